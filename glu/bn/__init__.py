@@ -1,0 +1,7 @@
+"""The Affordance–Words Bayesian network: the model, its learning, and exact inference (pgmpy-free)."""
+
+from glu.bn.inference import InferenceEngine
+from glu.bn.learning import learn_bn, learn_parameters, learn_structure
+from glu.bn.model import BayesNet
+
+__all__ = ["BayesNet", "InferenceEngine", "learn_bn", "learn_parameters", "learn_structure"]

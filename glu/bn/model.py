@@ -1,0 +1,241 @@
+"""The Affordance–Words Bayesian network as data: nodes, parents, CPTs; JSON and BNT ``.mat`` input/output.
+
+CPT layout (the original's): ``cpt[i_1, …, i_m, v] = P(node = v | parent_1 = i_1, …, parent_m = i_m)``,
+parents in node order, value indices in the order of :mod:`glu.schema`.
+
+JSON model file (``glu bn learn -o MODEL.json``; :meth:`BayesNet.save` / :meth:`BayesNet.load`)::
+
+    {
+      "format": "glu-bayesnet", "version": 1,
+      "n_affordance": 8,                      # the first 8 nodes are affordance nodes, the rest words
+      "meta": {"data_source": "...", "words": "lab", "unseen_words": "zero", ...},
+      "nodes": [
+        {"name": "ObjVel", "values": ["slow", "medium", "fast"],
+         "parents": ["Action", "Shape", "Size"],
+         "cpt": [[[[p, p, p], ...]]]},        # nested lists, shape (*parent cardinalities, cardinality)
+        ...
+      ]
+    }
+
+Floats are written with Python's ``repr``, so a saved model loads back bit for bit.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from glu.errors import ModelError
+from glu.schema import FILE_ALIASES, WORD_VALUES, Schema
+
+FORMAT = "glu-bayesnet"
+VERSION = 1
+ROW_TOL = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class BayesNet:
+    """A discrete Bayesian network over the schema's nodes.
+
+    Attributes
+    ----------
+    schema : nodes and values (affordance nodes first)
+    parents : node → tuple of parent names, in node order
+    cpts : node → array, shape (*parent cardinalities, cardinality)
+    meta : free-form provenance (data source, learning options, …)
+    """
+
+    schema: Schema
+    parents: Mapping[str, tuple[str, ...]]
+    cpts: Mapping[str, np.ndarray]
+    meta: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    @property
+    def nodes(self) -> tuple[str, ...]:
+        """All node names, affordance nodes first."""
+        return self.schema.nodes
+
+    def edges(self) -> list[tuple[str, str]]:
+        """All edges ``(parent, child)``, sorted by name."""
+        return sorted((p, c) for c in self.nodes for p in self.parents[c])
+
+    def children(self, node: str) -> tuple[str, ...]:
+        """The children of ``node``, in node order."""
+        return tuple(c for c in self.nodes if node in self.parents[c])
+
+    def validate(self) -> None:
+        """Check names, acyclicity, CPT shapes and that every CPT row sums to 1 (or is all zeros)."""
+        order = {n: i for i, n in enumerate(self.nodes)}
+        if set(self.parents) != set(order) or set(self.cpts) != set(order):
+            raise ModelError("parents and CPTs must be given for exactly the schema's nodes")
+        for node in self.nodes:
+            ps = self.parents[node]
+            for p in ps:
+                if p not in order:
+                    raise ModelError(f"node {node!r}: unknown parent {p!r}")
+            if list(ps) != sorted(ps, key=order.__getitem__) or len(set(ps)) != len(ps):
+                raise ModelError(f"node {node!r}: parents must be distinct and in node order, got {list(ps)}")
+            shape = tuple(self.schema.cardinality(p) for p in ps) + (self.schema.cardinality(node),)
+            cpt = self.cpts[node]
+            if cpt.shape != shape:
+                raise ModelError(f"node {node!r}: CPT shape {cpt.shape}, expected {shape}")
+            if not np.all(np.isfinite(cpt)) or (cpt < 0).any():
+                raise ModelError(f"node {node!r}: CPT entries must be finite and non-negative")
+            sums = cpt.sum(axis=-1)
+            ok = (np.abs(sums - 1) <= ROW_TOL) | (sums == 0)
+            if not ok.all():
+                raise ModelError(
+                    f"node {node!r}: CPT rows must sum to 1 (or be all zeros), found {sums[~ok][0]}"
+                )
+        _check_acyclic(self.nodes, self.parents)
+
+    def zero_rows(self) -> dict[str, int]:
+        """Nodes whose CPT has all-zero rows (parent configurations never seen), with how many."""
+        out = {}
+        for node in self.nodes:
+            z = int((self.cpts[node].sum(axis=-1) == 0).sum())
+            if z:
+                out[node] = z
+        return out
+
+    def log_likelihood(self, codes: Mapping[str, np.ndarray], nodes: tuple[str, ...] | None = None) -> float:
+        """Natural-log likelihood of data given as value codes per node (``nodes``: only these terms)."""
+        total = 0.0
+        for node in nodes or self.nodes:
+            cpt = self.cpts[node]
+            idx = tuple(np.asarray(codes[p]) for p in self.parents[node]) + (np.asarray(codes[node]),)
+            with np.errstate(divide="ignore"):
+                total += float(np.log(cpt[idx]).sum())
+        return total
+
+    # ------------------------------------------------------------------ input / output
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON-ready form of the model (see the module docstring)."""
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "n_affordance": self.schema.n_affordance,
+            "meta": dict(self.meta),
+            "nodes": [
+                {
+                    "name": n,
+                    "values": list(self.schema.values_of(n)),
+                    "parents": list(self.parents[n]),
+                    "cpt": self.cpts[n].tolist(),
+                }
+                for n in self.nodes
+            ],
+        }
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write the model as JSON (atomically)."""
+        from glu.data.tables import atomic_write_text
+
+        path = Path(path)
+        atomic_write_text(path, json.dumps(self.to_dict(), indent=1) + "\n")
+        return path
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], where: str = "model") -> BayesNet:
+        """Build a model from its JSON-ready form, with clear errors for malformed input."""
+        if not isinstance(d, Mapping) or d.get("format") != FORMAT:
+            raise ModelError(f'{where}: not a glu Bayesian network (expected "format": "{FORMAT}")')
+        if d.get("version") != VERSION:
+            raise ModelError(
+                f"{where}: unsupported version {d.get('version')!r}; this glu reads version {VERSION}"
+            )
+        try:
+            nodes = d["nodes"]
+            values = {str(n["name"]): tuple(str(v) for v in n["values"]) for n in nodes}
+            if len(values) != len(nodes):
+                raise ModelError(f"{where}: a node name appears twice")
+            schema = Schema(values=values, n_affordance=int(d["n_affordance"]), aliases=FILE_ALIASES)
+            parents = {str(n["name"]): tuple(str(p) for p in n["parents"]) for n in nodes}
+            cpts = {str(n["name"]): np.asarray(n["cpt"], dtype=float) for n in nodes}
+        except ModelError:
+            raise
+        except (KeyError, TypeError, ValueError) as e:
+            raise ModelError(f"{where}: malformed model ({type(e).__name__}: {e})") from None
+        try:
+            return cls(schema=schema, parents=parents, cpts=cpts, meta=dict(d.get("meta", {})))
+        except ModelError as e:
+            raise ModelError(f"{where}: {e}") from None
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> BayesNet:
+        """Read a model written by :meth:`save`."""
+        path = Path(path)
+        try:
+            d = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise ModelError(f"{path}: no such model file") from None
+        except (UnicodeDecodeError, json.JSONDecodeError) as e:
+            raise ModelError(f"{path}: not a JSON model file ({e})") from None
+        except OSError as e:
+            raise ModelError(f"{path}: cannot read ({e.strerror})") from None
+        return cls.from_dict(d, where=str(path))
+
+    @classmethod
+    def from_bnt_mat(cls, path: str | os.PathLike, variable: str = "netobj_lab") -> BayesNet:
+        """Import an original model saved by the authors' MATLAB code (BNT), e.g. ``BN_lab.mat``."""
+        import scipy.io as sio
+
+        path = Path(path)
+        if not path.is_file():
+            raise ModelError(f"{path}: no such file")
+        try:
+            net = sio.loadmat(path, squeeze_me=True, struct_as_record=False)[variable]
+        except FileNotFoundError:
+            raise ModelError(f"{path}: no such file") from None
+        except KeyError:
+            raise ModelError(f"{path}: no variable {variable!r} in the .mat file") from None
+        except (ValueError, TypeError, OSError) as e:
+            raise ModelError(f"{path}: not a readable MATLAB file ({e})") from None
+        names = [str(n) for n in np.atleast_1d(net.nodeNames)]
+        n_aff = len(np.atleast_1d(net.AFFORDNODES))
+        values: dict[str, tuple[str, ...]] = {}
+        for i, name in enumerate(names):
+            if i >= n_aff:
+                values[name] = WORD_VALUES
+            else:
+                vals = [str(v) for v in np.atleast_1d(net.nodeValueNames[i])]
+                aliases = FILE_ALIASES.get(name, {})
+                values[name] = tuple(aliases.get(v, v) for v in vals)
+        dag = np.asarray(net.dag)
+        parents = {names[j]: tuple(names[i] for i in np.flatnonzero(dag[:, j])) for j in range(len(names))}
+        cpts = {}
+        for j, name in enumerate(names):
+            shape = tuple(len(values[p]) for p in parents[name]) + (len(values[name]),)
+            cpts[name] = np.asarray(net.bnet.CPD[j].CPT, dtype=float).reshape(shape)
+        schema = Schema(values=values, n_affordance=n_aff, aliases=FILE_ALIASES)
+        meta = {"data_source": f"original model imported from {path.name}", "origin": str(path)}
+        return cls(schema=schema, parents=parents, cpts=cpts, meta=meta)
+
+
+def _check_acyclic(nodes: tuple[str, ...], parents: Mapping[str, tuple[str, ...]]) -> None:
+    state: dict[str, int] = {}
+
+    def visit(n: str, stack: list[str]) -> None:
+        if state.get(n) == 2:
+            return
+        if state.get(n) == 1:
+            cycle = stack[stack.index(n) :] + [n]
+            raise ModelError(f"the graph has a cycle: {' -> '.join(reversed(cycle))}")
+        state[n] = 1
+        stack.append(n)
+        for p in parents[n]:
+            visit(p, stack)
+        stack.pop()
+        state[n] = 2
+
+    for n in nodes:
+        visit(n, [])

@@ -1,0 +1,83 @@
+"""``glu data fetch|synth|info``: get the real data, make synthetic data, show what a source holds."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from glu import paths
+from glu.errors import DataError, FetchError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``data`` command group."""
+    p = sub.add_parser("data", help="fetch, synthesise or inspect data", description=__doc__)
+    dsub = p.add_subparsers(dest="data_command", metavar="SUBCOMMAND")
+    dsub.required = True
+
+    f = dsub.add_parser("fetch", help="download the real data at pinned commits, verifying checksums")
+    f.add_argument("--dest", type=Path, default=paths.REAL_DATA_DIR, help="data folder (default: data/real)")
+    f.add_argument("--mirror", metavar="URL", help="fetch {URL}/{local path} instead of from GitHub")
+    f.add_argument("--timeout", type=float, default=60.0, help="seconds per request (default 60)")
+    f.set_defaults(func=_fetch)
+
+    s = dsub.add_parser("synth", help="write a synthetic data folder with the real data's layout")
+    s.add_argument(
+        "--n", type=int, default=1270, help="experiments per table (100 to 1,000,000; default 1270)"
+    )
+    s.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    s.add_argument("-o", "--out", type=Path, required=True, help="output folder")
+    s.set_defaults(func=_synth)
+
+    i = dsub.add_parser("info", help="say which data source is used and what it holds")
+    i.add_argument(
+        "--data", help="data folder, or 'synthetic' (default: $GLU_DATA_DIR, data/real, synthetic)"
+    )
+    i.add_argument("--words", choices=("lab", "asr"), default="lab")
+    i.set_defaults(func=_info)
+
+
+def _fetch(args: argparse.Namespace) -> int:
+    from glu.data.fetch import fetch_all
+
+    def progress(i: int, n: int, r) -> None:
+        extra = f": {r.detail}" if r.detail else ""
+        print(f"[{i}/{n}] {r.status:10s} {r.local}{extra}", file=sys.stderr)
+
+    results = fetch_all(args.dest, mirror=args.mirror, progress=progress, timeout=args.timeout)
+    failed = [r for r in results if r.status == "failed"]
+    ok = len(results) - len(failed)
+    print(f"{ok}/{len(results)} files in {args.dest}" + (f"; {len(failed)} failed" if failed else ""))
+    if failed:
+        raise FetchError(
+            f"{len(failed)} of {len(results)} files could not be fetched (first: {failed[0].detail}); "
+            "nothing partial was written, run the command again to retry"
+        )
+    return 0
+
+
+def _synth(args: argparse.Namespace) -> int:
+    from glu.data.source import write_synthetic_folder
+    from glu.data.synthetic import MAX_ROWS, MIN_ROWS
+
+    if not MIN_ROWS <= args.n <= MAX_ROWS:
+        raise DataError(f"--n {args.n} is out of range; allowed: {MIN_ROWS} to {MAX_ROWS:,}")
+    out = write_synthetic_folder(args.out, args.n, args.seed)
+    print(f"wrote synthetic data (seed {args.seed}, {args.n} experiments per table) to {out}")
+    return 0
+
+
+def _info(args: argparse.Namespace) -> int:
+    from glu.data.source import load_experiments, resolve_data
+
+    source = resolve_data(args.data)
+    print(f"data: {source.describe()}")
+    df = load_experiments(source, args.words)
+    print(f"experiments: {len(df)} (words={args.words})")
+    for node in df.columns[:8]:
+        counts = df[node].value_counts(sort=False)
+        print(f"  {node:10s} " + "  ".join(f"{v}={c}" for v, c in counts.items()))
+    present = (df.iloc[:, 8:] == "present").sum().sort_values(ascending=False)
+    print("most frequent words: " + ", ".join(f"{w} ({c})" for w, c in present.head(10).items()))
+    return 0

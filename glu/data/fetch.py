@@ -1,0 +1,117 @@
+"""Download the real data from its public origin at pinned commits, verifying each file's sha256.
+
+The manifest (``glu/resources/sources.json``) lists each file: where it goes in the data folder, which
+repository and commit it comes from, and its sha256. Each file is downloaded into a temporary file in the
+destination folder, checked, and only then renamed into place, so an interrupted or corrupted download
+leaves no file behind. Files already present with the right checksum are kept.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import http.client
+import json
+import os
+import tempfile
+import urllib.error
+import urllib.request
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from glu import paths
+from glu.errors import FetchError
+
+MANIFEST = paths.RESOURCES_DIR / "sources.json"
+CHUNK = 1 << 16
+
+
+@dataclass(frozen=True)
+class RemoteFile:
+    """One file of the manifest: its place in the data folder, its URL and its sha256."""
+
+    local: str
+    url: str
+    sha256: str
+
+
+@dataclass(frozen=True)
+class FetchResult:
+    """Outcome of one file: ``status`` is ``downloaded``, ``present`` (already there) or ``failed``."""
+
+    local: str
+    status: str
+    detail: str = ""
+
+
+def manifest(mirror: str | None = None) -> list[RemoteFile]:
+    """The files to fetch; with ``mirror``, URLs are ``{mirror}/{local path}`` instead of GitHub's."""
+    spec = json.loads(MANIFEST.read_text())
+    out = []
+    for f in spec["files"]:
+        if mirror:
+            url = mirror.rstrip("/") + "/" + f["local"]
+        else:
+            repo = spec["repositories"][f["source"]]
+            url = spec["url_template"].format(repo=repo["repo"], commit=repo["commit"], path=f["path"])
+        out.append(RemoteFile(local=f["local"], url=url, sha256=f["sha256"]))
+    return out
+
+
+def sha256_of(path: Path) -> str:
+    """Hex sha256 of a file."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(CHUNK), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def fetch_file(item: RemoteFile, dest: Path, timeout: float = 60.0) -> FetchResult:
+    """Download one file into ``dest`` atomically; return what happened (never a partial file)."""
+    target = dest / item.local
+    if target.is_file() and sha256_of(target) == item.sha256:
+        return FetchResult(item.local, "present")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
+    tmp = Path(tmp_name)
+    try:
+        h = hashlib.sha256()
+        with os.fdopen(fd, "wb") as out, urllib.request.urlopen(item.url, timeout=timeout) as resp:
+            for block in iter(lambda: resp.read(CHUNK), b""):
+                h.update(block)
+                out.write(block)
+        digest = h.hexdigest()
+        if digest != item.sha256:
+            raise FetchError(
+                f"{item.url}: sha256 mismatch (got {digest[:12]}…, expected {item.sha256[:12]}…)"
+            )
+        os.replace(tmp, target)
+        return FetchResult(item.local, "downloaded")
+    except urllib.error.HTTPError as e:
+        return FetchResult(item.local, "failed", f"{item.url}: HTTP {e.code} {e.reason}")
+    except (urllib.error.URLError, OSError, TimeoutError, http.client.HTTPException) as e:
+        reason = getattr(e, "reason", None) or e
+        return FetchResult(item.local, "failed", f"{item.url}: {reason}")
+    except FetchError as e:
+        return FetchResult(item.local, "failed", str(e))
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def fetch_all(
+    dest: str | os.PathLike = paths.REAL_DATA_DIR,
+    mirror: str | None = None,
+    progress: Callable[[int, int, FetchResult], None] | None = None,
+    timeout: float = 60.0,
+) -> list[FetchResult]:
+    """Fetch every file of the manifest into ``dest``; ``progress(i, n, result)`` is called after each."""
+    dest = Path(dest)
+    items = manifest(mirror)
+    results = []
+    for i, item in enumerate(items, start=1):
+        r = fetch_file(item, dest, timeout=timeout)
+        results.append(r)
+        if progress:
+            progress(i, len(items), r)
+    return results

@@ -1,0 +1,189 @@
+"""Where the data comes from: ``--data DIR``, ``$GLU_DATA_DIR``, ``data/real/``, else synthetic.
+
+A data folder has the layout of the public data (and of ``glu data fetch`` / ``glu data synth``)::
+
+    affordance-words/sent-1-5_lab_aff_bag.txt     words from transcriptions (``words="lab"``)
+    affordance-words/sent-all_mllr3_aff_bag.txt   words from a speech recogniser (``words="asr"``)
+    affordance-words/networkDefinition.txt        nodes and values
+    gestures/<recording>/data.log                 human hand trajectories
+    reference-models/*.mat                        the original trained models
+
+Every result carries :meth:`DataSource.describe`, so it always says which data it came from.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from glu import paths
+from glu.errors import DataError
+from glu.schema import Schema, default_schema
+
+WORD_FILES: dict[str, str] = {
+    "lab": "affordance-words/sent-1-5_lab_aff_bag.txt",
+    "asr": "affordance-words/sent-all_mllr3_aff_bag.txt",
+}
+"""``words`` option → experiment table (``lab``: transcriptions, the paper's; ``asr``: speech recogniser)."""
+NETWORK_DEFINITION = "affordance-words/networkDefinition.txt"
+SYNTHETIC_MARKER = "SYNTHETIC.json"
+SYNTHETIC_KEYWORD = "synthetic"
+DEFAULT_SYNTHETIC_N = 1270
+DEFAULT_SYNTHETIC_SEED = 0
+
+
+@dataclass(frozen=True)
+class DataSource:
+    """A resolved data source.
+
+    Attributes
+    ----------
+    kind : ``"real"`` or ``"synthetic"``
+    root : the data folder, or None for synthetic data generated in memory
+    origin : how it was chosen: ``"--data"``, ``"GLU_DATA_DIR"``, ``"data/real"`` or ``"default"``
+    seed, n_experiments : the generator's parameters, for synthetic data
+    """
+
+    kind: str
+    root: Path | None
+    origin: str
+    seed: int = DEFAULT_SYNTHETIC_SEED
+    n_experiments: int = DEFAULT_SYNTHETIC_N
+
+    @property
+    def is_real(self) -> bool:
+        """True for the authors' recordings, False for synthetic data."""
+        return self.kind == "real"
+
+    def describe(self) -> str:
+        """One line saying which data this is and how it was chosen."""
+        how = {"--data": "from --data", "GLU_DATA_DIR": f"from ${paths.DATA_ENV_VAR}", "data/real": "fetched"}
+        if self.kind == "real":
+            return f"real data: {self.root} ({how.get(self.origin, self.origin)})"
+        where = f" in {self.root}" if self.root else ""
+        why = " — no real data found" if self.origin == "default" else ""
+        return f"synthetic data{where} (seed {self.seed}, {self.n_experiments} experiments{why})"
+
+    def file(self, relative: str) -> Path:
+        """Path of a file of this source; raises :class:`DataError` if the source has no such file."""
+        if self.root is None:
+            raise DataError(f"{relative}: synthetic data generated in memory has no files")
+        p = self.root / relative
+        if not p.exists():
+            raise DataError(f"{p}: no such file in the data folder {self.root} ({self.describe()})")
+        return p
+
+
+def resolve_data(data: str | os.PathLike | None = None) -> DataSource:
+    """Choose the data source: ``data`` if given, else ``$GLU_DATA_DIR``, else ``data/real/``, else synthetic.
+
+    ``data`` may be a folder or the word ``synthetic`` (force the built-in synthetic data).
+    """
+    if data is not None and str(data) == SYNTHETIC_KEYWORD:
+        return DataSource(kind="synthetic", root=None, origin="--data")
+    if data is not None:
+        return _folder_source(Path(data), "--data")
+    env = os.environ.get(paths.DATA_ENV_VAR)
+    if env:
+        if env == SYNTHETIC_KEYWORD:
+            return DataSource(kind="synthetic", root=None, origin="GLU_DATA_DIR")
+        return _folder_source(Path(env), "GLU_DATA_DIR")
+    if (paths.REAL_DATA_DIR / WORD_FILES["lab"]).is_file():
+        return _folder_source(paths.REAL_DATA_DIR, "data/real")
+    return DataSource(kind="synthetic", root=None, origin="default")
+
+
+def _folder_source(root: Path, origin: str) -> DataSource:
+    where = (
+        "--data" if origin == "--data" else f"${paths.DATA_ENV_VAR}" if origin == "GLU_DATA_DIR" else origin
+    )
+    if not root.is_dir():
+        raise DataError(
+            f"{root}: no such data folder (given by {where}); expected a folder with affordance-words/, "
+            "gestures/, reference-models/ (see `glu data fetch`), or the word 'synthetic'"
+        )
+    if not (root / "affordance-words").is_dir() and not (root / "gestures").is_dir():
+        raise DataError(
+            f"{root}: not a glu data folder (given by {where}): it has neither affordance-words/ nor gestures/"
+        )
+    marker = root / SYNTHETIC_MARKER
+    if marker.is_file():
+        try:
+            info = json.loads(marker.read_text())
+            return DataSource(
+                kind="synthetic", root=root.resolve(), origin=origin,
+                seed=int(info["seed"]), n_experiments=int(info["n"]),
+            )  # fmt: skip
+        except (ValueError, KeyError, TypeError):
+            raise DataError(f"{marker}: malformed marker file; expected JSON with 'seed' and 'n'") from None
+    return DataSource(kind="real", root=root.resolve(), origin=origin)
+
+
+def load_schema(source: DataSource) -> Schema:
+    """The schema of a source: its ``networkDefinition.txt`` if it has one, else the default schema."""
+    if source.root is not None and (source.root / NETWORK_DEFINITION).is_file():
+        from glu.data.tables import read_network_definition
+
+        schema = read_network_definition(source.root / NETWORK_DEFINITION)
+        if tuple(schema.nodes) != default_schema().nodes:
+            raise DataError(
+                f"{source.root / NETWORK_DEFINITION}: nodes differ from the model's 8 affordance nodes "
+                "and 49 words (or are in another order)"
+            )
+        return schema
+    return default_schema()
+
+
+def load_experiments(data: DataSource | str | os.PathLike | None = None, words: str = "lab") -> pd.DataFrame:
+    """Load the robot experiments of a source as a validated DataFrame of categorical columns.
+
+    Parameters
+    ----------
+    data : a :class:`DataSource`, a folder, ``"synthetic"``, or None (resolve as :func:`resolve_data`)
+    words : ``"lab"`` (transcribed descriptions, the paper's) or ``"asr"`` (speech-recogniser output)
+
+    Returns
+    -------
+    DataFrame, shape (n_experiments, 57); ``df.attrs["data_source"]`` says where it came from.
+    """
+    if words not in WORD_FILES:
+        raise DataError(f"unknown words option {words!r}; allowed: {', '.join(WORD_FILES)}")
+    source = data if isinstance(data, DataSource) else resolve_data(data)
+    if source.root is None:
+        from glu.data.synthetic import synthesize_experiments
+
+        df = synthesize_experiments(
+            source.n_experiments, source.seed, asr_noise=0.1 if words == "asr" else 0.0
+        )
+    else:
+        from glu.data.tables import read_experiments
+
+        df = read_experiments(source.file(WORD_FILES[words]), load_schema(source))
+    df.attrs["data_source"] = source.describe() + f", words={words}"
+    return df
+
+
+def write_synthetic_folder(out: str | os.PathLike, n: int, seed: int) -> Path:
+    """Write a synthetic data folder with the layout of the real one (experiment tables and definition)."""
+    from glu.data.synthetic import synthesize_experiments
+    from glu.data.tables import atomic_write_text, write_experiments
+
+    out = Path(out)
+    schema = default_schema()
+    for words, rel in WORD_FILES.items():
+        df = synthesize_experiments(n, seed, asr_noise=0.1 if words == "asr" else 0.0)
+        write_experiments(df, out / rel, schema)
+    lines = []
+    for node in schema.nodes:
+        if node in schema.word_nodes:
+            lines.append(f"{node}\t-\t{node}")
+        else:
+            vals = [{"sphere": "circle"}.get(v, v) for v in schema.values_of(node)]
+            lines.append("\t".join([node, *vals]))
+    atomic_write_text(out / NETWORK_DEFINITION, "\n".join(lines) + "\n")
+    atomic_write_text(out / SYNTHETIC_MARKER, json.dumps({"seed": seed, "n": n, "generator": "glu"}) + "\n")
+    return out

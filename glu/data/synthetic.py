@@ -1,0 +1,244 @@
+"""Synthetic robot experiments with the schema of the real data and a known generating structure.
+
+The generator is a small world of simple physics plus a sentence model:
+
+* the experimenter picks Action, Color, Shape and Size uniformly;
+* a tap rolls a sphere fast (a small one most often) and barely moves a box; a touch leaves objects
+  still; a grasp lifts the object (ObjVel medium) or fails (slow), failing more often on big objects;
+* ObjHandVel, HandVel and Contact follow from the action (and the object's motion or shape);
+* each experiment gets one spoken description drawn from the 49-word vocabulary: an agent (``the robot``,
+  ``he``, ``baltazar``), a verb synonym of the action in one of several tenses (``taps``, ``is tapping``,
+  ``has just tapped``), the object (``the [big|small] [green|yellow|blue] ball|sphere|box|square|cube``),
+  ``and`` or ``but`` (``but`` when the outcome is a failure), and an effect phrase (``is still``,
+  ``rolls``, ``is sliding``, ``rises``, ``falls``, …).
+
+Everything is vectorised with NumPy and seeded: :func:`synthesize_experiments` makes 1,000,000 rows in a
+couple of seconds. :data:`WORLD` exposes the generating DAG, so tests can check that structure learning
+recovers it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from glu.errors import DataError
+from glu.schema import AFFORDANCE_VALUES, WORD_VALUES, WORDS, default_schema
+
+MIN_ROWS, MAX_ROWS = 100, 1_000_000
+
+
+@dataclass(frozen=True)
+class SyntheticWorld:
+    """The generating model of the synthetic data.
+
+    Attributes
+    ----------
+    parents : affordance node → its parents in the generator (the DAG structure learning should find)
+    cpts : affordance node → array, shape (*parent cardinalities, cardinality), P(node | parents)
+    word_parents : word → the affordance nodes its presence depends on, for the words whose dependence
+        is clean enough to be identified from data (the others are left out)
+    """
+
+    parents: dict[str, tuple[str, ...]]
+    cpts: dict[str, np.ndarray]
+    word_parents: dict[str, tuple[str, ...]]
+
+
+def _world() -> SyntheticWorld:
+    A = {"grasp": 0, "tap": 1, "touch": 2}
+    cpts: dict[str, np.ndarray] = {
+        "Action": np.full(3, 1 / 3),
+        "Color": np.full(4, 1 / 4),
+        "Shape": np.full(2, 1 / 2),
+        "Size": np.full(3, 1 / 3),
+    }
+    # ObjVel | Action, Shape, Size   (slow, medium, fast)
+    ov = np.zeros((3, 2, 3, 3))
+    grasp_lift = {0: 0.85, 1: 0.65, 2: 0.3}  # small, medium, big: big objects slip out
+    for size in range(3):
+        for shape in range(2):
+            lift = grasp_lift[size] - (0.1 if shape == 0 else 0.0)  # spheres are harder to hold
+            ov[A["grasp"], shape, size] = [1 - lift, lift, 0.0]
+    ov[A["tap"], 0] = [[0.02, 0.13, 0.85], [0.05, 0.3, 0.65], [0.1, 0.45, 0.45]]  # sphere rolls away
+    ov[A["tap"], 1] = [[0.3, 0.6, 0.1], [0.55, 0.4, 0.05], [0.85, 0.15, 0.0]]  # box barely moves
+    ov[A["touch"], :, :] = [0.95, 0.05, 0.0]
+    cpts["ObjVel"] = ov
+    # ObjHandVel | Action, ObjVel   (slow, medium, fast)
+    ohv = np.zeros((3, 3, 3))
+    ohv[A["grasp"]] = [[0.3, 0.6, 0.1], [0.85, 0.15, 0.0], [0.7, 0.3, 0.0]]  # lifted: moves with the hand
+    ohv[A["tap"]] = [[0.1, 0.3, 0.6], [0.2, 0.6, 0.2], [0.15, 0.35, 0.5]]
+    ohv[A["touch"]] = [[0.9, 0.1, 0.0], [0.6, 0.4, 0.0], [0.5, 0.5, 0.0]]
+    cpts["ObjHandVel"] = ohv
+    # HandVel | Action   (slow, fast)
+    cpts["HandVel"] = np.array([[0.85, 0.15], [0.15, 0.85], [0.75, 0.25]])
+    # Contact | Action, Shape   (short, long)
+    cpts["Contact"] = np.array(
+        [[[0.1, 0.9], [0.05, 0.95]], [[0.9, 0.1], [0.7, 0.3]], [[0.5, 0.5], [0.35, 0.65]]]
+    )
+    parents = {
+        "Action": (),
+        "Color": (),
+        "Shape": (),
+        "Size": (),
+        "ObjVel": ("Action", "Shape", "Size"),
+        "ObjHandVel": ("Action", "ObjVel"),
+        "HandVel": ("Action",),
+        "Contact": ("Action", "Shape"),
+    }
+    word_parents: dict[str, tuple[str, ...]] = {w: () for w in ("robot", "he", "baltazar", "has", "just")}
+    for verb in ("grasps", "grasping", "grasped", "picks", "picking", "picked", "taps", "tapping", "tapped",
+                 "pushes", "pushing", "pushed", "touches", "touching", "touched", "pokes", "poking", "poked"):  # fmt: skip
+        word_parents[verb] = ("Action",)
+    for w in ("big", "small"):
+        word_parents[w] = ("Size",)
+    for w in ("green", "yellow", "blue"):
+        word_parents[w] = ("Color",)
+    for w in ("ball", "sphere", "box", "square", "cube"):
+        word_parents[w] = ("Shape",)
+    for w in ("still", "inert"):
+        word_parents[w] = ("ObjVel",)
+    return SyntheticWorld(parents=parents, cpts=cpts, word_parents=word_parents)
+
+
+WORLD: SyntheticWorld = _world()
+"""The generator's ground truth."""
+
+_VERBS = {0: ("grasp", "pick"), 1: ("tap", "push"), 2: ("touch", "poke")}
+_FORMS = {  # base → (3rd person, -ing, past participle)
+    "grasp": ("grasps", "grasping", "grasped"),
+    "pick": ("picks", "picking", "picked"),
+    "tap": ("taps", "tapping", "tapped"),
+    "push": ("pushes", "pushing", "pushed"),
+    "touch": ("touches", "touching", "touched"),
+    "poke": ("pokes", "poking", "poked"),
+}
+
+
+def _sample(rng: np.random.Generator, probs: np.ndarray) -> np.ndarray:
+    """One categorical draw per row of ``probs`` (shape (n, k)) → int array, shape (n,)."""
+    u = rng.random(probs.shape[0])[:, None]
+    idx = (np.cumsum(probs, axis=1) < u).sum(axis=1)
+    return np.minimum(idx, probs.shape[1] - 1)
+
+
+def _choice(rng: np.random.Generator, n: int, p: list[float]) -> np.ndarray:
+    return _sample(rng, np.broadcast_to(np.asarray(p, dtype=float), (n, len(p))))
+
+
+def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0) -> pd.DataFrame:
+    """Generate ``n`` synthetic experiments (one verbal description each) with the real data's schema.
+
+    Parameters
+    ----------
+    n : number of rows, 100 to 1,000,000
+    seed : seed of the random generator; the same (n, seed, asr_noise) give the same table
+    asr_noise : probability that each word's presence is flipped as by a speech recogniser
+        (deletions at this rate, insertions at a tenth of it); 0 gives clean transcriptions
+
+    Returns
+    -------
+    DataFrame, shape (n, 57), categorical columns as :func:`glu.data.tables.read_experiments` returns.
+    """
+    if not isinstance(n, int | np.integer) or not MIN_ROWS <= n <= MAX_ROWS:
+        raise DataError(
+            f"synthetic data size n={n!r} is out of range; allowed: {MIN_ROWS} to {MAX_ROWS:,} rows"
+        )
+    if not 0.0 <= asr_noise <= 0.5:
+        raise DataError(f"asr_noise={asr_noise!r} is out of range; allowed: 0 to 0.5")
+    rng = np.random.default_rng(seed)
+    n = int(n)
+    world = WORLD
+    codes: dict[str, np.ndarray] = {}
+    for node, parents in world.parents.items():
+        cpt = world.cpts[node]
+        if parents:
+            rows = cpt[tuple(codes[p] for p in parents)]
+        else:
+            rows = np.broadcast_to(cpt, (n, cpt.shape[-1]))
+        codes[node] = _sample(rng, rows)
+    words = {w: np.zeros(n, dtype=bool) for w in WORDS}
+    action, color, shape, size, objvel = (codes[k] for k in ("Action", "Color", "Shape", "Size", "ObjVel"))
+
+    # agent: the robot | he | baltazar
+    agent = _choice(rng, n, [0.5, 0.25, 0.25])
+    words["robot"] |= agent == 0
+    words["the"] |= True  # "the robot" or "the <object>": every description has it
+    words["he"] |= agent == 1
+    words["baltazar"] |= agent == 2
+    # verb: a synonym of the action, in one of four forms
+    synonym = _choice(rng, n, [0.6, 0.4])
+    form = _choice(rng, n, [0.3, 0.3, 0.2, 0.2])  # taps | is tapping | has just tapped | tapped
+    for a, pair in _VERBS.items():
+        for s, base in enumerate(pair):
+            third, ing, past = _FORMS[base]
+            sel = (action == a) & (synonym == s)
+            words[third] |= sel & (form == 0)
+            words[ing] |= sel & (form == 1)
+            words[past] |= sel & (form >= 2)
+    words["is"] |= form == 1
+    words["has"] |= form == 2
+    words["just"] |= (form == 2) & (rng.random(n) < 0.5)
+    # object: the [size] [color] shape
+    says_size = rng.random(n) < 0.6
+    words["small"] |= says_size & (size == 0)
+    words["big"] |= says_size & (size == 2)
+    says_color = rng.random(n) < 0.5
+    words["green"] |= says_color & (color <= 1)
+    words["yellow"] |= says_color & (color == 2)
+    words["blue"] |= says_color & (color == 3)
+    noun = _choice(rng, n, [0.5, 0.3, 0.2])
+    words["ball"] |= (shape == 0) & (noun != 0)
+    words["sphere"] |= (shape == 0) & (noun == 0)
+    words["box"] |= (shape == 1) & (noun == 0)
+    words["square"] |= (shape == 1) & (noun == 1)
+    words["cube"] |= (shape == 1) & (noun == 2)
+    # conjunction: "but" when the action did not have its usual outcome
+    failed = ((action == 0) & (objvel == 0)) | ((action == 1) & (objvel == 0))
+    words["but"] |= failed
+    words["and"] |= ~failed
+    # effect phrase
+    progressive = rng.random(n) < 0.5
+    still = objvel == 0
+    which = rng.random(n) < 0.5
+    words["still"] |= still & which
+    words["inert"] |= still & ~which
+    words["is"] |= still
+    lifted = (action == 0) & (objvel == 1)
+    falls = lifted & (rng.random(n) < np.where(size == 2, 0.4, 0.1))
+    rises = lifted & ~falls
+    for mask, third, ing in ((rises, "rises", "rising"), (falls, "falls", "falling")):
+        words[third] |= mask & ~progressive
+        words[ing] |= mask & progressive
+        words["is"] |= mask & progressive
+    moving = (objvel >= 1) & ~lifted
+    rolls = moving & (shape == 0) & (objvel == 2)
+    slides = moving & (shape == 1) & (objvel == 2)
+    moves = moving & ~rolls & ~slides
+    for mask, third, ing in (
+        (rolls, "rolls", "rolling"),
+        (slides, "slides", "sliding"),
+        (moves, "moves", "moving"),
+    ):
+        words[third] |= mask & ~progressive
+        words[ing] |= mask & progressive
+        words["is"] |= mask & progressive
+    if asr_noise > 0:
+        for w in WORDS:
+            present = words[w]
+            flip = rng.random(n) < np.where(present, asr_noise, asr_noise / 10)
+            words[w] = present ^ flip
+
+    schema = default_schema()
+    data: dict[str, pd.Categorical] = {}
+    for node in AFFORDANCE_VALUES:
+        data[node] = pd.Categorical.from_codes(codes[node], categories=list(schema.values_of(node)))
+    for w in WORDS:
+        data[w] = pd.Categorical.from_codes(words[w].astype(np.int8), categories=list(WORD_VALUES))
+    df = pd.DataFrame(data)
+    df.attrs["data_source"] = f"synthetic data (seed {seed}, {n} experiments" + (
+        f", asr_noise {asr_noise})" if asr_noise else ")"
+    )
+    return df

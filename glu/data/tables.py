@@ -1,0 +1,232 @@
+"""Read and write the experiment tables and the network definition of the original data.
+
+An experiment table (``sent-1-5_lab_aff_bag.txt``, ``sent-all_mllr3_aff_bag.txt``) is tab-separated text:
+a header naming the 8 affordance nodes and the 49 words, then one robot experiment with one verbal
+description per line. Affordance columns hold a value (``tap``, ``circle``, …); a word column holds ``-``
+(absent) or the word itself (present).
+
+In memory it is a :class:`pandas.DataFrame` with one categorical column per node, in schema order, with
+the categories in the value order of :mod:`glu.schema` (``sphere`` for the files' ``circle``; ``absent`` /
+``present`` for words). Every problem with a file raises :class:`~glu.errors.DataError` naming the file,
+the line, the column and what is allowed.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from glu.errors import DataError
+from glu.schema import FILE_ALIASES, WORD_VALUES, Schema, default_schema
+
+ABSENT_MARK = "-"
+
+
+def _read_text(path: Path) -> str:
+    """Read a whole file as UTF-8 text, with a clear error for missing files and bad encodings."""
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise DataError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise DataError(f"{path}: is a directory, expected a file") from None
+    except OSError as e:
+        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = raw[: e.start].count(b"\n") + 1
+        raise DataError(
+            f"{path}:{line}: not UTF-8 text (byte 0x{raw[e.start]:02x}); expected tab-separated UTF-8 text"
+        ) from None
+    if "\x00" in text:
+        line = text[: text.index("\x00")].count("\n") + 1
+        raise DataError(f"{path}:{line}: binary data (NUL byte); expected tab-separated UTF-8 text")
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    return text
+
+
+def _file_value(node: str, value: str, schema: Schema) -> str:
+    """The value as the original files write it (``circle`` for glu's ``sphere``)."""
+    for alias, v in schema.aliases.get(node, {}).items():
+        if v == value:
+            return alias
+    return value
+
+
+def read_experiments(path: str | os.PathLike, schema: Schema | None = None) -> pd.DataFrame:
+    """Read an experiment table into a DataFrame of categorical columns, validating every cell.
+
+    Parameters
+    ----------
+    path : the tab-separated table (header line, then one experiment per line)
+    schema : nodes and values to expect; default :func:`glu.schema.default_schema`
+
+    Returns
+    -------
+    DataFrame, shape (n_experiments, n_nodes), columns in schema order, categorical dtype whose categories
+    are the node's values in order. ``df.attrs["path"]`` holds the file name.
+    """
+    path = Path(path)
+    schema = schema or default_schema()
+    text = _read_text(path)
+    lines = text.splitlines()
+    while lines and not lines[-1].strip():
+        lines.pop()
+    if not lines:
+        raise DataError(f"{path}: empty file; expected a header line and at least one experiment")
+    header = [h.strip() for h in lines[0].split("\t")]
+    _check_header(path, header, schema)
+    if len(lines) == 1:
+        raise DataError(f"{path}: no experiments after the header line")
+    ncol = len(header)
+    counts = np.fromiter((ln.count("\t") for ln in lines[1:]), dtype=np.int64, count=len(lines) - 1)
+    bad = np.flatnonzero(counts != ncol - 1)
+    if bad.size:
+        i = int(bad[0])
+        if not lines[i + 1].strip():
+            raise DataError(f"{path}:{i + 2}: empty line inside the table; every line is one experiment")
+        raise DataError(
+            f"{path}:{i + 2}: {counts[i] + 1} columns, expected {ncol} (as in the header)"
+            + (f"; {bad.size} such lines in all" if bad.size > 1 else "")
+        )
+    try:
+        raw = pd.read_csv(
+            io.StringIO("\n".join(lines[1:])),
+            sep="\t",
+            header=None,
+            names=list(range(ncol)),
+            dtype=str,
+            na_filter=False,
+            quoting=3,  # csv.QUOTE_NONE: quotes are ordinary characters here
+            engine="c",
+        )
+    except (pd.errors.ParserError, ValueError) as e:  # pragma: no cover - counts were checked above
+        raise DataError(f"{path}: cannot parse the table ({e})") from None
+    columns: dict[str, pd.Categorical] = {}
+    for j, name in enumerate(header):
+        columns[name] = _parse_column(path, j, name, raw[j], schema)
+    df = pd.DataFrame({node: columns[node] for node in schema.nodes})
+    df.attrs["path"] = str(path)
+    return df
+
+
+def _check_header(path: Path, header: list[str], schema: Schema) -> None:
+    seen: dict[str, int] = {}
+    for j, h in enumerate(header, start=1):
+        if h in seen:
+            raise DataError(f"{path}:1: header name {h!r} appears twice (columns {seen[h]} and {j})")
+        seen[h] = j
+        if h not in schema.values:
+            what = "empty header name" if not h else f"unknown header name {h!r}"
+            raise DataError(
+                f"{path}:1: column {j}: {what}; allowed: the nodes "
+                f"{', '.join(schema.affordance_nodes)} and the {len(schema.word_nodes)} words"
+            )
+    missing = [n for n in schema.nodes if n not in seen]
+    if missing:
+        shown = ", ".join(missing[:10]) + (" …" if len(missing) > 10 else "")
+        raise DataError(f"{path}:1: header lacks {len(missing)} node(s): {shown}")
+
+
+def _parse_column(path: Path, j: int, name: str, col: pd.Series, schema: Schema) -> pd.Categorical:
+    values = schema.values_of(name)
+    if name in schema.word_nodes:
+        file_cats = [ABSENT_MARK, name]
+        allowed = f"'-' or the word {name!r} itself"
+    else:
+        aliases = schema.aliases.get(name, {})
+        col = col.str.strip()
+        if aliases:
+            col = col.replace(dict(aliases))
+        file_cats = list(values)
+        allowed = ", ".join(values)
+    codes = pd.Index(file_cats).get_indexer(col)
+    bad = np.flatnonzero(codes < 0)
+    if bad.size:
+        i = int(bad[0])
+        shown = col.iloc[i]
+        raise DataError(
+            f"{path}:{i + 2}: column {j + 1} ({name}): value {shown!r} is not allowed; allowed: {allowed}"
+            + (f" ({bad.size} bad cells in this column)" if bad.size > 1 else "")
+        )
+    return pd.Categorical.from_codes(codes, categories=list(values))
+
+
+def write_experiments(df: pd.DataFrame, path: str | os.PathLike, schema: Schema | None = None) -> Path:
+    """Write a table in the original file format (atomically: a temporary file moved into place)."""
+    schema = schema or default_schema()
+    path = Path(path)
+    out = {}
+    for node in schema.nodes:
+        codes = pd.Index(schema.values_of(node)).get_indexer(df[node].astype(object))
+        if (codes < 0).any():
+            raise DataError(f"column {node}: values outside {schema.values_of(node)}")
+        if node in schema.word_nodes:
+            file_vals = np.array([ABSENT_MARK, node], dtype=object)
+        else:
+            file_vals = np.array([_file_value(node, v, schema) for v in schema.values_of(node)], dtype=object)
+        out[node] = file_vals[codes]
+    text = pd.DataFrame(out).to_csv(sep="\t", index=False, lineterminator="\n")
+    atomic_write_text(path, text)
+    return path
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file in the same folder, then rename."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file in the same folder, then rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def read_network_definition(path: str | os.PathLike) -> Schema:
+    """Read ``networkDefinition.txt`` (``node<TAB>value<TAB>value…`` per line) into a :class:`Schema`.
+
+    A node whose values are ``-`` and its own name is a word node; the others are affordance nodes and
+    must come first. Values are translated to glu names (``circle`` → ``sphere``, ``-``/word →
+    ``absent``/``present``).
+    """
+    path = Path(path)
+    text = _read_text(path)
+    values: dict[str, tuple[str, ...]] = {}
+    n_aff = 0
+    for i, line in enumerate(text.splitlines(), start=1):
+        if not line.strip():
+            continue
+        parts = [p.strip() for p in line.split("\t")]
+        name, vals = parts[0], [v for v in parts[1:] if v]
+        if not name or len(vals) < 2:
+            raise DataError(f"{path}:{i}: expected a node name and at least two values separated by tabs")
+        if name in values:
+            raise DataError(f"{path}:{i}: node {name!r} defined twice")
+        if len(set(vals)) != len(vals):
+            raise DataError(f"{path}:{i}: node {name!r} lists a value twice")
+        if vals == [ABSENT_MARK, name]:
+            values[name] = WORD_VALUES
+        else:
+            if n_aff != len(values):
+                raise DataError(f"{path}:{i}: affordance node {name!r} after word nodes; list them first")
+            aliases = FILE_ALIASES.get(name, {})
+            values[name] = tuple(aliases.get(v, v) for v in vals)
+            n_aff += 1
+    if not values:
+        raise DataError(f"{path}: empty network definition")
+    return Schema(values=values, n_affordance=n_aff, aliases=FILE_ALIASES)

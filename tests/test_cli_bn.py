@@ -1,0 +1,157 @@
+"""The command line of the BN: learn, edges, import, query (single, JSON, batch) and its error handling."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.io as sio
+
+from glu.bn import InferenceEngine
+from glu.cli import main
+
+SPHERE = ["--target", "ObjVel", "--evidence", "Action=tap", "Shape=sphere", "Size=small"]
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_query_json_prints_exactly_the_posterior(shared_data, original_bn, capsys):
+    status, out, err = run(capsys, "query", "--data", str(shared_data), *SPHERE, "--json")
+    assert status == 0
+    answer = json.loads(out)
+    assert list(answer) == ["ObjVel"] and list(answer["ObjVel"]) == ["slow", "medium", "fast"]
+    ref = InferenceEngine(original_bn).query(
+        ["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"}
+    )
+    np.testing.assert_allclose(list(answer["ObjVel"].values()), ref["ObjVel"], atol=1e-6)
+    assert "real data" in err  # the source is named, on stderr so stdout stays JSON
+
+
+def test_query_text_output_names_the_source_and_each_value(shared_data, capsys):
+    status, out, _ = run(capsys, "query", "--data", str(shared_data), "--target", "ObjVel", "Action",
+                         "--evidence", "Shape=box", "Size=big", "--soft", "Action=grasp:0.2,tap:0.6,touch:0.2")  # fmt: skip
+    assert status == 0
+    lines = out.splitlines()
+    assert lines[0].startswith("# learned from real data:")
+    assert lines[1].startswith(
+        "# evidence: Shape=box, Size=big, Action~(grasp:0.2, tap:0.6, touch:0.2, virtual)"
+    )
+    rows = [ln.split() for ln in lines[2:]]
+    assert [(r[0], r[1]) for r in rows] == [("ObjVel", "slow"), ("ObjVel", "medium"), ("ObjVel", "fast"),
+                                            ("Action", "grasp"), ("Action", "tap"), ("Action", "touch")]  # fmt: skip
+    assert sum(float(r[2]) for r in rows[:3]) == pytest.approx(1, abs=1e-5)
+
+
+def test_learn_edges_and_import(shared_data, tmp_path, capsys):
+    model = tmp_path / "lab.json"
+    assert run(capsys, "bn", "learn", "--data", str(shared_data), "-o", str(model))[0] == 0
+    status, out, _ = run(capsys, "bn", "edges", str(model))
+    assert status == 0
+    raw = sio.loadmat(shared_data / "reference-models" / "BN_lab.mat", squeeze_me=True,
+                      struct_as_record=False)["netobj_lab"]  # fmt: skip
+    names = [str(n) for n in raw.nodeNames]
+    expected = sorted(f"{names[i]} -> {names[j]}" for i, j in zip(*np.nonzero(raw.dag), strict=True))
+    assert out.splitlines() == expected and len(expected) == 66
+    imported = tmp_path / "orig.json"
+    mat = str(shared_data / "reference-models" / "BN_lab.mat")
+    assert run(capsys, "bn", "import", mat, "-o", str(imported))[0] == 0
+    assert run(capsys, "bn", "edges", str(imported))[1].splitlines() == expected
+    # a query against the saved model equals the query that learns from the data
+    a = json.loads(run(capsys, "query", "--model", str(model), *SPHERE, "--json")[1])
+    b = json.loads(run(capsys, "query", "--model", mat, *SPHERE, "--json")[1])
+    np.testing.assert_allclose(list(a["ObjVel"].values()), list(b["ObjVel"].values()), atol=1e-6)
+
+
+def test_unseen_words_option_changes_the_answer(shared_data, capsys):
+    args = ["query", "--data", str(shared_data), "--target", "ObjVel", "--json"]
+    zero = json.loads(run(capsys, *args)[1])["ObjVel"]
+    uniform = json.loads(run(capsys, *args, "--unseen-words", "uniform")[1])["ObjVel"]
+    assert abs(zero["fast"] - uniform["fast"]) > 1e-3
+
+
+def test_batch_answers_line_by_line_with_errors_in_place(shared_data, tmp_path, capsys, original_bn):
+    queries = [
+        {"target": ["ObjVel"], "evidence": {"Action": "tap", "Shape": "sphere", "Size": "small"}},
+        {"target": ["Action"], "evidence": {"ObjVel": "fast", "HandVel": "fast", "Contact": "short"}},
+        {
+            "target": ["ObjVel"],
+            "evidence": {"Shape": "sphere"},
+            "soft": {"Action": {"tap": 0.5, "touch": 0.5}},
+        },
+        "not json",
+        {"target": ["Colour"]},
+        {"target": "rolls", "evidence": {"Action": "tap"}},
+    ]
+    path = tmp_path / "q.jsonl"
+    path.write_text("\n".join(q if isinstance(q, str) else json.dumps(q) for q in queries) + "\n")
+    status, out, err = run(capsys, "query", "--model", str(shared_data / "reference-models" / "BN_lab.mat"),
+                           "--batch", str(path))  # fmt: skip
+    assert status == 0
+    answers = [json.loads(line) for line in out.splitlines()]
+    assert len(answers) == 6
+    eng = InferenceEngine(original_bn)
+    np.testing.assert_allclose(list(answers[0]["ObjVel"].values()),
+                               eng.query(["ObjVel"], queries[0]["evidence"])["ObjVel"], atol=1e-12)  # fmt: skip
+    assert answers[1]["error"].startswith("line 2: impossible evidence")
+    np.testing.assert_allclose(
+        list(answers[2]["ObjVel"].values()),
+        eng.query(["ObjVel"], {"Shape": "sphere"}, soft={"Action": [0, 0.5, 0.5]})["ObjVel"], atol=1e-12,
+    )  # fmt: skip
+    assert answers[3]["error"].startswith("line 4: not JSON")
+    assert "unknown node 'Colour'" in answers[4]["error"]
+    assert list(answers[5]) == ["rolls"]
+    assert "3 of 6 queries answered with an error" in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["query", "--target", "Colour"], "unknown node 'Colour' (did you mean Color?)"),
+        (["query", "--target", "ObjVel", "--evidence", "Shape"], "expected NODE=VALUE"),
+        (["query", "--target", "ObjVel", "--evidence", "Shape=box", "Shape=sphere"], "Shape is given twice"),
+        (
+            ["query", "--target", "ObjVel", "--evidence", "Action=tap", "--soft", "Action=tap:1"],
+            "Action is given twice",
+        ),
+        (["query", "--target", "ObjVel", "--soft", "Action=tap:0.7,grasp:0.7"], "not a distribution"),
+        (["query", "--target", "ObjVel", "--soft", "Action=tap"], "expected VALUE:PROBABILITY"),
+        (
+            ["query", "--target", "Action", "--evidence", "ObjVel=fast", "HandVel=fast", "Contact=short"],
+            "impossible evidence",
+        ),
+        (["query", "--data", "/nonexistent/folder", "--target", "ObjVel"], "no such data folder"),
+        (["query", "--model", "/nonexistent/m.json", "--target", "ObjVel"], "no such model file"),
+        (["query"], "no target"),
+    ],
+)
+def test_bad_input_is_one_line_and_status_2(shared_data, capsys, argv, message):
+    if "--data" not in argv and "--model" not in argv:
+        argv = [argv[0], "--data", str(shared_data), *argv[1:]]
+    status, out, err = run(capsys, *argv)
+    assert status == 2
+    assert len(err.strip().splitlines()) == 1 and message in err and "Traceback" not in err
+
+
+def test_cold_start_does_not_import_pgmpy(shared_data, tmp_path):
+    """The query path stays light: no pgmpy (its import alone takes seconds)."""
+    code = (
+        "import sys; from glu.cli import main; "
+        f"rc = main(['query', '--data', {str(shared_data)!r}, '--target', 'ObjVel', '--json']); "
+        "print('pgmpy' in sys.modules, 'hmmlearn' in sys.modules, 'matplotlib' in sys.modules, rc)"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert res.stdout.strip().splitlines()[-1] == "False False False 0"
+
+
+def test_console_script_error_has_no_traceback(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "glu", "query", "--data", str(tmp_path), "--target", "ObjVel"],
+                         capture_output=True, text=True)  # fmt: skip
+    assert res.returncode == 2
+    assert res.stderr.count("\n") == 1 and "not a glu data folder" in res.stderr

@@ -1,0 +1,84 @@
+"""Model files: JSON round trip, the original .mat import, and clear errors for malformed models."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import scipy.io as sio
+
+from glu.bn import BayesNet
+from glu.errors import ModelError
+
+
+def test_json_round_trip_is_bit_exact(original_bn, tmp_path):
+    p = original_bn.save(tmp_path / "orig.json")
+    back = BayesNet.load(p)
+    assert back.edges() == original_bn.edges()
+    assert back.schema.nodes == original_bn.schema.nodes
+    for n in original_bn.nodes:
+        np.testing.assert_array_equal(back.cpts[n], original_bn.cpts[n])
+    doc = json.loads(p.read_text())
+    assert doc["format"] == "glu-bayesnet" and doc["version"] == 1 and doc["n_affordance"] == 8
+    objvel = next(d for d in doc["nodes"] if d["name"] == "ObjVel")
+    assert objvel["parents"] == ["Action", "Shape", "Size"]
+    assert np.asarray(objvel["cpt"]).shape == (3, 2, 3, 3)
+
+
+def test_mat_import_reads_layout_independently(shared_data, original_bn):
+    raw = sio.loadmat(shared_data / "reference-models" / "BN_lab.mat", squeeze_me=True,
+                      struct_as_record=False)["netobj_lab"]  # fmt: skip
+    names = list(raw.nodeNames)
+    j = names.index("ObjVel")
+    # CPT[i_Action, i_Shape, i_Size, v] in the .mat; the same cell through glu's model
+    np.testing.assert_array_equal(original_bn.cpts["ObjVel"][1, 0, 0], raw.bnet.CPD[j].CPT[1, 0, 0])
+    assert original_bn.schema.values_of("Shape") == ("sphere", "box")
+    assert original_bn.schema.values_of("rolls") == ("absent", "present")
+    assert int(raw.dag.sum()) == len(original_bn.edges())
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("not json", "not a JSON model file"),
+        ('{"format": "other"}', "not a glu Bayesian network"),
+        ('{"format": "glu-bayesnet", "version": 9}', "unsupported version 9"),
+        (
+            '{"format": "glu-bayesnet", "version": 1, "n_affordance": 1, "nodes": [{"name": "A"}]}',
+            "malformed model",
+        ),
+    ],
+)
+def test_malformed_json_models(tmp_path, content, message):
+    p = tmp_path / "m.json"
+    p.write_text(content)
+    with pytest.raises(ModelError, match=message):
+        BayesNet.load(p)
+
+
+def _doc(cpt_b, parents_b=("A",), parents_a=()):
+    return {
+        "format": "glu-bayesnet", "version": 1, "n_affordance": 2,
+        "nodes": [
+            {"name": "A", "values": ["a0", "a1"], "parents": list(parents_a), "cpt": [0.5, 0.5] if not parents_a else [[0.5, 0.5]] * 2},
+            {"name": "B", "values": ["b0", "b1"], "parents": list(parents_b), "cpt": cpt_b},
+        ],
+    }  # fmt: skip
+
+
+def test_model_validation_errors(tmp_path):
+    with pytest.raises(ModelError, match="CPT shape"):
+        BayesNet.from_dict(_doc([0.5, 0.5]))
+    with pytest.raises(ModelError, match="must sum to 1"):
+        BayesNet.from_dict(_doc([[0.5, 0.6], [0.5, 0.5]]))
+    with pytest.raises(ModelError, match="non-negative"):
+        BayesNet.from_dict(_doc([[1.5, -0.5], [0.5, 0.5]]))
+    with pytest.raises(ModelError, match="cycle"):
+        BayesNet.from_dict(_doc([[0.5, 0.5], [0.5, 0.5]], parents_a=("B",)))
+    ok = BayesNet.from_dict(_doc([[0.0, 0.0], [0.5, 0.5]]))  # an all-zero row is allowed
+    assert ok.zero_rows() == {"B": 1}
+    with pytest.raises(ModelError, match="no such model file"):
+        BayesNet.load(tmp_path / "missing.json")
+    with pytest.raises(ModelError, match="no such file"):
+        BayesNet.from_bnt_mat(tmp_path / "missing.mat")
