@@ -13,6 +13,8 @@ DATA_DIR: Path = PROJECT_ROOT / "data"
 REAL_DATA_DIR: Path = DATA_DIR / "real"
 FIGURES_DIR: Path = PROJECT_ROOT / "figures"
 RECORDINGS_DIR: Path = PROJECT_ROOT / "recordings"
+RESULTS_DIR: Path = PROJECT_ROOT / "results"
+EXECUTED_DIR: Path = PROJECT_ROOT / "build" / "notebooks"
 NOTEBOOKS_DIR: Path = PROJECT_ROOT / "notebooks"
 
 DATA_ENV_VAR = "GLU_DATA_DIR"

@@ -68,6 +68,13 @@ class DataSource:
         why = " — no real data found" if self.origin == "default" else ""
         return f"synthetic data{where} (seed {self.seed}, {self.n_experiments} experiments{why})"
 
+    def optional(self, relative: str) -> Path | None:
+        """Path of a file of this source if it has it, else None (e.g. the original models)."""
+        if self.root is None:
+            return None
+        p = self.root / relative
+        return p if p.exists() else None
+
     def file(self, relative: str) -> Path:
         """Path of a file of this source; raises :class:`DataError` if the source has no such file."""
         if self.root is None:

@@ -1,0 +1,118 @@
+"""Where a notebook's outputs go, and how they are written: figures, result tables, recordings.
+
+A notebook calls :func:`open_outputs` once with its parameters; the returned :class:`Outputs` saves
+figures (PNG + SVG, deterministic, stamped with the data source), result tables (CSV + JSON, with the data
+source and package versions) and gives paths for Rerun recordings. With ``out_dir=None`` everything goes
+to the project's ``figures/``, ``results/`` and ``recordings/``; ``glu reproduce`` passes a staging folder
+and moves the files into place only when the notebook succeeds.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+from dataclasses import dataclass, field
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from glu import paths
+from glu.data.source import DataSource, resolve_data
+
+PACKAGES = ("glu", "numpy", "scipy", "pandas", "pgmpy", "hmmlearn", "matplotlib", "rerun-sdk", "papermill")
+
+
+def package_versions() -> dict[str, str]:
+    """Versions of Python and of the packages behind the results."""
+    out = {"python": platform.python_version()}
+    for name in PACKAGES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "not installed"
+    return out
+
+
+@dataclass
+class Outputs:
+    """Output folders of one notebook run, and the data source it used.
+
+    Attributes
+    ----------
+    notebook : the notebook's name (e.g. ``"03_bn_learning"``), recorded with every table
+    source : the resolved data source
+    figures, results, recordings : output folders (created on first use)
+    """
+
+    notebook: str
+    source: DataSource
+    figures: Path
+    results: Path
+    recordings: Path
+    written: list[Path] = field(default_factory=list)
+
+    @property
+    def data_label(self) -> str:
+        """One line naming the data, for figure footers and tables."""
+        return self.source.describe()
+
+    def figure(self, fig: Any, name: str, source: str | None = None) -> list[Path]:
+        """Stamp ``fig`` with the data source and save it as ``figures/<name>.png`` and ``.svg``."""
+        from glu import plots
+
+        plots.stamp(fig, source or self.data_label)
+        files = plots.save_figure(fig, self.figures / name)
+        self.written.extend(files)
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+        return files
+
+    def table(self, df: pd.DataFrame, name: str, **extra: Any) -> Path:
+        """Save the numbers behind a figure as ``results/<name>.csv`` and ``.json`` (with provenance)."""
+        self.results.mkdir(parents=True, exist_ok=True)
+        csv = self.results / f"{name}.csv"
+        df.to_csv(csv, index=False, float_format="%.12g", lineterminator="\n")
+        meta = {
+            "name": name,
+            "notebook": self.notebook,
+            "data_source": df.attrs.get("data_source", self.data_label),
+            "data": self.data_label,
+            **extra,
+        }
+        doc = {"meta": meta, "rows": json.loads(df.to_json(orient="records", double_precision=15))}
+        js = self.results / f"{name}.json"
+        js.write_text(json.dumps(doc, indent=1, sort_keys=False) + "\n")
+        self.written.extend([csv, js])
+        return csv
+
+    def recording(self, name: str) -> Path:
+        """Path for a Rerun recording ``recordings/<name>.rrd`` (the folder is created)."""
+        self.recordings.mkdir(parents=True, exist_ok=True)
+        p = self.recordings / f"{name}.rrd"
+        self.written.append(p)
+        return p
+
+
+def open_outputs(
+    notebook: str, data: str | os.PathLike | None = None, out_dir: str | os.PathLike | None = None
+) -> Outputs:
+    """Resolve the data source and the output folders for a notebook run.
+
+    Parameters
+    ----------
+    notebook : the notebook's name
+    data : data folder, ``"synthetic"``, or None (``$GLU_DATA_DIR``, ``data/real/``, else synthetic)
+    out_dir : folder for ``figures/``, ``results/``, ``recordings/``; None = the project's own folders
+    """
+    source = resolve_data(data)
+    if out_dir is None:
+        figures, results, recordings = paths.FIGURES_DIR, paths.RESULTS_DIR, paths.RECORDINGS_DIR
+    else:
+        root = Path(out_dir)
+        figures, results, recordings = root / "figures", root / "results", root / "recordings"
+    print(f"{notebook}: {source.describe()}")
+    return Outputs(notebook=notebook, source=source, figures=figures, results=results, recordings=recordings)

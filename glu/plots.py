@@ -1,0 +1,201 @@
+"""One plotting function per figure, each drawing tidy experiment frames on matplotlib axes.
+
+Figures are saved with :func:`save_figure`, which writes PNG and SVG that are byte-identical across runs
+(no software/date metadata, fixed SVG hash salt), and every figure carries a footer naming its data source.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+matplotlib.rcParams["svg.hashsalt"] = "glu"
+matplotlib.rcParams["figure.dpi"] = 100
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+ACTION_COLORS = {"grasp": "#4C72B0", "tap": "#DD8452", "touch": "#55A868", "push": "#8172B3"}
+VALUE_COLORS = {"slow": "#8DA0CB", "medium": "#FC8D62", "fast": "#66C2A5"}
+ORIGINAL_MARK = {"marker": "_", "color": "black", "markersize": 14, "markeredgewidth": 2, "linestyle": "none"}
+
+
+def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
+    """Save ``fig`` as ``path.<fmt>`` for each format, deterministically; returns the files written."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    out = []
+    for fmt in formats:
+        target = path.with_suffix(f".{fmt}")
+        meta = {"png": {"Software": None}, "svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt, {})
+        tmp = target.with_name(f".{target.name}.tmp")
+        fig.savefig(tmp, format=fmt, metadata=meta, bbox_inches="tight")
+        os.replace(tmp, target)
+        out.append(target)
+    return out
+
+
+def stamp(fig: Figure, source: str) -> None:
+    """Lay the figure out, then write the data source in small grey text below everything else."""
+    fig.tight_layout()
+    fig.text(0.005, -0.01, f"data: {source}", fontsize=6.5, color="0.35", ha="left", va="top")
+
+
+def new_figure(ncols: int = 1, width: float = 4.2, height: float = 3.2) -> tuple[Figure, list[Axes]]:
+    """A figure with ``ncols`` side-by-side axes."""
+    fig, axes = plt.subplots(1, ncols, figsize=(width * ncols, height), squeeze=False)
+    return fig, list(axes[0])
+
+
+def _bars_with_original(ax: Axes, x: np.ndarray, p: np.ndarray, colors, original: np.ndarray | None) -> None:
+    ax.bar(x, p, color=colors, edgecolor="0.2", linewidth=0.6)
+    if original is not None:
+        ax.plot(x, original, **ORIGINAL_MARK, label="original model (BN_lab.mat)")
+
+
+def plot_effect_prediction(df: pd.DataFrame, axes: Sequence[Axes]) -> None:
+    """GLU 2017 Fig. 4: bars of p(ObjVel | Action=tap, Shape, Size), one axis per case."""
+    for ax, (case, g) in zip(axes, df.groupby("case", sort=False), strict=False):
+        x = np.arange(len(g))
+        orig = g["p_original"].to_numpy() if "p_original" in g else None
+        _bars_with_original(ax, x, g["p"].to_numpy(), [VALUE_COLORS.get(v, "0.6") for v in g["ObjVel"]], orig)
+        ax.set_xticks(x, g["ObjVel"])
+        ax.set_ylim(0, 1)
+        ax.set_xlabel("ObjVel")
+        ax.set_ylabel("probability")
+        ax.set_title(f"tap on a {case}", fontsize=10)
+        if orig is not None:
+            ax.legend(fontsize=7, loc="upper left", frameon=False)
+
+
+def plot_word_change(df: pd.DataFrame, ax: Axes) -> None:
+    """GLU 2017 Fig. 5: Δp(w) for the words whose probability changes by more than the threshold."""
+    g = df[df["shown"]]
+    x = np.arange(len(g))
+    colors = np.where(g["delta"] > 0, "#DD8452", "#4C72B0")
+    ax.bar(x, g["delta"], color=colors, edgecolor="0.2", linewidth=0.6)
+    if "delta_original" in g:
+        ax.plot(x, g["delta_original"], **ORIGINAL_MARK, label="original model")
+        ax.legend(fontsize=7, frameon=False)
+    ax.axhline(0, color="0.2", linewidth=0.8)
+    ax.set_xticks(x, g["word"], rotation=60, ha="right")
+    ax.set_ylabel(r"$\Delta p(w)$")
+    ax.set_title(r"$p(w \mid F, E, A{=}tap) - p(w \mid F, E)$", fontsize=10)
+
+
+def plot_action_vs_soft_evidence(df: pd.DataFrame, ax: Axes, threshold: float | None = None) -> None:
+    """TCDS: p_comb(Action | evidence) as grouped bars, one group per p_hmm row."""
+    cases = list(dict.fromkeys(df["case"]))
+    actions = list(dict.fromkeys(df["Action"]))
+    w = 0.8 / len(actions)
+    for k, a in enumerate(actions):
+        g = df[df["Action"] == a].set_index("case").loc[cases]
+        x = np.arange(len(cases)) + (k - (len(actions) - 1) / 2) * w
+        ax.bar(x, g["p"], width=w, color=ACTION_COLORS.get(a, "0.6"), label=a, edgecolor="0.2", linewidth=0.5)
+        if "p_original" in g:
+            ax.plot(x, g["p_original"], **{**ORIGINAL_MARK, "markersize": 6})
+    ax.set_xticks(
+        np.arange(len(cases)),
+        [c.replace("no action evidence", "none") for c in cases],
+        rotation=30,
+        ha="right",
+        fontsize=8,
+    )
+    ax.set_xlabel(r"$p_{HMM}$ [grasp tap touch]")
+    ax.set_ylabel(r"$p_{comb}(Action)$")
+    ax.set_ylim(0, 1)
+    title = "action given soft evidence"
+    if threshold is not None and np.isfinite(threshold):
+        title += f" (tap wins for $p_{{HMM}}(tap) > {threshold:.4f}$)"
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=8, frameon=False, ncols=len(actions))
+
+
+def plot_effect_vs_soft_evidence(df: pd.DataFrame, axes: Sequence[Axes], rule: str = "virtual") -> None:
+    """TCDS: p_comb(ObjVel | Shape) stacked per p_hmm row, one axis per shape."""
+    d = df[df["rule"] == rule]
+    for ax, (shape, g) in zip(axes, d.groupby("Shape", sort=False), strict=False):
+        cases = list(dict.fromkeys(g["case"]))
+        bottom = np.zeros(len(cases))
+        for v in dict.fromkeys(g["ObjVel"]):
+            p = g[g["ObjVel"] == v].set_index("case").loc[cases, "p"].to_numpy()
+            ax.bar(
+                np.arange(len(cases)),
+                p,
+                bottom=bottom,
+                color=VALUE_COLORS.get(v, "0.6"),
+                label=v,
+                edgecolor="0.2",
+                linewidth=0.5,
+            )
+            bottom += p
+        ax.set_xticks(
+            np.arange(len(cases)),
+            [c.replace("no action evidence", "none") for c in cases],
+            rotation=30,
+            ha="right",
+            fontsize=8,
+        )
+        ax.set_ylim(0, 1)
+        ax.set_ylabel(r"$p_{comb}(ObjVel)$")
+        ax.set_xlabel(r"$p_{HMM}$ [grasp tap touch]")
+        ax.set_title(f"{shape} ({rule} evidence)", fontsize=10)
+    axes[-1].legend(
+        fontsize=8,
+        frameon=False,
+        title="ObjVel",
+        title_fontsize=8,
+        loc="center left",
+        bbox_to_anchor=(1.0, 0.5),
+    )
+
+
+def plot_unseen_rows(df: pd.DataFrame, ax: Axes) -> None:
+    """The original's all-zero rows vs uniform rows: the same numbers under both models."""
+    for name, g in df.groupby("experiment", sort=False):
+        ax.scatter(g["p_zero"], g["p_uniform"], s=14, label=name, alpha=0.8)
+    lo = min(df["p_zero"].min(), df["p_uniform"].min())
+    ax.plot([lo, 1], [lo, 1], color="0.5", linewidth=0.8)
+    ax.set_xlabel("original: all-zero rows (faithful)")
+    ax.set_ylabel("corrected: uniform rows")
+    worst = df.loc[df["uniform_minus_zero"].abs().idxmax()]
+    ax.set_title(
+        f"largest change {worst['uniform_minus_zero']:+.3f} ({worst['experiment']}, {worst['value']})",
+        fontsize=8,
+    )
+    ax.legend(fontsize=7, frameon=False)
+
+
+def plot_structure(bn, ax: Axes, reference=None) -> None:
+    """The learned DAG as a matrix: one row per node with parents, one column per affordance node.
+
+    Filled cells are edges; with a reference model, edges only in ours are red, only in the reference are
+    hollow squares.
+    """
+    aff = list(bn.schema.affordance_nodes)
+    children = [n for n in bn.nodes if bn.parents[n] or (reference is not None and reference.parents[n])]
+    mat = np.array([[p in bn.parents[c] for p in aff] for c in children], dtype=float)
+    ax.imshow(mat, cmap="Greys", vmin=0, vmax=1.6, aspect="auto", interpolation="nearest")
+    if reference is not None:
+        for i, c in enumerate(children):
+            for j, p in enumerate(aff):
+                ours, theirs = p in bn.parents[c], p in reference.parents[c]
+                if ours and not theirs:
+                    ax.scatter(j, i, marker="s", color="red", s=30)
+                elif theirs and not ours:
+                    ax.scatter(j, i, marker="s", facecolors="none", edgecolors="red", s=30)
+    ax.set_xticks(range(len(aff)), aff, rotation=45, ha="left", fontsize=7)
+    ax.xaxis.tick_top()
+    ax.set_yticks(range(len(children)), children, fontsize=6)
+    ax.set_title(
+        f"{len(bn.edges())} edges" + ("" if reference is None else f" (original: {len(reference.edges())})"),
+        fontsize=9,
+        pad=30,
+    )

@@ -1,0 +1,70 @@
+# ---
+# jupyter:
+#   jupytext:
+#     formats: py:percent
+#     text_representation:
+#       extension: .py
+#       format_name: percent
+#   kernelspec:
+#     display_name: Python 3
+#     language: python
+#     name: python3
+# ---
+
+# %% [markdown]
+# # 07 · The figures of GLU 2017
+#
+# Saponaro et al. (GLU 2017) assume the gesture HMMs recognised a **tap** and enter it as hard evidence in
+# the Affordance–Words network. Two results: the object's velocity predicted for a small sphere and for a
+# big box (Fig. 4), and how word probabilities change when the tap is added to the evidence (Fig. 5).
+# Black ticks mark the authors' own model (`BN_lab.mat`) when the real data is used.
+
+# %% tags=["parameters"]
+data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+words = "lab"  # descriptions: "lab" (the paper's) or "asr"
+unseen_words = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
+threshold = 0.02  # words shown in Fig. 5: |Δp(w)| above this
+seed = 0  # seed (unused: everything here is exact)
+quick = False  # small, fast run (for tests)
+out_dir = None  # folder for figures/ and results/; None: the project's own
+
+# %%
+from glu import experiments, plots
+from glu.bn import BayesNet, learn_bn
+from glu.data import load_experiments
+from glu.outputs import open_outputs
+
+out = open_outputs("07_glu2017_figures", data, out_dir)
+bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
+mat = out.source.optional("reference-models/BN_lab.mat")
+original = BayesNet.from_bnt_mat(mat) if mat else None
+
+# %% [markdown]
+# ## Fig. 4 · Effect prediction: p(ObjVel | Action=tap, Shape, Size)
+
+# %%
+effect = experiments.effect_prediction(bn, original)
+out.table(effect, "glu2017_effect_prediction")
+fig, axes = plots.new_figure(2)
+plots.plot_effect_prediction(effect, axes)
+out.figure(fig, "glu2017_effect_prediction")
+effect
+
+# %% [markdown]
+# ## Fig. 5 · Word prediction: Δp(w) = p(w | F, E, A=tap) − p(w | F, E)
+# F = {Size=big, Shape=sphere}, E = {ObjVel=fast}. The original code also put Color=yellow in the evidence;
+# both versions are computed.
+
+# %%
+for variant in ("text", "code"):
+    change = experiments.word_probability_change(bn, variant, original, threshold=threshold)
+    out.table(change, f"glu2017_word_change_{variant}", evidence=variant)
+    fig, (ax,) = plots.new_figure(1, width=7)
+    plots.plot_word_change(change, ax)
+    out.figure(fig, f"glu2017_word_change_{variant}")
+change[change.shown][["word", "p_without", "p_with", "delta"]]
+
+# %% [markdown]
+# A tap on a small sphere most likely sends it off fast, while a big box barely moves: the same action, a
+# different effect. Adding the tap raises the probability of tap and push words and of "rolls" (the paper's
+# text says "rolling"; its figure's word is "rolls"), and lowers touch and poke words.
