@@ -136,7 +136,8 @@ def tap_threshold(
     """The p_hmm(tap) above which tap wins p_comb(Action | evidence), the rest split equally; by bisection.
 
     The papers report tap wins only when p_hmm(tap) > 0.81 for {Size=small, Shape=sphere, ObjVel=slow}.
-    Returns ``nan`` if tap never wins or always wins on [1/3, 1].
+    The search runs over p_hmm(tap) in [0, 1] (below 1/3 the HMMs favour the other actions), where tap's
+    margin grows monotonically; returns ``nan`` if tap never wins (p_BN(tap | evidence) = 0).
     """
     eng = InferenceEngine(bn)
     actions = bn.schema.values_of("Action")
@@ -148,8 +149,8 @@ def tap_threshold(
         post = fuse(eng, ["Action"], evidence, q, strategy)["Action"]
         return float(post[i_tap] - np.delete(post, i_tap).max())
 
-    lo, hi = 1 / 3, 1.0 - 1e-15
-    if margin(lo) > 0 or margin(hi) <= 0:
+    lo, hi = 0.0, 1.0 - 1e-15
+    if margin(hi) <= 0:
         return float("nan")
     while hi - lo > tol:
         mid = 0.5 * (lo + hi)
@@ -187,6 +188,54 @@ def effect_vs_soft_evidence(
     return _finish(
         _with_reference(pd.DataFrame(out), ref if reference else None), bn, "tcds_effect_vs_soft_evidence"
     )
+
+
+def soft_evidence_sweep(
+    bn: BayesNet,
+    evidence: Mapping[str, str],
+    target: str = "ObjVel",
+    n_points: int = 101,
+    rules: Sequence[Strategy] = ("virtual", "jeffrey"),
+) -> pd.DataFrame:
+    """p_comb(target | evidence, p_hmm) as p_hmm(tap) goes from 0 to 1 (the rest split equally), per rule.
+
+    Vectorised with :meth:`InferenceEngine.query_batch`. Returns columns ``rule, p_hmm_tap, <target>, p``.
+    """
+    from glu.fusion import hmm_rows
+
+    eng = InferenceEngine(bn)
+    t = np.linspace(0.0, 1.0, n_points)
+    q = hmm_rows(t)
+    values = bn.schema.values_of(target)
+    frames = []
+    for rule in rules:
+        post = eng.query_batch(
+            [target], {k: [v] * n_points for k, v in evidence.items()}, soft={"Action": q}, soft_rule=rule
+        )[target]
+        for i, v in enumerate(values):
+            frames.append(pd.DataFrame({"rule": rule, "p_hmm_tap": t, target: v, "p": post[:, i]}))
+    df = pd.concat(frames, ignore_index=True)
+    df.insert(0, "evidence", _evidence_text(evidence))
+    return _finish(df, bn, f"soft_evidence_sweep_{target}")
+
+
+def tap_thresholds(bn: BayesNet, nodes: Sequence[str] = ("Shape", "Size", "ObjVel")) -> pd.DataFrame:
+    """The tap threshold of :func:`tap_threshold` for every combination of values of ``nodes``.
+
+    Returns columns ``<nodes…>, p_bn_tap, threshold`` (``threshold`` nan where tap can never win).
+    """
+    import itertools
+
+    eng = InferenceEngine(bn)
+    rows = []
+    for combo in itertools.product(*[bn.schema.values_of(n) for n in nodes]):
+        ev = dict(zip(nodes, combo, strict=True))
+        try:
+            p_bn = eng.query(["Action"], ev)["Action"][bn.schema.values_of("Action").index("tap")]
+        except ValueError:  # impossible evidence under the model
+            continue
+        rows.append({**ev, "p_bn_tap": p_bn, "threshold": tap_threshold(bn, ev)})
+    return _finish(pd.DataFrame(rows), bn, "tap_thresholds")
 
 
 def unseen_rows_comparison(zero: BayesNet, uniform: BayesNet) -> pd.DataFrame:

@@ -199,3 +199,30 @@ def plot_structure(bn, ax: Axes, reference=None) -> None:
         fontsize=9,
         pad=30,
     )
+
+
+def plot_soft_sweep(df: pd.DataFrame, ax: Axes) -> None:
+    """p_comb(target) against p_hmm(tap): one colour per value, solid for virtual, dashed for Jeffrey."""
+    target = [c for c in df.columns if c not in ("evidence", "rule", "p_hmm_tap", "p")][0]
+    styles = {"virtual": "-", "jeffrey": "--", "hard": ":"}
+    for (rule, value), g in df.groupby(["rule", target], sort=False):
+        ax.plot(g["p_hmm_tap"], g["p"], styles.get(rule, "-"), color=VALUE_COLORS.get(value, ACTION_COLORS.get(value, "0.4")),
+                label=f"{value} ({rule})")  # fmt: skip
+    ax.set_xlabel(r"$p_{HMM}(tap)$ (rest split equally)")
+    ax.set_ylabel(rf"$p_{{comb}}({target})$")
+    ax.set_ylim(0, 1)
+    ax.set_xlim(0, 1)
+    ax.set_title(df["evidence"].iloc[0], fontsize=9)
+    ax.legend(fontsize=7, frameon=False, ncols=2)
+
+
+def plot_tap_thresholds(df: pd.DataFrame, ax: Axes) -> None:
+    """The p_hmm(tap) above which tap wins, for each (Shape, Size, ObjVel)."""
+    labels = [", ".join(str(r[c]) for c in df.columns[:-2]) for _, r in df.iterrows()]
+    y = np.arange(len(df))
+    ax.barh(y, df["threshold"], color=ACTION_COLORS["tap"], edgecolor="0.2", linewidth=0.5)
+    ax.axvline(1 / 3, color="0.4", linestyle=":", linewidth=1)
+    ax.set_yticks(y, labels, fontsize=7)
+    ax.invert_yaxis()
+    ax.set_xlim(0, 1)
+    ax.set_xlabel(r"$p_{HMM}(tap)$ needed for tap to win")

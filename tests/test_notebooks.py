@@ -16,11 +16,14 @@ from glu.reproduce import NotebookError, list_notebooks, reproduce
 
 EXPECTED_FIGURES = {
     "03_bn_learning": ["bn_structure", "unseen_rows_comparison"],
+    "05_fusion_soft": ["fusion_soft_rules", "fusion_soft_sweep"],
+    "06_fusion_product": ["fusion_product_action", "fusion_product_thresholds"],
     "07_glu2017_figures": [
         "glu2017_effect_prediction",
         "glu2017_word_change_text",
         "glu2017_word_change_code",
     ],
+    "09_verbal_descriptions": ["verbal_and_but", "verbal_yellow_sphere_nbest", "verbal_sampling_vs_exact"],
 }
 COMMON_PARAMETERS = {"data", "seed", "quick", "out_dir"}
 NOTEBOOKS = [p.stem for p in list_notebooks()]

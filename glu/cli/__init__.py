@@ -18,6 +18,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "glu.cli.data_cmds",
     "glu.cli.bn_cmds",
     "glu.cli.reproduce_cmds",
+    "glu.cli.language_cmds",
 )
 """Each module defines ``register(subparsers)``; handlers import heavy libraries lazily."""
 

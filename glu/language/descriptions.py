@@ -1,0 +1,371 @@
+"""Sentences scored by the BN's word probabilities, and the exact N-best descriptions of a grammar.
+
+The originals' score of a sentence ``s = w_1 … w_L`` given evidence ``e`` (METHOD.md §5) is the mean log
+probability of its words,
+
+    score(s) = (1/L) Σ_k log p(w_k = present | e),
+
+every occurrence counting (``the`` twice in "the … the …" counts twice). A word of probability 0 gives
+``-inf``.
+
+**Exact N-best.** The originals scored 10,000 random sentences. Here :func:`nbest` finds the N best of the
+*whole* grammar with a k-best dynamic programme over the deterministic word network
+(:mod:`glu.language.sentences`): for every state and every number ``l`` of remaining words it keeps the
+``n`` best suffixes of exactly ``l`` words (the mean divides by the length, so lengths are kept apart
+until the end), which costs ``O(max length × arcs × n)`` instead of one score per sentence. The network is
+deterministic, so the N best are N *different* sentences.
+
+**Exact ties.** Sums of log probabilities are computed exactly: every ``log p`` is a binary fraction, so
+``log p × 2^K`` is an integer for a common ``K``, and sums of those integers have no rounding error.
+Sentences are ranked by
+
+1. the number of words of probability 0 (fewest first; all such sentences score ``-inf``),
+2. the exact mean log probability of the other words (highest first),
+3. the words themselves, in lexicographic order,
+
+so equal scores (e.g. two orders of the same words) are ordered the same way every time, and the
+reported score is the exact mean rounded once to a float.
+
+Example
+-------
+>>> from glu.bn import InferenceEngine
+>>> eng = InferenceEngine(bn)                          # doctest: +SKIP
+>>> describe(eng, {"Action": "grasp", "ObjVel": "slow"}, n=2)[["sentence", "score"]]   # doctest: +SKIP
+                                                   sentence     score
+0   the robot is picking the square but the square is inert -0.590857
+1  the robot is grasping the square but the square is inert -0.595187
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from glu.errors import EvidenceError, GrammarError, VocabularyError
+from glu.language.grammar import Grammar, load_grammar
+from glu.language.sentences import (
+    Sentence,
+    WordNetwork,
+    as_network,
+    count_sentences,
+    restrict,
+    sample_sentences,
+)
+
+WordProbs = Mapping[str, float] | pd.Series
+"""P(word = present | evidence) by word: a mapping or a Series indexed by word."""
+PROB_TOL = 1e-9
+"""Probabilities within this of [0, 1] are clipped into it; further out they are an error."""
+MAX_ALL_SCORES = 50_000_000
+"""Most sentences :func:`all_scores` scores."""
+NBEST_COLUMNS = ["rank", "sentence", "score", "length"]
+
+
+@lru_cache(maxsize=1)
+def default_network() -> WordNetwork:
+    """The word network of glu's default grammar (compiled once)."""
+    from glu.language.sentences import compile_network
+
+    return compile_network(load_grammar())
+
+
+def _network(grammar: Grammar | WordNetwork | None) -> WordNetwork:
+    return default_network() if grammar is None else as_network(grammar)
+
+
+# --------------------------------------------------------------------------------------- log probabilities
+@dataclass(frozen=True)
+class LogProbs:
+    """Log word probabilities as exact integers: ``log p(w) = num[w] / scale`` exactly, or ``-inf`` (``zero[w]``).
+
+    Attributes
+    ----------
+    words : the words, in the order of the other fields
+    logp : ``log p(w)`` as floats, shape (n_words,)
+    num : the integer numerators (0 where ``p = 0``), length n_words
+    zero : whether ``p(w) = 0``, length n_words
+    scale : the common denominator, a power of two
+    """
+
+    words: tuple[str, ...]
+    logp: np.ndarray
+    num: tuple[int, ...]
+    zero: tuple[bool, ...]
+    scale: int
+
+    @classmethod
+    def from_probs(cls, words: Sequence[str], word_probs: WordProbs) -> LogProbs:
+        """The log probabilities of ``words`` looked up in ``word_probs``; VocabularyError for a missing word."""
+        probs = _as_mapping(word_probs)
+        missing = [w for w in words if w not in probs]
+        if missing:
+            shown = ", ".join(missing[:10]) + (f", … ({len(missing)} words)" if len(missing) > 10 else "")
+            raise VocabularyError(
+                f"no probability for the word(s) {shown}: the grammar uses words the model does not have "
+                f"(the model's words: {', '.join(list(probs)[:8])}, … {len(probs)} in all)"
+            )
+        logs = []
+        for w in words:
+            p = probs[w]
+            try:
+                p = float(p)
+            except (TypeError, ValueError):
+                raise EvidenceError(f"the probability of {w!r} is not a number: {p!r}") from None
+            if not (-PROB_TOL <= p <= 1 + PROB_TOL):  # also catches nan
+                raise EvidenceError(f"the probability of {w!r} is {p!r}, outside [0, 1]")
+            p = min(max(p, 0.0), 1.0)
+            logs.append(math.log(p) if p > 0 else -math.inf)
+        ratios = [x.as_integer_ratio() if math.isfinite(x) else (0, 1) for x in logs]
+        scale = max((d for _, d in ratios), default=1)
+        num = tuple(n * (scale // d) for n, d in ratios)
+        zero = tuple(not math.isfinite(x) for x in logs)
+        return cls(tuple(words), np.array(logs, dtype=float), num, zero, scale)
+
+
+def _as_mapping(word_probs: WordProbs) -> Mapping[str, Any]:
+    if isinstance(word_probs, pd.Series):
+        if word_probs.index.has_duplicates:
+            dup = word_probs.index[word_probs.index.duplicated()][0]
+            raise VocabularyError(f"the word probabilities give {dup!r} twice")
+        return word_probs.to_dict()
+    if isinstance(word_probs, Mapping):
+        return word_probs
+    raise TypeError(
+        f"word probabilities must be a mapping word → p or a pandas Series, not {type(word_probs).__name__}"
+    )
+
+
+def word_probabilities(
+    engine: Any,
+    evidence: Mapping[str, str | int] | None = None,
+    soft: Mapping[str, Any] | None = None,
+    soft_rule: str = "virtual",
+) -> pd.Series:
+    """P(word = present | evidence) from an :class:`~glu.bn.InferenceEngine`, a Series indexed by word, shape (n_words,).
+
+    ``soft`` is soft evidence on affordance nodes; a gesture posterior ``p_hmm`` enters as
+    ``soft={"Action": p_hmm}`` (fusion, METHOD.md §2), with ``soft_rule`` ``"virtual"`` (the originals') or
+    ``"jeffrey"``.
+    """
+    probs = engine.word_probabilities(evidence, soft or None, soft_rule)
+    return pd.Series(
+        np.asarray(probs, dtype=float), index=list(engine.binary_leaves), name="p(word | evidence)"
+    )
+
+
+# ------------------------------------------------------------------------------------------------ scores
+def _exact(lp: LogProbs, index: Sequence[int]) -> tuple[int, int]:
+    """(number of zero-probability words, exact numerator of the sum of the others)."""
+    return sum(lp.zero[i] for i in index), sum(lp.num[i] for i in index)
+
+
+def _score(lp: LogProbs, n_zero: int, total: int, length: int) -> float:
+    return -math.inf if n_zero else float(Fraction(total, lp.scale * length))
+
+
+def _rank_key(n_zero: int, total: int, length: int, words: Sentence) -> tuple:
+    return (n_zero, Fraction(-total, length), words)
+
+
+def _split(sentence: str | Iterable[str]) -> Sentence:
+    return tuple(sentence.split()) if isinstance(sentence, str) else tuple(sentence)
+
+
+def score_sentence(sentence: str | Iterable[str], word_probs: WordProbs) -> float:
+    """``(1/L) Σ_k log p(w_k)`` over the L words of ``sentence`` (a string or a sequence of words); -inf if a word has p = 0."""
+    return float(score_sentences([sentence], word_probs)[0])
+
+
+def score_sentences(sentences: Iterable[str | Iterable[str]], word_probs: WordProbs) -> np.ndarray:
+    """The score of each sentence (see :func:`score_sentence`), shape (n_sentences,)."""
+    sents = [_split(s) for s in sentences]
+    if any(len(s) == 0 for s in sents):
+        raise VocabularyError("an empty sentence has no score (the score is a mean over its words)")
+    vocab = sorted({w for s in sents for w in s})
+    lp = LogProbs.from_probs(vocab, word_probs)
+    pos = {w: i for i, w in enumerate(vocab)}
+    out = np.empty(len(sents))
+    for k, s in enumerate(sents):
+        n_zero, total = _exact(lp, [pos[w] for w in s])
+        out[k] = _score(lp, n_zero, total, len(s))
+    return out
+
+
+def _frame(rows: list[tuple[Sentence, float]]) -> pd.DataFrame:
+    return pd.DataFrame(
+        {
+            "rank": np.arange(1, len(rows) + 1),
+            "sentence": [" ".join(s) for s, _ in rows],
+            "score": np.array([sc for _, sc in rows], dtype=float),
+            "length": np.array([len(s) for s, _ in rows], dtype=int),
+        },
+        columns=NBEST_COLUMNS,
+    )
+
+
+def rank_sentences(
+    sentences: Iterable[str | Iterable[str]], word_probs: WordProbs, n: int | None = None
+) -> pd.DataFrame:
+    """The distinct ``sentences`` ranked by score (ties as in :func:`nbest`), the best ``n`` (all if None).
+
+    Returns
+    -------
+    DataFrame with columns rank (1 = best), sentence, score, length; one row per distinct sentence.
+    """
+    sents = sorted({_split(s) for s in sentences})
+    if any(len(s) == 0 for s in sents):
+        raise VocabularyError("an empty sentence has no score (the score is a mean over its words)")
+    vocab = sorted({w for s in sents for w in s})
+    lp = LogProbs.from_probs(vocab, word_probs)
+    pos = {w: i for i, w in enumerate(vocab)}
+    keyed = []
+    for s in sents:
+        n_zero, total = _exact(lp, [pos[w] for w in s])
+        keyed.append((_rank_key(n_zero, total, len(s), s), _score(lp, n_zero, total, len(s))))
+    best = heapq.nsmallest(n, keyed) if n is not None else sorted(keyed)
+    return _frame([(k[2], sc) for k, sc in best])
+
+
+# ------------------------------------------------------------------------------------------------ N-best
+def nbest(
+    grammar: Grammar | WordNetwork | None,
+    word_probs: WordProbs,
+    n: int = 10,
+    max_length: int | None = None,
+    must_contain: Iterable[str] | None = None,
+    exclude: Iterable[str] | None = None,
+) -> pd.DataFrame:
+    """The exact ``n`` best sentences of the grammar under the mean log word probability.
+
+    Parameters
+    ----------
+    grammar : a Grammar, its compiled WordNetwork (faster when reused), or None for glu's default grammar
+    word_probs : P(word = present | evidence) for every word of the grammar (e.g. :func:`word_probabilities`)
+    n : how many sentences (fewer if the grammar has fewer)
+    max_length : only sentences of at most this many words (required when the grammar is infinite)
+    must_contain : only sentences with at least one of these words (e.g. the colour words)
+    exclude : only sentences with none of these words
+
+    Returns
+    -------
+    DataFrame with columns rank (1 = best), sentence (words separated by spaces), score (float, the mean
+    log probability; -inf with a zero-probability word), length (words); at most ``n`` rows, best first.
+    """
+    if int(n) != n or n < 1:
+        raise EvidenceError(f"the number of sentences must be a whole number ≥ 1, not {n!r}")
+    n = int(n)
+    net = _network(grammar)
+    if must_contain is not None or exclude is not None:
+        must = None if must_contain is None else list(must_contain)
+        unknown = sorted(set(must or ()) - set(net.words))
+        if unknown:
+            raise VocabularyError(
+                f"the grammar has no word(s) {', '.join(unknown)}; its words: {', '.join(net.words)}"
+            )
+        net = restrict(net, must, exclude)
+    limit = net.check_length_limit(max_length)
+    lp = LogProbs.from_probs(net.words, word_probs)
+    zero, num, words = lp.zero, lp.num, net.words
+    # cells[s]: the n best suffixes of exactly l words from state s, as (n_zero, -sum, words), best first
+    cells: list[list[tuple[int, int, Sentence]]] = [[(0, 0, ())] if f else [] for f in net.final]
+    candidates: list[tuple[tuple, float]] = []
+    for length in range(1, limit + 1):
+        new_cells = []
+        for arcs in net.arcs:
+            merged = [
+                (z + zero[w], neg - num[w], (words[w], *ws)) for w, t in arcs for z, neg, ws in cells[t]
+            ]  # fmt: skip
+            new_cells.append(heapq.nsmallest(n, merged) if len(merged) > n else sorted(merged))
+        cells = new_cells
+        for z, neg, ws in cells[net.start]:
+            candidates.append((_rank_key(z, -neg, length, ws), _score(lp, z, -neg, length)))
+        if not any(cells):
+            break
+    best = heapq.nsmallest(n, candidates)
+    return _frame([(k[2], sc) for k, sc in best])
+
+
+def sample_nbest(
+    grammar: Grammar | None, word_probs: WordProbs, n: int = 10, n_samples: int = 10_000, seed: int | None = 0
+) -> pd.DataFrame:
+    """The originals' method: the ``n`` best distinct sentences among ``n_samples`` random ones (HSGen-like, seeded).
+
+    Returns
+    -------
+    DataFrame with columns rank, sentence, score, length (as :func:`nbest`).
+    """
+    g = load_grammar() if grammar is None else grammar
+    if not isinstance(g, Grammar):
+        raise TypeError("random sampling walks the grammar itself: pass a Grammar, not a WordNetwork")
+    return rank_sentences(sample_sentences(g, n_samples, seed), word_probs, n)
+
+
+def all_scores(grammar: Grammar | WordNetwork | None, word_probs: WordProbs) -> np.ndarray:
+    """The score of every sentence of a finite grammar, vectorised, in no particular order; shape (n_sentences,).
+
+    Sums are ordinary floating-point sums (not the exact ones of :func:`nbest`); use it for distributions
+    and ranks, up to :data:`MAX_ALL_SCORES` sentences.
+    """
+    net = _network(grammar)
+    total = count_sentences(net)
+    if total > MAX_ALL_SCORES:
+        raise GrammarError(
+            f"the grammar has {total} sentences; all_scores handles up to {MAX_ALL_SCORES}", net.source
+        )
+    lp = LogProbs.from_probs(net.words, word_probs)
+    order = net.topological_order
+    assert order is not None  # count_sentences raised for an infinite grammar
+    # per state, length → sums of log p over every suffix of that many words; a state's arrays are freed
+    # when its last predecessor is done, and the start state writes the means straight into the output
+    n_preds = [0] * net.n_states
+    for arcs in net.arcs:
+        for _, t in arcs:
+            n_preds[t] += 1
+    suffix: dict[int, dict[int, np.ndarray]] = {}
+    out = np.empty(total - (1 if net.final[net.start] else 0))
+    for s in reversed(order):
+        if s == net.start:
+            k = 0
+            for w, t in net.arcs[s]:
+                for length, sums in suffix[t].items():
+                    chunk = out[k : k + len(sums)]
+                    np.add(sums, lp.logp[w], out=chunk)
+                    chunk /= length + 1
+                    k += len(sums)
+            break
+        parts: dict[int, list[np.ndarray]] = {0: [np.zeros(1)]} if net.final[s] else {}
+        for w, t in net.arcs[s]:
+            for length, sums in suffix[t].items():
+                parts.setdefault(length + 1, []).append(sums + lp.logp[w])
+            n_preds[t] -= 1
+            if n_preds[t] == 0:
+                del suffix[t]
+        suffix[s] = {length: np.concatenate(p) for length, p in parts.items()}
+    return out
+
+
+def describe(
+    engine: Any,
+    evidence: Mapping[str, str | int] | None = None,
+    soft: Mapping[str, Any] | None = None,
+    soft_rule: str = "virtual",
+    n: int = 10,
+    grammar: Grammar | WordNetwork | None = None,
+    must_contain: Iterable[str] | None = None,
+) -> pd.DataFrame:
+    """The exact ``n`` best descriptions given evidence: :func:`nbest` over :func:`word_probabilities`.
+
+    Returns
+    -------
+    DataFrame with columns rank, sentence, score, length (see :func:`nbest`).
+    """
+    probs = word_probabilities(engine, evidence, soft, soft_rule)
+    return nbest(grammar, probs, n, must_contain=must_contain)

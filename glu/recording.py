@@ -1,0 +1,176 @@
+"""Rerun recordings (``.rrd``) of experiments that unfold over time: gestures and beliefs, frame by frame.
+
+One function per concept (the trajectory, the HMM series, the posterior bars, the scene text), a blueprint
+built by a function, explicit ``frame`` and ``time`` timelines, whole series sent with ``send_columns``.
+Each file is written headless through its own :class:`rerun.RecordingStream` with an explicit recording id
+and closed with ``disconnect()`` so the footer is written; open it with ``rerun FILE.rrd``.
+
+Layout of a recording written by :func:`write_anticipation_recording`::
+
+    /scene                     markdown: what is happening, the data source (static)
+    /hand/position             the hand at frame t (Points3D)
+    /hand/path                 the path so far (LineStrips3D, growing)
+    /hmm/loglik_per_frame/<A>  (1/t) log L(G_1^t | A), one series per action model
+    /hmm/p_hmm/<A>             p_HMM(A | G_1^t)
+    /fusion/ObjVel             bar chart of p_comb(ObjVel | Shape, Size, G_1^t), updated every few frames
+    /fusion/Action             bar chart of p_comb(Action | …)
+    /description               the best verbal description so far (TextLog), if given
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+ACTION_RGB = {
+    "grasp": (76, 114, 176),
+    "tap": (221, 132, 82),
+    "touch": (85, 168, 104),
+    "push": (129, 114, 179),
+}
+
+
+def _rr():
+    import rerun as rr
+
+    return rr
+
+
+def new_recording(path: str | os.PathLike, recording_id: str, blueprint=None, application_id: str = "glu"):
+    """Open a RecordingStream that writes to ``path`` (log time off, so same data → same content)."""
+    rr = _rr()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rec = rr.RecordingStream(application_id, recording_id=recording_id, send_properties=False)
+    rec.set_log_time_enabled(False)
+    rec.save(str(path), default_blueprint=blueprint)
+    return rec
+
+
+def anticipation_blueprint(actions: Sequence[str]):
+    """Viewer layout: the hand in 3-D and the scene text on the left; HMM series and fused bars on the right."""
+    import rerun.blueprint as rrb
+
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Vertical(
+                rrb.Spatial3DView(origin="/hand", name="hand trajectory"),
+                rrb.TextDocumentView(origin="/scene", name="scene"),
+                rrb.TextLogView(origin="/description", name="description"),
+                row_shares=[3, 1, 1],
+            ),
+            rrb.Vertical(
+                rrb.TimeSeriesView(origin="/hmm/loglik_per_frame", name="(1/t) log L(G | A)"),
+                rrb.TimeSeriesView(
+                    origin="/hmm/p_hmm", name="p_HMM(A | G)", axis_y=rrb.ScalarAxis(range=(0.0, 1.0))
+                ),
+                rrb.Horizontal(
+                    rrb.BarChartView(origin="/fusion/ObjVel", name="p_comb(ObjVel)"),
+                    rrb.BarChartView(origin="/fusion/Action", name="p_comb(Action)"),
+                ),
+            ),
+            column_shares=[1, 1],
+        ),
+        rrb.TimePanel(state="collapsed"),
+        collapse_panels=True,
+    )
+
+
+def log_scene(rec, markdown: str) -> None:
+    """The static text panel describing the scene."""
+    rr = _rr()
+    rec.log("scene", rr.TextDocument(markdown, media_type="text/markdown"), static=True)
+
+
+def log_trajectory(rec, xyz: np.ndarray, frames: np.ndarray, seconds: np.ndarray) -> None:
+    """The hand position and its growing path, one row per frame (xyz: shape (n_frames, 3))."""
+    rr = _rr()
+    xyz = np.asarray(xyz, dtype=np.float32)
+    for k, (f, t) in enumerate(zip(frames, seconds, strict=True)):
+        rec.set_time("frame", sequence=int(f))
+        rec.set_time("time", duration=float(t))
+        rec.log("hand/position", rr.Points3D(xyz[k : k + 1], radii=0.02, colors=(255, 200, 0)))
+        rec.log("hand/path", rr.LineStrips3D([xyz[: k + 1]], radii=0.004, colors=(200, 200, 200)))
+
+
+def log_series(
+    rec, entity: str, values: np.ndarray, names: Sequence[str], frames: np.ndarray, seconds: np.ndarray
+) -> None:
+    """One time series per column of ``values`` (shape (n_frames, n_series)) under ``entity/<name>``."""
+    rr = _rr()
+    values = np.asarray(values, dtype=float)
+    for j, name in enumerate(names):
+        color = ACTION_RGB.get(name, (120, 120, 120))
+        rec.log(f"{entity}/{name}", rr.SeriesLines(names=name, colors=color), static=True)
+        finite = np.isfinite(values[:, j])
+        rec.send_columns(
+            f"{entity}/{name}",
+            indexes=[
+                rr.TimeColumn("frame", sequence=np.asarray(frames)[finite].astype(np.int64)),
+                rr.TimeColumn("time", duration=np.asarray(seconds)[finite].astype(float)),
+            ],
+            columns=rr.Scalars.columns(scalars=values[finite, j]),
+        )
+
+
+def log_bars(rec, entity: str, probs: np.ndarray, frames: np.ndarray, seconds: np.ndarray) -> None:
+    """A bar chart that changes over time: ``probs`` shape (n_updates, n_values), one row per update frame."""
+    rr = _rr()
+    for p, f, t in zip(np.asarray(probs, dtype=float), frames, seconds, strict=True):
+        rec.set_time("frame", sequence=int(f))
+        rec.set_time("time", duration=float(t))
+        rec.log(entity, rr.BarChart(p))
+
+
+def log_texts(rec, entity: str, texts: Sequence[str], frames: np.ndarray, seconds: np.ndarray) -> None:
+    """Text lines at given frames (e.g. the current best verbal description)."""
+    rr = _rr()
+    for text, f, t in zip(texts, frames, seconds, strict=True):
+        rec.set_time("frame", sequence=int(f))
+        rec.set_time("time", duration=float(t))
+        rec.log(entity, rr.TextLog(text, level=rr.TextLogLevel.INFO))
+
+
+def write_anticipation_recording(
+    path: str | os.PathLike,
+    recording_id: str,
+    xyz: np.ndarray,
+    seconds: np.ndarray,
+    frames: np.ndarray,
+    actions: Sequence[str],
+    loglik_per_frame: np.ndarray,
+    p_hmm: np.ndarray,
+    update_frames: np.ndarray,
+    fused: Mapping[str, np.ndarray],
+    scene: str,
+    descriptions: Sequence[str] | None = None,
+) -> Path:
+    """Write the recording of one effect-anticipation run (see the module docstring for the layout).
+
+    Parameters
+    ----------
+    xyz, seconds, frames : hand positions (n_frames, 3), their times in s from the start, frame numbers
+    actions : names of the HMM models, in the column order of ``loglik_per_frame`` and ``p_hmm``
+    loglik_per_frame, p_hmm : arrays, shape (n_frames, n_actions)
+    update_frames : frame numbers at which the fused posteriors were computed, shape (n_updates,)
+    fused : node → array, shape (n_updates, n_values), e.g. {"ObjVel": …, "Action": …}
+    scene : markdown for the scene panel
+    descriptions : the best verbal description at each update frame (optional)
+    """
+    rec = new_recording(path, recording_id, anticipation_blueprint(actions))
+    try:
+        log_scene(rec, scene)
+        log_trajectory(rec, xyz, frames, seconds)
+        log_series(rec, "hmm/loglik_per_frame", loglik_per_frame, actions, frames, seconds)
+        log_series(rec, "hmm/p_hmm", p_hmm, actions, frames, seconds)
+        upd_seconds = np.interp(update_frames, frames, seconds)
+        for node, probs in fused.items():
+            log_bars(rec, f"fusion/{node}", probs, update_frames, upd_seconds)
+        if descriptions is not None:
+            log_texts(rec, "description", descriptions, update_frames, upd_seconds)
+    finally:
+        rec.disconnect()
+    return Path(path)

@@ -1,0 +1,71 @@
+# ---
+# jupyter:
+#   jupytext:
+#     formats: py:percent
+#     text_representation:
+#       extension: .py
+#       format_name: percent
+#   kernelspec:
+#     display_name: Python 3
+#     language: python
+#     name: python3
+# ---
+
+# %% [markdown]
+# # 05 · Soft fusion: virtual evidence or Jeffrey's rule
+#
+# A gesture HMM rarely is certain. TCDS passes its whole posterior `p_HMM(A | G)` to the network as soft
+# evidence on Action. The originals enter it as *virtual (likelihood) evidence* — the BN's own belief about
+# the action is multiplied by the HMM's — while the literature they cite also defines soft evidence by
+# *Jeffrey's rule*, which sets the Action marginal to `p_HMM` exactly. Here both, side by side, on the TCDS
+# effect-prediction experiment and on a continuous sweep of `p_HMM(tap)`.
+
+# %% tags=["parameters"]
+data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+words = "lab"  # descriptions: "lab" (the paper's) or "asr"
+unseen_words = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
+n_points = 101  # points of the p_HMM(tap) sweep
+seed = 0  # seed (unused: everything here is exact)
+quick = False  # small, fast run (for tests)
+out_dir = None  # folder for figures/ and results/; None: the project's own
+
+# %%
+from glu import experiments, plots
+from glu.bn import learn_bn
+from glu.data import load_experiments
+from glu.outputs import open_outputs
+
+out = open_outputs("05_fusion_soft", data, out_dir)
+bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
+if quick:
+    n_points = 11
+
+# %% [markdown]
+# ## TCDS effect prediction with both rules
+# p_comb(ObjVel | Shape) for the TCDS rows of p_HMM [grasp, tap, touch].
+
+# %%
+table = experiments.effect_vs_soft_evidence(bn, rules=("virtual", "jeffrey"))
+out.table(table, "fusion_soft_rules")
+fig, axes = plots.new_figure(4, width=3.6)
+plots.plot_effect_vs_soft_evidence(table, axes[:2], rule="virtual")
+plots.plot_effect_vs_soft_evidence(table, axes[2:], rule="jeffrey")
+out.figure(fig, "fusion_soft_rules")
+
+# %% [markdown]
+# ## A continuous sweep of p_HMM(tap)
+
+# %%
+fig, axes = plots.new_figure(2, width=4.6)
+for ax, shape in zip(axes, ("sphere", "box"), strict=True):
+    sweep = experiments.soft_evidence_sweep(bn, {"Shape": shape}, n_points=n_points)
+    out.table(sweep, f"fusion_soft_sweep_{shape}")
+    plots.plot_soft_sweep(sweep, ax)
+out.figure(fig, "fusion_soft_sweep")
+pivot = sweep.pivot_table(index="p_hmm_tap", columns=["rule", "ObjVel"], values="p")
+pivot.iloc[:: max(1, len(pivot) // 5)]
+
+# %% [markdown]
+# The two rules agree at the ends (no doubt about the action) and differ in between: virtual evidence lets
+# the network's own knowledge of which actions move a sphere pull the belief, while Jeffrey's rule trusts
+# the HMM's numbers as they are and mixes the action-conditional predictions linearly.

@@ -1,0 +1,394 @@
+"""Sentence scores and the exact N-best: against brute force over every sentence, on tiny and full grammars."""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import json
+import math
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from language_reference import brute_force_nbest, exact_key, exact_logs, expand, grammar_text, plain_score
+
+from glu.cli import main
+from glu.errors import EvidenceError, GluError, VocabularyError
+from glu.language import (
+    all_scores,
+    compile_network,
+    default_network,
+    enumerate_sentences,
+    load_grammar,
+    nbest,
+    parse_grammar,
+    rank_sentences,
+    sample_nbest,
+    score_sentence,
+    score_sentences,
+)
+from glu.schema import WORDS
+
+
+def _random_probs(seed: int, words=WORDS) -> dict[str, float]:
+    rng = np.random.default_rng(seed)
+    return dict(zip(words, rng.uniform(0.01, 1.0, len(words)).tolist(), strict=True))
+
+
+# ---------------------------------------------------------------- scores
+def test_score_is_the_mean_log_probability_counting_repeated_words():
+    p = {"the": 0.9, "robot": 0.5, "taps": 0.2, "ball": 0.4}
+    by_hand = (2 * math.log(0.9) + math.log(0.5) + math.log(0.2) + math.log(0.4)) / 5
+    assert score_sentence("the robot taps the ball", p) == pytest.approx(by_hand, abs=1e-15)
+    assert score_sentence(["the", "ball"], p) == pytest.approx((math.log(0.9) + math.log(0.4)) / 2, abs=1e-15)
+    assert score_sentence("the taps", {"the": 1.0, "taps": 0.0}) == -math.inf
+    got = score_sentences(["the ball", "robot"], pd.Series(p))
+    assert got.shape == (2,) and got[1] == pytest.approx(math.log(0.5))
+
+
+def test_scores_are_exact_so_reordered_words_tie():
+    p = _random_probs(0)
+    a = score_sentence("the robot taps the big ball and the ball rolls", p)
+    b = score_sentence("the robot taps the ball and the big ball rolls", p)
+    assert a == b  # exactly, though a plain float sum depends on the order
+
+
+def test_bad_word_probabilities():
+    with pytest.raises(VocabularyError, match="zzz"):
+        score_sentence("the zzz", {"the": 0.5})
+    with pytest.raises(VocabularyError, match="empty"):
+        score_sentence("", {"the": 0.5})
+    with pytest.raises(EvidenceError, match="outside"):
+        score_sentence("the", {"the": 1.5})
+    with pytest.raises(EvidenceError, match="outside"):
+        score_sentence("the", {"the": float("nan")})
+    with pytest.raises(EvidenceError, match="not a number"):
+        score_sentence("the", {"the": "high"})
+    with pytest.raises(VocabularyError, match="twice"):
+        score_sentence("the", pd.Series([0.5, 0.6], index=["the", "the"]))
+    assert score_sentence("the", {"the": 1 + 1e-12}) == 0.0  # rounding noise is clipped
+
+
+def test_grammar_words_missing_from_the_model_are_an_error():
+    probs = _random_probs(1)
+    del probs["square"]
+    with pytest.raises(VocabularyError, match="square"):
+        nbest(None, probs)
+    with pytest.raises(VocabularyError, match="purple"):
+        nbest(None, _random_probs(1), must_contain=["purple"])
+    with pytest.raises(GluError):
+        nbest(None, _random_probs(1), n=0)
+
+
+# ---------------------------------------------------------------- exact N-best == brute force
+def test_ties_are_broken_by_the_words():
+    g = parse_grammar("( (a | b) (a | b) )")
+    got = nbest(g, {"a": 0.5, "b": 0.5}, n=4)
+    assert list(got["sentence"]) == ["a a", "a b", "b a", "b b"]
+    assert list(got["rank"]) == [1, 2, 3, 4] and np.all(got["score"] == math.log(0.5))
+    assert list(nbest(g, {"a": 0.5, "b": 0.5}, n=2)["sentence"]) == ["a a", "a b"]
+
+
+def test_longer_sentences_can_win_the_mean():
+    g = parse_grammar("( x [y y y] )")
+    got = nbest(g, {"x": 0.1, "y": 0.9}, n=2)
+    assert list(got["sentence"]) == ["x y y y", "x"]
+    assert list(got["length"]) == [4, 1]
+
+
+def test_zero_probability_sentences_come_last_fewest_impossible_words_first():
+    g = parse_grammar("( (a | z) (b | z) )")
+    got = nbest(g, {"a": 0.5, "b": 0.25, "z": 0.0}, n=4)
+    assert list(got["sentence"]) == ["a b", "a z", "z b", "z z"]
+    assert np.isinf(got["score"].iloc[1:]).all()
+
+
+PROB_VALUES = [0.0, 0.05, 0.25, 0.5, 0.5, 0.8, 1.0]
+
+
+def _tree_strategy():
+    leaves = st.sampled_from("abcd").map(lambda w: ("w", w))
+
+    def extend(children):
+        return st.one_of(
+            st.lists(children, min_size=2, max_size=3).map(lambda xs: ("seq", xs)),
+            st.lists(children, min_size=2, max_size=4).map(lambda xs: ("alt", xs)),
+            children.map(lambda x: ("opt", x)),
+            children.map(lambda x: ("star", x)),
+        )
+
+    return st.recursive(leaves, extend, max_leaves=9)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    tree=_tree_strategy(),
+    sub=_tree_strategy(),
+    probs=st.fixed_dictionaries({w: st.sampled_from(PROB_VALUES) for w in "abcd"}),
+    n=st.integers(1, 8),
+    max_length=st.integers(1, 6),
+)
+def test_nbest_equals_brute_force_on_small_grammars(tree, sub, probs, n, max_length):
+    sentence = ("seq", [tree, ("opt", ("ref", "v")), ("ref", "v")])
+    defs = {"v": sub}
+    g = parse_grammar(grammar_text(sentence, defs))
+    expected = brute_force_nbest(expand(sentence, defs, max_length), probs, n)
+    got = nbest(g, probs, n, max_length=max_length)
+    assert [tuple(s.split()) for s in got["sentence"]] == [s for s, _ in expected]
+    np.testing.assert_allclose(got["score"].to_numpy(), [sc for _, sc in expected], rtol=1e-12, atol=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(probs=st.fixed_dictionaries({w: st.sampled_from(PROB_VALUES) for w in "abc"}), n=st.integers(1, 6))
+def test_nbest_with_must_contain_equals_brute_force(probs, n):
+    sentence = (
+        "seq",
+        [("alt", [("w", "a"), ("w", "b")]), ("opt", ("w", "c")), ("alt", [("w", "a"), ("w", "c")])],
+    )
+    g = parse_grammar(grammar_text(sentence))
+    every = [s for s in expand(sentence) if "c" in s]
+    got = nbest(g, probs, n, must_contain=["c"])
+    assert [tuple(s.split()) for s in got["sentence"]] == [s for s, _ in brute_force_nbest(every, probs, n)]
+
+
+def test_nbest_on_a_grammar_small_enough_to_score_every_sentence():
+    # the default grammar without sizes and colours: 3·36·5·2·5·12 = 32,400 sentences, scored one by one
+    g = parse_grammar(
+        load_grammar().format().replace("$thing = the [$size] [$colour] $noun;", "$thing = the $noun;")
+    )
+    sentences = list(enumerate_sentences(g))
+    assert len(sentences) == 3 * 36 * 5 * 2 * 5 * 12
+    for seed in range(3):
+        probs = _random_probs(seed)
+        probs.update({"the": 1.0, "is": 0.5, "taps": 0.0})  # exact zeros, ones and ties
+        got = nbest(g, probs, 10)
+        expected = brute_force_nbest(sentences, probs, 10)
+        assert [tuple(s.split()) for s in got["sentence"]] == [s for s, _ in expected]
+        np.testing.assert_allclose(got["score"], [sc for _, sc in expected], rtol=1e-12)
+
+
+def test_nbest_on_the_full_grammar_matches_vectorised_scores_of_all_sentences():
+    net = default_network()
+    for seed in (0, 1):
+        probs = _random_probs(seed)
+        scores = all_scores(net, probs)
+        assert scores.shape == (9_331_200,)
+        top = np.sort(scores)[::-1][:10]
+        got = nbest(net, probs, 10)
+        np.testing.assert_allclose(got["score"], top, rtol=1e-12)
+        for s, sc in zip(got["sentence"], got["score"], strict=True):  # and the sentences carry those scores
+            assert plain_score(tuple(s.split()), probs) == pytest.approx(sc, rel=1e-12)
+
+
+def test_exact_nbest_is_fast():
+    net = default_network()
+    probs = _random_probs(3)
+    nbest(net, probs, 10)
+    t0 = time.perf_counter()
+    nbest(net, probs, 10)
+    assert time.perf_counter() - t0 < 0.5
+
+
+@pytest.mark.slow
+def test_nbest_equals_brute_force_over_the_full_grammar():
+    """All 9,331,200 sentences, streamed slot by slot from the reference expander and scored one by one (~1 min)."""
+    g = load_grammar()
+    tree = {name: _as_tree(e) for name, e in g.definitions.items()}
+    slots = [sorted(expand(("ref", item.name), tree)) for item in g.sentence.items]
+    assert math.prod(len(s) for s in slots) == 9_331_200
+    for seed in (5, 6):
+        probs = _random_probs(seed)
+        logs = exact_logs(probs)
+        best = heapq.nsmallest(
+            10, (sum(p, ()) for p in itertools.product(*slots)), key=lambda s: exact_key(s, logs)
+        )
+        got = nbest(g, probs, 10)
+        assert [tuple(s.split()) for s in got["sentence"]] == best
+
+
+def _as_tree(e):
+    """A parsed expression as a reference tree (the default grammar has words, refs, seq, alt, opt)."""
+    from glu.language.grammar import Alt, Opt, Ref, Seq, Word
+
+    if isinstance(e, Word):
+        return ("w", e.text)
+    if isinstance(e, Ref):
+        return ("ref", e.name)
+    if isinstance(e, Seq):
+        return ("seq", [_as_tree(x) for x in e.items])
+    if isinstance(e, Alt):
+        return ("alt", [_as_tree(x) for x in e.options])
+    if isinstance(e, Opt):
+        return ("opt", _as_tree(e.expr))
+    raise TypeError(e)
+
+
+# ---------------------------------------------------------------- sampling
+def test_sample_nbest_ranks_the_distinct_sampled_sentences():
+    g = load_grammar()
+    probs = _random_probs(4)
+    got = sample_nbest(g, probs, n=5, n_samples=300, seed=2)
+    again = sample_nbest(g, probs, n=5, n_samples=300, seed=2)
+    pd.testing.assert_frame_equal(got, again)
+    exact = nbest(g, probs, 1)
+    assert (got["score"] <= exact["score"].iloc[0]).all()
+    ranked = rank_sentences(["b a", "a b", "a b"], {"a": 0.5, "b": 0.5})
+    assert list(ranked["sentence"]) == ["a b", "b a"]
+
+
+def test_compiled_network_and_grammar_give_the_same_nbest():
+    probs = _random_probs(6)
+    g = load_grammar()
+    pd.testing.assert_frame_equal(nbest(g, probs, 5), nbest(compile_network(g), probs, 5))
+
+
+# ---------------------------------------------------------------- the BN: word probabilities given evidence
+@pytest.fixture(scope="module")
+def engine(learned_bn):
+    from glu.bn import InferenceEngine
+
+    return InferenceEngine(learned_bn)
+
+
+@pytest.mark.shared_data
+def test_and_but_follow_the_objects_velocity(engine):
+    from glu.language import describe
+
+    slow = describe(engine, {"Action": "grasp", "ObjVel": "slow"}, n=10)
+    medium = describe(engine, {"Action": "grasp", "ObjVel": "medium"}, n=10)
+    assert all("but" in s.split() for s in slow["sentence"])
+    assert all("and" in s.split() for s in medium["sentence"])
+
+
+@pytest.mark.shared_data
+def test_word_probabilities_match_the_word_marginals(engine):
+    from glu.language import word_probabilities
+
+    ev = {"Action": "grasp", "ObjVel": "slow"}
+    probs = word_probabilities(engine, ev)
+    q = engine.query(["and", "but"], ev)
+    assert probs["and"] == pytest.approx(q["and"][1]) and probs["but"] == pytest.approx(q["but"][1])
+
+
+@pytest.mark.shared_data
+def test_soft_evidence_certain_of_an_action_equals_hard_evidence(engine):
+    from glu.language import describe
+
+    hard = describe(engine, {"Action": "tap", "Shape": "sphere"}, n=5)
+    soft = describe(engine, {"Shape": "sphere"}, soft={"Action": {"grasp": 0, "tap": 1, "touch": 0}}, n=5)
+    assert list(hard["sentence"]) == list(soft["sentence"])
+    np.testing.assert_allclose(hard["score"], soft["score"], rtol=1e-9)
+    fused = describe(engine, {"Shape": "sphere"}, soft={"Action": [0.2, 0.6, 0.2]}, n=5)
+    assert len(fused) == 5
+
+
+@pytest.mark.shared_data
+def test_tcds_experiments(engine):
+    from glu.language import experiments as ex
+
+    yellow = ex.yellow_sphere_nbest(engine)
+    assert list(yellow.columns) == ["rank", "sentence", "score", "length"] and len(yellow) == 10
+    assert yellow["score"].is_monotonic_decreasing
+    ab = ex.and_but_probabilities(engine)
+    p = ab.set_index(["ObjVel", "word"])["p"]
+    assert p["slow", "but"] > p["slow", "and"] and p["medium", "and"] > p["medium", "but"]
+    nb = ex.and_but_nbest(engine, n=3)
+    assert list(nb["conjunction"]) == ["and"] * 3 + ["but"] * 3
+    fig8 = ex.fig8_descriptions(engine)
+    assert len(fig8) == 4
+    for row in fig8.itertuples():
+        assert set(row.colour_sentence.split()) & {"green", "yellow", "blue"}
+        assert row.colour_score <= row.score
+    cmp = ex.sampling_vs_exact(engine, ex.EVIDENCE_AND_BUT["slow"], seeds=[0, 1], n_samples=2000)
+    assert (cmp["gap"] >= 0).all() and (cmp["sample_rank"] >= 1).all()
+    assert (cmp["found_best"] == (cmp["gap"] == 0)).all()
+    assert ((cmp["p_draw_best"] > 0) & (cmp["p_draw_best"] < 1)).all()
+
+
+# ---------------------------------------------------------------- the command line
+@pytest.mark.shared_data
+def test_cli_done_when(shared_data, capsys):
+    for objvel, word in [("slow", "but"), ("medium", "and")]:
+        assert main(["describe", "--data", str(shared_data), "--evidence", "Action=grasp", f"ObjVel={objvel}",
+                     "--nbest", "10"]) == 0  # fmt: skip
+        out = capsys.readouterr().out
+        lines = [ln for ln in out.splitlines() if not ln.startswith("#")]
+        assert lines[0].split() == ["rank", "score", "sentence"]
+        assert len(lines) == 11 and word in lines[1].split()
+        assert "learned from real data" in out
+
+
+def test_cli_json_and_sampling(capsys):
+    assert (
+        main(["describe", "--data", "synthetic", "--evidence", "Action=tap", "--nbest", "3", "--json"]) == 0
+    )
+    out = json.loads(capsys.readouterr().out)
+    assert out["method"] == "exact" and len(out["nbest"]) == 3 and out["grammar"]["n_sentences"] == 9_331_200
+    assert "synthetic" in out["model"]
+    assert (
+        main(["describe", "--data", "synthetic", "--sample", "500", "--seed", "1", "--nbest", "3", "--json"])
+        == 0
+    )
+    out = json.loads(capsys.readouterr().out)
+    assert out["method"] == "sample" and out["n_samples"] == 500 and out["seed"] == 1
+    assert out["nbest"][0]["score"] <= out["exact_best"]["score"]
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--seed", "3"], "--sample"),
+        (["--evidence", "Action"], "malformed"),
+        (["--evidence", "Action=jump"], "jump"),
+        (["--grammar", "/nonexistent.grm"], "no such grammar file"),
+        (["--must-contain", "purple"], "purple"),
+    ],
+)
+def test_cli_bad_input_is_one_line(argv, message, capsys):
+    assert main(["describe", "--data", "synthetic", *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def test_cli_bad_grammars(tmp_path, capsys):
+    bad = tmp_path / "bad.grm"
+    bad.write_text("$a = the robot;\n( $a $b )\n")
+    assert main(["describe", "--data", "synthetic", "--grammar", str(bad)]) == 2
+    assert f"{bad}:2:6: $b is not defined" in capsys.readouterr().err
+    unknown = tmp_path / "unknown.grm"
+    unknown.write_text("( the robot zzz )\n")
+    assert main(["describe", "--data", "synthetic", "--grammar", str(unknown)]) == 2
+    assert "zzz" in capsys.readouterr().err
+    loop = tmp_path / "loop.grm"
+    loop.write_text("( the robot {taps} )\n")
+    assert main(["describe", "--data", "synthetic", "--grammar", str(loop)]) == 2
+    assert "--max-length" in capsys.readouterr().err
+    assert main(["describe", "--data", "synthetic", "--grammar", str(loop), "--max-length", "4"]) == 0
+    assert "the robot taps taps" in capsys.readouterr().out
+
+
+# ---------------------------------------------------------------- plots
+def test_plots_draw_what_they_are_given():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from glu.language.plots import plot_and_but, plot_nbest, plot_sampling
+
+    df = nbest(parse_grammar("( (a | b) [c] )"), {"a": 0.5, "b": 0.2, "c": 0.9}, n=4)
+    fig, axes = plt.subplots(1, 3)
+    plot_nbest(axes[0], df, title="t", highlight="c")
+    assert [t.get_text() for t in axes[0].get_yticklabels()] == list(df["sentence"])
+    assert len(axes[0].patches) == 4
+    probs = pd.DataFrame({"ObjVel": ["medium", "medium", "slow", "slow"], "word": ["and", "but"] * 2,
+                          "p": [0.8, 0.2, 0.1, 0.9]})  # fmt: skip
+    plot_and_but(axes[1], probs)
+    heights = sorted(round(p.get_height(), 6) for p in axes[1].patches)
+    assert heights == [0.1, 0.2, 0.8, 0.9]
+    plot_sampling(axes[2], np.array([-1.0, -2.0, -np.inf]), np.array([-2.0]), -1.0)
+    assert any("1 score -inf" in t.get_text() for t in axes[2].get_legend().get_texts())
+    plt.close(fig)
