@@ -226,3 +226,29 @@ def plot_tap_thresholds(df: pd.DataFrame, ax: Axes) -> None:
     ax.invert_yaxis()
     ax.set_xlim(0, 1)
     ax.set_xlabel(r"$p_{HMM}(tap)$ needed for tap to win")
+
+
+def plot_anticipation(
+    curves: pd.DataFrame, predictions: pd.DataFrame, axes: Sequence[Axes], node: str = "ObjVel"
+) -> None:
+    """TCDS effect anticipation: (1/t) log L per model (top) and p_comb(node) every few frames (bottom)."""
+    top, bottom = axes
+    for action, g in curves.groupby("action", sort=False):
+        top.plot(g["frame"], g["loglik_per_frame"], color=ACTION_COLORS.get(action, "0.4"), label=action)
+    top.set_ylabel(r"$\frac{1}{t}\log L(G_1^t \mid A)$")
+    top.legend(fontsize=8, frameon=False)
+    title = f"{curves['case'].iloc[0]} — HMMs: {curves['models'].iloc[0]}"
+    top.set_title(title, fontsize=9)
+    d = predictions[predictions["node"] == node]
+    frames = np.array(sorted(d["frame"].unique()))
+    width = 0.8 * (float(np.median(np.diff(frames))) if len(frames) > 1 else 1.0)
+    bottom_acc = np.zeros(len(frames))
+    for v in dict.fromkeys(d["value"]):
+        p = d[d["value"] == v].set_index("frame").loc[frames, "p"].to_numpy()
+        bottom.bar(frames, p, width=width, bottom=bottom_acc, color=VALUE_COLORS.get(v, ACTION_COLORS.get(v, "0.6")),
+                   label=v, edgecolor="0.2", linewidth=0.3)  # fmt: skip
+        bottom_acc += p
+    bottom.set_ylim(0, 1)
+    bottom.set_ylabel(rf"$p_{{comb}}({node})$")
+    bottom.set_xlabel("frame")
+    bottom.legend(fontsize=7, frameon=False, loc="center left", bbox_to_anchor=(1.0, 0.5))

@@ -17,6 +17,7 @@ from glu.errors import GluError
 COMMAND_MODULES: tuple[str, ...] = (
     "glu.cli.data_cmds",
     "glu.cli.bn_cmds",
+    "glu.cli.gesture_cmds",
     "glu.cli.reproduce_cmds",
     "glu.cli.language_cmds",
 )

@@ -1,0 +1,136 @@
+"""Speed of gesture recognition: glu's forward recursion and streaming step against hmmlearn's ``score``.
+
+Run on demand (not a test)::
+
+    python benchmarks/bench_hmm.py [--data DIR] [--repeats N]
+
+Measures, for a 150-frame sequence:
+
+1. the whole prefix log-likelihood curve ``log L(G_1^t | A)``, t = 1 … 150, of one model: glu computes the
+   emissions once and runs one forward pass (target ≤ 2 ms); hmmlearn rescores every prefix with
+   ``score`` (about 1.3 s);
+2. the log-likelihood of the whole sequence under one model (one ``score`` call);
+3. one new frame for all four models of a bank: glu's :class:`~glu.hmm.GestureStream` step (target
+   ≤ 100 µs) against rescoring the grown prefix with hmmlearn (four ``score`` calls).
+
+The models are the originals' four 2013 HMMs (grasp, tap, touch = push, garbage; Q = 6, M = 3) and the
+sequence is frames 216–365 of ``tap1_hand`` when the real data is found; otherwise four models trained on
+synthetic gestures and a synthetic sequence. Timings are medians over repeats, on one BLAS thread.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+
+import numpy as np
+
+
+def _median_time(fn, repeats: int, number: int = 1) -> float:
+    """Median over ``repeats`` of the mean time of ``number`` calls, in seconds."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(number):
+            fn()
+        times.append((time.perf_counter() - t0) / number)
+    return statistics.median(times)
+
+
+def _setup(data: str | None):
+    from glu.data.source import resolve_data
+    from glu.hmm import ORIGINAL_MODEL_FILES, load_original_models
+    from glu.paths import shared_data_dir
+
+    root = None
+    try:
+        source = resolve_data(data)
+        root = source.root if source.is_real else None
+    except Exception:  # noqa: BLE001 - fall back to the shared copy, then synthetic
+        root = None
+    root = root or (shared_data_dir() if data is None else None)
+    if root is not None and (root / ORIGINAL_MODEL_FILES[3]).is_file():
+        rec = load_original_models(root / ORIGINAL_MODEL_FILES[3], include_garbage=True)
+        X = np.loadtxt(root / "gestures/tap1_hand/data.log")[215:365, 2:] / 1000
+        return rec, X, f"original 2013 models, tap1_hand frames 216–365 ({root})"
+    from glu.data.synthetic_gestures import GESTURES
+    from glu.gesture_eval import synthetic_corpus
+    from glu.hmm import train_recognizer
+
+    seqs = synthetic_corpus(8, seed=0, actions=GESTURES)
+    rec = train_recognizer(
+        {a: [s.xyz for s in seqs if s.action == a] for a in GESTURES}, n_iter=20, warn=False
+    )
+    X = np.concatenate([s.xyz for s in seqs])[:150]
+    return rec, X, "4 models trained on synthetic gestures, a synthetic 150-frame sequence"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark and print the table."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", help="data folder with reference-models/ and gestures/")
+    ap.add_argument("--repeats", type=int, default=7, help="repeats of each measurement (default 7)")
+    args = ap.parse_args(argv)
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        rec, X, what = _setup(args.data)
+        T = len(X)
+        models = [rec.models[a] for a in rec.actions]
+        hl = [m.to_hmmlearn() for m in models]
+        m0, h0 = models[0], hl[0]
+
+        # correctness first: the fast paths must agree with hmmlearn
+        curve = m0.loglik_curve(X)
+        ref = np.array([h0.score(X[:t]) for t in range(1, T + 1)])
+        err_curve = float(np.abs(curve - ref).max())
+        stream = rec.stream()
+        steps = np.array([stream.push(x).loglik for x in X])
+        err_stream = float(np.abs(steps[-1] - np.array([h.score(X) for h in hl])).max())
+
+        rows = []
+        glu_curve = _median_time(lambda: m0.loglik_curve(X), args.repeats, 20)
+        hl_curve = _median_time(lambda: [h0.score(X[:t]) for t in range(1, T + 1)], max(1, args.repeats // 3))
+        rows.append((f"prefix curve, {T} frames, 1 model", glu_curve, hl_curve, "≤ 2 ms"))
+
+        glu_full = _median_time(lambda: m0.loglik(X), args.repeats, 20)
+        hl_full = _median_time(lambda: h0.score(X), args.repeats, 5)
+        rows.append((f"log L of {T} frames, 1 model", glu_full, hl_full, ""))
+
+        def push_all() -> None:
+            s = rec.stream()
+            for x in X:
+                s.push(x)
+
+        glu_step = _median_time(push_all, args.repeats) / T
+        hl_step = _median_time(lambda: [h.score(X) for h in hl], args.repeats, 3)
+        rows.append((f"one new frame, {len(models)} models (stream)", glu_step, hl_step, "≤ 100 µs"))
+
+    print(f"gesture HMM benchmark: {what}")
+    print(f"models: {', '.join(f'{a} (Q={m.n_states}, M={m.n_mix})' for a, m in rec.models.items())}")
+    print(
+        f"agreement with hmmlearn: prefix curve max |Δ| = {err_curve:.2e}, stream at t={T} max |Δ| = {err_stream:.2e}"
+    )
+    print()
+    print(f"{'measurement':42s} {'glu':>12s} {'hmmlearn':>12s} {'speed-up':>10s}  target")
+    for name, g, h, target in rows:
+        ok = ""
+        if target:
+            limit = 2e-3 if "ms" in target else 100e-6
+            ok = "met" if g <= limit else "MISSED"
+        print(f"{name:42s} {_fmt(g):>12s} {_fmt(h):>12s} {h / g:>9.0f}×  {target} {ok}")
+    return 0
+
+
+def _fmt(seconds: float) -> str:
+    if seconds >= 1:
+        return f"{seconds:.2f} s"
+    if seconds >= 1e-3:
+        return f"{seconds * 1e3:.2f} ms"
+    return f"{seconds * 1e6:.1f} µs"
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,338 @@
+"""``glu gestures segment``, ``glu hmm train`` and ``glu recognize``: gestures from hand logs to p_HMM(A | G).
+
+A LOG argument is a YARP hand log (``data.log``), a recording folder holding one, or the name of a
+recording of the data folder (``tap1_hand`` → ``<data>/gestures/tap1_hand/data.log``). Frame ranges
+(``--frames A:B``) are 1-based and inclusive, in the numbering of the log, as in the papers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from glu.errors import DataError
+
+_DATA_HELP = "data folder, or 'synthetic' (default: $GLU_DATA_DIR, data/real, else synthetic)"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``gestures`` and ``hmm`` command groups and ``recognize``."""
+    g = sub.add_parser("gestures", help="inspect and segment hand-trajectory logs", description=__doc__)
+    gsub = g.add_subparsers(dest="gestures_command", metavar="SUBCOMMAND")
+    gsub.required = True
+    s = gsub.add_parser(
+        "segment",
+        help="find the gesture repetitions in a hand log and print them",
+        description="Repair a hand log (interpolate short gaps, split at long ones, replace spikes), "
+        "then find the repetitions of the gesture from the distance of the hand to its rest pose.",
+    )
+    s.add_argument("log", help="hand log: a data.log, a recording folder, or a recording name")
+    s.add_argument("--data", help=_DATA_HELP + "; used to find a recording by name")
+    s.add_argument("--plot", type=Path, metavar="PNG", help="also draw the segmentation into this image")
+    s.add_argument("--label", help="action performed (default: from the recording's name, if known)")
+    s.set_defaults(func=_segment)
+
+    h = sub.add_parser("hmm", help="train gesture HMMs", description=__doc__)
+    hsub = h.add_subparsers(dest="hmm_command", metavar="SUBCOMMAND")
+    hsub.required = True
+    t = hsub.add_parser(
+        "train",
+        help="train one left-to-right GMM-HMM per action and save the recogniser (JSON)",
+        description="Train on the automatically segmented real recordings (--data) or on synthetic "
+        "gestures (--synthetic N, N per action).",
+    )
+    src = t.add_mutually_exclusive_group()
+    src.add_argument("--data", help=_DATA_HELP)
+    src.add_argument(
+        "--synthetic", type=_positive_int, metavar="N", help="train on N synthetic gestures per action"
+    )
+    t.add_argument("-o", "--out", type=Path, required=True, metavar="RECOGNISER", help="file to write (JSON)")
+    t.add_argument(
+        "--actions", type=_actions, default=None, help="comma-separated (default: grasp,tap,touch)"
+    )
+    t.add_argument("--states", type=_positive_int, default=6, help="Q, states per HMM (default 6)")
+    t.add_argument("--mix", type=_positive_int, default=3, help="M, Gaussians per state (default 3)")
+    t.add_argument("--iter", type=_positive_int, default=200, help="most EM iterations (default 200)")
+    t.add_argument("--tol", type=_positive_float, default=1e-4, help="EM tolerance per frame (default 1e-4)")
+    t.add_argument(
+        "--noise", type=_nonneg_float, default=0.01, help="synthetic sensor noise, m (default 0.01)"
+    )
+    t.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    t.set_defaults(func=_train)
+
+    r = sub.add_parser(
+        "recognize",
+        help="posterior p_HMM(A | G) of a gesture in a hand log",
+        description="Score a hand log (or frames A:B of it) under each action's HMM and print the "
+        "log-likelihoods and the posterior with equal priors; --stream prints them after every frame.",
+    )
+    r.add_argument("log", help="hand log: a data.log, a recording folder, or a recording name")
+    r.add_argument("--frames", type=_frames, metavar="A:B", help="frames A to B (1-based, inclusive)")
+    r.add_argument(
+        "--models", default="original", metavar="original|RECOGNISER",
+        help="'original' (the 2013 models of the data folder; touch = their push model) or a recogniser "
+        "file from `glu hmm train` (default: original)",
+    )  # fmt: skip
+    r.add_argument("--data", help=_DATA_HELP)
+    r.add_argument(
+        "--stream", action="store_true", help="one line per frame: log L(G_1^t | A), p_HMM(A | G_1^t)"
+    )
+    r.add_argument("--json", action="store_true", help='print JSON: {"loglik": {…}, "posterior": {…}}')
+    r.add_argument("--repair", action="store_true", help="repair the log first (default: frames as logged)")
+    r.set_defaults(func=_recognize)
+
+
+# ------------------------------------------------------------------ argument types
+
+
+def _positive_int(s: str) -> int:
+    try:
+        v = int(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{s!r} is not an integer") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{v} must be ≥ 1")
+    return v
+
+
+def _positive_float(s: str) -> float:
+    try:
+        v = float(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{s!r} is not a number") from None
+    if not v > 0 or v == float("inf"):
+        raise argparse.ArgumentTypeError(f"{s} must be a positive number")
+    return v
+
+
+def _nonneg_float(s: str) -> float:
+    try:
+        v = float(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{s!r} is not a number") from None
+    if not 0 <= v < float("inf"):
+        raise argparse.ArgumentTypeError(f"{s} must be a number ≥ 0")
+    return v
+
+
+def _frames(s: str) -> tuple[int, int]:
+    parts = s.split(":")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        a, b = int(parts[0]), int(parts[1])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{s!r} is not A:B with integers A ≤ B, e.g. 216:351") from None
+    if not 1 <= a <= b:
+        raise argparse.ArgumentTypeError(f"{s!r}: need 1 ≤ A ≤ B (frames are 1-based, inclusive)")
+    return a, b
+
+
+def _actions(s: str) -> tuple[str, ...]:
+    from glu.data.synthetic_gestures import GESTURES
+
+    acts = tuple(a.strip() for a in s.split(",") if a.strip())
+    bad = [a for a in acts if a not in GESTURES]
+    if bad or not acts or len(set(acts)) != len(acts):
+        raise argparse.ArgumentTypeError(f"{s!r}: give distinct actions among {', '.join(GESTURES)}")
+    return acts
+
+
+# ------------------------------------------------------------------ helpers
+
+
+def _resolve_log(log: str, data: str | None) -> tuple[Path, Any]:
+    """The log file for a LOG argument, and the data source if one was needed to find it."""
+    p = Path(log)
+    if p.is_dir():
+        p = p / "data.log"
+    if p.exists():
+        return p, None
+    if "/" not in log and not log.endswith(".log"):
+        from glu.data.source import resolve_data
+
+        source = resolve_data(data)
+        if source.root is None:
+            raise DataError(
+                f"{log}: no such file, and the data source has no recordings ({source.describe()})"
+            )
+        q = source.root / "gestures" / log / "data.log"
+        if q.exists():
+            return q, source
+        names = sorted(d.name for d in (source.root / "gestures").glob("*") if (d / "data.log").exists())
+        raise DataError(f"{log}: no such file or recording in {source.root}; recordings: {', '.join(names)}")
+    raise DataError(f"{log}: no such file (expected a YARP hand log `index timestamp x y z`)")
+
+
+def _say(msg: str, quiet: bool) -> None:
+    print(msg, file=sys.stderr if quiet else sys.stdout)
+
+
+# ------------------------------------------------------------------ handlers
+
+
+def _segment(args: argparse.Namespace) -> int:
+    from glu.segmentation import original_segments, segment_recording
+    from glu.trajectories import summarize_events
+
+    path, source = _resolve_log(args.log, args.data)
+    if source is not None:
+        print(f"data: {source.describe()}")
+    seg = segment_recording(path, label=args.label)
+    print(f"log: {path} ({seg.recording})")
+    print(f"tracking: {summarize_events(seg.events)}")
+    for e in seg.events:
+        if e.kind in ("gap", "jump", "short-piece"):
+            print(f"  {e.describe()}")
+    print(f"segments: {len(seg.segments)}")
+    for i, s in enumerate(seg.segments, 1):
+        print(f"  {i}. frames {s.start}:{s.end} ({s.n_frames} frames, peak activity {s.peak:.2f})"
+              + (f"  {s.label}" if s.label else ""))  # fmt: skip
+    if seg.rejected:
+        print(f"left out: {len(seg.rejected)}")
+        for s, why in seg.rejected:
+            print(f"  frames {s.start}:{s.end}: {why}")
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from glu.data.tables import atomic_write_bytes
+
+        fig, ax = plt.subplots(figsize=(12, 4), layout="constrained")
+        from glu.segmentation import plot_segmentation
+
+        plot_segmentation(ax, seg, f"{seg.recording}: {len(seg.segments)} segments",
+                          reference=original_segments(seg.recording))  # fmt: skip
+        import io
+
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=100, metadata={"Software": None})
+        plt.close(fig)
+        atomic_write_bytes(args.plot, buf.getvalue())
+        print(f"plot: {args.plot}")
+    return 0
+
+
+def _train(args: argparse.Namespace) -> int:
+    from glu.hmm import ACTIONS, train_recognizer
+
+    actions = args.actions or ACTIONS
+    if args.synthetic:
+        from glu.gesture_eval import synthetic_corpus
+
+        print(
+            f"data: {args.synthetic} synthetic gestures per action (seed {args.seed}, noise {args.noise} m)"
+        )
+        seqs = synthetic_corpus(args.synthetic, args.seed, actions=actions, noise=args.noise)
+        meta: dict[str, Any] = {"data": f"synthetic, {args.synthetic} per action, noise {args.noise} m"}
+    else:
+        from glu.data.source import resolve_data
+        from glu.segmentation import real_segments
+
+        source = resolve_data(args.data)
+        print(f"data: {source.describe()}")
+        if source.root is None or not (source.root / "gestures").is_dir():
+            raise DataError(
+                f"the data source has no gesture recordings ({source.describe()}); "
+                "give --data DIR with gestures/, or --synthetic N"
+            )
+        seqs = real_segments(source.root)
+        meta = {"data": source.describe()}
+    by_action = {a: [s.xyz for s in seqs if s.action == a] for a in actions}
+    empty = [a for a, v in by_action.items() if not v]
+    if empty:
+        raise DataError(f"no training segments for {', '.join(empty)}")
+    for a, v in by_action.items():
+        print(f"  {a}: {len(v)} sequences, {sum(len(x) for x in v)} frames")
+    rec = train_recognizer(
+        by_action,
+        args.states,
+        args.mix,
+        n_iter=args.iter,
+        tol=args.tol,
+        seed=args.seed,
+        warn=False,
+        meta=meta,
+    )
+    for r in rec.reports.values():
+        print(("  " if r.converged else "  warning: ") + r.describe())
+    rec.save(args.out)
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
+    from glu.hmm import ORIGINAL_MODEL_FILES, Recognizer, load_original_models
+
+    if spec == "original":
+        from glu.data.source import resolve_data
+
+        source = resolve_data(data)
+        _say(f"data: {source.describe()}", quiet)
+        mat = source.file(ORIGINAL_MODEL_FILES[3])
+        _say(f"models: {mat} (original 2013 HMMs; touch = their push model)", quiet)
+        return load_original_models(mat)
+    rec = Recognizer.load(spec)
+    _say(f"models: {spec} ({', '.join(rec.actions)})", quiet)
+    return rec
+
+
+def _recognize(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from glu.features import load_features
+
+    rec = _load_models(args.models, args.data, args.json)
+    path, source = _resolve_log(args.log, args.data)
+    if source is not None and args.models != "original":
+        _say(f"data: {source.describe()}", args.json)
+    pieces = load_features(path, policy=None).pieces
+    traj = pieces[0]
+    if args.repair:
+        from glu.trajectories import repair
+
+        rp = repair(traj)
+        traj = next((p for p in rp.pieces if args.frames is None or p.frame[0] <= args.frames[0] <= p.frame[-1]),
+                    rp.pieces[0])  # fmt: skip
+    if args.frames:
+        traj = traj.frames(*args.frames)
+    a0, a1 = int(traj.frame[0]), int(traj.frame[-1])
+    _say(f"log: {path}, frames {a0}:{a1} ({len(traj)} frames)", args.json)
+    X = traj.xyz
+    acts = rec.actions
+    if args.stream:
+        stream = rec.stream()
+        if not args.json:
+            print("frame " + " ".join(f"{'logL_' + a:>12s}" for a in acts) + " "
+                  + " ".join(f"{'p_' + a:>9s}" for a in acts) + "  best")  # fmt: skip
+        for f, x in zip(traj.frame, X, strict=True):
+            step = stream.push(x)
+            if args.json:
+                print(json.dumps(_as_json(acts, step.loglik, step.p_hmm, frame=int(f))))
+            else:
+                print(f"{int(f):5d} " + " ".join(f"{v:12.3f}" for v in step.loglik) + " "
+                      + " ".join(f"{v:9.4f}" for v in step.p_hmm) + f"  {acts[int(np.argmax(step.loglik))]}")  # fmt: skip
+        return 0
+    ll = rec.loglik(X)
+    p = rec.p_hmm(X)
+    if args.json:
+        print(json.dumps(_as_json(acts, ll, p)))
+        return 0
+    print(f"{'action':8s} {'log L(G|A)':>12s} {'p_HMM(A|G)':>11s}")
+    for a, v, q in zip(acts, ll, p, strict=True):
+        print(f"{a:8s} {v:12.3f} {q:11.4f}")
+    print(f"recognised: {acts[int(np.argmax(ll))]}")
+    return 0
+
+
+def _as_json(actions: tuple[str, ...], ll: Any, p: Any, **extra: Any) -> dict[str, Any]:
+    return {
+        **extra,
+        "loglik": {a: float(v) for a, v in zip(actions, ll, strict=True)},
+        "posterior": {a: float(v) for a, v in zip(actions, p, strict=True)},
+    }

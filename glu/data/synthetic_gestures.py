@@ -1,0 +1,319 @@
+"""Synthetic gestures: seeded skeleton sequences of grasp, tap, touch and push, with real-world variability.
+
+Each sequence is a 15-joint OpenNI skeleton (:data:`glu.features.OPENNI_JOINTS`) in metres, in the
+person's frame (x right, y up, z towards the back), sampled at about 30 frames a second, so the
+feature extraction of :mod:`glu.features` is exercised exactly as on a real skeleton.
+
+The right hand moves from a rest pose (hanging beside the hip) to an object on a table in front and
+back, through key poses per action:
+
+* **grasp** — reach above the object, descend, close (a pause), lift it about 25 cm, retract;
+* **tap** — reach to the right of the object, strike it laterally to the left (fast), retract;
+* **touch** — reach above the object, brief contact on top, retract;
+* **push** — reach behind the object (nearer the body), push it forward, retract.
+
+The hand passes smoothly (monotone cubic interpolation) through the key poses, on a mostly
+minimum-jerk time course (slow start and end, fastest in the middle). Variability, all drawn
+from one seeded generator per sequence:
+
+* **speed** — duration 2.5–5 s (the real repetitions last 2.7–5.5 s), key times jittered; still frames at rest before and after;
+* **amplitude** — the excursion from rest scaled by 0.85–1.15; object position ± 5 cm;
+* **person** — body size 0.85–1.15 (shoulder width 0.28–0.38 m), position in the room, a turn of
+  ± 10° about the vertical, slow sway of the torso;
+* **sensor** — Gaussian noise of ``noise`` metres on every joint, spikes (a hand joint displaced
+  15–40 cm for one frame) with probability ``spike_rate`` per frame, timestamp jitter, and dropouts
+  (runs of 3–20 frames with no skeleton: the frames are missing, as in the real logs) with probability
+  ``dropout_rate`` per sequence.
+
+Sequence ``i`` depends only on ``(seed, i)``, so ``synthesize_gestures(10, seed)[:5]`` equals
+``synthesize_gestures(5, seed)``. :func:`synthesize_recording` strings repetitions of one action together
+with rests in between, with the true segments, to test automatic segmentation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from glu.errors import DataError
+from glu.features import OPENNI_JOINTS, skeleton_features
+from glu.trajectories import RepairPolicy, Trajectory, repair
+
+GESTURES: tuple[str, ...] = ("grasp", "tap", "touch", "push")
+"""The actions the generator knows (the BN's Action values, plus push)."""
+
+FRAME_RATE = 30.0
+SYNTHETIC_POLICY = RepairPolicy(max_interpolate=1.0)
+"""Repair of single synthetic gestures: dropouts (at most 20 frames) are interpolated, never split."""
+
+# Body at size 1, relative to the torso, metres (x right, y up, z back). Shoulder distance 0.33 m and
+# neck–torso distance 0.23 m: the fallback constants of the original.
+_BODY = {
+    "head": (0.0, 0.45, 0.0),
+    "neck": (0.0, 0.23, 0.0),
+    "left_shoulder": (-0.165, 0.21, 0.0),
+    "right_shoulder": (0.165, 0.21, 0.0),
+    "left_elbow": (-0.2, -0.05, 0.02),
+    "left_hand": (-0.22, -0.3, 0.04),
+    "torso": (0.0, 0.0, 0.0),
+    "left_hip": (-0.1, -0.25, 0.0),
+    "right_hip": (0.1, -0.25, 0.0),
+    "left_knee": (-0.1, -0.35, -0.45),
+    "right_knee": (0.1, -0.35, -0.45),
+    "left_foot": (-0.1, -0.8, -0.5),
+    "right_foot": (0.1, -0.8, -0.5),
+}
+_REST = np.array([0.25, -0.34, 0.1])
+"""Right hand at rest, relative to the torso (size 1): beside the hip, slightly behind."""
+_OBJECT = np.array([0.06, -0.08, -0.5])
+"""The object on the table, relative to the torso (size 1)."""
+
+# Key poses: (time fraction, offset from the object or None for rest).
+_KEYS: dict[str, list[tuple[float, tuple[float, float, float] | None]]] = {
+    "grasp": [(0.0, None), (0.28, (0.0, 0.1, 0.06)), (0.38, (0.0, 0.01, 0.0)), (0.5, (0.0, 0.0, 0.0)),
+              (0.66, (0.0, 0.24, 0.04)), (1.0, None)],
+    "tap": [(0.0, None), (0.38, (0.18, 0.03, 0.0)), (0.5, (-0.14, 0.01, -0.02)),
+            (0.62, (-0.06, 0.07, 0.06)), (1.0, None)],
+    "touch": [(0.0, None), (0.36, (0.0, 0.08, 0.04)), (0.46, (0.0, 0.02, 0.0)), (0.52, (0.0, 0.02, 0.0)),
+              (0.64, (0.0, 0.05, 0.1)), (1.0, None)],
+    "push": [(0.0, None), (0.34, (0.0, 0.02, 0.14)), (0.48, (0.0, 0.01, 0.09)), (0.66, (0.0, 0.01, -0.14)),
+             (1.0, None)],
+}  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class SyntheticGesture:
+    """One synthetic sequence.
+
+    Attributes
+    ----------
+    action : one of :data:`GESTURES`
+    skeleton : array, shape (n_frames, 15, 3), metres, joints in :data:`glu.features.OPENNI_JOINTS` order
+    t : array, shape (n_frames,), seconds (gaps where the skeleton dropped out)
+    size : the person's size factor (1 = shoulders 0.33 m apart)
+    segments : for a continuous recording, the true (first, last) frames of each repetition
+        (1-based, inclusive); for a single gesture, one segment: the whole movement
+    """
+
+    action: str
+    skeleton: np.ndarray
+    t: np.ndarray
+    size: float
+    segments: tuple[tuple[int, int], ...]
+
+    def trajectory(self) -> Trajectory:
+        """The features of the skeleton (:func:`glu.features.skeleton_features`) as a trajectory, unrepaired."""
+        xyz, _ = skeleton_features(self.skeleton)
+        n = len(xyz)
+        return Trajectory(
+            xyz, self.t, np.arange(1, n + 1), np.ones(n, dtype=bool), f"synthetic {self.action}"
+        )
+
+    def features(self, policy: RepairPolicy = SYNTHETIC_POLICY) -> np.ndarray:
+        """The features after repair (dropouts interpolated, spikes replaced), shape (n_frames, 3)."""
+        pieces = repair(self.trajectory(), policy).pieces
+        return np.concatenate([p.xyz for p in pieces])
+
+
+def _min_jerk_path(keys: list[tuple[float, np.ndarray]], n: int) -> np.ndarray:
+    from scipy.interpolate import PchipInterpolator
+
+    times = np.array([k[0] for k in keys])
+    pts = np.stack([k[1] for k in keys])
+    s = np.linspace(0.0, 1.0, n)
+    u = 0.15 * s + 0.85 * s**3 * (10 - 15 * s + 6 * s**2)  # mostly minimum-jerk timing: slow start and end
+    return PchipInterpolator(times, pts, axis=0)(u)
+
+
+@dataclass(frozen=True)
+class _Person:
+    size: float
+    origin: np.ndarray  # torso position in the sensor frame
+    yaw: float  # radians
+    sway_phase: float
+    sway_amp: float
+
+
+def _person(rng: np.random.Generator) -> _Person:
+    return _Person(
+        size=float(rng.uniform(0.85, 1.15)),
+        origin=np.array([rng.uniform(-0.4, 0.4), rng.uniform(-0.15, 0.15), rng.uniform(-2.6, -1.6)]),
+        yaw=float(np.deg2rad(rng.uniform(-10, 10))),
+        sway_phase=float(rng.uniform(0, 2 * np.pi)),
+        sway_amp=float(rng.uniform(0.0, 0.02)),
+    )
+
+
+def _hand_path(action: str, rng: np.random.Generator, size: float) -> np.ndarray:
+    """Right-hand positions relative to the torso, shape (n_frames, 3), for one repetition."""
+    duration = rng.uniform(2.5, 5.0)
+    n = max(int(round(duration * FRAME_RATE)), 12)
+    amp = rng.uniform(0.85, 1.15)
+    obj = _OBJECT + rng.uniform(-0.05, 0.05, size=3) * np.array([1.0, 0.4, 1.0])
+    rest = _REST + rng.normal(0, 0.015, size=3)
+    keys = []
+    spec = _KEYS[action]
+    for j, (tf, off) in enumerate(spec):
+        if 0 < j < len(spec) - 1:
+            tf = tf + rng.uniform(-0.02, 0.02)
+        p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
+        keys.append((tf, p * size))
+    keys.sort(key=lambda k: k[0])
+    return _min_jerk_path(keys, n)
+
+
+def _skeletons(hand: np.ndarray, person: _Person, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Full skeletons in the sensor frame, shape (n_frames, 15, 3), for hand positions relative to the torso."""
+    n = len(hand)
+    s = person.size
+    body = np.array([_BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS]) * s
+    rel = np.broadcast_to(body, (n, len(OPENNI_JOINTS), 3)).copy()
+    ih, ie, ish = OPENNI_JOINTS.index("right_hand"), OPENNI_JOINTS.index("right_elbow"), 3
+    rel[:, ih] = hand
+    shoulder = body[ish]
+    mid = 0.5 * (shoulder + hand)
+    rel[:, ie] = mid + np.array([0.06, -0.06, 0.05]) * s  # elbow out, down and back of the shoulder–hand line
+    sway = person.sway_amp * np.sin(2 * np.pi * 0.25 * t + person.sway_phase)
+    c, si = np.cos(person.yaw), np.sin(person.yaw)
+    rot = np.array([[c, 0.0, si], [0.0, 1.0, 0.0], [-si, 0.0, c]])
+    world = rel @ rot.T + person.origin
+    world[:, :, 0] += sway[:, None]
+    return world
+
+
+def _sensor(
+    skel: np.ndarray,
+    t: np.ndarray,
+    rng: np.random.Generator,
+    noise: float,
+    spike_rate: float,
+    dropout_rate: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    n = len(skel)
+    skel = skel + rng.normal(0.0, noise, size=skel.shape) if noise > 0 else skel.copy()
+    ih = OPENNI_JOINTS.index("right_hand")
+    spikes = rng.random(n) < spike_rate
+    k = int(spikes.sum())
+    if k:
+        d = rng.normal(size=(k, 3))
+        d *= (rng.uniform(0.15, 0.4, size=k) / np.linalg.norm(d, axis=1))[:, None]
+        skel[spikes, ih] += d
+    t = t + rng.normal(0.0, 0.002, size=n)
+    keep = np.ones(n, dtype=bool)
+    if n > 30 and rng.random() < dropout_rate:
+        length = int(rng.integers(3, 21))
+        start = int(rng.integers(5, n - length - 5))
+        keep[start : start + length] = False
+    return skel[keep], t[keep]
+
+
+def _check(n: int, noise: float, spike_rate: float, dropout_rate: float) -> None:
+    if n < 0:
+        raise DataError(f"number of sequences {n} is negative")
+    if not noise >= 0 or not 0 <= spike_rate <= 1 or not 0 <= dropout_rate <= 1:
+        raise DataError("noise must be ≥ 0 (metres); spike_rate and dropout_rate in [0, 1]")
+
+
+def synthesize_gesture(
+    action: str,
+    rng: np.random.Generator,
+    *,
+    noise: float = 0.01,
+    spike_rate: float = 0.005,
+    dropout_rate: float = 0.2,
+    rest_frames: tuple[int, int] = (3, 15),
+) -> SyntheticGesture:
+    """One synthetic repetition of ``action`` drawn with ``rng`` (see the module docstring)."""
+    if action not in _KEYS:
+        raise DataError(f"unknown action {action!r}; allowed: {', '.join(GESTURES)}")
+    person = _person(rng)
+    move = _hand_path(action, rng, person.size)
+    pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
+    hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
+    t = np.arange(len(hand)) / FRAME_RATE
+    skel = _skeletons(hand, person, t, rng)
+    true = ((pre + 1, pre + len(move)),)
+    skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, dropout_rate)
+    return SyntheticGesture(action, skel, t_obs, person.size, true)
+
+
+def synthesize_gestures(
+    n: int,
+    seed: int = 0,
+    *,
+    actions: tuple[str, ...] = GESTURES,
+    noise: float = 0.01,
+    spike_rate: float = 0.005,
+    dropout_rate: float = 0.2,
+) -> list[SyntheticGesture]:
+    """``n`` synthetic gestures, actions in turn (``actions[i % len(actions)]``), sequence i seeded by (seed, i).
+
+    Parameters
+    ----------
+    n : number of sequences (any number ≥ 0)
+    seed : the random seed
+    actions : which actions, in turn
+    noise : standard deviation of the sensor noise on every joint, metres
+    spike_rate : probability that a frame's hand joint is an outlier
+    dropout_rate : probability that a sequence loses a run of 3–20 frames
+    """
+    _check(n, noise, spike_rate, dropout_rate)
+    for a in actions:
+        if a not in _KEYS:
+            raise DataError(f"unknown action {a!r}; allowed: {', '.join(GESTURES)}")
+    children = np.random.SeedSequence(seed).spawn(n)
+    return [
+        synthesize_gesture(
+            actions[i % len(actions)],
+            np.random.default_rng(children[i]),
+            noise=noise,
+            spike_rate=spike_rate,
+            dropout_rate=dropout_rate,
+        )  # fmt: skip
+        for i in range(n)
+    ]
+
+
+def synthesize_recording(
+    action: str,
+    n_repetitions: int,
+    seed: int = 0,
+    *,
+    noise: float = 0.01,
+    spike_rate: float = 0.0,
+    rest_seconds: tuple[float, float] = (1.0, 2.0),
+) -> SyntheticGesture:
+    """A continuous recording of one person repeating ``action``, resting in between (no dropouts).
+
+    Returns a :class:`SyntheticGesture` whose ``segments`` are the true repetitions (1-based frames).
+    """
+    if action not in _KEYS:
+        raise DataError(f"unknown action {action!r}; allowed: {', '.join(GESTURES)}")
+    if n_repetitions < 1:
+        raise DataError("a recording needs at least one repetition")
+    _check(n_repetitions, noise, spike_rate, 0.0)
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 7, GESTURES.index(action)]))
+    person = _person(rng)
+    parts, segments, n = [], [], 0
+    for _ in range(n_repetitions + 1):
+        rest = int(rng.uniform(*rest_seconds) * FRAME_RATE)
+        pose = _REST * person.size + rng.normal(0, 0.01, size=3)
+        parts.append(np.repeat(pose[None], rest, 0))
+        n += rest
+        if len(segments) == n_repetitions:
+            break
+        move = _hand_path(action, rng, person.size)
+        move = move - move[0] + pose  # start from the current rest pose
+        parts.append(move)
+        segments.append((n + 1, n + len(move)))
+        n += len(move)
+    hand = np.concatenate(parts)
+    # smooth the joins between a movement's end and the next rest pose
+    from scipy.ndimage import uniform_filter1d
+
+    hand = uniform_filter1d(hand, 5, axis=0, mode="nearest")
+    t = np.arange(len(hand)) / FRAME_RATE
+    skel = _skeletons(hand, person, t, rng)
+    skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, 0.0)
+    return SyntheticGesture(action, skel, t_obs, person.size, tuple(segments))

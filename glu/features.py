@@ -1,0 +1,179 @@
+"""Gesture features: a skeleton's right hand in the torso frame, normalised by body size (METHOD.md §4).
+
+The features of the original system (Saponaro et al., CR-HRI 2013; the ``humanHandProcessor`` of
+GLU 2017) are, per frame, the right hand minus the torso,
+
+* **x** — horizontal, positive to the person's right (the person's point of view),
+* **y** — vertical, positive upwards,
+* **z** — orthogonal to the torso, positive towards the person's back (so a reach forward makes z < 0),
+
+with x and z divided by a horizontal factor, the mean distance between the shoulders, and y by a
+vertical factor, the mean distance between neck and torso, both averaged over the middle part of the
+sequence (frames 45–55 %). When no skeleton is available the original used the constants 0.33 and 0.23
+(metres, measured on the 2012 training data). Features are therefore unitless: one unit is about a
+shoulder width horizontally and a neck–torso distance vertically. No rotation is applied: the skeleton
+must be in the person's frame above (the sensor's frame for a person facing it, as in the recordings).
+
+The YARP logs of 2017 hold these features already, but computed from millimetres with the metre
+constants, i.e. 1000 × the units of the 2013 models; the original scripts divide them by 1000
+(:data:`LOG_SCALE`, :func:`log_features`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import NamedTuple
+
+import numpy as np
+
+from glu.errors import DataError
+from glu.trajectories import DEFAULT_POLICY, Repaired, RepairPolicy, Trajectory, read_hand_log, repair
+
+AXES: tuple[str, str, str] = ("x", "y", "z")
+AXIS_MEANING: dict[str, str] = {
+    "x": "horizontal, positive to the person's right",
+    "y": "vertical, positive upwards",
+    "z": "orthogonal to the torso, positive towards the person's back",
+}
+LOG_SCALE = 1000.0
+"""The logged features are ``LOG_SCALE`` × the units of the original models."""
+HORIZONTAL_FALLBACK = 0.33
+"""Metres: the horizontal factor (shoulder distance) used when the skeleton has no shoulders."""
+VERTICAL_FALLBACK = 0.23
+"""Metres: the vertical factor (neck–torso distance) used when the skeleton has no neck or torso."""
+MIDDLE: tuple[float, float] = (0.45, 0.55)
+"""The part of the sequence over which the normalisation factors are averaged."""
+
+OPENNI_JOINTS: tuple[str, ...] = (
+    "head", "neck", "left_shoulder", "right_shoulder", "left_elbow", "right_elbow",
+    "left_hand", "right_hand", "torso", "left_hip", "right_hip", "left_knee", "right_knee",
+    "left_foot", "right_foot",
+)  # fmt: skip
+"""The 15 joints of the OpenNI skeleton, in the order of the YARP OpenNI2 driver."""
+
+
+class Normalisation(NamedTuple):
+    """The body-size factors of a sequence, in the skeleton's units, and whether each is a fallback."""
+
+    horizontal: float
+    vertical: float
+    horizontal_fallback: bool
+    vertical_fallback: bool
+
+
+def middle_frames(n_frames: int, middle: tuple[float, float] = MIDDLE) -> slice:
+    """The frames ``i`` (0-based) with ``middle[0]·n ≤ i < middle[1]·n``; at least the middle frame.
+
+    For 100 frames this is frames 45 … 54 (0-based), i.e. the 46th to the 55th frame.
+    """
+    if n_frames < 1:
+        raise DataError("a sequence needs at least one frame")
+    lo = math.ceil(round(middle[0] * n_frames, 9))  # round: 0.55 * 100 is 55.000000000000007
+    hi = math.ceil(round(middle[1] * n_frames, 9))
+    if hi <= lo:
+        lo = min(int(middle[0] * n_frames), n_frames - 1)
+        hi = lo + 1
+    return slice(lo, hi)
+
+
+def _joint(skeleton: np.ndarray, joints: tuple[str, ...], name: str) -> np.ndarray:
+    try:
+        return skeleton[:, joints.index(name), :]
+    except ValueError:
+        raise DataError(f"the skeleton has no joint {name!r}; joints: {', '.join(joints)}") from None
+
+
+def _check_skeleton(skeleton: np.ndarray, joints: tuple[str, ...]) -> np.ndarray:
+    skeleton = np.asarray(skeleton, dtype=float)
+    if skeleton.ndim != 3 or skeleton.shape[1:] != (len(joints), 3) or len(skeleton) == 0:
+        raise DataError(
+            f"a skeleton must have shape (n_frames ≥ 1, {len(joints)}, 3) for the joints "
+            f"{', '.join(joints)}; got {skeleton.shape}"
+        )
+    return skeleton
+
+
+def normalisation_factors(
+    skeleton: np.ndarray,
+    joints: tuple[str, ...] = OPENNI_JOINTS,
+    fallback: tuple[float, float] = (HORIZONTAL_FALLBACK, VERTICAL_FALLBACK),
+    middle: tuple[float, float] = MIDDLE,
+) -> Normalisation:
+    """Mean shoulder distance and mean neck–torso distance over the middle frames of a skeleton.
+
+    Parameters
+    ----------
+    skeleton : array, shape (n_frames, n_joints, 3); missing joints are NaN
+    joints : the joint names along axis 1
+    fallback : (horizontal, vertical) in the skeleton's units (the defaults are metres), used for a
+        factor whose joints are missing in every middle frame
+    """
+    skeleton = _check_skeleton(skeleton, joints)
+    mid = middle_frames(len(skeleton), middle)
+
+    def mean_distance(a: str, b: str) -> float:
+        d = np.linalg.norm(_joint(skeleton, joints, a)[mid] - _joint(skeleton, joints, b)[mid], axis=1)
+        d = d[np.isfinite(d) & (d > 0)]
+        return float(d.mean()) if len(d) else math.nan
+
+    h = mean_distance("left_shoulder", "right_shoulder")
+    v = mean_distance("neck", "torso")
+    return Normalisation(
+        horizontal=h if math.isfinite(h) else fallback[0],
+        vertical=v if math.isfinite(v) else fallback[1],
+        horizontal_fallback=not math.isfinite(h),
+        vertical_fallback=not math.isfinite(v),
+    )
+
+
+def skeleton_features(
+    skeleton: np.ndarray,
+    joints: tuple[str, ...] = OPENNI_JOINTS,
+    fallback: tuple[float, float] = (HORIZONTAL_FALLBACK, VERTICAL_FALLBACK),
+    middle: tuple[float, float] = MIDDLE,
+    hand: str = "right_hand",
+) -> tuple[np.ndarray, Normalisation]:
+    """The original gesture features of a skeleton sequence (METHOD.md §4).
+
+    Parameters
+    ----------
+    skeleton : array, shape (n_frames, n_joints, 3), in the person's frame (x right, y up, z back);
+        frames where the hand or the torso is missing (NaN) give NaN features
+    joints, fallback, middle : see :func:`normalisation_factors`
+    hand : the joint that gestures
+
+    Returns
+    -------
+    features : array, shape (n_frames, 3) — ``((hand - torso)_x / h, (hand - torso)_y / v, (hand - torso)_z / h)``
+    normalisation : the factors ``h`` and ``v`` used
+    """
+    skeleton = _check_skeleton(skeleton, joints)
+    norm = normalisation_factors(skeleton, joints, fallback, middle)
+    rel = _joint(skeleton, joints, hand) - _joint(skeleton, joints, "torso")
+    scale = np.array([norm.horizontal, norm.vertical, norm.horizontal])
+    return rel / scale, norm
+
+
+def log_features(xyz_logged: np.ndarray) -> np.ndarray:
+    """The features of a YARP hand log in the units of the original models: the logged values / 1000.
+
+    ``xyz_logged`` has shape (n_frames, 3); so has the result.
+    """
+    return np.asarray(xyz_logged, dtype=float) / LOG_SCALE
+
+
+def trajectory_features(traj: Trajectory) -> Trajectory:
+    """A logged trajectory with its coordinates converted by :func:`log_features` (timing unchanged)."""
+    return traj.with_xyz(log_features(traj.xyz))
+
+
+def load_features(path: str | os.PathLike, policy: RepairPolicy | None = DEFAULT_POLICY) -> Repaired:
+    """Read a YARP hand log, convert it to model units and repair it (``policy=None``: no repair).
+
+    Returns the pieces and events of :func:`glu.trajectories.repair` (one piece, no events if ``None``).
+    """
+    traj = trajectory_features(read_hand_log(path))
+    if policy is None:
+        return Repaired([traj], ())
+    return repair(traj, policy)

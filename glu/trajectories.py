@@ -1,0 +1,448 @@
+"""Hand trajectories: YARP hand logs with line-precise errors, tracking gaps and outliers, their repair.
+
+A YARP hand log (``gestures/<recording>/data.log``) has one frame a line, about 30 frames a second::
+
+    index timestamp x y z
+    -1 1495933414.180140 644.291918 -809.62949 -934.764515
+
+``index`` is the YARP envelope counter (an integer, ``-1`` when absent), ``timestamp`` is in seconds, and
+``x y z`` are the hand features as logged (METHOD.md §4: torso-centred, body-size normalised, 1000 × the
+units of the original models; :mod:`glu.features` converts them). Frames are numbered 1, 2, … in file
+order, the numbering of the papers' segment ranges; blank lines are skipped and do not count as frames.
+
+Real tracking drops out and jumps. :func:`repair` detects, reports and (by a :class:`RepairPolicy`) repairs:
+
+* **gaps** — a time step above ``gap_factor`` × the frame period (the median time step). Gaps up to
+  ``max_interpolate`` seconds are filled with frames at the frame period, linearly interpolated; longer
+  ones split the trajectory into pieces (or are kept, if ``long_gaps="keep"``).
+* **spikes** — isolated outliers: frames farther than ``spike_threshold`` from the running median of
+  ``spike_window`` frames (so at most ``spike_window // 2`` consecutive frames). They are replaced by
+  linear interpolation from their neighbours in time (or dropped, or kept).
+* **jumps** — a step between consecutive frames longer than ``jump_threshold`` (after spike repair):
+  a sudden displacement of the tracked hand that persists, which cannot be told from real motion
+  frame by frame. Jumps are reported, never changed.
+
+The thresholds are in the units of the trajectory; the defaults are for feature units (the logs divided
+by 1000; one unit is about a shoulder width horizontally, a neck–torso distance vertically). Repaired
+frames keep ``observed == False`` and the frame number of the last observed frame before them, so
+segments are always reported in the numbering of the original log.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from glu.errors import DataError
+
+LOG_FIELDS: tuple[str, ...] = ("index", "timestamp", "x", "y", "z")
+"""The columns of a YARP hand log."""
+
+_INT = re.compile(rb"[+-]?\d+")
+_FLOAT = re.compile(rb"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_MAX_REPORTED_LINE = 80
+
+
+@dataclass(frozen=True)
+class TrackingEvent:
+    """A tracking problem found in a trajectory, and what the repair policy did about it.
+
+    Attributes
+    ----------
+    kind : ``"gap"``, ``"spike"``, ``"jump"``, ``"missing"`` (a frame without coordinates) or
+        ``"short-piece"`` (a piece left too short after splitting, dropped)
+    frame : 1-based frame of the source log: the first frame after a gap or jump, the outlier frame
+    time : seconds since the first frame of the source
+    size : gap: its duration in seconds; spike: distance to the running median; jump: step length;
+        short-piece: its number of frames
+    action : ``"interpolated"``, ``"split"``, ``"replaced"``, ``"dropped"`` or ``"kept"``
+    """
+
+    kind: str
+    frame: int
+    time: float
+    size: float
+    action: str
+
+    def describe(self) -> str:
+        """One line, e.g. ``gap of 1.54 s before frame 339 (t=10.31 s): split``."""
+        if self.kind == "gap":
+            what = f"gap of {self.size:.2f} s before frame {self.frame}"
+        elif self.kind == "spike":
+            what = f"spike at frame {self.frame} ({self.size:.2f} from the running median)"
+        elif self.kind == "jump":
+            what = f"jump of {self.size:.2f} before frame {self.frame}"
+        elif self.kind == "short-piece":
+            what = f"piece of {int(self.size)} frames from frame {self.frame}"
+        else:
+            what = f"{self.kind} at frame {self.frame}"
+        return f"{what} (t={self.time:.2f} s): {self.action}"
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """A 3-D hand trajectory with its timing.
+
+    Attributes
+    ----------
+    xyz : array, shape (n_frames, 3) — x right (the person's view), y up, z towards the person's back
+    t : array, shape (n_frames,) — timestamps in seconds, strictly increasing
+    frame : int array, shape (n_frames,) — 1-based frame number in the source log (repaired frames
+        carry the number of the last observed frame before them)
+    observed : bool array, shape (n_frames,) — False for frames made by interpolation
+    source : where the trajectory comes from (a file path, or a description)
+    events : the tracking problems found so far (see :func:`repair`)
+    """
+
+    xyz: np.ndarray
+    t: np.ndarray
+    frame: np.ndarray
+    observed: np.ndarray
+    source: str = "<memory>"
+    events: tuple[TrackingEvent, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        xyz = np.asarray(self.xyz, dtype=float)
+        t = np.asarray(self.t, dtype=float)
+        n = len(t)
+        if xyz.ndim != 2 or xyz.shape != (n, 3):
+            raise DataError(f"{self.source}: xyz must have shape (n_frames, 3) = ({n}, 3), got {xyz.shape}")
+        frame = np.asarray(self.frame, dtype=np.int64)
+        observed = np.asarray(self.observed, dtype=bool)
+        if frame.shape != (n,) or observed.shape != (n,):
+            raise DataError(f"{self.source}: frame and observed must have shape ({n},)")
+        if n and (not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0)):
+            raise DataError(f"{self.source}: timestamps must be finite and strictly increasing")
+        for name, value in (("xyz", xyz), ("t", t), ("frame", frame), ("observed", observed)):
+            value.flags.writeable = False
+            object.__setattr__(self, name, value)
+
+    @classmethod
+    def from_array(
+        cls, xyz: np.ndarray, *, frame_rate: float = 30.0, t0: float = 0.0, source: str = "<memory>"
+    ) -> Trajectory:
+        """A trajectory from coordinates alone, shape (n_frames, 3), at a constant ``frame_rate`` (Hz)."""
+        xyz = np.asarray(xyz, dtype=float)
+        n = len(xyz)
+        return cls(
+            xyz=xyz,
+            t=t0 + np.arange(n) / frame_rate,
+            frame=np.arange(1, n + 1),
+            observed=np.ones(n, dtype=bool),
+            source=source,
+        )
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def frame_period(self) -> float:
+        """The median time between consecutive frames, in seconds (1/30 if fewer than two frames)."""
+        return float(np.median(np.diff(self.t))) if len(self.t) > 1 else 1 / 30
+
+    def with_xyz(self, xyz: np.ndarray) -> Trajectory:
+        """The same frames and timing with other coordinates, shape (n_frames, 3)."""
+        return replace(self, xyz=np.asarray(xyz, dtype=float))
+
+    def take(self, index: np.ndarray | slice) -> Trajectory:
+        """The frames selected by a positional index (a slice, an int array or a bool mask)."""
+        return replace(
+            self, xyz=self.xyz[index], t=self.t[index], frame=self.frame[index], observed=self.observed[index]
+        )
+
+    def frames(self, first: int, last: int) -> Trajectory:
+        """The frames numbered ``first`` … ``last`` of the source log (1-based, inclusive)."""
+        if len(self.frame) == 0:
+            raise DataError(f"{self.source}: the trajectory has no frames")
+        lo, hi = int(self.frame.min()), int(self.frame.max())
+        if not (lo <= first <= last <= hi):
+            raise DataError(
+                f"{self.source}: frames {first}:{last} are out of range; allowed: {lo} ≤ first ≤ last ≤ {hi}"
+            )
+        return self.take((self.frame >= first) & (self.frame <= last))
+
+
+def read_hand_log(path: str | os.PathLike) -> Trajectory:
+    """Read a YARP hand log (a ``data.log`` file or a recording folder holding one).
+
+    Returns the frames exactly as logged (no repair). Raises :class:`DataError` naming the file and the
+    line for a missing file, an undecodable byte, a line without five fields, a field that is not a
+    number, or a timestamp that does not increase.
+    """
+    path = Path(path)
+    if path.is_dir():
+        path = path / "data.log"
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise DataError(f"{path}: no such file (expected a YARP hand log, `index timestamp x y z`)") from None
+    except OSError as e:
+        raise DataError(f"{path}: cannot read: {e.strerror or e}") from None
+    return parse_hand_log(data, source=str(path))
+
+
+def parse_hand_log(data: bytes | str, source: str = "<string>") -> Trajectory:
+    """Parse the text of a YARP hand log (see :func:`read_hand_log`); ``source`` names it in errors."""
+    if isinstance(data, str):
+        data = data.encode("utf-8", errors="surrogatepass")
+    rows: list[tuple[float, float, float, float]] = []
+    for lineno, raw in enumerate(data.split(b"\n"), start=1):
+        line = raw[:-1] if raw.endswith(b"\r") else raw
+        rows_line = _parse_line(line, source, lineno)
+        if rows_line is not None:
+            if rows and not rows_line[0] > rows[-1][0]:
+                raise DataError(
+                    f"{source}:{lineno}: timestamp {rows_line[0]!r} does not increase "
+                    f"(previous frame: {rows[-1][0]!r})"
+                )
+            rows.append(rows_line)
+    if not rows:
+        raise DataError(f"{source}: no frames (expected lines `index timestamp x y z`)")
+    arr = np.array(rows, dtype=float)
+    n = len(arr)
+    return Trajectory(
+        xyz=arr[:, 1:], t=arr[:, 0], frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool), source=source
+    )
+
+
+def _show(b: bytes) -> str:
+    s = repr(b)[2:-1]
+    return s if len(s) <= _MAX_REPORTED_LINE else s[:_MAX_REPORTED_LINE] + "…"
+
+
+def _parse_line(line: bytes, source: str, lineno: int) -> tuple[float, float, float, float] | None:
+    try:
+        text = line.decode("ascii")
+    except UnicodeDecodeError as e:
+        raise DataError(
+            f"{source}:{lineno}: byte {line[e.start]:#04x} at column {e.start + 1} is not ASCII text "
+            f"(a YARP hand log has lines `index timestamp x y z`): {_show(line)}"
+        ) from None
+    fields = text.split()
+    if not fields:
+        return None
+    if len(fields) != len(LOG_FIELDS):
+        raise DataError(
+            f"{source}:{lineno}: expected 5 fields `index timestamp x y z`, got {len(fields)}: {_show(line)}"
+        )
+    if not _INT.fullmatch(fields[0].encode()):
+        raise DataError(f"{source}:{lineno}: index {fields[0]!r} is not an integer: {_show(line)}")
+    values = []
+    for name, f in zip(LOG_FIELDS[1:], fields[1:], strict=True):
+        v = float(f) if _FLOAT.fullmatch(f.encode()) else math.nan
+        if not math.isfinite(v):
+            raise DataError(f"{source}:{lineno}: {name} {f!r} is not a finite number: {_show(line)}")
+        values.append(v)
+    return values[0], values[1], values[2], values[3]
+
+
+@dataclass(frozen=True)
+class RepairPolicy:
+    """What :func:`repair` does with gaps, spikes and jumps (thresholds in the trajectory's units).
+
+    Attributes
+    ----------
+    gap_factor : a time step above ``gap_factor`` × the frame period is a gap
+    max_interpolate : seconds; gaps up to this long are filled by linear interpolation (0: none)
+    long_gaps : ``"split"`` (cut the trajectory into pieces) or ``"keep"`` (leave the frames as they are)
+    spike_window : frames in the running median (odd, ≥ 3); spikes up to ``spike_window // 2`` frames long
+    spike_threshold : a frame farther than this from the running median is a spike (``inf``: no check)
+    spikes : ``"interpolate"`` (replace from the neighbours), ``"drop"`` or ``"keep"``
+    jump_threshold : a step longer than this between consecutive frames is reported as a jump
+    min_piece : pieces shorter than this (frames) after splitting are dropped
+    """
+
+    gap_factor: float = 2.5
+    max_interpolate: float = 0.5
+    long_gaps: str = "split"
+    spike_window: int = 7
+    spike_threshold: float = 0.3
+    spikes: str = "interpolate"
+    jump_threshold: float = 0.5
+    min_piece: int = 10
+
+    def __post_init__(self) -> None:
+        if self.long_gaps not in ("split", "keep"):
+            raise DataError(f"long_gaps={self.long_gaps!r}; allowed: 'split', 'keep'")
+        if self.spikes not in ("interpolate", "drop", "keep"):
+            raise DataError(f"spikes={self.spikes!r}; allowed: 'interpolate', 'drop', 'keep'")
+        if self.spike_window < 3 or self.spike_window % 2 == 0:
+            raise DataError(f"spike_window={self.spike_window}; allowed: an odd number ≥ 3")
+        if not self.gap_factor > 1 or not self.max_interpolate >= 0 or self.min_piece < 1:
+            raise DataError("gap_factor must be > 1, max_interpolate ≥ 0 and min_piece ≥ 1")
+
+
+DEFAULT_POLICY = RepairPolicy()
+"""Interpolate gaps up to 0.5 s, split at longer ones, replace spikes, report jumps."""
+
+DETECT_ONLY = RepairPolicy(max_interpolate=0.0, long_gaps="keep", spikes="keep", min_piece=1)
+"""Report everything, change nothing."""
+
+
+class Repaired(NamedTuple):
+    """The result of :func:`repair`: the usable pieces, in time order, and every event found."""
+
+    pieces: list[Trajectory]
+    events: tuple[TrackingEvent, ...]
+
+
+def running_median(xyz: np.ndarray, window: int) -> np.ndarray:
+    """Per-axis running median over ``window`` frames (odd), edges padded by reflection; shape as ``xyz``."""
+    from scipy.ndimage import median_filter
+
+    xyz = np.asarray(xyz, dtype=float)
+    if len(xyz) == 0:
+        return xyz.copy()
+    return median_filter(xyz, size=(window, 1), mode="nearest")
+
+
+def spike_deviation(xyz: np.ndarray, window: int = 7) -> np.ndarray:
+    """Distance of each frame to the running median of ``window`` frames; ``> threshold`` marks a spike.
+
+    Parameters
+    ----------
+    xyz : array, shape (n_frames, 3)
+
+    Returns
+    -------
+    array, shape (n_frames,) (zeros when there are fewer frames than ``window``)
+    """
+    xyz = np.asarray(xyz, dtype=float)
+    if len(xyz) < window:
+        return np.zeros(len(xyz))
+    return np.linalg.norm(xyz - running_median(xyz, window), axis=1)
+
+
+def detect_gaps(t: np.ndarray, gap_factor: float = 2.5) -> np.ndarray:
+    """Indices i such that ``t[i+1] - t[i] > gap_factor × median(diff(t))``; ``t`` has shape (n_frames,)."""
+    dt = np.diff(np.asarray(t, dtype=float))
+    if len(dt) == 0:
+        return np.zeros(0, dtype=np.int64)
+    return np.flatnonzero(dt > gap_factor * np.median(dt))
+
+
+def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:
+    """Detect gaps, spikes and jumps in ``traj``, report them, and repair them as ``policy`` says.
+
+    Frames with non-finite coordinates are removed first (reported as ``missing``), so a dropout
+    becomes a gap. Returns the pieces (one unless gaps split it) and the events, in time order.
+    """
+    events: list[TrackingEvent] = []
+    t0 = float(traj.t[0]) if len(traj) else 0.0
+
+    def ev(kind: str, i: int, size: float, action: str, tr: Trajectory) -> TrackingEvent:
+        return TrackingEvent(kind, int(tr.frame[i]), float(tr.t[i] - t0), float(size), action)
+
+    finite = np.all(np.isfinite(traj.xyz), axis=1)
+    for i in np.flatnonzero(~finite):
+        events.append(ev("missing", int(i), 0.0, "dropped", traj))
+    tr = traj.take(finite)
+    if len(tr) == 0:
+        raise DataError(f"{traj.source}: no frame has finite coordinates")
+    period = tr.frame_period
+
+    # 1. spikes, on the observed frames
+    if math.isfinite(policy.spike_threshold):
+        dev = spike_deviation(tr.xyz, policy.spike_window)
+        spikes = dev > policy.spike_threshold
+        action = {"interpolate": "replaced", "drop": "dropped", "keep": "kept"}[policy.spikes]
+        for i in np.flatnonzero(spikes):
+            events.append(ev("spike", int(i), dev[i], action, tr))
+        if spikes.any() and policy.spikes == "interpolate" and (~spikes).sum() >= 2:
+            good = ~spikes
+            xyz = tr.xyz.copy()
+            for k in range(3):
+                xyz[spikes, k] = np.interp(tr.t[spikes], tr.t[good], tr.xyz[good, k])
+            tr = Trajectory(xyz, tr.t, tr.frame, tr.observed & good, tr.source)
+        elif spikes.any() and policy.spikes == "drop":
+            tr = tr.take(~spikes)
+
+    # 2. jumps (reported only)
+    steps = np.linalg.norm(np.diff(tr.xyz, axis=0), axis=1)
+    for i in np.flatnonzero(steps > policy.jump_threshold):
+        events.append(ev("jump", int(i) + 1, steps[i], "kept", tr))
+
+    # 3. gaps: interpolate the short ones, split at (or keep) the long ones
+    gaps = detect_gaps(tr.t, policy.gap_factor)
+    pieces: list[Trajectory] = []
+    start = 0
+    parts_xyz, parts_t, parts_frame, parts_obs = [], [], [], []
+
+    def flush(end: int) -> None:
+        nonlocal parts_xyz, parts_t, parts_frame, parts_obs
+        parts_xyz.append(tr.xyz[start:end])
+        parts_t.append(tr.t[start:end])
+        parts_frame.append(tr.frame[start:end])
+        parts_obs.append(tr.observed[start:end])
+        piece = Trajectory(
+            np.concatenate(parts_xyz), np.concatenate(parts_t), np.concatenate(parts_frame),
+            np.concatenate(parts_obs), tr.source,
+        )  # fmt: skip
+        pieces.append(piece)
+        parts_xyz, parts_t, parts_frame, parts_obs = [], [], [], []
+
+    for g in gaps:
+        dt = float(tr.t[g + 1] - tr.t[g])
+        if dt <= policy.max_interpolate:
+            events.append(ev("gap", int(g) + 1, dt, "interpolated", tr))
+            k = max(int(round(dt / period)) - 1, 0)
+            parts_xyz.append(tr.xyz[start : g + 1])
+            parts_t.append(tr.t[start : g + 1])
+            parts_frame.append(tr.frame[start : g + 1])
+            parts_obs.append(tr.observed[start : g + 1])
+            if k:
+                w = np.arange(1, k + 1) / (k + 1)
+                parts_xyz.append(tr.xyz[g] + w[:, None] * (tr.xyz[g + 1] - tr.xyz[g]))
+                parts_t.append(tr.t[g] + w * dt)
+                parts_frame.append(np.full(k, tr.frame[g]))
+                parts_obs.append(np.zeros(k, dtype=bool))
+            start = g + 1
+        elif policy.long_gaps == "split":
+            events.append(ev("gap", int(g) + 1, dt, "split", tr))
+            flush(g + 1)
+            start = g + 1
+        else:
+            events.append(ev("gap", int(g) + 1, dt, "kept", tr))
+    flush(len(tr))
+
+    kept = []
+    for p in pieces:
+        if len(p) >= policy.min_piece:
+            kept.append(p)
+        else:
+            events.append(
+                TrackingEvent("short-piece", int(p.frame[0]), float(p.t[0] - t0), len(p), "dropped")
+            )
+    events.sort(key=lambda e: (e.frame, e.time))
+    all_events = tuple(events)
+    out = []
+    for p in kept:
+        lo, hi = int(p.frame[0]), int(p.frame[-1])
+        own = tuple(e for e in all_events if lo <= e.frame <= hi)
+        out.append(replace(p, events=traj.events + own))
+    if not out:
+        raise DataError(f"{traj.source}: no piece of at least {policy.min_piece} frames is left after repair")
+    return Repaired(out, traj.events + all_events)
+
+
+def summarize_events(events: tuple[TrackingEvent, ...] | list[TrackingEvent]) -> str:
+    """One line counting the events by kind and action, e.g. ``2 gaps (1 interpolated, 1 split), 5 spikes``."""
+    if not events:
+        return "no tracking problems found"
+    parts = []
+    for kind in ("missing", "gap", "spike", "jump", "short-piece"):
+        sel = [e for e in events if e.kind == kind]
+        if not sel:
+            continue
+        actions: dict[str, int] = {}
+        for e in sel:
+            actions[e.action] = actions.get(e.action, 0) + 1
+        detail = ", ".join(f"{n} {a}" for a, n in actions.items())
+        parts.append(f"{len(sel)} {kind}{'s' if len(sel) != 1 else ''} ({detail})")
+    return ", ".join(parts)

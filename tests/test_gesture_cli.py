@@ -1,0 +1,171 @@
+"""The gesture commands: outputs, JSON shape, streaming, and bad input as one line with exit status 2."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from glu.cli import main
+from glu.data.synthetic_gestures import synthesize_recording
+from glu.features import LOG_SCALE
+
+
+def run(capsys, *argv):
+    try:
+        status = main(list(argv))
+    except SystemExit as e:  # argparse usage errors exit from parse_args
+        status = e.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def _write_log(path, xyz, t):
+    lines = [f"-1 {ti:.6f} {x:.6f} {y:.6f} {z:.6f}" for ti, (x, y, z) in zip(t, xyz * LOG_SCALE, strict=True)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def synthetic_log(tmp_path_factory):
+    rec = synthesize_recording("tap", 3, seed=1, noise=0.005)
+    tr = rec.trajectory()
+    path = _write_log(tmp_path_factory.mktemp("logs") / "data.log", tr.xyz, 1000.0 + tr.t)
+    return path, rec
+
+
+def assert_one_line_error(status, err, *fragments):
+    assert status == 2
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    for f in fragments:
+        assert f in err, err
+
+
+def test_segment_prints_the_true_repetitions(capsys, synthetic_log, tmp_path):
+    path, rec = synthetic_log
+    png = tmp_path / "seg.png"
+    status, out, _ = run(capsys, "gestures", "segment", str(path), "--plot", str(png), "--label", "tap")
+    assert status == 0
+    assert "segments: 3" in out
+    lines = [ln for ln in out.splitlines() if ln.strip().startswith(("1.", "2.", "3."))]
+    for ln, (a, b) in zip(lines, rec.segments, strict=True):
+        start, end = map(int, ln.split("frames ")[1].split(" ")[0].split(":"))
+        assert a - 5 <= start < end <= b + 5
+    assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_train_and_recognize_with_a_recogniser(capsys, tmp_path, synthetic_log):
+    model = tmp_path / "rec.json"
+    status, out, _ = run(
+        capsys,
+        "hmm",
+        "train",
+        "--synthetic",
+        "6",
+        "--states",
+        "3",
+        "--mix",
+        "1",
+        "--iter",
+        "20",
+        "-o",
+        str(model),
+    )
+    assert status == 0 and model.exists() and "wrote" in out
+    assert "grasp: 6 sequences" in out
+    path, rec = synthetic_log
+    a, b = rec.segments[1]
+    status, out, _ = run(
+        capsys, "recognize", str(path), "--frames", f"{a}:{b}", "--models", str(model), "--json"
+    )
+    assert status == 0
+    d = json.loads(out)
+    assert set(d) == {"loglik", "posterior"}
+    assert list(d["loglik"]) == list(d["posterior"]) == ["grasp", "tap", "touch"]
+    assert sum(d["posterior"].values()) == pytest.approx(1.0)
+    from glu.hmm import Recognizer
+
+    X = np.loadtxt(path)[a - 1 : b, 2:] / 1000
+    np.testing.assert_allclose(list(d["loglik"].values()), Recognizer.load(model).loglik(X), rtol=1e-12)
+
+
+def test_recognize_original_models_json_and_stream(capsys, shared_data):
+    common = ["recognize", "tap1_hand", "--data", str(shared_data), "--frames", "216:351"]
+    status, out, err = run(capsys, *common, "--json")
+    assert status == 0
+    d = json.loads(out)  # stdout is exactly the JSON object; the data source went to stderr
+    assert set(d) == {"loglik", "posterior"} and list(d["loglik"]) == ["grasp", "tap", "touch"]
+    assert max(d["posterior"], key=d["posterior"].get) == "tap"
+    assert "real data" in err
+    status, out, _ = run(capsys, *common, "--stream")
+    assert status == 0
+    rows = [ln.split() for ln in out.splitlines() if ln[:5].strip().isdigit()]
+    assert len(rows) == 136 and rows[0][0] == "216" and rows[-1][0] == "351"
+    np.testing.assert_allclose([float(v) for v in rows[-1][1:4]], list(d["loglik"].values()), atol=1e-3)
+    status, out, _ = run(capsys, *common)
+    assert status == 0 and "data: real data" in out and "recognised: tap" in out
+
+
+def test_stream_json_lines(capsys, shared_data):
+    status, out, _ = run(
+        capsys, "recognize", "tap_notable_seated_1", "--data", str(shared_data), "--frames", "121:125", "--stream",
+        "--json",
+    )  # fmt: skip
+    assert status == 0
+    lines = [json.loads(ln) for ln in out.splitlines()]
+    assert [d["frame"] for d in lines] == [121, 122, 123, 124, 125]
+    assert all(set(d) == {"frame", "loglik", "posterior"} for d in lines)
+
+
+@pytest.mark.parametrize(
+    "frames, fragment",
+    [("5", "is not A:B"), ("a:b", "is not A:B"), ("10:5", "need 1 ≤ A ≤ B"), ("0:5", "need 1 ≤ A ≤ B")],
+)
+def test_bad_frames_syntax(capsys, synthetic_log, frames, fragment):
+    path, _ = synthetic_log
+    status, _, err = run(capsys, "recognize", str(path), "--frames", frames, "--models", "x.json")
+    assert_one_line_error(status, err, fragment)
+
+
+def test_frames_out_of_range(capsys, synthetic_log, shared_data):
+    path, _ = synthetic_log
+    status, _, err = run(capsys, "recognize", str(path), "--frames", "1:99999", "--data", str(shared_data))
+    assert_one_line_error(status, err, "out of range; allowed: 1 ≤ first ≤ last ≤")
+
+
+def test_malformed_log_and_missing_files(capsys, tmp_path, shared_data):
+    bad = tmp_path / "bad.log"
+    bad.write_text("-1 1.0 1 2 3\n-1 1.1 1 2\n")
+    status, _, err = run(capsys, "gestures", "segment", str(bad))
+    assert_one_line_error(status, err, f"{bad}:2: expected 5 fields")
+    status, _, err = run(capsys, "recognize", str(bad), "--data", str(shared_data))
+    assert_one_line_error(status, err, f"{bad}:2:")
+    status, _, err = run(capsys, "recognize", str(tmp_path / "none.log"), "--data", str(shared_data))
+    assert_one_line_error(status, err, "no such file")
+    status, _, err = run(capsys, "recognize", "no_such_recording", "--data", str(shared_data))
+    assert_one_line_error(status, err, "recordings: grasp1_hand")
+    notjson = tmp_path / "m.json"
+    notjson.write_text("{")
+    status, _, err = run(capsys, "recognize", str(bad.with_name("x")), "--models", str(notjson))
+    assert_one_line_error(status, err, "not a JSON recogniser file")
+
+
+def test_train_arguments(capsys, tmp_path):
+    status, _, err = run(capsys, "hmm", "train", "--synthetic", "0", "-o", str(tmp_path / "m.json"))
+    assert_one_line_error(status, err, "must be ≥ 1")
+    status, _, err = run(capsys, "hmm", "train", "--synthetic", "3", "--actions", "tap,wave", "-o", "m.json")
+    assert_one_line_error(status, err, "give distinct actions among grasp, tap, touch, push")
+    status, _, err = run(
+        capsys, "hmm", "train", "--data", str(tmp_path / "nope"), "-o", str(tmp_path / "m.json")
+    )
+    assert_one_line_error(status, err, "no such data folder")
+
+
+def test_train_on_the_real_recordings(capsys, tmp_path, shared_data):
+    model = tmp_path / "real.json"
+    status, out, _ = run(capsys, "hmm", "train", "--data", str(shared_data), "-o", str(model))
+    assert status == 0 and "data: real data" in out
+    assert "grasp: 4 sequences" in out
+    status, out, _ = run(capsys, "recognize", "tap1_hand", "--data", str(shared_data), "--models", str(model))
+    assert status == 0

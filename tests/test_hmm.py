@@ -1,0 +1,399 @@
+"""Gesture HMMs against independent references: brute force, scipy log-domain forward, hmmlearn's score."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import warnings
+
+import numpy as np
+import pytest
+from scipy.io import loadmat
+from scipy.special import logsumexp
+from scipy.stats import multivariate_normal
+
+from glu.errors import DataError, ModelError
+from glu.hmm import (
+    GestureHMM,
+    HMMConvergenceWarning,
+    Recognizer,
+    forward_curve,
+    init_left_to_right,
+    left_to_right_transmat,
+    load_original_models,
+    p_hmm_from_loglik,
+    train_hmm,
+    train_recognizer,
+)
+
+# --- independent references (no glu code) ----------------------------------------------------------
+
+
+def ref_log_b(X, weights, means, covars):
+    """log p(x_t | q) with scipy, shape (T, Q)."""
+    Q, M = weights.shape
+    out = np.empty((len(X), Q))
+    for q in range(Q):
+        comps = [
+            np.log(weights[q, m]) + multivariate_normal(means[q, m], covars[q, m]).logpdf(X).reshape(-1)
+            for m in range(M)
+            if weights[q, m] > 0
+        ]
+        out[:, q] = logsumexp(comps, axis=0)
+    return out
+
+
+def ref_forward(X, startprob, transmat, weights, means, covars):
+    """Log-domain forward algorithm with log-sum-exp; returns every prefix log-likelihood, shape (T,)."""
+    lb = ref_log_b(X, weights, means, covars)
+    with np.errstate(divide="ignore"):
+        lpi, lA = np.log(startprob), np.log(transmat)
+    la = lpi + lb[0]
+    out = [logsumexp(la)]
+    for t in range(1, len(X)):
+        la = logsumexp(la[:, None] + lA, axis=0) + lb[t]
+        out.append(logsumexp(la))
+    return np.array(out)
+
+
+def random_model(rng, Q=3, M=2, D=2, left_to_right=True, name=""):
+    A = rng.dirichlet(np.ones(Q), size=Q)
+    if left_to_right:
+        A = np.triu(A)
+        A /= A.sum(1, keepdims=True)
+    pi = np.zeros(Q)
+    pi[0] = 1.0
+    if not left_to_right:
+        pi = rng.dirichlet(np.ones(Q))
+    w = rng.dirichlet(np.ones(M), size=Q)
+    mu = rng.normal(scale=2.0, size=(Q, M, D))
+    L = rng.normal(scale=0.4, size=(Q, M, D, D))
+    cov = L @ np.swapaxes(L, -1, -2) + 0.2 * np.eye(D)
+    return GestureHMM(pi, A, w, mu, cov, name=name)
+
+
+def params(m: GestureHMM):
+    return m.startprob, m.transmat, m.weights, m.means, m.covars
+
+
+# --- the forward recursion ---------------------------------------------------------------------------
+
+
+def test_loglik_equals_brute_force_over_state_paths():
+    rng = np.random.default_rng(0)
+    m = random_model(rng, Q=3, M=2, D=2, left_to_right=False)
+    X = rng.normal(size=(4, 2))
+    b = np.exp(ref_log_b(X, m.weights, m.means, m.covars))
+    total = 0.0
+    for path in itertools.product(range(3), repeat=4):
+        p = m.startprob[path[0]] * b[0, path[0]]
+        for t in range(1, 4):
+            p *= m.transmat[path[t - 1], path[t]] * b[t, path[t]]
+        total += p
+    assert m.loglik(X) == pytest.approx(np.log(total), abs=1e-10)
+
+
+def test_emissions_equal_scipy_mixture_densities():
+    rng = np.random.default_rng(1)
+    m = random_model(rng, Q=4, M=3, D=3)
+    X = rng.normal(size=(20, 3))
+    np.testing.assert_allclose(m.log_emission(X), ref_log_b(X, m.weights, m.means, m.covars), rtol=1e-10)
+
+
+def test_prefix_curve_equals_log_domain_reference_and_hmmlearn():
+    rng = np.random.default_rng(2)
+    m = random_model(rng, Q=5, M=2, D=3)
+    X = rng.normal(size=(30, 3))
+    curve = m.loglik_curve(X)
+    np.testing.assert_allclose(curve, ref_forward(X, *params(m)), rtol=1e-10, atol=1e-8)
+    h = m.to_hmmlearn()
+    for t in (1, 7, 30):
+        assert curve[t - 1] == pytest.approx(h.score(X[:t]), abs=1e-8)
+
+
+def test_forward_survives_outliers_and_underflow():
+    rng = np.random.default_rng(3)
+    m = random_model(rng, Q=4, M=2, D=3)
+    X = rng.normal(size=(25, 3))
+    X[10] = [300.0, -200.0, 150.0]  # emissions ~ exp(-1e5): every scaled emission underflows
+    X[11] = [-40.0, 60.0, 0.0]
+    np.testing.assert_allclose(m.loglik_curve(X), ref_forward(X, *params(m)), rtol=1e-10)
+    # an unreachable state keeps a zero forward variable; hard zeros in transmat are fine
+    lb = np.log(np.full((3, 2), 0.5))
+    assert forward_curve(lb, np.array([1.0, 0.0]), np.array([[1.0, 0.0], [0.0, 1.0]]))[-1] == pytest.approx(
+        3 * np.log(0.5)
+    )
+
+
+def test_p_hmm_is_a_softmax_in_the_log_domain():
+    ll = np.array([-1000.0, -1001.0, -2000.0])
+    p = p_hmm_from_loglik(ll)
+    e = np.exp([0.0, -1.0, -1000.0])
+    np.testing.assert_allclose(p, e / e.sum(), rtol=1e-12)
+    assert p.sum() == pytest.approx(1.0)
+    np.testing.assert_allclose(p_hmm_from_loglik(np.zeros(4)), 0.25)
+
+
+# --- the recogniser and its streaming form -------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def bank():
+    rng = np.random.default_rng(4)
+    return Recognizer(
+        {
+            "grasp": random_model(rng, Q=6, M=3, D=3, name="grasp"),
+            "tap": random_model(rng, Q=4, M=1, D=3, name="tap"),  # different Q and M: padding is exercised
+            "touch": random_model(rng, Q=5, M=2, D=3, name="touch"),
+            "push": random_model(rng, Q=6, M=3, D=3, name="push"),
+        }
+    )
+
+
+def test_streaming_equals_rescoring_every_prefix(bank):
+    rng = np.random.default_rng(5)
+    X = rng.normal(size=(40, 3)) * 1.5
+    X[20] = [50.0, 0.0, -50.0]  # an outlier frame in the middle of the stream
+    stream = bank.stream()
+    steps = [stream.push(x) for x in X]
+    hmmlearn_models = {a: m.to_hmmlearn() for a, m in bank.models.items()}
+    for t in (1, 2, 20, 21, 22, 40):
+        ref = np.array([hmmlearn_models[a].score(X[:t]) for a in bank.actions])
+        np.testing.assert_allclose(steps[t - 1].loglik, ref, rtol=1e-9)
+        np.testing.assert_allclose(steps[t - 1].p_hmm, p_hmm_from_loglik(ref), rtol=1e-9, atol=1e-300)
+        assert steps[t - 1].t == t
+    for t in range(1, 41):
+        ref = [ref_forward(X[:t], *params(bank.models[a]))[-1] for a in ("tap",)]
+        assert steps[t - 1].loglik[1] == pytest.approx(ref[0], rel=1e-10)
+    np.testing.assert_allclose(np.array([s.loglik for s in steps]), bank.loglik_curve(X), rtol=1e-10)
+    stream.reset()
+    assert stream.push(X[0]).t == 1
+
+
+def test_recognizer_outputs(bank):
+    rng = np.random.default_rng(6)
+    X = rng.normal(size=(15, 3))
+    ll = bank.loglik(X)
+    assert ll.shape == (4,)
+    np.testing.assert_allclose(
+        ll, [ref_forward(X, *params(bank.models[a]))[-1] for a in bank.actions], rtol=1e-10
+    )
+    p = bank.p_hmm(X)
+    assert p.sum() == pytest.approx(1.0) and bank.classify(X) == bank.actions[int(np.argmax(p))]
+    assert bank.p_hmm_curve(X).shape == (15, 4)
+    with pytest.raises(DataError, match=r"shape \(n_frames, 3\)"):
+        bank.loglik(np.zeros((5, 2)))
+    with pytest.raises(DataError, match="no frames"):
+        bank.loglik(np.zeros((0, 3)))
+    with pytest.raises(DataError, match="frame 2"):
+        bank.loglik(np.array([[0, 0, 0], [np.nan, 0, 0]]))
+    with pytest.raises(DataError):
+        bank.stream().push(np.array([1.0, np.inf, 0.0]))
+
+
+def test_save_load_round_trip_scores_identically(bank, tmp_path):
+    path = bank.save(tmp_path / "rec.json")
+    d = json.loads(path.read_text())
+    assert d["format"] == "glu-gesture-recognizer" and d["version"] == 1
+    assert d["actions"] == ["grasp", "tap", "touch", "push"]
+    assert np.array(d["models"]["grasp"]["covars"]).shape == (6, 3, 3, 3)
+    again = Recognizer.load(path)
+    X = np.random.default_rng(7).normal(size=(33, 3))
+    np.testing.assert_array_equal(again.loglik(X), bank.loglik(X))
+    np.testing.assert_array_equal(again.loglik_curve(X), bank.loglik_curve(X))
+
+
+@pytest.mark.parametrize(
+    "mutate, message",
+    [
+        (lambda d: d.update(format="other"), "not a glu gesture recogniser"),
+        (lambda d: d.update(version=99), "format version 99"),
+        (lambda d: d["actions"].append("wave"), "exactly the keys"),
+        (lambda d: d["models"]["tap"].pop("means"), "missing or malformed field"),
+        (lambda d: d["models"]["tap"]["transmat"][0].__setitem__(0, 5.0), "sum to one"),
+        (
+            lambda d: d["models"]["tap"].update(covars=[[[[1, 0, 0], [0, -1, 0], [0, 0, 1]]]] * 4),
+            "positive definite",
+        ),
+        (lambda d: d["models"]["tap"].update(weights=[[1.0]] * 3), "shape"),
+    ],
+)
+def test_malformed_recogniser_files(bank, tmp_path, mutate, message):
+    d = bank.to_dict()
+    mutate(d)
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(d))
+    with pytest.raises(ModelError, match=message):
+        Recognizer.load(path)
+
+
+def test_unreadable_recogniser_files(tmp_path):
+    with pytest.raises(ModelError, match="no such"):
+        Recognizer.load(tmp_path / "none.json")
+    (tmp_path / "x.json").write_bytes(b"\xff\xfe not json")
+    with pytest.raises(ModelError, match="not a JSON"):
+        Recognizer.load(tmp_path / "x.json")
+
+
+# --- training ---------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def corpus():
+    from glu.gesture_eval import synthetic_corpus
+
+    return synthetic_corpus(10, seed=3, actions=("grasp", "tap", "touch"))
+
+
+def test_initialisation_from_equal_time_slices():
+    rng = np.random.default_rng(8)
+    seqs = [rng.normal(size=(n, 3)) + np.arange(n)[:, None] / n * 10 for n in (30, 45, 60)]
+    m = init_left_to_right(seqs, n_states=3, n_mix=1)
+    for q in range(3):  # state q starts at the mean of the q-th third of every sequence
+        frames = np.concatenate([X[len(X) * q // 3 : len(X) * (q + 1) // 3] for X in seqs])
+        np.testing.assert_allclose(m.means[q, 0], frames.mean(axis=0), rtol=1e-10)
+    assert m.is_left_to_right and m.startprob.tolist() == [1.0, 0.0, 0.0]
+
+
+def test_training_keeps_the_left_to_right_structure(corpus):
+    seqs = [s.xyz for s in corpus if s.action == "grasp"]
+    m, report = train_hmm(seqs, 5, 2, n_iter=15, tol=1e-6, name="grasp", warn=False)
+    A = m.transmat
+    assert np.all(np.tril(A, -1) == 0) and np.all(np.triu(A, 2) == 0)  # only stay or step right
+    assert m.startprob.tolist() == [1.0, 0.0, 0.0, 0.0, 0.0]
+    np.testing.assert_allclose(A.sum(1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(m.weights.sum(1), 1.0, atol=1e-12)
+    assert np.all(np.linalg.eigvalsh(m.covars) > 0)
+    h = np.array(report.history)
+    assert np.all(np.diff(h) > -1e-6 * np.abs(h[1:]))  # EM never decreases the log-likelihood
+    assert report.final_loglik >= h[-1] - 1e-6 * abs(h[-1])
+    assert report.final_loglik == pytest.approx(sum(ref_forward(X, *params(m))[-1] for X in seqs), rel=1e-10)
+    assert report.n_sequences == len(seqs) and report.n_frames == sum(len(X) for X in seqs)
+
+
+def test_non_convergence_is_reported(corpus):
+    seqs = [s.xyz for s in corpus if s.action == "tap"]
+    with pytest.warns(HMMConvergenceWarning, match="NOT converged after 2 of 2"):
+        _, report = train_hmm(seqs, 4, 1, n_iter=2, tol=1e-9, name="tap")
+    assert not report.converged and report.n_iter == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", HMMConvergenceWarning)
+        _, report = train_hmm(seqs, 4, 1, n_iter=300, tol=1e-3, name="tap")
+    assert report.converged and report.n_iter < 300
+    assert abs(report.history[-1] - report.history[-2]) < 1e-3 * report.n_frames
+
+
+def test_trained_recogniser_recognises_held_out_synthetic_gestures(corpus):
+    from glu.gesture_eval import synthetic_corpus
+
+    train = {a: [s.xyz for s in corpus if s.action == a] for a in ("grasp", "tap", "touch")}
+    rec = train_recognizer(train, 4, 1, n_iter=30, warn=False)
+    test = synthetic_corpus(12, seed=99, actions=("grasp", "tap", "touch"))
+    acc = np.mean([rec.classify(s.xyz) == s.action for s in test])
+    assert acc >= 0.75  # chance is 1/3
+
+
+def test_training_input_errors():
+    with pytest.raises(DataError, match="no sequences"):
+        train_hmm([])
+    with pytest.raises(DataError, match="too few"):
+        train_hmm([np.zeros((3, 3))], 6, 3)
+    with pytest.raises(DataError, match="sequence 2"):
+        train_hmm([np.zeros((30, 3)), np.zeros((30, 2))])
+
+
+def test_model_validation():
+    rng = np.random.default_rng(9)
+    m = random_model(rng)
+    with pytest.raises(ModelError, match="transmat must have shape"):
+        GestureHMM(m.startprob, m.transmat[:2], m.weights, m.means, m.covars)
+    with pytest.raises(ModelError, match="startprob must be non-negative and sum to one"):
+        GestureHMM(m.startprob * 2, m.transmat, m.weights, m.means, m.covars)
+    with pytest.raises(ModelError, match="non-finite"):
+        GestureHMM(m.startprob, m.transmat, m.weights, m.means * np.nan, m.covars)
+    np.testing.assert_allclose(
+        left_to_right_transmat(3, 0.8), [[0.8, 0.2, 0], [0, 0.8, 0.2], [0, 0, 1]], atol=1e-15
+    )
+
+
+# --- the original 2013 models ------------------------------------------------------------------------
+
+SEGMENTS = [
+    ("tap1_hand", 216, 351),
+    ("tap1_hand", 401, 511),
+    ("tap1_hand", 557, 664),
+    ("tap_notable_seated_1", 121, 214),
+    ("norobotview_tap_notable_seated_2", 230, 375),
+]
+
+
+def _mat_params(mat, k):
+    """The parameters of hmm{k} straight from the .mat arrays, in our (Q, M, …) layout."""
+    prior = mat[f"hmm{k}_prior"].astype(float).ravel()
+    Q = len(prior)
+    w = mat[f"hmm{k}_mixmat"].astype(float).reshape(Q, -1)
+    M = w.shape[1]
+    mu = mat[f"hmm{k}_mu"].reshape(3, Q, M).transpose(1, 2, 0)
+    sig = mat[f"hmm{k}_Sigma"].reshape(3, 3, Q, M).transpose(2, 3, 0, 1)
+    return prior, mat[f"hmm{k}_trans"].astype(float), w, mu, sig
+
+
+@pytest.mark.parametrize("file", ["HMM_M3_Q6_mixsplit.mat", "HMM_M1_Q6_mixsplit.mat"])
+def test_original_models_match_an_independent_forward(shared_data, file):
+    from hmmlearn.hmm import GMMHMM
+
+    path = shared_data / "reference-models" / file
+    rec = load_original_models(path, include_garbage=True)
+    mat = loadmat(path)
+    assert rec.actions == ("grasp", "tap", "touch", "garbage")
+    for name, a, b in SEGMENTS:
+        X = np.loadtxt(shared_data / "gestures" / name / "data.log")[a - 1 : b, 2:] / 1000
+        assert len(X) == b - a + 1
+        ours = rec.loglik(X)
+        for i, k in enumerate((3, 1, 4, 0)):
+            pi, A, w, mu, sig = _mat_params(mat, k)
+            ref = ref_forward(X, pi, A, w, mu, sig)[-1]
+            assert ours[i] == pytest.approx(ref, abs=1e-6)
+            h = GMMHMM(n_components=len(pi), n_mix=w.shape[1], covariance_type="full", init_params="")
+            h.n_features = 3
+            h.startprob_, h.transmat_, h.weights_, h.means_, h.covars_ = pi, A, w, mu, sig
+            assert ours[i] == pytest.approx(h.score(X), abs=1e-6)
+    for m in rec.models.values():
+        assert m.is_left_to_right and m.startprob[0] == 1.0
+
+
+def test_original_streaming_curve_on_the_sphere_tap(shared_data):
+    rec = load_original_models(shared_data / "reference-models/HMM_M3_Q6_mixsplit.mat")
+    X = np.loadtxt(shared_data / "gestures/tap_notable_seated_1/data.log")[120:214, 2:] / 1000
+    ll, p = rec.stream().extend(X)
+    mat = loadmat(shared_data / "reference-models/HMM_M3_Q6_mixsplit.mat")
+    for i, k in enumerate((3, 1, 4)):
+        np.testing.assert_allclose(ll[:, i], ref_forward(X, *_mat_params(mat, k)), rtol=1e-9, atol=1e-7)
+    np.testing.assert_allclose(p.sum(1), 1.0)
+
+
+def test_original_model_file_errors(tmp_path):
+    with pytest.raises(ModelError, match="no such file"):
+        load_original_models(tmp_path / "none.mat")
+    (tmp_path / "bad.mat").write_bytes(b"not a mat file at all")
+    with pytest.raises(ModelError, match="not a readable MATLAB file"):
+        load_original_models(tmp_path / "bad.mat")
+    from scipy.io import savemat
+
+    savemat(tmp_path / "partial.mat", {"hmm1_prior": np.ones(2)})
+    with pytest.raises(ModelError, match="missing hmm3_prior"):
+        load_original_models(tmp_path / "partial.mat")
+
+
+def test_forward_log_domain_fallback_closed_form():
+    # frame 1 fits only the unreachable state 1: every scaled emission of state 0 underflows to zero
+    lb = np.array([[-2000.0, 0.0], [-1.0, -3000.0]])
+    A = np.array([[0.5, 0.5], [0.0, 1.0]])
+    curve = forward_curve(lb, np.array([1.0, 0.0]), A)
+    assert curve[0] == pytest.approx(-2000.0, abs=1e-9)
+    expected = np.logaddexp(-2000.0 + np.log(0.5) - 1.0, -2000.0 + np.log(0.5) - 3000.0)
+    assert curve[1] == pytest.approx(expected, abs=1e-9)
+    # an impossible frame (no reachable state can emit it) gives -inf from there on
+    lb_impossible = np.array([[0.0, 0.0], [-np.inf, 0.0], [0.0, 0.0]])
+    stay = np.eye(2)
+    assert np.isneginf(forward_curve(lb_impossible, np.array([1.0, 0.0]), stay)[1:]).all()

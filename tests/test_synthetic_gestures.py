@@ -1,0 +1,82 @@
+"""The synthetic gesture generator: seeded, any number of sequences, real-world variability as skeletons."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from glu.data.synthetic_gestures import GESTURES, synthesize_gestures, synthesize_recording
+from glu.errors import DataError
+from glu.features import skeleton_features
+from glu.trajectories import repair
+
+
+def test_same_seed_same_sequences_and_prefix_stability():
+    a = synthesize_gestures(9, seed=11)
+    b = synthesize_gestures(9, seed=11)
+    c = synthesize_gestures(4, seed=11)
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x.skeleton, y.skeleton)
+        np.testing.assert_array_equal(x.t, y.t)
+    for x, y in zip(a[:4], c, strict=True):
+        np.testing.assert_array_equal(x.skeleton, y.skeleton)
+    d = synthesize_gestures(9, seed=12)
+    assert not np.array_equal(a[0].skeleton, d[0].skeleton)
+
+
+def test_actions_in_turn_shapes_and_timing():
+    gs = synthesize_gestures(10, seed=0)
+    assert [g.action for g in gs] == [GESTURES[i % 4] for i in range(10)]
+    for g in gs:
+        assert g.skeleton.ndim == 3 and g.skeleton.shape[1:] == (15, 3)
+        assert len(g.t) == len(g.skeleton) and np.all(np.diff(g.t) > 0)
+        assert 2.4 < g.t[-1] - g.t[0] < 6.1  # 2.5–5 s of movement, 3–15 still frames before and after
+    assert synthesize_gestures(0) == []
+
+
+def test_variability_is_present():
+    gs = synthesize_gestures(40, seed=1, dropout_rate=1.0)
+    sizes = [g.size for g in gs]
+    assert min(sizes) < 0.9 and max(sizes) > 1.1
+    lengths = [len(g.t) for g in gs]
+    assert max(lengths) - min(lengths) > 20
+    # every sequence lost a run of frames: its largest time step is well above the frame period
+    assert all(np.diff(g.t).max() > 3 / 30 for g in gs)
+    torsos = np.array([g.skeleton[0, 8] for g in gs])
+    assert torsos.std(axis=0).min() > 0.05  # people stand in different places
+
+
+def test_noise_free_gestures_are_smooth_and_noise_adds_spikes():
+    (clean,) = synthesize_gestures(1, seed=2, noise=0.0, spike_rate=0.0, dropout_rate=0.0)
+    f, _ = skeleton_features(clean.skeleton)
+    assert np.abs(np.diff(f, 2, axis=0)).max() < 0.05
+    (spiky,) = synthesize_gestures(1, seed=2, noise=0.0, spike_rate=0.2, dropout_rate=0.0)
+    assert any(e.kind == "spike" for e in repair(spiky.trajectory()).events)
+
+
+def test_gestures_differ_where_they_should():
+    gs = synthesize_gestures(40, seed=3, noise=0.0, spike_rate=0.0, dropout_rate=0.0)
+    feats = {a: [skeleton_features(g.skeleton)[0] for g in gs if g.action == a] for a in GESTURES}
+    # a tap strikes laterally: its x range is the largest; a reach always goes forward (z < rest)
+    x_range = {a: np.mean([f[:, 0].max() - f[:, 0].min() for f in fs]) for a, fs in feats.items()}
+    assert max(x_range, key=x_range.get) == "tap"
+    for fs in feats.values():
+        for f in fs:
+            assert f[:, 2].min() < f[0, 2] - 1.0
+
+
+def test_recording_has_known_segments():
+    rec = synthesize_recording("grasp", 3, seed=0)
+    assert len(rec.segments) == 3
+    assert all(a < b for a, b in rec.segments)
+    assert all(rec.segments[i][1] < rec.segments[i + 1][0] for i in range(2))
+    assert rec.segments[-1][1] < len(rec.t)
+
+
+def test_bad_arguments():
+    with pytest.raises(DataError, match="unknown action"):
+        synthesize_gestures(3, actions=("wave",))
+    with pytest.raises(DataError, match="noise"):
+        synthesize_gestures(3, noise=-1)
+    with pytest.raises(DataError):
+        synthesize_recording("grasp", 0)
