@@ -274,3 +274,36 @@ def _finish(df: pd.DataFrame, bn: BayesNet, name: str) -> pd.DataFrame:
     df.attrs["experiment"] = name
     df.attrs["data_source"] = str(bn.meta.get("data_source", "unknown data"))
     return df
+
+
+def fusion_on_gestures(
+    bn: BayesNet,
+    recognizer,
+    sequences: Sequence,
+    evidence: Mapping[str, str],
+    strategies: Sequence[Strategy] = ("hard", "virtual", "jeffrey"),
+    target: str = "ObjVel",
+) -> pd.DataFrame:
+    """Recognise each gesture with the HMMs and predict ``target`` from it with each fusion strategy.
+
+    ``sequences``: labelled sequences (``action, xyz, recording, start, end``, as
+    :class:`glu.segmentation.LabelledSequence`); ``evidence``: the object the gestures are applied to.
+    Returns columns ``recording, start, end, true_action, hmm_top, p_hmm_<a>…, strategy, <target>, p``.
+    """
+    eng = InferenceEngine(bn)
+    actions = bn.schema.values_of("Action")
+    order = [list(recognizer.actions).index(a) for a in actions]
+    rows = []
+    for s in sequences:
+        ll = recognizer.loglik(s.xyz)[order]
+        q = np.exp(ll - ll.max())
+        q /= q.sum()
+        base = {"recording": s.recording, "start": s.start, "end": s.end, "true_action": s.action,
+                "hmm_top": actions[int(np.argmax(q))], **{f"p_hmm_{a}": float(v) for a, v in zip(actions, q, strict=True)}}  # fmt: skip
+        for strategy in strategies:
+            post = fuse(eng, [target], evidence, q, strategy)[target]
+            for v, p in zip(bn.schema.values_of(target), post, strict=True):
+                rows.append({**base, "strategy": strategy, target: v, "p": float(p)})
+    df = pd.DataFrame(rows)
+    df.insert(0, "evidence", _evidence_text(evidence))
+    return _finish(df, bn, "fusion_on_gestures")

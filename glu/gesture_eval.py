@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from glu.data.source import DataSource
 from glu.errors import DataError
 from glu.hmm import ACTIONS, Recognizer, load_original_models, train_recognizer
 from glu.segmentation import ORIGINAL_SEGMENTS, RECORDING_ACTION, LabelledSequence
@@ -208,3 +209,109 @@ def original_scores(root: str | os.PathLike, n_mix: int = 3, include_garbage: bo
             del row["converged"]
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def gesture_sequences(
+    source: DataSource,
+    n_per_action: int = 20,
+    seed: int = 0,
+    actions: Sequence[str] = ACTIONS,
+    include_test: bool = True,
+) -> list[LabelledSequence]:
+    """Labelled training sequences of a data source: the real segments, or a seeded synthetic corpus.
+
+    With real gesture recordings, the repetitions found by automatic segmentation of the training
+    recordings plus, with ``include_test``, the originals' hand-cut segments of the two single-tap
+    recordings (leave them out when those recordings are the test data, as in effect anticipation);
+    restricted to ``actions``. Otherwise ``n_per_action`` synthetic gestures per action.
+    """
+    from glu.segmentation import real_segments
+
+    if source.root is not None and source.optional("gestures"):
+        return [s for s in real_segments(source.root, include_original=include_test) if s.action in actions]
+    return synthetic_corpus(n_per_action, seed, actions=tuple(actions))
+
+
+def recording_segmentations(source: DataSource, seed: int = 0) -> list[tuple[Any, list[Any]]]:
+    """Automatic segmentation of every recording, each with its reference segments.
+
+    Real data: the six logs, with the originals' hand-cut segments as reference. Synthetic data: one
+    continuous synthetic recording per action (four repetitions each), with the true repetitions.
+    Returns a list of (:class:`~glu.segmentation.RecordingSegmentation`, reference segments).
+    """
+    from glu.segmentation import (
+        RecordingSegmentation,
+        Segment,
+        original_segments,
+        segment_recording,
+        segment_repetitions,
+    )
+
+    if source.root is not None and source.optional("gestures"):
+        names = sorted(RECORDING_ACTION, key=list(RECORDING_ACTION).index)
+        return [
+            (segment_recording(source.file(f"gestures/{n}/data.log")), original_segments(n))
+            for n in names if source.optional(f"gestures/{n}/data.log")
+        ]  # fmt: skip
+    from glu.data.synthetic_gestures import synthesize_recording
+    from glu.trajectories import repair
+
+    out = []
+    for action in ("grasp", "tap", "touch", "push"):
+        g = synthesize_recording(action, 4, seed)
+        repaired = repair(g.trajectory())
+        name = f"synthetic {action}"
+        pieces = [segment_repetitions(tr, action, recording=name) for tr in repaired.pieces if len(tr) >= 2]
+        ref = [Segment(a, b, action, name) for a, b in g.segments]
+        out.append((RecordingSegmentation(name, pieces, repaired.events), ref))
+    return out
+
+
+def segmentation_table(segmentations: Sequence[tuple[Any, list[Any]]]) -> pd.DataFrame:
+    """One row per segment found: recording, action, segment number, start, end, n_frames, tracking events."""
+    rows = []
+    for seg, ref in segmentations:
+        kinds = pd.Series([e.kind for e in seg.events], dtype=object).value_counts().to_dict()
+        for i, s in enumerate(seg.segments, 1):
+            rows.append({
+                "recording": seg.recording, "action": s.label, "segment": i, "start": s.start, "end": s.end,
+                "n_frames": s.n_frames, "n_reference": len(ref), "n_gaps": kinds.get("gap", 0),
+                "n_spikes": kinds.get("spike", 0), "n_jumps": kinds.get("jump", 0),
+            })  # fmt: skip
+        if not seg.segments:
+            rows.append({"recording": seg.recording, "action": None, "segment": 0, "n_reference": len(ref)})
+    return pd.DataFrame(rows)
+
+
+def train_on(sequences: Sequence[LabelledSequence], seed: int = 0, **train: Any) -> Recognizer:
+    """Train one HMM per action present in ``sequences`` (settings: :data:`TRAIN_DEFAULTS` overridden by ``train``)."""
+    actions = tuple(dict.fromkeys(s.action for s in sequences))
+    return _train(sequences, actions, seed, train)
+
+
+def training_table(recognizer: Recognizer) -> pd.DataFrame:
+    """How training went, one row per action: sequences, frames, EM iterations, convergence, log-likelihood."""
+    rows = []
+    for a, r in recognizer.reports.items():
+        rows.append({
+            "action": a, "n_sequences": r.n_sequences, "n_frames": r.n_frames, "em_iterations": r.n_iter,
+            "max_iterations": r.max_iter, "converged": r.converged, "loglik_per_frame": r.final_loglik / max(r.n_frames, 1),
+        })  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_segments(source: DataSource, seed: int = 0, n_per_action: int = 2) -> list[LabelledSequence]:
+    """Gestures to recognise in the fusion experiments: the originals' five tap segments, as logged, or
+    ``n_per_action`` fresh synthetic gestures per action (seeded apart from the training corpus)."""
+    from glu.features import load_features
+
+    if source.root is not None and source.optional("gestures"):
+        out = []
+        for name, ranges in ORIGINAL_SEGMENTS.items():
+            traj = load_features(source.file(f"gestures/{name}/data.log"), policy=None).pieces[0]
+            out += [
+                LabelledSequence(RECORDING_ACTION[name], traj.frames(a, b).xyz, name, a, b) for a, b in ranges
+            ]
+        return out
+    corpus = synthetic_corpus(n_per_action, seed + 1000)
+    return [s._replace(recording=f"synthetic {s.action} {i}") for i, s in enumerate(corpus)]

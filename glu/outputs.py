@@ -2,8 +2,8 @@
 
 A notebook calls :func:`open_outputs` once with its parameters; the returned :class:`Outputs` saves
 figures (PNG + SVG, deterministic, stamped with the data source), result tables (CSV + JSON, with the data
-source and package versions) and gives paths for Rerun recordings. With ``out_dir=None`` everything goes
-to the project's ``figures/``, ``results/`` and ``recordings/``; ``glu reproduce`` passes a staging folder
+source and package versions) and gives paths for Rerun recordings and trained models. With ``out_dir=None``
+everything goes to the project's ``figures/``, ``results/``, ``recordings/`` and ``models/``; ``glu reproduce`` passes a staging folder
 and moves the files into place only when the notebook succeeds.
 """
 
@@ -44,7 +44,7 @@ class Outputs:
     ----------
     notebook : the notebook's name (e.g. ``"03_bn_learning"``), recorded with every table
     source : the resolved data source
-    figures, results, recordings : output folders (created on first use)
+    figures, results, recordings, models : output folders (created on first use)
     """
 
     notebook: str
@@ -52,6 +52,7 @@ class Outputs:
     figures: Path
     results: Path
     recordings: Path
+    models: Path
     written: list[Path] = field(default_factory=list)
 
     @property
@@ -89,6 +90,13 @@ class Outputs:
         self.written.extend([csv, js])
         return csv
 
+    def model(self, name: str) -> Path:
+        """Path for a trained model file ``models/<name>`` (the folder is created)."""
+        self.models.mkdir(parents=True, exist_ok=True)
+        p = self.models / name
+        self.written.append(p)
+        return p
+
     def recording(self, name: str) -> Path:
         """Path for a Rerun recording ``recordings/<name>.rrd`` (the folder is created)."""
         self.recordings.mkdir(parents=True, exist_ok=True)
@@ -110,9 +118,16 @@ def open_outputs(
     """
     source = resolve_data(data)
     if out_dir is None:
-        figures, results, recordings = paths.FIGURES_DIR, paths.RESULTS_DIR, paths.RECORDINGS_DIR
+        figures, results, recordings, models = (
+            paths.FIGURES_DIR,
+            paths.RESULTS_DIR,
+            paths.RECORDINGS_DIR,
+            paths.MODELS_DIR,
+        )
     else:
         root = Path(out_dir)
-        figures, results, recordings = root / "figures", root / "results", root / "recordings"
+        figures, results, recordings, models = (
+            root / k for k in ("figures", "results", "recordings", "models")
+        )
     print(f"{notebook}: {source.describe()}")
-    return Outputs(notebook=notebook, source=source, figures=figures, results=results, recordings=recordings)
+    return Outputs(notebook, source, figures, results, recordings, models)

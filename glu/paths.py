@@ -14,6 +14,7 @@ REAL_DATA_DIR: Path = DATA_DIR / "real"
 FIGURES_DIR: Path = PROJECT_ROOT / "figures"
 RECORDINGS_DIR: Path = PROJECT_ROOT / "recordings"
 RESULTS_DIR: Path = PROJECT_ROOT / "results"
+MODELS_DIR: Path = PROJECT_ROOT / "models"
 EXECUTED_DIR: Path = PROJECT_ROOT / "build" / "notebooks"
 NOTEBOOKS_DIR: Path = PROJECT_ROOT / "notebooks"
 

@@ -252,3 +252,85 @@ def plot_anticipation(
     bottom.set_ylabel(rf"$p_{{comb}}({node})$")
     bottom.set_xlabel("frame")
     bottom.legend(fontsize=7, frameon=False, loc="center left", bbox_to_anchor=(1.0, 0.5))
+
+
+def plot_segmentations(segmentations: Sequence, axes: Sequence[Axes]) -> None:
+    """The automatic segmentation of each recording, one axis each (reference segments as black bars)."""
+    from glu.segmentation import plot_segmentation
+
+    for ax, (seg, ref) in zip(axes, segmentations, strict=False):
+        plot_segmentation(ax, seg, title=f"{seg.recording}: {len(seg.segments)} segments", reference=ref)
+        ax.title.set_fontsize(9)
+
+
+def plot_confusion(confusion: pd.DataFrame, ax: Axes) -> None:
+    """A confusion matrix (rows: true action, columns: predicted), counts in the cells."""
+    m = confusion.to_numpy(dtype=float)
+    ax.imshow(m, cmap="Blues")
+    for i in range(m.shape[0]):
+        for j in range(m.shape[1]):
+            ax.text(
+                j,
+                i,
+                f"{int(m[i, j])}",
+                ha="center",
+                va="center",
+                color="white" if m[i, j] > m.max() / 2 else "black",
+            )
+    ax.set_xticks(range(m.shape[1]), confusion.columns)
+    ax.set_yticks(range(m.shape[0]), confusion.index)
+    ax.set_xlabel("predicted")
+    ax.set_ylabel("true")
+
+
+def plot_accuracy_vs_noise(df: pd.DataFrame, ax: Axes) -> None:
+    """k-fold accuracy against sensor noise, overall and per action."""
+    ax.plot(df["noise_m"] * 100, df["accuracy"], "o-", color="black", label="all")
+    for c in [c for c in df.columns if c.startswith("accuracy_")]:
+        a = c.removeprefix("accuracy_")
+        ax.plot(df["noise_m"] * 100, df[c], ".--", color=ACTION_COLORS.get(a, "0.5"), label=a)
+    ax.set_xlabel("sensor noise (cm, std per joint)")
+    ax.set_ylabel("accuracy")
+    ax.set_ylim(0, 1.02)
+    ax.legend(fontsize=8, frameon=False)
+
+
+def plot_segment_scores(df: pd.DataFrame, ax: Axes) -> None:
+    """Per-frame log-likelihood of each segment under each model (grouped bars), the winner marked."""
+    cols = [c for c in df.columns if c.startswith("loglik_")]
+    labels = [f"{r.recording}\n{r.start}–{r.end}" for r in df.itertuples()]
+    w = 0.8 / len(cols)
+    for k, c in enumerate(cols):
+        a = c.removeprefix("loglik_")
+        ax.bar(np.arange(len(df)) + (k - (len(cols) - 1) / 2) * w, df[c] / df["n_frames"], width=w,
+               color=ACTION_COLORS.get(a, "0.5"), label=a)  # fmt: skip
+    ax.set_xticks(np.arange(len(df)), labels, fontsize=7)
+    ax.set_ylabel(r"$\frac{1}{T}\log L(G \mid A)$")
+    ax.legend(fontsize=8, frameon=False)
+
+
+def plot_fusion_on_gestures(df: pd.DataFrame, ax: Axes, value: str = "fast", target: str = "ObjVel") -> None:
+    """p_comb(target = value) per gesture segment, one bar per fusion strategy; HMM's top action below."""
+    d = df[df[target] == value]
+    segs = list(dict.fromkeys(zip(d["recording"], d["start"], d["end"], strict=True)))
+    strategies = list(dict.fromkeys(d["strategy"]))
+    w = 0.8 / len(strategies)
+    hatches = {"hard": "", "virtual": "//", "jeffrey": ".."}
+    for k, st in enumerate(strategies):
+        g = d[d["strategy"] == st].set_index(["recording", "start", "end"]).loc[segs]
+        ax.bar(np.arange(len(segs)) + (k - (len(strategies) - 1) / 2) * w, g["p"], width=w, color="#66C2A5",
+               hatch=hatches.get(st, ""), edgecolor="0.2", linewidth=0.5, label=st)  # fmt: skip
+    tops = (
+        d.drop_duplicates(["recording", "start", "end"])
+        .set_index(["recording", "start", "end"])
+        .loc[segs, "hmm_top"]
+    )
+    ax.set_xticks(
+        np.arange(len(segs)),
+        [f"{r}\n{a}–{b}\nHMM: {t}" for (r, a, b), t in zip(segs, tops, strict=True)],
+        fontsize=6.5,
+    )
+    ax.set_ylim(0, 1)
+    ax.set_ylabel(rf"$p_{{comb}}({target}={value})$")
+    ax.set_title(d["evidence"].iloc[0], fontsize=9)
+    ax.legend(fontsize=8, frameon=False)

@@ -2,7 +2,7 @@
 
 ``glu reproduce`` (and ``make reproduce``) calls :func:`reproduce`. Each notebook runs in its own kernel,
 writing into a private staging folder; when it succeeds its files are moved into ``figures/``,
-``recordings/`` and ``results/`` and the executed notebook into ``build/notebooks/`` (or under ``--out``).
+``recordings/``, ``results/`` and ``models/`` and the executed notebook into ``build/notebooks/`` (or under ``--out``).
 A failing notebook stops the run with a message naming the notebook and the cell, keeps its executed copy
 (``NAME.failed.ipynb``), and leaves the outputs of earlier runs as they were. At the end
 ``results/summary.json`` and ``results/summary.csv`` collect every number behind every figure, the data
@@ -130,7 +130,7 @@ def reproduce(
         executed_dir = paths.EXECUTED_DIR
     else:
         root = Path(out).resolve()
-        final = {k: root / k for k in ("figures", "results", "recordings")}
+        final = {k: root / k for k in ("figures", "results", "recordings", "models")}
         executed_dir = root / "notebooks"
     staging = root / ".glu-staging" / uuid.uuid4().hex[:12]
     log(f"glu reproduce: {len(notebooks)} notebooks, {source.describe()}, quick={quick}, jobs={jobs}")

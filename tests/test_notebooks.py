@@ -15,7 +15,10 @@ import pytest
 from glu.reproduce import NotebookError, list_notebooks, reproduce
 
 EXPECTED_FIGURES = {
+    "01_gesture_features": ["gesture_segmentation"],
+    "02_hmm_training": ["hmm_synthetic_accuracy"],
     "03_bn_learning": ["bn_structure", "unseen_rows_comparison"],
+    "04_fusion_hard": ["fusion_hard_on_gestures"],
     "05_fusion_soft": ["fusion_soft_rules", "fusion_soft_sweep"],
     "06_fusion_product": ["fusion_product_action", "fusion_product_thresholds"],
     "07_glu2017_figures": [
@@ -23,8 +26,14 @@ EXPECTED_FIGURES = {
         "glu2017_word_change_text",
         "glu2017_word_change_code",
     ],
+    "08_tcds_figures": [
+        "tcds_action_vs_soft_evidence",
+        "tcds_effect_vs_soft_evidence",
+        "tcds_anticipation_glu",
+    ],
     "09_verbal_descriptions": ["verbal_and_but", "verbal_yellow_sphere_nbest", "verbal_sampling_vs_exact"],
 }
+EXPECTED_RECORDINGS = {"08_tcds_figures": ["tcds_anticipation_sphere_glu", "tcds_anticipation_box_glu"]}
 COMMON_PARAMETERS = {"data", "seed", "quick", "out_dir"}
 NOTEBOOKS = [p.stem for p in list_notebooks()]
 
@@ -65,6 +74,12 @@ def test_notebook_quick_run_writes_its_figures(quick_runs, name):
             f = out / "figures" / f"{fig}.{ext}"
             assert f.is_file() and f.stat().st_size > 1000, f
     assert (out / "notebooks" / f"{name}.ipynb").is_file()
+    for rec in EXPECTED_RECORDINGS.get(name, []):
+        f = out / "recordings" / f"{rec}.rrd"
+        res = subprocess.run(
+            [sys.executable, "-m", "rerun", "rrd", "verify", str(f)], capture_output=True, text=True
+        )
+        assert res.returncode == 0, f"{rec}: {res.stderr}"
     svg = (out / "figures" / f"{EXPECTED_FIGURES[name][0]}.svg").read_text()
     assert "synthetic data" in svg  # every figure says which data it came from
 

@@ -1,0 +1,57 @@
+# ---
+# jupyter:
+#   jupytext:
+#     formats: py:percent
+#     text_representation:
+#       extension: .py
+#       format_name: percent
+#   kernelspec:
+#     display_name: Python 3
+#     language: python
+#     name: python3
+# ---
+
+# %% [markdown]
+# # 01 · Hand trajectories and gesture features
+#
+# A depth sensor tracks the person's skeleton; the features are the right hand relative to the torso,
+# x and z divided by the shoulder distance and y by the neck–torso distance (x to the person's right, y up,
+# z towards their back). The recordings of 2017 log these features directly. Real tracking drops out and
+# jumps: glu detects gaps and outliers, repairs short ones and splits at long ones, then cuts each
+# recording into gesture repetitions from the hand's activity (distance from the rest pose and speed).
+# With the real data the originals' hand-cut test segments are shown as black bars; with synthetic data,
+# the true repetitions.
+
+# %% tags=["parameters"]
+data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+seed = 0  # seed of the synthetic recordings
+quick = False  # small, fast run (for tests)
+out_dir = None  # folder for figures/ and results/; None: the project's own
+
+# %%
+import matplotlib.pyplot as plt
+
+from glu import gesture_eval, plots
+from glu.outputs import open_outputs
+
+out = open_outputs("01_gesture_features", data, out_dir)
+segmentations = gesture_eval.recording_segmentations(out.source, seed=seed)
+table = gesture_eval.segmentation_table(segmentations)
+table.attrs["data_source"] = out.data_label
+out.table(table, "gesture_segments")
+
+# %%
+fig, axes = plt.subplots(len(segmentations), 1, figsize=(10, 2.3 * len(segmentations)), squeeze=False)
+plots.plot_segmentations(segmentations, axes[:, 0])
+out.figure(fig, "gesture_segmentation")
+table.groupby("recording", sort=False).agg(
+    segments=("segment", "max"),
+    reference=("n_reference", "first"),
+    gaps=("n_gaps", "first"),
+    spikes=("n_spikes", "first"),
+)
+
+# %% [markdown]
+# Each training recording yields one segment per repetition (push1_hand loses a repetition to a 1.5 s
+# tracking gap, where the trajectory is split); the single-tap recordings yield one segment each, around
+# the originals' hand-cut ranges. These segments train the gesture HMMs in notebook 02.

@@ -1,0 +1,70 @@
+# ---
+# jupyter:
+#   jupytext:
+#     formats: py:percent
+#     text_representation:
+#       extension: .py
+#       format_name: percent
+#   kernelspec:
+#     display_name: Python 3
+#     language: python
+#     name: python3
+# ---
+
+# %% [markdown]
+# # 04 · Hard decision: the HMMs' top action as evidence
+#
+# The simplest way to join the two models (GLU 2017 §2.4): recognise the gesture, take the most likely
+# action, and enter it in the Affordance–Words network as if the robot had seen it for certain. Here the
+# gesture HMMs recognise each test gesture, and the network predicts what the gesture will do to a small
+# sphere — by the hard decision, and, for comparison, by the two soft rules of notebook 05.
+
+# %% tags=["parameters"]
+data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+words = "lab"  # descriptions: "lab" (the paper's) or "asr"
+unseen_words = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
+shape = "sphere"  # the object the gestures are applied to …
+size = "small"  # … and its size
+n_per_action = 20  # synthetic data: training gestures per action
+seed = 0  # seed of synthetic gestures and EM initialisation
+quick = False  # small, fast run (for tests)
+out_dir = None  # folder for figures/ and results/; None: the project's own
+
+# %%
+from glu import experiments, gesture_eval, plots
+from glu.bn import learn_bn
+from glu.data import load_experiments
+from glu.hmm import load_original_models
+from glu.outputs import open_outputs
+
+out = open_outputs("04_fusion_hard", data, out_dir)
+bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
+mat = out.source.optional("reference-models/HMM_M3_Q6_mixsplit.mat")
+if mat is not None:
+    recognizer, models = load_original_models(mat), "original 2013 HMMs"
+else:
+    n = 6 if quick else n_per_action
+    train = {"n_iter": 15} if quick else {}
+    recognizer = gesture_eval.train_on(
+        gesture_eval.gesture_sequences(out.source, n, seed), seed=seed, **train
+    )
+    models = "HMMs trained on synthetic gestures"
+segments = gesture_eval.test_segments(out.source, seed)
+print(f"{len(segments)} test gestures, {models}")
+
+# %%
+table = experiments.fusion_on_gestures(bn, recognizer, segments, {"Shape": shape, "Size": size})
+out.table(table, "fusion_hard_on_gestures", models=models)
+fig, (ax,) = plots.new_figure(1, width=max(6, 1.3 * len(segments)))
+plots.plot_fusion_on_gestures(table, ax, value="fast")
+out.figure(fig, "fusion_hard_on_gestures")
+table.pivot_table(index=["recording", "start", "hmm_top"], columns=["strategy", "ObjVel"], values="p").round(
+    3
+)
+
+# %% [markdown]
+# When the HMMs recognise the tap, the network predicts the small sphere will roll away fast. A gesture
+# the HMMs take for a touch turns the prediction around (the sphere stays still). Over a whole segment the
+# HMM posteriors are nearly certain (log-likelihoods differ by tens to hundreds of nats), so soft fusion
+# changes little here; it matters while the gesture is still unfolding (notebook 08) and when the models
+# disagree less.
