@@ -7,6 +7,7 @@ Figures are saved with :func:`save_figure`, which writes PNG and SVG that are by
 from __future__ import annotations
 
 import os
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -327,7 +328,10 @@ def plot_fusion_on_gestures(df: pd.DataFrame, ax: Axes, value: str = "fast", tar
     )
     ax.set_xticks(
         np.arange(len(segs)),
-        [f"{r}\n{a}–{b}\nHMM: {t}" for (r, a, b), t in zip(segs, tops, strict=True)],
+        [
+            f"{textwrap.fill(r.replace('_', ' '), 16)}\n{a}–{b}\nHMM: {t}"
+            for (r, a, b), t in zip(segs, tops, strict=True)
+        ],
         fontsize=6.5,
     )
     ax.set_ylim(0, 1)

@@ -207,48 +207,88 @@ def reproduce(
 def write_summary(
     results_dir: Path, runs: list[NotebookResult], data: str, quick: bool, wall: float
 ) -> dict[str, Any]:
-    """Collect every result table of the run into ``summary.json`` and a long-format ``summary.csv``."""
+    """Collect every result table into ``summary.json`` and a long-format ``summary.csv``.
+
+    A partial run (``--only``) updates the existing summary when it was made from the same data in the
+    same mode: the notebooks just run replace their earlier entries, the others are kept.
+    """
     import pandas as pd
 
+    from glu.data.tables import atomic_write_text
     from glu.outputs import package_versions
 
+    notebooks = {r.name: {"name": r.name, "status": r.status, "seconds": round(r.seconds, 3)} for r in runs}
     tables: dict[str, Any] = {}
-    long_rows = []
-    comparison = []
+    figures: dict[str, str] = {}
+    recordings: dict[str, str] = {}
+    previous = results_dir / "summary.json"
+    if previous.is_file():
+        try:
+            old = json.loads(previous.read_text())
+        except (OSError, json.JSONDecodeError):
+            old = {}
+        if old.get("data_source") == data and old.get("quick") == quick:
+            for nb in old.get("notebooks", []):
+                if nb["name"] not in notebooks:
+                    notebooks[nb["name"]] = nb
+                    tables.update(
+                        {
+                            k: v
+                            for k, v in old.get("tables", {}).items()
+                            if v["meta"].get("notebook") == nb["name"]
+                        }
+                    )
+                    figures.update(
+                        {
+                            f: nb["name"]
+                            for f, n in old.get("figures_by_notebook", {}).items()
+                            if n == nb["name"]
+                        }
+                    )
+                    recordings.update(
+                        {
+                            f: nb["name"]
+                            for f, n in old.get("recordings_by_notebook", {}).items()
+                            if n == nb["name"]
+                        }
+                    )
     for run in runs:
         for f in run.files:
             p = Path(f)
-            if p.suffix != ".json" or p.parent != results_dir:
-                continue
-            doc = json.loads(p.read_text())
-            name = doc["meta"]["name"]
-            tables[name] = doc
-            df = pd.DataFrame(doc["rows"])
-            for i, row in df.iterrows():
-                for col, val in row.items():
-                    long_rows.append({"table": name, "row": i, "column": col, "value": val})
-            if "difference" in df.columns and len(df):
-                diff = pd.to_numeric(df["difference"], errors="coerce").abs()
-                comparison.append(
-                    {"table": name, "rows": int(diff.notna().sum()), "max_abs_difference": float(diff.max())}
-                )
+            if p.suffix == ".json" and p.parent == results_dir:
+                doc = json.loads(p.read_text())
+                tables[doc["meta"]["name"]] = doc
+            elif p.parent.name == "figures":
+                figures[p.name] = run.name
+            elif p.suffix == ".rrd":
+                recordings[p.name] = run.name
+    long_rows, comparison = [], []
+    for name in sorted(tables):
+        df = pd.DataFrame(tables[name]["rows"])
+        for i, row in df.iterrows():
+            for col, val in row.items():
+                long_rows.append({"table": name, "row": i, "column": col, "value": val})
+        if "difference" in df.columns and len(df):
+            diff = pd.to_numeric(df["difference"], errors="coerce").abs()
+            comparison.append(
+                {"table": name, "rows": int(diff.notna().sum()), "max_abs_difference": float(diff.max())}
+            )
     summary = {
+        "ran": [r.name for r in runs],
         "data_source": data,
         "quick": quick,
         "wall_time_s": round(wall, 3),
         "versions": package_versions(),
-        "notebooks": [{"name": r.name, "status": r.status, "seconds": round(r.seconds, 3)} for r in runs],
-        "figures": sorted(
-            Path(f).name for r in runs for f in r.files if "/figures/" in f.replace(os.sep, "/")
-        ),
-        "recordings": sorted(Path(f).name for r in runs for f in r.files if f.endswith(".rrd")),
+        "notebooks": [notebooks[k] for k in sorted(notebooks)],
+        "figures": sorted(figures),
+        "figures_by_notebook": dict(sorted(figures.items())),
+        "recordings": sorted(recordings),
+        "recordings_by_notebook": dict(sorted(recordings.items())),
         "comparison_with_original": comparison,
-        "tables": tables,
+        "tables": {k: tables[k] for k in sorted(tables)},
     }
     results_dir.mkdir(parents=True, exist_ok=True)
-    from glu.data.tables import atomic_write_text
-
-    atomic_write_text(results_dir / "summary.json", json.dumps(summary, indent=1, default=str) + "\n")
+    atomic_write_text(previous, json.dumps(summary, indent=1, default=str) + "\n")
     atomic_write_text(
         results_dir / "summary.csv", pd.DataFrame(long_rows).to_csv(index=False, lineterminator="\n")
     )

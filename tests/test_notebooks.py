@@ -157,6 +157,33 @@ def test_a_failing_notebook_stops_with_a_clear_message_and_keeps_earlier_outputs
         reproduce(data="synthetic", out=out, only=["nope"], log=_silent, notebooks_dir=nbs)
 
 
+_TABLE = (
+    _OK
+    + """
+# %%
+import pandas as pd
+from glu.outputs import open_outputs
+out = open_outputs(NAME, data, out_dir)
+out.table(pd.DataFrame({"x": [seed]}), NAME)
+"""
+)
+
+
+def test_a_partial_run_updates_the_summary_of_the_same_data(tmp_path):
+    nbs = tmp_path / "nbs"
+    nbs.mkdir()
+    for name in ("01_a", "02_b"):
+        (nbs / f"{name}.py").write_text(_TABLE.replace("NAME", repr(name)))
+    out = tmp_path / "out"
+    full = reproduce(data="synthetic", out=out, log=_silent, notebooks_dir=nbs, seed=1)
+    assert set(full["tables"]) == {"01_a", "02_b"} and full["ran"] == ["01_a", "02_b"]
+    part = reproduce(data="synthetic", out=out, log=_silent, notebooks_dir=nbs, only=["02"], seed=5)
+    assert part["ran"] == ["02_b"] and set(part["tables"]) == {"01_a", "02_b"}
+    assert part["tables"]["01_a"]["rows"] == [{"x": 1}] and part["tables"]["02_b"]["rows"] == [{"x": 5}]
+    other = reproduce(data="synthetic", quick=True, out=out, log=_silent, notebooks_dir=nbs, only=["02"])
+    assert set(other["tables"]) == {"02_b"}  # another mode: a fresh summary, nothing mixed
+
+
 @pytest.mark.shared_data
 def test_real_data_bn_figures_equal_the_original(shared_data, tmp_path):
     summary = reproduce(data=shared_data, quick=True, out=tmp_path, jobs=2, only=["03", "07"], log=_silent)

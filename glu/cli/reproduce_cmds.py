@@ -30,8 +30,11 @@ def _reproduce(args: argparse.Namespace) -> int:
     summary = reproduce(
         data=args.data, quick=args.quick, out=args.out, jobs=args.jobs, only=args.only, seed=args.seed
     )
-    print(f"{len(summary['notebooks'])} notebooks, {len(summary['figures'])} figure files, "
-          f"{len(summary['recordings'])} recordings in {summary['wall_time_s']:.1f} s ({summary['data_source']})")  # fmt: skip
+    print(
+        f"ran {len(summary['ran'])} notebooks in {summary['wall_time_s']:.1f} s ({summary['data_source']}); "
+        f"the summary covers {len(summary['notebooks'])} notebooks, {len(summary['figures'])} figure files, "
+        f"{len(summary['recordings'])} recordings"
+    )
     for c in summary["comparison_with_original"]:
         print(
             f"  {c['table']}: max |ours − original| = {c['max_abs_difference']:.3g} over {c['rows']} numbers"
