@@ -209,8 +209,16 @@ def soft_evidence_sweep(
     values = bn.schema.values_of(target)
     frames = []
     for rule in rules:
+        if rule == "product" and target != "Action":
+            raise ValueError("the product rule infers the action: use target='Action'")
+        if rule == "hard":
+            raise ValueError("a sweep of p_hmm needs a soft rule: virtual, jeffrey or product")
+        soft_rule = "virtual" if rule == "product" else rule  # the product rule is virtual evidence on Action
         post = eng.query_batch(
-            [target], {k: [v] * n_points for k, v in evidence.items()}, soft={"Action": q}, soft_rule=rule
+            [target],
+            {k: [v] * n_points for k, v in evidence.items()},
+            soft={"Action": q},
+            soft_rule=soft_rule,
         )[target]
         for i, v in enumerate(values):
             frames.append(pd.DataFrame({"rule": rule, "p_hmm_tap": t, target: v, "p": post[:, i]}))

@@ -205,7 +205,7 @@ def plot_structure(bn, ax: Axes, reference=None) -> None:
 def plot_soft_sweep(df: pd.DataFrame, ax: Axes) -> None:
     """p_comb(target) against p_hmm(tap): one colour per value, solid for virtual, dashed for Jeffrey."""
     target = [c for c in df.columns if c not in ("evidence", "rule", "p_hmm_tap", "p")][0]
-    styles = {"virtual": "-", "jeffrey": "--", "hard": ":"}
+    styles = {"virtual": "-", "jeffrey": "--", "hard": ":", "product": "-"}
     for (rule, value), g in df.groupby(["rule", target], sort=False):
         ax.plot(g["p_hmm_tap"], g["p"], styles.get(rule, "-"), color=VALUE_COLORS.get(value, ACTION_COLORS.get(value, "0.4")),
                 label=f"{value} ({rule})")  # fmt: skip

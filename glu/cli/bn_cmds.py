@@ -20,7 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     bsub.required = True
 
     lp = bsub.add_parser("learn", help="learn structure (K2 + BIC) and parameters from the experiments")
-    _add_data_args(lp)
+    add_data_args(lp)
     lp.add_argument("-o", "--out", type=Path, required=True, help="model file to write (JSON)")
     lp.set_defaults(func=_learn)
 
@@ -38,29 +38,19 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="posterior marginals given hard and soft evidence",
         description="Posterior marginal of each target node given evidence, by exact inference.",
     )
-    q.add_argument(
-        "--model", type=Path, help="model file (.json or the original .mat); default: learn from --data"
-    )
-    _add_data_args(q)
+    add_model_args(q)
     q.add_argument(
         "--target", action="extend", nargs="+", default=[], metavar="NODE", help="node(s) to infer"
     )
-    q.add_argument(
-        "--evidence", action="extend", nargs="+", default=[], metavar="NODE=VALUE", help="hard evidence"
-    )
-    q.add_argument(
-        "--soft", action="append", default=[], metavar="NODE=v1:p1,v2:p2,…",
-        help="soft evidence on an affordance node, a distribution over its values",
-    )  # fmt: skip
-    q.add_argument("--soft-rule", choices=("virtual", "jeffrey"), default="virtual",
-                   help="how soft evidence enters: virtual (likelihood) evidence, as the originals, or Jeffrey's rule")  # fmt: skip
+    add_evidence_args(q)
     q.add_argument("--json", action="store_true", help='print {"NODE": {"VALUE": p, …}, …} only')
     q.add_argument("--batch", metavar="QUERIES.jsonl",
                    help="one JSON query a line ({'target': [...], 'evidence': {...}, 'soft': {...}}); '-' = stdin")  # fmt: skip
     q.set_defaults(func=_query)
 
 
-def _add_data_args(p: argparse.ArgumentParser) -> None:
+def add_data_args(p: argparse.ArgumentParser) -> None:
+    """``--data``, ``--words``, ``--unseen-words``: where the network is learned from, and how."""
     p.add_argument(
         "--data", help="data folder, or 'synthetic' (default: $GLU_DATA_DIR, data/real, else synthetic)"
     )
@@ -68,6 +58,28 @@ def _add_data_args(p: argparse.ArgumentParser) -> None:
                    help="descriptions: lab = transcriptions (the paper's), asr = speech recogniser")  # fmt: skip
     p.add_argument("--unseen-words", choices=("zero", "uniform"), default="zero",
                    help="CPT rows of word parent configurations never seen: zero (the original's) or uniform")  # fmt: skip
+
+
+def add_model_args(p: argparse.ArgumentParser) -> None:
+    """``--model`` or the data options of :func:`add_data_args` (read by :func:`load_model`)."""
+    p.add_argument(
+        "--model", type=Path, help="model file (.json or the original .mat); default: learn from --data"
+    )
+    add_data_args(p)
+
+
+def add_evidence_args(p: argparse.ArgumentParser) -> None:
+    """``--evidence``, ``--soft``, ``--soft-rule`` (read by :func:`parse_evidence` and :func:`parse_soft`)."""
+    p.add_argument(
+        "--evidence", action="extend", nargs="+", default=[], metavar="NODE=VALUE", help="hard evidence"
+    )
+    p.add_argument(
+        "--soft", action="append", default=[], metavar="NODE=v1:p1,v2:p2,…",
+        help="soft evidence on an affordance node, a distribution over its values, "
+        "e.g. a gesture posterior Action=grasp:0.2,tap:0.6,touch:0.2",
+    )  # fmt: skip
+    p.add_argument("--soft-rule", choices=("virtual", "jeffrey"), default="virtual",
+                   help="how soft evidence enters: virtual (likelihood) evidence, as the originals, or Jeffrey's rule")  # fmt: skip
 
 
 def load_model(args: argparse.Namespace):

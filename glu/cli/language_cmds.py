@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from glu.cli.bn_cmds import _add_data_args, load_model, parse_evidence, parse_soft
+from glu.cli.bn_cmds import add_evidence_args, add_model_args, load_model, parse_evidence, parse_soft
 from glu.errors import EvidenceError
 
 DESCRIPTION = """\
@@ -44,19 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="the N best sentences describing a situation (grammar + word probabilities)",
         description=DESCRIPTION,
     )
-    p.add_argument(
-        "--model", type=Path, help="model file (.json or the original .mat); default: learn from --data"
-    )
-    _add_data_args(p)
-    p.add_argument(
-        "--evidence", action="extend", nargs="+", default=[], metavar="NODE=VALUE", help="hard evidence"
-    )
-    p.add_argument(
-        "--soft", action="append", default=[], metavar="NODE=v1:p1,v2:p2,…",
-        help="soft evidence on an affordance node, e.g. a gesture posterior Action=grasp:0.2,tap:0.6,touch:0.2",
-    )  # fmt: skip
-    p.add_argument("--soft-rule", choices=("virtual", "jeffrey"), default="virtual",
-                   help="how soft evidence enters: virtual (likelihood) evidence, as the originals, or Jeffrey's rule")  # fmt: skip
+    add_model_args(p)
+    add_evidence_args(p)
     p.add_argument(
         "--nbest", type=_positive_int, default=10, metavar="N", help="how many sentences (default 10)"
     )
