@@ -72,6 +72,7 @@ def run_notebook(src: Path, out_ipynb: Path, parameters: dict[str, Any], cwd: Pa
     nb = jupytext.read(src)
     return pm.execute_notebook(
         nb, str(out_ipynb), parameters=parameters, kernel_name="python3", language="python", progress_bar=False,
+        extra_arguments=["--log-level=ERROR"],  # the kernel's own start-up chatter stays out of the run's log
         cwd=str(cwd or src.parent), log_output=False,
     )  # fmt: skip
 
@@ -270,9 +271,9 @@ def write_summary(
                 long_rows.append({"table": name, "row": i, "column": col, "value": val})
         if "difference" in df.columns and len(df):
             diff = pd.to_numeric(df["difference"], errors="coerce").abs()
-            comparison.append(
-                {"table": name, "rows": int(diff.notna().sum()), "max_abs_difference": float(diff.max())}
-            )
+            reference = tables[name]["meta"].get("reference", "original model (BN_lab.mat)")
+            comparison.append({"table": name, "reference": reference, "rows": int(diff.notna().sum()),
+                               "max_abs_difference": float(diff.max())})  # fmt: skip
     summary = {
         "ran": [r.name for r in runs],
         "data_source": data,
@@ -284,7 +285,7 @@ def write_summary(
         "figures_by_notebook": dict(sorted(figures.items())),
         "recordings": sorted(recordings),
         "recordings_by_notebook": dict(sorted(recordings.items())),
-        "comparison_with_original": comparison,
+        "comparison_with_reference": comparison,
         "tables": {k: tables[k] for k in sorted(tables)},
     }
     results_dir.mkdir(parents=True, exist_ok=True)

@@ -97,7 +97,7 @@ def test_fetch_command_reports_failures_with_status_2(server, tmp_path, capsys):
     err = capsys.readouterr().err
     assert status == 2
     last = err.strip().splitlines()[-1]
-    assert last.startswith("glu data: error: 1 of 14 files could not be fetched")
+    assert last.startswith("glu data fetch: error: 1 of 14 files could not be fetched")
     assert "[14/14]" in err
     assert not (tmp_path / "d" / "affordance-words" / "affdata.txt").exists()
     assert main(["data", "fetch", "--dest", str(tmp_path / "d2"), "--mirror", "http://127.0.0.1:9"]) == 2

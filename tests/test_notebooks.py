@@ -187,7 +187,7 @@ def test_a_partial_run_updates_the_summary_of_the_same_data(tmp_path):
 @pytest.mark.shared_data
 def test_real_data_bn_figures_equal_the_original(shared_data, tmp_path):
     summary = reproduce(data=shared_data, quick=True, out=tmp_path, jobs=2, only=["03", "07"], log=_silent)
-    comparison = {c["table"]: c["max_abs_difference"] for c in summary["comparison_with_original"]}
+    comparison = {c["table"]: c["max_abs_difference"] for c in summary["comparison_with_reference"]}
     for table in (
         "glu2017_effect_prediction",
         "glu2017_word_change_text",

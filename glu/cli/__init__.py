@@ -51,13 +51,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``glu`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    sub = getattr(args, f"{args.command}_command", None)
+    name = f"glu {args.command}" + (f" {sub}" if sub else "")
     try:
         status = args.func(args)
     except GluError as e:
-        print(f"glu {args.command}: error: {e}", file=sys.stderr)
+        print(f"{name}: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print(f"glu {args.command}: interrupted", file=sys.stderr)
+        print(f"{name}: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0

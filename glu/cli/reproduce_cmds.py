@@ -35,8 +35,8 @@ def _reproduce(args: argparse.Namespace) -> int:
         f"the summary covers {len(summary['notebooks'])} notebooks, {len(summary['figures'])} figure files, "
         f"{len(summary['recordings'])} recordings"
     )
-    for c in summary["comparison_with_original"]:
+    for c in summary["comparison_with_reference"]:
         print(
-            f"  {c['table']}: max |ours − original| = {c['max_abs_difference']:.3g} over {c['rows']} numbers"
+            f"  {c['table']}: max |ours − {c['reference']}| = {c['max_abs_difference']:.3g} over {c['rows']} numbers"
         )
     return 0
