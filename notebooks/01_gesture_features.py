@@ -23,10 +23,10 @@
 # the true repetitions.
 
 # %% tags=["parameters"]
-data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-seed = 0  # seed of the synthetic recordings
-quick = False  # small, fast run (for tests)
-out_dir = None  # folder for figures/ and results/; None: the project's own
+data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+seed: int = 0  # seed of the synthetic recordings
+quick: bool = False  # small, fast run (for tests)
+out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
 import matplotlib.pyplot as plt

@@ -22,16 +22,21 @@
 # the few real segments.
 
 # %% tags=["parameters"]
-data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-n_states = 6  # Q: HMM states per action
-n_mix = 3  # M: Gaussian components per state
-n_per_action = 20  # synthetic corpus: gestures per action
-folds = 5  # k of the k-fold cross-validation
-noise_levels = [0.0, 0.02, 0.05, 0.1]  # sensor noise (m) for the accuracy-vs-noise curve (3-fold)
-eval_tol = 1e-3  # EM tolerance (log-likelihood per frame) in the evaluation sweeps; training uses 1e-4
-seed = 0  # seed of the synthetic corpora and of EM initialisation
-quick = False  # small, fast run (for tests)
-out_dir = None  # folder for figures/, results/; None: the project's own
+data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+n_states: int = 6  # Q: HMM states per action
+n_mix: int = 3  # M: Gaussian components per state
+n_per_action: int = 20  # synthetic corpus: gestures per action
+folds: int = 5  # k of the k-fold cross-validation
+noise_levels: list[float] = [
+    0.0,
+    0.02,
+    0.05,
+    0.1,
+]  # sensor noise (m) for the accuracy-vs-noise curve (3-fold)
+eval_tol: float = 1e-3  # EM tolerance (log-likelihood per frame) in the evaluation sweeps; training uses 1e-4
+seed: int = 0  # seed of the synthetic corpora and of EM initialisation
+quick: bool = False  # small, fast run (for tests)
+out_dir: str = None  # folder for figures/, results/; None: the project's own
 
 # %%
 from glu import gesture_eval, plots

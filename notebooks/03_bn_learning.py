@@ -22,11 +22,11 @@
 # authors' model, `BN_lab.mat`.
 
 # %% tags=["parameters"]
-data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-words = "lab"  # descriptions: "lab" (transcribed, the paper's) or "asr" (speech recogniser)
-seed = 0  # seed (learning itself is deterministic)
-quick = False  # small, fast run (for tests)
-out_dir = None  # folder for figures/ and results/; None: the project's own
+data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+words: str = "lab"  # descriptions: "lab" (transcribed, the paper's) or "asr" (speech recogniser)
+seed: int = 0  # seed (learning itself is deterministic)
+quick: bool = False  # small, fast run (for tests)
+out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
 import time

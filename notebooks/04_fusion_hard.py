@@ -20,15 +20,15 @@
 # sphere — by the hard decision, and, for comparison, by the two soft rules of notebook 05.
 
 # %% tags=["parameters"]
-data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-words = "lab"  # descriptions: "lab" (the paper's) or "asr"
-unseen_words = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
-shape = "sphere"  # the object the gestures are applied to …
-size = "small"  # … and its size
-n_per_action = 20  # synthetic data: training gestures per action
-seed = 0  # seed of synthetic gestures and EM initialisation
-quick = False  # small, fast run (for tests)
-out_dir = None  # folder for figures/ and results/; None: the project's own
+data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+words: str = "lab"  # descriptions: "lab" (the paper's) or "asr"
+unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
+shape: str = "sphere"  # the object the gestures are applied to …
+size: str = "small"  # … and its size
+n_per_action: int = 20  # synthetic data: training gestures per action
+seed: int = 0  # seed of synthetic gestures and EM initialisation
+quick: bool = False  # small, fast run (for tests)
+out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
 from glu import experiments, gesture_eval, plots

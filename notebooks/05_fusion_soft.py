@@ -21,13 +21,13 @@
 # effect-prediction experiment and on a continuous sweep of `p_HMM(tap)`.
 
 # %% tags=["parameters"]
-data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-words = "lab"  # descriptions: "lab" (the paper's) or "asr"
-unseen_words = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
-n_points = 101  # points of the p_HMM(tap) sweep
-seed = 0  # seed (unused: everything here is exact)
-quick = False  # small, fast run (for tests)
-out_dir = None  # folder for figures/ and results/; None: the project's own
+data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+words: str = "lab"  # descriptions: "lab" (the paper's) or "asr"
+unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
+n_points: int = 101  # points of the p_HMM(tap) sweep
+seed: int = 0  # seed (unused: everything here is exact)
+quick: bool = False  # small, fast run (for tests)
+out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
 from glu import experiments, plots

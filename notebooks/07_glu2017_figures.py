@@ -20,13 +20,13 @@
 # Black ticks mark the authors' own model (`BN_lab.mat`) when the real data is used.
 
 # %% tags=["parameters"]
-data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-words = "lab"  # descriptions: "lab" (the paper's) or "asr"
-unseen_words = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
-threshold = 0.02  # words shown in Fig. 5: |Δp(w)| above this
-seed = 0  # seed (unused: everything here is exact)
-quick = False  # small, fast run (for tests)
-out_dir = None  # folder for figures/ and results/; None: the project's own
+data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+words: str = "lab"  # descriptions: "lab" (the paper's) or "asr"
+unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
+threshold: float = 0.02  # words shown in Fig. 5: |Δp(w)| above this
+seed: int = 0  # seed (unused: everything here is exact)
+quick: bool = False  # small, fast run (for tests)
+out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
 from glu import experiments, plots

@@ -23,17 +23,17 @@
 # (`recordings/*.rrd`: the hand in 3-D, the HMM series, the fused beliefs, the best description).
 
 # %% tags=["parameters"]
-data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-words = "lab"  # descriptions: "lab" (the paper's) or "asr"
-unseen_words = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
-step = 5  # anticipation: fuse every `step` frames
-rule = "virtual"  # how p_HMM enters the network: "virtual" (the originals') or "jeffrey"
-n_states = 6  # our HMMs: states per action
-n_mix = 3  # our HMMs: Gaussian components per state
-n_per_action = 20  # synthetic data: training gestures per action
-seed = 0  # seed of synthetic gestures and EM initialisation
-quick = False  # small, fast run (for tests)
-out_dir = None  # folder for figures/, results/, recordings/; None: the project's own
+data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+words: str = "lab"  # descriptions: "lab" (the paper's) or "asr"
+unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
+step: int = 5  # anticipation: fuse every `step` frames
+rule: str = "virtual"  # how p_HMM enters the network: "virtual" (the originals') or "jeffrey"
+n_states: int = 6  # our HMMs: states per action
+n_mix: int = 3  # our HMMs: Gaussian components per state
+n_per_action: int = 20  # synthetic data: training gestures per action
+seed: int = 0  # seed of synthetic gestures and EM initialisation
+quick: bool = False  # small, fast run (for tests)
+out_dir: str = None  # folder for figures/, results/, recordings/; None: the project's own
 
 # %%
 import matplotlib.pyplot as plt

@@ -20,15 +20,15 @@
 # ranked 10,000 random sentences; here the N best are exact, over every sentence of the grammar.
 
 # %% tags=["parameters"]
-data = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-words = "lab"  # descriptions: "lab" (the paper's) or "asr"
-unseen_words = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
-nbest = 10  # sentences per N-best list
-n_samples = 10_000  # random sentences per sample, as the originals
-n_seeds = 20  # samples compared with the exact N-best
-seed = 0  # first seed of the random samples
-quick = False  # small, fast run (for tests)
-out_dir = None  # folder for figures/ and results/; None: the project's own
+data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
+words: str = "lab"  # descriptions: "lab" (the paper's) or "asr"
+unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
+nbest: int = 10  # sentences per N-best list
+n_samples: int = 10_000  # random sentences per sample, as the originals
+n_seeds: int = 20  # samples compared with the exact N-best
+seed: int = 0  # first seed of the random samples
+quick: bool = False  # small, fast run (for tests)
+out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
 import time

@@ -62,6 +62,9 @@ def test_every_notebook_is_known_and_parameterised():
             f"{path.stem} lacks parameters {COMMON_PARAMETERS - set(params)}"
         )
         assert path.read_text().count('tags=["parameters"]') == 1
+        for name, p in params.items():  # what `papermill --help-notebook` lists: a type and a comment each
+            assert p["inferred_type_name"] not in ("None", "Unknown type"), f"{path.stem}: {name} has no type"
+            assert p["help"], f"{path.stem}: {name} has no comment"
 
 
 @pytest.mark.parametrize("name", NOTEBOOKS)
