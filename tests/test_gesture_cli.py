@@ -153,7 +153,7 @@ def test_malformed_log_and_missing_files(capsys, tmp_path, shared_data):
 
 def test_train_arguments(capsys, tmp_path):
     status, _, err = run(capsys, "hmm", "train", "--synthetic", "0", "-o", str(tmp_path / "m.json"))
-    assert_one_line_error(status, err, "must be ≥ 1")
+    assert_one_line_error(status, err, "expected a whole number ≥ 1, not 0")
     status, _, err = run(capsys, "hmm", "train", "--synthetic", "3", "--actions", "tap,wave", "-o", "m.json")
     assert_one_line_error(status, err, "give distinct actions among grasp, tap, touch, push")
     status, _, err = run(

@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from glu.cli.argtypes import nonneg_float, positive_float, positive_int
 from glu.errors import DataError
 
 _DATA_HELP = "data folder, or 'synthetic' (default: $GLU_DATA_DIR, data/real, else synthetic)"
@@ -47,18 +48,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     src = t.add_mutually_exclusive_group()
     src.add_argument("--data", help=_DATA_HELP)
     src.add_argument(
-        "--synthetic", type=_positive_int, metavar="N", help="train on N synthetic gestures per action"
+        "--synthetic", type=positive_int, metavar="N", help="train on N synthetic gestures per action"
     )
     t.add_argument("-o", "--out", type=Path, required=True, metavar="RECOGNISER", help="file to write (JSON)")
     t.add_argument(
         "--actions", type=_actions, default=None, help="comma-separated (default: grasp,tap,touch)"
     )
-    t.add_argument("--states", type=_positive_int, default=6, help="Q, states per HMM (default 6)")
-    t.add_argument("--mix", type=_positive_int, default=3, help="M, Gaussians per state (default 3)")
-    t.add_argument("--iter", type=_positive_int, default=200, help="most EM iterations (default 200)")
-    t.add_argument("--tol", type=_positive_float, default=1e-4, help="EM tolerance per frame (default 1e-4)")
+    t.add_argument("--states", type=positive_int, default=6, help="Q, states per HMM (default 6)")
+    t.add_argument("--mix", type=positive_int, default=3, help="M, Gaussians per state (default 3)")
+    t.add_argument("--iter", type=positive_int, default=200, help="most EM iterations (default 200)")
+    t.add_argument("--tol", type=positive_float, default=1e-4, help="EM tolerance per frame (default 1e-4)")
     t.add_argument(
-        "--noise", type=_nonneg_float, default=0.01, help="synthetic sensor noise, m (default 0.01)"
+        "--noise", type=nonneg_float, default=0.01, help="synthetic sensor noise, m (default 0.01)"
     )
     t.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     t.set_defaults(func=_train)
@@ -86,36 +87,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 # ------------------------------------------------------------------ argument types
-
-
-def _positive_int(s: str) -> int:
-    try:
-        v = int(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{s!r} is not an integer") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"{v} must be ≥ 1")
-    return v
-
-
-def _positive_float(s: str) -> float:
-    try:
-        v = float(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{s!r} is not a number") from None
-    if not v > 0 or v == float("inf"):
-        raise argparse.ArgumentTypeError(f"{s} must be a positive number")
-    return v
-
-
-def _nonneg_float(s: str) -> float:
-    try:
-        v = float(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{s!r} is not a number") from None
-    if not 0 <= v < float("inf"):
-        raise argparse.ArgumentTypeError(f"{s} must be a number ≥ 0")
-    return v
 
 
 def _frames(s: str) -> tuple[int, int]:

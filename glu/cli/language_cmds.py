@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from glu.cli.argtypes import integer, positive_int
 from glu.cli.bn_cmds import add_evidence_args, add_model_args, load_model, parse_evidence, parse_soft
 from glu.errors import EvidenceError
 
@@ -18,23 +19,6 @@ its words, p(word | evidence) from the Affordance-Words network (TCDS 2020). By 
 exact, over every sentence of the grammar; --sample K ranks K random sentences instead (the originals'
 method, as HTK's HSGen) and also prints the exact best for comparison.
 """
-
-
-def _positive_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, not {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number ≥ 1, not {v}")
-    return v
-
-
-def _int(text: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, not {text!r}") from None
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -47,19 +31,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_model_args(p)
     add_evidence_args(p)
     p.add_argument(
-        "--nbest", type=_positive_int, default=10, metavar="N", help="how many sentences (default 10)"
+        "--nbest", type=positive_int, default=10, metavar="N", help="how many sentences (default 10)"
     )
-    p.add_argument("--sample", type=_positive_int, metavar="K",
+    p.add_argument("--sample", type=positive_int, metavar="K",
                    help="rank K random sentences (the originals' method) instead of the whole grammar")  # fmt: skip
     p.add_argument(
-        "--seed", type=_int, metavar="S", help="seed of the random sentences (with --sample; default 0)"
+        "--seed", type=integer, metavar="S", help="seed of the random sentences (with --sample; default 0)"
     )
     p.add_argument(
         "--grammar", type=Path, metavar="FILE", help="grammar in HTK HParse syntax (default: glu's)"
     )
     p.add_argument("--must-contain", nargs="+", metavar="WORD",
                    help="only sentences with at least one of these words, e.g. green yellow blue")  # fmt: skip
-    p.add_argument("--max-length", type=_positive_int, metavar="L",
+    p.add_argument("--max-length", type=positive_int, metavar="L",
                    help="only sentences of at most L words (needed when the grammar repeats with { } or < >)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print one JSON object only")
     p.set_defaults(func=_describe)
