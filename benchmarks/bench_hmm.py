@@ -10,7 +10,7 @@ Measures, for a 150-frame sequence:
    emissions once and runs one forward pass (target ≤ 2 ms); hmmlearn rescores every prefix with
    ``score`` (about 1.3 s);
 2. the log-likelihood of the whole sequence under one model (one ``score`` call);
-3. one new frame for all four models of a bank: glu's :class:`~glu.hmm.GestureStream` step (target
+3. one new frame for all four models of a bank: glu's :class:`~glu.gestures.recognizer.GestureStream` step (target
    ≤ 100 µs) against rescoring the grown prefix with hmmlearn (four ``score`` calls).
 
 The models are the originals' four 2013 HMMs (grasp, tap, touch = push, garbage; Q = 6, M = 3) and the
@@ -40,24 +40,25 @@ def _median_time(fn, repeats: int, number: int = 1) -> float:
 
 
 def _setup(data: str | None):
-    from glu.data.source import resolve_data
-    from glu.hmm import ORIGINAL_MODEL_FILES, load_original_models
+    from glu.data.source import DataSource, resolve_data
+    from glu.gestures.features import load_features
+    from glu.gestures.original import load_original_models
     from glu.paths import shared_data_dir
 
-    root = None
+    source = None
     try:
         source = resolve_data(data)
-        root = source.root if source.is_real else None
     except Exception:  # noqa: BLE001 - fall back to the shared copy, then synthetic
-        root = None
-    root = root or (shared_data_dir() if data is None else None)
-    if root is not None and (root / ORIGINAL_MODEL_FILES[3]).is_file():
-        rec = load_original_models(root / ORIGINAL_MODEL_FILES[3], include_garbage=True)
-        X = np.loadtxt(root / "gestures/tap1_hand/data.log")[215:365, 2:] / 1000
-        return rec, X, f"original 2013 models, tap1_hand frames 216–365 ({root})"
-    from glu.data.synthetic_gestures import GESTURES
-    from glu.gesture_eval import synthetic_corpus
-    from glu.hmm import train_recognizer
+        source = None
+    if (source is None or not source.is_real) and data is None and shared_data_dir() is not None:
+        source = DataSource("real", shared_data_dir(), "GLU_SHARED_DATA")
+    if source is not None and source.original_hmms() is not None:
+        rec = load_original_models(source.original_hmms(), include_garbage=True)
+        X = load_features(source.hand_log("tap1_hand"), policy=None).pieces[0].frames(216, 365).xyz
+        return rec, X, f"original 2013 models, tap1_hand frames 216–365 ({source.describe()})"
+    from glu.gestures.corpus import synthetic_corpus
+    from glu.gestures.recognizer import train_recognizer
+    from glu.gestures.synthetic import GESTURES
 
     seqs = synthetic_corpus(8, seed=0, actions=GESTURES)
     rec = train_recognizer(

@@ -1,7 +1,7 @@
 """Fusing the gesture HMMs with the Affordance–Words network (GLU 2017 §2.4, TCDS 2020 §III-C).
 
-The HMMs observe the human's hand and give a posterior over the action, ``p_hmm(A | G)``; the BN knows
-how actions, objects, effects and words go together. Four ways to combine them, one interface:
+The HMMs observe the human's hand and give a posterior over the action, ``p_hmm(A | G)``; the network knows
+how actions, objects, effects and words go together. The one home of every fusion rule:
 
 ``hard``
     the top HMM action becomes hard evidence: ``p_BN(X_inf | X_obs, A = argmax p_hmm)``.
@@ -17,8 +17,20 @@ how actions, objects, effects and words go together. Four ways to combine them, 
     the product rule for the action itself, ``p(A) ∝ p_hmm(A | G) p_BN(A | X_obs)`` (targets must be
     Action only; numerically the ``virtual`` rule restricted to Action).
 
-Observing Action directly makes the gesture evidence irrelevant; the originals refuse it, and so does
-:func:`fuse`.
+:func:`fuse` takes one gesture posterior, shape (K,), or one per frame, shape (T, K), and returns the
+posterior of each target with the same leading shape. Observing Action directly makes the gesture evidence
+irrelevant; the originals refuse it, and so does :func:`fuse`.
+
+Example
+-------
+>>> from glu.bn import InferenceEngine, learn_bn
+>>> from glu.data import load_experiments
+>>> engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
+>>> p = fuse(engine, ["ObjVel"], {"Shape": "sphere"}, [0.1, 0.8, 0.1], "virtual")["ObjVel"]
+>>> p.shape, round(float(p.sum()), 12)
+((3,), 1.0)
+>>> fuse(engine, ["ObjVel"], {"Shape": "sphere"}, [[0.1, 0.8, 0.1], [0.8, 0.1, 0.1]], "jeffrey")["ObjVel"].shape
+(2, 3)
 """
 
 from __future__ import annotations
@@ -29,11 +41,23 @@ from typing import Literal
 import numpy as np
 
 from glu.bn.inference import InferenceEngine
+from glu.bn.soft import SOFT_RULES
 from glu.errors import EvidenceError
+from glu.schema import ACTIONS
 
 Strategy = Literal["hard", "virtual", "jeffrey", "product"]
-STRATEGIES: tuple[str, ...] = ("hard", "virtual", "jeffrey", "product")
+STRATEGIES: tuple[str, ...] = ("hard", *SOFT_RULES, "product")
+"""Every fusion strategy: hard decision, the two soft rules (the originals' first), the product rule."""
+SOFT_STRATEGIES: tuple[str, ...] = (*SOFT_RULES, "product")
+"""The strategies that keep the HMMs' doubt (a sweep over p_hmm needs one of these)."""
 ACTION = "Action"
+
+
+def check_strategy(strategy: str, allowed: Sequence[str] = STRATEGIES) -> str:
+    """``strategy`` if it is among ``allowed``, else :class:`EvidenceError` naming them."""
+    if strategy not in allowed:
+        raise EvidenceError(f"unknown fusion strategy {strategy!r}; allowed: {', '.join(allowed)}")
+    return strategy
 
 
 def fuse(
@@ -43,7 +67,7 @@ def fuse(
     p_hmm: Mapping[str, float] | Sequence[float] | np.ndarray | None,
     strategy: Strategy = "virtual",
 ) -> dict[str, np.ndarray]:
-    """Posterior marginals of ``targets`` given observed BN evidence and the HMM posterior over Action.
+    """Posterior marginals of ``targets`` given observed network evidence and the HMM posterior over Action.
 
     Parameters
     ----------
@@ -51,19 +75,19 @@ def fuse(
     targets : nodes to infer (``"Action"`` among them for action recognition)
     evidence : hard evidence on the other observed nodes (object features, effects, words); must not
         contain Action
-    p_hmm : the gesture posterior over Action (a vector in the node's value order, or {action: p}); None
-        means no gesture evidence (the BN alone)
-    strategy : ``"hard"``, ``"virtual"``, ``"jeffrey"`` or ``"product"`` (see the module docstring)
+    p_hmm : the gesture posterior over Action in the node's value order: array, shape (K,) — or a
+        mapping {action: p} — for one gesture; array, shape (T, K) for T gestures (or T prefixes of one);
+        None for no gesture evidence (the network alone)
+    strategy : one of :data:`STRATEGIES` (see the module docstring)
 
     Returns
     -------
-    dict target → array, shape (n_values,)
+    dict target → array, shape (n_values,) for one gesture or (T, n_values) for T
     """
     if isinstance(targets, str):
         targets = [targets]
     evidence = dict(evidence or {})
-    if strategy not in STRATEGIES:
-        raise EvidenceError(f"unknown fusion strategy {strategy!r}; allowed: {', '.join(STRATEGIES)}")
+    check_strategy(strategy)
     if p_hmm is None:
         return engine.query(targets, evidence)
     if ACTION in evidence:
@@ -71,15 +95,17 @@ def fuse(
             f"Action is observed directly (Action={evidence[ACTION]}) and also given by the gesture HMMs; "
             "the gesture evidence would be ignored — drop one of them"
         )
+    if strategy == "product" and list(targets) != [ACTION]:
+        raise EvidenceError(
+            f"the product rule infers the action itself: targets must be ['Action'], not {list(targets)}"
+        )
+    if not isinstance(p_hmm, Mapping) and np.ndim(p_hmm) == 2:
+        return _fuse_rows(engine, list(targets), evidence, np.asarray(p_hmm, dtype=float), strategy)
     q = engine.soft_vector(ACTION, p_hmm)
     if strategy == "hard":
         best = int(np.argmax(q))
         return engine.query(targets, {**evidence, ACTION: best})
     if strategy == "product":
-        if list(targets) != [ACTION]:
-            raise EvidenceError(
-                f"the product rule infers the action itself: targets must be ['Action'], not {list(targets)}"
-            )
         p_bn = engine.query([ACTION], evidence)[ACTION]
         p = p_bn * q
         if p.sum() <= 0:
@@ -88,10 +114,21 @@ def fuse(
     return engine.query(targets, evidence, soft={ACTION: q}, soft_rule=strategy)
 
 
-def hmm_rows(
-    p_tap: Sequence[float] | np.ndarray, actions: Sequence[str] = ("grasp", "tap", "touch")
-) -> np.ndarray:
-    """HMM posteriors with ``p(tap) = t`` and the rest split equally, shape (len(p_tap), 3)."""
+def _fuse_rows(
+    engine: InferenceEngine, targets: list[str], evidence: dict[str, str], q: np.ndarray, strategy: str
+) -> dict[str, np.ndarray]:
+    """:func:`fuse` for T posteriors at once, with one batch query."""
+    n = len(q)
+    columns = {k: [v] * n for k, v in evidence.items()}
+    if strategy == "hard":
+        return engine.query_batch(targets, {**columns, ACTION: np.argmax(q, axis=1)})
+    # the product rule is virtual evidence on Action with Action the only target
+    rule = "virtual" if strategy == "product" else strategy
+    return engine.query_batch(targets, columns, soft={ACTION: q}, soft_rule=rule)
+
+
+def hmm_rows(p_tap: Sequence[float] | np.ndarray, actions: Sequence[str] = ACTIONS) -> np.ndarray:
+    """HMM posteriors with ``p(tap) = t`` and the rest split equally, shape (len(p_tap), len(actions))."""
     t = np.asarray(p_tap, dtype=float)
     rows = np.empty((t.size, len(actions)))
     i = list(actions).index("tap")

@@ -1,10 +1,11 @@
 """Where a notebook's outputs go, and how they are written: figures, result tables, recordings.
 
 A notebook calls :func:`open_outputs` once with its parameters; the returned :class:`Outputs` saves
-figures (PNG + SVG, deterministic, stamped with the data source), result tables (CSV + JSON, with the data
-source and package versions) and gives paths for Rerun recordings and trained models. With ``out_dir=None``
-everything goes to the project's ``figures/``, ``results/``, ``recordings/`` and ``models/``; ``glu reproduce`` passes a staging folder
-and moves the files into place only when the notebook succeeds.
+figures (PNG + SVG, deterministic, stamped with the data source), result tables (CSV + JSON, with the
+experiment's provenance: data source and parameters) and gives paths for Rerun recordings and trained
+models. Where each kind goes is :class:`glu.paths.OutputLayout`'s business: with ``out_dir=None`` the
+project's ``figures/``, ``results/``, ``recordings/`` and ``models/``; ``glu reproduce`` passes a staging
+folder and publishes the files only when the notebook succeeds.
 """
 
 from __future__ import annotations
@@ -19,8 +20,9 @@ from typing import Any
 
 import pandas as pd
 
-from glu import paths
 from glu.data.source import DataSource, resolve_data
+from glu.files import atomic_write_text
+from glu.paths import OutputLayout
 
 PACKAGES = ("glu", "numpy", "scipy", "pandas", "pgmpy", "hmmlearn", "matplotlib", "rerun-sdk", "papermill")
 
@@ -44,16 +46,23 @@ class Outputs:
     ----------
     notebook : the notebook's name (e.g. ``"03_bn_learning"``), recorded with every table
     source : the resolved data source
-    figures, results, recordings, models : output folders (created on first use)
+    layout : where each kind of output goes (folders are created on first use)
     """
 
     notebook: str
     source: DataSource
-    figures: Path
-    results: Path
-    recordings: Path
-    models: Path
+    layout: OutputLayout
     written: list[Path] = field(default_factory=list)
+
+    @property
+    def figures(self) -> Path:
+        """The folder of figures."""
+        return self.layout.figures
+
+    @property
+    def results(self) -> Path:
+        """The folder of result tables."""
+        return self.layout.results
 
     @property
     def data_label(self) -> str:
@@ -62,45 +71,54 @@ class Outputs:
 
     def figure(self, fig: Any, name: str, source: str | None = None) -> list[Path]:
         """Stamp ``fig`` with the data source and save it as ``figures/<name>.png`` and ``.svg``."""
-        from glu import plots
+        from glu.plots.style import save_figure, stamp
 
-        plots.stamp(fig, source or self.data_label)
-        files = plots.save_figure(fig, self.figures / name)
+        stamp(fig, source or self.data_label)
+        files = save_figure(fig, self.layout.figures / name)
         self.written.extend(files)
         import matplotlib.pyplot as plt
 
         plt.close(fig)
         return files
 
-    def table(self, df: pd.DataFrame, name: str, **extra: Any) -> Path:
-        """Save the numbers behind a figure as ``results/<name>.csv`` and ``.json`` (with provenance)."""
-        self.results.mkdir(parents=True, exist_ok=True)
-        csv = self.results / f"{name}.csv"
-        df.to_csv(csv, index=False, float_format="%.12g", lineterminator="\n")
+    def table(self, df: pd.DataFrame, name: str | None = None, **extra: Any) -> Path:
+        """Save the numbers behind a figure as ``results/<name>.csv`` and ``.json`` (with provenance).
+
+        ``name`` defaults to the frame's experiment (``df.attrs["experiment"]``); the JSON's ``meta`` holds
+        the experiment, its data source and parameters (from :func:`glu.experiments.common.tidy`), the
+        notebook, and ``extra``.
+        """
+        name = name or df.attrs.get("experiment")
+        if not name:
+            raise ValueError("a table needs a name (or an experiment frame that carries one)")
+        csv = self.layout.results / f"{name}.csv"
+        atomic_write_text(csv, df.to_csv(index=False, float_format="%.12g", lineterminator="\n"))
         meta = {
             "name": name,
             "notebook": self.notebook,
             "data_source": df.attrs.get("data_source", self.data_label),
             "data": self.data_label,
+            **({"experiment": df.attrs["experiment"]} if "experiment" in df.attrs else {}),
+            **({"parameters": df.attrs["parameters"]} if df.attrs.get("parameters") else {}),
             **extra,
         }
         doc = {"meta": meta, "rows": json.loads(df.to_json(orient="records", double_precision=15))}
-        js = self.results / f"{name}.json"
-        js.write_text(json.dumps(doc, indent=1, sort_keys=False) + "\n")
+        js = self.layout.results / f"{name}.json"
+        atomic_write_text(js, json.dumps(doc, indent=1, sort_keys=False) + "\n")
         self.written.extend([csv, js])
         return csv
 
     def model(self, name: str) -> Path:
         """Path for a trained model file ``models/<name>`` (the folder is created)."""
-        self.models.mkdir(parents=True, exist_ok=True)
-        p = self.models / name
+        self.layout.models.mkdir(parents=True, exist_ok=True)
+        p = self.layout.models / name
         self.written.append(p)
         return p
 
     def recording(self, name: str) -> Path:
         """Path for a Rerun recording ``recordings/<name>.rrd`` (the folder is created)."""
-        self.recordings.mkdir(parents=True, exist_ok=True)
-        p = self.recordings / f"{name}.rrd"
+        self.layout.recordings.mkdir(parents=True, exist_ok=True)
+        p = self.layout.recordings / f"{name}.rrd"
         self.written.append(p)
         return p
 
@@ -117,17 +135,5 @@ def open_outputs(
     out_dir : folder for ``figures/``, ``results/``, ``recordings/``; None = the project's own folders
     """
     source = resolve_data(data)
-    if out_dir is None:
-        figures, results, recordings, models = (
-            paths.FIGURES_DIR,
-            paths.RESULTS_DIR,
-            paths.RECORDINGS_DIR,
-            paths.MODELS_DIR,
-        )
-    else:
-        root = Path(out_dir)
-        figures, results, recordings, models = (
-            root / k for k in ("figures", "results", "recordings", "models")
-        )
     print(f"{notebook}: {source.describe()}")
-    return Outputs(notebook, source, figures, results, recordings, models)
+    return Outputs(notebook, source, OutputLayout.at(out_dir))

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from glu.experiments.anticipation import AnticipationRun
+
 ACTION_RGB = {
     "grasp": (76, 114, 176),
     "tap": (221, 132, 82),
@@ -174,3 +176,12 @@ def write_anticipation_recording(
     finally:
         rec.disconnect()
     return Path(path)
+
+
+def write_anticipation(run: AnticipationRun, path: str | os.PathLike, recording_id: str) -> Path:
+    """Write an effect-anticipation run (:func:`glu.experiments.anticipation.effect_anticipation`) as a recording."""
+    return write_anticipation_recording(
+        path, recording_id, xyz=run.xyz, seconds=run.seconds, frames=run.frames, actions=run.actions,
+        loglik_per_frame=run.loglik_per_frame, p_hmm=run.p_hmm, update_frames=run.update_frames,
+        fused=run.fused, scene=run.scene(), descriptions=run.descriptions or None,
+    )  # fmt: skip

@@ -1,8 +1,9 @@
 """Run every notebook headless with papermill: figures, recordings, result tables and a summary.
 
 ``glu reproduce`` (and ``make reproduce``) calls :func:`reproduce`. Each notebook runs in its own kernel,
-writing into a private staging folder; when it succeeds its files are moved into ``figures/``,
-``recordings/``, ``results/`` and ``models/`` and the executed notebook into ``build/notebooks/`` (or under ``--out``).
+writing into a private staging folder; when it succeeds its files are moved into the folders of the
+output layout (:class:`glu.paths.OutputLayout`: ``figures/``, ``recordings/``, ``results/``, ``models/``,
+the executed notebook into ``build/notebooks/``; or all under ``--out``).
 A failing notebook stops the run with a message naming the notebook and the cell, keeps its executed copy
 (``NAME.failed.ipynb``), and leaves the outputs of earlier runs as they were. At the end
 ``results/summary.json`` and ``results/summary.csv`` collect every number behind every figure, the data
@@ -26,6 +27,8 @@ from typing import Any
 from glu import paths
 from glu.data.source import resolve_data
 from glu.errors import GluError
+from glu.files import atomic_write_text
+from glu.paths import OutputLayout
 
 
 class NotebookError(GluError):
@@ -106,7 +109,8 @@ def reproduce(
     ----------
     data : data folder, ``"synthetic"``, or None (``$GLU_DATA_DIR``, ``data/real/``, else synthetic)
     quick : small, fast runs (for tests); figures are still made
-    out : root for ``figures/``, ``recordings/``, ``results/``, ``notebooks/``; None = the project's folders
+    out : root for ``figures/``, ``recordings/``, ``results/``, ``models/``, ``notebooks/``; None = the
+        project's folders (:meth:`glu.paths.OutputLayout.at`)
     jobs : notebooks run at the same time (each in its own kernel)
     only : run only these notebooks (names or numbers)
     seed : the seed passed to every notebook
@@ -121,19 +125,10 @@ def reproduce(
         raise NotebookError(f"no notebooks found in {notebooks_dir}")
     if jobs < 1:
         raise NotebookError(f"-j {jobs}: the number of parallel notebooks must be at least 1")
-    if out is None:
-        root = paths.PROJECT_ROOT
-        final = {
-            "figures": paths.FIGURES_DIR,
-            "results": paths.RESULTS_DIR,
-            "recordings": paths.RECORDINGS_DIR,
-        }
-        executed_dir = paths.EXECUTED_DIR
-    else:
-        root = Path(out).resolve()
-        final = {k: root / k for k in ("figures", "results", "recordings", "models")}
-        executed_dir = root / "notebooks"
-    staging = root / ".glu-staging" / uuid.uuid4().hex[:12]
+    layout = OutputLayout.at(out)
+    final = layout.published()
+    executed_dir = layout.notebooks
+    staging = layout.staging / uuid.uuid4().hex[:12]
     log(f"glu reproduce: {len(notebooks)} notebooks, {source.describe()}, quick={quick}, jobs={jobs}")
 
     results: list[NotebookResult] = []
@@ -159,8 +154,9 @@ def reproduce(
             )
             return NotebookResult(name, "failed", time.perf_counter() - t0, kept, msg)
         files = []
+        staged = OutputLayout.under(stage / "out")
         for kind, target in final.items():
-            files += _move_tree(stage / "out" / kind, target)
+            files += _move_tree(staged.folder(kind), target)
         executed = executed_dir / f"{name}.ipynb"
         executed.parent.mkdir(parents=True, exist_ok=True)
         os.replace(out_ipynb, executed)
@@ -215,7 +211,6 @@ def write_summary(
     """
     import pandas as pd
 
-    from glu.data.tables import atomic_write_text
     from glu.outputs import package_versions
 
     notebooks = {r.name: {"name": r.name, "status": r.status, "seconds": round(r.seconds, 3)} for r in runs}

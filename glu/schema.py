@@ -26,6 +26,8 @@ AFFORDANCE_VALUES: dict[str, tuple[str, ...]] = {
 """Affordance nodes in the fixed K2 order, with their values in file order (glu names)."""
 
 AFFORDANCE_NODES: tuple[str, ...] = tuple(AFFORDANCE_VALUES)
+ACTIONS: tuple[str, ...] = AFFORDANCE_VALUES["Action"]
+"""The actions, in the network's order: grasp, tap, touch (every p_HMM vector follows it)."""
 ROOT_NODES: tuple[str, ...] = ("Action", "Color", "Shape", "Size")
 """Set by the experimenter: they never get parents."""
 

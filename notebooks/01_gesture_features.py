@@ -31,18 +31,19 @@ out_dir: str = None  # folder for figures/ and results/; None: the project's own
 # %%
 import matplotlib.pyplot as plt
 
-from glu import gesture_eval, plots
+from glu import plots
+from glu.experiments import gestures
+from glu.gestures.corpus import recording_segmentations
 from glu.outputs import open_outputs
 
 out = open_outputs("01_gesture_features", data, out_dir)
-segmentations = gesture_eval.recording_segmentations(out.source, seed=seed)
-table = gesture_eval.segmentation_table(segmentations)
-table.attrs["data_source"] = out.data_label
+segmentations = recording_segmentations(out.source, seed=seed)
+table = gestures.segmentation_table(segmentations, out.data_label)
 out.table(table, "gesture_segments")
 
 # %%
 fig, axes = plt.subplots(len(segmentations), 1, figsize=(10, 2.3 * len(segmentations)), squeeze=False)
-plots.plot_segmentations(segmentations, axes[:, 0])
+plots.plot_segmentations(axes[:, 0], segmentations)
 out.figure(fig, "gesture_segmentation")
 table.groupby("recording", sort=False).agg(
     segments=("segment", "max"),

@@ -39,7 +39,9 @@ quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for figures/, results/; None: the project's own
 
 # %%
-from glu import gesture_eval, plots
+from glu import plots
+from glu.experiments import gestures
+from glu.gestures.corpus import gesture_sequences, synthetic_corpus
 from glu.outputs import open_outputs
 
 out = open_outputs("02_hmm_training", data, out_dir)
@@ -52,10 +54,9 @@ sweep = {**train, "tol": eval_tol}
 # ## Training on the recordings
 
 # %%
-sequences = gesture_eval.gesture_sequences(out.source, n_per_action=n_per_action, seed=seed)
-recognizer = gesture_eval.train_on(sequences, seed=seed, **train)
-report = gesture_eval.training_table(recognizer)
-report.attrs["data_source"] = out.data_label
+sequences = gesture_sequences(out.source, n_per_action=n_per_action, seed=seed)
+recognizer = gestures.train_on(sequences, seed=seed, **train)
+report = gestures.training_table(recognizer)
 out.table(report, "hmm_training")
 recognizer.save(out.model(f"recognizer_{out.source.kind}.json"))
 report
@@ -64,13 +65,11 @@ report
 # ## The original 2013 models on their test segments (real data only)
 
 # %%
-mat = out.source.optional("reference-models/HMM_M3_Q6_mixsplit.mat")
-if mat is not None:
-    scores = gesture_eval.original_scores(out.source.root)
-    scores.attrs["data_source"] = out.data_label
+if out.source.original_hmms() is not None:
+    scores = gestures.original_scores(out.source)
     out.table(scores, "hmm_original_scores")
     fig, (ax,) = plots.new_figure(1, width=8)
-    plots.plot_segment_scores(scores, ax)
+    plots.plot_segment_scores(ax, scores)
     out.figure(fig, "hmm_original_scores")
     display_scores = scores[["recording", "start", "end", "winner"]]
 else:
@@ -81,19 +80,17 @@ display_scores
 # ## Cross-validated accuracy on synthetic gestures, and its sensitivity to noise
 
 # %%
-corpus = gesture_eval.synthetic_corpus(n_per_action, seed)
-predictions = gesture_eval.cross_validate(corpus, k=folds, seed=seed, **sweep)
-confusion = gesture_eval.confusion_matrix(predictions)
-accuracy = gesture_eval.accuracy(predictions)
-predictions.attrs["data_source"] = f"synthetic data: gestures (seed {seed}, {n_per_action} per action)"
+corpus = synthetic_corpus(n_per_action, seed)
+predictions = gestures.cross_validate(corpus, k=folds, seed=seed, **sweep)
+confusion = gestures.confusion_matrix(predictions)
+accuracy = gestures.accuracy(predictions)
 out.table(predictions, "hmm_synthetic_cv", accuracy=accuracy, folds=folds)
-noise = gesture_eval.accuracy_vs_noise(noise_levels, n_per_action=n_per_action, k=3, seed=seed, **sweep)
-noise.attrs["data_source"] = predictions.attrs["data_source"]
+noise = gestures.accuracy_vs_noise(noise_levels, n_per_action=n_per_action, k=3, seed=seed, **sweep)
 out.table(noise, "hmm_accuracy_vs_noise")
 fig, axes = plots.new_figure(2, width=4.2)
-plots.plot_confusion(confusion, axes[0])
+plots.plot_confusion(axes[0], confusion)
 axes[0].set_title(f"{folds}-fold CV, accuracy {accuracy:.3f}", fontsize=9)
-plots.plot_accuracy_vs_noise(noise, axes[1])
+plots.plot_accuracy_vs_noise(axes[1], noise)
 out.figure(fig, "hmm_synthetic_accuracy", source=predictions.attrs["data_source"])
 noise
 
@@ -102,10 +99,9 @@ noise
 
 # %%
 if out.source.is_real:
-    loo = gesture_eval.leave_one_out(sequences, by="segment", seed=seed, **sweep)
-    loo.attrs["data_source"] = out.data_label
-    out.table(loo, "hmm_real_leave_one_out", accuracy=gesture_eval.accuracy(loo[loo.testable]))
-    summary = f"leave-one-segment-out accuracy: {gesture_eval.accuracy(loo[loo.testable]):.3f} over {int(loo.testable.sum())} segments"
+    loo = gestures.leave_one_out(sequences, by="segment", seed=seed, **sweep)
+    out.table(loo, "hmm_real_leave_one_out", accuracy=gestures.accuracy(loo[loo.testable]))
+    summary = f"leave-one-segment-out accuracy: {gestures.accuracy(loo[loo.testable]):.3f} over {int(loo.testable.sum())} segments"
 else:
     summary = "synthetic data: see the cross-validation above"
 summary

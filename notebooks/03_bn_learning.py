@@ -31,11 +31,10 @@ out_dir: str = None  # folder for figures/ and results/; None: the project's own
 # %%
 import time
 
-import pandas as pd
-
-from glu import experiments, plots
+from glu import plots
 from glu.bn import BayesNet, learn_bn
-from glu.data import WORLD, load_experiments
+from glu.data import load_experiments
+from glu.experiments import fusion
 from glu.outputs import open_outputs
 
 out = open_outputs("03_bn_learning", data, out_dir)
@@ -50,27 +49,16 @@ print(f"learned {len(bn.edges())} edges from {len(table)} experiments in {time.p
 # structure, which learning should recover.
 
 # %%
-mat = out.source.optional("reference-models/BN_lab.mat")
+mat = out.source.original_bn()
 original = BayesNet.from_bnt_mat(mat) if mat else None
-if original is not None:
-    reference = {n: set(original.parents[n]) for n in bn.nodes}
-else:
-    reference = {n: set(WORLD.parents.get(n, WORLD.word_parents.get(n, bn.parents[n]))) for n in bn.nodes}
-edges = pd.DataFrame(
-    [(p, c, p in reference[c]) for p, c in bn.edges()]
-    + [(p, c, True) for c in bn.nodes for p in reference[c] if p not in bn.parents[c]],
-    columns=["parent", "child", "in_reference"],
-)
-edges["in_ours"] = [p in bn.parents[c] for p, c in zip(edges["parent"], edges["child"], strict=True)]
-edges["difference"] = (edges["in_ours"] != edges["in_reference"]).astype(int)
-edges.attrs["data_source"] = out.data_label
-out.table(edges, "bn_structure", reference="BN_lab.mat" if original is not None else "synthetic generator")
+edges = fusion.structure_comparison(bn, original)
+out.table(edges, reference=edges.attrs["parameters"]["reference"])
 print(
     f"edges: ours {int(edges.in_ours.sum())}, reference {int(edges.in_reference.sum())}, differing {int(edges.difference.sum())}"
 )
 
 fig, (ax,) = plots.new_figure(1, width=4.5, height=8)
-plots.plot_structure(bn, ax, original)
+plots.plot_structure(ax, bn, original)
 out.figure(fig, "bn_structure")
 
 # %% [markdown]
@@ -84,10 +72,10 @@ if original is not None:
     cpt_diff = max(float(abs(bn.cpts[n] - original.cpts[n]).max()) for n in bn.nodes)
     print(f"max |CPT ours − original| = {cpt_diff:.3g}; zero rows: {bn.zero_rows()}")
 uniform = learn_bn(table, unseen_words="uniform")
-comparison = experiments.unseen_rows_comparison(bn, uniform)
+comparison = fusion.unseen_rows_comparison(bn, uniform)
 out.table(comparison, "unseen_rows_comparison")
 fig, (ax,) = plots.new_figure(1, width=5, height=4.5)
-plots.plot_unseen_rows(comparison, ax)
+plots.plot_unseen_rows(ax, comparison)
 out.figure(fig, "unseen_rows_comparison")
 comparison.loc[comparison.uniform_minus_zero.abs().sort_values(ascending=False).index[:5]]
 

@@ -31,32 +31,32 @@ quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
-from glu import experiments, gesture_eval, plots
+from glu import plots
 from glu.bn import learn_bn
 from glu.data import load_experiments
-from glu.hmm import load_original_models
+from glu.experiments import fusion, gestures
+from glu.gestures import gesture_sequences, load_original_models
+from glu.gestures.corpus import held_out_gestures
 from glu.outputs import open_outputs
 
 out = open_outputs("04_fusion_hard", data, out_dir)
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
-mat = out.source.optional("reference-models/HMM_M3_Q6_mixsplit.mat")
+mat = out.source.original_hmms()
 if mat is not None:
     recognizer, models = load_original_models(mat), "original 2013 HMMs"
 else:
     n = 6 if quick else n_per_action
     train = {"n_iter": 15} if quick else {}
-    recognizer = gesture_eval.train_on(
-        gesture_eval.gesture_sequences(out.source, n, seed), seed=seed, **train
-    )
+    recognizer = gestures.train_on(gesture_sequences(out.source, n, seed), seed=seed, **train)
     models = "HMMs trained on synthetic gestures"
-segments = gesture_eval.test_segments(out.source, seed)
+segments = held_out_gestures(out.source, seed)
 print(f"{len(segments)} test gestures, {models}")
 
 # %%
-table = experiments.fusion_on_gestures(bn, recognizer, segments, {"Shape": shape, "Size": size})
+table = fusion.fusion_on_gestures(bn, recognizer, segments, {"Shape": shape, "Size": size})
 out.table(table, "fusion_hard_on_gestures", models=models)
 fig, (ax,) = plots.new_figure(1, width=max(6, 1.3 * len(segments)))
-plots.plot_fusion_on_gestures(table, ax, value="fast")
+plots.plot_fusion_on_gestures(ax, table, value="fast")
 out.figure(fig, "fusion_hard_on_gestures")
 table.pivot_table(index=["recording", "start", "hmm_top"], columns=["strategy", "ObjVel"], values="p").round(
     3

@@ -30,9 +30,10 @@ quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
-from glu import experiments, plots
+from glu import plots
 from glu.bn import learn_bn
 from glu.data import load_experiments
+from glu.experiments import fusion
 from glu.outputs import open_outputs
 
 out = open_outputs("05_fusion_soft", data, out_dir)
@@ -45,11 +46,11 @@ if quick:
 # p_comb(ObjVel | Shape) for the TCDS rows of p_HMM [grasp, tap, touch].
 
 # %%
-table = experiments.effect_vs_soft_evidence(bn, rules=("virtual", "jeffrey"))
+table = fusion.effect_vs_soft_evidence(bn, rules=("virtual", "jeffrey"))
 out.table(table, "fusion_soft_rules")
 fig, axes = plots.new_figure(4, width=3.6)
-plots.plot_effect_vs_soft_evidence(table, axes[:2], rule="virtual")
-plots.plot_effect_vs_soft_evidence(table, axes[2:], rule="jeffrey")
+plots.plot_effect_vs_soft_evidence(axes[:2], table, rule="virtual")
+plots.plot_effect_vs_soft_evidence(axes[2:], table, rule="jeffrey")
 out.figure(fig, "fusion_soft_rules")
 
 # %% [markdown]
@@ -58,9 +59,9 @@ out.figure(fig, "fusion_soft_rules")
 # %%
 fig, axes = plots.new_figure(2, width=4.6)
 for ax, shape in zip(axes, ("sphere", "box"), strict=True):
-    sweep = experiments.soft_evidence_sweep(bn, {"Shape": shape}, n_points=n_points)
+    sweep = fusion.soft_evidence_sweep(bn, {"Shape": shape}, n_points=n_points)
     out.table(sweep, f"fusion_soft_sweep_{shape}")
-    plots.plot_soft_sweep(sweep, ax)
+    plots.plot_soft_sweep(ax, sweep)
 out.figure(fig, "fusion_soft_sweep")
 pivot = sweep.pivot_table(index="p_hmm_tap", columns=["rule", "ObjVel"], values="p")
 pivot.iloc[:: max(1, len(pivot) // 5)]

@@ -30,23 +30,24 @@ quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
-from glu import experiments, plots
+from glu import plots
 from glu.bn import learn_bn
 from glu.data import load_experiments
+from glu.experiments import fusion
 from glu.outputs import open_outputs
 
 out = open_outputs("06_fusion_product", data, out_dir)
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
 
 # %%
-evidence = experiments.TCDS_ACTION_EVIDENCE
-threshold = experiments.tap_threshold(bn, evidence)
-sweep = experiments.soft_evidence_sweep(
+evidence = fusion.TCDS_ACTION_EVIDENCE
+threshold = fusion.tap_threshold(bn, evidence)
+sweep = fusion.soft_evidence_sweep(
     bn, evidence, target="Action", n_points=11 if quick else 201, rules=("product",)
 )
 out.table(sweep, "fusion_product_sweep", tap_threshold=threshold)
 fig, (ax,) = plots.new_figure(1, width=6)
-plots.plot_soft_sweep(sweep, ax)
+plots.plot_soft_sweep(ax, sweep)
 ax.axvline(threshold, color="0.3", linestyle=":", linewidth=1)
 ax.annotate(
     f"tap wins above {threshold:.4f}",
@@ -63,10 +64,10 @@ print(f"tap wins p_comb(Action | Size=small, Shape=sphere, ObjVel=slow) when p_H
 # ## The threshold for every object and effect
 
 # %%
-thresholds = experiments.tap_thresholds(bn)
+thresholds = fusion.tap_thresholds(bn)
 out.table(thresholds, "fusion_product_thresholds")
 fig, (ax,) = plots.new_figure(1, width=5, height=5)
-plots.plot_tap_thresholds(thresholds, ax)
+plots.plot_tap_thresholds(ax, thresholds)
 out.figure(fig, "fusion_product_thresholds")
 thresholds
 

@@ -29,24 +29,25 @@ quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for figures/ and results/; None: the project's own
 
 # %%
-from glu import experiments, plots
+from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
+from glu.experiments import fusion
 from glu.outputs import open_outputs
 
 out = open_outputs("07_glu2017_figures", data, out_dir)
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
-mat = out.source.optional("reference-models/BN_lab.mat")
+mat = out.source.original_bn()
 original = BayesNet.from_bnt_mat(mat) if mat else None
 
 # %% [markdown]
 # ## Fig. 4 · Effect prediction: p(ObjVel | Action=tap, Shape, Size)
 
 # %%
-effect = experiments.effect_prediction(bn, original)
+effect = fusion.effect_prediction(bn, original)
 out.table(effect, "glu2017_effect_prediction")
 fig, axes = plots.new_figure(2)
-plots.plot_effect_prediction(effect, axes)
+plots.plot_effect_prediction(axes, effect)
 out.figure(fig, "glu2017_effect_prediction")
 effect
 
@@ -57,10 +58,10 @@ effect
 
 # %%
 for variant in ("text", "code"):
-    change = experiments.word_probability_change(bn, variant, original, threshold=threshold)
+    change = fusion.word_probability_change(bn, variant, original, threshold=threshold)
     out.table(change, f"glu2017_word_change_{variant}", evidence=variant)
     fig, (ax,) = plots.new_figure(1, width=7)
-    plots.plot_word_change(change, ax)
+    plots.plot_word_change(ax, change)
     out.figure(fig, f"glu2017_word_change_{variant}")
 change[change.shown][["word", "p_without", "p_with", "delta"]]
 

@@ -38,26 +38,27 @@ out_dir: str = None  # folder for figures/, results/, recordings/; None: the pro
 # %%
 import matplotlib.pyplot as plt
 
-from glu import anticipation, experiments, gesture_eval, plots
+from glu import plots, recording
 from glu.bn import BayesNet, InferenceEngine, learn_bn
 from glu.data import load_experiments
-from glu.hmm import load_original_models
+from glu.experiments import anticipation, fusion, gestures
+from glu.gestures import gesture_sequences, load_original_models
 from glu.outputs import open_outputs
 
 out = open_outputs("08_tcds_figures", data, out_dir)
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
-bn_mat = out.source.optional("reference-models/BN_lab.mat")
+bn_mat = out.source.original_bn()
 original = BayesNet.from_bnt_mat(bn_mat) if bn_mat else None
 
 # %% [markdown]
 # ## Action given soft evidence: p_comb(Action | Size=small, Shape=sphere, ObjVel=slow)
 
 # %%
-threshold = experiments.tap_threshold(bn)
-actions = experiments.action_vs_soft_evidence(bn, reference=original)
+threshold = fusion.tap_threshold(bn)
+actions = fusion.action_vs_soft_evidence(bn, reference=original)
 out.table(actions, "tcds_action_vs_soft_evidence", tap_threshold=threshold)
 fig, (ax,) = plots.new_figure(1, width=7)
-plots.plot_action_vs_soft_evidence(actions, ax, threshold)
+plots.plot_action_vs_soft_evidence(ax, actions, threshold)
 out.figure(fig, "tcds_action_vs_soft_evidence")
 print(f"tap wins when p_HMM(tap) > {threshold:.6f} (the paper: 0.81)")
 
@@ -65,10 +66,10 @@ print(f"tap wins when p_HMM(tap) > {threshold:.6f} (the paper: 0.81)")
 # ## Effect given soft evidence: p_comb(ObjVel | Shape) for a sphere and a box
 
 # %%
-effects = experiments.effect_vs_soft_evidence(bn, rules=("virtual",), reference=original)
+effects = fusion.effect_vs_soft_evidence(bn, rules=("virtual",), reference=original)
 out.table(effects, "tcds_effect_vs_soft_evidence")
 fig, axes = plots.new_figure(2)
-plots.plot_effect_vs_soft_evidence(effects, axes, rule="virtual")
+plots.plot_effect_vs_soft_evidence(axes, effects, rule="virtual")
 out.figure(fig, "tcds_effect_vs_soft_evidence")
 
 # %% [markdown]
@@ -79,15 +80,15 @@ out.figure(fig, "tcds_effect_vs_soft_evidence")
 # %%
 engine = InferenceEngine(bn)
 banks = {}
-hmm_mat = out.source.optional("reference-models/HMM_M3_Q6_mixsplit.mat")
+hmm_mat = out.source.original_hmms()
 if hmm_mat is not None:
     banks["original"] = load_original_models(hmm_mat)
 train = {"n_states": n_states, "n_mix": n_mix, **({"n_iter": 15} if quick else {})}
 # the two anticipation recordings are test data: train on the other recordings only
-sequences = gesture_eval.gesture_sequences(
+sequences = gesture_sequences(
     out.source, n_per_action=6 if quick else n_per_action, seed=seed, include_test=False
 )
-banks["glu"] = gesture_eval.train_on(sequences, seed=seed, **train)
+banks["glu"] = gestures.train_on(sequences, seed=seed, **train)
 
 for name, recognizer in banks.items():
     fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), sharex="col")
@@ -103,10 +104,10 @@ for name, recognizer in banks.items():
             f"tcds_anticipation_{case}_{name}_predictions",
             final_description=run.descriptions[-1],
         )
-        anticipation.write_recording(
+        recording.write_anticipation(
             run, out.recording(f"tcds_anticipation_{case}_{name}"), f"glu-anticipation-{case}-{name}-{seed}"
         )
-        plots.plot_anticipation(run.curves(), run.predictions(), axes[:, j])
+        plots.plot_anticipation(axes[:, j], run.curves(), run.predictions())
         print(
             f"{case}, {name} HMMs: final p_comb(ObjVel) = {run.fused['ObjVel'][-1].round(3)}; “{run.descriptions[-1]}”"
         )

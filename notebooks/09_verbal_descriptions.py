@@ -38,6 +38,7 @@ import numpy as np
 from glu import plots
 from glu.bn import InferenceEngine, learn_bn
 from glu.data import load_experiments
+from glu.experiments import verbal as ex
 from glu.language import (
     all_scores,
     count_sentences,
@@ -47,9 +48,7 @@ from glu.language import (
     score_sentences,
     word_probabilities,
 )
-from glu.language import experiments as ex
 from glu.language import nbest as exact_nbest
-from glu.language import plots as lplots
 from glu.outputs import open_outputs
 
 out = open_outputs("09_verbal_descriptions", data, out_dir)
@@ -71,10 +70,10 @@ lists = ex.and_but_nbest(engine, nbest)
 out.table(and_but, "verbal_and_but_probabilities")
 out.table(lists, "verbal_and_but_nbest")
 fig, axes = plots.new_figure(3, width=4.6, height=3.6)
-lplots.plot_and_but(axes[0], and_but)
+plots.plot_and_but(axes[0], and_but)
 for ax, objvel in zip(axes[1:], ex.EVIDENCE_AND_BUT, strict=True):
     sub = lists[lists["ObjVel"] == objvel]
-    lplots.plot_nbest(ax, sub, title=sub["evidence"].iloc[0], highlight="but")
+    plots.plot_nbest(ax, sub, title=sub["evidence"].iloc[0], highlight="but")
 out.figure(fig, "verbal_and_but")
 and_but
 
@@ -87,7 +86,7 @@ fig8 = ex.fig8_descriptions(engine, net)
 out.table(yellow, "verbal_yellow_sphere_nbest")
 out.table(fig8, "verbal_fig8_descriptions")
 fig, (ax,) = plots.new_figure(1, width=7, height=3.6)
-lplots.plot_nbest(ax, yellow, title=", ".join(f"{k}={v}" for k, v in ex.EVIDENCE_YELLOW_SPHERE.items()))
+plots.plot_nbest(ax, yellow, title=", ".join(f"{k}={v}" for k, v in ex.EVIDENCE_YELLOW_SPHERE.items()))
 out.figure(fig, "verbal_yellow_sphere_nbest")
 fig8[["evidence", "sentence", "score", "colour_sentence", "colour_score"]]
 
@@ -99,7 +98,7 @@ cmp = ex.sampling_vs_exact(engine, ex.EVIDENCE_AND_BUT["slow"], seeds, n_samples
 out.table(cmp, "verbal_sampling_vs_exact")
 drawn = sample_sentences(grammar, n_samples, seeds[0])
 fig, (ax,) = plots.new_figure(1, width=6, height=3.4)
-lplots.plot_sampling(ax, all_scores(net, probs), score_sentences(drawn, probs), cmp["exact_score"].iloc[0])
+plots.plot_sampling(ax, all_scores(net, probs), score_sentences(drawn, probs), cmp["exact_score"].iloc[0])
 out.figure(fig, "verbal_sampling_vs_exact")
 summary = {
     "seeds": len(cmp),

@@ -28,6 +28,14 @@ def shared_data() -> Path:
 
 
 @pytest.fixture(scope="session")
+def real_source(shared_data):
+    """The real data as a :class:`glu.data.DataSource`."""
+    from glu.data import resolve_data
+
+    return resolve_data(shared_data)
+
+
+@pytest.fixture(scope="session")
 def lab_table(shared_data):
     """The paper's experiment table (words from transcriptions), validated."""
     from glu.data import load_experiments

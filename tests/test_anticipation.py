@@ -8,12 +8,14 @@ import sys
 import numpy as np
 import pytest
 
-from glu import anticipation
+from glu import recording
 from glu.bn import InferenceEngine
 from glu.data import resolve_data
 from glu.errors import ModelError
+from glu.experiments import anticipation
 from glu.fusion import fuse
-from glu.hmm import Recognizer, load_original_models
+from glu.gestures.original import load_original_models
+from glu.gestures.recognizer import Recognizer
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +72,7 @@ def test_recording_of_a_run(setup, tmp_path):
     run = anticipation.effect_anticipation(rec, eng, anticipation.case_trajectory(src, "sphere"), case.evidence,
                                            case="sphere", models="original", describe=True)  # fmt: skip
     assert len(run.descriptions) == len(run.update_frames) and "sphere" in run.descriptions[-1]
-    path = anticipation.write_recording(run, tmp_path / "s.rrd", "test-sphere")
+    path = recording.write_anticipation(run, tmp_path / "s.rrd", "test-sphere")
     res = subprocess.run(
         [sys.executable, "-m", "rerun", "rrd", "verify", str(path)], capture_output=True, text=True
     )

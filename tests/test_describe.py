@@ -287,7 +287,7 @@ def test_soft_evidence_certain_of_an_action_equals_hard_evidence(engine):
 
 @pytest.mark.shared_data
 def test_tcds_experiments(engine):
-    from glu.language import experiments as ex
+    from glu.experiments import verbal as ex
 
     yellow = ex.yellow_sphere_nbest(engine)
     assert list(yellow.columns) == ["rank", "sentence", "score", "length"] and len(yellow) == 10
@@ -377,7 +377,7 @@ def test_plots_draw_what_they_are_given():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from glu.language.plots import plot_and_but, plot_nbest, plot_sampling
+    from glu.plots import plot_and_but, plot_nbest, plot_sampling
 
     df = nbest(parse_grammar("( (a | b) [c] )"), {"a": 0.5, "b": 0.2, "c": 0.9}, n=4)
     fig, axes = plt.subplots(1, 3)

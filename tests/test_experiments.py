@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from glu import experiments
 from glu.bn import InferenceEngine
+from glu.experiments import fusion as experiments
 from glu.fusion import fuse
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from glu.errors import DataError
-from glu.features import (
+from glu.gestures.features import (
     HORIZONTAL_FALLBACK,
     OPENNI_JOINTS,
     VERTICAL_FALLBACK,
@@ -103,7 +103,7 @@ def test_log_features_divide_by_1000(shared_data):
 
 
 def test_synthetic_skeletons_give_the_original_body_factors():
-    from glu.data.synthetic_gestures import synthesize_gestures
+    from glu.gestures.synthetic import synthesize_gestures
 
     for g in synthesize_gestures(8, seed=5, noise=0.0, spike_rate=0.0, dropout_rate=0.0):
         _, norm = skeleton_features(g.skeleton)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from glu.cli import main
-from glu.data.synthetic_gestures import synthesize_recording
-from glu.features import LOG_SCALE
+from glu.gestures.features import LOG_SCALE
+from glu.gestures.synthetic import synthesize_recording
 
 
 def run(capsys, *argv):
@@ -84,7 +84,7 @@ def test_train_and_recognize_with_a_recogniser(capsys, tmp_path, synthetic_log):
     assert set(d) == {"loglik", "posterior"}
     assert list(d["loglik"]) == list(d["posterior"]) == ["grasp", "tap", "touch"]
     assert sum(d["posterior"].values()) == pytest.approx(1.0)
-    from glu.hmm import Recognizer
+    from glu.gestures.recognizer import Recognizer
 
     X = np.loadtxt(path)[a - 1 : b, 2:] / 1000
     np.testing.assert_allclose(list(d["loglik"].values()), Recognizer.load(model).loglik(X), rtol=1e-12)

@@ -7,16 +7,15 @@ import pandas as pd
 import pytest
 
 from glu.errors import DataError
-from glu.gesture_eval import (
+from glu.experiments.gestures import (
     accuracy,
     confusion_matrix,
     cross_validate,
     leave_one_out,
     original_scores,
     stratified_folds,
-    synthetic_corpus,
 )
-from glu.segmentation import LabelledSequence
+from glu.gestures.corpus import LabelledSequence, synthetic_corpus
 
 SMALL = {"n_states": 3, "n_mix": 1, "n_iter": 15}
 
@@ -78,8 +77,8 @@ def test_leave_one_recording_out_marks_untestable_actions():
     assert seg[seg.action == "grasp"].correct.all()
 
 
-def test_original_scores_pick_a_winner_per_segment(shared_data):
-    df = original_scores(shared_data)
+def test_original_scores_pick_a_winner_per_segment(real_source):
+    df = original_scores(real_source)
     assert list(zip(df.recording, df.start, df.end, strict=True)) == [
         ("tap1_hand", 216, 351), ("tap1_hand", 401, 511), ("tap1_hand", 557, 664),
         ("tap_notable_seated_1", 121, 214), ("norobotview_tap_notable_seated_2", 230, 375),

@@ -19,13 +19,8 @@ from glu.language.grammar import (
     load_grammar,
     parse_grammar,
 )
-from glu.language.sentences import (
-    compile_network,
-    count_by_length,
-    count_sentences,
-    same_language,
-    sample_sentences,
-)
+from glu.language.sampling import sample_sentences
+from glu.language.sentences import compile_network, count_by_length, count_sentences, same_language
 from glu.schema import WORDS
 
 

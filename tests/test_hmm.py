@@ -13,18 +13,11 @@ from scipy.special import logsumexp
 from scipy.stats import multivariate_normal
 
 from glu.errors import DataError, ModelError
-from glu.hmm import (
-    GestureHMM,
-    HMMConvergenceWarning,
-    Recognizer,
-    forward_curve,
-    init_left_to_right,
-    left_to_right_transmat,
-    load_original_models,
-    p_hmm_from_loglik,
-    train_hmm,
-    train_recognizer,
-)
+from glu.gestures.forward import forward_curve, left_to_right_transmat, p_hmm_from_loglik
+from glu.gestures.model import GestureHMM
+from glu.gestures.original import load_original_models
+from glu.gestures.recognizer import Recognizer, train_recognizer
+from glu.gestures.training import HMMConvergenceWarning, init_left_to_right, train_hmm
 
 # --- independent references (no glu code) ----------------------------------------------------------
 
@@ -240,7 +233,7 @@ def test_unreadable_recogniser_files(tmp_path):
 
 @pytest.fixture(scope="module")
 def corpus():
-    from glu.gesture_eval import synthetic_corpus
+    from glu.gestures.corpus import synthetic_corpus
 
     return synthetic_corpus(10, seed=3, actions=("grasp", "tap", "touch"))
 
@@ -284,7 +277,7 @@ def test_non_convergence_is_reported(corpus):
 
 
 def test_trained_recogniser_recognises_held_out_synthetic_gestures(corpus):
-    from glu.gesture_eval import synthetic_corpus
+    from glu.gestures.corpus import synthetic_corpus
 
     train = {a: [s.xyz for s in corpus if s.action == a] for a in ("grasp", "tap", "touch")}
     rec = train_recognizer(train, 4, 1, n_iter=30, warn=False)

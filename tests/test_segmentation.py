@@ -12,20 +12,18 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from glu.data.synthetic_gestures import GESTURES, synthesize_recording  # noqa: E402
 from glu.errors import DataError  # noqa: E402
-from glu.segmentation import (  # noqa: E402
+from glu.gestures.corpus import (  # noqa: E402
     ORIGINAL_SEGMENTS,
     TRAINING_RECORDINGS,
-    Segment,
-    extract,
     original_segments,
-    plot_segmentation,
     real_segments,
-    segment_recording,
-    segment_repetitions,
+    segment_recording_of,
 )
-from glu.trajectories import Trajectory, repair  # noqa: E402
+from glu.gestures.segmentation import Segment, extract, segment_recording, segment_repetitions  # noqa: E402
+from glu.gestures.synthetic import GESTURES, synthesize_recording  # noqa: E402
+from glu.gestures.trajectories import Trajectory, repair  # noqa: E402
+from glu.plots import plot_segmentation  # noqa: E402
 
 
 def _iou(a: tuple[int, int], b: tuple[int, int]) -> float:
@@ -115,8 +113,8 @@ def test_tap1_repetitions_match_the_originals_hand_cut_segments(shared_data):
 
 
 @pytest.mark.parametrize("name", TRAINING_RECORDINGS)
-def test_real_recordings_yield_labelled_segments(shared_data, name):
-    seg = segment_recording(shared_data / "gestures" / name / "data.log")
+def test_real_recordings_yield_labelled_segments(shared_data, real_source, name):
+    seg = segment_recording_of(real_source, name)
     assert len(seg.segments) >= 2
     n = len(np.loadtxt(shared_data / "gestures" / name / "data.log"))
     prev_end = 0
@@ -127,8 +125,8 @@ def test_real_recordings_yield_labelled_segments(shared_data, name):
         prev_end = s.end
 
 
-def test_real_segments_for_training(shared_data):
-    seqs = real_segments(shared_data)
+def test_real_segments_for_training(real_source):
+    seqs = real_segments(real_source)
     actions = {s.action for s in seqs}
     assert actions == {"grasp", "tap", "touch", "push"}
     singles = [(s.recording, s.start, s.end) for s in seqs if s.recording.startswith(("tap_", "norobot"))]

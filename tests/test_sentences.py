@@ -11,6 +11,7 @@ from language_reference import expand, grammar_text
 
 from glu.errors import GrammarError
 from glu.language.grammar import load_grammar, parse_grammar
+from glu.language.sampling import sample_probability, sample_sentences
 from glu.language.sentences import (
     compile_network,
     count_by_length,
@@ -18,8 +19,6 @@ from glu.language.sentences import (
     enumerate_sentences,
     restrict,
     same_language,
-    sample_probability,
-    sample_sentences,
 )
 
 

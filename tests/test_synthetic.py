@@ -8,7 +8,7 @@ import pytest
 
 from glu.bn import learn_bn
 from glu.data import WORLD, load_experiments, read_experiments, synthesize_experiments
-from glu.data.source import write_synthetic_folder
+from glu.data.synthetic import write_synthetic_folder
 from glu.errors import DataError
 from glu.schema import AFFORDANCE_VALUES, WORDS
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from glu.data.synthetic_gestures import GESTURES, synthesize_gestures, synthesize_recording
 from glu.errors import DataError
-from glu.features import skeleton_features
-from glu.trajectories import repair
+from glu.gestures.features import skeleton_features
+from glu.gestures.synthetic import GESTURES, synthesize_gestures, synthesize_recording
+from glu.gestures.trajectories import repair
 
 
 def test_same_seed_same_sequences_and_prefix_stability():

@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from glu.errors import DataError
-from glu.trajectories import (
+from glu.gestures.trajectories import (
     DETECT_ONLY,
     RepairPolicy,
     Trajectory,

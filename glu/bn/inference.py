@@ -25,18 +25,16 @@ of magnitude faster (``benchmarks/bench_bn.py``).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Literal
 
 import numpy as np
 
+from glu.bn.batch import BatchQueries
 from glu.bn.model import BayesNet
+from glu.bn.soft import SUM_TOL, SoftRule, check_soft_rule
 from glu.errors import EvidenceError, ImpossibleEvidenceError, ModelError, UnknownNodeError
 from glu.schema import unknown_node_message
 
-SoftRule = Literal["virtual", "jeffrey"]
-SOFT_RULES: tuple[str, ...] = ("virtual", "jeffrey")
 SoftEvidence = Mapping[str, Mapping[str, float] | Sequence[float] | np.ndarray]
-SUM_TOL = 1e-6
 MAX_CORE_STATES = 1 << 22
 IPFP_TOL, IPFP_MAX_ITER = 1e-13, 10_000
 
@@ -51,7 +49,7 @@ def _broadcast(table: np.ndarray, axes: Sequence[int], ndim: int) -> np.ndarray:
     return t.reshape(shape)
 
 
-class InferenceEngine:
+class InferenceEngine(BatchQueries):
     """Exact marginals of a :class:`BayesNet` whose non-core nodes are leaves with core parents.
 
     Parameters
@@ -218,8 +216,7 @@ class InferenceEngine:
         for node, v in leaf.items():
             p = p * self.leaf_table[self.leaf_row[node] + v][idx]
         if soft:
-            if soft_rule not in SOFT_RULES:
-                raise EvidenceError(f"unknown soft rule {soft_rule!r}; allowed: {', '.join(SOFT_RULES)}")
+            check_soft_rule(soft_rule)
             qs = {}
             for node, dist in soft.items():
                 q = self.soft_vector(node, dist)
@@ -348,216 +345,3 @@ class InferenceEngine:
         for node, v in leaf.items():
             p = p * self.leaf_table[self.leaf_row[node] + v][idx]
         return float(np.sum(p))
-
-    # ------------------------------------------------------------------ batches
-    def query_batch(
-        self,
-        targets: Sequence[str] | str,
-        evidence: Mapping[str, Sequence] | None = None,
-        soft: Mapping[str, np.ndarray] | None = None,
-        soft_rule: SoftRule = "virtual",
-        errors: Literal["raise", "nan"] = "raise",
-    ) -> dict[str, np.ndarray]:
-        """Posterior marginals for many evidence sets at once, vectorised over the rows.
-
-        Parameters
-        ----------
-        targets : node names
-        evidence : node → sequence of n values (names or indices; None, NaN or -1 = not observed), e.g. the
-            columns of a DataFrame
-        soft : node → array, shape (n, n_values): one soft-evidence distribution per row
-        soft_rule : ``"virtual"`` or ``"jeffrey"`` (one soft node only)
-        errors : ``"raise"`` an :class:`ImpossibleEvidenceError` naming the first impossible row, or give
-            that row ``nan``
-
-        Returns
-        -------
-        dict target → array, shape (n, n_values).
-        """
-        if isinstance(targets, str):
-            targets = [targets]
-        evidence = dict(evidence or {})
-        soft = dict(soft or {})
-        n = _batch_length(evidence, soft)
-        for t in targets:
-            if t not in self._value_index:
-                raise UnknownNodeError(unknown_node_message(t, self.nodes))
-        codes = {node: self._codes(node, vals, n) for node, vals in evidence.items()}
-        qs = {}
-        for node, arr in soft.items():
-            if node in codes:
-                raise EvidenceError(f"{node} is given twice: as hard evidence and as soft evidence")
-            arr = np.asarray(arr, dtype=float)
-            if arr.ndim != 2 or arr.shape[0] != n:
-                raise EvidenceError(f"batch soft evidence on {node} must have shape (n={n}, n_values)")
-            for row in arr[: min(n, 1)]:
-                self.soft_vector(node, row)
-            sums = arr.sum(axis=1)
-            if (arr < 0).any() or not np.all(np.abs(sums - 1) <= SUM_TOL):
-                bad = int(np.flatnonzero((np.abs(sums - 1) > SUM_TOL) | (arr < 0).any(axis=1))[0])
-                self.soft_vector(node, arr[bad])
-            qs[node] = arr / sums[:, None]
-        if soft_rule not in SOFT_RULES:
-            raise EvidenceError(f"unknown soft rule {soft_rule!r}; allowed: {', '.join(SOFT_RULES)}")
-        if soft_rule == "jeffrey" and len(qs) > 1:
-            raise EvidenceError("batch queries with Jeffrey's rule take soft evidence on one node")
-        out = {t: np.full((n, self.bn.schema.cardinality(t)), np.nan) for t in targets}
-        # rows with the same pattern of observed nodes share one reduced table
-        observed = np.stack([c >= 0 for c in codes.values()], axis=1) if codes else np.zeros((n, 0), bool)
-        patterns, inverse = np.unique(observed, axis=0, return_inverse=True)
-        for k, pattern in enumerate(patterns):
-            rows = np.flatnonzero(inverse.ravel() == k)
-            obs = {node: codes[node][rows] for node, on in zip(codes, pattern, strict=True) if on}
-            res = self._batch_pattern(targets, obs, {s: q[rows] for s, q in qs.items()}, soft_rule, len(rows))
-            for t in targets:
-                out[t][rows] = res[t]
-        if errors == "raise":
-            bad = np.flatnonzero(np.isnan(out[targets[0]][:, 0])) if targets else []
-            if len(bad):
-                i = int(bad[0])
-                ev = {node: self.bn.schema.values_of(node)[c[i]] for node, c in codes.items() if c[i] >= 0}
-                raise ImpossibleEvidenceError(
-                    f"row {i}: {self._impossible(ev, {s: None for s in qs})}" + (
-                        f" ({len(bad)} impossible rows in all)" if len(bad) > 1 else "")
-                )  # fmt: skip
-        return out
-
-    def _codes(self, node: str, values: Sequence, n: int) -> np.ndarray:
-        if node not in self._value_index:
-            raise UnknownNodeError(unknown_node_message(node, self.nodes))
-        vals = list(values)
-        if len(vals) != n:
-            raise EvidenceError(f"batch evidence on {node} has {len(vals)} rows, expected {n}")
-        out = np.empty(n, dtype=np.intp)
-        for i, v in enumerate(vals):
-            if (
-                v is None
-                or (isinstance(v, float) and np.isnan(v))
-                or (isinstance(v, int | np.integer) and v < 0)
-            ):
-                out[i] = -1
-            else:
-                out[i] = self._value(node, v)
-        return out
-
-    def _batch_pattern(
-        self, targets: Sequence[str], obs: dict[str, np.ndarray], qs: dict[str, np.ndarray], rule: str, n: int
-    ) -> dict[str, np.ndarray]:
-        nd = len(self.shape)
-        core_obs = {self.axis[k]: v for k, v in obs.items() if k in self.axis}
-        leaf_obs = {k: v for k, v in obs.items() if k not in self.axis}
-        keep = set(core_obs) | {self.axis[s] for s in qs}
-        for t in targets:
-            if t in self.axis:
-                keep.add(self.axis[t])
-            elif t not in leaf_obs:
-                keep.update(self.leaf_axes[t])
-        for leaf in leaf_obs:
-            keep.update(self.leaf_axes[leaf])
-        kept = sorted(keep)
-        reduced = (
-            self.base.sum(axis=tuple(a for a in range(nd) if a not in keep)) if len(kept) < nd else self.base
-        )
-        # gather the observed core axes row by row → table over the free kept axes, shape (n, *free)
-        free = [a for a in kept if a not in core_obs]
-        index = []
-        for a in kept:
-            if a in core_obs:
-                index.append(core_obs[a].reshape((n,) + (1,) * len(free)))
-            else:
-                j = free.index(a)
-                shape = [1] * (len(free) + 1)
-                shape[j + 1] = self.shape[a]
-                index.append(np.arange(self.shape[a]).reshape(shape))
-        p = reduced[tuple(index)] if kept else np.broadcast_to(reduced, (n,)).copy()
-        if not kept:
-            p = p.reshape(n)
-        pos = {a: 1 + free.index(a) for a in free}
-
-        def expand(table: np.ndarray, axes: Sequence[int]) -> np.ndarray:
-            """Row-wise table over ``axes`` (shape (n, *cards)) → broadcastable against p."""
-            shape = [n] + [1] * len(free)
-            order = np.argsort([pos[a] for a in axes])
-            t = table.transpose([0, *(1 + order)])
-            for a, s in zip(np.asarray(axes)[order], t.shape[1:], strict=True):
-                shape[pos[a]] = s
-            return t.reshape(shape)
-
-        for leaf, v in leaf_obs.items():
-            axes = self.leaf_axes[leaf]
-            ratio = self.leaf_ratio[leaf][v]  # (n, *pa cards)
-            fixed = [a for a in axes if a in core_obs]
-            if fixed:
-                ratio = _gather_rows(ratio, [core_obs.get(a) for a in axes])
-                axes = tuple(a for a in axes if a not in core_obs)
-            p = p * (expand(ratio, axes) if axes else ratio.reshape((n,) + (1,) * len(free)))
-        for s, q in qs.items():
-            a = self.axis[s]
-            shape = [n] + [1] * len(free)
-            shape[pos[a]] = q.shape[1]
-            qb = q.reshape(shape)
-            if rule == "virtual":
-                p = p * qb
-            else:
-                others = tuple(i for i in range(1, p.ndim) if i != pos[a])
-                z = p.sum(axis=others, keepdims=True)
-                bad = ((z <= 0) & (qb > 0)).reshape(n, -1).any(axis=1)
-                p = p * np.divide(qb, z, out=np.zeros(np.broadcast_shapes(qb.shape, z.shape)), where=z > 0)
-                p[bad] = 0.0
-        total = p.reshape(n, -1).sum(axis=1)
-        ok = total > 0
-        res = {}
-        for t in targets:
-            if t in self.axis and self.axis[t] in core_obs:
-                r = np.zeros((n, self.shape[self.axis[t]]))
-                r[np.arange(n), core_obs[self.axis[t]]] = 1.0
-            elif t in self.axis:
-                k = pos[self.axis[t]]
-                r = p.sum(axis=tuple(i for i in range(1, p.ndim) if i != k))
-                r = r / np.where(ok, total, 1)[:, None]
-            elif t in leaf_obs:
-                r = np.zeros((n, self.bn.schema.cardinality(t)))
-                r[np.arange(n), leaf_obs[t]] = 1.0
-            else:
-                axes = self.leaf_axes[t]
-                ratio = self.leaf_ratio[t]  # (r, *pa)
-                fixed = [a for a in axes if a in core_obs]
-                cols = []
-                for v in range(ratio.shape[0]):
-                    rv = np.broadcast_to(ratio[v], (n, *ratio.shape[1:]))
-                    ax = axes
-                    if fixed:
-                        rv = _gather_rows(rv, [core_obs.get(a) for a in axes])
-                        ax = tuple(a for a in axes if a not in core_obs)
-                    f = expand(rv, ax) if ax else rv.reshape((n,) + (1,) * len(free))
-                    cols.append((p * f).reshape(n, -1).sum(axis=1))
-                r = np.stack(cols, axis=1) / np.where(ok, total, 1)[:, None]
-            r = np.array(r, dtype=float)
-            r[~ok] = np.nan
-            res[t] = r
-        return res
-
-
-def _gather_rows(table: np.ndarray, fixed: Sequence[np.ndarray | None]) -> np.ndarray:
-    """Per row i, index the axes of ``table[i]`` given in ``fixed`` (None = keep the axis): (n, *kept)."""
-    n = table.shape[0]
-    index: list = [np.arange(n)]
-    kept = [k for k, f in enumerate(fixed) if f is None]
-    for k, f in enumerate(fixed):
-        if f is None:
-            shape = [1] * (len(kept) + 1)
-            shape[1 + kept.index(k)] = table.shape[1 + k]
-            index.append(np.arange(table.shape[1 + k]).reshape(shape))
-        else:
-            index.append(f.reshape((n,) + (1,) * len(kept)))
-    index[0] = index[0].reshape((n,) + (1,) * len(kept))
-    return table[tuple(index)]
-
-
-def _batch_length(evidence: Mapping[str, Sequence], soft: Mapping[str, np.ndarray]) -> int:
-    lengths = {len(v) for v in evidence.values()} | {len(v) for v in soft.values()}
-    if len(lengths) > 1:
-        raise EvidenceError(f"batch evidence columns have different lengths: {sorted(lengths)}")
-    if not lengths:
-        raise EvidenceError("a batch query needs at least one evidence or soft-evidence column")
-    return lengths.pop()

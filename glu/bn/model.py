@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from glu.errors import ModelError
+from glu.files import atomic_write_json
 from glu.schema import FILE_ALIASES, WORD_VALUES, Schema
 
 FORMAT = "glu-bayesnet"
@@ -138,11 +139,7 @@ class BayesNet:
 
     def save(self, path: str | os.PathLike) -> Path:
         """Write the model as JSON (atomically)."""
-        from glu.data.tables import atomic_write_text
-
-        path = Path(path)
-        atomic_write_text(path, json.dumps(self.to_dict(), indent=1) + "\n")
-        return path
+        return atomic_write_json(path, self.to_dict())
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], where: str = "model") -> BayesNet:

@@ -8,7 +8,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from glu.cli.common import add_data_args, add_evidence_args, add_model_args, load_model, read_evidence
 from glu.errors import EvidenceError, GluError
+from glu.evidence import check_disjoint, format_evidence
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -49,58 +51,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     q.set_defaults(func=_query)
 
 
-def add_data_args(p: argparse.ArgumentParser) -> None:
-    """``--data``, ``--words``, ``--unseen-words``: where the network is learned from, and how."""
-    p.add_argument(
-        "--data", help="data folder, or 'synthetic' (default: $GLU_DATA_DIR, data/real, else synthetic)"
-    )
-    p.add_argument("--words", choices=("lab", "asr"), default="lab",
-                   help="descriptions: lab = transcriptions (the paper's), asr = speech recogniser")  # fmt: skip
-    p.add_argument("--unseen-words", choices=("zero", "uniform"), default="zero",
-                   help="CPT rows of word parent configurations never seen: zero (the original's) or uniform")  # fmt: skip
-
-
-def add_model_args(p: argparse.ArgumentParser) -> None:
-    """``--model`` or the data options of :func:`add_data_args` (read by :func:`load_model`)."""
-    p.add_argument(
-        "--model", type=Path, help="model file (.json or the original .mat); default: learn from --data"
-    )
-    add_data_args(p)
-
-
-def add_evidence_args(p: argparse.ArgumentParser) -> None:
-    """``--evidence``, ``--soft``, ``--soft-rule`` (read by :func:`parse_evidence` and :func:`parse_soft`)."""
-    p.add_argument(
-        "--evidence", action="extend", nargs="+", default=[], metavar="NODE=VALUE", help="hard evidence"
-    )
-    p.add_argument(
-        "--soft", action="append", default=[], metavar="NODE=v1:p1,v2:p2,…",
-        help="soft evidence on an affordance node, a distribution over its values, "
-        "e.g. a gesture posterior Action=grasp:0.2,tap:0.6,touch:0.2",
-    )  # fmt: skip
-    p.add_argument("--soft-rule", choices=("virtual", "jeffrey"), default="virtual",
-                   help="how soft evidence enters: virtual (likelihood) evidence, as the originals, or Jeffrey's rule")  # fmt: skip
-
-
-def load_model(args: argparse.Namespace):
-    """The model named by ``--model``, or the one learned from ``--data``; returns (BayesNet, description)."""
-    from glu.bn.model import BayesNet
-
-    model = getattr(args, "model", None)
-    if model is not None:
-        if getattr(args, "data", None):
-            raise EvidenceError("give either --model or --data, not both")
-        bn = BayesNet.from_bnt_mat(model) if model.suffix.lower() == ".mat" else BayesNet.load(model)
-        return bn, f"model {model} ({bn.meta.get('data_source', 'unknown data')})"
-    from glu.bn.learning import learn_bn
-    from glu.data.source import load_experiments, resolve_data
-
-    source = resolve_data(args.data)
-    df = load_experiments(source, args.words)
-    bn = learn_bn(df, unseen_words=args.unseen_words)
-    return bn, f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}"
-
-
 def _learn(args: argparse.Namespace) -> int:
     bn, desc = load_model(args)
     bn.save(args.out)
@@ -126,49 +76,6 @@ def _import(args: argparse.Namespace) -> int:
     return 0
 
 
-def parse_evidence(items: list[str]) -> dict[str, str]:
-    """``["Action=tap", "Shape=sphere"]`` → ``{"Action": "tap", "Shape": "sphere"}``; a node twice is an error."""
-    out: dict[str, str] = {}
-    for item in items:
-        node, sep, value = item.partition("=")
-        node, value = node.strip(), value.strip()
-        if not sep or not node or not value:
-            raise EvidenceError(f"evidence {item!r} is malformed; expected NODE=VALUE, e.g. Action=tap")
-        if node in out:
-            raise EvidenceError(f"{node} is given twice in the evidence ({node}={out[node]} and {item})")
-        out[node] = value
-    return out
-
-
-def parse_soft(items: list[str]) -> dict[str, dict[str, float]]:
-    """``["Action=grasp:0.2,tap:0.6,touch:0.2"]`` → ``{"Action": {"grasp": 0.2, …}}``."""
-    out: dict[str, dict[str, float]] = {}
-    for item in items:
-        node, sep, spec = item.partition("=")
-        node = node.strip()
-        if not sep or not node or not spec.strip():
-            raise EvidenceError(f"soft evidence {item!r} is malformed; expected NODE=v1:p1,v2:p2,…")
-        if node in out:
-            raise EvidenceError(f"{node} is given twice as soft evidence")
-        dist: dict[str, float] = {}
-        for part in spec.split(","):
-            value, sep2, prob = part.partition(":")
-            value = value.strip()
-            try:
-                p = float(prob)
-            except ValueError:
-                p = None
-            if not sep2 or not value or p is None:
-                raise EvidenceError(
-                    f"soft evidence {item!r}: {part!r} is malformed; expected VALUE:PROBABILITY"
-                )
-            if value in dist:
-                raise EvidenceError(f"soft evidence on {node} gives {value!r} twice")
-            dist[value] = p
-        out[node] = dist
-    return out
-
-
 def _answer(
     bn, engine, targets: list[str], evidence: dict, soft: dict, rule: str
 ) -> dict[str, dict[str, float]]:
@@ -185,21 +92,14 @@ def _query(args: argparse.Namespace) -> int:
     engine = InferenceEngine(bn)
     if args.batch:
         return _query_batch(args, bn, engine, desc)
-    evidence = parse_evidence(args.evidence)
-    soft = parse_soft(args.soft)
-    both = sorted(set(evidence) & set(soft))
-    if both:
-        raise EvidenceError(f"{both[0]} is given twice: as --evidence and as --soft")
+    evidence, soft = read_evidence(args)
     answer = _answer(bn, engine, args.target, evidence, soft, args.soft_rule)
     if args.json:
         print(f"# {desc}", file=sys.stderr)
         print(json.dumps(answer))
         return 0
     print(f"# {desc}")
-    shown = [f"{k}={v}" for k, v in evidence.items()] + [
-        f"{k}~({', '.join(f'{v}:{p:g}' for v, p in d.items())}, {args.soft_rule})" for k, d in soft.items()
-    ]
-    print(f"# evidence: {', '.join(shown) if shown else 'none'}")
+    print(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")
     width = max(len(t) for t in answer)
     for t, dist in answer.items():
         vwidth = max(len(v) for v in dist)
@@ -261,9 +161,10 @@ def _batch_line(bn, engine, line: str, i: int, default_rule: str) -> dict[str, A
         raise EvidenceError(f"line {i}: 'evidence' must map node names to value names")
     if not isinstance(soft, dict) or not all(isinstance(d, dict | list) for d in soft.values()):
         raise EvidenceError(f"line {i}: 'soft' must map node names to {{value: probability}}")
-    both = sorted(set(evidence) & set(soft))
-    if both:
-        raise EvidenceError(f"line {i}: {both[0]} is given twice: as evidence and as soft evidence")
+    try:
+        check_disjoint(evidence, soft)
+    except EvidenceError as e:
+        raise EvidenceError(f"line {i}: {e}") from None
     rule = q.get("soft_rule", default_rule)
     try:
         return _answer(bn, engine, targets, evidence, soft, rule)

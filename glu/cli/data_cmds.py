@@ -7,6 +7,9 @@ import sys
 from pathlib import Path
 
 from glu import paths
+from glu.cli.common import add_data_option, integer
+from glu.data.source import DEFAULT_SYNTHETIC_N, WORD_FILES
+from glu.data.synthetic import MAX_ROWS, MIN_ROWS
 from glu.errors import DataError, FetchError
 
 
@@ -22,19 +25,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--timeout", type=float, default=60.0, help="seconds per request (default 60)")
     f.set_defaults(func=_fetch)
 
-    s = dsub.add_parser("synth", help="write a synthetic data folder with the real data's layout")
-    s.add_argument(
-        "--n", type=int, default=1270, help="experiments per table (100 to 1,000,000; default 1270)"
+    s = dsub.add_parser(
+        "synth", help="write a synthetic data folder with the real data's layout (tables and hand logs)"
     )
-    s.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    s.add_argument("--n", type=integer, default=DEFAULT_SYNTHETIC_N,
+                   help=f"experiments per table ({MIN_ROWS} to {MAX_ROWS:,}; default {DEFAULT_SYNTHETIC_N})")  # fmt: skip
+    s.add_argument("--seed", type=integer, default=0, help="random seed (default 0)")
     s.add_argument("-o", "--out", type=Path, required=True, help="output folder")
     s.set_defaults(func=_synth)
 
     i = dsub.add_parser("info", help="say which data source is used and what it holds")
+    add_data_option(i)
     i.add_argument(
-        "--data", help="data folder, or 'synthetic' (default: $GLU_DATA_DIR, data/real, synthetic)"
+        "--words", choices=tuple(WORD_FILES), default="lab", help="which experiment table (default lab)"
     )
-    i.add_argument("--words", choices=("lab", "asr"), default="lab")
     i.set_defaults(func=_info)
 
 
@@ -58,13 +62,15 @@ def _fetch(args: argparse.Namespace) -> int:
 
 
 def _synth(args: argparse.Namespace) -> int:
-    from glu.data.source import write_synthetic_folder
-    from glu.data.synthetic import MAX_ROWS, MIN_ROWS
+    from glu.data.synthetic import write_synthetic_folder
+    from glu.gestures.synthetic import hand_log_arrays, synthetic_recordings
 
     if not MIN_ROWS <= args.n <= MAX_ROWS:
         raise DataError(f"--n {args.n} is out of range; allowed: {MIN_ROWS} to {MAX_ROWS:,}")
-    out = write_synthetic_folder(args.out, args.n, args.seed)
-    print(f"wrote synthetic data (seed {args.seed}, {args.n} experiments per table) to {out}")
+    recordings = {name: hand_log_arrays(g) for name, g in synthetic_recordings(args.seed).items()}
+    out = write_synthetic_folder(args.out, args.n, args.seed, recordings)
+    print(f"wrote synthetic data (seed {args.seed}, {args.n} experiments per table, "
+          f"{len(recordings)} gesture recordings) to {out}")  # fmt: skip
     return 0
 
 

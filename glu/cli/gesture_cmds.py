@@ -13,10 +13,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.cli.argtypes import nonneg_float, positive_float, positive_int
+from glu.cli.common import add_data_option, integer, nonneg_float, positive_float, positive_int
+from glu.data.source import HAND_LOG
 from glu.errors import DataError
+from glu.gestures.synthetic import GESTURES
+from glu.gestures.training import TrainingConfig
+from glu.schema import ACTIONS
 
-_DATA_HELP = "data folder, or 'synthetic' (default: $GLU_DATA_DIR, data/real, else synthetic)"
+SYNTHETIC_NOISE = 0.01
+"""Default sensor noise (m) of ``glu hmm train --synthetic``."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "then find the repetitions of the gesture from the distance of the hand to its rest pose.",
     )
     s.add_argument("log", help="hand log: a data.log, a recording folder, or a recording name")
-    s.add_argument("--data", help=_DATA_HELP + "; used to find a recording by name")
+    add_data_option(s, "used to find a recording by name")
     s.add_argument("--plot", type=Path, metavar="PNG", help="also draw the segmentation into this image")
     s.add_argument("--label", help="action performed (default: from the recording's name, if known)")
     s.set_defaults(func=_segment)
@@ -46,22 +51,30 @@ def register(sub: argparse._SubParsersAction) -> None:
         "gestures (--synthetic N, N per action).",
     )
     src = t.add_mutually_exclusive_group()
-    src.add_argument("--data", help=_DATA_HELP)
+    add_data_option(src)
     src.add_argument(
         "--synthetic", type=positive_int, metavar="N", help="train on N synthetic gestures per action"
     )
     t.add_argument("-o", "--out", type=Path, required=True, metavar="RECOGNISER", help="file to write (JSON)")
     t.add_argument(
-        "--actions", type=_actions, default=None, help="comma-separated (default: grasp,tap,touch)"
+        "--actions", type=_actions, default=ACTIONS, help=f"comma-separated (default: {','.join(ACTIONS)})"
     )
-    t.add_argument("--states", type=positive_int, default=6, help="Q, states per HMM (default 6)")
-    t.add_argument("--mix", type=positive_int, default=3, help="M, Gaussians per state (default 3)")
-    t.add_argument("--iter", type=positive_int, default=200, help="most EM iterations (default 200)")
-    t.add_argument("--tol", type=positive_float, default=1e-4, help="EM tolerance per frame (default 1e-4)")
+    d = TrainingConfig()
     t.add_argument(
-        "--noise", type=nonneg_float, default=0.01, help="synthetic sensor noise, m (default 0.01)"
+        "--states", type=positive_int, default=d.n_states, help=f"Q, states per HMM (default {d.n_states})"
     )
-    t.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    t.add_argument(
+        "--mix", type=positive_int, default=d.n_mix, help=f"M, Gaussians per state (default {d.n_mix})"
+    )
+    t.add_argument(
+        "--iter", type=positive_int, default=d.n_iter, help=f"most EM iterations (default {d.n_iter})"
+    )
+    t.add_argument(
+        "--tol", type=positive_float, default=d.tol, help=f"EM tolerance per frame (default {d.tol:g})"
+    )
+    t.add_argument("--noise", type=nonneg_float, default=SYNTHETIC_NOISE,
+                   help=f"synthetic sensor noise, m (default {SYNTHETIC_NOISE:g})")  # fmt: skip
+    t.add_argument("--seed", type=integer, default=0, help="random seed (default 0)")
     t.set_defaults(func=_train)
 
     r = sub.add_parser(
@@ -77,7 +90,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="'original' (the 2013 models of the data folder; touch = their push model) or a recogniser "
         "file from `glu hmm train` (default: original)",
     )  # fmt: skip
-    r.add_argument("--data", help=_DATA_HELP)
+    add_data_option(r)
     r.add_argument(
         "--stream", action="store_true", help="one line per frame: log L(G_1^t | A), p_HMM(A | G_1^t)"
     )
@@ -103,8 +116,6 @@ def _frames(s: str) -> tuple[int, int]:
 
 
 def _actions(s: str) -> tuple[str, ...]:
-    from glu.data.synthetic_gestures import GESTURES
-
     acts = tuple(a.strip() for a in s.split(",") if a.strip())
     bad = [a for a in acts if a not in GESTURES]
     if bad or not acts or len(set(acts)) != len(acts):
@@ -119,22 +130,14 @@ def _resolve_log(log: str, data: str | None) -> tuple[Path, Any]:
     """The log file for a LOG argument, and the data source if one was needed to find it."""
     p = Path(log)
     if p.is_dir():
-        p = p / "data.log"
+        p = p / HAND_LOG
     if p.exists():
         return p, None
     if "/" not in log and not log.endswith(".log"):
         from glu.data.source import resolve_data
 
         source = resolve_data(data)
-        if source.root is None:
-            raise DataError(
-                f"{log}: no such file, and the data source has no recordings ({source.describe()})"
-            )
-        q = source.root / "gestures" / log / "data.log"
-        if q.exists():
-            return q, source
-        names = sorted(d.name for d in (source.root / "gestures").glob("*") if (d / "data.log").exists())
-        raise DataError(f"{log}: no such file or recording in {source.root}; recordings: {', '.join(names)}")
+        return source.hand_log(log), source
     raise DataError(f"{log}: no such file (expected a YARP hand log `index timestamp x y z`)")
 
 
@@ -146,13 +149,15 @@ def _say(msg: str, quiet: bool) -> None:
 
 
 def _segment(args: argparse.Namespace) -> int:
-    from glu.segmentation import original_segments, segment_recording
-    from glu.trajectories import summarize_events
+    from glu.gestures.corpus import RECORDING_ACTION, original_segments
+    from glu.gestures.segmentation import segment_recording
+    from glu.gestures.trajectories import summarize_events
 
     path, source = _resolve_log(args.log, args.data)
     if source is not None:
         print(f"data: {source.describe()}")
-    seg = segment_recording(path, label=args.label)
+    name = path.parent.name if path.name == HAND_LOG else path.stem
+    seg = segment_recording(path, label=args.label if args.label is not None else RECORDING_ACTION.get(name))
     print(f"log: {path} ({seg.recording})")
     print(f"tracking: {summarize_events(seg.events)}")
     for e in seg.events:
@@ -172,11 +177,10 @@ def _segment(args: argparse.Namespace) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from glu.data.tables import atomic_write_bytes
+        from glu.files import atomic_write_bytes
+        from glu.plots import plot_segmentation
 
         fig, ax = plt.subplots(figsize=(12, 4), layout="constrained")
-        from glu.segmentation import plot_segmentation
-
         plot_segmentation(ax, seg, f"{seg.recording}: {len(seg.segments)} segments",
                           reference=original_segments(seg.recording))  # fmt: skip
         import io
@@ -190,11 +194,11 @@ def _segment(args: argparse.Namespace) -> int:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from glu.hmm import ACTIONS, train_recognizer
+    from glu.gestures.recognizer import train_recognizer
 
-    actions = args.actions or ACTIONS
+    actions = args.actions
     if args.synthetic:
-        from glu.gesture_eval import synthetic_corpus
+        from glu.gestures.corpus import synthetic_corpus
 
         print(
             f"data: {args.synthetic} synthetic gestures per action (seed {args.seed}, noise {args.noise} m)"
@@ -203,16 +207,16 @@ def _train(args: argparse.Namespace) -> int:
         meta: dict[str, Any] = {"data": f"synthetic, {args.synthetic} per action, noise {args.noise} m"}
     else:
         from glu.data.source import resolve_data
-        from glu.segmentation import real_segments
+        from glu.gestures.corpus import real_segments
 
         source = resolve_data(args.data)
         print(f"data: {source.describe()}")
-        if source.root is None or not (source.root / "gestures").is_dir():
+        if not source.has_gestures:
             raise DataError(
                 f"the data source has no gesture recordings ({source.describe()}); "
                 "give --data DIR with gestures/, or --synthetic N"
             )
-        seqs = real_segments(source.root)
+        seqs = real_segments(source)
         meta = {"data": source.describe()}
     by_action = {a: [s.xyz for s in seqs if s.action == a] for a in actions}
     empty = [a for a, v in by_action.items() if not v]
@@ -238,14 +242,15 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
-    from glu.hmm import ORIGINAL_MODEL_FILES, Recognizer, load_original_models
+    from glu.gestures.original import load_original_models
+    from glu.gestures.recognizer import Recognizer
 
     if spec == "original":
-        from glu.data.source import resolve_data
+        from glu.data.source import ORIGINAL_HMMS, resolve_data
 
         source = resolve_data(data)
         _say(f"data: {source.describe()}", quiet)
-        mat = source.file(ORIGINAL_MODEL_FILES[3])
+        mat = source.file(ORIGINAL_HMMS[3])
         _say(f"models: {mat} (original 2013 HMMs; touch = their push model)", quiet)
         return load_original_models(mat)
     rec = Recognizer.load(spec)
@@ -256,7 +261,7 @@ def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
 def _recognize(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from glu.features import load_features
+    from glu.gestures.features import load_features
 
     rec = _load_models(args.models, args.data, args.json)
     path, source = _resolve_log(args.log, args.data)
@@ -265,7 +270,7 @@ def _recognize(args: argparse.Namespace) -> int:
     pieces = load_features(path, policy=None).pieces
     traj = pieces[0]
     if args.repair:
-        from glu.trajectories import repair
+        from glu.gestures.trajectories import repair
 
         rp = repair(traj)
         traj = next((p for p in rp.pieces if args.frames is None or p.frame[0] <= args.frames[0] <= p.frame[-1]),

@@ -9,9 +9,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from glu.cli.argtypes import integer, positive_int
-from glu.cli.bn_cmds import add_evidence_args, add_model_args, load_model, parse_evidence, parse_soft
+from glu.cli.common import add_evidence_args, add_model_args, integer, load_model, positive_int, read_evidence
 from glu.errors import EvidenceError
+from glu.evidence import format_evidence
 
 DESCRIPTION = """\
 Print the N best sentences of the grammar given evidence, each scored by the mean log probability of
@@ -57,17 +57,14 @@ def _describe(args: argparse.Namespace) -> int:
     from glu.bn.inference import InferenceEngine
     from glu.language.descriptions import nbest, rank_sentences, word_probabilities
     from glu.language.grammar import load_grammar
-    from glu.language.sentences import compile_network, count_sentences, sample_sentences
+    from glu.language.sampling import sample_sentences
+    from glu.language.sentences import compile_network, count_sentences
 
     if args.seed is not None and args.sample is None:
         raise EvidenceError("--seed chooses the random sentences of --sample K; give --sample too")
     if args.sample is not None and args.max_length is not None:
         raise EvidenceError("--max-length applies to the exact N-best; drop it with --sample")
-    evidence = parse_evidence(args.evidence)
-    soft = parse_soft(args.soft)
-    both = sorted(set(evidence) & set(soft))
-    if both:
-        raise EvidenceError(f"{both[0]} is given twice: as --evidence and as --soft")
+    evidence, soft = read_evidence(args)
     grammar = load_grammar(args.grammar)
     net = compile_network(grammar)
     limit = net.check_length_limit(args.max_length)
@@ -115,10 +112,7 @@ def _describe(args: argparse.Namespace) -> int:
 
     print(f"# model: {desc}")
     print(f"# grammar: {gram_name}: {n_sentences:,} sentences of {net.min_length}–{limit} words")
-    shown = [f"{k}={v}" for k, v in evidence.items()] + [
-        f"{k}~({', '.join(f'{v}:{p:g}' for v, p in d.items())}, {args.soft_rule})" for k, d in soft.items()
-    ]
-    print(f"# evidence: {', '.join(shown) if shown else 'none'}")
+    print(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")
     if args.must_contain:
         print(f"# only sentences containing: {' or '.join(args.must_contain)}")
     if args.sample is None:

@@ -5,8 +5,13 @@ A data folder has the layout of the public data (and of ``glu data fetch`` / ``g
     affordance-words/sent-1-5_lab_aff_bag.txt     words from transcriptions (``words="lab"``)
     affordance-words/sent-all_mllr3_aff_bag.txt   words from a speech recogniser (``words="asr"``)
     affordance-words/networkDefinition.txt        nodes and values
-    gestures/<recording>/data.log                 human hand trajectories
-    reference-models/*.mat                        the original trained models
+    gestures/<recording>/data.log                 human hand trajectories (YARP logs)
+    reference-models/BN_lab.mat                   the originals' learned network
+    reference-models/HMM_M{3,1}_Q6_mixsplit.mat   the originals' gesture HMMs
+    sentence-samples/sentence_10000samples_uniq.txt   the originals' sampled sentences
+
+:class:`DataSource` owns this layout: code asks it for ``hand_log(recording)``, ``original_bn()``,
+``original_hmms(n_mix)``, … and never spells a path inside a data folder itself.
 
 Every result carries :meth:`DataSource.describe`, so it always says which data it came from.
 """
@@ -21,6 +26,7 @@ from pathlib import Path
 import pandas as pd
 
 from glu import paths
+from glu.data.hand_logs import FILE_NAME
 from glu.errors import DataError
 from glu.schema import Schema, default_schema
 
@@ -30,6 +36,15 @@ WORD_FILES: dict[str, str] = {
 }
 """``words`` option → experiment table (``lab``: transcriptions, the paper's; ``asr``: speech recogniser)."""
 NETWORK_DEFINITION = "affordance-words/networkDefinition.txt"
+GESTURES = "gestures"
+HAND_LOG = FILE_NAME
+ORIGINAL_BN = "reference-models/BN_lab.mat"
+ORIGINAL_HMMS: dict[int, str] = {
+    3: "reference-models/HMM_M3_Q6_mixsplit.mat",
+    1: "reference-models/HMM_M1_Q6_mixsplit.mat",
+}
+"""Gaussians per state M → the originals' HMM file."""
+SENTENCE_SAMPLES = "sentence-samples/sentence_10000samples_uniq.txt"
 SYNTHETIC_MARKER = "SYNTHETIC.json"
 SYNTHETIC_KEYWORD = "synthetic"
 DEFAULT_SYNTHETIC_N = 1270
@@ -68,8 +83,9 @@ class DataSource:
         why = " — no real data found" if self.origin == "default" else ""
         return f"synthetic data{where} (seed {self.seed}, {self.n_experiments} experiments{why})"
 
+    # ------------------------------------------------------------------ the folder layout
     def optional(self, relative: str) -> Path | None:
-        """Path of a file of this source if it has it, else None (e.g. the original models)."""
+        """Path of a file of this source if it has it, else None (``relative`` to the data folder)."""
         if self.root is None:
             return None
         p = self.root / relative
@@ -83,6 +99,61 @@ class DataSource:
         if not p.exists():
             raise DataError(f"{p}: no such file in the data folder {self.root} ({self.describe()})")
         return p
+
+    def experiments_file(self, words: str = "lab") -> Path:
+        """The experiment table of a ``words`` option (:data:`WORD_FILES`)."""
+        return self.file(WORD_FILES[check_words(words)])
+
+    def network_definition(self) -> Path | None:
+        """``networkDefinition.txt`` (nodes and values), if the source has it."""
+        return self.optional(NETWORK_DEFINITION)
+
+    @property
+    def has_gestures(self) -> bool:
+        """True if the source has a ``gestures/`` folder of hand logs."""
+        return self.optional(GESTURES) is not None
+
+    def recordings(self) -> tuple[str, ...]:
+        """Names of the recordings that have a hand log, sorted."""
+        folder = self.optional(GESTURES)
+        if folder is None:
+            return ()
+        return tuple(sorted(d.name for d in folder.iterdir() if (d / HAND_LOG).is_file()))
+
+    def has_hand_log(self, recording: str) -> bool:
+        """True if the source has the hand log of ``recording``."""
+        return self.optional(f"{GESTURES}/{recording}/{HAND_LOG}") is not None
+
+    def hand_log(self, recording: str) -> Path:
+        """The hand log ``gestures/<recording>/data.log``; :class:`DataError` naming the recordings if absent."""
+        if not self.has_hand_log(recording):
+            have = self.recordings()
+            raise DataError(
+                f"{recording}: no such recording in {self.describe()}; "
+                + (f"recordings: {', '.join(have)}" if have else "it has no gesture recordings")
+            )
+        return self.file(f"{GESTURES}/{recording}/{HAND_LOG}")
+
+    def original_bn(self) -> Path | None:
+        """The originals' learned network ``BN_lab.mat``, if the source has it."""
+        return self.optional(ORIGINAL_BN)
+
+    def original_hmms(self, n_mix: int = 3) -> Path | None:
+        """The originals' gesture HMMs with ``n_mix`` Gaussians per state, if the source has them."""
+        if n_mix not in ORIGINAL_HMMS:
+            raise DataError(f"n_mix={n_mix}: the originals have HMMs with M in {sorted(ORIGINAL_HMMS)}")
+        return self.optional(ORIGINAL_HMMS[n_mix])
+
+    def sentence_samples(self) -> Path | None:
+        """The originals' 9,941 sampled sentences, if the source has them."""
+        return self.optional(SENTENCE_SAMPLES)
+
+
+def check_words(words: str) -> str:
+    """``words`` if it names an experiment table (:data:`WORD_FILES`), else :class:`DataError`."""
+    if words not in WORD_FILES:
+        raise DataError(f"unknown words option {words!r}; allowed: {', '.join(WORD_FILES)}")
+    return words
 
 
 def resolve_data(data: str | os.PathLike | None = None) -> DataSource:
@@ -132,13 +203,14 @@ def _folder_source(root: Path, origin: str) -> DataSource:
 
 def load_schema(source: DataSource) -> Schema:
     """The schema of a source: its ``networkDefinition.txt`` if it has one, else the default schema."""
-    if source.root is not None and (source.root / NETWORK_DEFINITION).is_file():
+    definition = source.network_definition()
+    if definition is not None:
         from glu.data.tables import read_network_definition
 
-        schema = read_network_definition(source.root / NETWORK_DEFINITION)
+        schema = read_network_definition(definition)
         if tuple(schema.nodes) != default_schema().nodes:
             raise DataError(
-                f"{source.root / NETWORK_DEFINITION}: nodes differ from the model's 8 affordance nodes "
+                f"{definition}: nodes differ from the model's 8 affordance nodes "
                 "and 49 words (or are in another order)"
             )
         return schema
@@ -157,40 +229,17 @@ def load_experiments(data: DataSource | str | os.PathLike | None = None, words: 
     -------
     DataFrame, shape (n_experiments, 57); ``df.attrs["data_source"]`` says where it came from.
     """
-    if words not in WORD_FILES:
-        raise DataError(f"unknown words option {words!r}; allowed: {', '.join(WORD_FILES)}")
+    check_words(words)
     source = data if isinstance(data, DataSource) else resolve_data(data)
     if source.root is None:
-        from glu.data.synthetic import synthesize_experiments
+        from glu.data.synthetic import ASR_NOISE, synthesize_experiments
 
         df = synthesize_experiments(
-            source.n_experiments, source.seed, asr_noise=0.1 if words == "asr" else 0.0
+            source.n_experiments, source.seed, asr_noise=ASR_NOISE if words == "asr" else 0.0
         )
     else:
         from glu.data.tables import read_experiments
 
-        df = read_experiments(source.file(WORD_FILES[words]), load_schema(source))
+        df = read_experiments(source.experiments_file(words), load_schema(source))
     df.attrs["data_source"] = source.describe() + f", words={words}"
     return df
-
-
-def write_synthetic_folder(out: str | os.PathLike, n: int, seed: int) -> Path:
-    """Write a synthetic data folder with the layout of the real one (experiment tables and definition)."""
-    from glu.data.synthetic import synthesize_experiments
-    from glu.data.tables import atomic_write_text, write_experiments
-
-    out = Path(out)
-    schema = default_schema()
-    for words, rel in WORD_FILES.items():
-        df = synthesize_experiments(n, seed, asr_noise=0.1 if words == "asr" else 0.0)
-        write_experiments(df, out / rel, schema)
-    lines = []
-    for node in schema.nodes:
-        if node in schema.word_nodes:
-            lines.append(f"{node}\t-\t{node}")
-        else:
-            vals = [{"sphere": "circle"}.get(v, v) for v in schema.values_of(node)]
-            lines.append("\t".join([node, *vals]))
-    atomic_write_text(out / NETWORK_DEFINITION, "\n".join(lines) + "\n")
-    atomic_write_text(out / SYNTHETIC_MARKER, json.dumps({"seed": seed, "n": n, "generator": "glu"}) + "\n")
-    return out

@@ -19,15 +19,21 @@ recovers it.
 
 from __future__ import annotations
 
+import os
+from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
+from glu.files import atomic_write_json
 from glu.schema import AFFORDANCE_VALUES, WORD_VALUES, WORDS, default_schema
 
 MIN_ROWS, MAX_ROWS = 100, 1_000_000
+ASR_NOISE = 0.1
+"""Synthetic speech-recogniser noise: the probability that a word of the ``asr`` table is flipped."""
 
 
 @dataclass(frozen=True)
@@ -242,3 +248,35 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
         f", asr_noise {asr_noise})" if asr_noise else ")"
     )
     return df
+
+
+def write_synthetic_folder(
+    out: str | os.PathLike,
+    n: int,
+    seed: int,
+    recordings: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
+) -> Path:
+    """Write a synthetic data folder with the layout of the real one.
+
+    Parameters
+    ----------
+    out : the folder
+    n, seed : experiments per table, and the generator's seed
+    recordings : hand logs to write, recording name → (timestamps, logged coordinates), e.g. from
+        :func:`glu.gestures.synthetic.synthetic_recordings`; none by default (the data layer does not make
+        gestures)
+    """
+    from glu.data.hand_logs import write_hand_log
+    from glu.data.source import GESTURES, NETWORK_DEFINITION, SYNTHETIC_MARKER, WORD_FILES
+    from glu.data.tables import write_experiments, write_network_definition
+
+    out = Path(out)
+    schema = default_schema()
+    for words, rel in WORD_FILES.items():
+        df = synthesize_experiments(n, seed, asr_noise=ASR_NOISE if words == "asr" else 0.0)
+        write_experiments(df, out / rel, schema)
+    write_network_definition(schema, out / NETWORK_DEFINITION)
+    for name, (t, xyz) in (recordings or {}).items():
+        write_hand_log(out / GESTURES / name, t, xyz)
+    atomic_write_json(out / SYNTHETIC_MARKER, {"seed": seed, "n": n, "generator": "glu"}, indent=None)
+    return out

@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import io
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
+from glu.files import atomic_write_text
 from glu.schema import FILE_ALIASES, WORD_VALUES, Schema, default_schema
 
 ABSENT_MARK = "-"
@@ -178,25 +178,6 @@ def write_experiments(df: pd.DataFrame, path: str | os.PathLike, schema: Schema 
     return path
 
 
-def atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same folder, then rename."""
-    atomic_write_bytes(path, text.encode("utf-8"))
-
-
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder, then rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def read_network_definition(path: str | os.PathLike) -> Schema:
     """Read ``networkDefinition.txt`` (``node<TAB>value<TAB>value…`` per line) into a :class:`Schema`.
 
@@ -230,3 +211,14 @@ def read_network_definition(path: str | os.PathLike) -> Schema:
     if not values:
         raise DataError(f"{path}: empty network definition")
     return Schema(values=values, n_affordance=n_aff, aliases=FILE_ALIASES)
+
+
+def write_network_definition(schema: Schema, path: str | os.PathLike) -> Path:
+    """Write a schema as ``networkDefinition.txt`` (file values: ``circle``, ``-``/word), atomically."""
+    lines = []
+    for node in schema.nodes:
+        if node in schema.word_nodes:
+            lines.append(f"{node}\t{ABSENT_MARK}\t{node}")
+        else:
+            lines.append("\t".join([node, *(_file_value(node, v, schema) for v in schema.values_of(node))]))
+    return atomic_write_text(path, "\n".join(lines) + "\n")

@@ -1,9 +1,11 @@
 """Verbal descriptions (METHOD.md §5): the grammar, its sentences, and sentences scored by the BN's word probabilities.
 
 * :mod:`glu.language.grammar` — HTK HParse grammars: :func:`parse_grammar`, :func:`load_grammar`.
-* :mod:`glu.language.sentences` — the deterministic word network, counting, enumeration, HSGen-like sampling.
+* :mod:`glu.language.sentences` — the deterministic word network, counting, enumeration.
+* :mod:`glu.language.sampling` — random sentences as the originals drew them (HTK's HSGen).
 * :mod:`glu.language.descriptions` — scores, the exact N-best (:func:`nbest`), :func:`describe`.
-* :mod:`glu.language.experiments` — the TCDS experiments as DataFrames; :mod:`glu.language.plots` — figures.
+
+The TCDS experiments built on them are in :mod:`glu.experiments.verbal`, their figures in :mod:`glu.plots`.
 """
 
 from glu.language.descriptions import (
@@ -18,6 +20,7 @@ from glu.language.descriptions import (
     word_probabilities,
 )
 from glu.language.grammar import DEFAULT_GRAMMAR_PATH, Grammar, load_grammar, parse_grammar
+from glu.language.sampling import sample_probability, sample_sentences
 from glu.language.sentences import (
     WordNetwork,
     compile_network,
@@ -26,8 +29,6 @@ from glu.language.sentences import (
     enumerate_sentences,
     restrict,
     same_language,
-    sample_probability,
-    sample_sentences,
 )
 
 __all__ = [

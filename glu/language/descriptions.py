@@ -51,14 +51,8 @@ import pandas as pd
 
 from glu.errors import EvidenceError, GrammarError, VocabularyError
 from glu.language.grammar import Grammar, load_grammar
-from glu.language.sentences import (
-    Sentence,
-    WordNetwork,
-    as_network,
-    count_sentences,
-    restrict,
-    sample_sentences,
-)
+from glu.language.sampling import sample_sentences
+from glu.language.sentences import Sentence, WordNetwork, as_network, count_sentences, restrict
 
 WordProbs = Mapping[str, float] | pd.Series
 """P(word = present | evidence) by word: a mapping or a Series indexed by word."""

@@ -3,7 +3,8 @@
 Every function takes an :class:`~glu.bn.InferenceEngine` (word probabilities given evidence) and
 optionally a grammar (default: glu's, the originals' language) and uses the exact N-best of
 :mod:`glu.language.descriptions`, not a random sample; :func:`sampling_vs_exact` measures what the originals'
-random sample of 10,000 sentences misses.
+random sample of 10,000 sentences misses. Each returns a frame stamped by
+:func:`~glu.experiments.common.tidy`.
 """
 
 from __future__ import annotations
@@ -14,15 +15,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from glu.language.descriptions import (
-    _network,
-    all_scores,
-    nbest,
-    rank_sentences,
-    word_probabilities,
-)
+from glu.experiments.common import evidence_text, model_source, tidy
+from glu.language.descriptions import _network, all_scores, nbest, rank_sentences, word_probabilities
 from glu.language.grammar import Grammar, load_grammar
-from glu.language.sentences import WordNetwork, compile_network, sample_probability, sample_sentences
+from glu.language.sampling import sample_probability, sample_sentences
+from glu.language.sentences import WordNetwork, compile_network
 
 EVIDENCE_YELLOW_SPHERE: dict[str, str] = {
     "Color": "yellow",
@@ -51,11 +48,6 @@ COLOUR_WORDS: tuple[str, ...] = ("green", "yellow", "blue")
 CONJUNCTIONS: tuple[str, ...] = ("and", "but")
 
 
-def evidence_text(evidence: Mapping[str, Any]) -> str:
-    """``{"Action": "grasp", "ObjVel": "slow"}`` → ``"Action=grasp, ObjVel=slow"``."""
-    return ", ".join(f"{k}={v}" for k, v in evidence.items())
-
-
 def yellow_sphere_nbest(
     engine: Any, n: int = 10, grammar: Grammar | WordNetwork | None = None
 ) -> pd.DataFrame:
@@ -65,7 +57,10 @@ def yellow_sphere_nbest(
     -------
     DataFrame with columns rank, sentence, score, length (``n`` rows, best first).
     """
-    return nbest(grammar, word_probabilities(engine, EVIDENCE_YELLOW_SPHERE), n)
+    df = nbest(grammar, word_probabilities(engine, EVIDENCE_YELLOW_SPHERE), n)
+    return tidy(
+        df, "verbal_yellow_sphere_nbest", model_source(engine.bn), evidence=EVIDENCE_YELLOW_SPHERE, n=n
+    )
 
 
 def and_but_probabilities(engine: Any) -> pd.DataFrame:
@@ -80,7 +75,8 @@ def and_but_probabilities(engine: Any) -> pd.DataFrame:
         probs = word_probabilities(engine, ev)
         for w in CONJUNCTIONS:
             rows.append({"ObjVel": objvel, "evidence": evidence_text(ev), "word": w, "p": float(probs[w])})
-    return pd.DataFrame(rows, columns=["ObjVel", "evidence", "word", "p"])
+    df = pd.DataFrame(rows, columns=["ObjVel", "evidence", "word", "p"])
+    return tidy(df, "verbal_and_but", model_source(engine.bn), evidence=EVIDENCE_AND_BUT)
 
 
 def and_but_nbest(engine: Any, n: int = 10, grammar: Grammar | WordNetwork | None = None) -> pd.DataFrame:
@@ -99,7 +95,8 @@ def and_but_nbest(engine: Any, n: int = 10, grammar: Grammar | WordNetwork | Non
         df.insert(0, "ObjVel", objvel)
         df["conjunction"] = [_conjunction(s) for s in df["sentence"]]
         frames.append(df)
-    return pd.concat(frames, ignore_index=True)
+    return tidy(pd.concat(frames, ignore_index=True), "verbal_and_but_nbest", model_source(engine.bn),
+                evidence=EVIDENCE_AND_BUT, n=n)  # fmt: skip
 
 
 def _conjunction(sentence: str) -> str:
@@ -118,7 +115,8 @@ def best_with_colour(
     """
     net = _network(grammar)
     colours = [w for w in COLOUR_WORDS if w in net.words]
-    return nbest(net, word_probabilities(engine, evidence), n, must_contain=colours)
+    df = nbest(net, word_probabilities(engine, evidence), n, must_contain=colours)
+    return tidy(df, "verbal_best_with_colour", model_source(engine.bn), evidence=evidence, n=n)
 
 
 def fig8_descriptions(engine: Any, grammar: Grammar | WordNetwork | None = None) -> pd.DataFrame:
@@ -139,7 +137,7 @@ def fig8_descriptions(engine: Any, grammar: Grammar | WordNetwork | None = None)
             "sentence": best["sentence"], "score": float(best["score"]),
             "colour_sentence": colour["sentence"], "colour_score": float(colour["score"]),
         })  # fmt: skip
-    return pd.DataFrame(rows)
+    return tidy(pd.DataFrame(rows), "verbal_fig8", model_source(engine.bn), evidence=EVIDENCE_FIG8)
 
 
 def sampling_vs_exact(
@@ -161,6 +159,7 @@ def sampling_vs_exact(
     p_draw_best (the probability that ``n_samples`` random sentences contain the exact best, computed from
     :func:`~glu.language.sentences.sample_probability`; the same on every row).
     """
+    seeds = list(seeds)
     g = load_grammar() if grammar is None else grammar
     net = compile_network(g)
     probs = word_probabilities(engine, evidence)
@@ -185,4 +184,5 @@ def sampling_vs_exact(
             "overlap": len(set(exact["sentence"]) & set(ranked["sentence"])),
             "p_draw_best": float(p_draw),
         })  # fmt: skip
-    return pd.DataFrame(rows)
+    return tidy(pd.DataFrame(rows), "verbal_sampling_vs_exact", model_source(engine.bn), evidence=evidence,
+                seeds=seeds, n_samples=n_samples, n=n)  # fmt: skip

@@ -1,6 +1,6 @@
 """Gesture segments: the original frame ranges, and automatic segmentation of a recording into repetitions.
 
-The originals cut their test segments by hand (METHOD.md §4, :data:`ORIGINAL_SEGMENTS`). For training,
+The originals cut their test segments by hand (METHOD.md §4, :data:`glu.gestures.corpus.ORIGINAL_SEGMENTS`). For training,
 the recordings ``grasp1_hand``, ``tap1_hand``, ``touch1_hand`` and ``push1_hand`` hold several repetitions
 of one gesture each; :func:`segment_repetitions` finds them automatically:
 
@@ -18,45 +18,21 @@ of one gesture each; :func:`segment_repetitions` finds them automatically:
    split the trajectory, is *partial*).
 
 The parameters are a :class:`SegmentationParams`; the defaults were chosen by looking at the six real
-recordings (the figure of :func:`plot_segmentation`) and are checked on synthetic recordings with known
+recordings (the figure of :func:`glu.plots.plot_segmentation`) and are checked on synthetic recordings with known
 repetitions. Segments are 1-based inclusive frame ranges of the source log, as in the papers.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
 from glu.errors import DataError
-from glu.trajectories import DEFAULT_POLICY, RepairPolicy, TrackingEvent, Trajectory
-
-if TYPE_CHECKING:  # pragma: no cover
-    from matplotlib.axes import Axes
-
-ORIGINAL_SEGMENTS: dict[str, tuple[tuple[int, int], ...]] = {
-    "tap1_hand": ((216, 351), (401, 511), (557, 664)),
-    "tap_notable_seated_1": ((121, 214),),
-    "norobotview_tap_notable_seated_2": ((230, 375),),
-}
-"""The test segments of the originals (1-based, inclusive frames of ``gestures/<recording>/data.log``)."""
-
-RECORDING_ACTION: dict[str, str] = {
-    "grasp1_hand": "grasp",
-    "tap1_hand": "tap",
-    "touch1_hand": "touch",
-    "push1_hand": "push",
-    "tap_notable_seated_1": "tap",
-    "norobotview_tap_notable_seated_2": "tap",
-}
-"""The action performed in each real recording."""
-
-TRAINING_RECORDINGS: tuple[str, ...] = ("grasp1_hand", "tap1_hand", "touch1_hand", "push1_hand")
-"""The recordings with several repetitions of one gesture, segmented automatically for training."""
+from glu.gestures.trajectories import DEFAULT_POLICY, RepairPolicy, TrackingEvent, Trajectory
 
 
 @dataclass(frozen=True)
@@ -118,6 +94,10 @@ class SegmentationParams:
     keep_partial: bool = False
 
 
+DEFAULT_PARAMS = SegmentationParams()
+"""The segmentation parameters glu uses (chosen on the six real recordings, checked on synthetic ones)."""
+
+
 class Segmentation(NamedTuple):
     """The result of :func:`segment_repetitions` on one trajectory.
 
@@ -137,7 +117,7 @@ class Segmentation(NamedTuple):
     trajectory: Trajectory
 
 
-def smooth(xyz: np.ndarray, params: SegmentationParams = SegmentationParams()) -> np.ndarray:
+def smooth(xyz: np.ndarray, params: SegmentationParams = DEFAULT_PARAMS) -> np.ndarray:
     """Running median then moving average, per axis; ``xyz`` has shape (n_frames, 3), so has the result."""
     from scipy.ndimage import median_filter, uniform_filter1d
 
@@ -149,7 +129,7 @@ def smooth(xyz: np.ndarray, params: SegmentationParams = SegmentationParams()) -
 
 
 def activity_signal(
-    xyz: np.ndarray, params: SegmentationParams = SegmentationParams()
+    xyz: np.ndarray, params: SegmentationParams = DEFAULT_PARAMS
 ) -> tuple[np.ndarray, np.ndarray]:
     """The activity (distance to the rest pose / its 95th percentile) and the rest pose.
 
@@ -181,7 +161,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 def segment_repetitions(
     traj: Trajectory,
     label: str | None = None,
-    params: SegmentationParams = SegmentationParams(),
+    params: SegmentationParams = DEFAULT_PARAMS,
     recording: str = "",
 ) -> Segmentation:
     """Find the repetitions of a gesture in a trajectory in feature units (one piece, see :func:`repair`).
@@ -234,14 +214,6 @@ def segment_repetitions(
     return Segmentation(segments, rejected, activity, rest, traj)
 
 
-def original_segments(recording: str) -> list[Segment]:
-    """The originals' hand-cut segments of a recording (empty if it has none), labelled with its action."""
-    return [
-        Segment(a, b, RECORDING_ACTION.get(recording), recording)
-        for a, b in ORIGINAL_SEGMENTS.get(recording, ())
-    ]
-
-
 def extract(traj: Trajectory, segment: Segment) -> np.ndarray:
     """The coordinates of a segment's frames, shape (n_frames, 3) (repaired frames within it included)."""
     sel = (traj.frame >= segment.start) & (traj.frame <= segment.end)
@@ -280,116 +252,19 @@ def segment_recording(
     path: str | os.PathLike,
     label: str | None = None,
     policy: RepairPolicy = DEFAULT_POLICY,
-    params: SegmentationParams = SegmentationParams(),
+    params: SegmentationParams = DEFAULT_PARAMS,
 ) -> RecordingSegmentation:
     """Read a YARP hand log (file or recording folder), repair it and segment each piece.
 
-    ``label`` defaults to the action of a known recording (:data:`RECORDING_ACTION`).
+    ``label`` is the action performed, if known (:func:`glu.gestures.corpus.segment_recording_of`
+    fills it in for the recordings of a data folder).
     """
-    from glu.features import load_features
+    from glu.gestures.features import load_features
 
     p = Path(path)
     name = p.name if p.is_dir() else p.parent.name if p.name == "data.log" else p.stem
-    label = label if label is not None else RECORDING_ACTION.get(name)
     repaired = load_features(path, policy)
     pieces = [
         segment_repetitions(tr, label, params, recording=name) for tr in repaired.pieces if len(tr) >= 2
     ]
     return RecordingSegmentation(name, pieces, repaired.events)
-
-
-class LabelledSequence(NamedTuple):
-    """A gesture sequence for training or testing: its action, its features and where it comes from."""
-
-    action: str
-    xyz: np.ndarray
-    recording: str
-    start: int
-    end: int
-
-
-def real_segments(
-    root: str | os.PathLike,
-    recordings: Sequence[str] = TRAINING_RECORDINGS,
-    include_original: bool = True,
-    policy: RepairPolicy = DEFAULT_POLICY,
-    params: SegmentationParams = SegmentationParams(),
-) -> list[LabelledSequence]:
-    """Labelled segments of the real recordings in ``root/gestures/``.
-
-    The recordings in ``recordings`` are segmented automatically (repaired by ``policy``); with
-    ``include_original`` the hand-cut segments of the single-tap recordings (:data:`ORIGINAL_SEGMENTS`,
-    except those of recordings segmented automatically) are added, taken from the repaired trajectory.
-    """
-    from glu.features import load_features
-
-    root = Path(root)
-    out: list[LabelledSequence] = []
-    for rec in recordings:
-        log = root / "gestures" / rec / "data.log"
-        seg = segment_recording(log, RECORDING_ACTION.get(rec), policy, params)
-        for piece in seg.pieces:
-            for s in piece.segments:
-                out.append(LabelledSequence(s.label or "", extract(piece.trajectory, s), rec, s.start, s.end))
-    if include_original:
-        for rec, ranges in ORIGINAL_SEGMENTS.items():
-            if rec in recordings:
-                continue
-            pieces = load_features(root / "gestures" / rec / "data.log", policy).pieces
-            for a, b in ranges:
-                piece = next((p for p in pieces if p.frame[0] <= a and b <= p.frame[-1]), None)
-                if piece is None:
-                    continue
-                s = Segment(a, b, RECORDING_ACTION[rec], rec)
-                out.append(LabelledSequence(RECORDING_ACTION[rec], extract(piece, s), rec, a, b))
-    return out
-
-
-def plot_segmentation(
-    ax: Axes,
-    segmentation: Segmentation | RecordingSegmentation,
-    title: str | None = None,
-    reference: Sequence[Segment] = (),
-) -> Axes:
-    """Draw a recording's features (x, y, z), the activity and the segments found on ``ax``.
-
-    Kept segments are shaded and numbered, rejected candidates hatched, tracking events marked at the
-    bottom (gaps ▼, spikes ·; jumps as dotted lines), reference segments (e.g. the originals) drawn as
-    black bars near the top. Repaired (interpolated) frames are drawn half a frame late.
-    Deterministic: the same input gives the same picture.
-    """
-    pieces = segmentation.pieces if isinstance(segmentation, RecordingSegmentation) else [segmentation]
-    colors = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
-    for k, piece in enumerate(pieces):
-        tr = piece.trajectory
-        f = tr.frame + np.where(tr.observed, 0.0, 0.5)
-        for i, axis in enumerate("xyz"):
-            ax.plot(f, tr.xyz[:, i], color=colors[axis], lw=0.8, label=axis if k == 0 else None)
-        ax.plot(f, piece.activity, color="black", lw=1.2, label="activity" if k == 0 else None)
-    segs = [s for p in pieces for s in p.segments]
-    for i, s in enumerate(segs, 1):
-        ax.axvspan(s.start, s.end, color="tab:orange", alpha=0.2, lw=0)
-        ax.text((s.start + s.end) / 2, 1.0, str(i), transform=ax.get_xaxis_transform(), ha="center", va="top")
-    for s, _reason in (r for p in pieces for r in p.rejected):
-        ax.axvspan(s.start, s.end, facecolor="none", edgecolor="grey", hatch="//", alpha=0.5, lw=0)
-    events = segmentation.events if isinstance(segmentation, RecordingSegmentation) else ()
-    xt = ax.get_xaxis_transform()
-    gaps = [e.frame - 0.5 for e in events if e.kind == "gap"]
-    spikes = [e.frame for e in events if e.kind == "spike"]
-    if gaps:
-        ax.plot(gaps, [0.02] * len(gaps), ls="none", marker="v", color="purple", transform=xt, label="gap")
-    if spikes:
-        ax.plot(
-            spikes, [0.02] * len(spikes), ls="none", marker=".", color="grey", transform=xt, label="spike"
-        )
-    for e in events:
-        if e.kind == "jump":
-            ax.axvline(e.frame - 0.5, color="purple", lw=0.6, ls=":")
-    for s in reference:
-        ax.plot([s.start, s.end], [0.93, 0.93], color="black", lw=3, transform=ax.get_xaxis_transform())
-    ax.set_xlabel("frame")
-    ax.set_ylabel("features / activity")
-    if title is not None:
-        ax.set_title(title)
-    ax.legend(loc="lower right", fontsize="small", ncol=6)
-    return ax

@@ -1,9 +1,10 @@
 """Evaluation of gesture recognition: cross-validation on synthetic gestures, real recordings, original models.
 
-Every function returns a tidy pandas DataFrame (one row per test sequence, or per condition), so numbers
-quoted anywhere are computed, never typed:
+Every function returns a tidy pandas DataFrame (one row per test sequence, or per condition) stamped by
+:func:`~glu.experiments.common.tidy`, so numbers quoted anywhere are computed, never typed. The labelled
+sequences come from :mod:`glu.gestures.corpus`; training settings default to
+:class:`glu.gestures.training.TrainingConfig`.
 
-* :func:`synthetic_corpus` — labelled feature sequences from :mod:`glu.data.synthetic_gestures`;
 * :func:`cross_validate` — stratified k-fold: train a recogniser on k-1 folds, classify the held-out fold;
   :func:`confusion_matrix` and :func:`accuracy` summarise the predictions;
 * :func:`accuracy_vs_noise` — k-fold accuracy as the sensor noise grows;
@@ -13,9 +14,7 @@ quoted anywhere are computed, never typed:
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -23,33 +22,12 @@ import pandas as pd
 
 from glu.data.source import DataSource
 from glu.errors import DataError
-from glu.hmm import ACTIONS, Recognizer, load_original_models, train_recognizer
-from glu.segmentation import ORIGINAL_SEGMENTS, RECORDING_ACTION, LabelledSequence
-
-TRAIN_DEFAULTS: dict[str, Any] = {"n_states": 6, "n_mix": 3, "n_iter": 200, "tol": 1e-4, "covar_reg": 1e-3}
-"""Training settings used when none are given (those of :func:`glu.hmm.train_hmm`)."""
-
-
-def synthetic_corpus(
-    n_per_action: int,
-    seed: int = 0,
-    *,
-    actions: tuple[str, ...] = ACTIONS,
-    noise: float = 0.01,
-    spike_rate: float = 0.005,
-    dropout_rate: float = 0.2,
-) -> list[LabelledSequence]:
-    """``n_per_action`` synthetic gestures per action, as repaired feature sequences (see :mod:`glu.data.synthetic_gestures`)."""
-    from glu.data.synthetic_gestures import synthesize_gestures
-
-    gestures = synthesize_gestures(
-        n_per_action * len(actions), seed, actions=actions,
-        noise=noise, spike_rate=spike_rate, dropout_rate=dropout_rate,
-    )  # fmt: skip
-    return [
-        LabelledSequence(g.action, g.features(), f"synthetic-{i}", 1, len(g.t))
-        for i, g in enumerate(gestures)
-    ]
+from glu.experiments.common import corpus_source, model_source, tidy
+from glu.gestures.corpus import LabelledSequence, original_test_segments, synthetic_corpus
+from glu.gestures.forward import p_hmm_from_loglik
+from glu.gestures.original import load_original_models
+from glu.gestures.recognizer import Recognizer, train_recognizer
+from glu.schema import ACTIONS
 
 
 def stratified_folds(labels: Sequence[str], k: int, seed: int = 0) -> np.ndarray:
@@ -72,15 +50,14 @@ def _train(
 ) -> Recognizer:
     by_action = {a: [s.xyz for s in seqs if s.action == a] for a in actions}
     by_action = {a: v for a, v in by_action.items() if v}
-    return train_recognizer(by_action, seed=seed, warn=False, **{**TRAIN_DEFAULTS, **train})
+    return train_recognizer(by_action, seed=seed, warn=False, **train)
 
 
 def _predict_rows(rec: Recognizer, test: Sequence[LabelledSequence], **extra: Any) -> list[dict[str, Any]]:
     rows = []
     for s in test:
         ll = rec.loglik(s.xyz)
-        p = np.exp(ll - ll.max())
-        p /= p.sum()
+        p = p_hmm_from_loglik(ll)
         row = {
             **extra, "recording": s.recording, "start": s.start, "end": s.end, "n_frames": len(s.xyz),
             "action": s.action, "predicted": rec.actions[int(np.argmax(ll))],
@@ -98,7 +75,8 @@ def cross_validate(
 ) -> pd.DataFrame:
     """Stratified k-fold cross-validation: one row per sequence with its fold, prediction and scores.
 
-    ``train`` overrides :data:`TRAIN_DEFAULTS` (``n_states``, ``n_mix``, ``n_iter``, ``tol``, ``covar_reg``).
+    ``train`` overrides the defaults of :class:`~glu.gestures.training.TrainingConfig` (``n_states``,
+    ``n_mix``, ``n_iter``, ``tol``, ``covar_reg``).
     Columns: fold, recording, start, end, n_frames, action, predicted, loglik_<a>, p_hmm_<a>, correct, converged.
     """
     actions = tuple(dict.fromkeys(s.action for s in sequences))
@@ -108,7 +86,7 @@ def cross_validate(
         tr = [s for s, g in zip(sequences, folds, strict=True) if g != f]
         te = [s for s, g in zip(sequences, folds, strict=True) if g == f]
         rows += _predict_rows(_train(tr, actions, seed, train), te, fold=f)
-    return pd.DataFrame(rows)
+    return tidy(pd.DataFrame(rows), "hmm_cross_validation", corpus_source(sequences), k=k, seed=seed, **train)
 
 
 def confusion_matrix(predictions: pd.DataFrame, actions: Sequence[str] | None = None) -> pd.DataFrame:
@@ -150,7 +128,9 @@ def accuracy_vs_noise(
             row[f"accuracy_{a}"] = accuracy(pred[pred["action"] == a])
         row["all_converged"] = bool(pred["converged"].all())
         rows.append(row)
-    return pd.DataFrame(rows)
+        source = pred.attrs["data_source"]
+    return tidy(pd.DataFrame(rows), "hmm_accuracy_vs_noise", source, noise_levels=noise_levels,
+                n_per_action=n_per_action, k=k, seed=seed, **train)  # fmt: skip
 
 
 def leave_one_out(
@@ -183,92 +163,36 @@ def leave_one_out(
                     "held_out": key, "testable": False, "recording": s.recording, "start": s.start, "end": s.end,
                     "n_frames": len(s.xyz), "action": s.action, "predicted": None, "correct": False,
                 })  # fmt: skip
-    return pd.DataFrame(rows)
+    return tidy(
+        pd.DataFrame(rows), f"hmm_leave_one_{by}_out", corpus_source(sequences), by=by, seed=seed, **train
+    )
 
 
-def original_scores(root: str | os.PathLike, n_mix: int = 3, include_garbage: bool = False) -> pd.DataFrame:
+def original_scores(source: DataSource, n_mix: int = 3, include_garbage: bool = False) -> pd.DataFrame:
     """The original 2013 models on the five original test segments (features = logged values / 1000).
 
     One row per segment: recording, start, end (1-based inclusive), n_frames, loglik_<a>, p_hmm_<a>,
     and winner (the action of highest likelihood), for a = grasp, tap, touch (the push model).
     """
-    from glu.features import load_features
-    from glu.hmm import ORIGINAL_MODEL_FILES
-
-    root = Path(root)
-    if n_mix not in ORIGINAL_MODEL_FILES:
-        raise DataError(f"n_mix={n_mix}; the originals have models with M in {sorted(ORIGINAL_MODEL_FILES)}")
-    rec = load_original_models(root / ORIGINAL_MODEL_FILES[n_mix], include_garbage=include_garbage)
+    mat = source.original_hmms(n_mix)
+    if mat is None:
+        raise DataError(f"the data source has no original HMMs with M = {n_mix} ({source.describe()})")
+    rec = load_original_models(mat, include_garbage=include_garbage)
     rows = []
-    for name, ranges in ORIGINAL_SEGMENTS.items():
-        traj = load_features(root / "gestures" / name / "data.log", policy=None).pieces[0]
-        for a, b in ranges:
-            seq = LabelledSequence(RECORDING_ACTION[name], traj.frames(a, b).xyz, name, a, b)
-            row = _predict_rows(rec, [seq])[0]
-            row["winner"] = row.pop("predicted")
-            del row["converged"]
-            rows.append(row)
-    return pd.DataFrame(rows)
+    for seq in original_test_segments(source):
+        row = _predict_rows(rec, [seq])[0]
+        row["winner"] = row.pop("predicted")
+        del row["converged"]
+        rows.append(row)
+    return tidy(pd.DataFrame(rows), "hmm_original_scores", source.describe(), n_mix=n_mix,
+                include_garbage=include_garbage)  # fmt: skip
 
 
-def gesture_sequences(
-    source: DataSource,
-    n_per_action: int = 20,
-    seed: int = 0,
-    actions: Sequence[str] = ACTIONS,
-    include_test: bool = True,
-) -> list[LabelledSequence]:
-    """Labelled training sequences of a data source: the real segments, or a seeded synthetic corpus.
+def segmentation_table(segmentations: Sequence[tuple[Any, list[Any]]], data_source: str) -> pd.DataFrame:
+    """One row per segment found: recording, action, segment number, start, end, n_frames, tracking events.
 
-    With real gesture recordings, the repetitions found by automatic segmentation of the training
-    recordings plus, with ``include_test``, the originals' hand-cut segments of the two single-tap
-    recordings (leave them out when those recordings are the test data, as in effect anticipation);
-    restricted to ``actions``. Otherwise ``n_per_action`` synthetic gestures per action.
+    ``segmentations`` as :func:`glu.gestures.corpus.recording_segmentations` returns them.
     """
-    from glu.segmentation import real_segments
-
-    if source.root is not None and source.optional("gestures"):
-        return [s for s in real_segments(source.root, include_original=include_test) if s.action in actions]
-    return synthetic_corpus(n_per_action, seed, actions=tuple(actions))
-
-
-def recording_segmentations(source: DataSource, seed: int = 0) -> list[tuple[Any, list[Any]]]:
-    """Automatic segmentation of every recording, each with its reference segments.
-
-    Real data: the six logs, with the originals' hand-cut segments as reference. Synthetic data: one
-    continuous synthetic recording per action (four repetitions each), with the true repetitions.
-    Returns a list of (:class:`~glu.segmentation.RecordingSegmentation`, reference segments).
-    """
-    from glu.segmentation import (
-        RecordingSegmentation,
-        Segment,
-        original_segments,
-        segment_recording,
-        segment_repetitions,
-    )
-
-    if source.root is not None and source.optional("gestures"):
-        names = sorted(RECORDING_ACTION, key=list(RECORDING_ACTION).index)
-        return [
-            (segment_recording(source.file(f"gestures/{n}/data.log")), original_segments(n))
-            for n in names if source.optional(f"gestures/{n}/data.log")
-        ]  # fmt: skip
-    from glu.data.synthetic_gestures import synthesize_recording
-    from glu.trajectories import repair
-
-    out = []
-    for action in ("grasp", "tap", "touch", "push"):
-        g = synthesize_recording(action, 4, seed)
-        repaired = repair(g.trajectory())
-        name = f"synthetic {action}"
-        pieces = [segment_repetitions(tr, action, recording=name) for tr in repaired.pieces if len(tr) >= 2]
-        ref = [Segment(a, b, action, name) for a, b in g.segments]
-        out.append((RecordingSegmentation(name, pieces, repaired.events), ref))
-    return out
-
-
-def segmentation_table(segmentations: Sequence[tuple[Any, list[Any]]]) -> pd.DataFrame:
-    """One row per segment found: recording, action, segment number, start, end, n_frames, tracking events."""
     rows = []
     for seg, ref in segmentations:
         kinds = pd.Series([e.kind for e in seg.events], dtype=object).value_counts().to_dict()
@@ -280,13 +204,13 @@ def segmentation_table(segmentations: Sequence[tuple[Any, list[Any]]]) -> pd.Dat
             })  # fmt: skip
         if not seg.segments:
             rows.append({"recording": seg.recording, "action": None, "segment": 0, "n_reference": len(ref)})
-    return pd.DataFrame(rows)
+    return tidy(pd.DataFrame(rows), "gesture_segmentation", data_source)
 
 
 def train_on(sequences: Sequence[LabelledSequence], seed: int = 0, **train: Any) -> Recognizer:
-    """Train one HMM per action present in ``sequences`` (settings: :data:`TRAIN_DEFAULTS` overridden by ``train``)."""
+    """Train one HMM per action present in ``sequences`` (``train`` overrides :class:`~glu.gestures.training.TrainingConfig`)."""
     actions = tuple(dict.fromkeys(s.action for s in sequences))
-    return _train(sequences, actions, seed, train)
+    return _train(sequences, actions, seed, {**train, "meta": {"data": corpus_source(sequences)}})
 
 
 def training_table(recognizer: Recognizer) -> pd.DataFrame:
@@ -297,21 +221,12 @@ def training_table(recognizer: Recognizer) -> pd.DataFrame:
             "action": a, "n_sequences": r.n_sequences, "n_frames": r.n_frames, "em_iterations": r.n_iter,
             "max_iterations": r.max_iter, "converged": r.converged, "loglik_per_frame": r.final_loglik / max(r.n_frames, 1),
         })  # fmt: skip
-    return pd.DataFrame(rows)
+    return tidy(
+        pd.DataFrame(rows), "hmm_training", model_source(recognizer), **recognizer_settings(recognizer)
+    )
 
 
-def test_segments(source: DataSource, seed: int = 0, n_per_action: int = 2) -> list[LabelledSequence]:
-    """Gestures to recognise in the fusion experiments: the originals' five tap segments, as logged, or
-    ``n_per_action`` fresh synthetic gestures per action (seeded apart from the training corpus)."""
-    from glu.features import load_features
-
-    if source.root is not None and source.optional("gestures"):
-        out = []
-        for name, ranges in ORIGINAL_SEGMENTS.items():
-            traj = load_features(source.file(f"gestures/{name}/data.log"), policy=None).pieces[0]
-            out += [
-                LabelledSequence(RECORDING_ACTION[name], traj.frames(a, b).xyz, name, a, b) for a, b in ranges
-            ]
-        return out
-    corpus = synthetic_corpus(n_per_action, seed + 1000)
-    return [s._replace(recording=f"synthetic {s.action} {i}") for i, s in enumerate(corpus)]
+def recognizer_settings(recognizer: Recognizer) -> dict[str, Any]:
+    """The training settings recorded in a recogniser's ``meta`` (Q, M, EM limits, seed)."""
+    keys = ("n_states", "n_mix", "n_iter", "tol", "covar_reg", "seed")
+    return {k: recognizer.meta[k] for k in keys if k in recognizer.meta}

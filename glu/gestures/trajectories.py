@@ -1,14 +1,9 @@
-"""Hand trajectories: YARP hand logs with line-precise errors, tracking gaps and outliers, their repair.
+"""Hand trajectories: a 3-D path with its timing, tracking gaps and outliers, and their repair.
 
-A YARP hand log (``gestures/<recording>/data.log``) has one frame a line, about 30 frames a second::
-
-    index timestamp x y z
-    -1 1495933414.180140 644.291918 -809.62949 -934.764515
-
-``index`` is the YARP envelope counter (an integer, ``-1`` when absent), ``timestamp`` is in seconds, and
-``x y z`` are the hand features as logged (METHOD.md §4: torso-centred, body-size normalised, 1000 × the
-units of the original models; :mod:`glu.features` converts them). Frames are numbered 1, 2, … in file
-order, the numbering of the papers' segment ranges; blank lines are skipped and do not count as frames.
+A :class:`Trajectory` is read from a YARP hand log (:mod:`glu.data.hand_logs` owns the format: one frame
+a line, ``index timestamp x y z``, the hand features as logged, 1000 × the units of the original models;
+:mod:`glu.gestures.features` converts them). Frames are numbered 1, 2, … in file order, the numbering of
+the papers' segment ranges.
 
 Real tracking drops out and jumps. :func:`repair` detects, reports and (by a :class:`RepairPolicy`) repairs:
 
@@ -32,21 +27,13 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
+from glu.data import hand_logs
 from glu.errors import DataError
-
-LOG_FIELDS: tuple[str, ...] = ("index", "timestamp", "x", "y", "z")
-"""The columns of a YARP hand log."""
-
-_INT = re.compile(rb"[+-]?\d+")
-_FLOAT = re.compile(rb"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-_MAX_REPORTED_LINE = 80
 
 
 @dataclass(frozen=True)
@@ -169,77 +156,23 @@ class Trajectory:
 
 
 def read_hand_log(path: str | os.PathLike) -> Trajectory:
-    """Read a YARP hand log (a ``data.log`` file or a recording folder holding one).
+    """Read a YARP hand log (a ``data.log`` file or a recording folder holding one), as logged (no repair).
 
-    Returns the frames exactly as logged (no repair). Raises :class:`DataError` naming the file and the
-    line for a missing file, an undecodable byte, a line without five fields, a field that is not a
-    number, or a timestamp that does not increase.
+    The format and its errors are :mod:`glu.data.hand_logs`'; frames are numbered 1, 2, … in file order.
     """
-    path = Path(path)
-    if path.is_dir():
-        path = path / "data.log"
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such file (expected a YARP hand log, `index timestamp x y z`)") from None
-    except OSError as e:
-        raise DataError(f"{path}: cannot read: {e.strerror or e}") from None
-    return parse_hand_log(data, source=str(path))
+    return _as_trajectory(hand_logs.read_hand_log(path))
 
 
 def parse_hand_log(data: bytes | str, source: str = "<string>") -> Trajectory:
     """Parse the text of a YARP hand log (see :func:`read_hand_log`); ``source`` names it in errors."""
-    if isinstance(data, str):
-        data = data.encode("utf-8", errors="surrogatepass")
-    rows: list[tuple[float, float, float, float]] = []
-    for lineno, raw in enumerate(data.split(b"\n"), start=1):
-        line = raw[:-1] if raw.endswith(b"\r") else raw
-        rows_line = _parse_line(line, source, lineno)
-        if rows_line is not None:
-            if rows and not rows_line[0] > rows[-1][0]:
-                raise DataError(
-                    f"{source}:{lineno}: timestamp {rows_line[0]!r} does not increase "
-                    f"(previous frame: {rows[-1][0]!r})"
-                )
-            rows.append(rows_line)
-    if not rows:
-        raise DataError(f"{source}: no frames (expected lines `index timestamp x y z`)")
-    arr = np.array(rows, dtype=float)
-    n = len(arr)
+    return _as_trajectory(hand_logs.parse_hand_log(data, source))
+
+
+def _as_trajectory(log: hand_logs.HandLog) -> Trajectory:
+    n = len(log.t)
     return Trajectory(
-        xyz=arr[:, 1:], t=arr[:, 0], frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool), source=source
+        xyz=log.xyz, t=log.t, frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool), source=log.source
     )
-
-
-def _show(b: bytes) -> str:
-    s = repr(b)[2:-1]
-    return s if len(s) <= _MAX_REPORTED_LINE else s[:_MAX_REPORTED_LINE] + "…"
-
-
-def _parse_line(line: bytes, source: str, lineno: int) -> tuple[float, float, float, float] | None:
-    try:
-        text = line.decode("ascii")
-    except UnicodeDecodeError as e:
-        raise DataError(
-            f"{source}:{lineno}: byte {line[e.start]:#04x} at column {e.start + 1} is not ASCII text "
-            f"(a YARP hand log has lines `index timestamp x y z`): {_show(line)}"
-        ) from None
-    fields = text.split()
-    if not fields:
-        return None
-    if len(fields) != len(LOG_FIELDS):
-        raise DataError(
-            f"{source}:{lineno}: expected 5 fields `index timestamp x y z`, got {len(fields)}: {_show(line)}"
-        )
-    if not _INT.fullmatch(fields[0].encode()):
-        raise DataError(f"{source}:{lineno}: index {fields[0]!r} is not an integer: {_show(line)}")
-    values = []
-    for name, f in zip(LOG_FIELDS[1:], fields[1:], strict=True):
-        v = float(f) if _FLOAT.fullmatch(f.encode()) else math.nan
-        if not math.isfinite(v):
-            raise DataError(f"{source}:{lineno}: {name} {f!r} is not a finite number: {_show(line)}")
-        values.append(v)
-    return values[0], values[1], values[2], values[3]
 
 
 @dataclass(frozen=True)

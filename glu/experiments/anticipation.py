@@ -5,16 +5,14 @@ hand trajectory, ``(1/t) log L(G_1^t | A)`` per model, and every few frames thei
 ``p_HMM(A | G_1^t)`` enters the Affordance–Words network as soft evidence on Action, giving
 ``p_comb(ObjVel | Shape, Size, G_1^t)`` — the robot anticipates the object's motion before the hand
 touches it. :func:`effect_anticipation` runs it; :func:`case_trajectory` gets the hand trajectory (the
-originals' hand-cut segments of the real recordings, or a synthetic tap); :func:`write_recording`
-turns a run into a Rerun recording.
+originals' hand-cut segments of the real recordings, or a synthetic tap);
+:func:`glu.recording.write_anticipation` turns a run into a Rerun recording.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -22,8 +20,14 @@ import pandas as pd
 from glu.bn.inference import InferenceEngine
 from glu.data.source import DataSource
 from glu.errors import ModelError
-from glu.hmm import Recognizer, p_hmm_from_loglik
-from glu.trajectories import RepairPolicy, Trajectory
+from glu.experiments.common import tidy
+from glu.fusion import fuse
+from glu.gestures.features import load_features
+from glu.gestures.forward import p_hmm_from_loglik
+from glu.gestures.recognizer import Recognizer
+from glu.gestures.synthetic import synthesize_gesture
+from glu.gestures.trajectories import RepairPolicy, Trajectory
+from glu.language.descriptions import describe as best_sentences
 
 
 @dataclass(frozen=True)
@@ -69,6 +73,7 @@ class AnticipationRun:
     values : node → its value names
     descriptions : the best verbal description at each update frame (if computed)
     data_source : which data the run used
+    parameters : the run's settings (step, rule, targets)
     """
 
     case: str
@@ -85,6 +90,7 @@ class AnticipationRun:
     values: dict[str, tuple[str, ...]]
     data_source: str = ""
     descriptions: list[str] = field(default_factory=list)
+    parameters: dict[str, object] = field(default_factory=dict)
 
     @property
     def loglik_per_frame(self) -> np.ndarray:
@@ -100,8 +106,9 @@ class AnticipationRun:
             "action": np.tile(self.actions, T),
             "loglik_per_frame": self.loglik_per_frame.ravel(), "p_hmm": self.p_hmm.ravel(),
         })  # fmt: skip
-        df.attrs["data_source"] = self.data_source
-        return df
+        return tidy(
+            df, f"tcds_anticipation_{self.case}_{self.models}_curves", self.data_source, **self.parameters
+        )
 
     def predictions(self) -> pd.DataFrame:
         """Tidy fused posteriors: columns ``case, models, frame, node, value, p``."""
@@ -119,9 +126,8 @@ class AnticipationRun:
                             "p": p,
                         }
                     )
-        df = pd.DataFrame(rows)
-        df.attrs["data_source"] = self.data_source
-        return df
+        return tidy(pd.DataFrame(rows), f"tcds_anticipation_{self.case}_{self.models}_predictions",
+                    self.data_source, **self.parameters)  # fmt: skip
 
     def scene(self) -> str:
         """A markdown description of the run: the scene, the models, and the final beliefs."""
@@ -188,18 +194,16 @@ def effect_anticipation(
     p_hmm = p_hmm_from_loglik(loglik)
     T = len(X)
     idx = np.unique(np.r_[np.arange(step - 1, T, step), T - 1])
-    ev = {k: [v] * len(idx) for k, v in evidence.items()}
-    fused = engine.query_batch(list(targets), ev, soft={"Action": p_hmm[idx]}, soft_rule=rule)
+    fused = fuse(engine, list(targets), evidence, p_hmm[idx], rule)
     run = AnticipationRun(
         case=case, models=models, evidence=dict(evidence), actions=tuple(actions),
         frames=np.asarray(trajectory.frame), seconds=np.asarray(trajectory.t) - float(trajectory.t[0]),
         xyz=X, loglik=loglik, p_hmm=p_hmm, update_frames=np.asarray(trajectory.frame)[idx], fused=fused,
         values={t: engine.bn.schema.values_of(t) for t in targets},
         data_source=str(engine.bn.meta.get("data_source", "")),
+        parameters={"step": step, "rule": rule, "targets": list(targets)},
     )  # fmt: skip
     if describe:
-        from glu.language import describe as best_sentences
-
         for i in idx:
             best = best_sentences(engine, evidence, soft={"Action": p_hmm[i]}, soft_rule=rule, n=1)
             run.descriptions.append(str(best["sentence"].iloc[0]))
@@ -212,18 +216,14 @@ def case_trajectory(
     """The hand features of an anticipation case: the originals' segment of the real log, or a synthetic tap.
 
     Real logs are converted to model units (÷ 1000); by default they are used as logged, like the
-    originals did (``policy``: a :class:`~glu.trajectories.RepairPolicy` to repair tracking gaps and
+    originals did (``policy``: a :class:`~glu.gestures.trajectories.RepairPolicy` to repair tracking gaps and
     outliers first). Synthetic data gives a seeded synthetic tap with the same role.
     """
-    from glu.features import load_features
-
     c = CASES[case]
-    if source.root is not None and source.optional(f"gestures/{c.recording}/data.log"):
-        pieces = load_features(source.file(f"gestures/{c.recording}/data.log"), policy).pieces
+    if source.has_hand_log(c.recording):
+        pieces = load_features(source.hand_log(c.recording), policy).pieces
         whole = pieces[0] if len(pieces) == 1 else _concat(pieces)
         return whole.frames(c.first, c.last)
-    from glu.data.synthetic_gestures import synthesize_gesture
-
     rng = np.random.default_rng(np.random.SeedSequence([seed, 11, list(CASES).index(case)]))
     g = synthesize_gesture("tap", rng, spike_rate=0.0, dropout_rate=0.0)
     traj = g.trajectory()
@@ -234,15 +234,4 @@ def _concat(pieces: Sequence[Trajectory]) -> Trajectory:
     return Trajectory(
         np.concatenate([p.xyz for p in pieces]), np.concatenate([p.t for p in pieces]),
         np.concatenate([p.frame for p in pieces]), np.concatenate([p.observed for p in pieces]), pieces[0].source,
-    )  # fmt: skip
-
-
-def write_recording(run: AnticipationRun, path: str | os.PathLike, recording_id: str) -> Path:
-    """Write the run as a Rerun recording (hand, HMM series, fused bars, scene text, descriptions)."""
-    from glu.recording import write_anticipation_recording
-
-    return write_anticipation_recording(
-        path, recording_id, xyz=run.xyz, seconds=run.seconds, frames=run.frames, actions=run.actions,
-        loglik_per_frame=run.loglik_per_frame, p_hmm=run.p_hmm, update_frames=run.update_frames,
-        fused=run.fused, scene=run.scene(), descriptions=run.descriptions or None,
     )  # fmt: skip

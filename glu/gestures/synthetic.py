@@ -1,8 +1,8 @@
 """Synthetic gestures: seeded skeleton sequences of grasp, tap, touch and push, with real-world variability.
 
-Each sequence is a 15-joint OpenNI skeleton (:data:`glu.features.OPENNI_JOINTS`) in metres, in the
+Each sequence is a 15-joint OpenNI skeleton (:data:`glu.gestures.features.OPENNI_JOINTS`) in metres, in the
 person's frame (x right, y up, z towards the back), sampled at about 30 frames a second, so the
-feature extraction of :mod:`glu.features` is exercised exactly as on a real skeleton.
+feature extraction of :mod:`glu.gestures.features` is exercised exactly as on a real skeleton.
 
 The right hand moves from a rest pose (hanging beside the hip) to an object on a table in front and
 back, through key poses per action:
@@ -32,15 +32,18 @@ with rests in between, with the true segments, to test automatic segmentation.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from glu.data.recordings import ORIGINAL_SEGMENTS, RECORDING_ACTION
 from glu.errors import DataError
-from glu.features import OPENNI_JOINTS, skeleton_features
-from glu.trajectories import RepairPolicy, Trajectory, repair
+from glu.gestures.features import LOG_SCALE, OPENNI_JOINTS, skeleton_features
+from glu.gestures.trajectories import RepairPolicy, Trajectory, repair
+from glu.schema import ACTIONS
 
-GESTURES: tuple[str, ...] = ("grasp", "tap", "touch", "push")
+GESTURES: tuple[str, ...] = (*ACTIONS, "push")
 """The actions the generator knows (the BN's Action values, plus push)."""
 
 FRAME_RATE = 30.0
@@ -89,7 +92,7 @@ class SyntheticGesture:
     Attributes
     ----------
     action : one of :data:`GESTURES`
-    skeleton : array, shape (n_frames, 15, 3), metres, joints in :data:`glu.features.OPENNI_JOINTS` order
+    skeleton : array, shape (n_frames, 15, 3), metres, joints in :data:`glu.gestures.features.OPENNI_JOINTS` order
     t : array, shape (n_frames,), seconds (gaps where the skeleton dropped out)
     size : the person's size factor (1 = shoulders 0.33 m apart)
     segments : for a continuous recording, the true (first, last) frames of each repetition
@@ -103,7 +106,7 @@ class SyntheticGesture:
     segments: tuple[tuple[int, int], ...]
 
     def trajectory(self) -> Trajectory:
-        """The features of the skeleton (:func:`glu.features.skeleton_features`) as a trajectory, unrepaired."""
+        """The features of the skeleton (:func:`glu.gestures.features.skeleton_features`) as a trajectory, unrepaired."""
         xyz, _ = skeleton_features(self.skeleton)
         n = len(xyz)
         return Trajectory(
@@ -283,27 +286,59 @@ def synthesize_recording(
     noise: float = 0.01,
     spike_rate: float = 0.0,
     rest_seconds: tuple[float, float] = (1.0, 2.0),
+    placements: Sequence[tuple[int, int]] | None = None,
+    n_frames: int | None = None,
 ) -> SyntheticGesture:
     """A continuous recording of one person repeating ``action``, resting in between (no dropouts).
+
+    Parameters
+    ----------
+    action, n_repetitions, seed : what is repeated, how often, and the seed (the same arguments give the
+        same recording)
+    noise, spike_rate : sensor noise (m) and outlier rate, as :func:`synthesize_gesture`
+    rest_seconds : the range of the rests between repetitions
+    placements : optional (first, last) frames (1-based, inclusive) of each repetition, in order and
+        apart; each movement is then resampled to its placement and the rests fill the frames between
+        (``n_repetitions`` is ``len(placements)``)
+    n_frames : with ``placements``, the length of the recording (default: 60 frames after the last)
 
     Returns a :class:`SyntheticGesture` whose ``segments`` are the true repetitions (1-based frames).
     """
     if action not in _KEYS:
         raise DataError(f"unknown action {action!r}; allowed: {', '.join(GESTURES)}")
+    if placements is not None:
+        n_repetitions = len(placements)
+        ends = [0, *(b for _, b in placements)]
+        starts = [a for a, _ in placements]
+        if any(a < 2 or b < a + 9 for a, b in placements) or any(
+            a <= e for a, e in zip(starts, ends[:-1], strict=True)
+        ):
+            raise DataError(
+                f"placements {list(placements)} must be in order, apart, after frame 1, ≥ 10 frames each"
+            )
+        n_frames = n_frames or ends[-1] + 60
+        if n_frames < ends[-1]:
+            raise DataError(f"n_frames={n_frames} is shorter than the last placement ({ends[-1]})")
     if n_repetitions < 1:
         raise DataError("a recording needs at least one repetition")
     _check(n_repetitions, noise, spike_rate, 0.0)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 7, GESTURES.index(action)]))
     person = _person(rng)
     parts, segments, n = [], [], 0
-    for _ in range(n_repetitions + 1):
-        rest = int(rng.uniform(*rest_seconds) * FRAME_RATE)
+    for k in range(n_repetitions + 1):
+        if placements is None:
+            rest = int(rng.uniform(*rest_seconds) * FRAME_RATE)
+        else:
+            rest = (placements[k][0] - 1 if k < n_repetitions else n_frames) - n
         pose = _REST * person.size + rng.normal(0, 0.01, size=3)
         parts.append(np.repeat(pose[None], rest, 0))
         n += rest
         if len(segments) == n_repetitions:
             break
         move = _hand_path(action, rng, person.size)
+        if placements is not None:
+            a, b = placements[k]
+            move = _resample(move, b - a + 1)
         move = move - move[0] + pose  # start from the current rest pose
         parts.append(move)
         segments.append((n + 1, n + len(move)))
@@ -317,3 +352,34 @@ def synthesize_recording(
     skel = _skeletons(hand, person, t, rng)
     skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, 0.0)
     return SyntheticGesture(action, skel, t_obs, person.size, tuple(segments))
+
+
+def _resample(path: np.ndarray, n: int) -> np.ndarray:
+    """``path`` (shape (m, 3)) linearly resampled to ``n`` frames with the same start and end."""
+    s = np.linspace(0.0, 1.0, len(path))
+    u = np.linspace(0.0, 1.0, n)
+    return np.stack([np.interp(u, s, path[:, i]) for i in range(path.shape[1])], axis=1)
+
+
+def synthetic_recordings(seed: int = 0, noise: float = 0.01) -> dict[str, SyntheticGesture]:
+    """Synthetic look-alikes of the six real recordings (:data:`glu.data.recordings.RECORDING_ACTION`).
+
+    Each has the recording's action; the recordings with the originals' segments have their gestures at
+    exactly those frames (so ``tap1_hand`` frames 216–351 hold a tap, as in the real log); the other
+    training recordings hold four repetitions each. Deterministic in ``seed``.
+    """
+    out = {}
+    for i, (name, action) in enumerate(RECORDING_ACTION.items()):
+        if name in ORIGINAL_SEGMENTS:
+            out[name] = synthesize_recording(
+                action, 0, seed + i, noise=noise, placements=ORIGINAL_SEGMENTS[name]
+            )
+        else:
+            out[name] = synthesize_recording(action, 4, seed + i, noise=noise)
+    return out
+
+
+def hand_log_arrays(gesture: SyntheticGesture) -> tuple[np.ndarray, np.ndarray]:
+    """A synthetic recording as a hand log holds it: timestamps (s) and features × 1000, shapes (n,), (n, 3)."""
+    traj = gesture.trajectory()
+    return traj.t, traj.xyz * LOG_SCALE

@@ -1,10 +1,10 @@
-"""The papers' experiments as functions returning tidy DataFrames (METHOD.md §5).
+"""The papers' network and fusion experiments as functions returning tidy DataFrames (METHOD.md §5).
 
-Each function takes the network(s) it needs and returns one row per number behind a figure. When the
-original model is given (``reference=``, the BN imported from ``BN_lab.mat``), the frame also holds the
-original's value and the difference, so every reproduced figure can be checked against the authors'.
-Plotting functions for these frames are in :mod:`glu.plots`; the effect-anticipation experiment, which
-needs the gesture HMMs, is in :mod:`glu.anticipation`.
+Each function takes the network(s) it needs and returns one row per number behind a figure, stamped by
+:func:`~glu.experiments.common.tidy`. When the original model is given (``reference=``, the BN imported
+from ``BN_lab.mat``), the frame also holds the original's value and the difference, so every reproduced
+figure can be checked against the authors'. Their figures are drawn by :mod:`glu.plots`; the
+effect-anticipation experiment, which needs the gesture HMMs, is in :mod:`glu.experiments.anticipation`.
 """
 
 from __future__ import annotations
@@ -16,7 +16,11 @@ import pandas as pd
 
 from glu.bn.inference import InferenceEngine
 from glu.bn.model import BayesNet
-from glu.fusion import Strategy, fuse
+from glu.experiments.common import evidence_text, model_source, tidy
+from glu.fusion import SOFT_STRATEGIES, Strategy, check_strategy, fuse, hmm_rows
+from glu.gestures.corpus import LabelledSequence
+from glu.gestures.forward import p_hmm_from_loglik
+from glu.gestures.recognizer import Recognizer
 
 EFFECT_CASES: dict[str, dict[str, str]] = {
     "small sphere": {"Action": "tap", "Shape": "sphere", "Size": "small"},
@@ -64,12 +68,11 @@ def effect_prediction(bn: BayesNet, reference: BayesNet | None = None) -> pd.Dat
     for case, ev in EFFECT_CASES.items():
         posts = [e.query(["ObjVel"], ev)["ObjVel"] for e in engines]
         for i, v in enumerate(bn.schema.values_of("ObjVel")):
-            rows.append({"case": case, "evidence": _evidence_text(ev), "ObjVel": v, "p": posts[0][i]})
+            rows.append({"case": case, "evidence": evidence_text(ev), "ObjVel": v, "p": posts[0][i]})
             if reference:
                 ref.append(posts[1][i])
-    return _finish(
-        _with_reference(pd.DataFrame(rows), ref if reference else None), bn, "glu2017_effect_prediction"
-    )
+    df = _with_reference(pd.DataFrame(rows), ref if reference else None)
+    return tidy(df, "glu2017_effect_prediction", model_source(bn), cases=EFFECT_CASES)
 
 
 def word_probability_change(
@@ -91,12 +94,12 @@ def word_probability_change(
     df = pd.DataFrame({"word": list(eng.binary_leaves), "p_without": without, "p_with": with_tap})
     df["delta"] = df["p_with"] - df["p_without"]
     df["shown"] = df["delta"].abs() > threshold
-    df.insert(0, "evidence", _evidence_text(ev))
+    df.insert(0, "evidence", evidence_text(ev))
     if reference:
         r = InferenceEngine(reference)
         df["delta_original"] = r.word_probabilities({**ev, "Action": "tap"}) - r.word_probabilities(ev)
         df["difference"] = df["delta"] - df["delta_original"]
-    return _finish(df, bn, "glu2017_word_change")
+    return tidy(df, "glu2017_word_change", model_source(bn), evidence=ev, threshold=threshold)
 
 
 def action_vs_soft_evidence(
@@ -122,9 +125,10 @@ def action_vs_soft_evidence(
             if rpost is not None:
                 ref.append(rpost[i])
     df = pd.DataFrame(out)
-    df.insert(0, "evidence", _evidence_text(evidence))
+    df.insert(0, "evidence", evidence_text(evidence))
     df.insert(1, "strategy", strategy)
-    return _finish(_with_reference(df, ref if reference else None), bn, "tcds_action_vs_soft_evidence")
+    df = _with_reference(df, ref if reference else None)
+    return tidy(df, "tcds_action_vs_soft_evidence", model_source(bn), evidence=evidence, strategy=strategy)
 
 
 def tap_threshold(
@@ -185,9 +189,8 @@ def effect_vs_soft_evidence(
                     out.append({"Shape": shape, "rule": rule, "case": _label(q), "ObjVel": v, "p": post[i]})
                     if rpost is not None:
                         ref.append(rpost[i])
-    return _finish(
-        _with_reference(pd.DataFrame(out), ref if reference else None), bn, "tcds_effect_vs_soft_evidence"
-    )
+    df = _with_reference(pd.DataFrame(out), ref if reference else None)
+    return tidy(df, "tcds_effect_vs_soft_evidence", model_source(bn), shapes=shapes, rules=rules)
 
 
 def soft_evidence_sweep(
@@ -199,32 +202,23 @@ def soft_evidence_sweep(
 ) -> pd.DataFrame:
     """p_comb(target | evidence, p_hmm) as p_hmm(tap) goes from 0 to 1 (the rest split equally), per rule.
 
-    Vectorised with :meth:`InferenceEngine.query_batch`. Returns columns ``rule, p_hmm_tap, <target>, p``.
+    One batch query per rule (:func:`glu.fusion.fuse` over a (n_points, 3) array of posteriors). Returns
+    columns ``evidence, rule, p_hmm_tap, <target>, p``.
     """
-    from glu.fusion import hmm_rows
-
     eng = InferenceEngine(bn)
     t = np.linspace(0.0, 1.0, n_points)
     q = hmm_rows(t)
     values = bn.schema.values_of(target)
     frames = []
     for rule in rules:
-        if rule == "product" and target != "Action":
-            raise ValueError("the product rule infers the action: use target='Action'")
-        if rule == "hard":
-            raise ValueError("a sweep of p_hmm needs a soft rule: virtual, jeffrey or product")
-        soft_rule = "virtual" if rule == "product" else rule  # the product rule is virtual evidence on Action
-        post = eng.query_batch(
-            [target],
-            {k: [v] * n_points for k, v in evidence.items()},
-            soft={"Action": q},
-            soft_rule=soft_rule,
-        )[target]
+        check_strategy(rule, SOFT_STRATEGIES)
+        post = fuse(eng, [target], evidence, q, rule)[target]
         for i, v in enumerate(values):
             frames.append(pd.DataFrame({"rule": rule, "p_hmm_tap": t, target: v, "p": post[:, i]}))
     df = pd.concat(frames, ignore_index=True)
-    df.insert(0, "evidence", _evidence_text(evidence))
-    return _finish(df, bn, f"soft_evidence_sweep_{target}")
+    df.insert(0, "evidence", evidence_text(evidence))
+    return tidy(df, f"soft_evidence_sweep_{target}", model_source(bn), evidence=evidence, n_points=n_points,
+                rules=rules)  # fmt: skip
 
 
 def tap_thresholds(bn: BayesNet, nodes: Sequence[str] = ("Shape", "Size", "ObjVel")) -> pd.DataFrame:
@@ -243,7 +237,31 @@ def tap_thresholds(bn: BayesNet, nodes: Sequence[str] = ("Shape", "Size", "ObjVe
         except ValueError:  # impossible evidence under the model
             continue
         rows.append({**ev, "p_bn_tap": p_bn, "threshold": tap_threshold(bn, ev)})
-    return _finish(pd.DataFrame(rows), bn, "tap_thresholds")
+    return tidy(pd.DataFrame(rows), "tap_thresholds", model_source(bn), nodes=nodes)
+
+
+def structure_comparison(bn: BayesNet, original: BayesNet | None = None) -> pd.DataFrame:
+    """The learned structure against a reference: the original's (``original``) or the synthetic generator's.
+
+    One row per edge in either: ``parent, child, in_reference, in_ours, difference`` (1 where they differ).
+    The reference's name is in ``attrs["parameters"]["reference"]``.
+    """
+    if original is not None:
+        reference = {n: set(original.parents[n]) for n in bn.nodes}
+        name = "BN_lab.mat"
+    else:
+        from glu.data.synthetic import WORLD
+
+        reference = {n: set(WORLD.parents.get(n, WORLD.word_parents.get(n, bn.parents[n]))) for n in bn.nodes}
+        name = "synthetic generator"
+    edges = pd.DataFrame(
+        [(p, c, p in reference[c]) for p, c in bn.edges()]
+        + [(p, c, True) for c in bn.nodes for p in reference[c] if p not in bn.parents[c]],
+        columns=["parent", "child", "in_reference"],
+    )
+    edges["in_ours"] = [p in bn.parents[c] for p, c in zip(edges["parent"], edges["child"], strict=True)]
+    edges["difference"] = (edges["in_ours"] != edges["in_reference"]).astype(int)
+    return tidy(edges, "bn_structure", model_source(bn), reference=name)
 
 
 def unseen_rows_comparison(zero: BayesNet, uniform: BayesNet) -> pd.DataFrame:
@@ -271,23 +289,13 @@ def unseen_rows_comparison(zero: BayesNet, uniform: BayesNet) -> pd.DataFrame:
                               "p_zero": wz["delta"], "p_uniform": wu["delta"]}))  # fmt: skip
     df = pd.concat(rows, ignore_index=True)
     df["uniform_minus_zero"] = df["p_uniform"] - df["p_zero"]
-    return _finish(df, zero, "unseen_rows_comparison")
-
-
-def _evidence_text(ev: Mapping[str, str]) -> str:
-    return ", ".join(f"{k}={v}" for k, v in ev.items())
-
-
-def _finish(df: pd.DataFrame, bn: BayesNet, name: str) -> pd.DataFrame:
-    df.attrs["experiment"] = name
-    df.attrs["data_source"] = str(bn.meta.get("data_source", "unknown data"))
-    return df
+    return tidy(df, "unseen_rows_comparison", model_source(zero))
 
 
 def fusion_on_gestures(
     bn: BayesNet,
-    recognizer,
-    sequences: Sequence,
+    recognizer: Recognizer,
+    sequences: Sequence[LabelledSequence],
     evidence: Mapping[str, str],
     strategies: Sequence[Strategy] = ("hard", "virtual", "jeffrey"),
     target: str = "ObjVel",
@@ -295,7 +303,7 @@ def fusion_on_gestures(
     """Recognise each gesture with the HMMs and predict ``target`` from it with each fusion strategy.
 
     ``sequences``: labelled sequences (``action, xyz, recording, start, end``, as
-    :class:`glu.segmentation.LabelledSequence`); ``evidence``: the object the gestures are applied to.
+    :class:`glu.gestures.corpus.LabelledSequence`); ``evidence``: the object the gestures are applied to.
     Returns columns ``recording, start, end, true_action, hmm_top, p_hmm_<a>…, strategy, <target>, p``.
     """
     eng = InferenceEngine(bn)
@@ -303,9 +311,7 @@ def fusion_on_gestures(
     order = [list(recognizer.actions).index(a) for a in actions]
     rows = []
     for s in sequences:
-        ll = recognizer.loglik(s.xyz)[order]
-        q = np.exp(ll - ll.max())
-        q /= q.sum()
+        q = p_hmm_from_loglik(recognizer.loglik(s.xyz)[order])
         base = {"recording": s.recording, "start": s.start, "end": s.end, "true_action": s.action,
                 "hmm_top": actions[int(np.argmax(q))], **{f"p_hmm_{a}": float(v) for a, v in zip(actions, q, strict=True)}}  # fmt: skip
         for strategy in strategies:
@@ -313,5 +319,6 @@ def fusion_on_gestures(
             for v, p in zip(bn.schema.values_of(target), post, strict=True):
                 rows.append({**base, "strategy": strategy, target: v, "p": float(p)})
     df = pd.DataFrame(rows)
-    df.insert(0, "evidence", _evidence_text(evidence))
-    return _finish(df, bn, "fusion_on_gestures")
+    df.insert(0, "evidence", evidence_text(evidence))
+    return tidy(df, "fusion_on_gestures", model_source(bn), evidence=evidence, strategies=strategies,
+                target=target)  # fmt: skip

@@ -1,72 +1,29 @@
-"""One plotting function per figure, each drawing tidy experiment frames on matplotlib axes.
+"""Figures of the Affordance–Words network and of fusion: the papers' bar charts, sweeps and anticipation.
 
-Figures are saved with :func:`save_figure`, which writes PNG and SVG that are byte-identical across runs
-(no software/date metadata, fixed SVG hash salt), and every figure carries a footer naming its data source.
+Every function draws on the axes it is given, first argument (a sequence of axes for multi-panel
+figures), and returns them: ``plot_x(ax, frame, …)``. Frames are the tidy outputs of
+:mod:`glu.experiments`; where they hold the original model's values (``p_original``), those are drawn as
+black marks on our bars.
 """
 
 from __future__ import annotations
 
-import os
 import textwrap
 from collections.abc import Sequence
-from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
 
-matplotlib.use("Agg")
-matplotlib.rcParams["svg.hashsalt"] = "glu"
-matplotlib.rcParams["figure.dpi"] = 100
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-from matplotlib.axes import Axes  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-ACTION_COLORS = {"grasp": "#4C72B0", "tap": "#DD8452", "touch": "#55A868", "push": "#8172B3"}
-VALUE_COLORS = {"slow": "#8DA0CB", "medium": "#FC8D62", "fast": "#66C2A5"}
-ORIGINAL_MARK = {"marker": "_", "color": "black", "markersize": 14, "markeredgewidth": 2, "linestyle": "none"}
+from glu.plots.style import ACTION_COLORS, ORIGINAL_MARK, VALUE_COLORS, bars_with_original
 
 
-def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
-    """Save ``fig`` as ``path.<fmt>`` for each format, deterministically; returns the files written."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    out = []
-    for fmt in formats:
-        target = path.with_suffix(f".{fmt}")
-        meta = {"png": {"Software": None}, "svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt, {})
-        tmp = target.with_name(f".{target.name}.tmp")
-        fig.savefig(tmp, format=fmt, metadata=meta, bbox_inches="tight")
-        os.replace(tmp, target)
-        out.append(target)
-    return out
-
-
-def stamp(fig: Figure, source: str) -> None:
-    """Lay the figure out, then write the data source in small grey text below everything else."""
-    fig.tight_layout()
-    fig.text(0.005, -0.01, f"data: {source}", fontsize=6.5, color="0.35", ha="left", va="top")
-
-
-def new_figure(ncols: int = 1, width: float = 4.2, height: float = 3.2) -> tuple[Figure, list[Axes]]:
-    """A figure with ``ncols`` side-by-side axes."""
-    fig, axes = plt.subplots(1, ncols, figsize=(width * ncols, height), squeeze=False)
-    return fig, list(axes[0])
-
-
-def _bars_with_original(ax: Axes, x: np.ndarray, p: np.ndarray, colors, original: np.ndarray | None) -> None:
-    ax.bar(x, p, color=colors, edgecolor="0.2", linewidth=0.6)
-    if original is not None:
-        ax.plot(x, original, **ORIGINAL_MARK, label="original model (BN_lab.mat)")
-
-
-def plot_effect_prediction(df: pd.DataFrame, axes: Sequence[Axes]) -> None:
+def plot_effect_prediction(axes: Sequence[Axes], df: pd.DataFrame) -> Sequence[Axes]:
     """GLU 2017 Fig. 4: bars of p(ObjVel | Action=tap, Shape, Size), one axis per case."""
     for ax, (case, g) in zip(axes, df.groupby("case", sort=False), strict=False):
         x = np.arange(len(g))
         orig = g["p_original"].to_numpy() if "p_original" in g else None
-        _bars_with_original(ax, x, g["p"].to_numpy(), [VALUE_COLORS.get(v, "0.6") for v in g["ObjVel"]], orig)
+        bars_with_original(ax, x, g["p"].to_numpy(), [VALUE_COLORS.get(v, "0.6") for v in g["ObjVel"]], orig)
         ax.set_xticks(x, g["ObjVel"])
         ax.set_ylim(0, 1)
         ax.set_xlabel("ObjVel")
@@ -74,9 +31,10 @@ def plot_effect_prediction(df: pd.DataFrame, axes: Sequence[Axes]) -> None:
         ax.set_title(f"tap on a {case}", fontsize=10)
         if orig is not None:
             ax.legend(fontsize=7, loc="upper left", frameon=False)
+    return axes
 
 
-def plot_word_change(df: pd.DataFrame, ax: Axes) -> None:
+def plot_word_change(ax: Axes, df: pd.DataFrame) -> Axes:
     """GLU 2017 Fig. 5: Δp(w) for the words whose probability changes by more than the threshold."""
     g = df[df["shown"]]
     x = np.arange(len(g))
@@ -89,9 +47,10 @@ def plot_word_change(df: pd.DataFrame, ax: Axes) -> None:
     ax.set_xticks(x, g["word"], rotation=60, ha="right")
     ax.set_ylabel(r"$\Delta p(w)$")
     ax.set_title(r"$p(w \mid F, E, A{=}tap) - p(w \mid F, E)$", fontsize=10)
+    return ax
 
 
-def plot_action_vs_soft_evidence(df: pd.DataFrame, ax: Axes, threshold: float | None = None) -> None:
+def plot_action_vs_soft_evidence(ax: Axes, df: pd.DataFrame, threshold: float | None = None) -> Axes:
     """TCDS: p_comb(Action | evidence) as grouped bars, one group per p_hmm row."""
     cases = list(dict.fromkeys(df["case"]))
     actions = list(dict.fromkeys(df["Action"]))
@@ -117,9 +76,12 @@ def plot_action_vs_soft_evidence(df: pd.DataFrame, ax: Axes, threshold: float | 
         title += f" (tap wins for $p_{{HMM}}(tap) > {threshold:.4f}$)"
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8, frameon=False, ncols=len(actions))
+    return ax
 
 
-def plot_effect_vs_soft_evidence(df: pd.DataFrame, axes: Sequence[Axes], rule: str = "virtual") -> None:
+def plot_effect_vs_soft_evidence(
+    axes: Sequence[Axes], df: pd.DataFrame, rule: str = "virtual"
+) -> Sequence[Axes]:
     """TCDS: p_comb(ObjVel | Shape) stacked per p_hmm row, one axis per shape."""
     d = df[df["rule"] == rule]
     for ax, (shape, g) in zip(axes, d.groupby("Shape", sort=False), strict=False):
@@ -156,9 +118,10 @@ def plot_effect_vs_soft_evidence(df: pd.DataFrame, axes: Sequence[Axes], rule: s
         loc="center left",
         bbox_to_anchor=(1.0, 0.5),
     )
+    return axes
 
 
-def plot_unseen_rows(df: pd.DataFrame, ax: Axes) -> None:
+def plot_unseen_rows(ax: Axes, df: pd.DataFrame) -> Axes:
     """The original's all-zero rows vs uniform rows: the same numbers under both models."""
     for name, g in df.groupby("experiment", sort=False):
         ax.scatter(g["p_zero"], g["p_uniform"], s=14, label=name, alpha=0.8)
@@ -172,9 +135,10 @@ def plot_unseen_rows(df: pd.DataFrame, ax: Axes) -> None:
         fontsize=8,
     )
     ax.legend(fontsize=7, frameon=False)
+    return ax
 
 
-def plot_structure(bn, ax: Axes, reference=None) -> None:
+def plot_structure(ax: Axes, bn, reference=None) -> Axes:
     """The learned DAG as a matrix: one row per node with parents, one column per affordance node.
 
     Filled cells are edges; with a reference model, edges only in ours are red, only in the reference are
@@ -200,9 +164,10 @@ def plot_structure(bn, ax: Axes, reference=None) -> None:
         fontsize=9,
         pad=30,
     )
+    return ax
 
 
-def plot_soft_sweep(df: pd.DataFrame, ax: Axes) -> None:
+def plot_soft_sweep(ax: Axes, df: pd.DataFrame) -> Axes:
     """p_comb(target) against p_hmm(tap): one colour per value, solid for virtual, dashed for Jeffrey."""
     target = [c for c in df.columns if c not in ("evidence", "rule", "p_hmm_tap", "p")][0]
     styles = {"virtual": "-", "jeffrey": "--", "hard": ":", "product": "-"}
@@ -215,9 +180,10 @@ def plot_soft_sweep(df: pd.DataFrame, ax: Axes) -> None:
     ax.set_xlim(0, 1)
     ax.set_title(df["evidence"].iloc[0], fontsize=9)
     ax.legend(fontsize=7, frameon=False, ncols=2)
+    return ax
 
 
-def plot_tap_thresholds(df: pd.DataFrame, ax: Axes) -> None:
+def plot_tap_thresholds(ax: Axes, df: pd.DataFrame) -> Axes:
     """The p_hmm(tap) above which tap wins, for each (Shape, Size, ObjVel)."""
     labels = [", ".join(str(r[c]) for c in df.columns[:-2]) for _, r in df.iterrows()]
     y = np.arange(len(df))
@@ -227,11 +193,12 @@ def plot_tap_thresholds(df: pd.DataFrame, ax: Axes) -> None:
     ax.invert_yaxis()
     ax.set_xlim(0, 1)
     ax.set_xlabel(r"$p_{HMM}(tap)$ needed for tap to win")
+    return ax
 
 
 def plot_anticipation(
-    curves: pd.DataFrame, predictions: pd.DataFrame, axes: Sequence[Axes], node: str = "ObjVel"
-) -> None:
+    axes: Sequence[Axes], curves: pd.DataFrame, predictions: pd.DataFrame, node: str = "ObjVel"
+) -> Sequence[Axes]:
     """TCDS effect anticipation: (1/t) log L per model (top) and p_comb(node) every few frames (bottom)."""
     top, bottom = axes
     for action, g in curves.groupby("action", sort=False):
@@ -253,64 +220,10 @@ def plot_anticipation(
     bottom.set_ylabel(rf"$p_{{comb}}({node})$")
     bottom.set_xlabel("frame")
     bottom.legend(fontsize=7, frameon=False, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    return axes
 
 
-def plot_segmentations(segmentations: Sequence, axes: Sequence[Axes]) -> None:
-    """The automatic segmentation of each recording, one axis each (reference segments as black bars)."""
-    from glu.segmentation import plot_segmentation
-
-    for ax, (seg, ref) in zip(axes, segmentations, strict=False):
-        plot_segmentation(ax, seg, title=f"{seg.recording}: {len(seg.segments)} segments", reference=ref)
-        ax.title.set_fontsize(9)
-
-
-def plot_confusion(confusion: pd.DataFrame, ax: Axes) -> None:
-    """A confusion matrix (rows: true action, columns: predicted), counts in the cells."""
-    m = confusion.to_numpy(dtype=float)
-    ax.imshow(m, cmap="Blues")
-    for i in range(m.shape[0]):
-        for j in range(m.shape[1]):
-            ax.text(
-                j,
-                i,
-                f"{int(m[i, j])}",
-                ha="center",
-                va="center",
-                color="white" if m[i, j] > m.max() / 2 else "black",
-            )
-    ax.set_xticks(range(m.shape[1]), confusion.columns)
-    ax.set_yticks(range(m.shape[0]), confusion.index)
-    ax.set_xlabel("predicted")
-    ax.set_ylabel("true")
-
-
-def plot_accuracy_vs_noise(df: pd.DataFrame, ax: Axes) -> None:
-    """k-fold accuracy against sensor noise, overall and per action."""
-    ax.plot(df["noise_m"] * 100, df["accuracy"], "o-", color="black", label="all")
-    for c in [c for c in df.columns if c.startswith("accuracy_")]:
-        a = c.removeprefix("accuracy_")
-        ax.plot(df["noise_m"] * 100, df[c], ".--", color=ACTION_COLORS.get(a, "0.5"), label=a)
-    ax.set_xlabel("sensor noise (cm, std per joint)")
-    ax.set_ylabel("accuracy")
-    ax.set_ylim(0, 1.02)
-    ax.legend(fontsize=8, frameon=False)
-
-
-def plot_segment_scores(df: pd.DataFrame, ax: Axes) -> None:
-    """Per-frame log-likelihood of each segment under each model (grouped bars), the winner marked."""
-    cols = [c for c in df.columns if c.startswith("loglik_")]
-    labels = [f"{r.recording}\n{r.start}–{r.end}" for r in df.itertuples()]
-    w = 0.8 / len(cols)
-    for k, c in enumerate(cols):
-        a = c.removeprefix("loglik_")
-        ax.bar(np.arange(len(df)) + (k - (len(cols) - 1) / 2) * w, df[c] / df["n_frames"], width=w,
-               color=ACTION_COLORS.get(a, "0.5"), label=a)  # fmt: skip
-    ax.set_xticks(np.arange(len(df)), labels, fontsize=7)
-    ax.set_ylabel(r"$\frac{1}{T}\log L(G \mid A)$")
-    ax.legend(fontsize=8, frameon=False)
-
-
-def plot_fusion_on_gestures(df: pd.DataFrame, ax: Axes, value: str = "fast", target: str = "ObjVel") -> None:
+def plot_fusion_on_gestures(ax: Axes, df: pd.DataFrame, value: str = "fast", target: str = "ObjVel") -> Axes:
     """p_comb(target = value) per gesture segment, one bar per fusion strategy; HMM's top action below."""
     d = df[df[target] == value]
     segs = list(dict.fromkeys(zip(d["recording"], d["start"], d["end"], strict=True)))
@@ -338,3 +251,4 @@ def plot_fusion_on_gestures(df: pd.DataFrame, ax: Axes, value: str = "fast", tar
     ax.set_ylabel(rf"$p_{{comb}}({target}={value})$")
     ax.set_title(d["evidence"].iloc[0], fontsize=9)
     ax.legend(fontsize=8, frameon=False)
+    return ax

@@ -28,7 +28,14 @@ from typing import NamedTuple
 import numpy as np
 
 from glu.errors import DataError
-from glu.trajectories import DEFAULT_POLICY, Repaired, RepairPolicy, Trajectory, read_hand_log, repair
+from glu.gestures.trajectories import (
+    DEFAULT_POLICY,
+    Repaired,
+    RepairPolicy,
+    Trajectory,
+    read_hand_log,
+    repair,
+)
 
 AXES: tuple[str, str, str] = ("x", "y", "z")
 AXIS_MEANING: dict[str, str] = {
@@ -36,6 +43,11 @@ AXIS_MEANING: dict[str, str] = {
     "y": "vertical, positive upwards",
     "z": "orthogonal to the torso, positive towards the person's back",
 }
+FEATURES_DESCRIPTION = (
+    "right hand minus torso; x (right) and z (back) / mean shoulder distance, y (up) / mean neck-torso "
+    "distance (METHOD.md §4); YARP hand logs / 1000"
+)
+"""What the gesture models expect, recorded in every recogniser file."""
 LOG_SCALE = 1000.0
 """The logged features are ``LOG_SCALE`` × the units of the original models."""
 HORIZONTAL_FALLBACK = 0.33
@@ -171,7 +183,7 @@ def trajectory_features(traj: Trajectory) -> Trajectory:
 def load_features(path: str | os.PathLike, policy: RepairPolicy | None = DEFAULT_POLICY) -> Repaired:
     """Read a YARP hand log, convert it to model units and repair it (``policy=None``: no repair).
 
-    Returns the pieces and events of :func:`glu.trajectories.repair` (one piece, no events if ``None``).
+    Returns the pieces and events of :func:`glu.gestures.trajectories.repair` (one piece, no events if ``None``).
     """
     traj = trajectory_features(read_hand_log(path))
     if policy is None:

@@ -1,20 +1,22 @@
-"""Figures of the verbal descriptions, each drawn on a given matplotlib ``ax``."""
+"""Figures of the verbal descriptions: N-best lists, "and" against "but", sampling against the exact search.
+
+Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``.
+"""
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.ticker import MaxNLocator
 
 
-def plot_nbest(ax: Any, nbest: pd.DataFrame, title: str | None = None, highlight: str | None = None) -> Any:
+def plot_nbest(ax: Axes, nbest: pd.DataFrame, title: str | None = None, highlight: str | None = None) -> Axes:
     """Horizontal bars of the scores of an N-best list (rank 1 at the top), the sentences as labels.
 
     Parameters
     ----------
-    ax : matplotlib Axes
+    ax : the axes to draw on
     nbest : DataFrame with columns sentence and score (as returned by :func:`glu.language.nbest`)
     title : axes title
     highlight : a word; bars of sentences containing it are drawn in a second colour
@@ -52,13 +54,13 @@ def plot_nbest(ax: Any, nbest: pd.DataFrame, title: str | None = None, highlight
     return ax
 
 
-def plot_and_but(ax: Any, probs: pd.DataFrame) -> Any:
+def plot_and_but(ax: Axes, probs: pd.DataFrame) -> Axes:
     """Grouped bars of P(and | e) and P(but | e) per evidence set.
 
     Parameters
     ----------
-    ax : matplotlib Axes
-    probs : DataFrame with columns ObjVel, word, p (as :func:`glu.language.experiments.and_but_probabilities`)
+    ax : the axes to draw on
+    probs : DataFrame with columns ObjVel, word, p (as :func:`glu.experiments.verbal.and_but_probabilities`)
 
     Returns
     -------
@@ -80,17 +82,17 @@ def plot_and_but(ax: Any, probs: pd.DataFrame) -> Any:
 
 
 def plot_sampling(
-    ax: Any,
+    ax: Axes,
     scores: np.ndarray,
     sample_scores: np.ndarray,
     exact_best: float,
     sample_best: float | None = None,
-) -> Any:
+) -> Axes:
     """The score distribution of every sentence of the grammar against a random sample's, with both bests.
 
     Parameters
     ----------
-    ax : matplotlib Axes
+    ax : the axes to draw on
     scores : the score of every sentence, shape (n_sentences,) (:func:`glu.language.all_scores`)
     sample_scores : the scores of the sampled sentences, shape (n_samples,)
     exact_best : the best score of the grammar

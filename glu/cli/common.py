@@ -1,0 +1,127 @@
+"""What the commands share: argument types, the data, model and evidence options, and loading a model.
+
+Every option that appears in more than one command is defined here once, with its help text, and its
+choices come from the package's constants (the word tables of :mod:`glu.data.source`, the unseen-row modes
+of :mod:`glu.bn.learning`, the soft rules of :mod:`glu.bn.soft`), so the command line cannot drift from
+the package.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from glu.data.source import SYNTHETIC_KEYWORD, WORD_FILES
+from glu.errors import EvidenceError
+from glu.evidence import check_disjoint, parse_evidence, parse_soft
+
+DATA_HELP = (
+    f"data folder, or '{SYNTHETIC_KEYWORD}' (default: $GLU_DATA_DIR, data/real, else built-in synthetic data)"
+)
+
+
+def _number(text: str, kind: type, what: str) -> float:
+    try:
+        return kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}") from None
+
+
+def integer(text: str) -> int:
+    """Any whole number."""
+    return int(_number(text, int, "a whole number"))
+
+
+def positive_int(text: str) -> int:
+    """A whole number ≥ 1."""
+    v = int(_number(text, int, "a whole number"))
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number ≥ 1, not {v}")
+    return v
+
+
+def positive_float(text: str) -> float:
+    """A finite number > 0."""
+    v = _number(text, float, "a number")
+    if not 0 < v < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, not {text}")
+    return v
+
+
+def nonneg_float(text: str) -> float:
+    """A finite number ≥ 0."""
+    v = _number(text, float, "a number")
+    if not 0 <= v < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, not {text}")
+    return v
+
+
+# ------------------------------------------------------------------ shared options
+
+
+def add_data_option(p: argparse.ArgumentParser, purpose: str = "") -> None:
+    """``--data``: the data folder (the same help everywhere, plus what this command uses it for)."""
+    p.add_argument("--data", help=DATA_HELP + (f"; {purpose}" if purpose else ""))
+
+
+def add_data_args(p: argparse.ArgumentParser) -> None:
+    """``--data``, ``--words``, ``--unseen-words``: where the network is learned from, and how."""
+    from glu.bn.learning import UNSEEN_MODES
+
+    add_data_option(p)
+    p.add_argument("--words", choices=tuple(WORD_FILES), default="lab",
+                   help="descriptions: lab = transcriptions (the paper's), asr = speech recogniser")  # fmt: skip
+    p.add_argument("--unseen-words", choices=UNSEEN_MODES, default=UNSEEN_MODES[0],
+                   help="CPT rows of word parent configurations never seen: zero (the original's) or uniform")  # fmt: skip
+
+
+def add_model_args(p: argparse.ArgumentParser) -> None:
+    """``--model`` or the data options of :func:`add_data_args` (read by :func:`load_model`)."""
+    p.add_argument(
+        "--model", type=Path, help="model file (.json or the original .mat); default: learn from --data"
+    )
+    add_data_args(p)
+
+
+def add_evidence_args(p: argparse.ArgumentParser) -> None:
+    """``--evidence``, ``--soft``, ``--soft-rule`` (read by :func:`read_evidence`)."""
+    from glu.bn.soft import SOFT_RULES
+
+    p.add_argument(
+        "--evidence", action="extend", nargs="+", default=[], metavar="NODE=VALUE", help="hard evidence"
+    )
+    p.add_argument(
+        "--soft", action="append", default=[], metavar="NODE=v1:p1,v2:p2,…",
+        help="soft evidence on an affordance node, a distribution over its values, "
+        "e.g. a gesture posterior Action=grasp:0.2,tap:0.6,touch:0.2",
+    )  # fmt: skip
+    p.add_argument("--soft-rule", choices=SOFT_RULES, default=SOFT_RULES[0],
+                   help="how soft evidence enters: virtual (likelihood) evidence, as the originals, or Jeffrey's rule")  # fmt: skip
+
+
+def read_evidence(args: argparse.Namespace) -> tuple[dict[str, str], dict[str, dict[str, float]]]:
+    """The hard and soft evidence of ``--evidence`` and ``--soft`` (a node may not be in both)."""
+    evidence = parse_evidence(args.evidence)
+    soft = parse_soft(args.soft)
+    check_disjoint(evidence, soft)
+    return evidence, soft
+
+
+def load_model(args: argparse.Namespace) -> tuple[Any, str]:
+    """The model named by ``--model``, or the one learned from ``--data``; returns (BayesNet, description)."""
+    from glu.bn.model import BayesNet
+
+    model = getattr(args, "model", None)
+    if model is not None:
+        if getattr(args, "data", None):
+            raise EvidenceError("give either --model or --data, not both")
+        bn = BayesNet.from_bnt_mat(model) if model.suffix.lower() == ".mat" else BayesNet.load(model)
+        return bn, f"model {model} ({bn.meta.get('data_source', 'unknown data')})"
+    from glu.bn.learning import learn_bn
+    from glu.data.source import load_experiments, resolve_data
+
+    source = resolve_data(args.data)
+    df = load_experiments(source, args.words)
+    bn = learn_bn(df, unseen_words=args.unseen_words)
+    return bn, f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}"

@@ -1,0 +1,10 @@
+"""The papers' experiments, each a function returning a tidy DataFrame stamped with its provenance.
+
+* :mod:`~glu.experiments.fusion` — the network and fusion experiments of GLU 2017 and TCDS 2020;
+* :mod:`~glu.experiments.gestures` — evaluation of gesture recognition;
+* :mod:`~glu.experiments.anticipation` — TCDS effect anticipation, frame by frame;
+* :mod:`~glu.experiments.verbal` — the verbal descriptions of TCDS;
+* :mod:`~glu.experiments.common` — the stamp every table carries (experiment, data source, parameters).
+
+Their figures are drawn by :mod:`glu.plots`.
+"""

@@ -1,0 +1,70 @@
+"""Writing files so that a reader never sees half of one: every write goes through a temporary file.
+
+A file is written next to its destination under a hidden temporary name and renamed into place only when
+complete (``os.replace`` is atomic on one file system), so an interrupted or failed write leaves the old
+file, or nothing, never a truncated one. The new file gets the permissions a plain ``open(path, "w")``
+would give (``0o666`` minus the process's umask), not the ``0o600`` of a temporary file.
+
+This module is the one implementation of atomic writes in glu; models, tables, figures and data folders
+all use it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextmanager
+def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]:
+    """A temporary path beside ``path``; renamed to ``path`` when the block ends without an exception.
+
+    For writers that want a file name rather than bytes (``savefig``, a Rerun recording, …)::
+
+        with atomic_path("figures/x.png") as tmp:
+            fig.savefig(tmp, format="png")
+
+    The folder is created if needed. On an exception (or ``KeyboardInterrupt``) the temporary file is
+    removed and ``path`` is left as it was.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent)
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically; returns the path."""
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+    return path
+
+
+def atomic_write_text(path: str | os.PathLike, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically; returns the path."""
+    return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def atomic_write_json(path: str | os.PathLike, obj: Any, indent: int | None = 1, **kwargs: Any) -> Path:
+    """Write ``obj`` as JSON (strict: no NaN or Infinity) followed by a newline, atomically."""
+    kwargs.setdefault("allow_nan", False)
+    return atomic_write_text(path, json.dumps(obj, indent=indent, **kwargs) + "\n")

@@ -1,0 +1,194 @@
+"""The forward algorithm of the gesture HMMs as pure functions over arrays.
+
+Split the way dynamax splits its HMM inference: these functions know nothing of models, files or
+training; they take documented arrays and return arrays. :class:`~glu.gestures.model.GestureHMM` scores a
+whole sequence with :func:`forward_curve`; :class:`~glu.gestures.recognizer.GestureStream` advances every
+model of a bank by one frame with the same :func:`forward_step`, so the batch and the streaming
+recognisers are one recursion.
+
+Shapes use ``T`` frames, ``Q`` states, ``M`` mixture components, ``D`` features, and any leading batch
+axes ``...`` (``()`` for one model, ``(A,)`` for a bank of ``A`` models padded to a common ``Q`` and
+``M``).
+
+The recursion is *scaled*: the state carried from frame to frame is the normalised forward variable
+``alpha_t(q) = P(q_t = q | G_1^t)`` plus the log-likelihood so far; each step factors the frame's largest
+emission out before exponentiating, and a frame whose scaled emissions underflow for every reachable
+state is redone in the log domain.
+
+Example
+-------
+A two-state model that stays with probability 0.9, one Gaussian per state:
+
+>>> import numpy as np
+>>> means = np.array([[[0.0]], [[3.0]]])            # (Q=2, M=1, D=1)
+>>> chol_inv, log_norm = gaussian_factors(np.ones((2, 1)), np.ones((2, 1, 1, 1)))
+>>> X = np.array([[0.1], [0.2], [2.9]])             # (T=3, D=1)
+>>> log_b = log_emissions(X, means, chol_inv, log_norm)
+>>> log_b.shape
+(3, 2)
+>>> curve = forward_curve(log_b, np.array([1.0, 0.0]), np.array([[0.9, 0.1], [0.0, 1.0]]))
+>>> curve.round(3)                                  # log L(G_1^t), t = 1, 2, 3
+array([-0.924, -2.027, -5.464])
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+TINY = 1e-280
+"""A frame whose scaled forward mass is below this is redone in the log domain."""
+LOG_2PI = math.log(2 * math.pi)
+
+
+class ForwardState(NamedTuple):
+    """The forward recursion after frame t.
+
+    Attributes
+    ----------
+    alpha : array, shape (..., Q) — ``P(q_t | G_1^t)``, rows sum to one (all zeros for a model to which the
+        frames so far are impossible)
+    loglik : array, shape (...) — ``log L(G_1^t)`` (``-inf`` when impossible)
+    """
+
+    alpha: np.ndarray
+    loglik: np.ndarray
+
+
+def gaussian_factors(weights: np.ndarray, covars: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Precompute what :func:`log_emissions` needs from mixture weights and full covariances.
+
+    Parameters
+    ----------
+    weights : array, shape (..., M) — mixture weights (components of weight 0 may have any covariance)
+    covars : array, shape (..., M, D, D) — symmetric positive-definite covariances
+
+    Returns
+    -------
+    chol_inv : array, shape (..., M, D, D) — ``L⁻¹`` for the Cholesky factor ``L`` of each covariance
+    log_norm : array, shape (..., M) — ``log w − (D/2) log 2π − log |L|`` (``-inf`` for weight 0)
+
+    Raises ``numpy.linalg.LinAlgError`` if a used covariance is not positive definite.
+    """
+    D = covars.shape[-1]
+    used = weights > 0
+    safe = np.where(used[..., None, None], covars, np.eye(D))
+    L = np.linalg.cholesky(safe)
+    chol_inv = np.linalg.inv(L)
+    with np.errstate(divide="ignore"):
+        log_norm = (
+            np.log(weights) - 0.5 * D * LOG_2PI - np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1)
+        )
+    return chol_inv, log_norm
+
+
+def log_emissions(X: np.ndarray, means: np.ndarray, chol_inv: np.ndarray, log_norm: np.ndarray) -> np.ndarray:
+    """Emission log-densities of Gaussian-mixture states, ``log p(x_t | q)``.
+
+    Parameters
+    ----------
+    X : array, shape (T, D) — the frames
+    means : array, shape (..., M, D)
+    chol_inv, log_norm : arrays, shapes (..., M, D, D) and (..., M), from :func:`gaussian_factors`
+
+    Returns
+    -------
+    array, shape (T, ...) — e.g. (T, Q) for one model, (T, A, Q) for a bank
+    """
+    batch = means.ndim - 2
+    diff = X.reshape((X.shape[0],) + (1,) * (batch + 1) + X.shape[1:]) - means[None]  # (T, ..., M, D)
+    z = np.einsum("...ij,t...j->t...i", chol_inv, diff, optimize=False)
+    lc = log_norm[None] - 0.5 * np.einsum("...i,...i->...", z, z)
+    m = lc.max(axis=-1)
+    with np.errstate(invalid="ignore"):
+        return np.log(np.exp(lc - m[..., None]).sum(axis=-1)) + m
+
+
+def forward_step(
+    state: ForwardState | None, log_b: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
+) -> ForwardState:
+    """Advance the scaled forward recursion by one frame.
+
+    Parameters
+    ----------
+    state : the state after the previous frame, or None before the first frame
+    log_b : array, shape (..., Q) — this frame's emission log-densities
+    startprob : array, shape (..., Q)
+    transmat : array, shape (..., Q, Q) — ``transmat[..., i, j] = P(q_{t+1} = j | q_t = i)``
+
+    Returns
+    -------
+    the :class:`ForwardState` after this frame; ``loglik`` grows by ``log p(g_t | G_1^{t-1})``.
+    """
+    if state is None:
+        pred, total = startprob, np.zeros(log_b.shape[:-1])
+    else:
+        a = state.alpha
+        pred = a @ transmat if a.ndim == 1 else (a[..., None, :] @ transmat)[..., 0, :]
+        total = state.loglik
+    mx = log_b.max(axis=-1)
+    new = pred * np.exp(log_b - mx[..., None])
+    c = new.sum(axis=-1)
+    ok = c > TINY
+    if np.all(ok):
+        return ForwardState(new / c[..., None], total + (np.log(c) + mx))
+    # underflow (or an impossible frame) for some model: redo those in the log domain
+    with np.errstate(divide="ignore", invalid="ignore"):
+        la = np.log(pred) + log_b
+        m = la.max(axis=-1)
+        finite = np.isfinite(m)
+        m_safe = np.where(finite, m, 0.0)
+        new_log = np.exp(la - m_safe[..., None])
+        c_log = new_log.sum(axis=-1)
+        step = np.where(ok, np.log(c) + mx, np.where(finite, m_safe + np.log(c_log), -np.inf))
+        alpha = np.where(
+            ok[..., None], new / np.where(ok, c, 1.0)[..., None],
+            np.where(finite[..., None], new_log / np.where(finite, c_log, 1.0)[..., None], 0.0),
+        )  # fmt: skip
+    return ForwardState(alpha, total + step)
+
+
+def forward_curve(log_b: np.ndarray, startprob: np.ndarray, transmat: np.ndarray) -> np.ndarray:
+    """Prefix log-likelihoods ``log L(G_1^t)`` for t = 1 … T by the forward algorithm.
+
+    Parameters
+    ----------
+    log_b : array, shape (T, ..., Q) — emission log-densities (:func:`log_emissions`)
+    startprob : array, shape (..., Q)
+    transmat : array, shape (..., Q, Q)
+
+    Returns
+    -------
+    array, shape (T, ...) — entry t-1 is ``log L(G_1^t)``; the last is the sequence's log-likelihood.
+    """
+    out = np.empty(log_b.shape[:-1])
+    state = None
+    for t in range(len(log_b)):
+        state = forward_step(state, log_b[t], startprob, transmat)
+        out[t] = state.loglik
+    return out
+
+
+def log_softmax(loglik: np.ndarray) -> np.ndarray:
+    """``log p(a) = loglik[..., a] − logsumexp(loglik[..., :])`` (equal priors), shape as ``loglik``."""
+    loglik = np.asarray(loglik, dtype=float)
+    m = loglik.max(axis=-1, keepdims=True)
+    m = np.where(np.isfinite(m), m, 0.0)
+    with np.errstate(divide="ignore"):
+        return loglik - (np.log(np.exp(loglik - m).sum(axis=-1, keepdims=True)) + m)
+
+
+def p_hmm_from_loglik(loglik: np.ndarray) -> np.ndarray:
+    """The posterior ``p_HMM(A | G)`` with equal priors from log-likelihoods, shape (..., n_actions)."""
+    return np.exp(log_softmax(loglik))
+
+
+def left_to_right_transmat(n_states: int, stay: float) -> np.ndarray:
+    """A left-to-right transition matrix, shape (Q, Q): stay with ``stay``, else move one state right."""
+    A = np.zeros((n_states, n_states))
+    for q in range(n_states - 1):
+        A[q, q], A[q, q + 1] = stay, 1.0 - stay
+    A[-1, -1] = 1.0
+    return A

@@ -1,0 +1,267 @@
+"""The recogniser: a bank of gesture HMMs, one per action, its posteriors, its streaming form, its file.
+
+:class:`Recognizer` gives ``log L(G | A)`` and ``p_HMM(A | G) = L(G|A) / Σ_h L(G|h)`` (equal priors, in the
+log domain) for whole sequences or every prefix; :meth:`Recognizer.stream` gives a :class:`GestureStream`
+that consumes one frame at a time at O(1) cost per frame. :func:`train_recognizer` trains one model per
+action (:mod:`glu.gestures.training`).
+
+Recogniser files (:meth:`Recognizer.save`) are JSON, not pickle::
+
+    {"format": "glu-gesture-recognizer", "version": 1,
+     "features": "<what the models expect>",
+     "actions": ["grasp", "tap", "touch"],
+     "models": {"grasp": {"n_states": Q, "n_mix": M, "n_features": D,
+                          "startprob": [Q], "transmat": [Q][Q], "weights": [Q][M],
+                          "means": [Q][M][D], "covars": [Q][M][D][D]}, …},
+     "training": {"grasp": {<TrainingReport fields>}, …},
+     "meta": {<free-form: data source, seed, parameters>}}
+
+Floats are written with ``repr`` precision, so a saved recogniser scores exactly as the one in memory.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from glu.errors import DataError, ModelError
+from glu.files import atomic_write_json
+from glu.gestures.features import FEATURES_DESCRIPTION
+from glu.gestures.forward import ForwardState, forward_step, log_emissions, p_hmm_from_loglik
+from glu.gestures.model import GestureHMM, as_sequence
+from glu.gestures.training import TrainingConfig, TrainingReport, train_hmm
+
+FORMAT = "glu-gesture-recognizer"
+FORMAT_VERSION = 1
+_PAD = -1e300
+"""log-normaliser of the padding components of a stacked bank (never the most likely)."""
+
+
+class StreamStep(NamedTuple):
+    """One step of a :class:`GestureStream`.
+
+    Attributes
+    ----------
+    t : frames consumed so far (1-based index of the frame just pushed)
+    loglik : array, shape (n_actions,) — ``log L(G_1^t | A)``
+    p_hmm : array, shape (n_actions,) — ``p_HMM(A | G_1^t)`` (equal priors)
+    """
+
+    t: int
+    loglik: np.ndarray
+    p_hmm: np.ndarray
+
+
+class GestureStream:
+    """Incremental forward recursion over every model of a recogniser: one frame in, one posterior out.
+
+    Each :meth:`push` costs O(Σ_a Q_a² + Σ_a Q_a M_a D²), independent of how many frames came before;
+    it runs the same :func:`~glu.gestures.forward.forward_step` as the batch scoring, with the models
+    stacked (padded to the largest Q and M), so the results equal rescoring the prefix ``G_1^t``.
+    """
+
+    def __init__(self, recognizer: Recognizer) -> None:
+        models = [recognizer.models[a] for a in recognizer.actions]
+        self.actions: tuple[str, ...] = recognizer.actions
+        A = len(models)
+        Q = max(m.n_states for m in models)
+        M = max(m.n_mix for m in models)
+        D = models[0].n_features
+        mu = np.zeros((A, Q, M, D))
+        cinv = np.broadcast_to(np.eye(D), (A, Q, M, D, D)).copy()
+        lnorm = np.full((A, Q, M), _PAD)
+        pi = np.zeros((A, Q))
+        trans = np.zeros((A, Q, Q))
+        for i, m in enumerate(models):
+            q, k = m.n_states, m.n_mix
+            mu[i, :q, :k] = m.means
+            cinv[i, :q, :k] = m._chol_inv
+            lnorm[i, :q, :k] = m._log_norm
+            pi[i, :q] = m.startprob
+            trans[i, :q, :q] = m.transmat
+        self._D = D
+        self._means, self._chol_inv = mu, cinv
+        self._log_norm = np.where(np.isfinite(lnorm), lnorm, _PAD)
+        self._startprob, self._transmat = pi, trans
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every frame: the next :meth:`push` starts a new gesture."""
+        self._state: ForwardState | None = None
+        self.t = 0
+
+    def push(self, x: np.ndarray) -> StreamStep:
+        """Consume one frame, shape (D,); return ``log L(G_1^t | A)`` and ``p_HMM(A | G_1^t)``."""
+        x = np.asarray(x, dtype=float)
+        if x.shape != (self._D,) or not np.all(np.isfinite(x)):
+            raise DataError(f"a frame must be {self._D} finite numbers, got {x!r}")
+        log_b = log_emissions(x[None], self._means, self._chol_inv, self._log_norm)[0]  # (A, Q)
+        self._state = forward_step(self._state, log_b, self._startprob, self._transmat)
+        self.t += 1
+        ll = self._state.loglik.copy()
+        return StreamStep(self.t, ll, p_hmm_from_loglik(ll))
+
+    def extend(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Push every frame of X, shape (T, D); return loglik and p_hmm per frame, each shape (T, n_actions)."""
+        X = as_sequence(X, self._D)
+        ll = np.empty((len(X), len(self.actions)))
+        for t, x in enumerate(X):
+            ll[t] = self.push(x).loglik
+        return ll, p_hmm_from_loglik(ll)
+
+
+class Recognizer:
+    """A bank of gesture HMMs, one per action: log-likelihoods, posteriors ``p_HMM(A | G)``, streaming.
+
+    Parameters
+    ----------
+    models : action → :class:`GestureHMM` (the order is the order of every output vector)
+    reports : action → :class:`TrainingReport`, if trained by glu
+    meta : free-form information saved with the recogniser (data source, seed, parameters)
+    """
+
+    def __init__(
+        self,
+        models: Mapping[str, GestureHMM],
+        reports: Mapping[str, TrainingReport] | None = None,
+        meta: Mapping[str, Any] | None = None,
+    ) -> None:
+        if not models:
+            raise ModelError("a recogniser needs at least one model")
+        dims = {m.n_features for m in models.values()}
+        if len(dims) != 1:
+            raise ModelError(f"all models must have the same number of features, got {sorted(dims)}")
+        self.models: dict[str, GestureHMM] = dict(models)
+        self.actions: tuple[str, ...] = tuple(models)
+        self.reports: dict[str, TrainingReport] = dict(reports or {})
+        self.meta: dict[str, Any] = dict(meta or {})
+        self.n_features: int = dims.pop()
+
+    def __repr__(self) -> str:
+        shapes = ", ".join(f"{a}: Q={m.n_states} M={m.n_mix}" for a, m in self.models.items())
+        return f"Recognizer({shapes})"
+
+    def loglik(self, X: np.ndarray) -> np.ndarray:
+        """``log L(G | A)`` for each action, shape (n_actions,), of a sequence of shape (T, D)."""
+        X = as_sequence(X, self.n_features)
+        return np.array([self.models[a].loglik(X) for a in self.actions])
+
+    def p_hmm(self, X: np.ndarray) -> np.ndarray:
+        """``p_HMM(A | G)`` with equal priors, shape (n_actions,), of a sequence of shape (T, D)."""
+        return p_hmm_from_loglik(self.loglik(X))
+
+    def loglik_curve(self, X: np.ndarray) -> np.ndarray:
+        """``log L(G_1^t | A)`` for every prefix, shape (T, n_actions)."""
+        X = as_sequence(X, self.n_features)
+        return np.stack([self.models[a].loglik_curve(X) for a in self.actions], axis=1)
+
+    def p_hmm_curve(self, X: np.ndarray) -> np.ndarray:
+        """``p_HMM(A | G_1^t)`` for every prefix, shape (T, n_actions)."""
+        return p_hmm_from_loglik(self.loglik_curve(X))
+
+    def classify(self, X: np.ndarray) -> str:
+        """The action with the highest likelihood."""
+        return self.actions[int(np.argmax(self.loglik(X)))]
+
+    def stream(self) -> GestureStream:
+        """A fresh :class:`GestureStream` over this bank."""
+        return GestureStream(self)
+
+    # ------------------------------------------------------------------ files
+
+    def to_dict(self) -> dict[str, Any]:
+        """The recogniser file's content (see the module docstring)."""
+        return {
+            "format": FORMAT,
+            "version": FORMAT_VERSION,
+            "features": FEATURES_DESCRIPTION,
+            "actions": list(self.actions),
+            "models": {a: self.models[a].to_dict() for a in self.actions},
+            "training": {a: asdict(r) for a, r in self.reports.items()},
+            "meta": self.meta,
+        }
+
+    @classmethod
+    def from_dict(cls, d: Any, source: str = "<dict>") -> Recognizer:
+        """A recogniser from :meth:`to_dict` output; :class:`ModelError` naming ``source`` if malformed."""
+        if not isinstance(d, dict) or d.get("format") != FORMAT:
+            raise ModelError(f'{source}: not a glu gesture recogniser (expected "format": "{FORMAT}")')
+        if d.get("version") != FORMAT_VERSION:
+            raise ModelError(
+                f"{source}: format version {d.get('version')!r}; this glu reads {FORMAT_VERSION}"
+            )
+        actions, models = d.get("actions"), d.get("models")
+        if not isinstance(actions, list) or not isinstance(models, dict) or set(actions) != set(models):
+            raise ModelError(f"{source}: 'actions' must list exactly the keys of 'models'")
+        try:
+            hmms = {a: GestureHMM.from_dict(models[a], name=a) for a in actions}
+        except ModelError as e:
+            raise ModelError(f"{source}: {e}") from None
+        reports = {}
+        for a, r in (d.get("training") or {}).items():
+            try:
+                reports[a] = TrainingReport(**{**r, "history": tuple(r["history"])})
+            except (TypeError, KeyError):
+                raise ModelError(f"{source}: malformed training report for {a!r}") from None
+        return cls(hmms, reports, d.get("meta") or {})
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write the recogniser as JSON (atomically); returns the path."""
+        return atomic_write_json(path, self.to_dict(), allow_nan=True)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> Recognizer:
+        """Read a recogniser written by :meth:`save`; :class:`ModelError` if the file is not one."""
+        path = Path(path)
+        try:
+            d = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise ModelError(f"{path}: no such recogniser file") from None
+        except IsADirectoryError:
+            raise ModelError(f"{path}: is a folder, not a recogniser file") from None
+        except (UnicodeDecodeError, json.JSONDecodeError) as e:
+            raise ModelError(f"{path}: not a JSON recogniser file ({e})") from None
+        return cls.from_dict(d, str(path))
+
+
+def train_recognizer(
+    sequences: Mapping[str, Sequence[np.ndarray]],
+    n_states: int = TrainingConfig.n_states,
+    n_mix: int = TrainingConfig.n_mix,
+    *,
+    n_iter: int = TrainingConfig.n_iter,
+    tol: float = TrainingConfig.tol,
+    covar_reg: float = TrainingConfig.covar_reg,
+    seed: int = 0,
+    warn: bool = True,
+    meta: Mapping[str, Any] | None = None,
+) -> Recognizer:
+    """Train one left-to-right GMM-HMM per action (see :func:`train_hmm`); ``sequences``: action → list of (T_i, D)."""
+    models, reports = {}, {}
+    for action, seqs in sequences.items():
+        models[action], reports[action] = train_hmm(
+            seqs,
+            n_states,
+            n_mix,
+            n_iter=n_iter,
+            tol=tol,
+            covar_reg=covar_reg,
+            seed=seed,
+            name=action,
+            warn=warn,
+        )
+    info = {
+        "n_states": n_states,
+        "n_mix": n_mix,
+        "n_iter": n_iter,
+        "tol": tol,
+        "covar_reg": covar_reg,
+        "seed": seed,
+    }
+    return Recognizer(models, reports, {**info, **(meta or {})})

@@ -1,0 +1,249 @@
+"""Training gesture HMMs: the settings, glu's initialisation, EM with hmmlearn, and what happened.
+
+* :class:`TrainingConfig` is the one home of the training defaults (Q = 6 states, M = 3 Gaussians, the
+  originals' model size; EM limits; the covariance regulariser). The command line, the experiments and the
+  notebooks' checks all read them from here.
+* :func:`init_left_to_right` starts each model from equal time slices of the training sequences;
+  :func:`train_hmm` runs Baum–Welch with hmmlearn's ``GMMHMM`` keeping the left-to-right structure (zero
+  transitions stay zero under EM), with explicit ``n_iter`` and ``tol``, and reports convergence
+  (:class:`TrainingReport`; hmmlearn itself only logs non-convergence, and counts reaching ``n_iter`` as
+  converged).
+
+This is glu's recipe, not the originals' (flat start and mixture splitting, METHOD.md §5.1).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from glu.errors import DataError, ModelError
+from glu.gestures.forward import left_to_right_transmat
+from glu.gestures.model import GestureHMM, as_sequence
+
+
+class HMMConvergenceWarning(UserWarning):
+    """EM stopped without converging (iteration limit reached, or the log-likelihood decreased)."""
+
+
+@dataclass(frozen=True)
+class TrainingConfig:
+    """How gesture HMMs are trained (the defaults are glu's, used everywhere).
+
+    Attributes
+    ----------
+    n_states : Q, states per model (the originals': 6)
+    n_mix : M, Gaussians per state (the originals': 3)
+    n_iter : most EM iterations
+    tol : EM tolerance, in log-likelihood per training frame
+    covar_reg : strength of the weak inverse-Wishart prior on each covariance
+    """
+
+    n_states: int = 6
+    n_mix: int = 3
+    n_iter: int = 200
+    tol: float = 1e-4
+    covar_reg: float = 1e-3
+
+    def as_dict(self) -> dict[str, Any]:
+        """The settings as keyword arguments of :func:`train_hmm`."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class TrainingReport:
+    """How EM went for one model.
+
+    Attributes
+    ----------
+    action : the model's action
+    n_sequences, n_frames : the training data
+    n_iter : EM iterations run (of at most ``max_iter``)
+    converged : True if the last change of the total log-likelihood, per training frame, was smaller
+        than ``tol`` in absolute value (a gain below ``tol``, not a larger decrease)
+    history : total training log-likelihood before each M-step
+    final_loglik : total training log-likelihood of the returned model
+    tol : the tolerance, in log-likelihood per training frame
+    max_iter : the iteration limit
+    """
+
+    action: str
+    n_sequences: int
+    n_frames: int
+    n_iter: int
+    converged: bool
+    history: tuple[float, ...]
+    final_loglik: float
+    tol: float
+    max_iter: int
+
+    def describe(self) -> str:
+        """One line, e.g. ``grasp: 40 sequences, 3812 frames; converged after 17 EM iterations …``."""
+        delta = self.history[-1] - self.history[-2] if len(self.history) >= 2 else float("nan")
+        state = (
+            f"converged after {self.n_iter} EM iterations (last gain {delta:.3g} < tol "
+            f"{self.tol:g} × {self.n_frames} frames)"
+            if self.converged
+            else f"NOT converged after {self.n_iter} of {self.max_iter} EM iterations "
+            f"(last change {delta:.3g}, tol {self.tol:g} × {self.n_frames} frames)"
+        )
+        return (
+            f"{self.action}: {self.n_sequences} sequences, {self.n_frames} frames; {state}; "
+            f"log L = {self.final_loglik:.2f} ({self.final_loglik / max(self.n_frames, 1):.3f} per frame)"
+        )
+
+
+def init_left_to_right(
+    sequences: Sequence[np.ndarray],
+    n_states: int = TrainingConfig.n_states,
+    n_mix: int = TrainingConfig.n_mix,
+    seed: int = 0,
+    covar_reg: float = TrainingConfig.covar_reg,
+    name: str = "",
+) -> GestureHMM:
+    """An initial left-to-right model: each sequence cut into ``n_states`` equal time slices, slice q → state q.
+
+    The frames of slice q (over all sequences) give state q's mixture (scikit-learn ``GaussianMixture``,
+    seeded; with too few frames, one Gaussian copied ``n_mix`` times with means spread along its main
+    axis). Self-transition probabilities are ``1 - 1 / (mean frames per state)``, clipped to [0.5, 0.98].
+    ``sequences`` are arrays of shape (T_i, D).
+    """
+    from sklearn.mixture import GaussianMixture
+
+    D = sequences[0].shape[1]
+    slices: list[list[np.ndarray]] = [[] for _ in range(n_states)]
+    for X in sequences:
+        idx = np.minimum((np.arange(len(X)) * n_states) // len(X), n_states - 1)
+        for q in range(n_states):
+            slices[q].append(X[idx == q])
+    weights = np.zeros((n_states, n_mix))
+    means = np.zeros((n_states, n_mix, D))
+    covars = np.zeros((n_states, n_mix, D, D))
+    pooled_all = np.concatenate(sequences)
+    for q in range(n_states):
+        Xq = np.concatenate(slices[q]) if any(len(s) for s in slices[q]) else pooled_all
+        if len(Xq) >= max(4 * n_mix * D, n_mix + 1) and len(np.unique(Xq, axis=0)) > n_mix:
+            gm = GaussianMixture(
+                n_mix, covariance_type="full", reg_covar=covar_reg, random_state=seed, n_init=1
+            )
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                gm.fit(Xq)
+            weights[q], means[q], covars[q] = gm.weights_, gm.means_, gm.covariances_
+        else:
+            mu = Xq.mean(axis=0)
+            cov = (np.cov(Xq.T) if len(Xq) > 1 else np.zeros((D, D))).reshape(D, D) + covar_reg * np.eye(D)
+            w, v = np.linalg.eigh(cov)
+            spread = np.linspace(-0.5, 0.5, n_mix) if n_mix > 1 else np.zeros(1)
+            weights[q] = 1.0 / n_mix
+            means[q] = mu + spread[:, None] * math.sqrt(w[-1]) * v[:, -1]
+            covars[q] = cov
+    covars = 0.5 * (covars + np.swapaxes(covars, -1, -2))
+    mean_len = float(np.mean([len(X) for X in sequences]))
+    stay = float(np.clip(1.0 - n_states / mean_len, 0.5, 0.98))
+    startprob = np.zeros(n_states)
+    startprob[0] = 1.0
+    return GestureHMM(startprob, left_to_right_transmat(n_states, stay), weights, means, covars, name=name)
+
+
+def _preset_gmmhmm_class() -> type:
+    from hmmlearn.hmm import GMMHMM
+
+    class PresetGMMHMM(GMMHMM):
+        """GMMHMM whose parameters are all given before ``fit`` (skips hmmlearn's k-means initialisation)."""
+
+        def _init(self, X, lengths=None):  # type: ignore[no-untyped-def]
+            if not hasattr(self, "_check_and_set_n_features"):  # pragma: no cover - other hmmlearn versions
+                return super()._init(X, lengths)
+            self._check_and_set_n_features(X)
+            self._init_covar_priors()
+            self._fix_priors_shape()
+
+    return PresetGMMHMM
+
+
+def train_hmm(
+    sequences: Sequence[np.ndarray],
+    n_states: int = TrainingConfig.n_states,
+    n_mix: int = TrainingConfig.n_mix,
+    *,
+    n_iter: int = TrainingConfig.n_iter,
+    tol: float = TrainingConfig.tol,
+    covar_reg: float = TrainingConfig.covar_reg,
+    seed: int = 0,
+    name: str = "",
+    warn: bool = True,
+) -> tuple[GestureHMM, TrainingReport]:
+    """Fit a left-to-right GMM-HMM to sequences of shape (T_i, D) with hmmlearn's EM (Baum–Welch).
+
+    Parameters
+    ----------
+    sequences : the training sequences, each an array of shape (T_i, D)
+    n_states, n_mix : Q and M
+    n_iter, tol : at most ``n_iter`` EM iterations; converged when the total log-likelihood gains less
+        than ``tol`` × the number of training frames in an iteration (``tol`` is per frame, so it means
+        the same for any amount of data; hmmlearn's own ``tol`` is this product)
+    covar_reg : each covariance gets a weak inverse-Wishart prior, ``Σ = (S + covar_reg·I) / (N + 1)``
+        for scatter S and soft count N, so a component with few frames cannot collapse
+    seed : seeds the initial mixtures
+    name : the action (for messages)
+    warn : emit an :class:`HMMConvergenceWarning` when EM does not converge
+
+    Returns
+    -------
+    the model and a :class:`TrainingReport`. Zero transitions of the left-to-right initialisation stay
+    zero (EM cannot create transitions that have zero probability).
+    """
+    who = f"training data for {name!r}" if name else "training data"
+    if len(sequences) == 0:
+        raise DataError(f"{who}: no sequences")
+    D = np.asarray(sequences[0]).shape[-1] if np.asarray(sequences[0]).ndim == 2 else 3
+    seqs = [as_sequence(X, D, f"{who}, sequence {i + 1}") for i, X in enumerate(sequences)]
+    n_frames = sum(len(X) for X in seqs)
+    if n_states < 1 or n_mix < 1:
+        raise ModelError(f"n_states={n_states} and n_mix={n_mix} must be ≥ 1")
+    if n_frames < n_states * n_mix:
+        raise DataError(f"{who}: {n_frames} frames are too few for {n_states} states × {n_mix} mixtures")
+    if n_iter < 1 or not tol > 0:
+        raise ModelError(f"n_iter={n_iter} must be ≥ 1 and tol={tol} > 0")
+    init = init_left_to_right(seqs, n_states, n_mix, seed, covar_reg, name)
+    model = _preset_gmmhmm_class()(
+        n_components=n_states, n_mix=n_mix, covariance_type="full", n_iter=n_iter, tol=tol * n_frames,
+        params="stmcw", init_params="", random_state=seed, implementation="log",
+        covars_prior=covar_reg * np.eye(D), covars_weight=-(D + 1.0),
+    )  # fmt: skip
+    model.startprob_, model.transmat_ = init.startprob.copy(), init.transmat.copy()
+    model.weights_, model.means_, model.covars_ = init.weights.copy(), init.means.copy(), init.covars.copy()
+    import logging
+
+    hmm_log = logging.getLogger("hmmlearn.base")
+    level = hmm_log.level
+    hmm_log.setLevel(logging.ERROR)  # we report non-convergence ourselves
+    from threadpoolctl import threadpool_limits
+
+    try:
+        # one BLAS thread: hmmlearn's many tiny solves are several times slower with thread hand-offs
+        with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
+            warnings.simplefilter("ignore", RuntimeWarning)
+            model.fit(np.concatenate(seqs), [len(X) for X in seqs])
+    except (ValueError, np.linalg.LinAlgError) as e:
+        raise ModelError(f"EM failed for {name or 'the model'}: {e}") from None
+    finally:
+        hmm_log.setLevel(level)
+    try:
+        fitted = GestureHMM.from_hmmlearn(model, name=name)
+    except ModelError as e:
+        raise ModelError(f"EM diverged for {name or 'the model'} ({e}); try a larger covar_reg") from None
+    history = tuple(float(h) for h in model.monitor_.history)
+    delta = history[-1] - history[-2] if len(history) >= 2 else math.inf
+    converged = bool(abs(delta) < tol * n_frames)
+    final = float(sum(fitted.loglik(X) for X in seqs))
+    report = TrainingReport(name, len(seqs), n_frames, len(history), converged, history, final, tol, n_iter)
+    if not converged and warn:
+        warnings.warn(report.describe(), HMMConvergenceWarning, stacklevel=2)
+    return fitted, report

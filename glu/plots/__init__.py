@@ -1,0 +1,56 @@
+"""One plotting function per figure, one signature: ``plot_x(ax, frame, …) -> Axes``.
+
+Each function draws a tidy frame of :mod:`glu.experiments` (or a model) on the axes it is given, first
+argument (a sequence of axes for a multi-panel figure), and returns them. The look shared by every figure
+(colours, sizes, the data-source footer, deterministic PNG and SVG) is in :mod:`glu.plots.style`. The
+functions live in one module per part of the story — :mod:`~glu.plots.gestures`,
+:mod:`~glu.plots.network`, :mod:`~glu.plots.verbal` — and are all importable from here.
+"""
+
+from glu.plots.gestures import (
+    plot_accuracy_vs_noise,
+    plot_confusion,
+    plot_segment_scores,
+    plot_segmentation,
+    plot_segmentations,
+)
+from glu.plots.network import (
+    plot_action_vs_soft_evidence,
+    plot_anticipation,
+    plot_effect_prediction,
+    plot_effect_vs_soft_evidence,
+    plot_fusion_on_gestures,
+    plot_soft_sweep,
+    plot_structure,
+    plot_tap_thresholds,
+    plot_unseen_rows,
+    plot_word_change,
+)
+from glu.plots.style import ACTION_COLORS, VALUE_COLORS, new_figure, save_figure, stamp
+from glu.plots.verbal import plot_and_but, plot_nbest, plot_sampling
+
+__all__ = [
+    "ACTION_COLORS",
+    "VALUE_COLORS",
+    "new_figure",
+    "plot_accuracy_vs_noise",
+    "plot_action_vs_soft_evidence",
+    "plot_and_but",
+    "plot_anticipation",
+    "plot_confusion",
+    "plot_effect_prediction",
+    "plot_effect_vs_soft_evidence",
+    "plot_fusion_on_gestures",
+    "plot_nbest",
+    "plot_sampling",
+    "plot_segment_scores",
+    "plot_segmentation",
+    "plot_segmentations",
+    "plot_soft_sweep",
+    "plot_structure",
+    "plot_tap_thresholds",
+    "plot_unseen_rows",
+    "plot_word_change",
+    "save_figure",
+    "stamp",
+]

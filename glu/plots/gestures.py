@@ -1,0 +1,126 @@
+"""Figures of the gesture chain: segmentation of the recordings, and how well the HMMs recognise actions.
+
+Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+
+from glu.gestures.segmentation import RecordingSegmentation, Segment, Segmentation
+from glu.plots.style import ACTION_COLORS
+
+
+def plot_segmentation(
+    ax: Axes,
+    segmentation: Segmentation | RecordingSegmentation,
+    title: str | None = None,
+    reference: Sequence[Segment] = (),
+) -> Axes:
+    """Draw a recording's features (x, y, z), the activity and the segments found on ``ax``.
+
+    Kept segments are shaded and numbered, rejected candidates hatched, tracking events marked at the
+    bottom (gaps ▼, spikes ·; jumps as dotted lines), reference segments (e.g. the originals) drawn as
+    black bars near the top. Repaired (interpolated) frames are drawn half a frame late.
+    Deterministic: the same input gives the same picture.
+    """
+    pieces = segmentation.pieces if isinstance(segmentation, RecordingSegmentation) else [segmentation]
+    colors = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
+    for k, piece in enumerate(pieces):
+        tr = piece.trajectory
+        f = tr.frame + np.where(tr.observed, 0.0, 0.5)
+        for i, axis in enumerate("xyz"):
+            ax.plot(f, tr.xyz[:, i], color=colors[axis], lw=0.8, label=axis if k == 0 else None)
+        ax.plot(f, piece.activity, color="black", lw=1.2, label="activity" if k == 0 else None)
+    segs = [s for p in pieces for s in p.segments]
+    for i, s in enumerate(segs, 1):
+        ax.axvspan(s.start, s.end, color="tab:orange", alpha=0.2, lw=0)
+        ax.text((s.start + s.end) / 2, 1.0, str(i), transform=ax.get_xaxis_transform(), ha="center", va="top")
+    for s, _reason in (r for p in pieces for r in p.rejected):
+        ax.axvspan(s.start, s.end, facecolor="none", edgecolor="grey", hatch="//", alpha=0.5, lw=0)
+    events = segmentation.events if isinstance(segmentation, RecordingSegmentation) else ()
+    xt = ax.get_xaxis_transform()
+    gaps = [e.frame - 0.5 for e in events if e.kind == "gap"]
+    spikes = [e.frame for e in events if e.kind == "spike"]
+    if gaps:
+        ax.plot(gaps, [0.02] * len(gaps), ls="none", marker="v", color="purple", transform=xt, label="gap")
+    if spikes:
+        ax.plot(
+            spikes, [0.02] * len(spikes), ls="none", marker=".", color="grey", transform=xt, label="spike"
+        )
+    for e in events:
+        if e.kind == "jump":
+            ax.axvline(e.frame - 0.5, color="purple", lw=0.6, ls=":")
+    for s in reference:
+        ax.plot([s.start, s.end], [0.93, 0.93], color="black", lw=3, transform=ax.get_xaxis_transform())
+    ax.set_xlabel("frame")
+    ax.set_ylabel("features / activity")
+    if title is not None:
+        ax.set_title(title)
+    ax.legend(loc="lower right", fontsize="small", ncol=6)
+    return ax
+
+
+def plot_segmentations(axes: Sequence[Axes], segmentations: Sequence) -> Sequence[Axes]:
+    """The automatic segmentation of each recording, one axis each (reference segments as black bars).
+
+    ``segmentations``: (segmentation, reference segments) pairs, as
+    :func:`glu.gestures.corpus.recording_segmentations` returns them.
+    """
+    for ax, (seg, ref) in zip(axes, segmentations, strict=False):
+        plot_segmentation(ax, seg, title=f"{seg.recording}: {len(seg.segments)} segments", reference=ref)
+        ax.title.set_fontsize(9)
+    return axes
+
+
+def plot_confusion(ax: Axes, confusion: pd.DataFrame) -> Axes:
+    """A confusion matrix (rows: true action, columns: predicted), counts in the cells."""
+    m = confusion.to_numpy(dtype=float)
+    ax.imshow(m, cmap="Blues")
+    for i in range(m.shape[0]):
+        for j in range(m.shape[1]):
+            ax.text(
+                j,
+                i,
+                f"{int(m[i, j])}",
+                ha="center",
+                va="center",
+                color="white" if m[i, j] > m.max() / 2 else "black",
+            )
+    ax.set_xticks(range(m.shape[1]), confusion.columns)
+    ax.set_yticks(range(m.shape[0]), confusion.index)
+    ax.set_xlabel("predicted")
+    ax.set_ylabel("true")
+    return ax
+
+
+def plot_accuracy_vs_noise(ax: Axes, df: pd.DataFrame) -> Axes:
+    """k-fold accuracy against sensor noise, overall and per action."""
+    ax.plot(df["noise_m"] * 100, df["accuracy"], "o-", color="black", label="all")
+    for c in [c for c in df.columns if c.startswith("accuracy_")]:
+        a = c.removeprefix("accuracy_")
+        ax.plot(df["noise_m"] * 100, df[c], ".--", color=ACTION_COLORS.get(a, "0.5"), label=a)
+    ax.set_xlabel("sensor noise (cm, std per joint)")
+    ax.set_ylabel("accuracy")
+    ax.set_ylim(0, 1.02)
+    ax.legend(fontsize=8, frameon=False)
+    return ax
+
+
+def plot_segment_scores(ax: Axes, df: pd.DataFrame) -> Axes:
+    """Per-frame log-likelihood of each segment under each model (grouped bars), the winner marked."""
+    cols = [c for c in df.columns if c.startswith("loglik_")]
+    labels = [f"{r.recording}\n{r.start}–{r.end}" for r in df.itertuples()]
+    w = 0.8 / len(cols)
+    for k, c in enumerate(cols):
+        a = c.removeprefix("loglik_")
+        ax.bar(np.arange(len(df)) + (k - (len(cols) - 1) / 2) * w, df[c] / df["n_frames"], width=w,
+               color=ACTION_COLORS.get(a, "0.5"), label=a)  # fmt: skip
+    ax.set_xticks(np.arange(len(df)), labels, fontsize=7)
+    ax.set_ylabel(r"$\frac{1}{T}\log L(G \mid A)$")
+    ax.legend(fontsize=8, frameon=False)
+    return ax

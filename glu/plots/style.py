@@ -1,0 +1,62 @@
+"""The look shared by every figure: colours, figure sizes, deterministic saving, the data-source footer.
+
+Figures are saved with :func:`save_figure`, which writes PNG and SVG that are byte-identical across runs
+(no software/date metadata, fixed SVG hash salt, written atomically), and every figure carries a footer
+naming its data source (:func:`stamp`).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+matplotlib.rcParams["svg.hashsalt"] = "glu"
+matplotlib.rcParams["figure.dpi"] = 100
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from glu.files import atomic_path  # noqa: E402
+
+ACTION_COLORS = {"grasp": "#4C72B0", "tap": "#DD8452", "touch": "#55A868", "push": "#8172B3"}
+VALUE_COLORS = {"slow": "#8DA0CB", "medium": "#FC8D62", "fast": "#66C2A5"}
+ORIGINAL_MARK = {"marker": "_", "color": "black", "markersize": 14, "markeredgewidth": 2, "linestyle": "none"}
+
+
+def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
+    """Save ``fig`` as ``path.<fmt>`` for each format, deterministically; returns the files written."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    out = []
+    for fmt in formats:
+        target = path.with_suffix(f".{fmt}")
+        meta = {"png": {"Software": None}, "svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt, {})
+        with atomic_path(target) as tmp:
+            fig.savefig(tmp, format=fmt, metadata=meta, bbox_inches="tight")
+        out.append(target)
+    return out
+
+
+def stamp(fig: Figure, source: str) -> None:
+    """Lay the figure out, then write the data source in small grey text below everything else."""
+    fig.tight_layout()
+    fig.text(0.005, -0.01, f"data: {source}", fontsize=6.5, color="0.35", ha="left", va="top")
+
+
+def new_figure(ncols: int = 1, width: float = 4.2, height: float = 3.2) -> tuple[Figure, list[Axes]]:
+    """A figure with ``ncols`` side-by-side axes."""
+    fig, axes = plt.subplots(1, ncols, figsize=(width * ncols, height), squeeze=False)
+    return fig, list(axes[0])
+
+
+def bars_with_original(ax: Axes, x: np.ndarray, p: np.ndarray, colors, original: np.ndarray | None) -> None:
+    """Bars of ``p`` at ``x``, and the original model's values as black marks (if given)."""
+    ax.bar(x, p, color=colors, edgecolor="0.2", linewidth=0.6)
+    if original is not None:
+        ax.plot(x, original, **ORIGINAL_MARK, label="original model (BN_lab.mat)")

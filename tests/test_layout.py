@@ -1,0 +1,118 @@
+"""The package's layout stays true: imports only go downward, every module has a layer, none is too long.
+
+The layers, bottom first (README, "Package layout"). A module may import from a lower layer and from its
+own component; never from a higher layer, and never from a sibling component of the same layer (the
+network, the gestures and the language know nothing of each other; plots and recordings neither).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+import glu
+
+PACKAGE = Path(glu.__file__).resolve().parent
+
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("glu", "glu.errors"),
+    ("glu.paths", "glu.files"),
+    ("glu.schema",),
+    ("glu.evidence",),
+    ("glu.data",),
+    ("glu.bn", "glu.gestures", "glu.language"),
+    ("glu.fusion",),
+    ("glu.experiments",),
+    ("glu.plots", "glu.recording"),
+    ("glu.outputs",),
+    ("glu.reproduce", "glu.compare"),
+    ("glu.cli",),
+    ("glu.__main__",),
+)
+LAYER = {component: i for i, layer in enumerate(LAYERS) for component in layer}
+MAX_LINES = 500
+
+
+def modules() -> dict[str, Path]:
+    """Every module of the package: dotted name → file."""
+    out = {}
+    for f in sorted(PACKAGE.rglob("*.py")):
+        parts = f.relative_to(PACKAGE.parent).with_suffix("").parts
+        name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+        out[name] = f
+    return out
+
+
+def component(module: str) -> str:
+    """The longest entry of :data:`LAYERS` that is ``module`` or a package containing it."""
+    best = ""
+    for c in LAYER:
+        if (module == c or module.startswith(c + ".")) and len(c) > len(best):
+            best = c
+    return best
+
+
+def imported_modules(path: Path, name: str) -> list[tuple[int, str]]:
+    """(line, module) for every import of a glu module in a file, including imports inside functions."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    is_package = path.name == "__init__.py"
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names if a.name.split(".")[0] == "glu"]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = name.split(".")
+                base = base[: len(base) - node.level + (1 if is_package else 0)]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            if mod.split(".")[0] != "glu":
+                continue
+            for a in node.names:  # `from glu import plots` imports the module glu.plots
+                sub = f"{mod}.{a.name}"
+                out.append((node.lineno, sub if component(sub) != component(mod) else mod))
+    return out
+
+
+def test_the_checker_sees_imports_inside_functions_and_relative_ones(tmp_path):
+    f = tmp_path / "m.py"
+    f.write_text("def f():\n    from glu.plots import style\n    import glu.cli\nfrom . import errors\n")
+    found = {m for _, m in imported_modules(f, "glu.m")}
+    assert found == {"glu.plots", "glu.cli", "glu.errors"}
+
+
+def test_every_module_has_a_layer():
+    missing = [m for m in modules() if not component(m)]
+    assert not missing, f"place these modules in LAYERS (tests/test_layout.py and the README): {missing}"
+
+
+def test_imports_only_go_downward():
+    bad = []
+    for name, path in modules().items():
+        here = component(name)
+        for line, target in imported_modules(path, name):
+            there = component(target)
+            if there == here:
+                continue
+            if not there:
+                bad.append(f"{path.relative_to(PACKAGE.parent)}:{line}: {target} is not a glu module")
+            elif LAYER[there] >= LAYER[here]:
+                kind = "a sibling" if LAYER[there] == LAYER[here] else "a higher layer"
+                bad.append(f"{path.relative_to(PACKAGE.parent)}:{line}: {here} imports {target} ({kind})")
+    assert not bad, "imports that break the layering:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize("upward", ["from glu.cli import main", "import glu.reproduce"])
+def test_an_upward_import_is_caught(tmp_path, upward):
+    f = tmp_path / "inference.py"
+    f.write_text(f"def f():\n    {upward}\n")
+    (target,) = [m for _, m in imported_modules(f, "glu.bn.inference")]
+    assert LAYER[component(target)] > LAYER[component("glu.bn.inference")]
+
+
+def test_no_module_is_longer_than_500_lines():
+    long = {m: n for m, p in modules().items() if (n := len(p.read_text().splitlines())) > MAX_LINES}
+    assert not long, f"split these modules (more than {MAX_LINES} lines): {long}"
