@@ -1,4 +1,14 @@
-"""Shared fixtures: the real data (skipped with a reason when absent) and small synthetic models."""
+"""Shared fixtures: data sources for the oracle tests, and the real data for the reference tests.
+
+Two kinds of tests use data:
+
+* **oracle tests** compare glu with an independent reference (pgmpy, hmmlearn, brute force, closed forms)
+  on whatever data there is. They take the ``source`` fixture (or a fixture built on it), which runs them
+  on a synthetic data folder always, and also on the real data when it is present (CI). Without the real
+  data they still run, on synthetic data.
+* **reference tests** (``tests/test_reference.py``) compare glu with the originals' models and the
+  published numbers; they need the real data and skip with a reason without it.
+"""
 
 from __future__ import annotations
 
@@ -17,8 +27,69 @@ NO_SHARED_REASON = (
     "the real data is absent: set GLU_SHARED_DATA or place it in ../shared/data (CI has it); "
     "`glu data fetch` downloads it"
 )
+SOURCES = ("synthetic", "real") if SHARED is not None else ("synthetic",)
+"""The data the oracle tests run on: synthetic always, real when present (never a skipped instance)."""
+SYNTHETIC_SEED = 0
+SYNTHETIC_N = 1270
 
 
+# ---------------------------------------------------------------- any data (oracle tests)
+@pytest.fixture(scope="session")
+def synthetic_folder(tmp_path_factory) -> Path:
+    """A synthetic data folder, as ``glu data synth`` writes it: both tables and the six hand logs."""
+    from glu.data.synthetic import write_synthetic_folder
+    from glu.gestures.synthetic import hand_log_arrays, synthetic_recordings
+
+    out = tmp_path_factory.mktemp("synthetic-data")
+    logs = {name: hand_log_arrays(g) for name, g in synthetic_recordings(SYNTHETIC_SEED).items()}
+    return write_synthetic_folder(out, SYNTHETIC_N, SYNTHETIC_SEED, logs)
+
+
+@pytest.fixture(scope="session", params=SOURCES)
+def source(request, synthetic_folder):
+    """A data source: the synthetic folder, and (a second instance) the real data when present."""
+    from glu.data import resolve_data
+
+    return resolve_data(SHARED if request.param == "real" else synthetic_folder)
+
+
+@pytest.fixture(scope="session")
+def table(source):
+    """The source's experiment table (words from transcriptions)."""
+    from glu.data import load_experiments
+
+    return load_experiments(source, "lab")
+
+
+@pytest.fixture(scope="session")
+def zero_bn(table):
+    """The network learned faithfully: all-zero CPT rows for word parent configurations never seen."""
+    from glu.bn import learn_bn
+
+    return learn_bn(table)
+
+
+@pytest.fixture(scope="session")
+def uniform_bn(table):
+    """The network learned with uniform rows for unseen word parent configurations."""
+    from glu.bn import learn_bn
+
+    return learn_bn(table, unseen_words="uniform")
+
+
+@pytest.fixture(scope="session")
+def recognizer(source):
+    """Gesture HMMs for the source: the originals' 2013 models on real data, small glu-trained ones otherwise."""
+    from glu.experiments.gestures import train_on
+    from glu.gestures.corpus import gesture_sequences
+    from glu.gestures.original import load_original_models
+
+    if source.original_hmms() is not None:
+        return load_original_models(source.original_hmms())
+    return train_on(gesture_sequences(source, include_test=False), n_states=4, n_mix=1, n_iter=20)
+
+
+# ---------------------------------------------------------------- the real data (reference tests)
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
     """The folder with the real data (affordance-words/, gestures/, reference-models/), or skip."""
@@ -36,19 +107,19 @@ def real_source(shared_data):
 
 
 @pytest.fixture(scope="session")
-def lab_table(shared_data):
+def lab_table(real_source):
     """The paper's experiment table (words from transcriptions), validated."""
     from glu.data import load_experiments
 
-    return load_experiments(shared_data, "lab")
+    return load_experiments(real_source, "lab")
 
 
 @pytest.fixture(scope="session")
-def original_bn(shared_data):
+def original_bn(real_source):
     """The authors' learned network, imported from BN_lab.mat."""
     from glu.bn import BayesNet
 
-    return BayesNet.from_bnt_mat(shared_data / "reference-models" / "BN_lab.mat")
+    return BayesNet.from_bnt_mat(real_source.original_bn())
 
 
 @pytest.fixture(scope="session")

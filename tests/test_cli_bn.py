@@ -9,6 +9,7 @@ import sys
 import numpy as np
 import pytest
 import scipy.io as sio
+from test_model_io import write_bnt_mat
 
 from glu.bn import InferenceEngine
 from glu.cli import main
@@ -22,24 +23,22 @@ def run(capsys, *argv: str) -> tuple[int, str, str]:
     return status, out, err
 
 
-def test_query_json_prints_exactly_the_posterior(shared_data, original_bn, capsys):
-    status, out, err = run(capsys, "query", "--data", str(shared_data), *SPHERE, "--json")
+def test_query_json_prints_exactly_the_posterior(source, zero_bn, capsys):
+    status, out, err = run(capsys, "query", "--data", str(source.root), *SPHERE, "--json")
     assert status == 0
     answer = json.loads(out)
     assert list(answer) == ["ObjVel"] and list(answer["ObjVel"]) == ["slow", "medium", "fast"]
-    ref = InferenceEngine(original_bn).query(
-        ["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"}
-    )
-    np.testing.assert_allclose(list(answer["ObjVel"].values()), ref["ObjVel"], atol=1e-6)
-    assert "real data" in err  # the source is named, on stderr so stdout stays JSON
+    ref = InferenceEngine(zero_bn).query(["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"})
+    assert list(answer["ObjVel"].values()) == ref["ObjVel"].tolist()  # JSON floats are exact
+    assert f"{source.kind} data" in err  # the source is named, on stderr so stdout stays JSON
 
 
-def test_query_text_output_names_the_source_and_each_value(shared_data, capsys):
-    status, out, _ = run(capsys, "query", "--data", str(shared_data), "--target", "ObjVel", "Action",
+def test_query_text_output_names_the_source_and_each_value(source, capsys):
+    status, out, _ = run(capsys, "query", "--data", str(source.root), "--target", "ObjVel", "Action",
                          "--evidence", "Shape=box", "Size=big", "--soft", "Action=grasp:0.2,tap:0.6,touch:0.2")  # fmt: skip
     assert status == 0
     lines = out.splitlines()
-    assert lines[0].startswith("# learned from real data:")
+    assert lines[0].startswith(f"# learned from {source.kind} data")
     assert lines[1].startswith(
         "# evidence: Shape=box, Size=big, Action~(grasp:0.2, tap:0.6, touch:0.2, virtual)"
     )
@@ -49,18 +48,19 @@ def test_query_text_output_names_the_source_and_each_value(shared_data, capsys):
     assert sum(float(r[2]) for r in rows[:3]) == pytest.approx(1, abs=1e-5)
 
 
-def test_learn_edges_and_import(shared_data, tmp_path, capsys):
+def test_learn_edges_and_import(source, zero_bn, tmp_path, capsys):
     model = tmp_path / "lab.json"
-    assert run(capsys, "bn", "learn", "--data", str(shared_data), "-o", str(model))[0] == 0
+    assert run(capsys, "bn", "learn", "--data", str(source.root), "-o", str(model))[0] == 0
     status, out, _ = run(capsys, "bn", "edges", str(model))
     assert status == 0
-    raw = sio.loadmat(shared_data / "reference-models" / "BN_lab.mat", squeeze_me=True,
-                      struct_as_record=False)["netobj_lab"]  # fmt: skip
+    mat = tmp_path / "BN.mat"  # the learned network as the originals' MATLAB code saves one
+    write_bnt_mat(zero_bn, mat)
+    raw = sio.loadmat(mat, squeeze_me=True, struct_as_record=False)["netobj_lab"]
     names = [str(n) for n in raw.nodeNames]
     expected = sorted(f"{names[i]} -> {names[j]}" for i, j in zip(*np.nonzero(raw.dag), strict=True))
-    assert out.splitlines() == expected and len(expected) == 66
+    assert out.splitlines() == expected and len(expected) == len(zero_bn.edges())
     imported = tmp_path / "orig.json"
-    mat = str(shared_data / "reference-models" / "BN_lab.mat")
+    mat = str(mat)
     assert run(capsys, "bn", "import", mat, "-o", str(imported))[0] == 0
     assert run(capsys, "bn", "edges", str(imported))[1].splitlines() == expected
     # a query against the saved model equals the query that learns from the data
@@ -69,17 +69,36 @@ def test_learn_edges_and_import(shared_data, tmp_path, capsys):
     np.testing.assert_allclose(list(a["ObjVel"].values()), list(b["ObjVel"].values()), atol=1e-6)
 
 
-def test_unseen_words_option_changes_the_answer(shared_data, capsys):
-    args = ["query", "--data", str(shared_data), "--target", "ObjVel", "--json"]
-    zero = json.loads(run(capsys, *args)[1])["ObjVel"]
-    uniform = json.loads(run(capsys, *args, "--unseen-words", "uniform")[1])["ObjVel"]
-    assert abs(zero["fast"] - uniform["fast"]) > 1e-3
+def test_unseen_words_option_changes_the_answer(source, zero_bn, uniform_bn, capsys):
+    args = ["query", "--data", str(source.root), "--target", "ObjVel", "--json"]
+    zero = list(json.loads(run(capsys, *args)[1])["ObjVel"].values())
+    uniform = list(json.loads(run(capsys, *args, "--unseen-words", "uniform")[1])["ObjVel"].values())
+    assert zero == InferenceEngine(zero_bn).query(["ObjVel"])["ObjVel"].tolist()
+    assert uniform == InferenceEngine(uniform_bn).query(["ObjVel"])["ObjVel"].tolist()
+    assert max(abs(a - b) for a, b in zip(zero, uniform, strict=True)) > 1e-9
 
 
-def test_batch_answers_line_by_line_with_errors_in_place(shared_data, tmp_path, capsys, original_bn):
+def test_impossible_evidence_is_one_line_and_status_2(source, zero_bn, capsys):
+    word = sorted(zero_bn.zero_rows())[0]
+    row = np.argwhere(zero_bn.cpts[word].sum(axis=-1) == 0)[0]
+    evidence = [
+        f"{p}={zero_bn.schema.values_of(p)[i]}" for p, i in zip(zero_bn.parents[word], row, strict=True)
+    ]
+    status, _, err = run(
+        capsys, "query", "--data", str(source.root), "--target", "Action", "--evidence", *evidence
+    )
+    assert status == 2 and err.count("\n") == 1
+    assert "impossible evidence" in err and ", ".join(evidence) in err
+
+
+def test_batch_answers_line_by_line_with_errors_in_place(tmp_path, capsys, zero_bn):
+    zero_word = sorted(zero_bn.zero_rows())[0]  # an evidence set the all-zero rows make impossible
+    parents = zero_bn.parents[zero_word]
+    row = np.argwhere(zero_bn.cpts[zero_word].sum(axis=-1) == 0)[0]
+    impossible = {p: zero_bn.schema.values_of(p)[i] for p, i in zip(parents, row, strict=True)}
     queries = [
         {"target": ["ObjVel"], "evidence": {"Action": "tap", "Shape": "sphere", "Size": "small"}},
-        {"target": ["Action"], "evidence": {"ObjVel": "fast", "HandVel": "fast", "Contact": "short"}},
+        {"target": ["Action"], "evidence": impossible},
         {
             "target": ["ObjVel"],
             "evidence": {"Shape": "sphere"},
@@ -91,12 +110,12 @@ def test_batch_answers_line_by_line_with_errors_in_place(shared_data, tmp_path, 
     ]
     path = tmp_path / "q.jsonl"
     path.write_text("\n".join(q if isinstance(q, str) else json.dumps(q) for q in queries) + "\n")
-    status, out, err = run(capsys, "query", "--model", str(shared_data / "reference-models" / "BN_lab.mat"),
-                           "--batch", str(path))  # fmt: skip
+    model = zero_bn.save(tmp_path / "model.json")
+    status, out, err = run(capsys, "query", "--model", str(model), "--batch", str(path))
     assert status == 0
     answers = [json.loads(line) for line in out.splitlines()]
     assert len(answers) == 6
-    eng = InferenceEngine(original_bn)
+    eng = InferenceEngine(zero_bn)
     np.testing.assert_allclose(list(answers[0]["ObjVel"].values()),
                                eng.query(["ObjVel"], queries[0]["evidence"])["ObjVel"], atol=1e-12)  # fmt: skip
     assert answers[1]["error"].startswith("line 2: impossible evidence")
@@ -122,28 +141,24 @@ def test_batch_answers_line_by_line_with_errors_in_place(shared_data, tmp_path, 
         ),
         (["query", "--target", "ObjVel", "--soft", "Action=tap:0.7,grasp:0.7"], "not a distribution"),
         (["query", "--target", "ObjVel", "--soft", "Action=tap"], "expected VALUE:PROBABILITY"),
-        (
-            ["query", "--target", "Action", "--evidence", "ObjVel=fast", "HandVel=fast", "Contact=short"],
-            "impossible evidence",
-        ),
         (["query", "--data", "/nonexistent/folder", "--target", "ObjVel"], "no such data folder"),
         (["query", "--model", "/nonexistent/m.json", "--target", "ObjVel"], "no such model file"),
         (["query"], "no target"),
     ],
 )
-def test_bad_input_is_one_line_and_status_2(shared_data, capsys, argv, message):
+def test_bad_input_is_one_line_and_status_2(source, capsys, argv, message):
     if "--data" not in argv and "--model" not in argv:
-        argv = [argv[0], "--data", str(shared_data), *argv[1:]]
+        argv = [argv[0], "--data", str(source.root), *argv[1:]]
     status, out, err = run(capsys, *argv)
     assert status == 2
     assert len(err.strip().splitlines()) == 1 and message in err and "Traceback" not in err
 
 
-def test_cold_start_does_not_import_pgmpy(shared_data, tmp_path):
+def test_cold_start_does_not_import_pgmpy(source, tmp_path):
     """The query path stays light: no pgmpy (its import alone takes seconds)."""
     code = (
         "import sys; from glu.cli import main; "
-        f"rc = main(['query', '--data', {str(shared_data)!r}, '--target', 'ObjVel', '--json']); "
+        f"rc = main(['query', '--data', {str(source.root)!r}, '--target', 'ObjVel', '--json']); "
         "print('pgmpy' in sys.modules, 'hmmlearn' in sys.modules, 'matplotlib' in sys.modules, rc)"
     )
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

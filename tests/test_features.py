@@ -94,11 +94,11 @@ def test_bad_skeletons():
         skeleton_features(np.zeros((10, 2, 3)) + 1, joints=("torso", "neck"))
 
 
-def test_log_features_divide_by_1000(shared_data):
+def test_log_features_divide_by_1000(source):
     x = np.array([[644.291918, -809.62949, -934.764515]])
     np.testing.assert_array_equal(log_features(x), x / 1000)
-    ref = np.loadtxt(shared_data / "gestures/tap1_hand/data.log")[:, 2:] / 1000
-    (piece,) = load_features(shared_data / "gestures/tap1_hand/data.log", policy=None).pieces
+    ref = np.loadtxt(source.hand_log("tap1_hand"))[:, 2:] / 1000
+    (piece,) = load_features(source.hand_log("tap1_hand"), policy=None).pieces
     np.testing.assert_array_equal(piece.xyz, ref)
 
 

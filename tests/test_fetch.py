@@ -1,7 +1,14 @@
-"""`glu data fetch` against a local HTTP server serving a copy of the shared data (with broken files)."""
+"""`glu data fetch` against a local HTTP server serving a data folder (with broken files) and its manifest.
+
+The mirror serves a copy of the synthetic data folder, described by a manifest written here with
+checksums computed by hashlib; the real manifest's checksums are checked against the real files in
+tests/test_reference.py.
+"""
 
 from __future__ import annotations
 
+import hashlib
+import json
 import shutil
 import threading
 from functools import partial
@@ -33,9 +40,9 @@ class _Handler(SimpleHTTPRequestHandler):
 
 
 @pytest.fixture
-def server(shared_data, tmp_path):
+def server(synthetic_folder, tmp_path):
     root = tmp_path / "mirror"
-    shutil.copytree(shared_data, root)
+    shutil.copytree(synthetic_folder, root)
     httpd = ThreadingHTTPServer(("127.0.0.1", 0), partial(_Handler, directory=str(root)))
     thread = threading.Thread(target=httpd.serve_forever, daemon=True)
     thread.start()
@@ -44,23 +51,31 @@ def server(shared_data, tmp_path):
     httpd.server_close()
 
 
-def test_manifest_checksums_match_the_shared_copy(shared_data):
-    items = manifest()
-    assert len(items) == 14
-    for item in items:
-        assert item.url.startswith("https://raw.githubusercontent.com/")
-        assert sha256_of(shared_data / item.local) == item.sha256, item.local
+@pytest.fixture
+def mirror_manifest(synthetic_folder, tmp_path):
+    """A manifest of every file of the synthetic folder, in the format of glu's own."""
+    files = []
+    for f in sorted(p for p in synthetic_folder.rglob("*") if p.is_file()):
+        local = f.relative_to(synthetic_folder).as_posix()
+        digest = hashlib.sha256(f.read_bytes()).hexdigest()
+        files.append({"local": local, "source": "S", "path": f"data/{local}", "sha256": digest})
+    spec = {"url_template": "https://example.org/{repo}/{commit}/{path}",
+            "repositories": {"S": {"repo": "lab/data", "commit": "0" * 40}}, "files": files}  # fmt: skip
+    path = tmp_path / "manifest.json"
+    path.write_text(json.dumps(spec))
+    return path, len(files)
 
 
-def test_fetch_verifies_and_leaves_nothing_partial(server, tmp_path):
+def test_fetch_verifies_and_leaves_nothing_partial(server, mirror_manifest, synthetic_folder, tmp_path):
     root, url, httpd = server
-    corrupted = "affordance-words/grammar.grm"
-    missing = "reference-models/HMM_M1_Q6_mixsplit.mat"
-    (root / corrupted).write_bytes((root / corrupted).read_bytes().replace(b"robot", b"r0bot"))
+    path, _ = mirror_manifest
+    corrupted = "affordance-words/networkDefinition.txt"
+    missing = "gestures/push1_hand/data.log"
+    (root / corrupted).write_bytes((root / corrupted).read_bytes().replace(b"tap", b"t4p"))
     (root / missing).unlink()
     httpd.truncate = True
     dest = tmp_path / "real"
-    results = {r.local: r for r in fetch_all(dest, mirror=url)}
+    results = {r.local: r for r in fetch_all(dest, mirror=url, manifest_path=path)}
     failed = {k for k, r in results.items() if r.status == "failed"}
     assert failed == {corrupted, missing, TRUNCATED}
     assert "sha256 mismatch" in results[corrupted].detail
@@ -71,33 +86,36 @@ def test_fetch_verifies_and_leaves_nothing_partial(server, tmp_path):
         p for p in dest.rglob("*") if p.is_file() and (p.name.startswith(".") or p.suffix == ".part")
     ]
     assert leftovers == []
-    for item in manifest(url):
+    for item in manifest(url, path):
         if item.local not in failed:
             assert sha256_of(dest / item.local) == item.sha256
+            assert (dest / item.local).read_bytes() == (synthetic_folder / item.local).read_bytes()
 
     # the server is mended: a second run downloads only what is missing
     httpd.truncate = False
-    shutil.copy(shared_data_file(root, corrupted), root / corrupted)
-    shutil.copy(shared_data_file(root, missing), root / missing)
-    results = {r.local: r.status for r in fetch_all(dest, mirror=url)}
+    shutil.copy(synthetic_folder / corrupted, root / corrupted)
+    shutil.copy(synthetic_folder / missing, root / missing)
+    results = {r.local: r.status for r in fetch_all(dest, mirror=url, manifest_path=path)}
     assert {k for k, s in results.items() if s == "downloaded"} == failed
     assert all(s in ("downloaded", "present") for s in results.values())
 
 
-def shared_data_file(_root: Path, local: str) -> Path:
-    from glu.paths import shared_data_dir
-
-    return shared_data_dir() / local
-
-
-def test_fetch_command_reports_failures_with_status_2(server, tmp_path, capsys):
+def test_fetch_command_reports_failures_with_status_2(server, mirror_manifest, tmp_path, capsys):
     root, url, _ = server
-    (root / "affordance-words" / "affdata.txt").unlink()
-    status = main(["data", "fetch", "--dest", str(tmp_path / "d"), "--mirror", url])
+    path, n = mirror_manifest
+    (root / "affordance-words" / "networkDefinition.txt").unlink()
+    status = main(["data", "fetch", "--dest", str(tmp_path / "d"), "--mirror", url, "--manifest", str(path)])
     err = capsys.readouterr().err
     assert status == 2
     last = err.strip().splitlines()[-1]
-    assert last.startswith("glu data fetch: error: 1 of 14 files could not be fetched")
-    assert "[14/14]" in err
-    assert not (tmp_path / "d" / "affordance-words" / "affdata.txt").exists()
+    assert last.startswith(f"glu data fetch: error: 1 of {n} files could not be fetched")
+    assert f"[{n}/{n}]" in err
+    assert not (tmp_path / "d" / "affordance-words" / "networkDefinition.txt").exists()
     assert main(["data", "fetch", "--dest", str(tmp_path / "d2"), "--mirror", "http://127.0.0.1:9"]) == 2
+
+
+def test_the_manifest_names_the_pinned_commits():
+    items = manifest()
+    assert {i.url.split("/")[5] for i in items} == {"421f4554aba944fe4fdbfc51feb01b0967bf930e",
+                                                   "fd608ac0f732bc1016df55af0489e5f25c43036c"}  # fmt: skip
+    assert all(len(i.sha256) == 64 for i in items)

@@ -1,4 +1,4 @@
-"""Fusion strategies against closed forms built from pgmpy's hard-evidence posteriors."""
+"""Fusion strategies against closed forms built from pgmpy's hard-evidence posteriors (synthetic and real data)."""
 
 from __future__ import annotations
 
@@ -21,8 +21,8 @@ ACTIONS = ("grasp", "tap", "touch")
 
 
 @pytest.fixture(scope="module")
-def ref(original_bn):
-    model, seen = to_pgmpy_with_zero_rows(original_bn)
+def ref(zero_bn):
+    model, seen = to_pgmpy_with_zero_rows(zero_bn)
     ve = VariableElimination(model)
 
     def p(target, evidence):
@@ -32,8 +32,8 @@ def ref(original_bn):
 
 
 @pytest.fixture(scope="module")
-def engine(original_bn):
-    return InferenceEngine(original_bn)
+def engine(zero_bn):
+    return InferenceEngine(zero_bn)
 
 
 CASES = [

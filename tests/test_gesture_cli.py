@@ -90,27 +90,36 @@ def test_train_and_recognize_with_a_recogniser(capsys, tmp_path, synthetic_log):
     np.testing.assert_allclose(list(d["loglik"].values()), Recognizer.load(model).loglik(X), rtol=1e-12)
 
 
-def test_recognize_original_models_json_and_stream(capsys, shared_data):
-    common = ["recognize", "tap1_hand", "--data", str(shared_data), "--frames", "216:351"]
+@pytest.fixture(scope="module")
+def models(source, recognizer, tmp_path_factory):
+    """``--models`` for the source: ``original`` with the real data, a saved recogniser file otherwise."""
+    if source.original_hmms() is not None:
+        return "original"
+    return str(recognizer.save(tmp_path_factory.mktemp("models") / "recognizer.json"))
+
+
+def test_recognize_json_and_stream(capsys, source, recognizer, models):
+    common = ["recognize", "tap1_hand", "--data", str(source.root), "--frames", "216:351", "--models", models]
     status, out, err = run(capsys, *common, "--json")
     assert status == 0
     d = json.loads(out)  # stdout is exactly the JSON object; the data source went to stderr
     assert set(d) == {"loglik", "posterior"} and list(d["loglik"]) == ["grasp", "tap", "touch"]
-    assert max(d["posterior"], key=d["posterior"].get) == "tap"
-    assert "real data" in err
+    X = np.loadtxt(source.hand_log("tap1_hand"))[215:351, 2:] / 1000  # the logged frames, independently
+    np.testing.assert_allclose(list(d["loglik"].values()), recognizer.loglik(X)[:3], rtol=1e-12)
     status, out, _ = run(capsys, *common, "--stream")
     assert status == 0
     rows = [ln.split() for ln in out.splitlines() if ln[:5].strip().isdigit()]
     assert len(rows) == 136 and rows[0][0] == "216" and rows[-1][0] == "351"
     np.testing.assert_allclose([float(v) for v in rows[-1][1:4]], list(d["loglik"].values()), atol=1e-3)
     status, out, _ = run(capsys, *common)
-    assert status == 0 and "data: real data" in out and "recognised: tap" in out
+    best = max(d["posterior"], key=d["posterior"].get)
+    assert status == 0 and f"recognised: {best}" in out
 
 
-def test_stream_json_lines(capsys, shared_data):
+def test_stream_json_lines(capsys, source, models):
     status, out, _ = run(
-        capsys, "recognize", "tap_notable_seated_1", "--data", str(shared_data), "--frames", "121:125", "--stream",
-        "--json",
+        capsys, "recognize", "tap_notable_seated_1", "--data", str(source.root), "--frames", "121:125", "--stream",
+        "--json", "--models", models,
     )  # fmt: skip
     assert status == 0
     lines = [json.loads(ln) for ln in out.splitlines()]
@@ -128,22 +137,24 @@ def test_bad_frames_syntax(capsys, synthetic_log, frames, fragment):
     assert_one_line_error(status, err, fragment)
 
 
-def test_frames_out_of_range(capsys, synthetic_log, shared_data):
+def test_frames_out_of_range(capsys, synthetic_log, source, models):
     path, _ = synthetic_log
-    status, _, err = run(capsys, "recognize", str(path), "--frames", "1:99999", "--data", str(shared_data))
+    status, _, err = run(capsys, "recognize", str(path), "--frames", "1:99999", "--data", str(source.root),
+                         "--models", models)  # fmt: skip
     assert_one_line_error(status, err, "out of range; allowed: 1 ≤ first ≤ last ≤")
 
 
-def test_malformed_log_and_missing_files(capsys, tmp_path, shared_data):
+def test_malformed_log_and_missing_files(capsys, tmp_path, source, models):
     bad = tmp_path / "bad.log"
     bad.write_text("-1 1.0 1 2 3\n-1 1.1 1 2\n")
     status, _, err = run(capsys, "gestures", "segment", str(bad))
     assert_one_line_error(status, err, f"{bad}:2: expected 5 fields")
-    status, _, err = run(capsys, "recognize", str(bad), "--data", str(shared_data))
+    data = ["--data", str(source.root), "--models", models]
+    status, _, err = run(capsys, "recognize", str(bad), *data)
     assert_one_line_error(status, err, f"{bad}:2:")
-    status, _, err = run(capsys, "recognize", str(tmp_path / "none.log"), "--data", str(shared_data))
+    status, _, err = run(capsys, "recognize", str(tmp_path / "none.log"), *data)
     assert_one_line_error(status, err, "no such file")
-    status, _, err = run(capsys, "recognize", "no_such_recording", "--data", str(shared_data))
+    status, _, err = run(capsys, "recognize", "no_such_recording", *data)
     assert_one_line_error(status, err, "recordings: grasp1_hand")
     notjson = tmp_path / "m.json"
     notjson.write_text("{")
@@ -162,10 +173,10 @@ def test_train_arguments(capsys, tmp_path):
     assert_one_line_error(status, err, "no such data folder")
 
 
-def test_train_on_the_real_recordings(capsys, tmp_path, shared_data):
-    model = tmp_path / "real.json"
-    status, out, _ = run(capsys, "hmm", "train", "--data", str(shared_data), "-o", str(model))
-    assert status == 0 and "data: real data" in out
+def test_train_on_the_recordings(capsys, tmp_path, source):
+    model = tmp_path / "trained.json"
+    status, out, _ = run(capsys, "hmm", "train", "--data", str(source.root), "-o", str(model), "--iter", "20")
+    assert status == 0 and f"data: {source.kind} data" in out
     assert "grasp: 4 sequences" in out
-    status, out, _ = run(capsys, "recognize", "tap1_hand", "--data", str(shared_data), "--models", str(model))
+    status, out, _ = run(capsys, "recognize", "tap1_hand", "--data", str(source.root), "--models", str(model))
     assert status == 0

@@ -12,7 +12,6 @@ from glu.experiments.gestures import (
     confusion_matrix,
     cross_validate,
     leave_one_out,
-    original_scores,
     stratified_folds,
 )
 from glu.gestures.corpus import LabelledSequence, synthetic_corpus
@@ -75,14 +74,3 @@ def test_leave_one_recording_out_marks_untestable_actions():
     assert len(seg) == 5 and seg.testable.all()
     # the grasp sequences sit 5 units away from the taps: leave-one-segment-out must find that
     assert seg[seg.action == "grasp"].correct.all()
-
-
-def test_original_scores_pick_a_winner_per_segment(real_source):
-    df = original_scores(real_source)
-    assert list(zip(df.recording, df.start, df.end, strict=True)) == [
-        ("tap1_hand", 216, 351), ("tap1_hand", 401, 511), ("tap1_hand", 557, 664),
-        ("tap_notable_seated_1", 121, 214), ("norobotview_tap_notable_seated_2", 230, 375),
-    ]  # fmt: skip
-    ll = df[["loglik_grasp", "loglik_tap", "loglik_touch"]].to_numpy()
-    assert df.winner.tolist() == [["grasp", "tap", "touch"][i] for i in ll.argmax(axis=1)]
-    np.testing.assert_allclose(df[["p_hmm_grasp", "p_hmm_tap", "p_hmm_touch"]].sum(axis=1), 1.0)

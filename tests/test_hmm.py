@@ -311,16 +311,8 @@ def test_model_validation():
 
 # --- the original 2013 models ------------------------------------------------------------------------
 
-SEGMENTS = [
-    ("tap1_hand", 216, 351),
-    ("tap1_hand", 401, 511),
-    ("tap1_hand", 557, 664),
-    ("tap_notable_seated_1", 121, 214),
-    ("norobotview_tap_notable_seated_2", 230, 375),
-]
 
-
-def _mat_params(mat, k):
+def mat_params(mat, k):
     """The parameters of hmm{k} straight from the .mat arrays, in our (Q, M, …) layout."""
     prior = mat[f"hmm{k}_prior"].astype(float).ravel()
     Q = len(prior)
@@ -331,37 +323,44 @@ def _mat_params(mat, k):
     return prior, mat[f"hmm{k}_trans"].astype(float), w, mu, sig
 
 
-@pytest.mark.parametrize("file", ["HMM_M3_Q6_mixsplit.mat", "HMM_M1_Q6_mixsplit.mat"])
-def test_original_models_match_an_independent_forward(shared_data, file):
+def write_original_mat(models: dict[int, GestureHMM], path) -> None:
+    """Save models in the layout of the originals' .mat files (METHOD.md §4), independently of glu's reader."""
+    from scipy.io import savemat
+
+    out = {}
+    for k, m in models.items():
+        out[f"hmm{k}_prior"] = m.startprob.reshape(-1, 1)
+        out[f"hmm{k}_trans"] = m.transmat
+        out[f"hmm{k}_mixmat"] = m.weights
+        out[f"hmm{k}_mu"] = m.means.transpose(2, 0, 1)  # D × Q × M
+        out[f"hmm{k}_Sigma"] = m.covars.transpose(2, 3, 0, 1)  # D × D × Q × M
+    savemat(path, out)
+
+
+@pytest.mark.parametrize("n_mix", [3, 1])
+def test_original_layout_files_are_read_as_written(tmp_path, n_mix):
     from hmmlearn.hmm import GMMHMM
 
-    path = shared_data / "reference-models" / file
+    rng = np.random.default_rng(10 + n_mix)
+    models = {k: random_model(rng, Q=6, M=n_mix, D=3) for k in (0, 1, 3, 4)}
+    path = tmp_path / f"HMM_M{n_mix}_Q6_mixsplit.mat"
+    write_original_mat(models, path)
     rec = load_original_models(path, include_garbage=True)
-    mat = loadmat(path)
     assert rec.actions == ("grasp", "tap", "touch", "garbage")
-    for name, a, b in SEGMENTS:
-        X = np.loadtxt(shared_data / "gestures" / name / "data.log")[a - 1 : b, 2:] / 1000
-        assert len(X) == b - a + 1
-        ours = rec.loglik(X)
-        for i, k in enumerate((3, 1, 4, 0)):
-            pi, A, w, mu, sig = _mat_params(mat, k)
-            ref = ref_forward(X, pi, A, w, mu, sig)[-1]
-            assert ours[i] == pytest.approx(ref, abs=1e-6)
-            h = GMMHMM(n_components=len(pi), n_mix=w.shape[1], covariance_type="full", init_params="")
-            h.n_features = 3
-            h.startprob_, h.transmat_, h.weights_, h.means_, h.covars_ = pi, A, w, mu, sig
-            assert ours[i] == pytest.approx(h.score(X), abs=1e-6)
-    for m in rec.models.values():
-        assert m.is_left_to_right and m.startprob[0] == 1.0
-
-
-def test_original_streaming_curve_on_the_sphere_tap(shared_data):
-    rec = load_original_models(shared_data / "reference-models/HMM_M3_Q6_mixsplit.mat")
-    X = np.loadtxt(shared_data / "gestures/tap_notable_seated_1/data.log")[120:214, 2:] / 1000
+    mat = loadmat(path)
+    X = rng.normal(size=(40, 3))
+    for action, k in (("grasp", 3), ("tap", 1), ("touch", 4), ("garbage", 0)):
+        for ours, ref in zip(params(rec.models[action]), params(models[k]), strict=True):
+            np.testing.assert_array_equal(ours, ref)
+        pi, A, w, mu, sig = mat_params(mat, k)
+        ll = rec.models[action].loglik_curve(X)
+        np.testing.assert_allclose(ll, ref_forward(X, pi, A, w, mu, sig), rtol=1e-10)
+        h = GMMHMM(n_components=6, n_mix=n_mix, covariance_type="full", init_params="")
+        h.n_features = 3
+        h.startprob_, h.transmat_, h.weights_, h.means_, h.covars_ = pi, A, w, mu, sig
+        assert ll[-1] == pytest.approx(h.score(X), abs=1e-8)
     ll, p = rec.stream().extend(X)
-    mat = loadmat(shared_data / "reference-models/HMM_M3_Q6_mixsplit.mat")
-    for i, k in enumerate((3, 1, 4)):
-        np.testing.assert_allclose(ll[:, i], ref_forward(X, *_mat_params(mat, k)), rtol=1e-9, atol=1e-7)
+    np.testing.assert_allclose(ll[:, 1], ref_forward(X, *mat_params(mat, 1)), rtol=1e-10)
     np.testing.assert_allclose(p.sum(1), 1.0)
 
 

@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from glu.bn import BayesNet, InferenceEngine, learn_bn
+from glu.bn import BayesNet, InferenceEngine
 from glu.errors import EvidenceError, ImpossibleEvidenceError, UnknownNodeError, UnknownValueError
 from glu.schema import AFFORDANCE_NODES, WORDS, Schema
 
@@ -20,11 +20,6 @@ with warnings.catch_warnings():
     from glu.bn.pgmpy_bridge import to_pgmpy, to_pgmpy_with_zero_rows
 
 TOL = 1e-9
-
-
-@pytest.fixture(scope="module")
-def uniform_bn(lab_table):
-    return learn_bn(lab_table, unseen_words="uniform")
 
 
 def _random_query(rng, bn: BayesNet, max_aff=4, max_words=3):
@@ -66,15 +61,16 @@ def test_hard_evidence_agrees_with_pgmpy(uniform_bn):
     assert checked > 200
 
 
-def test_zero_rows_agree_with_pgmpy_and_an_explicit_indicator(original_bn):
+def test_zero_rows_agree_with_pgmpy_and_an_explicit_indicator(zero_bn):
     """The original's all-zero rows: pgmpy with an observed 'seen' indicator per word is the reference."""
-    eng = InferenceEngine(original_bn)
-    model, seen = to_pgmpy_with_zero_rows(original_bn)
+    assert zero_bn.zero_rows(), "the faithful model has all-zero rows on this data"
+    eng = InferenceEngine(zero_bn)
+    model, seen = to_pgmpy_with_zero_rows(zero_bn)
     ve = VariableElimination(model)
     rng = np.random.default_rng(1)
     impossible = 0
     for _ in range(120):
-        target, evidence = _random_query(rng, original_bn)
+        target, evidence = _random_query(rng, zero_bn)
         if _pgmpy_evidence_probability(ve, {**evidence, **seen}) == 0:
             impossible += 1
             with pytest.raises(ImpossibleEvidenceError, match="impossible evidence"):
@@ -83,10 +79,15 @@ def test_zero_rows_agree_with_pgmpy_and_an_explicit_indicator(original_bn):
         ref = _pgmpy_marginal(ve, target, {**evidence, **seen})
         np.testing.assert_allclose(eng.query([target], evidence)[target], ref, rtol=0, atol=TOL)
     assert impossible > 0
-    # the configurations the quirk removes are impossible evidence
-    with pytest.raises(ImpossibleEvidenceError, match="ObjVel=fast, HandVel=fast, Contact=short"):
-        eng.query(["Action"], {"ObjVel": "fast", "HandVel": "fast", "Contact": "short"})
-    assert eng.base_mass == pytest.approx(1 - 0.0165, abs=5e-4)  # 1.65 % of the prior mass disappears
+    # the mass the zero rows remove: the prior probability of the excluded parent configurations
+    ve_uniform = VariableElimination(to_pgmpy(learn_bn_uniform_like(zero_bn)))
+    excluded = 0.0
+    for word in zero_bn.zero_rows():
+        parents = zero_bn.parents[word]
+        joint = ve_uniform.query(list(parents), joint=True, show_progress=False)
+        rows = zero_bn.cpts[word].sum(axis=-1) == 0
+        excluded = max(excluded, float(sum(joint.values[tuple(i)] for i in np.argwhere(rows))))
+    assert 1 - eng.base_mass >= excluded - 1e-12
 
 
 def test_virtual_evidence_agrees_with_pgmpy(uniform_bn):
@@ -137,8 +138,8 @@ def test_jeffrey_on_two_nodes_fits_both_marginals(uniform_bn):
     np.testing.assert_allclose(post["Shape"], qs, atol=1e-10)
 
 
-def test_soft_evidence_certain_equals_hard_evidence(original_bn):
-    eng = InferenceEngine(original_bn)
+def test_soft_evidence_certain_equals_hard_evidence(zero_bn):
+    eng = InferenceEngine(zero_bn)
     hard = eng.query(["ObjVel", "rolls"], {"Action": "tap", "Shape": "sphere"})
     for rule in ("virtual", "jeffrey"):
         soft = eng.query(
@@ -210,8 +211,8 @@ def test_brute_force_on_tiny_networks(zero_rows):
 
 
 # ---------------------------------------------------------------- batch and word fast paths
-def test_word_probabilities_equal_single_queries(original_bn):
-    eng = InferenceEngine(original_bn)
+def test_word_probabilities_equal_single_queries(zero_bn):
+    eng = InferenceEngine(zero_bn)
     for evidence in (
         {},
         {"Size": "big", "Shape": "sphere", "ObjVel": "fast"},
@@ -223,8 +224,8 @@ def test_word_probabilities_equal_single_queries(original_bn):
             assert probs[i] == pytest.approx(eng.query([w], evidence)[w][1], abs=1e-12)
 
 
-def test_batch_equals_single_queries(original_bn):
-    eng = InferenceEngine(original_bn)
+def test_batch_equals_single_queries(zero_bn):
+    eng = InferenceEngine(zero_bn)
     rng = np.random.default_rng(4)
     n = 300
     evidence = {
@@ -249,8 +250,8 @@ def test_batch_equals_single_queries(original_bn):
 
 
 @pytest.mark.parametrize("rule", ["virtual", "jeffrey"])
-def test_batch_soft_evidence_equals_single_queries(original_bn, rule):
-    eng = InferenceEngine(original_bn)
+def test_batch_soft_evidence_equals_single_queries(zero_bn, rule):
+    eng = InferenceEngine(zero_bn)
     rng = np.random.default_rng(5)
     n = 50
     q = rng.dirichlet(np.ones(3), size=n)
@@ -262,16 +263,20 @@ def test_batch_soft_evidence_equals_single_queries(original_bn, rule):
             np.testing.assert_allclose(out[t][i], single[t], atol=1e-12)
 
 
-def test_batch_raises_on_impossible_rows_by_default(original_bn):
-    eng = InferenceEngine(original_bn)
-    ev = {"ObjVel": ["slow", "fast"], "HandVel": ["slow", "fast"], "Contact": ["long", "short"]}
+def test_batch_raises_on_impossible_rows_by_default(zero_bn):
+    eng = InferenceEngine(zero_bn)
+    word, parents, row = _a_zero_row(zero_bn)
+    possible = _a_possible_row(zero_bn, parents)
+    ev = {p: [possible[i], row[i]] for i, p in enumerate(parents)}
     with pytest.raises(ImpossibleEvidenceError, match="row 1"):
         eng.query_batch(["Action"], ev)
+    out = eng.query_batch(["Action"], ev, errors="nan")
+    assert np.isfinite(out["Action"][0]).all() and np.isnan(out["Action"][1]).all()
 
 
 # ---------------------------------------------------------------- errors
-def test_errors_are_clear_value_errors(original_bn):
-    eng = InferenceEngine(original_bn)
+def test_errors_are_clear_value_errors(zero_bn):
+    eng = InferenceEngine(zero_bn)
     with pytest.raises(UnknownNodeError, match=r"unknown node 'Colour' \(did you mean Color\?\)"):
         eng.query(["Colour"])
     with pytest.raises(UnknownValueError, match=r"Shape has no value 'ball'; allowed: sphere, box"):
@@ -292,19 +297,29 @@ def test_errors_are_clear_value_errors(original_bn):
         assert issubclass(err, ValueError)
 
 
-# ---------------------------------------------------------------- the paper's numbers
-def test_glu2017_effect_prediction_equals_the_original_model(learned_bn, original_bn):
-    ours = InferenceEngine(learned_bn)
-    orig = InferenceEngine(original_bn)
-    model, seen = to_pgmpy_with_zero_rows(original_bn)
-    ve = VariableElimination(model)
-    for ev in (
-        {"Action": "tap", "Shape": "sphere", "Size": "small"},
-        {"Action": "tap", "Shape": "box", "Size": "big"},
-    ):
-        a = ours.query(["ObjVel"], ev)["ObjVel"]
-        np.testing.assert_allclose(a, orig.query(["ObjVel"], ev)["ObjVel"], atol=1e-6)
-        np.testing.assert_allclose(a, _pgmpy_marginal(ve, "ObjVel", {**ev, **seen}), atol=1e-9)
-    sphere = ours.query(["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"})["ObjVel"]
-    box = ours.query(["ObjVel"], {"Action": "tap", "Shape": "box", "Size": "big"})["ObjVel"]
-    assert sphere.argmax() == 2 and box.argmax() == 0  # the sphere rolls fast, the box barely moves
+# ---------------------------------------------------------------- helpers
+def learn_bn_uniform_like(bn: BayesNet) -> BayesNet:
+    """``bn`` with every all-zero row made uniform (the prior over affordance configurations, unexcluded)."""
+    cpts = {}
+    for n in bn.nodes:
+        c = bn.cpts[n].copy()
+        c[c.sum(axis=-1) == 0] = 1.0 / c.shape[-1]
+        cpts[n] = c
+    return BayesNet(schema=bn.schema, parents=bn.parents, cpts=cpts)
+
+
+def _a_zero_row(bn: BayesNet) -> tuple[str, tuple[str, ...], tuple[str, ...]]:
+    """A word with an all-zero row, its parents, and the parents' values on that row."""
+    word = sorted(bn.zero_rows())[0]
+    parents = bn.parents[word]
+    idx = np.argwhere(bn.cpts[word].sum(axis=-1) == 0)[0]
+    return word, parents, tuple(bn.schema.values_of(p)[i] for p, i in zip(parents, idx, strict=True))
+
+
+def _a_possible_row(bn: BayesNet, parents: tuple[str, ...]) -> tuple[str, ...]:
+    """Values of ``parents`` that no zero row excludes and that have prior probability > 0."""
+    eng = InferenceEngine(bn)
+    for combo in itertools.product(*[bn.schema.values_of(p) for p in parents]):
+        if eng.probability_of_evidence(dict(zip(parents, combo, strict=True))) > 0:
+            return combo
+    raise AssertionError("no possible configuration")

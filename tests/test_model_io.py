@@ -12,7 +12,8 @@ from glu.bn import BayesNet
 from glu.errors import ModelError
 
 
-def test_json_round_trip_is_bit_exact(original_bn, tmp_path):
+def test_json_round_trip_is_bit_exact(zero_bn, tmp_path):
+    original_bn = zero_bn
     p = original_bn.save(tmp_path / "orig.json")
     back = BayesNet.load(p)
     assert back.edges() == original_bn.edges()
@@ -26,16 +27,44 @@ def test_json_round_trip_is_bit_exact(original_bn, tmp_path):
     assert np.asarray(objvel["cpt"]).shape == (3, 2, 3, 3)
 
 
-def test_mat_import_reads_layout_independently(shared_data, original_bn):
-    raw = sio.loadmat(shared_data / "reference-models" / "BN_lab.mat", squeeze_me=True,
-                      struct_as_record=False)["netobj_lab"]  # fmt: skip
-    names = list(raw.nodeNames)
-    j = names.index("ObjVel")
-    # CPT[i_Action, i_Shape, i_Size, v] in the .mat; the same cell through glu's model
-    np.testing.assert_array_equal(original_bn.cpts["ObjVel"][1, 0, 0], raw.bnet.CPD[j].CPT[1, 0, 0])
-    assert original_bn.schema.values_of("Shape") == ("sphere", "box")
-    assert original_bn.schema.values_of("rolls") == ("absent", "present")
-    assert int(raw.dag.sum()) == len(original_bn.edges())
+def write_bnt_mat(bn: BayesNet, path, variable: str = "netobj_lab") -> None:
+    """Write ``bn`` as the originals' MATLAB code saved it (BNT struct), independently of glu's reader.
+
+    ``dag[i, j] = 1`` for an edge i → j; ``CPD{k}.CPT[i_1, …, i_m, v]`` with parents in node order; the
+    Shape value ``sphere`` is written as the files' ``circle``; word nodes have no value names.
+    """
+    names = list(bn.nodes)
+    dag = np.zeros((len(names), len(names)))
+    for parent, child in bn.edges():
+        dag[names.index(parent), names.index(child)] = 1
+    value_names = np.empty(bn.schema.n_affordance, dtype=object)
+    for i, n in enumerate(names[: bn.schema.n_affordance]):
+        value_names[i] = np.array(
+            [{"sphere": "circle"}.get(v, v) for v in bn.schema.values_of(n)], dtype=object
+        )
+    cpds = np.empty(len(names), dtype=object)
+    for k, n in enumerate(names):
+        cpds[k] = {"CPT": bn.cpts[n]}
+    net = {
+        "nodeNames": np.array(names, dtype=object),
+        "nodeValueNames": value_names,
+        "AFFORDNODES": np.arange(1, bn.schema.n_affordance + 1, dtype=float),
+        "dag": dag,
+        "bnet": {"CPD": cpds},
+    }
+    sio.savemat(path, {variable: net})
+
+
+def test_mat_import_reads_the_bnt_layout(zero_bn, tmp_path):
+    path = tmp_path / "BN.mat"
+    write_bnt_mat(zero_bn, path)
+    back = BayesNet.from_bnt_mat(path)
+    assert back.nodes == zero_bn.nodes and back.edges() == zero_bn.edges()
+    assert back.schema.values_of("Shape") == ("sphere", "box")
+    assert back.schema.values_of("rolls") == ("absent", "present")
+    for n in zero_bn.nodes:
+        np.testing.assert_array_equal(back.cpts[n], zero_bn.cpts[n])
+    assert back.zero_rows() == zero_bn.zero_rows()
 
 
 @pytest.mark.parametrize(

@@ -32,10 +32,10 @@ def _write(tmp_path: Path, text: str | bytes, name: str = "table.txt") -> Path:
     return p
 
 
-# ---------------------------------------------------------------- the real files
-@pytest.mark.parametrize("fname", ["sent-1-5_lab_aff_bag.txt", "sent-all_mllr3_aff_bag.txt"])
-def test_real_tables_load_with_ordered_categories(shared_data, fname):
-    path = shared_data / "affordance-words" / fname
+# ---------------------------------------------------------------- the files of a data folder
+@pytest.mark.parametrize("words", ["lab", "asr"])
+def test_tables_load_with_ordered_categories(source, words):
+    path = source.experiments_file(words)
     df = read_experiments(path)
     assert df.shape == (1270, 57)
     assert list(df.columns) == [*AFFORDANCE_VALUES, *WORDS]
@@ -56,8 +56,8 @@ def test_real_tables_load_with_ordered_categories(shared_data, fname):
             assert df.iloc[i][header[j]] == expected
 
 
-def test_network_definition_matches_schema(shared_data):
-    schema = read_network_definition(shared_data / "affordance-words" / "networkDefinition.txt")
+def test_network_definition_matches_schema(source):
+    schema = read_network_definition(source.network_definition())
     ref = default_schema()
     assert schema.nodes == ref.nodes
     assert dict(schema.values) == dict(ref.values)

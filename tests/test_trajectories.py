@@ -7,6 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from glu.data.recordings import RECORDING_ACTION
 from glu.errors import DataError
 from glu.gestures.trajectories import (
     DETECT_ONLY,
@@ -24,15 +25,6 @@ GOOD = (
     "\n"
     "7 1495933414.242088 648.199463 -790.254477 -931.142356\r\n"
 )
-
-RECORDINGS = {  # lines in each real log (wc -l), an independent count
-    "grasp1_hand": 958,
-    "norobotview_tap_notable_seated_2": 597,
-    "push1_hand": 687,
-    "tap1_hand": 752,
-    "tap_notable_seated_1": 384,
-    "touch1_hand": 819,
-}
 
 
 def test_parse_keeps_timestamps_and_values_exactly():
@@ -137,31 +129,30 @@ def test_fuzz_one_damaged_line_is_reported_at_its_line(lines, where, damage, cut
     assert str(e.value).startswith(f"log:{k + 1}:"), str(e.value)
 
 
-# --- the real logs ---------------------------------------------------------------------------------
+# --- the logs of a data folder ------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", sorted(RECORDINGS))
-def test_real_logs_load_like_loadtxt(shared_data, name):
-    path = shared_data / "gestures" / name / "data.log"
+@pytest.mark.parametrize("name", sorted(RECORDING_ACTION))
+def test_logs_load_like_loadtxt(source, name):
+    path = source.hand_log(name)
     ref = np.loadtxt(path)  # an independent parser
     tr = read_hand_log(path)
-    assert len(tr) == RECORDINGS[name] == len(ref)
+    assert len(tr) == len(ref) == len(path.read_text().splitlines())
     np.testing.assert_array_equal(tr.t, ref[:, 1])
     np.testing.assert_array_equal(tr.xyz, ref[:, 2:])
 
 
-def test_real_gaps_are_found_where_the_timestamps_jump(shared_data):
-    push = read_hand_log(shared_data / "gestures/push1_hand/data.log")
-    ref = np.loadtxt(shared_data / "gestures/push1_hand/data.log")[:, 1]
-    long_gap_before = int(np.argmax(np.diff(ref))) + 2  # 1-based frame after the longest time step
-    rp = repair(push.with_xyz(push.xyz / 1000))
-    gaps = {e.frame: e for e in rp.events if e.kind == "gap"}
-    assert gaps[long_gap_before].size == pytest.approx(np.diff(ref).max())
-    assert gaps[long_gap_before].size > 1.0 and gaps[long_gap_before].action == "split"
-    assert any(p.frame[-1] == long_gap_before - 1 for p in rp.pieces)
-    assert any(p.frame[0] == long_gap_before for p in rp.pieces)
-    tap = read_hand_log(shared_data / "gestures/tap1_hand/data.log")
-    assert not [e for e in repair(tap.with_xyz(tap.xyz / 1000)).events if e.kind == "gap"]
+def test_written_logs_read_back_exactly(tmp_path):
+    from glu.data.hand_logs import format_hand_log, write_hand_log
+
+    rng = np.random.default_rng(0)
+    t = np.cumsum(rng.uniform(0.02, 0.05, 50)).round(6)
+    xyz = rng.normal(scale=500, size=(50, 3)).round(6)
+    tr = read_hand_log(write_hand_log(tmp_path / "rec", t, xyz))
+    np.testing.assert_array_equal(tr.t, t)
+    np.testing.assert_array_equal(tr.xyz, xyz)
+    with pytest.raises(DataError, match="strictly increasing"):
+        format_hand_log(t[::-1], xyz)
 
 
 # --- repair on constructed trajectories ------------------------------------------------------------

@@ -23,6 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--dest", type=Path, default=paths.REAL_DATA_DIR, help="data folder (default: data/real)")
     f.add_argument("--mirror", metavar="URL", help="fetch {URL}/{local path} instead of from GitHub")
     f.add_argument("--timeout", type=float, default=60.0, help="seconds per request (default 60)")
+    f.add_argument("--manifest", type=Path, default=None, metavar="JSON",
+                   help="the files to fetch, with their origin and sha256 (default: glu's, the real data)")  # fmt: skip
     f.set_defaults(func=_fetch)
 
     s = dsub.add_parser(
@@ -49,7 +51,10 @@ def _fetch(args: argparse.Namespace) -> int:
         extra = f": {r.detail}" if r.detail else ""
         print(f"[{i}/{n}] {r.status:10s} {r.local}{extra}", file=sys.stderr)
 
-    results = fetch_all(args.dest, mirror=args.mirror, progress=progress, timeout=args.timeout)
+    from glu.data.fetch import MANIFEST
+
+    results = fetch_all(args.dest, mirror=args.mirror, progress=progress, timeout=args.timeout,
+                        manifest_path=args.manifest or MANIFEST)  # fmt: skip
     failed = [r for r in results if r.status == "failed"]
     ok = len(results) - len(failed)
     print(f"{ok}/{len(results)} files in {args.dest}" + (f"; {len(failed)} failed" if failed else ""))

@@ -44,9 +44,16 @@ class FetchResult:
     detail: str = ""
 
 
-def manifest(mirror: str | None = None) -> list[RemoteFile]:
-    """The files to fetch; with ``mirror``, URLs are ``{mirror}/{local path}`` instead of GitHub's."""
-    spec = json.loads(MANIFEST.read_text())
+def manifest(mirror: str | None = None, path: str | os.PathLike = MANIFEST) -> list[RemoteFile]:
+    """The files to fetch; with ``mirror``, URLs are ``{mirror}/{local path}`` instead of GitHub's.
+
+    ``path`` is the manifest (default: glu's, the real data at the pinned commits): JSON with
+    ``url_template``, ``repositories`` (key → repo, commit) and ``files`` (local, source, path, sha256).
+    """
+    try:
+        spec = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise FetchError(f"{path}: not a readable manifest ({e})") from None
     out = []
     for f in spec["files"]:
         if mirror:
@@ -104,10 +111,11 @@ def fetch_all(
     mirror: str | None = None,
     progress: Callable[[int, int, FetchResult], None] | None = None,
     timeout: float = 60.0,
+    manifest_path: str | os.PathLike = MANIFEST,
 ) -> list[FetchResult]:
     """Fetch every file of the manifest into ``dest``; ``progress(i, n, result)`` is called after each."""
     dest = Path(dest)
-    items = manifest(mirror)
+    items = manifest(mirror, manifest_path)
     results = []
     for i, item in enumerate(items, start=1):
         r = fetch_file(item, dest, timeout=timeout)

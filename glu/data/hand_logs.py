@@ -1,4 +1,4 @@
-"""YARP hand logs: the file format of the gesture recordings, read with line-precise errors, and written.
+r"""YARP hand logs: the file format of the gesture recordings, read with line-precise errors, and written.
 
 A hand log (``gestures/<recording>/data.log``) has one frame a line, about 30 frames a second::
 

@@ -28,7 +28,7 @@ A two-state model that stays with probability 0.9, one Gaussian per state:
 (3, 2)
 >>> curve = forward_curve(log_b, np.array([1.0, 0.0]), np.array([[0.9, 0.1], [0.0, 1.0]]))
 >>> curve.round(3)                                  # log L(G_1^t), t = 1, 2, 3
-array([-0.924, -2.027, -5.464])
+array([-0.924, -1.966, -5.049])
 """
 
 from __future__ import annotations

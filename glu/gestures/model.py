@@ -20,7 +20,7 @@ Example
 (2, 1, 3)
 >>> X = np.linspace(0, 1, 10)[:, None].repeat(3, axis=1)        # (T=10, D=3)
 >>> round(hmm.loglik(X), 4)
--30.8006
+-29.9073
 """
 
 from __future__ import annotations

@@ -28,12 +28,16 @@ reported score is the exact mean rounded once to a float.
 
 Example
 -------
->>> from glu.bn import InferenceEngine
->>> eng = InferenceEngine(bn)                          # doctest: +SKIP
->>> describe(eng, {"Action": "grasp", "ObjVel": "slow"}, n=2)[["sentence", "score"]]   # doctest: +SKIP
-                                                   sentence     score
-0   the robot is picking the square but the square is inert -0.590857
-1  the robot is grasping the square but the square is inert -0.595187
+On glu's synthetic data:
+
+>>> from glu.bn import InferenceEngine, learn_bn
+>>> from glu.data import load_experiments
+>>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
+>>> best = describe(eng, {"Action": "grasp", "ObjVel": "slow"}, n=2)
+>>> for row in best.itertuples():
+...     print(f"{row.score:.4f}  {row.sentence}")
+-0.4946  the robot is grasping the ball but the ball is still
+-0.5003  the robot is grasping the ball but the ball is inert
 """
 
 from __future__ import annotations
