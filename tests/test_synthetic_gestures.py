@@ -6,8 +6,14 @@ import numpy as np
 import pytest
 
 from glu.errors import DataError
-from glu.gestures.features import skeleton_features
-from glu.gestures.synthetic import GESTURES, synthesize_gestures, synthesize_recording
+from glu.gestures.features import OPENNI_JOINTS, skeleton_features
+from glu.gestures.synthetic import (
+    GESTURES,
+    View,
+    synthesize_gesture,
+    synthesize_gestures,
+    synthesize_recording,
+)
 from glu.gestures.trajectories import repair
 
 
@@ -80,3 +86,57 @@ def test_bad_arguments():
         synthesize_gestures(3, noise=-1)
     with pytest.raises(DataError):
         synthesize_recording("grasp", 0)
+
+
+# ---------------------------------------------------------------- views
+def _clean(view, seed=3, action="tap"):
+    rng = np.random.default_rng(seed)
+    return synthesize_gesture(action, rng, noise=0.0, spike_rate=0.0, dropout_rate=0.0, view=view)
+
+
+def _rot_y(deg):
+    c, s = np.cos(np.deg2rad(deg)), np.sin(np.deg2rad(deg))
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def test_no_view_and_the_default_view_draw_the_same_sequences():
+    a, b = _clean(None), _clean(View())
+    np.testing.assert_array_equal(a.skeleton, b.skeleton)
+    np.testing.assert_array_equal(a.t, b.t)
+
+
+@pytest.mark.parametrize("yaw", [30.0, 90.0, 180.0])
+def test_a_turned_person_gives_the_rotated_features(yaw):
+    """Features are torso-relative and x, z share one factor, so a turn about y rotates them exactly."""
+    front, turned = _clean(View(yaw_deg=0.0)), _clean(View(yaw_deg=yaw))
+    np.testing.assert_allclose(turned.trajectory().xyz, front.trajectory().xyz @ _rot_y(yaw).T, atol=1e-12)
+
+
+def test_a_mirrored_movement_negates_x_and_keeps_y_and_z():
+    plain, mirrored = _clean(View(yaw_deg=0.0)), _clean(View(yaw_deg=0.0, mirror=True))
+    np.testing.assert_allclose(mirrored.trajectory().xyz, plain.trajectory().xyz * [-1, 1, 1], atol=1e-12)
+
+
+def test_seated_puts_the_hand_higher_and_the_table_further():
+    standing, seated = _clean(View(posture="standing")), _clean(View(posture="seated"))
+    ys, yt = standing.trajectory().xyz, seated.trajectory().xyz
+    assert yt[:, 1].mean() > ys[:, 1].mean() + 0.2  # y is up, in units of the neck–torso distance
+    assert yt[:, 2].min() < ys[:, 2].min() - 0.3  # z is towards the back: the table is further in front
+
+
+def test_a_view_fixes_the_body_size():
+    g = _clean(View(size=1.2))
+    sk = g.skeleton
+    ls, rs = OPENNI_JOINTS.index("left_shoulder"), OPENNI_JOINTS.index("right_shoulder")
+    np.testing.assert_allclose(np.linalg.norm(sk[:, ls] - sk[:, rs], axis=1), 0.33 * 1.2, atol=1e-12)
+    assert g.size == 1.2
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [({"posture": "lying"}, "unknown posture"), ({"yaw_deg": float("nan")}, "not a finite angle"),
+     ({"size": 10.0}, "outside 0.3–3")],
+)  # fmt: skip
+def test_bad_views_are_refused(kwargs, message):
+    with pytest.raises(DataError, match=message):
+        View(**kwargs)

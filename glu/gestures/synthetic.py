@@ -25,6 +25,13 @@ from one seeded generator per sequence:
   (runs of 3–20 frames with no skeleton: the frames are missing, as in the real logs) with probability
   ``dropout_rate`` per sequence.
 
+How the robot's camera sees the person is a :class:`View`: the person's turn about the vertical axis
+relative to the camera (``yaw_deg``; by default a random ± 10°, as in the real recordings), a mirror image
+(the movement made with the other hand, or a person facing the robot instead of beside it), the posture
+(``standing`` at a table, or ``seated`` with the hand resting on the thigh and the table higher and
+further relative to the torso, as in the seated recordings of TCDS) and the body size. ``view=None`` and
+``View()`` draw the same sequences as before views existed.
+
 Sequence ``i`` depends only on ``(seed, i)``, so ``synthesize_gestures(10, seed)[:5]`` equals
 ``synthesize_gestures(5, seed)``. :func:`synthesize_recording` strings repetitions of one action together
 with rests in between, with the true segments, to test automatic segmentation.
@@ -33,7 +40,7 @@ with rests in between, with the true segments, to test automatic segmentation.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -71,6 +78,43 @@ _REST = np.array([0.25, -0.34, 0.1])
 """Right hand at rest, relative to the torso (size 1): beside the hip, slightly behind."""
 _OBJECT = np.array([0.06, -0.08, -0.5])
 """The object on the table, relative to the torso (size 1)."""
+_SEATED_REST = np.array([0.2, -0.22, -0.22])
+"""Seated: the right hand at rest on the thigh, relative to the torso (size 1)."""
+_SEATED_OBJECT_SHIFT = np.array([0.0, 0.12, -0.2])
+"""Seated: the table is higher and further, relative to the torso (size 1)."""
+POSTURES: tuple[str, ...] = ("standing", "seated")
+
+
+@dataclass(frozen=True)
+class View:
+    """How the robot's camera sees the person (all fields optional; the defaults are the generator's).
+
+    Attributes
+    ----------
+    yaw_deg : the person's turn about the vertical axis relative to the camera, degrees (0 = facing it,
+        90 = side-on); ``None`` draws a random turn in ± 10°, as in the real recordings
+    mirror : the movement mirrored across the person's sagittal plane (x → −x relative to the torso):
+        the same action made with the other hand, or seen from in front instead of from behind
+    posture : ``"standing"`` (at a table) or ``"seated"`` (hand resting on the thigh, table higher and
+        further relative to the torso)
+    size : body size factor (1 = shoulders 0.33 m apart); ``None`` draws one in 0.85–1.15
+    """
+
+    yaw_deg: float | None = None
+    mirror: bool = False
+    posture: str = "standing"
+    size: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.yaw_deg is not None and not np.isfinite(self.yaw_deg):
+            raise DataError(f"view yaw_deg={self.yaw_deg} is not a finite angle in degrees")
+        if self.posture not in POSTURES:
+            raise DataError(f"unknown posture {self.posture!r}; allowed: {', '.join(POSTURES)}")
+        if self.size is not None and not 0.3 <= self.size <= 3.0:
+            raise DataError(f"view size={self.size} is outside 0.3–3 (1 = shoulders 0.33 m apart)")
+
+
+DEFAULT_VIEW = View()
 
 # Key poses: (time fraction, offset from the object or None for rest).
 _KEYS: dict[str, list[tuple[float, tuple[float, float, float] | None]]] = {
@@ -138,23 +182,34 @@ class _Person:
     sway_amp: float
 
 
-def _person(rng: np.random.Generator) -> _Person:
-    return _Person(
+def _person(rng: np.random.Generator, view: View = DEFAULT_VIEW) -> _Person:
+    person = _Person(
         size=float(rng.uniform(0.85, 1.15)),
         origin=np.array([rng.uniform(-0.4, 0.4), rng.uniform(-0.15, 0.15), rng.uniform(-2.6, -1.6)]),
         yaw=float(np.deg2rad(rng.uniform(-10, 10))),
         sway_phase=float(rng.uniform(0, 2 * np.pi)),
         sway_amp=float(rng.uniform(0.0, 0.02)),
-    )
+    )  # drawn in full whatever the view, so a view changes nothing else of the sequence
+    if view.size is not None:
+        person = replace(person, size=float(view.size))
+    if view.yaw_deg is not None:
+        person = replace(person, yaw=float(np.deg2rad(view.yaw_deg)))
+    return person
 
 
-def _hand_path(action: str, rng: np.random.Generator, size: float) -> np.ndarray:
+def _rest_pose(view: View) -> np.ndarray:
+    return _SEATED_REST if view.posture == "seated" else _REST
+
+
+def _hand_path(action: str, rng: np.random.Generator, size: float, view: View = DEFAULT_VIEW) -> np.ndarray:
     """Right-hand positions relative to the torso, shape (n_frames, 3), for one repetition."""
     duration = rng.uniform(2.5, 5.0)
     n = max(int(round(duration * FRAME_RATE)), 12)
     amp = rng.uniform(0.85, 1.15)
     obj = _OBJECT + rng.uniform(-0.05, 0.05, size=3) * np.array([1.0, 0.4, 1.0])
-    rest = _REST + rng.normal(0, 0.015, size=3)
+    rest = _rest_pose(view) + rng.normal(0, 0.015, size=3)
+    if view.posture == "seated":
+        obj = obj + _SEATED_OBJECT_SHIFT
     keys = []
     spec = _KEYS[action]
     for j, (tf, off) in enumerate(spec):
@@ -166,8 +221,12 @@ def _hand_path(action: str, rng: np.random.Generator, size: float) -> np.ndarray
     return _min_jerk_path(keys, n)
 
 
-def _skeletons(hand: np.ndarray, person: _Person, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def _skeletons(
+    hand: np.ndarray, person: _Person, t: np.ndarray, rng: np.random.Generator, view: View = DEFAULT_VIEW
+) -> np.ndarray:
     """Full skeletons in the sensor frame, shape (n_frames, 15, 3), for hand positions relative to the torso."""
+    if view.mirror:
+        hand = hand * np.array([-1.0, 1.0, 1.0])
     n = len(hand)
     s = person.size
     body = np.array([_BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS]) * s
@@ -226,16 +285,18 @@ def synthesize_gesture(
     spike_rate: float = 0.005,
     dropout_rate: float = 0.2,
     rest_frames: tuple[int, int] = (3, 15),
+    view: View | None = None,
 ) -> SyntheticGesture:
-    """One synthetic repetition of ``action`` drawn with ``rng`` (see the module docstring)."""
+    """One synthetic repetition of ``action`` drawn with ``rng``, seen as ``view`` (see the module docstring)."""
     if action not in _KEYS:
         raise DataError(f"unknown action {action!r}; allowed: {', '.join(GESTURES)}")
-    person = _person(rng)
-    move = _hand_path(action, rng, person.size)
+    view = view or DEFAULT_VIEW
+    person = _person(rng, view)
+    move = _hand_path(action, rng, person.size, view)
     pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
     hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
     t = np.arange(len(hand)) / FRAME_RATE
-    skel = _skeletons(hand, person, t, rng)
+    skel = _skeletons(hand, person, t, rng, view)
     true = ((pre + 1, pre + len(move)),)
     skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, dropout_rate)
     return SyntheticGesture(action, skel, t_obs, person.size, true)
@@ -249,6 +310,7 @@ def synthesize_gestures(
     noise: float = 0.01,
     spike_rate: float = 0.005,
     dropout_rate: float = 0.2,
+    view: View | None = None,
 ) -> list[SyntheticGesture]:
     """``n`` synthetic gestures, actions in turn (``actions[i % len(actions)]``), sequence i seeded by (seed, i).
 
@@ -260,6 +322,7 @@ def synthesize_gestures(
     noise : standard deviation of the sensor noise on every joint, metres
     spike_rate : probability that a frame's hand joint is an outlier
     dropout_rate : probability that a sequence loses a run of 3–20 frames
+    view : how the camera sees the person (:class:`View`; default: facing it, turned by a random ± 10°)
     """
     _check(n, noise, spike_rate, dropout_rate)
     for a in actions:
@@ -273,6 +336,7 @@ def synthesize_gestures(
             noise=noise,
             spike_rate=spike_rate,
             dropout_rate=dropout_rate,
+            view=view,
         )  # fmt: skip
         for i in range(n)
     ]
