@@ -254,3 +254,20 @@ def test_anticipation_with_the_original_models(real_source, original_bn):
                                            anticipation.CASES["box"].evidence, case="box", models="original")  # fmt: skip
     assert box.fused["ObjVel"][-1].argmax() == 0  # a tapped big box stays slow (TCDS)
     assert RECORDING_ACTION["tap_notable_seated_1"] == "tap"
+
+
+def test_real_data_is_named_by_its_public_origin_however_it_is_reached(shared_data, tmp_path):
+    """The label on every result names the repositories and commits, never the folder it was read from."""
+    from glu.data import resolve_data
+
+    link = tmp_path / "elsewhere"
+    link.symlink_to(shared_data)
+    expected = "real data: giampierosalvi/AffordancesAndSpeech@421f455, gsaponaro/tcds-gestures@fd608ac"
+    assert resolve_data(shared_data).describe() == resolve_data(link).describe() == expected
+    copy = tmp_path / "copy"
+    import shutil
+
+    shutil.copytree(shared_data, copy)
+    table = copy / "affordance-words" / "sent-1-5_lab_aff_bag.txt"
+    table.write_text(table.read_text().replace("tap", "tap ", 1))
+    assert resolve_data(copy).describe() == "data folder 'copy' (not the published data: checksums differ)"

@@ -83,7 +83,10 @@ def test_learned_cpts_approach_the_generator():
 def test_synth_folder_reads_back_as_synthetic_source(tmp_path):
     write_synthetic_folder(tmp_path / "syn", n=150, seed=4)
     df = load_experiments(tmp_path / "syn", "lab")
-    assert "synthetic data in" in df.attrs["data_source"] and "seed 4" in df.attrs["data_source"]
+    assert df.attrs["data_source"] == "synthetic data (seed 4, 150 experiments), words=lab"  # no machine path
+    from glu.data import resolve_data
+
+    assert str(tmp_path / "syn") in resolve_data(tmp_path / "syn").location()  # messages name the folder
     direct = synthesize_experiments(150, seed=4)
     pd.testing.assert_frame_equal(df.reset_index(drop=True), direct, check_like=False)
     asr = read_experiments(tmp_path / "syn" / "affordance-words" / "sent-all_mllr3_aff_bag.txt")

@@ -83,7 +83,7 @@ def _info(args: argparse.Namespace) -> int:
     from glu.data.source import load_experiments, resolve_data
 
     source = resolve_data(args.data)
-    print(f"data: {source.describe()}")
+    print(f"data: {source.location()}")
     df = load_experiments(source, args.words)
     print(f"experiments: {len(df)} (words={args.words})")
     for node in df.columns[:8]:

@@ -65,6 +65,37 @@ def manifest(mirror: str | None = None, path: str | os.PathLike = MANIFEST) -> l
     return out
 
 
+def published_origin(root: str | os.PathLike, manifest_path: str | os.PathLike = MANIFEST) -> str | None:
+    """The upstream origin of a data folder, ``"owner/name@commit, …"``, if it holds the published data.
+
+    A folder holds the published data when it has the paper's experiment table and every file of the
+    manifest that it has carries the published sha256 (files it lacks are not fetched yet, files the
+    manifest does not list are ignored). Otherwise None: the folder is someone's own or modified data.
+    The commits are abbreviated to 7 characters, as git does.
+    """
+    root = Path(root)
+    spec = json.loads(Path(manifest_path).read_text(encoding="utf-8"))
+    present = [f for f in spec["files"] if (root / f["local"]).is_file()]
+    if not any(f["local"].endswith("_lab_aff_bag.txt") for f in present):
+        return None
+    if any(_cached_sha256(root / f["local"]) != f["sha256"] for f in present):
+        return None
+    used = sorted({f["source"] for f in present})
+    repos = spec["repositories"]
+    return ", ".join(f"{repos[k]['repo']}@{repos[k]['commit'][:7]}" for k in used)
+
+
+_SHA_CACHE: dict[tuple[str, int, int], str] = {}
+
+
+def _cached_sha256(path: Path) -> str:
+    st = path.stat()
+    key = (str(path.resolve()), st.st_size, st.st_mtime_ns)
+    if key not in _SHA_CACHE:
+        _SHA_CACHE[key] = sha256_of(path)
+    return _SHA_CACHE[key]
+
+
 def sha256_of(path: Path) -> str:
     """Hex sha256 of a file."""
     h = hashlib.sha256()

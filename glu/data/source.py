@@ -13,7 +13,9 @@ A data folder has the layout of the public data (and of ``glu data fetch`` / ``g
 :class:`DataSource` owns this layout: code asks it for ``hand_log(recording)``, ``original_bn()``,
 ``original_hmms(n_mix)``, … and never spells a path inside a data folder itself.
 
-Every result carries :meth:`DataSource.describe`, so it always says which data it came from.
+Every result carries :meth:`DataSource.describe`, so it always says which data it came from — by its
+public origin (repositories and commits) or the synthetic generator's parameters, never by a path on
+this machine; :meth:`DataSource.location` adds the folder, for messages to the person at the keyboard.
 """
 
 from __future__ import annotations
@@ -75,13 +77,39 @@ class DataSource:
         return self.kind == "real"
 
     def describe(self) -> str:
-        """One line saying which data this is and how it was chosen."""
-        how = {"--data": "from --data", "GLU_DATA_DIR": f"from ${paths.DATA_ENV_VAR}", "data/real": "fetched"}
+        """One line saying which data this is, without machine paths: what figures and tables carry.
+
+        Real data is named by its public origin when its checksums are the published ones (``real data:
+        giampierosalvi/AffordancesAndSpeech@421f455, gsaponaro/tcds-gestures@fd608ac``); a folder that is
+        not is ``data folder 'NAME' (not the published data: checksums differ)``; synthetic data by the
+        generator's parameters. The same data gives the same line however it was found.
+        """
         if self.kind == "real":
-            return f"real data: {self.root} ({how.get(self.origin, self.origin)})"
-        where = f" in {self.root}" if self.root else ""
-        why = " — no real data found" if self.origin == "default" else ""
-        return f"synthetic data{where} (seed {self.seed}, {self.n_experiments} experiments{why})"
+            from glu.data.fetch import published_origin
+
+            origin = published_origin(self.root) if self.root is not None else None
+            if origin is None:
+                return f"data folder '{self.root.name}' (not the published data: checksums differ)"
+            return f"real data: {origin}"
+        return f"synthetic data (seed {self.seed}, {self.n_experiments} experiments)"
+
+    def reason(self) -> str:
+        """How this source was chosen (and, for the synthetic fallback, why no real data was used)."""
+        if self.origin == "--data":
+            return "chosen explicitly (--data or the data parameter)"
+        if self.origin == "GLU_DATA_DIR":
+            return f"given by ${paths.DATA_ENV_VAR}"
+        if self.origin == "data/real":
+            return "fetched into data/real/"
+        return (
+            f"no real data found: no --data, no ${paths.DATA_ENV_VAR}, nothing in data/real/ "
+            "(`glu data fetch` downloads it)"
+        )
+
+    def location(self) -> str:
+        """:meth:`describe`, how it was chosen and the folder: for messages on this machine, never results."""
+        where = f" in {self.root}" if self.root is not None else ", generated in memory"
+        return f"{self.describe()}{where} ({self.reason()})"
 
     # ------------------------------------------------------------------ the folder layout
     def optional(self, relative: str) -> Path | None:
