@@ -264,6 +264,26 @@ def test_training_keeps_the_left_to_right_structure(corpus):
     assert report.n_sequences == len(seqs) and report.n_frames == sum(len(X) for X in seqs)
 
 
+@pytest.mark.parametrize(("action", "n_states", "n_mix"), [("grasp", 6, 3), ("tap", 4, 1), ("touch", 3, 2)])
+def test_glu_em_equals_hmmlearns_fit(corpus, action, n_states, n_mix):
+    """The vectorised Baum–Welch computes hmmlearn's GMMHMM update: same history, same parameters."""
+    seqs = [s.xyz for s in corpus if s.action == action]
+    kw = dict(n_iter=12, tol=1e-9, warn=False, name=action)
+    ours, r_ours = train_hmm(seqs, n_states, n_mix, engine="glu", **kw)
+    ref, r_ref = train_hmm(seqs, n_states, n_mix, engine="hmmlearn", **kw)
+    assert r_ours.n_iter == r_ref.n_iter == 12
+    np.testing.assert_allclose(r_ours.history, r_ref.history, rtol=1e-10)
+    for a in ("startprob", "transmat", "weights", "means", "covars"):
+        np.testing.assert_allclose(getattr(ours, a), getattr(ref, a), rtol=1e-7, atol=1e-9, err_msg=a)
+
+
+def test_glu_em_stops_where_hmmlearn_stops(corpus):
+    seqs = [s.xyz for s in corpus if s.action == "tap"]
+    _, r_ours = train_hmm(seqs, 4, 2, n_iter=200, tol=1e-3, warn=False, engine="glu")
+    _, r_ref = train_hmm(seqs, 4, 2, n_iter=200, tol=1e-3, warn=False, engine="hmmlearn")
+    assert r_ours.converged and r_ref.converged and r_ours.n_iter == r_ref.n_iter
+
+
 def test_non_convergence_is_reported(corpus):
     seqs = [s.xyz for s in corpus if s.action == "tap"]
     with pytest.warns(HMMConvergenceWarning, match="NOT converged after 2 of 2"):

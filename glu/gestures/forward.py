@@ -84,6 +84,27 @@ def gaussian_factors(weights: np.ndarray, covars: np.ndarray) -> tuple[np.ndarra
     return chol_inv, log_norm
 
 
+def log_component_densities(
+    X: np.ndarray, means: np.ndarray, chol_inv: np.ndarray, log_norm: np.ndarray
+) -> np.ndarray:
+    """Weighted log-densities of every Gaussian of every state, ``log w_qm + log N(x_t; μ_qm, Σ_qm)``.
+
+    Parameters
+    ----------
+    X : array, shape (T, D) — the frames
+    means : array, shape (..., M, D)
+    chol_inv, log_norm : arrays, shapes (..., M, D, D) and (..., M), from :func:`gaussian_factors`
+
+    Returns
+    -------
+    array, shape (T, ..., M)
+    """
+    batch = means.ndim - 2
+    diff = X.reshape((X.shape[0],) + (1,) * (batch + 1) + X.shape[1:]) - means[None]  # (T, ..., M, D)
+    z = np.einsum("...ij,t...j->t...i", chol_inv, diff, optimize=False)
+    return log_norm[None] - 0.5 * np.einsum("...i,...i->...", z, z)
+
+
 def log_emissions(X: np.ndarray, means: np.ndarray, chol_inv: np.ndarray, log_norm: np.ndarray) -> np.ndarray:
     """Emission log-densities of Gaussian-mixture states, ``log p(x_t | q)``.
 
@@ -97,10 +118,7 @@ def log_emissions(X: np.ndarray, means: np.ndarray, chol_inv: np.ndarray, log_no
     -------
     array, shape (T, ...) — e.g. (T, Q) for one model, (T, A, Q) for a bank
     """
-    batch = means.ndim - 2
-    diff = X.reshape((X.shape[0],) + (1,) * (batch + 1) + X.shape[1:]) - means[None]  # (T, ..., M, D)
-    z = np.einsum("...ij,t...j->t...i", chol_inv, diff, optimize=False)
-    lc = log_norm[None] - 0.5 * np.einsum("...i,...i->...", z, z)
+    lc = log_component_densities(X, means, chol_inv, log_norm)
     m = lc.max(axis=-1)
     with np.errstate(invalid="ignore"):
         return np.log(np.exp(lc - m[..., None]).sum(axis=-1)) + m

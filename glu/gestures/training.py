@@ -1,13 +1,14 @@
-"""Training gesture HMMs: the settings, glu's initialisation, EM with hmmlearn, and what happened.
+"""Training gesture HMMs: the settings, glu's initialisation, EM, and what happened.
 
 * :class:`TrainingConfig` is the one home of the training defaults (Q = 6 states, M = 3 Gaussians, the
   originals' model size; EM limits; the covariance regulariser). The command line, the experiments and the
   notebooks' checks all read them from here.
 * :func:`init_left_to_right` starts each model from equal time slices of the training sequences;
-  :func:`train_hmm` runs Baum–Welch with hmmlearn's ``GMMHMM`` keeping the left-to-right structure (zero
-  transitions stay zero under EM), with explicit ``n_iter`` and ``tol``, and reports convergence
-  (:class:`TrainingReport`; hmmlearn itself only logs non-convergence, and counts reaching ``n_iter`` as
-  converged).
+  :func:`train_hmm` runs Baum–Welch keeping the left-to-right structure (zero transitions stay zero
+  under EM), with explicit ``n_iter`` and ``tol``, and reports convergence (:class:`TrainingReport`;
+  hmmlearn itself only logs non-convergence, and counts reaching ``n_iter`` as converged). The EM is
+  hmmlearn's ``GMMHMM.fit`` update, vectorised over the training sequences
+  (:mod:`glu.gestures.baum_welch`, tested equal to hmmlearn's; ``engine="hmmlearn"`` runs hmmlearn itself).
 
 This is glu's recipe, not the originals' (flat start and mixture splitting, METHOD.md §5.1).
 """
@@ -167,6 +168,10 @@ def _preset_gmmhmm_class() -> type:
     return PresetGMMHMM
 
 
+ENGINES: tuple[str, ...] = ("glu", "hmmlearn")
+"""Who runs EM: glu's vectorised Baum–Welch (the default) or hmmlearn's ``GMMHMM.fit`` (the same update)."""
+
+
 def train_hmm(
     sequences: Sequence[np.ndarray],
     n_states: int = TrainingConfig.n_states,
@@ -178,8 +183,9 @@ def train_hmm(
     seed: int = 0,
     name: str = "",
     warn: bool = True,
+    engine: str = "glu",
 ) -> tuple[GestureHMM, TrainingReport]:
-    """Fit a left-to-right GMM-HMM to sequences of shape (T_i, D) with hmmlearn's EM (Baum–Welch).
+    """Fit a left-to-right GMM-HMM to sequences of shape (T_i, D) by EM (Baum–Welch).
 
     Parameters
     ----------
@@ -193,6 +199,8 @@ def train_hmm(
     seed : seeds the initial mixtures
     name : the action (for messages)
     warn : emit an :class:`HMMConvergenceWarning` when EM does not converge
+    engine : ``"glu"`` (vectorised, :mod:`glu.gestures.baum_welch`) or ``"hmmlearn"``; both compute the
+        same update (tested to agree to rounding)
 
     Returns
     -------
@@ -200,6 +208,8 @@ def train_hmm(
     zero (EM cannot create transitions that have zero probability).
     """
     who = f"training data for {name!r}" if name else "training data"
+    if engine not in ENGINES:
+        raise ModelError(f"unknown EM engine {engine!r}; allowed: {', '.join(ENGINES)}")
     if len(sequences) == 0:
         raise DataError(f"{who}: no sequences")
     D = np.asarray(sequences[0]).shape[-1] if np.asarray(sequences[0]).ndim == 2 else 3
@@ -212,34 +222,11 @@ def train_hmm(
     if n_iter < 1 or not tol > 0:
         raise ModelError(f"n_iter={n_iter} must be ≥ 1 and tol={tol} > 0")
     init = init_left_to_right(seqs, n_states, n_mix, seed, covar_reg, name)
-    model = _preset_gmmhmm_class()(
-        n_components=n_states, n_mix=n_mix, covariance_type="full", n_iter=n_iter, tol=tol * n_frames,
-        params="stmcw", init_params="", random_state=seed, implementation="log",
-        covars_prior=covar_reg * np.eye(D), covars_weight=-(D + 1.0),
-    )  # fmt: skip
-    model.startprob_, model.transmat_ = init.startprob.copy(), init.transmat.copy()
-    model.weights_, model.means_, model.covars_ = init.weights.copy(), init.means.copy(), init.covars.copy()
-    import logging
-
-    hmm_log = logging.getLogger("hmmlearn.base")
-    level = hmm_log.level
-    hmm_log.setLevel(logging.ERROR)  # we report non-convergence ourselves
-    from threadpoolctl import threadpool_limits
-
+    fitted_params, history = _run_em(engine, seqs, init, n_iter, tol * n_frames, covar_reg, seed, name)
     try:
-        # one BLAS thread: hmmlearn's many tiny solves are several times slower with thread hand-offs
-        with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
-            warnings.simplefilter("ignore", RuntimeWarning)
-            model.fit(np.concatenate(seqs), [len(X) for X in seqs])
-    except (ValueError, np.linalg.LinAlgError) as e:
-        raise ModelError(f"EM failed for {name or 'the model'}: {e}") from None
-    finally:
-        hmm_log.setLevel(level)
-    try:
-        fitted = GestureHMM.from_hmmlearn(model, name=name)
+        fitted = GestureHMM(*fitted_params, name=name)
     except ModelError as e:
         raise ModelError(f"EM diverged for {name or 'the model'} ({e}); try a larger covar_reg") from None
-    history = tuple(float(h) for h in model.monitor_.history)
     delta = history[-1] - history[-2] if len(history) >= 2 else math.inf
     converged = bool(abs(delta) < tol * n_frames)
     final = float(sum(fitted.loglik(X) for X in seqs))
@@ -247,3 +234,50 @@ def train_hmm(
     if not converged and warn:
         warnings.warn(report.describe(), HMMConvergenceWarning, stacklevel=2)
     return fitted, report
+
+
+def _run_em(
+    engine: str, seqs: list[np.ndarray], init: GestureHMM, n_iter: int, tol_total: float, covar_reg: float,
+    seed: int, name: str,
+) -> tuple[tuple[np.ndarray, ...], tuple[float, ...]]:  # fmt: skip
+    """EM from ``init``: the fitted (startprob, transmat, weights, means, covars) and the history."""
+    from threadpoolctl import threadpool_limits
+
+    start = (init.startprob, init.transmat, init.weights, init.means, init.covars)
+    try:
+        # one BLAS thread: EM's many small linear-algebra calls are slower with thread hand-offs
+        with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
+            warnings.simplefilter("ignore", RuntimeWarning)
+            if engine == "glu":
+                from glu.gestures import baum_welch
+
+                result = baum_welch.fit(seqs, baum_welch.GMMHMMParams(*start), n_iter, tol_total, covar_reg)
+                return tuple(result.params), tuple(float(h) for h in result.history)
+            return _run_hmmlearn(seqs, start, n_iter, tol_total, covar_reg, seed)
+    except (ValueError, np.linalg.LinAlgError) as e:
+        raise ModelError(f"EM failed for {name or 'the model'}: {e}") from None
+
+
+def _run_hmmlearn(
+    seqs: list[np.ndarray], start: tuple[np.ndarray, ...], n_iter: int, tol_total: float, covar_reg: float,
+    seed: int,
+) -> tuple[tuple[np.ndarray, ...], tuple[float, ...]]:  # fmt: skip
+    import logging
+
+    D = seqs[0].shape[1]
+    n_states, n_mix = start[2].shape
+    model = _preset_gmmhmm_class()(
+        n_components=n_states, n_mix=n_mix, covariance_type="full", n_iter=n_iter, tol=tol_total,
+        params="stmcw", init_params="", random_state=seed, implementation="log",
+        covars_prior=covar_reg * np.eye(D), covars_weight=-(D + 1.0),
+    )  # fmt: skip
+    model.startprob_, model.transmat_, model.weights_, model.means_, model.covars_ = (a.copy() for a in start)
+    hmm_log = logging.getLogger("hmmlearn.base")
+    level = hmm_log.level
+    hmm_log.setLevel(logging.ERROR)  # we report non-convergence ourselves
+    try:
+        model.fit(np.concatenate(seqs), [len(X) for X in seqs])
+    finally:
+        hmm_log.setLevel(level)
+    params = (model.startprob_, model.transmat_, model.weights_, model.means_, model.covars_)
+    return params, tuple(float(h) for h in model.monitor_.history)

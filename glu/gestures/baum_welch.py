@@ -1,0 +1,158 @@
+"""Baum–Welch for GMM-HMMs with full covariances, all training sequences in one vectorised pass.
+
+This is hmmlearn's ``GMMHMM.fit`` — the same E-step (log-domain forward–backward), the same M-step
+with the same priors, the same convergence rule — computed differently: hmmlearn loops in Python over
+the sequences and, inside each, over the states and their Gaussians; here the sequences are padded to a
+common length and pass through one forward and one backward recursion together, and the emissions of
+every frame under every Gaussian are one array operation. On the gesture corpora this is several times
+faster (``benchmarks/bench_hmm.py``); ``tests/test_hmm.py`` checks that both fits give the same
+parameters and the same log-likelihood history.
+
+The priors are those :func:`glu.gestures.training.train_hmm` gives hmmlearn: flat Dirichlet priors on the
+initial, transition and mixture probabilities (zeros stay zero, so a left-to-right model stays
+left-to-right), no prior on the means, and on each covariance ``Σ = (S + r·I) / (N + 1)`` with ``S`` the
+responsibility-weighted scatter of the frames about the component's mean *before* the update and ``N``
+its soft count, as hmmlearn computes it.
+
+Shapes: ``S`` sequences, ``T`` frames (padded), ``Q`` states, ``M`` Gaussians per state, ``D`` features.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+
+from glu.gestures.forward import gaussian_factors, log_component_densities
+
+
+class GMMHMMParams(NamedTuple):
+    """The parameters of a GMM-HMM: startprob (Q,), transmat (Q, Q), weights (Q, M), means (Q, M, D),
+    covars (Q, M, D, D)."""
+
+    startprob: np.ndarray
+    transmat: np.ndarray
+    weights: np.ndarray
+    means: np.ndarray
+    covars: np.ndarray
+
+
+class FitResult(NamedTuple):
+    """What :func:`fit` returns: the parameters after the last update, and the log-likelihood of the
+    training data before each update (``history[i]`` is the model of iteration ``i``), shape (n_iter,)."""
+
+    params: GMMHMMParams
+    history: np.ndarray
+
+
+def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
+    m = a.max(axis=axis, keepdims=True)
+    m = np.where(np.isfinite(m), m, 0.0)
+    with np.errstate(divide="ignore", under="ignore"):
+        return np.log(np.exp(a - m).sum(axis=axis)) + np.squeeze(m, axis=axis)
+
+
+def forward_backward(
+    log_b: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Forward–backward in the log domain over a padded batch of sequences.
+
+    Parameters
+    ----------
+    log_b : array, shape (S, T, Q) — emission log-densities; entries past a sequence's length are ignored
+    lengths : array, shape (S,) — the length of each sequence (≥ 1)
+    startprob : array, shape (Q,)
+    transmat : array, shape (Q, Q)
+
+    Returns
+    -------
+    log_gamma : array, shape (S, T, Q) — ``log P(q_t | G)`` (``-inf`` past a sequence's end)
+    xi_sum : array, shape (Q, Q) — expected transition counts, summed over sequences and frames
+    loglik : array, shape (S,) — ``log L(G)`` of each sequence
+    """
+    S, T, Q = log_b.shape
+    with np.errstate(divide="ignore"):
+        log_a, log_pi = np.log(transmat), np.log(startprob)
+    fwd = np.full((S, T, Q), -np.inf)
+    fwd[:, 0] = log_pi + log_b[:, 0]
+    for t in range(1, T):
+        fwd[:, t] = _logsumexp(fwd[:, t - 1, :, None] + log_a, axis=1) + log_b[:, t]
+    last = lengths - 1
+    loglik = _logsumexp(fwd[np.arange(S), last], axis=1)
+    bwd = np.zeros((S, T, Q))
+    alive = np.arange(T)[None, :] < lengths[:, None]  # (S, T)
+    for t in range(T - 2, -1, -1):
+        step = _logsumexp(log_a + (log_b[:, t + 1] + bwd[:, t + 1])[:, None, :], axis=2)
+        bwd[:, t] = np.where(alive[:, t + 1, None], step, 0.0)  # the last frame of a sequence has β = 1
+    log_gamma = fwd + bwd - loglik[:, None, None]
+    log_gamma = np.where(alive[..., None], log_gamma, -np.inf)
+    log_gamma -= np.where(alive, _logsumexp(log_gamma, axis=2), 0.0)[..., None]  # as hmmlearn: renormalise
+    if T > 1:
+        pair = alive[:, 1:]  # transitions t → t+1 inside each sequence
+        log_xi = (fwd[:, :-1, :, None] + log_a + (log_b[:, 1:] + bwd[:, 1:])[:, :, None, :]
+                  - loglik[:, None, None, None])  # fmt: skip
+        with np.errstate(under="ignore"):
+            xi_sum = np.exp(np.where(pair[..., None, None], log_xi, -np.inf)).sum(axis=(0, 1))
+    else:
+        xi_sum = np.zeros((Q, Q))
+    return log_gamma, xi_sum, loglik
+
+
+def _pad(sequences: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lengths (S,), the mask of real frames (S, T), and all frames in order (N, D)."""
+    lengths = np.array([len(x) for x in sequences])
+    alive = np.arange(int(lengths.max()))[None, :] < lengths[:, None]
+    return lengths, alive, np.concatenate(sequences)
+
+
+def fit(
+    sequences: Sequence[np.ndarray], init: GMMHMMParams, n_iter: int, tol: float, covar_reg: float
+) -> FitResult:
+    """Fit a GMM-HMM to ``sequences`` (arrays of shape (T_i, D)) by Baum–Welch from ``init``.
+
+    ``tol`` is on the total log-likelihood (hmmlearn's ``tol``): EM stops after ``n_iter`` iterations or
+    when an iteration gains less than ``tol``. ``covar_reg`` is the covariance prior ``r``. Raises
+    ``numpy.linalg.LinAlgError`` when a covariance stops being positive definite.
+    """
+    lengths, alive, X = _pad(sequences)
+    S, T = alive.shape
+    D = X.shape[1]
+    startprob, transmat, weights, means, covars = (np.array(a, dtype=float) for a in init)
+    Q, M = weights.shape
+    history: list[float] = []
+    for _ in range(n_iter):
+        chol_inv, log_norm = gaussian_factors(weights, covars)
+        lc = log_component_densities(X, means, chol_inv, log_norm)  # (N, Q, M), log w + log N
+        log_b_flat = _logsumexp(lc, axis=2)  # (N, Q)
+        log_b = np.full((S, T, Q), -np.inf)
+        log_b[alive] = log_b_flat
+        log_gamma, xi_sum, loglik = forward_backward(log_b, lengths, startprob, transmat)
+        history.append(float(loglik.sum()))
+        with np.errstate(under="ignore"):
+            gamma = np.exp(log_gamma[alive])  # (N, Q)
+            if M == 1:
+                post_mix = np.ones_like(lc)
+            else:
+                post_mix = np.exp(lc - log_b_flat[..., None])
+            pcm = gamma[:, :, None] * post_mix  # (N, Q, M)
+        start = np.exp(log_gamma[:, 0]).sum(axis=0)
+        post_mix_sum = pcm.sum(axis=0)
+        post_sum = gamma.sum(axis=0)
+        m_n = np.einsum("nqm,nd->qmd", pcm, X)
+        centered = X[:, None, None, :] - means[None]  # about the means before the update (as hmmlearn)
+        c_n = np.einsum("nqm,nqmi,nqmj->qmij", pcm, centered, centered)
+        # M-step, as hmmlearn's GMMHMM._do_mstep with its default priors and ours on the covariances
+        startprob = np.where(startprob == 0, 0.0, np.maximum(start, 0.0))
+        startprob = startprob / startprob.sum()
+        transmat = np.where(transmat == 0, 0.0, np.maximum(xi_sum, 0.0))
+        row = transmat.sum(axis=1, keepdims=True)
+        transmat = transmat / np.where(row == 0, 1.0, row)
+        weights = post_mix_sum / post_sum[:, None]
+        m_d = post_mix_sum.copy()
+        m_d[(weights == 0) & (m_n == 0).all(axis=-1)] = 1.0
+        means = m_n / m_d[:, :, None]
+        covars = (covar_reg * np.eye(D) + c_n) / (post_mix_sum + 1.0)[:, :, None, None]
+        if len(history) >= 2 and history[-1] - history[-2] < tol:
+            break
+    return FitResult(GMMHMMParams(startprob, transmat, weights, means, covars), np.array(history))
