@@ -1,6 +1,8 @@
-# glu: the two entry points of the README.
-#   make reproduce   set up .venv, then run every notebook (figures/, recordings/, results summary)
+# glu: the two entry points of the README, and a few more.
+#   make reproduce   set up .venv, then run every notebook (figures/, recordings/, results/, models/, report)
 #   make test        set up .venv, then lint (ruff) and run the test suite
+#   make lab         JupyterLab on the repository, the notebooks open as notebooks
+#   make bench       speed benchmarks (glu vs pgmpy, pyAgrum, hmmlearn); make bench-reproduce: the whole run
 # Variables: DATA=DIR (data folder; default: GLU_DATA_DIR, data/real, else synthetic), ARGS=... (extra flags).
 PYTHON ?= python3
 VENV ?= .venv
@@ -9,7 +11,7 @@ STAMP := $(VENV)/.glu-installed
 DATA ?=
 ARGS ?=
 
-.PHONY: reproduce test lint bench clean venv
+.PHONY: reproduce test lint lab bench bench-reproduce clean venv
 
 venv: $(STAMP)
 
@@ -29,8 +31,16 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/python -m pytest $(ARGS)
 
+lab: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[lab]'
+	$(if $(DATA),GLU_DATA_DIR=$(abspath $(DATA))) $(BIN)/jupyter lab --config=jupyter_lab_config.py $(ARGS)
+
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_bn.py
+	$(BIN)/python benchmarks/bench_hmm.py
+
+bench-reproduce: $(STAMP)
+	$(BIN)/python benchmarks/bench_reproduce.py $(if $(DATA),--data $(DATA)) $(ARGS)
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -55,3 +55,11 @@ class GrammarError(GluError):
 
 class VocabularyError(GluError):
     """A sentence or grammar uses words the model has no probability for."""
+
+
+class ParameterError(GluError):
+    """A notebook parameter that the notebook does not declare, of the wrong type or out of range."""
+
+
+class Terminated(KeyboardInterrupt):
+    """The process received SIGTERM; handled as an interrupt (the command line exits with status 143)."""

@@ -1,18 +1,19 @@
 """Where a notebook's outputs go, and how they are written: figures, result tables, recordings.
 
-A notebook calls :func:`open_outputs` once with its parameters; the returned :class:`Outputs` saves
-figures (PNG + SVG, deterministic, stamped with the data source), result tables (CSV + JSON, with the
+A notebook gets its :class:`Outputs` from :func:`glu.notebook.start`. It saves figures (PNG + SVG at
+:data:`glu.plots.style.DPI`, deterministic, stamped with the data source and the run's non-default
+parameters, and shown inline when a kernel runs the notebook), result tables (CSV + JSON, with the
 experiment's provenance: data source and parameters) and gives paths for Rerun recordings and trained
-models. Where each kind goes is :class:`glu.paths.OutputLayout`'s business: with ``out_dir=None`` the
-project's ``figures/``, ``results/``, ``recordings/`` and ``models/``; ``glu reproduce`` passes a staging
-folder and publishes the files only when the notebook succeeds.
+models. Where each kind goes is :class:`glu.paths.OutputLayout`'s business: ``glu reproduce`` passes a
+staging folder and publishes the files only when every notebook succeeded; any other run writes into the
+notebook's scratch folder (``build/scratch/<notebook>/``) and never touches the published ones.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import platform
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
@@ -20,11 +21,17 @@ from typing import Any
 
 import pandas as pd
 
-from glu.data.source import DataSource, resolve_data
+from glu.data.source import DataSource
+from glu.display import in_kernel
 from glu.files import atomic_write_text
 from glu.paths import OutputLayout
 
 PACKAGES = ("glu", "numpy", "scipy", "pandas", "pgmpy", "hmmlearn", "matplotlib", "rerun-sdk", "papermill")
+
+
+def parameters_text(params: Mapping[str, Any]) -> str:
+    """Parameters as outputs name them: ``rule=jeffrey, step=2`` (empty for none)."""
+    return ", ".join(f"{k}={v}" for k, v in params.items())
 
 
 def package_versions() -> dict[str, str]:
@@ -47,11 +54,13 @@ class Outputs:
     notebook : the notebook's name (e.g. ``"03_bn_learning"``), recorded with every table
     source : the resolved data source
     layout : where each kind of output goes (folders are created on first use)
+    parameters : the run's parameters that differ from the notebook's defaults (named on every output)
     """
 
     notebook: str
     source: DataSource
     layout: OutputLayout
+    parameters: dict[str, Any] = field(default_factory=dict)
     written: list[Path] = field(default_factory=list)
 
     @property
@@ -69,16 +78,32 @@ class Outputs:
         """One line naming the data, for figure footers and tables."""
         return self.source.describe()
 
+    @property
+    def parameters_label(self) -> str:
+        """The run's non-default parameters, ``rule=jeffrey, step=2`` (empty with the defaults)."""
+        return parameters_text(self.parameters)
+
+    def footer(self, source: str | None = None) -> str:
+        """What every output of this run names: its data, and its non-default parameters."""
+        text = f"data: {source or self.data_label}"
+        return text + (f" · {self.notebook} with {self.parameters_label}" if self.parameters else "")
+
     def figure(self, fig: Any, name: str, source: str | None = None) -> list[Path]:
-        """Stamp ``fig`` with the data source and save it as ``figures/<name>.png`` and ``.svg``."""
+        """Stamp ``fig`` with :meth:`footer`, save ``figures/<name>.png`` and ``.svg``, and show the PNG.
+
+        In a running kernel the saved PNG itself is displayed (tagged with its file name in the output's
+        metadata, ``{"glu": {"figure": "<name>.png"}}``), so the executed notebook shows exactly the file
+        that was written; the figure is then closed.
+        """
         from glu.plots.style import save_figure, stamp
 
-        stamp(fig, source or self.data_label)
+        stamp(fig, self.footer(source))
         files = save_figure(fig, self.layout.figures / name)
         self.written.extend(files)
         import matplotlib.pyplot as plt
 
         plt.close(fig)
+        _show_png(files[0])
         return files
 
     def table(self, df: pd.DataFrame, name: str | None = None, **extra: Any) -> Path:
@@ -96,6 +121,7 @@ class Outputs:
         meta = {
             "name": name,
             "notebook": self.notebook,
+            "notebook_parameters": self.parameters,
             "data_source": df.attrs.get("data_source", self.data_label),
             "data": self.data_label,
             **({"experiment": df.attrs["experiment"]} if "experiment" in df.attrs else {}),
@@ -123,17 +149,15 @@ class Outputs:
         return p
 
 
-def open_outputs(
-    notebook: str, data: str | os.PathLike | None = None, out_dir: str | os.PathLike | None = None
-) -> Outputs:
-    """Resolve the data source and the output folders for a notebook run.
+def _show_png(path: Path) -> None:
+    """Display a saved PNG in the running kernel, at the size it has at 100 dpi (nothing outside a kernel)."""
+    if not in_kernel():
+        return
+    from IPython.display import Image, display
 
-    Parameters
-    ----------
-    notebook : the notebook's name
-    data : data folder, ``"synthetic"``, or None (``$GLU_DATA_DIR``, ``data/real/``, else synthetic)
-    out_dir : folder for ``figures/``, ``results/``, ``recordings/``; None = the project's own folders
-    """
-    source = resolve_data(data)
-    print(f"{notebook}: {source.describe()}")
-    return Outputs(notebook, source, OutputLayout.at(out_dir))
+    from glu.plots.style import DPI
+
+    data = path.read_bytes()
+    width_px = int.from_bytes(data[16:20], "big")  # the PNG header's IHDR width
+    image = Image(data=data, format="png", width=width_px * 100 // DPI)
+    display(image, metadata={"glu": {"figure": path.name}})

@@ -72,6 +72,11 @@ class OutputLayout:
         """:meth:`under` ``root``, or :meth:`project` for None."""
         return cls.project() if root is None else cls.under(Path(root).resolve())
 
+    @classmethod
+    def scratch(cls, notebook: str) -> OutputLayout:
+        """A notebook's own scratch folder, for runs that do not publish: :meth:`under` ``scratch_dir(notebook)``."""
+        return cls.under(scratch_dir(notebook))
+
     def folder(self, kind: str) -> Path:
         """The folder of one kind of output (one of :data:`OUTPUT_KINDS`)."""
         if kind not in OUTPUT_KINDS:
@@ -86,6 +91,20 @@ class OutputLayout:
     def staging(self) -> Path:
         """Where ``glu reproduce`` stages runs before publishing them."""
         return self.root / STAGING
+
+
+SCRATCH_DIR: Path = PROJECT_ROOT / "build" / "scratch"
+"""Where notebooks run by hand (JupyterLab, nbconvert, papermill, ``glu run``) write their outputs."""
+
+
+def scratch_dir(notebook: str) -> Path:
+    """The scratch folder of one notebook: ``build/scratch/<notebook>/``."""
+    return SCRATCH_DIR / notebook
+
+
+def notebook_file(name: str) -> Path:
+    """The jupytext source of a notebook, ``notebooks/<name>.py``."""
+    return NOTEBOOKS_DIR / f"{name}.py"
 
 
 def shared_data_dir() -> Path | None:

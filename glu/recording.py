@@ -12,8 +12,9 @@ Layout of a recording written by :func:`write_anticipation_recording`::
     /hand/path                 the path so far (LineStrips3D, growing)
     /hmm/loglik_per_frame/<A>  (1/t) log L(G_1^t | A), one series per action model
     /hmm/p_hmm/<A>             p_HMM(A | G_1^t)
-    /fusion/ObjVel             bar chart of p_comb(ObjVel | Shape, Size, G_1^t), updated every few frames
-    /fusion/Action             bar chart of p_comb(Action | …)
+    /fusion/ObjVel/<value>     p_comb(ObjVel = value | Shape, Size, G_1^t), one labelled bar per value,
+                               updated every few frames (the view's legend names slow, medium, fast)
+    /fusion/Action/<value>     p_comb(Action = value | …), one bar per action
     /description               the best verbal description so far (TextLog), if given
 """
 
@@ -22,9 +23,11 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from glu.display import is_live
 from glu.experiments.anticipation import AnticipationRun
 
 ACTION_RGB = {
@@ -33,6 +36,8 @@ ACTION_RGB = {
     "touch": (85, 168, 104),
     "push": (129, 114, 179),
 }
+VALUE_RGB = {"slow": (141, 160, 203), "medium": (252, 141, 98), "fast": (102, 194, 165)}
+"""Colours of the values in the bar charts (the figures' colours)."""
 
 
 def _rr():
@@ -46,7 +51,13 @@ def new_recording(path: str | os.PathLike, recording_id: str, blueprint=None, ap
     rr = _rr()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    rec = rr.RecordingStream(application_id, recording_id=recording_id, send_properties=False)
+    # no time-based flushing: the chunks of a file depend on its data only, not on how fast it was logged
+    rec = rr.RecordingStream(
+        application_id,
+        recording_id=recording_id,
+        send_properties=False,
+        batcher_config=rr.ChunkBatcherConfig.NEVER(),
+    )
     rec.set_log_time_enabled(False)
     rec.save(str(path), default_blueprint=blueprint)
     return rec
@@ -62,7 +73,7 @@ def anticipation_blueprint(actions: Sequence[str]):
                 rrb.Spatial3DView(origin="/hand", name="hand trajectory"),
                 rrb.TextDocumentView(origin="/scene", name="scene"),
                 rrb.TextLogView(origin="/description", name="description"),
-                row_shares=[3, 1, 1],
+                row_shares=[5, 4, 2],
             ),
             rrb.Vertical(
                 rrb.TimeSeriesView(origin="/hmm/loglik_per_frame", name="(1/t) log L(G | A)"),
@@ -118,13 +129,22 @@ def log_series(
         )
 
 
-def log_bars(rec, entity: str, probs: np.ndarray, frames: np.ndarray, seconds: np.ndarray) -> None:
-    """A bar chart that changes over time: ``probs`` shape (n_updates, n_values), one row per update frame."""
+def log_bars(
+    rec, entity: str, probs: np.ndarray, values: Sequence[str], frames: np.ndarray, seconds: np.ndarray
+) -> None:
+    """Labelled bars that change over time: ``probs`` shape (n_updates, n_values), one row per update frame.
+
+    Rerun's bar charts have no category labels, so each value is its own entity ``entity/<value>`` with
+    one bar at its position: the bar-chart view then names each bar in its legend.
+    """
     rr = _rr()
-    for p, f, t in zip(np.asarray(probs, dtype=float), frames, seconds, strict=True):
-        rec.set_time("frame", sequence=int(f))
-        rec.set_time("time", duration=float(t))
-        rec.log(entity, rr.BarChart(p))
+    probs = np.asarray(probs, dtype=float)
+    for j, value in enumerate(values):
+        color = VALUE_RGB.get(value) or ACTION_RGB.get(value) or (120, 120, 120)
+        for p, f, t in zip(probs[:, j], frames, seconds, strict=True):
+            rec.set_time("frame", sequence=int(f))
+            rec.set_time("time", duration=float(t))
+            rec.log(f"{entity}/{value}", rr.BarChart([p], abscissa=[float(j)], color=color))
 
 
 def log_texts(rec, entity: str, texts: Sequence[str], frames: np.ndarray, seconds: np.ndarray) -> None:
@@ -136,9 +156,8 @@ def log_texts(rec, entity: str, texts: Sequence[str], frames: np.ndarray, second
         rec.log(entity, rr.TextLog(text, level=rr.TextLogLevel.INFO))
 
 
-def write_anticipation_recording(
-    path: str | os.PathLike,
-    recording_id: str,
+def log_anticipation(
+    rec,
     xyz: np.ndarray,
     seconds: np.ndarray,
     frames: np.ndarray,
@@ -149,8 +168,9 @@ def write_anticipation_recording(
     fused: Mapping[str, np.ndarray],
     scene: str,
     descriptions: Sequence[str] | None = None,
-) -> Path:
-    """Write the recording of one effect-anticipation run (see the module docstring for the layout).
+    values: Mapping[str, Sequence[str]] | None = None,
+) -> None:
+    """Log one effect-anticipation run into the stream ``rec`` (see the module docstring for the layout).
 
     Parameters
     ----------
@@ -161,27 +181,71 @@ def write_anticipation_recording(
     fused : node → array, shape (n_updates, n_values), e.g. {"ObjVel": …, "Action": …}
     scene : markdown for the scene panel
     descriptions : the best verbal description at each update frame (optional)
+    values : node → its value names, in the column order of ``fused[node]`` (default: ``0, 1, …``)
     """
-    rec = new_recording(path, recording_id, anticipation_blueprint(actions))
+    log_scene(rec, scene)
+    log_trajectory(rec, xyz, frames, seconds)
+    log_series(rec, "hmm/loglik_per_frame", loglik_per_frame, actions, frames, seconds)
+    log_series(rec, "hmm/p_hmm", p_hmm, actions, frames, seconds)
+    upd_seconds = np.interp(update_frames, frames, seconds)
+    for node, probs in fused.items():
+        names = (values or {}).get(node) or [str(i) for i in range(np.shape(probs)[1])]
+        log_bars(rec, f"fusion/{node}", probs, names, update_frames, upd_seconds)
+    if descriptions is not None:
+        log_texts(rec, "description", descriptions, update_frames, upd_seconds)
+
+
+def write_anticipation_recording(path: str | os.PathLike, recording_id: str, **run: Any) -> Path:
+    """Write one effect-anticipation run to an ``.rrd`` file; ``run`` as :func:`log_anticipation` takes it."""
+    rec = new_recording(path, recording_id, anticipation_blueprint(run["actions"]))
     try:
-        log_scene(rec, scene)
-        log_trajectory(rec, xyz, frames, seconds)
-        log_series(rec, "hmm/loglik_per_frame", loglik_per_frame, actions, frames, seconds)
-        log_series(rec, "hmm/p_hmm", p_hmm, actions, frames, seconds)
-        upd_seconds = np.interp(update_frames, frames, seconds)
-        for node, probs in fused.items():
-            log_bars(rec, f"fusion/{node}", probs, update_frames, upd_seconds)
-        if descriptions is not None:
-            log_texts(rec, "description", descriptions, update_frames, upd_seconds)
+        log_anticipation(rec, **run)
     finally:
         rec.disconnect()
     return Path(path)
 
 
-def write_anticipation(run: AnticipationRun, path: str | os.PathLike, recording_id: str) -> Path:
-    """Write an effect-anticipation run (:func:`glu.experiments.anticipation.effect_anticipation`) as a recording."""
-    return write_anticipation_recording(
-        path, recording_id, xyz=run.xyz, seconds=run.seconds, frames=run.frames, actions=run.actions,
+def _run_fields(run: AnticipationRun, note: str) -> dict[str, Any]:
+    scene = run.scene() + (f"\n\n<small>{note}</small>" if note else "")
+    return dict(
+        xyz=run.xyz, seconds=run.seconds, frames=run.frames, actions=run.actions,
         loglik_per_frame=run.loglik_per_frame, p_hmm=run.p_hmm, update_frames=run.update_frames,
-        fused=run.fused, scene=run.scene(), descriptions=run.descriptions or None,
+        fused=run.fused, scene=scene, descriptions=run.descriptions or None, values=run.values,
     )  # fmt: skip
+
+
+def show_anticipation(
+    run: AnticipationRun, recording_id: str, note: str = "", live: bool | None = None
+) -> Any:
+    """The Rerun viewer inline in a live notebook, replaying the run; None when headless.
+
+    Needs ``rerun-notebook`` (``pip install 'glu[lab]'``); without it, or headless (``glu reproduce``),
+    nothing is shown and None is returned: the ``.rrd`` files are the artefact either way.
+    """
+    if not is_live(live):
+        return None
+    rr = _rr()
+    try:
+        from rerun.notebook import Viewer
+    except ImportError:  # pragma: no cover - rerun-sdk always has the module
+        return None
+    rec = rr.RecordingStream("glu", recording_id=recording_id, send_properties=False)
+    rec.set_log_time_enabled(False)
+    try:
+        viewer = Viewer(
+            recording=rec, width="auto", height=560, blueprint=anticipation_blueprint(run.actions)
+        )
+    except Exception:  # rerun-notebook or ipywidgets missing: the static artefact stays the .rrd file
+        return None
+    log_anticipation(rec, **_run_fields(run, note))
+    return viewer
+
+
+def write_anticipation(
+    run: AnticipationRun, path: str | os.PathLike, recording_id: str, note: str = ""
+) -> Path:
+    """Write an effect-anticipation run (:func:`glu.experiments.anticipation.effect_anticipation`) as a recording.
+
+    ``note`` (e.g. the notebook's data source and non-default parameters) ends the scene text.
+    """
+    return write_anticipation_recording(path, recording_id, **_run_fields(run, note))

@@ -1,13 +1,19 @@
-"""Run every notebook headless with papermill: figures, recordings, result tables and a summary.
+"""Run every notebook headless with papermill: figures, recordings, result tables, a summary and a report.
 
-``glu reproduce`` (and ``make reproduce``) calls :func:`reproduce`. Each notebook runs in its own kernel,
-writing into a private staging folder; when it succeeds its files are moved into the folders of the
-output layout (:class:`glu.paths.OutputLayout`: ``figures/``, ``recordings/``, ``results/``, ``models/``,
-the executed notebook into ``build/notebooks/``; or all under ``--out``).
-A failing notebook stops the run with a message naming the notebook and the cell, keeps its executed copy
-(``NAME.failed.ipynb``), and leaves the outputs of earlier runs as they were. At the end
+``glu reproduce`` (and ``make reproduce``) calls :func:`reproduce`. Each notebook runs in its own kernel
+(:mod:`glu.execution`), writing into a private staging folder. The run is all-or-nothing: only when every
+notebook succeeded are the staged files moved into the folders of the output layout
+(:class:`glu.paths.OutputLayout`: ``figures/``, ``recordings/``, ``results/``, ``models/``, the executed
+notebooks into ``build/notebooks/``; or all under ``--out``), so figures, recordings, models and
+``results/summary.json`` always belong to one run. A failing notebook stops the run with a message naming
+the notebook and the cell and keeps its executed copy (``NAME.failed.ipynb``); Ctrl-C or SIGTERM stops
+it at once (the kernels are killed). Either way nothing is published and the staging folder is removed;
+a staging folder left by a killed process is removed by the next run. At the end
 ``results/summary.json`` and ``results/summary.csv`` collect every number behind every figure, the data
-source, the package versions and the comparison with the original model.
+source, the package versions and the comparison with the original model, and ``report/`` (by default
+``build/report/``) gets a browsable HTML report (:mod:`glu.report`).
+
+:func:`run_one` runs a single notebook the same way (``glu run``), into its scratch folder by default.
 """
 
 from __future__ import annotations
@@ -18,8 +24,8 @@ import shutil
 import sys
 import time
 import uuid
-from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,12 +33,18 @@ from typing import Any
 from glu import paths
 from glu.data.source import resolve_data
 from glu.errors import GluError
+from glu.execution import NotebookStopped, RunHandle, run_notebook
 from glu.files import atomic_write_text
+from glu.outputs import parameters_text
+from glu.parameters import check, non_defaults, parse_value, read_spec
 from glu.paths import OutputLayout
+
+OWNER_FILE = "owner.pid"
+"""In each staging folder: the process id of the run that owns it."""
 
 
 class NotebookError(GluError):
-    """A notebook failed while running."""
+    """A notebook failed while running, or a notebook name matches none."""
 
 
 @dataclass
@@ -45,19 +57,21 @@ class NotebookResult:
     executed: Path | None = None
     error: str = ""
     files: list[str] = field(default_factory=list)
+    parameters: dict[str, Any] = field(default_factory=dict)
 
 
 def list_notebooks(only: Sequence[str] | None = None, folder: Path = paths.NOTEBOOKS_DIR) -> list[Path]:
     """The notebooks (jupytext ``NN_name.py`` files) in story order; ``only`` selects by name or number."""
     found = sorted(p for p in folder.glob("[0-9][0-9]_*.py"))
-    if not only:
+    if only is None:
         return found
     chosen = []
     for key in only:
+        key = str(key).strip()
         match = [
             p
             for p in found
-            if p.stem == key or p.stem.split("_", 1)[0] == key.zfill(2) or p.stem.startswith(key)
+            if key and (p.stem == key or p.stem.split("_", 1)[0] == key.zfill(2) or p.stem.startswith(key))
         ]
         if not match:
             names = ", ".join(p.stem for p in found)
@@ -66,18 +80,31 @@ def list_notebooks(only: Sequence[str] | None = None, folder: Path = paths.NOTEB
     return sorted(chosen)
 
 
-def run_notebook(src: Path, out_ipynb: Path, parameters: dict[str, Any], cwd: Path | None = None) -> Any:
-    """Execute one jupytext notebook with papermill, writing the executed copy to ``out_ipynb``."""
-    import jupytext
-    import papermill as pm
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
-    out_ipynb.parent.mkdir(parents=True, exist_ok=True)
-    nb = jupytext.read(src)
-    return pm.execute_notebook(
-        nb, str(out_ipynb), parameters=parameters, kernel_name="python3", language="python", progress_bar=False,
-        extra_arguments=["--log-level=ERROR"],  # the kernel's own start-up chatter stays out of the run's log
-        cwd=str(cwd or src.parent), log_output=False,
-    )  # fmt: skip
+
+def clean_stale_staging(staging_root: Path) -> list[Path]:
+    """Remove staging folders whose owning process is gone (a run killed with SIGKILL); return them."""
+    removed = []
+    if not staging_root.is_dir():
+        return removed
+    for d in staging_root.iterdir():
+        owner = d / OWNER_FILE
+        try:
+            pid = int(owner.read_text().strip())
+        except (OSError, ValueError):
+            pid = None
+        if pid is None or not _pid_alive(pid):
+            shutil.rmtree(d, ignore_errors=True)
+            removed.append(d)
+    return removed
 
 
 def _move_tree(staged: Path, final: Path) -> list[str]:
@@ -93,6 +120,53 @@ def _move_tree(staged: Path, final: Path) -> list[str]:
     return moved
 
 
+class _Progress:
+    """Live progress on a terminal (tqdm, over all cells); plain lines when stderr is not a TTY."""
+
+    def __init__(self, notebooks: Sequence[Path], log: Callable[[str], None], live: bool):
+        self.log = log
+        self.running: dict[str, RunHandle] = {}
+        self.started: dict[str, float] = {}
+        self.done = 0
+        self.n = len(notebooks)
+        self.bar = None
+        if live:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=self.n, unit="notebook", file=sys.stderr, leave=False, dynamic_ncols=True)
+
+    def handle(self, name: str) -> RunHandle:
+        h = RunHandle()
+        self.running[name] = h
+        self.started[name] = time.perf_counter()
+        return h
+
+    def finished(self, name: str, line: str) -> None:
+        self.running.pop(name, None)
+        self.done += 1
+        if self.bar is not None:
+            self.bar.write(line, file=sys.stderr)
+            self.bar.update(1)
+        else:
+            self.log(line)
+
+    def tick(self) -> None:
+        if self.bar is None:
+            return
+        now = time.perf_counter()
+        parts = [
+            f"{n} cell {h.cell + 1}/{h.n_cells} {now - self.started[n]:.0f}s"
+            if h.n_cells
+            else f"{n} starting"
+            for n, h in self.running.items()
+        ]
+        self.bar.set_postfix_str(" · ".join(parts), refresh=True)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
 def reproduce(
     data: str | os.PathLike | None = None,
     quick: bool = False,
@@ -102,38 +176,60 @@ def reproduce(
     seed: int = 0,
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
+    progress: bool | None = None,
+    report: bool = True,
 ) -> dict[str, Any]:
-    """Run the notebooks and write the results summary; returns the summary (also in results/summary.json).
+    """Run the notebooks and publish their outputs if all succeed; returns the summary (also in results/).
 
     Parameters
     ----------
     data : data folder, ``"synthetic"``, or None (``$GLU_DATA_DIR``, ``data/real/``, else synthetic)
     quick : small, fast runs (for tests); figures are still made
-    out : root for ``figures/``, ``recordings/``, ``results/``, ``models/``, ``notebooks/``; None = the
-        project's folders (:meth:`glu.paths.OutputLayout.at`)
+    out : root for ``figures/``, ``recordings/``, ``results/``, ``models/``, ``notebooks/``, ``report/``;
+        None = the project's folders (:meth:`glu.paths.OutputLayout.at`)
     jobs : notebooks run at the same time (each in its own kernel)
     only : run only these notebooks (names or numbers)
     seed : the seed passed to every notebook
     log : where progress lines go (stderr by default)
     notebooks_dir : the folder of jupytext notebooks ``NN_name.py``
+    progress : live progress bar; None = when stderr is a terminal
+    report : also write the HTML report
+
+    Raises
+    ------
+    NotebookError : a notebook failed (nothing published); KeyboardInterrupt : interrupted (nothing
+    published, kernels killed, staging removed)
     """
     t_start = time.perf_counter()
+    if not 1 <= jobs <= 64:
+        raise NotebookError(f"-j {jobs}: the number of notebooks run at once must be between 1 and 64")
+    if not 0 <= seed < 2**32:
+        raise NotebookError(f"--seed {seed}: a seed must be between 0 and 2**32 - 1")
     source = resolve_data(data)
     data_param = "synthetic" if source.root is None else str(source.root)
     notebooks = list_notebooks(only, notebooks_dir)
     if not notebooks:
         raise NotebookError(f"no notebooks found in {notebooks_dir}")
-    if jobs < 1:
-        raise NotebookError(f"-j {jobs}: the number of parallel notebooks must be at least 1")
+    run_params = {"quick": quick, "seed": seed}
+    non_default = {}
+    for nb in notebooks:  # every notebook takes these parameters: refuse before anything runs
+        spec = read_spec(nb)
+        missing = {"data", "out_dir", *run_params} - set(spec)
+        if missing:
+            raise NotebookError(f"{nb.stem}: its parameters cell lacks {', '.join(sorted(missing))}")
+        non_default[nb.stem] = non_defaults(spec, check(spec, run_params, nb.stem))
     layout = OutputLayout.at(out)
     final = layout.published()
     executed_dir = layout.notebooks
+    clean_stale_staging(layout.staging)
     staging = layout.staging / uuid.uuid4().hex[:12]
-    log(f"glu reproduce: {len(notebooks)} notebooks, {source.describe()}, quick={quick}, jobs={jobs}")
+    staging.mkdir(parents=True)
+    (staging / OWNER_FILE).write_text(str(os.getpid()))
+    log(f"glu reproduce: {len(notebooks)} notebooks, {source.location()}, quick={quick}, jobs={jobs}")
+    live = sys.stderr.isatty() if progress is None else progress
+    bar = _Progress(notebooks, log, live)
 
-    results: list[NotebookResult] = []
-
-    def one(i: int, nb: Path) -> NotebookResult:
+    def one(i: int, nb: Path, handle: RunHandle) -> NotebookResult:
         import papermill as pm
 
         name = nb.stem
@@ -142,48 +238,63 @@ def reproduce(
         out_ipynb = stage / f"{name}.ipynb"
         params = {"data": data_param, "quick": quick, "out_dir": str(stage / "out"), "seed": seed}
         try:
-            run_notebook(nb, out_ipynb, params, cwd=nb.parent)
+            run_notebook(nb, out_ipynb, params, cwd=nb.parent, handle=handle)
         except pm.PapermillExecutionError as e:
             kept = executed_dir / f"{name}.failed.ipynb"
             kept.parent.mkdir(parents=True, exist_ok=True)
             if out_ipynb.exists():
                 os.replace(out_ipynb, kept)
             msg = f"notebook {name} failed in cell {e.cell_index} (execution count {e.exec_count}): {e.ename}: {e.evalue}"
-            log(
-                f"[{i}/{len(notebooks)}] {name}: FAILED after {time.perf_counter() - t0:.1f} s — {e.ename}: {e.evalue}"
+            bar.finished(
+                name,
+                f"[{i}/{len(notebooks)}] {name}: FAILED after {time.perf_counter() - t0:.1f} s — {e.ename}: {e.evalue}",
             )
             return NotebookResult(name, "failed", time.perf_counter() - t0, kept, msg)
-        files = []
-        staged = OutputLayout.under(stage / "out")
-        for kind, target in final.items():
-            files += _move_tree(staged.folder(kind), target)
-        executed = executed_dir / f"{name}.ipynb"
-        executed.parent.mkdir(parents=True, exist_ok=True)
-        os.replace(out_ipynb, executed)
-        (executed_dir / f"{name}.failed.ipynb").unlink(missing_ok=True)
         dt = time.perf_counter() - t0
-        log(f"[{i}/{len(notebooks)}] {name}: ok in {dt:.1f} s ({len(files)} files)")
-        return NotebookResult(name, "ok", dt, executed, files=files)
+        bar.finished(name, f"[{i}/{len(notebooks)}] {name}: ok in {dt:.1f} s")
+        return NotebookResult(name, "ok", dt, out_ipynb, parameters=non_default[name])
 
+    results: list[NotebookResult] = []
     try:
-        with ThreadPoolExecutor(max_workers=jobs) as pool:
-            futures = {pool.submit(one, i, nb): nb for i, nb in enumerate(notebooks, start=1)}
+        pool = ThreadPoolExecutor(max_workers=jobs)
+        futures: dict[Future, str] = {}
+        try:
+            for i, nb in enumerate(notebooks, start=1):
+                futures[pool.submit(one, i, nb, bar.handle(nb.stem))] = nb.stem
             pending = set(futures)
             failed: NotebookResult | None = None
             while pending:
-                done, pending = wait(pending, return_when=FIRST_EXCEPTION if jobs > 1 else "FIRST_COMPLETED")
+                done, pending = wait(pending, timeout=0.25, return_when=FIRST_COMPLETED)
+                bar.tick()
                 for f in done:
-                    r = f.result()
+                    try:
+                        r = f.result()
+                    except NotebookStopped:
+                        continue
                     results.append(r)
                     if r.status == "failed" and failed is None:
                         failed = r
-                        for p in pending:
-                            p.cancel()
-            if failed is not None:
-                raise NotebookError(
-                    f"{failed.error}; executed copy kept at {failed.executed}; "
-                    "outputs of earlier runs were left as they were"
-                )
+                        _stop_all(pending, futures, bar)
+        except BaseException:
+            _stop_all(set(futures), futures, bar)
+            raise
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+            bar.close()
+        if failed is not None:
+            raise NotebookError(
+                f"{failed.error}; executed copy kept at {failed.executed}; nothing was published: "
+                "the outputs of earlier runs are as they were"
+            )
+        for r in sorted(results, key=lambda r: r.name):  # every notebook succeeded: publish them all
+            staged = OutputLayout.under(staging / r.name / "out")
+            for kind, target in final.items():
+                r.files += _move_tree(staged.folder(kind), target)
+            executed = executed_dir / f"{r.name}.ipynb"
+            executed.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(r.executed, executed)
+            r.executed = executed
+            (executed_dir / f"{r.name}.failed.ipynb").unlink(missing_ok=True)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
         try:
@@ -195,10 +306,70 @@ def reproduce(
     summary = write_summary(
         final["results"], results, source.describe(), quick, time.perf_counter() - t_start
     )
+    if report:
+        from glu.report import write_report
+
+        index = write_report(layout, summary)
+        log(f"glu reproduce: report in {index}")
     log(
         f"glu reproduce: done in {summary['wall_time_s']:.1f} s; summary in {final['results'] / 'summary.json'}"
     )
     return summary
+
+
+def _stop_all(pending: set[Future], futures: Mapping[Future, str], bar: _Progress) -> None:
+    """Cancel what has not started, and kill the kernels of what is running."""
+    for f in pending:
+        f.cancel()
+    for h in list(bar.running.values()):
+        h.stop()
+
+
+def run_one(
+    notebook: str,
+    values: Mapping[str, str],
+    data: str | os.PathLike | None = None,
+    out: str | os.PathLike | None = None,
+    notebooks_dir: Path = paths.NOTEBOOKS_DIR,
+    log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
+) -> tuple[Path, OutputLayout]:
+    """Run one notebook headless (``glu run``): check the parameters first, then execute.
+
+    Parameters
+    ----------
+    notebook : the notebook's name or number
+    values : parameter name → its text on the command line (``-p NAME VALUE``), parsed by its type
+    data, out : the data source and the output root (default: the notebook's scratch folder)
+
+    Returns the executed notebook and the layout its outputs went to. Raises
+    :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
+    of range, :class:`NotebookError` when a cell fails.
+    """
+    import papermill as pm
+
+    (src,) = list_notebooks([notebook], notebooks_dir)[:1]
+    spec = read_spec(src)
+    for plumbing in ("data", "out_dir"):
+        if plumbing in values:
+            flag = "--data" if plumbing == "data" else "--out"
+            raise NotebookError(f"{src.stem}: give {plumbing!r} with {flag}, not -p")
+    parsed = {name: parse_value(spec[name], text, src.stem) for name, text in values.items() if name in spec}
+    unknown = {name: text for name, text in values.items() if name not in spec}
+    check(spec, {**parsed, **unknown}, src.stem)  # refuses unknown names, with a suggestion
+    source = resolve_data(data)
+    layout = OutputLayout.at(out) if out is not None else OutputLayout.scratch(src.stem)
+    params = {**parsed, "data": "synthetic" if source.root is None else str(source.root),
+              "out_dir": str(layout.root)}  # fmt: skip
+    executed = layout.notebooks / f"{src.stem}.ipynb"
+    shown = parameters_text(parsed) or "default parameters"
+    log(f"glu run: {src.stem} with {shown}, {source.location()} …")
+    try:
+        run_notebook(src, executed, params, cwd=src.parent)
+    except pm.PapermillExecutionError as e:
+        raise NotebookError(
+            f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; executed copy at {executed}"
+        ) from None
+    return executed, layout
 
 
 def write_summary(
@@ -213,7 +384,15 @@ def write_summary(
 
     from glu.outputs import package_versions
 
-    notebooks = {r.name: {"name": r.name, "status": r.status, "seconds": round(r.seconds, 3)} for r in runs}
+    notebooks = {
+        r.name: {
+            "name": r.name,
+            "status": r.status,
+            "seconds": round(r.seconds, 3),
+            "parameters": r.parameters,
+        }
+        for r in runs
+    }
     tables: dict[str, Any] = {}
     figures: dict[str, str] = {}
     recordings: dict[str, str] = {}

@@ -2,6 +2,7 @@
 # jupyter:
 #   jupytext:
 #     formats: py:percent
+#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent
@@ -26,7 +27,7 @@
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
 seed: int = 0  # seed of the synthetic recordings
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/ and results/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 import matplotlib.pyplot as plt
@@ -34,9 +35,9 @@ import matplotlib.pyplot as plt
 from glu import plots
 from glu.experiments import gestures
 from glu.gestures.corpus import recording_segmentations
-from glu.outputs import open_outputs
+from glu.notebook import start
 
-out = open_outputs("01_gesture_features", data, out_dir)
+out = start("01_gesture_features", globals())
 segmentations = recording_segmentations(out.source, seed=seed)
 table = gestures.segmentation_table(segmentations, out.data_label)
 out.table(table, "gesture_segments")

@@ -2,6 +2,7 @@
 # jupyter:
 #   jupytext:
 #     formats: py:percent
+#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent
@@ -36,15 +37,15 @@ noise_levels: list[float] = [
 eval_tol: float = 1e-3  # EM tolerance (log-likelihood per frame) in the evaluation sweeps; training uses 1e-4
 seed: int = 0  # seed of the synthetic corpora and of EM initialisation
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/, results/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 from glu import plots
 from glu.experiments import gestures
 from glu.gestures.corpus import gesture_sequences, synthetic_corpus
-from glu.outputs import open_outputs
+from glu.notebook import start
 
-out = open_outputs("02_hmm_training", data, out_dir)
+out = start("02_hmm_training", globals())
 train = {"n_states": n_states, "n_mix": n_mix}
 if quick:
     n_per_action, folds, noise_levels, train = 6, 3, [0.0, 0.05], {**train, "n_iter": 15}

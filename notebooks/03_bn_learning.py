@@ -2,6 +2,7 @@
 # jupyter:
 #   jupytext:
 #     formats: py:percent
+#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent
@@ -26,7 +27,7 @@ data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/
 words: str = "lab"  # descriptions: "lab" (transcribed, the paper's) or "asr" (speech recogniser)
 seed: int = 0  # seed (learning itself is deterministic)
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/ and results/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 import time
@@ -35,9 +36,9 @@ from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
 from glu.experiments import fusion
-from glu.outputs import open_outputs
+from glu.notebook import start
 
-out = open_outputs("03_bn_learning", data, out_dir)
+out = start("03_bn_learning", globals())
 table = load_experiments(out.source, words)
 t0 = time.perf_counter()
 bn = learn_bn(table)
@@ -82,3 +83,14 @@ comparison.loc[comparison.uniform_minus_zero.abs().sort_values(ascending=False).
 # %% [markdown]
 # Learning reproduces the original network exactly on the real data (the structure and every CPT), and the
 # all-zero rows matter: they change the word-probability differences of GLU 2017 Fig. 5 by up to ≈0.19.
+
+# %% [markdown]
+# ## Try it: query the learned network
+# Choose values of the affordance nodes and watch the network's beliefs about the effect, the action and
+# the words it would use (interactive when run live in JupyterLab, `make lab`; a table here otherwise).
+
+# %%
+from glu.bn import InferenceEngine
+from glu.explorer import evidence_explorer
+
+evidence_explorer(InferenceEngine(bn), evidence={"Action": "tap", "Shape": "sphere"})

@@ -2,6 +2,7 @@
 # jupyter:
 #   jupytext:
 #     formats: py:percent
+#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent
@@ -28,7 +29,7 @@ size: str = "small"  # … and its size
 n_per_action: int = 20  # synthetic data: training gestures per action
 seed: int = 0  # seed of synthetic gestures and EM initialisation
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/ and results/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 from glu import plots
@@ -37,9 +38,9 @@ from glu.data import load_experiments
 from glu.experiments import fusion, gestures
 from glu.gestures import gesture_sequences, load_original_models
 from glu.gestures.corpus import held_out_gestures
-from glu.outputs import open_outputs
+from glu.notebook import start
 
-out = open_outputs("04_fusion_hard", data, out_dir)
+out = start("04_fusion_hard", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
 mat = out.source.original_hmms()
 if mat is not None:

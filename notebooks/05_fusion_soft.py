@@ -2,6 +2,7 @@
 # jupyter:
 #   jupytext:
 #     formats: py:percent
+#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent
@@ -27,16 +28,16 @@ unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the origi
 n_points: int = 101  # points of the p_HMM(tap) sweep
 seed: int = 0  # seed (unused: everything here is exact)
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/ and results/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 from glu import plots
 from glu.bn import learn_bn
 from glu.data import load_experiments
 from glu.experiments import fusion
-from glu.outputs import open_outputs
+from glu.notebook import start
 
-out = open_outputs("05_fusion_soft", data, out_dir)
+out = start("05_fusion_soft", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
 if quick:
     n_points = 11
@@ -70,3 +71,15 @@ pivot.iloc[:: max(1, len(pivot) // 5)]
 # The two rules agree at the ends (no doubt about the action) and differ in between: virtual evidence lets
 # the network's own knowledge of which actions move a sphere pull the belief, while Jeffrey's rule trusts
 # the HMM's numbers as they are and mixes the action-conditional predictions linearly.
+
+# %% [markdown]
+# ## Try it: an evidence explorer
+# Set the object's features and effects, give the gesture recogniser's belief p_HMM(Action), pick the rule,
+# and watch p_comb(ObjVel), p_comb(Action) and the best descriptions change. Run live in JupyterLab
+# (`make lab`) it is interactive; in the executed notebook it shows the starting point below.
+
+# %%
+from glu.bn import InferenceEngine
+from glu.explorer import evidence_explorer
+
+evidence_explorer(InferenceEngine(bn), evidence={"Shape": "sphere", "Size": "small"}, p_hmm=[0.2, 0.6, 0.2])

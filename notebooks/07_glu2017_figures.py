@@ -2,6 +2,7 @@
 # jupyter:
 #   jupytext:
 #     formats: py:percent
+#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent
@@ -26,16 +27,16 @@ unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the origi
 threshold: float = 0.02  # words shown in Fig. 5: |Δp(w)| above this
 seed: int = 0  # seed (unused: everything here is exact)
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/ and results/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
 from glu.experiments import fusion
-from glu.outputs import open_outputs
+from glu.notebook import start
 
-out = open_outputs("07_glu2017_figures", data, out_dir)
+out = start("07_glu2017_figures", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
 mat = out.source.original_bn()
 original = BayesNet.from_bnt_mat(mat) if mat else None

@@ -2,6 +2,7 @@
 # jupyter:
 #   jupytext:
 #     formats: py:percent
+#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent
@@ -33,7 +34,7 @@ n_mix: int = 3  # our HMMs: Gaussian components per state
 n_per_action: int = 20  # synthetic data: training gestures per action
 seed: int = 0  # seed of synthetic gestures and EM initialisation
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/, results/, recordings/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 import matplotlib.pyplot as plt
@@ -43,9 +44,9 @@ from glu.bn import BayesNet, InferenceEngine, learn_bn
 from glu.data import load_experiments
 from glu.experiments import anticipation, fusion, gestures
 from glu.gestures import gesture_sequences, load_original_models
-from glu.outputs import open_outputs
+from glu.notebook import start
 
-out = open_outputs("08_tcds_figures", data, out_dir)
+out = start("08_tcds_figures", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
 bn_mat = out.source.original_bn()
 original = BayesNet.from_bnt_mat(bn_mat) if bn_mat else None
@@ -90,6 +91,7 @@ sequences = gesture_sequences(
 )
 banks["glu"] = gestures.train_on(sequences, seed=seed, **train)
 
+runs = {}
 for name, recognizer in banks.items():
     fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), sharex="col")
     for j, case in enumerate(anticipation.CASES):
@@ -98,6 +100,7 @@ for name, recognizer in banks.items():
             recognizer, engine, trajectory, anticipation.CASES[case].evidence,
             case=case, models=name, step=step, rule=rule, describe=True,
         )  # fmt: skip
+        runs[case, name] = run
         out.table(run.curves(), f"tcds_anticipation_{case}_{name}_curves")
         out.table(
             run.predictions(),
@@ -105,8 +108,9 @@ for name, recognizer in banks.items():
             final_description=run.descriptions[-1],
         )
         recording.write_anticipation(
-            run, out.recording(f"tcds_anticipation_{case}_{name}"), f"glu-anticipation-{case}-{name}-{seed}"
-        )
+            run, out.recording(f"tcds_anticipation_{case}_{name}"), f"glu-anticipation-{case}-{name}-{seed}",
+            note=out.footer(),
+        )  # fmt: skip
         plots.plot_anticipation(axes[:, j], run.curves(), run.predictions())
         print(
             f"{case}, {name} HMMs: final p_comb(ObjVel) = {run.fused['ObjVel'][-1].round(3)}; “{run.descriptions[-1]}”"
@@ -121,3 +125,13 @@ for name, recognizer in banks.items():
 # predicts a lift. The original models were trained on a larger 2013 corpus; the real gesture data
 # published with the paper is too small to retrain them (notebook 02 measures it). Open
 # `recordings/tcds_anticipation_*.rrd` in the Rerun viewer to replay each run.
+
+# %% [markdown]
+# ## Replay it in the Rerun viewer
+# Run live in JupyterLab (`make lab`), the Rerun viewer below replays the sphere: the hand in 3-D, the HMM
+# scores, p_HMM and the fused beliefs frame by frame. The same recordings are in `recordings/`
+# (`rerun recordings/tcds_anticipation_sphere_original.rrd`).
+
+# %%
+case, name = next(iter(runs))
+recording.show_anticipation(runs[case, name], f"live-{case}-{name}", note=out.footer())

@@ -2,6 +2,7 @@
 # jupyter:
 #   jupytext:
 #     formats: py:percent
+#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent
@@ -28,7 +29,7 @@ n_samples: int = 10_000  # random sentences per sample, as the originals
 n_seeds: int = 20  # samples compared with the exact N-best
 seed: int = 0  # first seed of the random samples
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/ and results/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 import time
@@ -49,9 +50,9 @@ from glu.language import (
     word_probabilities,
 )
 from glu.language import nbest as exact_nbest
-from glu.outputs import open_outputs
+from glu.notebook import start
 
-out = open_outputs("09_verbal_descriptions", data, out_dir)
+out = start("09_verbal_descriptions", globals())
 engine = InferenceEngine(learn_bn(load_experiments(out.source, words), unseen_words=unseen_words))
 grammar, net = load_grammar(), default_network()
 seeds = range(seed, seed + (2 if quick else n_seeds))

@@ -17,7 +17,7 @@ import glu
 PACKAGE = Path(glu.__file__).resolve().parent
 
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("glu", "glu.errors"),
+    ("glu", "glu.errors", "glu.display"),
     ("glu.paths", "glu.files"),
     ("glu.schema",),
     ("glu.evidence",),
@@ -25,8 +25,10 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("glu.bn", "glu.gestures", "glu.language"),
     ("glu.fusion",),
     ("glu.experiments",),
-    ("glu.plots", "glu.recording"),
-    ("glu.outputs",),
+    ("glu.plots", "glu.recording", "glu.explorer"),
+    ("glu.outputs", "glu.parameters"),
+    ("glu.notebook", "glu.execution"),
+    ("glu.report",),
     ("glu.reproduce", "glu.compare"),
     ("glu.cli",),
     ("glu.__main__",),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import filecmp
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -123,10 +124,10 @@ def test_two_runs_are_identical(quick_runs):
 
 
 _OK = """# %% tags=["parameters"]
-data = None
-seed = 0
-quick = False
-out_dir = None
+data: str = None  # data folder
+seed: int = 0  # seed
+quick: bool = False  # quick run
+out_dir: str = None  # outputs
 
 # %%
 from pathlib import Path
@@ -145,7 +146,7 @@ raise RuntimeError("deliberate failure")
 )
 
 
-def test_a_failing_notebook_stops_with_a_clear_message_and_keeps_earlier_outputs(tmp_path):
+def test_a_failing_notebook_stops_the_run_and_nothing_is_published(tmp_path):
     nbs = tmp_path / "nbs"
     nbs.mkdir()
     (nbs / "01_ok.py").write_text(_OK)
@@ -161,23 +162,30 @@ def test_a_failing_notebook_stops_with_a_clear_message_and_keeps_earlier_outputs
     assert "notebook 02_fails failed in cell" in msg and "RuntimeError: deliberate failure" in msg
     assert (out / "notebooks" / "02_fails.failed.ipynb").is_file()
     assert (out / "figures" / "earlier.png").read_bytes() == b"earlier output"
-    assert (out / "figures" / "new.txt").read_text() == "new"  # the notebook that succeeded landed
+    assert not (
+        out / "figures" / "new.txt"
+    ).exists()  # all or nothing: the notebook that succeeded did not land
+    assert "nothing was published" in msg
     assert (out / "results" / "summary.json").read_text() == "{}"  # no summary of a failed run
     assert not (out / ".glu-staging").exists()
     with pytest.raises(NotebookError, match="no notebook matches 'nope'"):
         reproduce(data="synthetic", out=out, only=["nope"], log=_silent, notebooks_dir=nbs)
+    with pytest.raises(NotebookError, match="no notebook matches ''"):
+        reproduce(data="synthetic", out=out, only=[""], log=_silent, notebooks_dir=nbs)
 
 
-_TABLE = (
-    _OK
-    + """
+_TABLE = """# %% tags=["parameters"]
+data: str = None  # data folder
+seed: int = 0  # seed
+quick: bool = False  # quick run
+out_dir: str = None  # outputs
+
 # %%
 import pandas as pd
-from glu.outputs import open_outputs
-out = open_outputs(NAME, data, out_dir)
+from glu.notebook import start
+out = start(NAME, globals())
 out.table(pd.DataFrame({"x": [seed]}), NAME)
 """
-)
 
 
 def test_a_partial_run_updates_the_summary_of_the_same_data(tmp_path):
@@ -200,3 +208,72 @@ def test_notebook_sources_have_no_outputs():
         nb = jupytext.read(path)
         assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code")
         assert Path(path).suffix == ".py"
+
+
+def test_every_executed_notebook_shows_every_figure_it_wrote(quick_runs):
+    """A reader of an executed notebook sees each figure inline: the very PNG that was saved."""
+    import base64
+
+    out, summary = quick_runs[0]
+    written: dict[str, set[str]] = {}
+    for fname, nb in summary["figures_by_notebook"].items():
+        if fname.endswith(".png"):
+            written.setdefault(nb, set()).add(fname)
+    assert written, "no figures were written"
+    for name in NOTEBOOKS:
+        nb = json.loads((out / "notebooks" / f"{name}.ipynb").read_text())
+        shown = {}
+        for cell in nb["cells"]:
+            for o in cell.get("outputs", []):
+                if "image/png" in o.get("data", {}):
+                    shown[o["metadata"]["glu"]["figure"]] = base64.b64decode(o["data"]["image/png"])
+        assert set(shown) == written.get(name, set()), f"{name}: figures written vs shown differ"
+        for fname, png in shown.items():
+            assert png == (out / "figures" / fname).read_bytes(), f"{name}: {fname} shown is not the file"
+
+
+def test_every_executed_notebook_names_its_data_first(quick_runs):
+    out, _ = quick_runs[0]
+    for name in NOTEBOOKS:
+        nb = json.loads((out / "notebooks" / f"{name}.ipynb").read_text())
+        texts = [
+            "".join(o["data"].get("text/markdown", ""))
+            for c in nb["cells"]
+            for o in c.get("outputs", [])
+            if o.get("output_type") == "display_data"
+        ]
+        assert texts and texts[0].startswith(f"**{name}** · synthetic data (seed 0, 1270 experiments)"), name
+        assert "quick=True" in texts[0]  # the run's non-default parameters
+
+
+def test_figures_name_the_runs_non_default_parameters(quick_runs):
+    out, _ = quick_runs[0]
+    svg = (out / "figures" / "glu2017_effect_prediction.svg").read_text()
+    footer = "data: synthetic data (seed 0, 1270 experiments) · 07_glu2017_figures with quick=True"
+    assert f"<!-- {footer} -->" in svg  # matplotlib keeps each text as a comment in the SVG
+    assert str(out) not in svg  # no machine path
+    doc = json.loads((out / "results" / "glu2017_effect_prediction.json").read_text())
+    assert doc["meta"]["notebook_parameters"] == {"quick": True}
+
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (apt-get install chromium)")
+def test_the_report_opens_in_a_real_browser_with_every_figure_rendered(quick_runs, tmp_path):
+    out, summary = quick_runs[0]
+    index = out / "report" / "index.html"
+    pngs = [f for f in summary["figures"] if f.endswith(".png")]
+    res = subprocess.run(
+        [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=10000", "--dump-dom",
+         index.as_uri()],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert f'data-figures-rendered="{len(pngs)}/{len(pngs)}"' in res.stdout
+    for name in NOTEBOOKS:  # each executed notebook has its page, linked from the index
+        page = out / "report" / "notebooks" / f"{name}.html"
+        assert page.is_file() and f'href="notebooks/{name}.html"' in index.read_text()
+        assert "data:image/png;base64" in page.read_text() or not summary["figures_by_notebook"]

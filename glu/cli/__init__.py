@@ -8,11 +8,14 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
+import signal
 import sys
+import traceback
 from collections.abc import Sequence
 
 from glu import __version__
-from glu.errors import GluError
+from glu.errors import GluError, Terminated
 
 COMMAND_MODULES: tuple[str, ...] = (
     "glu.cli.data_cmds",
@@ -40,6 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Gestures, language and affordances: reproduce Saponaro et al. (GLU 2017, TCDS 2020).",
     )
     parser.add_argument("--version", action="version", version=f"glu {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
     sub.required = True
     for name in COMMAND_MODULES:
@@ -47,22 +51,60 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+DEBUG_ENV = "GLU_DEBUG"
+"""Set to 1 to see the traceback of an unexpected error (as ``--debug`` does)."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``glu`` console script; returns the exit status."""
+    """Entry point of the ``glu`` console script; returns the exit status.
+
+    Bad input: one line, status 2. Ctrl-C: status 130; SIGTERM: 143 (both stop the work at once and
+    leave nothing half-written). Anything else is a bug: one line asking for a report, status 1, and the
+    traceback with ``--debug`` or ``GLU_DEBUG=1``.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     sub = getattr(args, f"{args.command}_command", None)
     name = f"glu {args.command}" + (f" {sub}" if sub else "")
+    debug = getattr(args, "debug", False) or os.environ.get(DEBUG_ENV, "") not in ("", "0")
+    previous = None
+    try:
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:  # not the main thread (a test calling main() from a thread): keep the default
+        pass
     try:
         status = args.func(args)
     except GluError as e:
         print(f"{name}: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except Terminated:
+        print(f"{name}: terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print(f"{name}: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0
+    except OSError as e:
+        where = f" {e.filename!r}" if getattr(e, "filename", None) else ""
+        print(f"{name}: error:{where} {e.strerror or e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except Exception as e:  # a bug: one line, the traceback on request
+        if debug:
+            traceback.print_exc()
+        print(
+            f"{name}: internal error: {type(e).__name__}: {e} — this is a bug in glu; please report it with the "
+            f"command you ran (set {DEBUG_ENV}=1 or pass --debug for the traceback)",
+            file=sys.stderr,
+        )
+        return 1
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
     return int(status or 0)
 
 

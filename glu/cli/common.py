@@ -41,6 +41,14 @@ def positive_int(text: str) -> int:
     return v
 
 
+def seed(text: str) -> int:
+    """A random seed: a whole number in [0, 2**32 - 1]."""
+    v = int(_number(text, int, "a whole number"))
+    if not 0 <= v < 2**32:
+        raise argparse.ArgumentTypeError(f"a seed is a whole number in [0, 2**32 - 1], not {v}")
+    return v
+
+
 def positive_float(text: str) -> float:
     """A finite number > 0."""
     v = _number(text, float, "a number")

@@ -177,19 +177,15 @@ def _segment(args: argparse.Namespace) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from glu.files import atomic_write_bytes
-        from glu.plots import plot_segmentation
+        from glu.plots import plot_segmentation, save_figure
 
         fig, ax = plt.subplots(figsize=(12, 4), layout="constrained")
         plot_segmentation(ax, seg, f"{seg.recording}: {len(seg.segments)} segments",
                           reference=original_segments(seg.recording))  # fmt: skip
-        import io
-
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=100, metadata={"Software": None})
+        fmt = Path(args.plot).suffix.lstrip(".").lower() or "png"
+        (written,) = save_figure(fig, args.plot, formats=(fmt,))
         plt.close(fig)
-        atomic_write_bytes(args.plot, buf.getvalue())
-        print(f"plot: {args.plot}")
+        print(f"plot: {written}")
     return 0
 
 

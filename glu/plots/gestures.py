@@ -61,7 +61,20 @@ def plot_segmentation(
     ax.set_ylabel("features / activity")
     if title is not None:
         ax.set_title(title)
-    ax.legend(loc="lower right", fontsize="small", ncol=6)
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    handles, _ = ax.get_legend_handles_labels()
+    handles += [Patch(color="tab:orange", alpha=0.2, label="segment found")]
+    if any(p.rejected for p in pieces):
+        handles += [Patch(facecolor="none", edgecolor="grey", hatch="//", label="candidate left out")]
+    if reference:
+        handles += [Line2D([], [], color="black", lw=3, label="originals' segment")]
+    if any(e.kind == "jump" for e in events):
+        handles += [Line2D([], [], color="purple", lw=0.6, ls=":", label="tracking jump")]
+    ax.legend(
+        handles=handles, loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize="x-small", frameon=False
+    )
     return ax
 
 
@@ -114,13 +127,30 @@ def plot_accuracy_vs_noise(ax: Axes, df: pd.DataFrame) -> Axes:
 def plot_segment_scores(ax: Axes, df: pd.DataFrame) -> Axes:
     """Per-frame log-likelihood of each segment under each model (grouped bars), the winner marked."""
     cols = [c for c in df.columns if c.startswith("loglik_")]
-    labels = [f"{r.recording}\n{r.start}–{r.end}" for r in df.itertuples()]
+    labels = [f"{_wrap(r.recording)}\nframes {r.start}–{r.end}" for r in df.itertuples()]
     w = 0.8 / len(cols)
+    per_frame = df[cols].to_numpy() / df["n_frames"].to_numpy()[:, None]
+    best = per_frame.argmax(axis=1)
     for k, c in enumerate(cols):
         a = c.removeprefix("loglik_")
-        ax.bar(np.arange(len(df)) + (k - (len(cols) - 1) / 2) * w, df[c] / df["n_frames"], width=w,
-               color=ACTION_COLORS.get(a, "0.5"), label=a)  # fmt: skip
+        ax.bar(np.arange(len(df)) + (k - (len(cols) - 1) / 2) * w, per_frame[:, k], width=w,
+               color=ACTION_COLORS.get(a, "0.5"), label=a,
+               edgecolor=["black" if b == k else "none" for b in best], linewidth=1.5)  # fmt: skip
     ax.set_xticks(np.arange(len(df)), labels, fontsize=7)
     ax.set_ylabel(r"$\frac{1}{T}\log L(G \mid A)$")
+    ax.set_title("per-frame log-likelihood of each segment (black edge: the recognised action)", fontsize=9)
     ax.legend(fontsize=8, frameon=False)
     return ax
+
+
+def _wrap(name: str, width: int = 16) -> str:
+    """A recording name broken at underscores into lines of about ``width`` characters."""
+    lines, line = [], ""
+    for part in name.split("_"):
+        piece = part if not line else f"{line}_{part}"
+        if line and len(piece) > width:
+            lines.append(line + "_")
+            line = part
+        else:
+            line = piece
+    return "\n".join([*lines, line])

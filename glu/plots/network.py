@@ -46,7 +46,14 @@ def plot_word_change(ax: Axes, df: pd.DataFrame) -> Axes:
     ax.axhline(0, color="0.2", linewidth=0.8)
     ax.set_xticks(x, g["word"], rotation=60, ha="right")
     ax.set_ylabel(r"$\Delta p(w)$")
-    ax.set_title(r"$p(w \mid F, E, A{=}tap) - p(w \mid F, E)$", fontsize=10)
+    ev = df.attrs.get("parameters", {}).get("evidence") or {}
+    given = ", ".join(f"{k}={v}" for k, v in ev.items()) or "no evidence"
+    ax.set_title(
+        r"$p(w \mid F, E, A{=}tap) - p(w \mid F, E)$" + f"\nF, E = {given}" + (
+            " (as the original code)" if "Color" in ev else " (as the paper's text)"
+        ),
+        fontsize=9,
+    )  # fmt: skip
     return ax
 
 
@@ -87,8 +94,10 @@ def plot_effect_vs_soft_evidence(
     for ax, (shape, g) in zip(axes, d.groupby("Shape", sort=False), strict=False):
         cases = list(dict.fromkeys(g["case"]))
         bottom = np.zeros(len(cases))
+        bottom_original = np.zeros(len(cases))
         for v in dict.fromkeys(g["ObjVel"]):
-            p = g[g["ObjVel"] == v].set_index("case").loc[cases, "p"].to_numpy()
+            rows = g[g["ObjVel"] == v].set_index("case").loc[cases]
+            p = rows["p"].to_numpy()
             ax.bar(
                 np.arange(len(cases)),
                 p,
@@ -99,6 +108,10 @@ def plot_effect_vs_soft_evidence(
                 linewidth=0.5,
             )
             bottom += p
+            if "p_original" in rows:  # the original model's stack: a mark at the top of each value's bar
+                bottom_original += rows["p_original"].to_numpy()
+                ax.plot(np.arange(len(cases)), bottom_original, **ORIGINAL_MARK,
+                        label="original model" if v == g["ObjVel"].iloc[0] else None)  # fmt: skip
         ax.set_xticks(
             np.arange(len(cases)),
             [c.replace("no action evidence", "none") for c in cases],
@@ -187,8 +200,14 @@ def plot_tap_thresholds(ax: Axes, df: pd.DataFrame) -> Axes:
     """The p_hmm(tap) above which tap wins, for each (Shape, Size, ObjVel)."""
     labels = [", ".join(str(r[c]) for c in df.columns[:-2]) for _, r in df.iterrows()]
     y = np.arange(len(df))
-    ax.barh(y, df["threshold"], color=ACTION_COLORS["tap"], edgecolor="0.2", linewidth=0.5)
-    ax.axvline(1 / 3, color="0.4", linestyle=":", linewidth=1)
+    ax.barh(y, df["threshold"].fillna(0), color=ACTION_COLORS["tap"], edgecolor="0.2", linewidth=0.5)
+    for yi, t in zip(y, df["threshold"], strict=True):
+        text = "never (tap cannot win)" if np.isnan(t) else "any > 0" if t < 0.005 else f"{t:.3f}"
+        ax.text(
+            0.01 if np.isnan(t) or t < 0.005 else t + 0.01, yi, text, va="center", fontsize=6.5, color="0.25"
+        )
+    ax.axvline(1 / 3, color="0.4", linestyle=":", linewidth=1, label="uniform (1/3)")
+    ax.legend(fontsize=7, frameon=False, loc="lower right")
     ax.set_yticks(y, labels, fontsize=7)
     ax.invert_yaxis()
     ax.set_xlim(0, 1)

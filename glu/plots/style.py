@@ -1,8 +1,9 @@
 """The look shared by every figure: colours, figure sizes, deterministic saving, the data-source footer.
 
-Figures are saved with :func:`save_figure`, which writes PNG and SVG that are byte-identical across runs
-(no software/date metadata, fixed SVG hash salt, written atomically), and every figure carries a footer
-naming its data source (:func:`stamp`).
+Figures are saved with :func:`save_figure`, which writes PNG (at :data:`DPI`) and SVG that are
+byte-identical across runs (no software/date metadata, fixed SVG hash salt, written atomically), and
+every figure carries a footer naming its data source (:func:`stamp`). The backend is left alone: the
+inline backend in a notebook, a non-interactive one on a headless machine; saving works with any.
 """
 
 from __future__ import annotations
@@ -12,17 +13,16 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
+from glu.files import atomic_path
+
 matplotlib.rcParams["svg.hashsalt"] = "glu"
-matplotlib.rcParams["figure.dpi"] = 100
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.axes import Axes  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-from glu.files import atomic_path  # noqa: E402
+DPI = 150
+"""Resolution of the saved PNGs (dots per inch)."""
 
 ACTION_COLORS = {"grasp": "#4C72B0", "tap": "#DD8452", "touch": "#55A868", "push": "#8172B3"}
 VALUE_COLORS = {"slow": "#8DA0CB", "medium": "#FC8D62", "fast": "#66C2A5"}
@@ -38,15 +38,15 @@ def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = (
         target = path.with_suffix(f".{fmt}")
         meta = {"png": {"Software": None}, "svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt, {})
         with atomic_path(target) as tmp:
-            fig.savefig(tmp, format=fmt, metadata=meta, bbox_inches="tight")
+            fig.savefig(tmp, format=fmt, metadata=meta, bbox_inches="tight", dpi=DPI)
         out.append(target)
     return out
 
 
-def stamp(fig: Figure, source: str) -> None:
-    """Lay the figure out, then write the data source in small grey text below everything else."""
+def stamp(fig: Figure, footer: str) -> None:
+    """Lay the figure out, then write ``footer`` (its data source, …) in small grey text below everything."""
     fig.tight_layout()
-    fig.text(0.005, -0.01, f"data: {source}", fontsize=6.5, color="0.35", ha="left", va="top")
+    fig.text(0.005, -0.01, footer, fontsize=6.5, color="0.35", ha="left", va="top")
 
 
 def new_figure(ncols: int = 1, width: float = 4.2, height: float = 3.2) -> tuple[Figure, list[Axes]]:

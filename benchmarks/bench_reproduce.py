@@ -1,0 +1,48 @@
+"""Wall time of the whole collection: `glu reproduce` on 2 cores, notebook by notebook.
+
+Run on demand (not a test)::
+
+    python benchmarks/bench_reproduce.py [--data DIR] [--jobs 2] [--repeats 1]
+
+Runs every notebook headless into a temporary folder (nothing is published into the project), as
+`glu reproduce --out TMP` does, and prints the total wall time and each notebook's time. The goal (issue
+#9): the whole collection on the real data in at most 45 s on 2 cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import tempfile
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark and print the table."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", help="data folder (default: as glu reproduce finds it)")
+    ap.add_argument("--jobs", type=int, default=2, help="notebooks at once (default 2)")
+    ap.add_argument("--repeats", type=int, default=1, help="whole runs (default 1)")
+    args = ap.parse_args(argv)
+    from glu.data import resolve_data
+    from glu.reproduce import reproduce
+
+    walls, per_notebook = [], {}
+    for _ in range(args.repeats):
+        with tempfile.TemporaryDirectory(prefix="glu-bench-") as out:
+            summary = reproduce(data=args.data, out=out, jobs=args.jobs, log=lambda _s: None, progress=False)
+        walls.append(summary["wall_time_s"])
+        for nb in summary["notebooks"]:
+            per_notebook.setdefault(nb["name"], []).append(nb["seconds"])
+    wall = statistics.median(walls)
+    print(f"glu reproduce: {resolve_data(args.data).describe()}, -j {args.jobs}, {args.repeats} run(s)")
+    for name, secs in per_notebook.items():
+        print(f"  {name:28s} {statistics.median(secs):6.1f} s")
+    print(
+        f"whole collection: {wall:.1f} s (median wall time)   goal ≤ 45 s: {'met' if wall <= 45 else 'MISSED'}"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

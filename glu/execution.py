@@ -1,0 +1,166 @@
+"""Execute one jupytext notebook headless with papermill: progress by cell, and a stop that works at once.
+
+:func:`run_notebook` runs a notebook (``notebooks/NN_name.py``) in its own kernel through papermill, with
+the parameters injected after its parameters cell, and writes the executed ``.ipynb``. It uses papermill's
+nbclient engine, extended (:class:`GluEngine`) in two ways:
+
+* every cell start is reported to ``handle.on_cell(index, n_cells)``, for live progress;
+* :meth:`RunHandle.stop` kills the kernel from another thread; nbclient notices the dead kernel within
+  about a second and the run ends with :class:`NotebookStopped`, so Ctrl-C never waits for a notebook.
+
+Kernels run with ``GLU_HEADLESS=1`` in their environment (:data:`glu.display.HEADLESS_ENV`): interactive extras (widgets,
+the Rerun viewer) then show their static form only.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from glu.display import HEADLESS_ENV
+from glu.errors import GluError
+
+
+class NotebookStopped(GluError):
+    """A notebook run was stopped (Ctrl-C, SIGTERM) before it finished."""
+
+
+@dataclass
+class RunHandle:
+    """What a caller holds on a running notebook: its progress, and a way to stop it.
+
+    Attributes
+    ----------
+    on_cell : called with (index, number of cells) when a cell starts (from the run's thread)
+    cell, n_cells : the cell running now (0-based) and how many there are
+    """
+
+    on_cell: Callable[[int, int], None] | None = None
+    cell: int = -1
+    n_cells: int = 0
+    stopped: bool = False
+    _client: Any = field(default=None, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+
+    def _cell_started(self, index: int, n_cells: int) -> None:
+        self.cell, self.n_cells = index, n_cells
+        if self.on_cell is not None:
+            self.on_cell(index, n_cells)
+
+    def stop(self) -> None:
+        """Kill the notebook's kernel (if it has one yet); the run then ends with :class:`NotebookStopped`."""
+        with self._lock:
+            self.stopped = True
+            km = getattr(self._client, "km", None)
+            pid = _kernel_pid(km)
+        if pid is not None:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
+
+
+def _kernel_pid(km: Any) -> int | None:
+    provisioner = getattr(km, "provisioner", None)
+    process = getattr(provisioner, "process", None)
+    return getattr(process, "pid", None)
+
+
+def _engine_class() -> type:
+    """papermill's nbclient engine, reporting cell starts and registering its client with the handle."""
+    from jupyter_core.utils import run_sync
+    from papermill.clientwrap import PapermillNotebookClient
+    from papermill.engines import NBClientEngine, logger
+    from papermill.utils import merge_kwargs, remove_args
+
+    class Client(PapermillNotebookClient):  # type: ignore[misc]
+        """papermill's client, whose kernel the handle can kill and whose cell starts it hears of."""
+
+        def __init__(self, nb_man, handle: RunHandle, **kw):  # type: ignore[no-untyped-def]
+            super().__init__(nb_man, **kw)
+            self.handle = handle
+            n_cells = len(nb_man.nb.cells)
+            started = nb_man.cell_start
+
+            def cell_start(cell, cell_index=None, **k):  # type: ignore[no-untyped-def]
+                handle._cell_started(cell_index, n_cells)
+                return started(cell, cell_index, **k)
+
+            nb_man.cell_start = cell_start
+
+        async def async_start_new_kernel(self, **kwargs):  # type: ignore[no-untyped-def]
+            with self.handle._lock:
+                if self.handle.stopped:
+                    raise NotebookStopped("stopped before its kernel started")
+                self.handle._client = self
+            env = {**os.environ, **kwargs.pop("env", {}), HEADLESS_ENV: "1"}
+            return await super().async_start_new_kernel(env=env, **kwargs)
+
+        start_new_kernel = run_sync(async_start_new_kernel)  # the sync name is bound to the base method
+
+    class GluEngine(NBClientEngine):
+        @classmethod
+        def execute_managed_notebook(  # type: ignore[no-untyped-def]
+            cls, nb_man, kernel_name, log_output=False, stdout_file=None, stderr_file=None,
+            start_timeout=60, execution_timeout=None, **kwargs,
+        ):  # fmt: skip
+            # as papermill's NBClientEngine, with our client
+            handle = kwargs.pop("glu_handle")
+            kwargs = remove_args(["input_path"], **kwargs)
+            safe_kwargs = remove_args(["timeout", "startup_timeout"], **kwargs)
+            final_kwargs = merge_kwargs(
+                safe_kwargs, timeout=execution_timeout if execution_timeout else kwargs.get("timeout"),
+                startup_timeout=start_timeout, kernel_name=kernel_name, log=logger, log_output=log_output,
+                stdout_file=stdout_file, stderr_file=stderr_file,
+            )  # fmt: skip
+            return Client(nb_man, handle, **final_kwargs).execute()
+
+    return GluEngine
+
+
+_ENGINE_LOCK = threading.Lock()
+
+
+def _register_engine() -> str:
+    from papermill.engines import papermill_engines
+
+    with _ENGINE_LOCK:
+        if "glu" not in papermill_engines._engines:
+            papermill_engines.register("glu", _engine_class())
+    return "glu"
+
+
+def run_notebook(
+    src: Path,
+    out_ipynb: Path,
+    parameters: dict[str, Any],
+    cwd: Path | None = None,
+    handle: RunHandle | None = None,
+) -> Any:
+    """Execute the jupytext notebook ``src`` with ``parameters``; write the executed copy to ``out_ipynb``.
+
+    Raises papermill's ``PapermillExecutionError`` when a cell fails (the executed copy, with the error,
+    is still written) and :class:`NotebookStopped` when ``handle.stop()`` was called.
+    """
+    import jupytext
+    import papermill as pm
+
+    handle = handle or RunHandle()
+    out_ipynb.parent.mkdir(parents=True, exist_ok=True)
+    nb = jupytext.read(src)
+    try:
+        return pm.execute_notebook(
+            nb, str(out_ipynb), parameters=parameters, kernel_name="python3", language="python",
+            progress_bar=False, engine_name=_register_engine(), glu_handle=handle,
+            extra_arguments=["--log-level=CRITICAL"],  # kernel chatter stays out of the run's log; errors reach the notebook
+            cwd=str(cwd or src.parent), log_output=False,
+        )  # fmt: skip
+    except Exception:
+        if handle.stopped:
+            raise NotebookStopped(f"{src.stem}: stopped") from None
+        raise

@@ -1,0 +1,100 @@
+"""The first call of every notebook: check its parameters, name its data, say where its outputs go.
+
+A notebook's first code cell after its parameters is ::
+
+    from glu.notebook import start
+    out = start("07_glu2017_figures", globals())
+
+:func:`start` checks the parameters against the notebook's own declaration (:mod:`glu.parameters`) —
+including names that papermill injected but the notebook does not declare — so a run by hand, by plain
+papermill or by ``glu run`` fails at once, in one line, instead of after minutes of work. It resolves the
+data the same way from any working directory, shows one line naming the data (and why, when it fell
+back to synthetic data) and the non-default parameters, and returns the :class:`glu.outputs.Outputs` of
+the run: the staging folder ``glu reproduce`` passed as ``out_dir``, or the notebook's scratch folder
+``build/scratch/<notebook>/`` for any other run, so only ``glu reproduce`` publishes into ``figures/``,
+``results/``, ``recordings/`` and ``models/``.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from glu import paths
+from glu.data.source import resolve_data
+from glu.display import in_kernel
+from glu.outputs import Outputs, parameters_text
+from glu.parameters import check, non_defaults, read_spec
+from glu.paths import OutputLayout
+
+INJECTED_COMMENT = "# Parameters"
+"""The first line of the cell papermill injects after the parameters cell."""
+
+
+def injected_names(namespace: Mapping[str, Any]) -> list[str]:
+    """Names assigned by the parameters cell papermill injected in this kernel (none in a by-hand run).
+
+    Read from the kernel's input history (``In``): the last executed cell that starts with papermill's
+    comment ``# Parameters``.
+    """
+    history = namespace.get("In")
+    if not isinstance(history, list):
+        return []
+    for source in reversed(history):
+        if isinstance(source, str) and source.startswith(INJECTED_COMMENT + "\n"):
+            try:
+                tree = ast.parse(source)
+            except SyntaxError:
+                return []
+            return [
+                t.id
+                for node in tree.body
+                if isinstance(node, ast.Assign)
+                for t in node.targets
+                if isinstance(t, ast.Name)
+            ]
+    return []
+
+
+def notebook_source(notebook: str) -> Path:
+    """The notebook's jupytext source: ``<name>.py`` in the working directory (where papermill, JupyterLab
+    and ``glu reproduce`` run a notebook), else the project's ``notebooks/<name>.py``."""
+    here = Path.cwd() / f"{notebook}.py"
+    return here if here.is_file() else paths.notebook_file(notebook)
+
+
+def start(notebook: str, namespace: Mapping[str, Any]) -> Outputs:
+    """Check the parameters in ``namespace`` (a notebook's ``globals()``) and open the run's outputs.
+
+    Raises :class:`glu.errors.ParameterError` (one line) for an undeclared name, a wrong type or a value
+    outside its choices or range, and :class:`glu.errors.DataError` for a data folder that is not one.
+    """
+    spec = read_spec(notebook_source(notebook))
+    given = {n: namespace[n] for n in spec if n in namespace}
+    given.update({n: namespace.get(n) for n in injected_names(namespace) if n not in spec})
+    values = check(spec, given, notebook)
+    source = resolve_data(values.get("data"))
+    out_dir = values.get("out_dir")
+    layout = OutputLayout.at(out_dir) if out_dir else OutputLayout.scratch(notebook)
+    params = non_defaults(spec, values)
+    out = Outputs(notebook, source, layout, parameters=params)
+    line = f"**{notebook}** · {source.describe()} ({source.reason()})"
+    line += f" · parameters: {parameters_text(params)}" if params else " · default parameters"
+    if not out_dir:
+        line += (
+            f" · outputs go to the scratch folder build/scratch/{notebook}/ "
+            "(only `glu reproduce` publishes to figures/, results/, recordings/, models/)"
+        )
+    _say(line)
+    return out
+
+
+def _say(markdown: str) -> None:
+    if in_kernel():
+        from IPython.display import Markdown, display
+
+        display(Markdown(markdown))
+    else:
+        print(markdown.replace("**", ""))

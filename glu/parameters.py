@@ -1,0 +1,247 @@
+"""Notebook parameters: declared once in each notebook's parameters cell, checked before anything runs.
+
+Every notebook (``notebooks/NN_name.py``) declares its parameters in its one cell tagged ``parameters``,
+one per line, as papermill and ``papermill --help-notebook`` read them::
+
+    rule: str = "virtual"  # how p_HMM enters the network: "virtual" (the originals') or "jeffrey"
+
+:func:`read_spec` reads that declaration (name, type, default, comment) from the notebook's source, and
+:func:`check` checks a set of values against it:
+
+* **names** — only declared names (a near miss gets a suggestion);
+* **types** — ``bool`` is ``True`` or ``False`` (not ``"no"``), ``int`` an integer, ``float`` a finite
+  number, ``str`` a string, ``list[float]`` a list of numbers; ``None`` only where the default is None;
+* **choices and ranges** — :data:`CHOICES` and :data:`RANGES`, keyed by parameter name: a name means the
+  same thing in every notebook, and the allowed values come from the package's own constants.
+
+``glu run`` checks before it starts a kernel; :func:`glu.notebook.start`, the first call of every
+notebook, checks again inside the kernel, so a plain papermill run is checked too.
+"""
+
+from __future__ import annotations
+
+import ast
+import difflib
+import io
+import math
+import re
+import tokenize
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from glu.bn.learning import UNSEEN_MODES
+from glu.bn.soft import SOFT_RULES
+from glu.data.source import WORD_FILES
+from glu.errors import ParameterError
+from glu.schema import AFFORDANCE_VALUES
+
+CHOICES: dict[str, tuple[str, ...]] = {
+    "words": tuple(WORD_FILES),
+    "unseen_words": UNSEEN_MODES,
+    "rule": SOFT_RULES,
+    "shape": AFFORDANCE_VALUES["Shape"],
+    "size": AFFORDANCE_VALUES["Size"],
+}
+"""Allowed values of the string parameters that take one of a few values."""
+
+RANGES: dict[str, tuple[float, float]] = {
+    "seed": (0, 2**32 - 1),
+    "n_states": (1, 50),
+    "n_mix": (1, 20),
+    "n_per_action": (2, 100_000),
+    "folds": (2, 1000),
+    "noise_levels": (0.0, 1.0),
+    "eval_tol": (1e-12, 1.0),
+    "threshold": (0.0, 1.0),
+    "step": (1, 100_000),
+    "n_points": (2, 1_000_001),
+    "nbest": (1, 100_000),
+    "n_samples": (1, 1_000_000),
+    "n_seeds": (1, 100_000),
+}
+"""Inclusive ranges of the numeric parameters (for a list, of each element)."""
+
+PLUMBING: tuple[str, ...] = ("data", "out_dir")
+"""Parameters that say where things are, not what is computed: never listed among a run's parameters."""
+
+TYPES = ("str", "int", "float", "bool", "list[float]", "list[int]", "list[str]")
+_CELL = re.compile(r'^# %%.*tags=\["parameters"\]')
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One declared parameter: ``name: type = default  # help``."""
+
+    name: str
+    type: str
+    default: Any
+    help: str
+
+    @property
+    def choices(self) -> tuple[str, ...] | None:
+        """The allowed values, if the parameter takes one of a few."""
+        return CHOICES.get(self.name)
+
+    @property
+    def range(self) -> tuple[float, float] | None:
+        """The inclusive range of a numeric parameter (of each element, for a list), if it has one."""
+        return RANGES.get(self.name)
+
+    def describe(self) -> str:
+        """``name: type = default  [allowed]  help`` (for ``glu run --list``)."""
+        allowed = (
+            f"  {{{', '.join(self.choices)}}}"
+            if self.choices
+            else f"  [{_num(self.range[0])}, {_num(self.range[1])}]"
+            if self.range
+            else ""
+        )
+        return f"{self.name}: {self.type} = {self.default!r}{allowed}  # {self.help}"
+
+
+def read_spec(path: str | Path) -> dict[str, Parameter]:
+    """The parameters declared in the ``parameters`` cell of a jupytext percent notebook, in order.
+
+    Raises :class:`ParameterError` when the notebook has no such cell, or a line of it is not
+    ``name: type = literal  # comment`` with a type of :data:`TYPES`.
+    """
+    path = Path(path)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    starts = [i for i, line in enumerate(lines) if _CELL.match(line)]
+    if len(starts) != 1:
+        raise ParameterError(f"{path.name}: expected one cell tagged parameters, found {len(starts)}")
+    body = []
+    for line in lines[starts[0] + 1 :]:
+        if line.startswith("# %%"):
+            break
+        body.append(line)
+    text = "\n".join(body) + "\n"
+    comments = {
+        tok.start[0]: tok.string.lstrip("#").strip()
+        for tok in tokenize.generate_tokens(io.StringIO(text).readline)
+        if tok.type == tokenize.COMMENT
+    }
+    spec: dict[str, Parameter] = {}
+    for node in ast.parse(text).body:
+        where = f"{path.name}, parameters cell line {node.lineno}"
+        if not (isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) and node.value):
+            raise ParameterError(f"{where}: expected `name: type = value  # comment`")
+        kind = ast.unparse(node.annotation)
+        if kind not in TYPES:
+            raise ParameterError(f"{where}: type {kind!r} is not one of {', '.join(TYPES)}")
+        try:
+            default = ast.literal_eval(node.value)
+        except ValueError:
+            raise ParameterError(f"{where}: the default of {node.target.id} is not a literal") from None
+        help_text = comments.get(node.end_lineno) or comments.get(node.lineno) or ""
+        spec[node.target.id] = Parameter(node.target.id, kind, default, help_text)
+    return spec
+
+
+def _num(x: float) -> str:
+    return str(int(x)) if float(x).is_integer() else f"{x:g}"
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
+def _check_one(p: Parameter, value: Any, who: str) -> Any:
+    got = f"got {value!r}"
+    if value is None:
+        if p.default is None:
+            return None
+        raise ParameterError(f"{who}: {p.name} must be a {p.type}, {got}")
+    if p.type == "bool":
+        if not isinstance(value, bool):
+            raise ParameterError(f"{who}: {p.name} must be True or False, {got}")
+        return value
+    if p.type == "str":
+        if not isinstance(value, str):
+            raise ParameterError(f"{who}: {p.name} must be a string, {got}")
+        if p.choices and value not in p.choices:
+            raise ParameterError(f"{who}: {p.name} must be one of {', '.join(p.choices)}; {got}")
+        return value
+    if p.type in ("int", "float"):
+        items, scalar = [value], True
+    elif isinstance(value, list | tuple):
+        items, scalar = list(value), False
+    else:
+        raise ParameterError(f"{who}: {p.name} must be a list ({p.type}), {got}")
+    element = p.type.removeprefix("list[").removesuffix("]")
+    for v in items:
+        if element == "str":
+            if not isinstance(v, str):
+                raise ParameterError(f"{who}: every element of {p.name} must be a string, {got}")
+            continue
+        if element == "int" and not (isinstance(v, int) and not isinstance(v, bool)):
+            raise ParameterError(f"{who}: {p.name} must be {'an integer' if scalar else 'integers'}, {got}")
+        if not _is_number(v) or not math.isfinite(v):
+            raise ParameterError(
+                f"{who}: {p.name} must be {'a finite number' if scalar else 'finite numbers'}, {got}"
+            )
+        if p.range and not p.range[0] <= v <= p.range[1]:
+            raise ParameterError(
+                f"{who}: {p.name} must be in [{_num(p.range[0])}, {_num(p.range[1])}], {got}"
+            )
+    return value
+
+
+def check(
+    spec: Mapping[str, Parameter], values: Mapping[str, Any], notebook: str = "notebook"
+) -> dict[str, Any]:
+    """Check ``values`` (name → value; absent names keep their defaults) against ``spec``.
+
+    Returns every parameter's value (defaults filled in). Raises :class:`ParameterError` with one line
+    naming the notebook, the parameter, what it must be and what it got.
+    """
+    for name in values:
+        if name not in spec:
+            close = difflib.get_close_matches(name, list(spec), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ParameterError(
+                f"{notebook}: unknown parameter {name!r}{hint}; its parameters are {', '.join(spec)}"
+            )
+    return {name: _check_one(p, values.get(name, p.default), notebook) for name, p in spec.items()}
+
+
+def non_defaults(spec: Mapping[str, Parameter], values: Mapping[str, Any]) -> dict[str, Any]:
+    """The values that differ from their defaults, in declaration order (:data:`PLUMBING` left out)."""
+    return {
+        n: values[n] for n, p in spec.items() if n in values and n not in PLUMBING and values[n] != p.default
+    }
+
+
+def parse_value(p: Parameter, text: str, notebook: str = "notebook") -> Any:
+    """A command-line value for ``p`` (``glu run -p NAME VALUE``), parsed by the declared type, then checked.
+
+    ``True``/``False`` (any case) for bool; a list as ``[0, 0.1]`` or ``0,0.1``; ``None`` where the
+    default is None.
+    """
+    t = text.strip()
+    who = f"{notebook}: -p {p.name} {text!r}"
+    if t == "None" and p.default is None:
+        return None
+    if p.type == "bool":
+        if t.lower() not in ("true", "false"):
+            raise ParameterError(f"{who}: {p.name} must be True or False")
+        return t.lower() == "true"
+    if p.type == "str":
+        return _check_one(p, text, notebook)
+    if p.type.startswith("list["):
+        parts = t.strip("[]").split(",") if t.strip("[]").strip() else []
+        element = p.type.removeprefix("list[").removesuffix("]")
+        value = [_scalar(element, x.strip().strip("'\""), who) for x in parts]
+        return _check_one(p, value, notebook)
+    return _check_one(p, _scalar(p.type, t, who), notebook)
+
+
+def _scalar(kind: str, t: str, who: str) -> Any:
+    if kind == "str":
+        return t
+    try:
+        return int(t) if kind == "int" else float(t)
+    except ValueError:
+        raise ParameterError(f"{who}: not {'an integer' if kind == 'int' else 'a number'}") from None

@@ -1,0 +1,141 @@
+"""A browsable HTML report of a ``glu reproduce`` run: every figure, every comparison, every notebook.
+
+:func:`write_report` writes into the layout's ``report/`` folder (by default ``build/report/``):
+
+* ``index.html`` — the data source, the package versions, the comparisons of our numbers with the
+  original models and the published values, and every figure (copied beside it into ``figures/``) with
+  the notebook that drew it and the parameters it ran with;
+* ``notebooks/NAME.html`` — each executed notebook rendered by nbconvert, its figures embedded.
+
+The pages are static files (no server, no network): open ``index.html`` in any browser. A small script
+in the index marks, once the page has loaded, how many of its figures the browser rendered
+(``<body data-figures-rendered="N/M">``), which the tests read back from headless Chromium.
+"""
+
+from __future__ import annotations
+
+import html
+import shutil
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from glu.files import atomic_write_text
+from glu.outputs import parameters_text
+from glu.paths import OutputLayout
+
+_STYLE = """
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; }
+h1 { font-size: 1.6em; } h2 { font-size: 1.25em; margin-top: 2em; border-bottom: 1px solid #ddd; }
+table { border-collapse: collapse; font-size: 0.9em; } td, th { padding: 3px 10px; text-align: left; }
+tr:nth-child(even) { background: #f6f6f6; } th { border-bottom: 1px solid #999; }
+.grid { display: flex; flex-wrap: wrap; gap: 24px; }
+figure { margin: 0; width: 560px; } figure img { width: 100%; border: 1px solid #eee; }
+figcaption { font-size: 0.85em; color: #444; } code { background: #f3f3f3; padding: 0 3px; }
+.ok { color: #1a7f37; } .diff { color: #b42318; }
+"""
+
+_CHECK_SCRIPT = """
+window.addEventListener("load", function () {
+  var imgs = document.querySelectorAll("img.figure");
+  var ok = 0;
+  imgs.forEach(function (im) { if (im.complete && im.naturalWidth > 0) { ok += 1; } });
+  document.body.setAttribute("data-figures-rendered", ok + "/" + imgs.length);
+});
+"""
+
+
+def _e(x: Any) -> str:
+    return html.escape(str(x))
+
+
+def _table(rows: list[Mapping[str, Any]], columns: list[str]) -> str:
+    head = "".join(f"<th>{_e(c)}</th>" for c in columns)
+    body = "".join("<tr>" + "".join(f"<td>{_e(r.get(c, ''))}</td>" for c in columns) + "</tr>" for r in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def _render_notebook(ipynb: Path, target: Path) -> None:
+    import nbformat
+    from nbconvert import HTMLExporter
+
+    nb = nbformat.read(ipynb, as_version=4)
+    body, _ = HTMLExporter(template_name="lab").from_notebook_node(nb)
+    atomic_write_text(target, body)
+
+
+def write_report(layout: OutputLayout, summary: Mapping[str, Any]) -> Path:
+    """Write the report of a run whose outputs are in ``layout``; returns ``index.html``.
+
+    ``summary`` is the run's summary (:func:`glu.reproduce.write_summary`): its figures, notebooks,
+    comparisons, data source and versions.
+    """
+    root = layout.report
+    if root.exists():
+        shutil.rmtree(root)
+    (root / "figures").mkdir(parents=True)
+    (root / "notebooks").mkdir()
+    notebooks = {nb["name"]: nb for nb in summary.get("notebooks", [])}
+    pages = {}
+    for name in notebooks:
+        ipynb = layout.notebooks / f"{name}.ipynb"
+        if ipynb.is_file():
+            _render_notebook(ipynb, root / "notebooks" / f"{name}.html")
+            pages[name] = f"notebooks/{name}.html"
+
+    figures = []
+    by_notebook = summary.get("figures_by_notebook", {})
+    for fname, nb in sorted(by_notebook.items(), key=lambda item: (item[1], item[0])):
+        if not fname.endswith(".png"):
+            continue
+        src = layout.figures / fname
+        if not src.is_file():
+            continue
+        shutil.copyfile(src, root / "figures" / fname)
+        params = notebooks.get(nb, {}).get("parameters") or {}
+        label = parameters_text(params) or "default parameters"
+        link = f'<a href="{_e(pages[nb])}">{_e(nb)}</a>' if nb in pages else _e(nb)
+        figures.append(
+            f'<figure><img class="figure" src="figures/{_e(fname)}" alt="{_e(fname)}">'
+            f"<figcaption><code>{_e(fname[:-4])}</code> — {link} — {_e(label)}</figcaption></figure>"
+        )
+
+    comparisons = [
+        {**c, "max |ours − reference|": f"{c['max_abs_difference']:.3g}"}
+        for c in summary.get("comparison_with_reference", [])
+    ]
+    nb_rows = [
+        {
+            "notebook": n["name"],
+            "status": n["status"],
+            "seconds": n.get("seconds", ""),
+            "parameters": parameters_text(n.get("parameters") or {}) or "defaults",
+        }
+        for n in notebooks.values()
+    ]
+    versions = [{"package": k, "version": v} for k, v in summary.get("versions", {}).items()]
+    recordings = "".join(f"<li><code>recordings/{_e(r)}</code></li>" for r in summary.get("recordings", []))
+    nb_links = "".join(f'<li><a href="{_e(p)}">{_e(n)}</a></li>' for n, p in sorted(pages.items()))
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>glu — reproduced figures</title>
+<style>{_STYLE}</style><script>{_CHECK_SCRIPT}</script></head>
+<body>
+<h1>glu — gestures, language and affordances, reproduced</h1>
+<p><b>Data:</b> {_e(summary.get("data_source", "unknown"))} · <b>mode:</b> {"quick" if summary.get("quick") else "full"}
+· <b>wall time:</b> {_e(summary.get("wall_time_s", ""))} s · {len(figures)} figures</p>
+<h2>Ours against the originals</h2>
+{_table(comparisons, ["table", "reference", "rows", "max |ours − reference|"]) if comparisons else "<p>No reference to compare with in this data.</p>"}
+<h2>Figures</h2>
+<div class="grid">{"".join(figures)}</div>
+<h2>Notebooks</h2>
+<ul>{nb_links}</ul>
+{_table(nb_rows, ["notebook", "status", "seconds", "parameters"])}
+<h2>Recordings</h2>
+<p>Open with <code>rerun FILE</code> (the Rerun viewer).</p><ul>{recordings}</ul>
+<h2>Package versions</h2>
+{_table(versions, ["package", "version"])}
+</body></html>
+"""
+    index = root / "index.html"
+    atomic_write_text(index, page)
+    return index

@@ -1,0 +1,129 @@
+"""Notebooks run by hand (plain papermill, `glu run`): checked at once, written to a scratch folder, never published."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import subprocess
+import sys
+import time
+
+import jupytext
+import papermill as pm
+import pytest
+
+from glu import paths
+from glu.reproduce import list_notebooks
+
+PUBLISHED = [paths.PROJECT_ROOT / kind for kind in paths.PUBLISHED_KINDS]
+
+
+def _snapshot() -> dict[str, str]:
+    """Every file in the project's published folders, with its content hash."""
+    out = {}
+    for folder in PUBLISHED:
+        for f in sorted(folder.rglob("*")) if folder.exists() else []:
+            if f.is_file():
+                out[str(f)] = hashlib.sha256(f.read_bytes()).hexdigest()
+    return out
+
+
+def _glu(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "glu", *args], capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture
+def scratch():
+    """The scratch folder of 07_glu2017_figures, removed afterwards if this test made it."""
+    folder = paths.scratch_dir("07_glu2017_figures")
+    existed = folder.exists()
+    yield folder
+    if not existed:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def test_plain_papermill_in_the_notebooks_folder_writes_to_scratch_only(scratch, tmp_path):
+    before = _snapshot()
+    nb = jupytext.read(paths.notebook_file("07_glu2017_figures"))
+    executed = tmp_path / "out.ipynb"
+    pm.execute_notebook(nb, str(executed), parameters={"data": "synthetic", "threshold": 0.05},
+                        kernel_name="python3", cwd=str(paths.NOTEBOOKS_DIR), progress_bar=False)  # fmt: skip
+    assert _snapshot() == before, "a by-hand run changed the project's published outputs"
+    assert (scratch / "figures" / "glu2017_effect_prediction.png").is_file()
+    svg = (scratch / "figures" / "glu2017_effect_prediction.svg").read_text()
+    assert "07_glu2017_figures with threshold=0.05" in svg  # the figure names the run's parameters
+    first = json.loads(executed.read_text())["cells"]
+    header = next(
+        "".join(o["data"]["text/markdown"])
+        for c in first
+        for o in c.get("outputs", [])
+        if "text/markdown" in o.get("data", {})
+    )
+    assert header.startswith("**07_glu2017_figures** · synthetic data")
+    assert "parameters: threshold=0.05" in header and "build/scratch/07_glu2017_figures/" in header
+
+
+def test_plain_papermill_refuses_an_unknown_parameter_in_the_first_cell(tmp_path):
+    nb = jupytext.read(paths.notebook_file("02_hmm_training"))
+    t0 = time.perf_counter()
+    with pytest.raises(pm.PapermillExecutionError) as e:
+        pm.execute_notebook(nb, str(tmp_path / "o.ipynb"), parameters={"n_statez": 4, "data": "synthetic"},
+                            kernel_name="python3", cwd=str(paths.NOTEBOOKS_DIR), progress_bar=False)  # fmt: skip
+    assert e.value.ename == "ParameterError"
+    assert "unknown parameter 'n_statez' (did you mean 'n_states'?)" in e.value.evalue
+    assert time.perf_counter() - t0 < 60  # refused before any training (a bound, not a benchmark)
+    executed = json.loads((tmp_path / "o.ipynb").read_text())
+    code = [c for c in executed["cells"] if c["cell_type"] == "code"]
+    failed = [i for i, c in enumerate(code) if any(o.get("output_type") == "error" for o in c["outputs"])]
+    assert failed == [2]  # parameters, injected parameters, then the first cell: start() refuses
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["08_tcds_figures", "-p", "rulez", "jeffrey"], "unknown parameter 'rulez' (did you mean 'rule'?)"),
+        (["08_tcds_figures", "-p", "quick", "no"], "quick must be True or False"),
+        (["07_glu2017_figures", "-p", "threshold", "abc"], "not a number"),
+        (["08_tcds_figures", "-p", "rule", "jefrey"], "rule must be one of virtual, jeffrey"),
+        (["08_tcds_figures", "-p", "step", "1", "-p", "step", "2"], "-p step given more than once"),
+        (["08_tcds_figures", "-p", "data", "x"], "give 'data' with --data"),
+        (["99_nothing"], "no notebook matches '99_nothing'"),
+        (["08_tcds_figures", "--data", "/nonexistent/folder"], "no such data folder"),
+    ],
+)
+def test_glu_run_refuses_bad_parameters_at_once_in_one_line(args, message, capsys):
+    from glu.cli import main
+
+    status = main(["run", *args])
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert err.count("\n") == 1 and message in err and "Traceback" not in err
+
+
+def test_the_command_exits_2_at_once():
+    res = _glu("run", "08_tcds_figures", "-p", "rulez", "jeffrey")
+    assert res.returncode == 2 and res.stderr.startswith("glu run: error: 08_tcds_figures: unknown parameter")
+
+
+def test_glu_run_lists_the_parameters_with_their_choices():
+    res = _glu("run", "08", "--list")
+    assert res.returncode == 0
+    lines = {line.split(":")[0]: line for line in res.stdout.splitlines()}
+    assert "{virtual, jeffrey}" in lines["rule"] and "[1, 100000]" in lines["step"]
+
+
+def test_glu_run_runs_one_notebook_into_its_out_folder(tmp_path):
+    before = _snapshot()
+    res = _glu("run", "07", "-p", "threshold", "0.05", "--data", "synthetic", "--out", str(tmp_path))
+    assert res.returncode == 0, res.stderr
+    assert _snapshot() == before
+    assert (tmp_path / "notebooks" / "07_glu2017_figures.ipynb").is_file()
+    svg = (tmp_path / "figures" / "glu2017_word_change_text.svg").read_text()
+    assert "07_glu2017_figures with threshold=0.05" in svg
+    doc = json.loads((tmp_path / "results" / "glu2017_word_change_text.json").read_text())
+    assert doc["meta"]["notebook_parameters"] == {"threshold": 0.05}
+
+
+def test_the_notebook_list_is_not_empty():
+    assert len(list_notebooks()) >= 9

@@ -1,0 +1,130 @@
+"""`make lab`: a real JupyterLab, configured by the project, opens the notebooks as notebooks and saves them unchanged."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+from glu import paths
+
+ROOT = paths.PROJECT_ROOT
+CONFIG = ROOT / "jupyter_lab_config.py"
+TOKEN = "glu-test-token"
+
+pytest.importorskip("jupyterlab", reason="JupyterLab is not installed (the test extra installs it)")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _get(url: str) -> dict:
+    req = urllib.request.Request(url, headers={"Authorization": f"token {TOKEN}"})
+    with urllib.request.urlopen(req, timeout=10) as r:
+        return json.loads(r.read())
+
+
+def _put(url: str, body: dict) -> dict:
+    data = json.dumps(body).encode()
+    req = urllib.request.Request(url, data=data, method="PUT",
+                                 headers={"Authorization": f"token {TOKEN}", "Content-Type": "application/json"})  # fmt: skip
+    with urllib.request.urlopen(req, timeout=10) as r:
+        return json.loads(r.read())
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    """JupyterLab with the project's configuration, on a copy of the notebooks (so saving cannot harm them)."""
+    root = tmp_path_factory.mktemp("lab-root")
+    shutil.copytree(ROOT / "notebooks", root / "notebooks", ignore=shutil.ignore_patterns("*.ipynb"))
+    shutil.copy(ROOT / "pyproject.toml", root / "pyproject.toml")  # jupytext's settings
+    port = _free_port()
+    home = tmp_path_factory.mktemp("home")  # nothing of the user's own settings is read or written
+    env = {"HOME": str(home), "JUPYTER_CONFIG_DIR": str(home / ".jupyter"),
+           "JUPYTERLAB_SETTINGS_DIR": str(home / "lab-user-settings"),
+           "PATH": "/usr/bin:/bin", "JUPYTER_PLATFORM_DIRS": "1"}  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "jupyterlab", f"--config={CONFIG}", "--no-browser", f"--port={port}",
+         f"--ServerApp.root_dir={root}", f"--IdentityProvider.token={TOKEN}", "--ServerApp.port_retries=0"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env,
+    )  # fmt: skip
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                _get(f"{base}/api/status")
+                break
+            except OSError:
+                if proc.poll() is not None or time.monotonic() > deadline:
+                    err = proc.stderr.read().decode(errors="replace")[-2000:] if proc.stderr else ""
+                    pytest.fail(f"JupyterLab did not start: {err}")
+                time.sleep(0.3)
+        yield base, root
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+def test_the_config_roots_lab_at_the_repository():
+    namespace = {}
+
+    class _Config(dict):
+        def __getattr__(self, key):
+            return self.setdefault(key, _Config())
+
+        def __setattr__(self, key, value):
+            self[key] = value
+
+    config = _Config()
+    namespace["get_config"] = lambda: config
+    namespace["__file__"] = str(CONFIG)  # as Jupyter loads a config file
+    exec(compile(CONFIG.read_text(), str(CONFIG), "exec"), namespace)
+    assert Path(config["ServerApp"]["root_dir"]) == ROOT
+    assert config["LabApp"]["default_url"] == "/lab/tree/notebooks"
+    assert Path(config["LabApp"]["app_settings_dir"]) == ROOT / "jupyterlab" / "settings"
+
+
+def test_python_files_open_as_notebooks_by_the_projects_settings(lab):
+    base, _ = lab
+    doc = _get(f"{base}/lab/api/settings/@jupyterlab/docmanager-extension:plugin")
+    assert doc["schema"]["properties"]["defaultViewers"]["default"] == {"python": "Jupytext Notebook"}
+    model = _get(f"{base}/api/contents/notebooks/07_glu2017_figures.py?content=1")
+    assert model["type"] == "notebook"  # jupytext's contents manager serves the .py as a notebook
+    tags = [c["metadata"].get("tags", []) for c in model["content"]["cells"]]
+    assert ["parameters"] in tags
+
+
+@pytest.mark.parametrize("name", ["02_hmm_training", "08_tcds_figures"])
+def test_saving_from_lab_keeps_the_file_as_it_is_in_git(lab, name):
+    base, root = lab
+    path = root / "notebooks" / f"{name}.py"
+    before = path.read_bytes()
+    assert before == (ROOT / "notebooks" / f"{name}.py").read_bytes()
+    model = _get(f"{base}/api/contents/notebooks/{name}.py?content=1")
+    nb = model["content"]
+    nb["metadata"]["language_info"] = {"name": "python", "version": "3.11"}
+    for i, cell in enumerate(nb["cells"]):  # what a session in Lab leaves on a notebook
+        if cell["cell_type"] == "code":
+            cell["execution_count"] = i
+            cell["outputs"] = [{"output_type": "stream", "name": "stdout", "text": "some output\n"}]
+            cell["metadata"]["scrolled"] = True
+            cell["metadata"]["execution"] = {"iopub.status.idle": "2026-11-23T00:00:00Z"}
+    saved = _put(f"{base}/api/contents/notebooks/{name}.py",
+                 {"type": "notebook", "format": "json", "content": nb})  # fmt: skip
+    assert saved["path"] == f"notebooks/{name}.py"
+    assert path.read_bytes() == before, "saving from JupyterLab changed the notebook's source"
+    assert not list(path.parent.glob("*.ipynb"))  # and no paired .ipynb appears
