@@ -409,3 +409,59 @@ def test_forward_log_domain_fallback_closed_form():
     lb_impossible = np.array([[0.0, 0.0], [-np.inf, 0.0], [0.0, 0.0]])
     stay = np.eye(2)
     assert np.isneginf(forward_curve(lb_impossible, np.array([1.0, 0.0]), stay)[1:]).all()
+
+
+def test_batched_forward_backward_equals_brute_force_over_state_paths():
+    """γ, Σξ and log L of a padded batch, scaled and log-domain, against enumerating every state path."""
+    import itertools
+
+    from glu.gestures.baum_welch import forward_backward, forward_backward_log
+
+    rng = np.random.default_rng(4)
+    Q, lengths = 3, np.array([4, 2, 5])
+    A = np.array([[0.6, 0.4, 0.0], [0.0, 0.7, 0.3], [0.0, 0.0, 1.0]])
+    pi = np.array([0.8, 0.2, 0.0])
+    log_b = rng.normal(size=(3, 5, Q)) * 2
+    log_b[1, 2:] = 123.0  # padding: must be ignored
+    gamma_ref = np.zeros((3, 5, Q))
+    xi_ref = np.zeros((Q, Q))
+    ll_ref = np.zeros(3)
+    for s, T in enumerate(lengths):
+        total, g, xi = 0.0, np.zeros((T, Q)), np.zeros((Q, Q))
+        for path in itertools.product(range(Q), repeat=int(T)):
+            p = pi[path[0]] * np.exp(log_b[s, 0, path[0]])
+            for t in range(1, T):
+                p *= A[path[t - 1], path[t]] * np.exp(log_b[s, t, path[t]])
+            total += p
+            for t in range(T):
+                g[t, path[t]] += p
+            for t in range(T - 1):
+                xi[path[t], path[t + 1]] += p
+        gamma_ref[s, :T] = g / total
+        xi_ref += xi / total
+        ll_ref[s] = np.log(total)
+    for fb in (forward_backward, forward_backward_log):
+        gamma, xi_sum, ll = fb(log_b, lengths, pi, A)
+        np.testing.assert_allclose(ll, ll_ref, rtol=1e-12)
+        np.testing.assert_allclose(gamma, gamma_ref, atol=1e-12)
+        np.testing.assert_allclose(xi_sum, xi_ref, atol=1e-12)
+
+
+def test_batched_forward_backward_falls_back_to_the_log_domain_on_underflow():
+    from glu.gestures.baum_welch import forward_backward, forward_backward_log
+
+    A = np.array([[0.9, 0.1, 0.0], [0.0, 0.9, 0.1], [0.0, 0.0, 1.0]])
+    pi = np.array([1.0, 0.0, 0.0])
+    # frame 2: only states 0 and 1 are reachable, and their emissions are e^-2000 times the best one's
+    log_b = np.array([[[0.0, -1.0, -1.0], [-2000.0, -2000.0, 0.0], [-1.0, -3.0, -2.0]]])
+    lengths = np.array([3])
+    scaled = np.exp(log_b[0, 1] - log_b[0, 1].max())
+    assert (
+        pi @ A * scaled
+    ).sum() == 0.0  # the scaled recursion underflows here: the log domain must take over
+    g, xi, ll = forward_backward(log_b, lengths, pi, A)
+    g_ref, xi_ref, ll_ref = forward_backward_log(log_b, lengths, pi, A)
+    assert np.isfinite(ll).all()
+    np.testing.assert_allclose(ll, ll_ref, rtol=1e-12)
+    np.testing.assert_allclose(g, g_ref, atol=1e-12)
+    np.testing.assert_allclose(xi, xi_ref, atol=1e-12)

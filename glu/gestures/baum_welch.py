@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.gestures.forward import gaussian_factors, log_component_densities
+from glu.gestures.forward import TINY, gaussian_factors, log_component_densities
 
 
 class GMMHMMParams(NamedTuple):
@@ -56,7 +56,7 @@ def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
 def forward_backward(
     log_b: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Forward–backward in the log domain over a padded batch of sequences.
+    """Forward–backward over a padded batch of sequences.
 
     Parameters
     ----------
@@ -67,10 +67,53 @@ def forward_backward(
 
     Returns
     -------
-    log_gamma : array, shape (S, T, Q) — ``log P(q_t | G)`` (``-inf`` past a sequence's end)
+    gamma : array, shape (S, T, Q) — ``P(q_t | G)`` (0 past a sequence's end)
     xi_sum : array, shape (Q, Q) — expected transition counts, summed over sequences and frames
     loglik : array, shape (S,) — ``log L(G)`` of each sequence
+
+    The recursions are scaled (each frame's largest emission factored out, each forward variable
+    normalised), as :func:`glu.gestures.forward.forward_step`; when a frame's scaled mass underflows for
+    some sequence, the whole batch is redone in the log domain (:func:`forward_backward_log`).
     """
+    S, T, Q = log_b.shape
+    alive = np.arange(T)[None, :] < lengths[:, None]  # (S, T)
+    mx = np.where(alive, log_b.max(axis=2), 0.0)
+    with np.errstate(under="ignore", invalid="ignore"):
+        b = np.where(alive[..., None], np.exp(log_b - mx[..., None]), 1.0)  # padding: emits 1 everywhere
+    eye = np.eye(Q)
+    alpha = np.empty((S, T, Q))
+    c = np.ones((S, T))
+    a = startprob * b[:, 0]
+    c[:, 0] = a.sum(axis=1)
+    alpha[:, 0] = a / c[:, 0, None]
+    for t in range(1, T):
+        live = alive[:, t, None]
+        a = np.where(live, (alpha[:, t - 1] @ transmat) * b[:, t], alpha[:, t - 1] @ eye)
+        c[:, t] = a.sum(axis=1)
+        if not np.all(c[:, t] > TINY):  # the scaled mass underflows for some sequence
+            return forward_backward_log(log_b, lengths, startprob, transmat)
+        alpha[:, t] = a / c[:, t, None]
+    if not np.all(c[:, 0] > TINY):
+        return forward_backward_log(log_b, lengths, startprob, transmat)
+    loglik = np.where(alive, np.log(c) + mx, 0.0).sum(axis=1)
+    beta = np.ones((S, T, Q))
+    for t in range(T - 2, -1, -1):
+        nxt = alive[:, t + 1, None]
+        beta[:, t] = np.where(nxt, ((b[:, t + 1] * beta[:, t + 1]) @ transmat.T) / c[:, t + 1, None], 1.0)
+    gamma = np.where(alive[..., None], alpha * beta, 0.0)
+    gamma /= np.where(alive, gamma.sum(axis=2), 1.0)[..., None]  # as hmmlearn: renormalise each frame
+    if T > 1:
+        right = np.where(alive[:, 1:, None], b[:, 1:] * beta[:, 1:] / c[:, 1:, None], 0.0)
+        xi_sum = transmat * np.einsum("sti,stj->ij", alpha[:, :-1], right, optimize=True)
+    else:
+        xi_sum = np.zeros((Q, Q))
+    return gamma, xi_sum, loglik
+
+
+def forward_backward_log(
+    log_b: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`forward_backward` in the log domain (slower; never underflows). Same arguments and returns."""
     S, T, Q = log_b.shape
     with np.errstate(divide="ignore"):
         log_a, log_pi = np.log(transmat), np.log(startprob)
@@ -96,7 +139,8 @@ def forward_backward(
             xi_sum = np.exp(np.where(pair[..., None, None], log_xi, -np.inf)).sum(axis=(0, 1))
     else:
         xi_sum = np.zeros((Q, Q))
-    return log_gamma, xi_sum, loglik
+    with np.errstate(under="ignore"):
+        return np.exp(log_gamma), xi_sum, loglik
 
 
 def _pad(sequences: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -127,21 +171,21 @@ def fit(
         log_b_flat = _logsumexp(lc, axis=2)  # (N, Q)
         log_b = np.full((S, T, Q), -np.inf)
         log_b[alive] = log_b_flat
-        log_gamma, xi_sum, loglik = forward_backward(log_b, lengths, startprob, transmat)
+        gamma_padded, xi_sum, loglik = forward_backward(log_b, lengths, startprob, transmat)
         history.append(float(loglik.sum()))
+        gamma = gamma_padded[alive]  # (N, Q)
         with np.errstate(under="ignore"):
-            gamma = np.exp(log_gamma[alive])  # (N, Q)
             if M == 1:
                 post_mix = np.ones_like(lc)
             else:
                 post_mix = np.exp(lc - log_b_flat[..., None])
             pcm = gamma[:, :, None] * post_mix  # (N, Q, M)
-        start = np.exp(log_gamma[:, 0]).sum(axis=0)
+        start = gamma_padded[:, 0].sum(axis=0)
         post_mix_sum = pcm.sum(axis=0)
         post_sum = gamma.sum(axis=0)
         m_n = np.einsum("nqm,nd->qmd", pcm, X)
         centered = X[:, None, None, :] - means[None]  # about the means before the update (as hmmlearn)
-        c_n = np.einsum("nqm,nqmi,nqmj->qmij", pcm, centered, centered)
+        c_n = np.einsum("nqmi,nqmj->qmij", pcm[..., None] * centered, centered, optimize=True)
         # M-step, as hmmlearn's GMMHMM._do_mstep with its default priors and ours on the covariances
         startprob = np.where(startprob == 0, 0.0, np.maximum(start, 0.0))
         startprob = startprob / startprob.sum()

@@ -221,8 +221,13 @@ def train_hmm(
         raise DataError(f"{who}: {n_frames} frames are too few for {n_states} states × {n_mix} mixtures")
     if n_iter < 1 or not tol > 0:
         raise ModelError(f"n_iter={n_iter} must be ≥ 1 and tol={tol} > 0")
-    init = init_left_to_right(seqs, n_states, n_mix, seed, covar_reg, name)
-    fitted_params, history = _run_em(engine, seqs, init, n_iter, tol * n_frames, covar_reg, seed, name)
+    from threadpoolctl import threadpool_limits
+
+    # one thread for BLAS and OpenMP: the many small k-means and linear-algebra calls are several times
+    # slower with thread hand-offs (and the sweeps parallelise over models instead)
+    with threadpool_limits(1):
+        init = init_left_to_right(seqs, n_states, n_mix, seed, covar_reg, name)
+        fitted_params, history = _run_em(engine, seqs, init, n_iter, tol * n_frames, covar_reg, seed, name)
     try:
         fitted = GestureHMM(*fitted_params, name=name)
     except ModelError as e:
@@ -241,12 +246,9 @@ def _run_em(
     seed: int, name: str,
 ) -> tuple[tuple[np.ndarray, ...], tuple[float, ...]]:  # fmt: skip
     """EM from ``init``: the fitted (startprob, transmat, weights, means, covars) and the history."""
-    from threadpoolctl import threadpool_limits
-
     start = (init.startprob, init.transmat, init.weights, init.means, init.covars)
     try:
-        # one BLAS thread: EM's many small linear-algebra calls are slower with thread hand-offs
-        with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore", RuntimeWarning)
             if engine == "glu":
                 from glu.gestures import baum_welch
