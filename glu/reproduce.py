@@ -306,6 +306,7 @@ def reproduce(
     summary = write_summary(
         final["results"], results, source.describe(), quick, time.perf_counter() - t_start
     )
+    write_rendering_record(final["figures"], source.describe(), quick)
     if report:
         from glu.report import write_report
 
@@ -370,6 +371,27 @@ def run_one(
             f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; executed copy at {executed}"
         ) from None
     return executed, layout
+
+
+RENDERING_RECORD = "rendered-with.json"
+"""In ``figures/``: the data and the library versions the figures were rendered with (no timestamps)."""
+
+
+def rendering_versions() -> dict[str, str]:
+    """The versions that decide a figure's bytes: matplotlib and the FreeType it renders text with."""
+    import matplotlib
+    from matplotlib import ft2font
+
+    return {"matplotlib": matplotlib.__version__, "freetype": ft2font.__freetype_version__}
+
+
+def write_rendering_record(figures_dir: Path, data: str, quick: bool) -> Path:
+    """Write ``figures/rendered-with.json``: which data, which mode, which renderer versions."""
+    record = {"data_source": data, "quick": quick, **rendering_versions()}
+    path = figures_dir / RENDERING_RECORD
+    figures_dir.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, json.dumps(record, indent=1, sort_keys=True) + "\n")
+    return path
 
 
 def write_summary(

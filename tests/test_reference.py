@@ -271,3 +271,44 @@ def test_real_data_is_named_by_its_public_origin_however_it_is_reached(shared_da
     table = copy / "affordance-words" / "sent-1-5_lab_aff_bag.txt"
     table.write_text(table.read_text().replace("tap", "tap ", 1))
     assert resolve_data(copy).describe() == "data folder 'copy' (not the published data: checksums differ)"
+
+
+FAST_NOTEBOOKS = ["01", "03", "04", "05", "06", "07"]
+"""Notebooks whose figures the default suite re-renders from the real data (the others: -m slow)."""
+
+
+def _render_and_compare(shared_data, tmp_path, only):
+    """Render figures from the real data reached through another path; compare bytes with the committed ones."""
+    import json
+
+    from glu.paths import PROJECT_ROOT
+    from glu.reproduce import RENDERING_RECORD, rendering_versions
+
+    committed = PROJECT_ROOT / "figures"
+    record = json.loads((committed / RENDERING_RECORD).read_text())
+    if record["quick"] or not record["data_source"].startswith("real data"):
+        pytest.fail(f"the committed figures are not the full real-data run: {record}")
+    here = rendering_versions()
+    if {k: record[k] for k in here} != here:
+        pytest.skip(f"the committed figures were rendered with {record}, this machine has {here}")
+    link = tmp_path / "the-data-seen-from-elsewhere"
+    link.symlink_to(shared_data)
+    out = tmp_path / "out"
+    summary = reproduce(data=link, out=out, jobs=2, only=only, log=lambda _: None, report=False)
+    pngs = [f for f in summary["figures"] if f.endswith(".png")]
+    assert pngs
+    for name in pngs:
+        assert (out / "figures" / name).read_bytes() == (committed / name).read_bytes(), name
+    return pngs
+
+
+def test_figures_from_the_real_data_equal_the_committed_ones(shared_data, tmp_path):
+    _render_and_compare(shared_data, tmp_path, FAST_NOTEBOOKS)
+
+
+@pytest.mark.slow
+def test_every_figure_from_the_real_data_equals_the_committed_one(shared_data, tmp_path):
+    pngs = _render_and_compare(shared_data, tmp_path, None)
+    from glu.paths import PROJECT_ROOT
+
+    assert set(pngs) == {p.name for p in (PROJECT_ROOT / "figures").glob("*.png")}

@@ -56,7 +56,7 @@ def plot_segmentation(
         if e.kind == "jump":
             ax.axvline(e.frame - 0.5, color="purple", lw=0.6, ls=":")
     for s in reference:
-        ax.plot([s.start, s.end], [0.93, 0.93], color="black", lw=3, transform=ax.get_xaxis_transform())
+        ax.plot([s.start, s.end], [0.84, 0.84], color="black", lw=3, transform=ax.get_xaxis_transform())
     ax.set_xlabel("frame")
     ax.set_ylabel("features / activity")
     if title is not None:
