@@ -130,6 +130,29 @@ def test_batch_answers_line_by_line_with_errors_in_place(tmp_path, capsys, zero_
 
 
 @pytest.mark.parametrize(
+    ("soft", "message"),
+    [({"Action": ["a", "b", "c"]}, "must be a list of 3 numbers"), ({"Action": [[1], [0], [0]]}, "flat list"),
+     ({"Action": {"tap": "x"}}, "must be a number"), ({"Action": {"tap": {"p": 1}}}, "must be a number"),
+     ({"Action": {"tap": None, "grasp": 1}}, "must be a number"), ({"Action": [0.5, 0.5]}, "has 2 entries"),
+     ({"Action": [0.5, 0.7, 0.0]}, "not a distribution")],
+)  # fmt: skip
+def test_a_malformed_soft_line_answers_in_place_and_later_lines_still_run(
+    tmp_path, capsys, zero_bn, soft, message
+):
+    good = {"target": ["ObjVel"], "evidence": {"Shape": "box"}}
+    lines = [json.dumps(good), json.dumps({"target": ["ObjVel"], "soft": soft}), json.dumps(good)]
+    path = tmp_path / "q.jsonl"
+    path.write_text("\n".join(lines) + "\n")
+    status, out, err = run(
+        capsys, "query", "--model", str(zero_bn.save(tmp_path / "m.json")), "--batch", str(path)
+    )
+    assert status == 0 and "Traceback" not in err
+    answers = [json.loads(line) for line in out.splitlines()]
+    assert len(answers) == 3 and answers[0] == answers[2] and "ObjVel" in answers[2]
+    assert answers[1]["error"].startswith("line 2: ") and message in answers[1]["error"]
+
+
+@pytest.mark.parametrize(
     ("argv", "message"),
     [
         (["query", "--target", "Colour"], "unknown node 'Colour' (did you mean Color?)"),

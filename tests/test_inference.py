@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import re
 import warnings
 
 import numpy as np
@@ -208,6 +209,31 @@ def test_brute_force_on_tiny_networks(zero_rows):
             np.testing.assert_allclose(
                 eng.query([target], evidence, soft=virtual or None)[target], ref, atol=1e-12
             )
+
+
+def test_a_tiny_likelihood_on_the_only_possible_value_is_not_called_impossible():
+    """Virtual evidence is a likelihood: q and c·q give one posterior, however small q is (log-domain safe)."""
+    bn = _tiny_bn(0, zero_rows=False)
+    bn.cpts["B"][:] = [[1.0, 0.0], [1.0, 0.0], [0.0, 1.0]]  # B=b1 ⇔ A=a2: only a2 is possible given B=b1
+    eng = InferenceEngine(bn)
+    ref = _brute_force(bn, "C", {"B": "b1"})
+    for tiny in (1e-300, 1e-320, 1e-322):
+        got = eng.query(["C"], {"B": "b1"}, soft={"A": [0.5, 0.5 - tiny, tiny]})["C"]
+        np.testing.assert_allclose(got, ref, atol=1e-12)
+    with pytest.raises(ImpossibleEvidenceError, match="the hard evidence alone is possible"):
+        eng.query(["C"], {"B": "b1"}, soft={"A": [0.5, 0.5, 0.0]})
+
+
+@pytest.mark.parametrize(
+    ("soft", "message"),
+    [(["a", "b", "c"], "must be a list of 3 numbers"), ([[1], [0], [0]], "must be a flat list"),
+     ({"a0": "x"}, "the probability of 'a0' must be a number, got 'x'"), ({"a0": [1]}, "must be a number"),
+     ({"a0": True}, "must be a number"), ("abc", "must be a list of 3 numbers"), ([0.5, 0.5], "has 2 entries")],
+)  # fmt: skip
+def test_malformed_soft_evidence_is_one_clear_error(soft, message):
+    eng = InferenceEngine(_tiny_bn(1, zero_rows=False))
+    with pytest.raises(EvidenceError, match=re.escape(message)):
+        eng.query(["C"], soft={"A": soft})
 
 
 # ---------------------------------------------------------------- batch and word fast paths

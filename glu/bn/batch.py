@@ -179,6 +179,11 @@ class BatchQueries:
             shape[pos[a]] = q.shape[1]
             qb = q.reshape(shape)
             if rule == "virtual":
+                # as InferenceEngine: each row's likelihood scaled so its largest allowed entry is 1
+                others = tuple(i for i in range(1, p.ndim) if i != pos[a])
+                allowed = p.sum(axis=others, keepdims=True) > 0
+                top = np.where(allowed, qb, 0.0).max(axis=pos[a], keepdims=True)
+                qb = np.where(allowed, qb, 0.0) / np.where(top > 0, top, 1.0)
                 p = p * qb
             else:
                 others = tuple(i for i in range(1, p.ndim) if i != pos[a])

@@ -176,9 +176,23 @@ class InferenceEngine(BatchQueries):
         if isinstance(dist, Mapping):
             q = np.zeros(len(values))
             for k, p in dist.items():
+                if isinstance(p, bool) or not isinstance(p, int | float | np.integer | np.floating):
+                    raise EvidenceError(
+                        f"soft evidence on {node}: the probability of {k!r} must be a number, got {p!r}"
+                    )
                 q[self._value(node, k)] = p
         else:
-            q = np.asarray(dist, dtype=float).ravel()
+            try:
+                q = np.asarray(dist, dtype=float)
+            except (TypeError, ValueError):
+                raise EvidenceError(
+                    f"soft evidence on {node} must be a list of {len(values)} numbers ({', '.join(values)}) "
+                    f"or {{value: probability}}, got {dist!r}"
+                ) from None
+            if q.ndim != 1:
+                raise EvidenceError(
+                    f"soft evidence on {node} must be a flat list of {len(values)} numbers ({', '.join(values)})"
+                )
             if q.shape != (len(values),):
                 raise EvidenceError(
                     f"soft evidence on {node} has {q.size} entries; expected {len(values)} ({', '.join(values)})"
@@ -195,10 +209,17 @@ class InferenceEngine(BatchQueries):
         parts = [f"{k}={v}" for k, v in (evidence or {}).items()] + [f"soft({k})" for k in (soft or {})]
         return ", ".join(parts) if parts else "no evidence"
 
-    def _impossible(self, evidence: Mapping | None, soft: Mapping | None) -> ImpossibleEvidenceError:
+    def _impossible(
+        self, evidence: Mapping | None, soft: Mapping | None, hard_possible: bool = False
+    ) -> ImpossibleEvidenceError:
         hint = ""
         zr = self.bn.zero_rows()
-        if zr:
+        if hard_possible:
+            hint = (
+                " (the hard evidence alone is possible: the soft evidence gives probability 0 to every "
+                "value it allows)"
+            )
+        elif zr:
             hint = (
                 f" (the model has all-zero CPT rows for {', '.join(zr)}, which exclude some affordance "
                 "configurations; learn with unseen_words='uniform' to keep them)"
@@ -229,16 +250,25 @@ class InferenceEngine(BatchQueries):
                 if a in core:
                     raise EvidenceError(f"{node} is given twice: as hard evidence and as soft evidence")
                 qs[free.index(a)] = q
+            hard_possible = bool(p.sum() > 0.0)
             p = self._apply_soft(p, qs, soft_rule, evidence, soft)
+        else:
+            hard_possible = False
         total = float(p.sum())
         if not total > 0.0:
-            raise self._impossible(evidence, soft)
+            raise self._impossible(evidence, soft, hard_possible)
         return p, idx, free, leaf, core, total
 
     def _apply_soft(self, p: np.ndarray, qs: dict[int, np.ndarray], rule: str, evidence, soft) -> np.ndarray:
         nd = p.ndim
         if rule == "virtual":
             for k, q in qs.items():
+                # a likelihood is defined up to a factor: scale it so that its largest entry among the
+                # values the evidence allows is 1, so tiny but valid likelihoods (1e-320) cannot underflow
+                allowed = p.sum(axis=tuple(i for i in range(nd) if i != k)) > 0
+                top = float(q[allowed].max()) if allowed.any() else 0.0
+                if top > 0.0:
+                    q = np.where(allowed, q, 0.0) / top
                 shape = [1] * nd
                 shape[k] = q.size
                 p = p * q.reshape(shape)
