@@ -85,16 +85,19 @@ def exact_logs(probs: dict[str, float]) -> dict[str, int | None]:
     return {w: None if p == 0 else int(Fraction(math.log(p)) * SCALE) for w, p in probs.items()}
 
 
-def exact_key(sentence: tuple[str, ...], logs: dict[str, int | None]):
-    """The documented ranking key: (zero-probability words, −exact mean of the other logs, words)."""
+def exact_key(sentence: tuple[str, ...], logs: dict[str, int | None], start: int = 0):
+    """The documented ranking key: (zero-probability words, −exact (start + Σ other logs)/L, words).
+
+    ``start`` is where the sum starts: 0 for the papers' score, 1 for the originals' code.
+    """
     n_zero = sum(1 for w in sentence if logs[w] is None)
-    total = sum(logs[w] for w in sentence if logs[w] is not None)
+    total = start * SCALE + sum(logs[w] for w in sentence if logs[w] is not None)
     return (n_zero, -total * (LENGTHS_LCM // len(sentence)), sentence)
 
 
-def plain_score(sentence: tuple[str, ...], probs: dict[str, float]) -> float:
-    """(1/L) Σ log p(w) with a plain loop; -inf when a word has probability 0."""
-    s = 0.0
+def plain_score(sentence: tuple[str, ...], probs: dict[str, float], start: float = 0.0) -> float:
+    """(start + Σ log p(w)) / L with a plain loop; -inf when a word has probability 0."""
+    s = start
     for w in sentence:
         if probs[w] == 0:
             return -math.inf
@@ -102,8 +105,10 @@ def plain_score(sentence: tuple[str, ...], probs: dict[str, float]) -> float:
     return s / len(sentence)
 
 
-def brute_force_nbest(sentences, probs: dict[str, float], n: int) -> list[tuple[tuple[str, ...], float]]:
-    """The n best non-empty sentences by the documented key, with their plain scores."""
+def brute_force_nbest(
+    sentences, probs: dict[str, float], n: int, start: int = 0
+) -> list[tuple[tuple[str, ...], float]]:
+    """The n best non-empty sentences by the documented key, with their plain scores (sums from ``start``)."""
     logs = exact_logs(probs)
-    ranked = sorted((s for s in sentences if s), key=lambda s: exact_key(s, logs))
-    return [(s, plain_score(s, probs)) for s in ranked[:n]]
+    ranked = sorted((s for s in sentences if s), key=lambda s: exact_key(s, logs, start))
+    return [(s, plain_score(s, probs, start)) for s in ranked[:n]]

@@ -49,6 +49,21 @@ def test_score_is_the_mean_log_probability_counting_repeated_words():
     assert got.shape == (2,) and got[1] == pytest.approx(math.log(0.5))
 
 
+def test_the_original_score_starts_the_sum_at_one():
+    p = {"the": 0.9, "robot": 0.5, "taps": 0.2, "ball": 0.4}
+    sentence = "the robot taps the ball"
+    by_hand = (1 + 2 * math.log(0.9) + math.log(0.5) + math.log(0.2) + math.log(0.4)) / 5
+    assert score_sentence(sentence, p, score="original") == pytest.approx(by_hand, abs=1e-15)
+    assert score_sentence(sentence, p, "original") - score_sentence(sentence, p) == pytest.approx(1 / 5)
+    assert score_sentence("the taps", {"the": 1.0, "taps": 0.0}, "original") == -math.inf
+    # the +1/L favours short sentences: here it reverses the order of a short and a long sentence
+    q = {"x": 0.3, "y": 0.6}
+    assert score_sentence("x y y y", q) > score_sentence("x", q)
+    assert score_sentence("x y y y", q, "original") < score_sentence("x", q, "original")
+    with pytest.raises(EvidenceError, match="paper, original"):
+        score_sentence(sentence, p, score="mean")
+
+
 def test_scores_are_exact_so_reordered_words_tie():
     p = _random_probs(0)
     a = score_sentence("the robot taps the big ball and the ball rolls", p)
@@ -107,6 +122,8 @@ def test_zero_probability_sentences_come_last_fewest_impossible_words_first():
 
 
 PROB_VALUES = [0.0, 0.05, 0.25, 0.5, 0.5, 0.8, 1.0]
+START = {"paper": 0, "original": 1}
+"""Where each score's sum starts (METHOD.md §5.1), written here independently of glu."""
 
 
 def _tree_strategy():
@@ -130,13 +147,14 @@ def _tree_strategy():
     probs=st.fixed_dictionaries({w: st.sampled_from(PROB_VALUES) for w in "abcd"}),
     n=st.integers(1, 8),
     max_length=st.integers(1, 6),
+    score=st.sampled_from(["paper", "original"]),
 )
-def test_nbest_equals_brute_force_on_small_grammars(tree, sub, probs, n, max_length):
+def test_nbest_equals_brute_force_on_small_grammars(tree, sub, probs, n, max_length, score):
     sentence = ("seq", [tree, ("opt", ("ref", "v")), ("ref", "v")])
     defs = {"v": sub}
     g = parse_grammar(grammar_text(sentence, defs))
-    expected = brute_force_nbest(expand(sentence, defs, max_length), probs, n)
-    got = nbest(g, probs, n, max_length=max_length)
+    expected = brute_force_nbest(expand(sentence, defs, max_length), probs, n, START[score])
+    got = nbest(g, probs, n, max_length=max_length, score=score)
     assert [tuple(s.split()) for s in got["sentence"]] == [s for s, _ in expected]
     np.testing.assert_allclose(got["score"].to_numpy(), [sc for _, sc in expected], rtol=1e-12, atol=1e-12)
 
@@ -181,6 +199,39 @@ def test_nbest_on_the_full_grammar_matches_vectorised_scores_of_all_sentences():
         np.testing.assert_allclose(got["score"], top, rtol=1e-12)
         for s, sc in zip(got["sentence"], got["score"], strict=True):  # and the sentences carry those scores
             assert plain_score(tuple(s.split()), probs) == pytest.approx(sc, rel=1e-12)
+
+
+def test_nbest_under_the_original_score_on_the_full_grammar():
+    net = default_network()
+    probs = _random_probs(2)
+    scores = all_scores(net, probs, score="original")
+    np.testing.assert_allclose(scores, all_scores(net, probs) + 1 / _lengths(net), rtol=0, atol=1e-12)
+    got = nbest(net, probs, 10, score="original")
+    np.testing.assert_allclose(got["score"], np.sort(scores)[::-1][:10], rtol=1e-12)
+    for s, sc in zip(got["sentence"], got["score"], strict=True):
+        assert plain_score(tuple(s.split()), probs, start=1) == pytest.approx(sc, rel=1e-12)
+    paper = nbest(net, probs, 10)
+    assert set(got["length"]).isdisjoint(set()) and got["length"].mean() <= paper["length"].mean()
+
+
+def _lengths(net) -> np.ndarray:
+    """The length of every sentence of the network, in the order of :func:`all_scores` (by a ones vector)."""
+    ones = {w: math.exp(-1.0) for w in net.words}  # log p = -1 for every word: the paper score is -1 exactly
+    return 1 / (all_scores(net, ones, score="original") + 1)
+
+
+def test_rank_sentences_under_both_scores_with_a_word_filter():
+    probs = {"a": 0.5, "b": 0.25, "c": 0.9}
+    sents = ["a", "b c c", "c c c c b", "a c"]
+    paper = rank_sentences(sents, probs)
+    original = rank_sentences(sents, probs, score="original")
+    for frame, start in ((paper, 0), (original, 1)):
+        expected = brute_force_nbest([tuple(s.split()) for s in sents], probs, 4, start)
+        assert [tuple(s.split()) for s in frame["sentence"]] == [s for s, _ in expected]
+        np.testing.assert_allclose(frame["score"], [sc for _, sc in expected], rtol=1e-12)
+    assert list(paper["sentence"]) != list(original["sentence"])
+    only_b = rank_sentences(sents, probs, score="original", must_contain=["b"])
+    assert set(only_b["sentence"]) == {"b c c", "c c c c b"}
 
 
 def test_exact_nbest_is_fast():
@@ -320,16 +371,48 @@ def test_cli_json_and_sampling(capsys):
     assert (
         main(["describe", "--data", "synthetic", "--evidence", "Action=tap", "--nbest", "3", "--json"]) == 0
     )
-    out = json.loads(capsys.readouterr().out)
-    assert out["method"] == "exact" and len(out["nbest"]) == 3 and out["grammar"]["n_sentences"] == 9_331_200
-    assert "synthetic" in out["model"]
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
+    assert [set(r) for r in out] == [{"sentence", "score"}] * 3
+    assert [r["score"] for r in out] == sorted((r["score"] for r in out), reverse=True)
+    assert "synthetic" in captured.err and "9,331,200 sentences" in captured.err  # provenance on stderr
     assert (
         main(["describe", "--data", "synthetic", "--sample", "500", "--seed", "1", "--nbest", "3", "--json"])
         == 0
     )
-    out = json.loads(capsys.readouterr().out)
-    assert out["method"] == "sample" and out["n_samples"] == 500 and out["seed"] == 1
-    assert out["nbest"][0]["score"] <= out["exact_best"]["score"]
+    captured = capsys.readouterr()
+    sampled = json.loads(captured.out)
+    assert len(sampled) == 3 and "500 random sentences (HSGen-like, seed 1" in captured.err
+    exact_best = float(captured.err.split("exact best over the grammar")[1].split(":")[1].split()[0])
+    assert sampled[0]["score"] <= exact_best + 1e-5
+
+
+def test_cli_scores_and_candidate_files(tmp_path, capsys):
+    from glu.bn import InferenceEngine, learn_bn
+    from glu.data import load_experiments
+    from glu.language import word_probabilities
+
+    sentences = ["the robot taps the ball and the ball rolls", "he pokes the box but the box is still",
+                 "the robot is grasping the cube and the cube is rising"]  # fmt: skip
+    f = tmp_path / "candidates.txt"
+    f.write_text("\n".join(sentences) + "\n\n")
+    ev = ["--evidence", "Action=touch", "Shape=box"]
+    for score, start in (("paper", 0), ("original", 1)):
+        argv = ["describe", "--data", "synthetic", *ev, "--candidates", str(f), "--score", score, "--json"]
+        assert main(argv) == 0
+        got = json.loads(capsys.readouterr().out)
+        probs = word_probabilities(InferenceEngine(learn_bn(load_experiments("synthetic"))),
+                                   {"Action": "touch", "Shape": "box"}).to_dict()  # fmt: skip
+        expected = brute_force_nbest([tuple(s.split()) for s in sentences], probs, 10, start)
+        assert [r["sentence"] for r in got] == [" ".join(s) for s, _ in expected]
+        got_scores = [-math.inf if r["score"] is None else r["score"] for r in got]  # JSON has no -inf
+        np.testing.assert_allclose(got_scores, [sc for _, sc in expected], rtol=1e-12)
+    assert (
+        main(["describe", "--data", "synthetic", *ev, "--candidates", str(f), "--must-contain", "box"]) == 0
+    )
+    text = capsys.readouterr().out
+    assert "of 3 candidate sentences" in text and "he pokes the box but the box is still" in text
+    assert "the robot taps the ball" not in text and "exact best over the grammar" in text
 
 
 @pytest.mark.parametrize(
@@ -340,12 +423,23 @@ def test_cli_json_and_sampling(capsys):
         (["--evidence", "Action=jump"], "jump"),
         (["--grammar", "/nonexistent.grm"], "no such grammar file"),
         (["--must-contain", "purple"], "purple"),
+        (["--candidates", "samples"], "sampled sentences are not in the data"),
+        (["--candidates", "/nonexistent.txt"], "no such sentence file"),
+        (["--candidates", "/nonexistent.txt", "--sample", "10"], "--candidates grammar only"),
+        (["--candidates", "/nonexistent.txt", "--max-length", "10"], "--candidates grammar only"),
     ],
 )
 def test_cli_bad_input_is_one_line(argv, message, capsys):
     assert main(["describe", "--data", "synthetic", *argv]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def test_cli_unknown_score_is_a_usage_error(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["describe", "--data", "synthetic", "--score", "mean"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and "invalid choice: 'mean'" in err and len(err.strip().splitlines()) == 1
 
 
 def test_cli_bad_grammars(tmp_path, capsys):

@@ -108,6 +108,31 @@ def add_evidence_args(p: argparse.ArgumentParser) -> None:
                    help="how soft evidence enters: virtual (likelihood) evidence, as the originals, or Jeffrey's rule")  # fmt: skip
 
 
+def add_description_args(p: argparse.ArgumentParser) -> None:
+    """``--score`` and ``--candidates``: how verbal descriptions are scored, and which sentences are ranked."""
+    from glu.language.candidates import CANDIDATES, DEFAULT_CANDIDATES
+    from glu.language.descriptions import DEFAULT_SCORE, SCORES
+
+    p.add_argument("--score", choices=tuple(SCORES), default=DEFAULT_SCORE,
+                   help="sentence score: paper = (1/L) Σ log p(w), the papers' formula (default); "
+                   "original = (1 + Σ log p(w))/L, what the originals' code printed")  # fmt: skip
+    p.add_argument("--candidates", default=DEFAULT_CANDIDATES, metavar="{" + ",".join(CANDIDATES) + ",FILE}",
+                   help="sentences to rank: grammar = every sentence of the grammar, exactly (default); "
+                   "samples = the originals' 9,941 sampled sentences (in the data folder); "
+                   "FILE = one sentence per line")  # fmt: skip
+
+
+def read_candidates(args: argparse.Namespace, source: Any | None = None) -> list[tuple[str, ...]] | None:
+    """The sentences ``--candidates`` names (None: the whole grammar); ``source`` holds the samples."""
+    from glu.language.candidates import candidate_sentences
+
+    if args.candidates == "samples" and source is None:
+        from glu.data.source import resolve_data
+
+        source = resolve_data(getattr(args, "data", None))
+    return candidate_sentences(args.candidates, source)
+
+
 def read_evidence(args: argparse.Namespace) -> tuple[dict[str, str], dict[str, dict[str, float]]]:
     """The hard and soft evidence of ``--evidence`` and ``--soft`` (a node may not be in both)."""
     evidence = parse_evidence(args.evidence)

@@ -3,21 +3,34 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
+import sys
 import time
 from pathlib import Path
-from typing import Any
 
-from glu.cli.common import add_evidence_args, add_model_args, integer, load_model, positive_int, read_evidence
+from glu.cli.common import (
+    add_description_args,
+    add_evidence_args,
+    add_model_args,
+    integer,
+    load_model,
+    positive_int,
+    read_candidates,
+    read_evidence,
+)
 from glu.errors import EvidenceError
 from glu.evidence import format_evidence
 
 DESCRIPTION = """\
-Print the N best sentences of the grammar given evidence, each scored by the mean log probability of
-its words, p(word | evidence) from the Affordance-Words network (TCDS 2020). By default the N best are
-exact, over every sentence of the grammar; --sample K ranks K random sentences instead (the originals'
-method, as HTK's HSGen) and also prints the exact best for comparison.
+Print the N best sentences describing a situation, each scored from the probabilities p(word | evidence)
+of the Affordance-Words network (TCDS 2020). --score paper (default) is the papers' mean log probability
+(1/L) Σ log p(w); --score original is what the originals' code printed, (1 + Σ log p(w))/L. By default the
+N best are exact, over every sentence of the grammar; --candidates samples ranks the originals' 9,941
+sampled sentences instead (with --score original this prints TCDS Table II, Fig. 7 and Fig. 8), and
+--sample K ranks K new random sentences (as HTK's HSGen). With a candidate list the exact best is also
+printed for comparison. --json prints [{"sentence": …, "score": …}, …] only; everything else goes to stderr.
 """
 
 
@@ -30,11 +43,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_model_args(p)
     add_evidence_args(p)
+    add_description_args(p)
     p.add_argument(
         "--nbest", type=positive_int, default=10, metavar="N", help="how many sentences (default 10)"
     )
     p.add_argument("--sample", type=positive_int, metavar="K",
-                   help="rank K random sentences (the originals' method) instead of the whole grammar")  # fmt: skip
+                   help="rank K new random sentences of the grammar (as HSGen) instead of searching it")  # fmt: skip
     p.add_argument(
         "--seed", type=integer, metavar="S", help="seed of the random sentences (with --sample; default 0)"
     )
@@ -45,12 +59,19 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="only sentences with at least one of these words, e.g. green yellow blue")  # fmt: skip
     p.add_argument("--max-length", type=positive_int, metavar="L",
                    help="only sentences of at most L words (needed when the grammar repeats with { } or < >)")  # fmt: skip
-    p.add_argument("--json", action="store_true", help="print one JSON object only")
+    p.add_argument("--json", action="store_true",
+                   help='print only [{"sentence": …, "score": …}, …] (best first; score null for -inf)')  # fmt: skip
     p.set_defaults(func=_describe)
 
 
 def _score_json(x: float) -> float | None:
     return None if not math.isfinite(x) else float(x)
+
+
+SCORE_TEXT = {
+    "paper": "(1/L) Σ log p(w), the papers' formula",
+    "original": "(1 + Σ log p(w))/L, the originals' code",
+}
 
 
 def _describe(args: argparse.Namespace) -> int:
@@ -64,70 +85,60 @@ def _describe(args: argparse.Namespace) -> int:
         raise EvidenceError("--seed chooses the random sentences of --sample K; give --sample too")
     if args.sample is not None and args.max_length is not None:
         raise EvidenceError("--max-length applies to the exact N-best; drop it with --sample")
+    if args.candidates != "grammar" and (args.sample is not None or args.max_length is not None):
+        raise EvidenceError(
+            f"--candidates {args.candidates} ranks a fixed list of sentences; "
+            "--sample and --max-length apply to --candidates grammar only"
+        )
     evidence, soft = read_evidence(args)
     grammar = load_grammar(args.grammar)
     net = compile_network(grammar)
     limit = net.check_length_limit(args.max_length)
     n_sentences = count_sentences(net, limit)
+    candidates = read_candidates(args)
     bn, desc = load_model(args)
     engine = InferenceEngine(bn)
     probs = word_probabilities(engine, evidence, soft, args.soft_rule)
 
     t0 = time.perf_counter()
-    exact = nbest(net, probs, args.nbest, max_length=args.max_length, must_contain=args.must_contain)
+    exact = nbest(net, probs, args.nbest, max_length=args.max_length, must_contain=args.must_contain,
+                  score=args.score)  # fmt: skip
     t_exact = time.perf_counter() - t0
     result = exact
     seed = 0 if args.seed is None else args.seed
-    n_distinct = None
     if args.sample is not None:
-        drawn = sample_sentences(grammar, args.sample, seed)
-        if args.must_contain:
-            wanted = set(args.must_contain)
-            drawn = [s for s in drawn if wanted & set(s)]
-        n_distinct = len(set(drawn))
-        result = rank_sentences(drawn, probs, args.nbest)
+        candidates = sample_sentences(grammar, args.sample, seed)
+    if candidates is not None:
+        result = rank_sentences(candidates, probs, args.nbest, args.score, args.must_contain)
 
     gram_name = "glu default grammar" if args.grammar is None else str(args.grammar)
-    if args.json:
-        out: dict[str, Any] = {
-            "model": desc,
-            "grammar": {"source": gram_name, "n_sentences": n_sentences,
-                        "min_length": net.min_length, "max_length": limit},
-            "evidence": evidence, "soft": soft, "soft_rule": args.soft_rule,
-            "must_contain": args.must_contain,
-            "method": "exact" if args.sample is None else "sample",
-            "nbest": [{"rank": int(r.rank), "sentence": r.sentence, "score": _score_json(r.score),
-                       "length": int(r.length)} for r in result.itertuples()],
-        }  # fmt: skip
-        if args.sample is not None:
-            out.update(n_samples=args.sample, seed=seed, n_distinct=n_distinct)
-        if len(exact):
-            out["exact_best"] = {
-                "sentence": exact["sentence"].iloc[0],
-                "score": _score_json(exact["score"].iloc[0]),
-            }
-        out["seconds_exact"] = t_exact
-        print(json.dumps(out, allow_nan=False))
-        return 0
-
-    print(f"# model: {desc}")
-    print(f"# grammar: {gram_name}: {n_sentences:,} sentences of {net.min_length}–{limit} words")
-    print(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")
+    say = functools.partial(print, file=sys.stderr if args.json else sys.stdout)
+    say(f"# model: {desc}")
+    say(f"# grammar: {gram_name}: {n_sentences:,} sentences of {net.min_length}–{limit} words")
+    say(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")
+    say(f"# score: {args.score} = {SCORE_TEXT[args.score]}")
     if args.must_contain:
-        print(f"# only sentences containing: {' or '.join(args.must_contain)}")
-    if args.sample is None:
-        print(f"# exact {args.nbest}-best over the whole grammar ({t_exact * 1000:.1f} ms)")
+        say(f"# only sentences containing: {' or '.join(args.must_contain)}")
+    if args.sample is not None:
+        say(f"# best {args.nbest} of {args.sample:,} random sentences (HSGen-like, seed {seed}; "
+            f"{len(set(candidates)):,} distinct)")  # fmt: skip
+    elif candidates is not None:
+        what = "the originals' sampled sentences" if args.candidates == "samples" else args.candidates
+        say(f"# best {args.nbest} of {len(set(candidates)):,} candidate sentences ({what})")
     else:
-        print(f"# best {args.nbest} of {args.sample:,} random sentences (HSGen-like, seed {seed}; "
-              f"{n_distinct:,} distinct)")  # fmt: skip
+        say(f"# exact {args.nbest}-best over the whole grammar ({t_exact * 1000:.1f} ms)")
+    if candidates is not None and len(exact):
+        e_sent, e_score = exact["sentence"].iloc[0], float(exact["score"].iloc[0])
+        status = "among the candidates" if e_sent in {" ".join(c) for c in candidates} else "not a candidate"
+        say(f"# exact best over the grammar ({status}): {e_score:.5f}  {e_sent}")
+    if args.json:
+        rows = [{"sentence": r.sentence, "score": _score_json(r.score)} for r in result.itertuples()]
+        print(json.dumps(rows, allow_nan=False))
+        return 0
     if result.empty:
         print("# no sentence")
         return 0
-    print(f"{'rank':>4}  {'score':>10}  sentence")
+    print(f"{'rank':>4}  {'score':>9}  sentence")
     for r in result.itertuples():
-        print(f"{r.rank:>4}  {r.score:>10.6f}  {r.sentence}")
-    if args.sample is not None and len(exact):
-        e_sent, e_score = exact["sentence"].iloc[0], float(exact["score"].iloc[0])
-        status = "drawn" if e_sent in set(result["sentence"]) else "not drawn"
-        print(f"# exact best ({status}): {e_score:.6f}  {e_sent}")
+        print(f"{r.rank:>4}  {r.score:>9.5f}  {r.sentence}")
     return 0

@@ -3,12 +3,17 @@
 * :mod:`glu.language.grammar` — HTK HParse grammars: :func:`parse_grammar`, :func:`load_grammar`.
 * :mod:`glu.language.sentences` — the deterministic word network, counting, enumeration.
 * :mod:`glu.language.sampling` — random sentences as the originals drew them (HTK's HSGen).
-* :mod:`glu.language.descriptions` — scores, the exact N-best (:func:`nbest`), :func:`describe`.
+* :mod:`glu.language.descriptions` — the two scores (:data:`SCORES`), the exact N-best (:func:`nbest`),
+  ranking a list of sentences, :func:`describe`.
+* :mod:`glu.language.candidates` — the sentences to choose from: the grammar, the originals' samples, a file.
 
 The TCDS experiments built on them are in :mod:`glu.experiments.verbal`, their figures in :mod:`glu.plots`.
 """
 
+from glu.language.candidates import CANDIDATES, candidate_sentences, read_sentences
 from glu.language.descriptions import (
+    DEFAULT_SCORE,
+    SCORES,
     all_scores,
     default_network,
     describe,
@@ -32,10 +37,14 @@ from glu.language.sentences import (
 )
 
 __all__ = [
+    "CANDIDATES",
     "DEFAULT_GRAMMAR_PATH",
+    "DEFAULT_SCORE",
+    "SCORES",
     "Grammar",
     "WordNetwork",
     "all_scores",
+    "candidate_sentences",
     "compile_network",
     "count_by_length",
     "count_sentences",
@@ -46,6 +55,7 @@ __all__ = [
     "nbest",
     "parse_grammar",
     "rank_sentences",
+    "read_sentences",
     "restrict",
     "same_language",
     "sample_nbest",

@@ -1,26 +1,36 @@
 """Sentences scored by the BN's word probabilities, and the exact N-best descriptions of a grammar.
 
-The originals' score of a sentence ``s = w_1 … w_L`` given evidence ``e`` (METHOD.md §5) is the mean log
-probability of its words,
+**Two scores** (:data:`SCORES`). The papers' score of a sentence ``s = w_1 … w_L`` given evidence ``e``
+(METHOD.md §5) is the mean log probability of its words,
 
-    score(s) = (1/L) Σ_k log p(w_k = present | e),
+    paper:     score(s) = (1/L) Σ_k log p(w_k = present | e),
 
-every occurrence counting (``the`` twice in "the … the …" counts twice). A word of probability 0 gives
-``-inf``.
+every occurrence counting (``the`` twice in "the … the …" counts twice). The originals' code started each
+sentence's sum at 1 instead of 0, so every score printed in TCDS Table II, Fig. 7 and Fig. 8 is
+
+    original:  score(s) = (1 + Σ_k log p(w_k = present | e)) / L
+
+(METHOD.md §5.1). The ``+1/L`` favours short sentences and changes rankings. ``paper`` is glu's default;
+``original`` reproduces the printed numbers. A word of probability 0 gives ``-inf`` under both.
+
+**Candidates.** The originals ranked the 9,941 distinct sentences of 10,000 random draws from the grammar
+(:func:`rank_sentences` ranks any such list, :mod:`glu.language.candidates` reads it); :func:`nbest`
+searches the whole grammar.
 
 **Exact N-best.** The originals scored 10,000 random sentences. Here :func:`nbest` finds the N best of the
 *whole* grammar with a k-best dynamic programme over the deterministic word network
 (:mod:`glu.language.sentences`): for every state and every number ``l`` of remaining words it keeps the
 ``n`` best suffixes of exactly ``l`` words (the mean divides by the length, so lengths are kept apart
 until the end), which costs ``O(max length × arcs × n)`` instead of one score per sentence. The network is
-deterministic, so the N best are N *different* sentences.
+deterministic, so the N best are N *different* sentences. Both scores work: within one length the
+``+1/L`` of the original score is a constant, so only the final comparison across lengths changes.
 
 **Exact ties.** Sums of log probabilities are computed exactly: every ``log p`` is a binary fraction, so
 ``log p × 2^K`` is an integer for a common ``K``, and sums of those integers have no rounding error.
 Sentences are ranked by
 
 1. the number of words of probability 0 (fewest first; all such sentences score ``-inf``),
-2. the exact mean log probability of the other words (highest first),
+2. the exact score computed from the other words (highest first),
 3. the words themselves, in lexicographic order,
 
 so equal scores (e.g. two orders of the same words) are ordered the same way every time, and the
@@ -65,6 +75,19 @@ PROB_TOL = 1e-9
 MAX_ALL_SCORES = 50_000_000
 """Most sentences :func:`all_scores` scores."""
 NBEST_COLUMNS = ["rank", "sentence", "score", "length"]
+SCORES: dict[str, int] = {"paper": 0, "original": 1}
+"""Sentence scores by name → the constant ``c`` in ``(c + Σ_k log p(w_k)) / L``: ``paper`` is the papers'
+formula, ``original`` what the originals' code computed and printed (METHOD.md §5.1)."""
+DEFAULT_SCORE = "paper"
+"""The score used unless another is asked for: the papers' formula."""
+
+
+def score_offset(score: str) -> int:
+    """The constant ``c`` of a score named in :data:`SCORES`; :class:`EvidenceError` for another name."""
+    try:
+        return SCORES[score]
+    except (KeyError, TypeError):
+        raise EvidenceError(f"unknown sentence score {score!r}; allowed: {', '.join(SCORES)}") from None
 
 
 @lru_cache(maxsize=1)
@@ -165,25 +188,39 @@ def _exact(lp: LogProbs, index: Sequence[int]) -> tuple[int, int]:
     return sum(lp.zero[i] for i in index), sum(lp.num[i] for i in index)
 
 
-def _score(lp: LogProbs, n_zero: int, total: int, length: int) -> float:
-    return -math.inf if n_zero else float(Fraction(total, lp.scale * length))
+def _score(lp: LogProbs, n_zero: int, total: int, length: int, offset: int = 0) -> float:
+    """The score, rounded once from its exact value ``(offset + total / scale) / length``."""
+    return -math.inf if n_zero else float(Fraction(total + offset * lp.scale, lp.scale * length))
 
 
-def _rank_key(n_zero: int, total: int, length: int, words: Sentence) -> tuple:
-    return (n_zero, Fraction(-total, length), words)
+def _rank_key(
+    n_zero: int, total: int, length: int, words: Sentence, offset: int = 0, scale: int = 1
+) -> tuple:
+    return (n_zero, Fraction(-(total + offset * scale), length), words)
 
 
 def _split(sentence: str | Iterable[str]) -> Sentence:
     return tuple(sentence.split()) if isinstance(sentence, str) else tuple(sentence)
 
 
-def score_sentence(sentence: str | Iterable[str], word_probs: WordProbs) -> float:
-    """``(1/L) Σ_k log p(w_k)`` over the L words of ``sentence`` (a string or a sequence of words); -inf if a word has p = 0."""
-    return float(score_sentences([sentence], word_probs)[0])
+def score_sentence(sentence: str | Iterable[str], word_probs: WordProbs, score: str = DEFAULT_SCORE) -> float:
+    """The score of one sentence (a string or a sequence of words); -inf if a word has p = 0.
+
+    ``score="paper"``: ``(1/L) Σ_k log p(w_k)`` over its L words; ``"original"``: ``(1 + Σ_k log p(w_k)) / L``.
+
+    >>> round(score_sentence("the ball", {"the": 0.5, "ball": 0.25}), 6)
+    -1.039721
+    >>> round(score_sentence("the ball", {"the": 0.5, "ball": 0.25}, score="original"), 6)
+    -0.539721
+    """
+    return float(score_sentences([sentence], word_probs, score)[0])
 
 
-def score_sentences(sentences: Iterable[str | Iterable[str]], word_probs: WordProbs) -> np.ndarray:
+def score_sentences(
+    sentences: Iterable[str | Iterable[str]], word_probs: WordProbs, score: str = DEFAULT_SCORE
+) -> np.ndarray:
     """The score of each sentence (see :func:`score_sentence`), shape (n_sentences,)."""
+    offset = score_offset(score)
     sents = [_split(s) for s in sentences]
     if any(len(s) == 0 for s in sents):
         raise VocabularyError("an empty sentence has no score (the score is a mean over its words)")
@@ -193,7 +230,7 @@ def score_sentences(sentences: Iterable[str | Iterable[str]], word_probs: WordPr
     out = np.empty(len(sents))
     for k, s in enumerate(sents):
         n_zero, total = _exact(lp, [pos[w] for w in s])
-        out[k] = _score(lp, n_zero, total, len(s))
+        out[k] = _score(lp, n_zero, total, len(s), offset)
     return out
 
 
@@ -210,15 +247,34 @@ def _frame(rows: list[tuple[Sentence, float]]) -> pd.DataFrame:
 
 
 def rank_sentences(
-    sentences: Iterable[str | Iterable[str]], word_probs: WordProbs, n: int | None = None
+    sentences: Iterable[str | Iterable[str]],
+    word_probs: WordProbs,
+    n: int | None = None,
+    score: str = DEFAULT_SCORE,
+    must_contain: Iterable[str] | None = None,
 ) -> pd.DataFrame:
     """The distinct ``sentences`` ranked by score (ties as in :func:`nbest`), the best ``n`` (all if None).
+
+    This is how the originals described a situation: they ranked a fixed list of sentences (9,941 drawn at
+    random from the grammar; :func:`glu.language.candidates.candidate_sentences`) with ``score="original"``.
+
+    Parameters
+    ----------
+    sentences : the candidates, strings or sequences of words (duplicates count once)
+    word_probs : P(word = present | evidence) for every word they use
+    n : how many to return (all if None)
+    score : a name of :data:`SCORES`
+    must_contain : keep only the sentences with at least one of these words (e.g. the colour words)
 
     Returns
     -------
     DataFrame with columns rank (1 = best), sentence, score, length; one row per distinct sentence.
     """
+    offset = score_offset(score)
     sents = sorted({_split(s) for s in sentences})
+    if must_contain is not None:
+        wanted = set(must_contain)
+        sents = [s for s in sents if wanted.intersection(s)]
     if any(len(s) == 0 for s in sents):
         raise VocabularyError("an empty sentence has no score (the score is a mean over its words)")
     vocab = sorted({w for s in sents for w in s})
@@ -227,7 +283,8 @@ def rank_sentences(
     keyed = []
     for s in sents:
         n_zero, total = _exact(lp, [pos[w] for w in s])
-        keyed.append((_rank_key(n_zero, total, len(s), s), _score(lp, n_zero, total, len(s))))
+        keyed.append((_rank_key(n_zero, total, len(s), s, offset, lp.scale),
+                      _score(lp, n_zero, total, len(s), offset)))  # fmt: skip
     best = heapq.nsmallest(n, keyed) if n is not None else sorted(keyed)
     return _frame([(k[2], sc) for k, sc in best])
 
@@ -240,8 +297,9 @@ def nbest(
     max_length: int | None = None,
     must_contain: Iterable[str] | None = None,
     exclude: Iterable[str] | None = None,
+    score: str = DEFAULT_SCORE,
 ) -> pd.DataFrame:
-    """The exact ``n`` best sentences of the grammar under the mean log word probability.
+    """The exact ``n`` best sentences of the grammar under a sentence score (:data:`SCORES`).
 
     Parameters
     ----------
@@ -251,12 +309,14 @@ def nbest(
     max_length : only sentences of at most this many words (required when the grammar is infinite)
     must_contain : only sentences with at least one of these words (e.g. the colour words)
     exclude : only sentences with none of these words
+    score : ``"paper"`` (the mean log probability) or ``"original"`` (the originals' ``(1 + Σ log p)/L``)
 
     Returns
     -------
-    DataFrame with columns rank (1 = best), sentence (words separated by spaces), score (float, the mean
-    log probability; -inf with a zero-probability word), length (words); at most ``n`` rows, best first.
+    DataFrame with columns rank (1 = best), sentence (words separated by spaces), score (float; -inf with
+    a zero-probability word), length (words); at most ``n`` rows, best first.
     """
+    offset = score_offset(score)
     if int(n) != n or n < 1:
         raise EvidenceError(f"the number of sentences must be a whole number ≥ 1, not {n!r}")
     n = int(n)
@@ -283,8 +343,9 @@ def nbest(
             ]  # fmt: skip
             new_cells.append(heapq.nsmallest(n, merged) if len(merged) > n else sorted(merged))
         cells = new_cells
-        for z, neg, ws in cells[net.start]:
-            candidates.append((_rank_key(z, -neg, length, ws), _score(lp, z, -neg, length)))
+        for z, neg, ws in cells[net.start]:  # within one length the +offset/L is a constant
+            candidates.append((_rank_key(z, -neg, length, ws, offset, lp.scale),
+                               _score(lp, z, -neg, length, offset)))  # fmt: skip
         if not any(cells):
             break
     best = heapq.nsmallest(n, candidates)
@@ -292,7 +353,12 @@ def nbest(
 
 
 def sample_nbest(
-    grammar: Grammar | None, word_probs: WordProbs, n: int = 10, n_samples: int = 10_000, seed: int | None = 0
+    grammar: Grammar | None,
+    word_probs: WordProbs,
+    n: int = 10,
+    n_samples: int = 10_000,
+    seed: int | None = 0,
+    score: str = DEFAULT_SCORE,
 ) -> pd.DataFrame:
     """The originals' method: the ``n`` best distinct sentences among ``n_samples`` random ones (HSGen-like, seeded).
 
@@ -303,15 +369,18 @@ def sample_nbest(
     g = load_grammar() if grammar is None else grammar
     if not isinstance(g, Grammar):
         raise TypeError("random sampling walks the grammar itself: pass a Grammar, not a WordNetwork")
-    return rank_sentences(sample_sentences(g, n_samples, seed), word_probs, n)
+    return rank_sentences(sample_sentences(g, n_samples, seed), word_probs, n, score)
 
 
-def all_scores(grammar: Grammar | WordNetwork | None, word_probs: WordProbs) -> np.ndarray:
+def all_scores(
+    grammar: Grammar | WordNetwork | None, word_probs: WordProbs, score: str = DEFAULT_SCORE
+) -> np.ndarray:
     """The score of every sentence of a finite grammar, vectorised, in no particular order; shape (n_sentences,).
 
     Sums are ordinary floating-point sums (not the exact ones of :func:`nbest`); use it for distributions
     and ranks, up to :data:`MAX_ALL_SCORES` sentences.
     """
+    offset = score_offset(score)
     net = _network(grammar)
     total = count_sentences(net)
     if total > MAX_ALL_SCORES:
@@ -335,7 +404,7 @@ def all_scores(grammar: Grammar | WordNetwork | None, word_probs: WordProbs) -> 
             for w, t in net.arcs[s]:
                 for length, sums in suffix[t].items():
                     chunk = out[k : k + len(sums)]
-                    np.add(sums, lp.logp[w], out=chunk)
+                    np.add(sums, lp.logp[w] + offset, out=chunk)
                     chunk /= length + 1
                     k += len(sums)
             break
@@ -358,12 +427,20 @@ def describe(
     n: int = 10,
     grammar: Grammar | WordNetwork | None = None,
     must_contain: Iterable[str] | None = None,
+    score: str = DEFAULT_SCORE,
+    candidates: Iterable[str | Iterable[str]] | None = None,
 ) -> pd.DataFrame:
-    """The exact ``n`` best descriptions given evidence: :func:`nbest` over :func:`word_probabilities`.
+    """The ``n`` best descriptions given evidence, from :func:`word_probabilities`.
+
+    With ``candidates=None`` the exact :func:`nbest` over the whole grammar; with a list of sentences
+    (e.g. the originals' 9,941 samples) :func:`rank_sentences` over that list. ``score`` names one of
+    :data:`SCORES`.
 
     Returns
     -------
     DataFrame with columns rank, sentence, score, length (see :func:`nbest`).
     """
     probs = word_probabilities(engine, evidence, soft, soft_rule)
-    return nbest(grammar, probs, n, must_contain=must_contain)
+    if candidates is not None:
+        return rank_sentences(candidates, probs, n, score, must_contain)
+    return nbest(grammar, probs, n, must_contain=must_contain, score=score)
