@@ -29,6 +29,7 @@ from glu.language import (
     sample_nbest,
     score_sentence,
     score_sentences,
+    word_probabilities,
 )
 from glu.schema import WORDS
 
@@ -349,10 +350,53 @@ def test_tcds_experiments(engine):
     for row in fig8.itertuples():
         assert set(row.colour_sentence.split()) & {"green", "yellow", "blue"}
         assert row.colour_score <= row.score
-    cmp = ex.sampling_vs_exact(engine, ex.EVIDENCE_AND_BUT["slow"], seeds=[0, 1], n_samples=2000)
-    assert (cmp["gap"] >= 0).all() and (cmp["sample_rank"] >= 1).all()
-    assert (cmp["found_best"] == (cmp["gap"] == 0)).all()
-    assert ((cmp["p_draw_best"] > 0) & (cmp["p_draw_best"] < 1)).all()
+    for score in ("paper", "original"):
+        cmp = ex.sampling_vs_exact(engine, ex.EVIDENCE_AND_BUT["slow"], [0, 1], n_samples=2000, score=score)
+        assert (cmp["gap"] >= 0).all() and (cmp["sample_rank"] >= 1).all()
+        assert (cmp["found_best"] == (cmp["gap"] == 0)).all()
+        assert ((cmp["p_draw_best"] > 0) & (cmp["p_draw_best"] < 1)).all()
+
+
+def test_published_descriptions_and_exact_vs_samples(engine):
+    from glu.data.published import num2str, published
+    from glu.experiments import verbal as ex
+    from glu.language import sample_sentences
+
+    samples = sample_sentences(load_grammar(), 3000, seed=0)
+    rep = ex.published_descriptions(engine, samples, score="original")
+    pub = published()["sentences"]
+    assert len(rep) == 3 * 10 + 4 and list(rep["figure"].unique()) == [
+        *ex.PUBLISHED_LISTS,
+        *(f"fig8{x}" for x in "abcd"),
+    ]
+    assert list(rep["paper_sentence"][:10]) == [r["sentence"] for r in pub["table_ii"]["rows"]]
+    assert (rep["printed"] == [num2str(x) for x in rep["score"]]).all()
+    drawn = {" ".join(x) for x in samples}
+    assert set(rep["sentence"]) <= drawn  # ranked among the candidates only
+    for key, ev in ex.PUBLISHED_LISTS.items():  # each list is the ranking of the samples under that evidence
+        ours = rep[rep["figure"] == key]
+        expected = rank_sentences(samples, word_probabilities(engine, ev), 10, score="original")
+        assert list(ours["sentence"]) == list(expected["sentence"])
+    fig8 = rep[rep["figure"].str.startswith("fig8")]
+    assert (
+        all(set(x.split()) & set(ex.COLOUR_WORDS) for x in fig8["sentence"])
+        and fig8["same_score"].isna().all()
+    )
+    vs = ex.exact_vs_samples(engine, samples)
+    assert len(vs) == 6 and set(vs["score_name"]) == {"paper", "original"}
+    assert (vs["exact_score"] >= vs["samples_score"]).all() and (vs["samples_rank"] >= 1).all()
+    assert ((vs["samples_rank"] == 1) == (vs["exact_score"] == vs["samples_score"])).all()
+    assert (vs["exact_in_samples"] == [s in drawn for s in vs["exact_best"]]).all()
+
+
+def test_the_published_evidence_is_the_codes():
+    from glu.data.published import published
+    from glu.experiments import verbal as ex
+
+    pub = published()["sentences"]
+    for key, ev in ex.PUBLISHED_LISTS.items():
+        assert pub[key]["evidence"] == ev
+    assert [r["evidence"] for r in pub["fig8"]["rows"]] == list(ex.EVIDENCE_FIG8)
 
 
 # ---------------------------------------------------------------- the command line

@@ -1,10 +1,16 @@
 """The verbal-description experiments of TCDS 2020 (METHOD.md §5), each a function returning a tidy DataFrame.
 
 Every function takes an :class:`~glu.bn.InferenceEngine` (word probabilities given evidence) and
-optionally a grammar (default: glu's, the originals' language) and uses the exact N-best of
-:mod:`glu.language.descriptions`, not a random sample; :func:`sampling_vs_exact` measures what the originals'
-random sample of 10,000 sentences misses. Each returns a frame stamped by
-:func:`~glu.experiments.common.tidy`.
+optionally a grammar (default: glu's, the originals' language). Two ways to choose a description:
+
+* as the originals did: rank their 9,941 sampled sentences with their score ``(1 + Σ log p)/L``.
+  :func:`published_descriptions` does that for TCDS Table II, Fig. 7 and Fig. 8 and puts the paper's
+  printed sentences and scores (:mod:`glu.data.published`) beside glu's;
+* exactly: the N best of the whole grammar (:mod:`glu.language.descriptions`), under either score.
+  :func:`exact_vs_samples` compares the two; :func:`sampling_vs_exact` measures how often a random sample
+  of 10,000 sentences misses the best of the grammar.
+
+Each returns a frame stamped by :func:`~glu.experiments.common.tidy`.
 """
 
 from __future__ import annotations
@@ -15,8 +21,19 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from glu.data.published import num2str, published
 from glu.experiments.common import evidence_text, model_source, tidy
-from glu.language.descriptions import _network, all_scores, nbest, rank_sentences, word_probabilities
+from glu.language.descriptions import (
+    DEFAULT_SCORE,
+    SCORES,
+    _network,
+    all_scores,
+    describe,
+    nbest,
+    rank_sentences,
+    score_sentence,
+    word_probabilities,
+)
 from glu.language.grammar import Grammar, load_grammar
 from glu.language.sampling import sample_probability, sample_sentences
 from glu.language.sentences import WordNetwork, compile_network
@@ -46,29 +63,43 @@ EVIDENCE_FIG8: tuple[dict[str, str], ...] = (
 COLOUR_WORDS: tuple[str, ...] = ("green", "yellow", "blue")
 """The grammar's colour words."""
 CONJUNCTIONS: tuple[str, ...] = ("and", "but")
+PUBLISHED_LISTS: dict[str, dict[str, str]] = {
+    "table_ii": EVIDENCE_YELLOW_SPHERE,
+    "fig7a": EVIDENCE_AND_BUT["medium"],
+    "fig7b": EVIDENCE_AND_BUT["slow"],
+}
+"""The TCDS 10-best lists (keys of the published reference file) and their evidence."""
 
 
 def yellow_sphere_nbest(
-    engine: Any, n: int = 10, grammar: Grammar | WordNetwork | None = None
+    engine: Any,
+    n: int = 10,
+    grammar: Grammar | WordNetwork | None = None,
+    score: str = DEFAULT_SCORE,
+    candidates: Iterable[Iterable[str]] | None = None,
 ) -> pd.DataFrame:
-    """The exact ``n`` best descriptions of {Color=yellow, Size=big, Shape=sphere, ObjVel=fast}.
+    """The ``n`` best descriptions of {Color=yellow, Size=big, Shape=sphere, ObjVel=fast} (TCDS Table II).
+
+    Exact over the grammar, or ranked among ``candidates`` (see :func:`glu.language.describe`).
 
     Returns
     -------
     DataFrame with columns rank, sentence, score, length (``n`` rows, best first).
     """
-    df = nbest(grammar, word_probabilities(engine, EVIDENCE_YELLOW_SPHERE), n)
-    return tidy(
-        df, "verbal_yellow_sphere_nbest", model_source(engine.bn), evidence=EVIDENCE_YELLOW_SPHERE, n=n
-    )
+    df = describe(engine, EVIDENCE_YELLOW_SPHERE, n=n, grammar=grammar, score=score, candidates=candidates)
+    return tidy(df, "verbal_yellow_sphere_nbest", model_source(engine.bn), evidence=EVIDENCE_YELLOW_SPHERE,
+                n=n, score=score, candidates="grammar" if candidates is None else "list")  # fmt: skip
 
 
-def and_but_probabilities(engine: Any) -> pd.DataFrame:
+def and_but_probabilities(engine: Any, compare: bool = False) -> pd.DataFrame:
     """P(and | e) and P(but | e) under {Action=grasp, ObjVel=medium} and {Action=grasp, ObjVel=slow}.
+
+    With ``compare``, the bars of TCDS Fig. 7 (:mod:`glu.data.published`) are added beside them.
 
     Returns
     -------
-    DataFrame with columns ObjVel, evidence, word, p; four rows (ObjVel medium, slow × and, but).
+    DataFrame with columns ObjVel, evidence, word, p (and with ``compare``: paper_p, difference = p −
+    paper_p, resolution of the published value); four rows (ObjVel medium, slow × and, but).
     """
     rows = []
     for objvel, ev in EVIDENCE_AND_BUT.items():
@@ -76,11 +107,25 @@ def and_but_probabilities(engine: Any) -> pd.DataFrame:
         for w in CONJUNCTIONS:
             rows.append({"ObjVel": objvel, "evidence": evidence_text(ev), "word": w, "p": float(probs[w])})
     df = pd.DataFrame(rows, columns=["ObjVel", "evidence", "word", "p"])
+    if compare:
+        bars = published()["conjunctions"]
+        paper = {(r["ObjVel"], w): r[w] for r in bars["rows"] for w in CONJUNCTIONS}
+        df["paper_p"] = [paper[o, w] for o, w in zip(df["ObjVel"], df["word"], strict=True)]
+        df["difference"] = df["p"] - df["paper_p"]
+        df["resolution"] = bars["resolution"]
     return tidy(df, "verbal_and_but", model_source(engine.bn), evidence=EVIDENCE_AND_BUT)
 
 
-def and_but_nbest(engine: Any, n: int = 10, grammar: Grammar | WordNetwork | None = None) -> pd.DataFrame:
-    """The exact ``n`` best descriptions under each of the two and/but evidence sets.
+def and_but_nbest(
+    engine: Any,
+    n: int = 10,
+    grammar: Grammar | WordNetwork | None = None,
+    score: str = DEFAULT_SCORE,
+    candidates: Iterable[Iterable[str]] | None = None,
+) -> pd.DataFrame:
+    """The ``n`` best descriptions under each of the two and/but evidence sets (TCDS Fig. 7).
+
+    Exact over the grammar, or ranked among ``candidates`` (see :func:`glu.language.describe`).
 
     Returns
     -------
@@ -88,15 +133,17 @@ def and_but_nbest(engine: Any, n: int = 10, grammar: Grammar | WordNetwork | Non
     "and"/"but"); ``2 n`` rows, ObjVel medium first.
     """
     net = _network(grammar)
+    cands = None if candidates is None else list(candidates)
     frames = []
     for objvel, ev in EVIDENCE_AND_BUT.items():
-        df = nbest(net, word_probabilities(engine, ev), n)
+        df = describe(engine, ev, n=n, grammar=net, score=score, candidates=cands)
         df.insert(0, "evidence", evidence_text(ev))
         df.insert(0, "ObjVel", objvel)
         df["conjunction"] = [_conjunction(s) for s in df["sentence"]]
         frames.append(df)
     return tidy(pd.concat(frames, ignore_index=True), "verbal_and_but_nbest", model_source(engine.bn),
-                evidence=EVIDENCE_AND_BUT, n=n)  # fmt: skip
+                evidence=EVIDENCE_AND_BUT, n=n, score=score,
+                candidates="grammar" if cands is None else "list")  # fmt: skip
 
 
 def _conjunction(sentence: str) -> str:
@@ -140,6 +187,92 @@ def fig8_descriptions(engine: Any, grammar: Grammar | WordNetwork | None = None)
     return tidy(pd.DataFrame(rows), "verbal_fig8", model_source(engine.bn), evidence=EVIDENCE_FIG8)
 
 
+def published_descriptions(
+    engine: Any, candidates: Iterable[Iterable[str]] | None, score: str = "original"
+) -> pd.DataFrame:
+    """TCDS Table II, Fig. 7(a), 7(b) and the four Fig. 8 sentences: the paper's beside glu's.
+
+    Parameters
+    ----------
+    engine : inference engine of the Affordance–Words network
+    candidates : the sentences to rank (the originals': their 9,941 samples,
+        :meth:`glu.data.DataSource.sentence_samples`), or None for the exact search over the grammar
+    score : ``"original"`` (what the paper printed) or ``"paper"`` (the paper's formula)
+
+    Returns
+    -------
+    DataFrame, one row per published sentence (34): figure (table_ii, fig7a, fig7b, fig8a … fig8d), rank,
+    evidence, paper_sentence, paper_score (as printed; None for Fig. 8, which prints no score), sentence,
+    score (glu's), printed (glu's score as the originals' MATLAB printed it), same_sentence, same_score
+    (the printed digits are equal; None for Fig. 8).
+    """
+    cands = None if candidates is None else list(candidates)
+    pub = published()["sentences"]
+    jobs = [(key, pub[key]["evidence"], pub[key]["rows"], None) for key in PUBLISHED_LISTS]
+    jobs += [(f"fig8{r['panel']}", r["evidence"], [r], list(COLOUR_WORDS)) for r in pub["fig8"]["rows"]]
+    rows = []
+    for key, ev, paper_rows, must in jobs:
+        ours = describe(engine, ev, n=len(paper_rows), score=score, candidates=cands, must_contain=must)
+        for k, (p, o) in enumerate(zip(paper_rows, ours.itertuples(), strict=True), start=1):
+            printed = num2str(o.score)
+            rows.append({
+                "figure": key, "rank": k, "evidence": evidence_text(ev),
+                "paper_sentence": p["sentence"], "paper_score": p.get("score"),
+                "sentence": o.sentence, "score": float(o.score), "printed": printed,
+                "same_sentence": o.sentence == p["sentence"],
+                "same_score": None if p.get("score") is None else printed == p["score"],
+            })  # fmt: skip
+    what = "grammar" if cands is None else f"{len(set(map(tuple, cands)))} candidate sentences"
+    return tidy(pd.DataFrame(rows), "verbal_published_descriptions", model_source(engine.bn),
+                score=score, candidates=what, reference=published()["read_from"])  # fmt: skip
+
+
+def _rank_in(sorted_scores: np.ndarray, score: float) -> int:
+    """1 + the number of sentences scoring higher (ties within 1e-12 count as equal)."""
+    tol = 1e-12 * max(1.0, abs(score))
+    return int(len(sorted_scores) - np.searchsorted(sorted_scores, score + tol, side="right")) + 1
+
+
+def exact_vs_samples(
+    engine: Any,
+    samples: Iterable[Iterable[str]],
+    grammar: Grammar | None = None,
+    evidence_sets: Mapping[str, Mapping[str, str]] = PUBLISHED_LISTS,
+) -> pd.DataFrame:
+    """The best description of the whole grammar against the best of the originals' samples, under both scores.
+
+    Returns
+    -------
+    DataFrame, one row per (evidence set, score): figure, evidence, score_name, exact_best, exact_score,
+    samples_best, samples_score, samples_rank (rank of the samples' best in the whole grammar, 1 = the
+    best), exact_in_samples (the grammar's best is one of the samples), rank_under_other (rank of
+    this score's exact best under the other score, in the whole grammar).
+    """
+    g = load_grammar() if grammar is None else grammar
+    net = compile_network(g)
+    sample_list = list(samples)
+    sample_set = {" ".join(s) for s in sample_list}
+    rows = []
+    for key, ev in evidence_sets.items():
+        probs = word_probabilities(engine, ev)
+        every = {name: np.sort(all_scores(net, probs, name)) for name in SCORES}
+        for name in SCORES:
+            exact = nbest(net, probs, 1, score=name).iloc[0]
+            best = rank_sentences(sample_list, probs, 1, name).iloc[0]
+            other = next(o for o in SCORES if o != name)
+            exact_under_other = score_sentence(exact["sentence"], probs, other)
+            rows.append({
+                "figure": key, "evidence": evidence_text(ev), "score_name": name,
+                "exact_best": exact["sentence"], "exact_score": float(exact["score"]),
+                "samples_best": best["sentence"], "samples_score": float(best["score"]),
+                "samples_rank": _rank_in(every[name], float(best["score"])),
+                "exact_in_samples": exact["sentence"] in sample_set,
+                "rank_under_other": _rank_in(every[other], exact_under_other),
+            })  # fmt: skip
+    return tidy(pd.DataFrame(rows), "verbal_exact_vs_samples", model_source(engine.bn),
+                n_samples=len(sample_set), evidence=dict(evidence_sets))  # fmt: skip
+
+
 def sampling_vs_exact(
     engine: Any,
     evidence: Mapping[str, str],
@@ -147,6 +280,7 @@ def sampling_vs_exact(
     n_samples: int = 10_000,
     n: int = 10,
     grammar: Grammar | None = None,
+    score: str = DEFAULT_SCORE,
 ) -> pd.DataFrame:
     """What the originals' method (the best of ``n_samples`` random sentences) misses, one row per seed.
 
@@ -163,26 +297,24 @@ def sampling_vs_exact(
     g = load_grammar() if grammar is None else grammar
     net = compile_network(g)
     probs = word_probabilities(engine, evidence)
-    exact = nbest(net, probs, n)
-    scores = np.sort(all_scores(net, probs))
+    exact = nbest(net, probs, n, score=score)
+    scores = np.sort(all_scores(net, probs, score))
     p_best = sample_probability(g, exact["sentence"].iloc[0])
     p_draw = -np.expm1(n_samples * np.log1p(-p_best)) if p_best < 1 else 1.0
     rows = []
     for seed in seeds:
         drawn = sample_sentences(g, n_samples, seed)
-        ranked = rank_sentences(drawn, probs, n)
+        ranked = rank_sentences(drawn, probs, n, score)
         s_best, s_score = ranked["sentence"].iloc[0], float(ranked["score"].iloc[0])
-        tol = 1e-12 * max(1.0, abs(s_score))
-        better = len(scores) - np.searchsorted(scores, s_score + tol, side="right")
         rows.append({
             "seed": seed, "n_samples": n_samples, "n_distinct": len(set(drawn)),
             "exact_best": exact["sentence"].iloc[0], "exact_score": float(exact["score"].iloc[0]),
             "sample_best": s_best, "sample_score": s_score,
             "gap": float(exact["score"].iloc[0]) - s_score,
             "found_best": s_best == exact["sentence"].iloc[0],
-            "sample_rank": int(better) + 1,
+            "sample_rank": _rank_in(scores, s_score),
             "overlap": len(set(exact["sentence"]) & set(ranked["sentence"])),
             "p_draw_best": float(p_draw),
         })  # fmt: skip
     return tidy(pd.DataFrame(rows), "verbal_sampling_vs_exact", model_source(engine.bn), evidence=evidence,
-                seeds=seeds, n_samples=n_samples, n=n)  # fmt: skip
+                seeds=seeds, n_samples=n_samples, n=n, score=score)  # fmt: skip

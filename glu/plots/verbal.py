@@ -10,8 +10,20 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.ticker import MaxNLocator
 
+SCORE_LABELS: dict[str, str] = {
+    "paper": "score: (1/L) Σ log p(word | evidence)",
+    "original": "score: (1 + Σ log p(word | evidence)) / L",
+}
+"""Axis label of each sentence score (:data:`glu.language.SCORES`)."""
 
-def plot_nbest(ax: Axes, nbest: pd.DataFrame, title: str | None = None, highlight: str | None = None) -> Axes:
+
+def plot_nbest(
+    ax: Axes,
+    nbest: pd.DataFrame,
+    title: str | None = None,
+    highlight: str | None = None,
+    score: str = "paper",
+) -> Axes:
     """Horizontal bars of the scores of an N-best list (rank 1 at the top), the sentences as labels.
 
     Parameters
@@ -20,6 +32,7 @@ def plot_nbest(ax: Axes, nbest: pd.DataFrame, title: str | None = None, highligh
     nbest : DataFrame with columns sentence and score (as returned by :func:`glu.language.nbest`)
     title : axes title
     highlight : a word; bars of sentences containing it are drawn in a second colour
+    score : the name of the score (:data:`SCORE_LABELS`), for the axis label
 
     Returns
     -------
@@ -46,7 +59,7 @@ def plot_nbest(ax: Axes, nbest: pd.DataFrame, title: str | None = None, highligh
     )
     ax.set_yticks(y, df["sentence"], fontsize=7)
     ax.invert_yaxis()
-    ax.set_xlabel("score: mean log p(word | evidence)")
+    ax.set_xlabel(SCORE_LABELS[score])
     ax.set_xlim(left, hi + pad)
     ax.xaxis.set_major_locator(MaxNLocator(4))
     if title:
@@ -87,6 +100,7 @@ def plot_sampling(
     sample_scores: np.ndarray,
     exact_best: float,
     sample_best: float | None = None,
+    score: str = "paper",
 ) -> Axes:
     """The score distribution of every sentence of the grammar against a random sample's, with both bests.
 
@@ -97,6 +111,7 @@ def plot_sampling(
     sample_scores : the scores of the sampled sentences, shape (n_samples,)
     exact_best : the best score of the grammar
     sample_best : the best score of the sample (default: the max of ``sample_scores``)
+    score : the name of the score (:data:`SCORE_LABELS`), for the axis label
 
     Returns
     -------
@@ -125,7 +140,7 @@ def plot_sampling(
         ax.axvline(exact_best, color="k", lw=1, label=f"exact best: {exact_best:.4f}")
     if sb is not None and np.isfinite(sb):
         ax.axvline(sb, color="tab:red", lw=1, ls="--", label=f"best of the sample: {sb:.4f}")
-    ax.set_xlabel("score: mean log p(word | evidence)")
+    ax.set_xlabel(SCORE_LABELS[score])
     ax.set_ylabel("density")
     ax.legend(fontsize=7)
     return ax
