@@ -180,7 +180,7 @@ def log_anticipation(
     update_frames : frame numbers at which the fused posteriors were computed, shape (n_updates,)
     fused : node → array, shape (n_updates, n_values), e.g. {"ObjVel": …, "Action": …}
     scene : markdown for the scene panel
-    descriptions : the best verbal description at each update frame (optional)
+    descriptions : the best verbal description at each update frame, or at the last ones only (optional)
     values : node → its value names, in the column order of ``fused[node]`` (default: ``0, 1, …``)
     """
     log_scene(rec, scene)
@@ -191,8 +191,9 @@ def log_anticipation(
     for node, probs in fused.items():
         names = (values or {}).get(node) or [str(i) for i in range(np.shape(probs)[1])]
         log_bars(rec, f"fusion/{node}", probs, names, update_frames, upd_seconds)
-    if descriptions is not None:
-        log_texts(rec, "description", descriptions, update_frames, upd_seconds)
+    if descriptions:  # at every update, or at the last ones only
+        k = len(descriptions)
+        log_texts(rec, "description", descriptions, update_frames[-k:], upd_seconds[-k:])
 
 
 def write_anticipation_recording(path: str | os.PathLike, recording_id: str, **run: Any) -> Path:

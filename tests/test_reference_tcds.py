@@ -82,3 +82,31 @@ def test_exact_search_under_each_score(real_source, learned_bn):
     assert row["exact_best"] == "the robot grasps the sphere and the sphere is moving"
     assert num2str(row["exact_score"]) == "-0.59324" and row["rank_under_other"] == 9
     assert not vs["exact_in_samples"].iloc[[0, 1, 3, 4, 5]].any()
+
+
+@pytest.mark.parametrize("case", ["sphere", "box"])
+def test_anticipate_matches_the_published_curves_bars_and_caption(shared_data, capsys, case):
+    import numpy as np
+
+    pub = PUB["anticipation"][case]
+    argv = ["anticipate", "--case", case, "--models", "original", "--data", str(shared_data), "--json"]
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    d = json.loads(out)
+    assert d["frames"] == pub["frames"] and "real data" in err
+    T = pub["frames"][1] - pub["frames"][0] + 1
+    # the originals' schedule: t = 5, 10, …, the last multiple of 5 (90 for the sphere, 145 for the box)
+    assert [u["t"] for u in d["updates"]] == list(range(5, 5 * (T // 5) + 1, 5))
+    # the three curves of Fig. 5, every vertex the figure shows, within the figure's resolution
+    curves = pub["loglik_per_frame"]
+    for action in ("grasp", "tap", "touch"):
+        ours = np.array(d["loglik_per_frame"][action])[np.array(curves[action]["t"]) - 1]
+        np.testing.assert_allclose(ours, curves[action]["value"], rtol=0, atol=curves["resolution"])
+        assert len(curves[action]["t"]) > 0.9 * T  # few vertices were clipped at the bottom of the axes
+    # the bars: p_comb(ObjVel) at the last update
+    bars = pub["ObjVel"]
+    np.testing.assert_allclose(list(d["updates"][-1]["ObjVel"].values()), list(bars["values"].values()),
+                               rtol=0, atol=bars["resolution"])  # fmt: skip
+    # the caption: the originals' score over their samples
+    assert main([*argv, "--score", "original", "--candidates", "samples"]) == 0
+    assert json.loads(capsys.readouterr().out)["description"] == pub["caption"]

@@ -23,6 +23,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "glu.cli.gesture_cmds",
     "glu.cli.reproduce_cmds",
     "glu.cli.language_cmds",
+    "glu.cli.anticipate_cmds",
 )
 """Each module defines ``register(subparsers)``; handlers import heavy libraries lazily."""
 

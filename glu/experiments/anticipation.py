@@ -7,11 +7,16 @@ hand trajectory, ``(1/t) log L(G_1^t | A)`` per model, and every few frames thei
 touches it. :func:`effect_anticipation` runs it; :func:`case_trajectory` gets the hand trajectory (the
 originals' hand-cut segments of the real recordings, or a synthetic tap);
 :func:`glu.recording.write_anticipation` turns a run into a Rerun recording.
+
+**The originals' schedule** (METHOD.md §5.1): updates at t = 5, 10, …, the last multiple of 5 within the
+segment (t is 1-based within the segment: 90 of T = 94 for the sphere, 145 of T = 146 for the box), and
+the scene's description is the best sentence given the evidence of the last update. glu follows it by
+default; ``final_update=True`` adds one more update at t = T, marked ``extra``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,7 +24,7 @@ import pandas as pd
 
 from glu.bn.inference import InferenceEngine
 from glu.data.source import DataSource
-from glu.errors import ModelError
+from glu.errors import DataError, ModelError
 from glu.experiments.common import tidy
 from glu.fusion import fuse
 from glu.gestures.features import load_features
@@ -27,7 +32,11 @@ from glu.gestures.forward import p_hmm_from_loglik
 from glu.gestures.recognizer import Recognizer
 from glu.gestures.synthetic import synthesize_gesture
 from glu.gestures.trajectories import RepairPolicy, Trajectory
+from glu.language.descriptions import DEFAULT_SCORE
 from glu.language.descriptions import describe as best_sentences
+
+ORIGINAL_STEP = 5
+"""The originals fused every 5 frames (``interval = 5`` in their scripts)."""
 
 
 @dataclass(frozen=True)
@@ -73,7 +82,8 @@ class AnticipationRun:
     values : node → its value names
     descriptions : the best verbal description at each update frame (if computed)
     data_source : which data the run used
-    parameters : the run's settings (step, rule, targets)
+    parameters : the run's settings (step, rule, targets, score, candidates)
+    update_extra : per update, True for the extra update at t = T (not on the originals' schedule), shape (K,)
     """
 
     case: str
@@ -91,6 +101,44 @@ class AnticipationRun:
     data_source: str = ""
     descriptions: list[str] = field(default_factory=list)
     parameters: dict[str, object] = field(default_factory=dict)
+    update_extra: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+
+    @property
+    def update_t(self) -> np.ndarray:
+        """t of each update, 1-based within the segment (5, 10, … on the originals' schedule), shape (K,)."""
+        return np.searchsorted(self.frames, self.update_frames) + 1
+
+    @property
+    def description(self) -> str | None:
+        """The scene's description: the best sentence at the last update (None if not computed)."""
+        return self.descriptions[-1] if self.descriptions else None
+
+    def as_dict(self) -> dict[str, object]:
+        """The run as plain data (what ``glu anticipate --json`` prints).
+
+        ``{"case", "frames": [first, last], "loglik_per_frame": {action: [...]}`` (index i is t = i + 1),
+        ``"updates": [{"t", "frame", "p_hmm": {action: p}, <node>: {value: p}, ["extra": true]}, …],
+        "description"}``.
+        """
+        actions = list(self.actions)
+        lpf = self.loglik_per_frame
+        updates = []
+        extra = self.update_extra if len(self.update_extra) else np.zeros(len(self.update_frames), bool)
+        for k, (t, f) in enumerate(zip(self.update_t, self.update_frames, strict=True)):
+            u: dict[str, object] = {"t": int(t), "frame": int(f),
+                                    "p_hmm": dict(zip(actions, map(float, self.p_hmm[t - 1]), strict=True))}  # fmt: skip
+            for node, probs in self.fused.items():
+                u[node] = dict(zip(self.values[node], map(float, probs[k]), strict=True))
+            if extra[k]:
+                u["extra"] = True
+            updates.append(u)
+        return {
+            "case": self.case,
+            "frames": [int(self.frames[0]), int(self.frames[-1])],
+            "loglik_per_frame": {a: [float(x) for x in lpf[:, i]] for i, a in enumerate(actions)},
+            "updates": updates,
+            "description": self.description,
+        }
 
     @property
     def loglik_per_frame(self) -> np.ndarray:
@@ -111,21 +159,16 @@ class AnticipationRun:
         )
 
     def predictions(self) -> pd.DataFrame:
-        """Tidy fused posteriors: columns ``case, models, frame, node, value, p``."""
+        """Tidy fused posteriors: columns ``case, models, frame, t, extra, node, value, p``."""
         rows = []
+        extra = self.update_extra if len(self.update_extra) else np.zeros(len(self.update_frames), bool)
         for node, probs in self.fused.items():
-            for k, f in enumerate(self.update_frames):
+            for k, (f, t) in enumerate(zip(self.update_frames, self.update_t, strict=True)):
                 for v, p in zip(self.values[node], probs[k], strict=True):
-                    rows.append(
-                        {
-                            "case": self.case,
-                            "models": self.models,
-                            "frame": int(f),
-                            "node": node,
-                            "value": v,
-                            "p": p,
-                        }
-                    )
+                    rows.append({
+                        "case": self.case, "models": self.models, "frame": int(f), "t": int(t),
+                        "extra": bool(extra[k]), "node": node, "value": v, "p": p,
+                    })  # fmt: skip
         return tidy(pd.DataFrame(rows), f"tcds_anticipation_{self.case}_{self.models}_predictions",
                     self.data_source, **self.parameters)  # fmt: skip
 
@@ -139,7 +182,7 @@ class AnticipationRun:
             f"*Evidence*: {', '.join(f'{k}={v}' for k, v in self.evidence.items())}; gesture HMMs: {self.models}.",
             f"*Frames* {int(self.frames[0])}–{int(self.frames[-1])} ({len(self.frames)} frames).",
             "",
-            "At the last frame:",
+            f"At the last update (frame {int(self.update_frames[-1])}, t = {int(self.update_t[-1])}):",
         ]
         for node, dist in final.items():
             best = max(dist, key=dist.get)
@@ -147,7 +190,7 @@ class AnticipationRun:
                 f"* p_comb({node}): " + ", ".join(f"{v} {p:.2f}" for v, p in dist.items()) + f" → **{best}**"
             )
         if self.descriptions:
-            lines.append(f"* best description: “{self.descriptions[-1]}”")
+            lines.append(f"* best description: “{self.description}”")
         lines.append(f"\n<small>{self.data_source}</small>")
         return "\n".join(lines)
 
@@ -161,6 +204,25 @@ def _bn_order(recognizer: Recognizer, actions: Sequence[str]) -> np.ndarray:
     return np.array([recognizer.actions.index(a) for a in actions])
 
 
+def update_indices(n_frames: int, step: int = ORIGINAL_STEP, final_update: bool = False) -> np.ndarray:
+    """0-based indices of the fusion updates in a segment of ``n_frames``: t = step, 2·step, … ≤ T, and T if asked.
+
+    >>> (update_indices(94) + 1).tolist()[-3:], (update_indices(94, final_update=True) + 1).tolist()[-2:]
+    ([80, 85, 90], [90, 94])
+    """
+    if int(step) != step or step < 1:
+        raise DataError(f"step={step!r}: the update step must be a whole number of frames ≥ 1")
+    idx = np.arange(step - 1, n_frames, step)
+    if final_update and (len(idx) == 0 or idx[-1] != n_frames - 1):
+        idx = np.r_[idx, n_frames - 1]
+    if len(idx) == 0:
+        raise DataError(
+            f"the segment has {n_frames} frames, fewer than the update step {step}: no update on the "
+            "schedule (use a smaller step, or final_update to fuse at the last frame)"
+        )
+    return idx
+
+
 def effect_anticipation(
     recognizer: Recognizer,
     engine: InferenceEngine,
@@ -169,12 +231,15 @@ def effect_anticipation(
     *,
     case: str = "",
     models: str = "",
-    step: int = 5,
+    step: int = ORIGINAL_STEP,
+    final_update: bool = False,
     rule: str = "virtual",
     targets: Sequence[str] = ("ObjVel", "Action"),
-    describe: bool = False,
+    describe: bool | str = False,
+    score: str = DEFAULT_SCORE,
+    candidates: Iterable[Iterable[str]] | None = None,
 ) -> AnticipationRun:
-    """Score every prefix of ``trajectory`` with the HMMs and fuse their posterior every ``step`` frames.
+    """Score every prefix of ``trajectory`` with the HMMs and fuse their posterior on the originals' schedule.
 
     Parameters
     ----------
@@ -182,10 +247,13 @@ def effect_anticipation(
     engine : inference engine of the Affordance–Words network
     trajectory : the hand features, in the units the HMMs expect
     evidence : observed object features, e.g. {"Shape": "sphere", "Size": "small"}
-    step : fuse every ``step`` frames (and at the last frame)
+    step : fuse at t = step, 2·step, … (t 1-based within the segment; the originals': 5)
+    final_update : also fuse at t = T when T is not a multiple of ``step`` (marked ``extra``)
     rule : how the HMM posterior enters the BN: ``"virtual"`` (the originals') or ``"jeffrey"``
     targets : nodes whose fused posterior is recorded
-    describe : also compute the best verbal description at each update (needs :mod:`glu.language`)
+    describe : the best verbal description at every update (True) or at the last one only (``"last"``)
+    score : the sentence score (``"paper"`` or ``"original"``, :data:`glu.language.SCORES`)
+    candidates : the sentences to choose from (the originals': their 9,941 samples), None for the whole grammar
     """
     actions = engine.bn.schema.values_of("Action")
     order = _bn_order(recognizer, actions)
@@ -193,19 +261,26 @@ def effect_anticipation(
     loglik = recognizer.loglik_curve(X)[:, order]
     p_hmm = p_hmm_from_loglik(loglik)
     T = len(X)
-    idx = np.unique(np.r_[np.arange(step - 1, T, step), T - 1])
+    idx = update_indices(T, step, final_update)
+    extra = np.zeros(len(idx), dtype=bool)
+    if final_update and (T % step):
+        extra[-1] = True
     fused = fuse(engine, list(targets), evidence, p_hmm[idx], rule)
+    cands = None if candidates is None else list(candidates)
     run = AnticipationRun(
         case=case, models=models, evidence=dict(evidence), actions=tuple(actions),
         frames=np.asarray(trajectory.frame), seconds=np.asarray(trajectory.t) - float(trajectory.t[0]),
         xyz=X, loglik=loglik, p_hmm=p_hmm, update_frames=np.asarray(trajectory.frame)[idx], fused=fused,
         values={t: engine.bn.schema.values_of(t) for t in targets},
         data_source=str(engine.bn.meta.get("data_source", "")),
-        parameters={"step": step, "rule": rule, "targets": list(targets)},
+        parameters={"step": step, "final_update": final_update, "rule": rule, "targets": list(targets),
+                    "score": score, "candidates": "grammar" if cands is None else f"{len(cands)} sentences"},
+        update_extra=extra,
     )  # fmt: skip
     if describe:
-        for i in idx:
-            best = best_sentences(engine, evidence, soft={"Action": p_hmm[i]}, soft_rule=rule, n=1)
+        for i in idx if describe is True else idx[-1:]:
+            best = best_sentences(engine, evidence, soft={"Action": p_hmm[i]}, soft_rule=rule, n=1,
+                                  score=score, candidates=cands)  # fmt: skip
             run.descriptions.append(str(best["sentence"].iloc[0]))
     return run
 
