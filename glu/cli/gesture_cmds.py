@@ -16,6 +16,7 @@ from typing import Any
 from glu.cli.common import add_data_option, integer, nonneg_float, positive_float, positive_int
 from glu.data.source import HAND_LOG
 from glu.errors import DataError
+from glu.gestures.mixsplit import RECIPES
 from glu.gestures.synthetic import GESTURES
 from glu.gestures.training import TrainingConfig
 from glu.schema import ACTIONS
@@ -75,6 +76,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--noise", type=nonneg_float, default=SYNTHETIC_NOISE,
                    help=f"synthetic sensor noise, m (default {SYNTHETIC_NOISE:g})")  # fmt: skip
     t.add_argument("--seed", type=integer, default=0, help="random seed (default 0)")
+    t.add_argument("--recipe", choices=RECIPES, default=RECIPES[0],
+                   help="glu = time slices + GaussianMixture, then EM (default); mixsplit = the originals': "
+                   "flat start, Baum-Welch, split the heaviest component, Baum-Welch, … up to M")  # fmt: skip
     t.set_defaults(func=_train)
 
     r = sub.add_parser(
@@ -229,6 +233,7 @@ def _train(args: argparse.Namespace) -> int:
         seed=args.seed,
         warn=False,
         meta=meta,
+        recipe=args.recipe,
     )
     for r in rec.reports.values():
         print(("  " if r.converged else "  warning: ") + r.describe())

@@ -227,6 +227,6 @@ def training_table(recognizer: Recognizer) -> pd.DataFrame:
 
 
 def recognizer_settings(recognizer: Recognizer) -> dict[str, Any]:
-    """The training settings recorded in a recogniser's ``meta`` (Q, M, EM limits, seed)."""
-    keys = ("n_states", "n_mix", "n_iter", "tol", "covar_reg", "seed")
+    """The training settings recorded in a recogniser's ``meta`` (recipe, Q, M, EM limits, seed)."""
+    keys = ("recipe", "n_states", "n_mix", "n_iter", "tol", "covar_reg", "seed")
     return {k: recognizer.meta[k] for k in keys if k in recognizer.meta}

@@ -34,6 +34,7 @@ from glu.errors import DataError, ModelError
 from glu.files import atomic_write_json
 from glu.gestures.features import FEATURES_DESCRIPTION
 from glu.gestures.forward import ForwardState, forward_step, log_emissions, p_hmm_from_loglik
+from glu.gestures.mixsplit import RECIPES, train_mixsplit
 from glu.gestures.model import GestureHMM, as_sequence
 from glu.gestures.training import TrainingConfig, TrainingReport, train_hmm
 
@@ -241,22 +242,24 @@ def train_recognizer(
     seed: int = 0,
     warn: bool = True,
     meta: Mapping[str, Any] | None = None,
+    recipe: str = "glu",
 ) -> Recognizer:
-    """Train one left-to-right GMM-HMM per action (see :func:`train_hmm`); ``sequences``: action → list of (T_i, D)."""
+    """Train one left-to-right GMM-HMM per action; ``sequences``: action → list of (T_i, D).
+
+    ``recipe``: ``"glu"`` (:func:`~glu.gestures.training.train_hmm`) or ``"mixsplit"``, the originals'
+    flat start and mixture splitting (:func:`~glu.gestures.mixsplit.train_mixsplit`).
+    """
+    if recipe not in RECIPES:
+        raise ModelError(f"unknown training recipe {recipe!r}; allowed: {', '.join(RECIPES)}")
     models, reports = {}, {}
     for action, seqs in sequences.items():
-        models[action], reports[action] = train_hmm(
-            seqs,
-            n_states,
-            n_mix,
-            n_iter=n_iter,
-            tol=tol,
-            covar_reg=covar_reg,
-            seed=seed,
-            name=action,
-            warn=warn,
-        )
+        kw = dict(n_iter=n_iter, tol=tol, covar_reg=covar_reg, seed=seed, name=action, warn=warn)
+        if recipe == "mixsplit":
+            models[action], reports[action], _ = train_mixsplit(seqs, n_states, n_mix, **kw)
+        else:
+            models[action], reports[action] = train_hmm(seqs, n_states, n_mix, **kw)
     info = {
+        "recipe": recipe,
         "n_states": n_states,
         "n_mix": n_mix,
         "n_iter": n_iter,

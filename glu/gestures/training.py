@@ -10,7 +10,8 @@
   hmmlearn's ``GMMHMM.fit`` update, vectorised over the training sequences
   (:mod:`glu.gestures.baum_welch`, tested equal to hmmlearn's; ``engine="hmmlearn"`` runs hmmlearn itself).
 
-This is glu's recipe, not the originals' (flat start and mixture splitting, METHOD.md §5.1).
+This is glu's recipe, not the originals' (flat start and mixture splitting, METHOD.md §5.1), which is
+:mod:`glu.gestures.mixsplit`; ``glu hmm train --recipe`` chooses between them.
 """
 
 from __future__ import annotations
