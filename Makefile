@@ -23,6 +23,7 @@ $(STAMP): pyproject.toml
 
 reproduce: $(STAMP)
 	$(BIN)/glu reproduce $(if $(DATA),--data $(DATA)) $(ARGS)
+	$(BIN)/glu readme --if-complete
 
 lint: $(STAMP)
 	$(BIN)/ruff check glu tests benchmarks $(wildcard notebooks/*.py)

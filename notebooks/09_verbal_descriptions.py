@@ -39,7 +39,6 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 import time
 
 import numpy as np
-import pandas as pd
 
 from glu import plots
 from glu.bn import InferenceEngine, learn_bn
@@ -83,7 +82,8 @@ print(f"grammar: {count_sentences(net):,} sentences of {net.min_length}-{net.max
 
 # %%
 reproduced = ex.published_descriptions(engine, samples, score="original")
-out.table(reproduced, "verbal_published_descriptions")
+out.table(reproduced, "verbal_published_descriptions", n_grammar_sentences=count_sentences(net),
+          n_candidates=len(set(samples)))  # fmt: skip
 scored = reproduced["same_score"].dropna().astype(bool)
 print(f"{out.source.kind} data, {samples_label}: "
       f"{int(reproduced['same_sentence'].sum())} of {len(reproduced)} published sentences and "
@@ -134,11 +134,7 @@ versus.drop(columns=["evidence"])
 # original score. `p_draw_best` is the exact probability that such a sample contains the grammar's best.
 
 # %%
-trials = pd.concat(
-    [ex.sampling_vs_exact(engine, ev, seeds, n_samples, nbest, grammar, score="original").assign(figure=key)
-     for key, ev in ex.PUBLISHED_LISTS.items()],
-    ignore_index=True,
-)  # fmt: skip
+trials = ex.sampling_trials(engine, seeds, ex.PUBLISHED_LISTS, n_samples, nbest, grammar, score="original")
 out.table(trials, "verbal_sampling_vs_exact", n_trials=len(trials), n_found=int(trials["found_best"].sum()))
 ev = ex.PUBLISHED_LISTS["fig7a"]
 probs = word_probabilities(engine, ev)

@@ -110,3 +110,22 @@ def test_anticipate_matches_the_published_curves_bars_and_caption(shared_data, c
     # the caption: the originals' score over their samples
     assert main([*argv, "--score", "original", "--candidates", "samples"]) == 0
     assert json.loads(capsys.readouterr().out)["description"] == pub["caption"]
+
+
+@pytest.mark.parametrize("case", ["sphere", "box"])
+def test_published_comparison_of_an_anticipation_run(real_source, learned_bn, case):
+    from glu.bn import InferenceEngine
+    from glu.experiments import anticipation
+    from glu.gestures.original import load_original_models
+    from glu.language import candidate_sentences
+
+    run = anticipation.effect_anticipation(
+        load_original_models(real_source.original_hmms()), InferenceEngine(learned_bn),
+        anticipation.case_trajectory(real_source, case), anticipation.CASES[case].evidence, case=case,
+        describe="last", score="original", candidates=candidate_sentences("samples", real_source),
+    )  # fmt: skip
+    df = anticipation.published_comparison(run)
+    assert df["within"].all() and set(df["quantity"]) == {"loglik_per_frame", "ObjVel"}
+    assert df.attrs["parameters"]["same_caption"] and df.attrs["parameters"]["caption"] == run.description
+    changes = run.prediction_changes()
+    assert changes[-1][2] == ("fast" if case == "sphere" else "slow")  # what the README's caption says

@@ -24,6 +24,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "glu.cli.reproduce_cmds",
     "glu.cli.language_cmds",
     "glu.cli.anticipate_cmds",
+    "glu.cli.readme_cmds",
 )
 """Each module defines ``register(subparsers)``; handlers import heavy libraries lazily."""
 

@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from glu.bn.inference import InferenceEngine
+from glu.data.published import published
 from glu.data.source import DataSource
 from glu.errors import DataError, ModelError
 from glu.experiments.common import tidy
@@ -172,6 +173,15 @@ class AnticipationRun:
         return tidy(pd.DataFrame(rows), f"tcds_anticipation_{self.case}_{self.models}_predictions",
                     self.data_source, **self.parameters)  # fmt: skip
 
+    def prediction_changes(self, node: str = "ObjVel") -> list[tuple[int, int, str, float]]:
+        """Where the most probable value of ``node`` changes: (t, frame, value, its p_comb), first update included."""
+        out: list[tuple[int, int, str, float]] = []
+        for k, (t, f) in enumerate(zip(self.update_t, self.update_frames, strict=True)):
+            j = int(np.argmax(self.fused[node][k]))
+            if not out or out[-1][2] != self.values[node][j]:
+                out.append((int(t), int(f), self.values[node][j], float(self.fused[node][k][j])))
+        return out
+
     def scene(self) -> str:
         """A markdown description of the run: the scene, the models, and the final beliefs."""
         final = {
@@ -283,6 +293,36 @@ def effect_anticipation(
                                   score=score, candidates=cands)  # fmt: skip
             run.descriptions.append(str(best["sentence"].iloc[0]))
     return run
+
+
+def published_comparison(run: AnticipationRun) -> pd.DataFrame:
+    """A run of a TCDS case beside the published Fig. 5 (:mod:`glu.data.published`): curves and final bars.
+
+    Returns
+    -------
+    DataFrame with columns quantity (``loglik_per_frame`` or ``ObjVel``), key (action or value), t, ours,
+    paper, difference (ours − paper), resolution (of the value read from the figure), within
+    (``|difference| ≤ resolution``); one row per vertex of the published curves and per bar. The bars
+    are compared at the run's last update (the paper's: the last multiple of 5). ``attrs["parameters"]``
+    holds the paper's caption and whether the run's description equals it.
+    """
+    pub = published()["anticipation"][run.case]
+    rows = []
+    curves = pub["loglik_per_frame"]
+    lpf = run.loglik_per_frame
+    for a, action in enumerate(run.actions):
+        for t, v in zip(curves[action]["t"], curves[action]["value"], strict=True):
+            rows.append(("loglik_per_frame", action, int(t), float(lpf[t - 1, a]), v, curves["resolution"]))
+    bars = pub["ObjVel"]
+    last = int(run.update_t[-1])
+    for value, v in bars["values"].items():
+        ours = float(run.fused["ObjVel"][-1][run.values["ObjVel"].index(value)])
+        rows.append(("ObjVel", value, last, ours, v, bars["resolution"]))
+    df = pd.DataFrame(rows, columns=["quantity", "key", "t", "ours", "paper", "resolution"])
+    df.insert(5, "difference", df["ours"] - df["paper"])
+    df["within"] = df["difference"].abs() <= df["resolution"]
+    return tidy(df, f"tcds_anticipation_{run.case}_published", run.data_source, reference=published()["read_from"],
+                caption=pub["caption"], same_caption=run.description == pub["caption"])  # fmt: skip
 
 
 def case_trajectory(

@@ -264,6 +264,39 @@ def structure_comparison(bn: BayesNet, original: BayesNet | None = None) -> pd.D
     return tidy(edges, "bn_structure", model_source(bn), reference=name)
 
 
+def network_summary(bn: BayesNet, table: pd.DataFrame, original: BayesNet | None = None) -> pd.DataFrame:
+    """The learned network in numbers, beside the original's when given (one row per quantity).
+
+    Quantities: ``edges``; ``log_likelihood`` of ``table`` (natural log, all nodes); ``zero_rows`` (CPT rows
+    left all zeros); ``lost_prior_mass`` (the prior probability of the affordance configurations those
+    rows make impossible, 1 − Σ p). With ``original``: ``differing_edges`` and ``max_cpt_difference`` too.
+
+    Returns
+    -------
+    DataFrame with columns quantity, ours, and with ``original``: reference (its value), difference.
+    """
+    from glu.bn.learning import encode
+
+    codes = encode(table, bn.schema)
+    rows = [
+        ("edges", len(bn.edges()), len(original.edges()) if original else np.nan),
+        ("log_likelihood", bn.log_likelihood(codes), original.log_likelihood(codes) if original else np.nan),
+        ("zero_rows", sum(bn.zero_rows().values()), sum(original.zero_rows().values()) if original else np.nan),
+        ("lost_prior_mass", 1 - InferenceEngine(bn).base_mass,
+         1 - InferenceEngine(original).base_mass if original else np.nan),
+    ]  # fmt: skip
+    if original is not None:
+        rows += [
+            ("differing_edges", len(set(bn.edges()) ^ set(original.edges())), 0),
+            ("max_cpt_difference", max(float(abs(bn.cpts[n] - original.cpts[n]).max()) for n in bn.nodes), 0),
+        ]
+    df = pd.DataFrame(rows, columns=["quantity", "ours", "reference"])
+    if original is None:
+        return tidy(df[["quantity", "ours"]], "bn_learning_summary", model_source(bn), reference=None)
+    df["difference"] = df["ours"] - df["reference"]
+    return tidy(df, "bn_learning_summary", model_source(bn), reference="BN_lab.mat")
+
+
 def unseen_rows_comparison(zero: BayesNet, uniform: BayesNet) -> pd.DataFrame:
     """How much the original's all-zero word rows move the published bars: the same queries on both models.
 

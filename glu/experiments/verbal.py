@@ -318,3 +318,26 @@ def sampling_vs_exact(
         })  # fmt: skip
     return tidy(pd.DataFrame(rows), "verbal_sampling_vs_exact", model_source(engine.bn), evidence=evidence,
                 seeds=seeds, n_samples=n_samples, n=n, score=score)  # fmt: skip
+
+
+def sampling_trials(
+    engine: Any,
+    seeds: Iterable[int],
+    evidence_sets: Mapping[str, Mapping[str, str]] = PUBLISHED_LISTS,
+    n_samples: int = 10_000,
+    n: int = 10,
+    grammar: Grammar | None = None,
+    score: str = "original",
+) -> pd.DataFrame:
+    """:func:`sampling_vs_exact` for each evidence set (one trial per seed and set), in one frame.
+
+    Returns
+    -------
+    DataFrame with the columns of :func:`sampling_vs_exact` plus figure (the key of the evidence set);
+    ``len(seeds) × len(evidence_sets)`` rows.
+    """
+    seeds = list(seeds)
+    frames = [sampling_vs_exact(engine, ev, seeds, n_samples, n, grammar, score).assign(figure=key)
+              for key, ev in evidence_sets.items()]  # fmt: skip
+    return tidy(pd.concat(frames, ignore_index=True), "verbal_sampling_trials", model_source(engine.bn),
+                seeds=seeds, evidence=dict(evidence_sets), n_samples=n_samples, score=score)  # fmt: skip

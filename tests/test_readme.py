@@ -1,0 +1,173 @@
+"""The README's results section is written by code from results/summary.json, never by hand."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from glu import readme
+from glu.cli import main
+from glu.errors import DataError
+from glu.paths import PROJECT_ROOT
+
+
+def t(rows, **meta) -> dict:
+    return {"meta": {"name": "x", **meta}, "rows": rows}
+
+
+def sweep(gap: float) -> dict:
+    rows = []
+    for p in (0.0, 0.5, 1.0):
+        for v, base in (("slow", 0.5), ("fast", 0.2)):
+            rows.append({"p_hmm_tap": p, "ObjVel": v, "rule": "virtual", "p": base})
+            rows.append(
+                {"p_hmm_tap": p, "ObjVel": v, "rule": "jeffrey", "p": base + (gap if p == 0.5 else 0)}
+            )
+    return t(rows)
+
+
+@pytest.fixture
+def summary() -> dict:
+    """A summary with known numbers in every table the README reads (the numbers are inputs, not glu's output)."""
+    bn = [("edges", 66, 66, 0), ("differing_edges", 0, 0, 0), ("max_cpt_difference", 0, 0, 0),
+          ("log_likelihood", -19692.20254, -19692.20254, 0.0), ("zero_rows", 12, 12, 0),
+          ("lost_prior_mass", 0.016521, 0.016521, 0)]  # fmt: skip
+    tables = {
+        "bn_learning_summary": t(
+            [dict(zip(("quantity", "ours", "reference", "difference"), r, strict=True)) for r in bn]
+        ),  # fmt: skip
+        "glu2017_effect_prediction": t(
+            [
+                {"case": "small sphere", "ObjVel": v, "p": p}
+                for v, p in (("slow", 0.0478), ("medium", 0.4286), ("fast", 0.5236))
+            ]
+            + [{"case": "big box", "ObjVel": "slow", "p": 0.99884}]
+        ),  # fmt: skip
+        "glu2017_word_change_text": t(
+            [
+                {"word": "rolls", "delta": 0.0641, "difference": 0.0},
+                {"word": "the", "delta": 0.0, "difference": -2e-17},
+            ]
+        ),  # fmt: skip
+        "tcds_action_vs_soft_evidence": t([{"difference": 0.0}]),
+        "tcds_effect_vs_soft_evidence": t([{"difference": 1e-16}]),
+        "unseen_rows_comparison": t([{"uniform_minus_zero": -0.1894}, {"uniform_minus_zero": 0.01}]),
+        "fusion_product_sweep": t([], tap_threshold=0.80431),
+        "fusion_product_thresholds": t([{}] * 18),
+        "fusion_soft_sweep_sphere": sweep(0.21),
+        "fusion_soft_sweep_box": sweep(0.05),
+        "hmm_original_scores": t(
+            [
+                {"recording": "tap1_hand", "start": a, "end": b, "winner": w}
+                for a, b, w in ((216, 351, "tap"), (401, 511, "touch"), (557, 664, "tap"))
+            ]
+        ),  # fmt: skip
+        "hmm_synthetic_cv": t([], accuracy=0.9333, folds=5),
+        "hmm_accuracy_vs_noise": t(
+            [{"noise_m": 0.0, "accuracy": 0.93}, {"noise_m": 0.1, "accuracy": 0.7333}], parameters={"k": 3}
+        ),  # fmt: skip
+        "hmm_recipe_comparison": t([{"loso_testable": 11}] * 3),
+        "hmm_recipe_spread": t(
+            [
+                {
+                    "recipe": "glu",
+                    "settings": 6,
+                    "loso_min": 0.4545,
+                    "loso_max": 0.4545,
+                    "test_correct_max": 0,
+                    "n_test": 2,
+                },
+                {
+                    "recipe": "mixsplit",
+                    "settings": 2,
+                    "loso_min": 0.7273,
+                    "loso_max": 0.8182,
+                    "test_correct_max": 0,
+                    "n_test": 2,
+                },
+            ]
+        ),  # fmt: skip
+        "tcds_anticipation_sphere_published": t(
+            [{"within": True, "difference": 1.3e-5}] * 3,
+            parameters={"caption": "the robot pushed the ball and the ball moves", "same_caption": True},
+        ),  # fmt: skip
+        "tcds_anticipation_box_published": t(
+            [{"within": True, "difference": -2e-6}] * 2,
+            parameters={"caption": "the box is inert", "same_caption": False},
+        ),  # fmt: skip
+        "verbal_published_descriptions": t(
+            [{"same_sentence": True, "same_score": True}] * 30
+            + [{"same_sentence": True, "same_score": None}] * 4,
+            n_grammar_sentences=9331200,
+            n_candidates=9941,
+        ),  # fmt: skip
+        "verbal_sampling_vs_exact": t(
+            [{"found_best": f, "p_draw_best": 0.0191, "n_samples": 10000} for f in [True] + [False] * 59]
+        ),
+        "tcds_anticipation_sphere_original_predictions": t([], parameters={"step": 5}),
+    }
+    return {"quick": False, "data_source": "real data: somewhere", "wall_time_s": 386.3, "notebooks": [{}] * 9,
+            "tables": tables}  # fmt: skip
+
+
+def test_the_section_reads_every_number_from_the_summary(summary):
+    text = readme.render(summary)
+    for expected in ("the same 66 edges (0 differ)", "(-19692.2025, difference 0)", "slow 0.048, medium 0.429",
+                     "slow 0.9988", "rises by +0.064", "(12 rows)", "(1.65 % of the", "up to 0.189",
+                     "p_HMM(tap) = 0.8043", "all 18 (Shape", "up to 0.21 in", "recognise 2 of the 3",
+                     "tap1_hand 401–511 goes to touch (their push model)", "5-fold accuracy 0.93", "0.73 with 10 cm",
+                     "on the 11 real segments", "glu's 0.45–0.45 over 6", "mixsplit (flat start, mixture splitting)",
+                     "0.73–0.82 over 2", "worth 9 points", "(at most 0 and 0 of 2)", "5 of 5 values",
+                     "(max |difference| 1.3e-05)", '"the robot pushed the ball and the ball moves"',
+                     "(not the paper's caption)", "9,941 sampled", "every 5 frames", "multiple of 5)", "samples of 10,000", "34 of 34 sentences and 30 of 30 scores",
+                     "9,331,200 sentences", "in 1 of 60 trials", "is 1.9 %", "of its 9 notebooks"):  # fmt: skip
+        assert expected in " ".join(text.split()), expected
+    assert readme.matches_template(text)
+    assert all(len(line) <= readme.WIDTH for line in text.splitlines() if " " in line.strip())
+
+
+def test_a_number_typed_by_hand_does_not_match_the_template(summary):
+    text = readme.render(summary)
+    assert not readme.matches_template(text.replace("Learned exactly", "Learned in 20 ms exactly"))
+    assert not readme.matches_template(text.replace("the same 66 edges", "the same sixty-six edges"))
+
+
+def test_the_readme_section_is_the_template_filled_with_numbers():
+    section = readme.readme_section((PROJECT_ROOT / "README.md").read_text(encoding="utf-8"))
+    assert readme.matches_template(section), (
+        "README.md: the results section was edited by hand; run `glu readme`"
+    )
+
+
+def test_update_and_check(summary, tmp_path, capsys):
+    page = tmp_path / "README.md"
+    page.write_text(f"# title\n\n{readme.BEGIN}\nold text\n{readme.END}\n\n## next\n")
+    path = tmp_path / "summary.json"
+    path.write_text(json.dumps(summary))
+    argv = ["readme", "--summary", str(path), "--readme", str(page)]
+    assert main([*argv, "--check"]) == 1
+    assert main(argv) == 0 and "updated" in capsys.readouterr().out
+    text = page.read_text()
+    assert text.startswith("# title\n\n") and text.endswith(f"{readme.END}\n\n## next\n")
+    assert readme.readme_section(text) == readme.render(summary)
+    assert main([*argv, "--check"]) == 0 and main(argv) == 0
+    assert "already up to date" in capsys.readouterr().out
+
+
+def test_only_a_full_run_on_the_real_data_is_quoted(summary, tmp_path, capsys):
+    path = tmp_path / "summary.json"
+    page = tmp_path / "README.md"
+    page.write_text(f"{readme.BEGIN}\nx\n{readme.END}\n")
+    for change in ({"quick": True}, {"data_source": "synthetic data (seed 0)"}):
+        path.write_text(json.dumps({**summary, **change}))
+        with pytest.raises(DataError, match="full run on the real data"):
+            readme.load_summary(path)
+        assert main(["readme", "--summary", str(path), "--readme", str(page), "--if-complete"]) == 0
+        assert "left as it is" in capsys.readouterr().out and page.read_text().count("x\n") == 1
+    del summary["tables"]["hmm_recipe_spread"]
+    path.write_text(json.dumps(summary))
+    with pytest.raises(DataError, match="lacks hmm_recipe_spread"):
+        readme.load_summary(path)
+    assert main(["readme", "--summary", str(tmp_path / "none.json"), "--readme", str(page)]) == 2
+    assert "no summary" in capsys.readouterr().err
