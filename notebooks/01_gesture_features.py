@@ -54,6 +54,6 @@ table.groupby("recording", sort=False).agg(
 )
 
 # %% [markdown]
-# Each training recording yields one segment per repetition (push1_hand loses a repetition to a 1.5 s
+# Each training recording yields one segment per repetition (push1_hand loses a repetition to a long
 # tracking gap, where the trajectory is split); the single-tap recordings yield one segment each, around
 # the originals' hand-cut ranges. These segments train the gesture HMMs in notebook 02.
