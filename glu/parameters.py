@@ -35,12 +35,14 @@ from glu.bn.learning import UNSEEN_MODES
 from glu.bn.soft import SOFT_RULES
 from glu.data.source import WORD_FILES
 from glu.errors import ParameterError
+from glu.language.descriptions import SCORES
 from glu.schema import AFFORDANCE_VALUES
 
 CHOICES: dict[str, tuple[str, ...]] = {
     "words": tuple(WORD_FILES),
     "unseen_words": UNSEEN_MODES,
     "rule": SOFT_RULES,
+    "score": tuple(SCORES),
     "shape": AFFORDANCE_VALUES["Shape"],
     "size": AFFORDANCE_VALUES["Size"],
 }
@@ -59,7 +61,9 @@ RANGES: dict[str, tuple[float, float]] = {
     "n_points": (2, 1_000_001),
     "nbest": (1, 100_000),
     "n_samples": (1, 1_000_000),
-    "n_seeds": (1, 100_000),
+    "n_trials": (1, 100_000),
+    "recipe_seeds": (0, 2**32 - 1),
+    "recipe_tols": (1e-12, 1.0),
 }
 """Inclusive ranges of the numeric parameters (for a list, of each element)."""
 
