@@ -265,23 +265,81 @@ def test_training_keeps_the_left_to_right_structure(corpus):
 
 
 @pytest.mark.parametrize(("action", "n_states", "n_mix"), [("grasp", 6, 3), ("tap", 4, 1), ("touch", 3, 2)])
-def test_glu_em_equals_hmmlearns_fit(corpus, action, n_states, n_mix):
-    """The vectorised Baum–Welch computes hmmlearn's GMMHMM update: same history, same parameters."""
+def test_vectorised_em_with_hmmlearns_covariance_step_equals_hmmlearns_fit(corpus, action, n_states, n_mix):
+    """covariance='hmmlearn' is hmmlearn's GMMHMM update: the same history and parameters after 12 iterations."""
+    from glu.gestures import baum_welch as bw
+    from glu.gestures.training import init_left_to_right
+
     seqs = [s.xyz for s in corpus if s.action == action]
-    kw = dict(n_iter=12, tol=1e-9, warn=False, name=action)
-    ours, r_ours = train_hmm(seqs, n_states, n_mix, engine="glu", **kw)
-    ref, r_ref = train_hmm(seqs, n_states, n_mix, engine="hmmlearn", **kw)
-    assert r_ours.n_iter == r_ref.n_iter == 12
-    np.testing.assert_allclose(r_ours.history, r_ref.history, rtol=1e-10)
-    for a in ("startprob", "transmat", "weights", "means", "covars"):
-        np.testing.assert_allclose(getattr(ours, a), getattr(ref, a), rtol=1e-7, atol=1e-9, err_msg=a)
+    ref, r_ref = train_hmm(seqs, n_states, n_mix, n_iter=12, tol=1e-9, warn=False, engine="hmmlearn")
+    init = init_left_to_right(seqs, n_states, n_mix, 0, 1e-3)
+    start = bw.GMMHMMParams(init.startprob, init.transmat, init.weights, init.means, init.covars)
+    ours = bw.fit(seqs, start, 12, 1e-300, 1e-3, "hmmlearn")
+    np.testing.assert_allclose(ours.history, r_ref.history, rtol=1e-10)
+    for a, got in zip(("startprob", "transmat", "weights", "means", "covars"), ours.params, strict=True):
+        np.testing.assert_allclose(got, getattr(ref, a), rtol=1e-7, atol=1e-9, err_msg=a)
 
 
-def test_glu_em_stops_where_hmmlearn_stops(corpus):
+def test_one_map_em_step_equals_the_textbook_update(corpus):
+    """One vectorised step against an M-step written out here from scipy's densities and a plain loop."""
+    from scipy.special import logsumexp
+    from scipy.stats import multivariate_normal
+
+    from glu.gestures import baum_welch as bw
+    from glu.gestures.training import init_left_to_right
+
+    seqs = [s.xyz for s in corpus if s.action == "touch"][:3]
+    init = init_left_to_right(seqs, 3, 2, 0, 1e-3)
+    start = bw.GMMHMMParams(init.startprob, init.transmat, init.weights, init.means, init.covars)
+    Q, M, D, r = 3, 2, 3, 1e-3
+    with np.errstate(divide="ignore"):
+        log_a, log_pi = np.log(init.transmat), np.log(init.startprob)
+    N_qm, S1, S2 = np.zeros((Q, M)), np.zeros((Q, M, D)), np.zeros((Q, M, D, D))
+    xi_sum, start_sum = np.zeros((Q, Q)), np.zeros(Q)
+    resp = []
+    for X in seqs:
+        lc = np.array([[np.log(init.weights[q, m]) + multivariate_normal(init.means[q, m], init.covars[q, m]).logpdf(X)
+                        for m in range(M)] for q in range(Q)]).transpose(2, 0, 1)  # (T, Q, M)  # fmt: skip
+        lb = logsumexp(lc, axis=2)
+        T = len(X)
+        fa, ba = np.zeros((T, Q)), np.zeros((T, Q))
+        fa[0] = log_pi + lb[0]
+        for t in range(1, T):
+            fa[t] = logsumexp(fa[t - 1][:, None] + log_a, axis=0) + lb[t]
+        for t in range(T - 2, -1, -1):
+            ba[t] = logsumexp(log_a + lb[t + 1] + ba[t + 1], axis=1)
+        ll = logsumexp(fa[-1])
+        g = np.exp(fa + ba - ll)
+        start_sum += g[0]
+        for t in range(T - 1):
+            xi_sum += np.exp(fa[t][:, None] + log_a + (lb[t + 1] + ba[t + 1])[None, :] - ll)
+        rr = g[:, :, None] * np.exp(lc - lb[:, :, None])
+        resp.append((X, rr))
+        N_qm += rr.sum(axis=0)
+        S1 += np.einsum("tqm,td->qmd", rr, X)
+    means = S1 / N_qm[..., None]
+    for X, rr in resp:
+        for q in range(Q):
+            for m in range(M):
+                d = X - means[q, m]
+                S2[q, m] += (rr[:, q, m, None] * d).T @ d
+    covars = (S2 + r * np.eye(D)) / (N_qm + 1)[..., None, None]
+    transmat = xi_sum / xi_sum.sum(axis=1, keepdims=True)
+    weights = N_qm / N_qm.sum(axis=1, keepdims=True)
+    ours = bw.fit(seqs, start, 1, 1e-300, r, "map").params
+    np.testing.assert_allclose(ours.startprob, start_sum / start_sum.sum(), atol=1e-12)
+    np.testing.assert_allclose(ours.transmat, transmat, atol=1e-10)
+    np.testing.assert_allclose(ours.weights, weights, atol=1e-10)
+    np.testing.assert_allclose(ours.means, means, rtol=1e-9)
+    np.testing.assert_allclose(ours.covars, covars, rtol=1e-8)
+
+
+def test_glu_em_stops_like_hmmlearn_and_gains_at_least_as_much(corpus):
     seqs = [s.xyz for s in corpus if s.action == "tap"]
     _, r_ours = train_hmm(seqs, 4, 2, n_iter=200, tol=1e-3, warn=False, engine="glu")
     _, r_ref = train_hmm(seqs, 4, 2, n_iter=200, tol=1e-3, warn=False, engine="hmmlearn")
-    assert r_ours.converged and r_ref.converged and r_ours.n_iter == r_ref.n_iter
+    assert r_ours.converged and r_ref.converged
+    assert r_ours.final_loglik >= r_ref.final_loglik - 1e-6 * abs(r_ref.final_loglik)
 
 
 def test_non_convergence_is_reported(corpus):

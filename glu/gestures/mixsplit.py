@@ -21,7 +21,7 @@ decreases within a stage). A component that loses all its frames keeps its previ
 glu's own recipe (:mod:`glu.gestures.training`) starts instead from equal time slices of each sequence,
 fits all M components of a slice at once (scikit-learn ``GaussianMixture``) and regularises covariances
 with a weak inverse-Wishart prior; :data:`RECIPES` names both and ``glu hmm train --recipe`` chooses.
-Baum–Welch is hmmlearn's ``GMMHMM`` in both, started from the given parameters.
+Baum–Welch is :func:`glu.gestures.baum_welch.fit` in both (``ml`` covariances here, ``map`` in glu's).
 
 Example
 -------
@@ -35,7 +35,6 @@ Example
 
 from __future__ import annotations
 
-import logging
 import math
 import warnings
 from collections.abc import Sequence
@@ -45,12 +44,7 @@ import numpy as np
 from glu.errors import DataError, ModelError
 from glu.gestures.forward import left_to_right_transmat
 from glu.gestures.model import GestureHMM, as_sequence
-from glu.gestures.training import (
-    HMMConvergenceWarning,
-    TrainingConfig,
-    TrainingReport,
-    _preset_gmmhmm_class,
-)
+from glu.gestures.training import HMMConvergenceWarning, TrainingConfig, TrainingReport
 
 RECIPES: tuple[str, ...] = ("glu", "mixsplit")
 """How gesture HMMs can be trained: ``glu`` (time slices + GaussianMixture, :func:`glu.gestures.training.train_hmm`)
@@ -64,29 +58,6 @@ COVAR_FLOOR = 0.01
 units of the original models: the logged coordinates / 1000)."""
 _EMPTY = 1e-10
 """A component with less soft count than this has lost its frames: its covariance is kept."""
-
-
-def _floored_gmmhmm_class(floor: float) -> type:
-    """hmmlearn's GMMHMM from preset parameters, with maximum-likelihood covariances plus ``floor·I``.
-
-    hmmlearn 0.3 accumulates each component's scatter around its mean *before* the update, so its
-    covariance is ``Σ_ML + d dᵀ`` with ``d`` the change of the mean (a generalised EM step; the ML covariance
-    is around the new mean). With no prior, subtracting ``d dᵀ`` gives the ML covariance exactly, as the
-    originals' toolbox computed it (tested against hmmlearn's ``GaussianHMM`` and an EM step by hand).
-    """
-    base = _preset_gmmhmm_class()
-
-    class FlooredGMMHMM(base):  # type: ignore[misc, valid-type]
-        def _do_mstep(self, stats):  # type: ignore[no-untyped-def]
-            old_cov, old_mean = self.covars_.copy(), self.means_.copy()
-            super()._do_mstep(stats)
-            d = self.means_ - old_mean
-            ml = self.covars_ - d[..., :, None] * d[..., None, :]
-            new = ml + floor * np.eye(self.n_features)
-            empty = (stats["post_mix_sum"] <= _EMPTY)[..., None, None] | ~np.isfinite(new)
-            self.covars_ = np.where(empty.any(axis=(-1, -2), keepdims=True), old_cov, new)
-
-    return FlooredGMMHMM
 
 
 def flat_start(sequences: Sequence[np.ndarray], n_states: int, name: str = "") -> GestureHMM:
@@ -134,41 +105,32 @@ def baum_welch(
     tol: float = TrainingConfig.tol,
     covar_floor: float = COVAR_FLOOR,
 ) -> tuple[GestureHMM, tuple[float, ...]]:
-    """Baum–Welch from ``hmm`` (hmmlearn's ``GMMHMM``, every parameter re-estimated, nothing re-initialised).
+    """Baum–Welch from ``hmm``, every parameter re-estimated (:func:`glu.gestures.baum_welch.fit`).
 
-    Covariances are the maximum-likelihood ones plus ``covar_floor·I``. Stops after ``n_iter`` iterations
-    or when the total log-likelihood gains less than ``tol`` × the number of frames. Returns the model and
-    the total log-likelihood before each M-step.
+    Covariances are the maximum-likelihood ones (about the updated means, as the originals' toolbox
+    computed them) plus ``covar_floor·I``; a component that lost its frames keeps its covariance. Stops
+    after ``n_iter`` iterations or when the total log-likelihood gains less than ``tol`` × the number of
+    frames. Returns the model and the total log-likelihood before each M-step.
     """
-    D = hmm.n_features
-    n_frames = sum(len(X) for X in sequences)
-    model = _floored_gmmhmm_class(covar_floor)(
-        n_components=hmm.n_states, n_mix=hmm.n_mix, covariance_type="full", n_iter=n_iter, tol=tol * n_frames,
-        params="stmcw", init_params="", implementation="log",
-        covars_prior=0.0, covars_weight=-(D + 2.0),  # hmmlearn's M-step is then maximum likelihood: S / N
-    )  # fmt: skip
-    model.startprob_, model.transmat_ = hmm.startprob.copy(), hmm.transmat.copy()
-    model.weights_, model.means_, model.covars_ = hmm.weights.copy(), hmm.means.copy(), hmm.covars.copy()
     from threadpoolctl import threadpool_limits
 
-    log = logging.getLogger("hmmlearn.base")
-    level = log.level
-    log.setLevel(logging.ERROR)  # convergence is reported by the caller
+    from glu.gestures import baum_welch as bw
+
+    n_frames = sum(len(X) for X in sequences)
+    start = bw.GMMHMMParams(hmm.startprob, hmm.transmat, hmm.weights, hmm.means, hmm.covars)
     try:
         with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
             warnings.simplefilter("ignore", RuntimeWarning)
-            model.fit(np.concatenate(sequences), [len(X) for X in sequences])
+            result = bw.fit(sequences, start, n_iter, tol * n_frames, covariance="ml", covar_floor=covar_floor)
     except (ValueError, np.linalg.LinAlgError) as e:
         raise ModelError(f"Baum–Welch failed for {hmm.name or 'the model'} at M = {hmm.n_mix}: {e}") from None
-    finally:
-        log.setLevel(level)
     try:
-        fitted = GestureHMM.from_hmmlearn(model, name=hmm.name)
+        fitted = GestureHMM(*result.params, name=hmm.name)
     except ModelError as e:
         raise ModelError(
             f"Baum–Welch diverged for {hmm.name or 'the model'} at M = {hmm.n_mix} ({e}); try covar_floor > 0"
         ) from None
-    return fitted, tuple(float(h) for h in model.monitor_.history)
+    return fitted, tuple(float(h) for h in result.history)
 
 
 def train_mixsplit(

@@ -6,9 +6,10 @@
 * :func:`init_left_to_right` starts each model from equal time slices of the training sequences;
   :func:`train_hmm` runs Baum–Welch keeping the left-to-right structure (zero transitions stay zero
   under EM), with explicit ``n_iter`` and ``tol``, and reports convergence (:class:`TrainingReport`;
-  hmmlearn itself only logs non-convergence, and counts reaching ``n_iter`` as converged). The EM is
-  hmmlearn's ``GMMHMM.fit`` update, vectorised over the training sequences
-  (:mod:`glu.gestures.baum_welch`, tested equal to hmmlearn's; ``engine="hmmlearn"`` runs hmmlearn itself).
+  hmmlearn itself only logs non-convergence, and counts reaching ``n_iter`` as converged). EM is
+  vectorised over the training sequences (:mod:`glu.gestures.baum_welch`), with the MAP covariance about
+  the updated means; ``engine="hmmlearn"`` runs hmmlearn's ``GMMHMM`` instead, whose covariance step
+  uses the means before the update.
 
 This is glu's recipe, not the originals' (flat start and mixture splitting, METHOD.md §5.1), which is
 :mod:`glu.gestures.mixsplit`; ``glu hmm train --recipe`` chooses between them.
@@ -170,7 +171,8 @@ def _preset_gmmhmm_class() -> type:
 
 
 ENGINES: tuple[str, ...] = ("glu", "hmmlearn")
-"""Who runs EM: glu's vectorised Baum–Welch (the default) or hmmlearn's ``GMMHMM.fit`` (the same update)."""
+"""Who runs EM: glu's vectorised Baum–Welch (the default; the covariance is the MAP estimate about the
+updated mean) or hmmlearn's ``GMMHMM.fit`` (which takes the scatter about the mean before the update)."""
 
 
 def train_hmm(
@@ -200,8 +202,9 @@ def train_hmm(
     seed : seeds the initial mixtures
     name : the action (for messages)
     warn : emit an :class:`HMMConvergenceWarning` when EM does not converge
-    engine : ``"glu"`` (vectorised, :mod:`glu.gestures.baum_welch`) or ``"hmmlearn"``; both compute the
-        same update (tested to agree to rounding)
+    engine : ``"glu"`` (vectorised, :mod:`glu.gestures.baum_welch`, ``covariance="map"``) or
+        ``"hmmlearn"`` (its ``GMMHMM``, whose covariance step uses the pre-update means; glu's engine with
+        ``covariance="hmmlearn"`` is tested equal to it)
 
     Returns
     -------
@@ -254,7 +257,7 @@ def _run_em(
             if engine == "glu":
                 from glu.gestures import baum_welch
 
-                result = baum_welch.fit(seqs, baum_welch.GMMHMMParams(*start), n_iter, tol_total, covar_reg)
+                result = baum_welch.fit(seqs, baum_welch.GMMHMMParams(*start), n_iter, tol_total, covar_reg, "map")
                 return tuple(result.params), tuple(float(h) for h in result.history)
             return _run_hmmlearn(seqs, start, n_iter, tol_total, covar_reg, seed)
     except (ValueError, np.linalg.LinAlgError) as e:
