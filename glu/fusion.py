@@ -21,6 +21,11 @@ how actions, objects, effects and words go together. The one home of every fusio
 posterior of each target with the same leading shape. Observing Action directly makes the gesture evidence
 irrelevant; the originals refuse it, and so does :func:`fuse`.
 
+:func:`fuse_tables` and :func:`fuse_action_tables` are the same rules in closed form over the network's
+conditional tables, ``p_BN(X_inf | X_obs, A = a)`` and ``p_BN(A | X_obs)``, vectorised over any number of
+leading axes (episodes, prefixes): a corpus evaluation queries the network once per distinct ``X_obs`` and
+fuses millions of gesture posteriors with array arithmetic. They are tested against :func:`fuse`.
+
 Example
 -------
 >>> from glu.bn import InferenceEngine, learn_bn
@@ -135,3 +140,56 @@ def hmm_rows(p_tap: Sequence[float] | np.ndarray, actions: Sequence[str] = ACTIO
     rows[:] = ((1 - t) / (len(actions) - 1))[:, None]
     rows[:, i] = t
     return rows
+
+
+def fuse_action_tables(p_a: np.ndarray, p_hmm: np.ndarray, strategy: str) -> np.ndarray:
+    """``p(Action | X_obs, G)`` by each rule, in closed form, vectorised over leading axes.
+
+    Parameters
+    ----------
+    p_a : array, shape (..., K) — the network's ``p_BN(A | X_obs)``
+    p_hmm : array, shape (..., K) — the gesture posterior (broadcast against ``p_a``)
+    strategy : one of :data:`STRATEGIES`: ``hard`` puts all mass on ``argmax p_hmm`` (first on ties, as
+        :func:`fuse`); ``virtual`` and ``product`` give ``p_a · p_hmm`` normalised; ``jeffrey`` gives
+        ``p_hmm`` itself (its rule fixes the marginal of Action)
+
+    Returns
+    -------
+    array, shape (..., K); rows where ``p_a · p_hmm`` sums to 0 are NaN (virtual, product)
+    """
+    check_strategy(strategy)
+    p_a, q = np.broadcast_arrays(np.asarray(p_a, dtype=float), np.asarray(p_hmm, dtype=float))
+    if strategy == "hard":
+        out = np.zeros(q.shape)
+        np.put_along_axis(out, np.argmax(q, axis=-1)[..., None], 1.0, axis=-1)
+        return out
+    if strategy == "jeffrey":
+        return q / q.sum(axis=-1, keepdims=True)
+    joint = p_a * q
+    total = joint.sum(axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(total > 0, joint / np.where(total > 0, total, 1.0), np.nan)
+
+
+def fuse_tables(p_x_given_a: np.ndarray, p_a: np.ndarray, p_hmm: np.ndarray, strategy: str) -> np.ndarray:
+    """``p(X_inf | X_obs, G)`` for a target other than Action by each rule, in closed form, vectorised.
+
+    Parameters
+    ----------
+    p_x_given_a : array, shape (..., K, V) — ``p_BN(X_inf = v | X_obs, A = a)``; the V entries may be the
+        values of one node or independent marginals (e.g. ``P(word present)`` for every word)
+    p_a : array, shape (..., K) — ``p_BN(A | X_obs)``
+    p_hmm : array, shape (..., K) — the gesture posterior
+    strategy : ``hard`` (``p(x | A = argmax p_hmm)``), ``virtual``
+        (``Σ_a p(x | a) p_a q_a / Σ_a p_a q_a``) or ``jeffrey`` (``Σ_a p(x | a) q_a``); the product rule
+        infers the action itself (:func:`fuse_action_tables`)
+
+    Returns
+    -------
+    array, shape (..., V); NaN where virtual evidence meets ``Σ_a p_a q_a = 0``
+    """
+    check_strategy(strategy)
+    if strategy == "product":
+        raise EvidenceError("the product rule infers the action itself: use fuse_action_tables")
+    w = fuse_action_tables(p_a, p_hmm, strategy)  # the weight of each action: hard, p(A | X_obs, G), q
+    return np.einsum("...k,...kv->...v", w, np.asarray(p_x_given_a, dtype=float))

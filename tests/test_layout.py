@@ -29,7 +29,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("glu.outputs", "glu.parameters"),
     ("glu.notebook", "glu.execution"),
     ("glu.report",),
-    ("glu.reproduce", "glu.compare", "glu.readme"),
+    ("glu.reproduce", "glu.compare", "glu.readme", "glu.sweep"),
     ("glu.cli",),
     ("glu.__main__",),
 )

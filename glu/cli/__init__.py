@@ -25,6 +25,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "glu.cli.language_cmds",
     "glu.cli.anticipate_cmds",
     "glu.cli.readme_cmds",
+    "glu.cli.eval_cmds",
 )
 """Each module defines ``register(subparsers)``; handlers import heavy libraries lazily."""
 

@@ -266,99 +266,102 @@ def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:
     Frames with non-finite coordinates are removed first (reported as ``missing``), so a dropout
     becomes a gap. Returns the pieces (one unless gaps split it) and the events, in time order.
     """
+    # Works on plain arrays and builds a Trajectory only for each returned piece (a corpus repairs
+    # every one of a million synthetic gestures).
     events: list[TrackingEvent] = []
     t0 = float(traj.t[0]) if len(traj) else 0.0
+    xyz, t, frame, observed = traj.xyz, traj.t, traj.frame, traj.observed
 
-    def ev(kind: str, i: int, size: float, action: str, tr: Trajectory) -> TrackingEvent:
-        return TrackingEvent(kind, int(tr.frame[i]), float(tr.t[i] - t0), float(size), action)
+    def ev(kind: str, i: int, size: float, action: str) -> TrackingEvent:
+        return TrackingEvent(kind, int(frame[i]), float(t[i] - t0), float(size), action)
 
-    finite = np.all(np.isfinite(traj.xyz), axis=1)
-    for i in np.flatnonzero(~finite):
-        events.append(ev("missing", int(i), 0.0, "dropped", traj))
-    tr = traj.take(finite)
-    if len(tr) == 0:
+    finite = np.isfinite(xyz).all(axis=1)
+    if not finite.all():
+        for i in np.flatnonzero(~finite):
+            events.append(ev("missing", int(i), 0.0, "dropped"))
+        xyz, t, frame, observed = xyz[finite], t[finite], frame[finite], observed[finite]
+    if len(t) == 0:
         raise DataError(f"{traj.source}: no frame has finite coordinates")
-    period = tr.frame_period
+    dt_all = np.diff(t)
+    period = float(np.median(dt_all)) if len(t) > 1 else 1 / 30
 
     # 1. spikes, on the observed frames
     if math.isfinite(policy.spike_threshold):
-        dev = spike_deviation(tr.xyz, policy.spike_window)
+        dev = spike_deviation(xyz, policy.spike_window)
         spikes = dev > policy.spike_threshold
-        action = {"interpolate": "replaced", "drop": "dropped", "keep": "kept"}[policy.spikes]
-        for i in np.flatnonzero(spikes):
-            events.append(ev("spike", int(i), dev[i], action, tr))
-        if spikes.any() and policy.spikes == "interpolate" and (~spikes).sum() >= 2:
-            good = ~spikes
-            xyz = tr.xyz.copy()
-            for k in range(3):
-                xyz[spikes, k] = np.interp(tr.t[spikes], tr.t[good], tr.xyz[good, k])
-            tr = Trajectory(xyz, tr.t, tr.frame, tr.observed & good, tr.source)
-        elif spikes.any() and policy.spikes == "drop":
-            tr = tr.take(~spikes)
+        if spikes.any():
+            action = {"interpolate": "replaced", "drop": "dropped", "keep": "kept"}[policy.spikes]
+            for i in np.flatnonzero(spikes):
+                events.append(ev("spike", int(i), dev[i], action))
+            if policy.spikes == "interpolate" and (~spikes).sum() >= 2:
+                good = ~spikes
+                xyz = xyz.copy()
+                for k in range(3):
+                    xyz[spikes, k] = np.interp(t[spikes], t[good], xyz[good, k])
+                observed = observed & good
+            elif policy.spikes == "drop":
+                keep = ~spikes
+                xyz, t, frame, observed = xyz[keep], t[keep], frame[keep], observed[keep]
+                dt_all = np.diff(t)
 
     # 2. jumps (reported only)
-    steps = np.linalg.norm(np.diff(tr.xyz, axis=0), axis=1)
+    steps = np.sqrt((np.diff(xyz, axis=0) ** 2).sum(axis=1))
     for i in np.flatnonzero(steps > policy.jump_threshold):
-        events.append(ev("jump", int(i) + 1, steps[i], "kept", tr))
+        events.append(ev("jump", int(i) + 1, steps[i], "kept"))
 
     # 3. gaps: interpolate the short ones, split at (or keep) the long ones
-    gaps = detect_gaps(tr.t, policy.gap_factor)
-    pieces: list[Trajectory] = []
+    gaps = (
+        np.flatnonzero(dt_all > policy.gap_factor * np.median(dt_all)) if len(dt_all) else dt_all.astype(int)
+    )
+    spans: list[tuple[list[np.ndarray], ...]] = []  # per piece: its parts of xyz, t, frame, observed
+    parts: tuple[list[np.ndarray], ...] = ([], [], [], [])
     start = 0
-    parts_xyz, parts_t, parts_frame, parts_obs = [], [], [], []
 
-    def flush(end: int) -> None:
-        nonlocal parts_xyz, parts_t, parts_frame, parts_obs
-        parts_xyz.append(tr.xyz[start:end])
-        parts_t.append(tr.t[start:end])
-        parts_frame.append(tr.frame[start:end])
-        parts_obs.append(tr.observed[start:end])
-        piece = Trajectory(
-            np.concatenate(parts_xyz), np.concatenate(parts_t), np.concatenate(parts_frame),
-            np.concatenate(parts_obs), tr.source,
-        )  # fmt: skip
-        pieces.append(piece)
-        parts_xyz, parts_t, parts_frame, parts_obs = [], [], [], []
+    def add(lo: int, hi: int) -> None:
+        for part, arr in zip(parts, (xyz, t, frame, observed), strict=True):
+            part.append(arr[lo:hi])
 
     for g in gaps:
-        dt = float(tr.t[g + 1] - tr.t[g])
+        dt = float(t[g + 1] - t[g])
         if dt <= policy.max_interpolate:
-            events.append(ev("gap", int(g) + 1, dt, "interpolated", tr))
+            events.append(ev("gap", int(g) + 1, dt, "interpolated"))
             k = max(int(round(dt / period)) - 1, 0)
-            parts_xyz.append(tr.xyz[start : g + 1])
-            parts_t.append(tr.t[start : g + 1])
-            parts_frame.append(tr.frame[start : g + 1])
-            parts_obs.append(tr.observed[start : g + 1])
+            add(start, g + 1)
             if k:
                 w = np.arange(1, k + 1) / (k + 1)
-                parts_xyz.append(tr.xyz[g] + w[:, None] * (tr.xyz[g + 1] - tr.xyz[g]))
-                parts_t.append(tr.t[g] + w * dt)
-                parts_frame.append(np.full(k, tr.frame[g]))
-                parts_obs.append(np.zeros(k, dtype=bool))
+                parts[0].append(xyz[g] + w[:, None] * (xyz[g + 1] - xyz[g]))
+                parts[1].append(t[g] + w * dt)
+                parts[2].append(np.full(k, frame[g]))
+                parts[3].append(np.zeros(k, dtype=bool))
             start = g + 1
         elif policy.long_gaps == "split":
-            events.append(ev("gap", int(g) + 1, dt, "split", tr))
-            flush(g + 1)
+            events.append(ev("gap", int(g) + 1, dt, "split"))
+            add(start, g + 1)
+            spans.append(parts)
+            parts = ([], [], [], [])
             start = g + 1
         else:
-            events.append(ev("gap", int(g) + 1, dt, "kept", tr))
-    flush(len(tr))
+            events.append(ev("gap", int(g) + 1, dt, "kept"))
+    add(start, len(t))
+    spans.append(parts)
 
-    kept = []
-    for p in pieces:
-        if len(p) >= policy.min_piece:
-            kept.append(p)
-        else:
-            events.append(
-                TrackingEvent("short-piece", int(p.frame[0]), float(p.t[0] - t0), len(p), "dropped")
-            )
     events.sort(key=lambda e: (e.frame, e.time))
+    kept = []
+    for p in spans:
+        arrays = [a[0] if len(a) == 1 else np.concatenate(a) for a in p]
+        if len(arrays[1]) >= policy.min_piece:
+            kept.append(arrays)
+        else:
+            events.append(TrackingEvent("short-piece", int(arrays[2][0]), float(arrays[1][0] - t0),
+                                        len(arrays[1]), "dropped"))  # fmt: skip
+    if len(kept) < len(spans):
+        events.sort(key=lambda e: (e.frame, e.time))
     all_events = tuple(events)
     out = []
-    for p in kept:
-        lo, hi = int(p.frame[0]), int(p.frame[-1])
+    for a_xyz, a_t, a_frame, a_obs in kept:
+        lo, hi = int(a_frame[0]), int(a_frame[-1])
         own = tuple(e for e in all_events if lo <= e.frame <= hi)
-        out.append(replace(p, events=traj.events + own))
+        out.append(Trajectory(a_xyz, a_t, a_frame, a_obs, traj.source, traj.events + own))
     if not out:
         raise DataError(f"{traj.source}: no piece of at least {policy.min_piece} frames is left after repair")
     return Repaired(out, traj.events + all_events)

@@ -1,0 +1,301 @@
+"""A simulated corpus of human–robot episodes: who does what to which object, what happens, how it looks.
+
+An **episode** is one person acting on one object in front of the robot:
+
+1. the object (Color, Shape, Size) and the person's action are drawn from a :class:`Scenario`;
+2. the effects (ObjVel, ObjHandVel, HandVel, Contact) and the words a person would use to describe it are
+   drawn from the Affordance–Words network given them (:func:`glu.bn.sampling.sample`) — the network
+   learned from the robot's own experiments (the real data, or glu's synthetic generator without it);
+3. the person's hand trajectory comes from the gesture generator (:mod:`glu.gestures.synthetic`): its
+   own speed, amplitude and body size, the sensor noise and the viewpoint of a :class:`Condition`,
+   tracking gaps and spikes, repaired as the recogniser's training data are;
+4. the robot sees growing prefixes of it (the observed fractions of :mod:`glu.experiments.evaluation`).
+
+Episodes are generated in chunks (:func:`simulate_chunk`), so a corpus of any size never sits in memory,
+and :func:`write_corpus` streams one to Parquet, one row group per chunk.
+
+**Seeds.** Episode ``i`` of a corpus with seed ``s`` has the same object, action, effects, words and
+person in every condition (its gesture uses the generator seeded by ``(s, i)``; the conditions change only
+the noise and the viewpoint), so conditions are compared on the same episodes. Its world draws are
+seeded by ``(s, chunk)``: a corpus depends on its chunk size, never on which machine ran which chunk.
+
+Example
+-------
+>>> from glu.bn import InferenceEngine, learn_bn
+>>> from glu.data import load_experiments
+>>> engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
+>>> chunk = simulate_chunk(engine, Condition(0.02, "front"), seed=0, chunk=0, n=4, chunk_size=4)
+>>> list(chunk.episodes.columns[:6])
+['episode', 'Action', 'Color', 'Shape', 'Size', 'ObjVel']
+>>> len(chunk.features), chunk.features[0].shape[1]
+(4, 3)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+import pandas as pd
+
+from glu.bn.inference import InferenceEngine
+from glu.bn.sampling import categorical, sample
+from glu.errors import DataError
+from glu.files import atomic_path
+from glu.gestures.synthetic import View, synthesize_gesture
+from glu.schema import AFFORDANCE_VALUES, ROOT_NODES
+
+EFFECT_NODES: tuple[str, ...] = ("ObjVel", "ObjHandVel", "HandVel", "Contact")
+"""The nodes the network draws (with the words) once the scenario has set the roots."""
+VIEWPOINTS: dict[str, View] = {
+    "front": View(),
+    "turned": View(yaw_deg=40.0),
+    "seated": View(posture="seated"),
+}
+"""Named viewpoints: as in the recordings (facing the camera, turned by a random ± 10°), turned by 40°,
+seated at a higher table (:class:`~glu.gestures.synthetic.View`)."""
+WORLD_KEY, GESTURE_KEY = 0, 1
+"""Spawn keys of the world draws (per chunk) and of each episode's gesture (per episode)."""
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Which objects people act on and how: a distribution over each root node, independent of the others.
+
+    Attributes
+    ----------
+    weights : root node (Action, Color, Shape, Size) → weights over its values in the schema's order
+        (normalised; a node left out is uniform)
+    """
+
+    weights: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for node, w in self.weights.items():
+            if node not in ROOT_NODES:
+                raise DataError(f"scenario: {node!r} is not a root node; allowed: {', '.join(ROOT_NODES)}")
+            k = len(AFFORDANCE_VALUES[node])
+            w = np.asarray(w, dtype=float)
+            if w.shape != (k,) or not np.all(np.isfinite(w)) or (w < 0).any() or w.sum() <= 0:
+                raise DataError(
+                    f"scenario: {node} needs {k} non-negative weights ({', '.join(AFFORDANCE_VALUES[node])}) "
+                    "with a positive sum"
+                )
+
+    @classmethod
+    def from_mapping(cls, spec: Mapping[str, Mapping[str, float]]) -> Scenario:
+        """From ``{node: {value: weight}}`` (values left out weigh 0; a node left out is uniform)."""
+        weights = {}
+        for node, by_value in spec.items():
+            if node not in ROOT_NODES:
+                raise DataError(f"scenario: {node!r} is not a root node; allowed: {', '.join(ROOT_NODES)}")
+            if not isinstance(by_value, Mapping):
+                raise DataError(f"scenario: {node} must map values to weights, e.g. {{tap = 2, grasp = 1}}")
+            values = AFFORDANCE_VALUES[node]
+            unknown = [v for v in by_value if v not in values]
+            if unknown:
+                raise DataError(f"scenario: {node} has no value {unknown[0]!r}; allowed: {', '.join(values)}")
+            bad = [v for v, x in by_value.items() if isinstance(x, bool) or not isinstance(x, int | float)]
+            if bad:
+                raise DataError(f"scenario: the weight of {node}={bad[0]} must be a number")
+            weights[node] = tuple(float(by_value.get(v, 0.0)) for v in values)
+        return cls(weights)
+
+    def probabilities(self, node: str) -> np.ndarray:
+        """The distribution of a root node, shape (n_values,)."""
+        w = np.asarray(self.weights.get(node, np.ones(len(AFFORDANCE_VALUES[node]))), dtype=float)
+        return w / w.sum()
+
+    def as_dict(self) -> dict[str, dict[str, float]]:
+        """``{node: {value: probability}}`` for every root node."""
+        return {
+            n: dict(zip(AFFORDANCE_VALUES[n], self.probabilities(n).round(12).tolist(), strict=True))
+            for n in ROOT_NODES
+        }
+
+
+@dataclass(frozen=True)
+class Condition:
+    """How the robot sees the episodes: sensor noise and viewpoint.
+
+    Attributes
+    ----------
+    noise : standard deviation of the sensor noise on every joint, metres
+    viewpoint : a name of :data:`VIEWPOINTS` (or of ``views`` given to :func:`simulate_chunk`)
+    """
+
+    noise: float
+    viewpoint: str
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.noise, int | float) and 0 <= self.noise < math.inf):
+            raise DataError(f"noise={self.noise!r}: the sensor noise must be a number ≥ 0 (metres)")
+
+
+@dataclass(frozen=True)
+class GestureSettings:
+    """The gesture generator's tracking problems (the person's speed, amplitude and size it draws itself).
+
+    Attributes
+    ----------
+    spike_rate : probability that a frame's hand joint is an outlier
+    dropout_rate : probability that an episode loses a run of 3–20 frames (a tracking gap)
+    """
+
+    spike_rate: float = 0.005
+    dropout_rate: float = 0.2
+
+    def __post_init__(self) -> None:
+        for name in ("spike_rate", "dropout_rate"):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and 0 <= v <= 1):
+                raise DataError(f"{name}={v!r}: must be a probability in [0, 1]")
+
+
+class Chunk(NamedTuple):
+    """A chunk of simulated episodes.
+
+    Attributes
+    ----------
+    episodes : one row per episode: episode (its index in the corpus), the 8 affordance nodes (value
+        names), words (the words drawn, space-separated, in vocabulary order), n_frames, duration_s,
+        body_size, noise, viewpoint
+    codes : node → int array, shape (n,), value indices of every node (affordance nodes and words)
+    features : n arrays of shape (T_i, 3), the repaired gesture features the robot sees
+    """
+
+    episodes: pd.DataFrame
+    codes: dict[str, np.ndarray]
+    features: list[np.ndarray]
+
+
+def chunk_ranges(n_episodes: int, chunk_size: int) -> list[tuple[int, int]]:
+    """``(chunk index, number of episodes)`` of each chunk of a corpus of ``n_episodes``."""
+    if chunk_size < 1:
+        raise DataError(f"chunk_size={chunk_size}: must be at least 1")
+    return [
+        (k, min(chunk_size, n_episodes - k * chunk_size)) for k in range(math.ceil(n_episodes / chunk_size))
+    ]
+
+
+def simulate_chunk(
+    engine: InferenceEngine,
+    condition: Condition,
+    seed: int,
+    chunk: int,
+    n: int,
+    chunk_size: int,
+    scenario: Scenario = Scenario(),
+    gestures: GestureSettings = GestureSettings(),
+    views: Mapping[str, View] = VIEWPOINTS,
+) -> Chunk:
+    """Episodes ``chunk · chunk_size`` … ``+ n − 1`` of the corpus with ``seed``, seen in ``condition``.
+
+    Parameters
+    ----------
+    engine : the Affordance–Words network the effects and words are drawn from
+    condition : sensor noise and viewpoint
+    seed, chunk, n, chunk_size : the corpus's seed, the chunk's index, its number of episodes (``n ≤
+        chunk_size``; only the last chunk is shorter) and the corpus's chunk size
+    scenario : the distribution of actions and objects
+    gestures : the generator's tracking problems
+    views : viewpoint names → :class:`~glu.gestures.synthetic.View`
+    """
+    if condition.viewpoint not in views:
+        raise DataError(f"unknown viewpoint {condition.viewpoint!r}; allowed: {', '.join(views)}")
+    if not 0 < n <= chunk_size:
+        raise DataError(f"a chunk holds 1 to chunk_size={chunk_size} episodes, not {n}")
+    view = views[condition.viewpoint]
+    first = chunk * chunk_size
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(WORLD_KEY, chunk)))
+    roots = {}
+    for node in ROOT_NODES:
+        p = scenario.probabilities(node)
+        roots[node] = categorical(np.broadcast_to(p, (chunk_size, len(p))), rng)[:n]
+    codes = sample(engine, roots, rng)
+    schema = engine.bn.schema
+    actions = schema.values_of("Action")
+    features, n_frames, duration, size = [], np.empty(n, int), np.empty(n), np.empty(n)
+    for i in range(n):
+        g_rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(GESTURE_KEY, first + i)))
+        g = synthesize_gesture(
+            actions[codes["Action"][i]], g_rng, noise=float(condition.noise),
+            spike_rate=gestures.spike_rate, dropout_rate=gestures.dropout_rate, view=view,
+        )  # fmt: skip
+        x = g.features()
+        features.append(x)
+        n_frames[i], duration[i], size[i] = len(x), g.t[-1] - g.t[0], g.size
+    table: dict[str, Any] = {"episode": np.arange(first, first + n)}
+    for node in schema.affordance_nodes:
+        table[node] = pd.Categorical.from_codes(codes[node], categories=list(schema.values_of(node)))
+    words = list(schema.word_nodes)
+    present = np.stack([codes[w] for w in words], axis=1) == 1 if words else np.zeros((n, 0), bool)
+    table["words"] = [" ".join(w for w, on in zip(words, row, strict=True) if on) for row in present]
+    table.update(n_frames=n_frames, duration_s=duration, body_size=size)
+    table.update(noise=np.full(n, float(condition.noise)), viewpoint=[condition.viewpoint] * n)
+    return Chunk(pd.DataFrame(table), codes, features)
+
+
+def iter_corpus(
+    engine: InferenceEngine,
+    conditions: Sequence[Condition],
+    n_per_condition: int,
+    seed: int,
+    chunk_size: int,
+    **settings: Any,
+) -> Iterator[tuple[Condition, Chunk]]:
+    """Every chunk of a corpus, condition by condition (``settings``: scenario, gestures, views)."""
+    for condition in conditions:
+        for k, n in chunk_ranges(n_per_condition, chunk_size):
+            yield condition, simulate_chunk(engine, condition, seed, k, n, chunk_size, **settings)
+
+
+def write_corpus(
+    path: str | os.PathLike,
+    engine: InferenceEngine,
+    conditions: Sequence[Condition],
+    n_per_condition: int,
+    seed: int = 0,
+    chunk_size: int = 2000,
+    data_source: str = "",
+    **settings: Any,
+) -> Path:
+    """Stream a simulated corpus into one Parquet file, one row group per chunk (written atomically).
+
+    Columns: those of :attr:`Chunk.episodes`, plus ``xyz`` — the gesture features, a list of
+    ``3 · n_frames`` float32 numbers (frame after frame, x y z). The file's metadata records the seed,
+    the chunk size, the conditions and ``data_source``. At most one chunk is in memory at a time.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    meta = {
+        "glu.corpus": str(
+            {"seed": seed, "chunk_size": chunk_size, "n_per_condition": n_per_condition,
+             "conditions": [(c.noise, c.viewpoint) for c in conditions], "data_source": data_source}
+        )
+    }  # fmt: skip
+    writer = None
+    with atomic_path(path, suffix=".parquet") as tmp:
+        try:
+            for _, chunk in iter_corpus(engine, conditions, n_per_condition, seed, chunk_size, **settings):
+                table = pa.Table.from_pandas(chunk.episodes, preserve_index=False)
+                xyz = pa.array(
+                    [x.astype(np.float32).ravel() for x in chunk.features], type=pa.list_(pa.float32())
+                )
+                table = table.append_column("xyz", xyz)
+                if writer is None:
+                    schema = table.schema.with_metadata({**(table.schema.metadata or {}), **meta})
+                    writer = pq.ParquetWriter(tmp, schema)
+                writer.write_table(table.cast(writer.schema))
+        finally:
+            if writer is not None:
+                writer.close()
+        if writer is None:
+            raise DataError("an empty corpus: give at least one condition and one episode")
+    return Path(path)

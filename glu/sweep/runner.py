@@ -1,0 +1,440 @@
+"""Run a corpus sweep as Dask tasks, resumably, and merge the chunks into tables.
+
+The grid of a sweep is strategy × noise × observed fraction × viewpoint × seed chunks. One **task** is one
+chunk of episodes in one condition (noise, viewpoint): it simulates the episodes once and scores them at
+every fraction with every strategy, since those share the gesture and its forward pass
+(:meth:`glu.experiments.evaluation.Evaluator.run_chunk`). Tasks run
+
+* on a ``LocalCluster`` sized to the machine (one single-threaded worker process per core) by default;
+* on an existing cluster with ``scheduler="tcp://host:8786"`` (``dask scheduler`` and ``dask worker``,
+  see the README); the workers need glu installed;
+* in this process, one after another, with ``scheduler="synchronous"`` (tests, notebooks, debugging).
+
+Each finished chunk is written by this process (workers need no shared disk) to ``OUT/chunks/`` through
+a temporary file and a rename, so an interrupted sweep leaves only whole chunks; running it again computes
+only the missing ones. A chunk's numbers depend only on the settings, the seed and its index, and chunks
+are merged in index order, so the same settings give the same tables on any cluster.
+
+The output folder::
+
+    OUT/sweep.json          the settings, the data source and a fingerprint of everything behind the numbers
+    OUT/recognizer.json     the gesture HMMs used (trained once, reused on resume)
+    OUT/chunks/*.npz        the summed statistics of each chunk (estimate and bootstrap replicates)
+    OUT/sums.parquet        the chunks merged: one row per condition and replicate
+    OUT/results.parquet     THE table: every metric with its 95 % interval, per condition, per noise level
+                            (viewpoint "all") and overall (noise NaN, viewpoint "all")
+    OUT/differences.parquet paired differences between strategies, with intervals
+    OUT/reliability.parquet the effect's reliability diagrams
+    OUT/summary.json, OUT/summary.csv   the tidy summary: the overall metrics at the full gesture, and
+                            which strategy is best for each target and metric
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+import re
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from glu import __version__
+from glu.errors import DataError, GluError, ModelError
+from glu.experiments.common import tidy
+from glu.experiments.corpus import Condition
+from glu.experiments.evaluation import Evaluator
+from glu.experiments.intervals import HIGHER_IS_BETTER, metrics, paired_differences, reliability
+from glu.files import atomic_path, atomic_write_json, atomic_write_text
+from glu.sweep.config import SweepConfig
+
+FORMAT = "glu-sweep"
+FORMAT_VERSION = 1
+SYNCHRONOUS = "synchronous"
+ADDRESS = re.compile(r"^(tcp|tls|ws|wss)://[^\s/]+:\d+/?$")
+RECOGNIZER_SEED_OFFSET = 5000
+"""The recogniser's training gestures are drawn with ``seed + 5000``, apart from the episodes."""
+EXPERIMENT = "corpus_evaluation"
+FILES = (
+    "sums.parquet",
+    "results.parquet",
+    "differences.parquet",
+    "reliability.parquet",
+    "summary.json",
+    "summary.csv",
+)
+
+
+def check_scheduler(address: str | None) -> str | None:
+    """``address`` if it is None, ``synchronous`` or a Dask address ``tcp://host:port``; else DataError."""
+    if address is None or address == SYNCHRONOUS or ADDRESS.match(address):
+        return address
+    raise DataError(f"--scheduler {address!r}: expected a Dask scheduler address such as tcp://127.0.0.1:8786, "
+                    f"or '{SYNCHRONOUS}' to run in this process")  # fmt: skip
+
+
+@dataclass
+class SweepResult:
+    """What a sweep produced: the folder, its tables, and how much was computed now."""
+
+    out: Path
+    metrics: pd.DataFrame
+    differences: pd.DataFrame
+    reliability: pd.DataFrame
+    summary: dict[str, Any]
+    computed: int
+    reused: int
+    seconds: float
+
+
+# ------------------------------------------------------------------------------------------ preparing
+def prepare_world(config: SweepConfig) -> tuple[Any, str]:
+    """The Affordance–Words network of a sweep (an inference engine) and a one-line label of its data."""
+    from glu.bn import InferenceEngine, learn_bn
+    from glu.data import load_experiments, resolve_data
+
+    net = config.network
+    source = resolve_data(net.data)
+    table = load_experiments(source, net.words)
+    bn = learn_bn(table, unseen_words=net.unseen_words)
+    kind = "real data (the authors' robot experiments)" if source.is_real else (
+        f"synthetic data (seed {source.seed}, {source.n_experiments} experiments)")  # fmt: skip
+    label = (f"{kind}: network learned from {len(table)} experiments (words={net.words}, unseen word rows "
+             f"{net.unseen_words}); gestures from glu's synthetic generator")  # fmt: skip
+    return InferenceEngine(bn), label
+
+
+def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple[Evaluator, dict[str, Any]]:
+    """The evaluator (network learned, recogniser trained or loaded) and the sweep's provenance."""
+    from glu.gestures.batch import BatchScorer
+
+    engine, label = prepare_world(config)
+    bn = engine.bn
+    recognizer = _recognizer(config, out, log)
+    from glu.schema import ACTIONS
+
+    missing = [a for a in ACTIONS if a not in recognizer.models]
+    if missing:
+        raise ModelError(
+            f"the recogniser has no model for {', '.join(missing)}; it needs {', '.join(ACTIONS)}"
+        )
+    evaluator = Evaluator(
+        engine, BatchScorer([recognizer.models[a] for a in ACTIONS]), config.evaluation,
+        config.seed, config.chunk_size, config.scenario, config.gestures,
+        {v: config.views[v] for v in config.viewpoints},
+    )  # fmt: skip
+    digest = hashlib.sha256()
+    for part in (json.dumps(config.as_dict(), sort_keys=True), label, json.dumps(bn.to_dict()),
+                 json.dumps(recognizer.to_dict()["models"]), __version__):  # fmt: skip
+        digest.update(part.encode())
+    provenance = {
+        "format": FORMAT, "version": FORMAT_VERSION, "fingerprint": digest.hexdigest()[:32],
+        "glu": __version__, "data_source": label, "settings": _public(config.as_dict()),
+        "conditions": [asdict(c) for c in config.conditions], "episodes_per_condition": config.per_condition,
+        "statistics": len(evaluator.columns),
+    }  # fmt: skip
+    return evaluator, provenance
+
+
+def _public(settings: dict[str, Any]) -> dict[str, Any]:
+    """The settings without machine paths (a data folder or a recogniser file is named by its last part)."""
+    out = json.loads(json.dumps(settings))
+    for section, key in (("network", "data"), ("recognizer", "file")):
+        v = out[section].get(key)
+        if v and v != "synthetic":
+            out[section][key] = Path(v).name
+    return out
+
+
+def _recognizer(config: SweepConfig, out: Path, log: Callable[[str], None]) -> Any:
+    from glu.gestures.corpus import synthetic_corpus
+    from glu.gestures.recognizer import Recognizer, train_recognizer
+
+    r = config.recognizer
+    if r.file:
+        return Recognizer.load(r.file)
+    saved = out / "recognizer.json"
+    recipe = {"sweep_recipe": {**asdict(r), "seed": config.seed}}
+    if saved.is_file():
+        try:
+            rec = Recognizer.load(saved)
+            if rec.meta.get("sweep_recipe") == recipe["sweep_recipe"]:
+                return rec
+        except ModelError:
+            pass
+    log(
+        f"training the gesture HMMs on {r.n_per_action} synthetic gestures per action (Q={r.n_states}, M={r.n_mix})"
+    )
+    corpus = synthetic_corpus(r.n_per_action, config.seed + RECOGNIZER_SEED_OFFSET, noise=r.noise)
+    by_action: dict[str, list[np.ndarray]] = {}
+    for s in corpus:
+        by_action.setdefault(s.action, []).append(s.xyz)
+    rec = train_recognizer(by_action, r.n_states, r.n_mix, n_iter=r.n_iter, seed=config.seed, warn=False,
+                           meta={**recipe, "data_source": corpus.description})  # fmt: skip
+    rec.save(saved)
+    return rec
+
+
+# ------------------------------------------------------------------------------------------ the tasks
+def compute_chunk(evaluator: Evaluator, index: int, condition: Condition, chunk: int, n: int) -> tuple:
+    """One task (run on a worker): the summed statistics of one chunk, on one BLAS thread."""
+    from threadpoolctl import threadpool_limits
+
+    t0 = time.process_time()
+    with threadpool_limits(1):
+        sums = evaluator.run_chunk(condition, chunk, n)
+    return index, chunk, n, sums, time.process_time() - t0
+
+
+def _chunk_path(out: Path, index: int, chunk: int) -> Path:
+    return out / "chunks" / f"c{index:03d}-{chunk:06d}.npz"
+
+
+def _write_chunk(out: Path, fingerprint: str, index: int, chunk: int, n: int, sums: np.ndarray) -> None:
+    path = _chunk_path(out, index, chunk)
+    with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as f:
+        np.savez(f, estimate=sums[0], replicates=sums[1:].astype(np.float32),
+                 meta=np.array(json.dumps({"fingerprint": fingerprint, "condition": index, "chunk": chunk, "n": n})))  # fmt: skip
+
+
+def _read_chunk(path: Path, fingerprint: str) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        with np.load(path) as z:
+            meta = json.loads(str(z["meta"]))
+            estimate, replicates = z["estimate"], z["replicates"]
+    except (OSError, ValueError, KeyError) as e:
+        raise DataError(f"{path}: unreadable chunk ({e}); delete it and run the sweep again") from None
+    if meta.get("fingerprint") != fingerprint:
+        raise DataError(
+            f"{path}: this chunk belongs to another sweep; delete it or use another output folder"
+        )
+    return estimate, replicates
+
+
+# ------------------------------------------------------------------------------------------ the sweep
+def run_sweep(
+    config: SweepConfig,
+    out: str | os.PathLike,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    progress: bool | None = None,
+    max_chunks: int | None = None,
+    log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
+) -> SweepResult:
+    """Run (or resume) a sweep into the folder ``out`` and write its tables (see the module docstring).
+
+    Parameters
+    ----------
+    config : the settings
+    out : the output folder (created; a folder holding a sweep with other settings is refused)
+    scheduler : None (a LocalCluster), a Dask address ``tcp://host:port``, or ``"synchronous"``
+    workers : LocalCluster worker processes (default: one per core available)
+    progress : show a progress bar (None: only on a terminal)
+    max_chunks : compute at most this many chunks now (the rest on a later run); tables are written only
+        when every chunk is done
+    log : where one-line messages go
+    """
+    t0 = time.perf_counter()
+    check_scheduler(scheduler)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    evaluator, provenance = prepare(config, out, log)
+    sweep_file = out / "sweep.json"
+    if sweep_file.is_file():
+        try:
+            old = json.loads(sweep_file.read_text())
+        except (OSError, json.JSONDecodeError):
+            old = {}
+        if old.get("fingerprint") != provenance["fingerprint"]:
+            raise DataError(f"{out} holds a sweep with other settings or data (sweep.json); "
+                            "use another output folder or delete that one")  # fmt: skip
+    else:
+        atomic_write_json(sweep_file, provenance)
+    conditions = config.conditions
+    from glu.experiments.corpus import chunk_ranges
+
+    tasks = [
+        (i, c, k, n)
+        for i, c in enumerate(conditions)
+        for k, n in chunk_ranges(config.per_condition, config.chunk_size)
+    ]
+    todo = [t for t in tasks if not _chunk_path(out, t[0], t[2]).is_file()]
+    reused = len(tasks) - len(todo)
+    if max_chunks is not None:
+        todo = todo[: max(int(max_chunks), 0)]
+    where = {None: "a LocalCluster", SYNCHRONOUS: "this process"}.get(scheduler, scheduler)
+    log(f"glu evaluate: {config.per_condition * len(conditions)} episodes, {len(conditions)} conditions, "
+        f"{len(tasks)} chunks ({reused} already done), on {where}; {provenance['data_source']}")  # fmt: skip
+    _run_tasks(
+        evaluator, todo, out, provenance["fingerprint"], scheduler, workers, progress, reused, len(tasks)
+    )
+    computed = len(todo)
+    if reused + computed < len(tasks):
+        log(f"glu evaluate: {reused + computed} of {len(tasks)} chunks done; run again to finish")
+        return SweepResult(
+            out,
+            pd.DataFrame(),
+            pd.DataFrame(),
+            pd.DataFrame(),
+            {},
+            computed,
+            reused,
+            time.perf_counter() - t0,
+        )
+    tables = merge(out, config, evaluator, provenance)
+    return SweepResult(out, *tables, computed, reused, time.perf_counter() - t0)
+
+
+def _run_tasks(evaluator, todo, out, fingerprint, scheduler, workers, progress, done, total) -> None:
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, initial=done, unit="chunk", desc="glu evaluate", disable=None if progress is None else not progress,
+               file=sys.stderr, dynamic_ncols=True)  # fmt: skip
+    try:
+        if not todo:
+            return
+        if scheduler == SYNCHRONOUS:
+            for task in todo:
+                index, chunk, n, sums, _ = compute_chunk(evaluator, *task)
+                _write_chunk(out, fingerprint, index, chunk, n, sums)
+                bar.update(1)
+            return
+        _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar)
+    finally:
+        bar.close()
+
+
+def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> None:
+    from distributed import Client, LocalCluster, as_completed
+
+    cluster = None
+    try:
+        if scheduler is None:
+            n = (
+                workers or len(os.sched_getaffinity(0))
+                if hasattr(os, "sched_getaffinity")
+                else (os.cpu_count() or 1)
+            )
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                                   silence_logs=logging.ERROR)  # fmt: skip
+            client = Client(cluster)
+        else:
+            try:
+                client = Client(scheduler, timeout="15s")
+            except (OSError, TimeoutError) as e:
+                raise DataError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
+    except BaseException:
+        if cluster is not None:
+            cluster.close()
+        raise
+    try:
+        shared = client.scatter(evaluator, broadcast=True)
+        futures = [client.submit(compute_chunk, shared, *t, pure=False, key=f"glu-chunk-{t[0]}-{t[2]}-{fingerprint[:8]}")
+                   for t in todo]  # fmt: skip
+        for fut in as_completed(futures):
+            try:
+                index, chunk, n, sums, _ = fut.result()
+            except GluError:
+                raise
+            except Exception as e:
+                for f in futures:
+                    f.cancel()
+                raise RuntimeError(f"a sweep task failed on the cluster ({type(e).__name__}: {e}); "
+                                   "do the workers have glu installed, in the same version?") from e  # fmt: skip
+            _write_chunk(out, fingerprint, index, chunk, n, sums)
+            bar.update(1)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+# ------------------------------------------------------------------------------------------ merging
+def merge(out: Path, config: SweepConfig, evaluator: Evaluator, provenance: dict[str, Any]) -> tuple:
+    """Merge the chunks (in index order) and write every table of the output folder."""
+    from glu.experiments.corpus import chunk_ranges
+
+    cols = evaluator.columns
+    K, B = len(cols), evaluator.settings.bootstrap
+    frames = []
+    for i, c in enumerate(config.conditions):
+        total = np.zeros((B + 1, K))
+        for k, _ in chunk_ranges(config.per_condition, config.chunk_size):
+            est, reps = _read_chunk(_chunk_path(out, i, k), provenance["fingerprint"])
+            total[0] += est
+            total[1:] += reps.astype(np.float64)
+        f = pd.DataFrame(total, columns=[f"s{j}" for j in range(K)])
+        f.insert(0, "replicate", np.arange(B + 1))
+        f.insert(0, "viewpoint", c.viewpoint)
+        f.insert(0, "noise", c.noise)
+        frames.append(f)
+    sums = pd.concat(frames, ignore_index=True)
+    by_condition = metrics(sums, cols, ["noise", "viewpoint"])
+    by_noise = metrics(sums, cols, ["noise"]).assign(viewpoint="all")
+    overall = metrics(sums, cols, []).assign(noise=np.nan, viewpoint="all")
+    table = pd.concat(
+        [by_condition, by_noise[by_condition.columns], overall[by_condition.columns]], ignore_index=True
+    )
+    diffs = pd.concat([paired_differences(sums, cols, ["noise", "viewpoint"]),
+                       paired_differences(sums, cols, []).assign(noise=np.nan, viewpoint="all")], ignore_index=True)  # fmt: skip
+    rel = pd.concat([reliability(sums, cols, ["noise", "viewpoint"]),
+                     reliability(sums, cols, []).assign(noise=np.nan, viewpoint="all")], ignore_index=True)  # fmt: skip
+    params = provenance["settings"]
+    source = provenance["data_source"]
+    for df, name in ((table, EXPERIMENT), (diffs, "corpus_differences"), (rel, "corpus_reliability")):
+        tidy(df, name, source, **params)
+    summary = summarize(table, diffs, provenance)
+    _write_parquet(out / "sums.parquet", sums)
+    _write_parquet(out / "results.parquet", table)
+    _write_parquet(out / "differences.parquet", diffs)
+    _write_parquet(out / "reliability.parquet", rel)
+    atomic_write_json(out / "summary.json", summary)
+    head = pd.DataFrame(summary["overall"])
+    atomic_write_text(out / "summary.csv", head.to_csv(index=False, float_format="%.6g", lineterminator="\n"))
+    return table, diffs, rel, summary
+
+
+def _write_parquet(path: Path, df: pd.DataFrame) -> None:
+    with atomic_path(path, suffix=".parquet") as tmp:
+        df.to_parquet(tmp, index=False)
+
+
+def summarize(table: pd.DataFrame, diffs: pd.DataFrame, provenance: dict[str, Any]) -> dict[str, Any]:
+    """The tidy summary: overall metrics at the full gesture and the best strategy per target and metric."""
+    full = max(table["fraction"].dropna()) if table["fraction"].notna().any() else np.nan
+    overall = table[(table.viewpoint == "all") & table.noise.isna() & (table.fraction == full)]
+    rows = [
+        {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in r.items() if k not in ("noise", "viewpoint")}
+        for r in overall.to_dict("records")
+    ]  # fmt: skip
+    best = []
+    d_all = diffs[(diffs.viewpoint == "all") & diffs.noise.isna() & (diffs.fraction == full)]
+    for (target, metric), g in overall.groupby(["target", "metric"], sort=False):
+        up = HIGHER_IS_BETTER.get(metric, True)
+        ranked = g.sort_values("estimate", ascending=not up)
+        top = ranked.iloc[0]
+        pairs = d_all[(d_all.target == target) & (d_all.metric == metric)
+                      & ((d_all.strategy == top.strategy) | (d_all.baseline == top.strategy))]  # fmt: skip
+        beats = []
+        for p in pairs.itertuples():
+            other = p.baseline if p.strategy == top.strategy else p.strategy
+            sign = 1 if p.strategy == top.strategy else -1
+            lo, hi = sorted((sign * p.ci_low, sign * p.ci_high))
+            if (lo > 0) if up else (hi < 0):
+                beats.append(other)
+        best.append({"target": target, "metric": metric, "fraction": full, "best": top.strategy,
+                     "estimate": float(top.estimate), "ci_low": float(top.ci_low), "ci_high": float(top.ci_high),
+                     "significantly_better_than": sorted(beats)})  # fmt: skip
+    return {
+        "experiment": EXPERIMENT, "data_source": provenance["data_source"], "fingerprint": provenance["fingerprint"],
+        "episodes": provenance["episodes_per_condition"] * len(provenance["conditions"]),
+        "conditions": provenance["conditions"], "parameters": provenance["settings"],
+        "files": list(FILES), "overall": rows, "best": best,
+    }  # fmt: skip
