@@ -151,11 +151,12 @@ def fuse_action_tables(p_a: np.ndarray, p_hmm: np.ndarray, strategy: str) -> np.
     p_hmm : array, shape (..., K) — the gesture posterior (broadcast against ``p_a``)
     strategy : one of :data:`STRATEGIES`: ``hard`` puts all mass on ``argmax p_hmm`` (first on ties, as
         :func:`fuse`); ``virtual`` and ``product`` give ``p_a · p_hmm`` normalised; ``jeffrey`` gives
-        ``p_hmm`` itself (its rule fixes the marginal of Action)
+        ``p_hmm`` itself (its rule fixes the marginal of Action) — restricted to the actions the evidence
+        allows (``p_a > 0``) and renormalised, where :func:`fuse` would refuse the evidence as impossible
 
     Returns
     -------
-    array, shape (..., K); rows where ``p_a · p_hmm`` sums to 0 are NaN (virtual, product)
+    array, shape (..., K); rows where nothing is left to normalise are NaN (virtual, product, jeffrey)
     """
     check_strategy(strategy)
     p_a, q = np.broadcast_arrays(np.asarray(p_a, dtype=float), np.asarray(p_hmm, dtype=float))
@@ -163,9 +164,7 @@ def fuse_action_tables(p_a: np.ndarray, p_hmm: np.ndarray, strategy: str) -> np.
         out = np.zeros(q.shape)
         np.put_along_axis(out, np.argmax(q, axis=-1)[..., None], 1.0, axis=-1)
         return out
-    if strategy == "jeffrey":
-        return q / q.sum(axis=-1, keepdims=True)
-    joint = p_a * q
+    joint = np.where(p_a > 0, q, 0.0) if strategy == "jeffrey" else p_a * q
     total = joint.sum(axis=-1, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(total > 0, joint / np.where(total > 0, total, 1.0), np.nan)

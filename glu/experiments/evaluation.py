@@ -8,8 +8,8 @@ gesture, the gesture HMMs give ``p_HMM(A | G_1^t)`` with ``t = ⌈f·T⌉`` (one
     p(Action) once the robot has seen the object and the effect (``action_evidence``, by default Color,
     Shape, Size, ObjVel: TCDS's ``p_comb(A | X_obs, G)``). Strategies: ``gesture`` (p_HMM alone),
     ``network`` (p_BN(A | X_obs) alone), ``hard``, ``virtual``, ``jeffrey``, ``product``
-    (:func:`glu.fusion.fuse_action_tables`). For the action itself virtual evidence *is* the product rule
-    and Jeffrey's rule returns p_HMM, so three of the six coincide (a property the tests check).
+    (:func:`glu.fusion.fuse_action_tables`). For the action itself virtual evidence *is* the product rule,
+    and Jeffrey's rule returns p_HMM restricted to the actions the evidence allows (tested properties).
 ``effect``
     p(ObjVel) before the effect, from the object (``effect_evidence``: Color, Shape, Size) and the
     gesture — effect anticipation. Strategies ``network``, ``hard``, ``virtual``, ``jeffrey``

@@ -12,9 +12,9 @@ Example
 -------
 >>> import numpy as np
 >>> x = np.array([0.0, 0.3, 0.6, 1.0])
->>> y = np.array([[0.0], [1.0], [1.0], [0.0]])            # rises, stays, falls: no overshoot
+>>> y = np.array([[0.0], [0.2], [0.9], [1.0]])            # monotone data: a monotone curve
 >>> v = pchip(x, y, np.linspace(0, 1, 11))
->>> bool(v.max() <= 1.0 and v.min() >= 0.0), v.shape
+>>> bool(np.all(np.diff(v[:, 0]) >= 0)), v.shape
 (True, (11, 1))
 """
 

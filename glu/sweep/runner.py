@@ -243,6 +243,8 @@ def run_sweep(
     """
     t0 = time.perf_counter()
     check_scheduler(scheduler)
+    if scheduler not in (None, SYNCHRONOUS):
+        _check_reachable(scheduler)  # before any work: an unreachable cluster is bad input, said at once
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     evaluator, provenance = prepare(config, out, log)
@@ -311,6 +313,18 @@ def _run_tasks(evaluator, todo, out, fingerprint, scheduler, workers, progress, 
         bar.close()
 
 
+def _check_reachable(address: str, timeout: float = 10.0) -> None:
+    """DataError unless something accepts TCP connections at the scheduler's host and port."""
+    import socket
+
+    host, _, port = address.split("://", 1)[1].rstrip("/").rpartition(":")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
+            pass
+    except OSError as e:
+        raise DataError(f"cannot reach the Dask scheduler at {address}: {e.strerror or e}") from None
+
+
 def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> None:
     from distributed import Client, LocalCluster, as_completed
 
@@ -322,12 +336,12 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
                 if hasattr(os, "sched_getaffinity")
                 else (os.cpu_count() or 1)
             )
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                                    silence_logs=logging.ERROR)  # fmt: skip
             client = Client(cluster)
         else:
             try:
-                client = Client(scheduler, timeout="15s")
+                client = Client(scheduler, timeout="30s")
             except (OSError, TimeoutError) as e:
                 raise DataError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
     except BaseException:

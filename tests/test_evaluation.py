@@ -1,0 +1,147 @@
+"""Per-episode statistics of the corpus evaluation against a direct, episode-by-episode computation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from glu.bn import InferenceEngine, learn_bn
+from glu.data import load_experiments
+from glu.errors import DataError, ModelError
+from glu.experiments.corpus import Condition
+from glu.experiments.evaluation import EvaluationSettings, Evaluator, statistic_columns
+from glu.fusion import fuse
+from glu.gestures.batch import BatchScorer
+from glu.language.batch import agreement, best_sentences
+from glu.language.descriptions import nbest
+from glu.schema import ACTIONS
+
+SETTINGS = EvaluationSettings(fractions=(0.3, 1.0), bootstrap=25)
+
+
+def small_recognizer(seed=0):
+    """Gesture HMMs trained in a second on a few synthetic gestures (good enough to be informative)."""
+    from glu.gestures.corpus import synthetic_corpus
+    from glu.gestures.recognizer import train_recognizer
+
+    corpus = synthetic_corpus(6, seed)
+    by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
+    return train_recognizer(by_action, 3, 1, n_iter=10, seed=seed, warn=False)
+
+
+@pytest.fixture(scope="module")
+def setup():
+    engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
+    rec = small_recognizer()
+    ev = Evaluator(engine, BatchScorer(rec), SETTINGS, seed=5, chunk_size=12)
+    chunk = ev.simulate(Condition(0.03, "front"), 0, 12)
+    return engine, rec, ev, chunk, ev.episode_statistics(chunk)
+
+
+def column_values(ev, blocks):
+    """The per-episode statistics as a frame with the statistics' description as columns."""
+    X = np.concatenate(blocks, axis=1)
+    cols = ev.columns
+    return pd.DataFrame(X, columns=pd.MultiIndex.from_frame(cols.astype(str)))
+
+
+def cell(frame, target, strategy, fraction, stat, b=-1):
+    return frame[(target, strategy, str(fraction), stat, str(b))].to_numpy()
+
+
+def test_statistics_equal_a_direct_computation(setup):
+    engine, rec, ev, chunk, blocks = setup
+    frame = column_values(ev, blocks)
+    assert frame.shape[1] == len(ev.columns)
+    schema = engine.bn.schema
+    for i, x in enumerate(chunk.features):
+        row = {
+            n: schema.values_of(n)[chunk.codes[n][i]] for n in ("Action", "Color", "Shape", "Size", "ObjVel")
+        }
+        for f in SETTINGS.fractions:
+            t = max(int(np.ceil(round(f * len(x), 9))), 1)
+            q = rec.p_hmm(x[:t])  # the per-sequence path
+            a_true = ACTIONS.index(row["Action"])
+            # action: gesture alone, and the product rule on the network's evidence
+            assert cell(frame, "action", "gesture", f, "correct")[i] == float(np.argmax(q) == a_true)
+            assert cell(frame, "action", "gesture", f, "log_loss")[i] == pytest.approx(
+                -np.log(max(q[a_true], 1e-6)), rel=1e-9
+            )
+            obs = {k: row[k] for k in SETTINGS.action_evidence}
+            p = fuse(engine, "Action", obs, q, "product")["Action"]
+            assert cell(frame, "action", "product", f, "brier")[i] == pytest.approx(
+                ((p - np.eye(3)[a_true]) ** 2).sum(), rel=1e-9
+            )
+            # effect: virtual evidence before the effect
+            obs = {k: row[k] for k in SETTINGS.effect_evidence}
+            p = fuse(engine, "ObjVel", obs, q, "virtual")["ObjVel"]
+            y = schema.values_of("ObjVel").index(row["ObjVel"])
+            assert cell(frame, "effect", "virtual", f, "log_loss")[i] == pytest.approx(
+                -np.log(max(p[y], 1e-6)), rel=1e-9
+            )
+            b = min(int(p.max() * SETTINGS.bins), SETTINGS.bins - 1)
+            assert cell(frame, "effect", "virtual", f, "bin_n", b)[i] == 1.0
+            assert cell(frame, "effect", "virtual", f, "bin_confidence", b)[i] == pytest.approx(p.max())
+            # description: Jeffrey's rule, the exact 1-best, read by agreement()
+            obs = {k: row[k] for k in SETTINGS.description_evidence}
+            allowed = engine.query("Action", obs)["Action"] > 0  # Jeffrey's rule on the actions obs allows
+            wp = engine.word_probabilities(obs, {"Action": q * allowed / (q * allowed).sum()}, "jeffrey")
+            sentence = nbest(None, pd.Series(wp, index=engine.binary_leaves), n=1).sentence[0]
+            one = best_sentences(wp[None], engine.binary_leaves)
+            assert one.sentence(0).split() == sentence.split() or sorted(one.sentence(0).split()) == sorted(
+                sentence.split()
+            )
+            ok = agreement(one, {k: np.array([schema.values_of(k).index(v)]) for k, v in row.items()},
+                           {k: schema.values_of(k) for k in row})  # fmt: skip
+            assert cell(frame, "description", "jeffrey", f, "verb")[i] == float(ok["verb"][0])
+
+
+def test_identities_between_strategies(setup):
+    _, _, ev, _, blocks = setup
+    frame = column_values(ev, blocks)
+    for f in SETTINGS.fractions:
+        for stat in ("correct", "log_loss", "brier"):
+            np.testing.assert_allclose(
+                cell(frame, "action", "virtual", f, stat),
+                cell(frame, "action", "product", f, stat),
+                rtol=1e-12,
+            )
+        # Jeffrey's rule returns p_HMM for the action (on the actions the evidence allows)
+        np.testing.assert_array_equal(
+            cell(frame, "action", "jeffrey", f, "correct") >= cell(frame, "action", "gesture", f, "correct"),
+            True,
+        )
+        # the network alone and the true action do not depend on the gesture
+        for strat in ("network", "true_action"):
+            np.testing.assert_array_equal(
+                cell(frame, "effect", strat, f, "brier"), cell(frame, "effect", strat, 1.0, "brier")
+            )
+    assert (cell(frame, "description", "true_action", 1.0, "verb") == 1).all()
+
+
+def test_run_chunk_sums_with_bootstrap_weights(setup):
+    _, _, ev, _, blocks = setup
+    sums = ev.run_chunk(Condition(0.03, "front"), 0, 12)
+    assert sums.shape == (SETTINGS.bootstrap + 1, len(ev.columns))
+    np.testing.assert_allclose(sums[0], np.concatenate(blocks, axis=1).sum(axis=0), rtol=1e-12)
+    assert sums[0, 0] == 12 and (sums[1:, 0] != 12).any()  # replicates count episodes with Poisson weights
+
+
+def test_columns_and_settings():
+    cols = statistic_columns(EvaluationSettings(fractions=(1.0,), strategies=("gesture", "hard"), bins=2))
+    assert cols.iloc[0].stat == "n"
+    assert set(cols.target) == {"episodes", "action", "effect", "description"}
+    assert set(cols[cols.target == "action"].strategy) == {"gesture", "hard"}
+    assert len(cols[(cols.target == "effect")]) == 3 + 2 * 3
+    for bad, msg in [({"fractions": (0.0,)}, "in \\(0, 1\\]"), ({"strategies": ("best",)}, "unknown strategy 'best'"),
+                     ({"effect_evidence": ("ObjVel",)}, "leave it out"), ({"action_evidence": ("Action",)}, "cannot be observed"),
+                     ({"bootstrap": -1}, "replicates")]:  # fmt: skip
+        with pytest.raises(DataError, match=msg):
+            EvaluationSettings(**bad)
+
+
+def test_the_recogniser_must_know_the_networks_actions(setup):
+    engine, rec, *_ = setup
+    with pytest.raises(ModelError, match="grasp, tap, touch"):
+        Evaluator(engine, BatchScorer([rec.models[a] for a in ("tap", "grasp", "touch")]))
