@@ -33,6 +33,12 @@ EXPECTED_FIGURES = {
         "tcds_anticipation_glu",
     ],
     "09_verbal_descriptions": ["verbal_and_but", "verbal_yellow_sphere_nbest", "verbal_sampling_vs_exact"],
+    "11_corpus_evaluation": [
+        "corpus_strategies_vs_noise",
+        "corpus_early_recognition",
+        "corpus_calibration",
+        "corpus_differences",
+    ],
 }
 EXPECTED_RECORDINGS = {"08_tcds_figures": ["tcds_anticipation_sphere_glu", "tcds_anticipation_box_glu"]}
 COMMON_PARAMETERS = {"data", "seed", "quick", "out_dir"}

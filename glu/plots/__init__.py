@@ -4,9 +4,16 @@ Each function draws a tidy frame of :mod:`glu.experiments` (or a model) on the a
 argument (a sequence of axes for a multi-panel figure), and returns them. The look shared by every figure
 (colours, sizes, the data-source footer, deterministic PNG and SVG) is in :mod:`glu.plots.style`. The
 functions live in one module per part of the story — :mod:`~glu.plots.gestures`,
-:mod:`~glu.plots.network`, :mod:`~glu.plots.verbal` — and are all importable from here.
+:mod:`~glu.plots.network`, :mod:`~glu.plots.verbal`, :mod:`~glu.plots.evaluation` — and are all importable from here.
 """
 
+from glu.plots.evaluation import (
+    plot_by_viewpoint,
+    plot_differences,
+    plot_early_recognition,
+    plot_metric_vs_noise,
+    plot_reliability,
+)
 from glu.plots.gestures import (
     plot_accuracy_vs_noise,
     plot_confusion,
@@ -34,6 +41,11 @@ __all__ = [
     "VALUE_COLORS",
     "new_figure",
     "plot_accuracy_vs_noise",
+    "plot_by_viewpoint",
+    "plot_differences",
+    "plot_early_recognition",
+    "plot_metric_vs_noise",
+    "plot_reliability",
     "plot_action_vs_soft_evidence",
     "plot_and_but",
     "plot_anticipation",

@@ -21,8 +21,8 @@ The output folder::
     OUT/recognizer.json     the gesture HMMs used (trained once, reused on resume)
     OUT/chunks/*.npz        the summed statistics of each chunk (estimate and bootstrap replicates)
     OUT/sums.parquet        the chunks merged: one row per condition and replicate
-    OUT/results.parquet     THE table: every metric with its 95 % interval, per condition, per noise level
-                            (viewpoint "all") and overall (noise NaN, viewpoint "all")
+    OUT/results.parquet     THE table: every metric with its 95 % interval, per condition, pooled over the
+                            viewpoints (viewpoint "all"), over the noise levels (noise NaN), and both
     OUT/differences.parquet paired differences between strategies, with intervals
     OUT/reliability.parquet the effect's reliability diagrams
     OUT/summary.json, OUT/summary.csv   the tidy summary: the overall metrics at the full gesture, and
@@ -392,10 +392,10 @@ def merge(out: Path, config: SweepConfig, evaluator: Evaluator, provenance: dict
     sums = pd.concat(frames, ignore_index=True)
     by_condition = metrics(sums, cols, ["noise", "viewpoint"])
     by_noise = metrics(sums, cols, ["noise"]).assign(viewpoint="all")
+    by_view = metrics(sums, cols, ["viewpoint"]).assign(noise=np.nan)
     overall = metrics(sums, cols, []).assign(noise=np.nan, viewpoint="all")
-    table = pd.concat(
-        [by_condition, by_noise[by_condition.columns], overall[by_condition.columns]], ignore_index=True
-    )
+    parts = [by_condition] + [p[by_condition.columns] for p in (by_noise, by_view, overall)]
+    table = pd.concat(parts, ignore_index=True)
     diffs = pd.concat([paired_differences(sums, cols, ["noise", "viewpoint"]),
                        paired_differences(sums, cols, []).assign(noise=np.nan, viewpoint="all")], ignore_index=True)  # fmt: skip
     rel = pd.concat([reliability(sums, cols, ["noise", "viewpoint"]),

@@ -1,0 +1,177 @@
+"""Figures of the corpus evaluation: which fusion strategy wins where, with 95 % intervals.
+
+Every function draws the tables of :mod:`glu.sweep` (``results``, ``differences``, ``reliability``) on the
+axes it is given and returns them. In those tables a noise of NaN means "pooled over the noise levels"
+and a viewpoint ``"all"`` "pooled over the viewpoints".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+
+STRATEGY_COLORS = {
+    "gesture": "#8C8C8C", "network": "#937860", "hard": "#C44E52", "virtual": "#4C72B0",
+    "jeffrey": "#55A868", "product": "#DD8452", "true_action": "#222222",
+}  # fmt: skip
+STRATEGY_STYLE = {"true_action": ":", "network": "--", "gesture": "--"}
+METRIC_LABEL = {
+    "accuracy": "accuracy", "log_loss": "log-loss (nats)", "brier": "Brier score", "ece": "ECE",
+    "verb": "verb right", "object": "object right", "effect": "effect right", "all": "sentence right",
+}  # fmt: skip
+
+
+def _pooled(frame: pd.DataFrame, noise: float | None, viewpoint: str) -> pd.DataFrame:
+    sel = frame.viewpoint == viewpoint
+    return frame[sel & (frame.noise.isna() if noise is None else np.isclose(frame.noise, noise))]
+
+
+def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str, jitter: float = 0.0) -> None:
+    c = STRATEGY_COLORS.get(strategy, "black")
+    ax.plot(x + jitter, g.estimate, color=c, ls=STRATEGY_STYLE.get(strategy, "-"), marker="o", ms=3, lw=1.3,
+            label=strategy)  # fmt: skip
+    ax.fill_between(x + jitter, g.ci_low, g.ci_high, color=c, alpha=0.15, lw=0)
+
+
+def plot_metric_vs_noise(
+    ax: Axes,
+    results: pd.DataFrame,
+    target: str,
+    metric: str,
+    fraction: float = 1.0,
+    viewpoint: str = "all",
+    strategies: Sequence[str] | None = None,
+) -> Axes:
+    """One metric of one target against the sensor noise (m), a line and a 95 % band per strategy."""
+    sel = results[(results.target == target) & (results.metric == metric) & np.isclose(results.fraction, fraction)
+                  & (results.viewpoint == viewpoint) & results.noise.notna()]  # fmt: skip
+    for strategy, g in sel.groupby("strategy", sort=False):
+        if strategies is None or strategy in strategies:
+            g = g.sort_values("noise")
+            _line(ax, g.noise.to_numpy() * 100, g, strategy)
+    ax.set_xlabel("sensor noise (cm)")
+    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
+    where = "all viewpoints" if viewpoint == "all" else viewpoint
+    ax.set_title(f"{target}: {METRIC_LABEL.get(metric, metric)} ({where}, {fraction:.0%} seen)", fontsize=9)
+    return ax
+
+
+def plot_early_recognition(
+    ax: Axes,
+    results: pd.DataFrame,
+    target: str,
+    metric: str = "accuracy",
+    noise: float | None = None,
+    viewpoint: str = "all",
+    strategies: Sequence[str] | None = None,
+) -> Axes:
+    """One metric against the observed fraction of the gesture, a line and a 95 % band per strategy."""
+    sel = _pooled(results, noise, viewpoint)
+    sel = sel[(sel.target == target) & (sel.metric == metric)]
+    for strategy, g in sel.groupby("strategy", sort=False):
+        if strategies is None or strategy in strategies:
+            g = g.sort_values("fraction")
+            _line(ax, g.fraction.to_numpy() * 100, g, strategy)
+    ax.set_xlabel("gesture observed (%)")
+    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
+    how = "all noise levels" if noise is None else f"noise {noise * 100:g} cm"
+    ax.set_title(f"{target}: early recognition ({how})", fontsize=9)
+    return ax
+
+
+def plot_reliability(
+    ax: Axes,
+    reliability: pd.DataFrame,
+    fraction: float = 1.0,
+    strategies: Sequence[str] | None = None,
+    noise: float | None = None,
+    viewpoint: str = "all",
+) -> Axes:
+    """Reliability diagram of the effect (ObjVel): how often the top value was right, against its
+    probability, per calibration bin; marker area ∝ the number of episodes in the bin."""
+    sel = _pooled(reliability, noise, viewpoint)
+    sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0)]
+    ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
+    total = sel.groupby("strategy").n.transform("sum")
+    for strategy, g in sel.assign(share=sel.n / total).groupby("strategy", sort=False):
+        if strategies is None or strategy in strategies:
+            c = STRATEGY_COLORS.get(strategy, "black")
+            ax.plot(g.confidence, g.accuracy, color=c, lw=1.0, ls=STRATEGY_STYLE.get(strategy, "-"), label=strategy)
+            ax.scatter(g.confidence, g.accuracy, s=4 + 200 * g.share, color=c, alpha=0.7, lw=0)
+    ax.set_xlim(0.3, 1.0)
+    ax.set_ylim(0.0, 1.0)
+    ax.set_xlabel("predicted probability of the top ObjVel value")
+    ax.set_ylabel("how often it was right")
+    ax.set_title(f"effect calibration ({fraction:.0%} seen)", fontsize=9)
+    return ax
+
+
+def plot_differences(
+    ax: Axes,
+    differences: pd.DataFrame,
+    pairs: Sequence[tuple[str, str, str, str]],
+    fraction: float = 1.0,
+    noise: float | None = None,
+    viewpoint: str = "all",
+) -> Axes:
+    """Paired differences with 95 % intervals, one row per ``(target, metric, strategy, baseline)``.
+
+    A filled marker: the interval excludes 0 on the side where the metric improves.
+    """
+    sel = _pooled(differences, noise, viewpoint)
+    sel = sel[np.isclose(sel.fraction, fraction)]
+    labels = []
+    for i, (target, metric, strategy, baseline) in enumerate(pairs):
+        row = sel[(sel.target == target) & (sel.metric == metric) & (sel.strategy == strategy) & (sel.baseline == baseline)]
+        sign = 1.0
+        if row.empty:  # stored the other way round
+            row = sel[(sel.target == target) & (sel.metric == metric) & (sel.strategy == baseline) & (sel.baseline == strategy)]
+            sign = -1.0
+        if row.empty:
+            continue
+        r = row.iloc[0]
+        lo, hi = sorted((sign * r.ci_low, sign * r.ci_high))
+        c = STRATEGY_COLORS.get(strategy, "black")
+        ax.plot([lo, hi], [i, i], color=c, lw=2)
+        ax.plot([sign * r.difference], [i], marker="o", color=c, mfc=c if _better(metric, lo, hi) else "white")
+        labels.append((i, f"{target} {METRIC_LABEL.get(metric, metric)}: {strategy} − {baseline}"))
+    ax.axvline(0, color="0.5", lw=0.8)
+    ax.set_yticks([i for i, _ in labels], [t for _, t in labels], fontsize=7)
+    ax.invert_yaxis()
+    ax.set_xlabel("difference (95 % paired bootstrap interval)")
+    ax.set_title(f"paired differences ({fraction:.0%} seen)", fontsize=9)
+    return ax
+
+
+def _better(metric: str, lo: float, hi: float) -> bool:
+    from glu.experiments.intervals import HIGHER_IS_BETTER
+
+    return lo > 0 if HIGHER_IS_BETTER.get(metric, True) else hi < 0
+
+
+def plot_by_viewpoint(
+    ax: Axes,
+    results: pd.DataFrame,
+    target: str,
+    metric: str,
+    fraction: float = 1.0,
+    strategies: Sequence[str] | None = None,
+) -> Axes:
+    """One metric per viewpoint (pooled over noise), grouped bars with 95 % intervals per strategy."""
+    sel = results[(results.target == target) & (results.metric == metric) & np.isclose(results.fraction, fraction)
+                  & results.noise.isna() & (results.viewpoint != "all")]  # fmt: skip
+    views = list(dict.fromkeys(sel.viewpoint))
+    strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
+    width = 0.8 / max(len(strats), 1)
+    for k, strategy in enumerate(strats):
+        g = sel[sel.strategy == strategy].set_index("viewpoint").loc[views]
+        x = np.arange(len(views)) + (k - (len(strats) - 1) / 2) * width
+        ax.bar(x, g.estimate, width, color=STRATEGY_COLORS.get(strategy, "black"), label=strategy,
+               yerr=[g.estimate - g.ci_low, g.ci_high - g.estimate], error_kw={"lw": 0.8})  # fmt: skip
+    ax.set_xticks(np.arange(len(views)), views)
+    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
+    ax.set_title(f"{target}: by viewpoint (all noise levels, {fraction:.0%} seen)", fontsize=9)
+    return ax
