@@ -97,6 +97,21 @@ def test_statistics_equal_a_direct_computation(setup):
             assert cell(frame, "description", "jeffrey", f, "verb")[i] == float(ok["verb"][0])
 
 
+def test_per_frame_posterior(setup):
+    """p_HMM read per frame: the softmax of (1/t) log L(G_1^t | A), with the per-sequence forward."""
+    _, rec, ev, chunk, _ = setup
+    q = ev.p_hmm(chunk.features, "per_frame")
+    for i, x in enumerate(chunk.features[:5]):
+        for j, f in enumerate(SETTINGS.fractions):
+            t = max(int(np.ceil(round(f * len(x), 9))), 1)
+            ll = rec.loglik(x[:t]) / t
+            np.testing.assert_allclose(
+                q[i, j], np.exp(ll - ll.max()) / np.exp(ll - ll.max()).sum(), rtol=1e-9
+            )
+    with pytest.raises(DataError, match="unknown posterior"):
+        ev.p_hmm(chunk.features, "tempered")
+
+
 def test_identities_between_strategies(setup):
     _, _, ev, _, blocks = setup
     frame = column_values(ev, blocks)

@@ -256,3 +256,15 @@ def test_glu_corpus_writes_parquet(config_file, tmp_path, capsys):
     assert status == 0, err
     df = pd.read_parquet(tmp_path / "c.parquet")
     assert len(df) == 8 and {"Action", "ObjVel", "words", "xyz", "noise", "viewpoint"} <= set(df.columns)
+
+
+def test_posteriors_share_the_episodes(config_file, synchronous, tmp_path):
+    """A second posterior adds conditions scored on the same episodes: the first posterior's rows are unchanged."""
+    ref, _ = synchronous
+    config = load_config(config_file).with_overrides(posteriors=("likelihood", "per_frame"))
+    result = run_sweep(config, tmp_path, scheduler="synchronous", log=quiet)
+    assert result.computed == 16 and set(result.metrics.posterior) == {"likelihood", "per_frame"}
+    both = result.metrics[result.metrics.posterior == "likelihood"].reset_index(drop=True)
+    one = pd.read_parquet(ref / "results.parquet")
+    pd.testing.assert_frame_equal(both[one.columns], one, check_exact=True)
+    assert result.summary["episodes"] == 64

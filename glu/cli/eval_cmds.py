@@ -88,16 +88,17 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def overall_text(summary: dict) -> str:
-    """The overall metrics at the full gesture as a small text table (estimate [95 % interval])."""
+    """The overall metrics at the full gesture as a small text table: posterior, target, metric, then each
+    strategy's estimate and [95 % interval], pooled over noise levels and viewpoints."""
     import pandas as pd
 
     rows = pd.DataFrame(summary["overall"])
     lines = [f"{summary['episodes']} episodes; {summary['data_source']}"]
-    for (target, metric), g in rows.groupby(["target", "metric"], sort=False):
+    for (posterior, target, metric), g in rows.groupby(["posterior", "target", "metric"], sort=False):
         cells = "  ".join(
             f"{r.strategy} {r.estimate:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]" for r in g.itertuples()
         )
-        lines.append(f"  {target:11s} {metric:9s} {cells}")
+        lines.append(f"  {posterior:10s} {target:11s} {metric:9s} {cells}")
     return "\n".join(lines)
 
 
@@ -108,10 +109,11 @@ def _corpus(args: argparse.Namespace) -> int:
     engine, label = prepare_world(config)
     from glu.experiments.corpus import write_corpus
 
-    path = write_corpus(args.out, engine, config.conditions, config.per_condition, config.seed, config.chunk_size,
+    seen = [
+        c for c in config.conditions if c.posterior == config.posteriors[0]
+    ]  # the posterior changes no episode
+    path = write_corpus(args.out, engine, seen, config.per_condition, config.seed, config.chunk_size,
                         label, scenario=config.scenario, gestures=config.gestures,
                         views={v: config.views[v] for v in config.viewpoints})  # fmt: skip
-    print(
-        f"{config.per_condition * len(config.conditions)} episodes ({len(config.conditions)} conditions) → {path}"
-    )
+    print(f"{config.n_episodes} episodes ({len(seen)} conditions) → {path}")
     return 0

@@ -119,22 +119,35 @@ class Scenario:
         }
 
 
+POSTERIORS: dict[str, str] = {
+    "likelihood": "p_HMM(A | G_1^t) ∝ L(G_1^t | A), equal priors (the originals')",
+    "per_frame": "p_HMM(A | G_1^t) ∝ exp((1/t) log L(G_1^t | A)), the per-frame log-likelihood TCDS plots",
+}
+"""How the robot turns its HMMs' likelihoods into ``p_HMM``. A likelihood multiplies t frame densities as if
+the frames were independent given the states, which makes ``p_HMM`` nearly certain after a few dozen
+frames, right or wrong; the per-frame version tempers it by the number of frames seen."""
+
+
 @dataclass(frozen=True)
 class Condition:
-    """How the robot sees the episodes: sensor noise and viewpoint.
+    """How the robot sees the episodes (sensor noise, viewpoint) and reads its HMMs (posterior).
 
     Attributes
     ----------
     noise : standard deviation of the sensor noise on every joint, metres
     viewpoint : a name of :data:`VIEWPOINTS` (or of ``views`` given to :func:`simulate_chunk`)
+    posterior : a name of :data:`POSTERIORS` (the simulation ignores it; the evaluation uses it)
     """
 
     noise: float
     viewpoint: str
+    posterior: str = "likelihood"
 
     def __post_init__(self) -> None:
         if not (isinstance(self.noise, int | float) and 0 <= self.noise < math.inf):
             raise DataError(f"noise={self.noise!r}: the sensor noise must be a number ≥ 0 (metres)")
+        if self.posterior not in POSTERIORS:
+            raise DataError(f"unknown posterior {self.posterior!r}; allowed: {', '.join(POSTERIORS)}")
 
 
 @dataclass(frozen=True)

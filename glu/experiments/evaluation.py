@@ -2,7 +2,9 @@
 
 For each episode of a chunk (:mod:`glu.experiments.corpus`) and each observed fraction ``f`` of its
 gesture, the gesture HMMs give ``p_HMM(A | G_1^t)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass,
-:class:`~glu.gestures.batch.BatchScorer`), and each strategy predicts three things:
+:class:`~glu.gestures.batch.BatchScorer`; from the likelihoods as the originals, or per frame — the
+condition's ``posterior``, :data:`~glu.experiments.corpus.POSTERIORS`), and each strategy predicts three
+things:
 
 ``action``
     p(Action) once the robot has seen the object and the effect (``action_evidence``, by default Color,
@@ -41,6 +43,7 @@ import pandas as pd
 from glu.bn.inference import InferenceEngine
 from glu.errors import DataError, ImpossibleEvidenceError, ModelError
 from glu.experiments.corpus import (
+    POSTERIORS,
     VIEWPOINTS,
     Chunk,
     Condition,
@@ -253,26 +256,37 @@ class Evaluator:
         ``self.columns`` row k. The weights depend on (seed, chunk) only, so every condition and strategy
         is resampled on the same episodes (paired).
         """
-        episodes = self.simulate(condition, chunk, n)
-        stats = self.episode_statistics(episodes)
-        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(BOOT_KEY, chunk)))
-        return accumulate(stats, poisson_weights(n, self.settings.bootstrap, rng))
+        return self.run_chunks([condition], chunk, n)[0]
 
-    def p_hmm(self, features: Sequence[np.ndarray]) -> np.ndarray:
-        """``p_HMM(A | G_1^t)`` at every observed fraction, shape (n, F, K)."""
+    def run_chunks(self, conditions: Sequence[Condition], chunk: int, n: int) -> list[np.ndarray]:
+        """:meth:`run_chunk` for conditions that differ only in their posterior: one simulation for all."""
+        if len({(c.noise, c.viewpoint) for c in conditions}) != 1:
+            raise DataError("run_chunks: the conditions must share their noise and viewpoint")
+        episodes = self.simulate(conditions[0], chunk, n)
+        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(BOOT_KEY, chunk)))
+        weights = poisson_weights(n, self.settings.bootstrap, rng)
+        return [accumulate(self.episode_statistics(episodes, c.posterior), weights) for c in conditions]
+
+    def p_hmm(self, features: Sequence[np.ndarray], posterior: str = "likelihood") -> np.ndarray:
+        """``p_HMM(A | G_1^t)`` at every observed fraction, shape (n, F, K) (``posterior``: :data:`POSTERIORS`)."""
         lengths = np.array([len(x) for x in features])
         f = np.asarray(self.settings.fractions)
         ends = np.maximum(np.ceil(np.round(f[None, :] * lengths[:, None], 9)).astype(int), 1)
-        q = p_hmm_from_loglik(self.scorer.loglik_at(features, ends))
+        loglik = self.scorer.loglik_at(features, ends)
+        if posterior == "per_frame":
+            loglik = loglik / ends[:, :, None]
+        elif posterior != "likelihood":
+            raise DataError(f"unknown posterior {posterior!r}; allowed: {', '.join(POSTERIORS)}")
+        q = p_hmm_from_loglik(loglik)
         bad = ~np.isfinite(q).all(axis=-1)
         q[bad] = 1.0 / q.shape[-1]  # every model finds the prefix impossible: no information
         return q
 
-    def episode_statistics(self, episodes: Chunk) -> list[np.ndarray]:
+    def episode_statistics(self, episodes: Chunk, posterior: str = "likelihood") -> list[np.ndarray]:
         """Per-episode statistics, blocks of columns in the order of ``self.columns`` (each shape (n, k))."""
         s, codes = self.settings, episodes.codes
         shape = {n: self.engine.shape[self.engine.axis[n]] for n in AFFORDANCE_NODES}
-        q = self.p_hmm(episodes.features)  # (n, F, K)
+        q = self.p_hmm(episodes.features, posterior)  # (n, F, K)
         n, F, K = q.shape
         action = codes["Action"]
         blocks = [np.ones((n, 1))]

@@ -2,7 +2,8 @@
 
 Every function draws the tables of :mod:`glu.sweep` (``results``, ``differences``, ``reliability``) on the
 axes it is given and returns them. In those tables a noise of NaN means "pooled over the noise levels"
-and a viewpoint ``"all"`` "pooled over the viewpoints".
+and a viewpoint ``"all"`` "pooled over the viewpoints"; ``posterior`` picks how p_HMM was read from the
+HMMs (:data:`glu.experiments.corpus.POSTERIORS`).
 """
 
 from __future__ import annotations
@@ -24,8 +25,8 @@ METRIC_LABEL = {
 }  # fmt: skip
 
 
-def _pooled(frame: pd.DataFrame, noise: float | None, viewpoint: str) -> pd.DataFrame:
-    sel = frame.viewpoint == viewpoint
+def _pooled(frame: pd.DataFrame, noise: float | None, viewpoint: str, posterior: str) -> pd.DataFrame:
+    sel = (frame.viewpoint == viewpoint) & (frame.posterior == posterior)
     return frame[sel & (frame.noise.isna() if noise is None else np.isclose(frame.noise, noise))]
 
 
@@ -44,10 +45,11 @@ def plot_metric_vs_noise(
     fraction: float = 1.0,
     viewpoint: str = "all",
     strategies: Sequence[str] | None = None,
+    posterior: str = "likelihood",
 ) -> Axes:
     """One metric of one target against the sensor noise (m), a line and a 95 % band per strategy."""
     sel = results[(results.target == target) & (results.metric == metric) & np.isclose(results.fraction, fraction)
-                  & (results.viewpoint == viewpoint) & results.noise.notna()]  # fmt: skip
+                  & (results.viewpoint == viewpoint) & results.noise.notna() & (results.posterior == posterior)]  # fmt: skip
     for strategy, g in sel.groupby("strategy", sort=False):
         if strategies is None or strategy in strategies:
             g = g.sort_values("noise")
@@ -67,9 +69,10 @@ def plot_early_recognition(
     noise: float | None = None,
     viewpoint: str = "all",
     strategies: Sequence[str] | None = None,
+    posterior: str = "likelihood",
 ) -> Axes:
     """One metric against the observed fraction of the gesture, a line and a 95 % band per strategy."""
-    sel = _pooled(results, noise, viewpoint)
+    sel = _pooled(results, noise, viewpoint, posterior)
     sel = sel[(sel.target == target) & (sel.metric == metric)]
     for strategy, g in sel.groupby("strategy", sort=False):
         if strategies is None or strategy in strategies:
@@ -89,17 +92,25 @@ def plot_reliability(
     strategies: Sequence[str] | None = None,
     noise: float | None = None,
     viewpoint: str = "all",
+    posterior: str = "likelihood",
 ) -> Axes:
     """Reliability diagram of the effect (ObjVel): how often the top value was right, against its
     probability, per calibration bin; marker area ∝ the number of episodes in the bin."""
-    sel = _pooled(reliability, noise, viewpoint)
+    sel = _pooled(reliability, noise, viewpoint, posterior)
     sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0)]
     ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
     total = sel.groupby("strategy").n.transform("sum")
     for strategy, g in sel.assign(share=sel.n / total).groupby("strategy", sort=False):
         if strategies is None or strategy in strategies:
             c = STRATEGY_COLORS.get(strategy, "black")
-            ax.plot(g.confidence, g.accuracy, color=c, lw=1.0, ls=STRATEGY_STYLE.get(strategy, "-"), label=strategy)
+            ax.plot(
+                g.confidence,
+                g.accuracy,
+                color=c,
+                lw=1.0,
+                ls=STRATEGY_STYLE.get(strategy, "-"),
+                label=strategy,
+            )
             ax.scatter(g.confidence, g.accuracy, s=4 + 200 * g.share, color=c, alpha=0.7, lw=0)
     ax.set_xlim(0.3, 1.0)
     ax.set_ylim(0.0, 1.0)
@@ -116,19 +127,30 @@ def plot_differences(
     fraction: float = 1.0,
     noise: float | None = None,
     viewpoint: str = "all",
+    posterior: str = "likelihood",
 ) -> Axes:
     """Paired differences with 95 % intervals, one row per ``(target, metric, strategy, baseline)``.
 
     A filled marker: the interval excludes 0 on the side where the metric improves.
     """
-    sel = _pooled(differences, noise, viewpoint)
+    sel = _pooled(differences, noise, viewpoint, posterior)
     sel = sel[np.isclose(sel.fraction, fraction)]
     labels = []
     for i, (target, metric, strategy, baseline) in enumerate(pairs):
-        row = sel[(sel.target == target) & (sel.metric == metric) & (sel.strategy == strategy) & (sel.baseline == baseline)]
+        row = sel[
+            (sel.target == target)
+            & (sel.metric == metric)
+            & (sel.strategy == strategy)
+            & (sel.baseline == baseline)
+        ]
         sign = 1.0
         if row.empty:  # stored the other way round
-            row = sel[(sel.target == target) & (sel.metric == metric) & (sel.strategy == baseline) & (sel.baseline == strategy)]
+            row = sel[
+                (sel.target == target)
+                & (sel.metric == metric)
+                & (sel.strategy == baseline)
+                & (sel.baseline == strategy)
+            ]
             sign = -1.0
         if row.empty:
             continue
@@ -136,7 +158,9 @@ def plot_differences(
         lo, hi = sorted((sign * r.ci_low, sign * r.ci_high))
         c = STRATEGY_COLORS.get(strategy, "black")
         ax.plot([lo, hi], [i, i], color=c, lw=2)
-        ax.plot([sign * r.difference], [i], marker="o", color=c, mfc=c if _better(metric, lo, hi) else "white")
+        ax.plot(
+            [sign * r.difference], [i], marker="o", color=c, mfc=c if _better(metric, lo, hi) else "white"
+        )
         labels.append((i, f"{target} {METRIC_LABEL.get(metric, metric)}: {strategy} − {baseline}"))
     ax.axvline(0, color="0.5", lw=0.8)
     ax.set_yticks([i for i, _ in labels], [t for _, t in labels], fontsize=7)
@@ -159,10 +183,11 @@ def plot_by_viewpoint(
     metric: str,
     fraction: float = 1.0,
     strategies: Sequence[str] | None = None,
+    posterior: str = "likelihood",
 ) -> Axes:
     """One metric per viewpoint (pooled over noise), grouped bars with 95 % intervals per strategy."""
     sel = results[(results.target == target) & (results.metric == metric) & np.isclose(results.fraction, fraction)
-                  & results.noise.isna() & (results.viewpoint != "all")]  # fmt: skip
+                  & results.noise.isna() & (results.viewpoint != "all") & (results.posterior == posterior)]  # fmt: skip
     views = list(dict.fromkeys(sel.viewpoint))
     strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
     width = 0.8 / max(len(strats), 1)

@@ -7,9 +7,10 @@ default shown::
     seed = 0
     chunk_size = 2000         # episodes per task (and per resumable piece)
 
-    [grid]                    # the factors: noise × viewpoint are conditions; every episode is scored
-    noise = [0.0, 0.02, 0.05, 0.1]               # at every fraction by every strategy
+    [grid]                    # the factors: noise × viewpoint × posterior are conditions; every episode
+    noise = [0.0, 0.02, 0.05, 0.1]               # is scored at every fraction by every strategy
     viewpoints = ["front", "turned", "seated"]
+    posteriors = ["likelihood"]                  # also "per_frame" (glu.experiments.corpus.POSTERIORS)
     fractions = [0.2, 0.4, 0.6, 0.8, 1.0]
     strategies = ["gesture", "network", "hard", "virtual", "jeffrey", "product", "true_action"]
 
@@ -60,7 +61,7 @@ from typing import Any
 from glu.bn.learning import UNSEEN_MODES
 from glu.data.source import WORD_FILES
 from glu.errors import DataError
-from glu.experiments.corpus import VIEWPOINTS, Condition, GestureSettings, Scenario
+from glu.experiments.corpus import POSTERIORS, VIEWPOINTS, Condition, GestureSettings, Scenario
 from glu.experiments.evaluation import EvaluationSettings
 from glu.gestures.synthetic import POSTURES, View
 from glu.gestures.training import TrainingConfig
@@ -99,6 +100,7 @@ class SweepConfig:
     chunk_size: int = 2000
     noise: tuple[float, ...] = (0.0, 0.02, 0.05, 0.1)
     viewpoints: tuple[str, ...] = ("front", "turned", "seated")
+    posteriors: tuple[str, ...] = ("likelihood",)
     views: Mapping[str, View] = field(default_factory=lambda: dict(VIEWPOINTS))
     scenario: Scenario = Scenario()
     gestures: GestureSettings = GestureSettings()
@@ -112,8 +114,13 @@ class SweepConfig:
         _whole("chunk_size", self.chunk_size, 1, 1_000_000)
         if not self.noise or any(not _number(x) or x < 0 for x in self.noise):
             raise DataError(f"grid.noise {list(self.noise)}: give one or more noise levels ≥ 0 (metres)")
-        if len(set(self.noise)) != len(self.noise) or len(set(self.viewpoints)) != len(self.viewpoints):
-            raise DataError("grid: each noise level and viewpoint may appear once")
+        if any(len(set(v)) != len(v) for v in (self.noise, self.viewpoints, self.posteriors)):
+            raise DataError("grid: each noise level, viewpoint and posterior may appear once")
+        bad = [p for p in self.posteriors if p not in POSTERIORS]
+        if bad or not self.posteriors:
+            raise DataError(
+                f"grid.posteriors: unknown posterior {bad[0] if bad else '(none)'!r}; allowed: {', '.join(POSTERIORS)}"
+            )
         if not self.viewpoints:
             raise DataError("grid.viewpoints: give at least one viewpoint")
         unknown = [v for v in self.viewpoints if v not in self.views]
@@ -134,13 +141,21 @@ class SweepConfig:
 
     @property
     def conditions(self) -> list[Condition]:
-        """The conditions, noise-major: (noise, viewpoint) for every pair of the grid."""
-        return [Condition(float(n), v) for n in self.noise for v in self.viewpoints]
+        """The conditions, noise-major: (noise, viewpoint, posterior) for every triple of the grid."""
+        return [
+            Condition(float(n), v, p) for n in self.noise for v in self.viewpoints for p in self.posteriors
+        ]
 
     @property
     def per_condition(self) -> int:
-        """Episodes per condition: ``episodes`` shared equally, rounded up."""
-        return math.ceil(self.episodes / len(self.conditions))
+        """Episodes per condition: ``episodes`` shared equally by the (noise, viewpoint) pairs, rounded up
+        (every posterior reads the same episodes)."""
+        return math.ceil(self.episodes / (len(self.noise) * len(self.viewpoints)))
+
+    @property
+    def n_episodes(self) -> int:
+        """Episodes simulated: :attr:`per_condition` for each (noise, viewpoint) pair."""
+        return self.per_condition * len(self.noise) * len(self.viewpoints)
 
     def with_overrides(self, **changes: Any) -> SweepConfig:
         """A copy with top-level fields changed (``None`` values are ignored)."""
@@ -150,7 +165,7 @@ class SweepConfig:
         """The settings as plain data (JSON-ready), for result files and fingerprints."""
         d = {
             "episodes": self.episodes, "seed": self.seed, "chunk_size": self.chunk_size,
-            "grid": {"noise": list(self.noise), "viewpoints": list(self.viewpoints),
+            "grid": {"noise": list(self.noise), "viewpoints": list(self.viewpoints), "posteriors": list(self.posteriors),
                      "fractions": list(self.evaluation.fractions), "strategies": list(self.evaluation.strategies)},
             "views": {k: asdict(v) for k, v in self.views.items() if k in self.viewpoints},
             "scenario": self.scenario.as_dict(), "gestures": asdict(self.gestures),
@@ -181,7 +196,7 @@ def _whole(name: str, v: Any, lo: int, hi: int) -> None:
 SECTIONS: dict[str, tuple[str, ...]] = {
     "": ("episodes", "seed", "chunk_size", "grid", "views", "scenario", "gestures", "recognizer", "network",
          "evaluation"),
-    "grid": ("noise", "viewpoints", "fractions", "strategies"),
+    "grid": ("noise", "viewpoints", "posteriors", "fractions", "strategies"),
     "gestures": tuple(f.name for f in fields(GestureSettings)),
     "recognizer": tuple(f.name for f in fields(RecognizerSettings)),
     "network": tuple(f.name for f in fields(NetworkSettings)),
@@ -257,6 +272,8 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
         extra["noise"] = _list("grid.noise", grid["noise"])
     if "viewpoints" in grid:
         extra["viewpoints"] = _list("grid.viewpoints", grid["viewpoints"])
+    if "posteriors" in grid:
+        extra["posteriors"] = _list("grid.posteriors", grid["posteriors"])
     return SweepConfig(
         **top, **extra, views=views, scenario=scenario, gestures=gestures,
         recognizer=RecognizerSettings(**rec), network=NetworkSettings(**net), evaluation=EvaluationSettings(**ev),

@@ -137,7 +137,7 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
     provenance = {
         "format": FORMAT, "version": FORMAT_VERSION, "fingerprint": digest.hexdigest()[:32],
         "glu": __version__, "data_source": label, "settings": _public(config.as_dict()),
-        "conditions": [asdict(c) for c in config.conditions], "episodes_per_condition": config.per_condition,
+        "conditions": [asdict(c) for c in config.conditions], "episodes_per_condition": config.per_condition, "episodes": config.n_episodes,
         "statistics": len(evaluator.columns),
     }  # fmt: skip
     return evaluator, provenance
@@ -183,14 +183,16 @@ def _recognizer(config: SweepConfig, out: Path, log: Callable[[str], None]) -> A
 
 
 # ------------------------------------------------------------------------------------------ the tasks
-def compute_chunk(evaluator: Evaluator, index: int, condition: Condition, chunk: int, n: int) -> tuple:
-    """One task (run on a worker): the summed statistics of one chunk, on one BLAS thread."""
+def compute_chunk(evaluator: Evaluator, indices: tuple[int, ...], conditions: tuple[Condition, ...],
+                  chunk: int, n: int) -> tuple:  # fmt: skip
+    """One task (run on a worker): one chunk of episodes, simulated once and scored for each of
+    ``conditions`` (the same noise and viewpoint, other posteriors), on one BLAS thread."""
     from threadpoolctl import threadpool_limits
 
     t0 = time.process_time()
     with threadpool_limits(1):
-        sums = evaluator.run_chunk(condition, chunk, n)
-    return index, chunk, n, sums, time.process_time() - t0
+        sums = evaluator.run_chunks(conditions, chunk, n)
+    return indices, chunk, n, sums, time.process_time() - t0
 
 
 def _chunk_path(out: Path, index: int, chunk: int) -> Path:
@@ -237,8 +239,8 @@ def run_sweep(
     scheduler : None (a LocalCluster), a Dask address ``tcp://host:port``, or ``"synchronous"``
     workers : LocalCluster worker processes (default: one per core available)
     progress : show a progress bar (None: only on a terminal)
-    max_chunks : compute at most this many chunks now (the rest on a later run); tables are written only
-        when every chunk is done
+    max_chunks : run at most this many tasks now (a task is one chunk of episodes, scored for every
+        posterior); the rest on a later run; tables are written only when every chunk is done
     log : where one-line messages go
     """
     t0 = time.perf_counter()
@@ -262,36 +264,39 @@ def run_sweep(
     conditions = config.conditions
     from glu.experiments.corpus import chunk_ranges
 
-    tasks = [
-        (i, c, k, n)
-        for i, c in enumerate(conditions)
-        for k, n in chunk_ranges(config.per_condition, config.chunk_size)
-    ]
-    todo = [t for t in tasks if not _chunk_path(out, t[0], t[2]).is_file()]
-    reused = len(tasks) - len(todo)
-    if max_chunks is not None:
-        todo = todo[: max(int(max_chunks), 0)]
+    chunks = chunk_ranges(config.per_condition, config.chunk_size)
+    tasks, missing = [], 0
+    for noise in config.noise:  # one task per (noise, viewpoint, chunk): the posteriors share the episodes
+        for view in config.viewpoints:
+            group = [
+                (i, c) for i, c in enumerate(conditions) if (c.noise, c.viewpoint) == (float(noise), view)
+            ]
+            for k, n in chunks:
+                todo_here = [(i, c) for i, c in group if not _chunk_path(out, i, k).is_file()]
+                if todo_here:
+                    tasks.append((tuple(i for i, _ in todo_here), tuple(c for _, c in todo_here), k, n))
+                    missing += len(todo_here)
+    total = len(conditions) * len(chunks)
+    todo = tasks if max_chunks is None else tasks[: max(int(max_chunks), 0)]
+    reused = total - missing
     where = {None: "a LocalCluster", SYNCHRONOUS: "this process"}.get(scheduler, scheduler)
-    log(f"glu evaluate: {config.per_condition * len(conditions)} episodes, {len(conditions)} conditions, "
-        f"{len(tasks)} chunks ({reused} already done), on {where}; {provenance['data_source']}")  # fmt: skip
-    _run_tasks(
-        evaluator, todo, out, provenance["fingerprint"], scheduler, workers, progress, reused, len(tasks)
-    )
-    computed = len(todo)
-    if reused + computed < len(tasks):
-        log(f"glu evaluate: {reused + computed} of {len(tasks)} chunks done; run again to finish")
-        return SweepResult(
-            out,
-            pd.DataFrame(),
-            pd.DataFrame(),
-            pd.DataFrame(),
-            {},
-            computed,
-            reused,
-            time.perf_counter() - t0,
-        )
+    log(f"glu evaluate: {config.n_episodes} episodes, {len(conditions)} conditions, {total} chunks "
+        f"({reused} already done), on {where}; {provenance['data_source']}")  # fmt: skip
+    _run_tasks(evaluator, todo, out, provenance["fingerprint"], scheduler, workers, progress, reused, total)
+    computed = sum(len(t[0]) for t in todo)
+    if reused + computed < total:
+        log(f"glu evaluate: {reused + computed} of {total} chunks done; run again to finish")
+        empty = pd.DataFrame()
+        return SweepResult(out, empty, empty, empty, {}, computed, reused, time.perf_counter() - t0)
     tables = merge(out, config, evaluator, provenance)
     return SweepResult(out, *tables, computed, reused, time.perf_counter() - t0)
+
+
+def _save(out: Path, fingerprint: str, result: tuple, bar: Any) -> None:
+    indices, chunk, n, sums, _ = result
+    for index, s in zip(indices, sums, strict=True):
+        _write_chunk(out, fingerprint, index, chunk, n, s)
+        bar.update(1)
 
 
 def _run_tasks(evaluator, todo, out, fingerprint, scheduler, workers, progress, done, total) -> None:
@@ -304,9 +309,7 @@ def _run_tasks(evaluator, todo, out, fingerprint, scheduler, workers, progress, 
             return
         if scheduler == SYNCHRONOUS:
             for task in todo:
-                index, chunk, n, sums, _ = compute_chunk(evaluator, *task)
-                _write_chunk(out, fingerprint, index, chunk, n, sums)
-                bar.update(1)
+                _save(out, fingerprint, compute_chunk(evaluator, *task), bar)
             return
         _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar)
     finally:
@@ -331,11 +334,10 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
     cluster = None
     try:
         if scheduler is None:
-            n = (
-                workers or len(os.sched_getaffinity(0))
-                if hasattr(os, "sched_getaffinity")
-                else (os.cpu_count() or 1)
+            cores = (
+                len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
             )
+            n = workers or cores
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                                    silence_logs=logging.ERROR)  # fmt: skip
             client = Client(cluster)
@@ -350,11 +352,12 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
         raise
     try:
         shared = client.scatter(evaluator, broadcast=True)
-        futures = [client.submit(compute_chunk, shared, *t, pure=False, key=f"glu-chunk-{t[0]}-{t[2]}-{fingerprint[:8]}")
+        futures = [client.submit(compute_chunk, shared, *t, pure=False,
+                                 key=f"glu-chunk-{'-'.join(map(str, t[0]))}-{t[2]}-{fingerprint[:8]}")
                    for t in todo]  # fmt: skip
         for fut in as_completed(futures):
             try:
-                index, chunk, n, sums, _ = fut.result()
+                result = fut.result()
             except GluError:
                 raise
             except Exception as e:
@@ -362,8 +365,7 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
                     f.cancel()
                 raise RuntimeError(f"a sweep task failed on the cluster ({type(e).__name__}: {e}); "
                                    "do the workers have glu installed, in the same version?") from e  # fmt: skip
-            _write_chunk(out, fingerprint, index, chunk, n, sums)
-            bar.update(1)
+            _save(out, fingerprint, result, bar)
     finally:
         client.close()
         if cluster is not None:
@@ -386,20 +388,28 @@ def merge(out: Path, config: SweepConfig, evaluator: Evaluator, provenance: dict
             total[1:] += reps.astype(np.float64)
         f = pd.DataFrame(total, columns=[f"s{j}" for j in range(K)])
         f.insert(0, "replicate", np.arange(B + 1))
+        f.insert(0, "posterior", c.posterior)
         f.insert(0, "viewpoint", c.viewpoint)
         f.insert(0, "noise", c.noise)
         frames.append(f)
     sums = pd.concat(frames, ignore_index=True)
-    by_condition = metrics(sums, cols, ["noise", "viewpoint"])
-    by_noise = metrics(sums, cols, ["noise"]).assign(viewpoint="all")
-    by_view = metrics(sums, cols, ["viewpoint"]).assign(noise=np.nan)
-    overall = metrics(sums, cols, []).assign(noise=np.nan, viewpoint="all")
-    parts = [by_condition] + [p[by_condition.columns] for p in (by_noise, by_view, overall)]
-    table = pd.concat(parts, ignore_index=True)
-    diffs = pd.concat([paired_differences(sums, cols, ["noise", "viewpoint"]),
-                       paired_differences(sums, cols, []).assign(noise=np.nan, viewpoint="all")], ignore_index=True)  # fmt: skip
-    rel = pd.concat([reliability(sums, cols, ["noise", "viewpoint"]),
-                     reliability(sums, cols, []).assign(noise=np.nan, viewpoint="all")], ignore_index=True)  # fmt: skip
+    # every grouping keeps the posterior: pooling two ways of reading the HMMs would mean nothing
+    groups = {("noise", "viewpoint"): {}, ("noise",): {"viewpoint": "all"}, ("viewpoint",): {"noise": np.nan},
+              (): {"noise": np.nan, "viewpoint": "all"}}  # fmt: skip
+    order = ["noise", "viewpoint", "posterior"]
+
+    def pooled(fn, by_all=True):
+        parts = []
+        for by, fill in groups.items():
+            if not by_all and by not in (("noise", "viewpoint"), ()):
+                continue
+            part = fn(sums, cols, [*by, "posterior"]).assign(**fill)
+            parts.append(part[order + [c for c in part.columns if c not in order]])
+        return pd.concat(parts, ignore_index=True)
+
+    table = pooled(metrics)
+    diffs = pooled(paired_differences, by_all=False)
+    rel = pooled(reliability, by_all=False)
     params = provenance["settings"]
     source = provenance["data_source"]
     for df, name in ((table, EXPERIMENT), (diffs, "corpus_differences"), (rel, "corpus_reliability")):
@@ -421,7 +431,8 @@ def _write_parquet(path: Path, df: pd.DataFrame) -> None:
 
 
 def summarize(table: pd.DataFrame, diffs: pd.DataFrame, provenance: dict[str, Any]) -> dict[str, Any]:
-    """The tidy summary: overall metrics at the full gesture and the best strategy per target and metric."""
+    """The tidy summary: overall metrics at the full gesture, and per posterior, target and metric the best
+    strategy (all strategies tied with it) and those it beats with 95 % confidence."""
     full = max(table["fraction"].dropna()) if table["fraction"].notna().any() else np.nan
     overall = table[(table.viewpoint == "all") & table.noise.isna() & (table.fraction == full)]
     rows = [
@@ -430,25 +441,25 @@ def summarize(table: pd.DataFrame, diffs: pd.DataFrame, provenance: dict[str, An
     ]  # fmt: skip
     best = []
     d_all = diffs[(diffs.viewpoint == "all") & diffs.noise.isna() & (diffs.fraction == full)]
-    for (target, metric), g in overall.groupby(["target", "metric"], sort=False):
+    for (posterior, target, metric), g in overall.groupby(["posterior", "target", "metric"], sort=False):
         up = HIGHER_IS_BETTER.get(metric, True)
-        ranked = g.sort_values("estimate", ascending=not up)
-        top = ranked.iloc[0]
-        pairs = d_all[(d_all.target == target) & (d_all.metric == metric)
-                      & ((d_all.strategy == top.strategy) | (d_all.baseline == top.strategy))]  # fmt: skip
+        top = g.sort_values("estimate", ascending=not up).iloc[0]
+        tied = sorted(g.strategy[np.isclose(g.estimate, top.estimate, rtol=0, atol=1e-12)])
+        d = d_all[(d_all.posterior == posterior) & (d_all.target == target) & (d_all.metric == metric)]
         beats = []
-        for p in pairs.itertuples():
-            other = p.baseline if p.strategy == top.strategy else p.strategy
-            sign = 1 if p.strategy == top.strategy else -1
+        for p in d.itertuples():
+            if top.strategy not in (p.strategy, p.baseline):
+                continue
+            other, sign = (p.baseline, 1) if p.strategy == top.strategy else (p.strategy, -1)
             lo, hi = sorted((sign * p.ci_low, sign * p.ci_high))
             if (lo > 0) if up else (hi < 0):
                 beats.append(other)
-        best.append({"target": target, "metric": metric, "fraction": full, "best": top.strategy,
+        best.append({"posterior": posterior, "target": target, "metric": metric, "fraction": full, "best": tied,
                      "estimate": float(top.estimate), "ci_low": float(top.ci_low), "ci_high": float(top.ci_high),
                      "significantly_better_than": sorted(beats)})  # fmt: skip
     return {
         "experiment": EXPERIMENT, "data_source": provenance["data_source"], "fingerprint": provenance["fingerprint"],
-        "episodes": provenance["episodes_per_condition"] * len(provenance["conditions"]),
+        "episodes": provenance["episodes"],
         "conditions": provenance["conditions"], "parameters": provenance["settings"],
         "files": list(FILES), "overall": rows, "best": best,
     }  # fmt: skip

@@ -1,0 +1,191 @@
+"""Speed of the corpus evaluation: batched HMM scoring, episodes per second, Dask scaling, a million episodes.
+
+Run on demand (not a test)::
+
+    python benchmarks/bench_corpus.py [--data DIR] [--only forward episodes scaling million] [--episodes N]
+
+1. **forward** — many sequences scored against all three models in one vectorised pass
+   (:class:`glu.gestures.batch.BatchScorer`; Q = 6, M = 3, full covariance, 3-D): frame·model evaluations
+   per second of CPU time on one core (goal ≥ 5 M), against glu's per-sequence forward and hmmlearn's
+   ``score`` per sequence (goal ≥ 50×), with the largest difference to both;
+2. **episodes** — one chunk of 2000 episodes end to end on one core: simulation (world, gestures),
+   scoring (HMMs, fusion, descriptions, statistics), bootstrap sums; episodes per second;
+3. **scaling** — the same sweep on a LocalCluster of 1 and of 2 worker processes (goal: ≥ 1.7× faster);
+4. **million** — ``glu evaluate --episodes 1000000`` on a LocalCluster of 2 workers (goal: ≤ 10 minutes).
+
+The models are the default recogniser of a sweep (trained on synthetic gestures, Q = 6, M = 3); the
+network is learned from ``--data`` (default: $GLU_DATA_DIR, data/real, else synthetic). Timings are CPU
+time of this process where one process does the work (robust to other load on the machine), wall time
+for the cluster runs (sensitive to it: the machine's load average is printed with them).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+
+def _load() -> str:
+    return " ".join(f"{x:.1f}" for x in os.getloadavg())
+
+
+def _setup(data: str | None, out: Path):
+    from glu.sweep import config_from_dict
+    from glu.sweep.runner import prepare
+
+    cfg = config_from_dict({"chunk_size": 2000, **({"network": {"data": data}} if data else {})})
+    evaluator, provenance = prepare(cfg, out, lambda s: print(f"  {s}"))
+    return cfg, evaluator, provenance
+
+
+def bench_forward(evaluator, repeats: int) -> None:
+    from glu.experiments.corpus import Condition
+
+    scorer = evaluator.scorer
+    chunk = evaluator.simulate(Condition(0.02, "front"), 0, 2000)
+    X = chunk.features
+    n_fm = sum(len(x) for x in X) * scorer.n_models
+    times = []
+    for _ in range(repeats):
+        t = time.process_time()
+        curves = scorer.loglik_curves(X)
+        times.append(time.process_time() - t)
+    batch = statistics.median(times)
+    sub = X[:60]
+    t = time.process_time()
+    ref = [np.stack([m.loglik_curve(x) for m in scorer.models], axis=1) for x in sub]
+    per_seq = (time.process_time() - t) / len(sub)
+    hl = [m.to_hmmlearn() for m in scorer.models]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t = time.process_time()
+        scores = np.array([[h.score(x) for h in hl] for x in sub])
+        hl_seq = (time.process_time() - t) / len(sub)
+    err_glu = max(
+        float(np.abs(curves[i, : len(x)] - r).max()) for i, (x, r) in enumerate(zip(sub, ref, strict=True))
+    )
+    err_hl = float(np.abs(np.array([curves[i, len(x) - 1] for i, x in enumerate(sub)]) - scores).max())
+    ours = batch / len(X)
+    mean_t = n_fm / scorer.n_models / len(X)
+    print(
+        f"forward: {len(X)} sequences (mean {mean_t:.0f} frames) × {scorer.n_models} models "
+        f"(Q={scorer.bank.log_norm.shape[1]}, M={scorer.bank.log_norm.shape[2]}, full covariance, D=3)"
+    )
+    print(
+        f"  batch: {batch:.3f} s CPU → {n_fm / batch / 1e6:.2f} M frame·model evaluations/s on one core (goal ≥ 5 M)"
+    )
+    print(
+        f"  per sequence, all {scorer.n_models} models: batch {ours * 1e6:.0f} µs (every prefix), glu per-sequence "
+        f"{per_seq * 1e6:.0f} µs ({per_seq / ours:.1f}×), hmmlearn score {hl_seq * 1e6:.0f} µs "
+        f"(whole sequence only; {hl_seq / ours:.0f}×, goal ≥ 50×)"
+    )
+    print(f"  agreement: max |Δ| to glu's per-sequence curves {err_glu:.1e}, to hmmlearn {err_hl:.1e}")
+
+
+def bench_episodes(evaluator) -> None:
+    from glu.experiments.corpus import Condition
+    from glu.experiments.intervals import poisson_weights
+
+    cond, n = Condition(0.02, "front"), 2000
+    t0 = time.process_time()
+    chunk = evaluator.simulate(cond, 0, n)
+    t1 = time.process_time()
+    q = evaluator.p_hmm(chunk.features)
+    t2 = time.process_time()
+    blocks = evaluator.episode_statistics(chunk)  # HMMs again, fusion, descriptions, statistics
+    t3 = time.process_time()
+    from glu.experiments.intervals import accumulate
+
+    accumulate(blocks, poisson_weights(n, evaluator.settings.bootstrap, np.random.default_rng(0)))
+    t4 = time.process_time()
+    total = (t1 - t0) + (t3 - t2) + (t4 - t3)
+    print(
+        f"episodes: one chunk of {n} episodes on one core ({q.shape[1]} fractions, "
+        f"{len(evaluator.columns)} statistics, {evaluator.settings.bootstrap} replicates)"
+    )
+    print(
+        f"  simulate {1e3 * (t1 - t0) / n:.3f} ms/episode (world, gestures, features), HMMs "
+        f"{1e3 * (t2 - t1) / n:.3f}, all statistics {1e3 * (t3 - t2) / n:.3f} (HMMs included), bootstrap sums "
+        f"{1e3 * (t4 - t3) / n:.3f}"
+    )
+    print(f"  total {1e3 * total / n:.3f} ms CPU per episode → {n / total:.0f} episodes/s per core")
+
+
+def _sweep_wall(cfg, workers: int, out: Path) -> float:
+    from glu.sweep import run_sweep
+
+    shutil.rmtree(out, ignore_errors=True)
+    out.mkdir(parents=True)
+    shutil.copy(out.parent / "recognizer.json", out / "recognizer.json")  # trained once, by _setup
+    t = time.perf_counter()
+    run_sweep(cfg, out, workers=workers, progress=False, log=lambda s: None)
+    return time.perf_counter() - t
+
+
+def bench_scaling(cfg, tmp: Path, episodes: int) -> None:
+    c = cfg.with_overrides(episodes=episodes, chunk_size=1000)
+    w1 = _sweep_wall(c, 1, tmp / "w1")
+    load1 = _load()
+    w2 = _sweep_wall(c, 2, tmp / "w2")
+    print(
+        f"scaling: {episodes} episodes, chunks of 1000: 1 worker {w1:.1f} s (load {load1}), 2 workers {w2:.1f} s "
+        f"(load {_load()}) → {w1 / w2:.2f}× (goal ≥ 1.7×)"
+    )
+    same = all(
+        (tmp / "w1" / f).read_bytes() == (tmp / "w2" / f).read_bytes()
+        for f in ("results.parquet", "sums.parquet")
+    )
+    print(f"  identical tables from 1 and 2 workers: {same}")
+
+
+def bench_million(cfg, tmp: Path, episodes: int) -> None:
+    c = cfg.with_overrides(episodes=episodes, chunk_size=5000)
+    wall = _sweep_wall(c, 2, tmp / "million")
+    print(
+        f"million: {c.n_episodes} episodes on a LocalCluster of 2 workers: {wall:.0f} s "
+        f"({wall / 60:.1f} min; goal ≤ 10 min; load average now {_load()})"
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the chosen benchmarks and print their numbers."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", help="data folder the network is learned from")
+    ap.add_argument("--only", nargs="+", default=["forward", "episodes", "scaling"],
+                    choices=["forward", "episodes", "scaling", "million"])  # fmt: skip
+    ap.add_argument(
+        "--episodes", type=int, default=48_000, help="episodes of the scaling run (default 48000)"
+    )
+    ap.add_argument("--million", type=int, default=1_000_000, help="episodes of the million run")
+    ap.add_argument("--repeats", type=int, default=5)
+    args = ap.parse_args(argv)
+    from threadpoolctl import threadpool_limits
+
+    print(f"machine: {os.cpu_count()} cores, load average {_load()}")
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        with threadpool_limits(1):
+            cfg, evaluator, prov = _setup(args.data, tmp)
+            print(f"data: {prov['data_source']}")
+            if "forward" in args.only:
+                bench_forward(evaluator, args.repeats)
+            if "episodes" in args.only:
+                bench_episodes(evaluator)
+        if "scaling" in args.only:
+            bench_scaling(cfg, tmp, args.episodes)
+        if "million" in args.only:
+            bench_million(cfg, tmp, args.million)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
