@@ -62,6 +62,8 @@ ADDRESS = re.compile(r"^(tcp|tls|ws|wss)://[^\s/]+:\d+/?$")
 RECOGNIZER_SEED_OFFSET = 5000
 """The recogniser's training gestures are drawn with ``seed + 5000``, apart from the episodes."""
 EXPERIMENT = "corpus_evaluation"
+REFERENCES = ("true_action",)
+"""Strategies that are references (a ceiling), not candidates for "best" in the summary."""
 FILES = (
     "sums.parquet",
     "results.parquet",
@@ -432,7 +434,8 @@ def _write_parquet(path: Path, df: pd.DataFrame) -> None:
 
 def summarize(table: pd.DataFrame, diffs: pd.DataFrame, provenance: dict[str, Any]) -> dict[str, Any]:
     """The tidy summary: overall metrics at the full gesture, and per posterior, target and metric the best
-    strategy (all strategies tied with it) and those it beats with 95 % confidence."""
+    strategy (all strategies tied with it; the reference ``true_action`` left out) and those it beats with
+    95 % confidence."""
     full = max(table["fraction"].dropna()) if table["fraction"].notna().any() else np.nan
     overall = table[(table.viewpoint == "all") & table.noise.isna() & (table.fraction == full)]
     rows = [
@@ -443,6 +446,9 @@ def summarize(table: pd.DataFrame, diffs: pd.DataFrame, provenance: dict[str, An
     d_all = diffs[(diffs.viewpoint == "all") & diffs.noise.isna() & (diffs.fraction == full)]
     for (posterior, target, metric), g in overall.groupby(["posterior", "target", "metric"], sort=False):
         up = HIGHER_IS_BETTER.get(metric, True)
+        g = g[~g.strategy.isin(REFERENCES)]  # the true action is a ceiling, not a strategy
+        if g.empty:
+            continue
         top = g.sort_values("estimate", ascending=not up).iloc[0]
         tied = sorted(g.strategy[np.isclose(g.estimate, top.estimate, rtol=0, atol=1e-12)])
         d = d_all[(d_all.posterior == posterior) & (d_all.target == target) & (d_all.metric == metric)]
@@ -451,6 +457,8 @@ def summarize(table: pd.DataFrame, diffs: pd.DataFrame, provenance: dict[str, An
             if top.strategy not in (p.strategy, p.baseline):
                 continue
             other, sign = (p.baseline, 1) if p.strategy == top.strategy else (p.strategy, -1)
+            if other in REFERENCES:
+                continue
             lo, hi = sorted((sign * p.ci_low, sign * p.ci_high))
             if (lo > 0) if up else (hi < 0):
                 beats.append(other)
