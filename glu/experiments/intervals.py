@@ -12,7 +12,9 @@ estimate is from ``S_0``:
 * the expected calibration error (top label, equal-width bins) is ``Σ_bins |S_b[correct_bin] −
   S_b[confidence_bin]| / S_b[n]``.
 
-The 95 % interval is the 2.5th to 97.5th percentile of the replicates (percentile bootstrap). Because the
+The 95 % interval is the 2.5th to 97.5th percentile of the replicates (percentile bootstrap). The ECE is
+biased upwards by sampling noise, its replicates more so: for a well-calibrated predictor the interval can
+sit mostly above the estimate. Because the
 weights belong to episodes (the same for every strategy, fraction and condition of an episode), the
 difference of two strategies is resampled *paired*: :func:`paired_differences` takes the percentiles of
 the replicates' differences.
