@@ -168,6 +168,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--million", type=int, default=1_000_000, help="episodes of the million run")
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args(argv)
+    import hmmlearn.hmm  # noqa: F401 - load every BLAS before limiting threads (a library loaded later is not)
+    import scipy.linalg  # noqa: F401
+    import scipy.ndimage  # noqa: F401
     from threadpoolctl import threadpool_limits
 
     print(f"machine: {os.cpu_count()} cores, load average {_load()}")

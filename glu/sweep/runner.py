@@ -189,6 +189,7 @@ def compute_chunk(evaluator: Evaluator, indices: tuple[int, ...], conditions: tu
                   chunk: int, n: int) -> tuple:  # fmt: skip
     """One task (run on a worker): one chunk of episodes, simulated once and scored for each of
     ``conditions`` (the same noise and viewpoint, other posteriors), on one BLAS thread."""
+    import scipy.ndimage  # noqa: F401 - loaded before the limit, which binds only libraries already loaded
     from threadpoolctl import threadpool_limits
 
     t0 = time.process_time()
