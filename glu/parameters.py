@@ -64,6 +64,10 @@ RANGES: dict[str, tuple[float, float]] = {
     "n_trials": (1, 100_000),
     "recipe_seeds": (0, 2**32 - 1),
     "recipe_tols": (1e-12, 1.0),
+    "episodes": (1, 100_000_000),
+    "fractions": (1e-9, 1.0),
+    "bootstrap": (0, 10_000),
+    "workers": (0, 1024),
 }
 """Inclusive ranges of the numeric parameters (for a list, of each element)."""
 

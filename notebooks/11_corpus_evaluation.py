@@ -33,16 +33,16 @@ bootstrap: int = 200  # Poisson bootstrap replicates for the 95 % intervals
 workers: int = 2  # Dask LocalCluster workers; 0: run the chunks in this process
 seed: int = 0  # seed of the corpus, the recogniser's training gestures and EM
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/, results/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 import tempfile
 
 from glu import plots
-from glu.outputs import open_outputs
+from glu.notebook import start
 from glu.sweep import config_from_dict, run_sweep
 
-out = open_outputs("11_corpus_evaluation", data, out_dir)
+out = start("11_corpus_evaluation", globals())
 settings = {
     "episodes": episodes, "seed": seed, "chunk_size": 2000,
     "grid": {"noise": noise_levels, "viewpoints": viewpoints, "posteriors": posteriors, "fractions": fractions},

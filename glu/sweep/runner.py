@@ -106,10 +106,8 @@ def prepare_world(config: SweepConfig) -> tuple[Any, str]:
     source = resolve_data(net.data)
     table = load_experiments(source, net.words)
     bn = learn_bn(table, unseen_words=net.unseen_words)
-    kind = "real data (the authors' robot experiments)" if source.is_real else (
-        f"synthetic data (seed {source.seed}, {source.n_experiments} experiments)")  # fmt: skip
-    label = (f"{kind}: network learned from {len(table)} experiments (words={net.words}, unseen word rows "
-             f"{net.unseen_words}); gestures from glu's synthetic generator")  # fmt: skip
+    label = (f"{source.describe()}: network learned from {len(table)} experiments (words={net.words}, "
+             f"unseen word rows {net.unseen_words}); gestures from glu's synthetic generator")  # fmt: skip
     return InferenceEngine(bn), label
 
 
