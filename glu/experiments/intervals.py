@@ -25,7 +25,9 @@ condition and replicate) into tidy tables.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -62,44 +64,74 @@ def _interval(reps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if len(reps) == 0:
         nan = np.full(reps.shape[1:], np.nan)
         return nan, nan
-    lo, hi = np.nanpercentile(reps, [50 * (1 - LEVEL), 50 * (1 + LEVEL)], axis=0)
+    q = [50 * (1 - LEVEL), 50 * (1 + LEVEL)]
+    nan = np.isnan(reps).any(axis=0)
+    lo, hi = np.percentile(np.where(nan, 0.0, reps), q, axis=0)  # NaN-free columns, fast
+    if nan.any():  # a metric undefined in some replicates (e.g. no episode in a group): skip those
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            lo[nan], hi[nan] = np.nanpercentile(reps[:, nan], q, axis=0)
     return lo, hi
 
 
-def metric_values(sums: np.ndarray, columns: pd.DataFrame) -> pd.DataFrame:
-    """Every metric of every replicate: a frame with one column per metric cell, one row per replicate.
+class Cells(NamedTuple):
+    """The metric cells of a set of statistics: what each is, and how it is computed from the sums.
+
+    Attributes
+    ----------
+    keys : DataFrame, one row per cell: target, strategy, fraction, metric
+    mean : int array — for each cell, the statistic whose mean it is (−1 for an ECE cell)
+    conf, correct : int arrays, shape (n_cells, n_bins) — an ECE cell's bin statistics (−1 elsewhere)
+    """
+
+    keys: pd.DataFrame
+    mean: np.ndarray
+    conf: np.ndarray
+    correct: np.ndarray
+
+
+def metric_cells(columns: pd.DataFrame) -> Cells:
+    """The cells of :func:`metric_values` for statistics described by ``columns``, in their order."""
+    cells = columns.iloc[1:]
+    plain = cells[cells["bin"] < 0]
+    keys = [(r.target, r.strategy, r.fraction, MEAN_METRICS.get(r.stat, r.stat)) for r in plain.itertuples()]
+    mean = list(plain.index)
+    binned = cells[cells["bin"] >= 0]
+    n_bins = int(binned["bin"].max()) + 1 if len(binned) else 0
+    conf, corr = [[-1] * n_bins for _ in mean], [[-1] * n_bins for _ in mean]
+    for (target, strategy, fraction), g in binned.groupby(["target", "strategy", "fraction"], sort=False):
+        keys.append((target, strategy, fraction, "ece"))
+        mean.append(-1)
+        conf.append(list(g.index[g.stat == "bin_confidence"]))
+        corr.append(list(g.index[g.stat == "bin_correct"]))
+    frame = pd.DataFrame(keys, columns=["target", "strategy", "fraction", "metric"])
+    as_array = lambda x: np.array(x, dtype=np.intp).reshape(len(keys), n_bins)  # noqa: E731
+    return Cells(frame, np.array(mean, dtype=np.intp), as_array(conf), as_array(corr))
+
+
+def metric_values(sums: np.ndarray, columns: pd.DataFrame | Cells) -> np.ndarray:
+    """Every metric of every replicate, shape (B + 1, n_cells), cells as :func:`metric_cells` lists them.
 
     Parameters
     ----------
     sums : array, shape (B + 1, K) — merged sums (row 0 the estimate)
-    columns : the statistics' description (:func:`glu.experiments.evaluation.statistic_columns`)
-
-    Returns
-    -------
-    DataFrame, shape (B + 1, n_cells), columns a MultiIndex (target, strategy, fraction, metric)
+    columns : the statistics' description (:func:`glu.experiments.evaluation.statistic_columns`), or
+        its :func:`metric_cells`
     """
-    if sums.shape[1] != len(columns):
-        raise DataError(
-            f"{sums.shape[1]} sums for {len(columns)} statistics: the chunks do not match the settings"
-        )
-    n = sums[:, 0]
+    cells = columns if isinstance(columns, Cells) else metric_cells(columns)
+    K = int(max(cells.mean.max(initial=0), cells.conf.max(initial=0), cells.correct.max(initial=0))) + 1
+    if sums.shape[1] < K:
+        raise DataError(f"{sums.shape[1]} sums for {K} statistics: the chunks do not match the settings")
+    n = sums[:, :1]
+    out = np.empty((len(sums), len(cells.mean)))
     with np.errstate(invalid="ignore", divide="ignore"):
-        out = {}
-        cells = columns.iloc[1:]
-        plain = cells[cells["bin"] < 0]
-        for k, row in plain.iterrows():
-            metric = MEAN_METRICS.get(row.stat, row.stat)
-            out[(row.target, row.strategy, row.fraction, metric)] = sums[:, k] / n
-        binned = cells[cells["bin"] >= 0]
-        for (target, strategy, fraction), g in binned.groupby(["target", "strategy", "fraction"], sort=False):
-            conf = sums[:, g.index[g.stat == "bin_confidence"]]
-            corr = sums[:, g.index[g.stat == "bin_correct"]]
-            out[(target, strategy, fraction, "ece")] = np.abs(corr - conf).sum(axis=1) / n
-    frame = pd.DataFrame(out)
-    frame.columns = pd.MultiIndex.from_tuples(
-        frame.columns, names=["target", "strategy", "fraction", "metric"]
-    )
-    return frame
+        plain = cells.mean >= 0
+        out[:, plain] = sums[:, cells.mean[plain]] / n
+        if (~plain).any():
+            conf = sums[:, cells.conf[~plain]]  # (B + 1, n_ece, n_bins)
+            corr = sums[:, cells.correct[~plain]]
+            out[:, ~plain] = np.abs(corr - conf).sum(axis=2) / n
+    return out
 
 
 def metrics(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
@@ -116,27 +148,24 @@ def metrics(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.
     -------
     tidy DataFrame: *by, target, strategy, fraction, metric, estimate, ci_low, ci_high, n_episodes
     """
-    rows = []
+    cells = metric_cells(columns)
+    parts = []
     for key, g in _groups(sums, by):
-        vals = metric_values(_stat_matrix(g, len(columns)), columns)
-        lo, hi = _interval(vals.to_numpy()[1:])
-        n = float(_stat_matrix(g, len(columns))[0, 0])
-        for j, cell in enumerate(vals.columns):
-            rows.append((*key, *cell, vals.iat[0, j], lo[j], hi[j], n))
-    return pd.DataFrame(
-        rows,
-        columns=[
-            *by,
-            "target",
-            "strategy",
-            "fraction",
-            "metric",
-            "estimate",
-            "ci_low",
-            "ci_high",
-            "n_episodes",
-        ],
-    )
+        S = _stat_matrix(g, len(columns))
+        vals = metric_values(S, cells)
+        lo, hi = _interval(vals[1:])
+        part = cells.keys.copy()
+        for name, v in zip(by, key, strict=True):
+            part.insert(len(part.columns) - 4, name, v)
+        part["estimate"], part["ci_low"], part["ci_high"], part["n_episodes"] = (
+            vals[0],
+            lo,
+            hi,
+            float(S[0, 0]),
+        )
+        parts.append(part)
+    cols = [*by, "target", "strategy", "fraction", "metric", "estimate", "ci_low", "ci_high", "n_episodes"]
+    return pd.concat(parts, ignore_index=True)[cols] if parts else pd.DataFrame(columns=cols)
 
 
 def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
@@ -148,38 +177,45 @@ def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[s
     ci_low, ci_high, better (the interval excludes 0 on the side where the metric improves), for every
     pair of strategies predicting the same target (strategy after baseline in the settings' order)
     """
-    rows = []
+    cells = metric_cells(columns)
+    k = cells.keys
+    first, second = [], []
+    for _, g in k.groupby(["target", "fraction", "metric"], sort=False):
+        idx = list(g.index)
+        for i, a in enumerate(idx):
+            first += [a] * (len(idx) - i - 1)
+            second += idx[i + 1 :]
+    first, second = np.array(first, dtype=np.intp), np.array(second, dtype=np.intp)
+    pairs = pd.DataFrame({
+        "target": k.target.to_numpy()[first], "fraction": k.fraction.to_numpy()[first],
+        "metric": k.metric.to_numpy()[first], "strategy": k.strategy.to_numpy()[second],
+        "baseline": k.strategy.to_numpy()[first],
+    })  # fmt: skip
+    up = pairs.metric.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    parts = []
     for key, g in _groups(sums, by):
-        vals = metric_values(_stat_matrix(g, len(columns)), columns)
-        for (target, fraction, metric), cells in vals.T.groupby(
-            level=["target", "fraction", "metric"], sort=False
-        ):
-            strategies = [c[1] for c in cells.index]
-            for i, base in enumerate(strategies):
-                for strat in strategies[i + 1 :]:
-                    d = (
-                        cells.loc[(target, strat, fraction, metric)].to_numpy()
-                        - cells.loc[(target, base, fraction, metric)].to_numpy()
-                    )
-                    lo, hi = _interval(d[1:, None])
-                    up = HIGHER_IS_BETTER.get(metric, True)
-                    better = bool(lo[0] > 0) if up else bool(hi[0] < 0)
-                    rows.append((*key, target, fraction, metric, strat, base, d[0], lo[0], hi[0], better))
-    return pd.DataFrame(
-        rows,
-        columns=[
-            *by,
-            "target",
-            "fraction",
-            "metric",
-            "strategy",
-            "baseline",
-            "difference",
-            "ci_low",
-            "ci_high",
-            "better",
-        ],
-    )
+        vals = metric_values(_stat_matrix(g, len(columns)), cells)
+        d = vals[:, second] - vals[:, first]
+        lo, hi = _interval(d[1:])
+        part = pairs.copy()
+        for j, (name, v) in enumerate(zip(by, key, strict=True)):
+            part.insert(j, name, v)
+        part["difference"], part["ci_low"], part["ci_high"] = d[0], lo, hi
+        part["better"] = np.where(up, lo > 0, hi < 0)
+        parts.append(part)
+    cols = [
+        *by,
+        "target",
+        "fraction",
+        "metric",
+        "strategy",
+        "baseline",
+        "difference",
+        "ci_low",
+        "ci_high",
+        "better",
+    ]
+    return pd.concat(parts, ignore_index=True)[cols] if parts else pd.DataFrame(columns=cols)
 
 
 def reliability(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
@@ -190,38 +226,27 @@ def reliability(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) ->
     tidy DataFrame: *by, strategy, fraction, bin, lower, upper (the bin's confidence range), n (episodes
     in the bin), confidence (their mean top-label confidence), accuracy (how often that label was right)
     """
-    rows = []
+    cols = [*by, "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
     binned = columns[columns["bin"] >= 0]
     if binned.empty:
-        return pd.DataFrame(
-            columns=[*by, "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
-        )
+        return pd.DataFrame(columns=cols)
     n_bins = int(binned["bin"].max()) + 1
+    stats = {st: binned[binned.stat == st] for st in ("bin_n", "bin_confidence", "bin_correct")}
+    base = stats["bin_n"][["strategy", "fraction", "bin"]].reset_index(drop=True)
+    base["lower"], base["upper"] = base["bin"] / n_bins, (base["bin"] + 1) / n_bins
+    parts = []
     for key, g in _groups(sums, by):
         s0 = _stat_matrix(g, len(columns))[0]
-        for (strategy, fraction), cells in binned.groupby(["strategy", "fraction"], sort=False):
-            for b in range(n_bins):
-                at = cells[cells["bin"] == b]
-                cnt, conf, corr = (
-                    s0[at.index[at.stat == st][0]] for st in ("bin_n", "bin_confidence", "bin_correct")
-                )
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    rows.append(
-                        (
-                            *key,
-                            strategy,
-                            fraction,
-                            b,
-                            b / n_bins,
-                            (b + 1) / n_bins,
-                            cnt,
-                            conf / cnt,
-                            corr / cnt,
-                        )
-                    )
-    return pd.DataFrame(
-        rows, columns=[*by, "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
-    )
+        part = base.copy()
+        for j, (name, v) in enumerate(zip(by, key, strict=True)):
+            part.insert(j, name, v)
+        cnt = s0[stats["bin_n"].index]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            part["n"] = cnt
+            part["confidence"] = s0[stats["bin_confidence"].index] / cnt
+            part["accuracy"] = s0[stats["bin_correct"].index] / cnt
+        parts.append(part)
+    return pd.concat(parts, ignore_index=True)[cols]
 
 
 def _stat_matrix(g: pd.DataFrame, k: int) -> np.ndarray:
