@@ -94,6 +94,8 @@ class SweepResult:
     computed: int
     reused: int
     seconds: float
+    task_cpu_seconds: float = 0.0
+    """CPU time the tasks computed now took, summed over workers (the parallel part of ``seconds``)."""
 
 
 # ------------------------------------------------------------------------------------------ preparing
@@ -283,36 +285,37 @@ def run_sweep(
     where = {None: "a LocalCluster", SYNCHRONOUS: "this process"}.get(scheduler, scheduler)
     log(f"glu evaluate: {config.n_episodes} episodes, {len(conditions)} conditions, {total} chunks "
         f"({reused} already done), on {where}; {provenance['data_source']}")  # fmt: skip
-    _run_tasks(evaluator, todo, out, provenance["fingerprint"], scheduler, workers, progress, reused, total)
+    cpu = _run_tasks(
+        evaluator, todo, out, provenance["fingerprint"], scheduler, workers, progress, reused, total
+    )
     computed = sum(len(t[0]) for t in todo)
     if reused + computed < total:
         log(f"glu evaluate: {reused + computed} of {total} chunks done; run again to finish")
         empty = pd.DataFrame()
-        return SweepResult(out, empty, empty, empty, {}, computed, reused, time.perf_counter() - t0)
+        return SweepResult(out, empty, empty, empty, {}, computed, reused, time.perf_counter() - t0, cpu)
     tables = merge(out, config, evaluator, provenance)
-    return SweepResult(out, *tables, computed, reused, time.perf_counter() - t0)
+    return SweepResult(out, *tables, computed, reused, time.perf_counter() - t0, cpu)
 
 
-def _save(out: Path, fingerprint: str, result: tuple, bar: Any) -> None:
-    indices, chunk, n, sums, _ = result
+def _save(out: Path, fingerprint: str, result: tuple, bar: Any) -> float:
+    indices, chunk, n, sums, cpu = result
     for index, s in zip(indices, sums, strict=True):
         _write_chunk(out, fingerprint, index, chunk, n, s)
         bar.update(1)
+    return cpu
 
 
-def _run_tasks(evaluator, todo, out, fingerprint, scheduler, workers, progress, done, total) -> None:
+def _run_tasks(evaluator, todo, out, fingerprint, scheduler, workers, progress, done, total) -> float:
     from tqdm import tqdm
 
     bar = tqdm(total=total, initial=done, unit="chunk", desc="glu evaluate", disable=None if progress is None else not progress,
                file=sys.stderr, dynamic_ncols=True)  # fmt: skip
     try:
         if not todo:
-            return
+            return 0.0
         if scheduler == SYNCHRONOUS:
-            for task in todo:
-                _save(out, fingerprint, compute_chunk(evaluator, *task), bar)
-            return
-        _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar)
+            return sum(_save(out, fingerprint, compute_chunk(evaluator, *task), bar) for task in todo)
+        return _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar)
     finally:
         bar.close()
 
@@ -329,7 +332,7 @@ def _check_reachable(address: str, timeout: float = 10.0) -> None:
         raise DataError(f"cannot reach the Dask scheduler at {address}: {e.strerror or e}") from None
 
 
-def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> None:
+def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
     from distributed import Client, LocalCluster, as_completed
 
     cluster = None
@@ -352,6 +355,7 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
             cluster.close()
         raise
     try:
+        cpu = 0.0
         shared = client.scatter(evaluator, broadcast=True)
         futures = [client.submit(compute_chunk, shared, *t, pure=False,
                                  key=f"glu-chunk-{'-'.join(map(str, t[0]))}-{t[2]}-{fingerprint[:8]}")
@@ -366,7 +370,8 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
                     f.cancel()
                 raise RuntimeError(f"a sweep task failed on the cluster ({type(e).__name__}: {e}); "
                                    "do the workers have glu installed, in the same version?") from e  # fmt: skip
-            _save(out, fingerprint, result, bar)
+            cpu += _save(out, fingerprint, result, bar)
+        return cpu
     finally:
         client.close()
         if cluster is not None:
