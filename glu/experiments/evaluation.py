@@ -70,6 +70,8 @@ APPLICABLE: dict[str, tuple[str, ...]] = {
 }
 """The strategies that predict each target (p_HMM alone says nothing about effects; the product rule
 infers only the action, and for effects it equals virtual evidence)."""
+GESTURE_FREE: tuple[str, ...] = ("network", "true_action")
+"""Strategies that ignore the gesture (their predictions are the same at every fraction)."""
 EFFECT = "ObjVel"
 DESCRIBED: tuple[str, ...] = ("Action", "Color", "Shape", "Size", "ObjVel")
 """The nodes a description is checked against."""
@@ -318,9 +320,11 @@ class Evaluator:
         truth_codes = {node: codes[node] for node in DESCRIBED}
         for strat in s.strategies_for("description"):
             probs = self._fused(strat, p_a, p_w, q, action)  # (n, F, W)
-            best = best_sentences(probs.reshape(n * F, -1), words)
-            ok = agreement(best, {k: np.repeat(v, F) for k, v in truth_codes.items()}, values)
-            blocks.append(np.stack([ok[a].reshape(n, F) for a in (*ASPECTS, "all")], axis=2).reshape(n, -1))
+            f = 1 if strat in GESTURE_FREE else F  # the same sentence at every fraction
+            best = best_sentences(probs[:, :f].reshape(n * f, -1), words)
+            ok = agreement(best, {k: np.repeat(v, f) for k, v in truth_codes.items()}, values)
+            ok = np.stack([ok[a].reshape(n, f) for a in (*ASPECTS, "all")], axis=2)
+            blocks.append(np.broadcast_to(ok, (n, F, ok.shape[2])).reshape(n, -1))
         return blocks
 
     def _fused(

@@ -23,12 +23,17 @@ from __future__ import annotations
 import numpy as np
 
 
-def _edge(h0: np.ndarray, h1: np.ndarray, m0: np.ndarray, m1: np.ndarray) -> np.ndarray:
+def _sign(v: float) -> int:
+    return (v > 0) - (v < 0)
+
+
+def _edge(h0: float, h1: float, m0: float, m1: float) -> float:
     d = ((2 * h0 + h1) * m0 - h0 * m1) / (h0 + h1)
-    wrong_sign = np.sign(d) != np.sign(m0)
-    overshoot = (np.sign(m0) != np.sign(m1)) & (np.abs(d) > 3.0 * np.abs(m0)) & ~wrong_sign
-    d = np.where(wrong_sign, 0.0, d)
-    return np.where(overshoot, 3.0 * m0, d)
+    if _sign(d) != _sign(m0):
+        return 0.0
+    if _sign(m0) != _sign(m1) and abs(d) > 3.0 * abs(m0):
+        return 3.0 * m0
+    return d
 
 
 def pchip(x: np.ndarray, y: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -44,32 +49,40 @@ def pchip(x: np.ndarray, y: np.ndarray, u: np.ndarray) -> np.ndarray:
     -------
     array, shape (N, D)
     """
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
+    # The derivatives and coefficients of a few key points are computed with Python floats (the same IEEE
+    # operations SciPy applies elementwise, so the same values), the N evaluations with NumPy.
+    xs = [float(v) for v in np.asarray(x, dtype=float)]
+    Y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
-    h = np.diff(x)[:, None]
-    m = np.diff(y, axis=0) / h
-    d = np.zeros_like(y)
-    if len(x) == 2:
-        d[0] = d[1] = m[0]
-    else:
-        sm = np.sign(m)
-        flat = (sm[1:] != sm[:-1]) | (m[1:] == 0) | (m[:-1] == 0)
-        w1 = 2 * h[1:] + h[:-1]
-        w2 = h[1:] + 2 * h[:-1]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            whmean = (w1 / m[:-1] + w2 / m[1:]) / (w1 + w2)
-            d[1:-1] = np.where(flat, 0.0, 1.0 / whmean)
-        d[0] = _edge(h[0], h[1], m[0], m[1])
-        d[-1] = _edge(h[-1], h[-2], m[-1], m[-2])
-    # cubic Hermite coefficients in the power basis of each interval, as SciPy's CubicHermiteSpline
-    t = (d[:-1] + d[1:] - 2 * m) / h
-    c0, c1, c2, c3 = t / h, (m - d[:-1]) / h - t, d[:-1], y[:-1]
-    k = np.clip(np.searchsorted(x, u, side="right") - 1, 0, len(x) - 2)
-    s = (u - x[k])[:, None]
+    K, D = Y.shape
+    h = [xs[k + 1] - xs[k] for k in range(K - 1)]
+    c = np.empty((4, K - 1, D))
+    for j in range(D):
+        yj = [float(v) for v in Y[:, j]]
+        m = [(yj[k + 1] - yj[k]) / h[k] for k in range(K - 1)]
+        if K == 2:
+            d = [m[0], m[0]]
+        else:
+            d = [0.0] * K
+            for k in range(1, K - 1):
+                a, b = m[k - 1], m[k]
+                if _sign(b) != _sign(a) or b == 0 or a == 0:
+                    continue
+                w1, w2 = 2 * h[k] + h[k - 1], h[k] + 2 * h[k - 1]
+                d[k] = 1.0 / ((w1 / a + w2 / b) / (w1 + w2))
+            d[0] = _edge(h[0], h[1], m[0], m[1])
+            d[-1] = _edge(h[-1], h[-2], m[-1], m[-2])
+        for k in range(K - 1):  # cubic Hermite coefficients in the power basis, as SciPy's CubicHermiteSpline
+            t = (d[k] + d[k + 1] - 2 * m[k]) / h[k]
+            c[0, k, j] = t / h[k]
+            c[1, k, j] = (m[k] - d[k]) / h[k] - t
+            c[2, k, j] = d[k]
+            c[3, k, j] = yj[k]
+    k = np.clip(np.searchsorted(xs, u, side="right") - 1, 0, K - 2)
+    s = (u - np.asarray(xs)[k])[:, None]
     z = s
-    out = c3[k] + c2[k] * z
+    out = c[3][k] + c[2][k] * z
     z = z * s
-    out = out + c1[k] * z
+    out = out + c[1][k] * z
     z = z * s
-    return out + c0[k] * z
+    return out + c[0][k] * z
