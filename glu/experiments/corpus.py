@@ -33,6 +33,7 @@ Example
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from collections.abc import Iterator, Mapping, Sequence
@@ -288,9 +289,9 @@ def write_corpus(
     import pyarrow.parquet as pq
 
     meta = {
-        "glu.corpus": str(
+        "glu.corpus": json.dumps(
             {"seed": seed, "chunk_size": chunk_size, "n_per_condition": n_per_condition,
-             "conditions": [(c.noise, c.viewpoint) for c in conditions], "data_source": data_source}
+             "conditions": [[c.noise, c.viewpoint] for c in conditions], "data_source": data_source}
         )
     }  # fmt: skip
     writer = None

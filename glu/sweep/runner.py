@@ -53,6 +53,7 @@ from glu.experiments.corpus import Condition
 from glu.experiments.evaluation import Evaluator
 from glu.experiments.intervals import HIGHER_IS_BETTER, metrics, paired_differences, reliability
 from glu.files import atomic_path, atomic_write_json, atomic_write_text
+from glu.schema import ACTIONS
 from glu.sweep.config import SweepConfig
 
 FORMAT = "glu-sweep"
@@ -120,8 +121,6 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
     engine, label = prepare_world(config)
     bn = engine.bn
     recognizer = _recognizer(config, out, log)
-    from glu.schema import ACTIONS
-
     missing = [a for a in ACTIONS if a not in recognizer.models]
     if missing:
         raise ModelError(
@@ -132,8 +131,12 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
         config.seed, config.chunk_size, config.scenario, config.gestures,
         {v: config.views[v] for v in config.viewpoints},
     )  # fmt: skip
+    # what the numbers depend on: the settings (where the data and the recogniser file are does not
+    # matter, what they hold does), the data, the network, the models, glu's version
+    settings = config.as_dict()
+    settings["network"]["data"] = settings["recognizer"]["file"] = None
     digest = hashlib.sha256()
-    for part in (json.dumps(config.as_dict(), sort_keys=True), label, json.dumps(bn.to_dict()),
+    for part in (json.dumps(settings, sort_keys=True), label, json.dumps(bn.to_dict()),
                  json.dumps(recognizer.to_dict()["models"]), __version__):  # fmt: skip
         digest.update(part.encode())
     provenance = {
