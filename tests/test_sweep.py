@@ -109,6 +109,7 @@ def test_resume_computes_only_the_missing_chunks(config_file, synchronous, tmp_p
         (out / name).unlink()
     result = run_sweep(load_config(config_file), out, scheduler="synchronous", log=quiet)
     assert (result.computed, result.reused) == (1, 7)
+    assert not list((out / "chunks").glob(".*"))  # the half-written file is gone
     same_tables(ref, out)
 
 

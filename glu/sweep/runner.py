@@ -267,6 +267,8 @@ def run_sweep(
                             "use another output folder or delete that one")  # fmt: skip
     else:
         atomic_write_json(sweep_file, provenance)
+    for stale in (out / "chunks").glob(".c*.npz*"):  # a write cut short by a hard kill (never a whole chunk)
+        stale.unlink(missing_ok=True)
     conditions = config.conditions
     from glu.experiments.corpus import chunk_ranges
 
