@@ -74,7 +74,11 @@ both captions are the paper's: "{sphere_caption}", "{box_caption}".
 and {same_scores:.0f} of {n_scores:.0f} scores to the printed digit. The grammar has {n_grammar:,.0f} sentences; \
 glu finds the exact N-best under either score without scoring them one by one. Random samples of {trial_samples:,.0f} \
 sentences, as the originals drew them, held the grammar's best in {trials_found:.0f} of {trials:.0f} trials (the \
-exact chance is {p_draw_percent:.1f} %)."""
+exact chance is {p_draw_percent:.1f} %).
+* **Every fusion strategy on a simulated corpus** (`11_corpus_evaluation`: {corpus_episodes:,.0f} episodes; objects and actions from a scenario, effects and words drawn from the network, hand trajectories from the gesture generator under {corpus_noise:.0f} noise levels × {corpus_views:.0f} viewpoints; {ci_percent:.0f} % bootstrap intervals).
+  * Read from the likelihoods, as the originals do, p_HMM is nearly certain, right or wrong: the action's log-loss is {lik_gesture_ll:.2f} [{lik_gesture_ll_lo:.2f}, {lik_gesture_ll_hi:.2f}] nats at an accuracy of {lik_gesture_acc:.3f}. Fusion then changes little (product rule {lik_product_acc:.3f}), and a hard decision is as good as a soft one.
+  * Read per frame, p ∝ exp((1/t) log L), the product rule names the action in {pf_product_acc:.3f} [{pf_product_acc_lo:.3f}, {pf_product_acc_hi:.3f}] of the episodes against {pf_gesture_acc:.3f} for the gestures alone (paired difference {pf_gain:+.3f} [{pf_gain_lo:+.3f}, {pf_gain_hi:+.3f}]); with {early_percent:.0f} % of the gesture seen, {early_product:.3f} against {early_gesture:.3f}. Jeffrey's rule anticipates the effect with an ECE of {pf_jeffrey_ece:.3f} [{pf_jeffrey_ece_lo:.3f}, {pf_jeffrey_ece_hi:.3f}] against {pf_hard_ece:.3f} for a hard decision, and a log-loss of {pf_jeffrey_ll:.3f} against {pf_hard_ll:.3f}.
+  * Seen from a viewpoint turned by {turned_deg:.0f}°, the HMMs (trained facing the camera) name {turned_gesture:.3f} of the actions, below the network alone ({turned_network:.3f}): the correspondence problem."""
 """The results section, with ``{name:format}`` slots filled by :func:`values`."""
 
 REQUIRED = (
@@ -83,7 +87,7 @@ REQUIRED = (
     "fusion_soft_sweep_sphere", "fusion_soft_sweep_box", "hmm_original_scores", "hmm_synthetic_cv",
     "hmm_accuracy_vs_noise", "hmm_recipe_comparison", "hmm_recipe_spread", "tcds_anticipation_sphere_published",
     "tcds_anticipation_box_published", "tcds_anticipation_sphere_original_predictions",
-    "verbal_published_descriptions", "verbal_sampling_vs_exact",
+    "verbal_published_descriptions", "verbal_sampling_vs_exact", "corpus_metrics", "corpus_differences",
 )  # fmt: skip
 """The result tables the section is written from."""
 
@@ -179,6 +183,53 @@ def values(summary: Mapping[str, Any]) -> dict[str, Any]:
     trials = _table(summary, "verbal_sampling_vs_exact")[0]
     v.update(trials=len(trials), trials_found=int(trials["found_best"].sum()), trial_samples=trials["n_samples"].max(),
              p_draw_percent=100 * float(trials["p_draw_best"].mean()))  # fmt: skip
+    v.update(corpus_values(summary))
+    return v
+
+
+def corpus_values(summary: Mapping[str, Any]) -> dict[str, Any]:
+    """The slots of the corpus bullet, from the tables of notebook 11 (pooled over noise and viewpoints)."""
+    from glu.experiments.intervals import LEVEL
+
+    table, meta = _table(summary, "corpus_metrics")
+    diffs = _table(summary, "corpus_differences")[0]
+    grid = meta["parameters"]["grid"]
+    full, early = max(grid["fractions"]), min(grid["fractions"])
+
+    def cell(posterior: str, target: str, strategy: str, metric: str, fraction: float = full,
+             viewpoint: str = "all") -> pd.Series:  # fmt: skip
+        sel = table[(table.posterior == posterior) & (table.target == target) & (table.strategy == strategy)
+                    & (table.metric == metric) & (table.fraction == fraction) & (table.viewpoint == viewpoint)
+                    & table.noise.isna()]  # fmt: skip
+        if len(sel) != 1:
+            raise DataError(
+                f"corpus_metrics: no single row for {posterior} {target} {strategy} {metric} {fraction}"
+            )
+        return sel.iloc[0]
+
+    v: dict[str, Any] = {"corpus_episodes": meta["episodes"], "corpus_noise": len(grid["noise"]),
+                         "corpus_views": len(grid["viewpoints"]), "ci_percent": 100 * LEVEL}  # fmt: skip
+    g = cell("likelihood", "action", "gesture", "log_loss")
+    v.update(lik_gesture_ll=g.estimate, lik_gesture_ll_lo=g.ci_low, lik_gesture_ll_hi=g.ci_high,
+             lik_gesture_acc=cell("likelihood", "action", "gesture", "accuracy").estimate,
+             lik_product_acc=cell("likelihood", "action", "product", "accuracy").estimate)  # fmt: skip
+    p = cell("per_frame", "action", "product", "accuracy")
+    v.update(pf_product_acc=p.estimate, pf_product_acc_lo=p.ci_low, pf_product_acc_hi=p.ci_high,
+             pf_gesture_acc=cell("per_frame", "action", "gesture", "accuracy").estimate)  # fmt: skip
+    d = diffs[(diffs.posterior == "per_frame") & (diffs.target == "action") & (diffs.metric == "accuracy")
+              & (diffs.fraction == full) & (diffs.strategy == "product") & (diffs.baseline == "gesture")
+              & (diffs.viewpoint == "all") & diffs.noise.isna()].iloc[0]  # fmt: skip
+    v.update(pf_gain=d.difference, pf_gain_lo=d.ci_low, pf_gain_hi=d.ci_high, early_percent=100 * early,
+             early_product=cell("per_frame", "action", "product", "accuracy", early).estimate,
+             early_gesture=cell("per_frame", "action", "gesture", "accuracy", early).estimate)  # fmt: skip
+    j = cell("per_frame", "effect", "jeffrey", "ece")
+    v.update(pf_jeffrey_ece=j.estimate, pf_jeffrey_ece_lo=j.ci_low, pf_jeffrey_ece_hi=j.ci_high,
+             pf_hard_ece=cell("per_frame", "effect", "hard", "ece").estimate,
+             pf_jeffrey_ll=cell("per_frame", "effect", "jeffrey", "log_loss").estimate,
+             pf_hard_ll=cell("per_frame", "effect", "hard", "log_loss").estimate)  # fmt: skip
+    v.update(turned_deg=meta["parameters"]["views"]["turned"]["yaw_deg"],
+             turned_gesture=cell("per_frame", "action", "gesture", "accuracy", viewpoint="turned").estimate,
+             turned_network=cell("per_frame", "action", "network", "accuracy", viewpoint="turned").estimate)  # fmt: skip
     return v
 
 

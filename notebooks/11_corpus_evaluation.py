@@ -17,7 +17,7 @@
 # The papers illustrate fusion on five real segments; their future work asks for quantitative tests on
 # larger corpora. Here glu simulates episodes — an object and a person's action from a scenario, the effect
 # and the words drawn from the Affordance–Words network, the person's hand from the gesture generator under
-# sensor noise and from several viewpoints — and measures, with 95 % bootstrap intervals, what each strategy
+# sensor noise and from several viewpoints — and measures, with bootstrap intervals, what each strategy
 # gets right: the action (after seeing the effect), the effect before it happens (anticipation), and the
 # best verbal description; as the noise grows, as more of the gesture is seen, and how well calibrated the
 # predictions are. The sweep runs as Dask tasks (`glu evaluate` runs the same sweep from the command line).
@@ -79,7 +79,7 @@ overall.pivot_table(index=["posterior", "target", "metric"], columns="strategy",
 # ## Which strategy wins as the sensor noise grows
 #
 # Left, p_HMM as the originals read it from the likelihoods; right, per frame (`posteriors`). Every band is a
-# 95 % bootstrap interval.
+# bootstrap interval (`glu.experiments.intervals.LEVEL`).
 
 # %%
 fig, axes = plots.new_figure(4, width=3.7)
@@ -152,5 +152,5 @@ print("\n".join(lines))
 # most of all — anticipates the effect with a lower log-loss and a smaller calibration error than a hard
 # decision. Seen from a turned viewpoint the gestures mislead more than they help: the network alone is then
 # more accurate, the correspondence problem of notebook 10. The lines above name, for each target and metric,
-# the best strategy and those it beats with 95 % confidence; every number with its interval is in
+# the best strategy and those it beats with confidence; every number with its interval is in
 # `results/corpus_metrics.csv`.

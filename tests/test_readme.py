@@ -27,6 +27,29 @@ def sweep(gap: float) -> dict:
     return t(rows)
 
 
+def corpus_rows() -> list[dict]:
+    """Rows of corpus_metrics: (posterior, target, strategy, metric, fraction, viewpoint) → (estimate, low, high)."""
+    cells = {
+        ("likelihood", "action", "gesture", "log_loss", 1.0, "all"): (5.478, 5.324, 5.692),
+        ("likelihood", "action", "gesture", "accuracy", 1.0, "all"): (0.5991, 0.58, 0.61),
+        ("likelihood", "action", "product", "accuracy", 1.0, "all"): (0.6003, 0.58, 0.61),
+        ("per_frame", "action", "product", "accuracy", 1.0, "all"): (0.6344, 0.6171, 0.6472),
+        ("per_frame", "action", "gesture", "accuracy", 1.0, "all"): (0.5991, 0.58, 0.61),
+        ("per_frame", "action", "product", "accuracy", 0.2, "all"): (0.5104, 0.5, 0.52),
+        ("per_frame", "action", "gesture", "accuracy", 0.2, "all"): (0.3871, 0.37, 0.4),
+        ("per_frame", "effect", "jeffrey", "ece", 1.0, "all"): (0.0834, 0.0712, 0.1003),
+        ("per_frame", "effect", "hard", "ece", 1.0, "all"): (0.1718, 0.15, 0.19),
+        ("per_frame", "effect", "jeffrey", "log_loss", 1.0, "all"): (0.9021, 0.87, 0.93),
+        ("per_frame", "effect", "hard", "log_loss", 1.0, "all"): (1.2357, 1.2, 1.3),
+        ("per_frame", "action", "gesture", "accuracy", 1.0, "turned"): (0.3582, 0.33, 0.38),
+        ("per_frame", "action", "network", "accuracy", 1.0, "turned"): (0.5731, 0.55, 0.6),
+    }
+    rows = [dict(zip(("posterior", "target", "strategy", "metric", "fraction", "viewpoint"), k, strict=True),
+                 noise=None, estimate=e, ci_low=lo, ci_high=hi) for k, (e, lo, hi) in cells.items()]  # fmt: skip
+    rows.append({**rows[0], "noise": 0.1, "estimate": 9.9})  # a row of one noise level: never quoted
+    return rows
+
+
 @pytest.fixture
 def summary() -> dict:
     """A summary with known numbers in every table the README reads (the numbers are inputs, not glu's output)."""
@@ -106,6 +129,35 @@ def summary() -> dict:
             [{"found_best": f, "p_draw_best": 0.0191, "n_samples": 10000} for f in [True] + [False] * 59]
         ),
         "tcds_anticipation_sphere_original_predictions": t([], parameters={"step": 5}),
+        "corpus_metrics": t(
+            corpus_rows(),
+            episodes=20004,
+            parameters={
+                "grid": {
+                    "noise": [0.0, 0.1],
+                    "viewpoints": ["front", "turned", "seated"],
+                    "fractions": [0.2, 1.0],
+                },
+                "views": {"turned": {"yaw_deg": 40.0}},
+            },
+        ),  # fmt: skip
+        "corpus_differences": t(
+            [
+                {
+                    "noise": None,
+                    "viewpoint": "all",
+                    "posterior": "per_frame",
+                    "target": "action",
+                    "fraction": 1.0,
+                    "metric": "accuracy",
+                    "strategy": "product",
+                    "baseline": "gesture",
+                    "difference": 0.0353,
+                    "ci_low": 0.029,
+                    "ci_high": 0.042,
+                },
+            ]
+        ),  # fmt: skip
     }
     return {"quick": False, "data_source": "real data: somewhere", "wall_time_s": 386.3, "notebooks": [{}] * 9,
             "tables": tables}  # fmt: skip
@@ -121,7 +173,12 @@ def test_the_section_reads_every_number_from_the_summary(summary):
                      "0.73–0.82 over 2", "worth 9 points", "(at most 0 and 0 of 2)", "5 of 5 values",
                      "(max |difference| 1.3e-05)", '"the robot pushed the ball and the ball moves"',
                      "(not the paper's caption)", "9,941 sampled", "every 5 frames", "multiple of 5)", "samples of 10,000", "34 of 34 sentences and 30 of 30 scores",
-                     "9,331,200 sentences", "in 1 of 60 trials", "is 1.9 %", "of its 9 notebooks"):  # fmt: skip
+                     "9,331,200 sentences", "in 1 of 60 trials", "is 1.9 %", "of its 9 notebooks",
+                     "20,004 episodes", "under 2 noise levels × 3 viewpoints", "95 % bootstrap", "is 5.48 [5.32, 5.69] nats",
+                     "accuracy of 0.599", "(product rule 0.600)", "in 0.634 [0.617, 0.647] of", "(paired difference "
+                     "+0.035 [+0.029, +0.042])", "with 20 % of the gesture seen, 0.510 against 0.387",
+                     "ECE of 0.083 [0.071, 0.100] against 0.172", "log-loss of 0.902 against 1.236",
+                     "turned by 40°", "name 0.358 of the actions", "network alone (0.573)"):  # fmt: skip
         assert expected in " ".join(text.split()), expected
     assert readme.matches_template(text)
     assert all(len(line) <= readme.WIDTH for line in text.splitlines() if " " in line.strip())
