@@ -60,7 +60,8 @@ config = config_from_dict(settings)
 # ## The sweep
 #
 # One task per chunk of episodes and condition; every episode is scored at every observed fraction by
-# every strategy. Finished chunks are kept, so an interrupted run resumes where it stopped.
+# every strategy. Here the chunks go to a temporary folder; `glu evaluate -o DIR` keeps them, so an
+# interrupted sweep resumes where it stopped.
 
 # %%
 with tempfile.TemporaryDirectory() as sweep_dir:
