@@ -57,6 +57,14 @@ class VocabularyError(GluError):
     """A sentence or grammar uses words the model has no probability for."""
 
 
+class OutputError(GluError):
+    """No output folder was given where one is needed (an installed glu has no project folders)."""
+
+
+class MissingDependencyError(GluError):
+    """An optional dependency (an extra such as ``glu[notebooks]``) that a command needs is not installed."""
+
+
 class ParameterError(GluError):
     """A notebook parameter that the notebook does not declare, of the wrong type or out of range."""
 

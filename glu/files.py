@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import tempfile
+import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -68,3 +70,45 @@ def atomic_write_json(path: str | os.PathLike, obj: Any, indent: int | None = 1,
     """Write ``obj`` as JSON (strict: no NaN or Infinity) followed by a newline, atomically."""
     kwargs.setdefault("allow_nan", False)
     return atomic_write_text(path, json.dumps(obj, indent=indent, **kwargs) + "\n")
+
+
+@contextmanager
+def staged_folder(dest: str | os.PathLike) -> Iterator[Path]:
+    """A new hidden folder beside ``dest`` to build it in; it becomes ``dest`` when the block succeeds.
+
+    ::
+
+        with staged_folder("data/synthetic") as tmp:
+            write everything into tmp
+
+    On success :func:`replace_folder` moves it into place (an existing ``dest`` is swapped out whole); on
+    an exception or an interrupt it is removed and ``dest`` is left as it was. Readers therefore see the
+    old folder, or the complete new one, never a half-written one.
+    """
+    dest = Path(dest).absolute()
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".staging", dir=dest.parent))
+    try:
+        yield tmp
+        os.chmod(tmp, 0o777 & ~_umask())
+        replace_folder(tmp, dest)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def replace_folder(complete: str | os.PathLike, dest: str | os.PathLike) -> Path:
+    """Make the folder ``complete`` be ``dest`` by renaming (same file system); an old ``dest`` is removed.
+
+    A missing ``dest`` is one rename. An existing one is renamed aside first, then removed, so ``dest`` is
+    at every moment the old folder, absent, or the new folder.
+    """
+    complete, dest = Path(complete), Path(dest)
+    if dest.exists():
+        old = dest.parent / f".{dest.name}.old-{uuid.uuid4().hex[:8]}"
+        os.replace(dest, old)
+        os.replace(complete, dest)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(complete, dest)
+    return dest

@@ -60,7 +60,8 @@ def injected_names(namespace: Mapping[str, Any]) -> list[str]:
 
 def notebook_source(notebook: str) -> Path:
     """The notebook's jupytext source: ``<name>.py`` in the working directory (where papermill, JupyterLab
-    and ``glu reproduce`` run a notebook), else the project's ``notebooks/<name>.py``."""
+    and ``glu reproduce`` run a notebook), else glu's own ``notebooks/<name>.py`` (in the checkout, or
+    the installed package ``glu.notebooks``)."""
     here = Path.cwd() / f"{notebook}.py"
     return here if here.is_file() else paths.notebook_file(notebook)
 
@@ -83,8 +84,9 @@ def start(notebook: str, namespace: Mapping[str, Any]) -> Outputs:
     line = f"**{notebook}** · {source.describe()} ({source.reason()})"
     line += f" · parameters: {parameters_text(params)}" if params else " · default parameters"
     if not out_dir:
+        where = f"build/scratch/{notebook}/" if paths.PROJECT_ROOT is not None else str(layout.root)
         line += (
-            f" · outputs go to the scratch folder build/scratch/{notebook}/ "
+            f" · outputs go to the scratch folder {where} "
             "(only `glu reproduce` publishes to figures/, results/, recordings/, models/)"
         )
     _say(line)

@@ -1,10 +1,22 @@
-"""Where glu's inputs and outputs live, rooted at the project (never at the working directory).
+"""Where glu's inputs and outputs live, rooted at the package (never at the working directory).
 
-The one owner of paths. Inputs: the package's resources, the notebooks, the data folders (the *layout*
-inside a data folder belongs to :class:`glu.data.DataSource`). Outputs: an :class:`OutputLayout` names
-the folder of every kind of output, either the project's own (``figures/``, ``results/``,
-``recordings/``, ``models/`` at the top, executed notebooks and the report under ``build/``) or one root
-holding them all (``glu reproduce --out DIR``, a notebook's ``out_dir``). Notebooks (through
+The one owner of paths. glu runs in two settings, and :func:`locate` tells them apart:
+
+* **a source checkout** (``git clone`` + ``pip install -e .``): the package sits beside ``pyproject.toml``
+  and ``notebooks/``. Data fetched goes to ``data/real/``, notebook scratch runs to ``build/scratch/``, and
+  ``glu reproduce`` publishes into the project's ``figures/``, ``results/``, ``recordings/``, ``models/``.
+* **an installed package** (a wheel in any environment): nothing is ever written inside the package
+  (``site-packages``). Data lives in the user's data folder (platformdirs: ``~/.local/share/glu/real`` on
+  Linux, ``~/Library/Application Support/glu/real`` on macOS, ``%LOCALAPPDATA%\\glu\\real`` on Windows),
+  scratch runs in the user's cache folder, and ``glu reproduce`` needs ``--out DIR``. The notebooks ship
+  inside the package as ``glu.notebooks`` (the repository's ``notebooks/`` folder, mapped by
+  ``[tool.setuptools] package-dir`` in ``pyproject.toml``), so they run from any folder.
+
+``--data DIR`` and ``$GLU_DATA_DIR`` win over both. Inputs: the package's resources, the notebooks, the
+data folders (the *layout* inside a data folder belongs to :class:`glu.data.DataSource`). Outputs: an
+:class:`OutputLayout` names the folder of every kind of output, either the project's own (``figures/``,
+``results/``, ``recordings/``, ``models/`` at the top, executed notebooks and the report under ``build/``)
+or one root holding them all (``glu reproduce --out DIR``, a notebook's ``out_dir``). Notebooks (through
 :mod:`glu.outputs`) and ``glu reproduce`` both use it, so the two can never disagree.
 """
 
@@ -14,13 +26,83 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-PACKAGE_DIR: Path = Path(__file__).resolve().parent
-PROJECT_ROOT: Path = PACKAGE_DIR.parent
-RESOURCES_DIR: Path = PACKAGE_DIR / "resources"
-NOTEBOOKS_DIR: Path = PROJECT_ROOT / "notebooks"
+from glu.errors import OutputError
 
-DATA_DIR: Path = PROJECT_ROOT / "data"
-REAL_DATA_DIR: Path = DATA_DIR / "real"
+APP_NAME = "glu"
+"""The application's name in the user's data and cache folders."""
+
+
+@dataclass(frozen=True)
+class Locations:
+    """Where glu reads and writes, for one place the package is installed (see :func:`locate`).
+
+    Attributes
+    ----------
+    package : the package's folder
+    checkout : the source checkout holding it, or None for an installed package
+    notebooks : the jupytext notebooks ``NN_name.py``
+    data : the folder of fetched data (``real/`` under it)
+    scratch : where notebooks run by hand write their outputs
+    """
+
+    package: Path
+    checkout: Path | None
+    notebooks: Path
+    data: Path
+    scratch: Path
+
+    @property
+    def real_data(self) -> Path:
+        """Where ``glu data fetch`` puts the real data by default."""
+        return self.data / "real"
+
+    @property
+    def real_data_label(self) -> str:
+        """How messages name :attr:`real_data`: ``data/real/`` in a checkout, else the user's data folder."""
+        return "data/real/" if self.checkout is not None else f"{self.real_data}{os.sep}"
+
+
+def is_checkout(root: Path) -> bool:
+    """True if ``root`` is glu's source tree: ``pyproject.toml``, ``notebooks/`` and ``glu/`` side by side."""
+    return (root / "pyproject.toml").is_file() and (root / "notebooks").is_dir() and (root / "glu").is_dir()
+
+
+def locate(package_dir: Path, user_data: Path | None = None, user_cache: Path | None = None) -> Locations:
+    """The :class:`Locations` of a package installed at ``package_dir``.
+
+    In a checkout everything is under the checkout; otherwise data goes to ``user_data`` and scratch runs
+    to ``user_cache`` (default: platformdirs' user data and cache folders for ``glu``), never inside
+    ``package_dir``.
+
+    >>> import tempfile
+    >>> site = Path(tempfile.mkdtemp()) / "site-packages"
+    >>> loc = locate(site / "glu", user_data=Path("/home/me/.local/share/glu"),
+    ...              user_cache=Path("/home/me/.cache/glu"))
+    >>> loc.checkout is None, loc.notebooks == site / "glu" / "notebooks", loc.real_data.as_posix()
+    (True, True, '/home/me/.local/share/glu/real')
+    """
+    package_dir = Path(package_dir)
+    root = package_dir.parent
+    if is_checkout(root):
+        return Locations(package_dir, root, root / "notebooks", root / "data", root / "build" / "scratch")
+    if user_data is None or user_cache is None:
+        import platformdirs
+
+        user_data = user_data or Path(platformdirs.user_data_dir(APP_NAME, appauthor=False))
+        user_cache = user_cache or Path(platformdirs.user_cache_dir(APP_NAME, appauthor=False))
+    return Locations(package_dir, None, package_dir / "notebooks", user_data, user_cache / "scratch")
+
+
+PACKAGE_DIR: Path = Path(__file__).resolve().parent
+HERE: Locations = locate(PACKAGE_DIR)
+"""Where this glu reads and writes."""
+PROJECT_ROOT: Path | None = HERE.checkout
+"""The source checkout, or None when glu is installed from a wheel."""
+RESOURCES_DIR: Path = PACKAGE_DIR / "resources"
+NOTEBOOKS_DIR: Path = HERE.notebooks
+
+DATA_DIR: Path = HERE.data
+REAL_DATA_DIR: Path = HERE.real_data
 DATA_ENV_VAR = "GLU_DATA_DIR"
 """Environment variable naming the data folder (or ``synthetic``)."""
 SHARED_DATA_ENV_VAR = "GLU_SHARED_DATA"
@@ -58,6 +140,11 @@ class OutputLayout:
     def project(cls) -> OutputLayout:
         """The project's own folders: ``figures/``, ``results/``, ``recordings/``, ``models/``, ``build/…``."""
         r = PROJECT_ROOT
+        if r is None:
+            raise OutputError(
+                f"glu is installed, not a source checkout: give an output folder (--out DIR); "
+                f"nothing is written inside the package ({PACKAGE_DIR})"
+            )
         return cls(r, r / "figures", r / "results", r / "recordings", r / "models",
                    r / "build" / "notebooks", r / "build" / "report")  # fmt: skip
 
@@ -93,12 +180,13 @@ class OutputLayout:
         return self.root / STAGING
 
 
-SCRATCH_DIR: Path = PROJECT_ROOT / "build" / "scratch"
-"""Where notebooks run by hand (JupyterLab, nbconvert, papermill, ``glu run``) write their outputs."""
+SCRATCH_DIR: Path = HERE.scratch
+"""Where notebooks run by hand (JupyterLab, nbconvert, papermill, ``glu run``) write their outputs:
+``build/scratch/`` in a checkout, the user's cache folder otherwise."""
 
 
 def scratch_dir(notebook: str) -> Path:
-    """The scratch folder of one notebook: ``build/scratch/<notebook>/``."""
+    """The scratch folder of one notebook: ``build/scratch/<notebook>/`` in a checkout."""
     return SCRATCH_DIR / notebook
 
 
@@ -111,7 +199,8 @@ def shared_data_dir() -> Path | None:
     """The shared copy of the real data used by tests and CI (``$GLU_SHARED_DATA`` or ``../shared/data``)."""
     env = os.environ.get(SHARED_DATA_ENV_VAR)
     candidates = [Path(env)] if env else []
-    candidates.append(PROJECT_ROOT.parent / "shared" / "data")
+    if PROJECT_ROOT is not None:
+        candidates.append(PROJECT_ROOT.parent / "shared" / "data")
     for c in candidates:
         if (c / "affordance-words").is_dir():
             return c.resolve()

@@ -183,7 +183,7 @@ def reproduce(
 
     Parameters
     ----------
-    data : data folder, ``"synthetic"``, or None (``$GLU_DATA_DIR``, ``data/real/``, else synthetic)
+    data : data folder, ``"synthetic"``, or None (``$GLU_DATA_DIR``, the fetched data, else synthetic)
     quick : small, fast runs (for tests); figures are still made
     out : root for ``figures/``, ``recordings/``, ``results/``, ``models/``, ``notebooks/``, ``report/``;
         None = the project's folders (:meth:`glu.paths.OutputLayout.at`)

@@ -18,7 +18,8 @@ from pathlib import Path
 import pytest
 
 from glu.cli import main
-from glu.data.fetch import fetch_all, manifest, sha256_of
+from glu.data.fetch import fetch_all, manifest, partial_folder, sha256_of
+from glu.errors import FetchError
 
 TRUNCATED = "gestures/tap1_hand/data.log"
 
@@ -66,9 +67,9 @@ def mirror_manifest(synthetic_folder, tmp_path):
     return path, len(files)
 
 
-def test_fetch_verifies_and_leaves_nothing_partial(server, mirror_manifest, synthetic_folder, tmp_path):
+def test_fetch_is_complete_or_absent(server, mirror_manifest, synthetic_folder, tmp_path):
     root, url, httpd = server
-    path, _ = mirror_manifest
+    path, n = mirror_manifest
     corrupted = "affordance-words/networkDefinition.txt"
     missing = "gestures/push1_hand/data.log"
     (root / corrupted).write_bytes((root / corrupted).read_bytes().replace(b"tap", b"t4p"))
@@ -80,24 +81,45 @@ def test_fetch_verifies_and_leaves_nothing_partial(server, mirror_manifest, synt
     assert failed == {corrupted, missing, TRUNCATED}
     assert "sha256 mismatch" in results[corrupted].detail
     assert "404" in results[missing].detail
-    for local in failed:
-        assert not (dest / local).exists()
-    leftovers = [
-        p for p in dest.rglob("*") if p.is_file() and (p.name.startswith(".") or p.suffix == ".part")
-    ]
-    assert leftovers == []
-    for item in manifest(url, path):
-        if item.local not in failed:
-            assert sha256_of(dest / item.local) == item.sha256
-            assert (dest / item.local).read_bytes() == (synthetic_folder / item.local).read_bytes()
+    assert not dest.exists()  # nothing is published until every file is verified
+    partial = partial_folder(dest)
+    kept = {p.relative_to(partial).as_posix() for p in partial.rglob("*") if p.is_file()}
+    assert kept == {i.local for i in manifest(url, path)} - failed  # verified files only, no temporaries
+    for local in kept:
+        assert (partial / local).read_bytes() == (synthetic_folder / local).read_bytes()
 
-    # the server is mended: a second run downloads only what is missing
+    # the server is mended: a second run downloads only what is missing, then publishes the whole folder
     httpd.truncate = False
     shutil.copy(synthetic_folder / corrupted, root / corrupted)
     shutil.copy(synthetic_folder / missing, root / missing)
     results = {r.local: r.status for r in fetch_all(dest, mirror=url, manifest_path=path)}
     assert {k for k, s in results.items() if s == "downloaded"} == failed
     assert all(s in ("downloaded", "present") for s in results.values())
+    assert not partial.exists()
+    for item in manifest(url, path):
+        assert sha256_of(dest / item.local) == item.sha256
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
+
+
+def test_fetch_into_an_existing_data_folder_keeps_its_other_files(server, mirror_manifest, tmp_path):
+    _, url, _ = server
+    path, _ = mirror_manifest
+    dest = tmp_path / "real"
+    (dest / "sentence-samples").mkdir(parents=True)
+    (dest / "sentence-samples" / "mine.txt").write_text("kept\n")
+    assert all(r.status == "downloaded" for r in fetch_all(dest, mirror=url, manifest_path=path))
+    assert (dest / "sentence-samples" / "mine.txt").read_text() == "kept\n"
+    assert all(r.status == "present" for r in fetch_all(dest, mirror=url, manifest_path=path))
+
+
+def test_fetch_refuses_a_folder_of_something_else(server, mirror_manifest, tmp_path):
+    _, url, _ = server
+    path, _ = mirror_manifest
+    (tmp_path / "home").mkdir()
+    (tmp_path / "home" / "thesis.tex").write_text("x")
+    with pytest.raises(FetchError, match="other content"):
+        fetch_all(tmp_path / "home", mirror=url, manifest_path=path)
+    assert [p.name for p in (tmp_path / "home").iterdir()] == ["thesis.tex"]
 
 
 def test_fetch_command_reports_failures_with_status_2(server, mirror_manifest, tmp_path, capsys):
@@ -110,7 +132,8 @@ def test_fetch_command_reports_failures_with_status_2(server, mirror_manifest, t
     last = err.strip().splitlines()[-1]
     assert last.startswith(f"glu data fetch: error: 1 of {n} files could not be fetched")
     assert f"[{n}/{n}]" in err
-    assert not (tmp_path / "d" / "affordance-words" / "networkDefinition.txt").exists()
+    assert f"nothing was written to {tmp_path / 'd'}" in last
+    assert not (tmp_path / "d").exists()
     assert main(["data", "fetch", "--dest", str(tmp_path / "d2"), "--mirror", "http://127.0.0.1:9"]) == 2
 
 

@@ -13,11 +13,13 @@ from pathlib import Path
 from typing import Any
 
 from glu.data.source import SYNTHETIC_KEYWORD, WORD_FILES
-from glu.errors import EvidenceError
+from glu.errors import EvidenceError, MissingDependencyError
 from glu.evidence import check_disjoint, parse_evidence, parse_soft
+from glu.paths import HERE
 
 DATA_HELP = (
-    f"data folder, or '{SYNTHETIC_KEYWORD}' (default: $GLU_DATA_DIR, data/real, else built-in synthetic data)"
+    f"data folder, or '{SYNTHETIC_KEYWORD}' (default: $GLU_DATA_DIR, the fetched data in "
+    f"{HERE.real_data_label}, else built-in synthetic data)"
 )
 
 
@@ -158,3 +160,35 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
     df = load_experiments(source, args.words)
     bn = learn_bn(df, unseen_words=args.unseen_words)
     return bn, f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}"
+
+
+# ------------------------------------------------------------------ progress and optional dependencies
+
+
+def progress_bar(total: int | None, desc: str, unit: str, quiet: bool = False) -> Any:
+    """A tqdm bar on stderr when it is a terminal and the output is not ``--json`` (``quiet``); else None.
+
+    Callers print plain lines instead when this is None, so logs and pipes never see bar characters.
+    """
+    import sys
+
+    if quiet or not sys.stderr.isatty():
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, leave=False, dynamic_ncols=True)
+
+
+def require_extra(extra: str, *modules: str) -> None:
+    """Raise :class:`MissingDependencyError` (one line) unless every module can be imported.
+
+    ``extra`` names the optional dependencies that provide them (``pip install 'glu[EXTRA]'``).
+    """
+    import importlib.util
+
+    missing = [m for m in modules if importlib.util.find_spec(m) is None]
+    if missing:
+        raise MissingDependencyError(
+            f"this command needs {', '.join(missing)}, which the plain `pip install glu` leaves out; "
+            f"install them with: pip install 'glu[{extra}]'"
+        )

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from glu import paths
-from glu.cli.common import add_data_option, integer
+from glu.cli.common import add_data_option, integer, progress_bar
 from glu.data.source import DEFAULT_SYNTHETIC_N, WORD_FILES
 from glu.data.synthetic import MAX_ROWS, MIN_ROWS
 from glu.errors import DataError, FetchError
@@ -20,7 +20,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     dsub.required = True
 
     f = dsub.add_parser("fetch", help="download the real data at pinned commits, verifying checksums")
-    f.add_argument("--dest", type=Path, default=paths.REAL_DATA_DIR, help="data folder (default: data/real)")
+    f.add_argument(
+        "--dest",
+        type=Path,
+        default=paths.REAL_DATA_DIR,
+        help=f"data folder (default: {paths.HERE.real_data_label})",
+    )
     f.add_argument("--mirror", metavar="URL", help="fetch {URL}/{local path} instead of from GitHub")
     f.add_argument("--timeout", type=float, default=60.0, help="seconds per request (default 60)")
     f.add_argument("--manifest", type=Path, default=None, metavar="JSON",
@@ -45,35 +50,57 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _fetch(args: argparse.Namespace) -> int:
-    from glu.data.fetch import fetch_all
+    from glu.data.fetch import MANIFEST, fetch_all, partial_folder
+
+    bar = progress_bar(None, "fetch", "file")
 
     def progress(i: int, n: int, r) -> None:
         extra = f": {r.detail}" if r.detail else ""
-        print(f"[{i}/{n}] {r.status:10s} {r.local}{extra}", file=sys.stderr)
+        line = f"[{i}/{n}] {r.status:10s} {r.local}{extra}"
+        if bar is None:
+            print(line, file=sys.stderr)
+            return
+        bar.total = n
+        if r.status == "failed":
+            bar.write(line, file=sys.stderr)
+        bar.set_postfix_str(r.local, refresh=False)
+        bar.update(1)
 
-    from glu.data.fetch import MANIFEST
-
-    results = fetch_all(args.dest, mirror=args.mirror, progress=progress, timeout=args.timeout,
-                        manifest_path=args.manifest or MANIFEST)  # fmt: skip
+    try:
+        results = fetch_all(args.dest, mirror=args.mirror, progress=progress, timeout=args.timeout,
+                            manifest_path=args.manifest or MANIFEST)  # fmt: skip
+    finally:
+        if bar is not None:
+            bar.close()
     failed = [r for r in results if r.status == "failed"]
     ok = len(results) - len(failed)
-    print(f"{ok}/{len(results)} files in {args.dest}" + (f"; {len(failed)} failed" if failed else ""))
     if failed:
+        kept = f"; the {ok} verified files wait in {partial_folder(args.dest)} for the next run" if ok else ""
         raise FetchError(
             f"{len(failed)} of {len(results)} files could not be fetched (first: {failed[0].detail}); "
-            "nothing partial was written, run the command again to retry"
+            f"nothing was written to {args.dest}{kept}; run the command again to retry"
         )
+    print(f"{ok}/{len(results)} files verified in {args.dest}")
     return 0
 
 
 def _synth(args: argparse.Namespace) -> int:
+    from glu.data.source import WORD_FILES as TABLES
     from glu.data.synthetic import write_synthetic_folder
     from glu.gestures.synthetic import hand_log_arrays, synthetic_recordings
 
     if not MIN_ROWS <= args.n <= MAX_ROWS:
         raise DataError(f"--n {args.n} is out of range; allowed: {MIN_ROWS} to {MAX_ROWS:,}")
+    if not 0 <= args.seed < 2**32:
+        raise DataError(f"--seed {args.seed}: a seed is a whole number in [0, 2**32 - 1]")
     recordings = {name: hand_log_arrays(g) for name, g in synthetic_recordings(args.seed).items()}
-    out = write_synthetic_folder(args.out, args.n, args.seed, recordings)
+    bar = progress_bar(len(TABLES) + 1 + len(recordings), "synth", "file")
+    try:
+        out = write_synthetic_folder(args.out, args.n, args.seed, recordings,
+                                     progress=(lambda name: bar.update(1)) if bar is not None else None)  # fmt: skip
+    finally:
+        if bar is not None:
+            bar.close()
     print(f"wrote synthetic data (seed {args.seed}, {args.n} experiments per table, "
           f"{len(recordings)} gesture recordings) to {out}")  # fmt: skip
     return 0

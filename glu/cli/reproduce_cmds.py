@@ -6,7 +6,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from glu.cli.common import DATA_HELP, positive_int, seed
+from glu.cli.common import DATA_HELP, positive_int, require_extra, seed
+
+NOTEBOOK_MODULES = ("papermill", "jupytext", "ipykernel", "nbconvert", "rerun")
+"""What running the notebooks needs: the extra ``glu[notebooks]``."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,7 +22,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--data", help=DATA_HELP)
     p.add_argument("--quick", action="store_true", help="small, fast runs (as the tests do)")
     p.add_argument(
-        "--out", type=Path, help="write figures/, recordings/, results/, models/, notebooks/, report/ here"
+        "--out",
+        type=Path,
+        help="write figures/, recordings/, results/, models/, notebooks/, report/ here "
+        "(default: the project's folders in a source checkout; required when glu is installed)",
     )
     p.add_argument("-j", "--jobs", type=positive_int, default=2, help="notebooks run in parallel (default 2)")
     p.add_argument(
@@ -51,6 +57,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _reproduce(args: argparse.Namespace) -> int:
     from glu import paths
+
+    require_extra("notebooks", *NOTEBOOK_MODULES)
     from glu.reproduce import NotebookError, reproduce
 
     folder = args.notebooks or paths.NOTEBOOKS_DIR
@@ -73,6 +81,7 @@ def _reproduce(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    require_extra("notebooks", *NOTEBOOK_MODULES)
     from glu.parameters import read_spec
     from glu.reproduce import NotebookError, list_notebooks, run_one
 

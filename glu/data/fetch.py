@@ -1,29 +1,35 @@
-"""Download the real data from its public origin at pinned commits, verifying each file's sha256.
+"""Download the real data from its public origin at pinned commits, verifying each file's sha256 (pooch).
 
 The manifest (``glu/resources/sources.json``) lists each file: where it goes in the data folder, which
-repository and commit it comes from, and its sha256. Each file is downloaded into a temporary file in the
-destination folder, checked, and only then renamed into place, so an interrupted or corrupted download
-leaves no file behind. Files already present with the right checksum are kept.
+repository and commit it comes from, and its sha256. Downloading and checking is pooch's job
+(:func:`pooch.retrieve`: a temporary file, renamed into place only when its hash is the known one).
+
+The data folder is **complete or absent**. Files are gathered in a hidden folder beside the destination,
+``.<name>.partial/`` (files the destination already holds with the right checksum are linked in, the others
+downloaded); only when every file of the manifest is there and verified does that folder become the
+destination, by renaming (a destination that already exists is swapped out the same way, its other files
+kept). A failed or interrupted fetch therefore changes nothing in the destination; the files it verified
+stay in the partial folder, which no command reads as data, and the next run downloads only the rest.
 """
 
 from __future__ import annotations
 
 import hashlib
-import http.client
 import json
 import os
-import tempfile
-import urllib.error
-import urllib.request
+import shutil
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from glu import paths
 from glu.errors import FetchError
+from glu.files import replace_folder
 
 MANIFEST = paths.RESOURCES_DIR / "sources.json"
-CHUNK = 1 << 16
+PARTIAL_SUFFIX = ".partial"
+DATA_SUBFOLDERS = ("affordance-words", "gestures", "reference-models", "sentence-samples")
+"""The folders of a glu data folder: a destination that has files but none of these is not one."""
 
 
 @dataclass(frozen=True)
@@ -37,7 +43,7 @@ class RemoteFile:
 
 @dataclass(frozen=True)
 class FetchResult:
-    """Outcome of one file: ``status`` is ``downloaded``, ``present`` (already there) or ``failed``."""
+    """Outcome of one file: ``status`` is ``downloaded``, ``present`` (already verified) or ``failed``."""
 
     local: str
     status: str
@@ -52,16 +58,20 @@ def manifest(mirror: str | None = None, path: str | os.PathLike = MANIFEST) -> l
     """
     try:
         spec = json.loads(Path(path).read_text(encoding="utf-8"))
+        out = []
+        for f in spec["files"]:
+            if mirror:
+                url = mirror.rstrip("/") + "/" + f["local"]
+            else:
+                repo = spec["repositories"][f["source"]]
+                url = spec["url_template"].format(repo=repo["repo"], commit=repo["commit"], path=f["path"])
+            out.append(RemoteFile(local=f["local"], url=url, sha256=f["sha256"]))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
         raise FetchError(f"{path}: not a readable manifest ({e})") from None
-    out = []
-    for f in spec["files"]:
-        if mirror:
-            url = mirror.rstrip("/") + "/" + f["local"]
-        else:
-            repo = spec["repositories"][f["source"]]
-            url = spec["url_template"].format(repo=repo["repo"], commit=repo["commit"], path=f["path"])
-        out.append(RemoteFile(local=f["local"], url=url, sha256=f["sha256"]))
+    except (KeyError, TypeError, AttributeError) as e:
+        raise FetchError(f"{path}: malformed manifest ({type(e).__name__}: {e})") from None
+    if mirror and not mirror.startswith(("http://", "https://", "ftp://")):
+        raise FetchError(f"--mirror {mirror!r}: expected an http://, https:// or ftp:// URL")
     return out
 
 
@@ -96,45 +106,84 @@ def _cached_sha256(path: Path) -> str:
     return _SHA_CACHE[key]
 
 
-def sha256_of(path: Path) -> str:
-    """Hex sha256 of a file."""
-    h = hashlib.sha256()
+def sha256_of(path: str | os.PathLike) -> str:
+    """Hex sha256 of a file (the standard library's :func:`hashlib.file_digest`; no pooch import needed)."""
     with open(path, "rb") as f:
-        for block in iter(lambda: f.read(CHUNK), b""):
-            h.update(block)
-    return h.hexdigest()
+        return hashlib.file_digest(f, "sha256").hexdigest()
 
 
-def fetch_file(item: RemoteFile, dest: Path, timeout: float = 60.0) -> FetchResult:
-    """Download one file into ``dest`` atomically; return what happened (never a partial file)."""
-    target = dest / item.local
-    if target.is_file() and sha256_of(target) == item.sha256:
-        return FetchResult(item.local, "present")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
-    tmp = Path(tmp_name)
+def partial_folder(dest: str | os.PathLike) -> Path:
+    """The hidden folder where a fetch into ``dest`` gathers its files: ``.<name>.partial`` beside it."""
+    dest = Path(dest).absolute()
+    return dest.parent / f".{dest.name}{PARTIAL_SUFFIX}"
+
+
+def _verified(path: Path, sha256: str) -> bool:
+    return path.is_file() and sha256_of(path) == sha256
+
+
+def _link_or_copy(src: Path, dst: Path) -> None:
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    dst.unlink(missing_ok=True)
     try:
-        h = hashlib.sha256()
-        with os.fdopen(fd, "wb") as out, urllib.request.urlopen(item.url, timeout=timeout) as resp:
-            for block in iter(lambda: resp.read(CHUNK), b""):
-                h.update(block)
-                out.write(block)
-        digest = h.hexdigest()
-        if digest != item.sha256:
-            raise FetchError(
-                f"{item.url}: sha256 mismatch (got {digest[:12]}…, expected {item.sha256[:12]}…)"
-            )
-        os.replace(tmp, target)
-        return FetchResult(item.local, "downloaded")
-    except urllib.error.HTTPError as e:
-        return FetchResult(item.local, "failed", f"{item.url}: HTTP {e.code} {e.reason}")
-    except (urllib.error.URLError, OSError, TimeoutError, http.client.HTTPException) as e:
-        reason = getattr(e, "reason", None) or e
-        return FetchResult(item.local, "failed", f"{item.url}: {reason}")
-    except FetchError as e:
-        return FetchResult(item.local, "failed", str(e))
-    finally:
-        tmp.unlink(missing_ok=True)
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)
+
+
+def _download(item: RemoteFile, folder: Path, timeout: float) -> FetchResult:
+    """Download one file into ``folder`` with pooch (verified, atomic); never raises for a network error."""
+    import pooch
+    import requests
+
+    pooch.get_logger().setLevel("WARNING")
+    target = folder / item.local
+    target.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        pooch.retrieve(
+            item.url, known_hash=f"sha256:{item.sha256}", fname=target.name, path=target.parent,
+            downloader=pooch.HTTPDownloader(timeout=timeout, progressbar=False),
+        )  # fmt: skip
+    except requests.HTTPError as e:
+        status = e.response.status_code if e.response is not None else "?"
+        return FetchResult(item.local, "failed", f"{item.url}: HTTP {status}")
+    except ValueError as e:  # pooch: the hash does not match
+        if "hash" not in str(e).lower():
+            return FetchResult(item.local, "failed", f"{item.url}: {e}")
+        return FetchResult(
+            item.local, "failed", f"{item.url}: sha256 mismatch (expected {item.sha256[:12]}…)"
+        )
+    except (requests.RequestException, OSError) as e:
+        return FetchResult(item.local, "failed", f"{item.url}: {type(e).__name__}: {e}")
+    target_ok = _verified(target, item.sha256)
+    if not target_ok:  # pragma: no cover - pooch verified it
+        target.unlink(missing_ok=True)
+        return FetchResult(item.local, "failed", f"{item.url}: sha256 mismatch after download")
+    return FetchResult(item.local, "downloaded")
+
+
+def _check_destination(dest: Path) -> None:
+    if dest.exists() and not dest.is_dir():
+        raise FetchError(f"{dest}: exists and is not a folder; give a data folder to fetch into")
+    if dest.is_dir() and any(dest.iterdir()) and not any((dest / d).is_dir() for d in DATA_SUBFOLDERS):
+        raise FetchError(
+            f"{dest}: a folder with other content (none of {', '.join(DATA_SUBFOLDERS)}); "
+            "fetch into a new or empty folder, or into an earlier glu data folder"
+        )
+
+
+def publish(partial: Path, dest: Path) -> None:
+    """Make the complete folder ``partial`` the folder ``dest``; the other files of an existing ``dest`` are kept.
+
+    They are linked into ``partial`` first, then :func:`glu.files.replace_folder` swaps the folders, so at
+    no moment does ``dest`` hold a mix of old and new files.
+    """
+    if dest.exists():
+        for f in sorted(dest.rglob("*")):
+            if f.is_file() and not (partial / f.relative_to(dest)).exists():
+                _link_or_copy(f, partial / f.relative_to(dest))
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    replace_folder(partial, dest)
 
 
 def fetch_all(
@@ -144,13 +193,34 @@ def fetch_all(
     timeout: float = 60.0,
     manifest_path: str | os.PathLike = MANIFEST,
 ) -> list[FetchResult]:
-    """Fetch every file of the manifest into ``dest``; ``progress(i, n, result)`` is called after each."""
-    dest = Path(dest)
+    """Fetch every file of the manifest into ``dest``, completely or not at all.
+
+    ``progress(i, n, result)`` is called after each file. When every file is verified the gathered folder
+    becomes ``dest`` (:func:`publish`); otherwise ``dest`` is left exactly as it was and the verified files
+    wait in :func:`partial_folder` for the next run. Raises :class:`FetchError` for a malformed manifest or
+    a destination that is a file or a folder of something else.
+    """
+    dest = Path(dest).absolute()
+    if not timeout > 0 or timeout == float("inf"):
+        raise FetchError(f"--timeout {timeout}: expected a positive number of seconds")
     items = manifest(mirror, manifest_path)
+    _check_destination(dest)
+    partial = partial_folder(dest)
     results = []
     for i, item in enumerate(items, start=1):
-        r = fetch_file(item, dest, timeout=timeout)
+        staged = partial / item.local
+        if _verified(dest / item.local, item.sha256):
+            _link_or_copy(dest / item.local, staged)
+            r = FetchResult(item.local, "present")
+        elif _verified(staged, item.sha256):
+            r = FetchResult(item.local, "present")
+        else:
+            r = _download(item, partial, timeout)
         results.append(r)
         if progress:
             progress(i, len(items), r)
+    if all(r.status != "failed" for r in results):
+        publish(partial, dest)
+    elif partial.is_dir() and not any(f.is_file() for f in partial.rglob("*")):
+        shutil.rmtree(partial, ignore_errors=True)  # nothing verified: leave no empty folders behind
     return results

@@ -1,4 +1,7 @@
-"""Where the data comes from: ``--data DIR``, ``$GLU_DATA_DIR``, ``data/real/``, else synthetic.
+"""Where the data comes from: ``--data DIR``, ``$GLU_DATA_DIR``, the fetched data, else synthetic.
+
+The fetched data is ``data/real/`` in a source checkout and the user's data folder (``~/.local/share/glu/real``
+on Linux) when glu is installed (:mod:`glu.paths`).
 
 A data folder has the layout of the public data (and of ``glu data fetch`` / ``glu data synth``)::
 
@@ -100,9 +103,9 @@ class DataSource:
         if self.origin == "GLU_DATA_DIR":
             return f"given by ${paths.DATA_ENV_VAR}"
         if self.origin == "data/real":
-            return "fetched into data/real/"
+            return f"fetched into {paths.HERE.real_data_label}"
         return (
-            f"no real data found: no --data, no ${paths.DATA_ENV_VAR}, nothing in data/real/ "
+            f"no real data found: no --data, no ${paths.DATA_ENV_VAR}, nothing in {paths.HERE.real_data_label} "
             "(`glu data fetch` downloads it)"
         )
 
@@ -185,7 +188,10 @@ def check_words(words: str) -> str:
 
 
 def resolve_data(data: str | os.PathLike | None = None) -> DataSource:
-    """Choose the data source: ``data`` if given, else ``$GLU_DATA_DIR``, else ``data/real/``, else synthetic.
+    """Choose the data source: ``data`` if given, else ``$GLU_DATA_DIR``, else the fetched data, else synthetic.
+
+    The fetched data is :data:`glu.paths.REAL_DATA_DIR` (``data/real/`` in a checkout, the user's data
+    folder when installed).
 
     ``data`` may be a folder or the word ``synthetic`` (force the built-in synthetic data).
     """

@@ -20,7 +20,7 @@ recovers it.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
-from glu.files import atomic_write_json
+from glu.files import atomic_write_json, staged_folder
 from glu.schema import AFFORDANCE_VALUES, WORD_VALUES, WORDS, default_schema
 
 MIN_ROWS, MAX_ROWS = 100, 1_000_000
@@ -255,28 +255,46 @@ def write_synthetic_folder(
     n: int,
     seed: int,
     recordings: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> Path:
-    """Write a synthetic data folder with the layout of the real one.
+    """Write a synthetic data folder with the layout of the real one, completely or not at all.
 
     Parameters
     ----------
-    out : the folder
+    out : the folder; if it exists it must be empty or an earlier synthetic folder (it is then replaced)
     n, seed : experiments per table, and the generator's seed
     recordings : hand logs to write, recording name → (timestamps, logged coordinates), e.g. from
         :func:`glu.gestures.synthetic.synthetic_recordings`; none by default (the data layer does not make
         gestures)
+    progress : called with the name of each file written (for a progress bar)
+
+    The folder is built beside ``out`` and moved into place when complete
+    (:func:`glu.files.staged_folder`), so an interrupted run leaves ``out`` as it was. Raises
+    :class:`DataError` if ``out`` is a file, or a folder with other content (real data, say).
     """
     from glu.data.hand_logs import write_hand_log
     from glu.data.source import GESTURES, NETWORK_DEFINITION, SYNTHETIC_MARKER, WORD_FILES
     from glu.data.tables import write_experiments, write_network_definition
 
     out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise DataError(f"{out}: exists and is not a folder; give a folder for the synthetic data")
+    if out.is_dir() and any(out.iterdir()) and not (out / SYNTHETIC_MARKER).is_file():
+        raise DataError(
+            f"{out}: a folder that is not glu synthetic data (no {SYNTHETIC_MARKER}); refusing to overwrite "
+            "it: give a new or empty folder"
+        )
+    tick = progress or (lambda name: None)
     schema = default_schema()
-    for words, rel in WORD_FILES.items():
-        df = synthesize_experiments(n, seed, asr_noise=ASR_NOISE if words == "asr" else 0.0)
-        write_experiments(df, out / rel, schema)
-    write_network_definition(schema, out / NETWORK_DEFINITION)
-    for name, (t, xyz) in (recordings or {}).items():
-        write_hand_log(out / GESTURES / name, t, xyz)
-    atomic_write_json(out / SYNTHETIC_MARKER, {"seed": seed, "n": n, "generator": "glu"}, indent=None)
+    with staged_folder(out) as tmp:
+        for words, rel in WORD_FILES.items():
+            df = synthesize_experiments(n, seed, asr_noise=ASR_NOISE if words == "asr" else 0.0)
+            write_experiments(df, tmp / rel, schema)
+            tick(rel)
+        write_network_definition(schema, tmp / NETWORK_DEFINITION)
+        tick(NETWORK_DEFINITION)
+        for name, (t, xyz) in (recordings or {}).items():
+            write_hand_log(tmp / GESTURES / name, t, xyz)
+            tick(f"{GESTURES}/{name}")
+        atomic_write_json(tmp / SYNTHETIC_MARKER, {"seed": seed, "n": n, "generator": "glu"}, indent=None)
     return out

@@ -338,7 +338,15 @@ def _check_reachable(address: str, timeout: float = 10.0) -> None:
 
 
 def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
-    from distributed import Client, LocalCluster, as_completed
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        from glu.errors import MissingDependencyError
+
+        raise MissingDependencyError(
+            "running on Dask needs dask.distributed, which the plain `pip install glu` leaves out; "
+            "install it with: pip install 'glu[dask]'"
+        ) from None
 
     cluster = None
     try:
