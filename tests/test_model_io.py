@@ -105,8 +105,14 @@ def test_model_validation_errors(tmp_path):
         BayesNet.from_dict(_doc([[1.5, -0.5], [0.5, 0.5]]))
     with pytest.raises(ModelError, match="cycle"):
         BayesNet.from_dict(_doc([[0.5, 0.5], [0.5, 0.5]], parents_a=("B",)))
-    ok = BayesNet.from_dict(_doc([[0.0, 0.0], [0.5, 0.5]]))  # an all-zero row is allowed
+    with pytest.raises(ModelError, match="all-zero rows are for word nodes only"):
+        BayesNet.from_dict(_doc([[0.0, 0.0], [0.5, 0.5]]))  # B is an affordance node here
+    ok = BayesNet.from_dict({**_doc([[0.0, 0.0], [0.5, 0.5]]), "n_affordance": 1})  # a word may have one
     assert ok.zero_rows() == {"B": 1}
+    with pytest.raises(ModelError, match="distinct"):
+        doc = _doc([[0.5, 0.5], [0.5, 0.5]])
+        doc["nodes"][1]["values"] = ["b0", "b0"]
+        BayesNet.from_dict(doc)
     with pytest.raises(ModelError, match="no such model file"):
         BayesNet.load(tmp_path / "missing.json")
     with pytest.raises(ModelError, match="no such file"):

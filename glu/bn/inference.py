@@ -128,7 +128,7 @@ class InferenceEngine(BatchQueries):
         binary = [w for w in self.leaves if bn.schema.cardinality(w) == 2]
         self.binary_leaves = tuple(binary)
         self._present_rows = np.array([self.leaf_row[w] + 1 for w in binary], dtype=np.intp)
-        self._present_flat = self.leaf_table[self._present_rows].reshape(len(binary), -1)
+        self._present_flat = self.leaf_table[self._present_rows].reshape(len(binary), n_states)
         self._value_index: dict[str, dict[str, int]] = {}
         for n in bn.nodes:
             vals = bn.schema.values_of(n)

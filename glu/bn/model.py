@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -74,11 +74,33 @@ class BayesNet:
         return tuple(c for c in self.nodes if node in self.parents[c])
 
     def validate(self) -> None:
-        """Check names, acyclicity, CPT shapes and that every CPT row sums to 1 (or is all zeros)."""
+        """Check the model completely; :class:`ModelError` (one line) for the first problem.
+
+        Node names and each node's values are non-empty and distinct; parents are known nodes, distinct and
+        in node order; the graph is acyclic; each CPT has the shape (*parent cardinalities, cardinality),
+        finite non-negative entries, and rows that sum to 1 — or are all zeros, which only word nodes may
+        have (the original's parent configurations never seen, see :mod:`glu.bn.learning`).
+        """
         order = {n: i for i, n in enumerate(self.nodes)}
+        if not order:
+            raise ModelError("a model needs at least one node")
         if set(self.parents) != set(order) or set(self.cpts) != set(order):
             raise ModelError("parents and CPTs must be given for exactly the schema's nodes")
+        if not 0 <= self.schema.n_affordance <= len(order):
+            raise ModelError(f"n_affordance {self.schema.n_affordance} is outside 0 … {len(order)}")
+        words = set(self.schema.word_nodes)
         for node in self.nodes:
+            vals = self.schema.values_of(node)
+            if (
+                not isinstance(node, str)
+                or not node
+                or not vals
+                or len(set(vals)) != len(vals)
+                or not all(vals)
+            ):
+                raise ModelError(
+                    f"node {node!r}: needs a name and distinct, non-empty value names; got {list(vals)}"
+                )
             ps = self.parents[node]
             for p in ps:
                 if p not in order:
@@ -92,11 +114,13 @@ class BayesNet:
             if not np.all(np.isfinite(cpt)) or (cpt < 0).any():
                 raise ModelError(f"node {node!r}: CPT entries must be finite and non-negative")
             sums = cpt.sum(axis=-1)
-            ok = (np.abs(sums - 1) <= ROW_TOL) | (sums == 0)
+            zero = sums == 0 if node in words else np.zeros(sums.shape, dtype=bool)
+            ok = (np.abs(sums - 1) <= ROW_TOL) | zero
             if not ok.all():
-                raise ModelError(
-                    f"node {node!r}: CPT rows must sum to 1 (or be all zeros), found {sums[~ok][0]}"
+                allowed = (
+                    "1 (or be all zeros)" if node in words else "1 (all-zero rows are for word nodes only)"
                 )
+                raise ModelError(f"node {node!r}: CPT rows must sum to {allowed}, found {sums[~ok].flat[0]}")
         _check_acyclic(self.nodes, self.parents)
 
     def zero_rows(self) -> dict[str, int]:
@@ -108,8 +132,20 @@ class BayesNet:
                 out[node] = z
         return out
 
-    def log_likelihood(self, codes: Mapping[str, np.ndarray], nodes: tuple[str, ...] | None = None) -> float:
-        """Natural-log likelihood of data given as value codes per node (``nodes``: only these terms)."""
+    def log_likelihood(self, data: Any, nodes: Sequence[str] | None = None) -> float:
+        """Natural-log likelihood of a table of experiments (``nodes``: only these nodes' terms).
+
+        ``data`` is a DataFrame with a column per node (value names, or categoricals) or a mapping node →
+        value codes, shape (n_rows,). Rows that a zero CPT row excludes give ``-inf``.
+        """
+        import pandas as pd
+
+        if isinstance(data, pd.DataFrame):
+            from glu.bn.learning import encode
+
+            codes = encode(data, self.schema)
+        else:
+            codes = data
         total = 0.0
         for node in nodes or self.nodes:
             cpt = self.cpts[node]

@@ -1,4 +1,4 @@
-"""``glu bn learn|edges|import`` and ``glu query``: learn the network, inspect it, ask it questions."""
+"""``glu bn learn|edges|import|export`` and ``glu query``: learn the network, inspect it, ask it questions."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from glu.bn.exchange import FORMATS, ZERO_ROW_MODES
 from glu.cli.common import add_data_args, add_evidence_args, add_model_args, load_model, read_evidence
 from glu.errors import EvidenceError, GluError
 from glu.evidence import check_disjoint, format_evidence
@@ -30,10 +31,34 @@ def register(sub: argparse._SubParsersAction) -> None:
     ep.add_argument("model", type=Path, help="model file (.json from `glu bn learn`, or the original .mat)")
     ep.set_defaults(func=_edges)
 
-    ip = bsub.add_parser("import", help="convert an original BNT model (BN_lab.mat) to a glu JSON model")
-    ip.add_argument("mat", type=Path, help="the .mat file, e.g. reference-models/BN_lab.mat")
+    ip = bsub.add_parser(
+        "import",
+        help="convert a model from another tool (BIF, XMLBIF, UAI) or the original BNT .mat to a glu JSON model",
+        description="Read a BIF, XMLBIF or UAI file (the format from the suffix, or --format), or the "
+        "originals' BN_lab.mat, validate it completely and write a glu JSON model. Indicator nodes "
+        "seen__NODE written by `glu bn export --zero-rows seen` become NODE's all-zero rows again.",
+    )
+    ip.add_argument("model", type=Path, metavar="FILE", help="e.g. net.bif, net.xmlbif, net.uai, BN_lab.mat")
     ip.add_argument("-o", "--out", type=Path, required=True, help="model file to write (JSON)")
+    ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
     ip.set_defaults(func=_import)
+
+    xp = bsub.add_parser(
+        "export",
+        help="write a model as BIF, XMLBIF or UAI, for pgmpy, pyAgrum, GeNIe, bnlearn, UAI solvers",
+        description="Write a glu model (JSON or the original .mat) in an exchange format. A model with the "
+        "original's all-zero CPT rows is refused unless --zero-rows seen, which writes them as observed "
+        "indicator nodes seen__NODE: give seen__NODE=yes as evidence in the other tool to get glu's "
+        "posteriors exactly.",
+    )
+    xp.add_argument(
+        "model", type=Path, metavar="MODEL", help="model file (.json, the original .mat, or an exchange file)"
+    )
+    xp.add_argument("--format", choices=tuple(FORMATS), help="output format (default: from the suffix of -o)")
+    xp.add_argument("-o", "--out", type=Path, required=True, help="file to write")
+    xp.add_argument("--zero-rows", choices=ZERO_ROW_MODES, default=ZERO_ROW_MODES[0],
+                    help="all-zero CPT rows: refuse (default) or write them as observed indicator nodes (seen)")  # fmt: skip
+    xp.set_defaults(func=_export)
 
     q = sub.add_parser(
         "query",
@@ -67,12 +92,40 @@ def _edges(args: argparse.Namespace) -> int:
     return 0
 
 
-def _import(args: argparse.Namespace) -> int:
-    from glu.bn.model import BayesNet
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve()
+    except OSError:
+        return False
 
-    bn = BayesNet.from_bnt_mat(args.mat)
+
+def _import(args: argparse.Namespace) -> int:
+    from glu.cli.common import read_model_file
+
+    if _same_file(args.model, args.out):
+        raise GluError(f"-o {args.out} is the input file; write the JSON model to another file")
+    bn = read_model_file(args.model, args.format)
     bn.save(args.out)
-    print(f"wrote {args.out}: {len(bn.edges())} edges (imported from {args.mat})")
+    zr = bn.zero_rows()
+    print(f"wrote {args.out}: {len(bn.nodes)} nodes, {len(bn.edges())} edges"
+          + (f", all-zero CPT rows: {zr}" if zr else "") + f" (imported from {args.model})")  # fmt: skip
+    return 0
+
+
+def _export(args: argparse.Namespace) -> int:
+    from glu.bn.exchange import export_bn, format_of, seen_evidence
+    from glu.cli.common import read_model_file
+
+    if _same_file(args.model, args.out):
+        raise GluError(f"-o {args.out} is the input model; choose another file")
+    fmt = format_of(args.out, args.format)
+    bn = read_model_file(args.model)
+    export_bn(bn, args.out, fmt, zero_rows=args.zero_rows)
+    print(f"wrote {args.out} ({fmt}): {len(bn.nodes)} nodes, {len(bn.edges())} edges")
+    seen = seen_evidence(bn) if args.zero_rows == "seen" else {}
+    if seen:
+        print("the model's all-zero CPT rows are indicator nodes; in the other tool, always observe: "
+              + " ".join(f"{k}={v}" for k, v in seen.items()))  # fmt: skip
     return 0
 
 

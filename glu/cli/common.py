@@ -89,7 +89,9 @@ def add_data_args(p: argparse.ArgumentParser) -> None:
 def add_model_args(p: argparse.ArgumentParser) -> None:
     """``--model`` or the data options of :func:`add_data_args` (read by :func:`load_model`)."""
     p.add_argument(
-        "--model", type=Path, help="model file (.json or the original .mat); default: learn from --data"
+        "--model",
+        type=Path,
+        help="model file (.json, the original .mat, or .bif/.xmlbif/.uai); default: learn from --data",
     )
     add_data_args(p)
 
@@ -143,15 +145,28 @@ def read_evidence(args: argparse.Namespace) -> tuple[dict[str, str], dict[str, d
     return evidence, soft
 
 
+def read_model_file(path: Path, fmt: str | None = None) -> Any:
+    """A :class:`~glu.bn.model.BayesNet` from a file: glu's JSON, the originals' ``.mat``, or BIF/XMLBIF/UAI."""
+    from glu.bn.model import BayesNet
+
+    suffix = path.suffix.lower()
+    if fmt is None and suffix == ".mat":
+        return BayesNet.from_bnt_mat(path)
+    if fmt is None and suffix == ".json":
+        return BayesNet.load(path)
+    from glu.bn.exchange import import_bn
+
+    return import_bn(path, fmt)
+
+
 def load_model(args: argparse.Namespace) -> tuple[Any, str]:
     """The model named by ``--model``, or the one learned from ``--data``; returns (BayesNet, description)."""
-    from glu.bn.model import BayesNet
 
     model = getattr(args, "model", None)
     if model is not None:
         if getattr(args, "data", None):
             raise EvidenceError("give either --model or --data, not both")
-        bn = BayesNet.from_bnt_mat(model) if model.suffix.lower() == ".mat" else BayesNet.load(model)
+        bn = read_model_file(model)
         return bn, f"model {model} ({bn.meta.get('data_source', 'unknown data')})"
     from glu.bn.learning import learn_bn
     from glu.data.source import load_experiments, resolve_data
