@@ -81,7 +81,7 @@ def test_train_and_recognize_with_a_recogniser(capsys, tmp_path, synthetic_log):
     )
     assert status == 0
     d = json.loads(out)
-    assert set(d) == {"loglik", "posterior"}
+    assert set(d) == {"loglik", "posterior", "typicality"}
     assert list(d["loglik"]) == list(d["posterior"]) == ["grasp", "tap", "touch"]
     assert sum(d["posterior"].values()) == pytest.approx(1.0)
     from glu.gestures.recognizer import Recognizer
@@ -103,7 +103,7 @@ def test_recognize_json_and_stream(capsys, source, recognizer, models):
     status, out, err = run(capsys, *common, "--json")
     assert status == 0
     d = json.loads(out)  # stdout is exactly the JSON object; the data source went to stderr
-    assert set(d) == {"loglik", "posterior"} and list(d["loglik"]) == ["grasp", "tap", "touch"]
+    assert set(d) == {"loglik", "posterior", "typicality"} and list(d["loglik"]) == ["grasp", "tap", "touch"]
     X = np.loadtxt(source.hand_log("tap1_hand"))[215:351, 2:] / 1000  # the logged frames, independently
     np.testing.assert_allclose(list(d["loglik"].values()), recognizer.loglik(X)[:3], rtol=1e-12)
     status, out, _ = run(capsys, *common, "--stream")

@@ -38,7 +38,7 @@ with the format only for nodes with no parent (pgmpy) or at most one (pyAgrum); 
 >>> from glu.data import load_experiments
 >>> bn = learn_bn(load_experiments("synthetic"), unseen_words="uniform")
 >>> text = to_bif(bn)
->>> text.splitlines()[1:4]
+>>> text.splitlines()[2:5]
 ['variable Action {', '  type discrete [ 3 ] { grasp, tap, touch };', '}']
 >>> back = from_bif(text)
 >>> back.edges() == bn.edges() and all((back.cpts[n] == bn.cpts[n]).all() for n in bn.nodes)

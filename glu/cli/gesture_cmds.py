@@ -87,7 +87,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Score a hand log (or frames A:B of it) under each action's HMM and print the "
         "log-likelihoods and the posterior with equal priors; --stream prints them after every frame.",
     )
-    r.add_argument("log", help="hand log: a data.log, a recording folder, or a recording name")
+    r.add_argument("log", help="a YARP data.log, a recording folder or name, or a .csv/.tsv/.npy trajectory "
+                   "(t,x,y,z of the hand in the torso frame in m, or skeleton joints)")  # fmt: skip
     r.add_argument("--frames", type=_frames, metavar="A:B", help="frames A to B (1-based, inclusive)")
     r.add_argument(
         "--models", default="original", metavar="original|RECOGNISER",
@@ -100,6 +101,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     r.add_argument("--json", action="store_true", help='print JSON: {"loglik": {…}, "posterior": {…}}')
     r.add_argument("--repair", action="store_true", help="repair the log first (default: frames as logged)")
+    r.add_argument("--body-size", nargs=2, type=positive_float, metavar=("H", "V"),
+                   help="for a t,x,y,z table: horizontal (shoulder) and vertical (neck-torso) body size in m "
+                   "(default: the originals' 0.33 0.23)")  # fmt: skip
     r.set_defaults(func=_recognize)
 
 
@@ -268,7 +272,7 @@ def _recognize(args: argparse.Namespace) -> int:
     path, source = _resolve_log(args.log, args.data)
     if source is not None and args.models != "original":
         _say(f"data: {source.describe()}", args.json)
-    pieces = load_features(path, policy=None).pieces
+    pieces = load_features(path, policy=None, body=tuple(args.body_size) if args.body_size else None).pieces
     traj = pieces[0]
     if args.repair:
         from glu.gestures.trajectories import repair
@@ -297,13 +301,17 @@ def _recognize(args: argparse.Namespace) -> int:
         return 0
     ll = rec.loglik(X)
     p = rec.p_hmm(X)
+    verdict = rec.typicality(X)
     if args.json:
-        print(json.dumps(_as_json(acts, ll, p)))
+        print(json.dumps({**_as_json(acts, ll, p), "typicality": verdict.to_json()}, allow_nan=False))
+        if verdict.outside:
+            print(verdict.message(), file=sys.stderr)
         return 0
     print(f"{'action':8s} {'log L(G|A)':>12s} {'p_HMM(A|G)':>11s}")
     for a, v, q in zip(acts, ll, p, strict=True):
         print(f"{a:8s} {v:12.3f} {q:11.4f}")
     print(f"recognised: {acts[int(np.argmax(ll))]}")
+    print(verdict.message(), file=sys.stderr if verdict.outside else sys.stdout)
     return 0
 
 

@@ -27,6 +27,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from glu.data.trajectory_files import (
+    OPENNI_JOINTS,
+    SKELETON_JOINTS,
+    is_trajectory_file,
+    read_trajectory_table,
+)
 from glu.errors import DataError
 from glu.gestures.trajectories import (
     DEFAULT_POLICY,
@@ -56,13 +62,6 @@ VERTICAL_FALLBACK = 0.23
 """Metres: the vertical factor (neck–torso distance) used when the skeleton has no neck or torso."""
 MIDDLE: tuple[float, float] = (0.45, 0.55)
 """The part of the sequence over which the normalisation factors are averaged."""
-
-OPENNI_JOINTS: tuple[str, ...] = (
-    "head", "neck", "left_shoulder", "right_shoulder", "left_elbow", "right_elbow",
-    "left_hand", "right_hand", "torso", "left_hip", "right_hip", "left_knee", "right_knee",
-    "left_foot", "right_foot",
-)  # fmt: skip
-"""The 15 joints of the OpenNI skeleton, in the order of the YARP OpenNI2 driver."""
 
 
 class Normalisation(NamedTuple):
@@ -180,12 +179,42 @@ def trajectory_features(traj: Trajectory) -> Trajectory:
     return traj.with_xyz(log_features(traj.xyz))
 
 
-def load_features(path: str | os.PathLike, policy: RepairPolicy | None = DEFAULT_POLICY) -> Repaired:
-    """Read a YARP hand log, convert it to model units and repair it (``policy=None``: no repair).
+def table_features(path: str | os.PathLike, body: tuple[float, float] | None = None) -> Trajectory:
+    """The features of a CSV/TSV/NPY recording (:mod:`glu.data.trajectory_files`), as a trajectory.
 
-    Returns the pieces and events of :func:`glu.gestures.trajectories.repair` (one piece, no events if ``None``).
+    A hand table (``t, x, y, z`` in metres) is divided by ``body`` = (horizontal, vertical) body size in
+    metres (default: the originals' fallback constants); a skeleton table gets :func:`skeleton_features`.
     """
-    traj = trajectory_features(read_hand_log(path))
+    table = read_trajectory_table(path)
+    if table.kind == "hand":
+        h, v = body or (HORIZONTAL_FALLBACK, VERTICAL_FALLBACK)
+        if not (0 < h < 10 and 0 < v < 10):
+            raise DataError(f"body size ({h}, {v}) m: both must be positive and below 10 m")
+        xyz = table.hand / np.array([h, v, h])
+    else:
+        names = SKELETON_JOINTS
+        skeleton = np.stack([table.joints.get(j, np.full((len(table.t), 3), np.nan)) for j in names], axis=1)
+        xyz, _ = skeleton_features(skeleton, joints=names)
+    n = len(table.t)
+    return Trajectory(xyz=xyz, t=table.t, frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool),
+                      source=table.source)  # fmt: skip
+
+
+def load_features(
+    path: str | os.PathLike,
+    policy: RepairPolicy | None = DEFAULT_POLICY,
+    body: tuple[float, float] | None = None,
+) -> Repaired:
+    """Read a recording — a YARP hand log, or a CSV/TSV/NPY table — as model features, repaired.
+
+    YARP logs are converted by :func:`log_features`, tables by :func:`table_features` (``body``: the
+    body size of a hand table). ``policy=None``: no repair. Returns the pieces and events of
+    :func:`glu.gestures.trajectories.repair` (one piece, no events if ``None``).
+    """
+    if is_trajectory_file(path):
+        traj = table_features(path, body)
+    else:
+        traj = trajectory_features(read_hand_log(path))
     if policy is None:
         return Repaired([traj], ())
     return repair(traj, policy)

@@ -37,6 +37,16 @@ from glu.gestures.forward import ForwardState, forward_step, log_emissions, p_hm
 from glu.gestures.mixsplit import RECIPES, train_mixsplit
 from glu.gestures.model import GestureHMM, as_sequence
 from glu.gestures.training import TrainingConfig, TrainingReport, train_hmm
+from glu.gestures.typicality import (
+    META_KEY,
+    LoglikRange,
+    Typicality,
+    check,
+    ranges_from_meta,
+    ranges_to_meta,
+    sampled_range,
+    training_range,
+)
 
 FORMAT = "glu-gesture-recognizer"
 FORMAT_VERSION = 1
@@ -174,6 +184,23 @@ class Recognizer:
         """A fresh :class:`GestureStream` over this bank."""
         return GestureStream(self)
 
+    def reference_ranges(self) -> dict[str, LoglikRange]:
+        """Per action, the per-frame log-likelihoods of the reference sequences (:mod:`glu.gestures.typicality`).
+
+        A recogniser trained by glu keeps its training range; one without (the originals' models) gets the
+        range of sequences sampled from each model, computed once (seeded) and kept in :attr:`meta`.
+        """
+        ranges = ranges_from_meta(self.meta)
+        if ranges is None or set(ranges) != set(self.actions):
+            ranges = {a: sampled_range(self.models[a]) for a in self.actions}
+            self.meta[META_KEY] = ranges_to_meta(ranges)
+        return ranges
+
+    def typicality(self, X: np.ndarray) -> Typicality:
+        """Whether a sequence, shape (T, D), looks like the models' reference data (see :func:`typicality.check`)."""
+        X = as_sequence(X, self.n_features)
+        return check(self.loglik(X), len(X), self.actions, self.reference_ranges())
+
     # ------------------------------------------------------------------ files
 
     def to_dict(self) -> dict[str, Any]:
@@ -258,7 +285,9 @@ def train_recognizer(
             models[action], reports[action], _ = train_mixsplit(seqs, n_states, n_mix, **kw)
         else:
             models[action], reports[action] = train_hmm(seqs, n_states, n_mix, **kw)
+    ranges = {a: training_range(models[a], sequences[a]) for a in models}
     info = {
+        META_KEY: ranges_to_meta(ranges),
         "recipe": recipe,
         "n_states": n_states,
         "n_mix": n_mix,
