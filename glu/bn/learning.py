@@ -2,7 +2,8 @@
 
 * Structure, step 1: K2 greedy search over the affordance nodes in their fixed order, BIC score
   (``log-likelihood − ½ · free parameters · ln N``), at most ``max_parents`` parents; the root nodes
-  (Action, Color, Shape, Size: set by the experimenter) get none.
+  (those the experimenter sets, :attr:`glu.schema.Schema.root_nodes`: Action, Color, Shape, Size in
+  GLU's schema) get none.
 * Structure, step 2: the same search for each word, with the affordance nodes as the only candidates.
 * Parameters: BDeu Dirichlet prior with equivalent sample size 1 for affordance nodes; maximum likelihood
   for words, where a parent configuration never seen gives an all-zero row (``unseen_words="zero"``, the
@@ -23,7 +24,7 @@ import pandas as pd
 
 from glu.bn.model import BayesNet
 from glu.errors import DataError
-from glu.schema import ROOT_NODES, Schema, default_schema
+from glu.schema import Schema, default_schema
 
 UnseenRows = Literal["zero", "uniform"]
 UNSEEN_MODES: tuple[str, ...] = ("zero", "uniform")
@@ -117,7 +118,7 @@ def _structure(
     aff = schema.affordance_nodes
     parents: dict[str, tuple[str, ...]] = {}
     for i, node in enumerate(aff):
-        if node in ROOT_NODES:
+        if node in schema.root_nodes:
             parents[node] = ()
         else:
             parents[node] = k2_parents(codes, cards, node, aff[:i], max_parents)
@@ -174,7 +175,7 @@ def learn_bn(
     meta = {
         "data_source": df.attrs.get("data_source", df.attrs.get("path", "a DataFrame")),
         "n_experiments": len(df),
-        "structure": f"K2 + BIC, max {max_parents} parents, roots {', '.join(ROOT_NODES)}",
+        "structure": f"K2 + BIC, max {max_parents} parents, roots {', '.join(schema.root_nodes) or 'none'}",
         "parameters": f"BDeu(ess={ess}) for affordance nodes, maximum likelihood for words",
         "unseen_words": unseen_words,
     }

@@ -80,6 +80,12 @@ def add_data_args(p: argparse.ArgumentParser) -> None:
     from glu.bn.learning import UNSEEN_MODES
 
     add_data_option(p)
+    p.add_argument("--schema", type=Path, metavar="FILE",
+                   help="your own network: a schema file (.json/.yaml: nodes, values, roles, words); "
+                   "with --experiments instead of --data")  # fmt: skip
+    p.add_argument("--experiments", type=Path, metavar="TABLE",
+                   help="your own experiments for --schema (.csv/.tsv: a column per node, and a column per "
+                   "word or a 'description' column)")  # fmt: skip
     p.add_argument("--words", choices=tuple(WORD_FILES), default="lab",
                    help="descriptions: lab = transcriptions (the paper's), asr = speech recogniser")  # fmt: skip
     p.add_argument("--unseen-words", choices=UNSEEN_MODES, default=UNSEEN_MODES[0],
@@ -171,6 +177,19 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
     from glu.bn.learning import learn_bn
     from glu.data.source import load_experiments, resolve_data
 
+    schema_file, table = getattr(args, "schema", None), getattr(args, "experiments", None)
+    if (schema_file is None) != (table is None):
+        raise EvidenceError("give --schema FILE and --experiments TABLE together (your own network and data)")
+    if schema_file is not None:
+        from glu.data.tables import read_experiment_table
+        from glu.schema import read_schema_file
+
+        if getattr(args, "data", None):
+            raise EvidenceError("give either --data or --schema/--experiments, not both")
+        schema = read_schema_file(schema_file)
+        df = read_experiment_table(table, schema)
+        bn = learn_bn(df, schema, unseen_words=args.unseen_words)
+        return bn, f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}"
     source = resolve_data(args.data)
     df = load_experiments(source, args.words)
     bn = learn_bn(df, unseen_words=args.unseen_words)

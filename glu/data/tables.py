@@ -222,3 +222,84 @@ def write_network_definition(schema: Schema, path: str | os.PathLike) -> Path:
         else:
             lines.append("\t".join([node, *(_file_value(node, v, schema) for v in schema.values_of(node))]))
     return atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+# ------------------------------------------------------------------ your own experiments
+DESCRIPTION_COLUMN = "description"
+"""In an own experiments table: the spoken description, from which the word columns are made."""
+_PRESENT = {"present", "1", "yes", "true"}
+_ABSENT = {"absent", "0", "no", "false", "-"}
+
+
+def read_experiment_table(path: str | os.PathLike, schema: Schema) -> pd.DataFrame:
+    """Read your own robot experiments for a schema: ``.csv`` (comma) or ``.tsv`` (tab), a header line.
+
+    One row per experiment: a column per affordance node of the schema holding one of its values, and
+    either a column per word (``present``/``absent``, ``1``/``0``, or the word itself/``-`` as in the
+    original files) or one ``description`` column with what was said (lower-cased, split at spaces and
+    punctuation; a word of the vocabulary is present when it occurs, other words are ignored).
+
+    Returns a DataFrame of categorical columns in schema order (as :func:`read_experiments`), with
+    ``attrs["data_source"]`` naming the file (without its folder). Raises :class:`DataError` naming the
+    file, the line and the column.
+    """
+    import re
+
+    path = Path(path)
+    sep = {".csv": ",", ".tsv": "\t"}.get(path.suffix.lower())
+    if sep is None:
+        raise DataError(f"{path}: an experiments table is .csv or .tsv")
+    text = _read_text(path)
+    try:
+        raw = pd.read_csv(io.StringIO(text), sep=sep, dtype=str, keep_default_na=False, skipinitialspace=True)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as e:
+        raise DataError(f"{path}: not a table with a header line ({e})".replace("\n", " ")) from None
+    raw.columns = [str(c).strip() for c in raw.columns]
+    if len(raw) == 0:
+        raise DataError(f"{path}: no experiments after the header line")
+    missing = [n for n in schema.affordance_nodes if n not in raw.columns]
+    if missing:
+        raise DataError(
+            f"{path}:1: no column for the node(s) {', '.join(missing)}; columns: {', '.join(raw.columns)}"
+        )
+    columns: dict[str, pd.Categorical] = {}
+    for n in schema.affordance_nodes:
+        col = raw[n].str.strip().replace(dict(schema.aliases.get(n, {})))
+        codes = pd.Index(schema.values_of(n)).get_indexer(col)
+        bad = np.flatnonzero(codes < 0)
+        if bad.size:
+            raise DataError(
+                f"{path}:{bad[0] + 2}: column {n}: value {col.iloc[bad[0]]!r} is not allowed; "
+                f"allowed: {', '.join(schema.values_of(n))}"
+            )
+        columns[n] = pd.Categorical.from_codes(codes, categories=list(schema.values_of(n)))
+    words = schema.word_nodes
+    if all(w in raw.columns for w in words):
+        for w in words:
+            cell = raw[w].str.strip().str.lower()
+            present = cell.isin(_PRESENT | {w})
+            bad = np.flatnonzero(~present & ~cell.isin(_ABSENT))
+            if bad.size:
+                raise DataError(
+                    f"{path}:{bad[0] + 2}: column {w}: {raw[w].iloc[bad[0]]!r}; allowed: present/absent, 1/0, "
+                    f"{w}/-"
+                )
+            columns[w] = pd.Categorical.from_codes(
+                present.to_numpy().astype(np.int8), categories=list(WORD_VALUES)
+            )
+    elif DESCRIPTION_COLUMN in raw.columns:
+        tokens = [set(re.findall(r"[^\W\d_]+(?:'[^\W\d_]+)?", s.lower())) for s in raw[DESCRIPTION_COLUMN]]
+        for w in words:
+            present = np.fromiter((w in t for t in tokens), dtype=np.int8, count=len(tokens))
+            columns[w] = pd.Categorical.from_codes(present, categories=list(WORD_VALUES))
+    else:
+        lacking = [w for w in words if w not in raw.columns][:5]
+        raise DataError(
+            f"{path}:1: give a column per word (lacking: {', '.join(lacking)}, …) or a "
+            f"'{DESCRIPTION_COLUMN}' column with what was said"
+        )
+    df = pd.DataFrame(columns)
+    df.attrs["data_source"] = f"experiments table {path.name} ({len(df)} experiments" + (
+        f", schema {schema.name})" if schema.name else ")"
+    )
+    return df
