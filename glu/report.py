@@ -5,7 +5,8 @@
 * ``index.html`` — the data source, the package versions, the comparisons of our numbers with the
   original models and the published values, and every figure (copied beside it into ``figures/``) with
   the notebook that drew it and the parameters it ran with;
-* ``notebooks/NAME.html`` — each executed notebook rendered by nbconvert, its figures embedded.
+* ``notebooks/NAME.html`` — each executed notebook rendered by nbconvert, its figures embedded;
+* ``api.html`` — the reference of glu's public modules, generated from their docstrings (:func:`write_api_reference`).
 
 The pages are static files (no server, no network): open ``index.html`` in any browser. A small script
 in the index marks, once the page has loaded, how many of its figures the browser rendered
@@ -62,6 +63,47 @@ def _render_notebook(ipynb: Path, target: Path) -> None:
     nb = nbformat.read(ipynb, as_version=4)
     body, _ = HTMLExporter(template_name="lab").from_notebook_node(nb)
     atomic_write_text(target, body)
+
+
+API_MODULES: tuple[str, ...] = (
+    "glu.schema", "glu.data.source", "glu.data.tables", "glu.data.trajectory_files", "glu.data.fetch",
+    "glu.bn.model", "glu.bn.learning", "glu.bn.inference", "glu.bn.exchange", "glu.fusion",
+    "glu.gestures.features", "glu.gestures.recognizer", "glu.gestures.typicality", "glu.gestures.training",
+    "glu.language.grammar", "glu.language.descriptions", "glu.experiments.fusion", "glu.paths",
+)  # fmt: skip
+"""The modules of the API reference, in reading order."""
+
+
+def write_api_reference(path: Path, modules: tuple[str, ...] = API_MODULES) -> Path:
+    """Write the API reference of ``modules`` as one HTML page, from their docstrings (the standard
+    library's :mod:`pydoc`); file links are shown relative to the package, never as machine paths."""
+    import importlib
+    import pydoc
+    import re
+
+    from glu.paths import PACKAGE_DIR
+
+    doc = pydoc.HTMLDoc()
+    sections, toc = [], []
+    for name in modules:
+        mod = importlib.import_module(name)
+        body = doc.docmodule(mod)
+        body = re.sub(r'<a href="file:[^"]*">([^<]*)</a>', lambda m: _e(Path(m.group(1)).name), body)
+        body = body.replace(str(PACKAGE_DIR.parent), "").replace(str(PACKAGE_DIR), "glu")
+        sections.append(f'<section id="{_e(name)}">{body}</section>')
+        summary = (mod.__doc__ or "").strip().splitlines()[0] if mod.__doc__ else ""
+        toc.append(f'<li><a href="#{_e(name)}"><code>{_e(name)}</code></a> — {_e(summary)}</li>')
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>glu — API reference</title>
+<style>{_STYLE} section {{ margin-top: 3em; }}</style></head>
+<body><h1>glu — API reference</h1>
+<p>Generated from the docstrings of the installed package. <a href="index.html">Back to the report</a>.</p>
+<ul>{"".join(toc)}</ul>
+{"".join(sections)}
+</body></html>
+"""
+    atomic_write_text(path, page)
+    return path
 
 
 def write_report(layout: OutputLayout, summary: Mapping[str, Any]) -> Path:
@@ -132,10 +174,13 @@ def write_report(layout: OutputLayout, summary: Mapping[str, Any]) -> Path:
 {_table(nb_rows, ["notebook", "status", "seconds", "parameters"])}
 <h2>Recordings</h2>
 <p>Open with <code>rerun FILE</code> (the Rerun viewer).</p><ul>{recordings}</ul>
+<h2>Python API</h2>
+<p>The reference of glu's public modules, from their docstrings: <a href="api.html">api.html</a>.</p>
 <h2>Package versions</h2>
 {_table(versions, ["package", "version"])}
 </body></html>
 """
+    write_api_reference(root / "api.html")
     index = root / "index.html"
     atomic_write_text(index, page)
     return index

@@ -5,6 +5,7 @@ from __future__ import annotations
 import doctest
 import importlib
 import pkgutil
+from pathlib import Path
 
 import pytest
 
@@ -46,3 +47,18 @@ def test_docstring_examples_run(name):
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE | doctest.ELLIPSIS)
     assert result.attempted > 0
     assert result.failed == 0, f"{result.failed} of {result.attempted} examples in {name} failed (see above)"
+
+
+README = Path(__file__).resolve().parent.parent / "README.md"
+
+
+def test_the_readme_python_api_examples_run():
+    """The README's "Python API" section is a doctest: every example runs and prints what it shows."""
+    text = README.read_text(encoding="utf-8")
+    assert "## Python API" in text
+    section = text.split("## Python API", 1)[1].split("\n## ", 1)[0]
+    test = doctest.DocTestParser().get_doctest(section, {}, "README.md (Python API)", str(README), 0)
+    assert len(test.examples) >= 15
+    runner = doctest.DocTestRunner(optionflags=doctest.NORMALIZE_WHITESPACE | doctest.ELLIPSIS)
+    runner.run(test)
+    assert runner.failures == 0, f"{runner.failures} README examples failed (see above)"

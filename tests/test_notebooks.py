@@ -291,3 +291,16 @@ def test_the_report_opens_in_a_real_browser_with_every_figure_rendered(quick_run
         page = out / "report" / "notebooks" / f"{name}.html"
         assert page.is_file() and f'href="notebooks/{name}.html"' in index.read_text()
         assert "data:image/png;base64" in page.read_text() or not summary["figures_by_notebook"]
+
+
+def test_the_report_has_the_api_reference(quick_runs):
+    out, _ = quick_runs[0]
+    api = out / "report" / "api.html"
+    assert 'href="api.html"' in (out / "report" / "index.html").read_text()
+    text = api.read_text()
+    from glu.report import API_MODULES
+
+    for name in API_MODULES:
+        assert f'id="{name}"' in text
+    assert "posterior_table" in text and "export_bn" in text and "read_schema_file" in text
+    assert str(Path(__file__).resolve().parent.parent) not in text  # no machine paths

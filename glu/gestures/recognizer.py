@@ -167,6 +167,12 @@ class Recognizer:
         """``p_HMM(A | G)`` with equal priors, shape (n_actions,), of a sequence of shape (T, D)."""
         return p_hmm_from_loglik(self.loglik(X))
 
+    def posterior(self, X: np.ndarray) -> Any:
+        """:meth:`p_hmm` as a pandas Series indexed by action, named ``p_HMM(A | G)``."""
+        import pandas as pd
+
+        return pd.Series(self.p_hmm(X), index=pd.Index(self.actions, name="action"), name="p_HMM(A | G)")
+
     def loglik_curve(self, X: np.ndarray) -> np.ndarray:
         """``log L(G_1^t | A)`` for every prefix, shape (T, n_actions)."""
         X = as_sequence(X, self.n_features)

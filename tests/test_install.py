@@ -1,0 +1,144 @@
+"""glu installed anywhere: where it reads and writes outside a checkout; the wheel in a fresh venv (slow);
+dependency lower bounds that resolve together (slow)."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from glu import paths
+from glu.paths import is_checkout, locate
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_a_checkout_keeps_everything_in_the_checkout():
+    here = locate(ROOT / "glu")
+    assert here.checkout == ROOT and is_checkout(ROOT)
+    assert here.notebooks == ROOT / "notebooks" and here.real_data == ROOT / "data" / "real"
+    assert here.scratch == ROOT / "build" / "scratch" and here.real_data_label == "data/real/"
+
+
+def test_an_installed_package_writes_nothing_inside_itself(tmp_path):
+    site = tmp_path / "lib" / "python3.11" / "site-packages"
+    (site / "glu").mkdir(parents=True)
+    (site / "notebooks").mkdir()  # another distribution's top-level folder must not fool it
+    loc = locate(site / "glu", user_data=tmp_path / "share" / "glu", user_cache=tmp_path / "cache" / "glu")
+    assert loc.checkout is None
+    assert loc.notebooks == site / "glu" / "notebooks"  # read-only: the shipped notebooks
+    for written in (loc.data, loc.real_data, loc.scratch):
+        assert site not in written.parents
+    assert loc.real_data_label.startswith(str(tmp_path / "share" / "glu" / "real"))
+
+
+def test_an_installed_package_uses_platformdirs(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg-data"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg-cache"))
+    if sys.platform != "linux":
+        pytest.skip("XDG folders are the Linux convention")
+    loc = locate(tmp_path / "site-packages" / "glu")
+    assert loc.real_data == tmp_path / "xdg-data" / "glu" / "real"
+    assert loc.scratch == tmp_path / "xdg-cache" / "glu" / "scratch"
+
+
+def test_the_notebooks_ship_in_the_package():
+    import glu.notebooks
+
+    assert Path(glu.notebooks.__file__).parent == paths.NOTEBOOKS_DIR
+    setup = (ROOT / "setup.py").read_text()
+    assert '"glu.notebooks": "notebooks"' in setup
+
+
+def test_the_base_install_has_no_jupyter_and_no_rerun():
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    base = {re.split(r"[<>=\[ ;]", d)[0].lower() for d in meta["dependencies"]}
+    assert not base & {"jupyterlab", "papermill", "ipykernel", "nbconvert", "rerun-sdk", "jupytext", "pgmpy"}
+    extras = meta["optional-dependencies"]
+    assert {"notebooks", "lab", "dask", "test"} <= set(extras)
+    assert any(d.startswith("rerun-sdk") for d in extras["notebooks"])
+    assert "license" in meta and isinstance(meta["license"], str)
+
+
+def test_reproduce_without_the_notebook_extra_says_what_to_install(monkeypatch, capsys):
+    import importlib.util
+
+    from glu.cli import main
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "papermill" else real(name, *a)
+    )
+    assert main(["reproduce", "--quick", "--only", "03"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "pip install 'glu[notebooks]'" in err
+
+
+def _run(cmd, **kw):
+    return subprocess.run(cmd, capture_output=True, text=True, check=False, **kw)
+
+
+@pytest.mark.slow
+def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
+    """Build the wheel, install it with its notebooks extra in a new venv, run glu from an empty folder."""
+    dist = tmp_path / "dist"
+    r = _run([sys.executable, "-m", "build", "--wheel", "--outdir", str(dist), str(ROOT)])
+    assert r.returncode == 0, r.stderr[-2000:]
+    (wheel,) = dist.glob("glu-*.whl")
+    venv = tmp_path / "venv"
+    assert _run([sys.executable, "-m", "venv", str(venv)]).returncode == 0
+    py, glu = venv / "bin" / "python", venv / "bin" / "glu"
+    r = _run([str(py), "-m", "pip", "install", "--quiet", f"{wheel}[notebooks]"])
+    assert r.returncode == 0, r.stderr[-2000:]
+    site = Path(
+        _run(
+            [str(py), "-c", "import glu, pathlib; print(pathlib.Path(glu.__file__).parent.parent)"]
+        ).stdout.strip()
+    )
+
+    def snapshot():
+        return sorted(
+            (str(p), p.stat().st_size, p.stat().st_mtime_ns) for p in site.rglob("*") if p.is_file()
+        )
+
+    before = snapshot()
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    env = {**os.environ, "XDG_DATA_HOME": str(tmp_path / "xdg-data"), "XDG_CACHE_HOME": str(tmp_path / "xdg-cache"),
+           "RERUN_ANALYTICS": "0", "MPLBACKEND": "Agg", "PYTHONDONTWRITEBYTECODE": "1"}  # fmt: skip
+    env.pop(paths.DATA_ENV_VAR, None)
+    for cmd in (["data", "info"], ["query", "--target", "ObjVel", "--evidence", "Action=tap"],
+                ["describe", "--evidence", "Action=grasp", "ObjVel=slow", "--nbest", "2"]):  # fmt: skip
+        r = _run([str(glu), *cmd], cwd=empty, env=env)
+        assert r.returncode == 0, (cmd, r.stderr)
+    r = _run([str(glu), "reproduce", "--quick"], cwd=empty, env=env)
+    assert r.returncode == 2 and "give an output folder (--out DIR)" in r.stderr
+    r = _run([str(glu), "reproduce", "--quick", "--out", "out"], cwd=empty, env=env)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert (empty / "out" / "results" / "summary.json").is_file() and (
+        empty / "out" / "report" / "index.html"
+    ).is_file()
+    assert sorted(p.name for p in empty.iterdir()) == ["out"]
+    assert snapshot() == before, "something was written into site-packages"
+
+
+@pytest.mark.slow
+def test_the_lower_bounds_resolve_together(tmp_path):
+    """Every dependency pinned to its lower bound (all extras but test) resolves with pip's resolver."""
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    reqs = list(meta["dependencies"])
+    for extra in ("notebooks", "lab", "dask"):
+        reqs += [d for d in meta["optional-dependencies"][extra] if not d.startswith("glu")]
+    pinned = []
+    for d in reqs:
+        m = re.match(r"^([A-Za-z0-9_.\-]+(?:\[[^\]]+\])?)\s*>=\s*([^,;\s]+)", d)
+        assert m, f"{d}: every dependency needs a lower bound"
+        pinned.append(f"{m.group(1)}=={m.group(2)}")
+    r = _run([sys.executable, "-m", "pip", "install", "--dry-run", "--ignore-installed", "--quiet", "--report",
+              str(tmp_path / "report.json"), *pinned])  # fmt: skip
+    assert r.returncode == 0, "the lower bounds do not resolve together:\n" + r.stderr[-3000:]
