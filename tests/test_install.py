@@ -142,3 +142,14 @@ def test_the_lower_bounds_resolve_together(tmp_path):
     r = _run([sys.executable, "-m", "pip", "install", "--dry-run", "--ignore-installed", "--quiet", "--report",
               str(tmp_path / "report.json"), *pinned])  # fmt: skip
     assert r.returncode == 0, "the lower bounds do not resolve together:\n" + r.stderr[-3000:]
+
+
+def test_progress_bars_are_quiet_without_a_terminal_or_under_json(monkeypatch):
+    from glu.cli.common import progress_bar
+
+    assert progress_bar(3, "x", "file") is None  # pytest's stderr is not a terminal
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
+    assert progress_bar(3, "x", "file", quiet=True) is None
+    bar = progress_bar(3, "x", "file")
+    assert bar is not None
+    bar.close()

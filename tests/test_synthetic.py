@@ -91,3 +91,31 @@ def test_synth_folder_reads_back_as_synthetic_source(tmp_path):
     pd.testing.assert_frame_equal(df.reset_index(drop=True), direct, check_like=False)
     asr = read_experiments(tmp_path / "syn" / "affordance-words" / "sent-all_mllr3_aff_bag.txt")
     assert len(asr) == 150 and not asr.equals(df)
+
+
+def test_synth_folders_are_complete_or_absent(tmp_path):
+    import pytest
+
+    from glu.data.source import SYNTHETIC_MARKER
+    from glu.data.synthetic import write_synthetic_folder
+    from glu.errors import DataError
+
+    out = tmp_path / "syn"
+
+    def interrupt(name):
+        if name.startswith("affordance-words/networkDefinition"):
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        write_synthetic_folder(out, 200, 1, progress=interrupt)
+    assert list(tmp_path.iterdir()) == []  # nothing, not even the staging folder
+    write_synthetic_folder(out, 200, 1)
+    assert (out / SYNTHETIC_MARKER).is_file()
+    write_synthetic_folder(out, 300, 2)  # an earlier synthetic folder is replaced whole
+    assert '"seed": 2' in (out / SYNTHETIC_MARKER).read_text()
+    other = tmp_path / "real"
+    (other / "affordance-words").mkdir(parents=True)
+    (other / "affordance-words" / "sent-1-5_lab_aff_bag.txt").write_text("x")
+    with pytest.raises(DataError, match="refusing to overwrite"):
+        write_synthetic_folder(other, 200, 1)
+    assert (other / "affordance-words" / "sent-1-5_lab_aff_bag.txt").read_text() == "x"

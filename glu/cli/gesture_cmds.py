@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.cli.common import add_data_option, integer, nonneg_float, positive_float, positive_int
+from glu.cli.common import add_data_option, integer, nonneg_float, positive_float, positive_int, progress_bar
 from glu.data.source import HAND_LOG
 from glu.errors import DataError
 from glu.gestures.mixsplit import RECIPES
@@ -228,17 +228,15 @@ def _train(args: argparse.Namespace) -> int:
         raise DataError(f"no training segments for {', '.join(empty)}")
     for a, v in by_action.items():
         print(f"  {a}: {len(v)} sequences, {sum(len(x) for x in v)} frames")
-    rec = train_recognizer(
-        by_action,
-        args.states,
-        args.mix,
-        n_iter=args.iter,
-        tol=args.tol,
-        seed=args.seed,
-        warn=False,
-        meta=meta,
-        recipe=args.recipe,
-    )
+    bar = progress_bar(len(by_action), "train", "model")
+    try:
+        rec = train_recognizer(
+            by_action, args.states, args.mix, n_iter=args.iter, tol=args.tol, seed=args.seed, warn=False,
+            meta=meta, recipe=args.recipe, progress=(lambda a: bar.update(1)) if bar is not None else None,
+        )  # fmt: skip
+    finally:
+        if bar is not None:
+            bar.close()
     for r in rec.reports.values():
         print(("  " if r.converged else "  warning: ") + r.describe())
     rec.save(args.out)

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -276,11 +276,14 @@ def train_recognizer(
     warn: bool = True,
     meta: Mapping[str, Any] | None = None,
     recipe: str = "glu",
+    progress: Callable[[str], None] | None = None,
 ) -> Recognizer:
     """Train one left-to-right GMM-HMM per action; ``sequences``: action → list of (T_i, D).
 
     ``recipe``: ``"glu"`` (:func:`~glu.gestures.training.train_hmm`) or ``"mixsplit"``, the originals'
-    flat start and mixture splitting (:func:`~glu.gestures.mixsplit.train_mixsplit`).
+    flat start and mixture splitting (:func:`~glu.gestures.mixsplit.train_mixsplit`). ``progress(action)``
+    is called after each model (for a progress bar). The recogniser's meta keeps the per-frame
+    log-likelihood range of each action's training sequences (:mod:`glu.gestures.typicality`).
     """
     if recipe not in RECIPES:
         raise ModelError(f"unknown training recipe {recipe!r}; allowed: {', '.join(RECIPES)}")
@@ -291,6 +294,8 @@ def train_recognizer(
             models[action], reports[action], _ = train_mixsplit(seqs, n_states, n_mix, **kw)
         else:
             models[action], reports[action] = train_hmm(seqs, n_states, n_mix, **kw)
+        if progress is not None:
+            progress(action)
     ranges = {a: training_range(models[a], sequences[a]) for a in models}
     info = {
         META_KEY: ranges_to_meta(ranges),
