@@ -128,9 +128,7 @@ def test_the_command_line_runs_the_chain(tool_use, tmp_path, capsys):
     assert main(["describe", "--model", str(model), "--grammar", str(tool_use / "grammar.grm"), "--evidence",
                  "Tool=hook", "ObjShape=cube", "--nbest", "2", "--json"]) == 0  # fmt: skip
     out = json.loads(capsys.readouterr().out)
-    assert out["nbest"][0]["sentence"].startswith(
-        "the robot pulls the cube with the hook and it comes closer"
-    )
+    assert out[0]["sentence"].startswith("the robot pulls the cube with the hook and it comes closer")
     assert (
         main(["describe", "--model", str(model), "--evidence", "Tool=hook"]) == 2
     )  # GLU's grammar: other words
