@@ -24,8 +24,10 @@ from glu import paths
 from glu.errors import DataError
 from glu.files import atomic_write_text
 
-README = paths.PROJECT_ROOT / "README.md"
-SUMMARY = paths.PROJECT_ROOT / "results" / "summary.json"
+_ROOT = paths.PROJECT_ROOT
+README: Path | None = _ROOT / "README.md" if _ROOT is not None else None
+"""The checkout's README (None when glu is installed: then give the files explicitly)."""
+SUMMARY: Path | None = _ROOT / "results" / "summary.json" if _ROOT is not None else None
 BEGIN = (
     "<!-- BEGIN results: written by `glu readme` from results/summary.json; edit glu/readme.py, not here -->"
 )

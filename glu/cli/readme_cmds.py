@@ -29,7 +29,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _readme(args: argparse.Namespace) -> int:
-    from glu.errors import DataError
+    from glu.errors import DataError, OutputError
+
+    if args.summary is None or args.readme is None:
+        raise OutputError(
+            "glu is installed, not a source checkout: give --readme README.md and --summary FILE"
+        )
     from glu.readme import load_summary, readme_section, render, update_readme
 
     try:
