@@ -121,7 +121,9 @@ def baum_welch(
     try:
         with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
             warnings.simplefilter("ignore", RuntimeWarning)
-            result = bw.fit(sequences, start, n_iter, tol * n_frames, covariance="ml", covar_floor=covar_floor)
+            result = bw.fit(
+                sequences, start, n_iter, tol * n_frames, covariance="ml", covar_floor=covar_floor
+            )
     except (ValueError, np.linalg.LinAlgError) as e:
         raise ModelError(f"Baum–Welch failed for {hmm.name or 'the model'} at M = {hmm.n_mix}: {e}") from None
     try:

@@ -257,7 +257,9 @@ def _run_em(
             if engine == "glu":
                 from glu.gestures import baum_welch
 
-                result = baum_welch.fit(seqs, baum_welch.GMMHMMParams(*start), n_iter, tol_total, covar_reg, "map")
+                result = baum_welch.fit(
+                    seqs, baum_welch.GMMHMMParams(*start), n_iter, tol_total, covar_reg, "map"
+                )
                 return tuple(result.params), tuple(float(h) for h in result.history)
             return _run_hmmlearn(seqs, start, n_iter, tol_total, covar_reg, seed)
     except (ValueError, np.linalg.LinAlgError) as e:
