@@ -187,7 +187,7 @@ def test_recognizer_outputs(bank):
 def test_save_load_round_trip_scores_identically(bank, tmp_path):
     path = bank.save(tmp_path / "rec.json")
     d = json.loads(path.read_text())
-    assert d["format"] == "glu-gesture-recognizer" and d["version"] == 1
+    assert d["format"] == "glu-gesture-recognizer" and d["version"] == 2
     assert d["actions"] == ["grasp", "tap", "touch", "push"]
     assert np.array(d["models"]["grasp"]["covars"]).shape == (6, 3, 3, 3)
     again = Recognizer.load(path)

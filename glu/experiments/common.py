@@ -51,7 +51,9 @@ def evidence_text(evidence: Mapping[str, Any]) -> str:
 
 
 def _plain(v: Any) -> Any:
-    """A parameter value as JSON-ready data (tuples → lists, mappings → dicts)."""
+    """A parameter value as JSON-ready data (tuples → lists, mappings → dicts, settings objects → their name)."""
+    if hasattr(v, "name") and hasattr(v, "to_dict"):  # e.g. gesture Invariants: "centred+rotated"
+        return v.name
     if isinstance(v, Mapping):
         return {str(k): _plain(x) for k, x in v.items()}
     if isinstance(v, list | tuple):

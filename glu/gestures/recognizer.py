@@ -5,10 +5,16 @@ log domain) for whole sequences or every prefix; :meth:`Recognizer.stream` gives
 that consumes one frame at a time at O(1) cost per frame. :func:`train_recognizer` trains one model per
 action (:mod:`glu.gestures.training`).
 
+A recogniser knows which features its models were trained on (:class:`~glu.gestures.invariants.Invariants`:
+raw, or invariant to translation, scale, rotation about the vertical, mirroring) and computes them itself
+from the hand features it is given, for whole sequences and frame by frame alike, so every caller (``glu
+recognize``, effect anticipation, the notebooks) feeds it the same hand features and gets the same answer.
+
 Recogniser files (:meth:`Recognizer.save`) are JSON, not pickle::
 
-    {"format": "glu-gesture-recognizer", "version": 1,
+    {"format": "glu-gesture-recognizer", "version": 2,
      "features": "<what the models expect>",
+     "invariants": {"names": ["centred", …], "lock_radius": ρ, "min_scale": s},
      "actions": ["grasp", "tap", "touch"],
      "models": {"grasp": {"n_states": Q, "n_mix": M, "n_features": D,
                           "startprob": [Q], "transmat": [Q][Q], "weights": [Q][M],
@@ -17,6 +23,7 @@ Recogniser files (:meth:`Recognizer.save`) are JSON, not pickle::
      "meta": {<free-form: data source, seed, parameters>}}
 
 Floats are written with ``repr`` precision, so a saved recogniser scores exactly as the one in memory.
+Version 1 files (before invariant features) are read as raw-feature recognisers.
 """
 
 from __future__ import annotations
@@ -33,7 +40,8 @@ import numpy as np
 from glu.errors import DataError, ModelError
 from glu.files import atomic_write_json
 from glu.gestures.features import FEATURES_DESCRIPTION
-from glu.gestures.forward import ForwardState, forward_step, log_emissions, p_hmm_from_loglik
+from glu.gestures.forward import ForwardState, forward_curve, forward_step, log_emissions, p_hmm_from_loglik
+from glu.gestures.invariants import Invariants
 from glu.gestures.mixsplit import RECIPES, train_mixsplit
 from glu.gestures.model import GestureHMM, as_sequence
 from glu.gestures.training import TrainingConfig, TrainingReport, train_hmm
@@ -49,7 +57,8 @@ from glu.gestures.typicality import (
 )
 
 FORMAT = "glu-gesture-recognizer"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+READABLE_VERSIONS = (1, 2)
 _PAD = -1e300
 """log-normaliser of the padding components of a stacked bank (never the most likely)."""
 
@@ -69,17 +78,30 @@ class StreamStep(NamedTuple):
     p_hmm: np.ndarray
 
 
-class GestureStream:
-    """Incremental forward recursion over every model of a recogniser: one frame in, one posterior out.
+class StackedBank(NamedTuple):
+    """Every model of a bank in arrays padded to the largest Q and M (the batch axis A is the action).
 
-    Each :meth:`push` costs O(Σ_a Q_a² + Σ_a Q_a M_a D²), independent of how many frames came before;
-    it runs the same :func:`~glu.gestures.forward.forward_step` as the batch scoring, with the models
-    stacked (padded to the largest Q and M), so the results equal rescoring the prefix ``G_1^t``.
+    Padding states have zero start and transition probability and padding components a log-normaliser of
+    ``-1e300``, so they never contribute: the forward recursion over the stack equals each model's own.
+
+    Attributes
+    ----------
+    means : array, shape (A, Q, M, D)
+    chol_inv : array, shape (A, Q, M, D, D)
+    log_norm : array, shape (A, Q, M)
+    startprob : array, shape (A, Q)
+    transmat : array, shape (A, Q, Q)
     """
 
-    def __init__(self, recognizer: Recognizer) -> None:
-        models = [recognizer.models[a] for a in recognizer.actions]
-        self.actions: tuple[str, ...] = recognizer.actions
+    means: np.ndarray
+    chol_inv: np.ndarray
+    log_norm: np.ndarray
+    startprob: np.ndarray
+    transmat: np.ndarray
+
+    @classmethod
+    def of(cls, models: Sequence[GestureHMM]) -> StackedBank:
+        """Stack ``models`` (all with the same D)."""
         A = len(models)
         Q = max(m.n_states for m in models)
         M = max(m.n_mix for m in models)
@@ -96,22 +118,46 @@ class GestureStream:
             lnorm[i, :q, :k] = m._log_norm
             pi[i, :q] = m.startprob
             trans[i, :q, :q] = m.transmat
-        self._D = D
-        self._means, self._chol_inv = mu, cinv
-        self._log_norm = np.where(np.isfinite(lnorm), lnorm, _PAD)
-        self._startprob, self._transmat = pi, trans
+        return cls(mu, cinv, np.where(np.isfinite(lnorm), lnorm, _PAD), pi, trans)
+
+    def log_emissions(self, X: np.ndarray) -> np.ndarray:
+        """``log p(x_t | q)`` of every model, shape (T, A, Q), for frames of shape (T, D)."""
+        return log_emissions(X, self.means, self.chol_inv, self.log_norm)
+
+
+class GestureStream:
+    """Incremental forward recursion over every model of a recogniser: one frame in, one posterior out.
+
+    Each :meth:`push` costs O(Σ_a Q_a² + Σ_a Q_a M_a D²), independent of how many frames came before;
+    it computes the recogniser's invariant features of the frame (:class:`~glu.gestures.invariants.InvariantStream`)
+    and runs the same :func:`~glu.gestures.forward.forward_step` as the batch scoring, with the models
+    stacked (padded to the largest Q and M), so the results equal rescoring the prefix ``G_1^t``.
+    """
+
+    def __init__(self, recognizer: Recognizer) -> None:
+        self.actions: tuple[str, ...] = recognizer.actions
+        bank = recognizer.bank
+        self._D = recognizer.n_features
+        self.features: Invariants = recognizer.features
+        self._invariant = None if self.features.is_raw else self.features.stream()
+        self._means, self._chol_inv, self._log_norm = bank.means, bank.chol_inv, bank.log_norm
+        self._startprob, self._transmat = bank.startprob, bank.transmat
         self.reset()
 
     def reset(self) -> None:
         """Forget every frame: the next :meth:`push` starts a new gesture."""
         self._state: ForwardState | None = None
         self.t = 0
+        if self._invariant is not None:
+            self._invariant.reset()
 
     def push(self, x: np.ndarray) -> StreamStep:
-        """Consume one frame, shape (D,); return ``log L(G_1^t | A)`` and ``p_HMM(A | G_1^t)``."""
+        """Consume one frame of hand features, shape (D,); return ``log L(G_1^t | A)`` and ``p_HMM(A | G_1^t)``."""
         x = np.asarray(x, dtype=float)
         if x.shape != (self._D,) or not np.all(np.isfinite(x)):
             raise DataError(f"a frame must be {self._D} finite numbers, got {x!r}")
+        if self._invariant is not None:
+            x = self._invariant.push(x)
         log_b = log_emissions(x[None], self._means, self._chol_inv, self._log_norm)[0]  # (A, Q)
         self._state = forward_step(self._state, log_b, self._startprob, self._transmat)
         self.t += 1
@@ -130,11 +176,16 @@ class GestureStream:
 class Recognizer:
     """A bank of gesture HMMs, one per action: log-likelihoods, posteriors ``p_HMM(A | G)``, streaming.
 
+    Every method takes the hand features (:mod:`glu.gestures.features`, shape (T, 3)) and computes the
+    recogniser's own :attr:`features` from them before scoring.
+
     Parameters
     ----------
     models : action → :class:`GestureHMM` (the order is the order of every output vector)
     reports : action → :class:`TrainingReport`, if trained by glu
     meta : free-form information saved with the recogniser (data source, seed, parameters)
+    features : the invariant features the models were trained on (:class:`~glu.gestures.invariants.Invariants`,
+        or its name such as ``"centred"``); default raw
     """
 
     def __init__(
@@ -142,6 +193,7 @@ class Recognizer:
         models: Mapping[str, GestureHMM],
         reports: Mapping[str, TrainingReport] | None = None,
         meta: Mapping[str, Any] | None = None,
+        features: Invariants | str | None = None,
     ) -> None:
         if not models:
             raise ModelError("a recogniser needs at least one model")
@@ -153,15 +205,30 @@ class Recognizer:
         self.reports: dict[str, TrainingReport] = dict(reports or {})
         self.meta: dict[str, Any] = dict(meta or {})
         self.n_features: int = dims.pop()
+        self.features: Invariants = Invariants.parse(features)
+        if not self.features.is_raw and self.n_features != 3:
+            raise ModelError(f"invariant features need 3-D models, these have {self.n_features} features")
+        self._bank: StackedBank | None = None
+
+    @property
+    def bank(self) -> StackedBank:
+        """The models stacked for scoring them together (:class:`StackedBank`, built once)."""
+        if self._bank is None:
+            self._bank = StackedBank.of([self.models[a] for a in self.actions])
+        return self._bank
 
     def __repr__(self) -> str:
         shapes = ", ".join(f"{a}: Q={m.n_states} M={m.n_mix}" for a, m in self.models.items())
-        return f"Recognizer({shapes})"
+        return f"Recognizer({shapes}; features {self.features.name})"
+
+    def transform(self, X: np.ndarray) -> np.ndarray:
+        """The features the models see: the recogniser's invariant features of hand features X, shape (T, D)."""
+        X = as_sequence(X, self.n_features)
+        return X if self.features.is_raw else self.features.transform(X)
 
     def loglik(self, X: np.ndarray) -> np.ndarray:
         """``log L(G | A)`` for each action, shape (n_actions,), of a sequence of shape (T, D)."""
-        X = as_sequence(X, self.n_features)
-        return np.array([self.models[a].loglik(X) for a in self.actions])
+        return self.loglik_curve(X)[-1]
 
     def p_hmm(self, X: np.ndarray) -> np.ndarray:
         """``p_HMM(A | G)`` with equal priors, shape (n_actions,), of a sequence of shape (T, D)."""
@@ -174,9 +241,9 @@ class Recognizer:
         return pd.Series(self.p_hmm(X), index=pd.Index(self.actions, name="action"), name="p_HMM(A | G)")
 
     def loglik_curve(self, X: np.ndarray) -> np.ndarray:
-        """``log L(G_1^t | A)`` for every prefix, shape (T, n_actions)."""
-        X = as_sequence(X, self.n_features)
-        return np.stack([self.models[a].loglik_curve(X) for a in self.actions], axis=1)
+        """``log L(G_1^t | A)`` for every prefix, shape (T, n_actions): one forward pass over the stacked bank."""
+        bank = self.bank
+        return forward_curve(bank.log_emissions(self.transform(X)), bank.startprob, bank.transmat)
 
     def p_hmm_curve(self, X: np.ndarray) -> np.ndarray:
         """``p_HMM(A | G_1^t)`` for every prefix, shape (T, n_actions)."""
@@ -214,7 +281,9 @@ class Recognizer:
         return {
             "format": FORMAT,
             "version": FORMAT_VERSION,
-            "features": FEATURES_DESCRIPTION,
+            "features": FEATURES_DESCRIPTION
+            + ("" if self.features.is_raw else f"; invariant features: {self.features.name}"),
+            "invariants": self.features.to_dict(),
             "actions": list(self.actions),
             "models": {a: self.models[a].to_dict() for a in self.actions},
             "training": {a: asdict(r) for a, r in self.reports.items()},
@@ -226,9 +295,10 @@ class Recognizer:
         """A recogniser from :meth:`to_dict` output; :class:`ModelError` naming ``source`` if malformed."""
         if not isinstance(d, dict) or d.get("format") != FORMAT:
             raise ModelError(f'{source}: not a glu gesture recogniser (expected "format": "{FORMAT}")')
-        if d.get("version") != FORMAT_VERSION:
+        if d.get("version") not in READABLE_VERSIONS:
             raise ModelError(
-                f"{source}: format version {d.get('version')!r}; this glu reads {FORMAT_VERSION}"
+                f"{source}: format version {d.get('version')!r}; this glu reads "
+                + ", ".join(map(str, READABLE_VERSIONS))
             )
         actions, models = d.get("actions"), d.get("models")
         if not isinstance(actions, list) or not isinstance(models, dict) or set(actions) != set(models):
@@ -243,7 +313,8 @@ class Recognizer:
                 reports[a] = TrainingReport(**{**r, "history": tuple(r["history"])})
             except (TypeError, KeyError):
                 raise ModelError(f"{source}: malformed training report for {a!r}") from None
-        return cls(hmms, reports, d.get("meta") or {})
+        features = Invariants.from_dict(d.get("invariants"), source)
+        return cls(hmms, reports, d.get("meta") or {}, features)
 
     def save(self, path: str | os.PathLike) -> Path:
         """Write the recogniser as JSON (atomically); returns the path."""
@@ -277,6 +348,7 @@ def train_recognizer(
     meta: Mapping[str, Any] | None = None,
     recipe: str = "glu",
     progress: Callable[[str], None] | None = None,
+    features: Invariants | str | None = None,
 ) -> Recognizer:
     """Train one left-to-right GMM-HMM per action; ``sequences``: action → list of (T_i, D).
 
@@ -284,11 +356,18 @@ def train_recognizer(
     flat start and mixture splitting (:func:`~glu.gestures.mixsplit.train_mixsplit`). ``progress(action)``
     is called after each model (for a progress bar). The recogniser's meta keeps the per-frame
     log-likelihood range of each action's training sequences (:mod:`glu.gestures.typicality`).
+    ``features`` (:class:`~glu.gestures.invariants.Invariants` or a name such as ``"centred,rotated"``; default
+    raw): the models are trained on these features of the hand features given, and the recogniser applies
+    the same to whatever it scores.
     """
     if recipe not in RECIPES:
         raise ModelError(f"unknown training recipe {recipe!r}; allowed: {', '.join(RECIPES)}")
-    models, reports = {}, {}
+    features = Invariants.parse(features)
+    models, reports, seen = {}, {}, {}
     for action, seqs in sequences.items():
+        if not features.is_raw:
+            seqs = [features.transform(X) for X in seqs]
+        seen[action] = seqs  # what the models see: the typicality ranges are measured on these
         kw = dict(n_iter=n_iter, tol=tol, covar_reg=covar_reg, seed=seed, name=action, warn=warn)
         if recipe == "mixsplit":
             models[action], reports[action], _ = train_mixsplit(seqs, n_states, n_mix, **kw)
@@ -296,7 +375,7 @@ def train_recognizer(
             models[action], reports[action] = train_hmm(seqs, n_states, n_mix, **kw)
         if progress is not None:
             progress(action)
-    ranges = {a: training_range(models[a], sequences[a]) for a in models}
+    ranges = {a: training_range(models[a], seen[a]) for a in models}
     info = {
         META_KEY: ranges_to_meta(ranges),
         "recipe": recipe,
@@ -306,5 +385,6 @@ def train_recognizer(
         "tol": tol,
         "covar_reg": covar_reg,
         "seed": seed,
+        "features": features.name,
     }
-    return Recognizer(models, reports, {**info, **(meta or {})})
+    return Recognizer(models, reports, {**info, **(meta or {})}, features)
