@@ -177,6 +177,43 @@ def test_train_on_the_recordings(capsys, tmp_path, source):
     model = tmp_path / "trained.json"
     status, out, _ = run(capsys, "hmm", "train", "--data", str(source.root), "-o", str(model), "--iter", "20")
     assert status == 0 and f"data: {source.kind} data" in out
-    assert "grasp: 4 sequences" in out
+    assert "grasp: 4 sequences" in out and "tap: 3 sequences" in out  # the standing recordings only
+    status, out, _ = run(capsys, "hmm", "train", "--data", str(source.root), "-o", str(tmp_path / "all.json"),
+                         "--iter", "2", "--include-test")  # fmt: skip
+    assert status == 0 and "tap: 5 sequences" in out  # + the two seated taps
     status, out, _ = run(capsys, "recognize", "tap1_hand", "--data", str(source.root), "--models", str(model))
     assert status == 0
+
+
+def test_train_with_invariant_features_and_recognize(capsys, tmp_path, synthetic_log):
+    from glu.gestures.invariants import Invariants
+    from glu.gestures.recognizer import Recognizer
+
+    model = tmp_path / "inv.json"
+    status, out, _ = run(capsys, "hmm", "train", "--synthetic", "5", "--states", "3", "--mix", "1", "--iter", "10",
+                         "--features", "rotated,centred", "--covar-reg", "0.01", "-o", str(model))  # fmt: skip
+    assert status == 0 and "features: centred+rotated" in out
+    rec = Recognizer.load(model)
+    assert rec.features.name == "centred+rotated" and rec.meta["covar_reg"] == 0.01
+    path, g = synthetic_log
+    a, b = g.segments[0]
+    args = ["recognize", str(path), "--frames", f"{a}:{b}", "--models", str(model), "--json"]
+    status, out, err = run(capsys, *args)
+    assert status == 0 and "features centred+rotated" in err
+    X = np.loadtxt(path)[a - 1 : b, 2:] / 1000
+    Z = Invariants.parse("centred,rotated").transform(X)  # what the models must see
+    reference = [rec.models[x].to_hmmlearn().score(Z) for x in rec.actions]
+    np.testing.assert_allclose(list(json.loads(out)["loglik"].values()), reference, rtol=1e-9)
+    status, out, _ = run(capsys, *args, "--stream")
+    last = json.loads(out.splitlines()[-1])
+    assert status == 0 and last["frame"] == b
+    np.testing.assert_allclose(list(last["loglik"].values()), reference, rtol=1e-9)
+
+
+def test_bad_features_are_refused(capsys, tmp_path):
+    status, _, err = run(capsys, "hmm", "train", "--synthetic", "3", "--features", "centred,wobbly", "-o",
+                         str(tmp_path / "m.json"))  # fmt: skip
+    assert_one_line_error(
+        status, err, "unknown invariance 'wobbly'; allowed: centred, scaled, rotated, mirrored"
+    )
+    assert not (tmp_path / "m.json").exists()

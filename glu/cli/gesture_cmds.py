@@ -16,6 +16,7 @@ from typing import Any
 from glu.cli.common import add_data_option, integer, nonneg_float, positive_float, positive_int, progress_bar
 from glu.data.source import HAND_LOG
 from glu.errors import DataError
+from glu.gestures.invariants import ALL, INVARIANCE_MEANING, INVARIANCES, RAW, Invariants
 from glu.gestures.mixsplit import RECIPES
 from glu.gestures.synthetic import GESTURES
 from glu.gestures.training import TrainingConfig
@@ -48,8 +49,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     t = hsub.add_parser(
         "train",
         help="train one left-to-right GMM-HMM per action and save the recogniser (JSON)",
-        description="Train on the automatically segmented real recordings (--data) or on synthetic "
-        "gestures (--synthetic N, N per action).",
+        description="Train on the automatically segmented standing recordings (--data) or on synthetic "
+        "gestures (--synthetic N, N per action). --features chooses invariant features; the recogniser "
+        "file records them and `glu recognize` applies them.",
+        epilog="invariances: "
+        + "; ".join(f"{k} = {v}" for k, v in INVARIANCE_MEANING.items())
+        + " (formulas: glu.gestures.invariants)",
     )
     src = t.add_mutually_exclusive_group()
     add_data_option(src)
@@ -73,12 +78,23 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument(
         "--tol", type=positive_float, default=d.tol, help=f"EM tolerance per frame (default {d.tol:g})"
     )
+    t.add_argument("--covar-reg", type=positive_float, default=d.covar_reg, metavar="R",
+                   help=f"strength of the covariance prior (default {d.covar_reg:g}; larger: broader Gaussians)")  # fmt: skip
     t.add_argument("--noise", type=nonneg_float, default=SYNTHETIC_NOISE,
                    help=f"synthetic sensor noise, m (default {SYNTHETIC_NOISE:g})")  # fmt: skip
     t.add_argument("--seed", type=integer, default=0, help="random seed (default 0)")
     t.add_argument("--recipe", choices=RECIPES, default=RECIPES[0],
                    help="glu = time slices + GaussianMixture, then EM (default); mixsplit = the originals': "
                    "flat start, Baum-Welch, split the heaviest component, Baum-Welch, … up to M")  # fmt: skip
+    t.add_argument(
+        "--features", type=_features, default=Invariants(), metavar="LIST",
+        help=f"{RAW} (default), {ALL}, or comma-separated invariances among {','.join(INVARIANCES)}",
+    )  # fmt: skip
+    t.add_argument(
+        "--include-test", action="store_true",
+        help="real data: also train on the originals' hand-cut segments of the two seated taps (the "
+        "effect-anticipation test gestures; default: the standing recordings only)",
+    )  # fmt: skip
     t.set_defaults(func=_train)
 
     r = sub.add_parser(
@@ -121,6 +137,15 @@ def _frames(s: str) -> tuple[int, int]:
     if not 1 <= a <= b:
         raise argparse.ArgumentTypeError(f"{s!r}: need 1 ≤ A ≤ B (frames are 1-based, inclusive)")
     return a, b
+
+
+def _features(s: str) -> Invariants:
+    from glu.errors import GluError
+
+    try:
+        return Invariants.parse(s)
+    except GluError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
 
 
 def _actions(s: str) -> tuple[str, ...]:
@@ -220,7 +245,7 @@ def _train(args: argparse.Namespace) -> int:
                 f"the data source has no gesture recordings ({source.describe()}); "
                 "give --data DIR with gestures/, or --synthetic N"
             )
-        seqs = real_segments(source)
+        seqs = real_segments(source, include_original=args.include_test)
         meta = {"data": source.describe()}
     by_action = {a: [s.xyz for s in seqs if s.action == a] for a in actions}
     empty = [a for a, v in by_action.items() if not v]
@@ -231,12 +256,14 @@ def _train(args: argparse.Namespace) -> int:
     bar = progress_bar(len(by_action), "train", "model")
     try:
         rec = train_recognizer(
-            by_action, args.states, args.mix, n_iter=args.iter, tol=args.tol, seed=args.seed, warn=False,
-            meta=meta, recipe=args.recipe, progress=(lambda a: bar.update(1)) if bar is not None else None,
+            by_action, args.states, args.mix, n_iter=args.iter, tol=args.tol, covar_reg=args.covar_reg,
+            seed=args.seed, warn=False, meta=meta, recipe=args.recipe, features=args.features,
+            progress=(lambda a: bar.update(1)) if bar is not None else None,
         )  # fmt: skip
     finally:
         if bar is not None:
             bar.close()
+    print(f"  features: {rec.features.name} ({rec.features.describe()})")
     for r in rec.reports.values():
         print(("  " if r.converged else "  warning: ") + r.describe())
     rec.save(args.out)
@@ -257,7 +284,7 @@ def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
         _say(f"models: {mat} (original 2013 HMMs; touch = their push model)", quiet)
         return load_original_models(mat)
     rec = Recognizer.load(spec)
-    _say(f"models: {spec} ({', '.join(rec.actions)})", quiet)
+    _say(f"models: {spec} ({', '.join(rec.actions)}; features {rec.features.name})", quiet)
     return rec
 
 
