@@ -140,3 +140,53 @@ def test_a_view_fixes_the_body_size():
 def test_bad_views_are_refused(kwargs, message):
     with pytest.raises(DataError, match=message):
         View(**kwargs)
+
+
+# ---------------------------------------------------------------- the robot's own movements
+def _robot(action, seed=0, **view):
+    rng = np.random.default_rng(seed)
+    return synthesize_gesture(
+        action, rng, noise=0.0, spike_rate=0.0, dropout_rate=0.0, view=View(performer="robot", **view)
+    )
+
+
+def test_the_robot_moves_in_its_own_body_frame():
+    from glu.gestures.robot import ROBOT_HOME, ROBOT_NECK, ROBOT_SHOULDERS
+
+    g = _robot("tap")
+    sk = g.skeleton
+    torso = sk[:, OPENNI_JOINTS.index("torso")]
+    np.testing.assert_array_equal(torso, 0.0)  # no camera: the chest is the origin, no sway, no turn
+    hand = sk[:, OPENNI_JOINTS.index("right_hand")]
+    np.testing.assert_allclose(hand[0], ROBOT_HOME, atol=0.02)  # starts at home, in front of the belly
+    assert hand[0, 2] < 0 and hand[:, 2].min() < hand[0, 2] - 0.1  # reaches forward to the object
+    f = g.trajectory().xyz  # normalised by the robot's own body
+    np.testing.assert_allclose(f, (hand - torso) / [ROBOT_SHOULDERS, ROBOT_NECK, ROBOT_SHOULDERS], atol=1e-12)
+    fixed = _robot("tap", normalise_body=False).trajectory().xyz  # by a person's constants: a smaller body
+    np.testing.assert_allclose(fixed, (hand - torso) / [0.33, 0.23, 0.33], atol=1e-12)
+
+
+@pytest.mark.parametrize("action", ["grasp", "tap", "touch"])
+def test_the_robot_reaches_through_waypoints_where_it_stops(action):
+    """Approach, contact, retreat: straight minimum-jerk segments between 5 waypoints, each at rest."""
+    hand = _robot(action).skeleton[:, OPENNI_JOINTS.index("right_hand")]
+    speed = np.linalg.norm(np.diff(hand, axis=0), axis=1)  # metres per frame
+    moving = np.flatnonzero(speed > 1e-9)
+    slow = speed[moving[0] : moving[-1] + 1] < 2e-4  # below 6 mm/s inside the movement
+    runs = int(slow[0]) + int(np.sum(slow[1:] & ~slow[:-1]))  # runs of (near) rest
+    assert runs == 5  # leaving home, 3 waypoints, arriving home
+    human = synthesize_gesture(action, np.random.default_rng(0), noise=0.0, spike_rate=0.0, dropout_rate=0.0)
+    hs = np.linalg.norm(np.diff(human.skeleton[:, OPENNI_JOINTS.index("right_hand")], axis=0), axis=1)
+    inside = hs[np.flatnonzero(hs > 1e-9)[0] : np.flatnonzero(hs > 1e-9)[-1] + 1]
+    assert inside.min() > 2e-4  # a person's hand never stops mid-movement
+
+
+def test_robot_views_are_checked():
+    with pytest.raises(DataError, match="unknown action 'push' for a robot"):
+        _robot("push")
+    with pytest.raises(DataError, match="one posture"):
+        View(performer="robot", posture="seated")
+    with pytest.raises(DataError, match="unknown performer"):
+        View(performer="dog")
+    assert _robot("grasp", mirror=True).skeleton[0, OPENNI_JOINTS.index("right_hand"), 0] < 0  # its left arm
+    assert View(performer="robot", yaw_deg=30.0).describe() == "robot, yaw 30°"

@@ -29,7 +29,7 @@ from glu.gestures.segmentation import (
     segment_recording,
     segment_repetitions,
 )
-from glu.gestures.synthetic import synthesize_gestures, synthesize_recording
+from glu.gestures.synthetic import View, synthesize_gestures, synthesize_recording
 from glu.gestures.trajectories import DEFAULT_POLICY, RepairPolicy, repair
 from glu.schema import ACTIONS
 
@@ -139,17 +139,23 @@ def synthetic_corpus(
     noise: float = 0.01,
     spike_rate: float = 0.005,
     dropout_rate: float = 0.2,
+    view: View | None = None,
 ) -> Corpus:
-    """``n_per_action`` synthetic gestures per action, as repaired feature sequences (:mod:`glu.gestures.synthetic`)."""
+    """``n_per_action`` synthetic gestures per action, as repaired feature sequences (:mod:`glu.gestures.synthetic`).
+
+    ``view``: how they are seen (:class:`~glu.gestures.synthetic.View`; default the generator's: a person
+    facing the camera), or the robot's own movements (``View(performer="robot")``).
+    """
     gestures = synthesize_gestures(
         n_per_action * len(actions), seed, actions=actions,
-        noise=noise, spike_rate=spike_rate, dropout_rate=dropout_rate,
+        noise=noise, spike_rate=spike_rate, dropout_rate=dropout_rate, view=view,
     )  # fmt: skip
     seqs = [
         LabelledSequence(g.action, g.features(), f"synthetic-{i}", 1, len(g.t))
         for i, g in enumerate(gestures)
     ]
-    return Corpus(seqs, f"synthetic data: gestures (seed {seed}, {n_per_action} per action)")
+    seen = "" if view is None else f", {view.describe()}"
+    return Corpus(seqs, f"synthetic data: gestures (seed {seed}, {n_per_action} per action{seen})")
 
 
 def gesture_sequences(

@@ -144,6 +144,7 @@ def skeleton_features(
     fallback: tuple[float, float] = (HORIZONTAL_FALLBACK, VERTICAL_FALLBACK),
     middle: tuple[float, float] = MIDDLE,
     hand: str = "right_hand",
+    measure: bool = True,
 ) -> tuple[np.ndarray, Normalisation]:
     """The original gesture features of a skeleton sequence (METHOD.md §4).
 
@@ -153,6 +154,8 @@ def skeleton_features(
         frames where the hand or the torso is missing (NaN) give NaN features
     joints, fallback, middle : see :func:`normalisation_factors`
     hand : the joint that gestures
+    measure : divide by the body's measured factors (the 2013 system); False: by the ``fallback``
+        constants whatever the body, as the 2017 logs were computed (body size then stays in the features)
 
     Returns
     -------
@@ -160,7 +163,10 @@ def skeleton_features(
     normalisation : the factors ``h`` and ``v`` used
     """
     skeleton = _check_skeleton(skeleton, joints)
-    norm = normalisation_factors(skeleton, joints, fallback, middle)
+    if measure:
+        norm = normalisation_factors(skeleton, joints, fallback, middle)
+    else:
+        norm = Normalisation(fallback[0], fallback[1], True, True)
     rel = _joint(skeleton, joints, hand) - _joint(skeleton, joints, "torso")
     scale = np.array([norm.horizontal, norm.vertical, norm.horizontal])
     return rel / scale, norm

@@ -29,8 +29,16 @@ How the robot's camera sees the person is a :class:`View`: the person's turn abo
 relative to the camera (``yaw_deg``; by default a random ± 10°, as in the real recordings), a mirror image
 (the movement made with the other hand, or a person facing the robot instead of beside it), the posture
 (``standing`` at a table, or ``seated`` with the hand resting on the thigh and the table higher and
-further relative to the torso, as in the seated recordings of TCDS) and the body size. ``view=None`` and
-``View()`` draw the same sequences as before views existed.
+further relative to the torso, as in the seated recordings of TCDS), the body size, and whether the
+features are normalised by the body's measured size (the 2013 system) or by fixed constants (the 2017 logs,
+where body size stays in the features). ``view=None`` and ``View()`` draw the same sequences as before
+views existed.
+
+**Robot mode.** ``View(performer="robot")`` draws the robot's own grasp, tap and touch instead: the
+end effector of an iCub-like arm in the robot's body frame (:mod:`glu.gestures.robot`), as a skeleton of
+the robot's proportions, so its features are computed exactly as a person's. The robot senses itself by
+its joints: no turn unless ``yaw_deg`` is given, and a robot's sensor arguments (``noise=ROBOT_NOISE``, no
+spikes or dropouts).
 
 Sequence ``i`` depends only on ``(seed, i)``, so ``synthesize_gestures(10, seed)[:5]`` equals
 ``synthesize_gestures(5, seed)``. :func:`synthesize_recording` strings repetitions of one action together
@@ -48,6 +56,7 @@ from glu.data.recordings import ORIGINAL_SEGMENTS, RECORDING_ACTION
 from glu.errors import DataError
 from glu.gestures.features import LOG_SCALE, OPENNI_JOINTS, skeleton_features
 from glu.gestures.pchip import pchip
+from glu.gestures.robot import ROBOT_ACTIONS, ROBOT_BODY, robot_hand_path
 from glu.gestures.trajectories import RepairPolicy, Trajectory, repair
 from glu.schema import ACTIONS
 
@@ -84,6 +93,8 @@ _SEATED_REST = np.array([0.2, -0.22, -0.22])
 _SEATED_OBJECT_SHIFT = np.array([0.0, 0.12, -0.2])
 """Seated: the table is higher and further, relative to the torso (size 1)."""
 POSTURES: tuple[str, ...] = ("standing", "seated")
+PERFORMERS: tuple[str, ...] = ("human", "robot")
+"""Who moves: a person seen by the robot's camera, or the robot itself (its end effector, its body frame)."""
 
 
 @dataclass(frozen=True)
@@ -98,13 +109,21 @@ class View:
         the same action made with the other hand, or seen from in front instead of from behind
     posture : ``"standing"`` (at a table) or ``"seated"`` (hand resting on the thigh, table higher and
         further relative to the torso)
-    size : body size factor (1 = shoulders 0.33 m apart); ``None`` draws one in 0.85–1.15
+    size : body size factor (1 = shoulders 0.33 m apart; for the robot, its own body); ``None`` draws
+        one in 0.85–1.15 for a person, 1 for the robot
+    normalise_body : features divided by the body's measured shoulder and neck–torso distances (the 2013
+        system); False: by the constants 0.33 m and 0.23 m whatever the body, as the 2017 logs were
+        computed, so body size (and the robot's smaller body) stays in the features
+    performer : ``"human"`` (a person seen by the robot's camera) or ``"robot"`` (the robot's own
+        movement, its end effector in its body frame; :mod:`glu.gestures.robot`)
     """
 
     yaw_deg: float | None = None
     mirror: bool = False
     posture: str = "standing"
     size: float | None = None
+    normalise_body: bool = True
+    performer: str = "human"
 
     def __post_init__(self) -> None:
         if self.yaw_deg is not None and not np.isfinite(self.yaw_deg):
@@ -113,6 +132,18 @@ class View:
             raise DataError(f"unknown posture {self.posture!r}; allowed: {', '.join(POSTURES)}")
         if self.size is not None and not 0.3 <= self.size <= 3.0:
             raise DataError(f"view size={self.size} is outside 0.3–3 (1 = shoulders 0.33 m apart)")
+        if self.performer not in PERFORMERS:
+            raise DataError(f"unknown performer {self.performer!r}; allowed: {', '.join(PERFORMERS)}")
+        if self.performer == "robot" and self.posture != "standing":
+            raise DataError("the robot has one posture: give posture only for a human performer")
+
+    def describe(self) -> str:
+        """One line, e.g. ``human, standing, yaw 90°, mirrored, size 1.2``."""
+        human = self.performer == "human"
+        yaw = "yaw ±10°" if self.yaw_deg is None and human else f"yaw {self.yaw_deg or 0:g}°"
+        parts = [*([self.performer, self.posture] if human else ["robot"]), yaw, "mirrored" * self.mirror,
+                 f"size {self.size:g}" if self.size else "", "fixed scale" * (not self.normalise_body)]  # fmt: skip
+        return ", ".join(p for p in parts if p)
 
 
 DEFAULT_VIEW = View()
@@ -142,6 +173,7 @@ class SyntheticGesture:
     size : the person's size factor (1 = shoulders 0.33 m apart)
     segments : for a continuous recording, the true (first, last) frames of each repetition
         (1-based, inclusive); for a single gesture, one segment: the whole movement
+    view : how it was seen (which also says how its features are normalised)
     """
 
     action: str
@@ -149,10 +181,11 @@ class SyntheticGesture:
     t: np.ndarray
     size: float
     segments: tuple[tuple[int, int], ...]
+    view: View = DEFAULT_VIEW
 
     def trajectory(self) -> Trajectory:
         """The features of the skeleton (:func:`glu.gestures.features.skeleton_features`) as a trajectory, unrepaired."""
-        xyz, _ = skeleton_features(self.skeleton)
+        xyz, _ = skeleton_features(self.skeleton, measure=self.view.normalise_body)
         n = len(xyz)
         return Trajectory(
             xyz, self.t, np.arange(1, n + 1), np.ones(n, dtype=bool), f"synthetic {self.action}"
@@ -182,6 +215,9 @@ class _Person:
 
 
 def _person(rng: np.random.Generator, view: View = DEFAULT_VIEW) -> _Person:
+    if view.performer == "robot":  # its own body frame: no camera, no sway, no random turn
+        yaw = np.deg2rad(view.yaw_deg or 0.0)
+        return _Person(float(view.size or 1.0), np.zeros(3), float(yaw), 0.0, 0.0)
     person = _Person(
         size=float(rng.uniform(0.85, 1.15)),
         origin=np.array([rng.uniform(-0.4, 0.4), rng.uniform(-0.15, 0.15), rng.uniform(-2.6, -1.6)]),
@@ -228,7 +264,8 @@ def _skeletons(
         hand = hand * np.array([-1.0, 1.0, 1.0])
     n = len(hand)
     s = person.size
-    body = np.array([_BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS]) * s
+    shape = ROBOT_BODY if view.performer == "robot" else _BODY
+    body = np.array([shape.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS]) * s
     rel = np.broadcast_to(body, (n, len(OPENNI_JOINTS), 3)).copy()
     ih, ie, ish = OPENNI_JOINTS.index("right_hand"), OPENNI_JOINTS.index("right_elbow"), 3
     rel[:, ih] = hand
@@ -287,18 +324,26 @@ def synthesize_gesture(
     view: View | None = None,
 ) -> SyntheticGesture:
     """One synthetic repetition of ``action`` drawn with ``rng``, seen as ``view`` (see the module docstring)."""
-    if action not in _KEYS:
-        raise DataError(f"unknown action {action!r}; allowed: {', '.join(GESTURES)}")
     view = view or DEFAULT_VIEW
+    _check_action(action, view)
     person = _person(rng, view)
-    move = _hand_path(action, rng, person.size, view)
+    if view.performer == "robot":
+        move = robot_hand_path(action, rng, person.size)
+    else:
+        move = _hand_path(action, rng, person.size, view)
     pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
     hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
     t = np.arange(len(hand)) / FRAME_RATE
     skel = _skeletons(hand, person, t, rng, view)
     true = ((pre + 1, pre + len(move)),)
     skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, dropout_rate)
-    return SyntheticGesture(action, skel, t_obs, person.size, true)
+    return SyntheticGesture(action, skel, t_obs, person.size, true, view)
+
+
+def _check_action(action: str, view: View) -> None:
+    allowed = ROBOT_ACTIONS if view.performer == "robot" else GESTURES
+    if action not in allowed:
+        raise DataError(f"unknown action {action!r} for a {view.performer}; allowed: {', '.join(allowed)}")
 
 
 def synthesize_gestures(
@@ -321,12 +366,12 @@ def synthesize_gestures(
     noise : standard deviation of the sensor noise on every joint, metres
     spike_rate : probability that a frame's hand joint is an outlier
     dropout_rate : probability that a sequence loses a run of 3–20 frames
-    view : how the camera sees the person (:class:`View`; default: facing it, turned by a random ± 10°)
+    view : how the camera sees the person (:class:`View`; default: facing it, turned by a random ± 10°),
+        or ``View(performer="robot")`` for the robot's own movements (then only grasp, tap and touch)
     """
     _check(n, noise, spike_rate, dropout_rate)
     for a in actions:
-        if a not in _KEYS:
-            raise DataError(f"unknown action {a!r}; allowed: {', '.join(GESTURES)}")
+        _check_action(a, view or DEFAULT_VIEW)
     children = np.random.SeedSequence(seed).spawn(n)
     return [
         synthesize_gesture(
