@@ -4,8 +4,10 @@ The chain, one module per step:
 
 * :mod:`~glu.gestures.trajectories` — YARP hand logs, tracking gaps and outliers, their repair;
 * :mod:`~glu.gestures.features` — a skeleton's hand in the torso frame, normalised by body size;
+* :mod:`~glu.gestures.invariants` — features invariant to posture, body size, viewpoint and mirroring, online;
 * :mod:`~glu.gestures.segmentation` — automatic segmentation of a recording into repetitions;
-* :mod:`~glu.gestures.synthetic` — seeded synthetic skeletons of grasp, tap, touch and push;
+* :mod:`~glu.gestures.synthetic` — seeded synthetic skeletons of grasp, tap, touch and push, seen from a view;
+* :mod:`~glu.gestures.robot` — the robot's own grasp, tap and touch (an iCub-like arm in its body frame);
 * :mod:`~glu.gestures.corpus` — labelled sequences of a data source (real segments or synthetic);
 * :mod:`~glu.gestures.forward` — the forward algorithm as pure functions over arrays;
 * :mod:`~glu.gestures.model` — one left-to-right GMM-HMM;
@@ -17,6 +19,7 @@ The chain, one module per step:
 from glu.gestures.corpus import LabelledSequence, gesture_sequences, synthetic_corpus
 from glu.gestures.features import load_features
 from glu.gestures.forward import p_hmm_from_loglik
+from glu.gestures.invariants import Invariants
 from glu.gestures.model import GestureHMM
 from glu.gestures.original import load_original_models
 from glu.gestures.recognizer import GestureStream, Recognizer, train_recognizer
@@ -26,6 +29,7 @@ from glu.gestures.trajectories import Trajectory, read_hand_log, repair
 __all__ = [
     "GestureHMM",
     "GestureStream",
+    "Invariants",
     "LabelledSequence",
     "Recognizer",
     "TrainingConfig",

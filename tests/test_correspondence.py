@@ -1,0 +1,186 @@
+"""The correspondence study: tidy results, intervals against scipy, paired effects by hand, the two-view
+recording read back in strict mode, and invariance end to end (a turned, mirrored tap scores the same)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pytest
+import rerun as rr
+from rerun.chunk import RrdReader
+from scipy import stats
+
+from glu.experiments import correspondence as corr
+from glu.experiments import gestures
+from glu.gestures.corpus import synthetic_corpus
+from glu.gestures.synthetic import View
+from glu.plots import correspondence as cplots
+from glu.recording import write_two_views
+
+TINY = {"n_states": 2, "n_mix": 1, "n_iter": 3}
+
+
+@pytest.fixture(scope="module")
+def study():
+    conds = [c for c in corr.default_conditions() if c.level in ("0°", "90°", "the robot itself")]
+    return corr.correspondence_study(
+        feature_sets=("raw", "centred", "centred+rotated"), conditions=conds, seeds=(0, 1), n_train=2,
+        n_test=1, **TINY,
+    )  # fmt: skip
+
+
+def test_the_study_is_tidy_and_stamped(study):
+    assert len(study) == 2 * 2 * 3 * 3  # seeds × training sources × feature sets × conditions
+    assert set(study["train"]) == {"robot", "human"}
+    assert set(study["features"]) == {"raw", "centred", "centred+rotated"}
+    assert study["accuracy"].between(0, 1).all() and (study["n_test"] == 3).all()
+    assert study.attrs["experiment"] == "correspondence_study"
+    assert study.attrs["data_source"].startswith("synthetic data")
+    assert study.attrs["parameters"]["seeds"] == [0, 1] and study.attrs["parameters"]["n_states"] == 2
+    robot = study[study["factor"] == "performer"]
+    assert (robot["level"] == "the robot itself").all()
+
+
+def test_summary_intervals_are_t_intervals(study):
+    s = corr.summarise(study)
+    assert len(s) == len(study) // 2 and (s["n_seeds"] == 2).all()
+    row = s.iloc[4]
+    values = study[(study["train"] == row["train"]) & (study["features"] == row["features"])
+                   & (study["level"] == row["level"])]["accuracy"]  # fmt: skip
+    assert row["accuracy"] == pytest.approx(values.mean())
+    if values.std() > 0:
+        lo, hi = stats.t.interval(0.95, len(values) - 1, loc=values.mean(), scale=stats.sem(values))
+        assert row["ci_low"] == pytest.approx(max(lo, 0.0)) and row["ci_high"] == pytest.approx(min(hi, 1.0))
+    table = corr.main_table(s, "human")
+    assert list(table.columns) == ["raw", "centred", "centred+rotated"]
+    assert table.index[0] == "viewpoint: 0°"
+
+
+def test_t_interval_closed_form():
+    mean, lo, hi = corr.t_interval([0.5, 0.7, 0.9])
+    half = stats.t.ppf(0.975, 2) * 0.2 / np.sqrt(3)
+    assert (mean, lo, hi) == pytest.approx((0.7, 0.7 - half, 0.7 + half))
+    assert np.isnan(corr.t_interval([0.4])[1])
+
+
+def test_invariance_effects_are_paired_differences():
+    rows = []
+    acc = {"raw": [0.9, 0.8, 1.0], "centred": [0.6, 0.5, 0.55]}  # centring costs here, on every seed
+    for f, values in acc.items():
+        for seed, a in enumerate(values):
+            rows.append({"seed": seed, "train": "human", "features": f, "factor": "viewpoint", "level": "0°",
+                         "accuracy": a})  # fmt: skip
+    effects = corr.invariance_effects(pd.DataFrame(rows))
+    (e,) = effects.itertuples()
+    d = np.array(acc["centred"]) - np.array(acc["raw"])
+    half = stats.t.ppf(0.975, 2) * d.std(ddof=1) / np.sqrt(3)
+    assert (e.invariance, e.baseline) == ("centred", "raw")
+    assert e.delta == pytest.approx(d.mean()) and e.ci_high == pytest.approx(d.mean() + half)
+    assert e.costs and not e.helps
+
+
+def test_plots_draw_the_study(study):
+    s = corr.summarise(study)
+    fig, axes = plt.subplots(1, 4, figsize=(16, 3))
+    assert cplots.plot_accuracy_vs_viewpoint(axes[0], s, "human") is axes[0]
+    assert len(axes[0].lines) == 3 + 1  # one line per feature set, and chance
+    cplots.plot_accuracy_by_condition(axes[1], s, "robot")
+    assert len(axes[1].patches) == 3 * 2  # the reference and the robot itself, per feature set
+    cplots.plot_invariance_effects(axes[2], corr.invariance_effects(study), "human")
+    assert len(axes[2].images) == 1
+    spread = pd.DataFrame({"features": ["raw", "raw", "centred"], "setting": ["a", "b", "a"],
+                           "accuracy": [0.4, 0.5, 0.7]})  # fmt: skip
+    cplots.plot_loso_spread(axes[3], spread)
+    assert len(axes[3].collections) == 2  # the two means
+    plt.close(fig)
+
+
+def test_leave_one_out_spread_over_seeds_and_settings():
+    corpus = synthetic_corpus(2, seed=4)
+    settings = [gestures.parse_setting("Q2 M1"), gestures.parse_setting("Q2 M2")]
+    spread = gestures.leave_one_out_spread(corpus, ("raw", "centred"), (0, 1), settings, n_iter=2)
+    # single Gaussians have no random initialisation: one seed; two Gaussians: both seeds
+    assert len(spread) == 2 * (1 + 2)
+    assert set(spread["setting"]) == {"Q2 M1", "Q2 M2"} and (spread["n_segments"] == 6).all()
+    summary = gestures.spread_summary(spread)
+    raw = spread[spread["features"] == "raw"]["accuracy"]
+    row = summary.set_index("features").loc["raw"]
+    assert row["runs"] == 3 and row["mean"] == pytest.approx(raw.mean()) and row["max"] == raw.max()
+    with pytest.raises(Exception, match="KEYvalue"):
+        gestures.parse_setting("Q=6")
+
+
+# ---------------------------------------------------------------- one gesture, two viewpoints
+@pytest.fixture(scope="module")
+def runs():
+    raw = corr.train_for("human", "raw", 3, seed=0, **TINY)
+    inv = corr.train_for("human", "centred+rotated+mirrored", 3, seed=0, **TINY)
+    views = (View(yaw_deg=0.0, size=1.0), View(yaw_deg=120.0, mirror=True, size=1.0))
+    return corr.two_views(raw, inv, "tap", views, seed=2, noise=0.0)
+
+
+def test_an_invariant_recogniser_does_not_see_the_turn_or_the_mirror(runs):
+    front, back = runs
+    assert front.label == "yaw 0°" and back.label == "yaw 120°, mirrored"
+    np.testing.assert_allclose(back.aligned, front.aligned, atol=1e-9)  # the features, exactly
+    np.testing.assert_allclose(back.p_aligned, front.p_aligned, atol=1e-9)  # so the posterior, frame by frame
+    assert not np.allclose(back.raw, front.raw, atol=1e-3)
+    curves = corr.two_views_curves(runs)
+    assert (
+        set(curves["recogniser"]) == {"raw", "aligned"}
+        and curves.attrs["experiment"] == "correspondence_two_views"
+    )
+
+
+@pytest.fixture
+def strict():
+    rr.set_strict_mode(True)
+    yield
+    rr.set_strict_mode(False)
+
+
+def _column(path, entity, component):
+    stream = RrdReader(str(path)).stream().filter(content=entity, is_static=False, components=component)
+    return pa.Table.from_batches([c.to_record_batch().select(["frame", component]) for c in stream]).sort_by(
+        "frame"
+    )
+
+
+def test_two_view_recording_reads_back(runs, tmp_path, strict):
+    path = write_two_views(runs, tmp_path / "two.rrd", "test-two-views")
+    res = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "verify", str(path)], capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr
+    for i, run in enumerate(runs, start=1):
+        for name, p in (("raw", run.p_raw), ("aligned", run.p_aligned)):
+            tap = _column(path, f"/view{i}/p_hmm/{name}/tap", "Scalars:scalars")
+            assert tap.column("frame").to_pylist() == list(range(1, len(p) + 1))
+            np.testing.assert_allclose([v[0] for v in tap.column("Scalars:scalars").to_pylist()], p[:, 1])
+        pos = _column(path, f"/view{i}/features/aligned/position", "Points3D:positions")
+        np.testing.assert_allclose(
+            pos.column("Points3D:positions").to_pylist()[-1][0], run.aligned[-1], rtol=1e-6
+        )
+        joints = _column(path, f"/view{i}/camera/joints", "Points3D:positions")
+        assert len(joints.column("Points3D:positions").to_pylist()[0]) == 15
+    assert len(RrdReader(str(path)).blueprints()) == 1
+    again = write_two_views(runs, tmp_path / "again.rrd", "test-two-views-again")
+    cmp = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "compare", str(path), str(again)], capture_output=True
+    )
+    assert cmp.returncode == 0
+
+
+def test_seated_taps_on_any_source(source):
+    taps = corr.seated_taps(
+        source, ("centred",), (0,), [gestures.parse_setting("Q3 M1")], n_per_action=3, n_iter=5
+    )
+    assert list(taps["case"]) == ["sphere", "box"]
+    p = taps[[f"p_hmm_{a}" for a in ("grasp", "tap", "touch")]].to_numpy()
+    np.testing.assert_allclose(p.sum(axis=1), 1.0)
+    assert taps.attrs["experiment"] == "seated_taps"
