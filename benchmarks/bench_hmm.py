@@ -13,7 +13,9 @@ Measures, for a 150-frame sequence:
 3. one new frame for all four models of a bank: glu's :class:`~glu.gestures.recognizer.GestureStream` step (target
    ≤ 100 µs) against rescoring the grown prefix with hmmlearn (four ``score`` calls);
 4. training one model (Q = 6, M = 3, 20 EM iterations, 20 synthetic gestures): glu's vectorised
-   Baum–Welch (:mod:`glu.gestures.baum_welch`) against hmmlearn's ``GMMHMM.fit`` from the same start.
+   Baum–Welch (:mod:`glu.gestures.baum_welch`) against hmmlearn's ``GMMHMM.fit`` from the same start;
+5. the same streaming step when the recogniser computes invariant features (all four invariances,
+   :mod:`glu.gestures.invariants`) from each frame: target at most 20 % more than the raw step.
 
 The models are the originals' four 2013 HMMs (grasp, tap, touch = push, garbage; Q = 6, M = 3) and the
 sequence is frames 216–365 of ``tap1_hand`` when the real data is found; otherwise four models trained on
@@ -124,10 +126,38 @@ def main(argv: list[str] | None = None) -> int:
         hl_em = _median_time(em("hmmlearn"), max(1, args.repeats // 3))
         rows.append((f"EM, 20 iterations, {len(train)} sequences ({n_train} frames)", glu_em, hl_em, ""))
 
+        from glu.gestures.recognizer import Recognizer
+
+        invariant = Recognizer(rec.models, features="all")  # same models: only the features' cost differs
+
+        def push_all_invariant() -> None:
+            s = invariant.stream()
+            for x in X:
+                s.push(x)
+
+        def features_only() -> None:
+            s = invariant.features.stream()
+            for x in X:
+                s.push(x)
+
+        # interleave raw and invariant runs so that load on the machine affects both alike
+        raw_t, inv_t, feat_t = [], [], []
+        for _ in range(args.repeats):
+            raw_t.append(_median_time(push_all, 1) / T)
+            inv_t.append(_median_time(push_all_invariant, 1) / T)
+            feat_t.append(_median_time(features_only, 1) / T)
+        raw_step, inv_step = statistics.median(raw_t), statistics.median(inv_t)
+        feat_step = statistics.median(feat_t)
+
     print(f"gesture HMM benchmark: {what}")
     print(f"models: {', '.join(f'{a} (Q={m.n_states}, M={m.n_mix})' for a, m in rec.models.items())}")
     print(
         f"agreement with hmmlearn: prefix curve max |Δ| = {err_curve:.2e}, stream at t={T} max |Δ| = {err_stream:.2e}"
+    )
+    print(
+        f"invariant features ({invariant.features.name}): {_fmt(feat_step)} per frame alone; "
+        f"stream step {_fmt(raw_step)} raw → {_fmt(inv_step)} with them: "
+        f"+{100 * (inv_step / raw_step - 1):.1f} % (target ≤ +20 %: {'met' if inv_step <= 1.2 * raw_step else 'MISSED'})"
     )
     print()
     print(f"{'measurement':42s} {'glu':>12s} {'hmmlearn':>12s} {'speed-up':>10s}  target")

@@ -33,6 +33,13 @@ EXPECTED_FIGURES = {
         "tcds_anticipation_glu",
     ],
     "09_verbal_descriptions": ["verbal_and_but", "verbal_yellow_sphere_nbest", "verbal_sampling_vs_exact"],
+    "10_correspondence": [
+        "correspondence_viewpoint",
+        "correspondence_conditions",
+        "correspondence_invariance_effects",
+        "correspondence_two_views",
+        "hmm_leave_one_out_spread",
+    ],
     "11_corpus_evaluation": [
         "corpus_strategies_vs_noise",
         "corpus_early_recognition",
@@ -40,7 +47,10 @@ EXPECTED_FIGURES = {
         "corpus_differences",
     ],
 }
-EXPECTED_RECORDINGS = {"08_tcds_figures": ["tcds_anticipation_sphere_glu", "tcds_anticipation_box_glu"]}
+EXPECTED_RECORDINGS = {
+    "08_tcds_figures": ["tcds_anticipation_sphere_glu", "tcds_anticipation_box_glu"],
+    "10_correspondence": ["correspondence_two_views"],
+}
 COMMON_PARAMETERS = {"data", "seed", "quick", "out_dir"}
 NOTEBOOKS = [p.stem for p in list_notebooks()]
 

@@ -94,7 +94,7 @@ def plot_invariance_effects(ax: Axes, effects: pd.DataFrame, train: str) -> Axes
                 bold = bool(sure.get((r, c), False))
                 ax.text(j, i, f"{v:+.2f}", ha="center", va="center", fontsize=6.5,
                         fontweight="bold" if bold else "normal", color="black")  # fmt: skip
-    ax.set_xticks(range(len(cols)), cols, rotation=60, ha="right", fontsize=7)
+    ax.set_xticks(range(len(cols)), cols, rotation=35, ha="right", fontsize=7)
     ax.set_yticks(range(len(rows)), rows, fontsize=7)
     ax.set_title(f"Δ accuracy when an invariance is added (trained on {train}; bold: 95 % interval excludes 0)",
                  fontsize=8)  # fmt: skip
