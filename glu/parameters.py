@@ -35,6 +35,7 @@ from glu.bn.learning import UNSEEN_MODES
 from glu.bn.soft import SOFT_RULES
 from glu.data.source import WORD_FILES
 from glu.errors import ParameterError
+from glu.gestures.invariants import FEATURE_NAMES
 from glu.language.descriptions import SCORES
 from glu.schema import AFFORDANCE_VALUES
 
@@ -45,8 +46,12 @@ CHOICES: dict[str, tuple[str, ...]] = {
     "score": tuple(SCORES),
     "shape": AFFORDANCE_VALUES["Shape"],
     "size": AFFORDANCE_VALUES["Size"],
+    "features": FEATURE_NAMES,
+    "feature_sets": FEATURE_NAMES,
+    "real_features": FEATURE_NAMES,
+    "loso_features": FEATURE_NAMES,
 }
-"""Allowed values of the string parameters that take one of a few values."""
+"""Allowed values of the string parameters that take one of a few values (for a list, of each element)."""
 
 RANGES: dict[str, tuple[float, float]] = {
     "seed": (0, 2**32 - 1),
@@ -68,6 +73,12 @@ RANGES: dict[str, tuple[float, float]] = {
     "fractions": (1e-9, 1.0),
     "bootstrap": (0, 10_000),
     "workers": (0, 1024),
+    "seeds": (0, 2**32 - 1),
+    "real_seeds": (0, 2**32 - 1),
+    "view_gesture": (0, 2**32 - 1),
+    "n_train": (1, 100_000),
+    "n_test": (1, 100_000),
+    "covar_reg": (1e-12, 100.0),
 }
 """Inclusive ranges of the numeric parameters (for a list, of each element)."""
 
@@ -183,6 +194,10 @@ def _check_one(p: Parameter, value: Any, who: str) -> Any:
         if element == "str":
             if not isinstance(v, str):
                 raise ParameterError(f"{who}: every element of {p.name} must be a string, {got}")
+            if p.choices and v not in p.choices:
+                raise ParameterError(
+                    f"{who}: every element of {p.name} must be one of {', '.join(p.choices)}; {got}"
+                )
             continue
         if element == "int" and not (isinstance(v, int) and not isinstance(v, bool)):
             raise ParameterError(f"{who}: {p.name} must be {'an integer' if scalar else 'integers'}, {got}")

@@ -2,6 +2,7 @@
 # jupyter:
 #   jupytext:
 #     formats: py:percent
+#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent
@@ -51,7 +52,7 @@ real_seeds: list[int] = [0, 1, 2]  # real data: EM seeds, only the first for sin
 view_gesture: int = 1  # two-view recording: the seed of the tap it shows (noise-free)
 seed: int = 0  # two-view recording: seed of the recognisers' training set and EM
 quick: bool = False  # small, fast run (for tests)
-out_dir: str = None  # folder for figures/, results/, recordings/; None: the project's own
+out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 import matplotlib.pyplot as plt
@@ -61,10 +62,10 @@ from glu.experiments import correspondence as corr
 from glu.experiments import gestures
 from glu.gestures.corpus import gesture_sequences
 from glu.gestures.synthetic import View
-from glu.outputs import open_outputs
+from glu.notebook import start
 from glu.plots import correspondence as cplots
 
-out = open_outputs("10_correspondence", data, out_dir)
+out = start("10_correspondence", globals())
 conditions = corr.default_conditions(normalise_body)
 study = {"n_states": n_states, "n_mix": n_mix}
 if quick:

@@ -25,7 +25,8 @@ def test_the_declaration_is_what_papermill_reads(path):
         assert p.type == ref[name]["inferred_type_name"], name
         assert p.help == ref[name]["help"], name
         if p.choices:
-            assert p.default in p.choices, f"{path.stem}: default of {name} is not among its choices"
+            defaults = p.default if isinstance(p.default, list) else [p.default]
+            assert set(defaults) <= set(p.choices), f"{path.stem}: default of {name} is not among its choices"
         if p.range and p.type in ("int", "float"):
             assert p.range[0] <= p.default <= p.range[1], f"{path.stem}: default of {name} out of range"
 
@@ -33,8 +34,17 @@ def test_the_declaration_is_what_papermill_reads(path):
 def test_choices_come_from_the_package():
     from glu.bn.learning import UNSEEN_MODES
     from glu.bn.soft import SOFT_RULES
+    from glu.gestures.invariants import FEATURE_NAMES
 
     assert CHOICES["rule"] is SOFT_RULES and CHOICES["unseen_words"] is UNSEEN_MODES
+    assert CHOICES["features"] is FEATURE_NAMES and CHOICES["feature_sets"] is FEATURE_NAMES
+
+
+def test_each_element_of_a_list_of_choices_is_checked():
+    spec = {"feature_sets": Parameter("feature_sets", "list[str]", ["raw"], "feature sets")}
+    assert check(spec, {"feature_sets": ["centred+rotated", "all"]}, "10_x")["feature_sets"][1] == "all"
+    with pytest.raises(ParameterError, match="every element of feature_sets must be one of raw, centred"):
+        check(spec, {"feature_sets": ["raw", "rotated+centred"]}, "10_x")  # names are canonical
 
 
 SPEC = {

@@ -64,6 +64,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from itertools import combinations
 from typing import Any
 
 import numpy as np
@@ -82,6 +83,12 @@ RAW = "raw"
 """The name of the features without any invariance."""
 ALL = "all"
 """Shorthand for every invariance."""
+FEATURE_NAMES: tuple[str, ...] = (
+    RAW,
+    *("+".join(c) for r in range(1, len(INVARIANCES) + 1) for c in combinations(INVARIANCES, r)),
+    ALL,
+)
+"""Every feature set by its canonical name (``raw``, ``centred``, …, ``centred+scaled+rotated+mirrored``, ``all``)."""
 LOCK_RADIUS = 0.4
 """Default ρ: horizontal distance from the start (feature units, about 13 cm) that fixes the heading."""
 MIN_SCALE = 0.25
