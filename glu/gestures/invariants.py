@@ -25,7 +25,7 @@ so that sensor noise on one frame does not shift the whole sequence), and the ho
     ``rotated`` is also chosen, i.e. left of the movement's heading), else ``+1``; x is multiplied by
     ``σ_t``. The features become those of a right hand. With ``rotated``, a mirror image and a turn
     together are undone exactly (start-centred); without it, only for turns that keep the start on the
-    same side of the torso (about ±65° for a hand resting beside the hip).
+    same side of the torso.
 ``centred`` — translation (posture, position of the hand at rest)
     Only the (turned, mirrored) displacement is kept: ``v_t = d_t``; the start is dropped. Otherwise
     ``v_t = start + d_t`` (both turned and mirrored as above).
