@@ -49,7 +49,6 @@ CHOICES: dict[str, tuple[str, ...]] = {
     "features": FEATURE_NAMES,
     "feature_sets": FEATURE_NAMES,
     "real_features": FEATURE_NAMES,
-    "loso_features": FEATURE_NAMES,
 }
 """Allowed values of the string parameters that take one of a few values (for a list, of each element)."""
 

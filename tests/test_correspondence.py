@@ -16,7 +16,7 @@ from rerun.chunk import RrdReader
 from scipy import stats
 
 from glu.experiments import correspondence as corr
-from glu.experiments import gestures
+from glu.experiments import seated
 from glu.gestures.corpus import synthetic_corpus
 from glu.gestures.synthetic import View
 from glu.plots import correspondence as cplots
@@ -93,26 +93,51 @@ def test_plots_draw_the_study(study):
     assert len(axes[1].patches) == 3 * 2  # the reference and the robot itself, per feature set
     cplots.plot_invariance_effects(axes[2], corr.invariance_effects(study), "human")
     assert len(axes[2].images) == 1
-    spread = pd.DataFrame({"features": ["raw", "raw", "centred"], "setting": ["a", "b", "a"],
-                           "accuracy": [0.4, 0.5, 0.7]})  # fmt: skip
-    cplots.plot_loso_spread(axes[3], spread)
+    grid = pd.DataFrame({"features": ["raw", "raw", "centred"], "setting": ["a", "b", "a"],
+                         "loso_accuracy": [0.4, 0.5, 0.7], "test_correct": [0, 1, 2]})  # fmt: skip
+    grid.attrs["parameters"] = {"n_test": 2}
+    cplots.plot_feature_settings(axes[3], grid)
     assert len(axes[3].collections) == 2  # the two means
+    filled = [ln for ln in axes[3].lines if ln.get_xdata().size and ln.get_markerfacecolor() != "none"]
+    assert len(filled) == 1  # only the run that recognised both test gestures
     plt.close(fig)
 
 
-def test_leave_one_out_spread_over_seeds_and_settings():
-    corpus = synthetic_corpus(2, seed=4)
-    settings = [gestures.parse_setting("Q2 M1"), gestures.parse_setting("Q2 M2")]
-    spread = gestures.leave_one_out_spread(corpus, ("raw", "centred"), (0, 1), settings, n_iter=2)
-    # single Gaussians have no random initialisation: one seed; two Gaussians: both seeds
-    assert len(spread) == 2 * (1 + 2)
-    assert set(spread["setting"]) == {"Q2 M1", "Q2 M2"} and (spread["n_segments"] == 6).all()
-    summary = gestures.spread_summary(spread)
-    raw = spread[spread["features"] == "raw"]["accuracy"]
-    row = summary.set_index("features").loc["raw"]
-    assert row["runs"] == 3 and row["mean"] == pytest.approx(raw.mean()) and row["max"] == raw.max()
+def test_settings_are_labelled_and_parsed_back():
+    for label in ("glu defaults", "Q6 M3 reg0.03", "M1", "mixsplit", "mixsplit Q4"):
+        assert seated.setting_label(seated.parse_setting(label)) == label
+    assert seated.parse_setting("Q6 reg0.03") == {"n_states": 6, "covar_reg": 0.03}
     with pytest.raises(Exception, match="KEYvalue"):
-        gestures.parse_setting("Q=6")
+        seated.parse_setting("Q=6")
+
+
+def test_feature_settings_grid_over_features_settings_and_seeds():
+    corpus = synthetic_corpus(2, seed=4)
+    test = synthetic_corpus(1, seed=5)
+    settings = [seated.parse_setting(s) for s in ("Q2 M1", "Q2 M2", "mixsplit Q2 M1")]
+    grid = seated.feature_settings(corpus, test, ("raw", "centred"), settings, (0, 1), n_iter=2)
+    # single Gaussians and mixsplit have no random initialisation: one seed; two Gaussians: both seeds
+    assert len(grid) == 2 * (1 + 2 + 1)
+    assert list(grid.columns[:3]) == ["features", "setting", "recipe"]
+    assert set(grid["recipe"]) == {"glu", "mixsplit"} and (grid["loso_testable"] == 6).all()
+    assert grid["test_correct"].between(0, 3).all() and grid.attrs["parameters"]["n_test"] == 3
+    summary = seated.feature_settings_summary(grid)
+    raw = grid[grid["features"] == "raw"]["loso_accuracy"]
+    row = summary.set_index("features").loc["raw"]
+    assert row["runs"] == 4 and row["loso_mean"] == pytest.approx(raw.mean()) and row["loso_max"] == raw.max()
+
+
+def test_leave_one_segment_out_keeps_the_features():
+    """The fast leave-one-segment-out of glu.experiments.recipes equals the plain one with invariant features."""
+    from glu.experiments.gestures import leave_one_out
+    from glu.experiments.recipes import leave_one_segment_out
+
+    corpus = synthetic_corpus(3, seed=6)
+    train = {"n_states": 2, "n_mix": 1, "n_iter": 3, "features": "centred+rotated"}
+    fast, everything = leave_one_segment_out(corpus, seed=0, **train)
+    plain = leave_one_out(corpus, by="segment", seed=0, **train)
+    assert list(fast["predicted"]) == list(plain["predicted"])
+    assert everything.features.name == "centred+rotated"
 
 
 # ---------------------------------------------------------------- one gesture, two viewpoints
@@ -176,11 +201,11 @@ def test_two_view_recording_reads_back(runs, tmp_path, strict):
     assert cmp.returncode == 0
 
 
-def test_seated_taps_on_any_source(source):
-    taps = corr.seated_taps(
-        source, ("centred",), (0,), [gestures.parse_setting("Q3 M1")], n_per_action=3, n_iter=5
-    )
-    assert list(taps["case"]) == ["sphere", "box"]
-    p = taps[[f"p_hmm_{a}" for a in ("grasp", "tap", "touch")]].to_numpy()
-    np.testing.assert_allclose(p.sum(axis=1), 1.0)
-    assert taps.attrs["experiment"] == "seated_taps"
+def test_posture_offsets_of_synthetic_standing_and_seated_gestures():
+    from glu.data import resolve_data
+
+    off = seated.posture_offsets(resolve_data("synthetic"))  # no hand logs: the generator's two postures
+    assert set(off["posture"]) == {"standing", "seated"} and {"x", "y", "z"} <= set(off.columns)
+    mean = off.groupby("posture")[["y", "z"]].mean()
+    assert mean.loc["seated", "y"] > mean.loc["standing", "y"]  # seated: the hand works higher, further out
+    assert mean.loc["seated", "z"] < mean.loc["standing", "z"]

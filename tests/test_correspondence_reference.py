@@ -20,7 +20,7 @@ def _glu(capsys, *argv):
 
 
 def test_the_seated_taps_sit_apart_from_every_standing_repetition(real_source):
-    from glu.experiments.correspondence import posture_offsets
+    from glu.experiments.seated import posture_offsets
 
     off = posture_offsets(real_source)
     standing, seated = off[off["posture"] == "standing"], off[off["posture"] == "seated"]

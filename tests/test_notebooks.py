@@ -38,7 +38,6 @@ EXPECTED_FIGURES = {
         "correspondence_conditions",
         "correspondence_invariance_effects",
         "correspondence_two_views",
-        "hmm_leave_one_out_spread",
     ],
     "11_corpus_evaluation": [
         "corpus_strategies_vs_noise",

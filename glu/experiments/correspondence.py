@@ -15,7 +15,7 @@ HMMs carry over, and what invariant features (:mod:`glu.gestures.invariants`) bu
 * :func:`two_views` runs one action seen from two viewpoints through a raw and an invariant recogniser,
   for :func:`glu.recording.write_two_views`.
 
-Every function returns a tidy frame stamped by :func:`~glu.experiments.common.tidy`.
+The real data's side of it, the seated taps, is :mod:`glu.experiments.seated`. Every function returns a tidy frame stamped by :func:`~glu.experiments.common.tidy`.
 """
 
 from __future__ import annotations
@@ -27,7 +27,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from glu.data.source import DataSource
 from glu.errors import DataError
 from glu.experiments.common import tidy
 from glu.gestures.corpus import Corpus, synthetic_corpus
@@ -35,7 +34,6 @@ from glu.gestures.invariants import Invariants
 from glu.gestures.recognizer import Recognizer, train_recognizer
 from glu.gestures.robot import ROBOT_NOISE
 from glu.gestures.synthetic import SYNTHETIC_POLICY, View, synthesize_gesture
-from glu.gestures.training import TrainingConfig
 from glu.gestures.trajectories import repair
 from glu.schema import ACTIONS
 
@@ -373,78 +371,3 @@ def two_views(
                            {"action": action, "seed": seed, "noise_m": noise,
                             "features": invariant.features.name}))  # fmt: skip
     return out
-
-
-# ------------------------------------------------------------------ the real data: the seated taps
-
-
-def seated_taps(
-    source: DataSource,
-    feature_sets: Sequence[str] = ("raw", "centred"),
-    seeds: Sequence[int] = (0,),
-    settings: Sequence[dict[str, Any]] = ({},),
-    n_per_action: int = 20,
-    **train: Any,
-) -> pd.DataFrame:
-    """The two taps of effect anticipation, recognised by HMMs trained on the standing recordings only.
-
-    On the real data: trained on the automatically segmented standing recordings (grasp1, tap1, touch1),
-    never on the seated taps; tested on the originals' segments of ``tap_notable_seated_1`` (121–214) and
-    ``norobotview_tap_notable_seated_2`` (230–375), as logged. Without real data: a synthetic corpus and
-    synthetic taps (:func:`glu.experiments.anticipation.case_trajectory`). ``settings`` override
-    :class:`~glu.gestures.training.TrainingConfig` (``{}``: glu's defaults); single-Gaussian settings
-    (M = 1) have no random initialisation and run with the first seed only.
-
-    One row per (features, setting, seed, case): recording, first, last, predicted, p_hmm_<action>.
-    """
-    from glu.experiments.anticipation import CASES, case_trajectory
-    from glu.experiments.gestures import setting_label, train_on
-    from glu.gestures.corpus import gesture_sequences
-
-    sequences = gesture_sequences(source, n_per_action=n_per_action, include_test=False)
-    rows = []
-    for features in feature_sets:
-        for setting in settings:
-            single = setting.get("n_mix", TrainingConfig.n_mix) == 1  # no random initialisation: one seed
-            for seed in seeds[:1] if single else seeds:
-                rec = train_on(sequences, seed=seed, features=features, **{**train, **setting})
-                for case, c in CASES.items():
-                    traj = case_trajectory(source, case, seed=seed)
-                    p = rec.p_hmm(traj.xyz)
-                    rows.append({"features": Invariants.parse(features).name,
-                                 "setting": setting_label(setting), "seed": seed, "case": case,
-                                 "recording": c.recording if source.has_hand_log(c.recording) else traj.source,
-                                 "first": int(traj.frame[0]), "last": int(traj.frame[-1]),
-                                 "predicted": rec.actions[int(np.argmax(p))],
-                                 **{f"p_hmm_{a}": float(v) for a, v in zip(rec.actions, p, strict=True)}})  # fmt: skip
-    return tidy(pd.DataFrame(rows), "seated_taps", sequences.description, feature_sets=feature_sets,
-                seeds=seeds, settings=[setting_label(s) for s in settings], **train)  # fmt: skip
-
-
-def posture_offsets(source: DataSource, n_per_action: int = 4) -> pd.DataFrame:
-    """Where each gesture happens in the torso frame: the mean hand features of every segment.
-
-    Real data: the standing training segments (automatic segmentation) and the originals' segments of the
-    two seated taps, as logged. Synthetic data: standing and seated synthetic gestures (fixed
-    normalisation). Columns: recording, start, end, action, posture, x, y, z (feature units).
-    """
-    from glu.data.recordings import ORIGINAL_SEGMENTS, TRAINING_RECORDINGS
-    from glu.gestures.corpus import original_test_segments, real_segments
-
-    if source.has_gestures:
-        seqs = real_segments(source, include_original=False) + [
-            s for s in original_test_segments(source) if s.recording not in TRAINING_RECORDINGS
-        ]
-        posture = {r: "seated" for r in ORIGINAL_SEGMENTS if r not in TRAINING_RECORDINGS}
-        where = source.describe()
-    else:
-        seqs, posture = [], {}
-        for p in ("standing", "seated"):
-            c = synthetic_corpus(n_per_action, 0, view=View(posture=p, normalise_body=False))
-            seqs += [s._replace(recording=f"synthetic {p} {i}") for i, s in enumerate(c)]
-            posture.update({f"synthetic {p} {i}": p for i in range(len(c))})
-        where = "synthetic data: standing and seated gestures (seed 0)"
-    rows = [{"recording": s.recording, "start": s.start, "end": s.end, "action": s.action,
-             "posture": posture.get(s.recording, "standing"), **dict(zip("xyz", s.xyz.mean(axis=0), strict=True))}
-            for s in seqs]  # fmt: skip
-    return tidy(pd.DataFrame(rows), "posture_offsets", where)

@@ -27,7 +27,6 @@ from glu.gestures.corpus import LabelledSequence, original_test_segments, synthe
 from glu.gestures.forward import p_hmm_from_loglik
 from glu.gestures.original import load_original_models
 from glu.gestures.recognizer import Recognizer, train_recognizer
-from glu.gestures.training import TrainingConfig
 from glu.schema import ACTIONS
 
 
@@ -231,75 +230,3 @@ def recognizer_settings(recognizer: Recognizer) -> dict[str, Any]:
     """The training settings recorded in a recogniser's ``meta`` (recipe, Q, M, EM limits, seed, features)."""
     keys = ("recipe", "n_states", "n_mix", "n_iter", "tol", "covar_reg", "seed", "features")
     return {k: recognizer.meta[k] for k in keys if k in recognizer.meta}
-
-
-SETTING_KEYS = {"Q": "n_states", "M": "n_mix", "reg": "covar_reg", "iter": "n_iter", "tol": "tol"}
-"""Short names of training settings in labels such as ``"Q6 M3 reg0.03"`` (as the originals' ``HMM_M3_Q6``)."""
-DEFAULT_SETTING = "glu defaults"
-"""The label of no override (:class:`~glu.gestures.training.TrainingConfig` as it is)."""
-
-
-def parse_setting(label: str) -> dict[str, Any]:
-    """``"Q6 M3 reg0.03"`` → ``{"n_states": 6, "n_mix": 3, "covar_reg": 0.03}`` (``"glu defaults"``: ``{}``)."""
-    import re
-
-    out: dict[str, Any] = {}
-    for part in [] if label.strip() == DEFAULT_SETTING else label.split():
-        m = re.fullmatch(r"(Q|M|reg|iter|tol)([0-9.eE+-]+)", part)
-        try:
-            if m is None:
-                raise ValueError
-            key, value = m.groups()
-            out[SETTING_KEYS[key]] = int(value) if key in ("Q", "M", "iter") else float(value)
-        except ValueError:
-            raise DataError(
-                f"{label!r}: expected words KEYvalue with KEY among {', '.join(SETTING_KEYS)}, e.g. 'Q6 M3 reg0.03'"
-            ) from None
-    return out
-
-
-def setting_label(setting: dict[str, Any]) -> str:
-    """``{"n_states": 6, "n_mix": 3, "covar_reg": 0.03}`` → ``"Q6 M3 reg0.03"``."""
-    short = {v: k for k, v in SETTING_KEYS.items()}
-    if not setting:
-        return DEFAULT_SETTING
-    return " ".join(f"{short.get(k, k)}{v:g}" for k, v in setting.items())
-
-
-def leave_one_out_spread(
-    sequences: Sequence[LabelledSequence],
-    feature_sets: Sequence[str] = ("raw", "centred"),
-    seeds: Sequence[int] = (0, 1, 2),
-    settings: Sequence[dict[str, Any]] = ({"n_states": 6, "n_mix": 3}, {"n_states": 6, "n_mix": 1}),
-    **train: Any,
-) -> pd.DataFrame:
-    """Leave-one-segment-out accuracy for each feature set, seed and EM setting: how much it depends on them.
-
-    ``settings`` are overrides of :class:`~glu.gestures.training.TrainingConfig` (Q, M, covariance prior, …);
-    ``train`` applies to all. A single-Gaussian setting (M = 1) is run with the first seed only: its
-    initialisation has no randomness, so other seeds give the same models. One row per run: features,
-    setting, seed, n_segments, accuracy, plus the setting's fields.
-    """
-    rows = []
-    for features in feature_sets:
-        for setting in settings:
-            for seed in seeds[:1] if setting.get("n_mix", TrainingConfig.n_mix) == 1 else seeds:
-                loo = leave_one_out(
-                    sequences, by="segment", seed=seed, features=features, **{**train, **setting}
-                )
-                ok = loo[loo["testable"]]
-                rows.append({"features": features, "setting": setting_label(setting), "seed": seed,
-                             "n_segments": len(ok), "accuracy": accuracy(ok), **setting})  # fmt: skip
-    return tidy(pd.DataFrame(rows), "hmm_leave_one_out_spread", corpus_source(sequences),
-                feature_sets=feature_sets, seeds=seeds, settings=[setting_label(s) for s in settings],
-                **train)  # fmt: skip
-
-
-def spread_summary(spread: pd.DataFrame) -> pd.DataFrame:
-    """Per feature set: the mean, standard deviation, minimum and maximum accuracy over all runs."""
-    g = spread.groupby("features", sort=False)["accuracy"]
-    out = pd.DataFrame(
-        {"runs": g.size(), "mean": g.mean(), "sd": g.std(ddof=1), "min": g.min(), "max": g.max()}
-    )
-    return tidy(out.reset_index(), "hmm_leave_one_out_spread_summary", spread.attrs.get("data_source", ""),
-                **spread.attrs.get("parameters", {}))  # fmt: skip

@@ -57,13 +57,17 @@ def leave_one_segment_out(
             models = {
                 a: (_model(rest, a, seed, train)[0] if a == held.action else full[a][0]) for a in actions
             }
-            predicted = Recognizer(models).classify(held.xyz)
+            predicted = Recognizer(models, features=train.get("features")).classify(held.xyz)
         else:
             predicted = None
         rows.append(
             {**row, "predicted": predicted, "testable": bool(rest), "correct": predicted == held.action}
         )
-    everything = Recognizer({a: m for a, (m, _) in full.items()}, {a: r for a, (_, r) in full.items()})
+    everything = Recognizer(
+        {a: m for a, (m, _) in full.items()},
+        {a: r for a, (_, r) in full.items()},
+        features=train.get("features"),
+    )  # the models were trained on these (invariant) features: the recogniser computes them too
     return pd.DataFrame(rows), everything
 
 

@@ -101,26 +101,32 @@ def plot_invariance_effects(ax: Axes, effects: pd.DataFrame, train: str) -> Axes
     return ax
 
 
-def plot_loso_spread(ax: Axes, spread: pd.DataFrame) -> Axes:
-    """Leave-one-segment-out accuracy on the real segments, one point per (seed, EM setting), per feature set.
+def plot_feature_settings(ax: Axes, grid: pd.DataFrame) -> Axes:
+    """Leave-one-segment-out accuracy on the real segments, one point per (setting, seed), per feature set;
+    filled points: the models trained on every segment also recognised every test gesture (the seated taps).
 
-    ``spread`` as :func:`glu.experiments.gestures.leave_one_out_spread` returns it.
+    ``grid`` as :func:`glu.experiments.seated.feature_settings` returns it.
     """
-    features = list(dict.fromkeys(spread["features"]))
-    settings = list(dict.fromkeys(spread["setting"]))
+    features = list(dict.fromkeys(grid["features"]))
+    settings = list(dict.fromkeys(grid["setting"]))
+    n_test = int(grid.attrs.get("parameters", {}).get("n_test", 0))
     markers = "osD^v<>"
     for i, f in enumerate(features):
-        g = spread[spread["features"] == f]
+        g = grid[grid["features"] == f]
         for j, st in enumerate(settings):
             h = g[g["setting"] == st]
-            x = i + (j - (len(settings) - 1) / 2) * 0.12 + np.linspace(-0.03, 0.03, len(h))
-            ax.plot(x, h["accuracy"], markers[j % len(markers)], color=_color(f), ms=4, alpha=0.85,
-                    label=st if i == 0 else None, mfc="none")  # fmt: skip
-        ax.hlines(g["accuracy"].mean(), i - 0.35, i + 0.35, color=_color(f), lw=2)
+            x = i + (j - (len(settings) - 1) / 2) * 0.15 + np.linspace(-0.03, 0.03, len(h))
+            for xi, (_, r) in zip(x, h.iterrows(), strict=True):
+                full = n_test > 0 and r["test_correct"] == n_test
+                ax.plot(xi, r["loso_accuracy"], markers[j % len(markers)], color=_color(f), ms=5,
+                        mfc=_color(f) if full else "none")  # fmt: skip
+        ax.hlines(g["loso_accuracy"].mean(), i - 0.4, i + 0.4, color=_color(f), lw=2)
+    for j, st in enumerate(settings):
+        ax.plot([], [], markers[j % len(markers)], color="0.3", mfc="none", label=st)
     ax.set_xticks(range(len(features)), features, fontsize=8)
     ax.set_ylabel("leave-one-segment-out accuracy")
-    ax.set_ylim(0, 1.02)
-    ax.legend(fontsize=7, frameon=False, title="EM setting", title_fontsize=7)
+    ax.set_ylim(0, 1.05)
+    ax.legend(fontsize=7, frameon=False, title="setting (filled: seated taps all tap)", title_fontsize=7)
     return ax
 
 
