@@ -147,14 +147,14 @@ for name, recognizer in banks.items():
 # touch model (the sphere stays still); only when the tap model overtakes, late in the movement, does the
 # sphere's prediction turn to motion, while the big box is most likely slow from the second update on (the
 # updates where the prediction changes are printed above). With the original score over the originals'
-# samples the descriptions are the paper's captions. HMMs trained by glu on the standing recordings tell the sphere and the box apart when their features are
-# start-centred (`features="centred"`). On raw features, by either recipe, they take the seated taps for
-# another action — not because the data is small, but because a seated person's hand moves in another
-# place of the torso frame than every standing repetition, so the models' tails decide. Centring removes
-# that offset online; a broader covariance prior (`covar_reg`) keeps glu's three Gaussians per state from
-# fitting one person's path too closely (notebook 10 measures the offsets and the spread over feature sets,
-# settings and seeds). Open
-# `recordings/tcds_anticipation_*.rrd` in the Rerun viewer to replay each run.
+# samples the descriptions are the paper's captions. HMMs trained here on the standing recordings, by
+# either recipe, call the seated taps taps when their features are start-centred (`features="centred"`).
+# On raw features they take them for another action — not because the data is small, but because a seated
+# person's hand moves in another place of the torso frame than every standing repetition, so the models'
+# tails decide. Centring removes that offset online; a broader covariance prior (`covar_reg`) keeps glu's
+# three Gaussians per state from fitting one person's path too closely (notebook 10 measures the offsets
+# and the spread over feature sets, settings and seeds). Open `recordings/tcds_anticipation_*.rrd` in the
+# Rerun viewer to replay each run.
 
 # %% [markdown]
 # ## Two recipes on the same small corpus, and how fragile their accuracy is
