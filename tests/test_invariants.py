@@ -199,3 +199,15 @@ def test_raw_recognisers_and_version_1_files_are_unchanged(trained, tmp_path):
     (tmp_path / "bad.json").write_text(json.dumps(d))
     with pytest.raises(ModelError, match="malformed invariant features"):
         Recognizer.load(tmp_path / "bad.json")
+
+
+def test_the_batch_scorer_of_a_recogniser_uses_its_features(trained):
+    from glu.gestures.batch import BatchScorer
+
+    by, rec = trained
+    seqs = [by["tap"][0], by["grasp"][1][:30]]
+    curves = BatchScorer(rec).loglik_curves(seqs)
+    for s, X in enumerate(seqs):
+        np.testing.assert_allclose(curves[s, : len(X)], rec.loglik_curve(X), rtol=1e-8)
+    raw = BatchScorer([rec.models[a] for a in rec.actions]).loglik_curves(seqs)  # bare models: as given
+    assert not np.allclose(raw[0, : len(seqs[0])], curves[0, : len(seqs[0])])

@@ -144,13 +144,19 @@ class BatchScorer:
     Parameters
     ----------
     models : the models, in the order of the output's last axis (e.g. ``[rec.models[a] for a in
-        rec.actions]``, or a :class:`~glu.gestures.recognizer.Recognizer`)
+        rec.actions]``), or a :class:`~glu.gestures.recognizer.Recognizer`, whose invariant features are then
+        computed from each sequence as the recogniser itself does
     batch_size : sequences scored together
     """
 
     def __init__(self, models: Sequence[GestureHMM] | object, batch_size: int = DEFAULT_BATCH) -> None:
-        if hasattr(models, "actions") and hasattr(models, "models"):
-            models = [models.models[a] for a in models.actions]  # a Recognizer
+        features = None
+        if hasattr(models, "actions") and hasattr(models, "models"):  # a Recognizer: its models and features
+            features = getattr(models, "features", None)
+            models = [models.models[a] for a in models.actions]
+        self.features = None if features is None or features.is_raw else features
+        """The recogniser's invariant features (:mod:`glu.gestures.invariants`), computed from every sequence
+        before scoring, or None (raw)."""
         self.models: tuple[GestureHMM, ...] = tuple(models)
         self.bank = stack_models(self.models)
         self.n_features = self.bank.means.shape[-1]
@@ -177,6 +183,8 @@ class BatchScorer:
         NaN for t > T_s
         """
         seqs = [as_sequence(x, self.n_features, f"sequence {i}") for i, x in enumerate(sequences)]
+        if self.features is not None:
+            seqs = [self.features.transform(x) for x in seqs]
         lengths = np.array([len(x) for x in seqs], dtype=np.intp)
         out = np.full((len(seqs), int(lengths.max(initial=0)), self.n_models), np.nan)
         order = np.argsort(-lengths, kind="stable")

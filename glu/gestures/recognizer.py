@@ -39,6 +39,7 @@ import numpy as np
 
 from glu.errors import DataError, ModelError
 from glu.files import atomic_write_json
+from glu.gestures.batch import Bank, stack_models
 from glu.gestures.features import FEATURES_DESCRIPTION
 from glu.gestures.forward import ForwardState, forward_curve, forward_step, log_emissions, p_hmm_from_loglik
 from glu.gestures.invariants import Invariants
@@ -76,53 +77,6 @@ class StreamStep(NamedTuple):
     t: int
     loglik: np.ndarray
     p_hmm: np.ndarray
-
-
-class StackedBank(NamedTuple):
-    """Every model of a bank in arrays padded to the largest Q and M (the batch axis A is the action).
-
-    Padding states have zero start and transition probability and padding components a log-normaliser of
-    ``-1e300``, so they never contribute: the forward recursion over the stack equals each model's own.
-
-    Attributes
-    ----------
-    means : array, shape (A, Q, M, D)
-    chol_inv : array, shape (A, Q, M, D, D)
-    log_norm : array, shape (A, Q, M)
-    startprob : array, shape (A, Q)
-    transmat : array, shape (A, Q, Q)
-    """
-
-    means: np.ndarray
-    chol_inv: np.ndarray
-    log_norm: np.ndarray
-    startprob: np.ndarray
-    transmat: np.ndarray
-
-    @classmethod
-    def of(cls, models: Sequence[GestureHMM]) -> StackedBank:
-        """Stack ``models`` (all with the same D)."""
-        A = len(models)
-        Q = max(m.n_states for m in models)
-        M = max(m.n_mix for m in models)
-        D = models[0].n_features
-        mu = np.zeros((A, Q, M, D))
-        cinv = np.broadcast_to(np.eye(D), (A, Q, M, D, D)).copy()
-        lnorm = np.full((A, Q, M), _PAD)
-        pi = np.zeros((A, Q))
-        trans = np.zeros((A, Q, Q))
-        for i, m in enumerate(models):
-            q, k = m.n_states, m.n_mix
-            mu[i, :q, :k] = m.means
-            cinv[i, :q, :k] = m._chol_inv
-            lnorm[i, :q, :k] = m._log_norm
-            pi[i, :q] = m.startprob
-            trans[i, :q, :q] = m.transmat
-        return cls(mu, cinv, np.where(np.isfinite(lnorm), lnorm, _PAD), pi, trans)
-
-    def log_emissions(self, X: np.ndarray) -> np.ndarray:
-        """``log p(x_t | q)`` of every model, shape (T, A, Q), for frames of shape (T, D)."""
-        return log_emissions(X, self.means, self.chol_inv, self.log_norm)
 
 
 class GestureStream:
@@ -208,13 +162,13 @@ class Recognizer:
         self.features: Invariants = Invariants.parse(features)
         if not self.features.is_raw and self.n_features != 3:
             raise ModelError(f"invariant features need 3-D models, these have {self.n_features} features")
-        self._bank: StackedBank | None = None
+        self._bank: Bank | None = None
 
     @property
-    def bank(self) -> StackedBank:
-        """The models stacked for scoring them together (:class:`StackedBank`, built once)."""
+    def bank(self) -> Bank:
+        """The models stacked for scoring them together (:func:`glu.gestures.batch.stack_models`, built once)."""
         if self._bank is None:
-            self._bank = StackedBank.of([self.models[a] for a in self.actions])
+            self._bank = stack_models([self.models[a] for a in self.actions])
         return self._bank
 
     def __repr__(self) -> str:
@@ -243,7 +197,8 @@ class Recognizer:
     def loglik_curve(self, X: np.ndarray) -> np.ndarray:
         """``log L(G_1^t | A)`` for every prefix, shape (T, n_actions): one forward pass over the stacked bank."""
         bank = self.bank
-        return forward_curve(bank.log_emissions(self.transform(X)), bank.startprob, bank.transmat)
+        log_b = log_emissions(self.transform(X), bank.means, bank.chol_inv, bank.log_norm)
+        return forward_curve(log_b, bank.startprob, bank.transmat)
 
     def p_hmm_curve(self, X: np.ndarray) -> np.ndarray:
         """``p_HMM(A | G_1^t)`` for every prefix, shape (T, n_actions)."""
