@@ -66,8 +66,6 @@ RANGES: dict[str, tuple[float, float]] = {
     "nbest": (1, 100_000),
     "n_samples": (1, 1_000_000),
     "n_trials": (1, 100_000),
-    "recipe_seeds": (0, 2**32 - 1),
-    "recipe_tols": (1e-12, 1.0),
     "episodes": (1, 100_000_000),
     "fractions": (1e-9, 1.0),
     "bootstrap": (0, 10_000),
@@ -77,7 +75,6 @@ RANGES: dict[str, tuple[float, float]] = {
     "view_gesture": (0, 2**32 - 1),
     "n_train": (1, 100_000),
     "n_test": (1, 100_000),
-    "covar_reg": (1e-12, 100.0),
 }
 """Inclusive ranges of the numeric parameters (for a list, of each element)."""
 

@@ -37,10 +37,7 @@ candidates: str = None  # "grammar", "samples" or a file; None: the originals' s
 n_states: int = 6  # our HMMs: states per action
 n_mix: int = 3  # our HMMs: Gaussian components per state
 features: str = "centred"  # our HMMs: invariant features (glu.gestures.invariants), "raw" for none
-covar_reg: float = 0.03  # our HMMs: covariance prior strength (glu's default 0.001 overfits 11 segments)
 n_per_action: int = 20  # synthetic data: training gestures per action
-recipe_seeds: list[int] = [0, 1, 2]  # HMM recipes compared over these seeds (glu's recipe; mixsplit has none)
-recipe_tols: list[float] = [1e-4, 1e-3]  # … and these EM tolerances (log-likelihood per frame)
 seed: int = 0  # seed of synthetic gestures and EM initialisation
 quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
@@ -51,9 +48,8 @@ import matplotlib.pyplot as plt
 from glu import plots, recording
 from glu.bn import BayesNet, InferenceEngine, learn_bn
 from glu.data import load_experiments
-from glu.experiments import anticipation, fusion, gestures, recipes
+from glu.experiments import anticipation, fusion, gestures
 from glu.gestures import gesture_sequences, load_original_models
-from glu.gestures.corpus import original_test_segments
 from glu.language import candidate_sentences
 from glu.notebook import start
 
@@ -105,7 +101,7 @@ train = {"n_states": n_states, "n_mix": n_mix, "features": features, **({"n_iter
 sequences = gesture_sequences(
     out.source, n_per_action=6 if quick else n_per_action, seed=seed, include_test=False
 )
-banks["glu"] = gestures.train_on(sequences, seed=seed, covar_reg=covar_reg, **train)
+banks["glu"] = gestures.train_on(sequences, seed=seed, **train)
 banks["mixsplit"] = gestures.train_on(sequences, seed=seed, recipe="mixsplit", **train)
 
 runs = {}
@@ -151,34 +147,11 @@ for name, recognizer in banks.items():
 # either recipe, call the seated taps taps when their features are start-centred (`features="centred"`).
 # On raw features they take them for another action — not because the data is small, but because a seated
 # person's hand moves in another place of the torso frame than every standing repetition, so the models'
-# tails decide. Centring removes that offset online; a broader covariance prior (`covar_reg`) keeps glu's
-# three Gaussians per state from fitting one person's path too closely (notebook 10 measures the offsets
-# and the spread over feature sets, settings and seeds). Open `recordings/tcds_anticipation_*.rrd` in the
+# tails decide. Centring removes that offset online; glu's default covariance prior (`covar_reg`, chosen by
+# leave-one-segment-out on the standing segments) keeps three Gaussians per state from fitting one
+# person's path too closely. Notebook 10 measures the offsets, and the spread of both recipes over feature
+# sets, settings and seeds. Open `recordings/tcds_anticipation_*.rrd` in the
 # Rerun viewer to replay each run.
-
-# %% [markdown]
-# ## Two recipes on the same small corpus, and how fragile their accuracy is
-# Leave-one-segment-out accuracy on the standing segments, and the two seated taps recognised by models
-# trained on all of them: glu's recipe at several seeds and EM tolerances, mixsplit (which has no seed) at
-# the same tolerances. With a dozen segments, one segment moves an accuracy by several points.
-
-# %%
-if out.source.is_real and not quick:
-    seated = {c.recording for c in anticipation.CASES.values()}
-    test = [s for s in original_test_segments(out.source) if s.recording in seated]
-    grid = recipes.recipe_comparison(sequences, test, seeds=recipe_seeds, tols=recipe_tols,
-                                     n_states=n_states, n_mix=n_mix)  # fmt: skip
-    spread = recipes.recipe_spread(grid)
-    out.table(grid, "hmm_recipe_comparison")
-    out.table(spread, "hmm_recipe_spread")
-    for r in spread.itertuples():
-        print(f"{r.recipe}: leave-one-segment-out {r.loso_min:.2f}–{r.loso_max:.2f} over {r.settings} settings "
-              f"(first setting {r.loso_at_default:.2f}); seated taps recognised {r.test_correct_min}–"
-              f"{r.test_correct_max} of {r.n_test}")  # fmt: skip
-    display_grid = grid
-else:
-    display_grid = "the recipe comparison runs on the real segments, in full runs only"
-display_grid
 
 # %% [markdown]
 # ## Replay it in the Rerun viewer

@@ -128,24 +128,37 @@ def summary() -> dict:
         "hmm_accuracy_vs_noise": t(
             [{"noise_m": 0.0, "accuracy": 0.93}, {"noise_m": 0.1, "accuracy": 0.7333}], parameters={"k": 3}
         ),  # fmt: skip
-        "hmm_recipe_comparison": t([{"loso_testable": 11}] * 3),
-        "hmm_recipe_spread": t(
+        "hmm_feature_settings": t(
             [
                 {
+                    "features": "raw",
+                    "setting": "glu defaults",
                     "recipe": "glu",
-                    "settings": 6,
-                    "loso_min": 0.4545,
-                    "loso_max": 0.4545,
-                    "test_correct_max": 0,
-                    "n_test": 2,
+                    "loso_accuracy": acc,
+                    "loso_testable": 11,
+                    "test_predicted": "grasp,touch",
+                    "test_correct": 0,
+                }
+                for acc in (0.4545, 0.5455, 0.4545)
+            ]
+            + [
+                {
+                    "features": "raw",
+                    "setting": "mixsplit",
+                    "recipe": "mixsplit",
+                    "loso_accuracy": 0.8182,
+                    "loso_testable": 11,
+                    "test_predicted": "grasp,grasp",
+                    "test_correct": 1,
                 },
                 {
+                    "features": "centred",
+                    "setting": "mixsplit",
                     "recipe": "mixsplit",
-                    "settings": 2,
-                    "loso_min": 0.7273,
-                    "loso_max": 0.8182,
-                    "test_correct_max": 0,
-                    "n_test": 2,
+                    "loso_accuracy": 1.0,
+                    "loso_testable": 11,
+                    "test_predicted": "tap,tap",
+                    "test_correct": 2,
                 },
             ]
         ),  # fmt: skip
@@ -208,8 +221,8 @@ def test_the_section_reads_every_number_from_the_summary(summary):
                      "slow 0.9988", "rises by +0.064", "(12 rows)", "(1.65 % of the", "up to 0.189",
                      "p_HMM(tap) = 0.8043", "all 18 (Shape", "up to 0.21 in", "recognise 2 of the 3",
                      "tap1_hand 401–511 goes to touch (their push model)", "5-fold accuracy 0.93", "0.73 with 10 cm",
-                     "on the 11 real segments", "glu's 0.45–0.45 over 6", "mixsplit (flat start, mixture splitting)",
-                     "0.73–0.82 over 2", "worth 9 points", "(at most 0 and 0 of 2)", "5 of 5 values",
+                     "on the 11 real segments", "glu's 0.45–0.55 over 3 seeds", "mixsplit (flat start, mixture splitting)",
+                     "splitting) 0.82; with", "worth 9 points", "(at most 0 and 1 of 2)", "5 of 5 values",
                      "(max |difference| 1.3e-05)", '"the robot pushed the ball and the ball moves"',
                      "(not the paper's caption)", "9,941 sampled", "every 5 frames", "multiple of 5)", "samples of 10,000", "34 of 34 sentences and 30 of 30 scores",
                      "9,331,200 sentences", "in 1 of 60 trials", "is 1.9 %", "of its 9 notebooks",
@@ -269,9 +282,9 @@ def test_only_a_full_run_on_the_real_data_is_quoted(summary, tmp_path, capsys):
             readme.load_summary(path)
         assert main(["readme", "--summary", str(path), "--readme", str(page), "--if-complete"]) == 0
         assert "left as it is" in capsys.readouterr().out and page.read_text().count("x\n") == 1
-    del summary["tables"]["hmm_recipe_spread"]
+    del summary["tables"]["hmm_feature_settings"]
     path.write_text(json.dumps(summary))
-    with pytest.raises(DataError, match="lacks hmm_recipe_spread"):
+    with pytest.raises(DataError, match="lacks hmm_feature_settings"):
         readme.load_summary(path)
     assert main(["readme", "--summary", str(tmp_path / "none.json"), "--readme", str(page)]) == 2
     assert "no summary" in capsys.readouterr().err
