@@ -113,14 +113,27 @@ def _by_index(bn, tool):
     return (lambda n: f"{prefix}{nodes.index(n)}"), state
 
 
-@pytest.mark.parametrize("fmt", ["bif", "xmlbif", "uai"])
-@pytest.mark.parametrize("tool", ["pgmpy", "pyagrum"])
-@pytest.mark.parametrize("rows", ["zero", "uniform"])
+def _known_disagreement(tool: str) -> pytest.MarkDecorator:
+    """The libraries' UAI layouts differ from the format's (see the reasons): the test runs and must fail,
+    so that a fixed library turns it into a failure here (strict) and the limitation is lifted."""
+    return pytest.mark.xfail(strict=True, raises=(AssertionError, ValueError),
+                             reason=PGMPY_UAI if tool == "pgmpy" else AGRUM_UAI)  # fmt: skip
+
+
+def _export_cases() -> list:
+    cases = []
+    for rows in ("zero", "uniform"):
+        for tool in ("pgmpy", "pyagrum"):
+            for fmt in ("bif", "xmlbif", "uai"):
+                marks = [_known_disagreement(tool)] if fmt == "uai" else []
+                if (tool, fmt, rows) == ("pgmpy", "bif", "uniform"):
+                    marks.append(pytest.mark.slow)  # pgmpy's BIF reader takes seconds per file
+                cases.append(pytest.param(fmt, tool, rows, marks=marks, id=f"{rows}-{tool}-{fmt}"))
+    return cases
+
+
+@pytest.mark.parametrize(("fmt", "tool", "rows"), _export_cases())
 def test_exports_give_glus_posteriors_in_pgmpy_and_pyagrum(zero_bn, uniform_bn, tmp_path, fmt, tool, rows):
-    if tool == "pgmpy" and fmt == "bif" and rows == "uniform":
-        pytest.skip("pgmpy's BIF reader is covered with the zero-row model (it takes seconds per file)")
-    if fmt == "uai":
-        pytest.skip(PGMPY_UAI if tool == "pgmpy" else AGRUM_UAI)
     bn = zero_bn if rows == "zero" else uniform_bn
     suffix = {"bif": ".bif", "xmlbif": ".xmlbif" if tool == "pgmpy" else ".bifxml", "uai": ".uai"}[fmt]
     path = export_bn(bn, tmp_path / f"net{suffix}", fmt, zero_rows="seen")
@@ -145,11 +158,9 @@ def test_round_trip_through_each_format_is_exact(zero_bn, tmp_path, fmt):
         np.testing.assert_array_equal(back.cpts[n], zero_bn.cpts[n])
 
 
-@pytest.mark.parametrize("fmt", ["bif", "xmlbif", "uai"])
+@pytest.mark.parametrize("fmt", ["bif", "xmlbif"])  # their UAI layouts: test_exports_give_glus_posteriors…
 @pytest.mark.parametrize("tool", ["pgmpy", "pyagrum"])
 def test_glu_reads_what_pgmpy_and_pyagrum_write(uniform_bn, tmp_path, fmt, tool):
-    if fmt == "uai":
-        pytest.skip(PGMPY_UAI if tool == "pgmpy" else AGRUM_UAI)
     src = export_bn(uniform_bn, tmp_path / "glu.bifxml", "xmlbif")
     suffix = {"bif": ".bif", "xmlbif": ".bifxml" if tool == "pyagrum" else ".xmlbif"}[fmt]
     out = tmp_path / f"theirs{suffix}"
