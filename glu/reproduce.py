@@ -465,9 +465,12 @@ def write_summary(
         for i, row in df.iterrows():
             for col, val in row.items():
                 long_rows.append({"table": name, "row": i, "column": col, "value": val})
-        if "difference" in df.columns and len(df):
+        meta = tables[name]["meta"]
+        reference = meta.get("reference") or (meta.get("parameters") or {}).get("reference")
+        if (
+            reference and "difference" in df.columns and len(df)
+        ):  # a comparison declares what it compares with
             diff = pd.to_numeric(df["difference"], errors="coerce").abs()
-            reference = tables[name]["meta"].get("reference", "original model (BN_lab.mat)")
             comparison.append({"table": name, "reference": reference, "rows": int(diff.notna().sum()),
                                "max_abs_difference": float(diff.max())})  # fmt: skip
     summary = {

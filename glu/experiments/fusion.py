@@ -51,6 +51,14 @@ def _label(q: Sequence[float] | None) -> str:
     return "no action evidence" if q is None else "[" + " ".join(f"{x:.2g}" for x in q) + "]"
 
 
+ORIGINAL_REFERENCE = "original model (BN_lab.mat)"
+"""What a table's ``difference`` column is taken against when a reference model is given (the summary's label)."""
+
+
+def _reference(reference: BayesNet | None) -> str | None:
+    return ORIGINAL_REFERENCE if reference is not None else None
+
+
 def _with_reference(df: pd.DataFrame, ref_values: list[float] | None) -> pd.DataFrame:
     if ref_values is not None:
         df["p_original"] = ref_values
@@ -72,7 +80,9 @@ def effect_prediction(bn: BayesNet, reference: BayesNet | None = None) -> pd.Dat
             if reference:
                 ref.append(posts[1][i])
     df = _with_reference(pd.DataFrame(rows), ref if reference else None)
-    return tidy(df, "glu2017_effect_prediction", model_source(bn), cases=EFFECT_CASES)
+    return tidy(
+        df, "glu2017_effect_prediction", model_source(bn), cases=EFFECT_CASES, reference=_reference(reference)
+    )
 
 
 def word_probability_change(
@@ -99,7 +109,8 @@ def word_probability_change(
         r = InferenceEngine(reference)
         df["delta_original"] = r.word_probabilities({**ev, "Action": "tap"}) - r.word_probabilities(ev)
         df["difference"] = df["delta"] - df["delta_original"]
-    return tidy(df, "glu2017_word_change", model_source(bn), evidence=ev, threshold=threshold)
+    return tidy(df, "glu2017_word_change", model_source(bn), evidence=ev, threshold=threshold,
+                reference=_reference(reference))  # fmt: skip
 
 
 def action_vs_soft_evidence(
@@ -128,7 +139,8 @@ def action_vs_soft_evidence(
     df.insert(0, "evidence", evidence_text(evidence))
     df.insert(1, "strategy", strategy)
     df = _with_reference(df, ref if reference else None)
-    return tidy(df, "tcds_action_vs_soft_evidence", model_source(bn), evidence=evidence, strategy=strategy)
+    return tidy(df, "tcds_action_vs_soft_evidence", model_source(bn), evidence=evidence, strategy=strategy,
+                reference=_reference(reference))  # fmt: skip
 
 
 def tap_threshold(
@@ -190,7 +202,8 @@ def effect_vs_soft_evidence(
                     if rpost is not None:
                         ref.append(rpost[i])
     df = _with_reference(pd.DataFrame(out), ref if reference else None)
-    return tidy(df, "tcds_effect_vs_soft_evidence", model_source(bn), shapes=shapes, rules=rules)
+    return tidy(df, "tcds_effect_vs_soft_evidence", model_source(bn), shapes=shapes, rules=rules,
+                reference=_reference(reference))  # fmt: skip
 
 
 def soft_evidence_sweep(
