@@ -31,7 +31,11 @@ from glu.schema import ACTIONS
 
 
 def stratified_folds(labels: Sequence[str], k: int, seed: int = 0) -> np.ndarray:
-    """Fold number (0 … k-1) of each item, shape (n,): each label's items shuffled (seeded), dealt in turn."""
+    """Fold number (0 … k-1) of each item, shape (n,): each label's items shuffled (seeded), dealt in turn.
+
+    scikit-learn's ``StratifiedKFold(shuffle=True)`` makes folds of the same kind from its own random state,
+    so the same seed gives other folds there; glu keeps its own to keep its cross-validation numbers.
+    """
     labels = list(labels)
     if k < 2:
         raise DataError(f"k={k}: cross-validation needs at least 2 folds")
