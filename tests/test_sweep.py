@@ -233,7 +233,7 @@ def test_bad_settings_are_one_line(tmp_path, capsys, toml, message):
     ("argv", "message"),
     [
         (["--episodes", "0"], "expected a whole number ≥ 1"),
-        (["--seed", "-1"], "expected a whole number ≥ 0"),
+        (["--seed", "-1"], "a seed is a whole number in [0, 2**32 - 1]"),
         (["--scheduler", "localhost"], "expected a Dask scheduler address such as tcp://127.0.0.1:8786"),
         (["--config", "nope.toml"], "nope.toml: no such sweep file"),
     ],

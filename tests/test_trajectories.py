@@ -46,6 +46,8 @@ def test_parse_keeps_timestamps_and_values_exactly():
         ("-1 1495933414.3 1.0 nan 3.0", "is not a finite number"),
         ("-1 1495933414.3 inf 2.0 3.0", "is not a finite number"),
         ("-1 1495933414.3 1_000 2.0 3.0", "is not a finite number"),
+        ("-1 1495933414.3 1e157 2.0 3.0", "17: x '1e157' is outside ±10,000"),  # finite, but no hand is there
+        ("-1 1495933414.3 1.0 2.0 -10000.5", "25: z '-10000.5' is outside ±10,000"),
         ("x 1495933414.3 1.0 2.0 3.0", "index 'x' is not an integer"),
         ("-1 1495933414.0 1.0 2.0 3.0", "does not increase"),
     ],
@@ -57,6 +59,49 @@ def test_malformed_line_gives_file_and_line(bad_line, fragment):
     msg = str(e.value)
     assert msg.startswith("rec/data.log:5:"), msg
     assert fragment in msg
+
+
+def test_the_physical_range_lets_every_published_value_through():
+    from glu.data.hand_logs import MAX_LOGGED_COORDINATE
+
+    ok = GOOD + f"-1 1495933415.0 {MAX_LOGGED_COORDINATE} -{MAX_LOGGED_COORDINATE} 2297.08\n"
+    assert parse_hand_log(ok, source="f").xyz[-1].tolist() == [
+        MAX_LOGGED_COORDINATE,
+        -MAX_LOGGED_COORDINATE,
+        2297.08,
+    ]
+
+
+def test_a_huge_coordinate_is_refused_by_recognize_not_turned_into_nan(tmp_path, capsys):
+    from glu.cli import main
+
+    log = tmp_path / "huge.log"
+    log.write_text(GOOD + "-1 1495933415.0 1e157 2.0 3.0\n" + "-1 1495933415.1 1.0 2.0 3.0\n")
+    models = tmp_path / "r.json"
+    assert (
+        main(
+            [
+                "hmm",
+                "train",
+                "--synthetic",
+                "3",
+                "--states",
+                "2",
+                "--mix",
+                "1",
+                "--iter",
+                "3",
+                "-o",
+                str(models),
+            ]
+        )
+        == 0
+    )
+    capsys.readouterr()
+    assert main(["recognize", str(log), "--models", str(models), "--json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and "Traceback" not in err and "nan" not in err.lower()
+    assert err.splitlines()[-1].startswith(f"glu recognize: error: {log}:5:17: x '1e157' is outside ±10,000")
 
 
 def test_non_ascii_and_other_encodings_are_data_errors():
@@ -94,7 +139,10 @@ def test_fuzz_arbitrary_bytes(data):
 
 
 _line = st.tuples(
-    st.integers(-5, 10**6), st.floats(-1e6, 1e6), st.floats(-1e6, 1e6), st.floats(-1e6, 1e6)
+    st.integers(-5, 10**6),
+    st.floats(-1e4, 1e4),
+    st.floats(-1e4, 1e4),
+    st.floats(-1e4, 1e4),  # a hand's range
 ).map(lambda v: f"{v[0]} {{t}} {v[1]!r} {v[2]!r} {v[3]!r}")
 
 

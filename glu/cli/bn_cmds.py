@@ -9,7 +9,14 @@ from pathlib import Path
 from typing import Any
 
 from glu.bn.exchange import FORMATS, ZERO_ROW_MODES
-from glu.cli.common import add_data_args, add_evidence_args, add_model_args, load_model, read_evidence
+from glu.cli.common import (
+    add_data_args,
+    add_evidence_args,
+    add_model_args,
+    load_model,
+    output_file,
+    read_evidence,
+)
 from glu.errors import EvidenceError, GluError
 from glu.evidence import check_disjoint, format_evidence
 
@@ -24,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     lp = bsub.add_parser("learn", help="learn structure (K2 + BIC) and parameters from the experiments")
     add_data_args(lp)
-    lp.add_argument("-o", "--out", type=Path, required=True, help="model file to write (JSON)")
+    lp.add_argument("-o", "--out", type=output_file, required=True, help="model file to write (JSON)")
     lp.set_defaults(func=_learn)
 
     ep = bsub.add_parser("edges", help="print the edges of a model, one 'Parent -> Child' per line, sorted")
@@ -39,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "seen__NODE written by `glu bn export --zero-rows seen` become NODE's all-zero rows again.",
     )
     ip.add_argument("model", type=Path, metavar="FILE", help="e.g. net.bif, net.xmlbif, net.uai, BN_lab.mat")
-    ip.add_argument("-o", "--out", type=Path, required=True, help="model file to write (JSON)")
+    ip.add_argument("-o", "--out", type=output_file, required=True, help="model file to write (JSON)")
     ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
     ip.set_defaults(func=_import)
 
@@ -55,7 +62,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "model", type=Path, metavar="MODEL", help="model file (.json, the original .mat, or an exchange file)"
     )
     xp.add_argument("--format", choices=tuple(FORMATS), help="output format (default: from the suffix of -o)")
-    xp.add_argument("-o", "--out", type=Path, required=True, help="file to write")
+    xp.add_argument("-o", "--out", type=output_file, required=True, help="file to write")
     xp.add_argument("--zero-rows", choices=ZERO_ROW_MODES, default=ZERO_ROW_MODES[0],
                     help="all-zero CPT rows: refuse (default) or write them as observed indicator nodes (seen)")  # fmt: skip
     xp.set_defaults(func=_export)

@@ -9,6 +9,7 @@ the package.
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 from typing import Any
 
@@ -65,6 +66,46 @@ def nonneg_float(text: str) -> float:
     if not 0 <= v < float("inf"):
         raise argparse.ArgumentTypeError(f"expected a number ≥ 0, not {text}")
     return v
+
+
+def _writable_folder(folder: Path) -> str | None:
+    """Why files cannot be created in ``folder`` (made if missing), or None when they can."""
+    probe = folder
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if not probe.is_dir():
+        return f"{probe} is a file, not a folder"
+    if not os.access(probe, os.W_OK | os.X_OK):
+        return f"the folder {probe} is not writable"
+    return None
+
+
+def output_file(text: str) -> Path:
+    """-o FILE: a file path whose folder can be written (checked before any work, not after it)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file name, not an empty string")
+    path = Path(text)
+    if path.is_dir() or text.endswith(("/", os.sep)):
+        raise argparse.ArgumentTypeError(f"{text} is a folder; give a file name")
+    problem = _writable_folder(path.parent)
+    if problem:
+        raise argparse.ArgumentTypeError(f"cannot write {text}: {problem}")
+    return path
+
+
+def output_folder(text: str) -> Path:
+    """-o DIR: a folder that exists or can be made, and can be written."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a folder name, not an empty string")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a file; give a folder")
+    problem = _writable_folder(path)
+    if problem:
+        raise argparse.ArgumentTypeError(f"cannot write into {text}: {problem}")
+    return path
 
 
 # ------------------------------------------------------------------ shared options

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from glu import paths
-from glu.cli.common import add_data_option, integer, progress_bar
+from glu.cli.common import add_data_option, integer, output_folder, progress_bar, seed
 from glu.data.source import DEFAULT_SYNTHETIC_N, WORD_FILES
 from glu.data.synthetic import MAX_ROWS, MIN_ROWS
 from glu.errors import DataError, FetchError
@@ -37,8 +37,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     s.add_argument("--n", type=integer, default=DEFAULT_SYNTHETIC_N,
                    help=f"experiments per table ({MIN_ROWS} to {MAX_ROWS:,}; default {DEFAULT_SYNTHETIC_N})")  # fmt: skip
-    s.add_argument("--seed", type=integer, default=0, help="random seed (default 0)")
-    s.add_argument("-o", "--out", type=Path, required=True, help="output folder")
+    s.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
+    s.add_argument("-o", "--out", type=output_folder, required=True, help="output folder")
+    s.add_argument("--force", action="store_true",
+                   help="replace a folder that is not glu synthetic data (never the published real data)")  # fmt: skip
     s.set_defaults(func=_synth)
 
     i = dsub.add_parser("info", help="say which data source is used and what it holds")
@@ -91,13 +93,12 @@ def _synth(args: argparse.Namespace) -> int:
 
     if not MIN_ROWS <= args.n <= MAX_ROWS:
         raise DataError(f"--n {args.n} is out of range; allowed: {MIN_ROWS} to {MAX_ROWS:,}")
-    if not 0 <= args.seed < 2**32:
-        raise DataError(f"--seed {args.seed}: a seed is a whole number in [0, 2**32 - 1]")
     recordings = {name: hand_log_arrays(g) for name, g in synthetic_recordings(args.seed).items()}
     bar = progress_bar(len(TABLES) + 1 + len(recordings), "synth", "file")
     try:
         out = write_synthetic_folder(args.out, args.n, args.seed, recordings,
-                                     progress=(lambda name: bar.update(1)) if bar is not None else None)  # fmt: skip
+                                     progress=(lambda name: bar.update(1)) if bar is not None else None,
+                                     force=args.force)  # fmt: skip
     finally:
         if bar is not None:
             bar.close()

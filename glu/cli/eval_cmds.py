@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from glu.cli.common import integer, positive_int
+from glu.cli.common import output_file, output_folder, positive_int, seed
 
 
 def _scheduler(text: str) -> str:
@@ -24,17 +24,10 @@ def _scheduler(text: str) -> str:
         raise argparse.ArgumentTypeError(str(e).removeprefix(f"--scheduler {text!r}: ")) from None
 
 
-def _seed(text: str) -> int:
-    v = integer(text)
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number ≥ 0, not {v}")
-    return v
-
-
 def _shared(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", type=Path, metavar="FILE.toml", help="sweep settings (see glu.sweep.config)")
     p.add_argument("--episodes", type=positive_int, metavar="N", help="episodes in all (default 20000)")
-    p.add_argument("--seed", type=_seed, metavar="S", help="the corpus's seed (default 0)")
+    p.add_argument("--seed", type=seed, metavar="S", help="the corpus's seed (default 0)")
     p.add_argument(
         "--data", help="data the network is learned from (default: $GLU_DATA_DIR, data/real, else synthetic)"
     )
@@ -53,12 +46,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     e.add_argument("--max-chunks", type=positive_int, metavar="N",
                    help="compute at most N chunks now; run again to continue")  # fmt: skip
-    e.add_argument("-o", "--out", type=Path, required=True, metavar="DIR", help="output folder (resumable)")
+    e.add_argument(
+        "-o", "--out", type=output_folder, required=True, metavar="DIR", help="output folder (resumable)"
+    )
     e.set_defaults(func=_evaluate)
 
     c = sub.add_parser("corpus", help="write a simulated corpus of episodes to Parquet", description=__doc__)
     _shared(c)
-    c.add_argument("-o", "--out", type=Path, required=True, metavar="FILE.parquet", help="file to write")
+    c.add_argument(
+        "-o", "--out", type=output_file, required=True, metavar="FILE.parquet", help="file to write"
+    )
     c.set_defaults(func=_corpus)
 
 

@@ -13,7 +13,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.cli.common import add_data_option, integer, nonneg_float, positive_float, positive_int, progress_bar
+from glu.cli.common import (
+    add_data_option,
+    nonneg_float,
+    output_file,
+    positive_float,
+    positive_int,
+    progress_bar,
+    seed,
+)
 from glu.data.source import HAND_LOG
 from glu.errors import DataError
 from glu.gestures.invariants import ALL, INVARIANCE_MEANING, INVARIANCES, RAW, Invariants
@@ -61,7 +69,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     src.add_argument(
         "--synthetic", type=positive_int, metavar="N", help="train on N synthetic gestures per action"
     )
-    t.add_argument("-o", "--out", type=Path, required=True, metavar="RECOGNISER", help="file to write (JSON)")
+    t.add_argument(
+        "-o", "--out", type=output_file, required=True, metavar="RECOGNISER", help="file to write (JSON)"
+    )
     t.add_argument(
         "--actions", type=_actions, default=ACTIONS, help=f"comma-separated (default: {','.join(ACTIONS)})"
     )
@@ -82,7 +92,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"strength of the covariance prior (default {d.covar_reg:g}; larger: broader Gaussians)")  # fmt: skip
     t.add_argument("--noise", type=nonneg_float, default=SYNTHETIC_NOISE,
                    help=f"synthetic sensor noise, m (default {SYNTHETIC_NOISE:g})")  # fmt: skip
-    t.add_argument("--seed", type=integer, default=0, help="random seed (default 0)")
+    t.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
     t.add_argument("--recipe", choices=RECIPES, default=RECIPES[0],
                    help="glu = time slices + GaussianMixture, then EM (default); mixsplit = the originals': "
                    "flat start, Baum-Welch, split the heaviest component, Baum-Welch, … up to M")  # fmt: skip

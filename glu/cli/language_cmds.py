@@ -14,14 +14,15 @@ from glu.cli.common import (
     add_description_args,
     add_evidence_args,
     add_model_args,
-    integer,
     load_model,
     positive_int,
     read_candidates,
     read_evidence,
+    seed,
 )
 from glu.errors import EvidenceError
 from glu.evidence import format_evidence
+from glu.language.sampling import MAX_SAMPLES
 
 DESCRIPTION = """\
 Print the N best sentences describing a situation, each scored from the probabilities p(word | evidence)
@@ -47,10 +48,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--nbest", type=positive_int, default=10, metavar="N", help="how many sentences (default 10)"
     )
-    p.add_argument("--sample", type=positive_int, metavar="K",
-                   help="rank K new random sentences of the grammar (as HSGen) instead of searching it")  # fmt: skip
+    p.add_argument("--sample", type=_sample_count, metavar="K",
+                   help=f"rank K new random sentences of the grammar (as HSGen) instead of searching it "
+                        f"(1 to {MAX_SAMPLES:,})")  # fmt: skip
     p.add_argument(
-        "--seed", type=integer, metavar="S", help="seed of the random sentences (with --sample; default 0)"
+        "--seed", type=seed, metavar="S", help="seed of the random sentences (with --sample; default 0)"
     )
     p.add_argument(
         "--grammar", type=Path, metavar="FILE", help="grammar in HTK HParse syntax (default: glu's)"
@@ -62,6 +64,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true",
                    help='print only [{"sentence": …, "score": …}, …] (best first; score null for -inf)')  # fmt: skip
     p.set_defaults(func=_describe)
+
+
+def _sample_count(text: str) -> int:
+    """--sample K: 1 ≤ K ≤ MAX_SAMPLES (memory grows with K)."""
+    k = positive_int(text)
+    if k > MAX_SAMPLES:
+        raise argparse.ArgumentTypeError(f"at most {MAX_SAMPLES:,} random sentences at once, not {k:,}")
+    return k
+
+
+IMPOSSIBLE = "impossible"
+"""How text output shows a score of −∞ (a word of the sentence has probability 0 under the evidence)."""
+
+
+def _score_text(x: float) -> str:
+    return f"{x:>10.5f}" if math.isfinite(x) else f"{IMPOSSIBLE:>10}"
 
 
 def _score_json(x: float) -> float | None:
@@ -94,6 +112,9 @@ def _describe(args: argparse.Namespace) -> int:
     grammar = load_grammar(args.grammar)
     net = compile_network(grammar)
     limit = net.check_length_limit(args.max_length)
+    if limit < net.min_length:
+        raise EvidenceError(f"--max-length {limit}: the grammar's shortest sentence has {net.min_length} words; "
+                            f"give at least {net.min_length}")  # fmt: skip
     n_sentences = count_sentences(net, limit)
     candidates = read_candidates(args)
     bn, desc = load_model(args)
@@ -130,7 +151,7 @@ def _describe(args: argparse.Namespace) -> int:
     if candidates is not None and len(exact):
         e_sent, e_score = exact["sentence"].iloc[0], float(exact["score"].iloc[0])
         status = "among the candidates" if e_sent in {" ".join(c) for c in candidates} else "not a candidate"
-        say(f"# exact best over the grammar ({status}): {e_score:.5f}  {e_sent}")
+        say(f"# exact best over the grammar ({status}): {_score_text(e_score).strip()}  {e_sent}")
     if args.json:
         rows = [{"sentence": r.sentence, "score": _score_json(r.score)} for r in result.itertuples()]
         print(json.dumps(rows, allow_nan=False))
@@ -138,7 +159,9 @@ def _describe(args: argparse.Namespace) -> int:
     if result.empty:
         print("# no sentence")
         return 0
-    print(f"{'rank':>4}  {'score':>9}  sentence")
+    print(f"{'rank':>4}  {'score':>10}  sentence")
     for r in result.itertuples():
-        print(f"{r.rank:>4}  {r.score:>9.5f}  {r.sentence}")
+        print(f"{r.rank:>4}  {_score_text(r.score)}  {r.sentence}")
+    if not all(math.isfinite(x) for x in result["score"]):
+        say(f"# {IMPOSSIBLE}: a word of the sentence has probability 0 under this evidence (score −∞)")
     return 0

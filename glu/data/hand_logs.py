@@ -38,6 +38,9 @@ FILE_NAME = "data.log"
 _INT = re.compile(rb"[+-]?\d+")
 _FLOAT = re.compile(rb"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _MAX_REPORTED_LINE = 80
+MAX_LOGGED_COORDINATE = 10_000.0
+"""Largest |x|, |y|, |z| a hand log may hold: 10 body units (about 3 m from the torso); the published logs
+reach 2,300. Beyond it a value is a tracking or writing error, and would overflow the HMMs' densities."""
 
 
 class HandLog(NamedTuple):
@@ -118,10 +121,16 @@ def _parse_line(line: bytes, source: str, lineno: int) -> tuple[float, float, fl
     if not _INT.fullmatch(fields[0].encode()):
         raise DataError(f"{source}:{lineno}: index {fields[0]!r} is not an integer: {_show(line)}")
     values = []
-    for name, f in zip(LOG_FIELDS[1:], fields[1:], strict=True):
+    columns = [m.start() + 1 for m in re.finditer(r"\S+", text)][1:]
+    for name, f, col in zip(LOG_FIELDS[1:], fields[1:], columns, strict=True):
         v = float(f) if _FLOAT.fullmatch(f.encode()) else math.nan
         if not math.isfinite(v):
-            raise DataError(f"{source}:{lineno}: {name} {f!r} is not a finite number: {_show(line)}")
+            raise DataError(f"{source}:{lineno}:{col}: {name} {f!r} is not a finite number: {_show(line)}")
+        if name != "timestamp" and abs(v) > MAX_LOGGED_COORDINATE:
+            raise DataError(
+                f"{source}:{lineno}:{col}: {name} {f!r} is outside ±{MAX_LOGGED_COORDINATE:,.0f}, the range of "
+                f"a hand relative to the torso in logged units (1000 × body units): {_show(line)}"
+            )
         values.append(v)
     return values[0], values[1], values[2], values[3]
 

@@ -223,7 +223,7 @@ def _folder_source(root: Path, origin: str) -> DataSource:
             f"{root}: not a glu data folder (given by {where}): it has neither affordance-words/ nor gestures/"
         )
     marker = root / SYNTHETIC_MARKER
-    if marker.is_file():
+    if marker.is_file() and not _is_published(root):  # the checksums decide: a stray marker cannot relabel
         try:
             info = json.loads(marker.read_text())
             return DataSource(
@@ -233,6 +233,13 @@ def _folder_source(root: Path, origin: str) -> DataSource:
         except (ValueError, KeyError, TypeError):
             raise DataError(f"{marker}: malformed marker file; expected JSON with 'seed' and 'n'") from None
     return DataSource(kind="real", root=root.resolve(), origin=origin)
+
+
+def _is_published(root: Path) -> bool:
+    """Whether ``root`` holds the published real data (its files carry the published checksums)."""
+    from glu.data.fetch import published_origin
+
+    return published_origin(root) is not None
 
 
 def load_schema(source: DataSource) -> Schema:

@@ -256,6 +256,7 @@ def write_synthetic_folder(
     seed: int,
     recordings: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
     progress: Callable[[str], None] | None = None,
+    force: bool = False,
 ) -> Path:
     """Write a synthetic data folder with the layout of the real one, completely or not at all.
 
@@ -267,11 +268,14 @@ def write_synthetic_folder(
         :func:`glu.gestures.synthetic.synthetic_recordings`; none by default (the data layer does not make
         gestures)
     progress : called with the name of each file written (for a progress bar)
+    force : replace a folder that holds something else (never the published real data)
 
     The folder is built beside ``out`` and moved into place when complete
     (:func:`glu.files.staged_folder`), so an interrupted run leaves ``out`` as it was. Raises
-    :class:`DataError` if ``out`` is a file, or a folder with other content (real data, say).
+    :class:`DataError` if ``out`` is a file, holds the published real data (never replaced), or is a
+    folder with other content (replaced only with ``force``).
     """
+    from glu.data.fetch import published_origin
     from glu.data.hand_logs import write_hand_log
     from glu.data.source import GESTURES, NETWORK_DEFINITION, SYNTHETIC_MARKER, WORD_FILES
     from glu.data.tables import write_experiments, write_network_definition
@@ -279,10 +283,14 @@ def write_synthetic_folder(
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise DataError(f"{out}: exists and is not a folder; give a folder for the synthetic data")
-    if out.is_dir() and any(out.iterdir()) and not (out / SYNTHETIC_MARKER).is_file():
+    if out.is_dir() and published_origin(out) is not None:
+        raise DataError(
+            f"{out}: holds the published real data (its checksums say so); glu never overwrites it"
+        )
+    if out.is_dir() and any(out.iterdir()) and not (out / SYNTHETIC_MARKER).is_file() and not force:
         raise DataError(
             f"{out}: a folder that is not glu synthetic data (no {SYNTHETIC_MARKER}); refusing to overwrite "
-            "it: give a new or empty folder"
+            "it: give a new or empty folder (or --force to replace it)"
         )
     tick = progress or (lambda name: None)
     schema = default_schema()

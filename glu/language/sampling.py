@@ -17,6 +17,8 @@ from glu.language.sentences import Sentence
 
 MAX_SAMPLE_WORDS = 10_000
 """A random sentence longer than this (possible only with repetitions) raises GrammarError."""
+MAX_SAMPLES = 200_000
+"""At most this many random sentences at once (20× the originals' 10,000; about 80 MB with their scores)."""
 
 
 def sample_sentences(grammar: Grammar, n: int, seed: int | None = 0) -> list[Sentence]:
@@ -25,7 +27,7 @@ def sample_sentences(grammar: Grammar, n: int, seed: int | None = 0) -> list[Sen
     Parameters
     ----------
     grammar : the grammar to walk
-    n : number of sentences
+    n : number of sentences, at most :data:`MAX_SAMPLES`
     seed : seed of the random generator (Python's ``random.Random``); the same seed gives the same list
 
     Returns
@@ -34,6 +36,9 @@ def sample_sentences(grammar: Grammar, n: int, seed: int | None = 0) -> list[Sen
     """
     if int(n) != n or n < 0:
         raise GrammarError(f"the number of sentences must be a whole number ≥ 0, not {n!r}", grammar.source)
+    if n > MAX_SAMPLES:
+        raise GrammarError(f"{n:,} random sentences: at most {MAX_SAMPLES:,} at once (memory grows with each; "
+                           "the originals drew 10,000)", grammar.source)  # fmt: skip
     rng = random.Random(seed)
     rand, randrange = rng.random, rng.randrange
     defs = grammar.definitions

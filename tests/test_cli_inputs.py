@@ -1,0 +1,134 @@
+"""Bad arguments are refused where they enter, before any work: one line, exit 2 (issue 11)."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from glu.cli import main
+
+
+def _glu(capsys, *argv):
+    try:
+        status = main([str(a) for a in argv])
+    except SystemExit as e:  # argparse refuses an argument by exiting
+        status = e.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["hmm", "train", "--synthetic", "3", "--seed", "-1", "-o", "{tmp}/r.json"],
+        ["data", "synth", "--seed", "-1", "-o", "{tmp}/d"],
+        ["data", "synth", "--seed", str(2**32), "-o", "{tmp}/d"],
+        ["evaluate", "--seed", "-1", "-o", "{tmp}/e"],
+        ["describe", "--sample", "5", "--seed", "-1", "--evidence", "Action=grasp"],
+        ["reproduce", "--seed", "-1", "--out", "{tmp}/o"],
+    ],
+)
+def test_a_seed_is_a_whole_number_in_0_to_2_32(capsys, tmp_path, argv):
+    status, out, err = _glu(capsys, *(a.format(tmp=tmp_path) for a in argv))
+    assert status == 2 and out == "" and err.count("\n") == 1
+    assert "a seed is a whole number in [0, 2**32 - 1]" in err
+    assert not any(tmp_path.iterdir())  # nothing was written
+
+
+@pytest.mark.parametrize(
+    ("out", "message"),
+    [
+        ("", "expected a file name, not an empty string"),
+        ("{tmp}", "is a folder; give a file name"),
+        ("{tmp}/a_file/r.json", "a_file is a file, not a folder"),
+    ],
+)
+def test_hmm_train_checks_its_output_before_training(capsys, tmp_path, out, message):
+    (tmp_path / "a_file").write_text("x")
+    status, stdout, err = _glu(capsys, "hmm", "train", "--synthetic", "3", "-o", out.format(tmp=tmp_path))
+    assert (
+        status == 2 and stdout == "" and err.count("\n") == 1 and message in err
+    )  # no "data: …" line: no work done
+
+
+def test_an_unwritable_output_folder_is_refused_at_once(capsys, tmp_path, monkeypatch):
+    real_access = os.access
+    monkeypatch.setattr(os, "access", lambda p, mode: False if Path(p) == tmp_path else real_access(p, mode))
+    status, out, err = _glu(capsys, "bn", "learn", "--data", "synthetic", "-o", tmp_path / "m.json")
+    assert status == 2 and out == "" and f"the folder {tmp_path} is not writable" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_describe_refuses_a_maximum_below_the_shortest_sentence(capsys):
+    status, out, err = _glu(capsys, "describe", "--max-length", "3", "--evidence", "Action=grasp")
+    assert (
+        status == 2 and "the grammar's shortest sentence has 8 words; give at least 8" in err.splitlines()[-1]
+    )
+
+
+def test_describe_bounds_the_number_of_random_sentences(capsys):
+    from glu.language.sampling import MAX_SAMPLES
+
+    status, out, err = _glu(capsys, "describe", "--sample", MAX_SAMPLES + 1, "--evidence", "Action=grasp")
+    assert status == 2 and out == "" and f"at most {MAX_SAMPLES:,} random sentences" in err
+
+
+def test_sample_sentences_refuses_too_many():
+    from glu.errors import GrammarError
+    from glu.language.grammar import load_grammar
+    from glu.language.sampling import MAX_SAMPLES, sample_sentences
+
+    with pytest.raises(GrammarError, match="at most"):
+        sample_sentences(load_grammar(None), MAX_SAMPLES + 1)
+
+
+def test_impossible_sentences_print_as_impossible_never_as_inf(capsys):
+    status, out, err = _glu(capsys, "describe", "--sample", "5", "--seed", "1", "--evidence", "Action=grasp")
+    assert status == 0 and "inf" not in out and "nan" not in out.lower()
+    assert "impossible" in out  # these five random sentences each have a word of probability 0 under grasp
+    status, out, _ = _glu(
+        capsys, "describe", "--sample", "5", "--seed", "1", "--evidence", "Action=grasp", "--json"
+    )
+    rows = json.loads(out, parse_constant=lambda c: pytest.fail(f"{c} in --json output"))
+    assert [r["score"] for r in rows] == [None] * 5
+
+
+@pytest.mark.parametrize(
+    "mirror", ["http://[::1", "ftp:", "http://host:port/x", "file:///tmp", "localhost:8000"]
+)
+def test_a_malformed_mirror_url_is_refused_before_any_request(capsys, tmp_path, mirror):
+    status, out, err = _glu(capsys, "data", "fetch", "--dest", tmp_path / "d", "--mirror", mirror)
+    assert status == 2 and err.count("\n") == 1 and "expected an http://, https:// or ftp:// URL" in err
+    assert not (tmp_path / "d").exists()
+
+
+def test_a_stray_marker_does_not_relabel_verified_real_data_and_synth_never_overwrites_it(
+    capsys, tmp_path, monkeypatch
+):
+    from glu.data import fetch
+    from glu.data.source import SYNTHETIC_MARKER, resolve_data
+
+    folder = tmp_path / "real"
+    assert main(["data", "synth", "--n", "200", "-o", str(folder)]) == 0
+    tables = {p: p.read_bytes() for p in folder.rglob("*") if p.is_file() and p.name != SYNTHETIC_MARKER}
+    # the checksums say this folder is the published data (as test_fetch checks them on the real files)
+    monkeypatch.setattr(fetch, "published_origin", lambda root, *a, **k: "owner/repo@abc1234")
+    assert resolve_data(folder).kind == "real"  # the marker file is stray: ignored
+    capsys.readouterr()
+    for force in ([], ["--force"]):
+        status, out, err = _glu(capsys, "data", "synth", "-o", folder, *force)
+        assert status == 2 and "holds the published real data" in err and "never overwrites it" in err
+    assert {p: p.read_bytes() for p in tables} == tables
+
+
+def test_synth_replaces_a_foreign_folder_only_with_force(capsys, tmp_path):
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("mine")
+    status, out, err = _glu(capsys, "data", "synth", "--n", "200", "-o", folder)
+    assert status == 2 and "refusing to overwrite" in err and (folder / "notes.txt").read_text() == "mine"
+    status, out, err = _glu(capsys, "data", "synth", "--n", "200", "-o", folder, "--force")
+    assert status == 0 and not (folder / "notes.txt").exists() and (folder / "SYNTHETIC.json").is_file()
