@@ -132,3 +132,18 @@ def test_synth_replaces_a_foreign_folder_only_with_force(capsys, tmp_path):
     assert status == 2 and "refusing to overwrite" in err and (folder / "notes.txt").read_text() == "mine"
     status, out, err = _glu(capsys, "data", "synth", "--n", "200", "-o", folder, "--force")
     assert status == 0 and not (folder / "notes.txt").exists() and (folder / "SYNTHETIC.json").is_file()
+
+
+def test_json_output_is_strict_json_with_impossible_as_null():
+    from glu.cli.common import json_text
+
+    text = json_text(
+        {"loglik": {"tap": -1.5, "grasp": float("-inf")}, "scores": [float("inf"), 0.25], "n": 3}
+    )
+    assert json.loads(text, parse_constant=lambda c: pytest.fail(c)) == {
+        "loglik": {"tap": -1.5, "grasp": None},
+        "scores": [None, 0.25],
+        "n": 3,
+    }
+    with pytest.raises(ValueError):  # a NaN is a bug: never printed as JSON's non-standard NaN
+        json_text({"p": float("nan")})

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import argparse
 import functools
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
-from glu.cli.common import add_data_args, add_description_args, positive_int, read_candidates
+from glu.cli.common import add_data_args, add_description_args, json_text, positive_int, read_candidates
 from glu.errors import DataError
 
 DESCRIPTION = """\
@@ -97,7 +96,7 @@ def _anticipate(args: argparse.Namespace) -> int:
         + (" and at t = T (extra)" if args.final_update else " (the originals' schedule)")
         + f"; description: {args.score} score over {args.candidates}")  # fmt: skip
     if args.json:
-        print(json.dumps(run.as_dict(), allow_nan=False))
+        print(json_text(run.as_dict()))
         return 0
     acts = run.actions
     values = run.values["ObjVel"]

@@ -13,6 +13,7 @@ from glu.cli.common import (
     add_data_args,
     add_evidence_args,
     add_model_args,
+    json_text,
     load_model,
     output_file,
     read_evidence,
@@ -156,7 +157,7 @@ def _query(args: argparse.Namespace) -> int:
     answer = _answer(bn, engine, args.target, evidence, soft, args.soft_rule)
     if args.json:
         print(f"# {desc}", file=sys.stderr)
-        print(json.dumps(answer))
+        print(json_text(answer))
         return 0
     print(f"# {desc}")
     print(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")
@@ -191,7 +192,7 @@ def _query_batch(args: argparse.Namespace, bn, engine, desc: str) -> int:
         except GluError as e:
             answer = {"error": str(e)}
             n_err += 1
-        out.write(json.dumps(answer) + "\n")
+        out.write(json_text(answer) + "\n")
     if n_err:
         print(f"# {n_err} of {len(lines)} queries answered with an error", file=sys.stderr)
     return 0

@@ -9,6 +9,8 @@ the package.
 from __future__ import annotations
 
 import argparse
+import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -106,6 +108,22 @@ def output_folder(text: str) -> Path:
     if problem:
         raise argparse.ArgumentTypeError(f"cannot write into {text}: {problem}")
     return path
+
+
+def _json_ready(obj: Any) -> Any:
+    """``obj`` with ±inf as None (a log-likelihood or score of −∞: impossible); NaN stays (it is a bug)."""
+    if isinstance(obj, float) and math.isinf(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: _json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_json_ready(v) for v in obj]
+    return obj
+
+
+def json_text(obj: Any) -> str:
+    """Strict JSON for ``--json`` output: ±inf become null; a NaN raises ValueError (never printed)."""
+    return json.dumps(_json_ready(obj), allow_nan=False)
 
 
 # ------------------------------------------------------------------ shared options

@@ -8,13 +8,13 @@ recording of the data folder (``tap1_hand`` → ``<data>/gestures/tap1_hand/data
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
 from glu.cli.common import (
     add_data_option,
+    json_text,
     nonneg_float,
     output_file,
     positive_float,
@@ -329,7 +329,7 @@ def _recognize(args: argparse.Namespace) -> int:
         for f, x in zip(traj.frame, X, strict=True):
             step = stream.push(x)
             if args.json:
-                print(json.dumps(_as_json(acts, step.loglik, step.p_hmm, frame=int(f))))
+                print(json_text(_as_json(acts, step.loglik, step.p_hmm, frame=int(f))))
             else:
                 print(f"{int(f):5d} " + " ".join(f"{v:12.3f}" for v in step.loglik) + " "
                       + " ".join(f"{v:9.4f}" for v in step.p_hmm) + f"  {acts[int(np.argmax(step.loglik))]}")  # fmt: skip
@@ -338,7 +338,7 @@ def _recognize(args: argparse.Namespace) -> int:
     p = rec.p_hmm(X)
     verdict = rec.typicality(X)
     if args.json:
-        print(json.dumps({**_as_json(acts, ll, p), "typicality": verdict.to_json()}, allow_nan=False))
+        print(json_text({**_as_json(acts, ll, p), "typicality": verdict.to_json()}))
         if verdict.outside:
             print(verdict.message(), file=sys.stderr)
         return 0

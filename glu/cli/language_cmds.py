@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import functools
-import json
 import math
 import sys
 import time
@@ -14,6 +13,7 @@ from glu.cli.common import (
     add_description_args,
     add_evidence_args,
     add_model_args,
+    json_text,
     load_model,
     positive_int,
     read_candidates,
@@ -80,10 +80,6 @@ IMPOSSIBLE = "impossible"
 
 def _score_text(x: float) -> str:
     return f"{x:>10.5f}" if math.isfinite(x) else f"{IMPOSSIBLE:>10}"
-
-
-def _score_json(x: float) -> float | None:
-    return None if not math.isfinite(x) else float(x)
 
 
 SCORE_TEXT = {
@@ -153,8 +149,8 @@ def _describe(args: argparse.Namespace) -> int:
         status = "among the candidates" if e_sent in {" ".join(c) for c in candidates} else "not a candidate"
         say(f"# exact best over the grammar ({status}): {_score_text(e_score).strip()}  {e_sent}")
     if args.json:
-        rows = [{"sentence": r.sentence, "score": _score_json(r.score)} for r in result.itertuples()]
-        print(json.dumps(rows, allow_nan=False))
+        rows = [{"sentence": r.sentence, "score": float(r.score)} for r in result.itertuples()]  # −∞ → null
+        print(json_text(rows))
         return 0
     if result.empty:
         print("# no sentence")
