@@ -231,24 +231,31 @@ class BayesNet:
             raise ModelError(f"{path}: no such file") from None
         except KeyError:
             raise ModelError(f"{path}: no variable {variable!r} in the .mat file") from None
-        except (ValueError, TypeError, OSError) as e:
+        except (ValueError, TypeError, OSError, sio.matlab.MatReadError) as e:
             raise ModelError(f"{path}: not a readable MATLAB file ({e})") from None
-        names = [str(n) for n in np.atleast_1d(net.nodeNames)]
-        n_aff = len(np.atleast_1d(net.AFFORDNODES))
-        values: dict[str, tuple[str, ...]] = {}
-        for i, name in enumerate(names):
-            if i >= n_aff:
-                values[name] = WORD_VALUES
-            else:
-                vals = [str(v) for v in np.atleast_1d(net.nodeValueNames[i])]
-                aliases = FILE_ALIASES.get(name, {})
-                values[name] = tuple(aliases.get(v, v) for v in vals)
-        dag = np.asarray(net.dag)
-        parents = {names[j]: tuple(names[i] for i in np.flatnonzero(dag[:, j])) for j in range(len(names))}
-        cpts = {}
-        for j, name in enumerate(names):
-            shape = tuple(len(values[p]) for p in parents[name]) + (len(values[name]),)
-            cpts[name] = np.asarray(net.bnet.CPD[j].CPT, dtype=float).reshape(shape)
+        try:  # the BNT structure: nodeNames, AFFORDNODES, nodeValueNames, dag, bnet.CPD{j}.CPT
+            names = [str(n) for n in np.atleast_1d(net.nodeNames)]
+            n_aff = len(np.atleast_1d(net.AFFORDNODES))
+            values: dict[str, tuple[str, ...]] = {}
+            for i, name in enumerate(names):
+                if i >= n_aff:
+                    values[name] = WORD_VALUES
+                else:
+                    vals = [str(v) for v in np.atleast_1d(net.nodeValueNames[i])]
+                    aliases = FILE_ALIASES.get(name, {})
+                    values[name] = tuple(aliases.get(v, v) for v in vals)
+            dag = np.asarray(net.dag)
+            parents = {
+                names[j]: tuple(names[i] for i in np.flatnonzero(dag[:, j])) for j in range(len(names))
+            }
+            cpts = {}
+            for j, name in enumerate(names):
+                shape = tuple(len(values[p]) for p in parents[name]) + (len(values[name]),)
+                cpts[name] = np.asarray(net.bnet.CPD[j].CPT, dtype=float).reshape(shape)
+        except (AttributeError, IndexError, KeyError, TypeError, ValueError) as e:
+            raise ModelError(
+                f"{path}: not an original BNT network in {variable!r} ({type(e).__name__}: {e})"
+            ) from None
         schema = Schema(values=values, n_affordance=n_aff, aliases=FILE_ALIASES)
         meta = {"data_source": f"original model imported from {path.name}", "origin": str(path)}
         return cls(schema=schema, parents=parents, cpts=cpts, meta=meta)
