@@ -194,14 +194,25 @@ class BayesNet:
             schema = Schema(values=values, n_affordance=int(d["n_affordance"]), aliases=FILE_ALIASES)
             parents = {str(n["name"]): tuple(str(p) for p in n["parents"]) for n in nodes}
             cpts = {str(n["name"]): np.asarray(n["cpt"], dtype=float) for n in nodes}
+            meta = d.get("meta", {})
+            if not isinstance(meta, Mapping):
+                raise ModelError(f'{where}: "meta" must be an object, not {type(meta).__name__}')
         except ModelError:
             raise
-        except (KeyError, TypeError, ValueError) as e:
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError, RecursionError) as e:
             raise ModelError(f"{where}: malformed model ({type(e).__name__}: {e})") from None
         try:
-            return cls(schema=schema, parents=parents, cpts=cpts, meta=dict(d.get("meta", {})))
+            return cls(schema=schema, parents=parents, cpts=cpts, meta=dict(meta))
         except ModelError as e:
             raise ModelError(f"{where}: {e}") from None
+        except (
+            KeyError,
+            TypeError,
+            ValueError,
+            AttributeError,
+            IndexError,
+        ) as e:  # shapes the validation meets late
+            raise ModelError(f"{where}: malformed model ({type(e).__name__}: {e})") from None
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> BayesNet:
@@ -231,8 +242,8 @@ class BayesNet:
             raise ModelError(f"{path}: no such file") from None
         except KeyError:
             raise ModelError(f"{path}: no variable {variable!r} in the .mat file") from None
-        except (ValueError, TypeError, OSError, sio.matlab.MatReadError) as e:
-            raise ModelError(f"{path}: not a readable MATLAB file ({e})") from None
+        except Exception as e:  # scipy raises many types for a damaged file (MatReadError, IndexError, …)
+            raise ModelError(f"{path}: not a readable MATLAB file ({type(e).__name__}: {e})") from None
         try:  # the BNT structure: nodeNames, AFFORDNODES, nodeValueNames, dag, bnet.CPD{j}.CPT
             names = [str(n) for n in np.atleast_1d(net.nodeNames)]
             n_aff = len(np.atleast_1d(net.AFFORDNODES))

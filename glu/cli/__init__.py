@@ -70,6 +70,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     traceback with ``--debug`` or ``GLU_DEBUG=1``.
     """
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    nul = next((a for a in argv if "\x00" in a), None)
+    if nul is not None:  # no file name or value can hold one; the OS would refuse it deep inside
+        print(f"glu: error: argument {nul!r} contains a NUL byte", file=sys.stderr)
+        return EXIT_BAD_INPUT
     args = parser.parse_args(argv)
     sub = getattr(args, f"{args.command}_command", None)
     name = f"glu {args.command}" + (f" {sub}" if sub else "")

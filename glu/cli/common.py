@@ -97,6 +97,18 @@ def output_file(text: str) -> Path:
     return path
 
 
+IMAGE_SUFFIXES = (".png", ".svg", ".pdf", ".jpg", ".jpeg", ".eps", ".tif", ".tiff", ".webp")
+"""What ``--plot FILE`` may be (formats matplotlib writes)."""
+
+
+def output_image(text: str) -> Path:
+    """--plot FILE: an image file (by its suffix) whose folder can be written."""
+    path = output_file(text)
+    if path.suffix.lower() not in IMAGE_SUFFIXES:
+        raise argparse.ArgumentTypeError(f"{text}: an image is {', '.join(IMAGE_SUFFIXES)}")
+    return path
+
+
 def output_folder(text: str) -> Path:
     """-o DIR: a folder that exists or can be made, and can be written."""
     if not text.strip():

@@ -17,6 +17,7 @@ from glu.cli.common import (
     json_text,
     nonneg_float,
     output_file,
+    output_image,
     positive_float,
     positive_int,
     progress_bar,
@@ -48,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     s.add_argument("log", help="hand log: a data.log, a recording folder, or a recording name")
     add_data_option(s, "used to find a recording by name")
     s.add_argument(
-        "--plot", type=output_file, metavar="PNG", help="also draw the segmentation into this image"
+        "--plot", type=output_image, metavar="PNG", help="also draw the segmentation into this image"
     )
     s.add_argument("--label", help="action performed (default: from the recording's name, if known)")
     s.set_defaults(func=_segment)
