@@ -27,7 +27,7 @@ from hypothesis import strategies as st
 
 from glu.cli import build_parser, main
 
-PROFILE = settings(max_examples=12, deadline=None, derandomize=True, database=None,
+PROFILE = settings(max_examples=30, deadline=None, derandomize=True, database=None,
                    suppress_health_check=list(HealthCheck))  # fmt: skip
 LONG = settings(max_examples=150, deadline=None, derandomize=True, database=None,
                 suppress_health_check=list(HealthCheck))  # fmt: skip
