@@ -1,0 +1,41 @@
+"""Atomic writes (glu.files): complete or absent, and with the permissions the umask gives any other file."""
+
+from __future__ import annotations
+
+import os
+import stat
+
+import pytest
+
+from glu.files import atomic_write_text, staged_folder
+
+
+@pytest.fixture
+def umask():
+    old = os.umask(0o022)
+    os.umask(old)
+
+    def set_mask(mask: int) -> None:
+        os.umask(mask)
+
+    yield set_mask
+    os.umask(old)
+
+
+@pytest.mark.parametrize(("mask", "file_mode", "folder_mode"), [(0o022, 0o644, 0o755), (0o077, 0o600, 0o700),
+                                                                  (0o002, 0o664, 0o775)])  # fmt: skip
+def test_written_files_and_folders_respect_the_umask(tmp_path, umask, mask, file_mode, folder_mode):
+    umask(mask)
+    path = atomic_write_text(tmp_path / "a" / "f.txt", "x")
+    assert stat.S_IMODE(path.stat().st_mode) == file_mode  # a temporary file alone would be 0o600
+    with staged_folder(tmp_path / "d") as tmp:
+        (tmp / "g.txt").write_text("y")
+    assert stat.S_IMODE((tmp_path / "d").stat().st_mode) == folder_mode
+    assert (tmp_path / "d" / "g.txt").read_text() == "y"
+
+
+def test_a_failed_write_leaves_nothing(tmp_path):
+    with pytest.raises(RuntimeError), staged_folder(tmp_path / "d") as tmp:
+        (tmp / "half.txt").write_text("half")
+        raise RuntimeError("interrupted")
+    assert list(tmp_path.iterdir()) == []
