@@ -269,15 +269,6 @@ MUTATION = st.tuples(st.sampled_from(["truncate", "insert", "replace", "nan", "h
                      st.integers(0, 10**6), st.binary(min_size=1, max_size=12))  # fmt: skip
 
 
-def _hand_logs(profile, tmp_path_factory, files, capsys):
-    @profile
-    @given(m=MUTATION)
-    def run(m):
-        _hand_log(m, tmp_path_factory, files, capsys)
-
-    run()
-
-
 def _hand_log(m, tmp_path_factory, files, capsys):
     tmp = tmp_path_factory.mktemp("fuzz")
     log = tmp / "bad.log"
@@ -302,15 +293,6 @@ JSON_VALUES = st.sampled_from([None, 0, -1, 1e300, "x", "", [], {}, [[[]]], {"a"
                                [1.0, 1.0], [float("1e-320")], "slow"])  # fmt: skip
 
 
-def _model_jsons(profile, tmp_path_factory, files, capsys):
-    @profile
-    @given(path=st.lists(st.integers(0, 60), min_size=1, max_size=5), value=JSON_VALUES)
-    def run(path, value):
-        _model_json(path, value, tmp_path_factory, files, capsys)
-
-    run()
-
-
 def _model_json(path, value, tmp_path_factory, files, capsys):
     tmp = tmp_path_factory.mktemp("fuzz")
     model = tmp / "model.json"
@@ -324,15 +306,6 @@ def _model_json(path, value, tmp_path_factory, files, capsys):
 MAT_FIELDS = st.dictionaries(st.sampled_from(["dag", "names", "cpt", "node_sizes", "x", "netobj_lab"]),
                              st.sampled_from([0, 1, "a", [1, 2], [[0, 1], [1, 0]], [[1, 1], [1, 0]]]),
                              max_size=4)  # fmt: skip
-
-
-def _mat_files(profile, tmp_path_factory, files, capsys):
-    @profile
-    @given(m=MUTATION, fields=MAT_FIELDS)
-    def run(m, fields):
-        _mat_file(m, fields, tmp_path_factory, files, capsys)
-
-    run()
 
 
 def _mat_file(m, fields, tmp_path_factory, files, capsys):
@@ -365,15 +338,6 @@ BATCH_LINES = st.lists(
 )  # fmt: skip
 
 
-def _query_batches(profile, tmp_path_factory, files, capsys):
-    @profile
-    @given(lines=BATCH_LINES)
-    def run(lines):
-        _query_batch(lines, tmp_path_factory, files, capsys)
-
-    run()
-
-
 def _query_batch(lines, tmp_path_factory, files, capsys):
     tmp = tmp_path_factory.mktemp("fuzz")
     batch = tmp / "q.jsonl"
@@ -383,13 +347,31 @@ def _query_batch(lines, tmp_path_factory, files, capsys):
     )
 
 
-FILE_CASES = {"hand logs": _hand_logs, "model JSON": _model_jsons, ".mat files": _mat_files,
-              "query batches": _query_batches}  # fmt: skip
+FILE_CASES = {
+    "hand logs": (_hand_log, {"m": MUTATION}),
+    "model JSON": (
+        _model_json,
+        {"path": st.lists(st.integers(0, 60), min_size=1, max_size=5), "value": JSON_VALUES},
+    ),
+    ".mat files": (_mat_file, {"m": MUTATION, "fields": MAT_FIELDS}),
+    "query batches": (_query_batch, {"lines": BATCH_LINES}),
+}
+
+
+def _fuzz_files(case: str, tmp_path_factory, files, capsys, profile) -> None:
+    check, strategies = FILE_CASES[case]
+
+    @profile
+    @given(**strategies)
+    def run(**drawn):
+        check(**drawn, tmp_path_factory=tmp_path_factory, files=files, capsys=capsys)
+
+    run()
 
 
 @pytest.mark.parametrize("case", FILE_CASES)
 def test_corrupted_files(case, tmp_path_factory, files, capsys):
-    FILE_CASES[case](PROFILE, tmp_path_factory, files, capsys)
+    _fuzz_files(case, tmp_path_factory, files, capsys, PROFILE)
 
 
 @pytest.mark.slow
@@ -401,7 +383,7 @@ def test_long_profile(command, tmp_path_factory, files, capsys):
 @pytest.mark.slow
 @pytest.mark.parametrize("case", FILE_CASES)
 def test_long_profile_files(case, tmp_path_factory, files, capsys):
-    FILE_CASES[case](LONG, tmp_path_factory, files, capsys)
+    _fuzz_files(case, tmp_path_factory, files, capsys, LONG)
 
 
 @pytest.fixture(scope="module", autouse=True)
