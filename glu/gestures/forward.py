@@ -180,10 +180,33 @@ def forward_curve(log_b: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
     Returns
     -------
     array, shape (T, ...) — entry t-1 is ``log L(G_1^t)``; the last is the sequence's log-likelihood.
+
+    The scaled recursion of :func:`forward_step` runs over all frames with the emissions scaled at once
+    and underflow checked once at the end; only when some frame's scaled mass underflowed does it run
+    again frame by frame through :func:`forward_step` (whose log-domain fallback handles it). Both give
+    the same numbers where nothing underflows.
     """
-    out = np.empty(log_b.shape[:-1])
+    T = len(log_b)
+    if T == 0:
+        return np.empty(log_b.shape[:-1])
+    mx = log_b.max(axis=-1)  # (T, ...)
+    with np.errstate(all="ignore"):
+        b = np.exp(log_b - mx[..., None])
+        c = np.empty(log_b.shape[:-1])
+        new = startprob * b[0]
+        c[0] = new.sum(axis=-1)
+        alpha = new / c[0][..., None]
+        batch = alpha.ndim > 1
+        for t in range(1, T):
+            pred = (alpha[..., None, :] @ transmat)[..., 0, :] if batch else alpha @ transmat
+            new = pred * b[t]
+            c[t] = new.sum(axis=-1)
+            alpha = new / c[t][..., None]
+        if np.all(c > TINY):
+            return np.cumsum(np.log(c) + mx, axis=0)
+    out = np.empty(log_b.shape[:-1])  # underflow (or an impossible frame) somewhere: frame by frame
     state = None
-    for t in range(len(log_b)):
+    for t in range(T):
         state = forward_step(state, log_b[t], startprob, transmat)
         out[t] = state.loglik
     return out
