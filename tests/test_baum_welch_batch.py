@@ -1,0 +1,118 @@
+"""Batched Baum–Welch (glu.gestures.baum_welch_batch) against fitting each model alone (baum_welch.fit,
+itself tested against hmmlearn and brute force in test_hmm.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from glu.gestures import baum_welch as bw
+from glu.gestures.baum_welch_batch import fit_many, forward_backward_many
+from glu.gestures.training import init_left_to_right
+
+
+@pytest.fixture(scope="module")
+def corpus():
+    from glu.gestures.corpus import synthetic_corpus
+
+    return synthetic_corpus(8, seed=5, actions=("grasp", "tap", "touch"))
+
+
+def _start(seqs, Q, M, seed=0, reg=1e-3):
+    m = init_left_to_right(seqs, Q, M, seed, reg)
+    return bw.GMMHMMParams(m.startprob, m.transmat, m.weights, m.means, m.covars)
+
+
+def _assert_same(got, ref):
+    assert len(got) == len(ref)
+    for g, r in zip(got, ref, strict=True):
+        assert len(g.history) == len(r.history)
+        np.testing.assert_allclose(g.history, r.history, rtol=1e-10)
+        for name, a, b in zip(bw.GMMHMMParams._fields, g.params, r.params, strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-8, atol=1e-12, err_msg=name)
+
+
+@pytest.mark.parametrize("covariance", bw.COVARIANCES)
+def test_fit_many_equals_fitting_each_model_alone(corpus, covariance):
+    """Models with different numbers and lengths of sequences, and different shapes (grouped): same
+    iterations, histories and parameters as one fit per model; models stop at different iterations."""
+    problems, tols = [], []
+    for i, action in enumerate(("grasp", "tap", "touch")):
+        seqs = [s.xyz for s in corpus if s.action == action]
+        for drop, (Q, M) in enumerate([(6, 3), (6, 3), (4, 2), (6, 3)]):
+            subset = seqs[drop : len(seqs) - i]
+            problems.append((subset, _start(subset, Q, M, seed=drop)))
+            tols.append(1e-3 * sum(len(x) for x in subset) * (1 + drop))
+    n_iter, floor = 25, 0.0  # plain ML for "ml": its log-likelihood never decreases, so EM runs a while
+    ref = [bw.fit(s, p, n_iter, t, 1e-3, covariance, floor) for (s, p), t in zip(problems, tols, strict=True)]
+    assert len({len(r.history) for r in ref}) > 1  # the models do stop at different iterations
+    _assert_same(fit_many(problems, n_iter, tols, 1e-3, covariance, floor), ref)
+
+
+def test_fit_many_stops_at_n_iter_and_keeps_the_input_order(corpus):
+    seqs = [s.xyz for s in corpus if s.action == "tap"]
+    problems = [
+        (seqs[:3], _start(seqs[:3], 3, 1)),
+        (seqs[3:], _start(seqs[3:], 5, 2)),
+        (seqs, _start(seqs, 3, 1)),
+    ]
+    got = fit_many(problems, 4, 1e-300, 1e-3)
+    assert [len(r.history) for r in got] == [4, 4, 4]
+    _assert_same(got, [bw.fit(s, p, 4, 1e-300, 1e-3) for s, p in problems])
+
+
+def _underflowing_problem():
+    """A left-to-right model that must start in state 0, and sequences whose first frame sits on state 1's
+    mean, 85 standard deviations from state 0's: the scaled first frame underflows (e^-3600)."""
+    rng = np.random.default_rng(2)
+    seqs = [np.vstack([[[60.0, 60.0]], rng.normal(0.0, 1.0, (n, 2)), rng.normal(60.0, 1.0, (n, 2))])
+            for n in (6, 9)]  # fmt: skip
+    init = bw.GMMHMMParams(
+        np.array([1.0, 0.0]), np.array([[0.8, 0.2], [0.0, 1.0]]), np.ones((2, 1)),
+        np.array([[[0.0, 0.0]], [[60.0, 60.0]]]), np.tile(np.eye(2), (2, 1, 1, 1)),
+    )  # fmt: skip
+    return seqs, init
+
+
+def test_fit_many_redoes_only_the_underflowing_model_in_the_log_domain(monkeypatch):
+    from glu.gestures import baum_welch_batch
+
+    seqs, init = _underflowing_problem()
+    log_b = np.array([[[-1800.0, 0.0], [0.0, -5.0]]])
+    gamma, xi, ll, ok = forward_backward_many(log_b, np.array([2]), init.startprob[None], init.transmat[None])
+    assert not ok[0]  # the scaled pass reports the underflow; the log domain has it finite
+    assert np.isfinite(bw.forward_backward_log(log_b, np.array([2]), init.startprob, init.transmat)[2]).all()
+    rng = np.random.default_rng(3)
+    normal = [rng.normal(size=(n, 2)) + np.linspace(0, 3, n)[:, None] for n in (12, 20, 15)]
+    problems = [(normal, _start(normal, 2, 1)), (seqs, init), (normal[1:], _start(normal[1:], 2, 1))]
+    ref = [bw.fit(s, p, 6, 1e-300, 1e-2) for s, p in problems]
+    assert np.isfinite(ref[1].history).all()
+    redone = []
+
+    def log_domain(log_b, lengths, startprob, transmat):
+        redone.append(sorted(lengths.tolist()))
+        return bw.forward_backward_log(log_b, lengths, startprob, transmat)
+
+    monkeypatch.setattr(baum_welch_batch, "forward_backward_log", log_domain)
+    _assert_same(fit_many(problems, 6, 1e-300, 1e-2), ref)
+    assert redone and all(r == sorted(len(x) for x in seqs) for r in redone)  # that model, all its sequences
+
+
+def test_forward_backward_many_equals_one_model_at_a_time():
+    """Per-sequence parameters: each sequence as forward_backward (brute-force-tested) gives it alone."""
+    rng = np.random.default_rng(7)
+    S, T, Q = 5, 9, 3
+    lengths = np.array([9, 7, 7, 3, 1])
+    log_b = rng.normal(size=(S, T, Q)) * 3
+    pi = rng.dirichlet(np.ones(Q), size=S)
+    A = rng.dirichlet(np.ones(Q), size=(S, Q))
+    gamma, xi, ll, ok = forward_backward_many(log_b, lengths, pi, A)
+    assert ok.all()
+    for s in range(S):
+        g, x, lls = bw.forward_backward(log_b[s : s + 1, : lengths[s]], lengths[s : s + 1], pi[s], A[s])
+        np.testing.assert_allclose(ll[s], lls[0], rtol=1e-12)
+        np.testing.assert_allclose(gamma[s, : lengths[s]], g[0], atol=1e-12)
+        np.testing.assert_allclose(xi[s], x, atol=1e-12)
+        assert (gamma[s, lengths[s] :] == 0).all()
+    with pytest.raises(ValueError, match="decreasing"):
+        forward_backward_many(log_b, lengths[::-1].copy(), pi, A)
