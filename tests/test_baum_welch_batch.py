@@ -116,3 +116,46 @@ def test_forward_backward_many_equals_one_model_at_a_time():
         assert (gamma[s, lengths[s] :] == 0).all()
     with pytest.raises(ValueError, match="decreasing"):
         forward_backward_many(log_b, lengths[::-1].copy(), pi, A)
+
+
+# --- training several models at once, against the one-model path -----------------------------------
+
+
+def _assert_same_models(got, ref):
+    for (m, r), (m_ref, r_ref) in zip(got, ref, strict=True):
+        key = ("action", "n_sequences", "n_frames", "n_iter", "converged", "tol", "max_iter")
+        assert [getattr(r, k) for k in key] == [getattr(r_ref, k) for k in key]
+        np.testing.assert_allclose(r.history, r_ref.history, rtol=1e-10)
+        assert r.final_loglik == pytest.approx(r_ref.final_loglik, rel=1e-10)
+        for a in ("startprob", "transmat", "weights", "means", "covars"):
+            np.testing.assert_allclose(getattr(m, a), getattr(m_ref, a), rtol=1e-8, atol=1e-12, err_msg=a)
+
+
+def test_train_many_equals_train_hmm_per_model(corpus):
+    from glu.gestures.training import train_hmm, train_many
+
+    sets = [[s.xyz for s in corpus if s.action == a][i:] for a in ("grasp", "tap") for i in (0, 2)]
+    names, seeds = ["g0", "g2", "t0", "t2"], [0, 1, 2, 0]
+    kw = dict(n_iter=30, tol=1e-4, covar_reg=0.03, warn=False)
+    ref = [train_hmm(s, 5, 2, seed=sd, name=nm, **kw) for s, sd, nm in zip(sets, seeds, names, strict=True)]
+    _assert_same_models(train_many(sets, 5, 2, seed=seeds, name=names, **kw), ref)
+
+
+def test_train_mixsplit_many_equals_train_mixsplit_per_model(corpus):
+    from glu.gestures.mixsplit import train_mixsplit, train_mixsplit_many
+
+    sets = [[s.xyz for s in corpus if s.action == a][i:] for a in ("tap", "touch") for i in (0, 3)]
+    ref = [train_mixsplit(s, 4, 3, n_iter=15, name=f"m{i}", warn=False) for i, s in enumerate(sets)]
+    got = train_mixsplit_many(sets, 4, 3, n_iter=15, name=[f"m{i}" for i in range(len(sets))], warn=False)
+    _assert_same_models([g[:2] for g in got], [r[:2] for r in ref])
+    for g, r in zip(got, ref, strict=True):
+        assert [len(h) for h in g[2]] == [len(h) for h in r[2]]  # every stage ran as many iterations
+
+
+def test_training_errors_name_the_model_as_one_model_training_does(corpus):
+    from glu.errors import DataError
+    from glu.gestures.training import train_many
+
+    ok = [s.xyz for s in corpus if s.action == "tap"]
+    with pytest.raises(DataError, match="'short'.*too few"):
+        train_many([ok, [ok[0][:3]]], 6, 3, name=["tap", "short"])

@@ -167,6 +167,22 @@ def train_mixsplit(
     the model, a :class:`~glu.gestures.training.TrainingReport` of the last stage (``n_iter`` counts every
     stage's iterations), and the log-likelihood history of each stage (M = 1 first).
     """
+    seqs, n_frames = _checked(sequences, n_states, n_mix, n_iter, tol, covar_floor, name)
+    hmm = flat_start(seqs, n_states, name)
+    stages: list[tuple[float, ...]] = []
+    while True:
+        hmm, history = baum_welch(hmm, seqs, n_iter, tol, covar_floor)
+        stages.append(history)
+        if hmm.n_mix >= n_mix:
+            break
+        hmm = split_heaviest(hmm)
+    return (*_finish(hmm, seqs, stages, tol, n_iter, n_mix, name, warn), stages)
+
+
+def _checked(
+    sequences: Sequence[np.ndarray], n_states: int, n_mix: int, n_iter: int, tol: float, covar_floor: float,
+    name: str,
+) -> tuple[list[np.ndarray], int]:  # fmt: skip
     who = f"training data for {name!r}" if name else "training data"
     if len(sequences) == 0:
         raise DataError(f"{who}: no sequences")
@@ -180,14 +196,14 @@ def train_mixsplit(
         raise DataError(f"{who}: {n_frames} frames are too few for {n_states} states × {n_mix} mixtures")
     if n_iter < 1 or not tol > 0 or not covar_floor >= 0:
         raise ModelError(f"n_iter={n_iter} must be ≥ 1, tol={tol} > 0 and covar_floor={covar_floor} ≥ 0")
-    hmm = flat_start(seqs, n_states, name)
-    stages: list[tuple[float, ...]] = []
-    while True:
-        hmm, history = baum_welch(hmm, seqs, n_iter, tol, covar_floor)
-        stages.append(history)
-        if hmm.n_mix >= n_mix:
-            break
-        hmm = split_heaviest(hmm)
+    return seqs, n_frames
+
+
+def _finish(
+    hmm: GestureHMM, seqs: list[np.ndarray], stages: list[tuple[float, ...]], tol: float, n_iter: int,
+    n_mix: int, name: str, warn: bool,
+) -> tuple[GestureHMM, TrainingReport]:  # fmt: skip
+    n_frames = sum(len(X) for X in seqs)
     last = stages[-1]
     delta = last[-1] - last[-2] if len(last) >= 2 else math.inf
     converged = bool(abs(delta) < tol * n_frames)
@@ -195,5 +211,61 @@ def train_mixsplit(
     report = TrainingReport(name, len(seqs), n_frames, sum(len(h) for h in stages), converged, last, final,
                             tol, n_iter * n_mix)  # fmt: skip
     if not converged and warn:
-        warnings.warn(report.describe(), HMMConvergenceWarning, stacklevel=2)
-    return hmm, report, stages
+        warnings.warn(report.describe(), HMMConvergenceWarning, stacklevel=3)
+    return hmm, report
+
+
+def train_mixsplit_many(
+    sequences: Sequence[Sequence[np.ndarray]],
+    n_states: int = TrainingConfig.n_states,
+    n_mix: int = TrainingConfig.n_mix,
+    *,
+    n_iter: int = TrainingConfig.n_iter,
+    tol: float = TrainingConfig.tol,
+    covar_floor: float = COVAR_FLOOR,
+    name: str | Sequence[str] = "",
+    warn: bool = True,
+) -> list[tuple[GestureHMM, TrainingReport, list[tuple[float, ...]]]]:
+    """:func:`train_mixsplit` for many independent models, each stage's Baum–Welch batched.
+
+    ``sequences``: one list of training sequences (T_i, D) per model; ``name`` one for all or one per
+    model; the rest as :func:`train_mixsplit`. Every model goes through the same stages (M = 1 … n_mix),
+    and each stage is one :func:`glu.gestures.baum_welch_batch.fit_many` over all models, equal to
+    :func:`baum_welch` per model to rounding (tested). When Baum–Welch fails for some model, every model
+    is retrained alone so the error names it.
+    """
+    from threadpoolctl import threadpool_limits
+
+    from glu.gestures import baum_welch as bw
+    from glu.gestures.baum_welch_batch import fit_many
+
+    names = [name] * len(sequences) if isinstance(name, str) else list(name)
+    if len(names) != len(sequences):
+        raise ModelError(f"{len(sequences)} training sets need as many names, got {len(names)}")
+    checked = [
+        _checked(s, n_states, n_mix, n_iter, tol, covar_floor, nm)
+        for s, nm in zip(sequences, names, strict=True)
+    ]
+    hmms = [flat_start(seqs, n_states, nm) for (seqs, _), nm in zip(checked, names, strict=True)]
+    stages: list[list[tuple[float, ...]]] = [[] for _ in hmms]
+    try:
+        while True:
+            problems = [(seqs, bw.GMMHMMParams(h.startprob, h.transmat, h.weights, h.means, h.covars))
+                        for (seqs, _), h in zip(checked, hmms, strict=True)]  # fmt: skip
+            with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
+                warnings.simplefilter("ignore", RuntimeWarning)
+                results = fit_many(problems, n_iter, [tol * f for _, f in checked], covariance="ml",
+                                   covar_floor=covar_floor)  # fmt: skip
+            hmms = [GestureHMM(*r.params, name=nm) for r, nm in zip(results, names, strict=True)]
+            for st, r in zip(stages, results, strict=True):
+                st.append(tuple(float(h) for h in r.history))
+            if hmms[0].n_mix >= n_mix:
+                break
+            hmms = [split_heaviest(h) for h in hmms]
+    except (ValueError, np.linalg.LinAlgError, ModelError):  # say which model failed, as train_mixsplit does
+        return [train_mixsplit(seqs, n_states, n_mix, n_iter=n_iter, tol=tol, covar_floor=covar_floor, name=nm,
+                               warn=warn) for (seqs, _), nm in zip(checked, names, strict=True)]  # fmt: skip
+    return [
+        (*_finish(h, seqs, st, tol, n_iter, n_mix, nm, warn), st)
+        for h, (seqs, _), st, nm in zip(hmms, checked, stages, names, strict=True)
+    ]

@@ -43,9 +43,9 @@ from glu.gestures.batch import Bank, stack_models
 from glu.gestures.features import FEATURES_DESCRIPTION
 from glu.gestures.forward import ForwardState, forward_curve, forward_step, log_emissions, p_hmm_from_loglik
 from glu.gestures.invariants import Invariants
-from glu.gestures.mixsplit import RECIPES, train_mixsplit
+from glu.gestures.mixsplit import RECIPES, train_mixsplit_many
 from glu.gestures.model import GestureHMM, as_sequence
-from glu.gestures.training import TrainingConfig, TrainingReport, train_hmm
+from glu.gestures.training import TrainingConfig, TrainingReport, train_many
 from glu.gestures.typicality import (
     META_KEY,
     LoglikRange,
@@ -308,27 +308,25 @@ def train_recognizer(
     """Train one left-to-right GMM-HMM per action; ``sequences``: action → list of (T_i, D).
 
     ``recipe``: ``"glu"`` (:func:`~glu.gestures.training.train_hmm`) or ``"mixsplit"``, the originals'
-    flat start and mixture splitting (:func:`~glu.gestures.mixsplit.train_mixsplit`). ``progress(action)``
-    is called after each model (for a progress bar). The recogniser's meta keeps the per-frame
+    flat start and mixture splitting (:func:`~glu.gestures.mixsplit.train_mixsplit`); the actions' models
+    are trained together (:func:`train_models`). ``progress(action)`` is called for each model once they
+    are trained (for a progress bar). The recogniser's meta keeps the per-frame
     log-likelihood range of each action's training sequences (:mod:`glu.gestures.typicality`).
     ``features`` (:class:`~glu.gestures.invariants.Invariants` or a name such as ``"centred,rotated"``; default
     raw): the models are trained on these features of the hand features given, and the recogniser applies
     the same to whatever it scores.
     """
-    if recipe not in RECIPES:
-        raise ModelError(f"unknown training recipe {recipe!r}; allowed: {', '.join(RECIPES)}")
     features = Invariants.parse(features)
-    models, reports, seen = {}, {}, {}
-    for action, seqs in sequences.items():
-        if not features.is_raw:
-            seqs = [features.transform(X) for X in seqs]
-        seen[action] = seqs  # what the models see: the typicality ranges are measured on these
-        kw = dict(n_iter=n_iter, tol=tol, covar_reg=covar_reg, seed=seed, name=action, warn=warn)
-        if recipe == "mixsplit":
-            models[action], reports[action], _ = train_mixsplit(seqs, n_states, n_mix, **kw)
-        else:
-            models[action], reports[action] = train_hmm(seqs, n_states, n_mix, **kw)
-        if progress is not None:
+    seen = {
+        a: seqs if features.is_raw else [features.transform(X) for X in seqs] for a, seqs in sequences.items()
+    }
+    # what the models see: the typicality ranges are measured on these
+    trained = train_models(list(seen.values()), n_states, n_mix, n_iter=n_iter, tol=tol, covar_reg=covar_reg,
+                           seed=seed, name=list(seen), warn=warn, recipe=recipe)  # fmt: skip
+    models = {a: m for a, (m, _) in zip(seen, trained, strict=True)}
+    reports = {a: r for a, (_, r) in zip(seen, trained, strict=True)}
+    if progress is not None:
+        for action in models:
             progress(action)
     ranges = {a: training_range(models[a], seen[a]) for a in models}
     info = {
@@ -343,3 +341,31 @@ def train_recognizer(
         "features": features.name,
     }
     return Recognizer(models, reports, {**info, **(meta or {})}, features)
+
+
+def train_models(
+    sequences: Sequence[Sequence[np.ndarray]],
+    n_states: int = TrainingConfig.n_states,
+    n_mix: int = TrainingConfig.n_mix,
+    *,
+    n_iter: int = TrainingConfig.n_iter,
+    tol: float = TrainingConfig.tol,
+    covar_reg: float = TrainingConfig.covar_reg,
+    seed: int | Sequence[int] = 0,
+    name: str | Sequence[str] = "",
+    warn: bool = True,
+    recipe: str = "glu",
+) -> list[tuple[GestureHMM, TrainingReport]]:
+    """Many independent models by one recipe, their EM batched: (model, report) per list of sequences.
+
+    ``sequences``: one list of training sequences (T_i, D) per model (features as the models should see
+    them); ``seed`` and ``name`` one for all or one per model. ``recipe`` ``"glu"`` is
+    :func:`~glu.gestures.training.train_many`, ``"mixsplit"`` :func:`~glu.gestures.mixsplit.train_mixsplit_many`
+    (which ignores seed and covar_reg); each model equals what its one-model function returns (to rounding).
+    """
+    if recipe not in RECIPES:
+        raise ModelError(f"unknown training recipe {recipe!r}; allowed: {', '.join(RECIPES)}")
+    kw = dict(n_iter=n_iter, tol=tol, name=name, warn=warn)
+    if recipe == "mixsplit":
+        return [(m, r) for m, r, _ in train_mixsplit_many(sequences, n_states, n_mix, **kw)]
+    return train_many(sequences, n_states, n_mix, covar_reg=covar_reg, seed=seed, **kw)

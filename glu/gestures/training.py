@@ -215,9 +215,24 @@ def train_hmm(
     the model and a :class:`TrainingReport`. Zero transitions of the left-to-right initialisation stay
     zero (EM cannot create transitions that have zero probability).
     """
-    who = f"training data for {name!r}" if name else "training data"
     if engine not in ENGINES:
         raise ModelError(f"unknown EM engine {engine!r}; allowed: {', '.join(ENGINES)}")
+    seqs, n_frames = _checked(sequences, n_states, n_mix, n_iter, tol, name)
+    from threadpoolctl import threadpool_limits
+
+    # one thread for BLAS and OpenMP: the many small k-means and linear-algebra calls are several times
+    # slower with thread hand-offs (and the sweeps parallelise over models instead)
+    with threadpool_limits(1):
+        init = init_left_to_right(seqs, n_states, n_mix, seed, covar_reg, name)
+        fitted_params, history = _run_em(engine, seqs, init, n_iter, tol * n_frames, covar_reg, seed, name)
+    return _finish(seqs, fitted_params, history, tol, n_iter, name, warn)
+
+
+def _checked(
+    sequences: Sequence[np.ndarray], n_states: int, n_mix: int, n_iter: int, tol: float, name: str
+) -> tuple[list[np.ndarray], int]:
+    """The training sequences as float arrays (T_i, D) and their number of frames, or a clear error."""
+    who = f"training data for {name!r}" if name else "training data"
     if len(sequences) == 0:
         raise DataError(f"{who}: no sequences")
     D = np.asarray(sequences[0]).shape[-1] if np.asarray(sequences[0]).ndim == 2 else 3
@@ -229,24 +244,87 @@ def train_hmm(
         raise DataError(f"{who}: {n_frames} frames are too few for {n_states} states × {n_mix} mixtures")
     if n_iter < 1 or not tol > 0:
         raise ModelError(f"n_iter={n_iter} must be ≥ 1 and tol={tol} > 0")
-    from threadpoolctl import threadpool_limits
+    return seqs, n_frames
 
-    # one thread for BLAS and OpenMP: the many small k-means and linear-algebra calls are several times
-    # slower with thread hand-offs (and the sweeps parallelise over models instead)
-    with threadpool_limits(1):
-        init = init_left_to_right(seqs, n_states, n_mix, seed, covar_reg, name)
-        fitted_params, history = _run_em(engine, seqs, init, n_iter, tol * n_frames, covar_reg, seed, name)
+
+def _finish(
+    seqs: list[np.ndarray], fitted_params: tuple[np.ndarray, ...], history: tuple[float, ...], tol: float,
+    n_iter: int, name: str, warn: bool,
+) -> tuple[GestureHMM, TrainingReport]:  # fmt: skip
+    """The fitted model and its :class:`TrainingReport` (warning when EM did not converge)."""
     try:
         fitted = GestureHMM(*fitted_params, name=name)
     except ModelError as e:
         raise ModelError(f"EM diverged for {name or 'the model'} ({e}); try a larger covar_reg") from None
+    n_frames = sum(len(X) for X in seqs)
     delta = history[-1] - history[-2] if len(history) >= 2 else math.inf
     converged = bool(abs(delta) < tol * n_frames)
     final = float(sum(fitted.loglik(X) for X in seqs))
     report = TrainingReport(name, len(seqs), n_frames, len(history), converged, history, final, tol, n_iter)
     if not converged and warn:
-        warnings.warn(report.describe(), HMMConvergenceWarning, stacklevel=2)
+        warnings.warn(report.describe(), HMMConvergenceWarning, stacklevel=3)
     return fitted, report
+
+
+def train_many(
+    sequences: Sequence[Sequence[np.ndarray]],
+    n_states: int = TrainingConfig.n_states,
+    n_mix: int = TrainingConfig.n_mix,
+    *,
+    n_iter: int = TrainingConfig.n_iter,
+    tol: float = TrainingConfig.tol,
+    covar_reg: float = TrainingConfig.covar_reg,
+    seed: int | Sequence[int] = 0,
+    name: str | Sequence[str] = "",
+    warn: bool = True,
+) -> list[tuple[GestureHMM, TrainingReport]]:
+    """:func:`train_hmm` (glu's engine) for many independent models at once, EM batched.
+
+    Parameters
+    ----------
+    sequences : one list of training sequences (arrays of shape (T_i, D)) per model
+    n_states, n_mix, n_iter, tol, covar_reg, warn : as :func:`train_hmm`, the same for every model
+    seed, name : one for all models, or one per model
+
+    Returns
+    -------
+    (model, report) per entry of ``sequences``, in order: what ``train_hmm`` returns for it (the same
+    initialisation; Baum–Welch by :func:`glu.gestures.baum_welch_batch.fit_many`, equal to the one-model
+    EM to rounding, tested). When EM fails for some model, every model is retrained alone so the error
+    names the model, as ``train_hmm`` would.
+    """
+    n = len(sequences)
+    seeds = [seed] * n if isinstance(seed, int | np.integer) else list(seed)
+    names = [name] * n if isinstance(name, str) else list(name)
+    if len(seeds) != n or len(names) != n:
+        raise ModelError(f"{n} training sets need as many seeds and names, got {len(seeds)} and {len(names)}")
+    checked = [
+        _checked(seqs, n_states, n_mix, n_iter, tol, nm) for seqs, nm in zip(sequences, names, strict=True)
+    ]
+    from threadpoolctl import threadpool_limits
+
+    from glu.gestures import baum_welch as bw
+    from glu.gestures.baum_welch_batch import fit_many
+
+    with threadpool_limits(1):
+        problems = []
+        for (seqs, _), sd, nm in zip(checked, seeds, names, strict=True):
+            init = init_left_to_right(seqs, n_states, n_mix, sd, covar_reg, nm)
+            problems.append(
+                (seqs, bw.GMMHMMParams(init.startprob, init.transmat, init.weights, init.means, init.covars))
+            )
+        try:
+            with warnings.catch_warnings(), np.errstate(all="ignore"):
+                warnings.simplefilter("ignore", RuntimeWarning)
+                results = fit_many(problems, n_iter, [tol * f for _, f in checked], covar_reg, "map")
+        except (ValueError, np.linalg.LinAlgError):  # say which model failed, as train_hmm does
+            kw = dict(n_iter=n_iter, tol=tol, covar_reg=covar_reg, warn=warn)
+            return [train_hmm(seqs, n_states, n_mix, seed=sd, name=nm, **kw)
+                    for (seqs, _), sd, nm in zip(checked, seeds, names, strict=True)]  # fmt: skip
+    return [
+        _finish(seqs, tuple(r.params), tuple(float(h) for h in r.history), tol, n_iter, nm, warn)
+        for (seqs, _), r, nm in zip(checked, results, names, strict=True)
+    ]
 
 
 def _run_em(
