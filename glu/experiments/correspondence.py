@@ -31,7 +31,7 @@ from glu.errors import DataError
 from glu.experiments.common import tidy
 from glu.gestures.corpus import Corpus, synthetic_corpus
 from glu.gestures.invariants import Invariants
-from glu.gestures.recognizer import Recognizer, train_recognizer
+from glu.gestures.recognizer import Recognizer, train_recognizer, train_recognizers
 from glu.gestures.robot import ROBOT_NOISE
 from glu.gestures.synthetic import SYNTHETIC_POLICY, View, synthesize_gesture
 from glu.gestures.trajectories import repair
@@ -143,10 +143,19 @@ def _test_seed(seed: int) -> int:
     return int(np.random.SeedSequence([seed, 13]).generate_state(1)[0])
 
 
-def _accuracy(rec: Recognizer, corpus: Corpus) -> tuple[float, dict[str, float]]:
-    hits = np.array([rec.classify(s.xyz) == s.action for s in corpus])
-    actions = np.array([s.action for s in corpus])
-    return float(hits.mean()), {a: float(hits[actions == a].mean()) for a in dict.fromkeys(actions)}
+def _accuracies(rec: Recognizer, corpora: Sequence[Corpus]) -> list[tuple[float, dict[str, float]]]:
+    """Accuracy, and per action, of ``rec`` on each corpus (every sequence scored in one batch)."""
+    ll = rec.loglik_many([s.xyz for corpus in corpora for s in corpus])
+    predicted = np.array(rec.actions)[np.argmax(ll, axis=1)]  # as Recognizer.classify
+    out, lo = [], 0
+    for corpus in corpora:
+        actions = np.array([s.action for s in corpus])
+        hits = predicted[lo : lo + len(corpus)] == actions
+        lo += len(corpus)
+        out.append(
+            (float(hits.mean()), {a: float(hits[actions == a].mean()) for a in dict.fromkeys(actions)})
+        )
+    return out
 
 
 def correspondence_study(
@@ -186,9 +195,10 @@ def correspondence_study(
     conditions = list(conditions or default_conditions(normalise_body))
     settings = dict(invariant_settings or {})
     specs = [Invariants.parse(f, **settings) for f in feature_sets]
-    rows = []
+    runs, sets = [], []  # (seed, source, spec) of every recogniser, and its training set
+    tests = {}
     for seed in seeds:
-        tests = [
+        tests[seed] = [
             synthetic_corpus(n_test, _test_seed(seed), view=c.view, noise=c.noise, spike_rate=c.spike_rate,
                              dropout_rate=c.dropout_rate)
             for c in conditions
@@ -197,17 +207,23 @@ def correspondence_study(
             corpus = training_corpus(source, n_train, seed, normalise_body)
             by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
             for spec in specs:
-                rec = train_recognizer(by_action, n_states, n_mix, n_iter=n_iter, tol=tol, seed=seed,
-                                       warn=False, features=spec)  # fmt: skip
-                for c, test in zip(conditions, tests, strict=True):
-                    acc, per_action = _accuracy(rec, test)
-                    rows.append({
-                        "seed": seed, "train": source, "features": spec.name, "factor": c.factor,
-                        "level": c.level, "yaw_deg": c.view.yaw_deg, "mirror": c.view.mirror,
-                        "posture": c.view.posture, "size": c.view.size, "noise_m": c.noise,
-                        "n_test": len(test), "accuracy": acc,
-                        **{f"accuracy_{a}": v for a, v in per_action.items()},
-                    })  # fmt: skip
+                runs.append((seed, source, spec))
+                sets.append(by_action)
+    # every model of every recogniser in one batch (each as train_recognizer would train it)
+    recs = train_recognizers(sets, n_states, n_mix, n_iter=n_iter, tol=tol, seed=[r[0] for r in runs],
+                             warn=False, features=[r[2] for r in runs])  # fmt: skip
+    rows = []
+    for (seed, source, spec), rec in zip(runs, recs, strict=True):
+        for c, test, (acc, per_action) in zip(
+            conditions, tests[seed], _accuracies(rec, tests[seed]), strict=True
+        ):
+            rows.append({
+                "seed": seed, "train": source, "features": spec.name, "factor": c.factor,
+                "level": c.level, "yaw_deg": c.view.yaw_deg, "mirror": c.view.mirror,
+                "posture": c.view.posture, "size": c.view.size, "noise_m": c.noise,
+                "n_test": len(test), "accuracy": acc,
+                **{f"accuracy_{a}": v for a, v in per_action.items()},
+            })  # fmt: skip
     return tidy(
         pd.DataFrame(rows), "correspondence_study",
         f"synthetic data: the robot's own movements and one human view → human gestures seen otherwise "

@@ -26,7 +26,7 @@ from glu.experiments.common import corpus_source, model_source, tidy
 from glu.gestures.corpus import LabelledSequence, original_test_segments, synthetic_corpus
 from glu.gestures.forward import p_hmm_from_loglik
 from glu.gestures.original import load_original_models
-from glu.gestures.recognizer import Recognizer, train_recognizer
+from glu.gestures.recognizer import Recognizer, train_recognizer, train_recognizers
 from glu.schema import ACTIONS
 
 
@@ -49,18 +49,27 @@ def stratified_folds(labels: Sequence[str], k: int, seed: int = 0) -> np.ndarray
     return fold
 
 
+def _by_action(seqs: Sequence[LabelledSequence], actions: Sequence[str]) -> dict[str, list[np.ndarray]]:
+    by_action = {a: [s.xyz for s in seqs if s.action == a] for a in actions}
+    return {a: v for a, v in by_action.items() if v}
+
+
 def _train(
     seqs: Sequence[LabelledSequence], actions: Sequence[str], seed: int, train: dict[str, Any]
 ) -> Recognizer:
-    by_action = {a: [s.xyz for s in seqs if s.action == a] for a in actions}
-    by_action = {a: v for a, v in by_action.items() if v}
-    return train_recognizer(by_action, seed=seed, warn=False, **train)
+    return train_recognizer(_by_action(seqs, actions), seed=seed, warn=False, **train)
+
+
+def _train_all(
+    sets: Sequence[tuple[Sequence[LabelledSequence], Sequence[str]]], seed: int, train: dict[str, Any]
+) -> list[Recognizer]:
+    """One recogniser per (training set, actions), every model trained in one batch (each as :func:`_train`)."""
+    return train_recognizers([_by_action(s, a) for s, a in sets], seed=seed, warn=False, **train)
 
 
 def _predict_rows(rec: Recognizer, test: Sequence[LabelledSequence], **extra: Any) -> list[dict[str, Any]]:
     rows = []
-    for s in test:
-        ll = rec.loglik(s.xyz)
+    for s, ll in zip(test, rec.loglik_many([s.xyz for s in test]), strict=True):
         p = p_hmm_from_loglik(ll)
         row = {
             **extra, "recording": s.recording, "start": s.start, "end": s.end, "n_frames": len(s.xyz),
@@ -83,13 +92,35 @@ def cross_validate(
     ``n_mix``, ``n_iter``, ``tol``, ``covar_reg``).
     Columns: fold, recording, start, end, n_frames, action, predicted, loglik_<a>, p_hmm_<a>, correct, converged.
     """
-    actions = tuple(dict.fromkeys(s.action for s in sequences))
+    splits = _folds(sequences, k, seed)
+    actions = _actions(sequences)
+    recs = _train_all([(tr, actions) for tr, _ in splits], seed, train)
+    return _cv_frame(sequences, splits, recs, k, seed, train)
+
+
+def _actions(sequences: Sequence[LabelledSequence]) -> tuple[str, ...]:
+    return tuple(dict.fromkeys(s.action for s in sequences))
+
+
+def _folds(
+    sequences: Sequence[LabelledSequence], k: int, seed: int
+) -> list[tuple[list[LabelledSequence], list[LabelledSequence]]]:
+    """(training, test) sequences of each of the k folds."""
     folds = stratified_folds([s.action for s in sequences], k, seed)
+    return [
+        ([s for s, g in zip(sequences, folds, strict=True) if g != f],
+         [s for s, g in zip(sequences, folds, strict=True) if g == f])
+        for f in range(k)
+    ]  # fmt: skip
+
+
+def _cv_frame(
+    sequences: Sequence[LabelledSequence], splits: list[tuple[list[LabelledSequence], list[LabelledSequence]]],
+    recs: Sequence[Recognizer], k: int, seed: int, train: dict[str, Any],
+) -> pd.DataFrame:  # fmt: skip
     rows = []
-    for f in range(k):
-        tr = [s for s, g in zip(sequences, folds, strict=True) if g != f]
-        te = [s for s, g in zip(sequences, folds, strict=True) if g == f]
-        rows += _predict_rows(_train(tr, actions, seed, train), te, fold=f)
+    for f, ((_, te), rec) in enumerate(zip(splits, recs, strict=True)):
+        rows += _predict_rows(rec, te, fold=f)
     return tidy(pd.DataFrame(rows), "hmm_cross_validation", corpus_source(sequences), k=k, seed=seed, **train)
 
 
@@ -122,11 +153,13 @@ def accuracy_vs_noise(
     One row per noise level: noise_m, n_sequences, k, accuracy, and accuracy_<action> per action.
     The corpora share the seed, so only the noise differs between rows.
     """
+    corpora = [synthetic_corpus(n_per_action, seed, actions=actions, noise=noise) for noise in noise_levels]
+    splits = [_folds(c, k, seed) for c in corpora]
+    recs = iter(_train_all([(tr, _actions(c)) for c, sp in zip(corpora, splits, strict=True) for tr, _ in sp],
+                           seed, train))  # fmt: skip
     rows = []
-    for noise in noise_levels:
-        pred = cross_validate(
-            synthetic_corpus(n_per_action, seed, actions=actions, noise=noise), k, seed, **train
-        )
+    for noise, corpus, sp in zip(noise_levels, corpora, splits, strict=True):
+        pred = _cv_frame(corpus, sp, [next(recs) for _ in sp], k, seed, train)
         row = {"noise_m": float(noise), "n_sequences": len(pred), "k": k, "accuracy": accuracy(pred)}
         for a in actions:
             row[f"accuracy_{a}"] = accuracy(pred[pred["action"] == a])
@@ -153,14 +186,20 @@ def leave_one_out(
         s.recording if by == "recording" else f"{s.recording}:{s.start}-{s.end}#{i}"
         for i, s in enumerate(sequences)
     ]
-    rows = []
+    held = []  # (key, test, training) of every held-out key
     for key in dict.fromkeys(keys):
         te = [s for s, g in zip(sequences, keys, strict=True) if g == key]
         tr = [s for s, g in zip(sequences, keys, strict=True) if g != key]
+        held.append((key, te, tr))
+    trainable = [h for h in held if any(s.action in {t.action for t in h[2]} for s in h[1])]
+    recs = dict(zip([h[0] for h in trainable], _train_all([(h[2], actions) for h in trainable], seed, train),
+                    strict=True))  # fmt: skip
+    rows = []
+    for key, te, tr in held:
         trained_actions = {s.action for s in tr}
         testable = [s for s in te if s.action in trained_actions]
         if testable:
-            rows += _predict_rows(_train(tr, actions, seed, train), testable, held_out=key, testable=True)
+            rows += _predict_rows(recs[key], testable, held_out=key, testable=True)
         for s in te:
             if s.action not in trained_actions:
                 rows.append({

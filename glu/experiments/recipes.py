@@ -24,22 +24,22 @@ import pandas as pd
 from glu.experiments.common import corpus_source, tidy
 from glu.experiments.gestures import accuracy
 from glu.gestures.corpus import LabelledSequence
+from glu.gestures.invariants import Invariants
 from glu.gestures.mixsplit import RECIPES
-from glu.gestures.recognizer import Recognizer, train_recognizer
+from glu.gestures.recognizer import Recognizer, train_models
 
 COLUMNS = ["recipe", "seed", "tol", "loso_accuracy", "loso_correct", "loso_testable", "test_predicted",
            "test_correct", "train_loglik_per_frame"]  # fmt: skip
-
-
-def _model(seqs: Sequence[LabelledSequence], action: str, seed: int, train: dict[str, Any]) -> Any:
-    rec = train_recognizer({action: [s.xyz for s in seqs]}, seed=seed, warn=False, **train)
-    return rec.models[action], rec.reports[action]
 
 
 def leave_one_segment_out(
     sequences: Sequence[LabelledSequence], seed: int = 0, **train: Any
 ) -> tuple[pd.DataFrame, Recognizer]:
     """Hold out each segment in turn, train on the rest, recognise it; and the models trained on everything.
+
+    Every model (one per action on all segments, one per testable fold) is trained in one batch
+    (:func:`glu.gestures.recognizer.train_models`), each as :func:`~glu.gestures.recognizer.train_recognizer`
+    would train it alone (tested equal).
 
     Returns
     -------
@@ -48,25 +48,39 @@ def leave_one_segment_out(
     all segments)
     """
     actions = tuple(dict.fromkeys(s.action for s in sequences))
-    full = {a: _model([s for s in sequences if s.action == a], a, seed, train) for a in actions}
+    features = Invariants.parse(train.pop("features", None))
+    settings = {k: v for k, v in train.items() if k not in ("meta", "progress")}
+    seen = [s.xyz if features.is_raw else features.transform(s.xyz) for s in sequences]  # what models see
+    jobs = [(a, [x for x, s in zip(seen, sequences, strict=True) if s.action == a]) for a in actions]
+    folds = []  # (held-out index, the rest of its action)
+    for i, held in enumerate(sequences):
+        rest = [
+            x
+            for j, (x, s) in enumerate(zip(seen, sequences, strict=True))
+            if j != i and s.action == held.action
+        ]
+        if rest:
+            folds.append(i)
+            jobs.append((held.action, rest))
+    trained = train_models([seqs for _, seqs in jobs], seed=seed, name=[a for a, _ in jobs], warn=False,
+                           **settings)  # fmt: skip
+    full = dict(zip(actions, trained[: len(actions)], strict=True))
+    fold_model = dict(zip(folds, (m for m, _ in trained[len(actions) :]), strict=True))
     rows = []
     for i, held in enumerate(sequences):
-        rest = [s for j, s in enumerate(sequences) if j != i and s.action == held.action]
         row = {"recording": held.recording, "start": held.start, "end": held.end, "action": held.action}
-        if rest:
-            models = {
-                a: (_model(rest, a, seed, train)[0] if a == held.action else full[a][0]) for a in actions
-            }
-            predicted = Recognizer(models, features=train.get("features")).classify(held.xyz)
+        if i in fold_model:
+            models = {a: (fold_model[i] if a == held.action else full[a][0]) for a in actions}
+            predicted = Recognizer(models, features=features).classify(held.xyz)
         else:
             predicted = None
         rows.append(
-            {**row, "predicted": predicted, "testable": bool(rest), "correct": predicted == held.action}
+            {**row, "predicted": predicted, "testable": i in fold_model, "correct": predicted == held.action}
         )
     everything = Recognizer(
         {a: m for a, (m, _) in full.items()},
         {a: r for a, (_, r) in full.items()},
-        features=train.get("features"),
+        features=features,
     )  # the models were trained on these (invariant) features: the recogniser computes them too
     return pd.DataFrame(rows), everything
 

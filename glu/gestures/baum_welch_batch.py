@@ -57,6 +57,10 @@ from glu.gestures.baum_welch import (
 )
 from glu.gestures.forward import TINY, gaussian_factors
 
+MAX_BATCH_FLOATS = 4_000_000
+"""Models are batched in chunks whose (model, component, frame, feature) arrays hold about this many floats
+(32 MB each): more models per batch gain little once a chunk has a few dozen."""
+
 
 def forward_backward_many(
     log_b: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
@@ -184,10 +188,22 @@ def fit_many(
     for k, (seqs, init) in enumerate(items):
         groups.setdefault((*init.weights.shape, seqs[0].shape[1]), []).append(k)
     out: list[FitResult | None] = [None] * len(items)
-    for ks in groups.values():
-        results = _fit_group([items[k] for k in ks], n_iter, tols[ks], covar_reg, covariance, covar_floor)
-        for k, r in zip(ks, results, strict=True):
-            out[k] = r
+    for (Q, M, D), ks in groups.items():
+        chunks: list[list[int]] = [[]]
+        widest = 0
+        for k in ks:  # bound the (model, component, frame) arrays: about MAX_BATCH_FLOATS floats each
+            n = sum(len(x) for x in items[k][0])
+            if chunks[-1] and (len(chunks[-1]) + 1) * max(widest, n) * Q * M * D > MAX_BATCH_FLOATS:
+                chunks.append([])
+                widest = 0
+            chunks[-1].append(k)
+            widest = max(widest, n)
+        for chunk in chunks:
+            results = _fit_group(
+                [items[k] for k in chunk], n_iter, tols[chunk], covar_reg, covariance, covar_floor
+            )
+            for k, r in zip(chunk, results, strict=True):
+                out[k] = r
     return out  # type: ignore[return-value]
 
 

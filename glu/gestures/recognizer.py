@@ -41,7 +41,14 @@ from glu.errors import DataError, ModelError
 from glu.files import atomic_write_json
 from glu.gestures.batch import Bank, stack_models
 from glu.gestures.features import FEATURES_DESCRIPTION
-from glu.gestures.forward import ForwardState, forward_curve, forward_step, log_emissions, p_hmm_from_loglik
+from glu.gestures.forward import (
+    TINY,
+    ForwardState,
+    forward_curve,
+    forward_step,
+    log_emissions,
+    p_hmm_from_loglik,
+)
 from glu.gestures.invariants import Invariants
 from glu.gestures.mixsplit import RECIPES, train_mixsplit_many
 from glu.gestures.model import GestureHMM, as_sequence
@@ -184,6 +191,48 @@ class Recognizer:
         """``log L(G | A)`` for each action, shape (n_actions,), of a sequence of shape (T, D)."""
         return self.loglik_curve(X)[-1]
 
+    def loglik_many(self, sequences: Sequence[np.ndarray]) -> np.ndarray:
+        """:meth:`loglik` of many sequences (each of shape (T_i, D)), shape (S, n_actions), in one batch.
+
+        The emissions of every frame come from one call, and the forward recursion of
+        :func:`~glu.gestures.forward.forward_curve` runs over all sequences at once (sorted by length, the
+        finished ones dropping out); a sequence whose scaled mass underflowed for some model is scored
+        again alone by :meth:`loglik`. The same numbers as :meth:`loglik` of each sequence (tested).
+        """
+        seqs = [self.transform(X) for X in sequences]
+        if not seqs:
+            return np.empty((0, len(self.actions)))
+        bank = self.bank
+        lengths = np.array([len(X) for X in seqs])
+        order = np.argsort(-lengths, kind="stable")
+        lengths_sorted = lengths[order]
+        S, T = len(seqs), int(lengths_sorted[0])
+        alive = np.arange(T)[None, :] < lengths_sorted[:, None]
+        log_b = np.zeros((S, T) + bank.log_norm.shape[:-1])  # (S, T, A, Q); padding: ignored
+        log_b[alive] = log_emissions(np.concatenate([seqs[i] for i in order]), bank.means, bank.chol_inv,
+                                     bank.log_norm)  # fmt: skip
+        n_live = alive.sum(axis=0)
+        mx = log_b.max(axis=-1)  # (S, T, A)
+        c = np.ones(mx.shape)
+        with np.errstate(all="ignore"):
+            b = np.exp(log_b - mx[..., None])
+            new = bank.startprob * b[:, 0]
+            c[:, 0] = new.sum(axis=-1)
+            alpha = new / c[:, 0][..., None]  # (S, A, Q)
+            for t in range(1, T):
+                n = n_live[t]
+                new = (alpha[:n, :, None, :] @ bank.transmat)[..., 0, :] * b[:n, t]
+                c[:n, t] = new.sum(axis=-1)
+                alpha[:n] = new / c[:n, t][..., None]
+            ok = np.where(alive[..., None], c > TINY, True).all(axis=(1, 2))
+            steps = np.where(alive[..., None], np.log(c) + mx, 0.0)
+        total = np.cumsum(steps, axis=1)[np.arange(S), lengths_sorted - 1]  # (S, A), summed as forward_curve
+        out = np.empty_like(total)
+        out[order] = total
+        for i in order[~ok]:  # underflow somewhere: the per-sequence path with its log-domain fallback
+            out[i] = self.loglik(sequences[i])
+        return out
+
     def p_hmm(self, X: np.ndarray) -> np.ndarray:
         """``p_HMM(A | G)`` with equal priors, shape (n_actions,), of a sequence of shape (T, D)."""
         return p_hmm_from_loglik(self.loglik(X))
@@ -316,31 +365,61 @@ def train_recognizer(
     raw): the models are trained on these features of the hand features given, and the recogniser applies
     the same to whatever it scores.
     """
-    features = Invariants.parse(features)
-    seen = {
-        a: seqs if features.is_raw else [features.transform(X) for X in seqs] for a, seqs in sequences.items()
-    }
-    # what the models see: the typicality ranges are measured on these
-    trained = train_models(list(seen.values()), n_states, n_mix, n_iter=n_iter, tol=tol, covar_reg=covar_reg,
-                           seed=seed, name=list(seen), warn=warn, recipe=recipe)  # fmt: skip
-    models = {a: m for a, (m, _) in zip(seen, trained, strict=True)}
-    reports = {a: r for a, (_, r) in zip(seen, trained, strict=True)}
+    (rec,) = train_recognizers([sequences], n_states, n_mix, n_iter=n_iter, tol=tol, covar_reg=covar_reg,
+                               seed=seed, warn=warn, meta=meta, recipe=recipe, features=features)  # fmt: skip
     if progress is not None:
-        for action in models:
+        for action in rec.actions:
             progress(action)
-    ranges = {a: training_range(models[a], seen[a]) for a in models}
-    info = {
-        META_KEY: ranges_to_meta(ranges),
-        "recipe": recipe,
-        "n_states": n_states,
-        "n_mix": n_mix,
-        "n_iter": n_iter,
-        "tol": tol,
-        "covar_reg": covar_reg,
-        "seed": seed,
-        "features": features.name,
-    }
-    return Recognizer(models, reports, {**info, **(meta or {})}, features)
+    return rec
+
+
+def train_recognizers(
+    sets: Sequence[Mapping[str, Sequence[np.ndarray]]],
+    n_states: int = TrainingConfig.n_states,
+    n_mix: int = TrainingConfig.n_mix,
+    *,
+    n_iter: int = TrainingConfig.n_iter,
+    tol: float = TrainingConfig.tol,
+    covar_reg: float = TrainingConfig.covar_reg,
+    seed: int | Sequence[int] = 0,
+    warn: bool = True,
+    meta: Mapping[str, Any] | None = None,
+    recipe: str = "glu",
+    features: Invariants | str | None | Sequence[Invariants | str | None] = None,
+) -> list[Recognizer]:
+    """:func:`train_recognizer` for many training sets (action → list of (T_i, D)), every model in one batch.
+
+    ``seed`` and ``features`` are one for all recognisers or one per set; the other settings are shared.
+    Each recogniser equals what :func:`train_recognizer` returns for its set (the models to rounding:
+    :func:`train_models` batches their EM).
+    """
+    n = len(sets)
+    seeds = [seed] * n if isinstance(seed, int | np.integer) else list(seed)
+    specs = [
+        Invariants.parse(f) for f in (features if isinstance(features, list | tuple) else [features] * n)
+    ]
+    if len(seeds) != n or len(specs) != n:
+        raise ModelError(
+            f"{n} training sets need as many seeds and feature sets, got {len(seeds)} and {len(specs)}"
+        )
+    # what the models see (the typicality ranges are measured on these too)
+    seen = [{a: seqs if f.is_raw else [f.transform(X) for X in seqs] for a, seqs in s.items()}
+            for s, f in zip(sets, specs, strict=True)]  # fmt: skip
+    jobs = [(a, seqs, sd) for sn, sd in zip(seen, seeds, strict=True) for a, seqs in sn.items()]
+    trained = iter(train_models([j[1] for j in jobs], n_states, n_mix, n_iter=n_iter, tol=tol, covar_reg=covar_reg,
+                                seed=[j[2] for j in jobs], name=[j[0] for j in jobs], warn=warn, recipe=recipe))  # fmt: skip
+    out = []
+    for sn, sd, spec in zip(seen, seeds, specs, strict=True):
+        models, reports = {}, {}
+        for a in sn:
+            models[a], reports[a] = next(trained)
+        ranges = {a: training_range(models[a], sn[a]) for a in models}
+        info = {
+            META_KEY: ranges_to_meta(ranges), "recipe": recipe, "n_states": n_states, "n_mix": n_mix,
+            "n_iter": n_iter, "tol": tol, "covar_reg": covar_reg, "seed": sd, "features": spec.name,
+        }  # fmt: skip
+        out.append(Recognizer(models, reports, {**info, **(meta or {})}, spec))
+    return out
 
 
 def train_models(
