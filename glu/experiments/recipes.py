@@ -15,7 +15,7 @@ reuses the others' models trained on everything (tested equal).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -38,8 +38,8 @@ def leave_one_segment_out(
     """Hold out each segment in turn, train on the rest, recognise it; and the models trained on everything.
 
     Every model (one per action on all segments, one per testable fold) is trained in one batch
-    (:func:`glu.gestures.recognizer.train_models`), each as :func:`~glu.gestures.recognizer.train_recognizer`
-    would train it alone (tested equal).
+    (:func:`leave_one_segment_out_many`), each as :func:`~glu.gestures.recognizer.train_recognizer` would
+    train it alone (tested equal).
 
     Returns
     -------
@@ -47,23 +47,58 @@ def leave_one_segment_out(
     has no other segment), testable, correct; the :class:`~glu.gestures.recognizer.Recognizer` trained on
     all segments)
     """
+    return leave_one_segment_out_many(sequences, [{"seed": seed, **train}])[0]
+
+
+def leave_one_segment_out_many(
+    sequences: Sequence[LabelledSequence], runs: Sequence[Mapping[str, Any]]
+) -> list[tuple[pd.DataFrame, Recognizer]]:
+    """:func:`leave_one_segment_out` for several runs, each a dict of its ``seed`` and training settings.
+
+    Runs with the same training settings (all but the seed and the features) share one batch of
+    :func:`glu.gestures.recognizer.train_models`, so every model of a grid of seeds and feature sets
+    runs EM together. Returns what :func:`leave_one_segment_out` returns for each run, in order.
+    """
     actions = tuple(dict.fromkeys(s.action for s in sequences))
-    features = Invariants.parse(train.pop("features", None))
-    settings = {k: v for k, v in train.items() if k not in ("meta", "progress")}
-    seen = [s.xyz if features.is_raw else features.transform(s.xyz) for s in sequences]  # what models see
-    jobs = [(a, [x for x, s in zip(seen, sequences, strict=True) if s.action == a]) for a in actions]
-    folds = []  # (held-out index, the rest of its action)
-    for i, held in enumerate(sequences):
-        rest = [
-            x
-            for j, (x, s) in enumerate(zip(seen, sequences, strict=True))
-            if j != i and s.action == held.action
-        ]
-        if rest:
-            folds.append(i)
-            jobs.append((held.action, rest))
-    trained = train_models([seqs for _, seqs in jobs], seed=seed, name=[a for a, _ in jobs], warn=False,
-                           **settings)  # fmt: skip
+    seen_by: dict[str, list[np.ndarray]] = {}  # the features the models see, per feature set
+    plans, groups = [], {}
+    for run in runs:
+        settings = {k: v for k, v in run.items() if k not in ("meta", "progress", "features", "seed")}
+        features = Invariants.parse(run.get("features"))
+        if features.name not in seen_by:
+            seen_by[features.name] = [
+                s.xyz if features.is_raw else features.transform(s.xyz) for s in sequences
+            ]
+        seen = seen_by[features.name]
+        jobs = [(a, [x for x, s in zip(seen, sequences, strict=True) if s.action == a]) for a in actions]
+        folds = []  # held-out segments whose action has other segments: (index, the rest of its action)
+        for i, held in enumerate(sequences):
+            rest = [x for j, (x, s) in enumerate(zip(seen, sequences, strict=True))
+                    if j != i and s.action == held.action]  # fmt: skip
+            if rest:
+                folds.append(i)
+                jobs.append((held.action, rest))
+        key = repr(sorted(settings.items()))
+        group = groups.setdefault(key, (settings, []))[1]
+        plans.append((features, folds, len(group), len(jobs)))
+        group += [(a, seqs, int(run.get("seed", 0))) for a, seqs in jobs]
+    trained_by = {}
+    for key, (settings, jobs) in groups.items():
+        trained_by[key] = train_models([j[1] for j in jobs], seed=[j[2] for j in jobs],
+                                       name=[j[0] for j in jobs], warn=False, **settings)  # fmt: skip
+    out = []
+    for run, (features, folds, lo, n) in zip(runs, plans, strict=True):
+        settings = {k: v for k, v in run.items() if k not in ("meta", "progress", "features", "seed")}
+        trained = trained_by[repr(sorted(settings.items()))][lo : lo + n]
+        out.append(_loso_outcome(sequences, actions, features, folds, trained))
+    return out
+
+
+def _loso_outcome(
+    sequences: Sequence[LabelledSequence], actions: tuple[str, ...], features: Invariants, folds: list[int],
+    trained: Sequence[tuple[Any, Any]],
+) -> tuple[pd.DataFrame, Recognizer]:  # fmt: skip
+    """The table and the full recogniser of one run, from its models (one per action, then one per fold)."""
     full = dict(zip(actions, trained[: len(actions)], strict=True))
     fold_model = dict(zip(folds, (m for m, _ in trained[len(actions) :]), strict=True))
     rows = []
@@ -110,24 +145,35 @@ def recipe_comparison(
     test_predicted (the actions recognised for ``test``, comma-separated), test_correct (how many are
     right), train_loglik_per_frame (mean over actions, of the models trained on all segments).
     """
-    rows = []
-    for recipe in recipes:
-        for tol in tols:
-            for seed in seeds if recipe != "mixsplit" else (-1,):
-                settings = {**train, "tol": float(tol), "recipe": recipe}
-                loo, rec = leave_one_segment_out(sequences, seed=max(seed, 0), **settings)
-                ok = loo[loo["testable"]]
-                predicted = [rec.classify(t.xyz) for t in test]
-                reports = rec.reports.values()
-                rows.append({
-                    "recipe": recipe, "seed": int(seed), "tol": float(tol), "loso_accuracy": accuracy(ok),
-                    "loso_correct": int(ok["correct"].sum()), "loso_testable": len(ok),
-                    "test_predicted": ",".join(predicted),
-                    "test_correct": int(sum(p == t.action for p, t in zip(predicted, test, strict=True))),
-                    "train_loglik_per_frame": float(np.mean([r.final_loglik / r.n_frames for r in reports])),
-                })  # fmt: skip
+    grid = [{**train, "tol": float(tol), "recipe": recipe, "seed": int(seed)}
+            for recipe in recipes for tol in tols for seed in (seeds if recipe != "mixsplit" else (-1,))]  # fmt: skip
+    rows = comparison_rows(sequences, test, grid)
     return tidy(pd.DataFrame(rows, columns=COLUMNS), "hmm_recipe_comparison", corpus_source(sequences),
                 recipes=list(recipes), seeds=list(seeds), tols=list(tols), n_test=len(test), **train)  # fmt: skip
+
+
+def comparison_rows(
+    sequences: Sequence[LabelledSequence], test: Sequence[LabelledSequence], grid: Sequence[Mapping[str, Any]]
+) -> list[dict[str, Any]]:
+    """The rows of :func:`recipe_comparison` for a grid of runs, every run's models trained in one batch.
+
+    Each entry of ``grid`` holds ``recipe``, ``seed`` (-1 for mixsplit, which has none; it trains with 0),
+    ``tol`` and the other training settings (``features``, ``n_states``, …).
+    """
+    results = leave_one_segment_out_many(sequences, [{**g, "seed": max(int(g["seed"]), 0)} for g in grid])
+    rows = []
+    for g, (loo, rec) in zip(grid, results, strict=True):
+        ok = loo[loo["testable"]]
+        predicted = [rec.classify(t.xyz) for t in test]
+        reports = rec.reports.values()
+        rows.append({
+            "recipe": g["recipe"], "seed": int(g["seed"]), "tol": float(g["tol"]), "loso_accuracy": accuracy(ok),
+            "loso_correct": int(ok["correct"].sum()), "loso_testable": len(ok),
+            "test_predicted": ",".join(predicted),
+            "test_correct": int(sum(p == t.action for p, t in zip(predicted, test, strict=True))),
+            "train_loglik_per_frame": float(np.mean([r.final_loglik / r.n_frames for r in reports])),
+        })  # fmt: skip
+    return rows
 
 
 def recipe_spread(comparison: pd.DataFrame) -> pd.DataFrame:

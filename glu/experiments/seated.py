@@ -81,20 +81,23 @@ def feature_settings(
     only. Columns: features, setting, and those of ``recipe_comparison`` (recipe, seed, tol, loso_accuracy,
     loso_correct, loso_testable, test_predicted, test_correct, train_loglik_per_frame).
     """
-    from glu.experiments.recipes import recipe_comparison
+    from glu.experiments.recipes import COLUMNS, comparison_rows
 
-    frames = []
+    grid, labels = [], []
     for features in feature_sets:
         for setting in settings:
             s = dict(setting)
             recipe, tol = s.pop("recipe", "glu"), s.pop("tol", TrainingConfig.tol)
             single = recipe == "mixsplit" or s.get("n_mix", TrainingConfig.n_mix) == 1
-            df = recipe_comparison(sequences, test, recipes=(recipe,), seeds=seeds[:1] if single else seeds,
-                                   tols=(tol,), features=features, **{**train, **s})  # fmt: skip
-            df.insert(0, "setting", setting_label(setting))
-            df.insert(0, "features", Invariants.parse(features).name)
-            frames.append(df)
-    return tidy(pd.concat(frames, ignore_index=True), "hmm_feature_settings", corpus_source(sequences),
+            for seed in seeds[:1] if single else seeds:  # as recipe_comparison: mixsplit has no seed (-1)
+                grid.append({**train, **s, "features": features, "recipe": recipe, "tol": float(tol),
+                             "seed": -1 if recipe == "mixsplit" else int(seed)})  # fmt: skip
+                labels.append((Invariants.parse(features).name, setting_label(setting)))
+    rows = comparison_rows(sequences, test, grid)  # every model of the grid trained in one batch per setting
+    frame = pd.DataFrame(rows, columns=COLUMNS)
+    frame.insert(0, "setting", [lab[1] for lab in labels])
+    frame.insert(0, "features", [lab[0] for lab in labels])
+    return tidy(frame, "hmm_feature_settings", corpus_source(sequences),
                 feature_sets=list(feature_sets), settings=[setting_label(s) for s in settings], seeds=list(seeds),
                 n_test=len(test), **train)  # fmt: skip
 

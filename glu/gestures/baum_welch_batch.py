@@ -119,6 +119,10 @@ def forward_backward_many(
     return gamma, xi, loglik, ok
 
 
+def _pairs(D: int) -> list[tuple[int, int]]:
+    return [(i, j) for i in range(D) for j in range(i, D)]
+
+
 class _Batch:
     """The live models' data laid out for one EM iteration (rebuilt when a model leaves)."""
 
@@ -132,8 +136,11 @@ class _Batch:
         self.X = np.zeros((K, N, D))  # (model, frame): each model's frames in order, zero-padded
         self.frame_alive = np.arange(N)[None, :] < self.n_frames[:, None]
         model, first, length = [], [], []
+        self.centre = np.zeros((K, D))  # each model's mean frame: the moments are taken about it
         for i, s in enumerate(seqs):
-            self.X[i, : self.n_frames[i]] = np.concatenate(s)
+            frames = np.concatenate(s)
+            self.centre[i] = frames.mean(axis=0)
+            self.X[i, : self.n_frames[i]] = frames - self.centre[i]
             offsets = np.concatenate([[0], np.cumsum([len(x) for x in s])[:-1]])
             for j, x in enumerate(s):
                 model.append(i), first.append(i * N + offsets[j]), length.append(len(x))
@@ -141,6 +148,10 @@ class _Batch:
         self.model = np.array(model)[order]  # (S,) index into the live models
         self.lengths = np.array(length)[order]
         first = np.array(first)[order]
+        # the monomials x_i x_j (i ≤ j), x_i, 1 of each centred frame (0 for padding), shape (K, N, F)
+        pairs = _pairs(D)
+        cols = [self.X[..., i] * self.X[..., j] for i, j in pairs] + [self.X[..., i] for i in range(D)]
+        self.phi = np.stack(cols + [self.frame_alive.astype(float)], axis=-1)
         T = int(self.lengths.max())
         self.alive = np.arange(T)[None, :] < self.lengths[:, None]  # (S, T)
         # flat index into (K·N) of frame t of sequence s (padding points at frame 0 of the batch: ignored)
@@ -217,6 +228,7 @@ def _fit_group(
     params = [np.stack([p[1][i] for p in problems]) for i in range(5)]
     Q, M = params[2].shape[1:]
     D = params[3].shape[-1]
+    pairs = _pairs(D)
     histories: list[list[float]] = [[] for _ in range(P)]
     live = list(range(P))
     batch = _Batch(problems, live)
@@ -227,11 +239,18 @@ def _fit_group(
         startprob, transmat, weights, means, covars = (a[ix] for a in params)
         K, N = batch.X.shape[:2]
         chol_inv, log_norm = gaussian_factors(weights, covars)  # (K, Q, M, D, D), (K, Q, M)
-        X = batch.X[:, None, None]  # (K, 1, 1, N, D)
-        z = (X - means[..., None, :]) @ np.swapaxes(chol_inv, -1, -2)  # (K, Q, M, N, D): L⁻¹(x − μ)
-        lc = log_norm[..., None] - 0.5 * (z * z).sum(axis=-1)  # (K, Q, M, N), log w + log N
-        log_b_frames = _logsumexp(lc, axis=2)  # (K, Q, N)
-        log_b = np.swapaxes(log_b_frames, 1, 2).reshape(K * N, Q)[batch.index]  # (S, T, Q)
+        # log w + log N(x; μ, Σ) of every frame and component as one product with the frames' monomials:
+        # −½ xᵀPx + (Pμ)ᵀx − ½ μᵀPμ + log-normaliser, P = Σ⁻¹, in coordinates centred on each model's frames
+        prec = np.swapaxes(chol_inv, -1, -2) @ chol_inv
+        mu = means - batch.centre[:, None, None, :]
+        lin = (prec @ mu[..., None])[..., 0]  # (K, Q, M, D)
+        with np.errstate(invalid="ignore"):
+            const = log_norm - 0.5 * (mu * lin).sum(axis=-1)
+        coef = np.stack([(-0.5 if i == j else -1.0) * prec[..., i, j] for i, j in pairs]
+                        + [lin[..., i] for i in range(D)] + [const], axis=-1)  # fmt: skip  # (K, Q, M, F)
+        lc = (batch.phi @ np.swapaxes(coef.reshape(K, Q * M, -1), 1, 2)).reshape(K, N, Q, M)
+        log_b_frames = _logsumexp(lc, axis=3)  # (K, N, Q)
+        log_b = log_b_frames.reshape(K * N, Q)[batch.index]  # (S, T, Q)
         seq_model = batch.model
         gamma, xi, loglik, ok = forward_backward_many(
             log_b, batch.lengths, startprob[seq_model], transmat[seq_model]
@@ -247,17 +266,20 @@ def _fit_group(
             histories[k].append(float(loglik[batch.seqs_of[i]].sum()))
         gamma_frames = np.zeros((K * N, Q))  # padding frames: zero responsibility
         gamma_frames[batch.index[batch.alive]] = gamma[batch.alive]
-        gamma_frames = np.swapaxes(gamma_frames.reshape(K, N, Q), 1, 2)  # (K, Q, N)
-        with np.errstate(under="ignore"):
-            if M == 1:
-                pcm = np.ascontiguousarray(gamma_frames[:, :, None])  # (K, Q, M, N)
-            else:
-                pcm = gamma_frames[:, :, None] * np.exp(lc - log_b_frames[:, :, None])
+        gamma_frames = gamma_frames.reshape(K, N, Q)
+        with np.errstate(under="ignore", invalid="ignore"):
+            post_mix = np.ones_like(lc) if M == 1 else np.exp(lc - log_b_frames[..., None])
+            pcm = np.where(batch.frame_alive[..., None, None], gamma_frames[..., None] * post_mix, 0.0)
+        # every sufficient statistic at once: Σ pcm·x_i x_j, Σ pcm·x_i, Σ pcm per component
+        moments = (np.swapaxes(pcm.reshape(K, N, Q * M), 1, 2) @ batch.phi).reshape(K, Q, M, -1)
+        second = np.empty((K, Q, M, D, D))
+        for f, (i, j) in enumerate(pairs):
+            second[..., i, j] = second[..., j, i] = moments[..., f]
+        m_n = moments[..., len(pairs) : len(pairs) + D]  # (K, Q, M, D), centred
+        post_mix_sum = moments[..., -1]  # (K, Q, M)
         start = np.zeros((K, Q))
         np.add.at(start, seq_model, gamma[:, 0])
-        post_mix_sum = pcm.sum(axis=-1)  # (K, Q, M)
-        post_sum = gamma_frames.sum(axis=-1)  # (K, Q)
-        m_n = (pcm[..., None, :] @ X)[..., 0, :]  # (K, Q, M, D)
+        post_sum = gamma_frames.sum(axis=1)  # (K, Q)
         # M-step, as fit's
         new_start = np.where(startprob == 0, 0.0, np.maximum(start, 0.0))
         new_start = new_start / new_start.sum(axis=1, keepdims=True)
@@ -267,10 +289,16 @@ def _fit_group(
         new_weights = post_mix_sum / post_sum[..., None]
         m_d = post_mix_sum.copy()
         m_d[(new_weights == 0) & (m_n == 0).all(axis=-1)] = 1.0
-        new_means = m_n / m_d[..., None]
-        centre = means if covariance == "hmmlearn" else new_means
-        centered = X - centre[..., None, :]  # (K, Q, M, N, D)
-        c_n = np.swapaxes(pcm[..., None] * centered, -1, -2) @ centered  # (K, Q, M, D, D)
+        new_mu = m_n / m_d[..., None]
+        new_means = new_mu + batch.centre[:, None, None, :]
+        c = mu if covariance == "hmmlearn" else new_mu  # the scatter is about c: Σ pcm (x − c)(x − c)ᵀ
+        cm = c[..., :, None] * m_n[..., None, :]
+        c_n = (
+            second
+            - cm
+            - np.swapaxes(cm, -1, -2)
+            + post_mix_sum[..., None, None] * (c[..., :, None] * c[..., None, :])
+        )
         if covariance == "ml":
             n = post_mix_sum[..., None, None]
             with np.errstate(divide="ignore", invalid="ignore"):
