@@ -9,7 +9,12 @@ go through it. :func:`fit_many` runs the models side by side:
   transition matrix, so a step of the recursion is a few array operations over the live prefix of the
   batch (:func:`forward_backward_many`);
 * the emission densities and the M-step are array operations over a (model, frame) layout, frames
-  padded to the model with most frames (padding has zero responsibility);
+  padded to the model with most frames (padding has zero responsibility). Each frame is centred on its
+  model's mean frame and expanded into its monomials ``φ(x) = (x_i x_j for i ≤ j, x_i, 1)`` once; every
+  component's ``log w + log N(x; μ, Σ)`` is then ``φ(x) · c`` (one matrix product per model), and the
+  M-step's sufficient statistics (soft counts, first and second moments) are one product of the
+  responsibilities with ``φ``; the scatter about a mean ``m`` is ``Σ p x xᵀ − m sᵀ − s mᵀ + N m mᵀ``
+  (s the first moment, N the count), which the centring keeps far from cancellation;
 * each model stops exactly as :func:`~glu.gestures.baum_welch.fit` would (same ``tol`` rule, same
   ``n_iter`` cap): once converged its parameters freeze and its sequences leave the batch;
 * the scaled recursion is checked for underflow once per pass; a model with a sequence whose scaled mass

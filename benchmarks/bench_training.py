@@ -1,0 +1,182 @@
+"""Speed of training many gesture HMMs: one model at a time against one batched Baum–Welch.
+
+Run on demand (not a test)::
+
+    python benchmarks/bench_training.py [--data DIR] [--repeats N]
+
+Measures, on one BLAS thread, medians over repeats:
+
+1. **leave-one-segment-out on the real standing segments** (glu's recipe and defaults, raw features: 3
+   models on every segment + one per held-out segment): each model trained alone by
+   :func:`~glu.gestures.training.train_hmm`, as glu did before, against
+   :func:`glu.experiments.recipes.leave_one_segment_out`, which trains them in one batch
+   (:func:`glu.gestures.training.train_many`); also the EM alone (the same initial models):
+   :func:`glu.gestures.baum_welch.fit` per model against :func:`glu.gestures.baum_welch_batch.fit_many`.
+   Skipped without the real data;
+2. **5-fold cross-validation on synthetic gestures** (20 per action, three actions: 15 models): the same
+   two ways (:func:`glu.experiments.gestures.cross_validate` is the batched one);
+3. **the same EM as hmmlearn** (``covariance="hmmlearn"``, the update of hmmlearn 0.3's ``GMMHMM``,
+   20 iterations, the 15 cross-validation models from the same initial models): hmmlearn's
+   ``GMMHMM.fit`` per model, glu's ``fit`` per model, and ``fit_many``.
+
+Every pair is checked to give the same models first (histories to 1e-8 relative).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+
+import numpy as np
+
+
+def _median_time(fn, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def _fmt(seconds: float) -> str:
+    return f"{seconds:.2f} s" if seconds >= 1 else f"{seconds * 1e3:.0f} ms"
+
+
+def _params(m):
+    from glu.gestures.baum_welch import GMMHMMParams
+
+    return GMMHMMParams(m.startprob, m.transmat, m.weights, m.means, m.covars)
+
+
+def _loso_sets(sequences):
+    """The training sets of leave-one-segment-out: each action on all segments, then each testable fold."""
+    actions = tuple(dict.fromkeys(s.action for s in sequences))
+    sets = [(a, [s.xyz for s in sequences if s.action == a]) for a in actions]
+    for i, held in enumerate(sequences):
+        rest = [s.xyz for j, s in enumerate(sequences) if j != i and s.action == held.action]
+        if rest:
+            sets.append((held.action, rest))
+    return sets
+
+
+def _cv_sets(sequences, k, seed):
+    from glu.experiments.gestures import stratified_folds
+
+    folds = stratified_folds([s.action for s in sequences], k, seed)
+    actions = tuple(dict.fromkeys(s.action for s in sequences))
+    return [(a, [s.xyz for s, g in zip(sequences, folds, strict=True) if g != f and s.action == a])
+            for f in range(k) for a in actions]  # fmt: skip
+
+
+def _compare_training(label, sets, batched, repeats, rows):
+    """Time training every set alone (train_hmm) against ``batched()``; check they agree."""
+    from glu.gestures.training import TrainingConfig, init_left_to_right, train_hmm
+
+    cfg = TrainingConfig()
+
+    def alone():
+        return [train_hmm(x, name=a, warn=False) for a, x in sets]
+
+    ref = alone()
+    t_alone = _median_time(alone, repeats)
+    t_batch = _median_time(batched, repeats)
+    rows.append((f"{label}: {len(sets)} models, train_hmm each", t_alone, t_batch))
+    # EM alone, from the same initial models
+    from glu.gestures import baum_welch as bw
+    from glu.gestures.baum_welch_batch import fit_many
+
+    problems = [
+        (x, _params(init_left_to_right(x, cfg.n_states, cfg.n_mix, 0, cfg.covar_reg))) for _, x in sets
+    ]
+    tols = [cfg.tol * sum(len(s) for s in x) for x, _ in problems]
+    fits = [bw.fit(x, p, cfg.n_iter, t, cfg.covar_reg) for (x, p), t in zip(problems, tols, strict=True)]
+    many = fit_many(problems, cfg.n_iter, tols, cfg.covar_reg)
+    for a, b, (_, r) in zip(fits, many, ref, strict=True):
+        assert len(a.history) == len(b.history) == r.n_iter
+        np.testing.assert_allclose(b.history, a.history, rtol=1e-8)
+    t_fit = _median_time(lambda: [bw.fit(x, p, cfg.n_iter, t, cfg.covar_reg)
+                                  for (x, p), t in zip(problems, tols, strict=True)], repeats)  # fmt: skip
+    t_many = _median_time(lambda: fit_many(problems, cfg.n_iter, tols, cfg.covar_reg), repeats)
+    n_iter = [len(a.history) for a in fits]
+    rows.append((f"{label}: EM only ({min(n_iter)}–{max(n_iter)} iterations), fit each", t_fit, t_many))
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark and print the table."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", help="data folder with gestures/ (default: $GLU_SHARED_DATA or data/real/)")
+    ap.add_argument("--repeats", type=int, default=3, help="repeats of each measurement (default 3)")
+    args = ap.parse_args(argv)
+    from threadpoolctl import threadpool_limits
+
+    from glu.experiments.gestures import cross_validate
+    from glu.experiments.recipes import leave_one_segment_out
+    from glu.gestures.corpus import gesture_sequences, synthetic_corpus
+
+    rows: list[tuple[str, float, float]] = []
+    with threadpool_limits(1):
+        source = _real_source(args.data)
+        if source is not None:
+            standing = gesture_sequences(source, include_test=False)
+            _compare_training(f"LOSO, {len(standing)} real segments", _loso_sets(standing),
+                              lambda: leave_one_segment_out(standing), args.repeats, rows)  # fmt: skip
+        else:
+            print("no real data found: the leave-one-segment-out rows are skipped")
+        corpus = synthetic_corpus(20, seed=0)
+        _compare_training("5-fold CV, 60 synthetic gestures", _cv_sets(corpus, 5, 0),
+                          lambda: cross_validate(corpus, 5, 0), args.repeats, rows)  # fmt: skip
+        hl_rows = _versus_hmmlearn(_cv_sets(corpus, 5, 0), args.repeats)
+
+    print(f"{'measurement':58s} {'one at a time':>14s} {'batched':>10s} {'speed-up':>9s}")
+    for name, alone, batch in rows:
+        print(f"{name:58s} {_fmt(alone):>14s} {_fmt(batch):>10s} {alone / batch:>8.1f}×")
+    print()
+    print(f"{'EM as hmmlearn GMMHMM, 20 iterations, 15 CV models':58s} {'time':>14s} {'vs hmmlearn':>10s}")
+    for name, t, ratio in hl_rows:
+        print(f"{name:58s} {_fmt(t):>14s} {ratio:>9.1f}×")
+    return 0
+
+
+def _real_source(data: str | None):
+    from glu.data.source import DataSource, resolve_data
+    from glu.paths import shared_data_dir
+
+    try:
+        source = resolve_data(data)
+    except Exception:  # noqa: BLE001 - fall back to the shared copy
+        source = None
+    if (source is None or not source.is_real) and data is None and shared_data_dir() is not None:
+        source = DataSource("real", shared_data_dir(), "GLU_SHARED_DATA")
+    return source if source is not None and source.has_gestures else None
+
+
+def _versus_hmmlearn(sets, repeats):
+    """hmmlearn's GMMHMM.fit per model, glu's fit per model and fit_many, with hmmlearn's covariance step."""
+    from glu.gestures import baum_welch as bw
+    from glu.gestures.baum_welch_batch import fit_many
+    from glu.gestures.training import _run_hmmlearn, init_left_to_right
+
+    reg, n_iter = 0.03, 20
+    problems = [(x, _params(init_left_to_right(x, 6, 3, 0, reg))) for _, x in sets]
+
+    def hmmlearn():
+        return [_run_hmmlearn(x, tuple(p), n_iter, 1e-300, reg, 0) for x, p in problems]
+
+    ref = hmmlearn()
+    many = fit_many(problems, n_iter, 1e-300, reg, "hmmlearn")
+    for (_, h), m in zip(ref, many, strict=True):
+        np.testing.assert_allclose(m.history, h, rtol=1e-8)
+    t_hl = _median_time(hmmlearn, repeats)
+    t_fit = _median_time(
+        lambda: [bw.fit(x, p, n_iter, 1e-300, reg, "hmmlearn") for x, p in problems], repeats
+    )
+    t_many = _median_time(lambda: fit_many(problems, n_iter, 1e-300, reg, "hmmlearn"), repeats)
+    return [("hmmlearn GMMHMM.fit, each model", t_hl, 1.0), ("glu baum_welch.fit, each model", t_fit, t_hl / t_fit),
+            ("glu fit_many, one batch", t_many, t_hl / t_many)]  # fmt: skip
+
+
+if __name__ == "__main__":
+    sys.exit(main())
