@@ -86,6 +86,31 @@ class StreamStep(NamedTuple):
     p_hmm: np.ndarray
 
 
+def _scaled_step(
+    pred: np.ndarray, b: np.ndarray, mx: np.ndarray, log_b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """One step of :func:`~glu.gestures.forward.forward_step` from the predicted state ``pred`` and the
+    frame's scaled emissions ``b = exp(log_b − mx)``, element by element as it computes them: the new
+    normalised forward variable and the log-likelihood increment, shapes (..., Q) and (...)."""
+    new = pred * b
+    c = new.sum(axis=-1)
+    ok = c > TINY
+    if np.all(ok):
+        return new / c[..., None], np.log(c) + mx
+    la = np.log(pred) + log_b  # underflow (or an impossible frame) somewhere: the log domain there
+    m = la.max(axis=-1)
+    finite = np.isfinite(m)
+    m_safe = np.where(finite, m, 0.0)
+    new_log = np.exp(la - m_safe[..., None])
+    c_log = new_log.sum(axis=-1)
+    step = np.where(ok, np.log(c) + mx, np.where(finite, m_safe + np.log(c_log), -np.inf))
+    alpha = np.where(
+        ok[..., None], new / np.where(ok, c, 1.0)[..., None],
+        np.where(finite[..., None], new_log / np.where(finite, c_log, 1.0)[..., None], 0.0),
+    )  # fmt: skip
+    return alpha, step
+
+
 class GestureStream:
     """Incremental forward recursion over every model of a recogniser: one frame in, one posterior out.
 
@@ -196,8 +221,9 @@ class Recognizer:
 
         The emissions of every frame come from one call, and the forward recursion of
         :func:`~glu.gestures.forward.forward_curve` runs over all sequences at once (sorted by length, the
-        finished ones dropping out); a sequence whose scaled mass underflowed for some model is scored
-        again alone by :meth:`loglik`. The same numbers as :meth:`loglik` of each sequence (tested).
+        finished ones dropping out), each step exactly :func:`~glu.gestures.forward.forward_step`'s
+        (including its log-domain fallback where the scaled mass underflows). The same numbers as
+        :meth:`loglik` of each sequence (tested).
         """
         seqs = [self.transform(X) for X in sequences]
         if not seqs:
@@ -213,24 +239,17 @@ class Recognizer:
                                      bank.log_norm)  # fmt: skip
         n_live = alive.sum(axis=0)
         mx = log_b.max(axis=-1)  # (S, T, A)
-        c = np.ones(mx.shape)
+        steps = np.zeros(mx.shape)  # log p(g_t | G_1^{t-1}) of each sequence and model (0 past the end)
+        alpha = np.zeros(log_b.shape[:1] + log_b.shape[2:])  # (S, A, Q)
         with np.errstate(all="ignore"):
             b = np.exp(log_b - mx[..., None])
-            new = bank.startprob * b[:, 0]
-            c[:, 0] = new.sum(axis=-1)
-            alpha = new / c[:, 0][..., None]  # (S, A, Q)
-            for t in range(1, T):
+            for t in range(T):
                 n = n_live[t]
-                new = (alpha[:n, :, None, :] @ bank.transmat)[..., 0, :] * b[:n, t]
-                c[:n, t] = new.sum(axis=-1)
-                alpha[:n] = new / c[:n, t][..., None]
-            ok = np.where(alive[..., None], c > TINY, True).all(axis=(1, 2))
-            steps = np.where(alive[..., None], np.log(c) + mx, 0.0)
+                pred = bank.startprob if t == 0 else (alpha[:n, :, None, :] @ bank.transmat)[..., 0, :]
+                alpha[:n], steps[:n, t] = _scaled_step(pred, b[:n, t], mx[:n, t], log_b[:n, t])
         total = np.cumsum(steps, axis=1)[np.arange(S), lengths_sorted - 1]  # (S, A), summed as forward_curve
         out = np.empty_like(total)
         out[order] = total
-        for i in order[~ok]:  # underflow somewhere: the per-sequence path with its log-domain fallback
-            out[i] = self.loglik(sequences[i])
         return out
 
     def p_hmm(self, X: np.ndarray) -> np.ndarray:
