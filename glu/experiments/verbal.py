@@ -281,8 +281,12 @@ def sampling_vs_exact(
     n: int = 10,
     grammar: Grammar | None = None,
     score: str = DEFAULT_SCORE,
+    drawn: Mapping[int, list[str]] | None = None,
 ) -> pd.DataFrame:
     """What the originals' method (the best of ``n_samples`` random sentences) misses, one row per seed.
+
+    ``drawn``: the samples already drawn, seed → ``sample_sentences(grammar, n_samples, seed)`` (they do
+    not depend on the evidence, so :func:`sampling_trials` draws them once for every evidence set).
 
     Returns
     -------
@@ -303,11 +307,11 @@ def sampling_vs_exact(
     p_draw = -np.expm1(n_samples * np.log1p(-p_best)) if p_best < 1 else 1.0
     rows = []
     for seed in seeds:
-        drawn = sample_sentences(g, n_samples, seed)
-        ranked = rank_sentences(drawn, probs, n, score)
+        sample = drawn[seed] if drawn is not None and seed in drawn else sample_sentences(g, n_samples, seed)
+        ranked = rank_sentences(sample, probs, n, score)
         s_best, s_score = ranked["sentence"].iloc[0], float(ranked["score"].iloc[0])
         rows.append({
-            "seed": seed, "n_samples": n_samples, "n_distinct": len(set(drawn)),
+            "seed": seed, "n_samples": n_samples, "n_distinct": len(set(sample)),
             "exact_best": exact["sentence"].iloc[0], "exact_score": float(exact["score"].iloc[0]),
             "sample_best": s_best, "sample_score": s_score,
             "gap": float(exact["score"].iloc[0]) - s_score,
@@ -337,7 +341,9 @@ def sampling_trials(
     ``len(seeds) × len(evidence_sets)`` rows.
     """
     seeds = list(seeds)
-    frames = [sampling_vs_exact(engine, ev, seeds, n_samples, n, grammar, score).assign(figure=key)
+    g = load_grammar() if grammar is None else grammar
+    drawn = {seed: sample_sentences(g, n_samples, seed) for seed in seeds}  # the same for every evidence set
+    frames = [sampling_vs_exact(engine, ev, seeds, n_samples, n, g, score, drawn).assign(figure=key)
               for key, ev in evidence_sets.items()]  # fmt: skip
     return tidy(pd.concat(frames, ignore_index=True), "verbal_sampling_trials", model_source(engine.bn),
                 seeds=seeds, evidence=dict(evidence_sets), n_samples=n_samples, score=score)  # fmt: skip
