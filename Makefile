@@ -39,6 +39,7 @@ lab: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_bn.py
 	$(BIN)/python benchmarks/bench_hmm.py
+	$(BIN)/python benchmarks/bench_training.py
 
 bench-reproduce: $(STAMP)
 	$(BIN)/python benchmarks/bench_reproduce.py $(if $(DATA),--data $(DATA)) $(ARGS)
