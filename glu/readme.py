@@ -123,8 +123,10 @@ def load_summary(path: str | os.PathLike = SUMMARY) -> dict[str, Any]:
         summary = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise DataError(f"{path}: no summary; run `make reproduce DATA=<the real data>` first") from None
-    except (OSError, json.JSONDecodeError) as e:
+    except (OSError, ValueError) as e:  # ValueError: not UTF-8, not JSON
         raise DataError(f"{path}: not a readable summary ({e})") from None
+    if not isinstance(summary, dict):
+        raise DataError(f"{path}: not a summary of `glu reproduce` (expected a JSON object)")
     if summary.get("quick") or not str(summary.get("data_source", "")).startswith("real data"):
         raise DataError(f"{path}: the README quotes a full run on the real data, not this one "
                         f"({summary.get('data_source')}, quick={summary.get('quick')})")  # fmt: skip

@@ -68,11 +68,10 @@ def list_notebooks(only: Sequence[str] | None = None, folder: Path = paths.NOTEB
     chosen = []
     for key in only:
         key = str(key).strip()
-        match = [
-            p
-            for p in found
-            if key and (p.stem == key or p.stem.split("_", 1)[0] == key.zfill(2) or p.stem.startswith(key))
-        ]
+        if key.isdigit():  # a number names one notebook: "8" and "08" are 08_…, "0" and "1" are not prefixes
+            match = [p for p in found if int(p.stem.split("_", 1)[0]) == int(key)]
+        else:
+            match = [p for p in found if key and (p.stem == key or p.stem.startswith(key))]
         if not match:
             names = ", ".join(p.stem for p in found)
             raise NotebookError(f"no notebook matches {key!r}; notebooks are: {names}")

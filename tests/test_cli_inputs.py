@@ -147,3 +147,135 @@ def test_json_output_is_strict_json_with_impossible_as_null():
     }
     with pytest.raises(ValueError):  # a NaN is a bug: never printed as JSON's non-standard NaN
         json_text({"p": float("nan")})
+
+
+# ---------------------------------------------------------------- found by tests/test_fuzz_mutations.py
+
+
+def _one_line(status, err):
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert status == 2 and ": error:" in lines[-1] and sum(": error:" in ln for ln in lines) == 1, err
+    assert "Traceback" not in err and "internal error" not in err
+    return lines[-1]
+
+
+def test_a_number_names_one_notebook_never_a_prefix_of_others():
+    from glu.reproduce import NotebookError, list_notebooks
+
+    every = [p.stem for p in list_notebooks()]
+    assert [p.stem for p in list_notebooks(["1"])] == [every[0]] == [p.stem for p in list_notebooks(["01"])]
+    assert [p.stem for p in list_notebooks(["10"])] == [s for s in every if s.startswith("10_")]
+    for key in ("0", "00", "", "99"):  # "0" used to select 01 … 09
+        with pytest.raises(NotebookError, match="no notebook matches"):
+            list_notebooks([key])
+
+
+def test_failed_evaluate_and_fetch_leave_no_folder_behind(capsys, tmp_path):
+    line = _one_line(
+        *_glu(capsys, "evaluate", "--episodes", "20", "--data", tmp_path / "no", "-o", tmp_path / "ev")[::2]
+    )
+    assert "no such data folder" in line
+    line = _one_line(*_glu(capsys, "data", "fetch", "--dest", tmp_path / "a" / "b" / "d", "--mirror",
+                           "http://127.0.0.1:9/", "--timeout", "0.5")[::2])  # fmt: skip
+    assert "could not be fetched" in line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_empty_feature_list_and_unreadable_summary_are_refused(capsys, tmp_path):
+    assert "empty string" in _one_line(
+        *_glu(capsys, "hmm", "train", "--features", "", "-o", tmp_path / "r.json")[::2]
+    )
+    bad = tmp_path / "summary.json"
+    bad.write_bytes(b"\xff\xfe not utf-8")
+    assert "not a readable summary" in _one_line(
+        *_glu(capsys, "readme", "--summary", bad, "--readme", tmp_path / "R.md")[::2]
+    )
+    bad.write_text("[1, 2]")
+    assert "expected a JSON object" in _one_line(
+        *_glu(capsys, "readme", "--summary", bad, "--readme", tmp_path / "R.md")[::2]
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["summary.json"]
+
+
+def test_huge_soft_evidence_is_refused_without_a_runtime_warning(capsys):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # an overflow in the sum used to reach stderr
+        status, _, err = _glu(capsys, "query", "--data", "synthetic", "--target", "ObjVel",
+                              "--soft", "Action=grasp:1e308,tap:1e308,touch:1e308")  # fmt: skip
+    assert "not a distribution" in _one_line(status, err)
+
+
+@pytest.mark.parametrize(
+    "change, fragment",
+    [
+        (lambda d: d.update(actions=[[], "tap", "touch"]), "'actions' must list exactly the keys"),
+        (lambda d: d.update(actions=["tap", "tap", "touch"]), "each once"),
+        (lambda d: d.update(training=[1]), "must be JSON objects"),
+        (lambda d: d.update(meta=[["x"]]), "must be JSON objects"),
+        (lambda d: d["meta"].update(per_frame_loglik={"tap": [None, 1.0]}), "two finite numbers"),
+        (lambda d: d["meta"].update(per_frame_loglik={"tap": [2.0, 1.0]}), "two finite numbers"),
+    ],
+)
+def test_a_malformed_recogniser_file_is_one_line(capsys, tmp_path, change, fragment):
+    rec = tmp_path / "r.json"
+    assert (
+        _glu(
+            capsys,
+            "hmm",
+            "train",
+            "--synthetic",
+            "2",
+            "--states",
+            "2",
+            "--mix",
+            "1",
+            "--iter",
+            "2",
+            "-o",
+            rec,
+        )[0]
+        == 0
+    )
+    d = json.loads(rec.read_text())
+    change(d)
+    rec.write_text(json.dumps(d))
+    log = tmp_path / "g.log"
+    log.write_text("".join(f"-1 1495933414.{i:02d} {600 + i}.0 -790.0 -930.0\n" for i in range(10)))
+    assert fragment in _one_line(*_glu(capsys, "recognize", log, "--models", rec, "--json")[::2])
+
+
+@pytest.mark.parametrize("mode", [[], ["--json"], ["--stream"], ["--stream", "--json"]])
+def test_coordinates_at_the_physical_bound_give_finite_posteriors(capsys, tmp_path, mode):
+    from glu.data.hand_logs import MAX_LOGGED_COORDINATE as B
+
+    rec = tmp_path / "r.json"
+    assert (
+        _glu(
+            capsys,
+            "hmm",
+            "train",
+            "--synthetic",
+            "2",
+            "--states",
+            "2",
+            "--mix",
+            "1",
+            "--iter",
+            "2",
+            "-o",
+            rec,
+        )[0]
+        == 0
+    )
+    near = "".join(f"-1 1495933414.{i:02d} {600 + i}.0 -790.0 -930.0\n" for i in range(10))
+    far = "".join(f"-1 1495933415.{i:02d} {B} {-B if i % 2 else B} {B}\n" for i in range(10))
+    log = tmp_path / "far.log"
+    log.write_text(near + far)
+    status, out, err = _glu(capsys, "recognize", log, "--models", rec, *mode)
+    assert status == 0 and "nan" not in out.lower() and "inf" not in out.lower()
+    if "--json" in mode:
+        for line in out.splitlines():
+            p = list(json.loads(line, parse_constant=lambda c: pytest.fail(c))["posterior"].values())
+            assert all(x is not None and 0 <= x <= 1 for x in p) and abs(sum(p) - 1) < 1e-9

@@ -201,7 +201,13 @@ class InferenceEngine(BatchQueries):
                 raise EvidenceError(
                     f"soft evidence on {node} has {q.size} entries; expected {len(values)} ({', '.join(values)})"
                 )
-        if not np.all(np.isfinite(q)) or (q < 0).any() or abs(q.sum() - 1.0) > SUM_TOL:
+        # an entry above 1 is refused before the sum, which could overflow (1e308 + 1e308)
+        if (
+            not np.all(np.isfinite(q))
+            or (q < 0).any()
+            or (q > 1.0 + SUM_TOL).any()
+            or abs(q.sum() - 1.0) > SUM_TOL
+        ):
             shown = ", ".join(f"{v}:{p:g}" for v, p in zip(values, q, strict=True))
             raise EvidenceError(
                 f"soft evidence on {node} is not a distribution over its values ({shown}): "

@@ -155,6 +155,10 @@ def _frames(s: str) -> tuple[int, int]:
 def _features(s: str) -> Invariants:
     from glu.errors import GluError
 
+    if not s.strip():
+        raise argparse.ArgumentTypeError(
+            f"expected {RAW}, {ALL} or a comma-separated list, not an empty string"
+        )
     try:
         return Invariants.parse(s)
     except GluError as e:

@@ -219,6 +219,10 @@ def fetch_all(
         raise FetchError(f"--timeout {timeout}: expected a positive number of seconds")
     items = manifest(mirror, manifest_path)
     _check_destination(dest)
+    made, above = [], dest.parent  # the folders above dest this fetch creates (removed again if it fails)
+    while not above.exists():
+        made.append(above)
+        above = above.parent
     partial = partial_folder(dest)
     results = []
     for i, item in enumerate(items, start=1):
@@ -237,4 +241,9 @@ def fetch_all(
         publish(partial, dest)
     elif partial.is_dir() and not any(f.is_file() for f in partial.rglob("*")):
         shutil.rmtree(partial, ignore_errors=True)  # nothing verified: leave no empty folders behind
+        for folder in made:  # deepest first
+            try:
+                folder.rmdir()
+            except OSError:
+                break
     return results

@@ -324,20 +324,33 @@ class Recognizer:
                 + ", ".join(map(str, READABLE_VERSIONS))
             )
         actions, models = d.get("actions"), d.get("models")
-        if not isinstance(actions, list) or not isinstance(models, dict) or set(actions) != set(models):
-            raise ModelError(f"{source}: 'actions' must list exactly the keys of 'models'")
+        if (
+            not isinstance(actions, list)
+            or not all(isinstance(a, str) for a in actions)
+            or len(set(actions)) != len(actions)
+            or not isinstance(models, dict)
+            or set(actions) != set(models)
+        ):
+            raise ModelError(f"{source}: 'actions' must list exactly the keys of 'models', each once")
+        training, meta = d.get("training") or {}, d.get("meta") or {}
+        if not isinstance(training, dict) or not isinstance(meta, dict):
+            raise ModelError(f"{source}: 'training' and 'meta' must be JSON objects")
         try:
             hmms = {a: GestureHMM.from_dict(models[a], name=a) for a in actions}
         except ModelError as e:
             raise ModelError(f"{source}: {e}") from None
         reports = {}
-        for a, r in (d.get("training") or {}).items():
+        for a, r in training.items():
             try:
                 reports[a] = TrainingReport(**{**r, "history": tuple(r["history"])})
-            except (TypeError, KeyError):
+            except (TypeError, KeyError, ValueError):
                 raise ModelError(f"{source}: malformed training report for {a!r}") from None
         features = Invariants.from_dict(d.get("invariants"), source)
-        return cls(hmms, reports, d.get("meta") or {}, features)
+        try:
+            ranges_from_meta(meta)  # the typicality ranges: checked now, not when a gesture is scored
+        except ModelError as e:
+            raise ModelError(f"{source}: {e}") from None
+        return cls(hmms, reports, meta, features)
 
     def save(self, path: str | os.PathLike) -> Path:
         """Write the recogniser as JSON (atomically); returns the path."""

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from glu.errors import ModelError
 from glu.gestures.model import GestureHMM
 
 MIN_MARGIN = 15.0
@@ -127,8 +128,13 @@ def ranges_from_meta(meta: Mapping[str, Any]) -> dict[str, LoglikRange] | None:
     ref = str(entry.get("reference", "training"))
     out = {}
     for a, v in entry.items():
-        if a != "reference" and isinstance(v, list | tuple) and len(v) == 2:
-            out[a] = LoglikRange(float(v[0]), float(v[1]), ref)
+        if a == "reference":
+            continue
+        ok = isinstance(v, list | tuple) and len(v) == 2
+        ok = ok and all(isinstance(x, int | float) and not isinstance(x, bool) and np.isfinite(x) for x in v)
+        if not ok or v[0] > v[1]:
+            raise ModelError(f"meta.{META_KEY}.{a}: expected [low, high], two finite numbers, not {v!r}")
+        out[a] = LoglikRange(float(v[0]), float(v[1]), ref)
     return out or None
 
 

@@ -36,6 +36,7 @@ import json
 import logging
 import os
 import re
+import shutil
 import sys
 import time
 from collections.abc import Callable
@@ -254,19 +255,25 @@ def run_sweep(
     if scheduler not in (None, SYNCHRONOUS):
         _check_reachable(scheduler)  # before any work: an unreachable cluster is bad input, said at once
     out = Path(out)
+    created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
-    evaluator, provenance = prepare(config, out, log)
-    sweep_file = out / "sweep.json"
-    if sweep_file.is_file():
-        try:
-            old = json.loads(sweep_file.read_text())
-        except (OSError, json.JSONDecodeError):
-            old = {}
-        if old.get("fingerprint") != provenance["fingerprint"]:
-            raise DataError(f"{out} holds a sweep with other settings or data (sweep.json); "
-                            "use another output folder or delete that one")  # fmt: skip
-    else:
-        atomic_write_json(sweep_file, provenance)
+    try:  # bad settings or data found while preparing leave no new folder behind
+        evaluator, provenance = prepare(config, out, log)
+        sweep_file = out / "sweep.json"
+        if sweep_file.is_file():
+            try:
+                old = json.loads(sweep_file.read_text())
+            except (OSError, ValueError):
+                old = {}
+            if not isinstance(old, dict) or old.get("fingerprint") != provenance["fingerprint"]:
+                raise DataError(f"{out} holds a sweep with other settings or data (sweep.json); "
+                                "use another output folder or delete that one")  # fmt: skip
+        else:
+            atomic_write_json(sweep_file, provenance)
+    except BaseException:
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
     for stale in (out / "chunks").glob(".c*.npz*"):  # a write cut short by a hard kill (never a whole chunk)
         stale.unlink(missing_ok=True)
     conditions = config.conditions
