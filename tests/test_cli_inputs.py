@@ -207,6 +207,14 @@ def test_huge_soft_evidence_is_refused_without_a_runtime_warning(capsys):
     assert "not a distribution" in _one_line(status, err)
 
 
+def _tiny_recogniser(capsys, tmp_path):
+    """A recogniser file trained in a second (2 synthetic gestures an action, Q = 2, M = 1, 2 iterations)."""
+    rec = tmp_path / "r.json"
+    argv = ["hmm", "train", "--synthetic", "2", "--states", "2", "--mix", "1", "--iter", "2", "-o", rec]
+    assert _glu(capsys, *argv)[0] == 0
+    return rec
+
+
 @pytest.mark.parametrize(
     "change, fragment",
     [
@@ -219,25 +227,7 @@ def test_huge_soft_evidence_is_refused_without_a_runtime_warning(capsys):
     ],
 )
 def test_a_malformed_recogniser_file_is_one_line(capsys, tmp_path, change, fragment):
-    rec = tmp_path / "r.json"
-    assert (
-        _glu(
-            capsys,
-            "hmm",
-            "train",
-            "--synthetic",
-            "2",
-            "--states",
-            "2",
-            "--mix",
-            "1",
-            "--iter",
-            "2",
-            "-o",
-            rec,
-        )[0]
-        == 0
-    )
+    rec = _tiny_recogniser(capsys, tmp_path)
     d = json.loads(rec.read_text())
     change(d)
     rec.write_text(json.dumps(d))
@@ -250,25 +240,7 @@ def test_a_malformed_recogniser_file_is_one_line(capsys, tmp_path, change, fragm
 def test_coordinates_at_the_physical_bound_give_finite_posteriors(capsys, tmp_path, mode):
     from glu.data.hand_logs import MAX_LOGGED_COORDINATE as B
 
-    rec = tmp_path / "r.json"
-    assert (
-        _glu(
-            capsys,
-            "hmm",
-            "train",
-            "--synthetic",
-            "2",
-            "--states",
-            "2",
-            "--mix",
-            "1",
-            "--iter",
-            "2",
-            "-o",
-            rec,
-        )[0]
-        == 0
-    )
+    rec = _tiny_recogniser(capsys, tmp_path)
     near = "".join(f"-1 1495933414.{i:02d} {600 + i}.0 -790.0 -930.0\n" for i in range(10))
     far = "".join(f"-1 1495933415.{i:02d} {B} {-B if i % 2 else B} {B}\n" for i in range(10))
     log = tmp_path / "far.log"
