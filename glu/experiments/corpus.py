@@ -48,7 +48,8 @@ from glu.bn.inference import InferenceEngine
 from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.files import atomic_path
-from glu.gestures.synthetic import View, synthesize_gesture
+from glu.gestures.synthetic import View
+from glu.gestures.synthetic_batch import gesture_features
 from glu.schema import AFFORDANCE_VALUES, ROOT_NODES
 
 EFFECT_NODES: tuple[str, ...] = ("ObjVel", "ObjHandVel", "HandVel", "Contact")
@@ -234,16 +235,16 @@ def simulate_chunk(
     codes = sample(engine, roots, rng)
     schema = engine.bn.schema
     actions = schema.values_of("Action")
-    features, n_frames, duration, size = [], np.empty(n, int), np.empty(n), np.empty(n)
-    for i in range(n):
-        g_rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(GESTURE_KEY, first + i)))
-        g = synthesize_gesture(
-            actions[codes["Action"][i]], g_rng, noise=float(condition.noise),
-            spike_rate=gestures.spike_rate, dropout_rate=gestures.dropout_rate, view=view,
-        )  # fmt: skip
-        x = g.features()
-        features.append(x)
-        n_frames[i], duration[i], size[i] = len(x), g.t[-1] - g.t[0], g.size
+    rngs = [
+        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(GESTURE_KEY, first + i)))
+        for i in range(n)
+    ]
+    batch = gesture_features(
+        [actions[a] for a in codes["Action"][:n]], rngs, noise=float(condition.noise),
+        spike_rate=gestures.spike_rate, dropout_rate=gestures.dropout_rate, view=view,
+    )  # fmt: skip
+    features, duration, size = batch.features, batch.duration, batch.size
+    n_frames = np.array([len(x) for x in features], dtype=int)
     table: dict[str, Any] = {"episode": np.arange(first, first + n)}
     for node in schema.affordance_nodes:
         table[node] = pd.Categorical.from_codes(codes[node], categories=list(schema.values_of(node)))

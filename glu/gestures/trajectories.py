@@ -270,85 +270,10 @@ def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:
     # every one of a million synthetic gestures).
     events: list[TrackingEvent] = []
     t0 = float(traj.t[0]) if len(traj) else 0.0
-    xyz, t, frame, observed = traj.xyz, traj.t, traj.frame, traj.observed
-
-    def ev(kind: str, i: int, size: float, action: str) -> TrackingEvent:
-        return TrackingEvent(kind, int(frame[i]), float(t[i] - t0), float(size), action)
-
-    finite = np.isfinite(xyz).all(axis=1)
-    if not finite.all():
-        for i in np.flatnonzero(~finite):
-            events.append(ev("missing", int(i), 0.0, "dropped"))
-        xyz, t, frame, observed = xyz[finite], t[finite], frame[finite], observed[finite]
-    if len(t) == 0:
-        raise DataError(f"{traj.source}: no frame has finite coordinates")
-    dt_all = np.diff(t)
-    period = float(np.median(dt_all)) if len(t) > 1 else 1 / 30
-
-    # 1. spikes, on the observed frames
-    if math.isfinite(policy.spike_threshold):
-        dev = spike_deviation(xyz, policy.spike_window)
-        spikes = dev > policy.spike_threshold
-        if spikes.any():
-            action = {"interpolate": "replaced", "drop": "dropped", "keep": "kept"}[policy.spikes]
-            for i in np.flatnonzero(spikes):
-                events.append(ev("spike", int(i), dev[i], action))
-            if policy.spikes == "interpolate" and (~spikes).sum() >= 2:
-                good = ~spikes
-                xyz = xyz.copy()
-                for k in range(3):
-                    xyz[spikes, k] = np.interp(t[spikes], t[good], xyz[good, k])
-                observed = observed & good
-            elif policy.spikes == "drop":
-                keep = ~spikes
-                xyz, t, frame, observed = xyz[keep], t[keep], frame[keep], observed[keep]
-                dt_all = np.diff(t)
-
-    # 2. jumps (reported only)
-    steps = np.sqrt((np.diff(xyz, axis=0) ** 2).sum(axis=1))
-    for i in np.flatnonzero(steps > policy.jump_threshold):
-        events.append(ev("jump", int(i) + 1, steps[i], "kept"))
-
-    # 3. gaps: interpolate the short ones, split at (or keep) the long ones
-    gaps = (
-        np.flatnonzero(dt_all > policy.gap_factor * np.median(dt_all)) if len(dt_all) else dt_all.astype(int)
-    )
-    spans: list[tuple[list[np.ndarray], ...]] = []  # per piece: its parts of xyz, t, frame, observed
-    parts: tuple[list[np.ndarray], ...] = ([], [], [], [])
-    start = 0
-
-    def add(lo: int, hi: int) -> None:
-        for part, arr in zip(parts, (xyz, t, frame, observed), strict=True):
-            part.append(arr[lo:hi])
-
-    for g in gaps:
-        dt = float(t[g + 1] - t[g])
-        if dt <= policy.max_interpolate:
-            events.append(ev("gap", int(g) + 1, dt, "interpolated"))
-            k = max(int(round(dt / period)) - 1, 0)
-            add(start, g + 1)
-            if k:
-                w = np.arange(1, k + 1) / (k + 1)
-                parts[0].append(xyz[g] + w[:, None] * (xyz[g + 1] - xyz[g]))
-                parts[1].append(t[g] + w * dt)
-                parts[2].append(np.full(k, frame[g]))
-                parts[3].append(np.zeros(k, dtype=bool))
-            start = g + 1
-        elif policy.long_gaps == "split":
-            events.append(ev("gap", int(g) + 1, dt, "split"))
-            add(start, g + 1)
-            spans.append(parts)
-            parts = ([], [], [], [])
-            start = g + 1
-        else:
-            events.append(ev("gap", int(g) + 1, dt, "kept"))
-    add(start, len(t))
-    spans.append(parts)
-
+    spans = _repair_spans(traj.xyz, traj.t, traj.frame, traj.observed, policy, traj.source, events, t0)
     events.sort(key=lambda e: (e.frame, e.time))
     kept = []
-    for p in spans:
-        arrays = [a[0] if len(a) == 1 else np.concatenate(a) for a in p]
+    for arrays in spans:
         if len(arrays[1]) >= policy.min_piece:
             kept.append(arrays)
         else:
@@ -365,6 +290,132 @@ def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:
     if not out:
         raise DataError(f"{traj.source}: no piece of at least {policy.min_piece} frames is left after repair")
     return Repaired(out, traj.events + all_events)
+
+
+def repaired_xyz(
+    xyz: np.ndarray,
+    t: np.ndarray,
+    policy: RepairPolicy = DEFAULT_POLICY,
+    deviation: np.ndarray | None = None,
+    source: str = "<memory>",
+) -> np.ndarray:
+    """The coordinates :func:`repair` gives, its pieces one after the other, without building its events.
+
+    Parameters
+    ----------
+    xyz : array, shape (n_frames, 3); t : array, shape (n_frames,), strictly increasing (seconds)
+    policy : the repair
+    deviation : optional, shape (n_frames,): :func:`spike_deviation` of ``xyz`` if already computed
+        (e.g. by :func:`glu.gestures.repair_many.spike_deviations` for many trajectories)
+    source : names the trajectory in errors
+
+    Returns
+    -------
+    array, shape (n_repaired, 3): ``np.concatenate([p.xyz for p in repair(traj, policy).pieces])``
+    """
+    xyz, t = np.asarray(xyz, dtype=float), np.asarray(t, dtype=float)
+    n = len(t)
+    if xyz.shape != (n, 3):
+        raise DataError(f"{source}: xyz must have shape (n_frames, 3) = ({n}, 3), got {xyz.shape}")
+    if n and (not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0)):
+        raise DataError(f"{source}: timestamps must be finite and strictly increasing")
+    frame, observed = np.arange(1, n + 1), np.ones(n, dtype=bool)
+    spans = _repair_spans(xyz, t, frame, observed, policy, source, None, 0.0, deviation)
+    kept = [a[0] for a in spans if len(a[1]) >= policy.min_piece]
+    if not kept:
+        raise DataError(f"{source}: no piece of at least {policy.min_piece} frames is left after repair")
+    return kept[0] if len(kept) == 1 else np.concatenate(kept)
+
+
+def _repair_spans(
+    xyz: np.ndarray,
+    t: np.ndarray,
+    frame: np.ndarray,
+    observed: np.ndarray,
+    policy: RepairPolicy,
+    source: str,
+    events: list[TrackingEvent] | None,
+    t0: float,
+    deviation: np.ndarray | None = None,
+) -> list[list[np.ndarray]]:
+    """The repaired pieces as ``[xyz, t, frame, observed]`` arrays; the events go to ``events`` (if given)."""
+
+    def ev(kind: str, i: int, size: float, action: str) -> None:
+        if events is not None:
+            events.append(TrackingEvent(kind, int(frame[i]), float(t[i] - t0), float(size), action))
+
+    finite = np.isfinite(xyz).all(axis=1)
+    if not finite.all():
+        for i in np.flatnonzero(~finite):
+            ev("missing", int(i), 0.0, "dropped")
+        xyz, t, frame, observed = xyz[finite], t[finite], frame[finite], observed[finite]
+        deviation = None
+    if len(t) == 0:
+        raise DataError(f"{source}: no frame has finite coordinates")
+    dt_all = np.diff(t)
+    median_dt = np.median(dt_all) if len(t) > 1 else None
+    period = float(median_dt) if median_dt is not None else 1 / 30
+
+    # 1. spikes, on the observed frames
+    if math.isfinite(policy.spike_threshold):
+        dev = spike_deviation(xyz, policy.spike_window) if deviation is None else deviation
+        spikes = dev > policy.spike_threshold
+        if spikes.any():
+            action = {"interpolate": "replaced", "drop": "dropped", "keep": "kept"}[policy.spikes]
+            for i in np.flatnonzero(spikes):
+                ev("spike", int(i), dev[i], action)
+            if policy.spikes == "interpolate" and (~spikes).sum() >= 2:
+                good = ~spikes
+                xyz = xyz.copy()
+                for k in range(3):
+                    xyz[spikes, k] = np.interp(t[spikes], t[good], xyz[good, k])
+                observed = observed & good
+            elif policy.spikes == "drop":
+                keep = ~spikes
+                xyz, t, frame, observed = xyz[keep], t[keep], frame[keep], observed[keep]
+                dt_all = np.diff(t)
+                median_dt = np.median(dt_all) if len(dt_all) else None
+
+    # 2. jumps (reported only)
+    if events is not None:
+        steps = np.sqrt((np.diff(xyz, axis=0) ** 2).sum(axis=1))
+        for i in np.flatnonzero(steps > policy.jump_threshold):
+            ev("jump", int(i) + 1, steps[i], "kept")
+
+    # 3. gaps: interpolate the short ones, split at (or keep) the long ones
+    gaps = np.flatnonzero(dt_all > policy.gap_factor * median_dt) if len(dt_all) else dt_all.astype(int)
+    spans: list[tuple[list[np.ndarray], ...]] = []  # per piece: its parts of xyz, t, frame, observed
+    parts: tuple[list[np.ndarray], ...] = ([], [], [], [])
+    start = 0
+
+    def add(lo: int, hi: int) -> None:
+        for part, arr in zip(parts, (xyz, t, frame, observed), strict=True):
+            part.append(arr[lo:hi])
+
+    for g in gaps:
+        dt = float(t[g + 1] - t[g])
+        if dt <= policy.max_interpolate:
+            ev("gap", int(g) + 1, dt, "interpolated")
+            k = max(int(round(dt / period)) - 1, 0)
+            add(start, g + 1)
+            if k:
+                w = np.arange(1, k + 1) / (k + 1)
+                parts[0].append(xyz[g] + w[:, None] * (xyz[g + 1] - xyz[g]))
+                parts[1].append(t[g] + w * dt)
+                parts[2].append(np.full(k, frame[g]))
+                parts[3].append(np.zeros(k, dtype=bool))
+            start = g + 1
+        elif policy.long_gaps == "split":
+            ev("gap", int(g) + 1, dt, "split")
+            add(start, g + 1)
+            spans.append(parts)
+            parts = ([], [], [], [])
+            start = g + 1
+        else:
+            ev("gap", int(g) + 1, dt, "kept")
+    add(start, len(t))
+    spans.append(parts)
+    return [[a[0] if len(a) == 1 else np.concatenate(a) for a in p] for p in spans]
 
 
 def summarize_events(events: tuple[TrackingEvent, ...] | list[TrackingEvent]) -> str:

@@ -1,0 +1,247 @@
+"""Many synthetic gestures' repaired features at once: the corpus's fast path, bit for bit the same.
+
+A simulated corpus (:mod:`glu.experiments.corpus`) needs, for each of a million episodes, only the
+repaired features of one synthetic gesture (:meth:`glu.gestures.synthetic.SyntheticGesture.features`).
+:func:`gesture_features` computes them for a whole chunk of episodes: each episode's generator draws
+exactly the numbers :func:`~glu.gestures.synthetic.synthesize_gesture` draws, in the same order, and
+then the work is shared across the episodes — the minimum-jerk hand paths of all episodes in a few
+array operations (:func:`glu.gestures.pchip.pchip_many`), the sway of all frames at once, the running
+repair of all episodes at once (:func:`glu.gestures.repair_many.repaired_many`),
+and only the joints the features use. Every number is computed by the same IEEE operations as the
+one-gesture path (elementwise operations do not depend on how the arrays are batched; the rotation of
+each skeleton is the same matrix product; reductions run per episode, on the same arrays), so the
+features are identical, bit for bit, to ``synthesize_gesture(...).features()`` (tested).
+
+Example
+-------
+>>> import numpy as np
+>>> from glu.gestures.synthetic import synthesize_gesture
+>>> rngs = lambda: [np.random.default_rng(i) for i in range(3)]
+>>> fast = gesture_features(["tap", "grasp", "touch"], rngs(), noise=0.02)
+>>> slow = [synthesize_gesture(a, r, noise=0.02) for a, r in zip(["tap", "grasp", "touch"], rngs())]
+>>> all(np.array_equal(x, g.features()) for x, g in zip(fast.features, slow))
+True
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+from typing import NamedTuple
+
+import numpy as np
+
+from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle_frames
+from glu.gestures.pchip import pchip_many
+from glu.gestures.repair_many import repaired_many
+from glu.gestures.synthetic import (
+    _BODY,
+    _KEYS,
+    _OBJECT,
+    _SEATED_OBJECT_SHIFT,
+    DEFAULT_VIEW,
+    FRAME_RATE,
+    OPENNI_JOINTS,
+    SYNTHETIC_POLICY,
+    View,
+    _check_action,
+    _rest_pose,
+    synthesize_gesture,
+)
+from glu.gestures.trajectories import RepairPolicy
+
+_IH, _IT = OPENNI_JOINTS.index("right_hand"), OPENNI_JOINTS.index("torso")
+_ILS, _IRS, _IN = (OPENNI_JOINTS.index(j) for j in ("left_shoulder", "right_shoulder", "neck"))
+_BODY_ARRAY = np.array([_BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS])
+# _person's draws (size, origin x y z, yaw in degrees, sway phase, sway amplitude) then _hand_path's first
+# ones (duration, amplitude, object offset x y z): all uniform, drawn in this order by one call.
+_LOW = np.array([0.85, -0.4, -0.15, -2.6, -10, 0, 0.0, 2.5, 0.85, -0.05, -0.05, -0.05])
+_HIGH = np.array([1.15, 0.4, 0.15, -1.6, 10, 2 * np.pi, 0.02, 5.0, 1.15, 0.05, 0.05, 0.05])
+
+
+class GestureBatch(NamedTuple):
+    """The repaired features of many synthetic gestures, and what a corpus records of each.
+
+    Attributes
+    ----------
+    features : n arrays of shape (T_i, 3), as :meth:`~glu.gestures.synthetic.SyntheticGesture.features`
+    duration : array, shape (n,), seconds from the first to the last observed frame
+    size : array, shape (n,), the person's size factor
+    """
+
+    features: list[np.ndarray]
+    duration: np.ndarray
+    size: np.ndarray
+
+
+@lru_cache(maxsize=512)
+def _timing(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The minimum-jerk time course of ``n`` frames (as ``_min_jerk_path``) and ``arange(n) / FRAME_RATE``."""
+    s = np.linspace(0.0, 1.0, n)
+    u = 0.15 * s + 0.85 * s**3 * (10 - 15 * s + 6 * s**2)
+    for a in (s, u):
+        a.flags.writeable = False
+    t = np.arange(n) / FRAME_RATE
+    t.flags.writeable = False
+    return u, t
+
+
+def gesture_features(
+    actions: Sequence[str],
+    rngs: Sequence[np.random.Generator],
+    *,
+    noise: float = 0.01,
+    spike_rate: float = 0.005,
+    dropout_rate: float = 0.2,
+    rest_frames: tuple[int, int] = (3, 15),
+    view: View | None = None,
+    policy: RepairPolicy = SYNTHETIC_POLICY,
+) -> GestureBatch:
+    """``synthesize_gesture(actions[i], rngs[i], ...).features(policy)`` for every i, computed together.
+
+    Parameters
+    ----------
+    actions : n actions (:data:`~glu.gestures.synthetic.GESTURES`)
+    rngs : n generators, one per gesture (each is advanced exactly as by ``synthesize_gesture``)
+    noise, spike_rate, dropout_rate, rest_frames, view : as :func:`~glu.gestures.synthetic.synthesize_gesture`
+    policy : the repair (:meth:`~glu.gestures.synthetic.SyntheticGesture.features`)
+    """
+    view = view or DEFAULT_VIEW
+    n = len(actions)
+    if view.performer == "robot":  # the robot's own movements: one at a time
+        gs = [synthesize_gesture(a, r, noise=noise, spike_rate=spike_rate, dropout_rate=dropout_rate,
+                                 rest_frames=rest_frames, view=view) for a, r in zip(actions, rngs, strict=True)]  # fmt: skip
+        return GestureBatch(
+            [g.features(policy) for g in gs],
+            np.array([g.t[-1] - g.t[0] for g in gs], dtype=float).reshape(n),
+            np.array([g.size for g in gs], dtype=float).reshape(n),
+        )
+    for a in set(actions):
+        _check_action(a, view)
+    rest0 = _rest_pose(view)
+    seated = view.posture == "seated"
+    draws, key_times, key_points = [], [], []
+    for action, rng in zip(actions, rngs, strict=True):
+        # _person, then _hand_path: the same draws in the same order as synthesize_gesture
+        v = rng.uniform(_LOW, _HIGH)
+        size = float(v[0]) if view.size is None else float(view.size)
+        yaw = float(np.deg2rad(v[4])) if view.yaw_deg is None else float(np.deg2rad(view.yaw_deg))
+        m = max(int(round(v[7] * FRAME_RATE)), 12)
+        amp = v[8]
+        obj = _OBJECT + v[9:12] * np.array([1.0, 0.4, 1.0])
+        rest = rest0 + rng.normal(0, 0.015, size=3)
+        if seated:
+            obj = obj + _SEATED_OBJECT_SHIFT
+        spec = _KEYS[action]
+        jitter = rng.uniform(-0.02, 0.02, size=len(spec) - 2)
+        keys = []
+        for j, (tf, off) in enumerate(spec):
+            if 0 < j < len(spec) - 1:
+                tf = tf + jitter[j - 1]
+            p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
+            keys.append((tf, p * size))
+        keys.sort(key=lambda k: k[0])
+        key_times.append(np.array([k[0] for k in keys]))
+        key_points.append(np.stack([k[1] for k in keys]))
+        pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
+        # _sensor's draws
+        nf = pre + m + post
+        eps = rng.normal(0.0, noise, size=(nf, len(OPENNI_JOINTS), 3)) if noise > 0 else None
+        spikes = rng.random(nf) < spike_rate
+        k = int(spikes.sum())
+        d = None
+        if k:
+            d = rng.normal(size=(k, 3))
+            d *= (rng.uniform(0.15, 0.4, size=k) / np.linalg.norm(d, axis=1))[:, None]
+        jit = rng.normal(0.0, 0.002, size=nf)
+        keep = None
+        if nf > 30 and rng.random() < dropout_rate:
+            length = int(rng.integers(3, 21))
+            start = int(rng.integers(5, nf - length - 5))
+            keep = np.ones(nf, dtype=bool)
+            keep[start : start + length] = False
+        draws.append((size, v[1:4].copy(), yaw, v[5], v[6], m, pre, post, eps, spikes, d, jit, keep))
+    moves = _hand_paths(key_times, key_points, [w[5] for w in draws])
+    # the sway of every frame of every episode, in one call
+    phase = np.concatenate([np.full(w[5] + w[6] + w[7], w[3]) for w in draws])
+    amps = np.concatenate([np.full(w[5] + w[6] + w[7], w[4]) for w in draws])
+    tt = np.concatenate([_timing(w[5] + w[6] + w[7])[1] for w in draws])
+    sway_all = amps * np.sin(2 * np.pi * 0.25 * tt + phase)
+    xyzs, ts, duration, sizes = [], [], np.empty(n), np.empty(n)
+    at = 0
+    for i, (w, move) in enumerate(zip(draws, moves, strict=True)):
+        size, origin, yaw, _, _, m, pre, post, eps, spikes, d, jit, keep = w
+        nf = pre + m + post
+        hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
+        t = _timing(nf)[1]
+        skel = _skeleton(hand, size, yaw, origin, sway_all[at : at + nf], view)
+        at += nf
+        if eps is not None:
+            skel = skel + eps[:, _JOINTS]
+        if d is not None:
+            skel[spikes, 0] += d
+        t = t + jit
+        if keep is not None:
+            skel, t = skel[keep], t[keep]
+        xyzs.append(_features(skel, view.normalise_body))
+        ts.append(t)
+        duration[i], sizes[i] = t[-1] - t[0], size
+    return GestureBatch(repaired_many(xyzs, ts, policy), duration, sizes)
+
+
+_JOINTS = np.array([_IH, _IT, _ILS, _IRS, _IN])
+"""The joints the features use (hand, torso, shoulders, neck), in the order of :func:`_skeleton`'s columns."""
+
+
+def _hand_paths(times: list[np.ndarray], points: list[np.ndarray], n: list[int]) -> list[np.ndarray]:
+    """``_min_jerk_path`` of every episode: PCHIP through its key poses, per number of keys at once."""
+    out: list[np.ndarray] = [np.empty(0)] * len(times)
+    by_k: dict[int, list[int]] = {}
+    for i, x in enumerate(times):
+        by_k.setdefault(len(x), []).append(i)
+    for idx in by_k.values():
+        x = np.stack([times[i] for i in idx])
+        y = np.stack([points[i] for i in idx])
+        u = [_timing(n[i])[0] for i in idx]
+        for i, path in zip(idx, pchip_many(x, y, u), strict=True):
+            out[i] = path
+    return out
+
+
+def _skeleton(
+    hand: np.ndarray, size: float, yaw: float, origin: np.ndarray, sway: np.ndarray, view: View
+) -> np.ndarray:
+    """The joints :data:`_JOINTS` of ``_skeletons``' skeleton in the sensor frame, shape (n_frames, 5, 3).
+
+    The rotation is the same matrix product over the full 15-joint skeleton as ``_skeletons`` (each
+    output row depends only on its own joint; the elbow, unused by the features, is left at rest).
+    """
+    if view.mirror:
+        hand = hand * np.array([-1.0, 1.0, 1.0])
+    nf = len(hand)
+    body = _BODY_ARRAY * size
+    rel = np.empty((nf, len(OPENNI_JOINTS), 3))
+    rel[:] = body
+    rel[:, _IH] = hand
+    c, si = np.cos(yaw), np.sin(yaw)
+    rot = np.array([[c, 0.0, si], [0.0, 1.0, 0.0], [-si, 0.0, c]])
+    world = (rel @ rot.T)[:, _JOINTS] + origin
+    world[:, :, 0] += sway[:, None]
+    return world
+
+
+def _features(skel: np.ndarray, measure: bool) -> np.ndarray:
+    """:func:`~glu.gestures.features.skeleton_features` of the joints of :func:`_skeleton`, shape (n, 3)."""
+    if measure:
+        mid = middle_frames(len(skel))
+        h = _mean_distance(skel[mid, 2], skel[mid, 3], HORIZONTAL_FALLBACK)
+        v = _mean_distance(skel[mid, 4], skel[mid, 1], VERTICAL_FALLBACK)
+    else:
+        h, v = HORIZONTAL_FALLBACK, VERTICAL_FALLBACK
+    return (skel[:, 0] - skel[:, 1]) / np.array([h, v, h])
+
+
+def _mean_distance(a: np.ndarray, b: np.ndarray, fallback: float) -> float:
+    d = np.linalg.norm(a - b, axis=1)
+    d = d[np.isfinite(d) & (d > 0)]
+    return float(d.mean()) if len(d) else fallback
