@@ -3,10 +3,12 @@
 The chain, one module per step:
 
 * :mod:`~glu.gestures.trajectories` — YARP hand logs, tracking gaps and outliers, their repair;
+* :mod:`~glu.gestures.repair_many` — the repair of many trajectories at once (the corpus's fast path);
 * :mod:`~glu.gestures.features` — a skeleton's hand in the torso frame, normalised by body size;
 * :mod:`~glu.gestures.invariants` — features invariant to posture, body size, viewpoint and mirroring, online;
 * :mod:`~glu.gestures.segmentation` — automatic segmentation of a recording into repetitions;
 * :mod:`~glu.gestures.synthetic` — seeded synthetic skeletons of grasp, tap, touch and push, seen from a view;
+* :mod:`~glu.gestures.synthetic_batch` — many synthetic gestures' repaired features at once, bit for bit;
 * :mod:`~glu.gestures.robot` — the robot's own grasp, tap and touch (an iCub-like arm in its body frame);
 * :mod:`~glu.gestures.corpus` — labelled sequences of a data source (real segments or synthetic);
 * :mod:`~glu.gestures.forward` — the forward algorithm as pure functions over arrays;
