@@ -251,3 +251,13 @@ def test_coordinates_at_the_physical_bound_give_finite_posteriors(capsys, tmp_pa
         for line in out.splitlines():
             p = list(json.loads(line, parse_constant=lambda c: pytest.fail(c))["posterior"].values())
             assert all(x is not None and 0 <= x <= 1 for x in p) and abs(sum(p) - 1) < 1e-9
+
+
+def test_a_model_whose_value_is_not_a_string_is_one_line(capsys, tmp_path):
+    model = tmp_path / "m.json"
+    assert _glu(capsys, "bn", "learn", "--data", "synthetic", "-o", model)[0] == 0
+    d = json.loads(model.read_text())
+    next(n for n in d["nodes"] if n["name"] == "Shape")["values"][0] = None  # was read as the value "None"
+    model.write_text(json.dumps(d))
+    line = _one_line(*_glu(capsys, "describe", "--model", model, "--nbest", "2", "--json")[::2])
+    assert "must be non-empty strings" in line

@@ -138,7 +138,8 @@ class InferenceEngine(BatchQueries):
             vals = bn.schema.values_of(n)
             d = {v: i for i, v in enumerate(vals)}
             for alias, v in bn.schema.aliases.get(n, {}).items():
-                d[alias] = d[v]
+                if v in d:  # an alias of a value this model does not have does not apply
+                    d[alias] = d[v]
             self._value_index[n] = d
 
     # ------------------------------------------------------------------ parsing

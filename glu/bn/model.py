@@ -188,6 +188,12 @@ class BayesNet:
             )
         try:
             nodes = d["nodes"]
+            for n in nodes:
+                names = [n["name"], *n["values"], *n["parents"]]
+                if not all(isinstance(x, str) and x for x in names):
+                    raise ModelError(
+                        f"{where}: node names and values must be non-empty strings: {names[:6]!r}"
+                    )
             values = {str(n["name"]): tuple(str(v) for v in n["values"]) for n in nodes}
             if len(values) != len(nodes):
                 raise ModelError(f"{where}: a node name appears twice")
