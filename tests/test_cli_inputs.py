@@ -261,3 +261,14 @@ def test_a_model_whose_value_is_not_a_string_is_one_line(capsys, tmp_path):
     model.write_text(json.dumps(d))
     line = _one_line(*_glu(capsys, "describe", "--model", model, "--nbest", "2", "--json")[::2])
     assert "must be non-empty strings" in line
+
+
+def test_a_model_json_with_an_infinite_count_is_one_line(capsys, tmp_path):
+    """Found by the long fuzz profile: "n_affordance": Infinity (json reads it) overflowed int()."""
+    model = tmp_path / "m.json"
+    assert _glu(capsys, "bn", "learn", "--data", "synthetic", "-o", model)[0] == 0
+    d = json.loads(model.read_text())
+    d["n_affordance"] = float("inf")
+    model.write_text(json.dumps(d))
+    status, out, err = _glu(capsys, "query", "--model", model, "--target", "ObjVel", "--json")
+    assert status == 2 and out == "" and "malformed model (OverflowError" in err.splitlines()[-1]

@@ -205,7 +205,15 @@ class BayesNet:
                 raise ModelError(f'{where}: "meta" must be an object, not {type(meta).__name__}')
         except ModelError:
             raise
-        except (KeyError, TypeError, ValueError, AttributeError, IndexError, RecursionError) as e:
+        except (
+            KeyError,
+            TypeError,
+            ValueError,
+            AttributeError,
+            IndexError,
+            OverflowError,
+            RecursionError,
+        ) as e:
             raise ModelError(f"{where}: malformed model ({type(e).__name__}: {e})") from None
         try:
             return cls(schema=schema, parents=parents, cpts=cpts, meta=dict(meta))
