@@ -126,8 +126,8 @@ def _export_cases() -> list:
         for tool in ("pgmpy", "pyagrum"):
             for fmt in ("bif", "xmlbif", "uai"):
                 marks = [_known_disagreement(tool)] if fmt == "uai" else []
-                if (tool, fmt, rows) == ("pgmpy", "bif", "uniform"):
-                    marks.append(pytest.mark.slow)  # pgmpy's BIF reader takes seconds per file
+                if (tool, fmt, rows) in (("pgmpy", "bif", "uniform"), ("pgmpy", "uai", "uniform")):
+                    marks.append(pytest.mark.slow)  # pgmpy's BIF and UAI readers take seconds per file
                 cases.append(pytest.param(fmt, tool, rows, marks=marks, id=f"{rows}-{tool}-{fmt}"))
     return cases
 
