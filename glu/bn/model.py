@@ -40,6 +40,10 @@ VERSION = 1
 ROW_TOL = 1e-9
 
 
+_MALFORMED = (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError, RecursionError)
+"""What malformed JSON raises while a model is built from it (each becomes one ModelError line)."""
+
+
 @dataclass(frozen=True, eq=False)
 class BayesNet:
     """A discrete Bayesian network over the schema's nodes.
@@ -205,27 +209,13 @@ class BayesNet:
                 raise ModelError(f'{where}: "meta" must be an object, not {type(meta).__name__}')
         except ModelError:
             raise
-        except (
-            KeyError,
-            TypeError,
-            ValueError,
-            AttributeError,
-            IndexError,
-            OverflowError,
-            RecursionError,
-        ) as e:
+        except _MALFORMED as e:
             raise ModelError(f"{where}: malformed model ({type(e).__name__}: {e})") from None
         try:
             return cls(schema=schema, parents=parents, cpts=cpts, meta=dict(meta))
         except ModelError as e:
             raise ModelError(f"{where}: {e}") from None
-        except (
-            KeyError,
-            TypeError,
-            ValueError,
-            AttributeError,
-            IndexError,
-        ) as e:  # shapes the validation meets late
+        except _MALFORMED as e:  # shapes the validation meets late
             raise ModelError(f"{where}: malformed model ({type(e).__name__}: {e})") from None
 
     @classmethod

@@ -147,12 +147,22 @@ def forward_step(
         pred = a @ transmat if a.ndim == 1 else (a[..., None, :] @ transmat)[..., 0, :]
         total = state.loglik
     mx = log_b.max(axis=-1)
-    new = pred * np.exp(log_b - mx[..., None])
+    alpha, step = scaled_step(pred, np.exp(log_b - mx[..., None]), mx, log_b)
+    return ForwardState(alpha, total + step)
+
+
+def scaled_step(
+    pred: np.ndarray, b: np.ndarray, mx: np.ndarray, log_b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """One scaled forward step from the predicted state ``pred`` and the frame's scaled emissions
+    ``b = exp(log_b − mx)``: the new normalised forward variable and the log-likelihood increment, shapes
+    (..., Q) and (...). Where the scaled mass underflows (or a frame is impossible) that element is redone
+    in the log domain; an impossible frame gives −∞ and a zero forward variable."""
+    new = pred * b
     c = new.sum(axis=-1)
     ok = c > TINY
     if np.all(ok):
-        return ForwardState(new / c[..., None], total + (np.log(c) + mx))
-    # underflow (or an impossible frame) for some model: redo those in the log domain
+        return new / c[..., None], np.log(c) + mx
     with np.errstate(divide="ignore", invalid="ignore"):
         la = np.log(pred) + log_b
         m = la.max(axis=-1)
@@ -165,7 +175,7 @@ def forward_step(
             ok[..., None], new / np.where(ok, c, 1.0)[..., None],
             np.where(finite[..., None], new_log / np.where(finite, c_log, 1.0)[..., None], 0.0),
         )  # fmt: skip
-    return ForwardState(alpha, total + step)
+    return alpha, step
 
 
 def forward_curve(log_b: np.ndarray, startprob: np.ndarray, transmat: np.ndarray) -> np.ndarray:

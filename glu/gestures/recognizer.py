@@ -42,12 +42,12 @@ from glu.files import atomic_write_json
 from glu.gestures.batch import Bank, stack_models
 from glu.gestures.features import FEATURES_DESCRIPTION
 from glu.gestures.forward import (
-    TINY,
     ForwardState,
     forward_curve,
     forward_step,
     log_emissions,
     p_hmm_from_loglik,
+    scaled_step,
 )
 from glu.gestures.invariants import Invariants
 from glu.gestures.mixsplit import RECIPES, train_mixsplit_many
@@ -84,31 +84,6 @@ class StreamStep(NamedTuple):
     t: int
     loglik: np.ndarray
     p_hmm: np.ndarray
-
-
-def _scaled_step(
-    pred: np.ndarray, b: np.ndarray, mx: np.ndarray, log_b: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """One step of :func:`~glu.gestures.forward.forward_step` from the predicted state ``pred`` and the
-    frame's scaled emissions ``b = exp(log_b − mx)``, element by element as it computes them: the new
-    normalised forward variable and the log-likelihood increment, shapes (..., Q) and (...)."""
-    new = pred * b
-    c = new.sum(axis=-1)
-    ok = c > TINY
-    if np.all(ok):
-        return new / c[..., None], np.log(c) + mx
-    la = np.log(pred) + log_b  # underflow (or an impossible frame) somewhere: the log domain there
-    m = la.max(axis=-1)
-    finite = np.isfinite(m)
-    m_safe = np.where(finite, m, 0.0)
-    new_log = np.exp(la - m_safe[..., None])
-    c_log = new_log.sum(axis=-1)
-    step = np.where(ok, np.log(c) + mx, np.where(finite, m_safe + np.log(c_log), -np.inf))
-    alpha = np.where(
-        ok[..., None], new / np.where(ok, c, 1.0)[..., None],
-        np.where(finite[..., None], new_log / np.where(finite, c_log, 1.0)[..., None], 0.0),
-    )  # fmt: skip
-    return alpha, step
 
 
 class GestureStream:
@@ -246,7 +221,7 @@ class Recognizer:
             for t in range(T):
                 n = n_live[t]
                 pred = bank.startprob if t == 0 else (alpha[:n, :, None, :] @ bank.transmat)[..., 0, :]
-                alpha[:n], steps[:n, t] = _scaled_step(pred, b[:n, t], mx[:n, t], log_b[:n, t])
+                alpha[:n], steps[:n, t] = scaled_step(pred, b[:n, t], mx[:n, t], log_b[:n, t])
         total = np.cumsum(steps, axis=1)[np.arange(S), lengths_sorted - 1]  # (S, A), summed as forward_curve
         out = np.empty_like(total)
         out[order] = total
