@@ -112,3 +112,17 @@ def replace_folder(complete: str | os.PathLike, dest: str | os.PathLike) -> Path
     else:
         os.replace(complete, dest)
     return dest
+
+
+def read_text(path: str | os.PathLike, what: str = "file", encoding: str = "utf-8") -> str:
+    """The text of an input file; :class:`~glu.errors.DataError` naming the file and ``what`` it should be."""
+    from glu.errors import DataError
+
+    try:
+        return Path(path).read_text(encoding=encoding)
+    except FileNotFoundError:
+        raise DataError(f"{path}: no such {what}") from None
+    except IsADirectoryError:
+        raise DataError(f"{path}: is a folder, not a {what}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise DataError(f"{path}: cannot read the {what} as text ({e})") from None

@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from glu.errors import DataError, UnknownNodeError, UnknownValueError
+from glu.files import read_text
 from glu.paths import RESOURCES_DIR
 
 SCHEMA_FORMAT = "glu-schema"
@@ -202,12 +203,7 @@ def schema_from_dict(d: Any, where: str = "schema") -> Schema:
 def read_schema_file(path: str | os.PathLike) -> Schema:
     """Read a schema file (``.json``, or ``.yaml``/``.yml``, see the module docstring)."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such schema file") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise DataError(f"{path}: cannot read the schema file ({e})") from None
+    text = read_text(path, "schema file")
     if path.suffix.lower() in (".yaml", ".yml"):
         import yaml
 

@@ -39,3 +39,17 @@ def test_a_failed_write_leaves_nothing(tmp_path):
         (tmp / "half.txt").write_text("half")
         raise RuntimeError("interrupted")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_read_text_names_the_file_and_what_it_should_be(tmp_path):
+    from glu.errors import DataError
+    from glu.files import read_text
+
+    (tmp_path / "s.yaml").write_bytes(b"\xff\xfe not utf-8 \xff")
+    for path, message in ((tmp_path / "none.yaml", "none.yaml: no such schema file"),
+                          (tmp_path, "is a folder, not a schema file"),
+                          (tmp_path / "s.yaml", "s.yaml: cannot read the schema file as text")):  # fmt: skip
+        with pytest.raises(DataError, match=message):
+            read_text(path, "schema file")
+    (tmp_path / "ok.yaml").write_text("name: x\n")
+    assert read_text(tmp_path / "ok.yaml", "schema file") == "name: x\n"

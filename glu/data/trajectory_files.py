@@ -30,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from glu.errors import DataError
+from glu.files import read_text
 
 TABLE_SUFFIXES: dict[str, str] = {".csv": ",", ".tsv": "\t"}
 """Table files and their separators."""
@@ -85,12 +86,7 @@ def read_trajectory_table(path: str | os.PathLike) -> TrajectoryTable:
         return _from_array(np.asarray(arr), str(path))
     if suffix not in TABLE_SUFFIXES:
         raise DataError(f"{path}: unknown suffix; trajectories are .csv, .tsv, .npy (or a YARP .log)")
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise DataError(f"{path}: cannot read as UTF-8 text ({e})") from None
+    text = read_text(path, "trajectory table", encoding="utf-8-sig")
     return parse_trajectory_table(text, TABLE_SUFFIXES[suffix], str(path))
 
 

@@ -63,6 +63,7 @@ from glu.data.source import WORD_FILES
 from glu.errors import DataError
 from glu.experiments.corpus import POSTERIORS, VIEWPOINTS, Condition, GestureSettings, Scenario
 from glu.experiments.evaluation import EvaluationSettings
+from glu.files import read_text
 from glu.gestures.synthetic import POSTURES, View
 from glu.gestures.training import TrainingConfig
 
@@ -209,12 +210,7 @@ SECTIONS: dict[str, tuple[str, ...]] = {
 def load_config(path: str | os.PathLike) -> SweepConfig:
     """Read and validate a sweep file (TOML); :class:`DataError` naming the file and the problem."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such sweep file") from None
-    except (IsADirectoryError, UnicodeDecodeError) as e:
-        raise DataError(f"{path}: not a readable TOML file ({e})") from None
+    text = read_text(path, "sweep file")
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
