@@ -114,15 +114,19 @@ def replace_folder(complete: str | os.PathLike, dest: str | os.PathLike) -> Path
     return dest
 
 
-def read_text(path: str | os.PathLike, what: str = "file", encoding: str = "utf-8") -> str:
-    """The text of an input file; :class:`~glu.errors.DataError` naming the file and ``what`` it should be."""
+def read_text(
+    path: str | os.PathLike, what: str = "file", encoding: str = "utf-8", error: type | None = None
+) -> str:
+    """The text of an input file; ``error`` (default :class:`~glu.errors.DataError`) names the file and ``what``
+    it should be when it is missing, a folder, unreadable or not text."""
     from glu.errors import DataError
 
+    error = error or DataError
     try:
         return Path(path).read_text(encoding=encoding)
     except FileNotFoundError:
-        raise DataError(f"{path}: no such {what}") from None
+        raise error(f"{path}: no such {what}") from None
     except IsADirectoryError:
-        raise DataError(f"{path}: is a folder, not a {what}") from None
+        raise error(f"{path}: is a folder, not a {what}") from None
     except (OSError, UnicodeDecodeError) as e:
-        raise DataError(f"{path}: cannot read the {what} as text ({e})") from None
+        raise error(f"{path}: cannot read the {what} as text ({e})") from None

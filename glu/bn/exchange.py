@@ -58,7 +58,7 @@ import numpy as np
 
 from glu.bn.model import ROW_TOL, BayesNet
 from glu.errors import ModelError
-from glu.files import atomic_write_text
+from glu.files import atomic_write_text, read_text
 from glu.schema import FILE_ALIASES, WORD_VALUES, Schema
 
 FORMATS: dict[str, tuple[str, ...]] = {
@@ -393,14 +393,7 @@ def import_bn(path: str | os.PathLike, fmt: str | None = None) -> BayesNet:
     """Read a BIF, XMLBIF or UAI file (format from the suffix unless ``fmt``), validated completely."""
     path = Path(path)
     fmt = format_of(path, fmt)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ModelError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise ModelError(f"{path}: is a folder, expected a {fmt.upper()} file") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise ModelError(f"{path}: cannot read as UTF-8 text ({e})") from None
+    text = read_text(path, f"{fmt.upper()} file", error=ModelError)
     return READERS[fmt](text, str(path))
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from glu.data.source import DataSource
 from glu.errors import DataError
+from glu.files import read_text
 from glu.language.sentences import Sentence
 
 CANDIDATES: tuple[str, ...] = ("grammar", "samples")
@@ -36,14 +37,7 @@ def read_sentences(path: str | os.PathLike) -> list[Sentence]:
     Raises :class:`DataError` naming the file if it cannot be read or holds no sentence.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such sentence file (expected one sentence per line)") from None
-    except IsADirectoryError:
-        raise DataError(f"{path}: is a folder, not a sentence file") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise DataError(f"{path}: not a readable text file of sentences ({e})") from None
+    text = read_text(path, "sentence file (one sentence per line)")
     sentences = [tuple(line.split()) for line in text.splitlines() if line.strip()]
     if not sentences:
         raise DataError(f"{path}: no sentence in the file (expected one sentence per line)")
