@@ -37,6 +37,17 @@ def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str, jitter: float
     ax.fill_between(x + jitter, g.ci_low, g.ci_high, color=c, alpha=0.15, lw=0)
 
 
+def _strategy_lines(
+    ax: Axes, sel: pd.DataFrame, x: str, metric: str, strategies: Sequence[str] | None
+) -> None:
+    """A line and a 95 % band per strategy of ``sel`` against column ``x`` (a fraction, drawn in %)."""
+    for strategy, g in sel.groupby("strategy", sort=False):
+        if strategies is None or strategy in strategies:
+            g = g.sort_values(x)
+            _line(ax, g[x].to_numpy() * 100, g, strategy)
+    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
+
+
 def plot_metric_vs_noise(
     ax: Axes,
     results: pd.DataFrame,
@@ -50,12 +61,8 @@ def plot_metric_vs_noise(
     """One metric of one target against the sensor noise (m), a line and a 95 % band per strategy."""
     sel = results[(results.target == target) & (results.metric == metric) & np.isclose(results.fraction, fraction)
                   & (results.viewpoint == viewpoint) & results.noise.notna() & (results.posterior == posterior)]  # fmt: skip
-    for strategy, g in sel.groupby("strategy", sort=False):
-        if strategies is None or strategy in strategies:
-            g = g.sort_values("noise")
-            _line(ax, g.noise.to_numpy() * 100, g, strategy)
+    _strategy_lines(ax, sel, "noise", metric, strategies)
     ax.set_xlabel("sensor noise (cm)")
-    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
     where = "all viewpoints" if viewpoint == "all" else viewpoint
     ax.set_title(f"{target}: {METRIC_LABEL.get(metric, metric)} ({where}, {fraction:.0%} seen)", fontsize=9)
     return ax
@@ -74,12 +81,8 @@ def plot_early_recognition(
     """One metric against the observed fraction of the gesture, a line and a 95 % band per strategy."""
     sel = _pooled(results, noise, viewpoint, posterior)
     sel = sel[(sel.target == target) & (sel.metric == metric)]
-    for strategy, g in sel.groupby("strategy", sort=False):
-        if strategies is None or strategy in strategies:
-            g = g.sort_values("fraction")
-            _line(ax, g.fraction.to_numpy() * 100, g, strategy)
+    _strategy_lines(ax, sel, "fraction", metric, strategies)
     ax.set_xlabel("gesture observed (%)")
-    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
     how = "all noise levels" if noise is None else f"noise {noise * 100:g} cm"
     ax.set_title(f"{target}: early recognition ({how})", fontsize=9)
     return ax
