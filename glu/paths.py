@@ -196,11 +196,13 @@ def notebook_file(name: str) -> Path:
 
 
 def shared_data_dir() -> Path | None:
-    """The shared copy of the real data used by tests and CI (``$GLU_SHARED_DATA`` or ``../shared/data``)."""
+    """The real data the reference tests use: ``$GLU_SHARED_DATA``, ``../shared/data`` (CI), or what
+    ``glu data fetch`` downloaded (``data/real/`` in a checkout); None when none of them holds it."""
     env = os.environ.get(SHARED_DATA_ENV_VAR)
     candidates = [Path(env)] if env else []
     if PROJECT_ROOT is not None:
         candidates.append(PROJECT_ROOT.parent / "shared" / "data")
+    candidates.append(REAL_DATA_DIR)
     for c in candidates:
         if (c / "affordance-words").is_dir():
             return c.resolve()

@@ -6,8 +6,10 @@ Two kinds of tests use data:
   on whatever data there is. They take the ``source`` fixture (or a fixture built on it), which runs them
   on a synthetic data folder always, and also on the real data when it is present (CI). Without the real
   data they still run, on synthetic data.
-* **reference tests** (``tests/test_reference.py``) compare glu with the originals' models and the
-  published numbers; they need the real data and skip with a reason without it.
+* **reference tests** (``tests/test_reference*.py``, ``tests/test_correspondence_reference.py``) compare
+  glu with the originals' models and the published numbers; they need the real data and skip with a
+  reason without it. Each covers one published artefact, its parts as subtests, so that a clone without
+  the data skips nine tests.
 """
 
 from __future__ import annotations
@@ -24,8 +26,8 @@ from glu.paths import shared_data_dir  # noqa: E402
 
 SHARED = shared_data_dir()
 NO_SHARED_REASON = (
-    "the real data is absent: set GLU_SHARED_DATA or place it in ../shared/data (CI has it); "
-    "`glu data fetch` downloads it"
+    "the real data is absent: set GLU_SHARED_DATA, place it in ../shared/data (CI has it), "
+    "or download it with `glu data fetch` (to data/real/)"
 )
 SOURCES = ("synthetic", "real") if SHARED is not None else ("synthetic",)
 """The data the oracle tests run on: synthetic always, real when present (never a skipped instance)."""

@@ -47,6 +47,27 @@ def test_an_installed_package_uses_platformdirs(tmp_path, monkeypatch):
     assert loc.scratch == tmp_path / "xdg-cache" / "glu" / "scratch"
 
 
+def test_the_reference_tests_find_the_real_data_where_ci_or_glu_data_fetch_put_it(tmp_path, monkeypatch):
+    def data_folder(where: Path) -> Path:
+        (where / "affordance-words").mkdir(parents=True)
+        return where
+
+    checkout = tmp_path / "project" / "glu"
+    monkeypatch.setattr(paths, "PROJECT_ROOT", checkout)
+    monkeypatch.setattr(paths, "REAL_DATA_DIR", checkout / "data" / "real")
+    monkeypatch.delenv(paths.SHARED_DATA_ENV_VAR, raising=False)
+    assert paths.shared_data_dir() is None
+    fetched = data_folder(checkout / "data" / "real")  # what `glu data fetch` writes
+    assert paths.shared_data_dir() == fetched
+    shared = data_folder(tmp_path / "project" / "shared" / "data")  # CI's copy next to the checkout
+    assert paths.shared_data_dir() == shared
+    chosen = data_folder(tmp_path / "elsewhere")
+    monkeypatch.setenv(paths.SHARED_DATA_ENV_VAR, str(chosen))
+    assert paths.shared_data_dir() == chosen
+    monkeypatch.setenv(paths.SHARED_DATA_ENV_VAR, str(tmp_path / "missing"))  # a wrong setting falls through
+    assert paths.shared_data_dir() == shared
+
+
 def test_the_notebooks_ship_in_the_package():
     import glu.notebooks
 

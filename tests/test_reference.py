@@ -3,7 +3,8 @@
 These need the real data (``$GLU_SHARED_DATA`` or ``../shared/data``; CI has it) and skip with the reason
 without it. Everything that can be checked on any data — glu against pgmpy, hmmlearn, brute force and
 closed forms — is in the other test files and runs on synthetic data too. Each test here covers one
-published artefact, so that a clone without the real data skips only these few.
+published artefact (its parts are subtests, reported one by one), so that a clone without the real data
+skips only these few; ``test_reference_tcds.py`` and ``test_correspondence_reference.py`` do the same.
 """
 
 from __future__ import annotations
@@ -20,10 +21,10 @@ from glu.bn import InferenceEngine, learn_bn
 from glu.bn.learning import encode
 from glu.cli import main
 from glu.data.fetch import manifest, sha256_of
-from glu.data.recordings import ORIGINAL_SEGMENTS, RECORDING_ACTION, TRAINING_RECORDINGS
+from glu.data.recordings import ORIGINAL_SEGMENTS, TRAINING_RECORDINGS
 from glu.errors import ImpossibleEvidenceError
-from glu.experiments import anticipation, gestures
 from glu.experiments import fusion as experiments
+from glu.experiments import gestures
 from glu.gestures.corpus import segment_recording_of
 from glu.gestures.original import load_original_models
 from glu.gestures.trajectories import read_hand_log, repair
@@ -55,7 +56,7 @@ def run(capsys, *argv: str) -> tuple[int, str, str]:
     return status, out, err
 
 
-def test_real_files_match_their_checksums_the_schema_and_the_original_grammar(shared_data, real_source):
+def _files_schema_and_grammar(shared_data, real_source):
     items = manifest()
     assert len(items) == 15  # 14 files + the originals' sampled sentences
     for item in items:
@@ -82,7 +83,7 @@ def test_real_files_match_their_checksums_the_schema_and_the_original_grammar(sh
     assert not same_language(compile_network(changed), net_g)  # the comparison can fail
 
 
-def test_learning_reproduces_the_original_network(lab_table, learned_bn, original_bn):
+def _learning_reproduces_the_original_network(lab_table, learned_bn, original_bn):
     assert len(original_bn.edges()) == 66
     assert learned_bn.edges() == original_bn.edges()
     for node in ROOT_NODES:
@@ -111,9 +112,7 @@ def test_learning_reproduces_the_original_network(lab_table, learned_bn, origina
     assert uniform.edges() == learned_bn.edges() and uniform.zero_rows() == {}
 
 
-def test_the_original_network_file_and_the_command_line(
-    shared_data, real_source, original_bn, tmp_path, capsys
-):
+def _the_original_network_file_and_the_command_line(shared_data, real_source, original_bn, tmp_path, capsys):
     mat = real_source.original_bn()
     raw = sio.loadmat(mat, squeeze_me=True, struct_as_record=False)["netobj_lab"]
     names = [str(n) for n in raw.nodeNames]
@@ -167,7 +166,7 @@ def test_published_network_numbers_equal_the_original_model(learned_bn, original
     assert 0.8043 < experiments.tap_threshold(learned_bn) < 0.8044
 
 
-def test_real_data_notebooks_reproduce_the_original_network_figures(shared_data, tmp_path):
+def _notebooks_reproduce_the_original_network_figures(shared_data, tmp_path):
     summary = reproduce(
         data=shared_data, quick=True, out=tmp_path, jobs=2, only=["03", "07"], log=lambda s: None
     )
@@ -243,20 +242,7 @@ def test_original_hmms_on_the_original_segments(real_source, capsys):
     assert max(d["posterior"], key=d["posterior"].get) == "tap"
 
 
-def test_anticipation_with_the_original_models(real_source, original_bn):
-    rec = load_original_models(real_source.original_hmms())
-    eng = InferenceEngine(original_bn)
-    traj = anticipation.case_trajectory(real_source, "sphere")
-    raw = np.loadtxt(real_source.hand_log("tap_notable_seated_1"))
-    assert traj.frame.tolist() == list(range(121, 215))
-    np.testing.assert_allclose(traj.xyz, raw[120:214, 2:5] / 1000)
-    box = anticipation.effect_anticipation(rec, eng, anticipation.case_trajectory(real_source, "box"),
-                                           anticipation.CASES["box"].evidence, case="box", models="original")  # fmt: skip
-    assert box.fused["ObjVel"][-1].argmax() == 0  # a tapped big box stays slow (TCDS)
-    assert RECORDING_ACTION["tap_notable_seated_1"] == "tap"
-
-
-def test_real_data_is_named_by_its_public_origin_however_it_is_reached(shared_data, tmp_path):
+def _named_by_its_public_origin(shared_data, tmp_path):
     """The label on every result names the repositories and commits, never the folder it was read from."""
     from glu.data import resolve_data
 
@@ -302,8 +288,36 @@ def _render_and_compare(shared_data, tmp_path, only):
     return pngs
 
 
-def test_figures_from_the_real_data_equal_the_committed_ones(shared_data, tmp_path):
-    _render_and_compare(shared_data, tmp_path, FAST_NOTEBOOKS)
+# ------------------------------------------------------------------ one test per published artefact
+def test_the_real_data_files(shared_data, real_source, tmp_path, subtests):
+    """The published files: their checksums, the schema, the originals' grammar, and how results name them."""
+    with subtests.test("checksums, schema and the originals' grammar"):
+        _files_schema_and_grammar(shared_data, real_source)
+    with subtests.test("results name the public origin, however the folder is reached"):
+        _named_by_its_public_origin(shared_data, tmp_path)
+
+
+def test_the_original_network(shared_data, real_source, lab_table, learned_bn, original_bn, tmp_path, capsys,
+                              subtests):  # fmt: skip
+    """The originals' Affordance–Words network: learned again from the data, and read from their file."""
+    with subtests.test("learning reproduces it: 66 edges, CPT difference 0, the zero rows"):
+        _learning_reproduces_the_original_network(lab_table, learned_bn, original_bn)
+    with subtests.test("its .mat file, and the command line on both"):
+        _the_original_network_file_and_the_command_line(
+            shared_data, real_source, original_bn, tmp_path, capsys
+        )
+
+
+def test_notebooks_and_figures_from_the_real_data(shared_data, tmp_path, subtests):
+    """Notebooks on the real data: their comparisons with the original network, and figures equal to the committed ones."""
+    quick, full = tmp_path / "quick", tmp_path / "full"
+    quick.mkdir(), full.mkdir()
+    with subtests.test("notebooks 03 and 07 reproduce the original network's figures"):
+        _notebooks_reproduce_the_original_network_figures(shared_data, quick)
+    with subtests.test(
+        "figures rendered from the data reached through another path equal the committed ones"
+    ):
+        _render_and_compare(shared_data, full, FAST_NOTEBOOKS)
 
 
 @pytest.mark.slow
