@@ -109,7 +109,7 @@ def write_api_reference(path: Path, modules: tuple[str, ...] = API_MODULES) -> P
 def write_report(layout: OutputLayout, summary: Mapping[str, Any]) -> Path:
     """Write the report of a run whose outputs are in ``layout``; returns ``index.html``.
 
-    ``summary`` is the run's summary (:func:`glu.reproduce.write_summary`): its figures, notebooks,
+    ``summary`` is the run's summary (:func:`glu.summary.write_summary`): its figures, notebooks,
     comparisons, data source and versions.
     """
     root = layout.report

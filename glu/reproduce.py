@@ -18,7 +18,6 @@ source, the package versions and the comparison with the original model, and ``r
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import sys
@@ -26,7 +25,6 @@ import time
 import uuid
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -34,10 +32,10 @@ from glu import paths
 from glu.data.source import resolve_data
 from glu.errors import GluError
 from glu.execution import NotebookStopped, RunHandle, run_notebook
-from glu.files import atomic_write_text
 from glu.outputs import parameters_text
 from glu.parameters import check, non_defaults, parse_value, read_spec
 from glu.paths import OutputLayout
+from glu.summary import NotebookResult, expected_seconds, write_rendering_record, write_summary
 
 OWNER_FILE = "owner.pid"
 """In each staging folder: the process id of the run that owns it."""
@@ -45,19 +43,6 @@ OWNER_FILE = "owner.pid"
 
 class NotebookError(GluError):
     """A notebook failed while running, or a notebook name matches none."""
-
-
-@dataclass
-class NotebookResult:
-    """What happened to one notebook: ``status`` is ``ok`` or ``failed``."""
-
-    name: str
-    status: str
-    seconds: float
-    executed: Path | None = None
-    error: str = ""
-    files: list[str] = field(default_factory=list)
-    parameters: dict[str, Any] = field(default_factory=dict)
 
 
 def list_notebooks(only: Sequence[str] | None = None, folder: Path = paths.NOTEBOOKS_DIR) -> list[Path]:
@@ -166,6 +151,23 @@ class _Progress:
             self.bar.close()
 
 
+def run_order(notebooks: Sequence[Path], jobs: int, expected: Mapping[str, float]) -> list[tuple[int, Path]]:
+    """(story number, notebook) in the order they start: story order with one job; with several, the
+    longest first (by ``expected`` seconds, notebooks never timed first of all), so the last to finish is a
+    short one. The order changes no output: each notebook runs alone in its kernel and publishing is by name.
+
+    >>> nbs = [Path("01_a.py"), Path("02_b.py"), Path("03_c.py")]
+    >>> [p.stem for _, p in run_order(nbs, 2, {"01_a": 3.0, "02_b": 1.0, "03_c": 9.0})]
+    ['03_c', '01_a', '02_b']
+    >>> [i for i, _ in run_order(nbs, 2, {"01_a": 3.0})]
+    [2, 3, 1]
+    """
+    numbered = list(enumerate(notebooks, start=1))
+    if jobs == 1:
+        return numbered
+    return sorted(numbered, key=lambda item: -expected.get(item[1].stem, float("inf")))
+
+
 def reproduce(
     data: str | os.PathLike | None = None,
     quick: bool = False,
@@ -258,7 +260,7 @@ def reproduce(
         pool = ThreadPoolExecutor(max_workers=jobs)
         futures: dict[Future, str] = {}
         try:
-            for i, nb in enumerate(notebooks, start=1):
+            for i, nb in run_order(notebooks, jobs, expected_seconds(layout)):
                 futures[pool.submit(one, i, nb, bar.handle(nb.stem))] = nb.stem
             pending = set(futures)
             failed: NotebookResult | None = None
@@ -370,125 +372,3 @@ def run_one(
             f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; executed copy at {executed}"
         ) from None
     return executed, layout
-
-
-RENDERING_RECORD = "rendered-with.json"
-"""In ``figures/``: the data and the library versions the figures were rendered with (no timestamps)."""
-
-
-def rendering_versions() -> dict[str, str]:
-    """The versions that decide a figure's bytes: matplotlib and the FreeType it renders text with."""
-    import matplotlib
-    from matplotlib import ft2font
-
-    return {"matplotlib": matplotlib.__version__, "freetype": ft2font.__freetype_version__}
-
-
-def write_rendering_record(figures_dir: Path, data: str, quick: bool) -> Path:
-    """Write ``figures/rendered-with.json``: which data, which mode, which renderer versions."""
-    record = {"data_source": data, "quick": quick, **rendering_versions()}
-    path = figures_dir / RENDERING_RECORD
-    figures_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(path, json.dumps(record, indent=1, sort_keys=True) + "\n")
-    return path
-
-
-def write_summary(
-    results_dir: Path, runs: list[NotebookResult], data: str, quick: bool, wall: float
-) -> dict[str, Any]:
-    """Collect every result table into ``summary.json`` and a long-format ``summary.csv``.
-
-    A partial run (``--only``) updates the existing summary when it was made from the same data in the
-    same mode: the notebooks just run replace their earlier entries, the others are kept.
-    """
-    import pandas as pd
-
-    from glu.outputs import package_versions
-
-    notebooks = {
-        r.name: {
-            "name": r.name,
-            "status": r.status,
-            "seconds": round(r.seconds, 3),
-            "parameters": r.parameters,
-        }
-        for r in runs
-    }
-    tables: dict[str, Any] = {}
-    figures: dict[str, str] = {}
-    recordings: dict[str, str] = {}
-    previous = results_dir / "summary.json"
-    if previous.is_file():
-        try:
-            old = json.loads(previous.read_text())
-        except (OSError, json.JSONDecodeError):
-            old = {}
-        if old.get("data_source") == data and old.get("quick") == quick:
-            for nb in old.get("notebooks", []):
-                if nb["name"] not in notebooks:
-                    notebooks[nb["name"]] = nb
-                    tables.update(
-                        {
-                            k: v
-                            for k, v in old.get("tables", {}).items()
-                            if v["meta"].get("notebook") == nb["name"]
-                        }
-                    )
-                    figures.update(
-                        {
-                            f: nb["name"]
-                            for f, n in old.get("figures_by_notebook", {}).items()
-                            if n == nb["name"]
-                        }
-                    )
-                    recordings.update(
-                        {
-                            f: nb["name"]
-                            for f, n in old.get("recordings_by_notebook", {}).items()
-                            if n == nb["name"]
-                        }
-                    )
-    for run in runs:
-        for f in run.files:
-            p = Path(f)
-            if p.suffix == ".json" and p.parent == results_dir:
-                doc = json.loads(p.read_text())
-                tables[doc["meta"]["name"]] = doc
-            elif p.parent.name == "figures":
-                figures[p.name] = run.name
-            elif p.suffix == ".rrd":
-                recordings[p.name] = run.name
-    long_rows, comparison = [], []
-    for name in sorted(tables):
-        df = pd.DataFrame(tables[name]["rows"])
-        for i, row in df.iterrows():
-            for col, val in row.items():
-                long_rows.append({"table": name, "row": i, "column": col, "value": val})
-        meta = tables[name]["meta"]
-        reference = meta.get("reference") or (meta.get("parameters") or {}).get("reference")
-        if (
-            reference and "difference" in df.columns and len(df)
-        ):  # a comparison declares what it compares with
-            diff = pd.to_numeric(df["difference"], errors="coerce").abs()
-            comparison.append({"table": name, "reference": reference, "rows": int(diff.notna().sum()),
-                               "max_abs_difference": float(diff.max())})  # fmt: skip
-    summary = {
-        "ran": [r.name for r in runs],
-        "data_source": data,
-        "quick": quick,
-        "wall_time_s": round(wall, 3),
-        "versions": package_versions(),
-        "notebooks": [notebooks[k] for k in sorted(notebooks)],
-        "figures": sorted(figures),
-        "figures_by_notebook": dict(sorted(figures.items())),
-        "recordings": sorted(recordings),
-        "recordings_by_notebook": dict(sorted(recordings.items())),
-        "comparison_with_reference": comparison,
-        "tables": {k: tables[k] for k in sorted(tables)},
-    }
-    results_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(previous, json.dumps(summary, indent=1, default=str) + "\n")
-    atomic_write_text(
-        results_dir / "summary.csv", pd.DataFrame(long_rows).to_csv(index=False, lineterminator="\n")
-    )
-    return summary

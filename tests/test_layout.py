@@ -28,7 +28,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("glu.plots", "glu.recording", "glu.explorer"),
     ("glu.outputs", "glu.parameters"),
     ("glu.notebook", "glu.execution"),
-    ("glu.report",),
+    ("glu.report", "glu.summary"),
     ("glu.reproduce", "glu.compare", "glu.readme", "glu.sweep"),
     ("glu.cli",),
     ("glu.__main__",),

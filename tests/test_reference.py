@@ -268,7 +268,7 @@ def _render_and_compare(shared_data, tmp_path, only):
     import json
 
     from glu.paths import PROJECT_ROOT
-    from glu.reproduce import RENDERING_RECORD, rendering_versions
+    from glu.summary import RENDERING_RECORD, rendering_versions
 
     committed = PROJECT_ROOT / "figures"
     record = json.loads((committed / RENDERING_RECORD).read_text())

@@ -1,4 +1,4 @@
-"""The run summary: which tables count as comparisons with a reference (written by glu.reproduce.write_summary)."""
+"""The run summary: which tables count as comparisons with a reference (written by glu.summary.write_summary)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import json
 
 import pandas as pd
 
-from glu.reproduce import NotebookResult, write_summary
+from glu.summary import NotebookResult, write_summary
 
 
 def _table(results, name, rows, **meta):
@@ -52,3 +52,29 @@ def test_the_fusion_experiments_declare_the_original_model_only_when_given_it(ze
     assert alone.attrs["parameters"]["reference"] is None and "difference" not in alone
     assert versus.attrs["parameters"]["reference"] == fusion.ORIGINAL_REFERENCE
     assert versus["difference"].abs().max() == 0.0  # the same model: no difference
+
+
+def test_with_several_jobs_the_notebooks_that_took_longest_last_time_start_first(tmp_path):
+    from pathlib import Path
+
+    from glu.paths import OutputLayout
+    from glu.reproduce import run_order
+    from glu.summary import expected_seconds
+
+    layout = OutputLayout.at(tmp_path)
+    layout.results.mkdir(parents=True)
+    runs = [
+        NotebookResult("01_a", "ok", 4.0),
+        NotebookResult("02_b", "ok", 30.5),
+        NotebookResult("03_c", "ok", 9.25),
+    ]
+    write_summary(layout.results, runs, "synthetic data", False, 31.0)
+    assert expected_seconds(layout) == {"01_a": 4.0, "02_b": 30.5, "03_c": 9.25}
+    notebooks = [Path(f"{n}.py") for n in ("01_a", "02_b", "03_c", "04_new")]
+    order = run_order(notebooks, 2, expected_seconds(layout))
+    assert [(i, p.stem) for i, p in order] == [(4, "04_new"), (2, "02_b"), (3, "03_c"), (1, "01_a")]
+    assert [p.stem for _, p in run_order(notebooks, 1, expected_seconds(layout))] == [
+        p.stem for p in notebooks
+    ]
+    (layout.results / "summary.json").write_text("{not json")  # unreadable: the project's summary, or none
+    assert isinstance(expected_seconds(layout), dict)
