@@ -20,10 +20,10 @@
 # sensor noise and from several viewpoints — and measures, with bootstrap intervals, what each strategy
 # gets right: the action (after seeing the effect), the effect before it happens (anticipation), and the
 # best verbal description; as the noise grows, as more of the gesture is seen, and how well calibrated the
-# predictions are. It is the sweep `glu evaluate` runs as Dask tasks; at this size it runs in this process,
-# which on 2 cores is as fast as a LocalCluster of 2 workers (21.6 s against 22.0 s for the whole notebook)
-# and leaves the other core to the next notebook of `glu reproduce`. `-p workers 2` runs it on a cluster,
-# which pays off for larger corpora (48,000 episodes: 1.72× faster on 2 workers than on 1).
+# predictions are. It is the sweep `glu evaluate` runs as Dask tasks; at this size it runs in this process:
+# on 2 cores a LocalCluster of 2 workers is no faster here, and under `glu reproduce` its workers would compete
+# with the other notebook for the cores. `-p workers 2` runs it on a cluster, which pays off for larger corpora
+# (the README's speed table).
 
 # %% tags=["parameters"]
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic

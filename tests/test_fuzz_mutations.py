@@ -5,7 +5,8 @@ cases that *must* fail (an expensive command given only invalid settings may not
 every notebook), inputs and outputs in one work folder whose every file is compared before and after a failed
 run (folders made above ``--dest`` or ``-o`` count), recursive mutations of model and recogniser JSON (keys
 deleted, values replaced by arbitrary JSON, non-finite numbers, deep nesting, truncation), random byte flips
-in the originals' ``.mat``, and evidence batches from a file and from stdin with one answer per line.
+in the originals' ``.mat`` (without the real data, in the synthetic network saved in the same BNT layout),
+and evidence batches from a file and from stdin with one answer per line.
 
 Each generated input runs ``glu.cli.main(argv)`` in-process and must behave as the project promises:
 
@@ -41,7 +42,7 @@ from pathlib import Path
 from unittest import mock
 
 import pytest
-from conftest import NO_SHARED_REASON, SHARED
+from conftest import SHARED
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -597,11 +598,24 @@ test_mutated_recogniser_json = _files_case("recogniser JSON", "recogniser", ".js
 # ------------------------------------------------------------------ category ".mat files" (the originals' model)
 
 
-@pytest.mark.skipif(SHARED is None, reason=NO_SHARED_REASON)
+@pytest.fixture(scope="module")
+def original_mat(tmp_path_factory, assets) -> bytes:
+    """The originals' BN_lab.mat when the real data is here; else the synthetic network in the same BNT layout."""
+    if SHARED is not None:
+        return (SHARED / "reference-models" / "BN_lab.mat").read_bytes()
+    from test_model_io import write_bnt_mat
+
+    from glu.bn import BayesNet
+
+    path = tmp_path_factory.mktemp("bnt") / "BN_lab.mat"
+    write_bnt_mat(BayesNet.load(assets["model"]), path)
+    return path.read_bytes()
+
+
 @pytest.mark.parametrize("command", ["bn import", "query"])
 @pytest.mark.parametrize("profile", PROFILE_PARAMS)
-def test_corrupted_mat_files(command, profile, assets):
-    original = (SHARED / "reference-models" / "BN_lab.mat").read_bytes()
+def test_corrupted_mat_files(command, profile, assets, original_mat):
+    original = original_mat
 
     @PROFILES[profile]
     @given(cut=st.integers(0, len(original)), flips=st.lists(st.integers(0, len(original) - 1), max_size=8),

@@ -25,6 +25,7 @@ from glu.data.recordings import ORIGINAL_SEGMENTS, TRAINING_RECORDINGS
 from glu.errors import ImpossibleEvidenceError
 from glu.experiments import fusion as experiments
 from glu.experiments import gestures
+from glu.experiments.fusion import network_summary
 from glu.gestures.corpus import segment_recording_of
 from glu.gestures.original import load_original_models
 from glu.gestures.trajectories import read_hand_log, repair
@@ -132,6 +133,15 @@ def _the_original_network_file_and_the_command_line(shared_data, real_source, or
         original = json.loads(run(capsys, *argv, "--model", str(mat))[1])["ObjVel"]
         assert learned == original
     assert learned["slow"] == pytest.approx(0.9988375885888248, abs=1e-15)
+
+
+def _network_summary_of_the_original(learned_bn, original_bn, lab_table):
+    df = network_summary(learned_bn, lab_table, original_bn).set_index("quantity")
+    assert df.loc["edges", "ours"] == 66 and df.loc["log_likelihood", "ours"] == pytest.approx(
+        -19692.2025, abs=1e-4
+    )
+    assert df.loc["lost_prior_mass", "ours"] == pytest.approx(0.0165, abs=5e-5)  # METHOD.md §3: 1.65 %
+    assert (df["difference"].abs() == 0).all()
 
 
 def test_published_network_numbers_equal_the_original_model(learned_bn, original_bn):
@@ -302,6 +312,8 @@ def test_the_original_network(shared_data, real_source, lab_table, learned_bn, o
     """The originals' Affordance–Words network: learned again from the data, and read from their file."""
     with subtests.test("learning reproduces it: 66 edges, CPT difference 0, the zero rows"):
         _learning_reproduces_the_original_network(lab_table, learned_bn, original_bn)
+    with subtests.test("the summary table of notebook 03 (edges, likelihood, lost prior mass) against it"):
+        _network_summary_of_the_original(learned_bn, original_bn, lab_table)
     with subtests.test("its .mat file, and the command line on both"):
         _the_original_network_file_and_the_command_line(
             shared_data, real_source, original_bn, tmp_path, capsys
