@@ -235,6 +235,59 @@ def test_rank_sentences_under_both_scores_with_a_word_filter():
     assert set(only_b["sentence"]) == {"b c c", "c c c c b"}
 
 
+_WORDS = ("a", "b", "c", "d", "e")
+# probabilities with exact ties (equal values, and 0.5·0.5 = 0.25), zeros and ones, and arbitrary ones whose
+# sums of logs differ from each other by a few units in the last place
+_PROB = st.one_of(st.sampled_from([0.0, 1.0, 0.5, 0.25, 0.1, 0.3]), st.floats(1e-300, 1.0))
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    sents=st.lists(
+        st.lists(st.sampled_from(_WORDS), min_size=1, max_size=7).map(tuple), min_size=1, max_size=40
+    ),
+    probs=st.fixed_dictionaries({w: _PROB for w in _WORDS}),
+    n=st.integers(1, 45),
+    start=st.sampled_from([0, 1]),
+    must=st.none() | st.sets(st.sampled_from(_WORDS), min_size=1, max_size=2),
+)
+def test_ranking_equals_the_exact_key_over_every_sentence(sents, probs, n, start, must):
+    """The float shortlist of rank_sentences never changes the exact ranking (brute force: Fraction keys)."""
+    from glu.language import SentenceSet
+
+    score = {0: "paper", 1: "original"}[start]
+    pool = sorted({s for s in sents if must is None or set(s) & must})
+    expected = brute_force_nbest(pool, probs, n, start)
+    for given_as in (sents, [" ".join(s) for s in sents], SentenceSet(sents)):
+        got = rank_sentences(given_as, probs, n, score, must_contain=must)
+        assert [tuple(x.split()) for x in got["sentence"]] == [x for x, _ in expected]
+        np.testing.assert_allclose(got["score"], [sc for _, sc in expected], rtol=1e-12)
+    every = rank_sentences(sents, probs, None, score, must_contain=must)
+    assert [tuple(x.split()) for x in every["sentence"]] == [
+        x for x, _ in brute_force_nbest(pool, probs, len(pool), start)
+    ]
+
+
+def test_near_ties_that_floating_point_orders_the_wrong_way_are_ranked_exactly():
+    """Two means that differ in the last bits: summed in floating point they tie or come out reversed
+    (depending on the order of the sum), and only the exact key ranks them."""
+    import math
+    from fractions import Fraction
+
+    probs = {"x1": 0.5, "x2": 0.25, "x3": 0.125, "x4": 0.0625, "o": 1.0}
+    worse, better = ("x2", "x3", "x4", "o"), ("x1", "x2", "x3", "x3")
+    exact = [sum(Fraction(math.log(probs[w])) for w in s) / len(s) for s in (worse, better)]
+    floats = [sum(math.log(probs[w]) for w in s) / len(s) for s in (worse, better)]
+    assert exact[0] < exact[1] and abs(floats[0] - floats[1]) <= 4 * np.finfo(float).eps * abs(floats[1])
+    for start in (0, 1):
+        got = rank_sentences([worse, better], probs, 1, {0: "paper", 1: "original"}[start])
+        assert (
+            tuple(got["sentence"].iloc[0].split())
+            == better
+            == brute_force_nbest([worse, better], probs, 1, start)[0][0]
+        )
+
+
 def test_exact_nbest_is_fast():
     net = default_network()
     probs = _random_probs(3)

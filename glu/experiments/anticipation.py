@@ -33,6 +33,7 @@ from glu.gestures.forward import p_hmm_from_loglik
 from glu.gestures.recognizer import Recognizer
 from glu.gestures.synthetic import synthesize_gesture
 from glu.gestures.trajectories import RepairPolicy, Trajectory
+from glu.language.candidates import SentenceSet
 from glu.language.descriptions import DEFAULT_SCORE
 from glu.language.descriptions import describe as best_sentences
 
@@ -276,7 +277,7 @@ def effect_anticipation(
     if final_update and (T % step):
         extra[-1] = True
     fused = fuse(engine, list(targets), evidence, p_hmm[idx], rule)
-    cands = None if candidates is None else list(candidates)
+    cands = None if candidates is None else SentenceSet.of(candidates)
     run = AnticipationRun(
         case=case, models=models, evidence=dict(evidence), actions=tuple(actions),
         frames=np.asarray(trajectory.frame), seconds=np.asarray(trajectory.t) - float(trajectory.t[0]),

@@ -23,6 +23,7 @@ import pandas as pd
 
 from glu.data.published import num2str, published
 from glu.experiments.common import evidence_text, model_source, tidy
+from glu.language.candidates import SentenceSet
 from glu.language.descriptions import (
     DEFAULT_SCORE,
     SCORES,
@@ -133,7 +134,7 @@ def and_but_nbest(
     "and"/"but"); ``2 n`` rows, ObjVel medium first.
     """
     net = _network(grammar)
-    cands = None if candidates is None else list(candidates)
+    cands = None if candidates is None else SentenceSet.of(candidates)
     frames = []
     for objvel, ev in EVIDENCE_AND_BUT.items():
         df = describe(engine, ev, n=n, grammar=net, score=score, candidates=cands)
@@ -206,7 +207,7 @@ def published_descriptions(
     score (glu's), printed (glu's score as the originals' MATLAB printed it), same_sentence, same_score
     (the printed digits are equal; None for Fig. 8).
     """
-    cands = None if candidates is None else list(candidates)
+    cands = None if candidates is None else SentenceSet.of(candidates)
     pub = published()["sentences"]
     jobs = [(key, pub[key]["evidence"], pub[key]["rows"], None) for key in PUBLISHED_LISTS]
     jobs += [(f"fig8{r['panel']}", r["evidence"], [r], list(COLOUR_WORDS)) for r in pub["fig8"]["rows"]]
@@ -250,7 +251,7 @@ def exact_vs_samples(
     """
     g = load_grammar() if grammar is None else grammar
     net = compile_network(g)
-    sample_list = list(samples)
+    sample_list = SentenceSet.of(samples)  # split and counted once for every evidence set and score
     sample_set = {" ".join(s) for s in sample_list}
     rows = []
     for key, ev in evidence_sets.items():
@@ -281,12 +282,13 @@ def sampling_vs_exact(
     n: int = 10,
     grammar: Grammar | None = None,
     score: str = DEFAULT_SCORE,
-    drawn: Mapping[int, list[str]] | None = None,
+    drawn: Mapping[int, SentenceSet | list[str]] | None = None,
 ) -> pd.DataFrame:
     """What the originals' method (the best of ``n_samples`` random sentences) misses, one row per seed.
 
-    ``drawn``: the samples already drawn, seed → ``sample_sentences(grammar, n_samples, seed)`` (they do
-    not depend on the evidence, so :func:`sampling_trials` draws them once for every evidence set).
+    ``drawn``: the samples already drawn, seed → ``sample_sentences(grammar, n_samples, seed)`` or its
+    :class:`~glu.language.candidates.SentenceSet` (they do not depend on the evidence, so
+    :func:`sampling_trials` draws and counts them once for every evidence set).
 
     Returns
     -------
@@ -342,7 +344,8 @@ def sampling_trials(
     """
     seeds = list(seeds)
     g = load_grammar() if grammar is None else grammar
-    drawn = {seed: sample_sentences(g, n_samples, seed) for seed in seeds}  # the same for every evidence set
+    # the same samples for every evidence set: drawn, split and counted once
+    drawn = {seed: SentenceSet(sample_sentences(g, n_samples, seed)) for seed in seeds}
     frames = [sampling_vs_exact(engine, ev, seeds, n_samples, n, g, score, drawn).assign(figure=key)
               for key, ev in evidence_sets.items()]  # fmt: skip
     return tidy(pd.concat(frames, ignore_index=True), "verbal_sampling_trials", model_source(engine.bn),

@@ -10,7 +10,7 @@
 The TCDS experiments built on them are in :mod:`glu.experiments.verbal`, their figures in :mod:`glu.plots`.
 """
 
-from glu.language.candidates import CANDIDATES, candidate_sentences, read_sentences
+from glu.language.candidates import CANDIDATES, SentenceSet, candidate_sentences, read_sentences
 from glu.language.descriptions import (
     DEFAULT_SCORE,
     SCORES,
@@ -41,6 +41,7 @@ __all__ = [
     "DEFAULT_GRAMMAR_PATH",
     "DEFAULT_SCORE",
     "SCORES",
+    "SentenceSet",
     "Grammar",
     "WordNetwork",
     "all_scores",

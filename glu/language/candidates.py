@@ -4,7 +4,7 @@ The originals did not search their grammar: they drew 10,000 sentences at random
 kept the 9,941 distinct ones, and ranked those (METHOD.md §5.1). That list is part of the published data
 (:meth:`glu.data.DataSource.sentence_samples`). :func:`candidate_sentences` turns a ``--candidates``
 choice into what :func:`glu.language.describe` takes: ``None`` for the exact search over the grammar, or
-a list of sentences to rank.
+the sentences to rank, prepared once (:class:`SentenceSet`).
 
 A sentence file has one sentence per line, words separated by spaces; blank lines are skipped.
 
@@ -18,7 +18,10 @@ A sentence file has one sentence per line, words separated by spaces; blank line
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
+
+import numpy as np
 
 from glu.data.source import DataSource
 from glu.errors import DataError
@@ -44,8 +47,8 @@ def read_sentences(path: str | os.PathLike) -> list[Sentence]:
     return sentences
 
 
-def candidate_sentences(choice: str, source: DataSource | None = None) -> list[Sentence] | None:
-    """The candidates named by ``choice``: None for ``grammar``, else a list of sentences.
+def candidate_sentences(choice: str, source: DataSource | None = None) -> SentenceSet | None:
+    """The candidates named by ``choice``: None for ``grammar``, else the sentences as a :class:`SentenceSet`.
 
     Parameters
     ----------
@@ -63,5 +66,51 @@ def candidate_sentences(choice: str, source: DataSource | None = None) -> list[S
                 f"--candidates samples: the originals' sampled sentences are not in the data ({where}); "
                 "they come with the real data (`glu data fetch`); use --candidates grammar or a file"
             )
-        return read_sentences(path)
-    return read_sentences(choice)
+        return SentenceSet(read_sentences(path))
+    return SentenceSet(read_sentences(choice))
+
+
+class SentenceSet(Sequence):
+    """Distinct candidate sentences, sorted, with their word counts: prepared once, ranked many times.
+
+    A sequence of sentences (tuples of words, in sorted order, each once), plus what ranking them needs:
+    the vocabulary (sorted), each sentence's word counts as an array of shape (n_sentences, n_words) and
+    its length. :func:`glu.language.describe` and :func:`glu.language.rank_sentences` take one (or any
+    iterable of sentences, prepared on each call), so a list ranked under many evidence sets — the
+    originals' 9,941 samples in effect anticipation — is split, de-duplicated and counted once.
+
+    >>> s = SentenceSet.of(["the ball", "the box", "the ball"])
+    >>> len(s), s[0], s.vocabulary, s.counts.tolist()
+    (2, ('the', 'ball'), ('ball', 'box', 'the'), [[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]])
+    """
+
+    __slots__ = ("sentences", "vocabulary", "counts", "lengths")
+
+    def __init__(self, sentences: Iterable[str | Iterable[str]]) -> None:
+        self.sentences: tuple[Sentence, ...] = tuple(
+            sorted({tuple(s.split()) if isinstance(s, str) else tuple(s) for s in sentences})
+        )
+        self.vocabulary: tuple[str, ...] = tuple(sorted({w for s in self.sentences for w in s}))
+        pos = {w: i for i, w in enumerate(self.vocabulary)}
+        rows = np.repeat(np.arange(len(self.sentences)), [len(s) for s in self.sentences])
+        cols = np.fromiter((pos[w] for s in self.sentences for w in s), dtype=np.intp, count=len(rows))
+        self.counts = np.zeros((len(self.sentences), len(self.vocabulary)))
+        np.add.at(self.counts, (rows, cols), 1.0)
+        self.lengths = np.array([len(s) for s in self.sentences], dtype=np.intp)
+
+    @classmethod
+    def of(cls, sentences: SentenceSet | Iterable[str | Iterable[str]]) -> SentenceSet:
+        """``sentences`` itself if it is a SentenceSet, else a new one."""
+        return sentences if isinstance(sentences, SentenceSet) else cls(sentences)
+
+    def __len__(self) -> int:
+        return len(self.sentences)
+
+    def __getitem__(self, i):  # type: ignore[no-untyped-def]
+        return self.sentences[i]
+
+    def __iter__(self) -> Iterator[Sentence]:
+        return iter(self.sentences)
+
+    def __repr__(self) -> str:
+        return f"SentenceSet({len(self)} sentences, {len(self.vocabulary)} words)"

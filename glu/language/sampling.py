@@ -9,7 +9,7 @@ that chance exactly.
 from __future__ import annotations
 
 import random
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from glu.errors import GrammarError
 from glu.language.grammar import Alt, Expr, Grammar, Opt, Ref, Rep, Seq, Word
@@ -40,38 +40,79 @@ def sample_sentences(grammar: Grammar, n: int, seed: int | None = 0) -> list[Sen
         raise GrammarError(f"{n:,} random sentences: at most {MAX_SAMPLES:,} at once (memory grows with each; "
                            "the originals drew 10,000)", grammar.source)  # fmt: skip
     rng = random.Random(seed)
-    rand, randrange = rng.random, rng.randrange
-    defs = grammar.definitions
+    walk = _compile(grammar.sentence, grammar, rng.random, rng.randrange, {})
+    result: list[Sentence] = []
+    for _ in range(int(n)):
+        out: list[str] = []
+        walk(out)
+        result.append(tuple(out))
+    return result
 
-    def gen(e: Expr, out: list[str]) -> None:
-        if isinstance(e, Word):
-            out.append(e.text)
-        elif isinstance(e, Ref):
-            gen(defs[e.name], out)
-        elif isinstance(e, Seq):
-            for item in e.items:
-                gen(item, out)
-        elif isinstance(e, Alt):
-            gen(e.options[randrange(len(e.options))], out)
-        elif isinstance(e, Opt):
+
+Walk = Callable[[list[str]], None]
+
+
+def _compile(e: Expr, grammar: Grammar, rand: Callable[[], float], randrange: Callable[[int], int],
+             refs: dict[str, Walk]) -> Walk:  # fmt: skip
+    """A function that appends one random expansion of ``e`` to a list, drawing exactly as the recursive
+    walk of the grammar does (the same calls to ``rand`` and ``randrange``, in the same order), with the
+    grammar's structure resolved once instead of at every word. Runs of words become one ``extend``."""
+    if isinstance(e, Word):
+        text = e.text
+        return lambda out: out.append(text)
+    if isinstance(e, Ref):
+        if e.name not in refs:  # the parser refuses recursive definitions: this terminates
+            refs[e.name] = _compile(grammar.definitions[e.name], grammar, rand, randrange, refs)
+        return refs[e.name]
+    if isinstance(e, Seq):
+        parts: list[Walk | tuple[str, ...]] = []
+        for item in e.items:
+            if isinstance(item, Word) and parts and isinstance(parts[-1], tuple):
+                parts[-1] += (item.text,)
+            else:
+                parts.append(
+                    (item.text,) if isinstance(item, Word) else _compile(item, grammar, rand, randrange, refs)
+                )
+        steps = [(lambda out, w=p: out.extend(w)) if isinstance(p, tuple) else p for p in parts]
+        if len(steps) == 1:
+            return steps[0]
+
+        def seq(out: list[str]) -> None:
+            for step in steps:
+                step(out)
+
+        return seq
+    if isinstance(e, Alt):
+        n = len(e.options)
+        if all(isinstance(o, Word) for o in e.options):
+            texts = [o.text for o in e.options]
+            return lambda out: out.append(texts[randrange(n)])
+        options = [_compile(o, grammar, rand, randrange, refs) for o in e.options]
+        return lambda out: options[randrange(n)](out)
+    if isinstance(e, Opt):
+        inner = _compile(e.expr, grammar, rand, randrange, refs)
+
+        def opt(out: list[str]) -> None:
             if rand() < 0.5:
-                gen(e.expr, out)
-        elif isinstance(e, Rep):
-            if e.at_least_one:
-                gen(e.expr, out)
+                inner(out)
+
+        return opt
+    if isinstance(e, Rep):
+        inner = _compile(e.expr, grammar, rand, randrange, refs)
+        at_least_one = e.at_least_one
+
+        def rep(out: list[str]) -> None:
+            if at_least_one:
+                inner(out)
             while rand() < 0.5:
-                gen(e.expr, out)
+                inner(out)
                 if len(out) > MAX_SAMPLE_WORDS:
                     raise GrammarError(
                         f"a random sentence grew beyond {MAX_SAMPLE_WORDS} words", grammar.source
                     )
 
-    result: list[Sentence] = []
-    for _ in range(int(n)):
-        out: list[str] = []
-        gen(grammar.sentence, out)
-        result.append(tuple(out))
-    return result
+        return rep
+    raise TypeError(f"not a grammar expression: {e!r}")
 
 
 def sample_probability(grammar: Grammar, sentence: str | Iterable[str]) -> float:
