@@ -27,6 +27,7 @@ import numpy as np
 
 from glu.errors import DataError, ModelError
 from glu.gestures.forward import left_to_right_transmat
+from glu.gestures.gmm_init import fit_gaussian_mixture
 from glu.gestures.model import GestureHMM, as_sequence
 
 
@@ -115,13 +116,11 @@ def init_left_to_right(
 ) -> GestureHMM:
     """An initial left-to-right model: each sequence cut into ``n_states`` equal time slices, slice q → state q.
 
-    The frames of slice q (over all sequences) give state q's mixture (scikit-learn ``GaussianMixture``,
-    seeded; with too few frames, one Gaussian copied ``n_mix`` times with means spread along its main
-    axis). Self-transition probabilities are ``1 - 1 / (mean frames per state)``, clipped to [0.5, 0.98].
+    The frames of slice q (over all sequences) give state q's mixture (scikit-learn's ``GaussianMixture``
+    fit, seeded, as :func:`~glu.gestures.gmm_init.fit_gaussian_mixture` computes it; with too few frames,
+    one Gaussian copied ``n_mix`` times with means spread along its main axis). Self-transition probabilities are ``1 - 1 / (mean frames per state)``, clipped to [0.5, 0.98].
     ``sequences`` are arrays of shape (T_i, D).
     """
-    from sklearn.mixture import GaussianMixture
-
     D = sequences[0].shape[1]
     slices: list[list[np.ndarray]] = [[] for _ in range(n_states)]
     for X in sequences:
@@ -135,13 +134,7 @@ def init_left_to_right(
     for q in range(n_states):
         Xq = np.concatenate(slices[q]) if any(len(s) for s in slices[q]) else pooled_all
         if len(Xq) >= max(4 * n_mix * D, n_mix + 1) and len(np.unique(Xq, axis=0)) > n_mix:
-            gm = GaussianMixture(
-                n_mix, covariance_type="full", reg_covar=covar_reg, random_state=seed, n_init=1
-            )
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                gm.fit(Xq)
-            weights[q], means[q], covars[q] = gm.weights_, gm.means_, gm.covariances_
+            weights[q], means[q], covars[q] = fit_gaussian_mixture(Xq, n_mix, covar_reg, seed)
         else:
             mu = Xq.mean(axis=0)
             cov = (np.cov(Xq.T) if len(Xq) > 1 else np.zeros((D, D))).reshape(D, D) + covar_reg * np.eye(D)
