@@ -18,6 +18,7 @@ source, the package versions and the comparison with the original model, and ``r
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
 import sys
@@ -153,19 +154,23 @@ class _Progress:
 
 def run_order(notebooks: Sequence[Path], jobs: int, expected: Mapping[str, float]) -> list[tuple[int, Path]]:
     """(story number, notebook) in the order they start: story order with one job; with several, the
-    longest first (by ``expected`` seconds, notebooks never timed first of all), so the last to finish is a
-    short one. The order changes no output: each notebook runs alone in its kernel and publishing is by name.
+    longest first by ``expected`` seconds (from the last run's summary), so that the last to finish is a
+    short one. Notebooks never timed start before all others, the later ones in the story first (the
+    larger studies come late in it). The order changes no output: each notebook runs alone in its kernel,
+    and publishing is by name.
 
     >>> nbs = [Path("01_a.py"), Path("02_b.py"), Path("03_c.py")]
     >>> [p.stem for _, p in run_order(nbs, 2, {"01_a": 3.0, "02_b": 1.0, "03_c": 9.0})]
     ['03_c', '01_a', '02_b']
     >>> [i for i, _ in run_order(nbs, 2, {"01_a": 3.0})]
-    [2, 3, 1]
+    [3, 2, 1]
+    >>> [i for i, _ in run_order(nbs, 1, {"01_a": 3.0})]
+    [1, 2, 3]
     """
     numbered = list(enumerate(notebooks, start=1))
     if jobs == 1:
         return numbered
-    return sorted(numbered, key=lambda item: -expected.get(item[1].stem, float("inf")))
+    return sorted(numbered, key=lambda item: (-expected.get(item[1].stem, math.inf), -item[0]))
 
 
 def reproduce(

@@ -73,6 +73,8 @@ def test_with_several_jobs_the_notebooks_that_took_longest_last_time_start_first
     notebooks = [Path(f"{n}.py") for n in ("01_a", "02_b", "03_c", "04_new")]
     order = run_order(notebooks, 2, expected_seconds(layout))
     assert [(i, p.stem) for i, p in order] == [(4, "04_new"), (2, "02_b"), (3, "03_c"), (1, "01_a")]
+    # a fresh clone has no summary: the story's later notebooks (its larger studies) start first
+    assert [i for i, _ in run_order(notebooks, 2, {})] == [4, 3, 2, 1]
     assert [p.stem for _, p in run_order(notebooks, 1, expected_seconds(layout))] == [
         p.stem for p in notebooks
     ]
