@@ -32,7 +32,7 @@ from typing import Any
 from glu import paths
 from glu.data.source import resolve_data
 from glu.errors import GluError
-from glu.execution import NotebookStopped, RunHandle, run_notebook
+from glu.execution import NotebookStopped, RunHandle, available_cores, run_notebook
 from glu.outputs import parameters_text
 from glu.parameters import check, non_defaults, parse_value, read_spec
 from glu.paths import OutputLayout
@@ -265,8 +265,11 @@ def reproduce(
         pool = ThreadPoolExecutor(max_workers=jobs)
         futures: dict[Future, str] = {}
         try:
+            threads = max(1, available_cores() // jobs)  # each kernel's share of the cores for BLAS/OpenMP
             for i, nb in run_order(notebooks, jobs, expected_seconds(layout)):
-                futures[pool.submit(one, i, nb, bar.handle(nb.stem))] = nb.stem
+                handle = bar.handle(nb.stem)
+                handle.threads = threads
+                futures[pool.submit(one, i, nb, handle)] = nb.stem
             pending = set(futures)
             failed: NotebookResult | None = None
             while pending:

@@ -358,10 +358,9 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
     cluster = None
     try:
         if scheduler is None:
-            cores = (
-                len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-            )
-            n = workers or cores
+            from glu.execution import available_cores
+
+            n = workers or available_cores()
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                                    silence_logs=logging.ERROR)  # fmt: skip
             client = Client(cluster)
