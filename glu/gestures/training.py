@@ -27,7 +27,7 @@ import numpy as np
 
 from glu.errors import DataError, ModelError
 from glu.gestures.forward import left_to_right_transmat
-from glu.gestures.gmm_init import fit_gaussian_mixture
+from glu.gestures.gmm_init import fit_gaussian_mixture, load_libraries
 from glu.gestures.model import GestureHMM, as_sequence
 
 
@@ -215,6 +215,7 @@ def train_hmm(
 
     # one thread for BLAS and OpenMP: the many small k-means and linear-algebra calls are several times
     # slower with thread hand-offs (and the sweeps parallelise over models instead)
+    load_libraries(n_mix)  # before the limit, so that it binds their BLAS too
     with threadpool_limits(1):
         init = init_left_to_right(seqs, n_states, n_mix, seed, covar_reg, name)
         fitted_params, history = _run_em(engine, seqs, init, n_iter, tol * n_frames, covar_reg, seed, name)
@@ -299,6 +300,7 @@ def train_many(
     from glu.gestures import baum_welch as bw
     from glu.gestures.baum_welch_batch import fit_many
 
+    load_libraries(n_mix)  # before the limit, so that it binds their BLAS too
     with threadpool_limits(1):
         problems = []
         for (seqs, _), sd, nm in zip(checked, seeds, names, strict=True):

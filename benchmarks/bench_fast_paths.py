@@ -1,0 +1,190 @@
+"""Speed of the fast paths added for issue 9, each against the straightforward way it replaced.
+
+Run on demand (not a test)::
+
+    python benchmarks/bench_fast_paths.py [--data DIR] [--repeats N]
+
+Medians over repeats, on one BLAS thread; every pair is checked to give the same result first.
+
+1. **HMM initial mixtures**: the 6 per-state Gaussian mixtures of 30 HMMs (synthetic gestures, 12 per
+   action), by scikit-learn's ``GaussianMixture`` against :func:`glu.gestures.gmm_init.fit_gaussian_mixture`
+   (bit-identical), for one and for three components;
+2. **ranking candidate sentences**: 141 evidence sets × the candidates (the originals' 9,941 samples with
+   the real data, else 10,000 sentences drawn from the grammar), every sentence keyed exactly as before
+   against :func:`glu.language.rank_sentences` on a prepared :class:`~glu.language.SentenceSet`;
+3. **random sentences**: 21 × 10,000 from the default grammar, the recursive walk of the grammar tree
+   against the compiled walk of :func:`glu.language.sample_sentences` (the same sentences).
+"""
+
+from __future__ import annotations
+
+import argparse
+import heapq
+import random
+import statistics
+import sys
+import time
+import warnings
+
+import numpy as np
+
+
+def _median(fn, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def _row(what: str, before: float, after: float) -> None:
+    print(f"  {what:58s} {before:8.3f} s -> {after:7.3f} s   {before / after:5.1f}x")
+
+
+def bench_mixtures(repeats: int) -> None:
+    from sklearn.mixture import GaussianMixture
+
+    from glu.gestures.corpus import synthetic_corpus
+    from glu.gestures.gmm_init import fit_gaussian_mixture
+
+    corpus = synthetic_corpus(12, seed=3)
+    slices = []  # the frames of each state's time slices, as init_left_to_right cuts them (6 states)
+    for action in dict.fromkeys(s.action for s in corpus):
+        seqs = [s.xyz for s in corpus if s.action == action]
+        for q in range(6):
+            slices.append(
+                np.concatenate([X[np.minimum(np.arange(len(X)) * 6 // len(X), 5) == q] for X in seqs])
+            )
+    slices = slices * 10  # 30 models' worth
+
+    def sklearn(M):
+        out = []
+        for i, X in enumerate(slices):
+            gm = GaussianMixture(M, covariance_type="full", reg_covar=0.03, random_state=i, n_init=1)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                gm.fit(X)
+            out.append((gm.weights_, gm.means_, gm.covariances_))
+        return out
+
+    def ours(M):
+        return [fit_gaussian_mixture(X, M, 0.03, i) for i, X in enumerate(slices)]
+
+    print(
+        f"1. HMM initial mixtures ({len(slices)} fits, {int(np.mean([len(X) for X in slices]))} frames each)"
+    )
+    for M in (1, 3):
+        same = all(
+            np.array_equal(a, b)
+            for x, y in zip(sklearn(M), ours(M), strict=True)
+            for a, b in zip(x, y, strict=True)
+        )
+        assert same, "the fast mixtures differ from scikit-learn's"
+        _row(f"GaussianMixture.fit vs fit_gaussian_mixture, M = {M}", _median(lambda m=M: sklearn(m), repeats),
+             _median(lambda m=M: ours(m), repeats))  # fmt: skip
+
+
+def _rank_every_sentence(sentences, probs, n, score):
+    """rank_sentences as it was: split, de-duplicate and key every sentence exactly, on every call."""
+    from glu.language.descriptions import LogProbs, _exact, _frame, _rank_key, _score, score_offset
+
+    offset = score_offset(score)
+    sents = sorted({tuple(s.split()) if isinstance(s, str) else tuple(s) for s in sentences})
+    vocab = sorted({w for s in sents for w in s})
+    lp = LogProbs.from_probs(vocab, probs)
+    pos = {w: i for i, w in enumerate(vocab)}
+    keyed = []
+    for s in sents:
+        n_zero, total = _exact(lp, [pos[w] for w in s])
+        keyed.append(
+            (_rank_key(n_zero, total, len(s), s, offset, lp.scale), _score(lp, n_zero, total, len(s), offset))
+        )
+    return _frame([(k[2], sc) for k, sc in heapq.nsmallest(n, keyed)])
+
+
+def bench_ranking(data: str | None, repeats: int) -> None:
+    from glu.data import resolve_data
+    from glu.language import SentenceSet, candidate_sentences, load_grammar, rank_sentences, sample_sentences
+
+    source = resolve_data(data)
+    prepared = candidate_sentences("samples", source) if source.is_real else None
+    if prepared is None:
+        prepared = SentenceSet(sample_sentences(load_grammar(), 10_000, seed=0))
+    plain = list(prepared)
+    rng = np.random.default_rng(0)
+    evidence = [dict(zip(prepared.vocabulary, rng.uniform(0.01, 1, len(prepared.vocabulary)).tolist(), strict=True))
+                for _ in range(141)]  # fmt: skip
+    for probs in evidence[:10]:
+        assert rank_sentences(prepared, probs, 10, "original").equals(
+            _rank_every_sentence(plain, probs, 10, "original")
+        )
+    print(f"2. ranking {len(prepared)} candidate sentences for 141 evidence sets ({source.describe()})")
+    _row("every sentence keyed exactly vs float shortlist + exact keys",
+         _median(lambda: [_rank_every_sentence(plain, p, 10, "original") for p in evidence], repeats),
+         _median(lambda: [rank_sentences(prepared, p, 10, "original") for p in evidence], repeats))  # fmt: skip
+
+
+def _recursive_samples(grammar, n: int, seed: int):
+    from glu.language.grammar import Alt, Opt, Ref, Rep, Seq, Word
+
+    rng = random.Random(seed)
+
+    def gen(e, out):
+        if isinstance(e, Word):
+            out.append(e.text)
+        elif isinstance(e, Ref):
+            gen(grammar.definitions[e.name], out)
+        elif isinstance(e, Seq):
+            for item in e.items:
+                gen(item, out)
+        elif isinstance(e, Alt):
+            gen(e.options[rng.randrange(len(e.options))], out)
+        elif isinstance(e, Opt):
+            if rng.random() < 0.5:
+                gen(e.expr, out)
+        elif isinstance(e, Rep):
+            if e.at_least_one:
+                gen(e.expr, out)
+            while rng.random() < 0.5:
+                gen(e.expr, out)
+
+    out = []
+    for _ in range(n):
+        s: list[str] = []
+        gen(grammar.sentence, s)
+        out.append(tuple(s))
+    return out
+
+
+def bench_sampling(repeats: int) -> None:
+    from glu.language import load_grammar, sample_sentences
+
+    g = load_grammar()
+    assert sample_sentences(g, 10_000, 5) == _recursive_samples(g, 10_000, 5)
+    print("3. random sentences, 21 x 10,000 from the default grammar")
+    _row("recursive walk vs compiled walk",
+         _median(lambda: [_recursive_samples(g, 10_000, s) for s in range(21)], repeats),
+         _median(lambda: [sample_sentences(g, 10_000, s) for s in range(21)], repeats))  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the three benchmarks and print before/after times."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", help="data folder (default: as glu finds it)")
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args(argv)
+    import scipy.linalg  # noqa: F401 - loaded before the limit, which binds only the libraries already loaded
+    import sklearn.cluster  # noqa: F401
+    import sklearn.mixture  # noqa: F401
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        bench_mixtures(args.repeats)
+        bench_ranking(args.data, args.repeats)
+        bench_sampling(args.repeats)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
