@@ -20,22 +20,12 @@ from __future__ import annotations
 
 import argparse
 import heapq
-import random
-import statistics
 import sys
-import time
 import warnings
+from pathlib import Path
 
 import numpy as np
-
-
-def _median(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+from timing import median_time
 
 
 def _row(what: str, before: float, after: float) -> None:
@@ -81,8 +71,8 @@ def bench_mixtures(repeats: int) -> None:
             for a, b in zip(x, y, strict=True)
         )
         assert same, "the fast mixtures differ from scikit-learn's"
-        _row(f"GaussianMixture.fit vs fit_gaussian_mixture, M = {M}", _median(lambda m=M: sklearn(m), repeats),
-             _median(lambda m=M: ours(m), repeats))  # fmt: skip
+        _row(f"GaussianMixture.fit vs fit_gaussian_mixture, M = {M}", median_time(lambda m=M: sklearn(m), repeats),
+             median_time(lambda m=M: ours(m), repeats))  # fmt: skip
 
 
 def _rank_every_sentence(sentences, probs, n, score):
@@ -121,51 +111,22 @@ def bench_ranking(data: str | None, repeats: int) -> None:
         )
     print(f"2. ranking {len(prepared)} candidate sentences for 141 evidence sets ({source.describe()})")
     _row("every sentence keyed exactly vs float shortlist + exact keys",
-         _median(lambda: [_rank_every_sentence(plain, p, 10, "original") for p in evidence], repeats),
-         _median(lambda: [rank_sentences(prepared, p, 10, "original") for p in evidence], repeats))  # fmt: skip
-
-
-def _recursive_samples(grammar, n: int, seed: int):
-    from glu.language.grammar import Alt, Opt, Ref, Rep, Seq, Word
-
-    rng = random.Random(seed)
-
-    def gen(e, out):
-        if isinstance(e, Word):
-            out.append(e.text)
-        elif isinstance(e, Ref):
-            gen(grammar.definitions[e.name], out)
-        elif isinstance(e, Seq):
-            for item in e.items:
-                gen(item, out)
-        elif isinstance(e, Alt):
-            gen(e.options[rng.randrange(len(e.options))], out)
-        elif isinstance(e, Opt):
-            if rng.random() < 0.5:
-                gen(e.expr, out)
-        elif isinstance(e, Rep):
-            if e.at_least_one:
-                gen(e.expr, out)
-            while rng.random() < 0.5:
-                gen(e.expr, out)
-
-    out = []
-    for _ in range(n):
-        s: list[str] = []
-        gen(grammar.sentence, s)
-        out.append(tuple(s))
-    return out
+         median_time(lambda: [_rank_every_sentence(plain, p, 10, "original") for p in evidence], repeats),
+         median_time(lambda: [rank_sentences(prepared, p, 10, "original") for p in evidence], repeats))  # fmt: skip
 
 
 def bench_sampling(repeats: int) -> None:
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from language_reference import recursive_samples  # the sampler as first written
+
     from glu.language import load_grammar, sample_sentences
 
     g = load_grammar()
-    assert sample_sentences(g, 10_000, 5) == _recursive_samples(g, 10_000, 5)
+    assert sample_sentences(g, 10_000, 5) == recursive_samples(g, 10_000, 5)
     print("3. random sentences, 21 x 10,000 from the default grammar")
     _row("recursive walk vs compiled walk",
-         _median(lambda: [_recursive_samples(g, 10_000, s) for s in range(21)], repeats),
-         _median(lambda: [sample_sentences(g, 10_000, s) for s in range(21)], repeats))  # fmt: skip
+         median_time(lambda: [recursive_samples(g, 10_000, s) for s in range(21)], repeats),
+         median_time(lambda: [sample_sentences(g, 10_000, s) for s in range(21)], repeats))  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:

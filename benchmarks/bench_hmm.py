@@ -27,20 +27,9 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import time
 
 import numpy as np
-
-
-def _median_time(fn, repeats: int, number: int = 1) -> float:
-    """Median over ``repeats`` of the mean time of ``number`` calls, in seconds."""
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            fn()
-        times.append((time.perf_counter() - t0) / number)
-    return statistics.median(times)
+from timing import median_time
 
 
 def _setup(data: str | None):
@@ -96,12 +85,12 @@ def main(argv: list[str] | None = None) -> int:
         err_stream = float(np.abs(steps[-1] - np.array([h.score(X) for h in hl])).max())
 
         rows = []
-        glu_curve = _median_time(lambda: m0.loglik_curve(X), args.repeats, 20)
-        hl_curve = _median_time(lambda: [h0.score(X[:t]) for t in range(1, T + 1)], max(1, args.repeats // 3))
+        glu_curve = median_time(lambda: m0.loglik_curve(X), args.repeats, 20)
+        hl_curve = median_time(lambda: [h0.score(X[:t]) for t in range(1, T + 1)], max(1, args.repeats // 3))
         rows.append((f"prefix curve, {T} frames, 1 model", glu_curve, hl_curve, "≤ 2 ms"))
 
-        glu_full = _median_time(lambda: m0.loglik(X), args.repeats, 20)
-        hl_full = _median_time(lambda: h0.score(X), args.repeats, 5)
+        glu_full = median_time(lambda: m0.loglik(X), args.repeats, 20)
+        hl_full = median_time(lambda: h0.score(X), args.repeats, 5)
         rows.append((f"log L of {T} frames, 1 model", glu_full, hl_full, ""))
 
         def push_all() -> None:
@@ -109,8 +98,8 @@ def main(argv: list[str] | None = None) -> int:
             for x in X:
                 s.push(x)
 
-        glu_step = _median_time(push_all, args.repeats) / T
-        hl_step = _median_time(lambda: [h.score(X) for h in hl], args.repeats, 3)
+        glu_step = median_time(push_all, args.repeats) / T
+        hl_step = median_time(lambda: [h.score(X) for h in hl], args.repeats, 3)
         rows.append((f"one new frame, {len(models)} models (stream)", glu_step, hl_step, "≤ 100 µs"))
 
         from glu.gestures.corpus import synthetic_corpus
@@ -122,8 +111,8 @@ def main(argv: list[str] | None = None) -> int:
         def em(engine: str):
             return lambda: train_hmm(train, 6, 3, n_iter=20, tol=1e-12, warn=False, engine=engine)
 
-        glu_em = _median_time(em("glu"), max(1, args.repeats // 2))
-        hl_em = _median_time(em("hmmlearn"), max(1, args.repeats // 3))
+        glu_em = median_time(em("glu"), max(1, args.repeats // 2))
+        hl_em = median_time(em("hmmlearn"), max(1, args.repeats // 3))
         rows.append((f"EM, 20 iterations, {len(train)} sequences ({n_train} frames)", glu_em, hl_em, ""))
 
         from glu.gestures.recognizer import Recognizer
@@ -143,9 +132,9 @@ def main(argv: list[str] | None = None) -> int:
         # interleave raw and invariant runs so that load on the machine affects both alike
         raw_t, inv_t, feat_t = [], [], []
         for _ in range(args.repeats):
-            raw_t.append(_median_time(push_all, 1) / T)
-            inv_t.append(_median_time(push_all_invariant, 1) / T)
-            feat_t.append(_median_time(features_only, 1) / T)
+            raw_t.append(median_time(push_all, 1) / T)
+            inv_t.append(median_time(push_all_invariant, 1) / T)
+            feat_t.append(median_time(features_only, 1) / T)
         raw_step, inv_step = statistics.median(raw_t), statistics.median(inv_t)
         feat_step = statistics.median(feat_t)
 

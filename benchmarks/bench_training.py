@@ -25,20 +25,10 @@ Every pair is checked to give the same models first (histories to 1e-8 relative)
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 
 import numpy as np
-
-
-def _median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+from timing import median_time
 
 
 def _fmt(seconds: float) -> str:
@@ -81,8 +71,8 @@ def _compare_training(label, sets, batched, repeats, rows):
         return [train_hmm(x, name=a, warn=False) for a, x in sets]
 
     ref = alone()
-    t_alone = _median_time(alone, repeats)
-    t_batch = _median_time(batched, repeats)
+    t_alone = median_time(alone, repeats)
+    t_batch = median_time(batched, repeats)
     rows.append((f"{label}: {len(sets)} models, train_hmm each", t_alone, t_batch))
     # EM alone, from the same initial models
     from glu.gestures import baum_welch as bw
@@ -97,9 +87,9 @@ def _compare_training(label, sets, batched, repeats, rows):
     for a, b, (_, r) in zip(fits, many, ref, strict=True):
         assert len(a.history) == len(b.history) == r.n_iter
         np.testing.assert_allclose(b.history, a.history, rtol=1e-8)
-    t_fit = _median_time(lambda: [bw.fit(x, p, cfg.n_iter, t, cfg.covar_reg)
+    t_fit = median_time(lambda: [bw.fit(x, p, cfg.n_iter, t, cfg.covar_reg)
                                   for (x, p), t in zip(problems, tols, strict=True)], repeats)  # fmt: skip
-    t_many = _median_time(lambda: fit_many(problems, cfg.n_iter, tols, cfg.covar_reg), repeats)
+    t_many = median_time(lambda: fit_many(problems, cfg.n_iter, tols, cfg.covar_reg), repeats)
     n_iter = [len(a.history) for a in fits]
     rows.append((f"{label}: EM only ({min(n_iter)}–{max(n_iter)} iterations), fit each", t_fit, t_many))
 
@@ -169,11 +159,9 @@ def _versus_hmmlearn(sets, repeats):
     many = fit_many(problems, n_iter, 1e-300, reg, "hmmlearn")
     for (_, h), m in zip(ref, many, strict=True):
         np.testing.assert_allclose(m.history, h, rtol=1e-8)
-    t_hl = _median_time(hmmlearn, repeats)
-    t_fit = _median_time(
-        lambda: [bw.fit(x, p, n_iter, 1e-300, reg, "hmmlearn") for x, p in problems], repeats
-    )
-    t_many = _median_time(lambda: fit_many(problems, n_iter, 1e-300, reg, "hmmlearn"), repeats)
+    t_hl = median_time(hmmlearn, repeats)
+    t_fit = median_time(lambda: [bw.fit(x, p, n_iter, 1e-300, reg, "hmmlearn") for x, p in problems], repeats)
+    t_many = median_time(lambda: fit_many(problems, n_iter, 1e-300, reg, "hmmlearn"), repeats)
     return [("hmmlearn GMMHMM.fit, each model", t_hl, 1.0), ("glu baum_welch.fit, each model", t_fit, t_hl / t_fit),
             ("glu fit_many, one batch", t_many, t_hl / t_many)]  # fmt: skip
 

@@ -112,3 +112,40 @@ def brute_force_nbest(
     logs = exact_logs(probs)
     ranked = sorted((s for s in sentences if s), key=lambda s: exact_key(s, logs, start))
     return [(s, plain_score(s, probs, start)) for s in ranked[:n]]
+
+
+def recursive_samples(grammar, n: int, seed: int) -> list[tuple[str, ...]]:
+    """The sampler as first written: a recursive walk of the grammar tree (the draws the originals' HSGen
+    makes, in their order), the reference for the compiled walk of glu.language.sampling (tests and
+    benchmarks/bench_fast_paths.py)."""
+    import random
+
+    from glu.language.grammar import Alt, Opt, Ref, Rep, Seq, Word
+
+    rng = random.Random(seed)
+
+    def gen(e, out):
+        if isinstance(e, Word):
+            out.append(e.text)
+        elif isinstance(e, Ref):
+            gen(grammar.definitions[e.name], out)
+        elif isinstance(e, Seq):
+            for item in e.items:
+                gen(item, out)
+        elif isinstance(e, Alt):
+            gen(e.options[rng.randrange(len(e.options))], out)
+        elif isinstance(e, Opt):
+            if rng.random() < 0.5:
+                gen(e.expr, out)
+        elif isinstance(e, Rep):
+            if e.at_least_one:
+                gen(e.expr, out)
+            while rng.random() < 0.5:
+                gen(e.expr, out)
+
+    result = []
+    for _ in range(n):
+        out: list[str] = []
+        gen(grammar.sentence, out)
+        result.append(tuple(out))
+    return result

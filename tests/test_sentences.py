@@ -7,7 +7,7 @@ import collections
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from language_reference import expand, grammar_text
+from language_reference import expand, grammar_text, recursive_samples
 
 from glu.errors import GrammarError
 from glu.language.grammar import load_grammar, parse_grammar
@@ -171,53 +171,17 @@ def test_sampling_repetitions_are_geometric():
         assert abs(counts[k] / 20_000 - 0.5 ** (k + 1)) < 0.015
 
 
-def _reference_samples(grammar, n: int, seed: int) -> list[tuple[str, ...]]:
-    """The sampler as first written: a recursive walk of the grammar tree (the draws the originals' HSGen
-    makes, in their order), kept here as the reference for the compiled walk of glu.language.sampling."""
-    import random
-
-    from glu.language.grammar import Alt, Opt, Ref, Rep, Seq, Word
-
-    rng = random.Random(seed)
-
-    def gen(e, out):
-        if isinstance(e, Word):
-            out.append(e.text)
-        elif isinstance(e, Ref):
-            gen(grammar.definitions[e.name], out)
-        elif isinstance(e, Seq):
-            for item in e.items:
-                gen(item, out)
-        elif isinstance(e, Alt):
-            gen(e.options[rng.randrange(len(e.options))], out)
-        elif isinstance(e, Opt):
-            if rng.random() < 0.5:
-                gen(e.expr, out)
-        elif isinstance(e, Rep):
-            if e.at_least_one:
-                gen(e.expr, out)
-            while rng.random() < 0.5:
-                gen(e.expr, out)
-
-    result = []
-    for _ in range(n):
-        out: list[str] = []
-        gen(grammar.sentence, out)
-        result.append(tuple(out))
-    return result
-
-
 @pytest.mark.parametrize("seed", [0, 1, 7, 2**31 - 1])
 def test_sampling_draws_exactly_what_the_recursive_walk_draws(seed):
     g = load_grammar()
-    assert sample_sentences(g, 2000, seed) == _reference_samples(g, 2000, seed)
+    assert sample_sentences(g, 2000, seed) == recursive_samples(g, 2000, seed)
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(tree=_trees(allow_rep=True), sub=_trees(allow_rep=False), seed=st.integers(0, 2**32 - 1))
 def test_sampling_any_grammar_draws_what_the_recursive_walk_draws(tree, sub, seed):
     g = parse_grammar(grammar_text(("seq", [tree, ("ref", "v"), ("opt", ("ref", "v"))]), {"v": sub}))
-    assert sample_sentences(g, 50, seed) == _reference_samples(g, 50, seed)
+    assert sample_sentences(g, 50, seed) == recursive_samples(g, 50, seed)
 
 
 def test_sampling_bad_n():
