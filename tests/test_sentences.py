@@ -219,3 +219,9 @@ def test_sample_probability_matches_sampling_frequencies():
     for s in [("a",), ("a", "b"), ("a", "b", "b"), ("a", "c"), ("a", "b", "c", "c")]:
         p = sample_probability(g, s)
         assert abs(counts[s] / n - p) < 4 * (p * (1 - p) / n) ** 0.5 + 1e-3, s
+
+
+def test_sampling_a_grammar_nested_deeper_than_python_recurses_is_a_grammar_error():
+    text = "".join(f"$v{i} = $v{i + 1};\n" for i in range(3000)) + "$v3000 = a | b;\n( $v0 )\n"
+    with pytest.raises(GrammarError, match="nests too deeply"):
+        sample_sentences(parse_grammar(text), 3, seed=0)

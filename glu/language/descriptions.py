@@ -283,7 +283,8 @@ def rank_sentences(
     cands = SentenceSet.of(sentences)
     keep = np.ones(len(cands), dtype=bool)
     if must_contain is not None:
-        cols = [k for k, w in enumerate(cands.vocabulary) if w in set(must_contain)]
+        wanted = set(must_contain)
+        cols = [k for k, w in enumerate(cands.vocabulary) if w in wanted]
         keep = cands.counts[:, cols].sum(axis=1) > 0
     rows = np.flatnonzero(keep)
     if (cands.lengths[rows] == 0).any():

@@ -9,6 +9,7 @@ that chance exactly.
 from __future__ import annotations
 
 import random
+import sys
 from collections.abc import Callable, Iterable
 
 from glu.errors import GrammarError
@@ -40,12 +41,19 @@ def sample_sentences(grammar: Grammar, n: int, seed: int | None = 0) -> list[Sen
         raise GrammarError(f"{n:,} random sentences: at most {MAX_SAMPLES:,} at once (memory grows with each; "
                            "the originals drew 10,000)", grammar.source)  # fmt: skip
     rng = random.Random(seed)
-    walk = _compile(grammar.sentence, grammar, rng.random, rng.randrange, {})
     result: list[Sentence] = []
-    for _ in range(int(n)):
-        out: list[str] = []
-        walk(out)
-        result.append(tuple(out))
+    try:
+        walk = _compile(grammar.sentence, grammar, rng.random, rng.randrange, {})
+        for _ in range(int(n)):
+            out: list[str] = []
+            walk(out)
+            result.append(tuple(out))
+    except RecursionError:
+        raise GrammarError(
+            "the grammar nests too deeply to draw sentences from (variables within variables, "
+            f"deeper than Python's recursion limit of {sys.getrecursionlimit()})",
+            grammar.source,
+        ) from None
     return result
 
 
