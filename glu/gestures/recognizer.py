@@ -39,7 +39,7 @@ import numpy as np
 
 from glu.errors import DataError, ModelError
 from glu.files import atomic_write_json
-from glu.gestures.batch import Bank, stack_models
+from glu.gestures.batch import Bank, loglik_many, stack_models
 from glu.gestures.features import FEATURES_DESCRIPTION
 from glu.gestures.forward import (
     ForwardState,
@@ -47,7 +47,6 @@ from glu.gestures.forward import (
     forward_step,
     log_emissions,
     p_hmm_from_loglik,
-    scaled_step,
 )
 from glu.gestures.invariants import Invariants
 from glu.gestures.mixsplit import RECIPES, train_mixsplit_many
@@ -192,40 +191,10 @@ class Recognizer:
         return self.loglik_curve(X)[-1]
 
     def loglik_many(self, sequences: Sequence[np.ndarray]) -> np.ndarray:
-        """:meth:`loglik` of many sequences (each of shape (T_i, D)), shape (S, n_actions), in one batch.
-
-        The emissions of every frame come from one call, and the forward recursion of
-        :func:`~glu.gestures.forward.forward_curve` runs over all sequences at once (sorted by length, the
-        finished ones dropping out), each step exactly :func:`~glu.gestures.forward.forward_step`'s
-        (including its log-domain fallback where the scaled mass underflows). The same numbers as
-        :meth:`loglik` of each sequence (tested).
-        """
-        seqs = [self.transform(X) for X in sequences]
-        if not seqs:
-            return np.empty((0, len(self.actions)))
-        bank = self.bank
-        lengths = np.array([len(X) for X in seqs])
-        order = np.argsort(-lengths, kind="stable")
-        lengths_sorted = lengths[order]
-        S, T = len(seqs), int(lengths_sorted[0])
-        alive = np.arange(T)[None, :] < lengths_sorted[:, None]
-        log_b = np.zeros((S, T) + bank.log_norm.shape[:-1])  # (S, T, A, Q); padding: ignored
-        log_b[alive] = log_emissions(np.concatenate([seqs[i] for i in order]), bank.means, bank.chol_inv,
-                                     bank.log_norm)  # fmt: skip
-        n_live = alive.sum(axis=0)
-        mx = log_b.max(axis=-1)  # (S, T, A)
-        steps = np.zeros(mx.shape)  # log p(g_t | G_1^{t-1}) of each sequence and model (0 past the end)
-        alpha = np.zeros(log_b.shape[:1] + log_b.shape[2:])  # (S, A, Q)
-        with np.errstate(all="ignore"):
-            b = np.exp(log_b - mx[..., None])
-            for t in range(T):
-                n = n_live[t]
-                pred = bank.startprob if t == 0 else (alpha[:n, :, None, :] @ bank.transmat)[..., 0, :]
-                alpha[:n], steps[:n, t] = scaled_step(pred, b[:n, t], mx[:n, t], log_b[:n, t])
-        total = np.cumsum(steps, axis=1)[np.arange(S), lengths_sorted - 1]  # (S, A), summed as forward_curve
-        out = np.empty_like(total)
-        out[order] = total
-        return out
+        """:meth:`loglik` of many sequences (each of shape (T_i, D)), shape (S, n_actions), in one batch
+        (:func:`glu.gestures.batch.loglik_many` on the recogniser's features): the same numbers as
+        :meth:`loglik` of each sequence (tested)."""
+        return loglik_many(self.bank, [self.transform(X) for X in sequences])
 
     def p_hmm(self, X: np.ndarray) -> np.ndarray:
         """``p_HMM(A | G)`` with equal priors, shape (n_actions,), of a sequence of shape (T, D)."""

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from glu.errors import DataError, ModelError
+from glu.gestures.batch import loglik_many, stack_models
 from glu.gestures.forward import left_to_right_transmat
 from glu.gestures.gmm_init import fit_gaussian_mixture, load_libraries
 from glu.gestures.model import GestureHMM, as_sequence
@@ -253,7 +254,9 @@ def _finish(
     n_frames = sum(len(X) for X in seqs)
     delta = history[-1] - history[-2] if len(history) >= 2 else math.inf
     converged = bool(abs(delta) < tol * n_frames)
-    final = float(sum(fitted.loglik(X) for X in seqs))
+    # the training sequences' log-likelihood under the returned model, all sequences in one batch (the
+    # same numbers as fitted.loglik of each; summed in the same order)
+    final = float(sum(loglik_many(stack_models([fitted]), seqs)[:, 0].tolist()))
     report = TrainingReport(name, len(seqs), n_frames, len(history), converged, history, final, tol, n_iter)
     if not converged and warn:
         warnings.warn(report.describe(), HMMConvergenceWarning, stacklevel=3)
