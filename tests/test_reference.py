@@ -176,10 +176,7 @@ def test_published_network_numbers_equal_the_original_model(learned_bn, original
     assert 0.8043 < experiments.tap_threshold(learned_bn) < 0.8044
 
 
-def _notebooks_reproduce_the_original_network_figures(shared_data, tmp_path):
-    summary = reproduce(
-        data=shared_data, quick=True, out=tmp_path, jobs=2, only=["03", "07"], log=lambda s: None
-    )
+def _notebooks_reproduce_the_original_network_figures(summary):
     comparison = {c["table"]: c["max_abs_difference"] for c in summary["comparison_with_reference"]}
     for table in (
         "glu2017_effect_prediction",
@@ -273,8 +270,16 @@ FAST_NOTEBOOKS = ["01", "03", "04", "05", "06", "07"]
 """Notebooks whose figures the default suite re-renders from the real data (the others: -m slow)."""
 
 
-def _render_and_compare(shared_data, tmp_path, only):
-    """Render figures from the real data reached through another path; compare bytes with the committed ones."""
+def _render_from_elsewhere(shared_data, tmp_path, only):
+    """Run notebooks on the real data reached through another path (a symlink): (summary, output folder)."""
+    link = tmp_path / "the-data-seen-from-elsewhere"
+    link.symlink_to(shared_data)
+    out = tmp_path / "out"
+    return reproduce(data=link, out=out, jobs=2, only=only, log=lambda _: None, report=False), out
+
+
+def _figures_equal_the_committed_ones(summary, out):
+    """Every PNG the run wrote is byte-identical to the committed one (when rendered by the same versions)."""
     import json
 
     from glu.paths import PROJECT_ROOT
@@ -287,10 +292,6 @@ def _render_and_compare(shared_data, tmp_path, only):
     here = rendering_versions()
     if {k: record[k] for k in here} != here:
         pytest.skip(f"the committed figures were rendered with {record}, this machine has {here}")
-    link = tmp_path / "the-data-seen-from-elsewhere"
-    link.symlink_to(shared_data)
-    out = tmp_path / "out"
-    summary = reproduce(data=link, out=out, jobs=2, only=only, log=lambda _: None, report=False)
     pngs = [f for f in summary["figures"] if f.endswith(".png")]
     assert pngs
     for name in pngs:
@@ -321,20 +322,19 @@ def test_the_original_network(shared_data, real_source, lab_table, learned_bn, o
 
 
 def test_notebooks_and_figures_from_the_real_data(shared_data, tmp_path, subtests):
-    """Notebooks on the real data: their comparisons with the original network, and figures equal to the committed ones."""
-    quick, full = tmp_path / "quick", tmp_path / "full"
-    quick.mkdir(), full.mkdir()
+    """Notebooks on the real data, reached through another path: their comparisons with the original network
+    are exact, and their figures equal the committed ones."""
+    summary, out = _render_from_elsewhere(shared_data, tmp_path, FAST_NOTEBOOKS)
     with subtests.test("notebooks 03 and 07 reproduce the original network's figures"):
-        _notebooks_reproduce_the_original_network_figures(shared_data, quick)
-    with subtests.test(
-        "figures rendered from the data reached through another path equal the committed ones"
-    ):
-        _render_and_compare(shared_data, full, FAST_NOTEBOOKS)
+        _notebooks_reproduce_the_original_network_figures(summary)
+    with subtests.test("the figures equal the committed ones"):
+        _figures_equal_the_committed_ones(summary, out)
 
 
 @pytest.mark.slow
 def test_every_figure_from_the_real_data_equals_the_committed_one(shared_data, tmp_path):
-    pngs = _render_and_compare(shared_data, tmp_path, None)
+    summary, out = _render_from_elsewhere(shared_data, tmp_path, None)
+    pngs = _figures_equal_the_committed_ones(summary, out)
     from glu.paths import PROJECT_ROOT
 
     assert set(pngs) == {p.name for p in (PROJECT_ROOT / "figures").glob("*.png")}
