@@ -4,11 +4,12 @@ The one owner of paths. glu runs in two settings, and :func:`locate` tells them 
 
 * **a source checkout** (``git clone`` + ``pip install -e .``): the package sits beside ``pyproject.toml``
   and ``notebooks/``. Data fetched goes to ``data/real/``, notebook scratch runs to ``build/scratch/``, and
-  ``glu reproduce`` publishes into the project's ``figures/``, ``results/``, ``recordings/``, ``models/``.
+  ``glu reproduce`` publishes into the project's ``figures/``, ``results/``, ``recordings/``, ``models/``;
+  the machine code of the compiled HMM loops is cached in ``build/compiled/``.
 * **an installed package** (a wheel in any environment): nothing is ever written inside the package
   (``site-packages``). Data lives in the user's data folder (platformdirs: ``~/.local/share/glu/real`` on
   Linux, ``~/Library/Application Support/glu/real`` on macOS, ``%LOCALAPPDATA%\\glu\\real`` on Windows),
-  scratch runs in the user's cache folder, and ``glu reproduce`` needs ``--out DIR``. The notebooks ship
+  scratch runs and compiled code in the user's cache folder, and ``glu reproduce`` needs ``--out DIR``. The notebooks ship
   inside the package as ``glu.notebooks`` (the repository's ``notebooks/`` folder, mapped by
   ``[tool.setuptools] package-dir`` in ``pyproject.toml``), so they run from any folder.
 
@@ -43,6 +44,7 @@ class Locations:
     notebooks : the jupytext notebooks ``NN_name.py``
     data : the folder of fetched data (``real/`` under it)
     scratch : where notebooks run by hand write their outputs
+    compiled : numba's cache of the compiled HMM loops (:mod:`glu.gestures.kernels`)
     """
 
     package: Path
@@ -50,6 +52,7 @@ class Locations:
     notebooks: Path
     data: Path
     scratch: Path
+    compiled: Path
 
     @property
     def real_data(self) -> Path:
@@ -84,13 +87,17 @@ def locate(package_dir: Path, user_data: Path | None = None, user_cache: Path | 
     package_dir = Path(package_dir)
     root = package_dir.parent
     if is_checkout(root):
-        return Locations(package_dir, root, root / "notebooks", root / "data", root / "build" / "scratch")
+        build = root / "build"
+        return Locations(
+            package_dir, root, root / "notebooks", root / "data", build / "scratch", build / "compiled"
+        )
     if user_data is None or user_cache is None:
         import platformdirs
 
         user_data = user_data or Path(platformdirs.user_data_dir(APP_NAME, appauthor=False))
         user_cache = user_cache or Path(platformdirs.user_cache_dir(APP_NAME, appauthor=False))
-    return Locations(package_dir, None, package_dir / "notebooks", user_data, user_cache / "scratch")
+    return Locations(package_dir, None, package_dir / "notebooks", user_data, user_cache / "scratch",
+                     user_cache / "compiled")  # fmt: skip
 
 
 PACKAGE_DIR: Path = Path(__file__).resolve().parent

@@ -23,6 +23,7 @@ def test_a_checkout_keeps_everything_in_the_checkout():
     assert here.checkout == ROOT and is_checkout(ROOT)
     assert here.notebooks == ROOT / "notebooks" and here.real_data == ROOT / "data" / "real"
     assert here.scratch == ROOT / "build" / "scratch" and here.real_data_label == "data/real/"
+    assert here.compiled == ROOT / "build" / "compiled"
 
 
 def test_an_installed_package_writes_nothing_inside_itself(tmp_path):
@@ -32,7 +33,7 @@ def test_an_installed_package_writes_nothing_inside_itself(tmp_path):
     loc = locate(site / "glu", user_data=tmp_path / "share" / "glu", user_cache=tmp_path / "cache" / "glu")
     assert loc.checkout is None
     assert loc.notebooks == site / "glu" / "notebooks"  # read-only: the shipped notebooks
-    for written in (loc.data, loc.real_data, loc.scratch):
+    for written in (loc.data, loc.real_data, loc.scratch, loc.compiled):
         assert site not in written.parents
     assert loc.real_data_label.startswith(str(tmp_path / "share" / "glu" / "real"))
 

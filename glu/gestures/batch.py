@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 
 from glu.errors import DataError, ModelError
-from glu.gestures.forward import TINY, forward_curve, log_emissions, scaled_step
+from glu.gestures.forward import TINY, forward_curve, log_emissions
 from glu.gestures.model import GestureHMM, as_sequence
 
 PAD_LOG_NORM = -1e300
@@ -303,34 +303,14 @@ def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     bank : the stacked models (:func:`stack_models`)
     sequences : the feature sequences the models see, each of shape (T_i, D)
 
-    The emissions of every frame come from one call, and the forward recursion of
-    :func:`~glu.gestures.forward.forward_curve` runs over all sequences at once (sorted by length, the
-    finished ones dropping out), each step exactly :func:`~glu.gestures.forward.forward_step`'s (including
-    its log-domain fallback where the scaled mass underflows): the same numbers as the last entry of
-    ``forward_curve`` for each sequence, bit for bit on the project's data (tests/test_batched_experiments.py).
+    The emissions and the forward recursion run compiled, frame by frame
+    (:func:`glu.gestures.kernels.loglik_banked`), each step :func:`~glu.gestures.forward.forward_step`'s
+    (including its log-domain fallback where the scaled mass underflows): the last entry of
+    ``forward_curve`` for each sequence, to rounding (1e-12 relative, tests/test_batched_experiments.py).
     """
+    from glu.gestures.kernels import loglik_banked
+
     seqs = list(sequences)
     if not seqs:
         return np.empty((0, len(bank.startprob)))
-    lengths = np.array([len(X) for X in seqs])
-    order = np.argsort(-lengths, kind="stable")
-    lengths_sorted = lengths[order]
-    S, T = len(seqs), int(lengths_sorted[0])
-    alive = np.arange(T)[None, :] < lengths_sorted[:, None]
-    log_b = np.zeros((S, T) + bank.log_norm.shape[:-1])  # (S, T, A, Q); padding: ignored
-    log_b[alive] = log_emissions(np.concatenate([seqs[i] for i in order]), bank.means, bank.chol_inv,
-                                 bank.log_norm)  # fmt: skip
-    n_live = alive.sum(axis=0)
-    mx = log_b.max(axis=-1)  # (S, T, A)
-    steps = np.zeros(mx.shape)  # log p(g_t | G_1^{t-1}) of each sequence and model (0 past the end)
-    alpha = np.zeros(log_b.shape[:1] + log_b.shape[2:])  # (S, A, Q)
-    with np.errstate(all="ignore"):
-        b = np.exp(log_b - mx[..., None])
-        for t in range(T):
-            n = n_live[t]
-            pred = bank.startprob if t == 0 else (alpha[:n, :, None, :] @ bank.transmat)[..., 0, :]
-            alpha[:n], steps[:n, t] = scaled_step(pred, b[:n, t], mx[:n, t], log_b[:n, t])
-    total = np.cumsum(steps, axis=1)[np.arange(S), lengths_sorted - 1]  # (S, A), summed as forward_curve
-    out = np.empty_like(total)
-    out[order] = total
-    return out
+    return loglik_banked(seqs, bank.means, bank.chol_inv, bank.log_norm, bank.startprob, bank.transmat)

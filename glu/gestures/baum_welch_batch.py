@@ -1,13 +1,13 @@
 """Baum–Welch for many independent GMM-HMMs at once: one padded batch of every model's sequences.
 
 Experiments train many small models (leave-one-segment-out folds, k-fold cross-validation, one model per
-action and feature set and seed); :func:`glu.gestures.baum_welch.fit` trains one, and its forward and
-backward recursions are a Python loop over the frames whose cost hardly depends on how many sequences
-go through it. :func:`fit_many` runs the models side by side:
+action and feature set and seed); :func:`glu.gestures.baum_welch.fit` trains one. :func:`fit_many` runs
+the models side by side:
 
 * the sequences of every model form one batch, sorted by length (longest first), each with its model's
-  transition matrix, so a step of the recursion is a few array operations over the live prefix of the
-  batch (:func:`forward_backward_many`);
+  transition matrix; the forward and backward recursions run compiled, one sequence at a time
+  (:func:`glu.gestures.kernels.forward_backward_scaled`, via :func:`forward_backward_many`), since as
+  array code their cost was per-frame dispatch that hardly depended on the number of sequences;
 * the emission densities and the M-step are array operations over a (model, frame) layout, frames
   padded to the model with most frames (padding has zero responsibility). Each frame is centred on its
   model's mean frame and expanded into its monomials ``φ(x) = (x_i x_j for i ≤ j, x_i, 1)`` once; every
@@ -57,10 +57,9 @@ from glu.gestures.baum_welch import (
     EMPTY,
     FitResult,
     GMMHMMParams,
-    _logsumexp,
     forward_backward_log,
 )
-from glu.gestures.forward import TINY, gaussian_factors
+from glu.gestures.forward import gaussian_factors
 
 MAX_BATCH_FLOATS = 4_000_000
 """Models are batched in chunks whose (model, component, frame, feature) arrays hold about this many floats
@@ -87,40 +86,15 @@ def forward_backward_many(
     ok : array of bool, shape (S,) — False where the scaled mass underflowed at some frame (those
         sequences' other outputs are meaningless: redo them in the log domain)
 
-    Each step touches only the sequences still running (a prefix of the batch, as the lengths decrease);
-    underflow is checked once, after the forward pass.
+    The recursions run compiled, one sequence at a time
+    (:func:`glu.gestures.kernels.forward_backward_scaled`); a sequence stops at its first underflow.
     """
+    from glu.gestures.kernels import forward_backward_scaled
+
     S, T, Q = log_b.shape
     if np.any(np.diff(lengths) > 0):
         raise ValueError("forward_backward_many: lengths must be sorted in decreasing order")
-    n_live = (lengths[None, :] > np.arange(T)[:, None]).sum(axis=1)  # (T,): sequences with frame t
-    alive = np.arange(T)[None, :] < lengths[:, None]  # (S, T)
-    mx = np.where(alive, log_b.max(axis=2), 0.0)
-    with np.errstate(under="ignore", invalid="ignore", over="ignore"):
-        b = np.where(alive[..., None], np.exp(log_b - mx[..., None]), 0.0)
-    alpha = np.zeros((S, T, Q))
-    c = np.ones((S, T))
-    with np.errstate(all="ignore"):
-        a = startprob * b[:, 0]
-        c[:, 0] = a.sum(axis=1)
-        alpha[:, 0] = a / c[:, 0, None]
-        for t in range(1, T):
-            n = n_live[t]
-            a = np.matmul(alpha[:n, t - 1, None, :], transmat[:n])[:, 0] * b[:n, t]
-            c[:n, t] = s = a.sum(axis=1)
-            alpha[:n, t] = a / s[:, None]
-        ok = (np.where(alive, c, 1.0) > TINY).all(axis=1)
-        loglik = np.where(alive, np.log(c) + mx, 0.0).sum(axis=1)
-        beta = np.ones((S, T, Q))
-        right = np.zeros((S, T, Q))  # b_{t+1} β_{t+1} / c_{t+1}, the right factor of ξ_t
-        for t in range(T - 2, -1, -1):
-            n = n_live[t + 1]
-            r = b[:n, t + 1] * beta[:n, t + 1] / c[:n, t + 1, None]
-            right[:n, t] = r
-            beta[:n, t] = np.matmul(r[:, None, :], np.swapaxes(transmat[:n], 1, 2))[:, 0]
-        gamma = np.where(alive[..., None], alpha * beta, 0.0)
-        gamma /= np.where(alive, gamma.sum(axis=2), 1.0)[..., None]  # as hmmlearn: renormalise each frame
-        xi = transmat * np.einsum("sti,stj->sij", alpha[:, :-1], right[:, :-1], optimize=True)
+    gamma, xi, loglik, ok = forward_backward_scaled(log_b, lengths, startprob, transmat)
     return gamma, xi, loglik, ok
 
 
@@ -254,7 +228,17 @@ def _fit_group(
         coef = np.stack([(-0.5 if i == j else -1.0) * prec[..., i, j] for i, j in pairs]
                         + [lin[..., i] for i in range(D)] + [const], axis=-1)  # fmt: skip  # (K, Q, M, F)
         lc = (batch.phi @ np.swapaxes(coef.reshape(K, Q * M, -1), 1, 2)).reshape(K, N, Q, M)
-        log_b_frames = _logsumexp(lc, axis=3)  # (K, N, Q)
+        # each state's emission log-density (K, N, Q) and its mixture's responsibilities, from one exp
+        if M == 1:
+            log_b_frames, post_mix = lc[..., 0], None
+        else:
+            top = lc.max(axis=3, keepdims=True)
+            top = np.where(np.isfinite(top), top, 0.0)
+            with np.errstate(divide="ignore", under="ignore", invalid="ignore"):
+                e = np.exp(lc - top)
+                mass = e.sum(axis=3)
+                log_b_frames = np.log(mass) + top[..., 0]
+                post_mix = e / mass[..., None]
         log_b = log_b_frames.reshape(K * N, Q)[batch.index]  # (S, T, Q)
         seq_model = batch.model
         gamma, xi, loglik, ok = forward_backward_many(
@@ -272,9 +256,11 @@ def _fit_group(
         gamma_frames = np.zeros((K * N, Q))  # padding frames: zero responsibility
         gamma_frames[batch.index[batch.alive]] = gamma[batch.alive]
         gamma_frames = gamma_frames.reshape(K, N, Q)
-        with np.errstate(under="ignore", invalid="ignore"):
-            post_mix = np.ones_like(lc) if M == 1 else np.exp(lc - log_b_frames[..., None])
-            pcm = np.where(batch.frame_alive[..., None, None], gamma_frames[..., None] * post_mix, 0.0)
+        if post_mix is None:  # one Gaussian per state: its responsibility is the state's (0 on padding)
+            pcm = gamma_frames[..., None]
+        else:
+            with np.errstate(under="ignore", invalid="ignore"):
+                pcm = np.where(batch.frame_alive[..., None, None], gamma_frames[..., None] * post_mix, 0.0)
         # every sufficient statistic at once: Σ pcm·x_i x_j, Σ pcm·x_i, Σ pcm per component
         moments = (np.swapaxes(pcm.reshape(K, N, Q * M), 1, 2) @ batch.phi).reshape(K, Q, M, -1)
         second = np.empty((K, Q, M, D, D))

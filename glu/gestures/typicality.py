@@ -99,7 +99,10 @@ def _range(values: Sequence[float], reference: str) -> LoglikRange:
 
 def training_range(model: GestureHMM, sequences: Sequence[np.ndarray]) -> LoglikRange:
     """The range of ``log L(X | model) / T`` over the training sequences, shape (T_i, D) each."""
-    return _range([model.loglik(X) / len(X) for X in sequences], "training")
+    from glu.gestures.batch import loglik_many, stack_models
+
+    loglik = loglik_many(stack_models([model]), sequences)[:, 0]
+    return _range([ll / len(X) for ll, X in zip(loglik.tolist(), sequences, strict=True)], "training")
 
 
 def sampled_range(model: GestureHMM, n: int = 30, length: int = 60, seed: int = 0) -> LoglikRange:
