@@ -61,6 +61,56 @@ def test_the_mixtures_are_scikit_learns(chunk):
             _assert_same(ours, theirs, (X.shape, M, reg, seed))
 
 
+@pytest.mark.parametrize("chunk", range(2))
+def test_the_k_means_labels_are_scikit_learns(chunk):
+    """Labels are discrete: they must be equal, on problems with repeated frames (empty clusters, ties in
+    k-means++) and a constant coordinate, for 2 to 5 clusters."""
+    from sklearn.cluster import KMeans
+
+    from glu.gestures.gmm_init import kmeans_labels
+
+    n = 0
+    with threadpool_limits(1):  # KMeans on one thread, as training runs it
+        for X, M, _, seed in _problems(60, 20 + chunk):
+            for K in sorted({M, 2, 3, 5}):
+                if K > len(np.unique(X, axis=0)):
+                    continue
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    expected = KMeans(K, n_init=1, random_state=np.random.RandomState(seed)).fit(X).labels_
+                np.testing.assert_array_equal(
+                    kmeans_labels(X, K, seed), expected, err_msg=str((X.shape, K, seed))
+                )
+                n += 1
+    assert n > 150
+
+
+def test_k_means_relocates_an_empty_cluster_as_scikit_learn_does():
+    """k-means++ seeding practically never empties a cluster, so start the Lloyd rounds from centres one of
+    which is far from every frame (it gets none in the first round and takes the farthest frame), against
+    scikit-learn's own Lloyd loop from the same centres."""
+    from sklearn.cluster._kmeans import _kmeans_single_lloyd
+
+    from glu.gestures.kernels import kmeans_lloyd
+
+    with threadpool_limits(1):
+        for seed in range(20):
+            rng = np.random.default_rng(seed)
+            X = rng.normal(size=(int(rng.integers(10, 80)), int(rng.integers(1, 4))))
+            if seed % 2:
+                X[: len(X) // 2] = X[0]  # repeated frames: ties in the farthest-frame choice
+            X -= X.mean(axis=0)
+            K = int(rng.integers(2, 5))
+            centers = X[rng.choice(len(X), K - 1, replace=False)]
+            centers = np.vstack([centers, np.full((1, X.shape[1]), 1e3)])  # the far one: emptied at once
+            tol = 1e-4 * float(np.mean(np.var(X, axis=0)))
+            expected, *_ = _kmeans_single_lloyd(X, np.ones(len(X)), centers.copy(), max_iter=300, tol=tol,
+                                                n_threads=1)  # fmt: skip
+            np.testing.assert_array_equal(
+                kmeans_lloyd(X, centers.copy(), tol, 300), expected, err_msg=str(seed)
+            )
+
+
 def test_em_runs_as_many_rounds_as_scikit_learn():
     from sklearn.cluster import KMeans
 

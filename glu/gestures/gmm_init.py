@@ -1,4 +1,4 @@
-"""The Gaussian mixtures that start each HMM state: scikit-learn's ``GaussianMixture`` fit, compiled.
+"""The Gaussian mixtures that start each HMM state: scikit-learn's ``GaussianMixture`` fit, without scikit-learn.
 
 :func:`glu.gestures.training.init_left_to_right` fits one mixture per state to the frames of that state's
 time slices, as ``GaussianMixture(n_mix, covariance_type="full", reg_covar=…, random_state=seed,
@@ -6,8 +6,10 @@ n_init=1).fit(X)`` does. The experiments train hundreds of HMMs, so thousands of
 scikit-learn spends most of its ~4 ms a fit in input validation and in numpy calls on arrays of a few
 hundred frames. :func:`fit_gaussian_mixture` runs the same algorithm:
 
-* the initial responsibilities from scikit-learn's own ``KMeans(n_mix, n_init=1)`` seeded with
-  ``RandomState(seed)``, as ``GaussianMixture`` seeds it (one component: every frame in it, no k-means);
+* the initial responsibilities from ``KMeans(n_mix, n_init=1)`` seeded with ``RandomState(seed)``, as
+  ``GaussianMixture`` seeds it (one component: every frame in it, no k-means): :func:`kmeans_labels`,
+  scikit-learn's k-means++ and Lloyd rounds (the labels are scikit-learn's on every problem of
+  ``tests/test_gmm_init.py``; importing scikit-learn alone took 0.6–1 s in every kernel that trained an HMM);
 * then EM compiled (:func:`glu.gestures.kernels.gmm_em`): the M-step's ``nk = Σ resp + 10·eps``, means,
   covariances about the new means ``+ reg_covar·I``, the precisions' Cholesky factors; the E-step's
   log-densities and log-sum-exp; the same stopping rule (the mean log-likelihood changes by less than
@@ -27,8 +29,6 @@ when written; the test allows 1e-10).
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
 SKLEARN_TOL = 1e-3
@@ -37,15 +37,65 @@ SKLEARN_MAX_ITER = 100
 """``GaussianMixture``'s default ``max_iter``."""
 
 
-def load_libraries(n_mix: int) -> None:
-    """Import what a fit calls (scikit-learn's KMeans, for ``n_mix`` > 1) now.
+KMEANS_TOL = 1e-4
+"""``KMeans``' default ``tol``, scaled by the mean variance of the frames (scikit-learn's ``_tolerance``)."""
+KMEANS_MAX_ITER = 300
+"""``KMeans``' default ``max_iter``."""
 
-    Training runs under ``threadpoolctl.threadpool_limits(1)``, which binds only the libraries already
-    loaded: a BLAS or OpenMP runtime loaded inside the limit (k-means uses both) runs a thread per core,
-    and on these tiny problems that is several times slower. Call this before the limit.
+
+def kmeans_labels(X: np.ndarray, n_clusters: int, seed: int) -> np.ndarray:
+    """``KMeans(n_clusters, n_init=1, random_state=RandomState(seed)).fit(X).labels_``, as scikit-learn
+    computes it on one thread (what ``GaussianMixture`` starts from).
+
+    The frames are centred on their mean; the k-means++ seeding makes scikit-learn's numpy calls in the same
+    order with the same random draws (so it picks the same frames); the Lloyd rounds run compiled
+    (:func:`glu.gestures.kernels.kmeans_lloyd`), with scikit-learn's stopping rule, its relocation of empty
+    clusters and its final assignment.
+
+    >>> X = np.array([[0.0, 0.0], [0.1, 0.0], [5.0, 5.0], [5.1, 5.0], [9.0, 0.0], [9.1, 0.1]])
+    >>> labels = kmeans_labels(X, 3, seed=0)
+    >>> len(set(labels[:2].tolist())) == len(set(labels[2:4].tolist())) == 1, len(set(labels.tolist()))
+    (True, 3)
     """
-    if n_mix > 1:
-        import sklearn.cluster  # noqa: F401
+    from glu.gestures.kernels import kmeans_lloyd
+
+    X = np.array(X, dtype=np.float64, order="C")  # a copy: centred below, as KMeans does
+    n = X.shape[0]
+    if not 1 <= n_clusters <= n:
+        raise ValueError(f"k-means needs between 1 and n_samples={n} clusters, got {n_clusters}")
+    tol = np.mean(np.var(X, axis=0)) * KMEANS_TOL
+    X -= X.mean(axis=0)
+    x_squared_norms = np.einsum("ij,ij->i", X, X)
+    weights = np.ones(n, dtype=X.dtype)
+    rng = np.random.RandomState(seed)
+    # scikit-learn's _kmeans_plusplus, with its _euclidean_distances (squared, dense, float64)
+    centers = np.empty((n_clusters, X.shape[1]), dtype=X.dtype)
+    n_local_trials = 2 + int(np.log(n_clusters))
+    center_id = rng.choice(n, p=weights / weights.sum())
+    centers[0] = X[center_id]
+    closest_dist_sq = _squared_distances(centers[0, np.newaxis], X, x_squared_norms)
+    current_pot = closest_dist_sq @ weights
+    for c in range(1, n_clusters):
+        rand_vals = rng.uniform(size=n_local_trials) * current_pot
+        candidate_ids = np.searchsorted(np.cumsum(weights * closest_dist_sq), rand_vals)
+        np.clip(candidate_ids, None, closest_dist_sq.size - 1, out=candidate_ids)
+        distance_to_candidates = _squared_distances(X[candidate_ids], X, x_squared_norms)
+        np.minimum(closest_dist_sq, distance_to_candidates, out=distance_to_candidates)
+        candidates_pot = distance_to_candidates @ weights.reshape(-1, 1)
+        best_candidate = np.argmin(candidates_pot)
+        current_pot = candidates_pot[best_candidate]
+        closest_dist_sq = distance_to_candidates[best_candidate]
+        centers[c] = X[candidate_ids[best_candidate]]
+    return kmeans_lloyd(X, centers, tol, KMEANS_MAX_ITER)
+
+
+def _squared_distances(A: np.ndarray, X: np.ndarray, x_squared_norms: np.ndarray) -> np.ndarray:
+    """scikit-learn's ``_euclidean_distances(A, X, Y_norm_squared=…, squared=True)`` for float64 arrays."""
+    distances = -2 * (A @ X.T)
+    distances += np.einsum("ij,ij->i", A, A)[:, None]
+    distances += x_squared_norms.reshape(1, -1)
+    np.maximum(distances, 0, out=distances)
+    return distances
 
 
 def fit_gaussian_mixture(
@@ -79,14 +129,7 @@ def fit_gaussian_mixture(
     if n_mix == 1:
         resp[:, 0] = 1  # what k-means with one cluster gives
     else:
-        from sklearn.cluster import KMeans
-
-        with warnings.catch_warnings():  # e.g. fewer distinct clusters than asked: the fit goes on, as before
-            warnings.simplefilter("ignore")
-            labels = (
-                KMeans(n_clusters=n_mix, n_init=1, random_state=np.random.RandomState(seed)).fit(X).labels_
-            )
-        resp[np.arange(n), labels] = 1
+        resp[np.arange(n), kmeans_labels(X, n_mix, seed)] = 1
     from glu.gestures.kernels import gmm_em
 
     weights, means, covariances, n_iter = gmm_em(X, resp, reg_covar, tol, max_iter)

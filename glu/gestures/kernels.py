@@ -281,6 +281,57 @@ def _gmm_em(X, resp, reg_covar, tol, max_iter):
     return weights, means, covs, n_iter
 
 
+def _kmeans_step(X, old, csq, new, weight, labels, update):
+    """One Lloyd round of scikit-learn's ``lloyd_iter_chunked_dense`` on one thread: each frame to its
+    nearest centre (``‖c‖² − 2 x·c``, the first on ties), and, with ``update``, the sums of each cluster."""
+    n, D = X.shape
+    K = old.shape[0]
+    if update:
+        for j in range(K):
+            weight[j] = 0.0
+            for k in range(D):
+                new[j, k] = 0.0
+    for i in range(n):
+        best = 0
+        best_d = 0.0
+        for j in range(K):
+            dot = 0.0
+            for k in range(D):
+                dot += X[i, k] * old[j, k]
+            d = csq[j] + -2.0 * dot
+            if j == 0 or d < best_d:
+                best_d = d
+                best = j
+        labels[i] = best
+        if update:
+            weight[best] += 1.0
+            for k in range(D):
+                new[best, k] += X[i, k]
+
+
+def _kmeans_average(old, new, weight, shift):
+    """scikit-learn's ``_average_centers`` (an empty cluster takes the biggest one's row as it is at that
+    moment) and ``_center_shift``."""
+    K, D = new.shape
+    top = 0
+    for j in range(1, K):
+        if weight[j] > weight[top]:
+            top = j
+    for j in range(K):
+        if weight[j] > 0:
+            alpha = 1.0 / weight[j]
+            for k in range(D):
+                new[j, k] *= alpha
+        else:
+            for k in range(D):
+                new[j, k] = new[top, k]
+    for j in range(K):
+        acc = 0.0
+        for k in range(D):
+            acc += (new[j, k] - old[j, k]) * (new[j, k] - old[j, k])
+        shift[j] = np.sqrt(acc)
+
+
 @cache
 def _compiled() -> Any:
     """The kernels compiled by numba (or loaded from its cache): a namespace with one attribute each."""
@@ -296,6 +347,8 @@ def _compiled() -> Any:
         forward_backward_scaled=jit(_forward_backward_scaled),
         loglik_banked=jit(_loglik_banked),
         gmm_em=jit(_gmm_em),
+        kmeans_step=jit(_kmeans_step),
+        kmeans_average=jit(_kmeans_average),
     )
 
 
@@ -374,3 +427,65 @@ def gmm_em(
         float(reg_covar), float(tol), int(max_iter),
     )  # fmt: skip
     return weights, means, covs, int(n_iter)
+
+
+def kmeans_lloyd(X: np.ndarray, centers: np.ndarray, tol: float, max_iter: int) -> np.ndarray:
+    """The labels of scikit-learn's ``_kmeans_single_lloyd`` (dense, unit weights, one thread) from
+    ``centers``: Lloyd rounds until the labels repeat or the centres move less than ``tol`` (squared,
+    summed), then, unless the labels repeated, one more assignment to the final centres.
+
+    Parameters
+    ----------
+    X : array, shape (n, D) — the frames, centred on their mean (as ``KMeans.fit`` centres them)
+    centers : array, shape (K, D) — the k-means++ centres (changed in place)
+    tol, max_iter : ``KMeans``' scaled tolerance (``_tolerance``) and its ``max_iter``
+
+    Returns the label of every frame (int32), as ``KMeans(...).fit(X).labels_``. The distances are summed
+    in another order than the BLAS product scikit-learn calls, so a frame exactly halfway between two
+    centres (to the last bit) may go the other way; the tests compare the labels on random, degenerate and
+    the project's own problems.
+    """
+    k = _compiled()
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    centers = np.ascontiguousarray(centers, dtype=np.float64)
+    n, K = len(X), len(centers)
+    new = np.zeros_like(centers)
+    labels = np.full(n, -1, dtype=np.int32)
+    labels_old = labels.copy()
+    weight = np.zeros(K)
+    shift = np.zeros(K)
+    strict = False
+    for _ in range(max_iter):
+        k.kmeans_step(X, centers, np.einsum("ij,ij->i", centers, centers), new, weight, labels, True)
+        if not weight.all():
+            _relocate_empty_clusters(X, centers, new, weight, labels)
+        k.kmeans_average(centers, new, weight, shift)
+        centers, new = new, centers
+        if np.array_equal(labels, labels_old):
+            strict = True
+            break
+        if (shift**2).sum() <= tol:
+            break
+        labels_old[:] = labels
+    if not strict:
+        k.kmeans_step(X, centers, np.einsum("ij,ij->i", centers, centers), new, weight, labels, False)
+    return labels
+
+
+def _relocate_empty_clusters(
+    X: np.ndarray, old: np.ndarray, new: np.ndarray, weight: np.ndarray, labels: np.ndarray
+) -> None:
+    """scikit-learn's ``_relocate_empty_clusters_dense`` (unit weights): each empty cluster takes the frame
+    farthest from its centre, in ``argpartition``'s order."""
+    empty = np.where(np.equal(weight, 0))[0].astype(np.int32)
+    n_empty = empty.shape[0]
+    distances = ((X - old[labels]) ** 2).sum(axis=1)
+    far = np.argpartition(distances, -n_empty)[: -n_empty - 1 : -1].astype(np.int32)
+    if np.max(distances) == 0:
+        return
+    for new_id, far_idx in zip(empty, far, strict=True):
+        old_id = labels[far_idx]
+        new[old_id] -= X[far_idx]
+        new[new_id] = X[far_idx]
+        weight[new_id] = 1.0
+        weight[old_id] -= 1.0

@@ -28,7 +28,7 @@ import numpy as np
 from glu.errors import DataError, ModelError
 from glu.gestures.batch import loglik_many, stack_models
 from glu.gestures.forward import left_to_right_transmat
-from glu.gestures.gmm_init import fit_gaussian_mixture, load_libraries
+from glu.gestures.gmm_init import fit_gaussian_mixture
 from glu.gestures.model import GestureHMM, as_sequence
 
 
@@ -118,7 +118,7 @@ def init_left_to_right(
     """An initial left-to-right model: each sequence cut into ``n_states`` equal time slices, slice q → state q.
 
     The frames of slice q (over all sequences) give state q's mixture (scikit-learn's ``GaussianMixture``
-    fit, seeded, as :func:`~glu.gestures.gmm_init.fit_gaussian_mixture` computes it; with too few frames,
+    fit, seeded, as :func:`~glu.gestures.gmm_init.fit_gaussian_mixture` computes it without scikit-learn; with too few frames,
     one Gaussian copied ``n_mix`` times with means spread along its main axis). Self-transition probabilities are ``1 - 1 / (mean frames per state)``, clipped to [0.5, 0.98].
     ``sequences`` are arrays of shape (T_i, D).
     """
@@ -214,9 +214,8 @@ def train_hmm(
     seqs, n_frames = _checked(sequences, n_states, n_mix, n_iter, tol, name)
     from threadpoolctl import threadpool_limits
 
-    # one thread for BLAS and OpenMP: the many small k-means and linear-algebra calls are several times
-    # slower with thread hand-offs (and the sweeps parallelise over models instead)
-    load_libraries(n_mix)  # before the limit, so that it binds their BLAS too
+    # one thread for BLAS and OpenMP: the many small linear-algebra calls are several times slower with
+    # thread hand-offs (and the sweeps parallelise over models instead)
     with threadpool_limits(1):
         init = init_left_to_right(seqs, n_states, n_mix, seed, covar_reg, name)
         fitted_params, history = _run_em(engine, seqs, init, n_iter, tol * n_frames, covar_reg, seed, name)
@@ -303,7 +302,6 @@ def train_many(
     from glu.gestures import baum_welch as bw
     from glu.gestures.baum_welch_batch import fit_many
 
-    load_libraries(n_mix)  # before the limit, so that it binds their BLAS too
     with threadpool_limits(1):
         problems = []
         for (seqs, _), sd, nm in zip(checked, seeds, names, strict=True):
