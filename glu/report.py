@@ -5,8 +5,14 @@
 * ``index.html`` — the data source, the package versions, the comparisons of our numbers with the
   original models and the published values, and every figure (copied beside it into ``figures/``) with
   the notebook that drew it and the parameters it ran with;
-* ``notebooks/NAME.html`` — each executed notebook rendered by nbconvert, its figures embedded;
+* ``notebooks/NAME.html`` — each executed notebook rendered by nbconvert, its figures embedded
+  (:func:`render_notebook_page`);
 * ``api.html`` — the reference of glu's public modules, generated from their docstrings (:func:`write_api_reference`).
+
+:func:`glu.reproduce.reproduce` renders each notebook's page as soon as that notebook has run, while the
+others still run, and publishes the pages with the run's other outputs; the report then only copies the
+figures and writes the API reference (:func:`prepare_report`) and the index (:func:`write_index`). A page
+that is missing, or older than its executed notebook, is rendered there.
 
 The pages are static files (no server, no network): open ``index.html`` in any browser. A small script
 in the index marks, once the page has loaded, how many of its figures the browser rendered
@@ -56,13 +62,20 @@ def _table(rows: list[Mapping[str, Any]], columns: list[str]) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
-def _render_notebook(ipynb: Path, target: Path) -> None:
+def notebook_page(report: Path, name: str) -> Path:
+    """The page of the notebook ``name`` in the report folder ``report``: ``notebooks/NAME.html``."""
+    return report / "notebooks" / f"{name}.html"
+
+
+def render_notebook_page(ipynb: Path, page: Path) -> Path:
+    """Render the executed notebook ``ipynb`` to the HTML page ``page`` (nbconvert's lab template, its
+    figures embedded); returns ``page``."""
     import nbformat
     from nbconvert import HTMLExporter
 
     nb = nbformat.read(ipynb, as_version=4)
     body, _ = HTMLExporter(template_name="lab").from_notebook_node(nb)
-    atomic_write_text(target, body)
+    return atomic_write_text(page, body)
 
 
 API_MODULES: tuple[str, ...] = (
@@ -106,34 +119,59 @@ def write_api_reference(path: Path, modules: tuple[str, ...] = API_MODULES) -> P
     return path
 
 
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path)
+    else:
+        path.unlink()
+
+
 def write_report(layout: OutputLayout, summary: Mapping[str, Any]) -> Path:
     """Write the report of a run whose outputs are in ``layout``; returns ``index.html``.
 
     ``summary`` is the run's summary (:func:`glu.summary.write_summary`): its figures, notebooks,
-    comparisons, data source and versions.
+    comparisons, data source and versions. :func:`prepare_report`, then :func:`write_index`.
+    """
+    return write_index(layout, summary, prepare_report(layout, summary))
+
+
+def prepare_report(layout: OutputLayout, summary: Mapping[str, Any]) -> dict[str, str]:
+    """Everything of the report but its index: the folder cleared of all but the pages of the summary's
+    notebooks, the figures copied, a page rendered for each notebook whose page is missing or older than
+    its executed notebook, the API reference written. Returns notebook → its page (relative to the report).
     """
     root = layout.report
-    if root.exists():
-        shutil.rmtree(root)
-    (root / "figures").mkdir(parents=True)
-    (root / "notebooks").mkdir()
-    notebooks = {nb["name"]: nb for nb in summary.get("notebooks", [])}
+    names = [nb["name"] for nb in summary.get("notebooks", [])]
+    keep = {notebook_page(root, name) for name in names}
+    (root / "notebooks").mkdir(parents=True, exist_ok=True)
+    for item in [*root.iterdir(), *(root / "notebooks").iterdir()]:  # a fresh report, but for the pages
+        if item != root / "notebooks" and item not in keep:  # of its notebooks (rendered as each ran)
+            _remove(item)
+    (root / "figures").mkdir()
     pages = {}
-    for name in notebooks:
-        ipynb = layout.notebooks / f"{name}.ipynb"
-        if ipynb.is_file():
-            _render_notebook(ipynb, root / "notebooks" / f"{name}.html")
-            pages[name] = f"notebooks/{name}.html"
+    for name in names:
+        page, ipynb = notebook_page(root, name), layout.notebooks / f"{name}.ipynb"
+        if ipynb.is_file() and (not page.is_file() or page.stat().st_mtime_ns < ipynb.stat().st_mtime_ns):
+            render_notebook_page(ipynb, page)
+        if page.is_file():
+            pages[name] = page.relative_to(root).as_posix()
+    for fname in summary.get("figures_by_notebook", {}):
+        src = layout.figures / fname
+        if fname.endswith(".png") and src.is_file():
+            shutil.copyfile(src, root / "figures" / fname)
+    write_api_reference(root / "api.html")
+    return pages
 
+
+def write_index(layout: OutputLayout, summary: Mapping[str, Any], pages: Mapping[str, str]) -> Path:
+    """Write the report's ``index.html`` (after :func:`prepare_report`, which gives ``pages``); returns it."""
+    root = layout.report
+    notebooks = {nb["name"]: nb for nb in summary.get("notebooks", [])}
     figures = []
     by_notebook = summary.get("figures_by_notebook", {})
     for fname, nb in sorted(by_notebook.items(), key=lambda item: (item[1], item[0])):
-        if not fname.endswith(".png"):
+        if not fname.endswith(".png") or not (root / "figures" / fname).is_file():
             continue
-        src = layout.figures / fname
-        if not src.is_file():
-            continue
-        shutil.copyfile(src, root / "figures" / fname)
         params = notebooks.get(nb, {}).get("parameters") or {}
         label = parameters_text(params) or "default parameters"
         link = f'<a href="{_e(pages[nb])}">{_e(nb)}</a>' if nb in pages else _e(nb)
@@ -180,7 +218,6 @@ def write_report(layout: OutputLayout, summary: Mapping[str, Any]) -> Path:
 {_table(versions, ["package", "version"])}
 </body></html>
 """
-    write_api_reference(root / "api.html")
     index = root / "index.html"
     atomic_write_text(index, page)
     return index

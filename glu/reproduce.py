@@ -11,7 +11,10 @@ it at once (the kernels are killed). Either way nothing is published and the sta
 a staging folder left by a killed process is removed by the next run. At the end
 ``results/summary.json`` and ``results/summary.csv`` collect every number behind every figure, the data
 source, the package versions and the comparison with the original model, and ``report/`` (by default
-``build/report/``) gets a browsable HTML report (:mod:`glu.report`).
+``build/report/``) gets a browsable HTML report (:mod:`glu.report`). Each notebook's page of the report
+is rendered as soon as that notebook has run, while the others still run, staged and published with
+the rest; only the index and the API reference are written at the end. The wall time recorded in the
+summary (``wall_time_s``) covers the whole run, the report included.
 
 :func:`run_one` runs a single notebook the same way (``glu run``), into its scratch folder by default.
 """
@@ -36,7 +39,15 @@ from glu.execution import NotebookStopped, RunHandle, available_cores, run_noteb
 from glu.outputs import parameters_text
 from glu.parameters import check, non_defaults, parse_value, read_spec
 from glu.paths import OutputLayout
-from glu.summary import NotebookResult, expected_seconds, write_rendering_record, write_summary
+from glu.report import notebook_page, prepare_report, render_notebook_page, write_index
+from glu.summary import (
+    NotebookResult,
+    collect_summary,
+    expected_seconds,
+    save_summary,
+    summary_csv,
+    write_rendering_record,
+)
 
 OWNER_FILE = "owner.pid"
 """In each staging folder: the process id of the run that owns it."""
@@ -154,18 +165,18 @@ class _Progress:
 
 def run_order(notebooks: Sequence[Path], jobs: int, expected: Mapping[str, float]) -> list[tuple[int, Path]]:
     """(story number, notebook) in the order they start: story order with one job; with several, the
-    longest first by ``expected`` seconds (from the last run's summary), so that the last to finish is a
-    short one. Notebooks never timed start before all others, the later ones in the story first (the
-    larger studies come late in it). The order changes no output: each notebook runs alone in its kernel,
-    and publishing is by name.
+    longest first by ``expected`` seconds (:func:`glu.summary.expected_seconds`: the last run's times,
+    else on a first run the time each notebook declares in its header), so that the last to finish is a
+    short one. A notebook with no expected time starts before all others, the later ones in the story
+    first. The order changes no output: each notebook runs alone in its kernel, and publishing is by name.
 
-    >>> nbs = [Path("01_a.py"), Path("02_b.py"), Path("03_c.py")]
-    >>> [p.stem for _, p in run_order(nbs, 2, {"01_a": 3.0, "02_b": 1.0, "03_c": 9.0})]
-    ['03_c', '01_a', '02_b']
-    >>> [i for i, _ in run_order(nbs, 2, {"01_a": 3.0})]
-    [3, 2, 1]
-    >>> [i for i, _ in run_order(nbs, 1, {"01_a": 3.0})]
-    [1, 2, 3]
+    >>> nbs = [Path("01_a.py"), Path("02_b.py"), Path("03_c.py"), Path("04_d.py")]
+    >>> [p.stem for _, p in run_order(nbs, 2, {"01_a": 3.0, "02_b": 10.0, "03_c": 3.0, "04_d": 30.0})]
+    ['04_d', '02_b', '03_c', '01_a']
+    >>> [i for i, _ in run_order(nbs, 2, {"01_a": 3.0, "02_b": 10.0})]
+    [4, 3, 2, 1]
+    >>> [i for i, _ in run_order(nbs, 1, {"04_d": 30.0})]
+    [1, 2, 3, 4]
     """
     numbered = list(enumerate(notebooks, start=1))
     if jobs == 1:
@@ -199,7 +210,7 @@ def reproduce(
     log : where progress lines go (stderr by default)
     notebooks_dir : the folder of jupytext notebooks ``NN_name.py``
     progress : live progress bar; None = when stderr is a terminal
-    report : also write the HTML report
+    report : also write the HTML report (each notebook's page as soon as it has run)
 
     Raises
     ------
@@ -243,20 +254,30 @@ def reproduce(
         t0 = time.perf_counter()
         out_ipynb = stage / f"{name}.ipynb"
         params = {"data": data_param, "quick": quick, "out_dir": str(stage / "out"), "seed": seed}
-        try:
-            run_notebook(nb, out_ipynb, params, cwd=nb.parent, handle=handle)
-        except pm.PapermillExecutionError as e:
+
+        def failed(msg: str, why: str) -> NotebookResult:
             kept = executed_dir / f"{name}.failed.ipynb"
             kept.parent.mkdir(parents=True, exist_ok=True)
             if out_ipynb.exists():
                 os.replace(out_ipynb, kept)
-            msg = f"notebook {name} failed in cell {e.cell_index} (execution count {e.exec_count}): {e.ename}: {e.evalue}"
-            bar.finished(
-                name,
-                f"[{i}/{len(notebooks)}] {name}: FAILED after {time.perf_counter() - t0:.1f} s — {e.ename}: {e.evalue}",
+            dt = time.perf_counter() - t0
+            bar.finished(name, f"[{i}/{len(notebooks)}] {name}: FAILED after {dt:.1f} s — {why}")
+            return NotebookResult(name, "failed", dt, kept, msg)
+
+        try:
+            run_notebook(nb, out_ipynb, params, cwd=nb.parent, handle=handle)
+        except pm.PapermillExecutionError as e:
+            return failed(
+                f"notebook {name} failed in cell {e.cell_index} (execution count {e.exec_count}): {e.ename}: {e.evalue}",
+                f"{e.ename}: {e.evalue}",
             )
-            return NotebookResult(name, "failed", time.perf_counter() - t0, kept, msg)
         dt = time.perf_counter() - t0
+        if report:  # its page of the report, now, while the other notebooks still run
+            try:
+                render_notebook_page(out_ipynb, notebook_page(stage / "report", name))
+            except Exception as e:
+                why = f"its report page could not be rendered: {type(e).__name__}: {e}"
+                return failed(f"notebook {name} ran, but {why}", why)
         bar.finished(name, f"[{i}/{len(notebooks)}] {name}: ok in {dt:.1f} s")
         return NotebookResult(name, "ok", dt, out_ipynb, parameters=non_default[name])
 
@@ -266,7 +287,7 @@ def reproduce(
         futures: dict[Future, str] = {}
         try:
             threads = max(1, available_cores() // jobs)  # each kernel's share of the cores for BLAS/OpenMP
-            for i, nb in run_order(notebooks, jobs, expected_seconds(layout)):
+            for i, nb in run_order(notebooks, jobs, expected_seconds(layout, notebooks, quick)):
                 handle = bar.handle(nb.stem)
                 handle.threads = threads
                 futures[pool.submit(one, i, nb, handle)] = nb.stem
@@ -304,6 +325,7 @@ def reproduce(
             os.replace(r.executed, executed)
             r.executed = executed
             (executed_dir / f"{r.name}.failed.ipynb").unlink(missing_ok=True)
+            _move_tree(staging / r.name / "report", layout.report)  # its page, rendered as it finished
     finally:
         shutil.rmtree(staging, ignore_errors=True)
         try:
@@ -312,18 +334,17 @@ def reproduce(
             pass
 
     results.sort(key=lambda r: r.name)
-    summary = write_summary(
-        final["results"], results, source.describe(), quick, time.perf_counter() - t_start
-    )
+    summary = collect_summary(final["results"], results, source.describe(), quick)
+    csv = summary_csv(summary)
     write_rendering_record(final["figures"], source.describe(), quick)
+    pages = prepare_report(layout, summary) if report else {}
+    # the wall time covers all the user waits for but writing the files that state it (summary.json, the
+    # index: about 0.1 s)
+    summary["wall_time_s"] = round(time.perf_counter() - t_start, 3)
+    summary_file = save_summary(final["results"], summary, csv)
     if report:
-        from glu.report import write_report
-
-        index = write_report(layout, summary)
-        log(f"glu reproduce: report in {index}")
-    log(
-        f"glu reproduce: done in {summary['wall_time_s']:.1f} s; summary in {final['results'] / 'summary.json'}"
-    )
+        log(f"glu reproduce: report in {write_index(layout, summary, pages)}")
+    log(f"glu reproduce: done in {summary['wall_time_s']:.1f} s; summary in {summary_file}")
     return summary
 
 

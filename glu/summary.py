@@ -2,19 +2,26 @@
 ``summary.csv``, and the record of how the figures were rendered.
 
 :func:`write_summary` collects every result table of a run (with the data source, the package versions,
-each notebook's time and non-default parameters, and the comparisons with a reference);
-:func:`expected_seconds` reads the notebooks' times back, so that :func:`glu.reproduce.reproduce` can
-start the longest first. ``figures/rendered-with.json`` (:func:`write_rendering_record`) says which data
-and which renderer versions the committed figures come from.
+each notebook's time and non-default parameters, and the comparisons with a reference) and writes them:
+it is :func:`collect_summary` then :func:`save_summary` (with :func:`summary_csv`, the long format), which
+:func:`glu.reproduce.reproduce` calls apart, so that the wall time it records covers the report too.
+:func:`expected_seconds` says how long each notebook should take (the last run's times, else what the
+notebook declares, :func:`declared_seconds`), so that :func:`glu.reproduce.run_order` can start the
+longest first. ``figures/rendered-with.json`` (:func:`write_rendering_record`) says which data and which
+renderer versions the committed figures come from.
 """
 
 from __future__ import annotations
 
 import json
+import math
+import os
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from glu.errors import OutputError
 from glu.files import atomic_write_text
 from glu.paths import OutputLayout
 
@@ -32,15 +39,60 @@ class NotebookResult:
     parameters: dict[str, Any] = field(default_factory=dict)
 
 
-def expected_seconds(layout: OutputLayout) -> dict[str, float]:
-    """How long each notebook took in the last run (this output's summary, else the project's); {} if none."""
-    for folder in dict.fromkeys((layout.results, OutputLayout.at(None).results)):
+def declared_seconds(notebook: str | os.PathLike) -> float | None:
+    """The seconds a notebook declares a full run takes, or None: ``expected_seconds`` under ``glu`` in the
+    metadata of its jupytext header (the ``jupyter:`` block between the first two ``# ---`` lines)::
+
+        # jupyter:
+        #   glu:
+        #     expected_seconds: 30
+
+    A rough hint, for the order of a first run (:func:`expected_seconds`); a run's own times replace it.
+    """
+    import yaml
+
+    try:
+        lines = Path(notebook).read_text(encoding="utf-8").splitlines()
+        end = lines.index("# ---", 1) if lines and lines[0] == "# ---" else 0
+        header = yaml.safe_load("\n".join(line[2:] for line in lines[1:end])) if end else None
+        value = header["jupyter"]["glu"]["expected_seconds"]
+    except (OSError, ValueError, yaml.YAMLError, KeyError, TypeError):
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value < math.inf:
+        return None
+    return float(value)
+
+
+def _last_run_seconds(layout: OutputLayout, quick: bool) -> dict[str, float]:
+    """Each notebook's time in the last run in the same mode (``quick`` or full): this output's summary,
+    else the project's; {} if none."""
+    folders = [layout.results]
+    try:
+        folders.append(OutputLayout.at(None).results)
+    except OutputError:  # an installed package has no project folders
+        pass
+    for folder in dict.fromkeys(folders):
         try:
             doc = json.loads((folder / "summary.json").read_text())
+            if bool(doc["quick"]) != quick:  # a quick run's times say little about a full run's
+                continue
             return {nb["name"]: float(nb["seconds"]) for nb in doc["notebooks"]}
         except (OSError, ValueError, KeyError, TypeError):
             continue
     return {}
+
+
+def expected_seconds(
+    layout: OutputLayout, notebooks: Iterable[Path] = (), quick: bool = False
+) -> dict[str, float]:
+    """How long each notebook should take, by name: its time in the last run in the same mode
+    (``results/summary.json`` of ``layout``, else the project's own), else, for those of ``notebooks`` the
+    last run did not time (a first run: a fresh clone, a new ``--out`` folder), the time it declares
+    (:func:`declared_seconds`). Notebooks with neither are left out.
+    """
+    timed = _last_run_seconds(layout, quick)
+    declared = {nb.stem: declared_seconds(nb) for nb in notebooks if nb.stem not in timed}
+    return {**{k: v for k, v in declared.items() if v is not None}, **timed}
 
 
 RENDERING_RECORD = "rendered-with.json"
@@ -67,7 +119,18 @@ def write_rendering_record(figures_dir: Path, data: str, quick: bool) -> Path:
 def write_summary(
     results_dir: Path, runs: list[NotebookResult], data: str, quick: bool, wall: float
 ) -> dict[str, Any]:
-    """Collect every result table into ``summary.json`` and a long-format ``summary.csv``.
+    """Collect every result table into ``summary.json`` and a long-format ``summary.csv``, with ``wall``
+    (seconds) as the run's wall time: :func:`collect_summary`, then :func:`save_summary`; returns the
+    summary."""
+    summary = collect_summary(results_dir, runs, data, quick)
+    summary["wall_time_s"] = round(wall, 3)
+    save_summary(results_dir, summary)
+    return summary
+
+
+def collect_summary(results_dir: Path, runs: list[NotebookResult], data: str, quick: bool) -> dict[str, Any]:
+    """The summary of a run whose result tables are in ``results_dir`` (nothing is written); its
+    ``wall_time_s`` is None until the caller sets it.
 
     A partial run (``--only``) updates the existing summary when it was made from the same data in the
     same mode: the notebooks just run replace their earlier entries, the others are kept.
@@ -129,12 +192,9 @@ def write_summary(
                 figures[p.name] = run.name
             elif p.suffix == ".rrd":
                 recordings[p.name] = run.name
-    long_rows, comparison = [], []
+    comparison = []
     for name in sorted(tables):
         df = pd.DataFrame(tables[name]["rows"])
-        for i, row in df.iterrows():
-            for col, val in row.items():
-                long_rows.append({"table": name, "row": i, "column": col, "value": val})
         meta = tables[name]["meta"]
         reference = meta.get("reference") or (meta.get("parameters") or {}).get("reference")
         if (
@@ -147,7 +207,7 @@ def write_summary(
         "ran": [r.name for r in runs],
         "data_source": data,
         "quick": quick,
-        "wall_time_s": round(wall, 3),
+        "wall_time_s": None,
         "versions": package_versions(),
         "notebooks": [notebooks[k] for k in sorted(notebooks)],
         "figures": sorted(figures),
@@ -157,9 +217,28 @@ def write_summary(
         "comparison_with_reference": comparison,
         "tables": {k: tables[k] for k in sorted(tables)},
     }
-    results_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(previous, json.dumps(summary, indent=1, default=str) + "\n")
-    atomic_write_text(
-        results_dir / "summary.csv", pd.DataFrame(long_rows).to_csv(index=False, lineterminator="\n")
-    )
     return summary
+
+
+def summary_csv(summary: dict[str, Any]) -> str:
+    """Every number of the tables of ``summary`` (:func:`collect_summary`) in long format, as the text of
+    ``summary.csv``: one row per table cell (table, row, column, value)."""
+    import pandas as pd
+
+    long_rows = []
+    for name, table in summary["tables"].items():
+        df = pd.DataFrame(table["rows"])
+        for i, row in df.iterrows():
+            for col, val in row.items():
+                long_rows.append({"table": name, "row": i, "column": col, "value": val})
+    return pd.DataFrame(long_rows).to_csv(index=False, lineterminator="\n")
+
+
+def save_summary(results_dir: Path, summary: dict[str, Any], csv: str | None = None) -> Path:
+    """Write ``summary`` (:func:`collect_summary`) to ``summary.json`` and its numbers to ``summary.csv``
+    (``csv``, the text of :func:`summary_csv`, computed here if not given); returns ``summary.json``."""
+    results_dir.mkdir(parents=True, exist_ok=True)
+    path = results_dir / "summary.json"
+    atomic_write_text(path, json.dumps(summary, indent=1, default=str) + "\n")
+    atomic_write_text(results_dir / "summary.csv", summary_csv(summary) if csv is None else csv)
+    return path

@@ -1,8 +1,10 @@
 # ---
 # jupyter:
+#   glu:
+#     expected_seconds: 3
 #   jupytext:
 #     formats: py:percent
-#     notebook_metadata_filter: kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
+#     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
 #     text_representation:
 #       extension: .py
 #       format_name: percent

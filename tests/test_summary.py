@@ -73,10 +73,104 @@ def test_with_several_jobs_the_notebooks_that_took_longest_last_time_start_first
     notebooks = [Path(f"{n}.py") for n in ("01_a", "02_b", "03_c", "04_new")]
     order = run_order(notebooks, 2, expected_seconds(layout))
     assert [(i, p.stem) for i, p in order] == [(4, "04_new"), (2, "02_b"), (3, "03_c"), (1, "01_a")]
-    # a fresh clone has no summary: the story's later notebooks (its larger studies) start first
+    # nothing to go by (no summary, no declared times): the story's later notebooks start first
     assert [i for i, _ in run_order(notebooks, 2, {})] == [4, 3, 2, 1]
     assert [p.stem for _, p in run_order(notebooks, 1, expected_seconds(layout))] == [
         p.stem for p in notebooks
     ]
     (layout.results / "summary.json").write_text("{not json")  # unreadable: the project's summary, or none
     assert isinstance(expected_seconds(layout), dict)
+
+
+_HEADER = """# ---
+# jupyter:
+#   glu:
+#     expected_seconds: {}
+#   jupytext:
+#     formats: py:percent
+# ---
+
+# %% tags=["parameters"]
+data: str = None  # data folder
+"""
+
+
+def test_a_first_run_starts_the_notebooks_that_declare_the_longest_times_first(tmp_path, monkeypatch):
+    from glu.paths import OutputLayout
+    from glu.reproduce import run_order
+    from glu.summary import declared_seconds, expected_seconds
+
+    project = OutputLayout.under(tmp_path / "project")  # the project's own folders, with no summary yet
+    monkeypatch.setattr(OutputLayout, "project", classmethod(lambda cls: project))
+    nbs = tmp_path / "nbs"
+    nbs.mkdir()
+    declared = {"01_a": "3", "02_b": "10", "03_c": "3.5", "04_d": "31", "05_e": "25"}
+    for name, seconds in declared.items():
+        (nbs / f"{name}.py").write_text(_HEADER.format(seconds))
+    (nbs / "06_f.py").write_text(_HEADER.format("a while"))  # no usable time: starts first
+    notebooks = sorted(nbs.glob("*.py"))
+    layout = OutputLayout.at(tmp_path / "new-out")
+    first = expected_seconds(layout, notebooks)
+    assert first == {"01_a": 3.0, "02_b": 10.0, "03_c": 3.5, "04_d": 31.0, "05_e": 25.0}
+    order = [p.stem for _, p in run_order(notebooks, 2, first)]
+    assert order == ["06_f", "04_d", "05_e", "02_b", "03_c", "01_a"]
+
+    # the project's last run wins over the declared times, and declared times fill in what it lacks
+    write_summary(project.results, [NotebookResult("01_a", "ok", 40.0), NotebookResult("04_d", "ok", 2.0)],
+                  "synthetic data", False, 42.0)  # fmt: skip
+    assert expected_seconds(layout, notebooks) == {**first, "01_a": 40.0, "04_d": 2.0}
+    assert [p.stem for _, p in run_order(notebooks, 2, expected_seconds(layout, notebooks))][:3] == [
+        "06_f",
+        "01_a",
+        "05_e",
+    ]
+    # and this output's own last run wins over the project's
+    layout.results.mkdir(parents=True)
+    write_summary(layout.results, [NotebookResult("02_b", "ok", 99.0)], "synthetic data", False, 99.0)
+    assert expected_seconds(layout, notebooks) == {**first, "02_b": 99.0}
+
+    # an installed package has no project folders: the declared times still count
+    from glu.errors import OutputError
+
+    def installed(cls):
+        raise OutputError("glu is installed, not a source checkout")
+
+    monkeypatch.setattr(OutputLayout, "project", classmethod(installed))
+    assert expected_seconds(OutputLayout.at(tmp_path / "other"), notebooks) == first
+
+    odd = ("# %% no header\n", "# ---\n# jupyter:\n#   kernelspec: {}\n# ---\n", "# ---\n# : [\n# ---\n",
+           _HEADER.format("true"), _HEADER.format("-1"), _HEADER.format(".nan"))  # fmt: skip
+    for text in odd:
+        (nbs / "odd.py").write_text(text)
+        assert declared_seconds(nbs / "odd.py") is None, text
+    assert declared_seconds(nbs / "missing.py") is None
+
+
+def test_every_notebook_declares_its_time_and_a_first_run_starts_the_long_ones_first(tmp_path, monkeypatch):
+    from glu.paths import OutputLayout
+    from glu.reproduce import list_notebooks, run_order
+    from glu.summary import declared_seconds, expected_seconds
+
+    monkeypatch.setattr(OutputLayout, "project", classmethod(lambda cls: OutputLayout.under(tmp_path / "p")))
+    notebooks = list_notebooks()
+    declared = {nb.stem: declared_seconds(nb) for nb in notebooks}
+    assert all(s is not None and s > 0 for s in declared.values()), declared
+    first = expected_seconds(OutputLayout.at(tmp_path / "out"), notebooks)  # a fresh clone, a new --out
+    assert first == declared
+    order = [p.stem for _, p in run_order(notebooks, 2, first)]
+    assert order[:2] == ["10_correspondence", "11_corpus_evaluation"]  # the two long studies, together
+    assert order.index("02_hmm_training") < len(order) // 2  # never left for last, one core idle
+    assert [declared[n] for n in order] == sorted(declared.values(), reverse=True)
+
+
+def test_a_quick_runs_times_do_not_order_a_full_run(tmp_path, monkeypatch):
+    from glu.paths import OutputLayout
+    from glu.summary import expected_seconds
+
+    project = OutputLayout.under(tmp_path / "project")
+    monkeypatch.setattr(OutputLayout, "project", classmethod(lambda cls: project))
+    layout = OutputLayout.at(tmp_path / "out")
+    layout.results.mkdir(parents=True)
+    write_summary(layout.results, [NotebookResult("01_a", "ok", 2.0)], "synthetic data", True, 3.0)
+    assert expected_seconds(layout, quick=True) == {"01_a": 2.0}
+    assert expected_seconds(layout, quick=False) == {}  # the quick summary is skipped: no times at all
