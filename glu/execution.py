@@ -76,11 +76,13 @@ class RunHandle:
     ----------
     on_cell : called with (index, number of cells) when a cell starts (from the run's thread)
     threads : the kernel's BLAS/OpenMP threads (:func:`thread_env`); None leaves them to the libraries
+    cwd : the kernel's working directory (None: this process's)
     cell, n_cells : the cell running now (0-based) and how many there are
     """
 
     on_cell: Callable[[int, int], None] | None = None
     threads: int | None = None
+    cwd: str | None = None
     cell: int = -1
     n_cells: int = 0
     stopped: bool = False
@@ -144,6 +146,8 @@ def _engine_class() -> type:
                 **kwargs.pop("env", {}),
                 HEADLESS_ENV: "1",
             }
+            if self.handle.cwd is not None:
+                kwargs.setdefault("cwd", self.handle.cwd)
             return await super().async_start_new_kernel(env=env, **kwargs)
 
         start_new_kernel = run_sync(async_start_new_kernel)  # the sync name is bound to the base method
@@ -196,6 +200,8 @@ def run_notebook(
     import papermill as pm
 
     handle = handle or RunHandle()
+    handle.cwd = str(cwd or src.parent)  # the kernel's, set when it starts: papermill's own ``cwd`` would
+    # os.chdir this whole process, which two notebooks running in threads would undo for each other
     out_ipynb.parent.mkdir(parents=True, exist_ok=True)
     nb = jupytext.read(src)
     try:
@@ -203,7 +209,7 @@ def run_notebook(
             nb, str(out_ipynb), parameters=parameters, kernel_name="python3", language="python",
             progress_bar=False, engine_name=_register_engine(), glu_handle=handle,
             extra_arguments=["--log-level=CRITICAL"],  # kernel chatter stays out of the run's log; errors reach the notebook
-            cwd=str(cwd or src.parent), log_output=False, shutdown_kernel="immediate",
+            log_output=False, shutdown_kernel="immediate",
         )  # fmt: skip
     except Exception:
         if handle.stopped:

@@ -42,3 +42,36 @@ def test_a_kernel_gets_its_share_of_the_threads_unless_the_caller_chose(tmp_path
     monkeypatch.delenv("OMP_NUM_THREADS")
     free = _run(tmp_path, None)  # not capped: the libraries decide
     assert all(v is None for v in free["env"].values())
+
+
+CWD_NOTEBOOK = """# %% tags=["parameters"]
+x: int = 0
+
+# %%
+import os
+print(os.getcwd())
+"""
+
+
+def test_notebooks_run_side_by_side_each_in_its_own_folder_and_leave_this_process_where_it_was(tmp_path):
+    """papermill's own ``cwd`` would os.chdir this process around each run; two runs in threads (as
+    ``glu reproduce -j 2``) then undo each other's change and can leave the process, or start a kernel, in
+    the wrong folder. The kernel gets its folder when it starts, and this process never moves."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    pytest.importorskip("papermill")
+    here = __import__("os").getcwd()
+    folders = [tmp_path / f"nb{i}" for i in range(4)]
+
+    def run(folder):
+        folder.mkdir()
+        src = folder / "probe.py"
+        src.write_text(CWD_NOTEBOOK)
+        out = tmp_path / f"{folder.name}.ipynb"
+        run_notebook(src, out, {"x": 1})  # cwd: the notebook's folder
+        return "".join(json.loads(out.read_text())["cells"][-1]["outputs"][0]["text"]).strip()
+
+    with ThreadPoolExecutor(2) as pool:
+        seen = list(pool.map(run, folders))
+    assert seen == [str(f) for f in folders]
+    assert __import__("os").getcwd() == here
