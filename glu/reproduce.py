@@ -35,7 +35,7 @@ from typing import Any
 from glu import paths
 from glu.data.source import resolve_data
 from glu.errors import GluError
-from glu.execution import NotebookStopped, RunHandle, available_cores, run_notebook
+from glu.execution import NotebookStopped, RunHandle, available_cores, load_papermill, run_notebook
 from glu.outputs import parameters_text
 from glu.parameters import check, non_defaults, parse_value, read_spec
 from glu.paths import OutputLayout
@@ -247,8 +247,7 @@ def reproduce(
     bar = _Progress(notebooks, log, live)
 
     def one(i: int, nb: Path, handle: RunHandle) -> NotebookResult:
-        import papermill as pm
-
+        pm = load_papermill()
         name = nb.stem
         stage = staging / name
         t0 = time.perf_counter()
@@ -376,8 +375,7 @@ def run_one(
     :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
     of range, :class:`NotebookError` when a cell fails.
     """
-    import papermill as pm
-
+    pm = load_papermill()
     (src,) = list_notebooks([notebook], notebooks_dir)[:1]
     spec = read_spec(src)
     for plumbing in ("data", "out_dir"):

@@ -75,3 +75,33 @@ def test_notebooks_run_side_by_side_each_in_its_own_folder_and_leave_this_proces
         seen = list(pool.map(run, folders))
     assert seen == [str(f) for f in folders]
     assert __import__("os").getcwd() == here
+
+
+def test_papermill_loads_without_jsonschemas_slow_optional_iri_checker_and_notebooks_still_validate():
+    """rfc3987_syntax (installed with JupyterLab) builds a grammar at import (1.6 s); jsonschema only uses
+    it for the ``iri`` format, which nbformat never checks. In a fresh process load_papermill leaves it out;
+    in a process that already imported jsonschema it changes nothing."""
+    import subprocess
+    import sys
+
+    pytest.importorskip("rfc3987_syntax", reason="rfc3987-syntax is not installed: nothing to leave out")
+    probe = (
+        "import json, sys\n"
+        "{before}\n"
+        "from glu.execution import load_papermill\n"
+        "load_papermill()\n"
+        "import jsonschema, nbformat, rfc3987_syntax\n"
+        "nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell('1')])\n"
+        "nbformat.validate(nb)\n"
+        "print(json.dumps('iri' in jsonschema.FormatChecker.checkers))\n"
+    )
+
+    def iri_checker(before: str) -> bool:
+        r = subprocess.run(
+            [sys.executable, "-c", probe.format(before=before)], capture_output=True, text=True
+        )
+        assert r.returncode == 0, r.stderr[-2000:]
+        return json.loads(r.stdout.strip().splitlines()[-1])
+
+    assert iri_checker("") is False
+    assert iri_checker("import jsonschema") is True
