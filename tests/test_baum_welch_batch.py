@@ -160,3 +160,18 @@ def test_training_errors_name_the_model_as_one_model_training_does(corpus):
     ok = [s.xyz for s in corpus if s.action == "tap"]
     with pytest.raises(DataError, match="'short'.*too few"):
         train_many([ok, [ok[0][:3]]], 6, 3, name=["tap", "short"])
+
+
+def test_mixture_posteriors_are_scipys_logsumexp_and_softmax():
+    """The compiled mixture step against SciPy, with components of weight 0 (−∞) and huge magnitudes."""
+    from scipy.special import logsumexp, softmax
+
+    from glu.gestures.kernels import mixture_posteriors
+
+    rng = np.random.default_rng(5)
+    lc = rng.normal(0, 50, size=(3, 40, 6, 3)) - 1e3 * rng.random((3, 40, 6, 1))
+    lc[0, :, 2, 1] = -np.inf  # a component of weight 0
+    log_b, post = mixture_posteriors(lc)
+    np.testing.assert_allclose(log_b, logsumexp(lc, axis=3), rtol=1e-13)
+    np.testing.assert_allclose(post, softmax(lc, axis=3), rtol=1e-12, atol=1e-300)
+    assert (post[0, :, 2, 1] == 0).all()

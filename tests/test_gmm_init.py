@@ -91,7 +91,7 @@ def test_k_means_relocates_an_empty_cluster_as_scikit_learn_does():
     scikit-learn's own Lloyd loop from the same centres."""
     from sklearn.cluster._kmeans import _kmeans_single_lloyd
 
-    from glu.gestures.kernels import kmeans_lloyd
+    from glu.gestures.gmm_init import kmeans_lloyd
 
     with threadpool_limits(1):
         for seed in range(20):
@@ -114,7 +114,7 @@ def test_k_means_relocates_an_empty_cluster_as_scikit_learn_does():
 def test_em_runs_as_many_rounds_as_scikit_learn():
     from sklearn.cluster import KMeans
 
-    from glu.gestures.kernels import gmm_em
+    from glu.gestures.gmm_init import gmm_em
 
     rounds = []
     with threadpool_limits(1):

@@ -60,6 +60,7 @@ from glu.gestures.baum_welch import (
     forward_backward_log,
 )
 from glu.gestures.forward import gaussian_factors
+from glu.gestures.kernels import mixture_posteriors
 
 MAX_BATCH_FLOATS = 4_000_000
 """Models are batched in chunks whose (model, component, frame, feature) arrays hold about this many floats
@@ -228,17 +229,11 @@ def _fit_group(
         coef = np.stack([(-0.5 if i == j else -1.0) * prec[..., i, j] for i, j in pairs]
                         + [lin[..., i] for i in range(D)] + [const], axis=-1)  # fmt: skip  # (K, Q, M, F)
         lc = (batch.phi @ np.swapaxes(coef.reshape(K, Q * M, -1), 1, 2)).reshape(K, N, Q, M)
-        # each state's emission log-density (K, N, Q) and its mixture's responsibilities, from one exp
+        # each state's emission log-density (K, N, Q) and its mixture's responsibilities, in one pass
         if M == 1:
             log_b_frames, post_mix = lc[..., 0], None
         else:
-            top = lc.max(axis=3, keepdims=True)
-            top = np.where(np.isfinite(top), top, 0.0)
-            with np.errstate(divide="ignore", under="ignore", invalid="ignore"):
-                e = np.exp(lc - top)
-                mass = e.sum(axis=3)
-                log_b_frames = np.log(mass) + top[..., 0]
-                post_mix = e / mass[..., None]
+            log_b_frames, post_mix = mixture_posteriors(lc)
         log_b = log_b_frames.reshape(K * N, Q)[batch.index]  # (S, T, Q)
         seq_model = batch.model
         gamma, xi, loglik, ok = forward_backward_many(
@@ -256,11 +251,8 @@ def _fit_group(
         gamma_frames = np.zeros((K * N, Q))  # padding frames: zero responsibility
         gamma_frames[batch.index[batch.alive]] = gamma[batch.alive]
         gamma_frames = gamma_frames.reshape(K, N, Q)
-        if post_mix is None:  # one Gaussian per state: its responsibility is the state's (0 on padding)
-            pcm = gamma_frames[..., None]
-        else:
-            with np.errstate(under="ignore", invalid="ignore"):
-                pcm = np.where(batch.frame_alive[..., None, None], gamma_frames[..., None] * post_mix, 0.0)
+        # the components' responsibilities (0 on padding frames, whose gamma is 0 and whose lc is 0)
+        pcm = gamma_frames[..., None] if post_mix is None else gamma_frames[..., None] * post_mix
         # every sufficient statistic at once: Σ pcm·x_i x_j, Σ pcm·x_i, Σ pcm per component
         moments = (np.swapaxes(pcm.reshape(K, N, Q * M), 1, 2) @ batch.phi).reshape(K, Q, M, -1)
         second = np.empty((K, Q, M, D, D))

@@ -1,11 +1,14 @@
-"""The HMM recursions compiled (numba): the loops over frames that numpy can only run one step at a time.
+"""Compiled loops (numba): the HMM recursions here, and :func:`compiled` for the other modules' loops.
 
 The batched forward–backward of Baum–Welch and the batched scorer were array code whose cost on the
 project's models (Q = 6 states, a few dozen sequences of 100–200 frames) was almost all per-step
 dispatch: about 20 µs a frame for a few hundred multiplications. Here the same recursions run as
 compiled loops, one sequence at a time, with the same scaling, the same underflow checks and the same
 log-domain fallback; the callers (:func:`glu.gestures.baum_welch_batch.forward_backward_many`,
-:func:`glu.gestures.batch.loglik_many`) keep their signatures and their numpy set-up.
+:func:`glu.gestures.batch.loglik_many`) keep their signatures and their numpy set-up. The mixture
+log-sum-exp of EM (:func:`mixture_posteriors`) is here too: numpy's reductions over an axis of three
+Gaussians cost more than the arithmetic. :mod:`glu.gestures.gmm_init` compiles its k-means and EM loops
+with :func:`compiled`.
 
 What differs from the array code is only the order of some sums (a sum over states runs from the first
 state to the last, where BLAS may group it otherwise), so results agree to rounding: 1e-12 relative in
@@ -21,7 +24,6 @@ process compiles (about 3 s) and later ones load it (about 0.5 s with numba's im
 from __future__ import annotations
 
 from functools import cache
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -177,179 +179,48 @@ def _loglik_banked(X, starts, lengths, means, chol_inv, log_norm, startprob, tra
     return out
 
 
-def _gmm_em(X, resp, reg_covar, tol, max_iter):
-    """scikit-learn's GaussianMixture EM (full covariances) from initial responsibilities ``resp``.
-
-    Round 0 is the M-step of ``resp``; each later round an E-step then an M-step; the fit stops after the
-    M-step of the round whose mean log-likelihood changed by less than ``tol``, or after ``max_iter`` rounds.
-    Returns weights, means, covariances and the rounds run (−1: a covariance was not positive definite).
-    """
-    n, D = X.shape
-    M = resp.shape[1]
-    eps10 = 10.0 * np.finfo(np.float64).eps
-    weights = np.empty(M)
-    means = np.empty((M, D))
-    covs = np.empty((M, D, D))
-    prec = np.zeros((M, D, D))  # the precisions' Cholesky factors, L⁻ᵀ
-    L = np.zeros((D, D))
-    inv = np.zeros((D, D))
-    log_det = np.empty(M)
-    lp = np.empty(M)
-    log_2pi = np.log(2.0 * np.pi)
-    lower = -np.inf
-    n_iter = 0
-    converged = False
-    for it in range(max_iter + 1):
-        if it > 0:  # E-step: the mean log-likelihood and the responsibilities
-            previous = lower
-            s = 0.0
-            for i in range(n):
+def _mixture_posteriors(lc, log_b, post):
+    """For every (model, frame, state): ``log Σ_m exp(lc_m)`` and the mixture's responsibilities
+    ``exp(lc_m) / Σ exp``, scaled by the largest term (0 when none is finite)."""
+    K, N, Q, M = lc.shape
+    for k in range(K):
+        for n in range(N):
+            for q in range(Q):
                 top = -np.inf
-                for k in range(M):
-                    sq = 0.0
-                    for c in range(D):
-                        y = 0.0
-                        for r in range(D):
-                            y += (X[i, r] - means[k, r]) * prec[k, r, c]
-                        sq += y * y
-                    lp[k] = -0.5 * (D * log_2pi + sq) + log_det[k] + np.log(weights[k])
-                    if lp[k] > top:
-                        top = lp[k]
-                acc = 0.0
-                for k in range(M):
-                    acc += np.exp(lp[k] - top)
-                norm = top + np.log(acc)
-                s += norm
-                for k in range(M):
-                    resp[i, k] = np.exp(lp[k] - norm)
-            lower = s / n
-            n_iter = it
-            converged = abs(lower - previous) < tol
-        # M-step: nk = Σ resp + 10 eps, means, covariances about the new means + reg_covar·I
-        total = 0.0
-        for k in range(M):
-            nk = 0.0
-            for i in range(n):
-                nk += resp[i, k]
-            nk += eps10
-            weights[k] = nk
-            total += nk
-            for d in range(D):
-                acc = 0.0
-                for i in range(n):
-                    acc += resp[i, k] * X[i, d]
-                means[k, d] = acc / nk
-            for r in range(D):
-                for c in range(r, D):
-                    acc = 0.0
-                    for i in range(n):
-                        acc += resp[i, k] * (X[i, r] - means[k, r]) * (X[i, c] - means[k, c])
-                    covs[k, r, c] = acc / nk
-                    covs[k, c, r] = covs[k, r, c]
-                covs[k, r, r] += reg_covar
-        for k in range(M):
-            weights[k] /= n if it == 0 else total
-        # the precisions' Cholesky factors: cov = L Lᵀ, prec = (L⁻¹)ᵀ
-        for k in range(M):
-            for r in range(D):
-                for c in range(r + 1):
-                    acc = covs[k, r, c]
-                    for j in range(c):
-                        acc -= L[r, j] * L[c, j]
-                    if r == c:
-                        if not acc > 0.0:
-                            return weights, means, covs, -1
-                        L[r, r] = np.sqrt(acc)
-                    else:
-                        L[r, c] = acc / L[c, c]
-            for c in range(D):  # L⁻¹ column by column, by forward substitution
-                for r in range(D):
-                    inv[r, c] = 0.0
-                for r in range(c, D):
-                    acc = 1.0 if r == c else 0.0
-                    for j in range(c, r):
-                        acc -= L[r, j] * inv[j, c]
-                    inv[r, c] = acc / L[r, r]
-            ld = 0.0
-            for r in range(D):
-                for c in range(D):
-                    prec[k, r, c] = inv[c, r]
-                ld += np.log(prec[k, r, r])
-            log_det[k] = ld
-        if converged:
-            break
-    return weights, means, covs, n_iter
-
-
-def _kmeans_step(X, old, csq, new, weight, labels, update):
-    """One Lloyd round of scikit-learn's ``lloyd_iter_chunked_dense`` on one thread: each frame to its
-    nearest centre (``‖c‖² − 2 x·c``, the first on ties), and, with ``update``, the sums of each cluster."""
-    n, D = X.shape
-    K = old.shape[0]
-    if update:
-        for j in range(K):
-            weight[j] = 0.0
-            for k in range(D):
-                new[j, k] = 0.0
-    for i in range(n):
-        best = 0
-        best_d = 0.0
-        for j in range(K):
-            dot = 0.0
-            for k in range(D):
-                dot += X[i, k] * old[j, k]
-            d = csq[j] + -2.0 * dot
-            if j == 0 or d < best_d:
-                best_d = d
-                best = j
-        labels[i] = best
-        if update:
-            weight[best] += 1.0
-            for k in range(D):
-                new[best, k] += X[i, k]
-
-
-def _kmeans_average(old, new, weight, shift):
-    """scikit-learn's ``_average_centers`` (an empty cluster takes the biggest one's row as it is at that
-    moment) and ``_center_shift``."""
-    K, D = new.shape
-    top = 0
-    for j in range(1, K):
-        if weight[j] > weight[top]:
-            top = j
-    for j in range(K):
-        if weight[j] > 0:
-            alpha = 1.0 / weight[j]
-            for k in range(D):
-                new[j, k] *= alpha
-        else:
-            for k in range(D):
-                new[j, k] = new[top, k]
-    for j in range(K):
-        acc = 0.0
-        for k in range(D):
-            acc += (new[j, k] - old[j, k]) * (new[j, k] - old[j, k])
-        shift[j] = np.sqrt(acc)
+                for m in range(M):
+                    if lc[k, n, q, m] > top:
+                        top = lc[k, n, q, m]
+                if not np.isfinite(top):
+                    top = 0.0
+                mass = 0.0
+                for m in range(M):
+                    e = np.exp(lc[k, n, q, m] - top)
+                    post[k, n, q, m] = e
+                    mass += e
+                log_b[k, n, q] = np.log(mass) + top
+                for m in range(M):
+                    post[k, n, q, m] /= mass
 
 
 @cache
-def _compiled() -> Any:
-    """The kernels compiled by numba (or loaded from its cache): a namespace with one attribute each."""
+def _jit() -> Any:
+    """numba's ``njit`` as glu compiles with it: machine code cached on disk (:attr:`glu.paths.Locations.compiled`,
+    never inside an installed package; ``$NUMBA_CACHE_DIR`` wins), no GIL, numpy's error model (a division
+    by zero gives inf or nan, as the array code did)."""
     import numba
 
     from glu.paths import HERE
 
-    if not numba.config.CACHE_DIR:  # never inside an installed package; $NUMBA_CACHE_DIR wins
+    if not numba.config.CACHE_DIR:
         numba.config.CACHE_DIR = str(HERE.compiled)
+    return numba.njit(cache=True, nogil=True, error_model="numpy")
 
-    jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-    return SimpleNamespace(
-        forward_backward_scaled=jit(_forward_backward_scaled),
-        loglik_banked=jit(_loglik_banked),
-        gmm_em=jit(_gmm_em),
-        kmeans_step=jit(_kmeans_step),
-        kmeans_average=jit(_kmeans_average),
-    )
+
+@cache
+def compiled(fn: Any) -> Any:
+    """``fn`` (a module-level function of plain loops) compiled by numba, once per process; its machine
+    code comes from the cache after the first process."""
+    return _jit()(fn)
 
 
 def forward_backward_scaled(
@@ -372,7 +243,7 @@ def forward_backward_scaled(
     ok : (S,) bool — False where a scaled mass fell to :data:`~glu.gestures.forward.TINY` or below at some
         frame (the sequence's other outputs are then meaningless: redo it in the log domain)
     """
-    return _compiled().forward_backward_scaled(
+    return compiled(_forward_backward_scaled)(
         np.ascontiguousarray(log_b, dtype=np.float64),
         np.ascontiguousarray(lengths, dtype=np.int64),
         np.ascontiguousarray(startprob, dtype=np.float64),
@@ -399,93 +270,18 @@ def loglik_banked(
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
     X = np.ascontiguousarray(np.concatenate(sequences), dtype=np.float64)
     f = np.ascontiguousarray
-    return _compiled().loglik_banked(
+    return compiled(_loglik_banked)(
         X, starts, lengths, f(means, dtype=np.float64), f(chol_inv, dtype=np.float64),
         f(log_norm, dtype=np.float64), f(startprob, dtype=np.float64), f(transmat, dtype=np.float64),
     )  # fmt: skip
 
 
-def gmm_em(
-    X: np.ndarray, resp: np.ndarray, reg_covar: float, tol: float, max_iter: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """EM of a full-covariance Gaussian mixture as scikit-learn's ``GaussianMixture`` runs it.
-
-    Parameters
-    ----------
-    X : array, shape (n, D) — the frames
-    resp : array, shape (n, M) — the initial responsibilities (k-means' one-hot labels); overwritten
-    reg_covar : added to every covariance's diagonal
-    tol, max_iter : the stopping rule on the mean log-likelihood, and the most EM rounds
-
-    Returns
-    -------
-    weights (M,), means (M, D), covariances (M, D, D), and the EM rounds run (``n_iter_``); −1 rounds
-    when a covariance was not positive definite (the arrays are then meaningless).
-    """
-    weights, means, covs, n_iter = _compiled().gmm_em(
-        np.ascontiguousarray(X, dtype=np.float64), np.ascontiguousarray(resp, dtype=np.float64),
-        float(reg_covar), float(tol), int(max_iter),
-    )  # fmt: skip
-    return weights, means, covs, int(n_iter)
-
-
-def kmeans_lloyd(X: np.ndarray, centers: np.ndarray, tol: float, max_iter: int) -> np.ndarray:
-    """The labels of scikit-learn's ``_kmeans_single_lloyd`` (dense, unit weights, one thread) from
-    ``centers``: Lloyd rounds until the labels repeat or the centres move less than ``tol`` (squared,
-    summed), then, unless the labels repeated, one more assignment to the final centres.
-
-    Parameters
-    ----------
-    X : array, shape (n, D) — the frames, centred on their mean (as ``KMeans.fit`` centres them)
-    centers : array, shape (K, D) — the k-means++ centres (changed in place)
-    tol, max_iter : ``KMeans``' scaled tolerance (``_tolerance``) and its ``max_iter``
-
-    Returns the label of every frame (int32), as ``KMeans(...).fit(X).labels_``. The distances are summed
-    in another order than the BLAS product scikit-learn calls, so a frame exactly halfway between two
-    centres (to the last bit) may go the other way; the tests compare the labels on random, degenerate and
-    the project's own problems.
-    """
-    k = _compiled()
-    X = np.ascontiguousarray(X, dtype=np.float64)
-    centers = np.ascontiguousarray(centers, dtype=np.float64)
-    n, K = len(X), len(centers)
-    new = np.zeros_like(centers)
-    labels = np.full(n, -1, dtype=np.int32)
-    labels_old = labels.copy()
-    weight = np.zeros(K)
-    shift = np.zeros(K)
-    strict = False
-    for _ in range(max_iter):
-        k.kmeans_step(X, centers, np.einsum("ij,ij->i", centers, centers), new, weight, labels, True)
-        if not weight.all():
-            _relocate_empty_clusters(X, centers, new, weight, labels)
-        k.kmeans_average(centers, new, weight, shift)
-        centers, new = new, centers
-        if np.array_equal(labels, labels_old):
-            strict = True
-            break
-        if (shift**2).sum() <= tol:
-            break
-        labels_old[:] = labels
-    if not strict:
-        k.kmeans_step(X, centers, np.einsum("ij,ij->i", centers, centers), new, weight, labels, False)
-    return labels
-
-
-def _relocate_empty_clusters(
-    X: np.ndarray, old: np.ndarray, new: np.ndarray, weight: np.ndarray, labels: np.ndarray
-) -> None:
-    """scikit-learn's ``_relocate_empty_clusters_dense`` (unit weights): each empty cluster takes the frame
-    farthest from its centre, in ``argpartition``'s order."""
-    empty = np.where(np.equal(weight, 0))[0].astype(np.int32)
-    n_empty = empty.shape[0]
-    distances = ((X - old[labels]) ** 2).sum(axis=1)
-    far = np.argpartition(distances, -n_empty)[: -n_empty - 1 : -1].astype(np.int32)
-    if np.max(distances) == 0:
-        return
-    for new_id, far_idx in zip(empty, far, strict=True):
-        old_id = labels[far_idx]
-        new[old_id] -= X[far_idx]
-        new[new_id] = X[far_idx]
-        weight[new_id] = 1.0
-        weight[old_id] -= 1.0
+def mixture_posteriors(lc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each state's emission log-density and its mixture's responsibilities from the components'
+    ``log w + log N`` ``lc``, shape (K, N, Q, M): returns ``log_b`` (K, N, Q) and ``post`` (K, N, Q, M)
+    (numpy's ``logsumexp`` over the last axis and ``exp(lc − log_b)``, in one pass)."""
+    lc = np.ascontiguousarray(lc, dtype=np.float64)
+    log_b = np.empty(lc.shape[:-1])
+    post = np.empty(lc.shape)
+    compiled(_mixture_posteriors)(lc, log_b, post)
+    return log_b, post
