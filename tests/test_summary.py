@@ -174,3 +174,46 @@ def test_a_quick_runs_times_do_not_order_a_full_run(tmp_path, monkeypatch):
     write_summary(layout.results, [NotebookResult("01_a", "ok", 2.0)], "synthetic data", True, 3.0)
     assert expected_seconds(layout, quick=True) == {"01_a": 2.0}
     assert expected_seconds(layout, quick=False) == {}  # the quick summary is skipped: no times at all
+
+
+def _long_csv_by_iterrows(summary):
+    """The long format as first written: one dict per cell from DataFrame.iterrows."""
+    import pandas as pd
+
+    rows = []
+    for name, table in summary["tables"].items():
+        for i, row in pd.DataFrame(table["rows"]).iterrows():
+            for col, val in row.items():
+                rows.append({"table": name, "row": i, "column": col, "value": val})
+    return pd.DataFrame(rows).to_csv(index=False, lineterminator="\n")
+
+
+def test_summary_csv_is_the_cell_by_cell_long_format():
+    """Random tables of every kind the notebooks write: ints only (kept as ints), ints and floats (all
+    floats, as iterrows gives them), strings and booleans mixed in, None and NaN, empty tables."""
+    import numpy as np
+
+    from glu.summary import summary_csv
+
+    rng = np.random.default_rng(3)
+    kinds = [
+        lambda r: int(r.integers(-5, 5)),
+        lambda r: float(r.normal()),
+        lambda r: bool(r.integers(2)),
+        lambda r: ["tap", "grasp", "touch"][int(r.integers(3))],
+        lambda r: None,
+        lambda r: float("nan"),
+        lambda r: 1e-300 * float(r.random()),
+    ]
+    for trial in range(40):
+        tables = {}
+        for t in range(int(rng.integers(1, 5))):
+            cols = [
+                kinds[int(k)]
+                for k in rng.integers(0, 2 if trial % 3 == 0 else len(kinds), size=int(rng.integers(1, 5)))
+            ]
+            n = int(rng.integers(0, 6))
+            tables[f"t{t}"] = {"rows": [{f"c{j}": f(rng) for j, f in enumerate(cols)} for _ in range(n)]}
+        summary = {"tables": tables}
+        assert summary_csv(summary) == _long_csv_by_iterrows(summary), tables
+    assert summary_csv({"tables": {}}) == _long_csv_by_iterrows({"tables": {}})
