@@ -1,7 +1,7 @@
 # ---
 # jupyter:
 #   glu:
-#     expected_seconds: 11
+#     expected_seconds: 9
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
