@@ -44,7 +44,7 @@ from typing import NamedTuple
 import numpy as np
 
 from glu.errors import DataError, ModelError
-from glu.gestures.forward import forward_curve, log_emissions
+from glu.gestures.forward import TINY, forward_curve, log_emissions
 from glu.gestures.model import GestureHMM, as_sequence
 
 PAD_LOG_NORM = -1e300
@@ -239,10 +239,11 @@ def forward_curves_batch(
     """The scaled forward recursion of :func:`~glu.gestures.forward.forward_curve`, for S sequences and A
     models at once, computing each frame's emissions on the way.
 
-    At each frame of each sequence, for each model: the component log-densities ``coef_t · φ(x_t)``, scaled
-    by their maximum, floored at :data:`EXP_FLOOR` and exponentiated, summed over the mixture; then
-    ``alpha ← (transmatᵀ @ alpha) ∘ b``, normalised. The loops run compiled, one (sequence, model) pair at
-    a time (:func:`glu.gestures.kernels.forward_curves`); as array code their cost was per-frame dispatch.
+    At frame t, for the ``n_t`` sequences still running (sequences sorted by decreasing length): the
+    component log-densities ``coef_t @ phi[t]`` (one matrix product), scaled by their maximum per model and
+    exponentiated, summed over the mixture; then ``alpha ← (transmatᵀ @ alpha) ∘ b``, one batched product
+    per model, normalised per (model, sequence). Arrays are laid out (model, state, sequence), so every
+    operation runs along the sequences.
 
     Parameters
     ----------
@@ -260,10 +261,38 @@ def forward_curves_batch(
     bad : bool array, shape (A, S) — pairs whose scaled forward mass fell to :data:`~glu.gestures.forward.TINY`
         or below at some frame (underflow, or an impossible frame): recompute those exactly
     """
-    from glu.gestures.kernels import forward_curves
-
-    curves, bad = forward_curves(phi, coef_t, lengths, startprob, trans_t, n_mix, EXP_FLOOR)
-    return curves.transpose(1, 2, 0), bad
+    T, _, S = phi.shape
+    A, Q = startprob.shape
+    active = (np.asarray(lengths)[None, :] > np.arange(T)[:, None]).sum(axis=1)
+    curves = np.zeros((T, A, S))
+    bad = np.zeros((A, S), dtype=bool)
+    loglik = np.zeros((A, S))
+    alpha = np.zeros((A, Q, S))
+    for t in range(T):
+        n = int(active[t])
+        if n == 0:
+            break
+        comp = (coef_t @ phi[t, :, :n]).reshape(A, Q * n_mix, n)
+        scale = comp.max(axis=1)  # per model and sequence
+        np.subtract(comp, scale[:, None, :], out=comp)
+        np.maximum(comp, EXP_FLOOR, out=comp)  # exp's fast path; see EXP_FLOOR
+        np.exp(comp, out=comp)
+        b = comp.reshape(A, Q, n_mix, n).sum(axis=2)  # (A, Q, n)
+        if t == 0:
+            a = startprob[:, :, None] * b
+        else:
+            a = np.matmul(trans_t, alpha[:, :, :n])
+            a *= b
+        c = a.sum(axis=1)  # (A, n)
+        low = c <= TINY
+        if low.any():
+            bad[:, :n] |= low
+            c[low] = 1.0
+        a /= c[:, None, :]
+        alpha[:, :, :n] = a
+        loglik[:, :n] += np.log(c) + scale
+        curves[t, :, :n] = loglik[:, :n]
+    return curves, bad
 
 
 def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:

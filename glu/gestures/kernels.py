@@ -202,51 +202,6 @@ def _mixture_posteriors(lc, log_b, post):
                     post[k, n, q, m] /= mass
 
 
-def _forward_curves(phi, coef_t, lengths, startprob, trans_t, n_mix, floor, curves, bad):
-    """:func:`glu.gestures.batch.forward_curves_batch`, one (sequence, model) pair at a time;
-    ``phi`` is laid out (S, T, F)."""
-    S, T, F = phi.shape
-    A, Q = startprob.shape
-    M = n_mix
-    comp = np.empty(Q * M)
-    alpha = np.zeros(Q)
-    new = np.empty(Q)
-    for s in range(S):
-        for a in range(A):
-            loglik = 0.0
-            for t in range(lengths[s]):
-                scale = -np.inf
-                for r in range(Q * M):
-                    acc = 0.0
-                    for f in range(F):
-                        acc += coef_t[a * Q * M + r, f] * phi[s, t, f]
-                    comp[r] = acc
-                    if acc > scale:
-                        scale = acc
-                c = 0.0
-                for j in range(Q):
-                    b = 0.0
-                    for m in range(M):
-                        v = comp[j * M + m] - scale
-                        b += np.exp(v if v > floor else floor)
-                    if t == 0:
-                        v = startprob[a, j] * b
-                    else:
-                        acc = 0.0
-                        for i in range(Q):
-                            acc += trans_t[a, j, i] * alpha[i]
-                        v = acc * b
-                    new[j] = v
-                    c += v
-                if not c > TINY:
-                    bad[a, s] = True
-                    c = 1.0
-                for j in range(Q):
-                    alpha[j] = new[j] / c
-                loglik += np.log(c) + scale
-                curves[s, t, a] = loglik
-
-
 @cache
 def _jit() -> Any:
     """numba's ``njit`` as glu compiles with it: machine code cached on disk (:attr:`glu.paths.Locations.compiled`,
@@ -330,21 +285,3 @@ def mixture_posteriors(lc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     post = np.empty(lc.shape)
     compiled(_mixture_posteriors)(lc, log_b, post)
     return log_b, post
-
-
-def forward_curves(
-    phi: np.ndarray, coef_t: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, trans_t: np.ndarray,
-    n_mix: int, floor: float,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """The compiled body of :func:`glu.gestures.batch.forward_curves_batch` (same arguments, ``phi`` of shape
-    (T, F, S), and the floor of the scaled log-densities); returns curves (S, T, A) and bad (A, S)."""
-    S, A = phi.shape[2], startprob.shape[0]
-    curves = np.zeros((S, phi.shape[0], A))
-    bad = np.zeros((A, S), dtype=np.bool_)
-    compiled(_forward_curves)(
-        np.ascontiguousarray(np.transpose(phi, (2, 0, 1)), dtype=np.float64),
-        np.ascontiguousarray(coef_t, dtype=np.float64), np.ascontiguousarray(lengths, dtype=np.int64),
-        np.ascontiguousarray(startprob, dtype=np.float64), np.ascontiguousarray(trans_t, dtype=np.float64),
-        int(n_mix), float(floor), curves, bad,
-    )  # fmt: skip
-    return curves, bad
