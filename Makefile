@@ -41,6 +41,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_hmm.py
 	$(BIN)/python benchmarks/bench_training.py
 	$(BIN)/python benchmarks/bench_fast_paths.py
+	$(BIN)/python benchmarks/bench_kernels.py
 
 bench-reproduce: $(STAMP)
 	$(BIN)/python benchmarks/bench_reproduce.py $(if $(DATA),--data $(DATA)) $(ARGS)
