@@ -226,7 +226,7 @@ def summary_csv(summary: dict[str, Any]) -> str:
 
     Each cell's value is the element of ``DataFrame(rows).values`` (the frame's common dtype: an all-numeric
     table gives floats, a mixed one the values as they are), which is what ``DataFrame.iterrows`` yields,
-    taken row by row without building a Series per row (0.8 s → 0.2 s on the real data's 6 MB)."""
+    taken row by row without building a Series per row (about 0.9 s → 0.3 s on the real data's 6 MB)."""
     import numpy as np
     import pandas as pd
 
@@ -240,7 +240,7 @@ def summary_csv(summary: dict[str, Any]) -> str:
         tables.append(np.full(n * m, name, dtype=object))
         rows.append(np.repeat(np.asarray(df.index), m))
         columns.append(np.tile(np.asarray(df.columns, dtype=object), n))
-        values.extend(cells.ravel().tolist() if cells.dtype != object else cells.ravel())
+        values.extend(cells.ravel().tolist())
     # one frame, so that pandas infers the value column's type over every table at once, as it did
     frame = pd.DataFrame(
         {"table": np.concatenate(tables), "row": np.concatenate(rows), "column": np.concatenate(columns),

@@ -45,6 +45,7 @@ import numpy as np
 
 from glu.errors import DataError, ModelError
 from glu.gestures.forward import TINY, forward_curve, log_emissions
+from glu.gestures.kernels import loglik_banked
 from glu.gestures.model import GestureHMM, as_sequence
 
 PAD_LOG_NORM = -1e300
@@ -308,8 +309,6 @@ def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     (including its log-domain fallback where the scaled mass underflows): the last entry of
     ``forward_curve`` for each sequence, to rounding (1e-12 relative, tests/test_batched_experiments.py).
     """
-    from glu.gestures.kernels import loglik_banked
-
     seqs = list(sequences)
     if not seqs:
         return np.empty((0, len(bank.startprob)))

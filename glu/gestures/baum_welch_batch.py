@@ -60,7 +60,7 @@ from glu.gestures.baum_welch import (
     forward_backward_log,
 )
 from glu.gestures.forward import gaussian_factors
-from glu.gestures.kernels import mixture_posteriors
+from glu.gestures.kernels import forward_backward_scaled, mixture_posteriors
 
 MAX_BATCH_FLOATS = 4_000_000
 """Models are batched in chunks whose (model, component, frame, feature) arrays hold about this many floats
@@ -90,13 +90,9 @@ def forward_backward_many(
     The recursions run compiled, one sequence at a time
     (:func:`glu.gestures.kernels.forward_backward_scaled`); a sequence stops at its first underflow.
     """
-    from glu.gestures.kernels import forward_backward_scaled
-
-    S, T, Q = log_b.shape
     if np.any(np.diff(lengths) > 0):
         raise ValueError("forward_backward_many: lengths must be sorted in decreasing order")
-    gamma, xi, loglik, ok = forward_backward_scaled(log_b, lengths, startprob, transmat)
-    return gamma, xi, loglik, ok
+    return forward_backward_scaled(log_b, lengths, startprob, transmat)
 
 
 def _pairs(D: int) -> list[tuple[int, int]]:

@@ -1,14 +1,16 @@
 """Compiled loops (numba): the HMM recursions here, and :func:`compiled` for the other modules' loops.
 
-The batched forward–backward of Baum–Welch and the batched scorer were array code whose cost on the
-project's models (Q = 6 states, a few dozen sequences of 100–200 frames) was almost all per-step
+The batched forward–backward of Baum–Welch and the recogniser's scoring (``loglik_many``) were array
+code whose cost on the project's models (Q = 6 states, a few dozen sequences of 100–200 frames) was almost all per-step
 dispatch: about 20 µs a frame for a few hundred multiplications. Here the same recursions run as
 compiled loops, one sequence at a time, with the same scaling, the same underflow checks and the same
 log-domain fallback; the callers (:func:`glu.gestures.baum_welch_batch.forward_backward_many`,
 :func:`glu.gestures.batch.loglik_many`) keep their signatures and their numpy set-up. The mixture
 log-sum-exp of EM (:func:`mixture_posteriors`) is here too: numpy's reductions over an axis of three
 Gaussians cost more than the arithmetic. :mod:`glu.gestures.gmm_init` compiles its k-means and EM loops
-with :func:`compiled`.
+with :func:`compiled`. The corpus scorer (:class:`glu.gestures.batch.BatchScorer`) stays array code: on
+its batches of hundreds of sequences numpy's vectorised ``exp`` made it twice as fast as a compiled loop
+(``benchmarks/bench_corpus.py``).
 
 What differs from the array code is only the order of some sums (a sum over states runs from the first
 state to the last, where BLAS may group it otherwise), so results agree to rounding: 1e-12 relative in

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from glu.errors import ModelError
+from glu.gestures.batch import loglik_many, stack_models
 from glu.gestures.model import GestureHMM
 
 MIN_MARGIN = 15.0
@@ -99,8 +100,6 @@ def _range(values: Sequence[float], reference: str) -> LoglikRange:
 
 def training_range(model: GestureHMM, sequences: Sequence[np.ndarray]) -> LoglikRange:
     """The range of ``log L(X | model) / T`` over the training sequences, shape (T_i, D) each."""
-    from glu.gestures.batch import loglik_many, stack_models
-
     loglik = loglik_many(stack_models([model]), sequences)[:, 0]
     return _range([ll / len(X) for ll, X in zip(loglik.tolist(), sequences, strict=True)], "training")
 
