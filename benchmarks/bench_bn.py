@@ -61,8 +61,10 @@ def main() -> None:
             {"benchmark": name, "glu_s": ours, "pgmpy_s": theirs, "speedup": ratio, "target_s": target}
         )
         ok = "ok" if ours <= target else "MISSED"
-        print(f"{name:42s} glu {fmt(ours):>10s}   pgmpy {fmt(theirs) if theirs else '-':>10s}   "
-              f"×{ratio:8.0f}   target {fmt(target):>8s} {ok}")  # fmt: skip
+        print(
+            f"{name:42s} glu {fmt(ours):>10s}   pgmpy {fmt(theirs) if theirs else '-':>10s}   "
+            f"×{ratio:8.0f}   target {fmt(target):>8s} {ok}"
+        )
 
     t_learn = timeit(lambda: learn_bn(df), repeat=5, number=1)
     bn = learn_bn(df, unseen_words="uniform")  # pgmpy rejects all-zero rows: compare on the uniform model
@@ -88,8 +90,11 @@ def main() -> None:
 
         def k2_with_pgmpy_scores():
             for node in list(schema.affordance_nodes[4:]) + list(schema.word_nodes):
-                cands = list(schema.affordance_nodes[: schema.affordance_nodes.index(node)]) \
-                    if node in schema.affordance_nodes else list(schema.affordance_nodes)  # fmt: skip
+                cands = (
+                    list(schema.affordance_nodes[: schema.affordance_nodes.index(node)])
+                    if node in schema.affordance_nodes
+                    else list(schema.affordance_nodes)
+                )
                 chosen, best = [], bic.local_score(node, ())
                 while True:
                     pool = [c for c in cands if c not in chosen]
@@ -117,17 +122,31 @@ def main() -> None:
         q = np.array([0.1, 0.8, 0.1])
         virt = [TabularCPD("Action", 3, q.reshape(-1, 1), state_names={"Action": ["grasp", "tap", "touch"]})]
         t_v = timeit(lambda: eng.query(["ObjVel"], {"Shape": "sphere", "Size": "small"}, soft={"Action": q}))
-        t_v_pg = timeit(lambda: ve.query(["ObjVel"], evidence={"Shape": "sphere", "Size": "small"},
-                                         virtual_evidence=virt, show_progress=False), repeat=3)  # fmt: skip
+        t_v_pg = timeit(
+            lambda: ve.query(
+                ["ObjVel"],
+                evidence={"Shape": "sphere", "Size": "small"},
+                virtual_evidence=virt,
+                show_progress=False,
+            ),
+            repeat=3,
+        )
 
         rng = np.random.default_rng(0)
         n = 10_000
-        batch = {"Action": rng.integers(0, 3, n), "Shape": rng.integers(0, 2, n), "Size": rng.integers(0, 3, n),
-                 "HandVel": rng.integers(0, 2, n)}  # fmt: skip
+        batch = {
+            "Action": rng.integers(0, 3, n),
+            "Shape": rng.integers(0, 2, n),
+            "Size": rng.integers(0, 3, n),
+            "HandVel": rng.integers(0, 2, n),
+        }
         t_b = timeit(lambda: eng.query_batch(["ObjVel"], batch, errors="nan"), repeat=5, number=1)
         soft_b = rng.dirichlet(np.ones(3), size=n)
-        t_bs = timeit(lambda: eng.query_batch(["ObjVel", "rolls"], {"Shape": batch["Shape"]},
-                                              soft={"Action": soft_b}), repeat=5, number=1)  # fmt: skip
+        t_bs = timeit(
+            lambda: eng.query_batch(["ObjVel", "rolls"], {"Shape": batch["Shape"]}, soft={"Action": soft_b}),
+            repeat=5,
+            number=1,
+        )
         t_b_pg = t_q_pg * n  # extrapolated from the single query
 
     row("learning: K2 + parameters (real data)", t_learn, t_learn_pgmpy, 0.2)
@@ -141,8 +160,11 @@ def main() -> None:
     for extra in (["--data", str(source.root) if source.root else "synthetic"],):
         for _ in range(5):
             t0 = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "glu", "query", *extra, "--target", "ObjVel", "--json"],
-                           check=True, capture_output=True)  # fmt: skip
+            subprocess.run(
+                [sys.executable, "-m", "glu", "query", *extra, "--target", "ObjVel", "--json"],
+                check=True,
+                capture_output=True,
+            )
             cold.append(time.perf_counter() - t0)
     row("`glu query --data` cold start (median of 5)", statistics.median(cold), None, 1.0)
     print(f"(pgmpy import alone: {t_pgmpy_import:.2f} s)")

@@ -168,8 +168,12 @@ def main(argv: list[str] | None = None) -> int:
     """Run the chosen benchmarks and print their numbers."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", help="data folder the network is learned from")
-    ap.add_argument("--only", nargs="+", default=["forward", "episodes", "scaling"],
-                    choices=["forward", "episodes", "scaling", "million"])  # fmt: skip
+    ap.add_argument(
+        "--only",
+        nargs="+",
+        default=["forward", "episodes", "scaling"],
+        choices=["forward", "episodes", "scaling", "million"],
+    )
     ap.add_argument(
         "--episodes", type=int, default=48_000, help="episodes of the scaling run (default 48000)"
     )

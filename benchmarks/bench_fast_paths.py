@@ -72,8 +72,11 @@ def bench_mixtures(repeats: int) -> None:
             for a, b in zip(x, y, strict=True)
         )
         assert same, "the fast mixtures differ from scikit-learn's"
-        _row(f"GaussianMixture.fit vs fit_gaussian_mixture, M = {M}", median_time(lambda m=M: sklearn(m), repeats),
-             median_time(lambda m=M: ours(m), repeats))  # fmt: skip
+        _row(
+            f"GaussianMixture.fit vs fit_gaussian_mixture, M = {M}",
+            median_time(lambda m=M: sklearn(m), repeats),
+            median_time(lambda m=M: ours(m), repeats),
+        )
 
 
 def _rank_every_sentence(sentences, probs, n, score):
@@ -104,16 +107,20 @@ def bench_ranking(data: str | None, repeats: int) -> None:
         prepared = SentenceSet(sample_sentences(load_grammar(), 10_000, seed=0))
     plain = list(prepared)
     rng = np.random.default_rng(0)
-    evidence = [dict(zip(prepared.vocabulary, rng.uniform(0.01, 1, len(prepared.vocabulary)).tolist(), strict=True))
-                for _ in range(141)]  # fmt: skip
+    evidence = [
+        dict(zip(prepared.vocabulary, rng.uniform(0.01, 1, len(prepared.vocabulary)).tolist(), strict=True))
+        for _ in range(141)
+    ]
     for probs in evidence[:10]:
         assert rank_sentences(prepared, probs, 10, "original").equals(
             _rank_every_sentence(plain, probs, 10, "original")
         )
     print(f"2. ranking {len(prepared)} candidate sentences for 141 evidence sets ({source.describe()})")
-    _row("every sentence keyed exactly vs float shortlist + exact keys",
-         median_time(lambda: [_rank_every_sentence(plain, p, 10, "original") for p in evidence], repeats),
-         median_time(lambda: [rank_sentences(prepared, p, 10, "original") for p in evidence], repeats))  # fmt: skip
+    _row(
+        "every sentence keyed exactly vs float shortlist + exact keys",
+        median_time(lambda: [_rank_every_sentence(plain, p, 10, "original") for p in evidence], repeats),
+        median_time(lambda: [rank_sentences(prepared, p, 10, "original") for p in evidence], repeats),
+    )
 
 
 def bench_sampling(repeats: int) -> None:
@@ -125,9 +132,11 @@ def bench_sampling(repeats: int) -> None:
     g = load_grammar()
     assert sample_sentences(g, 10_000, 5) == recursive_samples(g, 10_000, 5)
     print("3. random sentences, 21 x 10,000 from the default grammar")
-    _row("recursive walk vs compiled walk",
-         median_time(lambda: [recursive_samples(g, 10_000, s) for s in range(21)], repeats),
-         median_time(lambda: [sample_sentences(g, 10_000, s) for s in range(21)], repeats))  # fmt: skip
+    _row(
+        "recursive walk vs compiled walk",
+        median_time(lambda: [recursive_samples(g, 10_000, s) for s in range(21)], repeats),
+        median_time(lambda: [sample_sentences(g, 10_000, s) for s in range(21)], repeats),
+    )
 
 
 def main(argv: list[str] | None = None) -> int:

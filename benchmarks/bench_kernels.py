@@ -133,8 +133,14 @@ def bench_start() -> None:
     """Compiling every kernel from an empty cache, then loading them, each in a fresh process."""
     with tempfile.TemporaryDirectory() as cache:
         env = {**os.environ, "NUMBA_CACHE_DIR": cache}
-        runs = [float(subprocess.run([sys.executable, "-c", _FIRST_CALLS], env=env, capture_output=True, text=True,
-                                     check=True).stdout) for _ in range(2)]  # fmt: skip
+        runs = [
+            float(
+                subprocess.run(
+                    [sys.executable, "-c", _FIRST_CALLS], env=env, capture_output=True, text=True, check=True
+                ).stdout
+            )
+            for _ in range(2)
+        ]
     print(
         f"4. first use of every kernel in a fresh process: {runs[0]:.1f} s compiling (empty cache), "
         f"{runs[1]:.2f} s loading the cached code (numba's import included)"
@@ -159,35 +165,50 @@ def main(argv: list[str] | None = None) -> int:
         corpus = synthetic_corpus(20, seed=1)
         print("1. scoring synthetic gestures under 3 HMMs (loglik_many)")
         for M in (1, 3):
-            models = [train_hmm([s.xyz for s in corpus if s.action == a], 6, M, seed=0, warn=False)[0]
-                      for a in ("grasp", "tap", "touch")]  # fmt: skip
+            models = [
+                train_hmm([s.xyz for s in corpus if s.action == a], 6, M, seed=0, warn=False)[0]
+                for a in ("grasp", "tap", "touch")
+            ]
             bank = stack_models(models)
             for S in (30, 450):
                 seqs = [corpus[i % len(corpus)].xyz for i in range(S)]
                 np.testing.assert_allclose(loglik_many(bank, seqs), loglik_many_array(bank, seqs), rtol=1e-12)
-                _row(f"M = {M}, {S} sequences", best_time(lambda b=bank, q=seqs: loglik_many_array(b, q), r),
-                     best_time(lambda b=bank, q=seqs: loglik_many(b, q), r))  # fmt: skip
+                _row(
+                    f"M = {M}, {S} sequences",
+                    best_time(lambda b=bank, q=seqs: loglik_many_array(b, q), r),
+                    best_time(lambda b=bank, q=seqs: loglik_many(b, q), r),
+                )
         print("2. forward-backward of batched Baum-Welch (Q = 6, 120-180 frames)")
         rng = np.random.default_rng(0)
         for S in (30, 300, 2000):
             T, Q = 180, 6
             lengths = np.sort(rng.integers(120, T + 1, S))[::-1].copy()
             lengths[0] = T
-            args_ = (rng.normal(-3, 2, (S, T, Q)), lengths, np.tile(np.eye(Q)[0], (S, 1)),
-                     np.tile(left_to_right_transmat(Q, 0.9), (S, 1, 1)))  # fmt: skip
+            args_ = (
+                rng.normal(-3, 2, (S, T, Q)),
+                lengths,
+                np.tile(np.eye(Q)[0], (S, 1)),
+                np.tile(left_to_right_transmat(Q, 0.9), (S, 1, 1)),
+            )
             for a, b in zip(
                 baum_welch_batch.forward_backward_many(*args_), forward_backward_array(*args_), strict=True
             ):
                 np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
-            _row(f"{S} sequences", best_time(lambda x=args_: forward_backward_array(*x), r),
-                 best_time(lambda x=args_: baum_welch_batch.forward_backward_many(*x), r))  # fmt: skip
+            _row(
+                f"{S} sequences",
+                best_time(lambda x=args_: forward_backward_array(*x), r),
+                best_time(lambda x=args_: baum_welch_batch.forward_backward_many(*x), r),
+            )
         print("3. the mixture log-sum-exp and responsibilities of EM (Q = 6, M = 3)")
         for K, N in ((5, 2000), (40, 2500)):
             lc = rng.normal(0, 5, (K, N, 6, 3))
             for a, b in zip(kernels.mixture_posteriors(lc), mixture_array(lc), strict=True):
                 np.testing.assert_allclose(a, b, rtol=1e-12)
-            _row(f"{K} models x {N} frames", best_time(lambda x=lc: mixture_array(x), r),
-                 best_time(lambda x=lc: kernels.mixture_posteriors(x), r))  # fmt: skip
+            _row(
+                f"{K} models x {N} frames",
+                best_time(lambda x=lc: mixture_array(x), r),
+                best_time(lambda x=lc: kernels.mixture_posteriors(x), r),
+            )
     bench_start()
     return 0
 

@@ -57,8 +57,11 @@ def _cv_sets(sequences, k, seed):
 
     folds = stratified_folds([s.action for s in sequences], k, seed)
     actions = tuple(dict.fromkeys(s.action for s in sequences))
-    return [(a, [s.xyz for s, g in zip(sequences, folds, strict=True) if g != f and s.action == a])
-            for f in range(k) for a in actions]  # fmt: skip
+    return [
+        (a, [s.xyz for s, g in zip(sequences, folds, strict=True) if g != f and s.action == a])
+        for f in range(k)
+        for a in actions
+    ]
 
 
 def _compare_training(label, sets, batched, repeats, rows):
@@ -87,8 +90,12 @@ def _compare_training(label, sets, batched, repeats, rows):
     for a, b, (_, r) in zip(fits, many, ref, strict=True):
         assert len(a.history) == len(b.history) == r.n_iter
         np.testing.assert_allclose(b.history, a.history, rtol=1e-8)
-    t_fit = median_time(lambda: [bw.fit(x, p, cfg.n_iter, t, cfg.covar_reg)
-                                  for (x, p), t in zip(problems, tols, strict=True)], repeats)  # fmt: skip
+    t_fit = median_time(
+        lambda: [
+            bw.fit(x, p, cfg.n_iter, t, cfg.covar_reg) for (x, p), t in zip(problems, tols, strict=True)
+        ],
+        repeats,
+    )
     t_many = median_time(lambda: fit_many(problems, cfg.n_iter, tols, cfg.covar_reg), repeats)
     n_iter = [len(a.history) for a in fits]
     rows.append((f"{label}: EM only ({min(n_iter)}–{max(n_iter)} iterations), fit each", t_fit, t_many))
@@ -111,13 +118,23 @@ def main(argv: list[str] | None = None) -> int:
         source = _real_source(args.data)
         if source is not None:
             standing = gesture_sequences(source, include_test=False)
-            _compare_training(f"LOSO, {len(standing)} real segments", _loso_sets(standing),
-                              lambda: leave_one_segment_out(standing), args.repeats, rows)  # fmt: skip
+            _compare_training(
+                f"LOSO, {len(standing)} real segments",
+                _loso_sets(standing),
+                lambda: leave_one_segment_out(standing),
+                args.repeats,
+                rows,
+            )
         else:
             print("no real data found: the leave-one-segment-out rows are skipped")
         corpus = synthetic_corpus(20, seed=0)
-        _compare_training("5-fold CV, 60 synthetic gestures", _cv_sets(corpus, 5, 0),
-                          lambda: cross_validate(corpus, 5, 0), args.repeats, rows)  # fmt: skip
+        _compare_training(
+            "5-fold CV, 60 synthetic gestures",
+            _cv_sets(corpus, 5, 0),
+            lambda: cross_validate(corpus, 5, 0),
+            args.repeats,
+            rows,
+        )
         hl_rows = _versus_hmmlearn(_cv_sets(corpus, 5, 0), args.repeats)
 
     print(f"{'measurement':72s} {'one at a time':>14s} {'batched':>10s} {'speed-up':>9s}")
@@ -162,8 +179,11 @@ def _versus_hmmlearn(sets, repeats):
     t_hl = median_time(hmmlearn, repeats)
     t_fit = median_time(lambda: [bw.fit(x, p, n_iter, 1e-300, reg, "hmmlearn") for x, p in problems], repeats)
     t_many = median_time(lambda: fit_many(problems, n_iter, 1e-300, reg, "hmmlearn"), repeats)
-    return [("hmmlearn GMMHMM.fit, each model", t_hl, 1.0), ("glu baum_welch.fit, each model", t_fit, t_hl / t_fit),
-            ("glu fit_many, one batch", t_many, t_hl / t_many)]  # fmt: skip
+    return [
+        ("hmmlearn GMMHMM.fit, each model", t_hl, 1.0),
+        ("glu baum_welch.fit, each model", t_fit, t_hl / t_fit),
+        ("glu fit_many, one batch", t_many, t_hl / t_many),
+    ]
 
 
 if __name__ == "__main__":

@@ -156,18 +156,30 @@ def _engine_class() -> type:
     class GluEngine(NBClientEngine):
         @classmethod
         def execute_managed_notebook(  # type: ignore[no-untyped-def]
-            cls, nb_man, kernel_name, log_output=False, stdout_file=None, stderr_file=None,
-            start_timeout=60, execution_timeout=None, **kwargs,
-        ):  # fmt: skip
+            cls,
+            nb_man,
+            kernel_name,
+            log_output=False,
+            stdout_file=None,
+            stderr_file=None,
+            start_timeout=60,
+            execution_timeout=None,
+            **kwargs,
+        ):
             # as papermill's NBClientEngine, with our client
             handle = kwargs.pop("glu_handle")
             kwargs = remove_args(["input_path"], **kwargs)
             safe_kwargs = remove_args(["timeout", "startup_timeout"], **kwargs)
             final_kwargs = merge_kwargs(
-                safe_kwargs, timeout=execution_timeout if execution_timeout else kwargs.get("timeout"),
-                startup_timeout=start_timeout, kernel_name=kernel_name, log=logger, log_output=log_output,
-                stdout_file=stdout_file, stderr_file=stderr_file,
-            )  # fmt: skip
+                safe_kwargs,
+                timeout=execution_timeout if execution_timeout else kwargs.get("timeout"),
+                startup_timeout=start_timeout,
+                kernel_name=kernel_name,
+                log=logger,
+                log_output=log_output,
+                stdout_file=stdout_file,
+                stderr_file=stderr_file,
+            )
             return Client(nb_man, handle, **final_kwargs).execute()
 
     return GluEngine
@@ -228,11 +240,20 @@ def run_notebook(
     nb = jupytext.read(src)
     try:
         return pm.execute_notebook(
-            nb, str(out_ipynb), parameters=parameters, kernel_name="python3", language="python",
-            progress_bar=False, engine_name=_register_engine(), glu_handle=handle,
-            extra_arguments=["--log-level=CRITICAL"],  # kernel chatter stays out of the run's log; errors reach the notebook
-            log_output=False, shutdown_kernel="immediate",
-        )  # fmt: skip
+            nb,
+            str(out_ipynb),
+            parameters=parameters,
+            kernel_name="python3",
+            language="python",
+            progress_bar=False,
+            engine_name=_register_engine(),
+            glu_handle=handle,
+            extra_arguments=[
+                "--log-level=CRITICAL"
+            ],  # kernel chatter stays out of the run's log; errors reach the notebook
+            log_output=False,
+            shutdown_kernel="immediate",
+        )
     except Exception:
         if handle.stopped:
             raise NotebookStopped(f"{src.stem}: stopped") from None

@@ -122,8 +122,10 @@ def evidence_explorer(
     actions = schema.values_of(ACTION)
     start_p = list(p_hmm) if p_hmm is not None else [1.0 / len(actions)] * len(actions)
     use_gesture = w.Checkbox(value=p_hmm is not None, description="gesture evidence p_HMM(Action)")
-    sliders = [w.FloatSlider(value=float(p), min=0.0, max=1.0, step=0.01, description=a) for a, p in
-               zip(actions, start_p, strict=True)]  # fmt: skip
+    sliders = [
+        w.FloatSlider(value=float(p), min=0.0, max=1.0, step=0.01, description=a)
+        for a, p in zip(actions, start_p, strict=True)
+    ]
     rule_pick = w.ToggleButtons(options=list(SOFT_RULES), value=rule, description="rule")
     view = w.HTML(start.to_html())
 
@@ -138,8 +140,15 @@ def evidence_explorer(
 
     for control in (*drops.values(), use_gesture, *sliders, rule_pick):
         control.observe(update, names="value")
-    box = w.VBox([w.HBox(list(drops.values())[:4]), w.HBox(list(drops.values())[4:]),
-                  w.HBox([use_gesture, rule_pick]), w.HBox(sliders), view])  # fmt: skip
+    box = w.VBox(
+        [
+            w.HBox(list(drops.values())[:4]),
+            w.HBox(list(drops.values())[4:]),
+            w.HBox([use_gesture, rule_pick]),
+            w.HBox(sliders),
+            view,
+        ]
+    )
     box.update = update  # type: ignore[attr-defined]  (tests call it; the widgets call it on change)
     box.controls = {"evidence": drops, "gesture": use_gesture, "sliders": sliders, "rule": rule_pick}  # type: ignore[attr-defined]
     box.view = view  # type: ignore[attr-defined]

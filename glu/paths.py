@@ -96,8 +96,14 @@ def locate(package_dir: Path, user_data: Path | None = None, user_cache: Path | 
 
         user_data = user_data or Path(platformdirs.user_data_dir(APP_NAME, appauthor=False))
         user_cache = user_cache or Path(platformdirs.user_cache_dir(APP_NAME, appauthor=False))
-    return Locations(package_dir, None, package_dir / "notebooks", user_data, user_cache / "scratch",
-                     user_cache / "compiled")  # fmt: skip
+    return Locations(
+        package_dir,
+        None,
+        package_dir / "notebooks",
+        user_data,
+        user_cache / "scratch",
+        user_cache / "compiled",
+    )
 
 
 PACKAGE_DIR: Path = Path(__file__).resolve().parent
@@ -152,8 +158,15 @@ class OutputLayout:
                 f"glu is installed, not a source checkout: give an output folder (--out DIR); "
                 f"nothing is written inside the package ({PACKAGE_DIR})"
             )
-        return cls(r, r / "figures", r / "results", r / "recordings", r / "models",
-                   r / "build" / "notebooks", r / "build" / "report")  # fmt: skip
+        return cls(
+            r,
+            r / "figures",
+            r / "results",
+            r / "recordings",
+            r / "models",
+            r / "build" / "notebooks",
+            r / "build" / "report",
+        )
 
     @classmethod
     def under(cls, root: str | os.PathLike) -> OutputLayout:

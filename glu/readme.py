@@ -104,15 +104,33 @@ exact chance is {p_draw_percent:.1f} %).
 """The results section, with ``{name:format}`` slots filled by :func:`values`."""
 
 REQUIRED = (
-    "bn_learning_summary", "glu2017_effect_prediction", "glu2017_word_change_text", "tcds_action_vs_soft_evidence",
-    "tcds_effect_vs_soft_evidence", "unseen_rows_comparison", "fusion_product_sweep", "fusion_product_thresholds",
-    "fusion_soft_sweep_sphere", "fusion_soft_sweep_box", "hmm_original_scores", "hmm_synthetic_cv",
-    "hmm_accuracy_vs_noise", "hmm_feature_settings", "tcds_anticipation_sphere_published",
-    "tcds_anticipation_box_published", "tcds_anticipation_sphere_original_predictions",
-    "verbal_published_descriptions", "verbal_sampling_vs_exact", "corpus_metrics", "corpus_differences",
-    "posture_offsets", "hmm_feature_settings_summary",
-    "tcds_anticipation_sphere_glu_predictions", "tcds_anticipation_box_glu_predictions", "correspondence_summary",
-)  # fmt: skip
+    "bn_learning_summary",
+    "glu2017_effect_prediction",
+    "glu2017_word_change_text",
+    "tcds_action_vs_soft_evidence",
+    "tcds_effect_vs_soft_evidence",
+    "unseen_rows_comparison",
+    "fusion_product_sweep",
+    "fusion_product_thresholds",
+    "fusion_soft_sweep_sphere",
+    "fusion_soft_sweep_box",
+    "hmm_original_scores",
+    "hmm_synthetic_cv",
+    "hmm_accuracy_vs_noise",
+    "hmm_feature_settings",
+    "tcds_anticipation_sphere_published",
+    "tcds_anticipation_box_published",
+    "tcds_anticipation_sphere_original_predictions",
+    "verbal_published_descriptions",
+    "verbal_sampling_vs_exact",
+    "corpus_metrics",
+    "corpus_differences",
+    "posture_offsets",
+    "hmm_feature_settings_summary",
+    "tcds_anticipation_sphere_glu_predictions",
+    "tcds_anticipation_box_glu_predictions",
+    "correspondence_summary",
+)
 """The result tables the section is written from."""
 
 
@@ -128,8 +146,10 @@ def load_summary(path: str | os.PathLike = SUMMARY) -> dict[str, Any]:
     if not isinstance(summary, dict):
         raise DataError(f"{path}: not a summary of `glu reproduce` (expected a JSON object)")
     if summary.get("quick") or not str(summary.get("data_source", "")).startswith("real data"):
-        raise DataError(f"{path}: the README quotes a full run on the real data, not this one "
-                        f"({summary.get('data_source')}, quick={summary.get('quick')})")  # fmt: skip
+        raise DataError(
+            f"{path}: the README quotes a full run on the real data, not this one "
+            f"({summary.get('data_source')}, quick={summary.get('quick')})"
+        )
     missing = [t for t in REQUIRED if t not in summary.get("tables", {})]
     if missing:
         raise DataError(f"{path}: the summary lacks {', '.join(missing)}; run every notebook")
@@ -145,10 +165,15 @@ def values(summary: Mapping[str, Any]) -> dict[str, Any]:
     """Every slot of :data:`TEMPLATE`, read from the summary's tables (see :data:`REQUIRED`)."""
     v: dict[str, Any] = {"notebooks": len(summary["notebooks"])}
     bn = _table(summary, "bn_learning_summary")[0].set_index("quantity")
-    v.update(edges=bn.loc["edges", "ours"], differing_edges=bn.loc["differing_edges", "ours"],
-             max_cpt_difference=bn.loc["max_cpt_difference", "ours"], log_likelihood=bn.loc["log_likelihood", "ours"],
-             log_likelihood_difference=abs(bn.loc["log_likelihood", "difference"]), zero_rows=bn.loc["zero_rows", "ours"],
-             lost_mass_percent=100 * bn.loc["lost_prior_mass", "ours"])  # fmt: skip
+    v.update(
+        edges=bn.loc["edges", "ours"],
+        differing_edges=bn.loc["differing_edges", "ours"],
+        max_cpt_difference=bn.loc["max_cpt_difference", "ours"],
+        log_likelihood=bn.loc["log_likelihood", "ours"],
+        log_likelihood_difference=abs(bn.loc["log_likelihood", "difference"]),
+        zero_rows=bn.loc["zero_rows", "ours"],
+        lost_mass_percent=100 * bn.loc["lost_prior_mass", "ours"],
+    )
     fig4 = _table(summary, "glu2017_effect_prediction")[0].set_index(["case", "ObjVel"])["p"]
     v.update({f"fig4_sphere_{x}": fig4["small sphere", x] for x in ("slow", "medium", "fast")})
     v["fig4_box_slow"] = fig4["big box", "slow"]
@@ -171,10 +196,14 @@ def values(summary: Mapping[str, Any]) -> dict[str, Any]:
     scores = _table(summary, "hmm_original_scores")[0]
     v["original_tap"], v["original_n"] = int((scores["winner"] == "tap").sum()), len(scores)
     others = scores[scores["winner"] != "tap"]
-    v["original_other"] = "; ".join(
-        f"{r.recording} {r.start}–{r.end} goes to {r.winner}" + (" (their push model)" if r.winner == "touch" else "")
-        for r in others.itertuples()
-    ) or "all of them"  # fmt: skip
+    v["original_other"] = (
+        "; ".join(
+            f"{r.recording} {r.start}–{r.end} goes to {r.winner}"
+            + (" (their push model)" if r.winner == "touch" else "")
+            for r in others.itertuples()
+        )
+        or "all of them"
+    )
     cv_meta = _table(summary, "hmm_synthetic_cv")[1]
     v["cv_folds"], v["cv_accuracy"] = cv_meta["folds"], cv_meta["accuracy"]
     noise, noise_meta = _table(summary, "hmm_accuracy_vs_noise")
@@ -209,12 +238,21 @@ def values(summary: Mapping[str, Any]) -> dict[str, Any]:
     v["step"] = _table(summary, "tcds_anticipation_sphere_original_predictions")[1]["parameters"]["step"]
     desc, desc_meta = _table(summary, "verbal_published_descriptions")
     scored = desc["same_score"].dropna()
-    v.update(same_sentences=int(desc["same_sentence"].sum()), n_sentences=len(desc), same_scores=int(scored.sum()),
-             n_scores=len(scored), n_grammar=desc_meta["n_grammar_sentences"],
-             n_samples=desc_meta["n_candidates"])  # fmt: skip
+    v.update(
+        same_sentences=int(desc["same_sentence"].sum()),
+        n_sentences=len(desc),
+        same_scores=int(scored.sum()),
+        n_scores=len(scored),
+        n_grammar=desc_meta["n_grammar_sentences"],
+        n_samples=desc_meta["n_candidates"],
+    )
     trials = _table(summary, "verbal_sampling_vs_exact")[0]
-    v.update(trials=len(trials), trials_found=int(trials["found_best"].sum()), trial_samples=trials["n_samples"].max(),
-             p_draw_percent=100 * float(trials["p_draw_best"].mean()))  # fmt: skip
+    v.update(
+        trials=len(trials),
+        trials_found=int(trials["found_best"].sum()),
+        trial_samples=trials["n_samples"].max(),
+        p_draw_percent=100 * float(trials["p_draw_best"].mean()),
+    )
     v.update(corpus_values(summary))
     v.update(_correspondence(summary))
     return v
@@ -229,40 +267,82 @@ def corpus_values(summary: Mapping[str, Any]) -> dict[str, Any]:
     grid = meta["parameters"]["grid"]
     full, early = max(grid["fractions"]), min(grid["fractions"])
 
-    def cell(posterior: str, target: str, strategy: str, metric: str, fraction: float = full,
-             viewpoint: str = "all") -> pd.Series:  # fmt: skip
-        sel = table[(table.posterior == posterior) & (table.target == target) & (table.strategy == strategy)
-                    & (table.metric == metric) & (table.fraction == fraction) & (table.viewpoint == viewpoint)
-                    & table.noise.isna()]  # fmt: skip
+    def cell(
+        posterior: str,
+        target: str,
+        strategy: str,
+        metric: str,
+        fraction: float = full,
+        viewpoint: str = "all",
+    ) -> pd.Series:
+        sel = table[
+            (table.posterior == posterior)
+            & (table.target == target)
+            & (table.strategy == strategy)
+            & (table.metric == metric)
+            & (table.fraction == fraction)
+            & (table.viewpoint == viewpoint)
+            & table.noise.isna()
+        ]
         if len(sel) != 1:
             raise DataError(
                 f"corpus_metrics: no single row for {posterior} {target} {strategy} {metric} {fraction}"
             )
         return sel.iloc[0]
 
-    v: dict[str, Any] = {"corpus_episodes": meta["episodes"], "corpus_noise": len(grid["noise"]),
-                         "corpus_views": len(grid["viewpoints"]), "ci_percent": 100 * LEVEL}  # fmt: skip
+    v: dict[str, Any] = {
+        "corpus_episodes": meta["episodes"],
+        "corpus_noise": len(grid["noise"]),
+        "corpus_views": len(grid["viewpoints"]),
+        "ci_percent": 100 * LEVEL,
+    }
     g = cell("likelihood", "action", "gesture", "log_loss")
-    v.update(lik_gesture_ll=g.estimate, lik_gesture_ll_lo=g.ci_low, lik_gesture_ll_hi=g.ci_high,
-             lik_gesture_acc=cell("likelihood", "action", "gesture", "accuracy").estimate,
-             lik_product_acc=cell("likelihood", "action", "product", "accuracy").estimate)  # fmt: skip
+    v.update(
+        lik_gesture_ll=g.estimate,
+        lik_gesture_ll_lo=g.ci_low,
+        lik_gesture_ll_hi=g.ci_high,
+        lik_gesture_acc=cell("likelihood", "action", "gesture", "accuracy").estimate,
+        lik_product_acc=cell("likelihood", "action", "product", "accuracy").estimate,
+    )
     p = cell("per_frame", "action", "product", "accuracy")
-    v.update(pf_product_acc=p.estimate, pf_product_acc_lo=p.ci_low, pf_product_acc_hi=p.ci_high,
-             pf_gesture_acc=cell("per_frame", "action", "gesture", "accuracy").estimate)  # fmt: skip
-    d = diffs[(diffs.posterior == "per_frame") & (diffs.target == "action") & (diffs.metric == "accuracy")
-              & (diffs.fraction == full) & (diffs.strategy == "product") & (diffs.baseline == "gesture")
-              & (diffs.viewpoint == "all") & diffs.noise.isna()].iloc[0]  # fmt: skip
-    v.update(pf_gain=d.difference, pf_gain_lo=d.ci_low, pf_gain_hi=d.ci_high, early_percent=100 * early,
-             early_product=cell("per_frame", "action", "product", "accuracy", early).estimate,
-             early_gesture=cell("per_frame", "action", "gesture", "accuracy", early).estimate)  # fmt: skip
+    v.update(
+        pf_product_acc=p.estimate,
+        pf_product_acc_lo=p.ci_low,
+        pf_product_acc_hi=p.ci_high,
+        pf_gesture_acc=cell("per_frame", "action", "gesture", "accuracy").estimate,
+    )
+    d = diffs[
+        (diffs.posterior == "per_frame")
+        & (diffs.target == "action")
+        & (diffs.metric == "accuracy")
+        & (diffs.fraction == full)
+        & (diffs.strategy == "product")
+        & (diffs.baseline == "gesture")
+        & (diffs.viewpoint == "all")
+        & diffs.noise.isna()
+    ].iloc[0]
+    v.update(
+        pf_gain=d.difference,
+        pf_gain_lo=d.ci_low,
+        pf_gain_hi=d.ci_high,
+        early_percent=100 * early,
+        early_product=cell("per_frame", "action", "product", "accuracy", early).estimate,
+        early_gesture=cell("per_frame", "action", "gesture", "accuracy", early).estimate,
+    )
     j = cell("per_frame", "effect", "jeffrey", "ece")
-    v.update(pf_jeffrey_ece=j.estimate, pf_jeffrey_ece_lo=j.ci_low, pf_jeffrey_ece_hi=j.ci_high,
-             pf_hard_ece=cell("per_frame", "effect", "hard", "ece").estimate,
-             pf_jeffrey_ll=cell("per_frame", "effect", "jeffrey", "log_loss").estimate,
-             pf_hard_ll=cell("per_frame", "effect", "hard", "log_loss").estimate)  # fmt: skip
-    v.update(turned_deg=meta["parameters"]["views"]["turned"]["yaw_deg"],
-             turned_gesture=cell("per_frame", "action", "gesture", "accuracy", viewpoint="turned").estimate,
-             turned_network=cell("per_frame", "action", "network", "accuracy", viewpoint="turned").estimate)  # fmt: skip
+    v.update(
+        pf_jeffrey_ece=j.estimate,
+        pf_jeffrey_ece_lo=j.ci_low,
+        pf_jeffrey_ece_hi=j.ci_high,
+        pf_hard_ece=cell("per_frame", "effect", "hard", "ece").estimate,
+        pf_jeffrey_ll=cell("per_frame", "effect", "jeffrey", "log_loss").estimate,
+        pf_hard_ll=cell("per_frame", "effect", "hard", "log_loss").estimate,
+    )
+    v.update(
+        turned_deg=meta["parameters"]["views"]["turned"]["yaw_deg"],
+        turned_gesture=cell("per_frame", "action", "gesture", "accuracy", viewpoint="turned").estimate,
+        turned_network=cell("per_frame", "action", "network", "accuracy", viewpoint="turned").estimate,
+    )
     return v
 
 
@@ -279,13 +359,27 @@ def _correspondence(summary: Mapping[str, Any]) -> dict[str, Any]:
     v: dict[str, Any] = {}
     off = _table(summary, "posture_offsets")[0]
     sat, stand = off[off["posture"] == "seated"], off[off["posture"] == "standing"]
-    v.update(seated_y_lo=sat["y"].min(), seated_y_hi=sat["y"].max(), standing_y_max=stand["y"].max(),
-             seated_z_lo=sat["z"].min(), seated_z_hi=sat["z"].max(), standing_z_min=stand["z"].min())  # fmt: skip
+    v.update(
+        seated_y_lo=sat["y"].min(),
+        seated_y_hi=sat["y"].max(),
+        standing_y_max=stand["y"].max(),
+        seated_z_lo=sat["z"].min(),
+        seated_z_hi=sat["z"].max(),
+        standing_z_min=stand["z"].min(),
+    )
     grid = _table(summary, "hmm_feature_settings_summary")[0].set_index("features")
     for f in ("raw", "centred"):
         r = grid.loc[f]
-        v.update({f"{f}_all": r["runs_all_test_correct"], f"{f}_runs": r["runs"], f"{f}_mean": r["loso_mean"],
-                  f"{f}_sd": r["loso_sd"], f"{f}_min": r["loso_min"], f"{f}_max": r["loso_max"]})  # fmt: skip
+        v.update(
+            {
+                f"{f}_all": r["runs_all_test_correct"],
+                f"{f}_runs": r["runs"],
+                f"{f}_mean": r["loso_mean"],
+                f"{f}_sd": r["loso_sd"],
+                f"{f}_min": r["loso_min"],
+                f"{f}_max": r["loso_max"],
+            }
+        )
     v["centred_always"] = grid.loc["centred", "settings_always_all_test_correct"] or "no setting"
     for case in ("sphere", "box"):
         pred = _table(summary, f"tcds_anticipation_{case}_glu_predictions")[0]
@@ -301,23 +395,35 @@ def _correspondence(summary: Mapping[str, Any]) -> dict[str, Any]:
         return rows["accuracy"] if level is None else rows[rows["level"] == level]["accuracy"]
 
     turned = h[(h["factor"] == "viewpoint") & (h["yaw_deg"] > 0)]
-    v.update(study_seeds=len(meta["parameters"]["seeds"]), yaw_lo=turned["yaw_deg"].min(),
-             yaw_hi=turned["yaw_deg"].max(), raw_front=acc("raw", "viewpoint", "0°").iloc[0],
-             raw_turn_min=turned[turned["features"] == "raw"]["accuracy"].min(),
-             raw_turn_max=turned[turned["features"] == "raw"]["accuracy"].max(),
-             rot_turn_min=turned[turned["features"] == "centred+rotated"]["accuracy"].min(),
-             rot_turn_max=turned[turned["features"] == "centred+rotated"]["accuracy"].max(),
-             raw_mirror=acc("raw", "mirror").iloc[0], mir_mirror=acc("centred+mirrored", "mirror").iloc[0],
-             raw_seated=acc("raw", "posture").iloc[0], cen_seated=acc("centred", "posture").iloc[0],
-             raw_combined=acc("raw", "combined").iloc[0], all_combined=acc(ALL_FOUR, "combined").iloc[0])  # fmt: skip
+    v.update(
+        study_seeds=len(meta["parameters"]["seeds"]),
+        yaw_lo=turned["yaw_deg"].min(),
+        yaw_hi=turned["yaw_deg"].max(),
+        raw_front=acc("raw", "viewpoint", "0°").iloc[0],
+        raw_turn_min=turned[turned["features"] == "raw"]["accuracy"].min(),
+        raw_turn_max=turned[turned["features"] == "raw"]["accuracy"].max(),
+        rot_turn_min=turned[turned["features"] == "centred+rotated"]["accuracy"].min(),
+        rot_turn_max=turned[turned["features"] == "centred+rotated"]["accuracy"].max(),
+        raw_mirror=acc("raw", "mirror").iloc[0],
+        mir_mirror=acc("centred+mirrored", "mirror").iloc[0],
+        raw_seated=acc("raw", "posture").iloc[0],
+        cen_seated=acc("centred", "posture").iloc[0],
+        raw_combined=acc("raw", "combined").iloc[0],
+        all_combined=acc(ALL_FOUR, "combined").iloc[0],
+    )
     noise = h[(h["factor"] == "sensor noise")]
     lowest = noise["level"].iloc[0]  # the first noise condition of the study
-    v.update(study_noise_cm=float(lowest.split()[0]), raw_noise=acc("raw", "sensor noise", lowest).iloc[0],
-             cen_noise=acc("centred", "sensor noise", lowest).iloc[0])  # fmt: skip
+    v.update(
+        study_noise_cm=float(lowest.split()[0]),
+        raw_noise=acc("raw", "sensor noise", lowest).iloc[0],
+        cen_noise=acc("centred", "sensor noise", lowest).iloc[0],
+    )
     r = study[study["train"] == "robot"]
-    v.update(robot_best=r[r["factor"] != "performer"]["accuracy"].max(),
-             robot_own_min=r[r["factor"] == "performer"]["accuracy"].min(),
-             robot_own_max=r[r["factor"] == "performer"]["accuracy"].max())  # fmt: skip
+    v.update(
+        robot_best=r[r["factor"] != "performer"]["accuracy"].max(),
+        robot_own_min=r[r["factor"] == "performer"]["accuracy"].min(),
+        robot_own_max=r[r["factor"] == "performer"]["accuracy"].max(),
+    )
     return v
 
 
@@ -331,8 +437,11 @@ def _wrap(text: str) -> str:
     for line in text.splitlines():
         bullet = re.match(r"( *)(\* )?", line)
         indent = bullet.group(1) + ("  " if bullet.group(2) else "")
-        out.append(textwrap.fill(line, WIDTH, subsequent_indent=indent, break_on_hyphens=False,
-                                 break_long_words=False))  # fmt: skip
+        out.append(
+            textwrap.fill(
+                line, WIDTH, subsequent_indent=indent, break_on_hyphens=False, break_long_words=False
+            )
+        )
     return "\n".join(out)
 
 

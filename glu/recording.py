@@ -212,10 +212,18 @@ def write_anticipation_recording(path: str | os.PathLike, recording_id: str, **r
 def _run_fields(run: AnticipationRun, note: str) -> dict[str, Any]:
     scene = run.scene() + (f"\n\n<small>{note}</small>" if note else "")
     return dict(
-        xyz=run.xyz, seconds=run.seconds, frames=run.frames, actions=run.actions,
-        loglik_per_frame=run.loglik_per_frame, p_hmm=run.p_hmm, update_frames=run.update_frames,
-        fused=run.fused, scene=scene, descriptions=run.descriptions or None, values=run.values,
-    )  # fmt: skip
+        xyz=run.xyz,
+        seconds=run.seconds,
+        frames=run.frames,
+        actions=run.actions,
+        loglik_per_frame=run.loglik_per_frame,
+        p_hmm=run.p_hmm,
+        update_frames=run.update_frames,
+        fused=run.fused,
+        scene=scene,
+        descriptions=run.descriptions or None,
+        values=run.values,
+    )
 
 
 def show_anticipation(
@@ -258,10 +266,10 @@ def write_anticipation(
 # ------------------------------------------------------------------ one gesture, two viewpoints
 
 SKELETON_BONES: tuple[tuple[str, ...], ...] = (
-    ("head", "neck", "torso"), ("left_hand", "left_elbow", "left_shoulder", "neck", "right_shoulder",
-    "right_elbow", "right_hand"), ("left_foot", "left_knee", "left_hip", "torso", "right_hip", "right_knee",
-    "right_foot"),
-)  # fmt: skip
+    ("head", "neck", "torso"),
+    ("left_hand", "left_elbow", "left_shoulder", "neck", "right_shoulder", "right_elbow", "right_hand"),
+    ("left_foot", "left_knee", "left_hip", "torso", "right_hip", "right_knee", "right_foot"),
+)
 """Chains of OpenNI joints drawn as the skeleton."""
 FEATURE_RGB = {"raw": (150, 150, 150), "aligned": (221, 132, 82)}
 
@@ -276,14 +284,22 @@ def two_views_blueprint(n_views: int):
         cols.append(
             rrb.Vertical(
                 rrb.Spatial3DView(origin=f"/view{i}/camera", name=f"view {i}: seen by the camera"),
-                rrb.Spatial3DView(origin=f"/view{i}/features", name=f"view {i}: raw (grey) and aligned features"),
-                rrb.TimeSeriesView(origin=f"/view{i}/p_hmm/raw", name=f"view {i}: p_HMM, raw features",
-                                   axis_y=rrb.ScalarAxis(range=(0.0, 1.0))),
-                rrb.TimeSeriesView(origin=f"/view{i}/p_hmm/aligned", name=f"view {i}: p_HMM, aligned features",
-                                   axis_y=rrb.ScalarAxis(range=(0.0, 1.0))),
+                rrb.Spatial3DView(
+                    origin=f"/view{i}/features", name=f"view {i}: raw (grey) and aligned features"
+                ),
+                rrb.TimeSeriesView(
+                    origin=f"/view{i}/p_hmm/raw",
+                    name=f"view {i}: p_HMM, raw features",
+                    axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+                ),
+                rrb.TimeSeriesView(
+                    origin=f"/view{i}/p_hmm/aligned",
+                    name=f"view {i}: p_HMM, aligned features",
+                    axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+                ),
                 row_shares=[2, 2, 1, 1],
             )
-        )  # fmt: skip
+        )
     return rrb.Blueprint(
         rrb.Vertical(
             rrb.TextDocumentView(origin="/scene", name="scene"), rrb.Horizontal(*cols), row_shares=[1, 6]
@@ -342,10 +358,12 @@ def write_two_views(runs: Sequence, path: str | os.PathLike, recording_id: str, 
     try:
         lines = [scene or "# One gesture, two viewpoints", ""]
         for i, run in enumerate(runs, start=1):
-            lines.append(f"* view {i}: {run.label} — {run.view.describe()}; final p_HMM raw "
-                         + ", ".join(f"{a} {p:.2f}" for a, p in zip(run.actions, run.p_raw[-1], strict=True))
-                         + "; aligned "
-                         + ", ".join(f"{a} {p:.2f}" for a, p in zip(run.actions, run.p_aligned[-1], strict=True)))  # fmt: skip
+            lines.append(
+                f"* view {i}: {run.label} — {run.view.describe()}; final p_HMM raw "
+                + ", ".join(f"{a} {p:.2f}" for a, p in zip(run.actions, run.p_raw[-1], strict=True))
+                + "; aligned "
+                + ", ".join(f"{a} {p:.2f}" for a, p in zip(run.actions, run.p_aligned[-1], strict=True))
+            )
         log_scene(rec, "\n".join(lines))
         for i, run in enumerate(runs, start=1):
             rec.log(f"view{i}", rr.ViewCoordinates.RUB, static=True)

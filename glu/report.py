@@ -94,11 +94,25 @@ def render_notebook_page(ipynb: Path, page: Path) -> Path:
 
 
 API_MODULES: tuple[str, ...] = (
-    "glu.schema", "glu.data.source", "glu.data.tables", "glu.data.trajectory_files", "glu.data.fetch",
-    "glu.bn.model", "glu.bn.learning", "glu.bn.inference", "glu.bn.exchange", "glu.fusion",
-    "glu.gestures.features", "glu.gestures.recognizer", "glu.gestures.typicality", "glu.gestures.training",
-    "glu.language.grammar", "glu.language.descriptions", "glu.experiments.fusion", "glu.paths",
-)  # fmt: skip
+    "glu.schema",
+    "glu.data.source",
+    "glu.data.tables",
+    "glu.data.trajectory_files",
+    "glu.data.fetch",
+    "glu.bn.model",
+    "glu.bn.learning",
+    "glu.bn.inference",
+    "glu.bn.exchange",
+    "glu.fusion",
+    "glu.gestures.features",
+    "glu.gestures.recognizer",
+    "glu.gestures.typicality",
+    "glu.gestures.training",
+    "glu.language.grammar",
+    "glu.language.descriptions",
+    "glu.experiments.fusion",
+    "glu.paths",
+)
 """The modules of the API reference, in reading order."""
 
 

@@ -387,8 +387,11 @@ def run_one(
     check(spec, {**parsed, **unknown}, src.stem)  # refuses unknown names, with a suggestion
     source = resolve_data(data)
     layout = OutputLayout.at(out) if out is not None else OutputLayout.scratch(src.stem)
-    params = {**parsed, "data": "synthetic" if source.root is None else str(source.root),
-              "out_dir": str(layout.root)}  # fmt: skip
+    params = {
+        **parsed,
+        "data": "synthetic" if source.root is None else str(source.root),
+        "out_dir": str(layout.root),
+    }
     executed = layout.notebooks / f"{src.stem}.ipynb"
     shown = parameters_text(parsed) or "default parameters"
     log(f"glu run: {src.stem} with {shown}, {source.location()} …")

@@ -196,8 +196,14 @@ def schema_from_dict(d: Any, where: str = "schema") -> Schema:
                 raise DataError(f"{where}: alias {alias!r} of {node!r} names an unknown value {v!r}")
     all_values = dict(values)
     all_values.update({w: WORD_VALUES for w in words})
-    return Schema(values=all_values, n_affordance=len(values), aliases={k: dict(v) for k, v in aliases.items()},
-                  roots=tuple(roots), roles=roles, name=str(d.get("name", "")))  # fmt: skip
+    return Schema(
+        values=all_values,
+        n_affordance=len(values),
+        aliases={k: dict(v) for k, v in aliases.items()},
+        roots=tuple(roots),
+        roles=roles,
+        name=str(d.get("name", "")),
+    )
 
 
 def read_schema_file(path: str | os.PathLike) -> Schema:
@@ -222,9 +228,18 @@ def read_schema_file(path: str | os.PathLike) -> Schema:
 def schema_to_dict(schema: Schema) -> dict[str, Any]:
     """The content of a schema file for ``schema`` (inverse of :func:`schema_from_dict`)."""
     return {
-        "format": SCHEMA_FORMAT, "version": SCHEMA_VERSION, "name": schema.name,
-        "nodes": [{"name": n, "values": list(schema.values_of(n)), "role": schema.roles.get(n, "object"),
-                   "set_by_experimenter": n in schema.root_nodes} for n in schema.affordance_nodes],
+        "format": SCHEMA_FORMAT,
+        "version": SCHEMA_VERSION,
+        "name": schema.name,
+        "nodes": [
+            {
+                "name": n,
+                "values": list(schema.values_of(n)),
+                "role": schema.roles.get(n, "object"),
+                "set_by_experimenter": n in schema.root_nodes,
+            }
+            for n in schema.affordance_nodes
+        ],
         "words": list(schema.word_nodes),
         "aliases": {k: dict(v) for k, v in schema.aliases.items()},
-    }  # fmt: skip
+    }

@@ -201,8 +201,14 @@ def collect_summary(results_dir: Path, runs: list[NotebookResult], data: str, qu
             reference and "difference" in df.columns and len(df)
         ):  # a comparison declares what it compares with
             diff = pd.to_numeric(df["difference"], errors="coerce").abs()
-            comparison.append({"table": name, "reference": reference, "rows": int(diff.notna().sum()),
-                               "max_abs_difference": float(diff.max())})  # fmt: skip
+            comparison.append(
+                {
+                    "table": name,
+                    "reference": reference,
+                    "rows": int(diff.notna().sum()),
+                    "max_abs_difference": float(diff.max()),
+                }
+            )
     summary = {
         "ran": [r.name for r in runs],
         "data_source": data,
@@ -242,10 +248,18 @@ def summary_csv(summary: dict[str, Any]) -> str:
         columns.append(np.tile(np.asarray(df.columns, dtype=object), n))
         values.extend(cells.ravel().tolist())
     # one frame, so that pandas infers the value column's type over every table at once, as it did
-    frame = pd.DataFrame(
-        {"table": np.concatenate(tables), "row": np.concatenate(rows), "column": np.concatenate(columns),
-         "value": values}
-    ) if tables else pd.DataFrame([])  # fmt: skip
+    frame = (
+        pd.DataFrame(
+            {
+                "table": np.concatenate(tables),
+                "row": np.concatenate(rows),
+                "column": np.concatenate(columns),
+                "value": values,
+            }
+        )
+        if tables
+        else pd.DataFrame([])
+    )
     return frame.to_csv(index=False, lineterminator="\n")
 
 

@@ -112,9 +112,19 @@ for name, recognizer in banks.items():
     for j, case in enumerate(anticipation.CASES):
         trajectory = anticipation.case_trajectory(out.source, case, seed=seed)
         run = anticipation.effect_anticipation(
-            recognizer, engine, trajectory, anticipation.CASES[case].evidence, case=case, models=name,
-            step=step, final_update=final_update, rule=rule, describe=True, score=score, candidates=sentences,
-        )  # fmt: skip
+            recognizer,
+            engine,
+            trajectory,
+            anticipation.CASES[case].evidence,
+            case=case,
+            models=name,
+            step=step,
+            final_update=final_update,
+            rule=rule,
+            describe=True,
+            score=score,
+            candidates=sentences,
+        )
         runs[case, name] = run
         out.table(run.curves(), f"tcds_anticipation_{case}_{name}_curves")
         out.table(
@@ -124,15 +134,21 @@ for name, recognizer in banks.items():
             prediction_changes=run.prediction_changes(),
         )
         recording.write_anticipation(
-            run, out.recording(f"tcds_anticipation_{case}_{name}"), f"glu-anticipation-{case}-{name}-{seed}",
+            run,
+            out.recording(f"tcds_anticipation_{case}_{name}"),
+            f"glu-anticipation-{case}-{name}-{seed}",
             note=out.footer(),
-        )  # fmt: skip
+        )
         if name == "original":  # the published Fig. 5: curves, bars and caption
             versus = anticipation.published_comparison(run)
-            out.table(versus, f"tcds_anticipation_{case}_published", reference="TCDS 2020 Fig. 5 (published EPS)")
-            print(f"{case}: {int(versus.within.sum())} of {len(versus)} published values within the figure's "
-                  f"resolution; the caption {'is' if versus.attrs['parameters']['same_caption'] else 'is not'} "
-                  "the paper's")  # fmt: skip
+            out.table(
+                versus, f"tcds_anticipation_{case}_published", reference="TCDS 2020 Fig. 5 (published EPS)"
+            )
+            print(
+                f"{case}: {int(versus.within.sum())} of {len(versus)} published values within the figure's "
+                f"resolution; the caption {'is' if versus.attrs['parameters']['same_caption'] else 'is not'} "
+                "the paper's"
+            )
         plots.plot_anticipation(axes[:, j], run.curves(), run.predictions())
         changes = "; ".join(
             f"{v} from t = {t} (frame {f}, p {p:.2f})" for t, f, v, p in run.prediction_changes()

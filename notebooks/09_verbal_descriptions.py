@@ -72,9 +72,11 @@ seeds = range(seed, seed + (2 if quick else n_trials))
 probs = word_probabilities(engine, ex.EVIDENCE_AND_BUT["medium"])
 t0 = time.perf_counter()
 exact_nbest(net, probs, nbest, score=score)
-print(f"grammar: {count_sentences(net):,} sentences of {net.min_length}-{net.max_length} words; "
-      f"exact {nbest}-best in {1000 * (time.perf_counter() - t0):.1f} ms; "
-      f"candidates: {len(set(samples)):,} sentences, {samples_label}")  # fmt: skip
+print(
+    f"grammar: {count_sentences(net):,} sentences of {net.min_length}-{net.max_length} words; "
+    f"exact {nbest}-best in {1000 * (time.perf_counter() - t0):.1f} ms; "
+    f"candidates: {len(set(samples)):,} sentences, {samples_label}"
+)
 
 # %% [markdown]
 # ## TCDS Table II, Fig. 7 and Fig. 8, as the paper printed them
@@ -84,12 +86,18 @@ print(f"grammar: {count_sentences(net):,} sentences of {net.min_length}-{net.max
 
 # %%
 reproduced = ex.published_descriptions(engine, samples, score="original")
-out.table(reproduced, "verbal_published_descriptions", n_grammar_sentences=count_sentences(net),
-          n_candidates=len(set(samples)))  # fmt: skip
+out.table(
+    reproduced,
+    "verbal_published_descriptions",
+    n_grammar_sentences=count_sentences(net),
+    n_candidates=len(set(samples)),
+)
 scored = reproduced["same_score"].dropna().astype(bool)
-print(f"{out.source.kind} data, {samples_label}: "
-      f"{int(reproduced['same_sentence'].sum())} of {len(reproduced)} published sentences and "
-      f"{int(scored.sum())} of {len(scored)} printed scores reproduced")  # fmt: skip
+print(
+    f"{out.source.kind} data, {samples_label}: "
+    f"{int(reproduced['same_sentence'].sum())} of {len(reproduced)} published sentences and "
+    f"{int(scored.sum())} of {len(scored)} printed scores reproduced"
+)
 reproduced[["figure", "rank", "paper_sentence", "paper_score", "sentence", "printed", "same_sentence"]]
 
 # %% [markdown]
@@ -143,17 +151,27 @@ probs = word_probabilities(engine, ev)
 first = trials[trials["figure"] == "fig7a"].iloc[0]
 drawn = sample_sentences(grammar, n_samples, int(first["seed"]))
 fig, (ax,) = plots.new_figure(1, width=6, height=3.4)
-plots.plot_sampling(ax, all_scores(net, probs, "original"), score_sentences(drawn, probs, "original"),
-                    first["exact_score"], score="original")  # fmt: skip
+plots.plot_sampling(
+    ax,
+    all_scores(net, probs, "original"),
+    score_sentences(drawn, probs, "original"),
+    first["exact_score"],
+    score="original",
+)
 ax.set_title(f"{', '.join(f'{k}={v}' for k, v in ev.items())}: one sample of {n_samples:,}", fontsize=9)
 out.figure(fig, "verbal_sampling_vs_exact")
 per_set = trials.groupby("figure", sort=False).agg(
-    trials=("seed", "size"), found_best=("found_best", "sum"), p_draw_best=("p_draw_best", "first"),
-    median_rank=("sample_rank", "median"), mean_gap=("gap", "mean"),
-)  # fmt: skip
-print(f"over {len(trials)} trials of {n_samples:,} random sentences, the best of the grammar was drawn "
-      f"{int(trials['found_best'].sum())} times ({100 * trials['found_best'].mean():.1f} %); "
-      f"the median rank of a sample's best in the grammar is {np.median(trials['sample_rank']):.0f}")  # fmt: skip
+    trials=("seed", "size"),
+    found_best=("found_best", "sum"),
+    p_draw_best=("p_draw_best", "first"),
+    median_rank=("sample_rank", "median"),
+    mean_gap=("gap", "mean"),
+)
+print(
+    f"over {len(trials)} trials of {n_samples:,} random sentences, the best of the grammar was drawn "
+    f"{int(trials['found_best'].sum())} times ({100 * trials['found_best'].mean():.1f} %); "
+    f"the median rank of a sample's best in the grammar is {np.median(trials['sample_rank']):.0f}"
+)
 per_set
 
 # %% [markdown]

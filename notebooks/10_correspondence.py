@@ -46,9 +46,16 @@ feature_sets: list[str] = [
 ]  # study: feature sets compared
 n_states: int = 6  # study: HMM states per action
 n_mix: int = 1  # study: Gaussians per state
-normalise_body: bool = False  # study: features / fixed constants as in the 2017 logs (True: / measured body size)
+normalise_body: bool = (
+    False  # study: features / fixed constants as in the 2017 logs (True: / measured body size)
+)
 real_features: list[str] = ["raw", "centred", "centred+rotated"]  # real data: feature sets compared
-real_settings: list[str] = ["glu defaults", "reg0.001", "M1", "mixsplit"]  # real data: training settings, Q states, M Gaussians, reg covariance prior, or a recipe
+real_settings: list[str] = [
+    "glu defaults",
+    "reg0.001",
+    "M1",
+    "mixsplit",
+]  # real data: training settings, Q states, M Gaussians, reg covariance prior, or a recipe
 real_seeds: list[int] = [0, 1, 2]  # real data: EM seeds, only the first for single Gaussians
 view_gesture: int = 1  # two-view recording: the seed of the tap it shows (noise-free)
 seed: int = 0  # two-view recording: seed of the recognisers' training set and EM
@@ -81,9 +88,14 @@ if quick:
 
 # %%
 results = corr.correspondence_study(
-    feature_sets=feature_sets, conditions=conditions, seeds=seeds, n_train=n_train, n_test=n_test,
-    normalise_body=normalise_body, **study,
-)  # fmt: skip
+    feature_sets=feature_sets,
+    conditions=conditions,
+    seeds=seeds,
+    n_train=n_train,
+    n_test=n_test,
+    normalise_body=normalise_body,
+    **study,
+)
 summary = corr.summarise(results)
 out.table(results, "correspondence_study")
 out.table(summary, "correspondence_summary")
@@ -114,7 +126,9 @@ fig, axes = plt.subplots(2, 1, figsize=(11, 6.5))
 for ax, train in zip(axes, corr.TRAIN_SOURCES, strict=True):
     cplots.plot_invariance_effects(ax, effects, train)
 out.figure(fig, "correspondence_invariance_effects", source=results.attrs["data_source"])
-costs = effects[effects["costs"]][["train", "features", "baseline", "factor", "level", "delta", "ci_low", "ci_high"]]
+costs = effects[effects["costs"]][
+    ["train", "features", "baseline", "factor", "level", "delta", "ci_low", "ci_high"]
+]
 costs
 
 # %% [markdown]
@@ -126,11 +140,20 @@ costs
 # the raw and aligned features in 3-D, and both posteriors over time.
 
 # %%
-raw_rec, inv_rec = (corr.train_for("human", f, n_train, seed, normalise_body, tol=1e-3, **study) for f in ("raw", "all"))
-views = (View(yaw_deg=0.0, normalise_body=normalise_body), View(yaw_deg=120.0, mirror=True, normalise_body=normalise_body))
+raw_rec, inv_rec = (
+    corr.train_for("human", f, n_train, seed, normalise_body, tol=1e-3, **study) for f in ("raw", "all")
+)
+views = (
+    View(yaw_deg=0.0, normalise_body=normalise_body),
+    View(yaw_deg=120.0, mirror=True, normalise_body=normalise_body),
+)
 runs = corr.two_views(raw_rec, inv_rec, "tap", views, seed=view_gesture, noise=0.0)
-recording.write_two_views(runs, out.recording("correspondence_two_views"), f"glu-correspondence-two-views-{seed}",
-                          scene="# One tap, two viewpoints\nRaw features (grey) and invariant features `all` (orange).")  # fmt: skip
+recording.write_two_views(
+    runs,
+    out.recording("correspondence_two_views"),
+    f"glu-correspondence-two-views-{seed}",
+    scene="# One tap, two viewpoints\nRaw features (grey) and invariant features `all` (orange).",
+)
 curves = corr.two_views_curves(runs)
 out.table(curves, "correspondence_two_views")
 fig, axes = plots.new_figure(len(runs), width=4.2, height=2.8)
@@ -160,16 +183,18 @@ if out.source.is_real:
     cases = {c.recording for c in anticipation.CASES.values()}
     taps = [s for s in original_test_segments(out.source) if s.recording in cases]
     settings = [seated.parse_setting(s) for s in real_settings]
-    grid = seated.feature_settings(standing, taps, real_features, settings, real_seeds,
-                                   **({"n_iter": 10} if quick else {}))  # fmt: skip
+    grid = seated.feature_settings(
+        standing, taps, real_features, settings, real_seeds, **({"n_iter": 10} if quick else {})
+    )
     real_summary = seated.feature_settings_summary(grid)
     out.table(grid, "hmm_feature_settings")
     out.table(real_summary, "hmm_feature_settings_summary")
     fig, axes = plots.new_figure(1, width=6, height=3.6)
     cplots.plot_feature_settings(axes[0], grid)
     out.figure(fig, "hmm_feature_settings", source=grid.attrs["data_source"])
-    shown = grid.pivot_table(index=["features", "setting"], values=["loso_accuracy", "test_correct"],
-                             aggfunc=["min", "max"]).round(3)  # fmt: skip
+    shown = grid.pivot_table(
+        index=["features", "setting"], values=["loso_accuracy", "test_correct"], aggfunc=["min", "max"]
+    ).round(3)
 else:
     shown = "the seated taps are in the real data only"
 shown

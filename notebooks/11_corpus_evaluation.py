@@ -50,11 +50,18 @@ from glu.sweep import config_from_dict, run_sweep
 
 out = start("11_corpus_evaluation", globals())
 settings = {
-    "episodes": episodes, "seed": seed, "chunk_size": 2000,
-    "grid": {"noise": noise_levels, "viewpoints": viewpoints, "posteriors": posteriors, "fractions": fractions},
+    "episodes": episodes,
+    "seed": seed,
+    "chunk_size": 2000,
+    "grid": {
+        "noise": noise_levels,
+        "viewpoints": viewpoints,
+        "posteriors": posteriors,
+        "fractions": fractions,
+    },
     "network": {"data": "synthetic" if out.source.root is None else str(out.source.root)},
     "evaluation": {"bootstrap": bootstrap},
-}  # fmt: skip
+}
 if quick:
     settings.update(episodes=240, chunk_size=60, evaluation={"bootstrap": 40})
     settings["grid"].update(noise=[0.0, 0.05], viewpoints=["front", "seated"], fractions=[0.4, 1.0])
@@ -71,8 +78,13 @@ config = config_from_dict(settings)
 
 # %%
 with tempfile.TemporaryDirectory() as sweep_dir:
-    result = run_sweep(config, sweep_dir, scheduler=None if workers else "synchronous", workers=workers or None,
-                       progress=False)  # fmt: skip
+    result = run_sweep(
+        config,
+        sweep_dir,
+        scheduler=None if workers else "synchronous",
+        workers=workers or None,
+        progress=False,
+    )
 table, diffs, rel = result.metrics, result.differences, result.reliability
 pooled = table[(table.viewpoint == "all") | table.noise.isna()]
 out.table(pooled, "corpus_metrics", episodes=result.summary["episodes"])
@@ -80,7 +92,9 @@ out.table(diffs[diffs.noise.isna()], "corpus_differences")
 out.table(rel[rel.noise.isna()], "corpus_reliability")
 full = max(config.evaluation.fractions)
 overall = table[(table.viewpoint == "all") & table.noise.isna() & (table.fraction == full)]
-overall.pivot_table(index=["posterior", "target", "metric"], columns="strategy", values="estimate", sort=False).round(3)
+overall.pivot_table(
+    index=["posterior", "target", "metric"], columns="strategy", values="estimate", sort=False
+).round(3)
 
 # %% [markdown]
 # ## Which strategy wins as the sensor noise grows
@@ -122,8 +136,15 @@ for k, post in enumerate(posteriors[:2]):
     axes[k].set_title(f"effect calibration, p_HMM: {post}", fontsize=9)
 plots.plot_metric_vs_noise(axes[2], table, "effect", "ece", full, posterior=posteriors[-1])
 axes[2].set_title(f"effect ECE, p_HMM: {posteriors[-1]}", fontsize=9)
-plots.plot_by_viewpoint(axes[3], table, "action", "accuracy", full, strategies=["gesture", "network", "hard", "product"],
-                        posterior=posteriors[-1])  # fmt: skip
+plots.plot_by_viewpoint(
+    axes[3],
+    table,
+    "action",
+    "accuracy",
+    full,
+    strategies=["gesture", "network", "hard", "product"],
+    posterior=posteriors[-1],
+)
 axes[3].set_title(f"action accuracy by viewpoint, p_HMM: {posteriors[-1]}", fontsize=9)
 axes[0].legend(fontsize=7)
 axes[3].legend(fontsize=7)
@@ -134,20 +155,26 @@ out.figure(fig, "corpus_calibration", source=result.summary["data_source"])
 
 # %%
 pairs = [
-    ("action", "accuracy", "product", "gesture"), ("action", "log_loss", "product", "gesture"),
-    ("action", "accuracy", "hard", "gesture"), ("effect", "accuracy", "virtual", "network"),
-    ("effect", "log_loss", "virtual", "hard"), ("effect", "log_loss", "jeffrey", "virtual"),
-    ("effect", "ece", "virtual", "hard"), ("description", "all", "virtual", "hard"),
+    ("action", "accuracy", "product", "gesture"),
+    ("action", "log_loss", "product", "gesture"),
+    ("action", "accuracy", "hard", "gesture"),
+    ("effect", "accuracy", "virtual", "network"),
+    ("effect", "log_loss", "virtual", "hard"),
+    ("effect", "log_loss", "jeffrey", "virtual"),
+    ("effect", "ece", "virtual", "hard"),
+    ("description", "all", "virtual", "hard"),
     ("description", "all", "jeffrey", "virtual"),
-]  # fmt: skip
+]
 fig, axes = plots.new_figure(len(posteriors[:2]), width=6.0, height=3.6)
 for ax, post in zip(axes, posteriors[:2], strict=False):
     plots.plot_differences(ax, diffs, pairs, full, posterior=post)
     ax.set_title(f"paired differences, p_HMM: {post}", fontsize=9)
 out.figure(fig, "corpus_differences", source=result.summary["data_source"])
-lines = [f"p_HMM {b['posterior']}, {b['target']} {b['metric']}: {', '.join(b['best'])} {b['estimate']:.3f} "
-         f"[{b['ci_low']:.3f}, {b['ci_high']:.3f}], better than {', '.join(b['significantly_better_than']) or 'none'}"
-         for b in result.summary["best"]]  # fmt: skip
+lines = [
+    f"p_HMM {b['posterior']}, {b['target']} {b['metric']}: {', '.join(b['best'])} {b['estimate']:.3f} "
+    f"[{b['ci_low']:.3f}, {b['ci_high']:.3f}], better than {', '.join(b['significantly_better_than']) or 'none'}"
+    for b in result.summary["best"]
+]
 print("\n".join(lines))
 
 # %% [markdown]

@@ -67,8 +67,15 @@ def test_a_bank_without_an_action_is_refused(setup):
 def test_recording_of_a_run(setup, tmp_path):
     src, rec, eng = setup
     case = anticipation.CASES["sphere"]
-    run = anticipation.effect_anticipation(rec, eng, anticipation.case_trajectory(src, "sphere"), case.evidence,
-                                           case="sphere", models="bank", describe=True)  # fmt: skip
+    run = anticipation.effect_anticipation(
+        rec,
+        eng,
+        anticipation.case_trajectory(src, "sphere"),
+        case.evidence,
+        case="sphere",
+        models="bank",
+        describe=True,
+    )
     assert len(run.descriptions) == len(run.update_frames)
     assert set(run.descriptions[-1].split()) & {"ball", "sphere"}  # the grammar's words for a sphere
     path = recording.write_anticipation(run, tmp_path / "s.rrd", "test-sphere")
@@ -113,8 +120,9 @@ def test_run_as_dict_has_the_documented_shape(setup):
     src, rec, eng = setup
     case = anticipation.CASES["box"]
     traj = anticipation.case_trajectory(src, "box")
-    run = anticipation.effect_anticipation(rec, eng, traj, case.evidence, case="box", targets=("ObjVel",),
-                                           describe="last")  # fmt: skip
+    run = anticipation.effect_anticipation(
+        rec, eng, traj, case.evidence, case="box", targets=("ObjVel",), describe="last"
+    )
     d = json.loads(json.dumps(run.as_dict(), allow_nan=False))
     assert list(d) == ["case", "frames", "loglik_per_frame", "updates", "description"]
     assert d["case"] == "box" and d["frames"] == [int(traj.frame[0]), int(traj.frame[-1])]

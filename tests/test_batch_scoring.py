@@ -89,8 +89,14 @@ def test_emission_coefficients_give_the_mixture_log_densities(bank):
 def test_underflowing_pairs_are_recomputed_exactly():
     """A frame far from every reachable state but near an unreachable one underflows the scaled forward."""
     means = np.array([[[0.0, 0, 0]], [[40.0, 40, 40]]])
-    hmm = GestureHMM([1.0, 0.0], left_to_right_transmat(2, 0.999), [[1.0], [1.0]], means,
-                     np.tile(np.eye(3) * 0.01, (2, 1, 1, 1)), name="x")  # fmt: skip
+    hmm = GestureHMM(
+        [1.0, 0.0],
+        left_to_right_transmat(2, 0.999),
+        [[1.0], [1.0]],
+        means,
+        np.tile(np.eye(3) * 0.01, (2, 1, 1, 1)),
+        name="x",
+    )
     X = np.zeros((5, 3))
     X[1] = 40.0  # state 1 explains it; state 0 (where the mass is) gives exp(-1e5)
     scorer = BatchScorer([hmm])

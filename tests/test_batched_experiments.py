@@ -81,16 +81,40 @@ def test_correspondence_study_equals_training_every_recogniser_alone():
 
     conds = [c for c in corr.default_conditions() if c.level in ("0°", "mirrored")]
     settings = {"n_states": 3, "n_mix": 1, "n_iter": 8, "tol": 1e-3}
-    study = corr.correspondence_study(train_sources=("human",), feature_sets=("raw", "all"), conditions=conds,
-                                      seeds=(0, 1), n_train=3, n_test=2, **settings)  # fmt: skip
+    study = corr.correspondence_study(
+        train_sources=("human",),
+        feature_sets=("raw", "all"),
+        conditions=conds,
+        seeds=(0, 1),
+        n_train=3,
+        n_test=2,
+        **settings,
+    )
     for seed in (0, 1):
         corpus = corr.training_corpus("human", 3, seed)
-        tests = [synthetic_corpus(2, corr._test_seed(seed), view=c.view, noise=c.noise, spike_rate=c.spike_rate,
-                                  dropout_rate=c.dropout_rate) for c in conds]  # fmt: skip
+        tests = [
+            synthetic_corpus(
+                2,
+                corr._test_seed(seed),
+                view=c.view,
+                noise=c.noise,
+                spike_rate=c.spike_rate,
+                dropout_rate=c.dropout_rate,
+            )
+            for c in conds
+        ]
         for features in ("raw", "all"):
             spec = Invariants.parse(features)
-            models = {a: _alone([spec.transform(s.xyz) if not spec.is_raw else s.xyz for s in corpus if s.action == a],
-                                a, seed, "glu", settings) for a in ACTIONS}  # fmt: skip
+            models = {
+                a: _alone(
+                    [spec.transform(s.xyz) if not spec.is_raw else s.xyz for s in corpus if s.action == a],
+                    a,
+                    seed,
+                    "glu",
+                    settings,
+                )
+                for a in ACTIONS
+            }
             rec = Recognizer(models, features=spec)
             for c, test in zip(conds, tests, strict=True):
                 acc = np.mean([rec.classify(s.xyz) == s.action for s in test])

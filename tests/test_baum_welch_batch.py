@@ -65,12 +65,17 @@ def _underflowing_problem():
     """A left-to-right model that must start in state 0, and sequences whose first frame sits on state 1's
     mean, 85 standard deviations from state 0's: the scaled first frame underflows (e^-3600)."""
     rng = np.random.default_rng(2)
-    seqs = [np.vstack([[[60.0, 60.0]], rng.normal(0.0, 1.0, (n, 2)), rng.normal(60.0, 1.0, (n, 2))])
-            for n in (6, 9)]  # fmt: skip
+    seqs = [
+        np.vstack([[[60.0, 60.0]], rng.normal(0.0, 1.0, (n, 2)), rng.normal(60.0, 1.0, (n, 2))])
+        for n in (6, 9)
+    ]
     init = bw.GMMHMMParams(
-        np.array([1.0, 0.0]), np.array([[0.8, 0.2], [0.0, 1.0]]), np.ones((2, 1)),
-        np.array([[[0.0, 0.0]], [[60.0, 60.0]]]), np.tile(np.eye(2), (2, 1, 1, 1)),
-    )  # fmt: skip
+        np.array([1.0, 0.0]),
+        np.array([[0.8, 0.2], [0.0, 1.0]]),
+        np.ones((2, 1)),
+        np.array([[[0.0, 0.0]], [[60.0, 60.0]]]),
+        np.tile(np.eye(2), (2, 1, 1, 1)),
+    )
     return seqs, init
 
 

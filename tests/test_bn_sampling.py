@@ -20,8 +20,12 @@ def engine(zero_bn):
 @pytest.fixture(scope="module")
 def draws(engine):
     rng = np.random.default_rng(0)
-    fixed = {"Action": rng.integers(0, 3, N), "Shape": rng.integers(0, 2, N), "Size": rng.integers(0, 3, N),
-             "Color": rng.integers(0, 4, N)}  # fmt: skip
+    fixed = {
+        "Action": rng.integers(0, 3, N),
+        "Shape": rng.integers(0, 2, N),
+        "Size": rng.integers(0, 3, N),
+        "Color": rng.integers(0, 4, N),
+    }
     return sample(engine, fixed, np.random.default_rng(1))
 
 

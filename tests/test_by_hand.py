@@ -47,8 +47,14 @@ def test_plain_papermill_in_the_notebooks_folder_writes_to_scratch_only(scratch,
     before = _snapshot()
     nb = jupytext.read(paths.notebook_file("07_glu2017_figures"))
     executed = tmp_path / "out.ipynb"
-    pm.execute_notebook(nb, str(executed), parameters={"data": "synthetic", "threshold": 0.05},
-                        kernel_name="python3", cwd=str(paths.NOTEBOOKS_DIR), progress_bar=False)  # fmt: skip
+    pm.execute_notebook(
+        nb,
+        str(executed),
+        parameters={"data": "synthetic", "threshold": 0.05},
+        kernel_name="python3",
+        cwd=str(paths.NOTEBOOKS_DIR),
+        progress_bar=False,
+    )
     assert _snapshot() == before, "a by-hand run changed the project's published outputs"
     assert (scratch / "figures" / "glu2017_effect_prediction.png").is_file()
     svg = (scratch / "figures" / "glu2017_effect_prediction.svg").read_text()
@@ -68,8 +74,14 @@ def test_plain_papermill_refuses_an_unknown_parameter_in_the_first_cell(tmp_path
     nb = jupytext.read(paths.notebook_file("02_hmm_training"))
     t0 = time.perf_counter()
     with pytest.raises(pm.PapermillExecutionError) as e:
-        pm.execute_notebook(nb, str(tmp_path / "o.ipynb"), parameters={"n_statez": 4, "data": "synthetic"},
-                            kernel_name="python3", cwd=str(paths.NOTEBOOKS_DIR), progress_bar=False)  # fmt: skip
+        pm.execute_notebook(
+            nb,
+            str(tmp_path / "o.ipynb"),
+            parameters={"n_statez": 4, "data": "synthetic"},
+            kernel_name="python3",
+            cwd=str(paths.NOTEBOOKS_DIR),
+            progress_bar=False,
+        )
     assert e.value.ename == "ParameterError"
     assert "unknown parameter 'n_statez' (did you mean 'n_states'?)" in e.value.evalue
     assert time.perf_counter() - t0 < 60  # refused before any training (a bound, not a benchmark)

@@ -34,8 +34,20 @@ def test_query_json_prints_exactly_the_posterior(source, zero_bn, capsys):
 
 
 def test_query_text_output_names_the_source_and_each_value(source, capsys):
-    status, out, _ = run(capsys, "query", "--data", str(source.root), "--target", "ObjVel", "Action",
-                         "--evidence", "Shape=box", "Size=big", "--soft", "Action=grasp:0.2,tap:0.6,touch:0.2")  # fmt: skip
+    status, out, _ = run(
+        capsys,
+        "query",
+        "--data",
+        str(source.root),
+        "--target",
+        "ObjVel",
+        "Action",
+        "--evidence",
+        "Shape=box",
+        "Size=big",
+        "--soft",
+        "Action=grasp:0.2,tap:0.6,touch:0.2",
+    )
     assert status == 0
     lines = out.splitlines()
     assert lines[0].startswith(f"# learned from {source.kind} data")
@@ -43,8 +55,14 @@ def test_query_text_output_names_the_source_and_each_value(source, capsys):
         "# evidence: Shape=box, Size=big, Action~(grasp:0.2, tap:0.6, touch:0.2, virtual)"
     )
     rows = [ln.split() for ln in lines[2:]]
-    assert [(r[0], r[1]) for r in rows] == [("ObjVel", "slow"), ("ObjVel", "medium"), ("ObjVel", "fast"),
-                                            ("Action", "grasp"), ("Action", "tap"), ("Action", "touch")]  # fmt: skip
+    assert [(r[0], r[1]) for r in rows] == [
+        ("ObjVel", "slow"),
+        ("ObjVel", "medium"),
+        ("ObjVel", "fast"),
+        ("Action", "grasp"),
+        ("Action", "tap"),
+        ("Action", "touch"),
+    ]
     assert sum(float(r[2]) for r in rows[:3]) == pytest.approx(1, abs=1e-5)
 
 
@@ -116,13 +134,17 @@ def test_batch_answers_line_by_line_with_errors_in_place(tmp_path, capsys, zero_
     answers = [json.loads(line) for line in out.splitlines()]
     assert len(answers) == 6
     eng = InferenceEngine(zero_bn)
-    np.testing.assert_allclose(list(answers[0]["ObjVel"].values()),
-                               eng.query(["ObjVel"], queries[0]["evidence"])["ObjVel"], atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        list(answers[0]["ObjVel"].values()),
+        eng.query(["ObjVel"], queries[0]["evidence"])["ObjVel"],
+        atol=1e-12,
+    )
     assert answers[1]["error"].startswith("line 2: impossible evidence")
     np.testing.assert_allclose(
         list(answers[2]["ObjVel"].values()),
-        eng.query(["ObjVel"], {"Shape": "sphere"}, soft={"Action": [0, 0.5, 0.5]})["ObjVel"], atol=1e-12,
-    )  # fmt: skip
+        eng.query(["ObjVel"], {"Shape": "sphere"}, soft={"Action": [0, 0.5, 0.5]})["ObjVel"],
+        atol=1e-12,
+    )
     assert answers[3]["error"].startswith("line 4: not JSON")
     assert "unknown node 'Colour'" in answers[4]["error"]
     assert list(answers[5]) == ["rolls"]
@@ -131,11 +153,16 @@ def test_batch_answers_line_by_line_with_errors_in_place(tmp_path, capsys, zero_
 
 @pytest.mark.parametrize(
     ("soft", "message"),
-    [({"Action": ["a", "b", "c"]}, "must be a list of 3 numbers"), ({"Action": [[1], [0], [0]]}, "flat list"),
-     ({"Action": {"tap": "x"}}, "must be a number"), ({"Action": {"tap": {"p": 1}}}, "must be a number"),
-     ({"Action": {"tap": None, "grasp": 1}}, "must be a number"), ({"Action": [0.5, 0.5]}, "has 2 entries"),
-     ({"Action": [0.5, 0.7, 0.0]}, "not a distribution")],
-)  # fmt: skip
+    [
+        ({"Action": ["a", "b", "c"]}, "must be a list of 3 numbers"),
+        ({"Action": [[1], [0], [0]]}, "flat list"),
+        ({"Action": {"tap": "x"}}, "must be a number"),
+        ({"Action": {"tap": {"p": 1}}}, "must be a number"),
+        ({"Action": {"tap": None, "grasp": 1}}, "must be a number"),
+        ({"Action": [0.5, 0.5]}, "has 2 entries"),
+        ({"Action": [0.5, 0.7, 0.0]}, "not a distribution"),
+    ],
+)
 def test_a_malformed_soft_line_answers_in_place_and_later_lines_still_run(
     tmp_path, capsys, zero_bn, soft, message
 ):
@@ -189,7 +216,10 @@ def test_cold_start_does_not_import_pgmpy(source, tmp_path):
 
 
 def test_console_script_error_has_no_traceback(tmp_path):
-    res = subprocess.run([sys.executable, "-m", "glu", "query", "--data", str(tmp_path), "--target", "ObjVel"],
-                         capture_output=True, text=True)  # fmt: skip
+    res = subprocess.run(
+        [sys.executable, "-m", "glu", "query", "--data", str(tmp_path), "--target", "ObjVel"],
+        capture_output=True,
+        text=True,
+    )
     assert res.returncode == 2
     assert res.stderr.count("\n") == 1 and "not a glu data folder" in res.stderr

@@ -175,8 +175,19 @@ def test_failed_evaluate_and_fetch_leave_no_folder_behind(capsys, tmp_path):
         *_glu(capsys, "evaluate", "--episodes", "20", "--data", tmp_path / "no", "-o", tmp_path / "ev")[::2]
     )
     assert "no such data folder" in line
-    line = _one_line(*_glu(capsys, "data", "fetch", "--dest", tmp_path / "a" / "b" / "d", "--mirror",
-                           "http://127.0.0.1:9/", "--timeout", "0.5")[::2])  # fmt: skip
+    line = _one_line(
+        *_glu(
+            capsys,
+            "data",
+            "fetch",
+            "--dest",
+            tmp_path / "a" / "b" / "d",
+            "--mirror",
+            "http://127.0.0.1:9/",
+            "--timeout",
+            "0.5",
+        )[::2]
+    )
     assert "could not be fetched" in line
     assert list(tmp_path.iterdir()) == []
 
@@ -202,8 +213,16 @@ def test_huge_soft_evidence_is_refused_without_a_runtime_warning(capsys):
 
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)  # an overflow in the sum used to reach stderr
-        status, _, err = _glu(capsys, "query", "--data", "synthetic", "--target", "ObjVel",
-                              "--soft", "Action=grasp:1e308,tap:1e308,touch:1e308")  # fmt: skip
+        status, _, err = _glu(
+            capsys,
+            "query",
+            "--data",
+            "synthetic",
+            "--target",
+            "ObjVel",
+            "--soft",
+            "Action=grasp:1e308,tap:1e308,touch:1e308",
+        )
     assert "not a distribution" in _one_line(status, err)
 
 

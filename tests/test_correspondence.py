@@ -29,9 +29,13 @@ TINY = {"n_states": 2, "n_mix": 1, "n_iter": 3}
 def study():
     conds = [c for c in corr.default_conditions() if c.level in ("0°", "90°", "the robot itself")]
     return corr.correspondence_study(
-        feature_sets=("raw", "centred", "centred+rotated"), conditions=conds, seeds=(0, 1), n_train=2,
-        n_test=1, **TINY,
-    )  # fmt: skip
+        feature_sets=("raw", "centred", "centred+rotated"),
+        conditions=conds,
+        seeds=(0, 1),
+        n_train=2,
+        n_test=1,
+        **TINY,
+    )
 
 
 def test_the_study_is_tidy_and_stamped(study):
@@ -50,8 +54,11 @@ def test_summary_intervals_are_t_intervals(study):
     s = corr.summarise(study)
     assert len(s) == len(study) // 2 and (s["n_seeds"] == 2).all()
     row = s.iloc[4]
-    values = study[(study["train"] == row["train"]) & (study["features"] == row["features"])
-                   & (study["level"] == row["level"])]["accuracy"]  # fmt: skip
+    values = study[
+        (study["train"] == row["train"])
+        & (study["features"] == row["features"])
+        & (study["level"] == row["level"])
+    ]["accuracy"]
     assert row["accuracy"] == pytest.approx(values.mean())
     if values.std() > 0:
         lo, hi = stats.t.interval(0.95, len(values) - 1, loc=values.mean(), scale=stats.sem(values))
@@ -73,8 +80,16 @@ def test_invariance_effects_are_paired_differences():
     acc = {"raw": [0.9, 0.8, 1.0], "centred": [0.6, 0.5, 0.55]}  # centring costs here, on every seed
     for f, values in acc.items():
         for seed, a in enumerate(values):
-            rows.append({"seed": seed, "train": "human", "features": f, "factor": "viewpoint", "level": "0°",
-                         "accuracy": a})  # fmt: skip
+            rows.append(
+                {
+                    "seed": seed,
+                    "train": "human",
+                    "features": f,
+                    "factor": "viewpoint",
+                    "level": "0°",
+                    "accuracy": a,
+                }
+            )
     effects = corr.invariance_effects(pd.DataFrame(rows))
     (e,) = effects.itertuples()
     d = np.array(acc["centred"]) - np.array(acc["raw"])
@@ -93,8 +108,14 @@ def test_plots_draw_the_study(study):
     assert len(axes[1].patches) == 3 * 2  # the reference and the robot itself, per feature set
     cplots.plot_invariance_effects(axes[2], corr.invariance_effects(study), "human")
     assert len(axes[2].images) == 1
-    grid = pd.DataFrame({"features": ["raw", "raw", "centred"], "setting": ["a", "b", "a"],
-                         "loso_accuracy": [0.4, 0.5, 0.7], "test_correct": [0, 1, 2]})  # fmt: skip
+    grid = pd.DataFrame(
+        {
+            "features": ["raw", "raw", "centred"],
+            "setting": ["a", "b", "a"],
+            "loso_accuracy": [0.4, 0.5, 0.7],
+            "test_correct": [0, 1, 2],
+        }
+    )
     grid.attrs["parameters"] = {"n_test": 2}
     cplots.plot_feature_settings(axes[3], grid)
     assert len(axes[3].collections) == 2  # the two means

@@ -41,8 +41,18 @@ def _train_centred(shared_data, folder, seed):
 
 def _centred_hmms_trained_standing_call_the_seated_tap_tap(capsys, shared_data, centred_models, recording):
     capsys.readouterr()
-    status, out, err = _glu(capsys, "recognize", recording, "--frames", CASES[recording], "--data", str(shared_data),
-                            "--models", str(centred_models), "--json")  # fmt: skip
+    status, out, err = _glu(
+        capsys,
+        "recognize",
+        recording,
+        "--frames",
+        CASES[recording],
+        "--data",
+        str(shared_data),
+        "--models",
+        str(centred_models),
+        "--json",
+    )
     assert status == 0 and "features centred" in err
     posterior = json.loads(out)["posterior"]
     assert max(posterior, key=posterior.get) == "tap" and posterior["tap"] >= 0.9

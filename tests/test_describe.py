@@ -455,8 +455,21 @@ def test_the_published_evidence_is_the_codes():
 # ---------------------------------------------------------------- the command line
 def test_cli_done_when(source, capsys):
     for objvel, word in [("slow", "but"), ("medium", "and")]:
-        assert main(["describe", "--data", str(source.root), "--evidence", "Action=grasp", f"ObjVel={objvel}",
-                     "--nbest", "10"]) == 0  # fmt: skip
+        assert (
+            main(
+                [
+                    "describe",
+                    "--data",
+                    str(source.root),
+                    "--evidence",
+                    "Action=grasp",
+                    f"ObjVel={objvel}",
+                    "--nbest",
+                    "10",
+                ]
+            )
+            == 0
+        )
         out = capsys.readouterr().out
         lines = [ln for ln in out.splitlines() if not ln.startswith("#")]
         assert lines[0].split() == ["rank", "score", "sentence"]
@@ -489,8 +502,11 @@ def test_cli_scores_and_candidate_files(tmp_path, capsys):
     from glu.data import load_experiments
     from glu.language import word_probabilities
 
-    sentences = ["the robot taps the ball and the ball rolls", "he pokes the box but the box is still",
-                 "the robot is grasping the cube and the cube is rising"]  # fmt: skip
+    sentences = [
+        "the robot taps the ball and the ball rolls",
+        "he pokes the box but the box is still",
+        "the robot is grasping the cube and the cube is rising",
+    ]
     f = tmp_path / "candidates.txt"
     f.write_text("\n".join(sentences) + "\n\n")
     ev = ["--evidence", "Action=touch", "Shape=box"]
@@ -498,8 +514,9 @@ def test_cli_scores_and_candidate_files(tmp_path, capsys):
         argv = ["describe", "--data", "synthetic", *ev, "--candidates", str(f), "--score", score, "--json"]
         assert main(argv) == 0
         got = json.loads(capsys.readouterr().out)
-        probs = word_probabilities(InferenceEngine(learn_bn(load_experiments("synthetic"))),
-                                   {"Action": "touch", "Shape": "box"}).to_dict()  # fmt: skip
+        probs = word_probabilities(
+            InferenceEngine(learn_bn(load_experiments("synthetic"))), {"Action": "touch", "Shape": "box"}
+        ).to_dict()
         expected = brute_force_nbest([tuple(s.split()) for s in sentences], probs, 10, start)
         assert [r["sentence"] for r in got] == [" ".join(s) for s, _ in expected]
         got_scores = [-math.inf if r["score"] is None else r["score"] for r in got]  # JSON has no -inf
@@ -570,8 +587,13 @@ def test_plots_draw_what_they_are_given():
     plot_nbest(axes[0], df, title="t", highlight="c")
     assert [t.get_text() for t in axes[0].get_yticklabels()] == list(df["sentence"])
     assert len(axes[0].patches) == 4
-    probs = pd.DataFrame({"ObjVel": ["medium", "medium", "slow", "slow"], "word": ["and", "but"] * 2,
-                          "p": [0.8, 0.2, 0.1, 0.9]})  # fmt: skip
+    probs = pd.DataFrame(
+        {
+            "ObjVel": ["medium", "medium", "slow", "slow"],
+            "word": ["and", "but"] * 2,
+            "p": [0.8, 0.2, 0.1, 0.9],
+        }
+    )
     plot_and_but(axes[1], probs)
     heights = sorted(round(p.get_height(), 6) for p in axes[1].patches)
     assert heights == [0.1, 0.2, 0.8, 0.9]

@@ -30,8 +30,15 @@ MODULES = _with_examples()
 
 
 def test_the_key_entry_points_have_examples():
-    for name in ("glu.fusion", "glu.evidence", "glu.bn.inference", "glu.gestures.forward",
-                 "glu.gestures.model", "glu.language.descriptions", "glu.data.hand_logs"):  # fmt: skip
+    for name in (
+        "glu.fusion",
+        "glu.evidence",
+        "glu.bn.inference",
+        "glu.gestures.forward",
+        "glu.gestures.model",
+        "glu.language.descriptions",
+        "glu.data.hand_logs",
+    ):
         assert name in MODULES, f"{name} has no runnable example"
 
 

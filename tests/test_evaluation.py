@@ -92,8 +92,11 @@ def test_statistics_equal_a_direct_computation(setup):
             assert one.sentence(0).split() == sentence.split() or sorted(one.sentence(0).split()) == sorted(
                 sentence.split()
             )
-            ok = agreement(one, {k: np.array([schema.values_of(k).index(v)]) for k, v in row.items()},
-                           {k: schema.values_of(k) for k in row})  # fmt: skip
+            ok = agreement(
+                one,
+                {k: np.array([schema.values_of(k).index(v)]) for k, v in row.items()},
+                {k: schema.values_of(k) for k in row},
+            )
             assert cell(frame, "description", "jeffrey", f, "verb")[i] == float(ok["verb"][0])
 
 
@@ -149,9 +152,13 @@ def test_columns_and_settings():
     assert set(cols.target) == {"episodes", "action", "effect", "description"}
     assert set(cols[cols.target == "action"].strategy) == {"gesture", "hard"}
     assert len(cols[(cols.target == "effect")]) == 3 + 2 * 3
-    for bad, msg in [({"fractions": (0.0,)}, "in \\(0, 1\\]"), ({"strategies": ("best",)}, "unknown strategy 'best'"),
-                     ({"effect_evidence": ("ObjVel",)}, "leave it out"), ({"action_evidence": ("Action",)}, "cannot be observed"),
-                     ({"bootstrap": -1}, "replicates")]:  # fmt: skip
+    for bad, msg in [
+        ({"fractions": (0.0,)}, "in \\(0, 1\\]"),
+        ({"strategies": ("best",)}, "unknown strategy 'best'"),
+        ({"effect_evidence": ("ObjVel",)}, "leave it out"),
+        ({"action_evidence": ("Action",)}, "cannot be observed"),
+        ({"bootstrap": -1}, "replicates"),
+    ]:
         with pytest.raises(DataError, match=msg):
             EvaluationSettings(**bad)
 

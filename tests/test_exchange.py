@@ -23,7 +23,7 @@ from glu.bn.exchange import (
     to_bif,
     to_uai,
     with_seen_indicators,
-)  # fmt: skip
+)
 from glu.cli import main
 from glu.errors import ModelError
 
@@ -116,8 +116,9 @@ def _by_index(bn, tool):
 def _known_disagreement(tool: str) -> pytest.MarkDecorator:
     """The libraries' UAI layouts differ from the format's (see the reasons): the test runs and must fail,
     so that a fixed library turns it into a failure here (strict) and the limitation is lifted."""
-    return pytest.mark.xfail(strict=True, raises=(AssertionError, ValueError),
-                             reason=PGMPY_UAI if tool == "pgmpy" else AGRUM_UAI)  # fmt: skip
+    return pytest.mark.xfail(
+        strict=True, raises=(AssertionError, ValueError), reason=PGMPY_UAI if tool == "pgmpy" else AGRUM_UAI
+    )
 
 
 def _export_cases() -> list:
@@ -225,8 +226,21 @@ def test_cli_export_and_import(zero_bn, tmp_path, capsys):
     assert main(["bn", "export", str(model), "-o", str(tmp_path / "m.bif"), "--zero-rows", "seen"]) == 0
     assert "seen__but=yes" in capsys.readouterr().out
     assert main(["bn", "import", str(tmp_path / "m.bif"), "-o", str(tmp_path / "back.json")]) == 0
-    assert main(["query", "--model", str(tmp_path / "m.bif"), "--target", "ObjVel", "--json",
-                 "--evidence", "Action=tap"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "query",
+                "--model",
+                str(tmp_path / "m.bif"),
+                "--target",
+                "ObjVel",
+                "--json",
+                "--evidence",
+                "Action=tap",
+            ]
+        )
+        == 0
+    )
     assert main(["bn", "import", str(tmp_path / "m.bif"), "-o", str(tmp_path / "m.bif")]) == 2
     assert "is the input file" in capsys.readouterr().err
 

@@ -33,8 +33,11 @@ def test_tap_threshold_by_bisection_agrees_with_a_fine_grid(zero_bn, evidence):
 
 
 def test_tables_are_stamped_with_their_provenance(zero_bn, uniform_bn):
-    for df in (experiments.effect_prediction(zero_bn), experiments.tap_thresholds(zero_bn),
-               experiments.unseen_rows_comparison(zero_bn, uniform_bn)):  # fmt: skip
+    for df in (
+        experiments.effect_prediction(zero_bn),
+        experiments.tap_thresholds(zero_bn),
+        experiments.unseen_rows_comparison(zero_bn, uniform_bn),
+    ):
         assert df.attrs["experiment"] and df.attrs["data_source"] == zero_bn.meta["data_source"]
         assert isinstance(df.attrs["parameters"], dict)
     sweep = experiments.soft_evidence_sweep(zero_bn, {"Shape": "sphere"}, n_points=5, rules=("jeffrey",))

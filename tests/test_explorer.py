@@ -53,8 +53,11 @@ def test_observed_targets_are_left_out_and_gesture_ignored_when_action_is_observ
 def test_headless_it_is_a_static_table(engine):
     table = evidence_explorer(engine, evidence={"Shape": "box"}, live=False)
     assert isinstance(table, pd.DataFrame)
-    np.testing.assert_allclose(table.loc["ObjVel", ["slow", "medium", "fast"]].to_numpy(dtype=float),
-                               engine.query(["ObjVel"], {"Shape": "box"})["ObjVel"], atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        table.loc["ObjVel", ["slow", "medium", "fast"]].to_numpy(dtype=float),
+        engine.query(["ObjVel"], {"Shape": "box"})["ObjVel"],
+        atol=1e-12,
+    )
 
 
 def test_live_the_widgets_update_the_answer(engine):

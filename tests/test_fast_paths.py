@@ -23,10 +23,20 @@ from glu.gestures.synthetic import GESTURES, SYNTHETIC_POLICY, View, synthesize_
 from glu.gestures.synthetic_batch import gesture_features
 from glu.gestures.trajectories import DEFAULT_POLICY, DETECT_ONLY, RepairPolicy, Trajectory, repair
 
-VIEWS = [None, View(yaw_deg=40.0), View(posture="seated"), View(mirror=True, size=1.2),
-         View(normalise_body=False, yaw_deg=90.0), View(performer="robot")]  # fmt: skip
-SENSORS = [dict(noise=0.02), dict(noise=0.0, spike_rate=0.0, dropout_rate=0.0),
-           dict(noise=0.05, spike_rate=0.1, dropout_rate=1.0), dict(noise=0.01, spike_rate=0.6)]  # fmt: skip
+VIEWS = [
+    None,
+    View(yaw_deg=40.0),
+    View(posture="seated"),
+    View(mirror=True, size=1.2),
+    View(normalise_body=False, yaw_deg=90.0),
+    View(performer="robot"),
+]
+SENSORS = [
+    dict(noise=0.02),
+    dict(noise=0.0, spike_rate=0.0, dropout_rate=0.0),
+    dict(noise=0.05, spike_rate=0.1, dropout_rate=1.0),
+    dict(noise=0.01, spike_rate=0.6),
+]
 
 
 def same(a: np.ndarray, b: np.ndarray) -> bool:
@@ -49,15 +59,22 @@ def test_batch_gestures_equal_one_at_a_time(view, sensor):
 def test_chunk_equals_the_episode_by_episode_reference():
     """simulate_chunk against the loop it replaced: one synthesize_gesture per episode, then its features."""
     engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
-    for cond, settings in [(Condition(0.02, "front"), GestureSettings()),
-                           (Condition(0.0, "seated"), GestureSettings(0.2, 1.0))]:  # fmt: skip
+    for cond, settings in [
+        (Condition(0.02, "front"), GestureSettings()),
+        (Condition(0.0, "seated"), GestureSettings(0.2, 1.0)),
+    ]:
         chunk = simulate_chunk(engine, cond, 5, 1, 30, 40, gestures=settings)
         actions = engine.bn.schema.values_of("Action")
         for i in range(30):
             rng = np.random.default_rng(np.random.SeedSequence(5, spawn_key=(GESTURE_KEY, 40 + i)))
-            g = synthesize_gesture(actions[chunk.codes["Action"][i]], rng, noise=cond.noise,
-                                   spike_rate=settings.spike_rate, dropout_rate=settings.dropout_rate,
-                                   view=VIEWPOINTS[cond.viewpoint])  # fmt: skip
+            g = synthesize_gesture(
+                actions[chunk.codes["Action"][i]],
+                rng,
+                noise=cond.noise,
+                spike_rate=settings.spike_rate,
+                dropout_rate=settings.dropout_rate,
+                view=VIEWPOINTS[cond.viewpoint],
+            )
             x = g.features()
             assert same(chunk.features[i], x)
             row = chunk.episodes.iloc[i]
@@ -109,9 +126,15 @@ def trajectories(rng, k=60):
     return out
 
 
-POLICIES = [SYNTHETIC_POLICY, DEFAULT_POLICY, DETECT_ONLY, RepairPolicy(spikes="drop", max_interpolate=0.1),
-            RepairPolicy(long_gaps="keep", spike_window=5, min_piece=3), RepairPolicy(spike_threshold=np.inf),
-            RepairPolicy(spike_window=3, spike_threshold=0.05, min_piece=1)]  # fmt: skip
+POLICIES = [
+    SYNTHETIC_POLICY,
+    DEFAULT_POLICY,
+    DETECT_ONLY,
+    RepairPolicy(spikes="drop", max_interpolate=0.1),
+    RepairPolicy(long_gaps="keep", spike_window=5, min_piece=3),
+    RepairPolicy(spike_threshold=np.inf),
+    RepairPolicy(spike_window=3, spike_threshold=0.05, min_piece=1),
+]
 
 
 @pytest.mark.parametrize("policy", POLICIES, ids=range(len(POLICIES)))

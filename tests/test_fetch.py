@@ -60,8 +60,11 @@ def mirror_manifest(synthetic_folder, tmp_path):
         local = f.relative_to(synthetic_folder).as_posix()
         digest = hashlib.sha256(f.read_bytes()).hexdigest()
         files.append({"local": local, "source": "S", "path": f"data/{local}", "sha256": digest})
-    spec = {"url_template": "https://example.org/{repo}/{commit}/{path}",
-            "repositories": {"S": {"repo": "lab/data", "commit": "0" * 40}}, "files": files}  # fmt: skip
+    spec = {
+        "url_template": "https://example.org/{repo}/{commit}/{path}",
+        "repositories": {"S": {"repo": "lab/data", "commit": "0" * 40}},
+        "files": files,
+    }
     path = tmp_path / "manifest.json"
     path.write_text(json.dumps(spec))
     return path, len(files)
@@ -139,6 +142,8 @@ def test_fetch_command_reports_failures_with_status_2(server, mirror_manifest, t
 
 def test_the_manifest_names_the_pinned_commits():
     items = manifest()
-    assert {i.url.split("/")[5] for i in items} == {"421f4554aba944fe4fdbfc51feb01b0967bf930e",
-                                                   "fd608ac0f732bc1016df55af0489e5f25c43036c"}  # fmt: skip
+    assert {i.url.split("/")[5] for i in items} == {
+        "421f4554aba944fe4fdbfc51feb01b0967bf930e",
+        "fd608ac0f732bc1016df55af0489e5f25c43036c",
+    }
     assert all(len(i.sha256) == 64 for i in items)

@@ -22,8 +22,10 @@ def umask():
     os.umask(old)
 
 
-@pytest.mark.parametrize(("mask", "file_mode", "folder_mode"), [(0o022, 0o644, 0o755), (0o077, 0o600, 0o700),
-                                                                  (0o002, 0o664, 0o775)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("mask", "file_mode", "folder_mode"),
+    [(0o022, 0o644, 0o755), (0o077, 0o600, 0o700), (0o002, 0o664, 0o775)],
+)
 def test_written_files_and_folders_respect_the_umask(tmp_path, umask, mask, file_mode, folder_mode):
     umask(mask)
     path = atomic_write_text(tmp_path / "a" / "f.txt", "x")
@@ -46,9 +48,11 @@ def test_read_text_names_the_file_and_what_it_should_be(tmp_path):
     from glu.files import read_text
 
     (tmp_path / "s.yaml").write_bytes(b"\xff\xfe not utf-8 \xff")
-    for path, message in ((tmp_path / "none.yaml", "none.yaml: no such schema file"),
-                          (tmp_path, "is a folder, not a schema file"),
-                          (tmp_path / "s.yaml", "s.yaml: cannot read the schema file as text")):  # fmt: skip
+    for path, message in (
+        (tmp_path / "none.yaml", "none.yaml: no such schema file"),
+        (tmp_path, "is a folder, not a schema file"),
+        (tmp_path / "s.yaml", "s.yaml: cannot read the schema file as text"),
+    ):
         with pytest.raises(DataError, match=message):
             read_text(path, "schema file")
     (tmp_path / "ok.yaml").write_text("name: x\n")

@@ -27,22 +27,64 @@ from hypothesis import strategies as st
 
 from glu.cli import build_parser, main
 
-PROFILE = settings(max_examples=30, deadline=None, derandomize=True, database=None,
-                   suppress_health_check=list(HealthCheck))  # fmt: skip
-LONG = settings(max_examples=150, deadline=None, derandomize=True, database=None,
-                suppress_health_check=list(HealthCheck))  # fmt: skip
+PROFILE = settings(
+    max_examples=30, deadline=None, derandomize=True, database=None, suppress_health_check=list(HealthCheck)
+)
+LONG = settings(
+    max_examples=150, deadline=None, derandomize=True, database=None, suppress_health_check=list(HealthCheck)
+)
 
 COUNTS: collections.Counter[str] = collections.Counter()
 MISBEHAVED: list[str] = []
 
-NUMBERS = ["-1", "0", "-0", "nan", "NaN", "inf", "-inf", "1e400", "", " ", "abc", "1.5", "1e-400", "99999999999999999999",
-           "0x10", "1_000", "2**32", "-1e9", "3"]  # fmt: skip
+NUMBERS = [
+    "-1",
+    "0",
+    "-0",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e400",
+    "",
+    " ",
+    "abc",
+    "1.5",
+    "1e-400",
+    "99999999999999999999",
+    "0x10",
+    "1_000",
+    "2**32",
+    "-1e9",
+    "3",
+]
 WORDS = ["", " ", "zzz", "TAP", "grasp,", ",", "..", "\x00", "é", "a b", "--json", "-"]
-EVIDENCE = ["Action", "Action=", "=tap", "Action=zzz", "Nope=tap", "Action=tap=1", "Action=tap", "Shape=box",
-            "Action==tap", "", "Action=tap Action=grasp"]  # fmt: skip
-SOFT = ["Action=grasp:2", "Action=grasp:nan", "Action=grasp:-1,tap:2", "Action:", "Action=grasp:1e-400,tap:1e-400",
-        "Action=grasp:0,tap:0,touch:0", "Action=grasp:0.2,tap:0.6,touch:0.2", "Action=grasp:inf", "ObjVel=slow:1",
-        "Action=grasp:0.5,grasp:0.5", "Action=[1,2]"]  # fmt: skip
+EVIDENCE = [
+    "Action",
+    "Action=",
+    "=tap",
+    "Action=zzz",
+    "Nope=tap",
+    "Action=tap=1",
+    "Action=tap",
+    "Shape=box",
+    "Action==tap",
+    "",
+    "Action=tap Action=grasp",
+]
+SOFT = [
+    "Action=grasp:2",
+    "Action=grasp:nan",
+    "Action=grasp:-1,tap:2",
+    "Action:",
+    "Action=grasp:1e-400,tap:1e-400",
+    "Action=grasp:0,tap:0,touch:0",
+    "Action=grasp:0.2,tap:0.6,touch:0.2",
+    "Action=grasp:inf",
+    "ObjVel=slow:1",
+    "Action=grasp:0.5,grasp:0.5",
+    "Action=[1,2]",
+]
 FRAMES = ["5:2", "a:b", "-1:3", "0:0", "1:1", "1:100000", "10:20", ":", "3", "1:2:3"]
 
 
@@ -143,8 +185,25 @@ def files(tmp_path_factory, synthetic_folder):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert main(["bn", "learn", "--data", str(synthetic_folder), "-o", str(model)]) == 0
-        assert main(["hmm", "train", "--synthetic", "3", "--states", "3", "--mix", "1", "--iter", "5",
-                     "-o", str(recogniser)]) == 0  # fmt: skip
+        assert (
+            main(
+                [
+                    "hmm",
+                    "train",
+                    "--synthetic",
+                    "3",
+                    "--states",
+                    "3",
+                    "--mix",
+                    "1",
+                    "--iter",
+                    "5",
+                    "-o",
+                    str(recogniser),
+                ]
+            )
+            == 0
+        )
     log = base / "tap.log"
     log.write_bytes((synthetic_folder / "gestures" / "tap1_hand" / "data.log").read_bytes())
     return {"model": model, "recogniser": recogniser, "log": log, "data": synthetic_folder}
@@ -258,23 +317,30 @@ def _mutate(data: bytes, how: str, at: int, junk: bytes) -> bytes:
     return {
         "truncate": data[:i],
         "insert": data[:i] + junk + data[i:],
-        "replace": data[:i] + junk + data[i + len(junk):],
+        "replace": data[:i] + junk + data[i + len(junk) :],
         "nan": data[:i] + b" nan " + data[i:],
         "huge": data[:i] + b" 1e308 " + data[i:],
         "empty": b"",
-    }[how]  # fmt: skip
+    }[how]
 
 
-MUTATION = st.tuples(st.sampled_from(["truncate", "insert", "replace", "nan", "huge", "empty"]),
-                     st.integers(0, 10**6), st.binary(min_size=1, max_size=12))  # fmt: skip
+MUTATION = st.tuples(
+    st.sampled_from(["truncate", "insert", "replace", "nan", "huge", "empty"]),
+    st.integers(0, 10**6),
+    st.binary(min_size=1, max_size=12),
+)
 
 
 def _hand_log(m, tmp_path_factory, files, capsys):
     tmp = tmp_path_factory.mktemp("fuzz")
     log = tmp / "bad.log"
     log.write_bytes(_mutate(files["log"].read_bytes(), *m))
-    _check("files: hand log → recognize", ["recognize", str(log), "--models", str(files["recogniser"]), "--json"],
-           tmp, capsys)  # fmt: skip
+    _check(
+        "files: hand log → recognize",
+        ["recognize", str(log), "--models", str(files["recogniser"]), "--json"],
+        tmp,
+        capsys,
+    )
     _check("files: hand log → gestures segment", ["gestures", "segment", str(log)], tmp, capsys)
 
 
@@ -289,23 +355,60 @@ def _json_mutations(obj, draw_path: list[int], replacement):
     return out
 
 
-JSON_VALUES = st.sampled_from([None, 0, -1, 1e300, "x", "", [], {}, [[[]]], {"a": {"b": {}}}, True, [0.5, 0.5],
-                               [1.0, 1.0], [float("1e-320")], "slow"])  # fmt: skip
+JSON_VALUES = st.sampled_from(
+    [
+        None,
+        0,
+        -1,
+        1e300,
+        "x",
+        "",
+        [],
+        {},
+        [[[]]],
+        {"a": {"b": {}}},
+        True,
+        [0.5, 0.5],
+        [1.0, 1.0],
+        [float("1e-320")],
+        "slow",
+    ]
+)
 
 
 def _model_json(path, value, tmp_path_factory, files, capsys):
     tmp = tmp_path_factory.mktemp("fuzz")
     model = tmp / "model.json"
     model.write_text(json.dumps(_json_mutations(json.loads(files["model"].read_text()), path, value)))
-    _check("files: model JSON → query", ["query", "--model", str(model), "--target", "ObjVel", "--evidence",
-                                           "Action=tap", "--json"], tmp, capsys)  # fmt: skip
-    _check("files: model JSON → bn export", ["bn", "export", str(model), "--format", "xmlbif", "--zero-rows", "seen",
-                                              "-o", str(tmp / "out" / "m.xmlbif")], tmp, capsys)  # fmt: skip
+    _check(
+        "files: model JSON → query",
+        ["query", "--model", str(model), "--target", "ObjVel", "--evidence", "Action=tap", "--json"],
+        tmp,
+        capsys,
+    )
+    _check(
+        "files: model JSON → bn export",
+        [
+            "bn",
+            "export",
+            str(model),
+            "--format",
+            "xmlbif",
+            "--zero-rows",
+            "seen",
+            "-o",
+            str(tmp / "out" / "m.xmlbif"),
+        ],
+        tmp,
+        capsys,
+    )
 
 
-MAT_FIELDS = st.dictionaries(st.sampled_from(["dag", "names", "cpt", "node_sizes", "x", "netobj_lab"]),
-                             st.sampled_from([0, 1, "a", [1, 2], [[0, 1], [1, 0]], [[1, 1], [1, 0]]]),
-                             max_size=4)  # fmt: skip
+MAT_FIELDS = st.dictionaries(
+    st.sampled_from(["dag", "names", "cpt", "node_sizes", "x", "netobj_lab"]),
+    st.sampled_from([0, 1, "a", [1, 2], [[0, 1], [1, 0]], [[1, 1], [1, 0]]]),
+    max_size=4,
+)
 
 
 def _mat_file(m, fields, tmp_path_factory, files, capsys):
@@ -325,17 +428,29 @@ def _mat_file(m, fields, tmp_path_factory, files, capsys):
 
 BATCH_LINES = st.lists(
     st.one_of(
-        st.sampled_from(['{"target": ["ObjVel"], "evidence": {"Action": "tap"}}', '{"target": "ObjVel"}', "[]", "1",
-                         '{"target": ["ObjVel"], "soft": {"Action": {"grasp": "x"}}}', '{"target": [["ObjVel"]]}',
-                         '{"target": ["Nope"]}', '{"evidence": {"Action": ["tap"]}, "target": ["ObjVel"]}', "",
-                         '{"target": ["ObjVel"], "soft": {"Action": [0.2, 0.8]}}', "{", "null",
-                         '{"target": ["ObjVel"], "evidence": {"Action": "tap", "Shape": "box", "Size": "big"}, '
-                         '"soft": {"Action": {"grasp": 1e-322, "tap": 1e-322, "touch": 0}}}']),
+        st.sampled_from(
+            [
+                '{"target": ["ObjVel"], "evidence": {"Action": "tap"}}',
+                '{"target": "ObjVel"}',
+                "[]",
+                "1",
+                '{"target": ["ObjVel"], "soft": {"Action": {"grasp": "x"}}}',
+                '{"target": [["ObjVel"]]}',
+                '{"target": ["Nope"]}',
+                '{"evidence": {"Action": ["tap"]}, "target": ["ObjVel"]}',
+                "",
+                '{"target": ["ObjVel"], "soft": {"Action": [0.2, 0.8]}}',
+                "{",
+                "null",
+                '{"target": ["ObjVel"], "evidence": {"Action": "tap", "Shape": "box", "Size": "big"}, '
+                '"soft": {"Action": {"grasp": 1e-322, "tap": 1e-322, "touch": 0}}}',
+            ]
+        ),
         st.text(max_size=20),
     ),
     min_size=1,
     max_size=6,
-)  # fmt: skip
+)
 
 
 def _query_batch(lines, tmp_path_factory, files, capsys):

@@ -286,13 +286,35 @@ def assets(tmp_path_factory, synthetic_folder) -> dict[str, Path]:
     root = tmp_path_factory.mktemp("fuzz-assets")
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         assert main(["bn", "learn", "--data", str(synthetic_folder), "-o", str(root / "model.json")]) == 0
-        assert main(["hmm", "train", "--synthetic", "3", "--states", "2", "--mix", "1", "--iter", "3",
-                     "-o", str(root / "recogniser.json")]) == 0  # fmt: skip
+        assert (
+            main(
+                [
+                    "hmm",
+                    "train",
+                    "--synthetic",
+                    "3",
+                    "--states",
+                    "2",
+                    "--mix",
+                    "1",
+                    "--iter",
+                    "3",
+                    "-o",
+                    str(root / "recogniser.json"),
+                ]
+            )
+            == 0
+        )
     log = next((synthetic_folder / "gestures").glob("*/data.log"))
     (root / "hand.log").write_text("".join(log.read_text().splitlines(keepends=True)[:60]))
     (root / "candidates.txt").write_text("the robot taps the ball\nthe robot is tapping the sphere\n")
-    return {"model": root / "model.json", "recogniser": root / "recogniser.json", "log": root / "hand.log",
-            "data": synthetic_folder, "candidates": root / "candidates.txt"}  # fmt: skip
+    return {
+        "model": root / "model.json",
+        "recogniser": root / "recogniser.json",
+        "log": root / "hand.log",
+        "data": synthetic_folder,
+        "candidates": root / "candidates.txt",
+    }
 
 
 @contextlib.contextmanager
@@ -318,69 +340,243 @@ OUT = "{out}"
 
 def _cases() -> dict[str, tuple[list[str], list[tuple[str, object]], bool]]:
     return {
-        "data fetch": (["data", "fetch", "--dest", f"{OUT}/d", "--mirror", "http://127.0.0.1:9/", "--timeout", "0.5"],
-                       [("--timeout", "pos_float"), ("--mirror", "url"), ("--dest", "path:"),
-                        ("--manifest", "path:.json")], True),
-        "data synth": (["data", "synth", "-o", f"{OUT}/s"],
-                       [("--n", ["0", "-5", "9", "1e9", "100000000000", "nan", ""]), ("--seed", "seed"),
-                        ("-o", "outdir")], True),
-        "data info": (["data", "info", "--data", "{data}"], [("--data", "path:"), ("--words", "name")], False),
-        "bn learn": (["bn", "learn", "--data", "{data}", "-o", f"{OUT}/m.json"],
-                     [("--words", "name"), ("--unseen-words", "name"), ("--data", "path:"), ("-o", "outfile"),
-                      ("--schema", "path:.yaml"), ("--experiments", "path:.csv")], True),
-        "bn edges": (["bn", "edges", "{model}"], [("", "path:.json"), ("", "path:.mat"), ("", "path:.bif")], False),
-        "bn import": (["bn", "import", "{model}", "-o", f"{OUT}/x.json"],
-                      [("", "path:.bif"), ("", "path:.mat"), ("", "path:.uai"), ("--format", "name"),
-                       ("-o", "outfile")], False),
-        "bn export": (["bn", "export", "{model}", "-o", f"{OUT}/x.bif"],
-                      [("--format", "name"), ("--zero-rows", "name"), ("-o", "outfile"), ("", "path:.json")], False),
-        "query": (["query", "--model", "{model}", "--target", "ObjVel", "--json"],
-                  [("--target", "name"), ("--evidence", ["", "Action", "Action=", "=grasp", "Action=nope",
-                                                         "Nope=grasp", "Action=grasp=tap", "Action=grasp,tap"]),
-                   ("--soft", ["Action=grasp:nan,tap:1,touch:0", "Action=grasp:inf,tap:1,touch:1",
-                               "Action=grasp:-1,tap:1,touch:1", "Action=grasp:0,tap:0,touch:0",
-                               "Action=grasp:1e-320,tap:0,touch:0", "Action=grasp:1e-322,tap:0,touch:0",
-                               "Action=grasp:1e308,tap:1e308,touch:1e308", "Action=", "Action=grasp",
-                               "Action=grasp:x", "ObjVel=slow:1", "Action=grasp:0.5,grasp:0.5"]),
-                   ("--soft-rule", "name"), ("--model", "path:.json"), ("--data", "path:"),
-                   ("--batch", "path:.jsonl")], False),
-        "gestures segment": (["gestures", "segment", "{log}"],
-                             [("--label", "name"), ("--plot", "outfile"), ("", "path:.log")], False),
-        "hmm train": (["hmm", "train", "--synthetic", "2", "--states", "2", "--mix", "1", "--iter", "2",
-                       "-o", f"{OUT}/r.json"],
-                      [("--states", "pos_int"), ("--mix", "pos_int"), ("--iter", "pos_int"), ("--tol", "pos_float"),
-                       ("--covar-reg", "pos_float"), ("--noise", "nonneg_float"), ("--seed", "seed"),
-                       ("--recipe", "name"), ("--features", "name"), ("--actions", "name"),
-                       ("--synthetic", "pos_int"), ("-o", "outfile")], True),
-        "recognize": (["recognize", "{log}", "--models", "{recogniser}"],
-                      [("--models", "path:.json"), ("--frames", ["-1", "nan", "x", "5:1"]),
-                       ("--body-size", ["0", "-1", "nan", "inf", "1e309"]), ("", "path:.log"),
-                       ("--json", None), ("--stream", None), ("--repair", None)], False),
-        "reproduce": (["reproduce", "--out", f"{OUT}/rep"],
-                      [("--only", ["", "nope", "99", "0", "-1"]), ("--jobs", "pos_int"), ("--seed", "seed"),
-                       ("--data", "path:"), ("--notebooks", "path:")], True),
-        "run": (["run", "01", "--out", f"{OUT}/run"],
-                [("-p", [("seed", "-1"), ("seed", "nan"), ("seed", ""), ("nokey", "1"), ("quick", "maybe"),
-                         ("data", "/no/such/folder")]), ("--data", "path:")], True),
-        "describe": (["describe", "--model", "{model}", "--nbest", "3"],
-                     [("--nbest", "pos_int"), ("--sample", ["0", "-1", "200001", "1e9", "nan"]),
-                      ("--max-length", ["0", "3", "7", "-1", "nan"]), ("--must-contain", "name"),
-                      ("--grammar", "path:.txt"), ("--candidates", "path:.txt"), ("--score", "name"),
-                      ("--evidence", ["Action=nope", "Action="]), ("--seed", "seed"),
-                      ("--candidates", ["{candidates}"]), ("--json", None)], False),
-        "anticipate": (["anticipate", "--case", "sphere", "--models", "{recogniser}", "--data", "{data}"],
-                       [("--case", "name"), ("--step", "pos_int"), ("--rule", "name"), ("--models", "path:.json"),
-                        ("--score", "name"), ("--candidates", "path:.txt"), ("--json", None)], False),
-        "readme": (["readme", "--summary", "{model}", "--readme", f"{OUT}/README.md"],
-                   [("--summary", "path:.json"), ("--readme", "path:.md")], True),
-        "evaluate": (["evaluate", "-o", f"{OUT}/ev", "--episodes", "20"],
-                     [("--episodes", "pos_int"), ("--seed", "seed"), ("--config", "badpath:.toml"),
-                      ("--scheduler", ["", "nope", "tcp://", "tcp://256.0.0.1:x"]), ("--workers", "pos_int"),
-                      ("--max-chunks", "pos_int"), ("--data", "path:"), ("-o", "outdir")], True),
-        "corpus": (["corpus", "-o", f"{OUT}/c.parquet", "--episodes", "20"],
-                   [("--episodes", "pos_int"), ("--seed", "seed"), ("--config", "badpath:.toml"),
-                    ("--data", "path:"), ("-o", "outfile")], True),
-    }  # fmt: skip
+        "data fetch": (
+            ["data", "fetch", "--dest", f"{OUT}/d", "--mirror", "http://127.0.0.1:9/", "--timeout", "0.5"],
+            [
+                ("--timeout", "pos_float"),
+                ("--mirror", "url"),
+                ("--dest", "path:"),
+                ("--manifest", "path:.json"),
+            ],
+            True,
+        ),
+        "data synth": (
+            ["data", "synth", "-o", f"{OUT}/s"],
+            [
+                ("--n", ["0", "-5", "9", "1e9", "100000000000", "nan", ""]),
+                ("--seed", "seed"),
+                ("-o", "outdir"),
+            ],
+            True,
+        ),
+        "data info": (
+            ["data", "info", "--data", "{data}"],
+            [("--data", "path:"), ("--words", "name")],
+            False,
+        ),
+        "bn learn": (
+            ["bn", "learn", "--data", "{data}", "-o", f"{OUT}/m.json"],
+            [
+                ("--words", "name"),
+                ("--unseen-words", "name"),
+                ("--data", "path:"),
+                ("-o", "outfile"),
+                ("--schema", "path:.yaml"),
+                ("--experiments", "path:.csv"),
+            ],
+            True,
+        ),
+        "bn edges": (
+            ["bn", "edges", "{model}"],
+            [("", "path:.json"), ("", "path:.mat"), ("", "path:.bif")],
+            False,
+        ),
+        "bn import": (
+            ["bn", "import", "{model}", "-o", f"{OUT}/x.json"],
+            [
+                ("", "path:.bif"),
+                ("", "path:.mat"),
+                ("", "path:.uai"),
+                ("--format", "name"),
+                ("-o", "outfile"),
+            ],
+            False,
+        ),
+        "bn export": (
+            ["bn", "export", "{model}", "-o", f"{OUT}/x.bif"],
+            [("--format", "name"), ("--zero-rows", "name"), ("-o", "outfile"), ("", "path:.json")],
+            False,
+        ),
+        "query": (
+            ["query", "--model", "{model}", "--target", "ObjVel", "--json"],
+            [
+                ("--target", "name"),
+                (
+                    "--evidence",
+                    [
+                        "",
+                        "Action",
+                        "Action=",
+                        "=grasp",
+                        "Action=nope",
+                        "Nope=grasp",
+                        "Action=grasp=tap",
+                        "Action=grasp,tap",
+                    ],
+                ),
+                (
+                    "--soft",
+                    [
+                        "Action=grasp:nan,tap:1,touch:0",
+                        "Action=grasp:inf,tap:1,touch:1",
+                        "Action=grasp:-1,tap:1,touch:1",
+                        "Action=grasp:0,tap:0,touch:0",
+                        "Action=grasp:1e-320,tap:0,touch:0",
+                        "Action=grasp:1e-322,tap:0,touch:0",
+                        "Action=grasp:1e308,tap:1e308,touch:1e308",
+                        "Action=",
+                        "Action=grasp",
+                        "Action=grasp:x",
+                        "ObjVel=slow:1",
+                        "Action=grasp:0.5,grasp:0.5",
+                    ],
+                ),
+                ("--soft-rule", "name"),
+                ("--model", "path:.json"),
+                ("--data", "path:"),
+                ("--batch", "path:.jsonl"),
+            ],
+            False,
+        ),
+        "gestures segment": (
+            ["gestures", "segment", "{log}"],
+            [("--label", "name"), ("--plot", "outfile"), ("", "path:.log")],
+            False,
+        ),
+        "hmm train": (
+            [
+                "hmm",
+                "train",
+                "--synthetic",
+                "2",
+                "--states",
+                "2",
+                "--mix",
+                "1",
+                "--iter",
+                "2",
+                "-o",
+                f"{OUT}/r.json",
+            ],
+            [
+                ("--states", "pos_int"),
+                ("--mix", "pos_int"),
+                ("--iter", "pos_int"),
+                ("--tol", "pos_float"),
+                ("--covar-reg", "pos_float"),
+                ("--noise", "nonneg_float"),
+                ("--seed", "seed"),
+                ("--recipe", "name"),
+                ("--features", "name"),
+                ("--actions", "name"),
+                ("--synthetic", "pos_int"),
+                ("-o", "outfile"),
+            ],
+            True,
+        ),
+        "recognize": (
+            ["recognize", "{log}", "--models", "{recogniser}"],
+            [
+                ("--models", "path:.json"),
+                ("--frames", ["-1", "nan", "x", "5:1"]),
+                ("--body-size", ["0", "-1", "nan", "inf", "1e309"]),
+                ("", "path:.log"),
+                ("--json", None),
+                ("--stream", None),
+                ("--repair", None),
+            ],
+            False,
+        ),
+        "reproduce": (
+            ["reproduce", "--out", f"{OUT}/rep"],
+            [
+                ("--only", ["", "nope", "99", "0", "-1"]),
+                ("--jobs", "pos_int"),
+                ("--seed", "seed"),
+                ("--data", "path:"),
+                ("--notebooks", "path:"),
+            ],
+            True,
+        ),
+        "run": (
+            ["run", "01", "--out", f"{OUT}/run"],
+            [
+                (
+                    "-p",
+                    [
+                        ("seed", "-1"),
+                        ("seed", "nan"),
+                        ("seed", ""),
+                        ("nokey", "1"),
+                        ("quick", "maybe"),
+                        ("data", "/no/such/folder"),
+                    ],
+                ),
+                ("--data", "path:"),
+            ],
+            True,
+        ),
+        "describe": (
+            ["describe", "--model", "{model}", "--nbest", "3"],
+            [
+                ("--nbest", "pos_int"),
+                ("--sample", ["0", "-1", "200001", "1e9", "nan"]),
+                ("--max-length", ["0", "3", "7", "-1", "nan"]),
+                ("--must-contain", "name"),
+                ("--grammar", "path:.txt"),
+                ("--candidates", "path:.txt"),
+                ("--score", "name"),
+                ("--evidence", ["Action=nope", "Action="]),
+                ("--seed", "seed"),
+                ("--candidates", ["{candidates}"]),
+                ("--json", None),
+            ],
+            False,
+        ),
+        "anticipate": (
+            ["anticipate", "--case", "sphere", "--models", "{recogniser}", "--data", "{data}"],
+            [
+                ("--case", "name"),
+                ("--step", "pos_int"),
+                ("--rule", "name"),
+                ("--models", "path:.json"),
+                ("--score", "name"),
+                ("--candidates", "path:.txt"),
+                ("--json", None),
+            ],
+            False,
+        ),
+        "readme": (
+            ["readme", "--summary", "{model}", "--readme", f"{OUT}/README.md"],
+            [("--summary", "path:.json"), ("--readme", "path:.md")],
+            True,
+        ),
+        "evaluate": (
+            ["evaluate", "-o", f"{OUT}/ev", "--episodes", "20"],
+            [
+                ("--episodes", "pos_int"),
+                ("--seed", "seed"),
+                ("--config", "badpath:.toml"),
+                ("--scheduler", ["", "nope", "tcp://", "tcp://256.0.0.1:x"]),
+                ("--workers", "pos_int"),
+                ("--max-chunks", "pos_int"),
+                ("--data", "path:"),
+                ("-o", "outdir"),
+            ],
+            True,
+        ),
+        "corpus": (
+            ["corpus", "-o", f"{OUT}/c.parquet", "--episodes", "20"],
+            [
+                ("--episodes", "pos_int"),
+                ("--seed", "seed"),
+                ("--config", "badpath:.toml"),
+                ("--data", "path:"),
+                ("-o", "outfile"),
+            ],
+            True,
+        ),
+    }
 
 
 CASES = _cases()
@@ -394,8 +590,14 @@ def test_every_subcommand_has_a_case_here():
 
 def _fill(arg: str, w: Work) -> str:
     a = w.assets
-    return arg.format(out=w.root / "out", model=a["model"], recogniser=a["recogniser"], log=a["log"],
-                      data=a["data"], candidates=a["candidates"])  # fmt: skip
+    return arg.format(
+        out=w.root / "out",
+        model=a["model"],
+        recogniser=a["recogniser"],
+        log=a["log"],
+        data=a["data"],
+        candidates=a["candidates"],
+    )
 
 
 def _bad_value(kind: object, w: Work, draw) -> list[str]:
@@ -517,10 +719,18 @@ def test_corrupted_hand_logs(command, profile, assets):
 # ------------------------------------------------------------------ categories "model JSON", "recogniser JSON"
 
 _json_leaf = st.one_of(
-    st.none(), st.booleans(), st.integers(-(10**20), 10**20), st.floats(allow_nan=True, allow_infinity=True),
-    st.text(max_size=8), st.sampled_from(["grasp", "ObjVel", "", "NaN"]),
-)  # fmt: skip
-_json_value = st.recursive(_json_leaf, lambda c: st.lists(c, max_size=4) | st.dictionaries(st.text(max_size=6), c, max_size=4), max_leaves=12)  # fmt: skip
+    st.none(),
+    st.booleans(),
+    st.integers(-(10**20), 10**20),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.text(max_size=8),
+    st.sampled_from(["grasp", "ObjVel", "", "NaN"]),
+)
+_json_value = st.recursive(
+    _json_leaf,
+    lambda c: st.lists(c, max_size=4) | st.dictionaries(st.text(max_size=6), c, max_size=4),
+    max_leaves=12,
+)
 
 
 def _paths(obj, prefix=()):
@@ -618,16 +828,22 @@ def test_corrupted_mat_files(command, profile, assets, original_mat):
     original = original_mat
 
     @PROFILES[profile]
-    @given(cut=st.integers(0, len(original)), flips=st.lists(st.integers(0, len(original) - 1), max_size=8),
-           byte=st.integers(0, 255))  # fmt: skip
+    @given(
+        cut=st.integers(0, len(original)),
+        flips=st.lists(st.integers(0, len(original) - 1), max_size=8),
+        byte=st.integers(0, 255),
+    )
     def example(cut, flips, byte):
         data = bytearray(original)
         for i in flips:
             data[i] = byte
         with work_folder(assets) as w:
             m = w.write("BN.mat", bytes(data[: cut if not flips else len(data)]))
-            argv = (["bn", "import", m, "-o", str(w.root / "out" / "x.json")] if command == "bn import"
-                    else ["query", "--model", m, "--target", "Action", "--json"])  # fmt: skip
+            argv = (
+                ["bn", "import", m, "-o", str(w.root / "out" / "x.json")]
+                if command == "bn import"
+                else ["query", "--model", m, "--target", "Action", "--json"]
+            )
             judge(".mat files", argv, w.root)
 
     example()
@@ -641,19 +857,34 @@ _query_line = st.one_of(
         {},
         optional={
             "target": st.one_of(st.sampled_from(["ObjVel", "Action", "Nope", ""]), _json_value),
-            "evidence": st.one_of(st.dictionaries(st.sampled_from(["Action", "Shape", "Nope"]),
-                                                  st.one_of(st.sampled_from(["tap", "circle", "x"]), _json_value),
-                                                  max_size=2), _json_value),
-            "soft": st.one_of(st.dictionaries(st.sampled_from(["Action", "Shape", "ObjVel"]),
-                                              st.one_of(st.dictionaries(st.sampled_from(["grasp", "tap", "touch", "x"]),
-                                                                        st.one_of(st.floats(allow_nan=True), _json_value),
-                                                                        max_size=4), _json_value),
-                                              max_size=2), _json_value),
+            "evidence": st.one_of(
+                st.dictionaries(
+                    st.sampled_from(["Action", "Shape", "Nope"]),
+                    st.one_of(st.sampled_from(["tap", "circle", "x"]), _json_value),
+                    max_size=2,
+                ),
+                _json_value,
+            ),
+            "soft": st.one_of(
+                st.dictionaries(
+                    st.sampled_from(["Action", "Shape", "ObjVel"]),
+                    st.one_of(
+                        st.dictionaries(
+                            st.sampled_from(["grasp", "tap", "touch", "x"]),
+                            st.one_of(st.floats(allow_nan=True), _json_value),
+                            max_size=4,
+                        ),
+                        _json_value,
+                    ),
+                    max_size=2,
+                ),
+                _json_value,
+            ),
             "soft_rule": st.one_of(st.sampled_from(["virtual", "jeffrey", "nope"]), _json_value),
         },
     ).map(json.dumps),
     st.text(max_size=30),
-)  # fmt: skip
+)
 
 
 @pytest.mark.parametrize("via", ["file", "stdin"])
@@ -669,8 +900,12 @@ def test_evidence_batches(via, profile, assets):
         text = "\n".join(lines) + "\n"
         with work_folder(assets) as w:
             batch = w.write("batch.jsonl", text) if via == "file" else "-"
-            o = judge("evidence batches", ["query", "--model", str(assets["model"]), "--batch", batch], w.root,
-                      stdin=text)  # fmt: skip
+            o = judge(
+                "evidence batches",
+                ["query", "--model", str(assets["model"]), "--batch", batch],
+                w.root,
+                stdin=text,
+            )
             if o.status == 0:  # one answer per line, in order, strict JSON (judge checked), nothing lost
                 assert len(o.out.splitlines()) == len(text.splitlines()), (lines, o.out)
 

@@ -118,9 +118,18 @@ def test_recognize_json_and_stream(capsys, source, recognizer, models):
 
 def test_stream_json_lines(capsys, source, models):
     status, out, _ = run(
-        capsys, "recognize", "tap_notable_seated_1", "--data", str(source.root), "--frames", "121:125", "--stream",
-        "--json", "--models", models,
-    )  # fmt: skip
+        capsys,
+        "recognize",
+        "tap_notable_seated_1",
+        "--data",
+        str(source.root),
+        "--frames",
+        "121:125",
+        "--stream",
+        "--json",
+        "--models",
+        models,
+    )
     assert status == 0
     lines = [json.loads(ln) for ln in out.splitlines()]
     assert [d["frame"] for d in lines] == [121, 122, 123, 124, 125]
@@ -139,8 +148,9 @@ def test_bad_frames_syntax(capsys, synthetic_log, frames, fragment):
 
 def test_frames_out_of_range(capsys, synthetic_log, source, models):
     path, _ = synthetic_log
-    status, _, err = run(capsys, "recognize", str(path), "--frames", "1:99999", "--data", str(source.root),
-                         "--models", models)  # fmt: skip
+    status, _, err = run(
+        capsys, "recognize", str(path), "--frames", "1:99999", "--data", str(source.root), "--models", models
+    )
     assert_one_line_error(status, err, "out of range; allowed: 1 ≤ first ≤ last ≤")
 
 
@@ -178,8 +188,18 @@ def test_train_on_the_recordings(capsys, tmp_path, source):
     status, out, _ = run(capsys, "hmm", "train", "--data", str(source.root), "-o", str(model), "--iter", "20")
     assert status == 0 and f"data: {source.kind} data" in out
     assert "grasp: 4 sequences" in out and "tap: 3 sequences" in out  # the standing recordings only
-    status, out, _ = run(capsys, "hmm", "train", "--data", str(source.root), "-o", str(tmp_path / "all.json"),
-                         "--iter", "2", "--include-test")  # fmt: skip
+    status, out, _ = run(
+        capsys,
+        "hmm",
+        "train",
+        "--data",
+        str(source.root),
+        "-o",
+        str(tmp_path / "all.json"),
+        "--iter",
+        "2",
+        "--include-test",
+    )
     assert status == 0 and "tap: 5 sequences" in out  # + the two seated taps
     status, out, _ = run(capsys, "recognize", "tap1_hand", "--data", str(source.root), "--models", str(model))
     assert status == 0
@@ -190,8 +210,25 @@ def test_train_with_invariant_features_and_recognize(capsys, tmp_path, synthetic
     from glu.gestures.recognizer import Recognizer
 
     model = tmp_path / "inv.json"
-    status, out, _ = run(capsys, "hmm", "train", "--synthetic", "5", "--states", "3", "--mix", "1", "--iter", "10",
-                         "--features", "rotated,centred", "--covar-reg", "0.01", "-o", str(model))  # fmt: skip
+    status, out, _ = run(
+        capsys,
+        "hmm",
+        "train",
+        "--synthetic",
+        "5",
+        "--states",
+        "3",
+        "--mix",
+        "1",
+        "--iter",
+        "10",
+        "--features",
+        "rotated,centred",
+        "--covar-reg",
+        "0.01",
+        "-o",
+        str(model),
+    )
     assert status == 0 and "features: centred+rotated" in out
     rec = Recognizer.load(model)
     assert rec.features.name == "centred+rotated" and rec.meta["covar_reg"] == 0.01
@@ -211,8 +248,17 @@ def test_train_with_invariant_features_and_recognize(capsys, tmp_path, synthetic
 
 
 def test_bad_features_are_refused(capsys, tmp_path):
-    status, _, err = run(capsys, "hmm", "train", "--synthetic", "3", "--features", "centred,wobbly", "-o",
-                         str(tmp_path / "m.json"))  # fmt: skip
+    status, _, err = run(
+        capsys,
+        "hmm",
+        "train",
+        "--synthetic",
+        "3",
+        "--features",
+        "centred,wobbly",
+        "-o",
+        str(tmp_path / "m.json"),
+    )
     assert_one_line_error(
         status, err, "unknown invariance 'wobbly'; allowed: centred, scaled, rotated, mirrored"
     )

@@ -104,8 +104,9 @@ def test_k_means_relocates_an_empty_cluster_as_scikit_learn_does():
             centers = X[rng.choice(len(X), K - 1, replace=False)]
             centers = np.vstack([centers, np.full((1, X.shape[1]), 1e3)])  # the far one: emptied at once
             tol = 1e-4 * float(np.mean(np.var(X, axis=0)))
-            expected, *_ = _kmeans_single_lloyd(X, np.ones(len(X)), centers.copy(), max_iter=300, tol=tol,
-                                                n_threads=1)  # fmt: skip
+            expected, *_ = _kmeans_single_lloyd(
+                X, np.ones(len(X)), centers.copy(), max_iter=300, tol=tol, n_threads=1
+            )
             np.testing.assert_array_equal(
                 kmeans_lloyd(X, centers.copy(), tol, 300), expected, err_msg=str(seed)
             )

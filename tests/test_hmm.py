@@ -300,8 +300,16 @@ def test_one_map_em_step_equals_the_textbook_update(corpus):
     xi_sum, start_sum = np.zeros((Q, Q)), np.zeros(Q)
     resp = []
     for X in seqs:
-        lc = np.array([[np.log(init.weights[q, m]) + multivariate_normal(init.means[q, m], init.covars[q, m]).logpdf(X)
-                        for m in range(M)] for q in range(Q)]).transpose(2, 0, 1)  # (T, Q, M)  # fmt: skip
+        lc = np.array(
+            [
+                [
+                    np.log(init.weights[q, m])
+                    + multivariate_normal(init.means[q, m], init.covars[q, m]).logpdf(X)
+                    for m in range(M)
+                ]
+                for q in range(Q)
+            ]
+        ).transpose(2, 0, 1)  # (T, Q, M)
         lb = logsumexp(lc, axis=2)
         T = len(X)
         fa, ba = np.zeros((T, Q)), np.zeros((T, Q))

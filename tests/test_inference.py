@@ -101,8 +101,14 @@ def test_virtual_evidence_agrees_with_pgmpy(uniform_bn):
         soft_node = str(rng.choice(free))
         card = uniform_bn.schema.cardinality(soft_node)
         q = rng.dirichlet(np.ones(card))
-        virtual = [TabularCPD(soft_node, card, q.reshape(-1, 1),
-                              state_names={soft_node: list(uniform_bn.schema.values_of(soft_node))})]  # fmt: skip
+        virtual = [
+            TabularCPD(
+                soft_node,
+                card,
+                q.reshape(-1, 1),
+                state_names={soft_node: list(uniform_bn.schema.values_of(soft_node))},
+            )
+        ]
         if _pgmpy_evidence_probability(ve, evidence) == 0:
             continue
         ref = _pgmpy_marginal(ve, target, evidence, virtual)
@@ -121,8 +127,10 @@ def test_jeffrey_rule_is_the_mixture_of_hard_posteriors(uniform_bn):
         {"Size": "small", "is": "present"},
     ):
         for target in ("ObjVel", "Contact", "rolling"):
-            ref = sum(qa * _pgmpy_marginal(ve, target, {**evidence, "Action": a})
-                      for a, qa in zip(("grasp", "tap", "touch"), q, strict=True))  # fmt: skip
+            ref = sum(
+                qa * _pgmpy_marginal(ve, target, {**evidence, "Action": a})
+                for a, qa in zip(("grasp", "tap", "touch"), q, strict=True)
+            )
             ours = eng.query([target], evidence, soft={"Action": q}, soft_rule="jeffrey")[target]
             np.testing.assert_allclose(ours, ref, rtol=0, atol=TOL)
         post = eng.query(["Action"], evidence, soft={"Action": q}, soft_rule="jeffrey")["Action"]
@@ -153,8 +161,14 @@ def test_soft_evidence_certain_equals_hard_evidence(zero_bn):
 # ---------------------------------------------------------------- brute force on small random networks
 def _tiny_bn(seed: int, zero_rows: bool) -> BayesNet:
     rng = np.random.default_rng(seed)
-    values = {"A": ("a0", "a1", "a2"), "B": ("b0", "b1"), "C": ("c0", "c1", "c2"),
-              "w1": ("absent", "present"), "w2": ("absent", "present"), "w3": ("x", "y", "z")}  # fmt: skip
+    values = {
+        "A": ("a0", "a1", "a2"),
+        "B": ("b0", "b1"),
+        "C": ("c0", "c1", "c2"),
+        "w1": ("absent", "present"),
+        "w2": ("absent", "present"),
+        "w3": ("x", "y", "z"),
+    }
     schema = Schema(values=values, n_affordance=3)
     parents = {"A": (), "B": ("A",), "C": ("A", "B"), "w1": ("B", "C"), "w2": (), "w3": ("A", "C")}
     cpts = {}
@@ -226,10 +240,16 @@ def test_a_tiny_likelihood_on_the_only_possible_value_is_not_called_impossible()
 
 @pytest.mark.parametrize(
     ("soft", "message"),
-    [(["a", "b", "c"], "must be a list of 3 numbers"), ([[1], [0], [0]], "must be a flat list"),
-     ({"a0": "x"}, "the probability of 'a0' must be a number, got 'x'"), ({"a0": [1]}, "must be a number"),
-     ({"a0": True}, "must be a number"), ("abc", "must be a list of 3 numbers"), ([0.5, 0.5], "has 2 entries")],
-)  # fmt: skip
+    [
+        (["a", "b", "c"], "must be a list of 3 numbers"),
+        ([[1], [0], [0]], "must be a flat list"),
+        ({"a0": "x"}, "the probability of 'a0' must be a number, got 'x'"),
+        ({"a0": [1]}, "must be a number"),
+        ({"a0": True}, "must be a number"),
+        ("abc", "must be a list of 3 numbers"),
+        ([0.5, 0.5], "has 2 entries"),
+    ],
+)
 def test_malformed_soft_evidence_is_one_clear_error(soft, message):
     eng = InferenceEngine(_tiny_bn(1, zero_rows=False))
     with pytest.raises(EvidenceError, match=re.escape(message)):
@@ -308,7 +328,8 @@ def test_errors_are_clear_value_errors(zero_bn):
     with pytest.raises(UnknownValueError, match=r"Shape has no value 'ball'; allowed: sphere, box"):
         eng.query(["ObjVel"], {"Shape": "ball"})
     assert eng.query(["ObjVel"], {"Shape": "circle"})["ObjVel"] == pytest.approx(
-        eng.query(["ObjVel"], {"Shape": "sphere"})["ObjVel"])  # fmt: skip
+        eng.query(["ObjVel"], {"Shape": "sphere"})["ObjVel"]
+    )
     with pytest.raises(EvidenceError, match="given twice"):
         eng.query(["ObjVel"], {"Action": "tap"}, soft={"Action": [0, 1, 0]})
     with pytest.raises(EvidenceError, match="not a distribution"):

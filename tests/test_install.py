@@ -131,11 +131,20 @@ def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
     before = snapshot()
     empty = tmp_path / "empty"
     empty.mkdir()
-    env = {**os.environ, "XDG_DATA_HOME": str(tmp_path / "xdg-data"), "XDG_CACHE_HOME": str(tmp_path / "xdg-cache"),
-           "RERUN_ANALYTICS": "0", "MPLBACKEND": "Agg", "PYTHONDONTWRITEBYTECODE": "1"}  # fmt: skip
+    env = {
+        **os.environ,
+        "XDG_DATA_HOME": str(tmp_path / "xdg-data"),
+        "XDG_CACHE_HOME": str(tmp_path / "xdg-cache"),
+        "RERUN_ANALYTICS": "0",
+        "MPLBACKEND": "Agg",
+        "PYTHONDONTWRITEBYTECODE": "1",
+    }
     env.pop(paths.DATA_ENV_VAR, None)
-    for cmd in (["data", "info"], ["query", "--target", "ObjVel", "--evidence", "Action=tap"],
-                ["describe", "--evidence", "Action=grasp", "ObjVel=slow", "--nbest", "2"]):  # fmt: skip
+    for cmd in (
+        ["data", "info"],
+        ["query", "--target", "ObjVel", "--evidence", "Action=tap"],
+        ["describe", "--evidence", "Action=grasp", "ObjVel=slow", "--nbest", "2"],
+    ):
         r = _run([str(glu), *cmd], cwd=empty, env=env)
         assert r.returncode == 0, (cmd, r.stderr)
     r = _run([str(glu), "reproduce", "--quick"], cwd=empty, env=env)
@@ -161,8 +170,20 @@ def test_the_lower_bounds_resolve_together(tmp_path):
         m = re.match(r"^([A-Za-z0-9_.\-]+(?:\[[^\]]+\])?)\s*>=\s*([^,;\s]+)", d)
         assert m, f"{d}: every dependency needs a lower bound"
         pinned.append(f"{m.group(1)}=={m.group(2)}")
-    r = _run([sys.executable, "-m", "pip", "install", "--dry-run", "--ignore-installed", "--quiet", "--report",
-              str(tmp_path / "report.json"), *pinned])  # fmt: skip
+    r = _run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "--dry-run",
+            "--ignore-installed",
+            "--quiet",
+            "--report",
+            str(tmp_path / "report.json"),
+            *pinned,
+        ]
+    )
     assert r.returncode == 0, "the lower bounds do not resolve together:\n" + r.stderr[-3000:]
 
 

@@ -45,10 +45,24 @@ def test_a_signal_stops_the_run_at_once_and_publishes_nothing(tmp_path, sig, sta
     for k, mark in enumerate(marks, start=1):
         (nbs / f"0{k}_slow.py").write_text(_SLOW.replace("MARK", repr(str(mark))))
     proc = subprocess.Popen(
-        [sys.executable, "-m", "glu", "reproduce", "--notebooks", str(nbs), "--data", "synthetic",
-         "--out", str(out), "-j", "2"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "glu",
+            "reproduce",
+            "--notebooks",
+            str(nbs),
+            "--data",
+            "synthetic",
+            "--out",
+            str(out),
+            "-j",
+            "2",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 120
     while not all(m.exists() for m in marks):
         assert proc.poll() is None, proc.stderr.read()

@@ -28,8 +28,11 @@ def fake_statistics(rng, n):
         y = rng.integers(0, 3, n)
         top = p.argmax(1)
         conf = p.max(1)
-        vals = {"correct": (top == y) * 1.0, "log_loss": -np.log(p[np.arange(n), y]),
-                "brier": ((p - np.eye(3)[y]) ** 2).sum(1)}  # fmt: skip
+        vals = {
+            "correct": (top == y) * 1.0,
+            "log_loss": -np.log(p[np.arange(n), y]),
+            "brier": ((p - np.eye(3)[y]) ** 2).sum(1),
+        }
         b = np.minimum((conf * SETTINGS.bins).astype(int), SETTINGS.bins - 1)
         for k, r in g.iterrows():
             if r.bin < 0:

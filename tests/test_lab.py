@@ -36,8 +36,12 @@ def _get(url: str) -> dict:
 
 def _put(url: str, body: dict) -> dict:
     data = json.dumps(body).encode()
-    req = urllib.request.Request(url, data=data, method="PUT",
-                                 headers={"Authorization": f"token {TOKEN}", "Content-Type": "application/json"})  # fmt: skip
+    req = urllib.request.Request(
+        url,
+        data=data,
+        method="PUT",
+        headers={"Authorization": f"token {TOKEN}", "Content-Type": "application/json"},
+    )
     with urllib.request.urlopen(req, timeout=10) as r:
         return json.loads(r.read())
 
@@ -50,14 +54,29 @@ def lab(tmp_path_factory):
     shutil.copy(ROOT / "pyproject.toml", root / "pyproject.toml")  # jupytext's settings
     port = _free_port()
     home = tmp_path_factory.mktemp("home")  # nothing of the user's own settings is read or written
-    env = {"HOME": str(home), "JUPYTER_CONFIG_DIR": str(home / ".jupyter"),
-           "JUPYTERLAB_SETTINGS_DIR": str(home / "lab-user-settings"),
-           "PATH": "/usr/bin:/bin", "JUPYTER_PLATFORM_DIRS": "1"}  # fmt: skip
+    env = {
+        "HOME": str(home),
+        "JUPYTER_CONFIG_DIR": str(home / ".jupyter"),
+        "JUPYTERLAB_SETTINGS_DIR": str(home / "lab-user-settings"),
+        "PATH": "/usr/bin:/bin",
+        "JUPYTER_PLATFORM_DIRS": "1",
+    }
     proc = subprocess.Popen(
-        [sys.executable, "-m", "jupyterlab", f"--config={CONFIG}", "--no-browser", f"--port={port}",
-         f"--ServerApp.root_dir={root}", f"--IdentityProvider.token={TOKEN}", "--ServerApp.port_retries=0"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "jupyterlab",
+            f"--config={CONFIG}",
+            "--no-browser",
+            f"--port={port}",
+            f"--ServerApp.root_dir={root}",
+            f"--IdentityProvider.token={TOKEN}",
+            "--ServerApp.port_retries=0",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        env=env,
+    )
     base = f"http://127.0.0.1:{port}"
     try:
         deadline = time.monotonic() + 60
@@ -123,8 +142,9 @@ def test_saving_from_lab_keeps_the_file_as_it_is_in_git(lab, name):
             cell["outputs"] = [{"output_type": "stream", "name": "stdout", "text": "some output\n"}]
             cell["metadata"]["scrolled"] = True
             cell["metadata"]["execution"] = {"iopub.status.idle": "2026-11-23T00:00:00Z"}
-    saved = _put(f"{base}/api/contents/notebooks/{name}.py",
-                 {"type": "notebook", "format": "json", "content": nb})  # fmt: skip
+    saved = _put(
+        f"{base}/api/contents/notebooks/{name}.py", {"type": "notebook", "format": "json", "content": nb}
+    )
     assert saved["path"] == f"notebooks/{name}.py"
     assert path.read_bytes() == before, "saving from JupyterLab changed the notebook's source"
     assert not list(path.parent.glob("*.ipynb"))  # and no paired .ipynb appears

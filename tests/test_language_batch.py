@@ -76,20 +76,28 @@ def _best_of(sentence, words):
 @pytest.mark.parametrize(
     ("sentence", "truth", "expected"),
     [
-        ("the robot taps the big yellow ball and the ball rolls",
-         {"Action": "tap", "Shape": "sphere", "Size": "big", "Color": "yellow", "ObjVel": "fast"},
-         {"verb": True, "object": True, "effect": True, "all": True}),
-        ("he is pushing the box but the box is still",
-         {"Action": "tap", "Shape": "box", "Size": "small", "Color": "blue", "ObjVel": "medium"},
-         {"verb": True, "object": True, "effect": False, "all": False}),
-        ("baltazar grasped the small green cube and the cube rises",
-         {"Action": "touch", "Shape": "box", "Size": "big", "Color": "green2", "ObjVel": "medium"},
-         {"verb": False, "object": False, "effect": True, "all": False}),
-        ("the robot pokes the green sphere and the sphere is inert",
-         {"Action": "touch", "Shape": "sphere", "Size": "medium", "Color": "green1", "ObjVel": "slow"},
-         {"verb": True, "object": True, "effect": True, "all": True}),
+        (
+            "the robot taps the big yellow ball and the ball rolls",
+            {"Action": "tap", "Shape": "sphere", "Size": "big", "Color": "yellow", "ObjVel": "fast"},
+            {"verb": True, "object": True, "effect": True, "all": True},
+        ),
+        (
+            "he is pushing the box but the box is still",
+            {"Action": "tap", "Shape": "box", "Size": "small", "Color": "blue", "ObjVel": "medium"},
+            {"verb": True, "object": True, "effect": False, "all": False},
+        ),
+        (
+            "baltazar grasped the small green cube and the cube rises",
+            {"Action": "touch", "Shape": "box", "Size": "big", "Color": "green2", "ObjVel": "medium"},
+            {"verb": False, "object": False, "effect": True, "all": False},
+        ),
+        (
+            "the robot pokes the green sphere and the sphere is inert",
+            {"Action": "touch", "Shape": "sphere", "Size": "medium", "Color": "green1", "ObjVel": "slow"},
+            {"verb": True, "object": True, "effect": True, "all": True},
+        ),
     ],
-)  # fmt: skip
+)
 def test_agreement(words, sentence, truth, expected):
     codes = {k: np.array([AFFORDANCE_VALUES[k].index(v)]) for k, v in truth.items()}
     got = agreement(_best_of(sentence, words), codes, AFFORDANCE_VALUES)

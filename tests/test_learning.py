@@ -142,8 +142,12 @@ def test_k2_brute_force_best_single_parent_matches_first_step():
 
 def test_bdeu_pseudo_counts_closed_form():
     schema = default_schema()
-    df = pd.DataFrame({n: pd.Categorical([schema.values_of(n)[0]] * 4, categories=schema.values_of(n))
-                       for n in schema.nodes})  # fmt: skip
+    df = pd.DataFrame(
+        {
+            n: pd.Categorical([schema.values_of(n)[0]] * 4, categories=schema.values_of(n))
+            for n in schema.nodes
+        }
+    )
     parents = {n: () for n in schema.nodes}
     parents["ObjVel"] = ("Action",)
     cpts = learn_parameters(df, parents, schema)

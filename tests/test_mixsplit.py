@@ -88,8 +88,16 @@ def test_a_stage_is_hmmlearns_baum_welch(taps):
 
     start = ms.flat_start(taps, 4)
     ours, history = ms.baum_welch(start, taps, n_iter=8, tol=1e-300, covar_floor=0.0)
-    ref = GaussianHMM(4, covariance_type="full", n_iter=8, tol=1e-300, params="stmc", init_params="",
-                      covars_prior=0.0, implementation="log")  # fmt: skip
+    ref = GaussianHMM(
+        4,
+        covariance_type="full",
+        n_iter=8,
+        tol=1e-300,
+        params="stmc",
+        init_params="",
+        covars_prior=0.0,
+        implementation="log",
+    )
     ref.startprob_, ref.transmat_ = start.startprob.copy(), start.transmat.copy()
     ref.means_, ref.covars_ = start.means[:, 0].copy(), start.covars[:, 0].copy()
     ref.fit(np.vstack(taps), [len(X) for X in taps])
@@ -106,8 +114,15 @@ def _posteriors_by_hand(hmm, X):
     from scipy.stats import multivariate_normal
 
     Q, M = hmm.weights.shape
-    lc = np.array([[np.log(hmm.weights[q, m]) + multivariate_normal(hmm.means[q, m], hmm.covars[q, m]).logpdf(X)
-                    for m in range(M)] for q in range(Q)]).transpose(2, 0, 1)  # (T, Q, M)  # fmt: skip
+    lc = np.array(
+        [
+            [
+                np.log(hmm.weights[q, m]) + multivariate_normal(hmm.means[q, m], hmm.covars[q, m]).logpdf(X)
+                for m in range(M)
+            ]
+            for q in range(Q)
+        ]
+    ).transpose(2, 0, 1)  # (T, Q, M)
     lb = logsumexp(lc, axis=2)  # (T, Q)
     with np.errstate(divide="ignore"):
         lA, lpi = np.log(hmm.transmat), np.log(hmm.startprob)
@@ -148,8 +163,22 @@ def test_recognizer_and_command_line(tmp_path, capsys, taps):
     rec = train_recognizer({"tap": taps, "grasp": taps[:3]}, 3, 2, recipe="mixsplit", n_iter=20, warn=False)
     assert rec.meta["recipe"] == "mixsplit" and rec.models["tap"].n_mix == 2
     out = tmp_path / "ms.json"
-    argv = ["hmm", "train", "--synthetic", "4", "--recipe", "mixsplit", "--states", "3", "--mix", "2",
-            "--iter", "15", "-o", str(out)]  # fmt: skip
+    argv = [
+        "hmm",
+        "train",
+        "--synthetic",
+        "4",
+        "--recipe",
+        "mixsplit",
+        "--states",
+        "3",
+        "--mix",
+        "2",
+        "--iter",
+        "15",
+        "-o",
+        str(out),
+    ]
     assert main(argv) == 0
     assert "wrote" in capsys.readouterr().out
     saved = Recognizer.load(out)

@@ -88,12 +88,19 @@ def test_malformed_json_models(tmp_path, content, message):
 
 def _doc(cpt_b, parents_b=("A",), parents_a=()):
     return {
-        "format": "glu-bayesnet", "version": 1, "n_affordance": 2,
+        "format": "glu-bayesnet",
+        "version": 1,
+        "n_affordance": 2,
         "nodes": [
-            {"name": "A", "values": ["a0", "a1"], "parents": list(parents_a), "cpt": [0.5, 0.5] if not parents_a else [[0.5, 0.5]] * 2},
+            {
+                "name": "A",
+                "values": ["a0", "a1"],
+                "parents": list(parents_a),
+                "cpt": [0.5, 0.5] if not parents_a else [[0.5, 0.5]] * 2,
+            },
             {"name": "B", "values": ["b0", "b1"], "parents": list(parents_b), "cpt": cpt_b},
         ],
-    }  # fmt: skip
+    }
 
 
 def test_model_validation_errors(tmp_path):

@@ -32,8 +32,9 @@ def test_network_summary_against_brute_force(zero_bn, table, source):
     codes = encode(table, zero_bn.schema)
     by_rows = sum(
         np.log(zero_bn.cpts[n][tuple(codes[q][i] for q in zero_bn.parents[n]) + (codes[n][i],)])
-        for i in range(0, len(table), 97) for n in zero_bn.nodes
-    )  # fmt: skip
+        for i in range(0, len(table), 97)
+        for n in zero_bn.nodes
+    )
     sub = network_summary(zero_bn, table.iloc[::97].reset_index(drop=True)).set_index("quantity")["ours"]
     assert sub["log_likelihood"] == pytest.approx(by_rows, rel=1e-12)
     assert df["lost_prior_mass"] == pytest.approx(1 - brute_force_mass(zero_bn), abs=1e-12)

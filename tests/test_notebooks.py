@@ -141,8 +141,11 @@ def test_two_runs_are_identical(quick_runs):
     recordings = sorted((b / "recordings").glob("*.rrd"))
     assert recordings
     for f in recordings:
-        res = subprocess.run([sys.executable, "-m", "rerun", "rrd", "compare", str(f), str(a / "recordings" / f.name)],
-                             capture_output=True, text=True)  # fmt: skip
+        res = subprocess.run(
+            [sys.executable, "-m", "rerun", "rrd", "compare", str(f), str(a / "recordings" / f.name)],
+            capture_output=True,
+            text=True,
+        )
         assert res.returncode == 0, f"{f.name}: {res.stdout}{res.stderr}"
 
 
@@ -288,12 +291,25 @@ def test_the_report_opens_in_a_real_browser_with_every_figure_rendered(quick_run
     index = out / "report" / "index.html"
     pngs = [f for f in summary["figures"] if f.endswith(".png")]
     res = subprocess.run(
-        [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync",
-         f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=10000", "--dump-dom",
-         index.as_uri()],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+        [
+            CHROMIUM,
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            f"--user-data-dir={tmp_path / 'profile'}",
+            "--virtual-time-budget=10000",
+            "--dump-dom",
+            index.as_uri(),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert res.returncode == 0, res.stderr[-2000:]
     assert f'data-figures-rendered="{len(pngs)}/{len(pngs)}"' in res.stdout
     for name in NOTEBOOKS:  # each executed notebook has its page, linked from the index

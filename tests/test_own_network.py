@@ -54,11 +54,21 @@ def tool_use_table(n: int = 600, seed: int = 0) -> list[dict[str, str]]:
         far = moves and shape == "ball" and rng.random() < 0.7
         distance = "none" if not moves else ("far" if far else "short")
         verb = "pushes" if tool == "stick" else "pulls"
-        effect = {"closer": "and it comes closer", "away": "and it goes far away" if far else "and it goes away",
-                  "still": "but it stays put"}[direction]  # fmt: skip
+        effect = {
+            "closer": "and it comes closer",
+            "away": "and it goes far away" if far else "and it goes away",
+            "still": "but it stays put",
+        }[direction]
         said = f"The robot {verb} the {shape} with the {tool}, {effect}."
-        rows.append({"Tool": tool, "ObjShape": shape, "Direction": direction, "Distance": distance,
-                     "description": said})  # fmt: skip
+        rows.append(
+            {
+                "Tool": tool,
+                "ObjShape": shape,
+                "Direction": direction,
+                "Distance": distance,
+                "description": said,
+            }
+        )
     return rows
 
 
@@ -122,11 +132,40 @@ def test_the_command_line_runs_the_chain(tool_use, tmp_path, capsys):
     )
     answer = json.loads(capsys.readouterr().out)
     assert max(answer["Direction"], key=answer["Direction"].get) == "closer"
-    assert main(["query", "--model", str(model), "--target", "Direction", "--soft", "Tool=stick:0.9,hook:0.05,rake:0.05",
-                 "--json"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "query",
+                "--model",
+                str(model),
+                "--target",
+                "Direction",
+                "--soft",
+                "Tool=stick:0.9,hook:0.05,rake:0.05",
+                "--json",
+            ]
+        )
+        == 0
+    )
     assert max(json.loads(capsys.readouterr().out)["Direction"].items(), key=lambda kv: kv[1])[0] == "away"
-    assert main(["describe", "--model", str(model), "--grammar", str(tool_use / "grammar.grm"), "--evidence",
-                 "Tool=hook", "ObjShape=cube", "--nbest", "2", "--json"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "describe",
+                "--model",
+                str(model),
+                "--grammar",
+                str(tool_use / "grammar.grm"),
+                "--evidence",
+                "Tool=hook",
+                "ObjShape=cube",
+                "--nbest",
+                "2",
+                "--json",
+            ]
+        )
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     assert out[0]["sentence"].startswith("the robot pulls the cube with the hook and it comes closer")
     assert (

@@ -85,23 +85,38 @@ def test_bad_values_are_refused_in_one_line(values, message):
 
 def test_good_values_pass_and_defaults_fill_in():
     got = check(SPEC, {"rule": "jeffrey", "step": 2, "threshold": 1, "data": None}, "nb")
-    assert got == {"rule": "jeffrey", "quick": False, "step": 2, "threshold": 1, "noise_levels": [0.0, 0.1],
-                   "data": None}  # fmt: skip
+    assert got == {
+        "rule": "jeffrey",
+        "quick": False,
+        "step": 2,
+        "threshold": 1,
+        "noise_levels": [0.0, 0.1],
+        "data": None,
+    }
     assert non_defaults(SPEC, got) == {"rule": "jeffrey", "step": 2, "threshold": 1}
 
 
 @pytest.mark.parametrize(
     ("name", "text", "value"),
-    [("quick", "True", True), ("quick", "false", False), ("step", "7", 7), ("threshold", "0.5", 0.5),
-     ("noise_levels", "[0, 0.05]", [0.0, 0.05]), ("noise_levels", "0.1,0.2", [0.1, 0.2]),
-     ("rule", "jeffrey", "jeffrey"), ("data", "None", None)],
-)  # fmt: skip
+    [
+        ("quick", "True", True),
+        ("quick", "false", False),
+        ("step", "7", 7),
+        ("threshold", "0.5", 0.5),
+        ("noise_levels", "[0, 0.05]", [0.0, 0.05]),
+        ("noise_levels", "0.1,0.2", [0.1, 0.2]),
+        ("rule", "jeffrey", "jeffrey"),
+        ("data", "None", None),
+    ],
+)
 def test_command_line_values_are_parsed_by_their_declared_type(name, text, value):
     assert parse_value(SPEC[name], text) == value
 
 
-@pytest.mark.parametrize(("name", "text"), [("quick", "no"), ("step", "five"), ("threshold", "abc"),
-                                            ("rule", "jefrey"), ("noise_levels", "[0, x]")])  # fmt: skip
+@pytest.mark.parametrize(
+    ("name", "text"),
+    [("quick", "no"), ("step", "five"), ("threshold", "abc"), ("rule", "jefrey"), ("noise_levels", "[0, x]")],
+)
 def test_command_line_values_that_do_not_parse_are_refused(name, text):
     with pytest.raises(ParameterError, match=f"{name}"):
         parse_value(SPEC[name], text)

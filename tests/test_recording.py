@@ -33,10 +33,19 @@ def _fake_run(seed: int, n: int = 40):
     p /= p.sum(1, keepdims=True)
     upd = frames[4::5]
     objvel = rng.dirichlet(np.ones(3), size=len(upd))
-    return dict(xyz=xyz, seconds=seconds, frames=frames, actions=ACTIONS, loglik_per_frame=ll, p_hmm=p,
-                update_frames=upd, fused={"ObjVel": objvel, "Action": p[4::5]},
-                values={"ObjVel": ["slow", "medium", "fast"], "Action": ACTIONS},
-                scene="# tap on a small sphere", descriptions=[f"the robot taps the ball {i}" for i in range(len(upd))])  # fmt: skip
+    return dict(
+        xyz=xyz,
+        seconds=seconds,
+        frames=frames,
+        actions=ACTIONS,
+        loglik_per_frame=ll,
+        p_hmm=p,
+        update_frames=upd,
+        fused={"ObjVel": objvel, "Action": p[4::5]},
+        values={"ObjVel": ["slow", "medium", "fast"], "Action": ACTIONS},
+        scene="# tap on a small sphere",
+        descriptions=[f"the robot taps the ball {i}" for i in range(len(upd))],
+    )
 
 
 def _column(path, entity, component, index="frame"):
@@ -63,8 +72,11 @@ def test_recording_content_reads_back(tmp_path):
         np.testing.assert_allclose(heights, run["fused"]["ObjVel"][:, j], rtol=1e-12)
         where = _column(path, f"/fusion/ObjVel/{value}", "BarChart:abscissa")
         assert {v[0]["buffer"][0] for v in where.column("BarChart:abscissa").to_pylist()} == {j}
-    assert not list(RrdReader(str(path)).stream().filter(content="/fusion/ObjVel", is_static=False,
-                                                             components="BarChart:values"))  # fmt: skip
+    assert not list(
+        RrdReader(str(path))
+        .stream()
+        .filter(content="/fusion/ObjVel", is_static=False, components="BarChart:values")
+    )
     pos = _column(path, "/hand/position", "Points3D:positions")
     np.testing.assert_allclose(
         np.array(pos.column("Points3D:positions").to_pylist()[-1][0]), run["xyz"][-1], rtol=1e-6

@@ -95,8 +95,12 @@ def _learning_reproduces_the_original_network(lab_table, learned_bn, original_bn
     zero = {w: 3 for w in ("but", "and", "falls", "falling")}
     assert original_bn.zero_rows() == zero and learned_bn.zero_rows() == zero
     rows = np.argwhere(learned_bn.cpts["but"].sum(axis=-1) == 0)
-    vals = [tuple(default_schema().values_of(n)[i] for n, i in zip(("ObjVel", "HandVel", "Contact"), r, strict=True))
-            for r in rows]  # fmt: skip
+    vals = [
+        tuple(
+            default_schema().values_of(n)[i] for n, i in zip(("ObjVel", "HandVel", "Contact"), r, strict=True)
+        )
+        for r in rows
+    ]
     assert sorted(vals) == sorted(
         [("medium", "slow", "long"), ("fast", "slow", "long"), ("fast", "fast", "short")]
     )
@@ -230,8 +234,12 @@ def test_original_hmms_on_the_original_segments(real_source, capsys):
                 for i, action in enumerate(rec.actions):
                     params = mat_params(mat, HMM_ORDER[action])
                     assert ours[i] == pytest.approx(ref_forward(X, *params)[-1], abs=1e-6)
-                    h = GMMHMM(n_components=len(params[0]), n_mix=params[2].shape[1], covariance_type="full",
-                               init_params="")  # fmt: skip
+                    h = GMMHMM(
+                        n_components=len(params[0]),
+                        n_mix=params[2].shape[1],
+                        covariance_type="full",
+                        init_params="",
+                    )
                     h.n_features = 3
                     h.startprob_, h.transmat_, h.weights_, h.means_, h.covars_ = params
                     assert ours[i] == pytest.approx(h.score(X), abs=1e-6)
@@ -239,8 +247,9 @@ def test_original_hmms_on_the_original_segments(real_source, capsys):
     df = gestures.original_scores(real_source)
     assert df.winner.tolist() == ["tap", "touch", "tap", "tap", "tap"]
     # the command line prints the same numbers, and a stream whose last line is the whole segment's
-    status, out, err = run(capsys, "recognize", "tap1_hand", "--data", str(real_source.root), "--frames",
-                           "216:351", "--json")  # fmt: skip
+    status, out, err = run(
+        capsys, "recognize", "tap1_hand", "--data", str(real_source.root), "--frames", "216:351", "--json"
+    )
     assert status == 0 and "real data" in err
     d = json.loads(out)
     np.testing.assert_allclose(
@@ -308,8 +317,9 @@ def test_the_real_data_files(shared_data, real_source, tmp_path, subtests):
         _named_by_its_public_origin(shared_data, tmp_path)
 
 
-def test_the_original_network(shared_data, real_source, lab_table, learned_bn, original_bn, tmp_path, capsys,
-                              subtests):  # fmt: skip
+def test_the_original_network(
+    shared_data, real_source, lab_table, learned_bn, original_bn, tmp_path, capsys, subtests
+):
     """The originals' Affordance–Words network: learned again from the data, and read from their file."""
     with subtests.test("learning reproduces it: 66 edges, CPT difference 0, the zero rows"):
         _learning_reproduces_the_original_network(lab_table, learned_bn, original_bn)

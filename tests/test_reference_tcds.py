@@ -20,8 +20,19 @@ PUB = published()
 
 
 def describe_json(capsys, data, evidence, *extra) -> list[dict]:
-    argv = ["describe", "--data", str(data), "--evidence", *(f"{k}={v}" for k, v in evidence.items()),
-            "--score", "original", "--candidates", "samples", "--json", *extra]  # fmt: skip
+    argv = [
+        "describe",
+        "--data",
+        str(data),
+        "--evidence",
+        *(f"{k}={v}" for k, v in evidence.items()),
+        "--score",
+        "original",
+        "--candidates",
+        "samples",
+        "--json",
+        *extra,
+    ]
     assert main(argv) == 0
     out, err = capsys.readouterr()
     assert "real data" in err and "the originals' sampled sentences" in err
@@ -37,8 +48,9 @@ def _describe_prints_the_published_ten_best_list(shared_data, capsys, key):
 
 def _describe_prints_the_four_fig8_sentences(shared_data, capsys):
     for row in PUB["sentences"]["fig8"]["rows"]:
-        got = describe_json(capsys, shared_data, row["evidence"], "--nbest", "1", "--must-contain",
-                            *ex.COLOUR_WORDS)  # fmt: skip
+        got = describe_json(
+            capsys, shared_data, row["evidence"], "--nbest", "1", "--must-contain", *ex.COLOUR_WORDS
+        )
         assert [r["sentence"] for r in got] == [row["sentence"]], row["panel"]
 
 
@@ -102,8 +114,12 @@ def _anticipate_matches_the_published_curves_bars_and_caption(shared_data, capsy
         assert len(curves[action]["t"]) > 0.9 * T  # few vertices were clipped at the bottom of the axes
     # the bars: p_comb(ObjVel) at the last update
     bars = pub["ObjVel"]
-    np.testing.assert_allclose(list(d["updates"][-1]["ObjVel"].values()), list(bars["values"].values()),
-                               rtol=0, atol=bars["resolution"])  # fmt: skip
+    np.testing.assert_allclose(
+        list(d["updates"][-1]["ObjVel"].values()),
+        list(bars["values"].values()),
+        rtol=0,
+        atol=bars["resolution"],
+    )
     # the caption: the originals' score over their samples
     assert main([*argv, "--score", "original", "--candidates", "samples"]) == 0
     assert json.loads(capsys.readouterr().out)["description"] == pub["caption"]
@@ -116,10 +132,15 @@ def _published_comparison_of_an_anticipation_run(real_source, learned_bn, case):
     from glu.language import candidate_sentences
 
     run = anticipation.effect_anticipation(
-        load_original_models(real_source.original_hmms()), InferenceEngine(learned_bn),
-        anticipation.case_trajectory(real_source, case), anticipation.CASES[case].evidence, case=case,
-        describe="last", score="original", candidates=candidate_sentences("samples", real_source),
-    )  # fmt: skip
+        load_original_models(real_source.original_hmms()),
+        InferenceEngine(learned_bn),
+        anticipation.case_trajectory(real_source, case),
+        anticipation.CASES[case].evidence,
+        case=case,
+        describe="last",
+        score="original",
+        candidates=candidate_sentences("samples", real_source),
+    )
     df = anticipation.published_comparison(run)
     assert df["within"].all() and set(df["quantity"]) == {"loglik_per_frame", "ObjVel"}
     assert df.attrs["parameters"]["same_caption"] and df.attrs["parameters"]["caption"] == run.description
@@ -141,8 +162,14 @@ def _anticipation_with_the_original_models(real_source, original_bn):
     raw = np.loadtxt(real_source.hand_log("tap_notable_seated_1"))
     assert traj.frame.tolist() == list(range(121, 215))
     np.testing.assert_allclose(traj.xyz, raw[120:214, 2:5] / 1000)
-    box = anticipation.effect_anticipation(rec, eng, anticipation.case_trajectory(real_source, "box"),
-                                           anticipation.CASES["box"].evidence, case="box", models="original")  # fmt: skip
+    box = anticipation.effect_anticipation(
+        rec,
+        eng,
+        anticipation.case_trajectory(real_source, "box"),
+        anticipation.CASES["box"].evidence,
+        case="box",
+        models="original",
+    )
     assert box.fused["ObjVel"][-1].argmax() == 0  # a tapped big box stays slow (TCDS)
     assert RECORDING_ACTION["tap_notable_seated_1"] == "tap"
 

@@ -46,8 +46,11 @@ raise RuntimeError("deliberate failure")
 
 
 def _snapshot(folder):
-    return sorted((str(p.relative_to(folder)), p.read_bytes(), p.stat().st_mtime_ns)
-                  for p in folder.rglob("*") if p.is_file())  # fmt: skip
+    return sorted(
+        (str(p.relative_to(folder)), p.read_bytes(), p.stat().st_mtime_ns)
+        for p in folder.rglob("*")
+        if p.is_file()
+    )
 
 
 @pytest.fixture
@@ -91,8 +94,13 @@ def test_each_page_is_rendered_as_its_notebook_finishes_and_published_only_with_
 
     monkeypatch.setattr(reproduce_module, "prepare_report", prepare)
     t_call = time.perf_counter()
-    summary = reproduce(data="synthetic", out=out, jobs=2, notebooks_dir=nbs,
-                        log=lambda s: lines.append((time.perf_counter(), s)))  # fmt: skip
+    summary = reproduce(
+        data="synthetic",
+        out=out,
+        jobs=2,
+        notebooks_dir=nbs,
+        log=lambda s: lines.append((time.perf_counter(), s)),
+    )
     t_return = time.perf_counter()
 
     # rendered in the workers, into the staging folder, while the other notebook still ran
@@ -171,8 +179,10 @@ def test_the_report_renders_only_the_pages_that_are_missing_or_older_than_their_
     os.utime(pages / "b.html", ns=(old, old))
     (pages / "gone.html").write_text("a notebook no longer in the summary")
     (layout.report / "leftover.txt").write_text("from an older report")
-    summary = {"notebooks": [{"name": n, "status": "ok", "seconds": 1.0} for n in ("a", "b", "c")],
-               "wall_time_s": 2.5}  # fmt: skip
+    summary = {
+        "notebooks": [{"name": n, "status": "ok", "seconds": 1.0} for n in ("a", "b", "c")],
+        "wall_time_s": 2.5,
+    }
     index = report_module.write_report(layout, summary)
     assert (pages / "a.html").read_text() == "<p>rendered by its run</p>"
     assert "notebook b speaks" in (pages / "b.html").read_text()

@@ -67,8 +67,14 @@ def test_enumeration_is_sorted_complete_and_without_repeats():
     got = list(enumerate_sentences(g))
     assert got == sorted(got)
     assert len(got) == len(set(got)) == count_sentences(g)
-    ref_tree = ("seq", [("w", "the"), ("opt", ("alt", [("w", "big"), ("w", "small")])),
-                        ("alt", [("w", "ball"), ("w", "box")])])  # fmt: skip
+    ref_tree = (
+        "seq",
+        [
+            ("w", "the"),
+            ("opt", ("alt", [("w", "big"), ("w", "small")])),
+            ("alt", [("w", "ball"), ("w", "box")]),
+        ],
+    )
     ref = expand(("seq", [("ref", "o"), ("opt", ("seq", [("w", "and"), ("ref", "o")]))]), {"o": ref_tree})
     assert set(got) == ref
 

@@ -11,8 +11,9 @@ from glu.summary import NotebookResult, write_summary
 
 def _table(results, name, rows, **meta):
     path = results / f"{name}.json"
-    path.write_text(json.dumps({"meta": {"name": name, "data_source": "synthetic data (seed 0)", **meta},
-                                "rows": rows}))  # fmt: skip
+    path.write_text(
+        json.dumps({"meta": {"name": name, "data_source": "synthetic data (seed 0)", **meta}, "rows": rows})
+    )
     return str(path)
 
 
@@ -26,7 +27,7 @@ def test_only_tables_that_declare_a_reference_are_comparisons(tmp_path):
             "declared_param",
             [{"difference": -0.5}, {"difference": 0.125}],
             parameters={"reference": "original model (BN_lab.mat)"},
-        ),  # fmt: skip
+        ),
         _table(results, "strategy_differences", [{"difference": 5.2}]),  # paired strategies: no reference
         _table(results, "declared_none", [{"difference": 3.0}], parameters={"reference": None}),
     ]
@@ -116,8 +117,13 @@ def test_a_first_run_starts_the_notebooks_that_declare_the_longest_times_first(t
     assert order == ["06_f", "04_d", "05_e", "02_b", "03_c", "01_a"]
 
     # the project's last run wins over the declared times, and declared times fill in what it lacks
-    write_summary(project.results, [NotebookResult("01_a", "ok", 40.0), NotebookResult("04_d", "ok", 2.0)],
-                  "synthetic data", False, 42.0)  # fmt: skip
+    write_summary(
+        project.results,
+        [NotebookResult("01_a", "ok", 40.0), NotebookResult("04_d", "ok", 2.0)],
+        "synthetic data",
+        False,
+        42.0,
+    )
     assert expected_seconds(layout, notebooks) == {**first, "01_a": 40.0, "04_d": 2.0}
     assert [p.stem for _, p in run_order(notebooks, 2, expected_seconds(layout, notebooks))][:3] == [
         "06_f",
@@ -138,8 +144,14 @@ def test_a_first_run_starts_the_notebooks_that_declare_the_longest_times_first(t
     monkeypatch.setattr(OutputLayout, "project", classmethod(installed))
     assert expected_seconds(OutputLayout.at(tmp_path / "other"), notebooks) == first
 
-    odd = ("# %% no header\n", "# ---\n# jupyter:\n#   kernelspec: {}\n# ---\n", "# ---\n# : [\n# ---\n",
-           _HEADER.format("true"), _HEADER.format("-1"), _HEADER.format(".nan"))  # fmt: skip
+    odd = (
+        "# %% no header\n",
+        "# ---\n# jupyter:\n#   kernelspec: {}\n# ---\n",
+        "# ---\n# : [\n# ---\n",
+        _HEADER.format("true"),
+        _HEADER.format("-1"),
+        _HEADER.format(".nan"),
+    )
     for text in odd:
         (nbs / "odd.py").write_text(text)
         assert declared_seconds(nbs / "odd.py") is None, text

@@ -154,16 +154,46 @@ def dask_cluster(tmp_path):
     port = _free_port()
     env = {**os.environ, "DASK_DISTRIBUTED__LOGGING__DISTRIBUTED": "error"}
     cli = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
-    sched = subprocess.Popen([*cli, "--host", "127.0.0.1", "--port", str(port), "--no-dashboard", "--dashboard-address", "127.0.0.1:0"],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, cwd=tmp_path)  # fmt: skip
+    sched = subprocess.Popen(
+        [
+            *cli,
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--no-dashboard",
+            "--dashboard-address",
+            "127.0.0.1:0",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+        cwd=tmp_path,
+    )
     procs = [sched]
     try:
         _wait_for_port(port, sched)
         worker = subprocess.Popen(
-            [sys.executable, "-m", "distributed.cli.dask_worker", f"tcp://127.0.0.1:{port}", "--nworkers", "1",
-             "--nthreads", "1", "--no-dashboard", "--host", "127.0.0.1", "--local-directory", str(tmp_path / "w")],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, cwd=tmp_path,
-        )  # fmt: skip
+            [
+                sys.executable,
+                "-m",
+                "distributed.cli.dask_worker",
+                f"tcp://127.0.0.1:{port}",
+                "--nworkers",
+                "1",
+                "--nthreads",
+                "1",
+                "--no-dashboard",
+                "--host",
+                "127.0.0.1",
+                "--local-directory",
+                str(tmp_path / "w"),
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            env=env,
+            cwd=tmp_path,
+        )
         procs.append(worker)
         yield f"tcp://127.0.0.1:{port}"
     finally:
@@ -198,8 +228,16 @@ def test_a_real_scheduler_and_worker_give_the_local_runs_table(
 
 
 def test_an_unreachable_scheduler_is_one_line(config_file, tmp_path, capsys):
-    status, out, err = run(capsys, "evaluate", "--config", str(config_file), "--scheduler", f"tcp://127.0.0.1:{_free_port()}",
-                           "-o", str(tmp_path / "x"))  # fmt: skip
+    status, out, err = run(
+        capsys,
+        "evaluate",
+        "--config",
+        str(config_file),
+        "--scheduler",
+        f"tcp://127.0.0.1:{_free_port()}",
+        "-o",
+        str(tmp_path / "x"),
+    )
     assert status == 2 and err.count("\n") == 1 and "cannot reach the Dask scheduler" in err, err
 
 

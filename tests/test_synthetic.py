@@ -48,9 +48,11 @@ def test_physics_of_the_generator():
     grasp = df[df["Action"] == "grasp"]
     assert (grasp["ObjVel"] == "fast").mean() == 0
     # descriptions: every sentence names exactly one verb of the right action, and "and" xor "but"
-    verbs = {"grasp": ["grasps", "grasping", "grasped", "picks", "picking", "picked"],
-             "tap": ["taps", "tapping", "tapped", "pushes", "pushing", "pushed"],
-             "touch": ["touches", "touching", "touched", "pokes", "poking", "poked"]}  # fmt: skip
+    verbs = {
+        "grasp": ["grasps", "grasping", "grasped", "picks", "picking", "picked"],
+        "tap": ["taps", "tapping", "tapped", "pushes", "pushing", "pushed"],
+        "touch": ["touches", "touching", "touched", "pokes", "poking", "poked"],
+    }
     present = df[list(WORDS)] == "present"
     for action, vs in verbs.items():
         rows = (df["Action"] == action).to_numpy()

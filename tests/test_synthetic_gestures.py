@@ -134,9 +134,12 @@ def test_a_view_fixes_the_body_size():
 
 @pytest.mark.parametrize(
     ("kwargs", "message"),
-    [({"posture": "lying"}, "unknown posture"), ({"yaw_deg": float("nan")}, "not a finite angle"),
-     ({"size": 10.0}, "outside 0.3–3")],
-)  # fmt: skip
+    [
+        ({"posture": "lying"}, "unknown posture"),
+        ({"yaw_deg": float("nan")}, "not a finite angle"),
+        ({"size": 10.0}, "outside 0.3–3"),
+    ],
+)
 def test_bad_views_are_refused(kwargs, message):
     with pytest.raises(DataError, match=message):
         View(**kwargs)

@@ -19,8 +19,16 @@ HEADER = "\t".join([*AFFORDANCE_VALUES, *WORDS])
 
 
 def _row(**overrides: str) -> str:
-    cells = {"Action": "tap", "Color": "blue", "Shape": "circle", "Size": "big", "ObjVel": "fast",
-             "ObjHandVel": "fast", "HandVel": "fast", "Contact": "short"}  # fmt: skip
+    cells = {
+        "Action": "tap",
+        "Color": "blue",
+        "Shape": "circle",
+        "Size": "big",
+        "ObjVel": "fast",
+        "ObjHandVel": "fast",
+        "HandVel": "fast",
+        "Contact": "short",
+    }
     cells.update({w: "-" for w in WORDS})
     cells.update(overrides)
     return "\t".join(cells[k] for k in [*AFFORDANCE_VALUES, *WORDS])

@@ -99,9 +99,9 @@ class BatchQueries:
                 i = int(bad[0])
                 ev = {node: self.bn.schema.values_of(node)[c[i]] for node, c in codes.items() if c[i] >= 0}
                 raise ImpossibleEvidenceError(
-                    f"row {i}: {self._impossible(ev, {s: None for s in qs})}" + (
-                        f" ({len(bad)} impossible rows in all)" if len(bad) > 1 else "")
-                )  # fmt: skip
+                    f"row {i}: {self._impossible(ev, {s: None for s in qs})}"
+                    + (f" ({len(bad)} impossible rows in all)" if len(bad) > 1 else "")
+                )
         return out
 
     def _codes(self, node: str, values: Sequence, n: int) -> np.ndarray:

@@ -83,10 +83,14 @@ def to_pgmpy_with_zero_rows(bn: BayesNet) -> tuple[Any, dict[str, str]]:
         names = {name: ["no", "yes"], **{p: list(bn.schema.values_of(p)) for p in ps}}
         model.add_cpds(
             TabularCPD(
-                name, 2, table, evidence=ps or None,
-                evidence_card=[bn.schema.cardinality(p) for p in ps] or None, state_names=names,
+                name,
+                2,
+                table,
+                evidence=ps or None,
+                evidence_card=[bn.schema.cardinality(p) for p in ps] or None,
+                state_names=names,
             )
-        )  # fmt: skip
+        )
         evidence[name] = "yes"
     model.check_model()
     return model, evidence

@@ -32,21 +32,39 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="effect anticipation: HMM scores per frame, p_comb(ObjVel) every 5 frames, a description",
         description=DESCRIPTION,
     )
-    p.add_argument("--case", choices=tuple(CASES), required=True,
-                   help="; ".join(f"{k}: {c.description}, {c.recording} frames {c.first}-{c.last}"
-                                  for k, c in CASES.items()))  # fmt: skip
     p.add_argument(
-        "--models", default="original", metavar="original|RECOGNISER",
+        "--case",
+        choices=tuple(CASES),
+        required=True,
+        help="; ".join(
+            f"{k}: {c.description}, {c.recording} frames {c.first}-{c.last}" for k, c in CASES.items()
+        ),
+    )
+    p.add_argument(
+        "--models",
+        default="original",
+        metavar="original|RECOGNISER",
         help="'original' (the 2013 HMMs of the data folder; touch = their push model) or a recogniser file "
         "from `glu hmm train` (default: original)",
-    )  # fmt: skip
+    )
     add_data_args(p)
-    p.add_argument("--rule", choices=SOFT_RULES, default=SOFT_RULES[0],
-                   help="how p_HMM enters the network: virtual evidence (the originals') or Jeffrey's rule")  # fmt: skip
-    p.add_argument("--step", type=positive_int, default=ORIGINAL_STEP,
-                   help=f"fuse at t = step, 2·step, … (default {ORIGINAL_STEP}, the originals')")  # fmt: skip
-    p.add_argument("--final-update", action="store_true",
-                   help="also fuse at the last frame t = T (not on the originals' schedule; marked extra)")  # fmt: skip
+    p.add_argument(
+        "--rule",
+        choices=SOFT_RULES,
+        default=SOFT_RULES[0],
+        help="how p_HMM enters the network: virtual evidence (the originals') or Jeffrey's rule",
+    )
+    p.add_argument(
+        "--step",
+        type=positive_int,
+        default=ORIGINAL_STEP,
+        help=f"fuse at t = step, 2·step, … (default {ORIGINAL_STEP}, the originals')",
+    )
+    p.add_argument(
+        "--final-update",
+        action="store_true",
+        help="also fuse at the last frame t = T (not on the originals' schedule; marked extra)",
+    )
     add_description_args(p)
     p.add_argument("--json", action="store_true", help="print one JSON object only")
     p.set_defaults(func=_anticipate)
@@ -82,31 +100,53 @@ def _anticipate(args: argparse.Namespace) -> int:
     engine = InferenceEngine(learn_bn(df, unseen_words=args.unseen_words))
     trajectory = case_trajectory(source, args.case)
     run = effect_anticipation(
-        recognizer, engine, trajectory, case.evidence, case=args.case, models=args.models, step=args.step,
-        final_update=args.final_update, rule=args.rule, targets=("ObjVel",), describe="last",
-        score=args.score, candidates=candidates,
-    )  # fmt: skip
+        recognizer,
+        engine,
+        trajectory,
+        case.evidence,
+        case=args.case,
+        models=args.models,
+        step=args.step,
+        final_update=args.final_update,
+        rule=args.rule,
+        targets=("ObjVel",),
+        describe="last",
+        score=args.score,
+        candidates=candidates,
+    )
     say = functools.partial(print, file=sys.stderr if args.json else sys.stdout)
     say(f"# data: {source.describe()}")
     say(f"# network: learned, words={args.words}, unseen words {args.unseen_words}; HMMs: {models}")
-    say(f"# case {args.case}: {case.description}; {case.recording}, frames {int(run.frames[0])}-"
+    say(
+        f"# case {args.case}: {case.description}; {case.recording}, frames {int(run.frames[0])}-"
         f"{int(run.frames[-1])} (T = {len(run.frames)}); evidence "
-        + ", ".join(f"{k}={v}" for k, v in case.evidence.items()))  # fmt: skip
-    say(f"# soft evidence: {args.rule}; updates every {args.step} frames"
+        + ", ".join(f"{k}={v}" for k, v in case.evidence.items())
+    )
+    say(
+        f"# soft evidence: {args.rule}; updates every {args.step} frames"
         + (" and at t = T (extra)" if args.final_update else " (the originals' schedule)")
-        + f"; description: {args.score} score over {args.candidates}")  # fmt: skip
+        + f"; description: {args.score} score over {args.candidates}"
+    )
     if args.json:
         print(json_text(run.as_dict()))
         return 0
     acts = run.actions
     values = run.values["ObjVel"]
-    print(f"{'t':>4} {'frame':>5}  " + " ".join(f"{'p_' + a:>8}" for a in acts) + "  "
-          + " ".join(f"{v:>7}" for v in values))  # fmt: skip
+    print(
+        f"{'t':>4} {'frame':>5}  "
+        + " ".join(f"{'p_' + a:>8}" for a in acts)
+        + "  "
+        + " ".join(f"{v:>7}" for v in values)
+    )
     extra = run.as_dict()["updates"]
     for k, u in enumerate(extra):
-        print(f"{u['t']:>4} {u['frame']:>5}  " + " ".join(f"{u['p_hmm'][a]:8.4f}" for a in acts) + "  "
-              + " ".join(f"{run.fused['ObjVel'][k][j]:7.4f}" for j in range(len(values)))
-              + ("  (extra)" if u.get("extra") else ""))  # fmt: skip
+        print(
+            f"{u['t']:>4} {u['frame']:>5}  "
+            + " ".join(f"{u['p_hmm'][a]:8.4f}" for a in acts)
+            + "  "
+            + " ".join(f"{run.fused['ObjVel'][k][j]:7.4f}" for j in range(len(values)))
+            + ("  (extra)" if u.get("extra") else "")
+        )
     last = run.loglik_per_frame[-1]
     print(
         f"(1/t) log L at t = {len(run.frames)}: "

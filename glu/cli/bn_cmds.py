@@ -64,8 +64,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     xp.add_argument("--format", choices=tuple(FORMATS), help="output format (default: from the suffix of -o)")
     xp.add_argument("-o", "--out", type=output_file, required=True, help="file to write")
-    xp.add_argument("--zero-rows", choices=ZERO_ROW_MODES, default=ZERO_ROW_MODES[0],
-                    help="all-zero CPT rows: refuse (default) or write them as observed indicator nodes (seen)")  # fmt: skip
+    xp.add_argument(
+        "--zero-rows",
+        choices=ZERO_ROW_MODES,
+        default=ZERO_ROW_MODES[0],
+        help="all-zero CPT rows: refuse (default) or write them as observed indicator nodes (seen)",
+    )
     xp.set_defaults(func=_export)
 
     q = sub.add_parser(
@@ -79,8 +83,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_evidence_args(q)
     q.add_argument("--json", action="store_true", help='print {"NODE": {"VALUE": p, …}, …} only')
-    q.add_argument("--batch", metavar="QUERIES.jsonl",
-                   help="one JSON query a line ({'target': [...], 'evidence': {...}, 'soft': {...}}); '-' = stdin")  # fmt: skip
+    q.add_argument(
+        "--batch",
+        metavar="QUERIES.jsonl",
+        help="one JSON query a line ({'target': [...], 'evidence': {...}, 'soft': {...}}); '-' = stdin",
+    )
     q.set_defaults(func=_query)
 
 
@@ -115,8 +122,11 @@ def _import(args: argparse.Namespace) -> int:
     bn = read_model_file(args.model, args.format)
     bn.save(args.out)
     zr = bn.zero_rows()
-    print(f"wrote {args.out}: {len(bn.nodes)} nodes, {len(bn.edges())} edges"
-          + (f", all-zero CPT rows: {zr}" if zr else "") + f" (imported from {args.model})")  # fmt: skip
+    print(
+        f"wrote {args.out}: {len(bn.nodes)} nodes, {len(bn.edges())} edges"
+        + (f", all-zero CPT rows: {zr}" if zr else "")
+        + f" (imported from {args.model})"
+    )
     return 0
 
 
@@ -132,8 +142,10 @@ def _export(args: argparse.Namespace) -> int:
     print(f"wrote {args.out} ({fmt}): {len(bn.nodes)} nodes, {len(bn.edges())} edges")
     seen = seen_evidence(bn) if args.zero_rows == "seen" else {}
     if seen:
-        print("the model's all-zero CPT rows are indicator nodes; in the other tool, always observe: "
-              + " ".join(f"{k}={v}" for k, v in seen.items()))  # fmt: skip
+        print(
+            "the model's all-zero CPT rows are indicator nodes; in the other tool, always observe: "
+            + " ".join(f"{k}={v}" for k, v in seen.items())
+        )
     return 0
 
 

@@ -151,16 +151,32 @@ def add_data_args(p: argparse.ArgumentParser) -> None:
     from glu.bn.learning import UNSEEN_MODES
 
     add_data_option(p)
-    p.add_argument("--schema", type=Path, metavar="FILE",
-                   help="your own network: a schema file (.json/.yaml: nodes, values, roles, words); "
-                   "with --experiments instead of --data")  # fmt: skip
-    p.add_argument("--experiments", type=Path, metavar="TABLE",
-                   help="your own experiments for --schema (.csv/.tsv: a column per node, and a column per "
-                   "word or a 'description' column)")  # fmt: skip
-    p.add_argument("--words", choices=tuple(WORD_FILES), default="lab",
-                   help="descriptions: lab = transcriptions (the paper's), asr = speech recogniser")  # fmt: skip
-    p.add_argument("--unseen-words", choices=UNSEEN_MODES, default=UNSEEN_MODES[0],
-                   help="CPT rows of word parent configurations never seen: zero (the original's) or uniform")  # fmt: skip
+    p.add_argument(
+        "--schema",
+        type=Path,
+        metavar="FILE",
+        help="your own network: a schema file (.json/.yaml: nodes, values, roles, words); "
+        "with --experiments instead of --data",
+    )
+    p.add_argument(
+        "--experiments",
+        type=Path,
+        metavar="TABLE",
+        help="your own experiments for --schema (.csv/.tsv: a column per node, and a column per "
+        "word or a 'description' column)",
+    )
+    p.add_argument(
+        "--words",
+        choices=tuple(WORD_FILES),
+        default="lab",
+        help="descriptions: lab = transcriptions (the paper's), asr = speech recogniser",
+    )
+    p.add_argument(
+        "--unseen-words",
+        choices=UNSEEN_MODES,
+        default=UNSEEN_MODES[0],
+        help="CPT rows of word parent configurations never seen: zero (the original's) or uniform",
+    )
 
 
 def add_model_args(p: argparse.ArgumentParser) -> None:
@@ -181,12 +197,19 @@ def add_evidence_args(p: argparse.ArgumentParser) -> None:
         "--evidence", action="extend", nargs="+", default=[], metavar="NODE=VALUE", help="hard evidence"
     )
     p.add_argument(
-        "--soft", action="append", default=[], metavar="NODE=v1:p1,v2:p2,…",
+        "--soft",
+        action="append",
+        default=[],
+        metavar="NODE=v1:p1,v2:p2,…",
         help="soft evidence on an affordance node, a distribution over its values, "
         "e.g. a gesture posterior Action=grasp:0.2,tap:0.6,touch:0.2",
-    )  # fmt: skip
-    p.add_argument("--soft-rule", choices=SOFT_RULES, default=SOFT_RULES[0],
-                   help="how soft evidence enters: virtual (likelihood) evidence, as the originals, or Jeffrey's rule")  # fmt: skip
+    )
+    p.add_argument(
+        "--soft-rule",
+        choices=SOFT_RULES,
+        default=SOFT_RULES[0],
+        help="how soft evidence enters: virtual (likelihood) evidence, as the originals, or Jeffrey's rule",
+    )
 
 
 def add_description_args(p: argparse.ArgumentParser) -> None:
@@ -194,13 +217,21 @@ def add_description_args(p: argparse.ArgumentParser) -> None:
     from glu.language.candidates import CANDIDATES, DEFAULT_CANDIDATES
     from glu.language.descriptions import DEFAULT_SCORE, SCORES
 
-    p.add_argument("--score", choices=tuple(SCORES), default=DEFAULT_SCORE,
-                   help="sentence score: paper = (1/L) Σ log p(w), the papers' formula (default); "
-                   "original = (1 + Σ log p(w))/L, what the originals' code printed")  # fmt: skip
-    p.add_argument("--candidates", default=DEFAULT_CANDIDATES, metavar="{" + ",".join(CANDIDATES) + ",FILE}",
-                   help="sentences to rank: grammar = every sentence of the grammar, exactly (default); "
-                   "samples = the originals' 9,941 sampled sentences (in the data folder); "
-                   "FILE = one sentence per line")  # fmt: skip
+    p.add_argument(
+        "--score",
+        choices=tuple(SCORES),
+        default=DEFAULT_SCORE,
+        help="sentence score: paper = (1/L) Σ log p(w), the papers' formula (default); "
+        "original = (1 + Σ log p(w))/L, what the originals' code printed",
+    )
+    p.add_argument(
+        "--candidates",
+        default=DEFAULT_CANDIDATES,
+        metavar="{" + ",".join(CANDIDATES) + ",FILE}",
+        help="sentences to rank: grammar = every sentence of the grammar, exactly (default); "
+        "samples = the originals' 9,941 sampled sentences (in the data folder); "
+        "FILE = one sentence per line",
+    )
 
 
 def read_candidates(args: argparse.Namespace, source: Any | None = None) -> list[tuple[str, ...]] | None:

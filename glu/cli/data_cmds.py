@@ -28,19 +28,31 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     f.add_argument("--mirror", metavar="URL", help="fetch {URL}/{local path} instead of from GitHub")
     f.add_argument("--timeout", type=float, default=60.0, help="seconds per request (default 60)")
-    f.add_argument("--manifest", type=Path, default=None, metavar="JSON",
-                   help="the files to fetch, with their origin and sha256 (default: glu's, the real data)")  # fmt: skip
+    f.add_argument(
+        "--manifest",
+        type=Path,
+        default=None,
+        metavar="JSON",
+        help="the files to fetch, with their origin and sha256 (default: glu's, the real data)",
+    )
     f.set_defaults(func=_fetch)
 
     s = dsub.add_parser(
         "synth", help="write a synthetic data folder with the real data's layout (tables and hand logs)"
     )
-    s.add_argument("--n", type=integer, default=DEFAULT_SYNTHETIC_N,
-                   help=f"experiments per table ({MIN_ROWS} to {MAX_ROWS:,}; default {DEFAULT_SYNTHETIC_N})")  # fmt: skip
+    s.add_argument(
+        "--n",
+        type=integer,
+        default=DEFAULT_SYNTHETIC_N,
+        help=f"experiments per table ({MIN_ROWS} to {MAX_ROWS:,}; default {DEFAULT_SYNTHETIC_N})",
+    )
     s.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
     s.add_argument("-o", "--out", type=output_folder, required=True, help="output folder")
-    s.add_argument("--force", action="store_true",
-                   help="replace a folder that is not glu synthetic data (never the published real data)")  # fmt: skip
+    s.add_argument(
+        "--force",
+        action="store_true",
+        help="replace a folder that is not glu synthetic data (never the published real data)",
+    )
     s.set_defaults(func=_synth)
 
     i = dsub.add_parser("info", help="say which data source is used and what it holds")
@@ -69,8 +81,13 @@ def _fetch(args: argparse.Namespace) -> int:
         bar.update(1)
 
     try:
-        results = fetch_all(args.dest, mirror=args.mirror, progress=progress, timeout=args.timeout,
-                            manifest_path=args.manifest or MANIFEST)  # fmt: skip
+        results = fetch_all(
+            args.dest,
+            mirror=args.mirror,
+            progress=progress,
+            timeout=args.timeout,
+            manifest_path=args.manifest or MANIFEST,
+        )
     finally:
         if bar is not None:
             bar.close()
@@ -96,14 +113,21 @@ def _synth(args: argparse.Namespace) -> int:
     recordings = {name: hand_log_arrays(g) for name, g in synthetic_recordings(args.seed).items()}
     bar = progress_bar(len(TABLES) + 1 + len(recordings), "synth", "file")
     try:
-        out = write_synthetic_folder(args.out, args.n, args.seed, recordings,
-                                     progress=(lambda name: bar.update(1)) if bar is not None else None,
-                                     force=args.force)  # fmt: skip
+        out = write_synthetic_folder(
+            args.out,
+            args.n,
+            args.seed,
+            recordings,
+            progress=(lambda name: bar.update(1)) if bar is not None else None,
+            force=args.force,
+        )
     finally:
         if bar is not None:
             bar.close()
-    print(f"wrote synthetic data (seed {args.seed}, {args.n} experiments per table, "
-          f"{len(recordings)} gesture recordings) to {out}")  # fmt: skip
+    print(
+        f"wrote synthetic data (seed {args.seed}, {args.n} experiments per table, "
+        f"{len(recordings)} gesture recordings) to {out}"
+    )
     return 0
 
 

@@ -35,17 +35,28 @@ def _shared(p: argparse.ArgumentParser) -> None:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``evaluate`` and ``corpus`` commands."""
-    e = sub.add_parser("evaluate", help="measure every fusion strategy on a simulated corpus (Dask sweep)",
-                       description=__doc__)  # fmt: skip
+    e = sub.add_parser(
+        "evaluate",
+        help="measure every fusion strategy on a simulated corpus (Dask sweep)",
+        description=__doc__,
+    )
     _shared(e)
-    e.add_argument("--scheduler", type=_scheduler, metavar="ADDRESS",
-                   help="an existing Dask scheduler, e.g. tcp://127.0.0.1:8786 ('synchronous': run here, "
-                        "one chunk after another); default: a LocalCluster with one worker per core")  # fmt: skip
+    e.add_argument(
+        "--scheduler",
+        type=_scheduler,
+        metavar="ADDRESS",
+        help="an existing Dask scheduler, e.g. tcp://127.0.0.1:8786 ('synchronous': run here, "
+        "one chunk after another); default: a LocalCluster with one worker per core",
+    )
     e.add_argument(
         "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: one per core)"
     )
-    e.add_argument("--max-chunks", type=positive_int, metavar="N",
-                   help="compute at most N chunks now; run again to continue")  # fmt: skip
+    e.add_argument(
+        "--max-chunks",
+        type=positive_int,
+        metavar="N",
+        help="compute at most N chunks now; run again to continue",
+    )
     e.add_argument(
         "-o", "--out", type=output_folder, required=True, metavar="DIR", help="output folder (resumable)"
     )
@@ -74,8 +85,9 @@ def _config(args: argparse.Namespace):
 def _evaluate(args: argparse.Namespace) -> int:
     from glu.sweep.runner import run_sweep
 
-    result = run_sweep(_config(args), args.out, scheduler=args.scheduler, workers=args.workers,
-                       max_chunks=args.max_chunks)  # fmt: skip
+    result = run_sweep(
+        _config(args), args.out, scheduler=args.scheduler, workers=args.workers, max_chunks=args.max_chunks
+    )
     print(
         f"{result.computed} chunks computed, {result.reused} reused, in {result.seconds:.1f} s → {args.out}"
     )
@@ -109,8 +121,17 @@ def _corpus(args: argparse.Namespace) -> int:
     seen = [
         c for c in config.conditions if c.posterior == config.posteriors[0]
     ]  # the posterior changes no episode
-    path = write_corpus(args.out, engine, seen, config.per_condition, config.seed, config.chunk_size,
-                        label, scenario=config.scenario, gestures=config.gestures,
-                        views={v: config.views[v] for v in config.viewpoints})  # fmt: skip
+    path = write_corpus(
+        args.out,
+        engine,
+        seen,
+        config.per_condition,
+        config.seed,
+        config.chunk_size,
+        label,
+        scenario=config.scenario,
+        gestures=config.gestures,
+        views={v: config.views[v] for v in config.viewpoints},
+    )
     print(f"{config.n_episodes} episodes ({len(seen)} conditions) → {path}")
     return 0

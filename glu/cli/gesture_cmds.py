@@ -91,23 +91,40 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument(
         "--tol", type=positive_float, default=d.tol, help=f"EM tolerance per frame (default {d.tol:g})"
     )
-    t.add_argument("--covar-reg", type=positive_float, default=d.covar_reg, metavar="R",
-                   help=f"strength of the covariance prior (default {d.covar_reg:g}; larger: broader Gaussians)")  # fmt: skip
-    t.add_argument("--noise", type=nonneg_float, default=SYNTHETIC_NOISE,
-                   help=f"synthetic sensor noise, m (default {SYNTHETIC_NOISE:g})")  # fmt: skip
+    t.add_argument(
+        "--covar-reg",
+        type=positive_float,
+        default=d.covar_reg,
+        metavar="R",
+        help=f"strength of the covariance prior (default {d.covar_reg:g}; larger: broader Gaussians)",
+    )
+    t.add_argument(
+        "--noise",
+        type=nonneg_float,
+        default=SYNTHETIC_NOISE,
+        help=f"synthetic sensor noise, m (default {SYNTHETIC_NOISE:g})",
+    )
     t.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
-    t.add_argument("--recipe", choices=RECIPES, default=RECIPES[0],
-                   help="glu = time slices + GaussianMixture, then EM (default); mixsplit = the originals': "
-                   "flat start, Baum-Welch, split the heaviest component, Baum-Welch, … up to M")  # fmt: skip
     t.add_argument(
-        "--features", type=_features, default=Invariants(), metavar="LIST",
+        "--recipe",
+        choices=RECIPES,
+        default=RECIPES[0],
+        help="glu = time slices + GaussianMixture, then EM (default); mixsplit = the originals': "
+        "flat start, Baum-Welch, split the heaviest component, Baum-Welch, … up to M",
+    )
+    t.add_argument(
+        "--features",
+        type=_features,
+        default=Invariants(),
+        metavar="LIST",
         help=f"{RAW} (default), {ALL}, or comma-separated invariances among {','.join(INVARIANCES)}",
-    )  # fmt: skip
+    )
     t.add_argument(
-        "--include-test", action="store_true",
+        "--include-test",
+        action="store_true",
         help="real data: also train on the originals' hand-cut segments of the two seated taps (the "
         "effect-anticipation test gestures; default: the standing recordings only)",
-    )  # fmt: skip
+    )
     t.set_defaults(func=_train)
 
     r = sub.add_parser(
@@ -116,23 +133,33 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Score a hand log (or frames A:B of it) under each action's HMM and print the "
         "log-likelihoods and the posterior with equal priors; --stream prints them after every frame.",
     )
-    r.add_argument("log", help="a YARP data.log, a recording folder or name, or a .csv/.tsv/.npy trajectory "
-                   "(t,x,y,z of the hand in the torso frame in m, or skeleton joints)")  # fmt: skip
+    r.add_argument(
+        "log",
+        help="a YARP data.log, a recording folder or name, or a .csv/.tsv/.npy trajectory "
+        "(t,x,y,z of the hand in the torso frame in m, or skeleton joints)",
+    )
     r.add_argument("--frames", type=_frames, metavar="A:B", help="frames A to B (1-based, inclusive)")
     r.add_argument(
-        "--models", default="original", metavar="original|RECOGNISER",
+        "--models",
+        default="original",
+        metavar="original|RECOGNISER",
         help="'original' (the 2013 models of the data folder; touch = their push model) or a recogniser "
         "file from `glu hmm train` (default: original)",
-    )  # fmt: skip
+    )
     add_data_option(r)
     r.add_argument(
         "--stream", action="store_true", help="one line per frame: log L(G_1^t | A), p_HMM(A | G_1^t)"
     )
     r.add_argument("--json", action="store_true", help='print JSON: {"loglik": {…}, "posterior": {…}}')
     r.add_argument("--repair", action="store_true", help="repair the log first (default: frames as logged)")
-    r.add_argument("--body-size", nargs=2, type=positive_float, metavar=("H", "V"),
-                   help="for a t,x,y,z table: horizontal (shoulder) and vertical (neck-torso) body size in m "
-                   "(default: the originals' 0.33 0.23)")  # fmt: skip
+    r.add_argument(
+        "--body-size",
+        nargs=2,
+        type=positive_float,
+        metavar=("H", "V"),
+        help="for a t,x,y,z table: horizontal (shoulder) and vertical (neck-torso) body size in m "
+        "(default: the originals' 0.33 0.23)",
+    )
     r.set_defaults(func=_recognize)
 
 
@@ -215,8 +242,10 @@ def _segment(args: argparse.Namespace) -> int:
             print(f"  {e.describe()}")
     print(f"segments: {len(seg.segments)}")
     for i, s in enumerate(seg.segments, 1):
-        print(f"  {i}. frames {s.start}:{s.end} ({s.n_frames} frames, peak activity {s.peak:.2f})"
-              + (f"  {s.label}" if s.label else ""))  # fmt: skip
+        print(
+            f"  {i}. frames {s.start}:{s.end} ({s.n_frames} frames, peak activity {s.peak:.2f})"
+            + (f"  {s.label}" if s.label else "")
+        )
     if seg.rejected:
         print(f"left out: {len(seg.rejected)}")
         for s, why in seg.rejected:
@@ -230,8 +259,12 @@ def _segment(args: argparse.Namespace) -> int:
         from glu.plots import plot_segmentation, save_figure
 
         fig, ax = plt.subplots(figsize=(12, 4), layout="constrained")
-        plot_segmentation(ax, seg, f"{seg.recording}: {len(seg.segments)} segments",
-                          reference=original_segments(seg.recording))  # fmt: skip
+        plot_segmentation(
+            ax,
+            seg,
+            f"{seg.recording}: {len(seg.segments)} segments",
+            reference=original_segments(seg.recording),
+        )
         fmt = Path(args.plot).suffix.lstrip(".").lower() or "png"
         (written,) = save_figure(fig, args.plot, formats=(fmt,))
         plt.close(fig)
@@ -273,10 +306,19 @@ def _train(args: argparse.Namespace) -> int:
     bar = progress_bar(len(by_action), "train", "model")
     try:
         rec = train_recognizer(
-            by_action, args.states, args.mix, n_iter=args.iter, tol=args.tol, covar_reg=args.covar_reg,
-            seed=args.seed, warn=False, meta=meta, recipe=args.recipe, features=args.features,
+            by_action,
+            args.states,
+            args.mix,
+            n_iter=args.iter,
+            tol=args.tol,
+            covar_reg=args.covar_reg,
+            seed=args.seed,
+            warn=False,
+            meta=meta,
+            recipe=args.recipe,
+            features=args.features,
             progress=(lambda a: bar.update(1)) if bar is not None else None,
-        )  # fmt: skip
+        )
     finally:
         if bar is not None:
             bar.close()
@@ -320,8 +362,10 @@ def _recognize(args: argparse.Namespace) -> int:
         from glu.gestures.trajectories import repair
 
         rp = repair(traj)
-        traj = next((p for p in rp.pieces if args.frames is None or p.frame[0] <= args.frames[0] <= p.frame[-1]),
-                    rp.pieces[0])  # fmt: skip
+        traj = next(
+            (p for p in rp.pieces if args.frames is None or p.frame[0] <= args.frames[0] <= p.frame[-1]),
+            rp.pieces[0],
+        )
     if args.frames:
         traj = traj.frames(*args.frames)
     a0, a1 = int(traj.frame[0]), int(traj.frame[-1])
@@ -331,15 +375,25 @@ def _recognize(args: argparse.Namespace) -> int:
     if args.stream:
         stream = rec.stream()
         if not args.json:
-            print("frame " + " ".join(f"{'logL_' + a:>12s}" for a in acts) + " "
-                  + " ".join(f"{'p_' + a:>9s}" for a in acts) + "  best")  # fmt: skip
+            print(
+                "frame "
+                + " ".join(f"{'logL_' + a:>12s}" for a in acts)
+                + " "
+                + " ".join(f"{'p_' + a:>9s}" for a in acts)
+                + "  best"
+            )
         for f, x in zip(traj.frame, X, strict=True):
             step = stream.push(x)
             if args.json:
                 print(json_text(_as_json(acts, step.loglik, step.p_hmm, frame=int(f))))
             else:
-                print(f"{int(f):5d} " + " ".join(f"{v:12.3f}" for v in step.loglik) + " "
-                      + " ".join(f"{v:9.4f}" for v in step.p_hmm) + f"  {acts[int(np.argmax(step.loglik))]}")  # fmt: skip
+                print(
+                    f"{int(f):5d} "
+                    + " ".join(f"{v:12.3f}" for v in step.loglik)
+                    + " "
+                    + " ".join(f"{v:9.4f}" for v in step.p_hmm)
+                    + f"  {acts[int(np.argmax(step.loglik))]}"
+                )
         return 0
     ll = rec.loglik(X)
     p = rec.p_hmm(X)

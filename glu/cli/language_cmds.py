@@ -48,21 +48,36 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--nbest", type=positive_int, default=10, metavar="N", help="how many sentences (default 10)"
     )
-    p.add_argument("--sample", type=_sample_count, metavar="K",
-                   help=f"rank K new random sentences of the grammar (as HSGen) instead of searching it "
-                        f"(1 to {MAX_SAMPLES:,})")  # fmt: skip
+    p.add_argument(
+        "--sample",
+        type=_sample_count,
+        metavar="K",
+        help=f"rank K new random sentences of the grammar (as HSGen) instead of searching it "
+        f"(1 to {MAX_SAMPLES:,})",
+    )
     p.add_argument(
         "--seed", type=seed, metavar="S", help="seed of the random sentences (with --sample; default 0)"
     )
     p.add_argument(
         "--grammar", type=Path, metavar="FILE", help="grammar in HTK HParse syntax (default: glu's)"
     )
-    p.add_argument("--must-contain", nargs="+", metavar="WORD",
-                   help="only sentences with at least one of these words, e.g. green yellow blue")  # fmt: skip
-    p.add_argument("--max-length", type=positive_int, metavar="L",
-                   help="only sentences of at most L words (needed when the grammar repeats with { } or < >)")  # fmt: skip
-    p.add_argument("--json", action="store_true",
-                   help='print only [{"sentence": …, "score": …}, …] (best first; score null for -inf)')  # fmt: skip
+    p.add_argument(
+        "--must-contain",
+        nargs="+",
+        metavar="WORD",
+        help="only sentences with at least one of these words, e.g. green yellow blue",
+    )
+    p.add_argument(
+        "--max-length",
+        type=positive_int,
+        metavar="L",
+        help="only sentences of at most L words (needed when the grammar repeats with { } or < >)",
+    )
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help='print only [{"sentence": …, "score": …}, …] (best first; score null for -inf)',
+    )
     p.set_defaults(func=_describe)
 
 
@@ -109,8 +124,10 @@ def _describe(args: argparse.Namespace) -> int:
     net = compile_network(grammar)
     limit = net.check_length_limit(args.max_length)
     if limit < net.min_length:
-        raise EvidenceError(f"--max-length {limit}: the grammar's shortest sentence has {net.min_length} words; "
-                            f"give at least {net.min_length}")  # fmt: skip
+        raise EvidenceError(
+            f"--max-length {limit}: the grammar's shortest sentence has {net.min_length} words; "
+            f"give at least {net.min_length}"
+        )
     n_sentences = count_sentences(net, limit)
     candidates = read_candidates(args)
     bn, desc = load_model(args)
@@ -118,8 +135,9 @@ def _describe(args: argparse.Namespace) -> int:
     probs = word_probabilities(engine, evidence, soft, args.soft_rule)
 
     t0 = time.perf_counter()
-    exact = nbest(net, probs, args.nbest, max_length=args.max_length, must_contain=args.must_contain,
-                  score=args.score)  # fmt: skip
+    exact = nbest(
+        net, probs, args.nbest, max_length=args.max_length, must_contain=args.must_contain, score=args.score
+    )
     t_exact = time.perf_counter() - t0
     result = exact
     seed = 0 if args.seed is None else args.seed
@@ -137,8 +155,10 @@ def _describe(args: argparse.Namespace) -> int:
     if args.must_contain:
         say(f"# only sentences containing: {' or '.join(args.must_contain)}")
     if args.sample is not None:
-        say(f"# best {args.nbest} of {args.sample:,} random sentences (HSGen-like, seed {seed}; "
-            f"{len(set(candidates)):,} distinct)")  # fmt: skip
+        say(
+            f"# best {args.nbest} of {args.sample:,} random sentences (HSGen-like, seed {seed}; "
+            f"{len(set(candidates)):,} distinct)"
+        )
     elif candidates is not None:
         what = "the originals' sampled sentences" if args.candidates == "samples" else args.candidates
         say(f"# best {args.nbest} of {len(set(candidates)):,} candidate sentences ({what})")

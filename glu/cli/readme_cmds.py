@@ -23,8 +23,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--readme", type=Path, default=README, help="the README to update (default: README.md)")
     p.add_argument("--check", action="store_true", help="do not write; exit 1 if the README differs")
-    p.add_argument("--if-complete", action="store_true",
-                   help="do nothing (exit 0) unless the summary is a full run on the real data (for make reproduce)")  # fmt: skip
+    p.add_argument(
+        "--if-complete",
+        action="store_true",
+        help="do nothing (exit 0) unless the summary is a full run on the real data (for make reproduce)",
+    )
     p.set_defaults(func=_readme)
 
 

@@ -33,8 +33,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=seed, default=0, help="seed passed to every notebook (default 0)")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")
-    p.add_argument("--notebooks", type=Path, metavar="DIR",
-                   help="run the jupytext notebooks NN_name.py in DIR instead of glu's own")  # fmt: skip
+    p.add_argument(
+        "--notebooks",
+        type=Path,
+        metavar="DIR",
+        help="run the jupytext notebooks NN_name.py in DIR instead of glu's own",
+    )
     p.set_defaults(func=_reproduce)
 
     r = sub.add_parser(
@@ -47,8 +51,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         ),
     )
     r.add_argument("notebook", help="the notebook's name or number (e.g. 08_tcds_figures or 8)")
-    r.add_argument("-p", "--parameter", nargs=2, action="append", default=[], metavar=("NAME", "VALUE"),
-                   help="set a parameter (repeatable); `glu run NOTEBOOK --list` shows them")  # fmt: skip
+    r.add_argument(
+        "-p",
+        "--parameter",
+        nargs=2,
+        action="append",
+        default=[],
+        metavar=("NAME", "VALUE"),
+        help="set a parameter (repeatable); `glu run NOTEBOOK --list` shows them",
+    )
     r.add_argument("--data", help=DATA_HELP)
     r.add_argument("--out", type=Path, help="output folder (default: build/scratch/NOTEBOOK/)")
     r.add_argument("--list", action="store_true", help="list the notebook's parameters and exit")
@@ -65,9 +76,15 @@ def _reproduce(args: argparse.Namespace) -> int:
     if not folder.is_dir():
         raise NotebookError(f"--notebooks {folder}: no such folder")
     summary = reproduce(
-        data=args.data, quick=args.quick, out=args.out, jobs=args.jobs, only=args.only, seed=args.seed,
-        report=not args.no_report, notebooks_dir=folder,
-    )  # fmt: skip
+        data=args.data,
+        quick=args.quick,
+        out=args.out,
+        jobs=args.jobs,
+        only=args.only,
+        seed=args.seed,
+        report=not args.no_report,
+        notebooks_dir=folder,
+    )
     print(
         f"ran {len(summary['ran'])} notebooks in {summary['wall_time_s']:.1f} s ({summary['data_source']}); "
         f"the summary covers {len(summary['notebooks'])} notebooks, {len(summary['figures'])} figure files, "

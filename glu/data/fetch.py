@@ -155,9 +155,12 @@ def _download(item: RemoteFile, folder: Path, timeout: float) -> FetchResult:
     target.parent.mkdir(parents=True, exist_ok=True)
     try:
         pooch.retrieve(
-            item.url, known_hash=f"sha256:{item.sha256}", fname=target.name, path=target.parent,
+            item.url,
+            known_hash=f"sha256:{item.sha256}",
+            fname=target.name,
+            path=target.parent,
             downloader=pooch.HTTPDownloader(timeout=timeout, progressbar=False),
-        )  # fmt: skip
+        )
     except requests.HTTPError as e:
         status = e.response.status_code if e.response is not None else "?"
         return FetchResult(item.local, "failed", f"{item.url}: HTTP {status}")

@@ -227,9 +227,12 @@ def _folder_source(root: Path, origin: str) -> DataSource:
         try:
             info = json.loads(marker.read_text())
             return DataSource(
-                kind="synthetic", root=root.resolve(), origin=origin,
-                seed=int(info["seed"]), n_experiments=int(info["n"]),
-            )  # fmt: skip
+                kind="synthetic",
+                root=root.resolve(),
+                origin=origin,
+                seed=int(info["seed"]),
+                n_experiments=int(info["n"]),
+            )
         except (ValueError, KeyError, TypeError):
             raise DataError(f"{marker}: malformed marker file; expected JSON with 'seed' and 'n'") from None
     return DataSource(kind="real", root=root.resolve(), origin=origin)

@@ -95,8 +95,26 @@ def _world() -> SyntheticWorld:
         "Contact": ("Action", "Shape"),
     }
     word_parents: dict[str, tuple[str, ...]] = {w: () for w in ("robot", "he", "baltazar", "has", "just")}
-    for verb in ("grasps", "grasping", "grasped", "picks", "picking", "picked", "taps", "tapping", "tapped",
-                 "pushes", "pushing", "pushed", "touches", "touching", "touched", "pokes", "poking", "poked"):  # fmt: skip
+    for verb in (
+        "grasps",
+        "grasping",
+        "grasped",
+        "picks",
+        "picking",
+        "picked",
+        "taps",
+        "tapping",
+        "tapped",
+        "pushes",
+        "pushing",
+        "pushed",
+        "touches",
+        "touching",
+        "touched",
+        "pokes",
+        "poking",
+        "poked",
+    ):
         word_parents[verb] = ("Action",)
     for w in ("big", "small"):
         word_parents[w] = ("Size",)

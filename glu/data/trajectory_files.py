@@ -39,10 +39,22 @@ HAND_COLUMNS: tuple[str, ...] = ("t", "x", "y", "z")
 SKELETON_JOINTS: tuple[str, ...] = ("torso", "right_hand", "left_shoulder", "right_shoulder", "neck")
 """The joints glu uses from a skeleton table (torso and right_hand are required)."""
 OPENNI_JOINTS: tuple[str, ...] = (
-    "head", "neck", "left_shoulder", "right_shoulder", "left_elbow", "right_elbow",
-    "left_hand", "right_hand", "torso", "left_hip", "right_hip", "left_knee", "right_knee",
-    "left_foot", "right_foot",
-)  # fmt: skip
+    "head",
+    "neck",
+    "left_shoulder",
+    "right_shoulder",
+    "left_elbow",
+    "right_elbow",
+    "left_hand",
+    "right_hand",
+    "torso",
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_foot",
+    "right_foot",
+)
 """The 15 joints of the OpenNI skeleton, in the order of the YARP OpenNI2 driver."""
 NPY_FRAME_RATE = 30.0
 """Frames a second assumed for ``.npy`` arrays without timestamps."""

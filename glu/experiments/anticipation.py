@@ -55,14 +55,22 @@ class AnticipationCase:
 
 CASES: dict[str, AnticipationCase] = {
     "sphere": AnticipationCase(
-        "sphere", "tap_notable_seated_1", 121, 214, {"Shape": "sphere", "Size": "small"},
+        "sphere",
+        "tap_notable_seated_1",
+        121,
+        214,
+        {"Shape": "sphere", "Size": "small"},
         "a person taps a small sphere",
     ),
     "box": AnticipationCase(
-        "box", "norobotview_tap_notable_seated_2", 230, 375, {"Shape": "box", "Size": "big"},
+        "box",
+        "norobotview_tap_notable_seated_2",
+        230,
+        375,
+        {"Shape": "box", "Size": "big"},
         "a person taps a big box",
     ),
-}  # fmt: skip
+}
 """The two TCDS cases (METHOD.md §4–5): 1-based inclusive frames of the hand logs."""
 
 
@@ -127,8 +135,11 @@ class AnticipationRun:
         updates = []
         extra = self.update_extra if len(self.update_extra) else np.zeros(len(self.update_frames), bool)
         for k, (t, f) in enumerate(zip(self.update_t, self.update_frames, strict=True)):
-            u: dict[str, object] = {"t": int(t), "frame": int(f),
-                                    "p_hmm": dict(zip(actions, map(float, self.p_hmm[t - 1]), strict=True))}  # fmt: skip
+            u: dict[str, object] = {
+                "t": int(t),
+                "frame": int(f),
+                "p_hmm": dict(zip(actions, map(float, self.p_hmm[t - 1]), strict=True)),
+            }
             for node, probs in self.fused.items():
                 u[node] = dict(zip(self.values[node], map(float, probs[k]), strict=True))
             if extra[k]:
@@ -150,12 +161,17 @@ class AnticipationRun:
     def curves(self) -> pd.DataFrame:
         """Tidy per-frame series: columns ``case, models, frame, t, action, loglik_per_frame, p_hmm``."""
         T, A = self.loglik.shape
-        df = pd.DataFrame({
-            "case": self.case, "models": self.models,
-            "frame": np.repeat(self.frames, A), "t": np.repeat(np.arange(1, T + 1), A),
-            "action": np.tile(self.actions, T),
-            "loglik_per_frame": self.loglik_per_frame.ravel(), "p_hmm": self.p_hmm.ravel(),
-        })  # fmt: skip
+        df = pd.DataFrame(
+            {
+                "case": self.case,
+                "models": self.models,
+                "frame": np.repeat(self.frames, A),
+                "t": np.repeat(np.arange(1, T + 1), A),
+                "action": np.tile(self.actions, T),
+                "loglik_per_frame": self.loglik_per_frame.ravel(),
+                "p_hmm": self.p_hmm.ravel(),
+            }
+        )
         return tidy(
             df, f"tcds_anticipation_{self.case}_{self.models}_curves", self.data_source, **self.parameters
         )
@@ -167,12 +183,24 @@ class AnticipationRun:
         for node, probs in self.fused.items():
             for k, (f, t) in enumerate(zip(self.update_frames, self.update_t, strict=True)):
                 for v, p in zip(self.values[node], probs[k], strict=True):
-                    rows.append({
-                        "case": self.case, "models": self.models, "frame": int(f), "t": int(t),
-                        "extra": bool(extra[k]), "node": node, "value": v, "p": p,
-                    })  # fmt: skip
-        return tidy(pd.DataFrame(rows), f"tcds_anticipation_{self.case}_{self.models}_predictions",
-                    self.data_source, **self.parameters)  # fmt: skip
+                    rows.append(
+                        {
+                            "case": self.case,
+                            "models": self.models,
+                            "frame": int(f),
+                            "t": int(t),
+                            "extra": bool(extra[k]),
+                            "node": node,
+                            "value": v,
+                            "p": p,
+                        }
+                    )
+        return tidy(
+            pd.DataFrame(rows),
+            f"tcds_anticipation_{self.case}_{self.models}_predictions",
+            self.data_source,
+            **self.parameters,
+        )
 
     def prediction_changes(self, node: str = "ObjVel") -> list[tuple[int, int, str, float]]:
         """Where the most probable value of ``node`` changes: (t, frame, value, its p_comb), first update included."""
@@ -279,19 +307,40 @@ def effect_anticipation(
     fused = fuse(engine, list(targets), evidence, p_hmm[idx], rule)
     cands = None if candidates is None else SentenceSet.of(candidates)
     run = AnticipationRun(
-        case=case, models=models, evidence=dict(evidence), actions=tuple(actions),
-        frames=np.asarray(trajectory.frame), seconds=np.asarray(trajectory.t) - float(trajectory.t[0]),
-        xyz=X, loglik=loglik, p_hmm=p_hmm, update_frames=np.asarray(trajectory.frame)[idx], fused=fused,
+        case=case,
+        models=models,
+        evidence=dict(evidence),
+        actions=tuple(actions),
+        frames=np.asarray(trajectory.frame),
+        seconds=np.asarray(trajectory.t) - float(trajectory.t[0]),
+        xyz=X,
+        loglik=loglik,
+        p_hmm=p_hmm,
+        update_frames=np.asarray(trajectory.frame)[idx],
+        fused=fused,
         values={t: engine.bn.schema.values_of(t) for t in targets},
         data_source=str(engine.bn.meta.get("data_source", "")),
-        parameters={"step": step, "final_update": final_update, "rule": rule, "targets": list(targets),
-                    "score": score, "candidates": "grammar" if cands is None else f"{len(cands)} sentences"},
+        parameters={
+            "step": step,
+            "final_update": final_update,
+            "rule": rule,
+            "targets": list(targets),
+            "score": score,
+            "candidates": "grammar" if cands is None else f"{len(cands)} sentences",
+        },
         update_extra=extra,
-    )  # fmt: skip
+    )
     if describe:
         for i in idx if describe is True else idx[-1:]:
-            best = best_sentences(engine, evidence, soft={"Action": p_hmm[i]}, soft_rule=rule, n=1,
-                                  score=score, candidates=cands)  # fmt: skip
+            best = best_sentences(
+                engine,
+                evidence,
+                soft={"Action": p_hmm[i]},
+                soft_rule=rule,
+                n=1,
+                score=score,
+                candidates=cands,
+            )
             run.descriptions.append(str(best["sentence"].iloc[0]))
     return run
 
@@ -322,8 +371,14 @@ def published_comparison(run: AnticipationRun) -> pd.DataFrame:
     df = pd.DataFrame(rows, columns=["quantity", "key", "t", "ours", "paper", "resolution"])
     df.insert(5, "difference", df["ours"] - df["paper"])
     df["within"] = df["difference"].abs() <= df["resolution"]
-    return tidy(df, f"tcds_anticipation_{run.case}_published", run.data_source, reference=published()["read_from"],
-                caption=pub["caption"], same_caption=run.description == pub["caption"])  # fmt: skip
+    return tidy(
+        df,
+        f"tcds_anticipation_{run.case}_published",
+        run.data_source,
+        reference=published()["read_from"],
+        caption=pub["caption"],
+        same_caption=run.description == pub["caption"],
+    )
 
 
 def case_trajectory(
@@ -348,6 +403,9 @@ def case_trajectory(
 
 def _concat(pieces: Sequence[Trajectory]) -> Trajectory:
     return Trajectory(
-        np.concatenate([p.xyz for p in pieces]), np.concatenate([p.t for p in pieces]),
-        np.concatenate([p.frame for p in pieces]), np.concatenate([p.observed for p in pieces]), pieces[0].source,
-    )  # fmt: skip
+        np.concatenate([p.xyz for p in pieces]),
+        np.concatenate([p.t for p in pieces]),
+        np.concatenate([p.frame for p in pieces]),
+        np.concatenate([p.observed for p in pieces]),
+        pieces[0].source,
+    )

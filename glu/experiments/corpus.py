@@ -240,9 +240,13 @@ def simulate_chunk(
         for i in range(n)
     ]
     batch = gesture_features(
-        [actions[a] for a in codes["Action"][:n]], rngs, noise=float(condition.noise),
-        spike_rate=gestures.spike_rate, dropout_rate=gestures.dropout_rate, view=view,
-    )  # fmt: skip
+        [actions[a] for a in codes["Action"][:n]],
+        rngs,
+        noise=float(condition.noise),
+        spike_rate=gestures.spike_rate,
+        dropout_rate=gestures.dropout_rate,
+        view=view,
+    )
     features, duration, size = batch.features, batch.duration, batch.size
     n_frames = np.array([len(x) for x in features], dtype=int)
     table: dict[str, Any] = {"episode": np.arange(first, first + n)}
@@ -291,10 +295,15 @@ def write_corpus(
 
     meta = {
         "glu.corpus": json.dumps(
-            {"seed": seed, "chunk_size": chunk_size, "n_per_condition": n_per_condition,
-             "conditions": [[c.noise, c.viewpoint] for c in conditions], "data_source": data_source}
+            {
+                "seed": seed,
+                "chunk_size": chunk_size,
+                "n_per_condition": n_per_condition,
+                "conditions": [[c.noise, c.viewpoint] for c in conditions],
+                "data_source": data_source,
+            }
         )
-    }  # fmt: skip
+    }
     writer = None
     with atomic_path(path, suffix=".parquet") as tmp:
         try:

@@ -38,8 +38,13 @@ from glu.gestures.trajectories import repair
 from glu.schema import ACTIONS
 
 FEATURE_SETS: tuple[str, ...] = (
-    "raw", "centred", "centred+scaled", "centred+rotated", "centred+mirrored", "all",
-)  # fmt: skip
+    "raw",
+    "centred",
+    "centred+scaled",
+    "centred+rotated",
+    "centred+mirrored",
+    "all",
+)
 """The feature sets compared by default: raw, translation invariance, and each other invariance added to it
 (they act on the displacement from the start, so in practice they need it), and all four."""
 TRAIN_SOURCES: tuple[str, ...] = ("robot", "human")
@@ -89,8 +94,9 @@ def default_conditions(
     recognisers.
     """
     base = View(yaw_deg=0.0, normalise_body=normalise_body)
-    conds = [Condition("viewpoint", f"{y:g}°", View(yaw_deg=float(y), normalise_body=normalise_body))
-             for y in yaws]  # fmt: skip
+    conds = [
+        Condition("viewpoint", f"{y:g}°", View(yaw_deg=float(y), normalise_body=normalise_body)) for y in yaws
+    ]
     if mirror:
         conds.append(
             Condition("mirror", "mirrored", View(yaw_deg=0.0, mirror=True, normalise_body=normalise_body))
@@ -99,8 +105,10 @@ def default_conditions(
         conds.append(
             Condition("posture", "seated", View(yaw_deg=0.0, posture="seated", normalise_body=normalise_body))
         )
-    conds += [Condition("body size", f"{s:g}", View(yaw_deg=0.0, size=float(s), normalise_body=normalise_body))
-              for s in sizes]  # fmt: skip
+    conds += [
+        Condition("body size", f"{s:g}", View(yaw_deg=0.0, size=float(s), normalise_body=normalise_body))
+        for s in sizes
+    ]
     conds += [Condition("sensor noise", f"{n * 100:g} cm", base, float(n)) for n in noises]
     if combined:
         view = View(yaw_deg=90.0, mirror=True, posture="seated", size=1.2, normalise_body=normalise_body)
@@ -134,8 +142,9 @@ def train_for(
     """A recogniser trained on :func:`training_corpus` (``train``: Q, M, EM settings of :func:`train_recognizer`)."""
     corpus = training_corpus(source, n_per_action, seed, normalise_body)
     by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
-    return train_recognizer(by_action, seed=seed, warn=False, features=features,
-                            meta={"data": corpus.description}, **train)  # fmt: skip
+    return train_recognizer(
+        by_action, seed=seed, warn=False, features=features, meta={"data": corpus.description}, **train
+    )
 
 
 def _test_seed(seed: int) -> int:
@@ -199,10 +208,16 @@ def correspondence_study(
     tests = {}
     for seed in seeds:
         tests[seed] = [
-            synthetic_corpus(n_test, _test_seed(seed), view=c.view, noise=c.noise, spike_rate=c.spike_rate,
-                             dropout_rate=c.dropout_rate)
+            synthetic_corpus(
+                n_test,
+                _test_seed(seed),
+                view=c.view,
+                noise=c.noise,
+                spike_rate=c.spike_rate,
+                dropout_rate=c.dropout_rate,
+            )
             for c in conditions
-        ]  # fmt: skip  # the same movements in every human condition: only the view or the sensor differs
+        ]  # the same movements in every human condition: only the view or the sensor differs
         for source in train_sources:
             corpus = training_corpus(source, n_train, seed, normalise_body)
             by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
@@ -210,28 +225,56 @@ def correspondence_study(
                 runs.append((seed, source, spec))
                 sets.append(by_action)
     # every model of every recogniser in one batch (each as train_recognizer would train it)
-    recs = train_recognizers(sets, n_states, n_mix, n_iter=n_iter, tol=tol, seed=[r[0] for r in runs],
-                             warn=False, features=[r[2] for r in runs])  # fmt: skip
+    recs = train_recognizers(
+        sets,
+        n_states,
+        n_mix,
+        n_iter=n_iter,
+        tol=tol,
+        seed=[r[0] for r in runs],
+        warn=False,
+        features=[r[2] for r in runs],
+    )
     rows = []
     for (seed, source, spec), rec in zip(runs, recs, strict=True):
         for c, test, (acc, per_action) in zip(
             conditions, tests[seed], _accuracies(rec, tests[seed]), strict=True
         ):
-            rows.append({
-                "seed": seed, "train": source, "features": spec.name, "factor": c.factor,
-                "level": c.level, "yaw_deg": c.view.yaw_deg, "mirror": c.view.mirror,
-                "posture": c.view.posture, "size": c.view.size, "noise_m": c.noise,
-                "n_test": len(test), "accuracy": acc,
-                **{f"accuracy_{a}": v for a, v in per_action.items()},
-            })  # fmt: skip
+            rows.append(
+                {
+                    "seed": seed,
+                    "train": source,
+                    "features": spec.name,
+                    "factor": c.factor,
+                    "level": c.level,
+                    "yaw_deg": c.view.yaw_deg,
+                    "mirror": c.view.mirror,
+                    "posture": c.view.posture,
+                    "size": c.view.size,
+                    "noise_m": c.noise,
+                    "n_test": len(test),
+                    "accuracy": acc,
+                    **{f"accuracy_{a}": v for a, v in per_action.items()},
+                }
+            )
     return tidy(
-        pd.DataFrame(rows), "correspondence_study",
+        pd.DataFrame(rows),
+        "correspondence_study",
         f"synthetic data: the robot's own movements and one human view → human gestures seen otherwise "
         f"({n_train} training, {n_test} test gestures per action and seed)",
-        train_sources=train_sources, feature_sets=[s.name for s in specs], seeds=seeds, n_train=n_train,
-        n_test=n_test, n_states=n_states, n_mix=n_mix, n_iter=n_iter, tol=tol, normalise_body=normalise_body,
-        conditions=[f"{c.factor}: {c.level}" for c in conditions], invariant_settings=settings,
-    )  # fmt: skip
+        train_sources=train_sources,
+        feature_sets=[s.name for s in specs],
+        seeds=seeds,
+        n_train=n_train,
+        n_test=n_test,
+        n_states=n_states,
+        n_mix=n_mix,
+        n_iter=n_iter,
+        tol=tol,
+        normalise_body=normalise_body,
+        conditions=[f"{c.factor}: {c.level}" for c in conditions],
+        invariant_settings=settings,
+    )
 
 
 def t_interval(values: Sequence[float], confidence: float = 0.95) -> tuple[float, float, float]:
@@ -256,11 +299,23 @@ def summarise(results: pd.DataFrame, confidence: float = 0.95) -> pd.DataFrame:
     rows = []
     for key, g in results.groupby(keys, sort=False):
         mean, lo, hi = t_interval(g["accuracy"], confidence)
-        rows.append({**dict(zip(keys, key, strict=True)), "yaw_deg": g["yaw_deg"].iloc[0],
-                     "n_seeds": len(g), "accuracy": mean, "ci_low": max(lo, 0.0) if lo == lo else lo,
-                     "ci_high": min(hi, 1.0) if hi == hi else hi})  # fmt: skip
-    return tidy(pd.DataFrame(rows), "correspondence_summary", results.attrs.get("data_source", ""),
-                confidence=confidence, **results.attrs.get("parameters", {}))  # fmt: skip
+        rows.append(
+            {
+                **dict(zip(keys, key, strict=True)),
+                "yaw_deg": g["yaw_deg"].iloc[0],
+                "n_seeds": len(g),
+                "accuracy": mean,
+                "ci_low": max(lo, 0.0) if lo == lo else lo,
+                "ci_high": min(hi, 1.0) if hi == hi else hi,
+            }
+        )
+    return tidy(
+        pd.DataFrame(rows),
+        "correspondence_summary",
+        results.attrs.get("data_source", ""),
+        confidence=confidence,
+        **results.attrs.get("parameters", {}),
+    )
 
 
 def main_table(summary: pd.DataFrame, train: str) -> pd.DataFrame:
@@ -300,11 +355,27 @@ def invariance_effects(results: pd.DataFrame, confidence: float = 0.95) -> pd.Da
             d = (a - b.reindex(a.index)).dropna().reset_index()
             for (train, factor, level), g in d.groupby(["train", "factor", "level"], sort=False):
                 mean, lo, hi = t_interval(g["accuracy"], confidence)
-                rows.append({"train": train, "invariance": x, "features": name, "baseline": base,
-                             "factor": factor, "level": level, "delta": mean, "ci_low": lo, "ci_high": hi,
-                             "costs": bool(hi < 0), "helps": bool(lo > 0)})  # fmt: skip
-    return tidy(pd.DataFrame(rows), "correspondence_invariance_effects",
-                results.attrs.get("data_source", ""), confidence=confidence)  # fmt: skip
+                rows.append(
+                    {
+                        "train": train,
+                        "invariance": x,
+                        "features": name,
+                        "baseline": base,
+                        "factor": factor,
+                        "level": level,
+                        "delta": mean,
+                        "ci_low": lo,
+                        "ci_high": hi,
+                        "costs": bool(hi < 0),
+                        "helps": bool(lo > 0),
+                    }
+                )
+    return tidy(
+        pd.DataFrame(rows),
+        "correspondence_invariance_effects",
+        results.attrs.get("data_source", ""),
+        confidence=confidence,
+    )
 
 
 # ------------------------------------------------------------------ one action, two viewpoints
@@ -342,21 +413,36 @@ class ViewRun:
         T, A = self.p_raw.shape
         frames = []
         for name, p in (("raw", self.p_raw), ("aligned", self.p_aligned)):
-            frames.append(pd.DataFrame({
-                "view": self.label, "recogniser": name, "t": np.repeat(np.arange(1, T + 1), A),
-                "seconds": np.repeat(self.seconds, A), "action": np.tile(self.actions, T), "p_hmm": p.ravel(),
-            }))  # fmt: skip
-        return tidy(pd.concat(frames, ignore_index=True), "correspondence_two_views",
-                    f"synthetic data: one gesture seen as {self.view.describe()}", **self.parameters)  # fmt: skip
+            frames.append(
+                pd.DataFrame(
+                    {
+                        "view": self.label,
+                        "recogniser": name,
+                        "t": np.repeat(np.arange(1, T + 1), A),
+                        "seconds": np.repeat(self.seconds, A),
+                        "action": np.tile(self.actions, T),
+                        "p_hmm": p.ravel(),
+                    }
+                )
+            )
+        return tidy(
+            pd.concat(frames, ignore_index=True),
+            "correspondence_two_views",
+            f"synthetic data: one gesture seen as {self.view.describe()}",
+            **self.parameters,
+        )
 
 
 def two_views_curves(runs: Sequence[ViewRun]) -> pd.DataFrame:
     """The per-frame posteriors of every view in one tidy frame (:meth:`ViewRun.curves` concatenated)."""
     frames = [r.curves() for r in runs]
     out = pd.concat(frames, ignore_index=True)
-    return tidy(out, "correspondence_two_views",
-                "synthetic data: one gesture seen as " + "; ".join(r.view.describe() for r in runs),
-                **frames[0].attrs["parameters"])  # fmt: skip
+    return tidy(
+        out,
+        "correspondence_two_views",
+        "synthetic data: one gesture seen as " + "; ".join(r.view.describe() for r in runs),
+        **frames[0].attrs["parameters"],
+    )
 
 
 def two_views(
@@ -382,8 +468,18 @@ def two_views(
         p_raw = raw.stream().extend(X)[1]
         p_inv = invariant.stream().extend(X)[1]
         label = f"yaw {view.yaw_deg or 0:g}°" + (", mirrored" if view.mirror else "")
-        out.append(ViewRun(label, view, traj.t - traj.t[0], g.skeleton, X, invariant.transform(X),
-                           raw.actions, p_raw, p_inv[:, [invariant.actions.index(a) for a in raw.actions]],
-                           {"action": action, "seed": seed, "noise_m": noise,
-                            "features": invariant.features.name}))  # fmt: skip
+        out.append(
+            ViewRun(
+                label,
+                view,
+                traj.t - traj.t[0],
+                g.skeleton,
+                X,
+                invariant.transform(X),
+                raw.actions,
+                p_raw,
+                p_inv[:, [invariant.actions.index(a) for a in raw.actions]],
+                {"action": action, "seed": seed, "noise_m": noise, "features": invariant.features.name},
+            )
+        )
     return out

@@ -151,8 +151,11 @@ def statistic_columns(settings: EvaluationSettings) -> pd.DataFrame:
                     continue
                 rows += [(target, s, f, st, -1) for st in PREDICTION_STATS]
                 if target == "effect":
-                    rows += [(target, s, f, st, b) for b in range(settings.bins)
-                             for st in ("bin_n", "bin_confidence", "bin_correct")]  # fmt: skip
+                    rows += [
+                        (target, s, f, st, b)
+                        for b in range(settings.bins)
+                        for st in ("bin_n", "bin_confidence", "bin_correct")
+                    ]
     return pd.DataFrame(rows, columns=["target", "strategy", "fraction", "stat", "bin"])
 
 
@@ -248,8 +251,17 @@ class Evaluator:
 
     def simulate(self, condition: Condition, chunk: int, n: int) -> Chunk:
         """The episodes of one chunk (:func:`~glu.experiments.corpus.simulate_chunk`)."""
-        return simulate_chunk(self.engine, condition, self.seed, chunk, n, self.chunk_size,
-                              self.scenario, self.gestures, self.views)  # fmt: skip
+        return simulate_chunk(
+            self.engine,
+            condition,
+            self.seed,
+            chunk,
+            n,
+            self.chunk_size,
+            self.scenario,
+            self.gestures,
+            self.views,
+        )
 
     def run_chunk(self, condition: Condition, chunk: int, n: int) -> np.ndarray:
         """Simulate and score one chunk: its statistics summed with bootstrap weights, shape (B + 1, K).
@@ -375,12 +387,23 @@ def describe_settings(evaluator: Evaluator) -> dict[str, Any]:
     """The settings of an evaluator as plain data (for result files)."""
     s = evaluator.settings
     return {
-        "fractions": list(s.fractions), "strategies": list(s.strategies),
-        "action_evidence": list(s.action_evidence), "effect_evidence": list(s.effect_evidence),
-        "description_evidence": list(s.description_evidence), "bins": s.bins, "bootstrap": s.bootstrap,
-        "log_floor": s.log_floor, "seed": evaluator.seed, "chunk_size": evaluator.chunk_size,
+        "fractions": list(s.fractions),
+        "strategies": list(s.strategies),
+        "action_evidence": list(s.action_evidence),
+        "effect_evidence": list(s.effect_evidence),
+        "description_evidence": list(s.description_evidence),
+        "bins": s.bins,
+        "bootstrap": s.bootstrap,
+        "log_floor": s.log_floor,
+        "seed": evaluator.seed,
+        "chunk_size": evaluator.chunk_size,
         "scenario": evaluator.scenario.as_dict(),
-        "gestures": {"spike_rate": evaluator.gestures.spike_rate, "dropout_rate": evaluator.gestures.dropout_rate},
-        "views": {k: {"yaw_deg": v.yaw_deg, "mirror": v.mirror, "posture": v.posture, "size": v.size}
-                  for k, v in evaluator.views.items()},
-    }  # fmt: skip
+        "gestures": {
+            "spike_rate": evaluator.gestures.spike_rate,
+            "dropout_rate": evaluator.gestures.dropout_rate,
+        },
+        "views": {
+            k: {"yaw_deg": v.yaw_deg, "mirror": v.mirror, "posture": v.posture, "size": v.size}
+            for k, v in evaluator.views.items()
+        },
+    }

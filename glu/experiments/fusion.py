@@ -35,15 +35,26 @@ WORD_EVIDENCE: dict[str, dict[str, str]] = {
 """GLU 2017 Fig. 5: the evidence of the paper's text, and of the original code (which adds Color=yellow)."""
 
 TCDS_ACTION_ROWS: tuple[tuple[float, float, float], ...] = (
-    (1 / 3, 1 / 3, 1 / 3), (0.3, 0.4, 0.3), (0.25, 0.5, 0.25), (0.2, 0.6, 0.2),
-    (0.15, 0.7, 0.15), (0.1, 0.8, 0.1), (0.05, 0.9, 0.05), (0.0, 1.0, 0.0),
-)  # fmt: skip
+    (1 / 3, 1 / 3, 1 / 3),
+    (0.3, 0.4, 0.3),
+    (0.25, 0.5, 0.25),
+    (0.2, 0.6, 0.2),
+    (0.15, 0.7, 0.15),
+    (0.1, 0.8, 0.1),
+    (0.05, 0.9, 0.05),
+    (0.0, 1.0, 0.0),
+)
 """TCDS: p_hmm rows [grasp, tap, touch] from uniform to certain tap."""
 TCDS_ACTION_EVIDENCE: dict[str, str] = {"Size": "small", "Shape": "sphere", "ObjVel": "slow"}
 
 TCDS_EFFECT_ROWS: tuple[tuple[float, float, float] | None, ...] = (
-    None, (0.0, 0.0, 1.0), (0.0, 0.25, 0.75), (0.0, 0.5, 0.5), (0.0, 0.75, 0.25), (0.0, 1.0, 0.0),
-)  # fmt: skip
+    None,
+    (0.0, 0.0, 1.0),
+    (0.0, 0.25, 0.75),
+    (0.0, 0.5, 0.5),
+    (0.0, 0.75, 0.25),
+    (0.0, 1.0, 0.0),
+)
 """TCDS: no action evidence, then p_hmm rows [grasp, tap, touch] from certain touch to certain tap."""
 
 
@@ -109,8 +120,14 @@ def word_probability_change(
         r = InferenceEngine(reference)
         df["delta_original"] = r.word_probabilities({**ev, "Action": "tap"}) - r.word_probabilities(ev)
         df["difference"] = df["delta"] - df["delta_original"]
-    return tidy(df, "glu2017_word_change", model_source(bn), evidence=ev, threshold=threshold,
-                reference=_reference(reference))  # fmt: skip
+    return tidy(
+        df,
+        "glu2017_word_change",
+        model_source(bn),
+        evidence=ev,
+        threshold=threshold,
+        reference=_reference(reference),
+    )
 
 
 def action_vs_soft_evidence(
@@ -139,8 +156,14 @@ def action_vs_soft_evidence(
     df.insert(0, "evidence", evidence_text(evidence))
     df.insert(1, "strategy", strategy)
     df = _with_reference(df, ref if reference else None)
-    return tidy(df, "tcds_action_vs_soft_evidence", model_source(bn), evidence=evidence, strategy=strategy,
-                reference=_reference(reference))  # fmt: skip
+    return tidy(
+        df,
+        "tcds_action_vs_soft_evidence",
+        model_source(bn),
+        evidence=evidence,
+        strategy=strategy,
+        reference=_reference(reference),
+    )
 
 
 def tap_threshold(
@@ -202,8 +225,14 @@ def effect_vs_soft_evidence(
                     if rpost is not None:
                         ref.append(rpost[i])
     df = _with_reference(pd.DataFrame(out), ref if reference else None)
-    return tidy(df, "tcds_effect_vs_soft_evidence", model_source(bn), shapes=shapes, rules=rules,
-                reference=_reference(reference))  # fmt: skip
+    return tidy(
+        df,
+        "tcds_effect_vs_soft_evidence",
+        model_source(bn),
+        shapes=shapes,
+        rules=rules,
+        reference=_reference(reference),
+    )
 
 
 def soft_evidence_sweep(
@@ -230,8 +259,14 @@ def soft_evidence_sweep(
             frames.append(pd.DataFrame({"rule": rule, "p_hmm_tap": t, target: v, "p": post[:, i]}))
     df = pd.concat(frames, ignore_index=True)
     df.insert(0, "evidence", evidence_text(evidence))
-    return tidy(df, f"soft_evidence_sweep_{target}", model_source(bn), evidence=evidence, n_points=n_points,
-                rules=rules)  # fmt: skip
+    return tidy(
+        df,
+        f"soft_evidence_sweep_{target}",
+        model_source(bn),
+        evidence=evidence,
+        n_points=n_points,
+        rules=rules,
+    )
 
 
 def tap_thresholds(bn: BayesNet, nodes: Sequence[str] = ("Shape", "Size", "ObjVel")) -> pd.DataFrame:
@@ -294,10 +329,17 @@ def network_summary(bn: BayesNet, table: pd.DataFrame, original: BayesNet | None
     rows = [
         ("edges", len(bn.edges()), len(original.edges()) if original else np.nan),
         ("log_likelihood", bn.log_likelihood(codes), original.log_likelihood(codes) if original else np.nan),
-        ("zero_rows", sum(bn.zero_rows().values()), sum(original.zero_rows().values()) if original else np.nan),
-        ("lost_prior_mass", 1 - InferenceEngine(bn).base_mass,
-         1 - InferenceEngine(original).base_mass if original else np.nan),
-    ]  # fmt: skip
+        (
+            "zero_rows",
+            sum(bn.zero_rows().values()),
+            sum(original.zero_rows().values()) if original else np.nan,
+        ),
+        (
+            "lost_prior_mass",
+            1 - InferenceEngine(bn).base_mass,
+            1 - InferenceEngine(original).base_mass if original else np.nan,
+        ),
+    ]
     if original is not None:
         rows += [
             ("differing_edges", len(set(bn.edges()) ^ set(original.edges())), 0),
@@ -317,13 +359,21 @@ def unseen_rows_comparison(zero: BayesNet, uniform: BayesNet) -> pd.DataFrame:
     """
     rows = []
     for (name, key, val_col), (a, b) in zip(
-        [("effect prediction", "case", "ObjVel"), ("effect vs soft evidence", "case", "ObjVel"),
-         ("action vs soft evidence", "case", "Action")],
-        [(effect_prediction(zero), effect_prediction(uniform)),
-         (effect_vs_soft_evidence(zero, rules=("virtual",)), effect_vs_soft_evidence(uniform, rules=("virtual",))),
-         (action_vs_soft_evidence(zero), action_vs_soft_evidence(uniform))],
+        [
+            ("effect prediction", "case", "ObjVel"),
+            ("effect vs soft evidence", "case", "ObjVel"),
+            ("action vs soft evidence", "case", "Action"),
+        ],
+        [
+            (effect_prediction(zero), effect_prediction(uniform)),
+            (
+                effect_vs_soft_evidence(zero, rules=("virtual",)),
+                effect_vs_soft_evidence(uniform, rules=("virtual",)),
+            ),
+            (action_vs_soft_evidence(zero), action_vs_soft_evidence(uniform)),
+        ],
         strict=True,
-    ):  # fmt: skip
+    ):
         case = a[key] if "Shape" not in a else a["Shape"] + ", " + a[key]
         rows.append(
             pd.DataFrame(
@@ -331,8 +381,17 @@ def unseen_rows_comparison(zero: BayesNet, uniform: BayesNet) -> pd.DataFrame:
             )
         )
     wz, wu = word_probability_change(zero), word_probability_change(uniform)
-    rows.append(pd.DataFrame({"experiment": "word change Δp(w)", "case": wz["evidence"], "value": wz["word"],
-                              "p_zero": wz["delta"], "p_uniform": wu["delta"]}))  # fmt: skip
+    rows.append(
+        pd.DataFrame(
+            {
+                "experiment": "word change Δp(w)",
+                "case": wz["evidence"],
+                "value": wz["word"],
+                "p_zero": wz["delta"],
+                "p_uniform": wu["delta"],
+            }
+        )
+    )
     df = pd.concat(rows, ignore_index=True)
     df["uniform_minus_zero"] = df["p_uniform"] - df["p_zero"]
     return tidy(df, "unseen_rows_comparison", model_source(zero))
@@ -358,13 +417,20 @@ def fusion_on_gestures(
     rows = []
     for s in sequences:
         q = p_hmm_from_loglik(recognizer.loglik(s.xyz)[order])
-        base = {"recording": s.recording, "start": s.start, "end": s.end, "true_action": s.action,
-                "hmm_top": actions[int(np.argmax(q))], **{f"p_hmm_{a}": float(v) for a, v in zip(actions, q, strict=True)}}  # fmt: skip
+        base = {
+            "recording": s.recording,
+            "start": s.start,
+            "end": s.end,
+            "true_action": s.action,
+            "hmm_top": actions[int(np.argmax(q))],
+            **{f"p_hmm_{a}": float(v) for a, v in zip(actions, q, strict=True)},
+        }
         for strategy in strategies:
             post = fuse(eng, [target], evidence, q, strategy)[target]
             for v, p in zip(bn.schema.values_of(target), post, strict=True):
                 rows.append({**base, "strategy": strategy, target: v, "p": float(p)})
     df = pd.DataFrame(rows)
     df.insert(0, "evidence", evidence_text(evidence))
-    return tidy(df, "fusion_on_gestures", model_source(bn), evidence=evidence, strategies=strategies,
-                target=target)  # fmt: skip
+    return tidy(
+        df, "fusion_on_gestures", model_source(bn), evidence=evidence, strategies=strategies, target=target
+    )

@@ -72,9 +72,14 @@ def _predict_rows(rec: Recognizer, test: Sequence[LabelledSequence], **extra: An
     for s, ll in zip(test, rec.loglik_many([s.xyz for s in test]), strict=True):
         p = p_hmm_from_loglik(ll)
         row = {
-            **extra, "recording": s.recording, "start": s.start, "end": s.end, "n_frames": len(s.xyz),
-            "action": s.action, "predicted": rec.actions[int(np.argmax(ll))],
-        }  # fmt: skip
+            **extra,
+            "recording": s.recording,
+            "start": s.start,
+            "end": s.end,
+            "n_frames": len(s.xyz),
+            "action": s.action,
+            "predicted": rec.actions[int(np.argmax(ll))],
+        }
         row.update({f"loglik_{a}": float(v) for a, v in zip(rec.actions, ll, strict=True)})
         row.update({f"p_hmm_{a}": float(v) for a, v in zip(rec.actions, p, strict=True)})
         row["correct"] = row["predicted"] == s.action
@@ -108,16 +113,22 @@ def _folds(
     """(training, test) sequences of each of the k folds."""
     folds = stratified_folds([s.action for s in sequences], k, seed)
     return [
-        ([s for s, g in zip(sequences, folds, strict=True) if g != f],
-         [s for s, g in zip(sequences, folds, strict=True) if g == f])
+        (
+            [s for s, g in zip(sequences, folds, strict=True) if g != f],
+            [s for s, g in zip(sequences, folds, strict=True) if g == f],
+        )
         for f in range(k)
-    ]  # fmt: skip
+    ]
 
 
 def _cv_frame(
-    sequences: Sequence[LabelledSequence], splits: list[tuple[list[LabelledSequence], list[LabelledSequence]]],
-    recs: Sequence[Recognizer], k: int, seed: int, train: dict[str, Any],
-) -> pd.DataFrame:  # fmt: skip
+    sequences: Sequence[LabelledSequence],
+    splits: list[tuple[list[LabelledSequence], list[LabelledSequence]]],
+    recs: Sequence[Recognizer],
+    k: int,
+    seed: int,
+    train: dict[str, Any],
+) -> pd.DataFrame:
     rows = []
     for f, ((_, te), rec) in enumerate(zip(splits, recs, strict=True)):
         rows += _predict_rows(rec, te, fold=f)
@@ -130,8 +141,10 @@ def confusion_matrix(predictions: pd.DataFrame, actions: Sequence[str] | None = 
     cm = pd.crosstab(
         pd.Categorical(predictions["action"], categories=actions),
         pd.Categorical(predictions["predicted"], categories=actions),
-        rownames=["action"], colnames=["predicted"], dropna=False,
-    )  # fmt: skip
+        rownames=["action"],
+        colnames=["predicted"],
+        dropna=False,
+    )
     return cm
 
 
@@ -155,8 +168,11 @@ def accuracy_vs_noise(
     """
     corpora = [synthetic_corpus(n_per_action, seed, actions=actions, noise=noise) for noise in noise_levels]
     splits = [_folds(c, k, seed) for c in corpora]
-    recs = iter(_train_all([(tr, _actions(c)) for c, sp in zip(corpora, splits, strict=True) for tr, _ in sp],
-                           seed, train))  # fmt: skip
+    recs = iter(
+        _train_all(
+            [(tr, _actions(c)) for c, sp in zip(corpora, splits, strict=True) for tr, _ in sp], seed, train
+        )
+    )
     rows = []
     for noise, corpus, sp in zip(noise_levels, corpora, splits, strict=True):
         pred = _cv_frame(corpus, sp, [next(recs) for _ in sp], k, seed, train)
@@ -166,8 +182,16 @@ def accuracy_vs_noise(
         row["all_converged"] = bool(pred["converged"].all())
         rows.append(row)
         source = pred.attrs["data_source"]
-    return tidy(pd.DataFrame(rows), "hmm_accuracy_vs_noise", source, noise_levels=noise_levels,
-                n_per_action=n_per_action, k=k, seed=seed, **train)  # fmt: skip
+    return tidy(
+        pd.DataFrame(rows),
+        "hmm_accuracy_vs_noise",
+        source,
+        noise_levels=noise_levels,
+        n_per_action=n_per_action,
+        k=k,
+        seed=seed,
+        **train,
+    )
 
 
 def leave_one_out(
@@ -192,8 +216,13 @@ def leave_one_out(
         tr = [s for s, g in zip(sequences, keys, strict=True) if g != key]
         held.append((key, te, tr))
     trainable = [h for h in held if any(s.action in {t.action for t in h[2]} for s in h[1])]
-    recs = dict(zip([h[0] for h in trainable], _train_all([(h[2], actions) for h in trainable], seed, train),
-                    strict=True))  # fmt: skip
+    recs = dict(
+        zip(
+            [h[0] for h in trainable],
+            _train_all([(h[2], actions) for h in trainable], seed, train),
+            strict=True,
+        )
+    )
     rows = []
     for key, te, tr in held:
         trained_actions = {s.action for s in tr}
@@ -202,10 +231,19 @@ def leave_one_out(
             rows += _predict_rows(recs[key], testable, held_out=key, testable=True)
         for s in te:
             if s.action not in trained_actions:
-                rows.append({
-                    "held_out": key, "testable": False, "recording": s.recording, "start": s.start, "end": s.end,
-                    "n_frames": len(s.xyz), "action": s.action, "predicted": None, "correct": False,
-                })  # fmt: skip
+                rows.append(
+                    {
+                        "held_out": key,
+                        "testable": False,
+                        "recording": s.recording,
+                        "start": s.start,
+                        "end": s.end,
+                        "n_frames": len(s.xyz),
+                        "action": s.action,
+                        "predicted": None,
+                        "correct": False,
+                    }
+                )
     return tidy(
         pd.DataFrame(rows), f"hmm_leave_one_{by}_out", corpus_source(sequences), by=by, seed=seed, **train
     )
@@ -227,8 +265,13 @@ def original_scores(source: DataSource, n_mix: int = 3, include_garbage: bool = 
         row["winner"] = row.pop("predicted")
         del row["converged"]
         rows.append(row)
-    return tidy(pd.DataFrame(rows), "hmm_original_scores", source.describe(), n_mix=n_mix,
-                include_garbage=include_garbage)  # fmt: skip
+    return tidy(
+        pd.DataFrame(rows),
+        "hmm_original_scores",
+        source.describe(),
+        n_mix=n_mix,
+        include_garbage=include_garbage,
+    )
 
 
 def segmentation_table(segmentations: Sequence[tuple[Any, list[Any]]], data_source: str) -> pd.DataFrame:
@@ -240,11 +283,20 @@ def segmentation_table(segmentations: Sequence[tuple[Any, list[Any]]], data_sour
     for seg, ref in segmentations:
         kinds = pd.Series([e.kind for e in seg.events], dtype=object).value_counts().to_dict()
         for i, s in enumerate(seg.segments, 1):
-            rows.append({
-                "recording": seg.recording, "action": s.label, "segment": i, "start": s.start, "end": s.end,
-                "n_frames": s.n_frames, "n_reference": len(ref), "n_gaps": kinds.get("gap", 0),
-                "n_spikes": kinds.get("spike", 0), "n_jumps": kinds.get("jump", 0),
-            })  # fmt: skip
+            rows.append(
+                {
+                    "recording": seg.recording,
+                    "action": s.label,
+                    "segment": i,
+                    "start": s.start,
+                    "end": s.end,
+                    "n_frames": s.n_frames,
+                    "n_reference": len(ref),
+                    "n_gaps": kinds.get("gap", 0),
+                    "n_spikes": kinds.get("spike", 0),
+                    "n_jumps": kinds.get("jump", 0),
+                }
+            )
         if not seg.segments:
             rows.append({"recording": seg.recording, "action": None, "segment": 0, "n_reference": len(ref)})
     return tidy(pd.DataFrame(rows), "gesture_segmentation", data_source)
@@ -260,10 +312,17 @@ def training_table(recognizer: Recognizer) -> pd.DataFrame:
     """How training went, one row per action: sequences, frames, EM iterations, convergence, log-likelihood."""
     rows = []
     for a, r in recognizer.reports.items():
-        rows.append({
-            "action": a, "n_sequences": r.n_sequences, "n_frames": r.n_frames, "em_iterations": r.n_iter,
-            "max_iterations": r.max_iter, "converged": r.converged, "loglik_per_frame": r.final_loglik / max(r.n_frames, 1),
-        })  # fmt: skip
+        rows.append(
+            {
+                "action": a,
+                "n_sequences": r.n_sequences,
+                "n_frames": r.n_frames,
+                "em_iterations": r.n_iter,
+                "max_iterations": r.max_iter,
+                "converged": r.converged,
+                "loglik_per_frame": r.final_loglik / max(r.n_frames, 1),
+            }
+        )
     return tidy(
         pd.DataFrame(rows), "hmm_training", model_source(recognizer), **recognizer_settings(recognizer)
     )

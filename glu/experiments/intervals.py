@@ -41,9 +41,15 @@ LEVEL = 0.95
 MEAN_METRICS: dict[str, str] = {"correct": "accuracy", "log_loss": "log_loss", "brier": "brier"}
 """Per-episode statistic → the metric that is its mean."""
 HIGHER_IS_BETTER: dict[str, bool] = {
-    "accuracy": True, "log_loss": False, "brier": False, "ece": False,
-    "verb": True, "object": True, "effect": True, "all": True,
-}  # fmt: skip
+    "accuracy": True,
+    "log_loss": False,
+    "brier": False,
+    "ece": False,
+    "verb": True,
+    "object": True,
+    "effect": True,
+    "all": True,
+}
 
 
 def poisson_weights(n: int, replicates: int, rng: np.random.Generator) -> np.ndarray:
@@ -186,11 +192,15 @@ def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[s
             first += [a] * (len(idx) - i - 1)
             second += idx[i + 1 :]
     first, second = np.array(first, dtype=np.intp), np.array(second, dtype=np.intp)
-    pairs = pd.DataFrame({
-        "target": k.target.to_numpy()[first], "fraction": k.fraction.to_numpy()[first],
-        "metric": k.metric.to_numpy()[first], "strategy": k.strategy.to_numpy()[second],
-        "baseline": k.strategy.to_numpy()[first],
-    })  # fmt: skip
+    pairs = pd.DataFrame(
+        {
+            "target": k.target.to_numpy()[first],
+            "fraction": k.fraction.to_numpy()[first],
+            "metric": k.metric.to_numpy()[first],
+            "strategy": k.strategy.to_numpy()[second],
+            "baseline": k.strategy.to_numpy()[first],
+        }
+    )
     up = pairs.metric.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
     parts = []
     for key, g in _groups(sums, by):

@@ -28,8 +28,17 @@ from glu.gestures.invariants import Invariants
 from glu.gestures.mixsplit import RECIPES
 from glu.gestures.recognizer import Recognizer, train_models
 
-COLUMNS = ["recipe", "seed", "tol", "loso_accuracy", "loso_correct", "loso_testable", "test_predicted",
-           "test_correct", "train_loglik_per_frame"]  # fmt: skip
+COLUMNS = [
+    "recipe",
+    "seed",
+    "tol",
+    "loso_accuracy",
+    "loso_correct",
+    "loso_testable",
+    "test_predicted",
+    "test_correct",
+    "train_loglik_per_frame",
+]
 
 
 def leave_one_segment_out(
@@ -73,8 +82,11 @@ def leave_one_segment_out_many(
         jobs = [(a, [x for x, s in zip(seen, sequences, strict=True) if s.action == a]) for a in actions]
         folds = []  # held-out segments whose action has other segments: (index, the rest of its action)
         for i, held in enumerate(sequences):
-            rest = [x for j, (x, s) in enumerate(zip(seen, sequences, strict=True))
-                    if j != i and s.action == held.action]  # fmt: skip
+            rest = [
+                x
+                for j, (x, s) in enumerate(zip(seen, sequences, strict=True))
+                if j != i and s.action == held.action
+            ]
             if rest:
                 folds.append(i)
                 jobs.append((held.action, rest))
@@ -84,8 +96,9 @@ def leave_one_segment_out_many(
         group += [(a, seqs, int(run.get("seed", 0))) for a, seqs in jobs]
     trained_by = {}
     for key, (settings, jobs) in groups.items():
-        trained_by[key] = train_models([j[1] for j in jobs], seed=[j[2] for j in jobs],
-                                       name=[j[0] for j in jobs], warn=False, **settings)  # fmt: skip
+        trained_by[key] = train_models(
+            [j[1] for j in jobs], seed=[j[2] for j in jobs], name=[j[0] for j in jobs], warn=False, **settings
+        )
     out = []
     for run, (features, folds, lo, n) in zip(runs, plans, strict=True):
         settings = {k: v for k, v in run.items() if k not in ("meta", "progress", "features", "seed")}
@@ -95,9 +108,12 @@ def leave_one_segment_out_many(
 
 
 def _loso_outcome(
-    sequences: Sequence[LabelledSequence], actions: tuple[str, ...], features: Invariants, folds: list[int],
+    sequences: Sequence[LabelledSequence],
+    actions: tuple[str, ...],
+    features: Invariants,
+    folds: list[int],
     trained: Sequence[tuple[Any, Any]],
-) -> tuple[pd.DataFrame, Recognizer]:  # fmt: skip
+) -> tuple[pd.DataFrame, Recognizer]:
     """The table and the full recogniser of one run, from its models (one per action, then one per fold)."""
     full = dict(zip(actions, trained[: len(actions)], strict=True))
     fold_model = dict(zip(folds, (m for m, _ in trained[len(actions) :]), strict=True))
@@ -145,11 +161,23 @@ def recipe_comparison(
     test_predicted (the actions recognised for ``test``, comma-separated), test_correct (how many are
     right), train_loglik_per_frame (mean over actions, of the models trained on all segments).
     """
-    grid = [{**train, "tol": float(tol), "recipe": recipe, "seed": int(seed)}
-            for recipe in recipes for tol in tols for seed in (seeds if recipe != "mixsplit" else (-1,))]  # fmt: skip
+    grid = [
+        {**train, "tol": float(tol), "recipe": recipe, "seed": int(seed)}
+        for recipe in recipes
+        for tol in tols
+        for seed in (seeds if recipe != "mixsplit" else (-1,))
+    ]
     rows = comparison_rows(sequences, test, grid)
-    return tidy(pd.DataFrame(rows, columns=COLUMNS), "hmm_recipe_comparison", corpus_source(sequences),
-                recipes=list(recipes), seeds=list(seeds), tols=list(tols), n_test=len(test), **train)  # fmt: skip
+    return tidy(
+        pd.DataFrame(rows, columns=COLUMNS),
+        "hmm_recipe_comparison",
+        corpus_source(sequences),
+        recipes=list(recipes),
+        seeds=list(seeds),
+        tols=list(tols),
+        n_test=len(test),
+        **train,
+    )
 
 
 def comparison_rows(
@@ -166,13 +194,19 @@ def comparison_rows(
         ok = loo[loo["testable"]]
         predicted = [rec.classify(t.xyz) for t in test]
         reports = rec.reports.values()
-        rows.append({
-            "recipe": g["recipe"], "seed": int(g["seed"]), "tol": float(g["tol"]), "loso_accuracy": accuracy(ok),
-            "loso_correct": int(ok["correct"].sum()), "loso_testable": len(ok),
-            "test_predicted": ",".join(predicted),
-            "test_correct": int(sum(p == t.action for p, t in zip(predicted, test, strict=True))),
-            "train_loglik_per_frame": float(np.mean([r.final_loglik / r.n_frames for r in reports])),
-        })  # fmt: skip
+        rows.append(
+            {
+                "recipe": g["recipe"],
+                "seed": int(g["seed"]),
+                "tol": float(g["tol"]),
+                "loso_accuracy": accuracy(ok),
+                "loso_correct": int(ok["correct"].sum()),
+                "loso_testable": len(ok),
+                "test_predicted": ",".join(predicted),
+                "test_correct": int(sum(p == t.action for p, t in zip(predicted, test, strict=True))),
+                "train_loglik_per_frame": float(np.mean([r.final_loglik / r.n_frames for r in reports])),
+            }
+        )
     return rows
 
 
@@ -187,11 +221,21 @@ def recipe_spread(comparison: pd.DataFrame) -> pd.DataFrame:
     rows = []
     n_test = int(comparison.attrs.get("parameters", {}).get("n_test", 0))
     for recipe, g in comparison.groupby("recipe", sort=False):
-        rows.append({
-            "recipe": recipe, "settings": len(g), "loso_min": float(g["loso_accuracy"].min()),
-            "loso_max": float(g["loso_accuracy"].max()), "loso_at_default": float(g["loso_accuracy"].iloc[0]),
-            "test_correct_min": int(g["test_correct"].min()), "test_correct_max": int(g["test_correct"].max()),
-            "n_test": n_test,
-        })  # fmt: skip
-    return tidy(pd.DataFrame(rows), "hmm_recipe_spread", comparison.attrs.get("data_source", ""),
-                **comparison.attrs.get("parameters", {}))  # fmt: skip
+        rows.append(
+            {
+                "recipe": recipe,
+                "settings": len(g),
+                "loso_min": float(g["loso_accuracy"].min()),
+                "loso_max": float(g["loso_accuracy"].max()),
+                "loso_at_default": float(g["loso_accuracy"].iloc[0]),
+                "test_correct_min": int(g["test_correct"].min()),
+                "test_correct_max": int(g["test_correct"].max()),
+                "n_test": n_test,
+            }
+        )
+    return tidy(
+        pd.DataFrame(rows),
+        "hmm_recipe_spread",
+        comparison.attrs.get("data_source", ""),
+        **comparison.attrs.get("parameters", {}),
+    )

@@ -90,16 +90,31 @@ def feature_settings(
             recipe, tol = s.pop("recipe", "glu"), s.pop("tol", TrainingConfig.tol)
             single = recipe == "mixsplit" or s.get("n_mix", TrainingConfig.n_mix) == 1
             for seed in seeds[:1] if single else seeds:  # as recipe_comparison: mixsplit has no seed (-1)
-                grid.append({**train, **s, "features": features, "recipe": recipe, "tol": float(tol),
-                             "seed": -1 if recipe == "mixsplit" else int(seed)})  # fmt: skip
+                grid.append(
+                    {
+                        **train,
+                        **s,
+                        "features": features,
+                        "recipe": recipe,
+                        "tol": float(tol),
+                        "seed": -1 if recipe == "mixsplit" else int(seed),
+                    }
+                )
                 labels.append((Invariants.parse(features).name, setting_label(setting)))
     rows = comparison_rows(sequences, test, grid)  # every model of the grid trained in one batch per setting
     frame = pd.DataFrame(rows, columns=COLUMNS)
     frame.insert(0, "setting", [lab[1] for lab in labels])
     frame.insert(0, "features", [lab[0] for lab in labels])
-    return tidy(frame, "hmm_feature_settings", corpus_source(sequences),
-                feature_sets=list(feature_sets), settings=[setting_label(s) for s in settings], seeds=list(seeds),
-                n_test=len(test), **train)  # fmt: skip
+    return tidy(
+        frame,
+        "hmm_feature_settings",
+        corpus_source(sequences),
+        feature_sets=list(feature_sets),
+        settings=[setting_label(s) for s in settings],
+        seeds=list(seeds),
+        n_test=len(test),
+        **train,
+    )
 
 
 def feature_settings_summary(grid: pd.DataFrame) -> pd.DataFrame:
@@ -113,11 +128,25 @@ def feature_settings_summary(grid: pd.DataFrame) -> pd.DataFrame:
         always = [
             s for s, h in g.groupby("setting", sort=False) if n_test and (h["test_correct"] == n_test).all()
         ]
-        rows.append({"features": features, "runs": len(g), "loso_mean": a.mean(), "loso_sd": a.std(ddof=1),
-                     "loso_min": a.min(), "loso_max": a.max(), "n_test": n_test, "runs_all_test_correct": len(every),
-                     "settings_always_all_test_correct": ", ".join(always)})  # fmt: skip
-    return tidy(pd.DataFrame(rows), "hmm_feature_settings_summary", grid.attrs.get("data_source", ""),
-                **grid.attrs.get("parameters", {}))  # fmt: skip
+        rows.append(
+            {
+                "features": features,
+                "runs": len(g),
+                "loso_mean": a.mean(),
+                "loso_sd": a.std(ddof=1),
+                "loso_min": a.min(),
+                "loso_max": a.max(),
+                "n_test": n_test,
+                "runs_all_test_correct": len(every),
+                "settings_always_all_test_correct": ", ".join(always),
+            }
+        )
+    return tidy(
+        pd.DataFrame(rows),
+        "hmm_feature_settings_summary",
+        grid.attrs.get("data_source", ""),
+        **grid.attrs.get("parameters", {}),
+    )
 
 
 def posture_offsets(source: DataSource, n_per_action: int = 4) -> pd.DataFrame:
@@ -143,7 +172,15 @@ def posture_offsets(source: DataSource, n_per_action: int = 4) -> pd.DataFrame:
             seqs += [s._replace(recording=f"synthetic {p} {i}") for i, s in enumerate(c)]
             posture.update({f"synthetic {p} {i}": p for i in range(len(c))})
         where = "synthetic data: standing and seated gestures (seed 0)"
-    rows = [{"recording": s.recording, "start": s.start, "end": s.end, "action": s.action,
-             "posture": posture.get(s.recording, "standing"), **dict(zip("xyz", s.xyz.mean(axis=0), strict=True))}
-            for s in seqs]  # fmt: skip
+    rows = [
+        {
+            "recording": s.recording,
+            "start": s.start,
+            "end": s.end,
+            "action": s.action,
+            "posture": posture.get(s.recording, "standing"),
+            **dict(zip("xyz", s.xyz.mean(axis=0), strict=True)),
+        }
+        for s in seqs
+    ]
     return tidy(pd.DataFrame(rows), "posture_offsets", where)

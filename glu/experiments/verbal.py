@@ -88,8 +88,15 @@ def yellow_sphere_nbest(
     DataFrame with columns rank, sentence, score, length (``n`` rows, best first).
     """
     df = describe(engine, EVIDENCE_YELLOW_SPHERE, n=n, grammar=grammar, score=score, candidates=candidates)
-    return tidy(df, "verbal_yellow_sphere_nbest", model_source(engine.bn), evidence=EVIDENCE_YELLOW_SPHERE,
-                n=n, score=score, candidates="grammar" if candidates is None else "list")  # fmt: skip
+    return tidy(
+        df,
+        "verbal_yellow_sphere_nbest",
+        model_source(engine.bn),
+        evidence=EVIDENCE_YELLOW_SPHERE,
+        n=n,
+        score=score,
+        candidates="grammar" if candidates is None else "list",
+    )
 
 
 def and_but_probabilities(engine: Any, compare: bool = False) -> pd.DataFrame:
@@ -142,9 +149,15 @@ def and_but_nbest(
         df.insert(0, "ObjVel", objvel)
         df["conjunction"] = [_conjunction(s) for s in df["sentence"]]
         frames.append(df)
-    return tidy(pd.concat(frames, ignore_index=True), "verbal_and_but_nbest", model_source(engine.bn),
-                evidence=EVIDENCE_AND_BUT, n=n, score=score,
-                candidates="grammar" if cands is None else "list")  # fmt: skip
+    return tidy(
+        pd.concat(frames, ignore_index=True),
+        "verbal_and_but_nbest",
+        model_source(engine.bn),
+        evidence=EVIDENCE_AND_BUT,
+        n=n,
+        score=score,
+        candidates="grammar" if cands is None else "list",
+    )
 
 
 def _conjunction(sentence: str) -> str:
@@ -180,11 +193,16 @@ def fig8_descriptions(engine: Any, grammar: Grammar | WordNetwork | None = None)
         probs = word_probabilities(engine, ev)
         best = nbest(net, probs, 1).iloc[0]
         colour = nbest(net, probs, 1, must_contain=[w for w in COLOUR_WORDS if w in net.words]).iloc[0]
-        rows.append({
-            "situation": k, "evidence": evidence_text(ev),
-            "sentence": best["sentence"], "score": float(best["score"]),
-            "colour_sentence": colour["sentence"], "colour_score": float(colour["score"]),
-        })  # fmt: skip
+        rows.append(
+            {
+                "situation": k,
+                "evidence": evidence_text(ev),
+                "sentence": best["sentence"],
+                "score": float(best["score"]),
+                "colour_sentence": colour["sentence"],
+                "colour_score": float(colour["score"]),
+            }
+        )
     return tidy(pd.DataFrame(rows), "verbal_fig8", model_source(engine.bn), evidence=EVIDENCE_FIG8)
 
 
@@ -216,16 +234,29 @@ def published_descriptions(
         ours = describe(engine, ev, n=len(paper_rows), score=score, candidates=cands, must_contain=must)
         for k, (p, o) in enumerate(zip(paper_rows, ours.itertuples(), strict=True), start=1):
             printed = num2str(o.score)
-            rows.append({
-                "figure": key, "rank": k, "evidence": evidence_text(ev),
-                "paper_sentence": p["sentence"], "paper_score": p.get("score"),
-                "sentence": o.sentence, "score": float(o.score), "printed": printed,
-                "same_sentence": o.sentence == p["sentence"],
-                "same_score": None if p.get("score") is None else printed == p["score"],
-            })  # fmt: skip
+            rows.append(
+                {
+                    "figure": key,
+                    "rank": k,
+                    "evidence": evidence_text(ev),
+                    "paper_sentence": p["sentence"],
+                    "paper_score": p.get("score"),
+                    "sentence": o.sentence,
+                    "score": float(o.score),
+                    "printed": printed,
+                    "same_sentence": o.sentence == p["sentence"],
+                    "same_score": None if p.get("score") is None else printed == p["score"],
+                }
+            )
     what = "grammar" if cands is None else f"{len(set(map(tuple, cands)))} candidate sentences"
-    return tidy(pd.DataFrame(rows), "verbal_published_descriptions", model_source(engine.bn),
-                score=score, candidates=what, reference=published()["read_from"])  # fmt: skip
+    return tidy(
+        pd.DataFrame(rows),
+        "verbal_published_descriptions",
+        model_source(engine.bn),
+        score=score,
+        candidates=what,
+        reference=published()["read_from"],
+    )
 
 
 def _rank_in(scores: np.ndarray, score: float) -> int:
@@ -263,16 +294,27 @@ def exact_vs_samples(
             best = rank_sentences(sample_list, probs, 1, name).iloc[0]
             other = next(o for o in SCORES if o != name)
             exact_under_other = score_sentence(exact["sentence"], probs, other)
-            rows.append({
-                "figure": key, "evidence": evidence_text(ev), "score_name": name,
-                "exact_best": exact["sentence"], "exact_score": float(exact["score"]),
-                "samples_best": best["sentence"], "samples_score": float(best["score"]),
-                "samples_rank": _rank_in(every[name], float(best["score"])),
-                "exact_in_samples": exact["sentence"] in sample_set,
-                "rank_under_other": _rank_in(every[other], exact_under_other),
-            })  # fmt: skip
-    return tidy(pd.DataFrame(rows), "verbal_exact_vs_samples", model_source(engine.bn),
-                n_samples=len(sample_set), evidence=dict(evidence_sets))  # fmt: skip
+            rows.append(
+                {
+                    "figure": key,
+                    "evidence": evidence_text(ev),
+                    "score_name": name,
+                    "exact_best": exact["sentence"],
+                    "exact_score": float(exact["score"]),
+                    "samples_best": best["sentence"],
+                    "samples_score": float(best["score"]),
+                    "samples_rank": _rank_in(every[name], float(best["score"])),
+                    "exact_in_samples": exact["sentence"] in sample_set,
+                    "rank_under_other": _rank_in(every[other], exact_under_other),
+                }
+            )
+    return tidy(
+        pd.DataFrame(rows),
+        "verbal_exact_vs_samples",
+        model_source(engine.bn),
+        n_samples=len(sample_set),
+        evidence=dict(evidence_sets),
+    )
 
 
 def sampling_vs_exact(
@@ -313,18 +355,32 @@ def sampling_vs_exact(
         sample = drawn[seed] if drawn is not None and seed in drawn else sample_sentences(g, n_samples, seed)
         ranked = rank_sentences(sample, probs, n, score)
         s_best, s_score = ranked["sentence"].iloc[0], float(ranked["score"].iloc[0])
-        rows.append({
-            "seed": seed, "n_samples": n_samples, "n_distinct": len(set(sample)),
-            "exact_best": exact["sentence"].iloc[0], "exact_score": float(exact["score"].iloc[0]),
-            "sample_best": s_best, "sample_score": s_score,
-            "gap": float(exact["score"].iloc[0]) - s_score,
-            "found_best": s_best == exact["sentence"].iloc[0],
-            "sample_rank": _rank_in(scores, s_score),
-            "overlap": len(set(exact["sentence"]) & set(ranked["sentence"])),
-            "p_draw_best": float(p_draw),
-        })  # fmt: skip
-    return tidy(pd.DataFrame(rows), "verbal_sampling_vs_exact", model_source(engine.bn), evidence=evidence,
-                seeds=seeds, n_samples=n_samples, n=n, score=score)  # fmt: skip
+        rows.append(
+            {
+                "seed": seed,
+                "n_samples": n_samples,
+                "n_distinct": len(set(sample)),
+                "exact_best": exact["sentence"].iloc[0],
+                "exact_score": float(exact["score"].iloc[0]),
+                "sample_best": s_best,
+                "sample_score": s_score,
+                "gap": float(exact["score"].iloc[0]) - s_score,
+                "found_best": s_best == exact["sentence"].iloc[0],
+                "sample_rank": _rank_in(scores, s_score),
+                "overlap": len(set(exact["sentence"]) & set(ranked["sentence"])),
+                "p_draw_best": float(p_draw),
+            }
+        )
+    return tidy(
+        pd.DataFrame(rows),
+        "verbal_sampling_vs_exact",
+        model_source(engine.bn),
+        evidence=evidence,
+        seeds=seeds,
+        n_samples=n_samples,
+        n=n,
+        score=score,
+    )
 
 
 def sampling_trials(
@@ -347,7 +403,16 @@ def sampling_trials(
     g = load_grammar() if grammar is None else grammar
     # the same samples for every evidence set: drawn, split and counted once
     drawn = {seed: SentenceSet(sample_sentences(g, n_samples, seed)) for seed in seeds}
-    frames = [sampling_vs_exact(engine, ev, seeds, n_samples, n, g, score, drawn).assign(figure=key)
-              for key, ev in evidence_sets.items()]  # fmt: skip
-    return tidy(pd.concat(frames, ignore_index=True), "verbal_sampling_trials", model_source(engine.bn),
-                seeds=seeds, evidence=dict(evidence_sets), n_samples=n_samples, score=score)  # fmt: skip
+    frames = [
+        sampling_vs_exact(engine, ev, seeds, n_samples, n, g, score, drawn).assign(figure=key)
+        for key, ev in evidence_sets.items()
+    ]
+    return tidy(
+        pd.concat(frames, ignore_index=True),
+        "verbal_sampling_trials",
+        model_source(engine.bn),
+        seeds=seeds,
+        evidence=dict(evidence_sets),
+        n_samples=n_samples,
+        score=score,
+    )

@@ -140,8 +140,12 @@ def forward_backward_log(
     log_gamma -= np.where(alive, _logsumexp(log_gamma, axis=2), 0.0)[..., None]  # as hmmlearn: renormalise
     if T > 1:
         pair = alive[:, 1:]  # transitions t → t+1 inside each sequence
-        log_xi = (fwd[:, :-1, :, None] + log_a + (log_b[:, 1:] + bwd[:, 1:])[:, :, None, :]
-                  - loglik[:, None, None, None])  # fmt: skip
+        log_xi = (
+            fwd[:, :-1, :, None]
+            + log_a
+            + (log_b[:, 1:] + bwd[:, 1:])[:, :, None, :]
+            - loglik[:, None, None, None]
+        )
         with np.errstate(under="ignore"):
             xi_sum = np.exp(np.where(pair[..., None, None], log_xi, -np.inf)).sum(axis=(0, 1))
     else:

@@ -169,8 +169,10 @@ def fit_many(
     if covariance not in COVARIANCES:
         raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
     tols = np.broadcast_to(np.asarray(tol, dtype=float), (len(problems),))
-    items = [([np.asarray(x, dtype=float) for x in seqs], GMMHMMParams(*(np.array(a, dtype=float) for a in init)))
-             for seqs, init in problems]  # fmt: skip
+    items = [
+        ([np.asarray(x, dtype=float) for x in seqs], GMMHMMParams(*(np.array(a, dtype=float) for a in init)))
+        for seqs, init in problems
+    ]
     groups: dict[tuple[int, ...], list[int]] = {}
     for k, (seqs, init) in enumerate(items):
         groups.setdefault((*init.weights.shape, seqs[0].shape[1]), []).append(k)
@@ -195,9 +197,13 @@ def fit_many(
 
 
 def _fit_group(
-    problems: list[tuple[list[np.ndarray], GMMHMMParams]], n_iter: int, tols: np.ndarray, covar_reg: float,
-    covariance: str, covar_floor: float,
-) -> list[FitResult]:  # fmt: skip
+    problems: list[tuple[list[np.ndarray], GMMHMMParams]],
+    n_iter: int,
+    tols: np.ndarray,
+    covar_reg: float,
+    covariance: str,
+    covar_floor: float,
+) -> list[FitResult]:
     """:func:`fit_many` for models of one shape."""
     P = len(problems)
     # every model's current parameters, stacked: (P, Q), (P, Q, Q), (P, Q, M), (P, Q, M, D), (P, Q, M, D, D)
@@ -222,8 +228,12 @@ def _fit_group(
         lin = (prec @ mu[..., None])[..., 0]  # (K, Q, M, D)
         with np.errstate(invalid="ignore"):
             const = log_norm - 0.5 * (mu * lin).sum(axis=-1)
-        coef = np.stack([(-0.5 if i == j else -1.0) * prec[..., i, j] for i, j in pairs]
-                        + [lin[..., i] for i in range(D)] + [const], axis=-1)  # fmt: skip  # (K, Q, M, F)
+        coef = np.stack(
+            [(-0.5 if i == j else -1.0) * prec[..., i, j] for i, j in pairs]
+            + [lin[..., i] for i in range(D)]
+            + [const],
+            axis=-1,
+        )  # (K, Q, M, F)
         lc = (batch.phi @ np.swapaxes(coef.reshape(K, Q * M, -1), 1, 2)).reshape(K, N, Q, M)
         # each state's emission log-density (K, N, Q) and its mixture's responsibilities, in one pass
         if M == 1:

@@ -147,9 +147,14 @@ def synthetic_corpus(
     facing the camera), or the robot's own movements (``View(performer="robot")``).
     """
     gestures = synthesize_gestures(
-        n_per_action * len(actions), seed, actions=actions,
-        noise=noise, spike_rate=spike_rate, dropout_rate=dropout_rate, view=view,
-    )  # fmt: skip
+        n_per_action * len(actions),
+        seed,
+        actions=actions,
+        noise=noise,
+        spike_rate=spike_rate,
+        dropout_rate=dropout_rate,
+        view=view,
+    )
     seqs = [
         LabelledSequence(g.action, g.features(), f"synthetic-{i}", 1, len(g.t))
         for i, g in enumerate(gestures)
@@ -199,8 +204,9 @@ def recording_segmentations(
     if source.has_gestures:
         return [
             (segment_recording_of(source, n), original_segments(n))
-            for n in RECORDING_ACTION if source.has_hand_log(n)
-        ]  # fmt: skip
+            for n in RECORDING_ACTION
+            if source.has_hand_log(n)
+        ]
     out = []
     for action in ("grasp", "tap", "touch", "push"):
         g = synthesize_recording(action, 4, seed)

@@ -202,8 +202,9 @@ def table_features(path: str | os.PathLike, body: tuple[float, float] | None = N
         skeleton = np.stack([table.joints.get(j, np.full((len(table.t), 3), np.nan)) for j in names], axis=1)
         xyz, _ = skeleton_features(skeleton, joints=names)
     n = len(table.t)
-    return Trajectory(xyz=xyz, t=table.t, frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool),
-                      source=table.source)  # fmt: skip
+    return Trajectory(
+        xyz=xyz, t=table.t, frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool), source=table.source
+    )
 
 
 def load_features(

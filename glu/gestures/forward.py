@@ -172,9 +172,10 @@ def scaled_step(
         c_log = new_log.sum(axis=-1)
         step = np.where(ok, np.log(c) + mx, np.where(finite, m_safe + np.log(c_log), -np.inf))
         alpha = np.where(
-            ok[..., None], new / np.where(ok, c, 1.0)[..., None],
+            ok[..., None],
+            new / np.where(ok, c, 1.0)[..., None],
             np.where(finite[..., None], new_log / np.where(finite, c_log, 1.0)[..., None], 0.0),
-        )  # fmt: skip
+        )
     return alpha, step
 
 

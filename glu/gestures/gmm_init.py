@@ -315,9 +315,12 @@ def gmm_em(
     when a covariance was not positive definite (the arrays are then meaningless).
     """
     weights, means, covs, n_iter = compiled(_gmm_em)(
-        np.ascontiguousarray(X, dtype=np.float64), np.ascontiguousarray(resp, dtype=np.float64),
-        float(reg_covar), float(tol), int(max_iter),
-    )  # fmt: skip
+        np.ascontiguousarray(X, dtype=np.float64),
+        np.ascontiguousarray(resp, dtype=np.float64),
+        float(reg_covar),
+        float(tol),
+        int(max_iter),
+    )
     return weights, means, covs, int(n_iter)
 
 

@@ -170,9 +170,11 @@ class Invariants:
     def to_dict(self) -> dict[str, Any]:
         """What a recogniser file records: ``{"names": [...], "lock_radius": ρ, "min_scale": …, "anchor_frames": k}``."""
         return {
-            "names": list(self.names), "lock_radius": self.lock_radius, "min_scale": self.min_scale,
+            "names": list(self.names),
+            "lock_radius": self.lock_radius,
+            "min_scale": self.min_scale,
             "anchor_frames": self.anchor_frames,
-        }  # fmt: skip
+        }
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any] | None, source: str = "<dict>") -> Invariants:

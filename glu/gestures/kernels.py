@@ -273,9 +273,15 @@ def loglik_banked(
     X = np.ascontiguousarray(np.concatenate(sequences), dtype=np.float64)
     f = np.ascontiguousarray
     return compiled(_loglik_banked)(
-        X, starts, lengths, f(means, dtype=np.float64), f(chol_inv, dtype=np.float64),
-        f(log_norm, dtype=np.float64), f(startprob, dtype=np.float64), f(transmat, dtype=np.float64),
-    )  # fmt: skip
+        X,
+        starts,
+        lengths,
+        f(means, dtype=np.float64),
+        f(chol_inv, dtype=np.float64),
+        f(log_norm, dtype=np.float64),
+        f(startprob, dtype=np.float64),
+        f(transmat, dtype=np.float64),
+    )
 
 
 def mixture_posteriors(lc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

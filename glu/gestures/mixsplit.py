@@ -73,9 +73,13 @@ def flat_start(sequences: Sequence[np.ndarray], n_states: int, name: str = "") -
     startprob = np.zeros(n_states)
     startprob[0] = 1.0
     return GestureHMM(
-        startprob, left_to_right_transmat(n_states, FLAT_STAY), np.ones((n_states, 1)),
-        np.tile(mean, (n_states, 1, 1)), np.tile(cov, (n_states, 1, 1, 1)), name=name,
-    )  # fmt: skip
+        startprob,
+        left_to_right_transmat(n_states, FLAT_STAY),
+        np.ones((n_states, 1)),
+        np.tile(mean, (n_states, 1, 1)),
+        np.tile(cov, (n_states, 1, 1, 1)),
+        name=name,
+    )
 
 
 def split_heaviest(hmm: GestureHMM, offset: float = SPLIT_OFFSET) -> GestureHMM:
@@ -180,9 +184,14 @@ def train_mixsplit(
 
 
 def _checked(
-    sequences: Sequence[np.ndarray], n_states: int, n_mix: int, n_iter: int, tol: float, covar_floor: float,
+    sequences: Sequence[np.ndarray],
+    n_states: int,
+    n_mix: int,
+    n_iter: int,
+    tol: float,
+    covar_floor: float,
     name: str,
-) -> tuple[list[np.ndarray], int]:  # fmt: skip
+) -> tuple[list[np.ndarray], int]:
     who = f"training data for {name!r}" if name else "training data"
     if len(sequences) == 0:
         raise DataError(f"{who}: no sequences")
@@ -200,16 +209,23 @@ def _checked(
 
 
 def _finish(
-    hmm: GestureHMM, seqs: list[np.ndarray], stages: list[tuple[float, ...]], tol: float, n_iter: int,
-    n_mix: int, name: str, warn: bool,
-) -> tuple[GestureHMM, TrainingReport]:  # fmt: skip
+    hmm: GestureHMM,
+    seqs: list[np.ndarray],
+    stages: list[tuple[float, ...]],
+    tol: float,
+    n_iter: int,
+    n_mix: int,
+    name: str,
+    warn: bool,
+) -> tuple[GestureHMM, TrainingReport]:
     n_frames = sum(len(X) for X in seqs)
     last = stages[-1]
     delta = last[-1] - last[-2] if len(last) >= 2 else math.inf
     converged = bool(abs(delta) < tol * n_frames)
     final = float(sum(hmm.loglik(X) for X in seqs))
-    report = TrainingReport(name, len(seqs), n_frames, sum(len(h) for h in stages), converged, last, final,
-                            tol, n_iter * n_mix)  # fmt: skip
+    report = TrainingReport(
+        name, len(seqs), n_frames, sum(len(h) for h in stages), converged, last, final, tol, n_iter * n_mix
+    )
     if not converged and warn:
         warnings.warn(report.describe(), HMMConvergenceWarning, stacklevel=3)
     return hmm, report
@@ -250,12 +266,15 @@ def train_mixsplit_many(
     stages: list[list[tuple[float, ...]]] = [[] for _ in hmms]
     try:
         while True:
-            problems = [(seqs, bw.GMMHMMParams(h.startprob, h.transmat, h.weights, h.means, h.covars))
-                        for (seqs, _), h in zip(checked, hmms, strict=True)]  # fmt: skip
+            problems = [
+                (seqs, bw.GMMHMMParams(h.startprob, h.transmat, h.weights, h.means, h.covars))
+                for (seqs, _), h in zip(checked, hmms, strict=True)
+            ]
             with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
                 warnings.simplefilter("ignore", RuntimeWarning)
-                results = fit_many(problems, n_iter, [tol * f for _, f in checked], covariance="ml",
-                                   covar_floor=covar_floor)  # fmt: skip
+                results = fit_many(
+                    problems, n_iter, [tol * f for _, f in checked], covariance="ml", covar_floor=covar_floor
+                )
             hmms = [GestureHMM(*r.params, name=nm) for r, nm in zip(results, names, strict=True)]
             for st, r in zip(stages, results, strict=True):
                 st.append(tuple(float(h) for h in r.history))
@@ -263,8 +282,12 @@ def train_mixsplit_many(
                 break
             hmms = [split_heaviest(h) for h in hmms]
     except (ValueError, np.linalg.LinAlgError, ModelError):  # say which model failed, as train_mixsplit does
-        return [train_mixsplit(seqs, n_states, n_mix, n_iter=n_iter, tol=tol, covar_floor=covar_floor, name=nm,
-                               warn=warn) for (seqs, _), nm in zip(checked, names, strict=True)]  # fmt: skip
+        return [
+            train_mixsplit(
+                seqs, n_states, n_mix, n_iter=n_iter, tol=tol, covar_floor=covar_floor, name=nm, warn=warn
+            )
+            for (seqs, _), nm in zip(checked, names, strict=True)
+        ]
     return [
         (*_finish(h, seqs, st, tol, n_iter, n_mix, nm, warn), st)
         for h, (seqs, _), st, nm in zip(hmms, checked, stages, names, strict=True)

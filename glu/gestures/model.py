@@ -144,10 +144,15 @@ class GestureHMM:
     def to_dict(self) -> dict[str, Any]:
         """The parameters as nested lists (the ``models`` entries of the recogniser file)."""
         return {
-            "n_states": self.n_states, "n_mix": self.n_mix, "n_features": self.n_features,
-            "startprob": self.startprob.tolist(), "transmat": self.transmat.tolist(),
-            "weights": self.weights.tolist(), "means": self.means.tolist(), "covars": self.covars.tolist(),
-        }  # fmt: skip
+            "n_states": self.n_states,
+            "n_mix": self.n_mix,
+            "n_features": self.n_features,
+            "startprob": self.startprob.tolist(),
+            "transmat": self.transmat.tolist(),
+            "weights": self.weights.tolist(),
+            "means": self.means.tolist(),
+            "covars": self.covars.tolist(),
+        }
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], name: str = "") -> GestureHMM:

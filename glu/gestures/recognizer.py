@@ -341,8 +341,19 @@ def train_recognizer(
     raw): the models are trained on these features of the hand features given, and the recogniser applies
     the same to whatever it scores.
     """
-    (rec,) = train_recognizers([sequences], n_states, n_mix, n_iter=n_iter, tol=tol, covar_reg=covar_reg,
-                               seed=seed, warn=warn, meta=meta, recipe=recipe, features=features)  # fmt: skip
+    (rec,) = train_recognizers(
+        [sequences],
+        n_states,
+        n_mix,
+        n_iter=n_iter,
+        tol=tol,
+        covar_reg=covar_reg,
+        seed=seed,
+        warn=warn,
+        meta=meta,
+        recipe=recipe,
+        features=features,
+    )
     if progress is not None:
         for action in rec.actions:
             progress(action)
@@ -379,11 +390,25 @@ def train_recognizers(
             f"{n} training sets need as many seeds and feature sets, got {len(seeds)} and {len(specs)}"
         )
     # what the models see (the typicality ranges are measured on these too)
-    seen = [{a: seqs if f.is_raw else [f.transform(X) for X in seqs] for a, seqs in s.items()}
-            for s, f in zip(sets, specs, strict=True)]  # fmt: skip
+    seen = [
+        {a: seqs if f.is_raw else [f.transform(X) for X in seqs] for a, seqs in s.items()}
+        for s, f in zip(sets, specs, strict=True)
+    ]
     jobs = [(a, seqs, sd) for sn, sd in zip(seen, seeds, strict=True) for a, seqs in sn.items()]
-    trained = iter(train_models([j[1] for j in jobs], n_states, n_mix, n_iter=n_iter, tol=tol, covar_reg=covar_reg,
-                                seed=[j[2] for j in jobs], name=[j[0] for j in jobs], warn=warn, recipe=recipe))  # fmt: skip
+    trained = iter(
+        train_models(
+            [j[1] for j in jobs],
+            n_states,
+            n_mix,
+            n_iter=n_iter,
+            tol=tol,
+            covar_reg=covar_reg,
+            seed=[j[2] for j in jobs],
+            name=[j[0] for j in jobs],
+            warn=warn,
+            recipe=recipe,
+        )
+    )
     out = []
     for sn, sd, spec in zip(seen, seeds, specs, strict=True):
         models, reports = {}, {}
@@ -391,9 +416,16 @@ def train_recognizers(
             models[a], reports[a] = next(trained)
         ranges = {a: training_range(models[a], sn[a]) for a in models}
         info = {
-            META_KEY: ranges_to_meta(ranges), "recipe": recipe, "n_states": n_states, "n_mix": n_mix,
-            "n_iter": n_iter, "tol": tol, "covar_reg": covar_reg, "seed": sd, "features": spec.name,
-        }  # fmt: skip
+            META_KEY: ranges_to_meta(ranges),
+            "recipe": recipe,
+            "n_states": n_states,
+            "n_mix": n_mix,
+            "n_iter": n_iter,
+            "tol": tol,
+            "covar_reg": covar_reg,
+            "seed": sd,
+            "features": spec.name,
+        }
         out.append(Recognizer(models, reports, {**info, **(meta or {})}, spec))
     return out
 

@@ -64,13 +64,28 @@ ROBOT_FRAME_RATE = 30.0
 
 # Waypoints: (offset from the object, or None for home; hold at the waypoint, s).
 _WAYPOINTS: dict[str, list[tuple[tuple[float, float, float] | None, float]]] = {
-    "grasp": [(None, 0.0), ((0.0, 0.08, 0.03), 0.0), ((0.0, 0.01, 0.0), 0.4), ((0.0, 0.12, 0.0), 0.1),
-              (None, 0.0)],
-    "tap": [(None, 0.0), ((0.1, 0.02, 0.0), 0.0), ((-0.08, 0.02, 0.0), 0.0), ((-0.05, 0.07, 0.05), 0.0),
-            (None, 0.0)],
-    "touch": [(None, 0.0), ((0.0, 0.07, 0.0), 0.0), ((0.0, 0.015, 0.0), 0.3), ((0.0, 0.07, 0.0), 0.0),
-              (None, 0.0)],
-}  # fmt: skip
+    "grasp": [
+        (None, 0.0),
+        ((0.0, 0.08, 0.03), 0.0),
+        ((0.0, 0.01, 0.0), 0.4),
+        ((0.0, 0.12, 0.0), 0.1),
+        (None, 0.0),
+    ],
+    "tap": [
+        (None, 0.0),
+        ((0.1, 0.02, 0.0), 0.0),
+        ((-0.08, 0.02, 0.0), 0.0),
+        ((-0.05, 0.07, 0.05), 0.0),
+        (None, 0.0),
+    ],
+    "touch": [
+        (None, 0.0),
+        ((0.0, 0.07, 0.0), 0.0),
+        ((0.0, 0.015, 0.0), 0.3),
+        ((0.0, 0.07, 0.0), 0.0),
+        (None, 0.0),
+    ],
+}
 _FAST = {("tap", 2)}
 """Segments the controller runs faster (the strike of a tap): (action, index of the segment's end)."""
 

@@ -141,8 +141,13 @@ class View:
         """One line, e.g. ``human, standing, yaw 90°, mirrored, size 1.2``."""
         human = self.performer == "human"
         yaw = "yaw ±10°" if self.yaw_deg is None and human else f"yaw {self.yaw_deg or 0:g}°"
-        parts = [*([self.performer, self.posture] if human else ["robot"]), yaw, "mirrored" * self.mirror,
-                 f"size {self.size:g}" if self.size else "", "fixed scale" * (not self.normalise_body)]  # fmt: skip
+        parts = [
+            *([self.performer, self.posture] if human else ["robot"]),
+            yaw,
+            "mirrored" * self.mirror,
+            f"size {self.size:g}" if self.size else "",
+            "fixed scale" * (not self.normalise_body),
+        ]
         return ", ".join(p for p in parts if p)
 
 
@@ -150,15 +155,37 @@ DEFAULT_VIEW = View()
 
 # Key poses: (time fraction, offset from the object or None for rest).
 _KEYS: dict[str, list[tuple[float, tuple[float, float, float] | None]]] = {
-    "grasp": [(0.0, None), (0.28, (0.0, 0.1, 0.06)), (0.38, (0.0, 0.01, 0.0)), (0.5, (0.0, 0.0, 0.0)),
-              (0.66, (0.0, 0.24, 0.04)), (1.0, None)],
-    "tap": [(0.0, None), (0.38, (0.18, 0.03, 0.0)), (0.5, (-0.14, 0.01, -0.02)),
-            (0.62, (-0.06, 0.07, 0.06)), (1.0, None)],
-    "touch": [(0.0, None), (0.36, (0.0, 0.08, 0.04)), (0.46, (0.0, 0.02, 0.0)), (0.52, (0.0, 0.02, 0.0)),
-              (0.64, (0.0, 0.05, 0.1)), (1.0, None)],
-    "push": [(0.0, None), (0.34, (0.0, 0.02, 0.14)), (0.48, (0.0, 0.01, 0.09)), (0.66, (0.0, 0.01, -0.14)),
-             (1.0, None)],
-}  # fmt: skip
+    "grasp": [
+        (0.0, None),
+        (0.28, (0.0, 0.1, 0.06)),
+        (0.38, (0.0, 0.01, 0.0)),
+        (0.5, (0.0, 0.0, 0.0)),
+        (0.66, (0.0, 0.24, 0.04)),
+        (1.0, None),
+    ],
+    "tap": [
+        (0.0, None),
+        (0.38, (0.18, 0.03, 0.0)),
+        (0.5, (-0.14, 0.01, -0.02)),
+        (0.62, (-0.06, 0.07, 0.06)),
+        (1.0, None),
+    ],
+    "touch": [
+        (0.0, None),
+        (0.36, (0.0, 0.08, 0.04)),
+        (0.46, (0.0, 0.02, 0.0)),
+        (0.52, (0.0, 0.02, 0.0)),
+        (0.64, (0.0, 0.05, 0.1)),
+        (1.0, None),
+    ],
+    "push": [
+        (0.0, None),
+        (0.34, (0.0, 0.02, 0.14)),
+        (0.48, (0.0, 0.01, 0.09)),
+        (0.66, (0.0, 0.01, -0.14)),
+        (1.0, None),
+    ],
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -381,7 +408,7 @@ def synthesize_gestures(
             spike_rate=spike_rate,
             dropout_rate=dropout_rate,
             view=view,
-        )  # fmt: skip
+        )
         for i in range(n)
     ]
 

@@ -109,8 +109,18 @@ def gesture_features(
     view = view or DEFAULT_VIEW
     n = len(actions)
     if view.performer == "robot":  # the robot's own movements: one at a time
-        gs = [synthesize_gesture(a, r, noise=noise, spike_rate=spike_rate, dropout_rate=dropout_rate,
-                                 rest_frames=rest_frames, view=view) for a, r in zip(actions, rngs, strict=True)]  # fmt: skip
+        gs = [
+            synthesize_gesture(
+                a,
+                r,
+                noise=noise,
+                spike_rate=spike_rate,
+                dropout_rate=dropout_rate,
+                rest_frames=rest_frames,
+                view=view,
+            )
+            for a, r in zip(actions, rngs, strict=True)
+        ]
         return GestureBatch(
             [g.features(policy) for g in gs],
             np.array([g.t[-1] - g.t[0] for g in gs], dtype=float).reshape(n),

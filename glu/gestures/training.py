@@ -242,9 +242,14 @@ def _checked(
 
 
 def _finish(
-    seqs: list[np.ndarray], fitted_params: tuple[np.ndarray, ...], history: tuple[float, ...], tol: float,
-    n_iter: int, name: str, warn: bool,
-) -> tuple[GestureHMM, TrainingReport]:  # fmt: skip
+    seqs: list[np.ndarray],
+    fitted_params: tuple[np.ndarray, ...],
+    history: tuple[float, ...],
+    tol: float,
+    n_iter: int,
+    name: str,
+    warn: bool,
+) -> tuple[GestureHMM, TrainingReport]:
     """The fitted model and its :class:`TrainingReport` (warning when EM did not converge)."""
     try:
         fitted = GestureHMM(*fitted_params, name=name)
@@ -315,8 +320,10 @@ def train_many(
                 results = fit_many(problems, n_iter, [tol * f for _, f in checked], covar_reg, "map")
         except (ValueError, np.linalg.LinAlgError):  # say which model failed, as train_hmm does
             kw = dict(n_iter=n_iter, tol=tol, covar_reg=covar_reg, warn=warn)
-            return [train_hmm(seqs, n_states, n_mix, seed=sd, name=nm, **kw)
-                    for (seqs, _), sd, nm in zip(checked, seeds, names, strict=True)]  # fmt: skip
+            return [
+                train_hmm(seqs, n_states, n_mix, seed=sd, name=nm, **kw)
+                for (seqs, _), sd, nm in zip(checked, seeds, names, strict=True)
+            ]
     return [
         _finish(seqs, tuple(r.params), tuple(float(h) for h in r.history), tol, n_iter, nm, warn)
         for (seqs, _), r, nm in zip(checked, results, names, strict=True)
@@ -324,9 +331,15 @@ def train_many(
 
 
 def _run_em(
-    engine: str, seqs: list[np.ndarray], init: GestureHMM, n_iter: int, tol_total: float, covar_reg: float,
-    seed: int, name: str,
-) -> tuple[tuple[np.ndarray, ...], tuple[float, ...]]:  # fmt: skip
+    engine: str,
+    seqs: list[np.ndarray],
+    init: GestureHMM,
+    n_iter: int,
+    tol_total: float,
+    covar_reg: float,
+    seed: int,
+    name: str,
+) -> tuple[tuple[np.ndarray, ...], tuple[float, ...]]:
     """EM from ``init``: the fitted (startprob, transmat, weights, means, covars) and the history."""
     start = (init.startprob, init.transmat, init.weights, init.means, init.covars)
     try:
@@ -345,18 +358,30 @@ def _run_em(
 
 
 def _run_hmmlearn(
-    seqs: list[np.ndarray], start: tuple[np.ndarray, ...], n_iter: int, tol_total: float, covar_reg: float,
+    seqs: list[np.ndarray],
+    start: tuple[np.ndarray, ...],
+    n_iter: int,
+    tol_total: float,
+    covar_reg: float,
     seed: int,
-) -> tuple[tuple[np.ndarray, ...], tuple[float, ...]]:  # fmt: skip
+) -> tuple[tuple[np.ndarray, ...], tuple[float, ...]]:
     import logging
 
     D = seqs[0].shape[1]
     n_states, n_mix = start[2].shape
     model = _preset_gmmhmm_class()(
-        n_components=n_states, n_mix=n_mix, covariance_type="full", n_iter=n_iter, tol=tol_total,
-        params="stmcw", init_params="", random_state=seed, implementation="log",
-        covars_prior=covar_reg * np.eye(D), covars_weight=-(D + 1.0),
-    )  # fmt: skip
+        n_components=n_states,
+        n_mix=n_mix,
+        covariance_type="full",
+        n_iter=n_iter,
+        tol=tol_total,
+        params="stmcw",
+        init_params="",
+        random_state=seed,
+        implementation="log",
+        covars_prior=covar_reg * np.eye(D),
+        covars_weight=-(D + 1.0),
+    )
     model.startprob_, model.transmat_, model.weights_, model.means_, model.covars_ = (a.copy() for a in start)
     hmm_log = logging.getLogger("hmmlearn.base")
     level = hmm_log.level

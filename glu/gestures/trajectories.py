@@ -277,8 +277,11 @@ def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:
         if len(arrays[1]) >= policy.min_piece:
             kept.append(arrays)
         else:
-            events.append(TrackingEvent("short-piece", int(arrays[2][0]), float(arrays[1][0] - t0),
-                                        len(arrays[1]), "dropped"))  # fmt: skip
+            events.append(
+                TrackingEvent(
+                    "short-piece", int(arrays[2][0]), float(arrays[1][0] - t0), len(arrays[1]), "dropped"
+                )
+            )
     if len(kept) < len(spans):
         events.sort(key=lambda e: (e.frame, e.time))
     all_events = tuple(events)

@@ -118,8 +118,10 @@ def sampled_range(model: GestureHMM, n: int = 30, length: int = 60, seed: int = 
 def ranges_to_meta(ranges: Mapping[str, LoglikRange]) -> dict[str, Any]:
     """The ranges as a recogniser's meta entry (JSON)."""
     ref = {r.reference for r in ranges.values()}
-    return {"reference": ref.pop() if len(ref) == 1 else "mixed",
-            **{a: [r.low, r.high] for a, r in ranges.items()}}  # fmt: skip
+    return {
+        "reference": ref.pop() if len(ref) == 1 else "mixed",
+        **{a: [r.low, r.high] for a, r in ranges.items()},
+    }
 
 
 def ranges_from_meta(meta: Mapping[str, Any]) -> dict[str, LoglikRange] | None:

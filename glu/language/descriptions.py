@@ -316,8 +316,12 @@ def rank_sentences(
     for r in shortlist:
         s = cands.sentences[r]
         n_zero_s, total = _exact(lp, [pos[w] for w in s])
-        keyed.append((_rank_key(n_zero_s, total, len(s), s, offset, lp.scale),
-                      _score(lp, n_zero_s, total, len(s), offset)))  # fmt: skip
+        keyed.append(
+            (
+                _rank_key(n_zero_s, total, len(s), s, offset, lp.scale),
+                _score(lp, n_zero_s, total, len(s), offset),
+            )
+        )
     best = heapq.nsmallest(n, keyed) if n is not None else sorted(keyed)
     return _frame([(k[2], sc) for k, sc in best])
 
@@ -373,12 +377,13 @@ def nbest(
         for arcs in net.arcs:
             merged = [
                 (z + zero[w], neg - num[w], (words[w], *ws)) for w, t in arcs for z, neg, ws in cells[t]
-            ]  # fmt: skip
+            ]
             new_cells.append(heapq.nsmallest(n, merged) if len(merged) > n else sorted(merged))
         cells = new_cells
         for z, neg, ws in cells[net.start]:  # within one length the +offset/L is a constant
-            candidates.append((_rank_key(z, -neg, length, ws, offset, lp.scale),
-                               _score(lp, z, -neg, length, offset)))  # fmt: skip
+            candidates.append(
+                (_rank_key(z, -neg, length, ws, offset, lp.scale), _score(lp, z, -neg, length, offset))
+            )
         if not any(cells):
             break
     best = heapq.nsmallest(n, candidates)

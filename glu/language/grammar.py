@@ -318,8 +318,11 @@ class _Parser:
             expr = self.expr()
             prev = self.tokens[self.k - 1]
             if self.tok.kind == "=" and prev.kind == "var":  # "$a = x  $b = y;": the ';' was forgotten
-                raise self.error(f"expected ';' at the end of the definition of ${var.text} (line {var.line}), "
-                                 f"before the definition of ${prev.text}", prev)  # fmt: skip
+                raise self.error(
+                    f"expected ';' at the end of the definition of ${var.text} (line {var.line}), "
+                    f"before the definition of ${prev.text}",
+                    prev,
+                )
             self.expect(";", f"at the end of the definition of ${var.text} (line {var.line})")
             defs[var.text] = expr
             def_pos[var.text] = (var.line, var.col)
@@ -334,8 +337,10 @@ class _Parser:
         self.k += 1
         sentence = self.expr()
         if self.tok.kind != ")":
-            raise self.error(f"expected ')' closing the sentence opened at line {open_tok.line}, "
-                             f"column {open_tok.col}, found {self.tok.describe()}")  # fmt: skip
+            raise self.error(
+                f"expected ')' closing the sentence opened at line {open_tok.line}, "
+                f"column {open_tok.col}, found {self.tok.describe()}"
+            )
         self.k += 1
         if self.tok.kind != "eof":
             raise self.error(f"nothing may follow the sentence '( … )', found {self.tok.describe()}")
@@ -372,8 +377,10 @@ class _Parser:
         inner = self.expr()
         close = _CLOSE[tok.kind]
         if self.tok.kind != close:
-            raise self.error(f"expected '{close}' closing the '{tok.kind}' at line {tok.line}, column {tok.col}, "
-                             f"found {self.tok.describe()}")  # fmt: skip
+            raise self.error(
+                f"expected '{close}' closing the '{tok.kind}' at line {tok.line}, column {tok.col}, "
+                f"found {self.tok.describe()}"
+            )
         self.k += 1
         self.depth -= 1
         if tok.kind == "(":

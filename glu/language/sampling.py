@@ -38,8 +38,11 @@ def sample_sentences(grammar: Grammar, n: int, seed: int | None = 0) -> list[Sen
     if int(n) != n or n < 0:
         raise GrammarError(f"the number of sentences must be a whole number ≥ 0, not {n!r}", grammar.source)
     if n > MAX_SAMPLES:
-        raise GrammarError(f"{n:,} random sentences: at most {MAX_SAMPLES:,} at once (memory grows with each; "
-                           "the originals drew 10,000)", grammar.source)  # fmt: skip
+        raise GrammarError(
+            f"{n:,} random sentences: at most {MAX_SAMPLES:,} at once (memory grows with each; "
+            "the originals drew 10,000)",
+            grammar.source,
+        )
     rng = random.Random(seed)
     result: list[Sentence] = []
     try:
@@ -60,8 +63,13 @@ def sample_sentences(grammar: Grammar, n: int, seed: int | None = 0) -> list[Sen
 Walk = Callable[[list[str]], None]
 
 
-def _compile(e: Expr, grammar: Grammar, rand: Callable[[], float], randrange: Callable[[int], int],
-             refs: dict[str, Walk]) -> Walk:  # fmt: skip
+def _compile(
+    e: Expr,
+    grammar: Grammar,
+    rand: Callable[[], float],
+    randrange: Callable[[int], int],
+    refs: dict[str, Walk],
+) -> Walk:
     """A function that appends one random expansion of ``e`` to a list, drawing exactly as the recursive
     walk of the grammar does (the same calls to ``rand`` and ``randrange``, in the same order), with the
     grammar's structure resolved once instead of at every word. Runs of words become one ``extend``."""

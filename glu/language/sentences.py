@@ -183,8 +183,11 @@ def compile_network(grammar: Grammar) -> WordNetwork:
     except RecursionError:
         raise GrammarError("the grammar nests variables too deeply to expand", grammar.source) from None
     if n_words > MAX_NFA_ARCS:
-        raise GrammarError(f"the grammar expands to {n_words} words once variables are substituted; "
-                           f"glu handles up to {MAX_NFA_ARCS}", grammar.source)  # fmt: skip
+        raise GrammarError(
+            f"the grammar expands to {n_words} words once variables are substituted; "
+            f"glu handles up to {MAX_NFA_ARCS}",
+            grammar.source,
+        )
     vocab = grammar.vocabulary
     index = {w: i for i, w in enumerate(vocab)}
 
@@ -255,8 +258,9 @@ def compile_network(grammar: Grammar) -> WordNetwork:
             c = closure(targets)
             if c not in ids:
                 if len(subsets) >= MAX_DFA_STATES:
-                    raise GrammarError(f"the grammar's word network needs more than {MAX_DFA_STATES} states",
-                                       grammar.source)  # fmt: skip
+                    raise GrammarError(
+                        f"the grammar's word network needs more than {MAX_DFA_STATES} states", grammar.source
+                    )
                 ids[c] = len(subsets)
                 subsets.append(c)
             out[w] = ids[c]

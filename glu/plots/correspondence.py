@@ -16,9 +16,13 @@ from matplotlib.axes import Axes
 from glu.plots.style import ACTION_COLORS
 
 FEATURE_COLORS = {
-    "raw": "0.2", "centred": "#4C72B0", "centred+scaled": "#55A868", "centred+rotated": "#C44E52",
-    "centred+mirrored": "#8172B3", "centred+scaled+rotated+mirrored": "#DD8452",
-}  # fmt: skip
+    "raw": "0.2",
+    "centred": "#4C72B0",
+    "centred+scaled": "#55A868",
+    "centred+rotated": "#C44E52",
+    "centred+mirrored": "#8172B3",
+    "centred+scaled+rotated+mirrored": "#DD8452",
+}
 """Colour of each default feature set (others get grey)."""
 
 
@@ -62,8 +66,15 @@ def plot_accuracy_by_condition(
         g = s[s["features"] == f].set_index(["factor", "level"]).reindex(conditions)
         x = np.arange(len(conditions)) + (k - (len(features) - 1) / 2) * w
         err = np.vstack([g["accuracy"] - g["ci_low"], g["ci_high"] - g["accuracy"]])
-        ax.bar(x, g["accuracy"], width=w, color=_color(f), label=f,
-               yerr=None if np.isnan(err).all() else err, error_kw={"lw": 0.7, "capsize": 1.5})  # fmt: skip
+        ax.bar(
+            x,
+            g["accuracy"],
+            width=w,
+            color=_color(f),
+            label=f,
+            yerr=None if np.isnan(err).all() else err,
+            error_kw={"lw": 0.7, "capsize": 1.5},
+        )
     labels = [
         "reference\n(standing, 0°)" if c == reference else c[1].replace(", ", ",\n") for c in conditions
     ]
@@ -92,12 +103,22 @@ def plot_invariance_effects(ax: Axes, effects: pd.DataFrame, train: str) -> Axes
             v = m.loc[r, c]
             if v == v:
                 bold = bool(sure.get((r, c), False))
-                ax.text(j, i, f"{v:+.2f}", ha="center", va="center", fontsize=6.5,
-                        fontweight="bold" if bold else "normal", color="black")  # fmt: skip
+                ax.text(
+                    j,
+                    i,
+                    f"{v:+.2f}",
+                    ha="center",
+                    va="center",
+                    fontsize=6.5,
+                    fontweight="bold" if bold else "normal",
+                    color="black",
+                )
     ax.set_xticks(range(len(cols)), cols, rotation=35, ha="right", fontsize=7)
     ax.set_yticks(range(len(rows)), rows, fontsize=7)
-    ax.set_title(f"Δ accuracy when an invariance is added (trained on {train}; bold: 95 % interval excludes 0)",
-                 fontsize=8)  # fmt: skip
+    ax.set_title(
+        f"Δ accuracy when an invariance is added (trained on {train}; bold: 95 % interval excludes 0)",
+        fontsize=8,
+    )
     return ax
 
 
@@ -118,8 +139,14 @@ def plot_feature_settings(ax: Axes, grid: pd.DataFrame) -> Axes:
             x = i + (j - (len(settings) - 1) / 2) * 0.15 + np.linspace(-0.03, 0.03, len(h))
             for xi, (_, r) in zip(x, h.iterrows(), strict=True):
                 full = n_test > 0 and r["test_correct"] == n_test
-                ax.plot(xi, r["loso_accuracy"], markers[j % len(markers)], color=_color(f), ms=5,
-                        mfc=_color(f) if full else "none")  # fmt: skip
+                ax.plot(
+                    xi,
+                    r["loso_accuracy"],
+                    markers[j % len(markers)],
+                    color=_color(f),
+                    ms=5,
+                    mfc=_color(f) if full else "none",
+                )
         ax.hlines(g["loso_accuracy"].mean(), i - 0.4, i + 0.4, color=_color(f), lw=2)
     for j, st in enumerate(settings):
         ax.plot([], [], markers[j % len(markers)], color="0.3", mfc="none", label=st)

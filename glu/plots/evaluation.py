@@ -15,14 +15,25 @@ import pandas as pd
 from matplotlib.axes import Axes
 
 STRATEGY_COLORS = {
-    "gesture": "#8C8C8C", "network": "#937860", "hard": "#C44E52", "virtual": "#4C72B0",
-    "jeffrey": "#55A868", "product": "#DD8452", "true_action": "#222222",
-}  # fmt: skip
+    "gesture": "#8C8C8C",
+    "network": "#937860",
+    "hard": "#C44E52",
+    "virtual": "#4C72B0",
+    "jeffrey": "#55A868",
+    "product": "#DD8452",
+    "true_action": "#222222",
+}
 STRATEGY_STYLE = {"true_action": ":", "network": "--", "gesture": "--"}
 METRIC_LABEL = {
-    "accuracy": "accuracy", "log_loss": "log-loss (nats)", "brier": "Brier score", "ece": "ECE",
-    "verb": "verb right", "object": "object right", "effect": "effect right", "all": "sentence right",
-}  # fmt: skip
+    "accuracy": "accuracy",
+    "log_loss": "log-loss (nats)",
+    "brier": "Brier score",
+    "ece": "ECE",
+    "verb": "verb right",
+    "object": "object right",
+    "effect": "effect right",
+    "all": "sentence right",
+}
 
 
 def _pooled(frame: pd.DataFrame, noise: float | None, viewpoint: str, posterior: str) -> pd.DataFrame:
@@ -32,8 +43,16 @@ def _pooled(frame: pd.DataFrame, noise: float | None, viewpoint: str, posterior:
 
 def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str, jitter: float = 0.0) -> None:
     c = STRATEGY_COLORS.get(strategy, "black")
-    ax.plot(x + jitter, g.estimate, color=c, ls=STRATEGY_STYLE.get(strategy, "-"), marker="o", ms=3, lw=1.3,
-            label=strategy)  # fmt: skip
+    ax.plot(
+        x + jitter,
+        g.estimate,
+        color=c,
+        ls=STRATEGY_STYLE.get(strategy, "-"),
+        marker="o",
+        ms=3,
+        lw=1.3,
+        label=strategy,
+    )
     ax.fill_between(x + jitter, g.ci_low, g.ci_high, color=c, alpha=0.15, lw=0)
 
 
@@ -59,8 +78,14 @@ def plot_metric_vs_noise(
     posterior: str = "likelihood",
 ) -> Axes:
     """One metric of one target against the sensor noise (m), a line and a 95 % band per strategy."""
-    sel = results[(results.target == target) & (results.metric == metric) & np.isclose(results.fraction, fraction)
-                  & (results.viewpoint == viewpoint) & results.noise.notna() & (results.posterior == posterior)]  # fmt: skip
+    sel = results[
+        (results.target == target)
+        & (results.metric == metric)
+        & np.isclose(results.fraction, fraction)
+        & (results.viewpoint == viewpoint)
+        & results.noise.notna()
+        & (results.posterior == posterior)
+    ]
     _strategy_lines(ax, sel, "noise", metric, strategies)
     ax.set_xlabel("sensor noise (cm)")
     where = "all viewpoints" if viewpoint == "all" else viewpoint
@@ -189,16 +214,29 @@ def plot_by_viewpoint(
     posterior: str = "likelihood",
 ) -> Axes:
     """One metric per viewpoint (pooled over noise), grouped bars with 95 % intervals per strategy."""
-    sel = results[(results.target == target) & (results.metric == metric) & np.isclose(results.fraction, fraction)
-                  & results.noise.isna() & (results.viewpoint != "all") & (results.posterior == posterior)]  # fmt: skip
+    sel = results[
+        (results.target == target)
+        & (results.metric == metric)
+        & np.isclose(results.fraction, fraction)
+        & results.noise.isna()
+        & (results.viewpoint != "all")
+        & (results.posterior == posterior)
+    ]
     views = list(dict.fromkeys(sel.viewpoint))
     strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
     width = 0.8 / max(len(strats), 1)
     for k, strategy in enumerate(strats):
         g = sel[sel.strategy == strategy].set_index("viewpoint").loc[views]
         x = np.arange(len(views)) + (k - (len(strats) - 1) / 2) * width
-        ax.bar(x, g.estimate, width, color=STRATEGY_COLORS.get(strategy, "black"), label=strategy,
-               yerr=[g.estimate - g.ci_low, g.ci_high - g.estimate], error_kw={"lw": 0.8})  # fmt: skip
+        ax.bar(
+            x,
+            g.estimate,
+            width,
+            color=STRATEGY_COLORS.get(strategy, "black"),
+            label=strategy,
+            yerr=[g.estimate - g.ci_low, g.ci_high - g.estimate],
+            error_kw={"lw": 0.8},
+        )
     ax.set_xticks(np.arange(len(views)), views)
     ax.set_ylabel(METRIC_LABEL.get(metric, metric))
     ax.set_title(f"{target}: by viewpoint (all noise levels, {fraction:.0%} seen)", fontsize=9)

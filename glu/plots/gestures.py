@@ -133,9 +133,15 @@ def plot_segment_scores(ax: Axes, df: pd.DataFrame) -> Axes:
     best = per_frame.argmax(axis=1)
     for k, c in enumerate(cols):
         a = c.removeprefix("loglik_")
-        ax.bar(np.arange(len(df)) + (k - (len(cols) - 1) / 2) * w, per_frame[:, k], width=w,
-               color=ACTION_COLORS.get(a, "0.5"), label=a,
-               edgecolor=["black" if b == k else "none" for b in best], linewidth=1.5)  # fmt: skip
+        ax.bar(
+            np.arange(len(df)) + (k - (len(cols) - 1) / 2) * w,
+            per_frame[:, k],
+            width=w,
+            color=ACTION_COLORS.get(a, "0.5"),
+            label=a,
+            edgecolor=["black" if b == k else "none" for b in best],
+            linewidth=1.5,
+        )
     ax.set_xticks(np.arange(len(df)), labels, fontsize=7)
     ax.set_ylabel(r"$\frac{1}{T}\log L(G \mid A)$")
     ax.set_title("per-frame log-likelihood of each segment (black edge: the recognised action)", fontsize=9)

@@ -49,11 +49,11 @@ def plot_word_change(ax: Axes, df: pd.DataFrame) -> Axes:
     ev = df.attrs.get("parameters", {}).get("evidence") or {}
     given = ", ".join(f"{k}={v}" for k, v in ev.items()) or "no evidence"
     ax.set_title(
-        r"$p(w \mid F, E, A{=}tap) - p(w \mid F, E)$" + f"\nF, E = {given}" + (
-            " (as the original code)" if "Color" in ev else " (as the paper's text)"
-        ),
+        r"$p(w \mid F, E, A{=}tap) - p(w \mid F, E)$"
+        + f"\nF, E = {given}"
+        + (" (as the original code)" if "Color" in ev else " (as the paper's text)"),
         fontsize=9,
-    )  # fmt: skip
+    )
     return ax
 
 
@@ -110,8 +110,12 @@ def plot_effect_vs_soft_evidence(
             bottom += p
             if "p_original" in rows:  # the original model's stack: a mark at the top of each value's bar
                 bottom_original += rows["p_original"].to_numpy()
-                ax.plot(np.arange(len(cases)), bottom_original, **ORIGINAL_MARK,
-                        label="original model" if v == g["ObjVel"].iloc[0] else None)  # fmt: skip
+                ax.plot(
+                    np.arange(len(cases)),
+                    bottom_original,
+                    **ORIGINAL_MARK,
+                    label="original model" if v == g["ObjVel"].iloc[0] else None,
+                )
         ax.set_xticks(
             np.arange(len(cases)),
             [c.replace("no action evidence", "none") for c in cases],
@@ -185,8 +189,13 @@ def plot_soft_sweep(ax: Axes, df: pd.DataFrame) -> Axes:
     target = [c for c in df.columns if c not in ("evidence", "rule", "p_hmm_tap", "p")][0]
     styles = {"virtual": "-", "jeffrey": "--", "hard": ":", "product": "-"}
     for (rule, value), g in df.groupby(["rule", target], sort=False):
-        ax.plot(g["p_hmm_tap"], g["p"], styles.get(rule, "-"), color=VALUE_COLORS.get(value, ACTION_COLORS.get(value, "0.4")),
-                label=f"{value} ({rule})")  # fmt: skip
+        ax.plot(
+            g["p_hmm_tap"],
+            g["p"],
+            styles.get(rule, "-"),
+            color=VALUE_COLORS.get(value, ACTION_COLORS.get(value, "0.4")),
+            label=f"{value} ({rule})",
+        )
     ax.set_xlabel(r"$p_{HMM}(tap)$ (rest split equally)")
     ax.set_ylabel(rf"$p_{{comb}}({target})$")
     ax.set_ylim(0, 1)
@@ -232,8 +241,16 @@ def plot_anticipation(
     bottom_acc = np.zeros(len(frames))
     for v in dict.fromkeys(d["value"]):
         p = d[d["value"] == v].set_index("frame").loc[frames, "p"].to_numpy()
-        bottom.bar(frames, p, width=width, bottom=bottom_acc, color=VALUE_COLORS.get(v, ACTION_COLORS.get(v, "0.6")),
-                   label=v, edgecolor="0.2", linewidth=0.3)  # fmt: skip
+        bottom.bar(
+            frames,
+            p,
+            width=width,
+            bottom=bottom_acc,
+            color=VALUE_COLORS.get(v, ACTION_COLORS.get(v, "0.6")),
+            label=v,
+            edgecolor="0.2",
+            linewidth=0.3,
+        )
         bottom_acc += p
     bottom.set_ylim(0, 1)
     bottom.set_ylabel(rf"$p_{{comb}}({node})$")
@@ -251,8 +268,16 @@ def plot_fusion_on_gestures(ax: Axes, df: pd.DataFrame, value: str = "fast", tar
     hatches = {"hard": "", "virtual": "//", "jeffrey": ".."}
     for k, st in enumerate(strategies):
         g = d[d["strategy"] == st].set_index(["recording", "start", "end"]).loc[segs]
-        ax.bar(np.arange(len(segs)) + (k - (len(strategies) - 1) / 2) * w, g["p"], width=w, color="#66C2A5",
-               hatch=hatches.get(st, ""), edgecolor="0.2", linewidth=0.5, label=st)  # fmt: skip
+        ax.bar(
+            np.arange(len(segs)) + (k - (len(strategies) - 1) / 2) * w,
+            g["p"],
+            width=w,
+            color="#66C2A5",
+            hatch=hatches.get(st, ""),
+            edgecolor="0.2",
+            linewidth=0.5,
+            label=st,
+        )
     tops = (
         d.drop_duplicates(["recording", "start", "end"])
         .set_index(["recording", "start", "end"])

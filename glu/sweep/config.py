@@ -126,8 +126,10 @@ class SweepConfig:
             raise DataError("grid.viewpoints: give at least one viewpoint")
         unknown = [v for v in self.viewpoints if v not in self.views]
         if unknown:
-            raise DataError(f"grid.viewpoints: unknown viewpoint {unknown[0]!r}; allowed: {', '.join(self.views)} "
-                            "(define more in [views.NAME])")  # fmt: skip
+            raise DataError(
+                f"grid.viewpoints: unknown viewpoint {unknown[0]!r}; allowed: {', '.join(self.views)} "
+                "(define more in [views.NAME])"
+            )
         r = self.recognizer
         for name, lo in (("n_per_action", 2), ("n_states", 1), ("n_mix", 1), ("n_iter", 1)):
             _whole(f"recognizer.{name}", getattr(r, name), lo, 100_000)
@@ -165,14 +167,25 @@ class SweepConfig:
     def as_dict(self) -> dict[str, Any]:
         """The settings as plain data (JSON-ready), for result files and fingerprints."""
         d = {
-            "episodes": self.episodes, "seed": self.seed, "chunk_size": self.chunk_size,
-            "grid": {"noise": list(self.noise), "viewpoints": list(self.viewpoints), "posteriors": list(self.posteriors),
-                     "fractions": list(self.evaluation.fractions), "strategies": list(self.evaluation.strategies)},
+            "episodes": self.episodes,
+            "seed": self.seed,
+            "chunk_size": self.chunk_size,
+            "grid": {
+                "noise": list(self.noise),
+                "viewpoints": list(self.viewpoints),
+                "posteriors": list(self.posteriors),
+                "fractions": list(self.evaluation.fractions),
+                "strategies": list(self.evaluation.strategies),
+            },
             "views": {k: asdict(v) for k, v in self.views.items() if k in self.viewpoints},
-            "scenario": self.scenario.as_dict(), "gestures": asdict(self.gestures),
-            "recognizer": asdict(self.recognizer), "network": asdict(self.network),
-            "evaluation": {k: v for k, v in asdict(self.evaluation).items() if k not in ("fractions", "strategies")},
-        }  # fmt: skip
+            "scenario": self.scenario.as_dict(),
+            "gestures": asdict(self.gestures),
+            "recognizer": asdict(self.recognizer),
+            "network": asdict(self.network),
+            "evaluation": {
+                k: v for k, v in asdict(self.evaluation).items() if k not in ("fractions", "strategies")
+            },
+        }
         return _plain(d)
 
 
@@ -195,15 +208,32 @@ def _whole(name: str, v: Any, lo: int, hi: int) -> None:
 
 # ---------------------------------------------------------------------------------------------- files
 SECTIONS: dict[str, tuple[str, ...]] = {
-    "": ("episodes", "seed", "chunk_size", "grid", "views", "scenario", "gestures", "recognizer", "network",
-         "evaluation"),
+    "": (
+        "episodes",
+        "seed",
+        "chunk_size",
+        "grid",
+        "views",
+        "scenario",
+        "gestures",
+        "recognizer",
+        "network",
+        "evaluation",
+    ),
     "grid": ("noise", "viewpoints", "posteriors", "fractions", "strategies"),
     "gestures": tuple(f.name for f in fields(GestureSettings)),
     "recognizer": tuple(f.name for f in fields(RecognizerSettings)),
     "network": tuple(f.name for f in fields(NetworkSettings)),
-    "evaluation": ("action_evidence", "effect_evidence", "description_evidence", "bins", "bootstrap", "log_floor"),
+    "evaluation": (
+        "action_evidence",
+        "effect_evidence",
+        "description_evidence",
+        "bins",
+        "bootstrap",
+        "log_floor",
+    ),
     "views.*": ("yaw_deg", "mirror", "posture", "size"),
-}  # fmt: skip
+}
 """The keys each table of a sweep file may have."""
 
 
@@ -271,9 +301,15 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
     if "posteriors" in grid:
         extra["posteriors"] = _list("grid.posteriors", grid["posteriors"])
     return SweepConfig(
-        **top, **extra, views=views, scenario=scenario, gestures=gestures,
-        recognizer=RecognizerSettings(**rec), network=NetworkSettings(**net), evaluation=EvaluationSettings(**ev),
-    )  # fmt: skip
+        **top,
+        **extra,
+        views=views,
+        scenario=scenario,
+        gestures=gestures,
+        recognizer=RecognizerSettings(**rec),
+        network=NetworkSettings(**net),
+        evaluation=EvaluationSettings(**ev),
+    )
 
 
 def _resolve(p: str, base: Path | None) -> Path:

@@ -49,13 +49,12 @@ import pandas as pd
 
 from glu import __version__
 from glu.errors import DataError, GluError, ModelError
-from glu.experiments.common import tidy
 from glu.experiments.corpus import Condition
 from glu.experiments.evaluation import Evaluator
-from glu.experiments.intervals import HIGHER_IS_BETTER, metrics, paired_differences, reliability
-from glu.files import atomic_path, atomic_write_json, atomic_write_text
+from glu.files import atomic_write_json
 from glu.schema import ACTIONS
 from glu.sweep.config import SweepConfig
+from glu.sweep.tables import chunk_path, merge, write_chunk
 
 FORMAT = "glu-sweep"
 FORMAT_VERSION = 1
@@ -63,25 +62,16 @@ SYNCHRONOUS = "synchronous"
 ADDRESS = re.compile(r"^(tcp|tls|ws|wss)://[^\s/]+:\d+/?$")
 RECOGNIZER_SEED_OFFSET = 5000
 """The recogniser's training gestures are drawn with ``seed + 5000``, apart from the episodes."""
-EXPERIMENT = "corpus_evaluation"
-REFERENCES = ("true_action",)
-"""Strategies that are references (a ceiling), not candidates for "best" in the summary."""
-FILES = (
-    "sums.parquet",
-    "results.parquet",
-    "differences.parquet",
-    "reliability.parquet",
-    "summary.json",
-    "summary.csv",
-)
 
 
 def check_scheduler(address: str | None) -> str | None:
     """``address`` if it is None, ``synchronous`` or a Dask address ``tcp://host:port``; else DataError."""
     if address is None or address == SYNCHRONOUS or ADDRESS.match(address):
         return address
-    raise DataError(f"--scheduler {address!r}: expected a Dask scheduler address such as tcp://127.0.0.1:8786, "
-                    f"or '{SYNCHRONOUS}' to run in this process")  # fmt: skip
+    raise DataError(
+        f"--scheduler {address!r}: expected a Dask scheduler address such as tcp://127.0.0.1:8786, "
+        f"or '{SYNCHRONOUS}' to run in this process"
+    )
 
 
 @dataclass
@@ -110,8 +100,10 @@ def prepare_world(config: SweepConfig) -> tuple[Any, str]:
     source = resolve_data(net.data)
     table = load_experiments(source, net.words)
     bn = learn_bn(table, unseen_words=net.unseen_words)
-    label = (f"{source.describe()}: network learned from {len(table)} experiments (words={net.words}, "
-             f"unseen word rows {net.unseen_words}); gestures from glu's synthetic generator")  # fmt: skip
+    label = (
+        f"{source.describe()}: network learned from {len(table)} experiments (words={net.words}, "
+        f"unseen word rows {net.unseen_words}); gestures from glu's synthetic generator"
+    )
     return InferenceEngine(bn), label
 
 
@@ -128,24 +120,40 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
             f"the recogniser has no model for {', '.join(missing)}; it needs {', '.join(ACTIONS)}"
         )
     evaluator = Evaluator(
-        engine, BatchScorer([recognizer.models[a] for a in ACTIONS]), config.evaluation,
-        config.seed, config.chunk_size, config.scenario, config.gestures,
+        engine,
+        BatchScorer([recognizer.models[a] for a in ACTIONS]),
+        config.evaluation,
+        config.seed,
+        config.chunk_size,
+        config.scenario,
+        config.gestures,
         {v: config.views[v] for v in config.viewpoints},
-    )  # fmt: skip
+    )
     # what the numbers depend on: the settings (where the data and the recogniser file are does not
     # matter, what they hold does), the data, the network, the models, glu's version
     settings = config.as_dict()
     settings["network"]["data"] = settings["recognizer"]["file"] = None
     digest = hashlib.sha256()
-    for part in (json.dumps(settings, sort_keys=True), label, json.dumps(bn.to_dict()),
-                 json.dumps(recognizer.to_dict()["models"]), __version__):  # fmt: skip
+    for part in (
+        json.dumps(settings, sort_keys=True),
+        label,
+        json.dumps(bn.to_dict()),
+        json.dumps(recognizer.to_dict()["models"]),
+        __version__,
+    ):
         digest.update(part.encode())
     provenance = {
-        "format": FORMAT, "version": FORMAT_VERSION, "fingerprint": digest.hexdigest()[:32],
-        "glu": __version__, "data_source": label, "settings": _public(config.as_dict()),
-        "conditions": [asdict(c) for c in config.conditions], "episodes_per_condition": config.per_condition, "episodes": config.n_episodes,
+        "format": FORMAT,
+        "version": FORMAT_VERSION,
+        "fingerprint": digest.hexdigest()[:32],
+        "glu": __version__,
+        "data_source": label,
+        "settings": _public(config.as_dict()),
+        "conditions": [asdict(c) for c in config.conditions],
+        "episodes_per_condition": config.per_condition,
+        "episodes": config.n_episodes,
         "statistics": len(evaluator.columns),
-    }  # fmt: skip
+    }
     return evaluator, provenance
 
 
@@ -182,15 +190,23 @@ def _recognizer(config: SweepConfig, out: Path, log: Callable[[str], None]) -> A
     by_action: dict[str, list[np.ndarray]] = {}
     for s in corpus:
         by_action.setdefault(s.action, []).append(s.xyz)
-    rec = train_recognizer(by_action, r.n_states, r.n_mix, n_iter=r.n_iter, seed=config.seed, warn=False,
-                           meta={**recipe, "data_source": corpus.description})  # fmt: skip
+    rec = train_recognizer(
+        by_action,
+        r.n_states,
+        r.n_mix,
+        n_iter=r.n_iter,
+        seed=config.seed,
+        warn=False,
+        meta={**recipe, "data_source": corpus.description},
+    )
     rec.save(saved)
     return rec
 
 
 # ------------------------------------------------------------------------------------------ the tasks
-def compute_chunk(evaluator: Evaluator, indices: tuple[int, ...], conditions: tuple[Condition, ...],
-                  chunk: int, n: int) -> tuple:  # fmt: skip
+def compute_chunk(
+    evaluator: Evaluator, indices: tuple[int, ...], conditions: tuple[Condition, ...], chunk: int, n: int
+) -> tuple:
     """One task (run on a worker): one chunk of episodes, simulated once and scored for each of
     ``conditions`` (the same noise and viewpoint, other posteriors), on one BLAS thread."""
     import scipy.ndimage  # noqa: F401 - loaded before the limit, which binds only libraries already loaded
@@ -200,31 +216,6 @@ def compute_chunk(evaluator: Evaluator, indices: tuple[int, ...], conditions: tu
     with threadpool_limits(1):
         sums = evaluator.run_chunks(conditions, chunk, n)
     return indices, chunk, n, sums, time.process_time() - t0
-
-
-def _chunk_path(out: Path, index: int, chunk: int) -> Path:
-    return out / "chunks" / f"c{index:03d}-{chunk:06d}.npz"
-
-
-def _write_chunk(out: Path, fingerprint: str, index: int, chunk: int, n: int, sums: np.ndarray) -> None:
-    path = _chunk_path(out, index, chunk)
-    with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as f:
-        np.savez(f, estimate=sums[0], replicates=sums[1:].astype(np.float32),
-                 meta=np.array(json.dumps({"fingerprint": fingerprint, "condition": index, "chunk": chunk, "n": n})))  # fmt: skip
-
-
-def _read_chunk(path: Path, fingerprint: str) -> tuple[np.ndarray, np.ndarray]:
-    try:
-        with np.load(path) as z:
-            meta = json.loads(str(z["meta"]))
-            estimate, replicates = z["estimate"], z["replicates"]
-    except (OSError, ValueError, KeyError) as e:
-        raise DataError(f"{path}: unreadable chunk ({e}); delete it and run the sweep again") from None
-    if meta.get("fingerprint") != fingerprint:
-        raise DataError(
-            f"{path}: this chunk belongs to another sweep; delete it or use another output folder"
-        )
-    return estimate, replicates
 
 
 # ------------------------------------------------------------------------------------------ the sweep
@@ -266,8 +257,10 @@ def run_sweep(
             except (OSError, ValueError):
                 old = {}
             if not isinstance(old, dict) or old.get("fingerprint") != provenance["fingerprint"]:
-                raise DataError(f"{out} holds a sweep with other settings or data (sweep.json); "
-                                "use another output folder or delete that one")  # fmt: skip
+                raise DataError(
+                    f"{out} holds a sweep with other settings or data (sweep.json); "
+                    "use another output folder or delete that one"
+                )
         else:
             atomic_write_json(sweep_file, provenance)
     except BaseException:
@@ -287,7 +280,7 @@ def run_sweep(
                 (i, c) for i, c in enumerate(conditions) if (c.noise, c.viewpoint) == (float(noise), view)
             ]
             for k, n in chunks:
-                todo_here = [(i, c) for i, c in group if not _chunk_path(out, i, k).is_file()]
+                todo_here = [(i, c) for i, c in group if not chunk_path(out, i, k).is_file()]
                 if todo_here:
                     tasks.append((tuple(i for i, _ in todo_here), tuple(c for _, c in todo_here), k, n))
                     missing += len(todo_here)
@@ -295,8 +288,10 @@ def run_sweep(
     todo = tasks if max_chunks is None else tasks[: max(int(max_chunks), 0)]
     reused = total - missing
     where = {None: "a LocalCluster", SYNCHRONOUS: "this process"}.get(scheduler, scheduler)
-    log(f"glu evaluate: {config.n_episodes} episodes, {len(conditions)} conditions, {total} chunks "
-        f"({reused} already done), on {where}; {provenance['data_source']}")  # fmt: skip
+    log(
+        f"glu evaluate: {config.n_episodes} episodes, {len(conditions)} conditions, {total} chunks "
+        f"({reused} already done), on {where}; {provenance['data_source']}"
+    )
     cpu = _run_tasks(
         evaluator, todo, out, provenance["fingerprint"], scheduler, workers, progress, reused, total
     )
@@ -312,7 +307,7 @@ def run_sweep(
 def _save(out: Path, fingerprint: str, result: tuple, bar: Any) -> float:
     indices, chunk, n, sums, cpu = result
     for index, s in zip(indices, sums, strict=True):
-        _write_chunk(out, fingerprint, index, chunk, n, s)
+        write_chunk(out, fingerprint, index, chunk, n, s)
         bar.update(1)
     return cpu
 
@@ -320,8 +315,15 @@ def _save(out: Path, fingerprint: str, result: tuple, bar: Any) -> float:
 def _run_tasks(evaluator, todo, out, fingerprint, scheduler, workers, progress, done, total) -> float:
     from tqdm import tqdm
 
-    bar = tqdm(total=total, initial=done, unit="chunk", desc="glu evaluate", disable=None if progress is None else not progress,
-               file=sys.stderr, dynamic_ncols=True)  # fmt: skip
+    bar = tqdm(
+        total=total,
+        initial=done,
+        unit="chunk",
+        desc="glu evaluate",
+        disable=None if progress is None else not progress,
+        file=sys.stderr,
+        dynamic_ncols=True,
+    )
     try:
         if not todo:
             return 0.0
@@ -361,8 +363,13 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
             from glu.execution import available_cores
 
             n = workers or available_cores()
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                                   silence_logs=logging.ERROR)  # fmt: skip
+            cluster = LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=":0",
+                silence_logs=logging.ERROR,
+            )
             client = Client(cluster)
         else:
             try:
@@ -376,9 +383,16 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
     try:
         cpu = 0.0
         shared = client.scatter(evaluator, broadcast=True)
-        futures = [client.submit(compute_chunk, shared, *t, pure=False,
-                                 key=f"glu-chunk-{'-'.join(map(str, t[0]))}-{t[2]}-{fingerprint[:8]}")
-                   for t in todo]  # fmt: skip
+        futures = [
+            client.submit(
+                compute_chunk,
+                shared,
+                *t,
+                pure=False,
+                key=f"glu-chunk-{'-'.join(map(str, t[0]))}-{t[2]}-{fingerprint[:8]}",
+            )
+            for t in todo
+        ]
         for fut in as_completed(futures):
             try:
                 result = fut.result()
@@ -387,110 +401,13 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
             except Exception as e:
                 for f in futures:
                     f.cancel()
-                raise RuntimeError(f"a sweep task failed on the cluster ({type(e).__name__}: {e}); "
-                                   "do the workers have glu installed, in the same version?") from e  # fmt: skip
+                raise RuntimeError(
+                    f"a sweep task failed on the cluster ({type(e).__name__}: {e}); "
+                    "do the workers have glu installed, in the same version?"
+                ) from e
             cpu += _save(out, fingerprint, result, bar)
         return cpu
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
-
-
-# ------------------------------------------------------------------------------------------ merging
-def merge(out: Path, config: SweepConfig, evaluator: Evaluator, provenance: dict[str, Any]) -> tuple:
-    """Merge the chunks (in index order) and write every table of the output folder."""
-    from glu.experiments.corpus import chunk_ranges
-
-    cols = evaluator.columns
-    K, B = len(cols), evaluator.settings.bootstrap
-    frames = []
-    for i, c in enumerate(config.conditions):
-        total = np.zeros((B + 1, K))
-        for k, _ in chunk_ranges(config.per_condition, config.chunk_size):
-            est, reps = _read_chunk(_chunk_path(out, i, k), provenance["fingerprint"])
-            total[0] += est
-            total[1:] += reps.astype(np.float64)
-        f = pd.DataFrame(total, columns=[f"s{j}" for j in range(K)])
-        f.insert(0, "replicate", np.arange(B + 1))
-        f.insert(0, "posterior", c.posterior)
-        f.insert(0, "viewpoint", c.viewpoint)
-        f.insert(0, "noise", c.noise)
-        frames.append(f)
-    sums = pd.concat(frames, ignore_index=True)
-    # every grouping keeps the posterior: pooling two ways of reading the HMMs would mean nothing
-    groups = {("noise", "viewpoint"): {}, ("noise",): {"viewpoint": "all"}, ("viewpoint",): {"noise": np.nan},
-              (): {"noise": np.nan, "viewpoint": "all"}}  # fmt: skip
-    order = ["noise", "viewpoint", "posterior"]
-
-    def pooled(fn, by_all=True):
-        parts = []
-        for by, fill in groups.items():
-            if not by_all and by not in (("noise", "viewpoint"), ()):
-                continue
-            part = fn(sums, cols, [*by, "posterior"]).assign(**fill)
-            parts.append(part[order + [c for c in part.columns if c not in order]])
-        return pd.concat(parts, ignore_index=True)
-
-    table = pooled(metrics)
-    diffs = pooled(paired_differences, by_all=False)
-    rel = pooled(reliability, by_all=False)
-    params = provenance["settings"]
-    source = provenance["data_source"]
-    for df, name in ((table, EXPERIMENT), (diffs, "corpus_differences"), (rel, "corpus_reliability")):
-        tidy(df, name, source, **params)
-    summary = summarize(table, diffs, provenance)
-    _write_parquet(out / "sums.parquet", sums)
-    _write_parquet(out / "results.parquet", table)
-    _write_parquet(out / "differences.parquet", diffs)
-    _write_parquet(out / "reliability.parquet", rel)
-    atomic_write_json(out / "summary.json", summary)
-    head = pd.DataFrame(summary["overall"])
-    atomic_write_text(out / "summary.csv", head.to_csv(index=False, float_format="%.6g", lineterminator="\n"))
-    return table, diffs, rel, summary
-
-
-def _write_parquet(path: Path, df: pd.DataFrame) -> None:
-    with atomic_path(path, suffix=".parquet") as tmp:
-        df.to_parquet(tmp, index=False)
-
-
-def summarize(table: pd.DataFrame, diffs: pd.DataFrame, provenance: dict[str, Any]) -> dict[str, Any]:
-    """The tidy summary: overall metrics at the full gesture, and per posterior, target and metric the best
-    strategy (all strategies tied with it; the reference ``true_action`` left out) and those it beats with
-    95 % confidence."""
-    full = max(table["fraction"].dropna()) if table["fraction"].notna().any() else np.nan
-    overall = table[(table.viewpoint == "all") & table.noise.isna() & (table.fraction == full)]
-    rows = [
-        {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in r.items() if k not in ("noise", "viewpoint")}
-        for r in overall.to_dict("records")
-    ]  # fmt: skip
-    best = []
-    d_all = diffs[(diffs.viewpoint == "all") & diffs.noise.isna() & (diffs.fraction == full)]
-    for (posterior, target, metric), g in overall.groupby(["posterior", "target", "metric"], sort=False):
-        up = HIGHER_IS_BETTER.get(metric, True)
-        g = g[~g.strategy.isin(REFERENCES)]  # the true action is a ceiling, not a strategy
-        if g.empty:
-            continue
-        top = g.sort_values("estimate", ascending=not up).iloc[0]
-        tied = sorted(g.strategy[np.isclose(g.estimate, top.estimate, rtol=0, atol=1e-12)])
-        d = d_all[(d_all.posterior == posterior) & (d_all.target == target) & (d_all.metric == metric)]
-        beats = []
-        for p in d.itertuples():
-            if top.strategy not in (p.strategy, p.baseline):
-                continue
-            other, sign = (p.baseline, 1) if p.strategy == top.strategy else (p.strategy, -1)
-            if other in REFERENCES:
-                continue
-            lo, hi = sorted((sign * p.ci_low, sign * p.ci_high))
-            if (lo > 0) if up else (hi < 0):
-                beats.append(other)
-        best.append({"posterior": posterior, "target": target, "metric": metric, "fraction": full, "best": tied,
-                     "estimate": float(top.estimate), "ci_low": float(top.ci_low), "ci_high": float(top.ci_high),
-                     "significantly_better_than": sorted(beats)})  # fmt: skip
-    return {
-        "experiment": EXPERIMENT, "data_source": provenance["data_source"], "fingerprint": provenance["fingerprint"],
-        "episodes": provenance["episodes"],
-        "conditions": provenance["conditions"], "parameters": provenance["settings"],
-        "files": list(FILES), "overall": rows, "best": best,
-    }  # fmt: skip
