@@ -18,7 +18,8 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from glu.files import atomic_path
+from glu.files import atomic_path, atomic_write_text
+from glu.plots.overlap import CHECK_ENV, figure_problems
 
 matplotlib.rcParams["svg.hashsalt"] = "glu"
 DPI = 150
@@ -30,9 +31,16 @@ ORIGINAL_MARK = {"marker": "_", "color": "black", "markersize": 14, "markeredgew
 
 
 def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
-    """Save ``fig`` as ``path.<fmt>`` for each format, deterministically; returns the files written."""
+    """Save ``fig`` as ``path.<fmt>`` for each format, deterministically; returns the files written.
+
+    With the environment variable ``GLU_FIGURE_CHECK`` naming a folder, the figure's readability problems
+    (:func:`glu.plots.overlap.figure_problems`, one per line) are written there first, to ``<name>.txt``.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    check = os.environ.get(CHECK_ENV)
+    if check:  # the test suite's readability check (glu.plots.overlap), before saving
+        atomic_write_text(Path(check) / f"{path.name}.txt", "".join(f"{p}\n" for p in figure_problems(fig)))
     out = []
     for fmt in formats:
         target = path.with_suffix(f".{fmt}")
