@@ -85,7 +85,7 @@ class Outputs:
 
     def footer(self, source: str | None = None) -> str:
         """What every output of this run names: its data, and its non-default parameters."""
-        text = f"data: {source or self.data_label}"
+        text = source or self.data_label  # names its origin ("real data: …", "synthetic data …")
         return text + (f" · {self.notebook} with {self.parameters_label}" if self.parameters else "")
 
     def figure(self, fig: Any, name: str, source: str | None = None) -> list[Path]:

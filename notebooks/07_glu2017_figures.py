@@ -60,12 +60,14 @@ effect
 # both versions are computed.
 
 # %%
+changes = {}
 for variant in ("text", "code"):
-    change = fusion.word_probability_change(bn, variant, original, threshold=threshold)
-    out.table(change, f"glu2017_word_change_{variant}", evidence=variant)
-    fig, (ax,) = plots.new_figure(1, width=7)
-    plots.plot_word_change(ax, change)
-    out.figure(fig, f"glu2017_word_change_{variant}")
+    changes[variant] = fusion.word_probability_change(bn, variant, original, threshold=threshold)
+    out.table(changes[variant], f"glu2017_word_change_{variant}", evidence=variant)
+fig, (ax,) = plots.new_figure(1, width=7, height=3.6)
+plots.plot_word_change(ax, changes["text"], other=changes["code"])
+out.figure(fig, "glu2017_word_change")
+change = changes["code"]
 change[change.shown][["word", "p_without", "p_with", "delta"]]
 
 # %% [markdown]

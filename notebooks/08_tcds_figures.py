@@ -45,8 +45,6 @@ quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-import matplotlib.pyplot as plt
-
 from glu import plots, recording
 from glu.bn import BayesNet, InferenceEngine, learn_bn
 from glu.data import load_experiments
@@ -106,10 +104,9 @@ sequences = gesture_sequences(
 banks["glu"] = gestures.train_on(sequences, seed=seed, **train)
 banks["mixsplit"] = gestures.train_on(sequences, seed=seed, recipe="mixsplit", **train)
 
-runs = {}
+runs, published = {}, {}
 for name, recognizer in banks.items():
-    fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), sharex="col")
-    for j, case in enumerate(anticipation.CASES):
+    for case in anticipation.CASES:
         trajectory = anticipation.case_trajectory(out.source, case, seed=seed)
         run = anticipation.effect_anticipation(
             recognizer,
@@ -140,7 +137,7 @@ for name, recognizer in banks.items():
             note=out.footer(),
         )
         if name == "original":  # the published Fig. 5: curves, bars and caption
-            versus = anticipation.published_comparison(run)
+            published[case] = versus = anticipation.published_comparison(run)
             out.table(
                 versus, f"tcds_anticipation_{case}_published", reference="TCDS 2020 Fig. 5 (published EPS)"
             )
@@ -149,11 +146,16 @@ for name, recognizer in banks.items():
                 f"resolution; the caption {'is' if versus.attrs['parameters']['same_caption'] else 'is not'} "
                 "the paper's"
             )
-        plots.plot_anticipation(axes[:, j], run.curves(), run.predictions())
         changes = "; ".join(
             f"{v} from t = {t} (frame {f}, p {p:.2f})" for t, f, v, p in run.prediction_changes()
         )
         print(f"{case}, {name} HMMs: predicted ObjVel {changes}; “{run.description}”")
+# glu's and the originals' recipes share one y axis, to be compared by eye; the original HMMs beside the paper
+ylim = plots.shared_ylim([r.curves() for (_, name), r in runs.items() if name != "original"])
+for name in banks:
+    cases = [(runs[case, name].curves(), runs[case, name].predictions()) for case in anticipation.CASES]
+    paper = [published.get(case) for case in anticipation.CASES] if name == "original" else None
+    fig = plots.anticipation_figure(cases, paper, ylim=None if name == "original" else ylim)
     out.figure(fig, f"tcds_anticipation_{name}")
 
 # %% [markdown]

@@ -108,11 +108,7 @@ and_but = ex.and_but_probabilities(engine, compare=out.source.is_real)
 lists = ex.and_but_nbest(engine, nbest, score=score, candidates=samples)
 out.table(and_but, "verbal_and_but_probabilities", reference="TCDS 2020 Fig. 7 bars (published EPS)")
 out.table(lists, "verbal_and_but_nbest")
-fig, axes = plots.new_figure(3, width=4.6, height=3.6)
-plots.plot_and_but(axes[0], and_but)
-for ax, objvel in zip(axes[1:], ex.EVIDENCE_AND_BUT, strict=True):
-    sub = lists[lists["ObjVel"] == objvel]
-    plots.plot_nbest(ax, sub, title=sub["evidence"].iloc[0], highlight="but", score=score)
+fig = plots.and_but_figure(and_but, lists, score=score)
 out.figure(fig, "verbal_and_but")
 and_but
 
@@ -150,15 +146,15 @@ ev = ex.PUBLISHED_LISTS["fig7a"]
 probs = word_probabilities(engine, ev)
 first = trials[trials["figure"] == "fig7a"].iloc[0]
 drawn = sample_sentences(grammar, n_samples, int(first["seed"]))
-fig, (ax,) = plots.new_figure(1, width=6, height=3.4)
+fig, (ax,) = plots.new_figure(1, width=6.4, height=3.4)
 plots.plot_sampling(
     ax,
     all_scores(net, probs, "original"),
     score_sentences(drawn, probs, "original"),
     first["exact_score"],
     score="original",
+    title=f"{', '.join(f'{k}={v}' for k, v in ev.items())}: one sample of {n_samples:,}",
 )
-ax.set_title(f"{', '.join(f'{k}={v}' for k, v in ev.items())}: one sample of {n_samples:,}", fontsize=9)
 out.figure(fig, "verbal_sampling_vs_exact")
 per_set = trials.groupby("figure", sort=False).agg(
     trials=("seed", "size"),

@@ -103,51 +103,21 @@ overall.pivot_table(
 # bootstrap interval (`glu.experiments.intervals.LEVEL`).
 
 # %%
-fig, axes = plots.new_figure(4, width=3.7)
-for k, post in enumerate(posteriors[:2]):
-    plots.plot_metric_vs_noise(axes[k], table, "action", "accuracy", full, posterior=post)
-    plots.plot_metric_vs_noise(axes[2 + k], table, "effect", "log_loss", full, posterior=post)
-    axes[k].set_title(f"action accuracy, p_HMM: {post}", fontsize=9)
-    axes[2 + k].set_title(f"effect log-loss, p_HMM: {post}", fontsize=9)
-axes[0].legend(fontsize=7)
+fig = plots.strategies_vs_noise_figure(table, posteriors[:2], full)
 out.figure(fig, "corpus_strategies_vs_noise", source=result.summary["data_source"])
 
 # %% [markdown]
 # ## Early recognition: how much of the gesture is needed
 
 # %%
-fig, axes = plots.new_figure(4, width=3.7)
-for k, post in enumerate(posteriors[:2]):
-    plots.plot_early_recognition(axes[k], table, "action", "accuracy", posterior=post)
-    plots.plot_early_recognition(axes[2 + k], table, "effect", "log_loss", posterior=post)
-    axes[k].set_title(f"action, p_HMM: {post}", fontsize=9)
-    axes[2 + k].set_title(f"effect log-loss, p_HMM: {post}", fontsize=9)
-axes[0].legend(fontsize=7)
+fig = plots.early_recognition_figure(table, posteriors[:2])
 out.figure(fig, "corpus_early_recognition", source=result.summary["data_source"])
 
 # %% [markdown]
 # ## Calibration of the anticipated effect, and the viewpoints
 
 # %%
-shown = ["network", "hard", "virtual", "jeffrey", "true_action"]
-fig, axes = plots.new_figure(4, width=3.7)
-for k, post in enumerate(posteriors[:2]):
-    plots.plot_reliability(axes[k], rel, full, strategies=shown, posterior=post)
-    axes[k].set_title(f"effect calibration, p_HMM: {post}", fontsize=9)
-plots.plot_metric_vs_noise(axes[2], table, "effect", "ece", full, posterior=posteriors[-1])
-axes[2].set_title(f"effect ECE, p_HMM: {posteriors[-1]}", fontsize=9)
-plots.plot_by_viewpoint(
-    axes[3],
-    table,
-    "action",
-    "accuracy",
-    full,
-    strategies=["gesture", "network", "hard", "product"],
-    posterior=posteriors[-1],
-)
-axes[3].set_title(f"action accuracy by viewpoint, p_HMM: {posteriors[-1]}", fontsize=9)
-axes[0].legend(fontsize=7)
-axes[3].legend(fontsize=7)
+fig = plots.calibration_figure(rel, table, posteriors, full)
 out.figure(fig, "corpus_calibration", source=result.summary["data_source"])
 
 # %% [markdown]
@@ -165,10 +135,7 @@ pairs = [
     ("description", "all", "virtual", "hard"),
     ("description", "all", "jeffrey", "virtual"),
 ]
-fig, axes = plots.new_figure(len(posteriors[:2]), width=6.0, height=3.6)
-for ax, post in zip(axes, posteriors[:2], strict=False):
-    plots.plot_differences(ax, diffs, pairs, full, posterior=post)
-    ax.set_title(f"paired differences, p_HMM: {post}", fontsize=9)
+fig = plots.differences_figure(diffs, pairs, posteriors[:2], full)
 out.figure(fig, "corpus_differences", source=result.summary["data_source"])
 lines = [
     f"p_HMM {b['posterior']}, {b['target']} {b['metric']}: {', '.join(b['best'])} {b['estimate']:.3f} "

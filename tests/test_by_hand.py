@@ -131,7 +131,7 @@ def test_glu_run_runs_one_notebook_into_its_out_folder(tmp_path):
     assert res.returncode == 0, res.stderr
     assert _snapshot() == before
     assert (tmp_path / "notebooks" / "07_glu2017_figures.ipynb").is_file()
-    svg = (tmp_path / "figures" / "glu2017_word_change_text.svg").read_text()
+    svg = (tmp_path / "figures" / "glu2017_word_change.svg").read_text()
     assert "07_glu2017_figures with threshold=0.05" in svg
     doc = json.loads((tmp_path / "results" / "glu2017_word_change_text.json").read_text())
     assert doc["meta"]["notebook_parameters"] == {"threshold": 0.05}

@@ -137,3 +137,27 @@ def test_the_check_is_written_beside_the_figures_when_asked(tmp_path, monkeypatc
     save_figure(f, tmp_path / "figures" / "crowded")
     report = (tmp_path / "check" / "crowded.txt").read_text()
     assert "text on text: 'one label' and 'two labels'" in report
+
+
+def test_a_value_label_inside_its_bar_passes_and_one_across_its_edge_is_caught(fig):
+    f, ax = fig
+    ax.bar([0, 1], [0.8, 0.05], width=0.6)
+    ax.set_ylim(0, 1)
+    ax.text(0, 0.4, "0.80", ha="center", va="center")  # inside the bar
+    assert figure_problems(f) == []
+    ax.text(1, 0.05, "0.05", ha="center", va="center")  # across the top of the short bar
+    assert any("label on data: '0.05'" in p for p in figure_problems(f))
+
+
+def test_the_figure_is_checked_as_saved_tightly_cropped(fig):
+    """A legend at the figure's bottom edge moves, in the cropped file, onto a footer written below it."""
+    from glu.plots.style import stamp
+
+    f, ax = fig
+    ax.plot([0, 1], [0, 1], label="a line")
+    f.legend(loc="lower center", ncols=1)
+    f.subplots_adjust(bottom=0.3)
+    assert figure_problems(f) == []
+    stamp(f, "the data this figure was drawn from")
+    problems = figure_problems(f)
+    assert any("the data this figure" in p and "legend" in p for p in problems), problems

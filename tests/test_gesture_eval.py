@@ -13,6 +13,7 @@ from glu.experiments.gestures import (
     cross_validate,
     leave_one_out,
     stratified_folds,
+    wilson_interval,
 )
 from glu.gestures.corpus import LabelledSequence, synthetic_corpus
 
@@ -39,6 +40,16 @@ def test_confusion_matrix_counts():
     assert cm.loc["tap", "tap"] == 1 and cm.loc["tap", "grasp"] == 1 and cm.loc["touch", "tap"] == 1
     assert cm.loc["touch", "touch"] == 0 and cm.values.sum() == 4
     assert accuracy(pred) == 0.5
+
+
+@pytest.mark.parametrize(("k", "n"), [(59, 60), (0, 20), (20, 20), (11, 20)])
+def test_wilson_interval_is_the_closed_form(k, n):
+    z = 1.959963984540054  # the 97.5 % quantile of the standard normal
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z / (1 + z * z / n) * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    np.testing.assert_allclose(wilson_interval(k, n), (centre - half, centre + half), atol=1e-12)
+    assert all(np.isnan(wilson_interval(0, 0)))
 
 
 def test_cross_validation_predicts_every_sequence_once():

@@ -111,7 +111,7 @@ def correspondence_tables() -> dict:
                 ("posture", "seated", 0.0),
                 ("sensor noise", "3 cm", 0.0),
                 ("sensor noise", "6 cm", 0.0),
-                ("combined", "seated, mirrored, 90°, 1.2", 90.0),
+                ("combined", "seated, mirrored, 90°, body size 1.2", 90.0),
             ]
             if train == "robot":
                 rows.append(("performer", "the robot itself", 0.0))

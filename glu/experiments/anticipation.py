@@ -159,7 +159,10 @@ class AnticipationRun:
         return self.loglik / np.arange(1, len(self.loglik) + 1)[:, None]
 
     def curves(self) -> pd.DataFrame:
-        """Tidy per-frame series: columns ``case, models, frame, t, action, loglik_per_frame, p_hmm``."""
+        """Tidy per-frame series: columns ``case, models, frame, t, seconds, action, loglik_per_frame, p_hmm``.
+
+        ``seconds``: the frame's time since the segment's first frame.
+        """
         T, A = self.loglik.shape
         df = pd.DataFrame(
             {
@@ -167,6 +170,7 @@ class AnticipationRun:
                 "models": self.models,
                 "frame": np.repeat(self.frames, A),
                 "t": np.repeat(np.arange(1, T + 1), A),
+                "seconds": np.repeat(self.seconds, A),
                 "action": np.tile(self.actions, T),
                 "loglik_per_frame": self.loglik_per_frame.ravel(),
                 "p_hmm": self.p_hmm.ravel(),

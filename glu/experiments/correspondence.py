@@ -112,7 +112,7 @@ def default_conditions(
     conds += [Condition("sensor noise", f"{n * 100:g} cm", base, float(n)) for n in noises]
     if combined:
         view = View(yaw_deg=90.0, mirror=True, posture="seated", size=1.2, normalise_body=normalise_body)
-        conds.append(Condition("combined", "seated, mirrored, 90°, 1.2", view))
+        conds.append(Condition("combined", "seated, mirrored, 90°, body size 1.2", view))
     if robot:
         view = View(performer="robot", normalise_body=normalise_body)
         conds.append(Condition("performer", "the robot itself", view, ROBOT_NOISE, 0.0, 0.0))

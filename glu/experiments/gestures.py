@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from scipy.stats import binomtest
 
 from glu.data.source import DataSource
 from glu.errors import DataError
@@ -153,6 +154,14 @@ def accuracy(predictions: pd.DataFrame) -> float:
     return float(predictions["correct"].mean()) if len(predictions) else float("nan")
 
 
+def wilson_interval(correct: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """The Wilson score interval of a proportion: ``correct`` successes of ``n`` (NaN, NaN if n = 0)."""
+    if n == 0:
+        return float("nan"), float("nan")
+    ci = binomtest(int(correct), int(n)).proportion_ci(confidence_level=confidence, method="wilson")
+    return float(ci.low), float(ci.high)
+
+
 def accuracy_vs_noise(
     noise_levels: Sequence[float] = (0.0, 0.01, 0.02, 0.04, 0.08),
     n_per_action: int = 20,
@@ -163,8 +172,9 @@ def accuracy_vs_noise(
 ) -> pd.DataFrame:
     """k-fold accuracy on synthetic corpora with growing sensor noise (metres, std on every joint).
 
-    One row per noise level: noise_m, n_sequences, k, accuracy, and accuracy_<action> per action.
-    The corpora share the seed, so only the noise differs between rows.
+    One row per noise level: noise_m, n_sequences, k, accuracy with its 95 % Wilson interval (ci_low,
+    ci_high), and accuracy_<action>, ci_low_<action>, ci_high_<action> per action. The corpora share the
+    seed, so only the noise differs between rows.
     """
     corpora = [synthetic_corpus(n_per_action, seed, actions=actions, noise=noise) for noise in noise_levels]
     splits = [_folds(c, k, seed) for c in corpora]
@@ -177,8 +187,11 @@ def accuracy_vs_noise(
     for noise, corpus, sp in zip(noise_levels, corpora, splits, strict=True):
         pred = _cv_frame(corpus, sp, [next(recs) for _ in sp], k, seed, train)
         row = {"noise_m": float(noise), "n_sequences": len(pred), "k": k, "accuracy": accuracy(pred)}
+        row["ci_low"], row["ci_high"] = wilson_interval(int(pred["correct"].sum()), len(pred))
         for a in actions:
-            row[f"accuracy_{a}"] = accuracy(pred[pred["action"] == a])
+            mine = pred[pred["action"] == a]
+            row[f"accuracy_{a}"] = accuracy(mine)
+            row[f"ci_low_{a}"], row[f"ci_high_{a}"] = wilson_interval(int(mine["correct"].sum()), len(mine))
         row["all_converged"] = bool(pred["converged"].all())
         rows.append(row)
         source = pred.attrs["data_source"]

@@ -4,9 +4,16 @@ Each function draws a tidy frame of :mod:`glu.experiments` (or a model) on the a
 argument (a sequence of axes for a multi-panel figure), and returns them. The look shared by every figure
 (colours, sizes, the data-source footer, deterministic PNG and SVG) is in :mod:`glu.plots.style`. The
 functions live in one module per part of the story — :mod:`~glu.plots.gestures`,
-:mod:`~glu.plots.network`, :mod:`~glu.plots.verbal`, :mod:`~glu.plots.evaluation` — and are all importable from here.
+:mod:`~glu.plots.network`, :mod:`~glu.plots.fusion`, :mod:`~glu.plots.anticipation`, :mod:`~glu.plots.verbal`, :mod:`~glu.plots.evaluation` — and are all importable from here.
 """
 
+from glu.plots.anticipation import anticipation_figure, plot_anticipation, shared_ylim
+from glu.plots.corpus import (
+    calibration_figure,
+    differences_figure,
+    early_recognition_figure,
+    strategies_vs_noise_figure,
+)
 from glu.plots.evaluation import (
     plot_by_viewpoint,
     plot_differences,
@@ -14,6 +21,7 @@ from glu.plots.evaluation import (
     plot_metric_vs_noise,
     plot_reliability,
 )
+from glu.plots.fusion import plot_fusion_on_gestures, plot_soft_sweep, plot_tap_thresholds
 from glu.plots.gestures import (
     plot_accuracy_vs_noise,
     plot_confusion,
@@ -23,21 +31,24 @@ from glu.plots.gestures import (
 )
 from glu.plots.network import (
     plot_action_vs_soft_evidence,
-    plot_anticipation,
     plot_effect_prediction,
     plot_effect_vs_soft_evidence,
-    plot_fusion_on_gestures,
-    plot_soft_sweep,
     plot_structure,
-    plot_tap_thresholds,
     plot_unseen_rows,
     plot_word_change,
 )
 from glu.plots.style import ACTION_COLORS, VALUE_COLORS, new_figure, save_figure, stamp
-from glu.plots.verbal import plot_and_but, plot_nbest, plot_sampling
+from glu.plots.verbal import and_but_figure, plot_and_but, plot_nbest, plot_sampling
 
 __all__ = [
     "ACTION_COLORS",
+    "and_but_figure",
+    "anticipation_figure",
+    "calibration_figure",
+    "differences_figure",
+    "early_recognition_figure",
+    "strategies_vs_noise_figure",
+    "shared_ylim",
     "VALUE_COLORS",
     "new_figure",
     "plot_accuracy_vs_noise",

@@ -2,17 +2,21 @@
 buys or costs, the spread of leave-one-out accuracy on the real data, one gesture seen from two sides.
 
 Every function draws the tidy frames of :mod:`glu.experiments.correspondence` on the axes it is given and
-returns them: ``plot_x(ax, frame, …) -> Axes``.
+returns them: ``plot_x(ax, frame, …) -> Axes``. Feature sets are named as in the text (``all`` for the four
+invariances together); conditions by their factor and level (``body size 0.8``).
 """
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.lines import Line2D
 
+from glu.gestures.invariants import ALL, INVARIANCES
 from glu.plots.style import ACTION_COLORS
 
 FEATURE_COLORS = {
@@ -21,42 +25,91 @@ FEATURE_COLORS = {
     "centred+scaled": "#55A868",
     "centred+rotated": "#C44E52",
     "centred+mirrored": "#8172B3",
-    "centred+scaled+rotated+mirrored": "#DD8452",
+    ALL: "#DD8452",
 }
 """Colour of each default feature set (others get grey)."""
+SETTING_COLORS = ("#4C72B0", "#DD8452", "#55A868", "#C44E52", "#8172B3", "#937860")
+"""Colour of each training setting in :func:`plot_feature_settings`, in order."""
+RECOGNISER_LABELS = {"raw": "raw features", "aligned": f"invariant features ({ALL})"}
+"""How :func:`plot_two_views` names the two recognisers of :meth:`ViewRun.curves`."""
+
+
+def feature_label(features: str) -> str:
+    """A feature set as the text names it: ``all`` for the four invariances together."""
+    return ALL if features == "+".join(INVARIANCES) else features
 
 
 def _color(features: str) -> str:
-    return FEATURE_COLORS.get(features, "0.55")
+    return FEATURE_COLORS.get(feature_label(features), "0.55")
 
 
-def plot_accuracy_vs_viewpoint(ax: Axes, summary: pd.DataFrame, train: str, chance: float = 1 / 3) -> Axes:
-    """Accuracy (mean over seeds, shaded 95 % interval) against the person's turn, one line per feature set.
+def condition_label(factor: str, level: str, width: int = 14) -> str:
+    """A condition as a short multi-line label: ``"body size\\n0.8"``, ``"sensor noise\\n3 cm"``."""
+    if factor in ("combined", "performer"):
+        return textwrap.fill(level if factor == "performer" else f"all at once: {level}", width)
+    if factor == "mirror":
+        return level
+    return f"{factor}\n{level}"
+
+
+def plot_accuracy_vs_viewpoint(
+    ax: Axes, summary: pd.DataFrame, train: str, chance: float = 1 / 3, legend: bool = False
+) -> Axes:
+    """Accuracy (mean over seeds, 95 % interval as an error bar) against the person's turn, per feature set.
 
     ``summary`` as :func:`glu.experiments.correspondence.summarise` returns it; ``train`` picks the
-    recognisers (``"robot"`` or ``"human"``).
+    recognisers (``"robot"`` or ``"human"``). The feature sets are set a few degrees apart so that their
+    intervals can be told apart. ``legend``: a legend right of the axes.
     """
     s = summary[(summary["train"] == train) & (summary["factor"] == "viewpoint")]
-    for features, g in s.groupby("features", sort=False):
+    groups = list(s.groupby("features", sort=False))
+    yaws = sorted(s["yaw_deg"].dropna().unique())
+    step = float(np.min(np.diff(yaws))) if len(yaws) > 1 else 30.0
+    offset = 0.5 * step / max(len(groups), 1)
+    for k, (features, g) in enumerate(groups):
         g = g.sort_values("yaw_deg")
         c = _color(features)
-        ax.plot(g["yaw_deg"], g["accuracy"], "o-", color=c, lw=1.4, ms=3.5, label=features)
-        if g["ci_low"].notna().any():
-            ax.fill_between(g["yaw_deg"], g["ci_low"], g["ci_high"], color=c, alpha=0.12, lw=0)
+        x = g["yaw_deg"] + (k - (len(groups) - 1) / 2) * offset
+        err = np.vstack([g["accuracy"] - g["ci_low"], g["ci_high"] - g["accuracy"]])
+        ax.errorbar(
+            x,
+            g["accuracy"],
+            yerr=None if np.isnan(err).all() else err,
+            fmt="o-",
+            color=c,
+            lw=1.2,
+            ms=3.5,
+            elinewidth=0.8,
+            capsize=0,
+            label=feature_label(features),
+        )
     ax.axhline(chance, color="0.6", lw=0.8, ls=":", label="chance")
     ax.set_xlabel("person's turn relative to the camera (yaw, °)")
-    ax.set_ylabel("accuracy")
-    ax.set_xticks(sorted(s["yaw_deg"].dropna().unique()))
+    ax.set_ylabel("accuracy (mean over seeds, 95 % interval)")
+    ax.set_xticks(yaws)
     ax.set_ylim(0, 1.02)
     ax.set_title(f"trained on {'the robot' if train == 'robot' else 'one human view'}", fontsize=9)
+    if legend:
+        ax.legend(
+            fontsize=8,
+            frameon=False,
+            title="features",
+            title_fontsize=8,
+            loc="upper left",
+            bbox_to_anchor=(1.01, 1.0),
+        )
     return ax
 
 
 def plot_accuracy_by_condition(
-    ax: Axes, summary: pd.DataFrame, train: str, reference: tuple[str, str] = ("viewpoint", "0°")
+    ax: Axes,
+    summary: pd.DataFrame,
+    train: str,
+    reference: tuple[str, str] = ("viewpoint", "0°"),
+    legend: bool = True,
 ) -> Axes:
     """Grouped bars: accuracy per condition other than the viewpoint sweep (and the reference), per feature
-    set, with the 95 % interval as error bars."""
+    set, with the 95 % interval as error bars. ``legend``: a legend right of the axes."""
     s = summary[(summary["train"] == train)]
     s = s[(s["factor"] != "viewpoint") | ((s["factor"] == reference[0]) & (s["level"] == reference[1]))]
     conditions = list(dict.fromkeys(zip(s["factor"], s["level"], strict=True)))
@@ -71,16 +124,23 @@ def plot_accuracy_by_condition(
             g["accuracy"],
             width=w,
             color=_color(f),
-            label=f,
+            label=feature_label(f),
             yerr=None if np.isnan(err).all() else err,
             error_kw={"lw": 0.7, "capsize": 1.5},
         )
-    labels = [
-        "reference\n(standing, 0°)" if c == reference else c[1].replace(", ", ",\n") for c in conditions
-    ]
-    ax.set_xticks(np.arange(len(conditions)), labels, fontsize=7)
-    ax.set_ylabel("accuracy")
+    labels = ["reference\n(standing, 0°)" if c == reference else condition_label(*c) for c in conditions]
+    ax.set_xticks(np.arange(len(conditions)), labels, fontsize=7.5)
+    ax.set_ylabel("accuracy (95 % interval)")
     ax.set_ylim(0, 1.05)
+    if legend:
+        ax.legend(
+            fontsize=8,
+            frameon=False,
+            title="features",
+            title_fontsize=8,
+            loc="upper left",
+            bbox_to_anchor=(1.01, 1.0),
+        )
     return ax
 
 
@@ -91,9 +151,10 @@ def plot_invariance_effects(ax: Axes, effects: pd.DataFrame, train: str) -> Axes
     marked with the value in bold.
     """
     e = effects[effects["train"] == train].copy()
-    e["row"] = e["features"] + "  vs  " + e["baseline"]
-    e["col"] = e["factor"] + ": " + e["level"]
-    rows, cols = list(dict.fromkeys(e["row"])), list(dict.fromkeys(e["col"]))
+    e["row"] = e["features"].map(feature_label) + "  vs  " + e["baseline"].map(feature_label)
+    e["col"] = e["factor"] + "\t" + e["level"]
+    cols = list(dict.fromkeys(e["col"]))
+    rows = list(dict.fromkeys(e["row"]))
     m = e.pivot(index="row", columns="col", values="delta").reindex(index=rows, columns=cols)
     sure = (e["costs"] | e["helps"]).to_numpy()
     sure = pd.Series(sure, index=pd.MultiIndex.from_arrays([e["row"], e["col"]]))
@@ -103,21 +164,13 @@ def plot_invariance_effects(ax: Axes, effects: pd.DataFrame, train: str) -> Axes
             v = m.loc[r, c]
             if v == v:
                 bold = bool(sure.get((r, c), False))
-                ax.text(
-                    j,
-                    i,
-                    f"{v:+.2f}",
-                    ha="center",
-                    va="center",
-                    fontsize=6.5,
-                    fontweight="bold" if bold else "normal",
-                    color="black",
-                )
-    ax.set_xticks(range(len(cols)), cols, rotation=35, ha="right", fontsize=7)
-    ax.set_yticks(range(len(rows)), rows, fontsize=7)
+                weight = "bold" if bold else "normal"
+                ax.text(j, i, f"{v:+.2f}", ha="center", va="center", fontsize=7, fontweight=weight)
+    ax.set_xticks(range(len(cols)), [condition_label(*c.split("\t"), width=11) for c in cols], fontsize=7)
+    ax.set_yticks(range(len(rows)), rows, fontsize=7.5)
     ax.set_title(
         f"Δ accuracy when an invariance is added (trained on {train}; bold: 95 % interval excludes 0)",
-        fontsize=8,
+        fontsize=8.5,
     )
     return ax
 
@@ -126,7 +179,8 @@ def plot_feature_settings(ax: Axes, grid: pd.DataFrame) -> Axes:
     """Leave-one-segment-out accuracy on the real segments, one point per (setting, seed), per feature set;
     filled points: the models trained on every segment also recognised every test gesture (the seated taps).
 
-    ``grid`` as :func:`glu.experiments.seated.feature_settings` returns it.
+    ``grid`` as :func:`glu.experiments.seated.feature_settings` returns it. Each setting has its colour and
+    marker; the black line is the mean over settings and seeds of each feature set.
     """
     features = list(dict.fromkeys(grid["features"]))
     settings = list(dict.fromkeys(grid["setting"]))
@@ -136,6 +190,7 @@ def plot_feature_settings(ax: Axes, grid: pd.DataFrame) -> Axes:
         g = grid[grid["features"] == f]
         for j, st in enumerate(settings):
             h = g[g["setting"] == st]
+            c = SETTING_COLORS[j % len(SETTING_COLORS)]
             x = i + (j - (len(settings) - 1) / 2) * 0.15 + np.linspace(-0.03, 0.03, len(h))
             for xi, (_, r) in zip(x, h.iterrows(), strict=True):
                 full = n_test > 0 and r["test_correct"] == n_test
@@ -143,22 +198,46 @@ def plot_feature_settings(ax: Axes, grid: pd.DataFrame) -> Axes:
                     xi,
                     r["loso_accuracy"],
                     markers[j % len(markers)],
-                    color=_color(f),
+                    color=c,
                     ms=5,
-                    mfc=_color(f) if full else "none",
+                    mfc=c if full else "none",
                 )
-        ax.hlines(g["loso_accuracy"].mean(), i - 0.4, i + 0.4, color=_color(f), lw=2)
-    for j, st in enumerate(settings):
-        ax.plot([], [], markers[j % len(markers)], color="0.3", mfc="none", label=st)
-    ax.set_xticks(range(len(features)), features, fontsize=8)
+        ax.hlines(g["loso_accuracy"].mean(), i - 0.4, i + 0.4, color="black", lw=1.5)
+    handles = [
+        Line2D(
+            [],
+            [],
+            marker=markers[j % len(markers)],
+            color=SETTING_COLORS[j % len(SETTING_COLORS)],
+            ls="none",
+            label=st,
+        )
+        for j, st in enumerate(settings)
+    ]
+    handles += [
+        Line2D([], [], marker="o", color="0.3", ls="none", label="filled: the seated taps both recognised"),
+        Line2D([], [], marker="o", color="0.3", mfc="none", ls="none", label="hollow: not both"),
+        Line2D([], [], color="black", lw=1.5, label="mean over settings and seeds"),
+    ]
+    ax.set_xticks(range(len(features)), [feature_label(f) for f in features], fontsize=8)
+    ax.set_xlim(-0.5, len(features) - 0.5)
     ax.set_ylabel("leave-one-segment-out accuracy")
-    ax.set_ylim(0, 1.05)
-    ax.legend(fontsize=7, frameon=False, title="setting (filled: seated taps all tap)", title_fontsize=7)
+    lo = float(grid["loso_accuracy"].min())
+    ax.set_ylim(max(0.0, np.floor(lo * 10) / 10 - 0.05), 1.03)
+    ax.legend(
+        handles=handles,
+        fontsize=7.5,
+        frameon=False,
+        title="training setting",
+        title_fontsize=7.5,
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+    )
     return ax
 
 
 def plot_two_views(axes: Sequence[Axes], curves: pd.DataFrame, action: str) -> Sequence[Axes]:
-    """``p_HMM(action | G_1^t)`` over time for each view (one axis each), raw (dashed) and aligned (solid).
+    """``p_HMM(action | G_1^t)`` over time for each view (one axis each), raw (dashed) and invariant (solid).
 
     ``curves``: the concatenated :meth:`glu.experiments.correspondence.ViewRun.curves` of the views.
     """
@@ -166,11 +245,15 @@ def plot_two_views(axes: Sequence[Axes], curves: pd.DataFrame, action: str) -> S
         for name, ls in (("raw", "--"), ("aligned", "-")):
             h = g[(g["recogniser"] == name) & (g["action"] == action)]
             ax.plot(
-                h["seconds"], h["p_hmm"], ls, color=ACTION_COLORS.get(action, "0.3"), label=f"{name} features"
+                h["seconds"],
+                h["p_hmm"],
+                ls,
+                color=ACTION_COLORS.get(action, "0.3"),
+                label=RECOGNISER_LABELS[name],
             )
         ax.set_title(view, fontsize=9)
         ax.set_xlabel("time (s)")
         ax.set_ylim(-0.02, 1.02)
-    axes[0].set_ylabel(f"p_HMM({action} | G_1^t)")
-    axes[0].legend(fontsize=7, frameon=False)
+    axes[0].set_ylabel(rf"$p_{{HMM}}({action} \mid G_1^t)$")
+    axes[-1].legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return axes

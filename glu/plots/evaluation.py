@@ -3,11 +3,14 @@
 Every function draws the tables of :mod:`glu.sweep` (``results``, ``differences``, ``reliability``) on the
 axes it is given and returns them. In those tables a noise of NaN means "pooled over the noise levels"
 and a viewpoint ``"all"`` "pooled over the viewpoints"; ``posterior`` picks how p_HMM was read from the
-HMMs (:data:`glu.experiments.corpus.POSTERIORS`).
+HMMs (:data:`glu.experiments.corpus.POSTERIORS`). Strategies whose lines coincide are named in the panel's
+title, so that a line hidden under another is not missed; the legends are drawn once per figure
+(:mod:`glu.plots.corpus`).
 """
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 
 import numpy as np
@@ -24,6 +27,18 @@ STRATEGY_COLORS = {
     "true_action": "#222222",
 }
 STRATEGY_STYLE = {"true_action": ":", "network": "--", "gesture": "--"}
+STRATEGY_LABELS = {
+    "gesture": "gesture (HMMs alone)",
+    "network": "network alone",
+    "hard": "hard decision",
+    "virtual": "virtual evidence",
+    "jeffrey": "Jeffrey's rule",
+    "product": "product rule",
+    "true_action": "true action given",
+}
+"""How figures name the strategies of :mod:`glu.experiments.corpus` (``jeffrey`` is Jeffrey's rule)."""
+POSTERIOR_LABELS = {"likelihood": r"$p_{HMM}$ from the likelihoods", "per_frame": r"$p_{HMM}$ per frame"}
+"""How figures name the ways of reading p_HMM (:data:`glu.experiments.corpus.POSTERIORS`)."""
 METRIC_LABEL = {
     "accuracy": "accuracy",
     "log_loss": "log-loss (nats)",
@@ -34,6 +49,18 @@ METRIC_LABEL = {
     "effect": "effect right",
     "all": "sentence right",
 }
+COINCIDE = 0.004
+"""Lines closer than this fraction of the axis' range at every point coincide (and the title says so)."""
+
+
+def strategy_label(strategy: str) -> str:
+    """A strategy as figures name it (:data:`STRATEGY_LABELS`)."""
+    return STRATEGY_LABELS.get(strategy, strategy)
+
+
+def posterior_label(posterior: str) -> str:
+    """A way of reading p_HMM as figures name it (:data:`POSTERIOR_LABELS`)."""
+    return POSTERIOR_LABELS.get(posterior, posterior)
 
 
 def _pooled(frame: pd.DataFrame, noise: float | None, viewpoint: str, posterior: str) -> pd.DataFrame:
@@ -41,30 +68,53 @@ def _pooled(frame: pd.DataFrame, noise: float | None, viewpoint: str, posterior:
     return frame[sel & (frame.noise.isna() if noise is None else np.isclose(frame.noise, noise))]
 
 
-def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str, jitter: float = 0.0) -> None:
+def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str) -> None:
     c = STRATEGY_COLORS.get(strategy, "black")
-    ax.plot(
-        x + jitter,
-        g.estimate,
-        color=c,
-        ls=STRATEGY_STYLE.get(strategy, "-"),
-        marker="o",
-        ms=3,
-        lw=1.3,
-        label=strategy,
+    ls = STRATEGY_STYLE.get(strategy, "-")
+    ax.plot(x, g.estimate, color=c, ls=ls, marker="o", ms=3, lw=1.3, label=strategy_label(strategy))
+    ax.fill_between(x, g.ci_low, g.ci_high, color=c, alpha=0.15, lw=0)
+
+
+def coinciding(series: dict[str, tuple[np.ndarray, np.ndarray]], span: float) -> list[list[str]]:
+    """Groups (of two or more) of the named ``(x, y)`` series that coincide: same x, |Δy| ≤ COINCIDE·span."""
+    groups: list[list[str]] = []
+    for name, (x, y) in series.items():
+        for grp in groups:
+            gx, gy = series[grp[0]]
+            if len(gx) == len(x) and np.allclose(gx, x) and np.nanmax(np.abs(gy - y)) <= COINCIDE * span:
+                grp.append(name)
+                break
+        else:
+            groups.append([name])
+    return [g for g in groups if len(g) > 1]
+
+
+def _coincide_note(groups: list[list[str]]) -> str:
+    return "; ".join(" = ".join(strategy_label(s) for s in g) for g in groups) + (
+        " (lines coincide)" if groups else ""
     )
-    ax.fill_between(x + jitter, g.ci_low, g.ci_high, color=c, alpha=0.15, lw=0)
 
 
 def _strategy_lines(
     ax: Axes, sel: pd.DataFrame, x: str, metric: str, strategies: Sequence[str] | None
-) -> None:
-    """A line and a 95 % band per strategy of ``sel`` against column ``x`` (a fraction, drawn in %)."""
+) -> str:
+    """A line and a 95 % band per strategy of ``sel`` against column ``x`` (a fraction, drawn in %).
+
+    Returns the note naming the strategies whose lines coincide ("" if none).
+    """
+    series = {}
     for strategy, g in sel.groupby("strategy", sort=False):
         if strategies is None or strategy in strategies:
             g = g.sort_values(x)
             _line(ax, g[x].to_numpy() * 100, g, strategy)
+            series[strategy] = (g[x].to_numpy(dtype=float), g.estimate.to_numpy(dtype=float))
     ax.set_ylabel(METRIC_LABEL.get(metric, metric))
+    lo, hi = ax.get_ylim()
+    return _coincide_note(coinciding(series, hi - lo))
+
+
+def _title(ax: Axes, first: str, note: str) -> None:
+    ax.set_title(first + ("\n" + textwrap.fill(note, 60) if note else ""), fontsize=9)
 
 
 def plot_metric_vs_noise(
@@ -86,10 +136,11 @@ def plot_metric_vs_noise(
         & results.noise.notna()
         & (results.posterior == posterior)
     ]
-    _strategy_lines(ax, sel, "noise", metric, strategies)
-    ax.set_xlabel("sensor noise (cm)")
+    note = _strategy_lines(ax, sel, "noise", metric, strategies)
     where = "all viewpoints" if viewpoint == "all" else viewpoint
-    ax.set_title(f"{target}: {METRIC_LABEL.get(metric, metric)} ({where}, {fraction:.0%} seen)", fontsize=9)
+    first = f"{target} {METRIC_LABEL.get(metric, metric)}, {posterior_label(posterior)}"
+    _title(ax, f"{first}\n({where}, {fraction:.0%} of the gesture seen)", note)
+    ax.set_xlabel("sensor noise (cm)")
     return ax
 
 
@@ -106,10 +157,10 @@ def plot_early_recognition(
     """One metric against the observed fraction of the gesture, a line and a 95 % band per strategy."""
     sel = _pooled(results, noise, viewpoint, posterior)
     sel = sel[(sel.target == target) & (sel.metric == metric)]
-    _strategy_lines(ax, sel, "fraction", metric, strategies)
-    ax.set_xlabel("gesture observed (%)")
+    note = _strategy_lines(ax, sel, "fraction", metric, strategies)
     how = "all noise levels" if noise is None else f"noise {noise * 100:g} cm"
-    ax.set_title(f"{target}: early recognition ({how})", fontsize=9)
+    ax.set_xlabel("gesture observed (%)")
+    _title(ax, f"{target} {METRIC_LABEL.get(metric, metric)}, {posterior_label(posterior)}\n({how})", note)
     return ax
 
 
@@ -123,29 +174,35 @@ def plot_reliability(
     posterior: str = "likelihood",
 ) -> Axes:
     """Reliability diagram of the effect (ObjVel): how often the top value was right, against its
-    probability, per calibration bin; marker area ∝ the number of episodes in the bin."""
+    probability, per calibration bin; marker area ∝ the share of the strategy's episodes in the bin
+    (:func:`size_of_share` for a key)."""
     sel = _pooled(reliability, noise, viewpoint, posterior)
     sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0)]
     ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
     total = sel.groupby("strategy").n.transform("sum")
+    series = {}
     for strategy, g in sel.assign(share=sel.n / total).groupby("strategy", sort=False):
         if strategies is None or strategy in strategies:
             c = STRATEGY_COLORS.get(strategy, "black")
-            ax.plot(
-                g.confidence,
-                g.accuracy,
-                color=c,
-                lw=1.0,
-                ls=STRATEGY_STYLE.get(strategy, "-"),
-                label=strategy,
-            )
-            ax.scatter(g.confidence, g.accuracy, s=4 + 200 * g.share, color=c, alpha=0.7, lw=0)
+            ls = STRATEGY_STYLE.get(strategy, "-")
+            ax.plot(g.confidence, g.accuracy, color=c, lw=1.0, ls=ls, label=strategy_label(strategy))
+            ax.scatter(g.confidence, g.accuracy, s=size_of_share(g.share), color=c, alpha=0.7, lw=0)
+            series[strategy] = (g.confidence.to_numpy(dtype=float), g.accuracy.to_numpy(dtype=float))
     ax.set_xlim(0.3, 1.0)
     ax.set_ylim(0.0, 1.0)
     ax.set_xlabel("predicted probability of the top ObjVel value")
     ax.set_ylabel("how often it was right")
-    ax.set_title(f"effect calibration ({fraction:.0%} seen)", fontsize=9)
+    _title(
+        ax,
+        f"effect calibration ({fraction:.0%} seen), {posterior_label(posterior)}",
+        _coincide_note(coinciding(series, 1.0)),
+    )
     return ax
+
+
+def size_of_share(share):
+    """Marker area (points²) of a calibration bin holding ``share`` of a strategy's episodes."""
+    return 4 + 200 * np.asarray(share, dtype=float)
 
 
 def plot_differences(
@@ -159,7 +216,9 @@ def plot_differences(
 ) -> Axes:
     """Paired differences with 95 % intervals, one row per ``(target, metric, strategy, baseline)``.
 
-    A filled marker: the interval excludes 0 on the side where the metric improves.
+    The colour is the strategy's; a filled marker: the interval excludes 0 on the side where the metric
+    improves (hollow: it does not). Each row's difference and interval are written in a column right of
+    the axes, since the metrics (accuracy, nats, ECE) share one axis.
     """
     sel = _pooled(differences, noise, viewpoint, posterior)
     sel = sel[np.isclose(sel.fraction, fraction)]
@@ -189,19 +248,31 @@ def plot_differences(
         ax.plot(
             [sign * r.difference], [i], marker="o", color=c, mfc=c if _better(metric, lo, hi) else "white"
         )
-        labels.append((i, f"{target} {METRIC_LABEL.get(metric, metric)}: {strategy} − {baseline}"))
+        value = f"{sign * r.difference:+.3f} [{lo:+.3f}, {hi:+.3f}]".replace("-", "−")
+        ax.text(1.02, i, value, va="center", fontsize=7, color="0.2", transform=ax.get_yaxis_transform())
+        better = "higher" if _higher(metric) else "lower"
+        labels.append(
+            (
+                i,
+                f"{target} {METRIC_LABEL.get(metric, metric)} ({better} is better): {strategy_label(strategy)} − {strategy_label(baseline)}",
+            )
+        )
     ax.axvline(0, color="0.5", lw=0.8)
     ax.set_yticks([i for i, _ in labels], [t for _, t in labels], fontsize=7)
-    ax.invert_yaxis()
+    ax.set_ylim(len(pairs) - 0.5, -0.5)
     ax.set_xlabel("difference (95 % paired bootstrap interval)")
-    ax.set_title(f"paired differences ({fraction:.0%} seen)", fontsize=9)
+    ax.set_title(f"paired differences ({fraction:.0%} seen), {posterior_label(posterior)}", fontsize=9)
     return ax
 
 
-def _better(metric: str, lo: float, hi: float) -> bool:
+def _higher(metric: str) -> bool:
     from glu.experiments.intervals import HIGHER_IS_BETTER
 
-    return lo > 0 if HIGHER_IS_BETTER.get(metric, True) else hi < 0
+    return HIGHER_IS_BETTER.get(metric, True)
+
+
+def _better(metric: str, lo: float, hi: float) -> bool:
+    return lo > 0 if _higher(metric) else hi < 0
 
 
 def plot_by_viewpoint(
@@ -233,11 +304,14 @@ def plot_by_viewpoint(
             g.estimate,
             width,
             color=STRATEGY_COLORS.get(strategy, "black"),
-            label=strategy,
+            label=strategy_label(strategy),
             yerr=[g.estimate - g.ci_low, g.ci_high - g.estimate],
             error_kw={"lw": 0.8},
         )
     ax.set_xticks(np.arange(len(views)), views)
     ax.set_ylabel(METRIC_LABEL.get(metric, metric))
-    ax.set_title(f"{target}: by viewpoint (all noise levels, {fraction:.0%} seen)", fontsize=9)
+    ax.set_title(
+        f"{target} {METRIC_LABEL.get(metric, metric)} by viewpoint, {posterior_label(posterior)}", fontsize=9
+    )
+    ax.set_xlabel(f"viewpoint (all noise levels, {fraction:.0%} seen)")
     return ax

@@ -10,6 +10,8 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from glu.gestures.segmentation import RecordingSegmentation, Segment, Segmentation
 from glu.plots.style import ACTION_COLORS
@@ -36,6 +38,8 @@ def plot_segmentation(
         for i, axis in enumerate("xyz"):
             ax.plot(f, tr.xyz[:, i], color=colors[axis], lw=0.8, label=axis if k == 0 else None)
         ax.plot(f, piece.activity, color="black", lw=1.2, label="activity" if k == 0 else None)
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(lo - 0.14 * (hi - lo), hi)  # an empty strip at the bottom for the tracking events
     segs = [s for p in pieces for s in p.segments]
     for i, s in enumerate(segs, 1):
         ax.axvspan(s.start, s.end, color="tab:orange", alpha=0.2, lw=0)
@@ -47,10 +51,10 @@ def plot_segmentation(
     gaps = [e.frame - 0.5 for e in events if e.kind == "gap"]
     spikes = [e.frame for e in events if e.kind == "spike"]
     if gaps:
-        ax.plot(gaps, [0.02] * len(gaps), ls="none", marker="v", color="purple", transform=xt, label="gap")
+        ax.plot(gaps, [0.05] * len(gaps), ls="none", marker="v", color="purple", transform=xt, label="gap")
     if spikes:
         ax.plot(
-            spikes, [0.02] * len(spikes), ls="none", marker=".", color="grey", transform=xt, label="spike"
+            spikes, [0.05] * len(spikes), ls="none", marker=".", color="grey", transform=xt, label="spike"
         )
     for e in events:
         if e.kind == "jump":
@@ -58,12 +62,9 @@ def plot_segmentation(
     for s in reference:
         ax.plot([s.start, s.end], [0.84, 0.84], color="black", lw=3, transform=ax.get_xaxis_transform())
     ax.set_xlabel("frame")
-    ax.set_ylabel("features / activity")
+    ax.set_ylabel("hand features (body units)\nactivity (0–1)", fontsize=8)
     if title is not None:
         ax.set_title(title)
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-
     handles, _ = ax.get_legend_handles_labels()
     handles += [Patch(color="tab:orange", alpha=0.2, label="segment found")]
     if any(p.rejected for p in pieces):
@@ -85,7 +86,10 @@ def plot_segmentations(axes: Sequence[Axes], segmentations: Sequence) -> Sequenc
     :func:`glu.gestures.corpus.recording_segmentations` returns them.
     """
     for ax, (seg, ref) in zip(axes, segmentations, strict=False):
-        plot_segmentation(ax, seg, title=f"{seg.recording}: {len(seg.segments)} segments", reference=ref)
+        n = len(seg.segments)
+        plot_segmentation(
+            ax, seg, title=f"{seg.recording}: {n} segment{'' if n == 1 else 's'}", reference=ref
+        )
         ax.title.set_fontsize(9)
     return axes
 
@@ -112,15 +116,28 @@ def plot_confusion(ax: Axes, confusion: pd.DataFrame) -> Axes:
 
 
 def plot_accuracy_vs_noise(ax: Axes, df: pd.DataFrame) -> Axes:
-    """k-fold accuracy against sensor noise, overall and per action."""
-    ax.plot(df["noise_m"] * 100, df["accuracy"], "o-", color="black", label="all")
-    for c in [c for c in df.columns if c.startswith("accuracy_")]:
-        a = c.removeprefix("accuracy_")
-        ax.plot(df["noise_m"] * 100, df[c], ".--", color=ACTION_COLORS.get(a, "0.5"), label=a)
+    """k-fold accuracy against sensor noise, overall (a band: its 95 % Wilson interval) and per action
+    (error bars, set a little apart), as :func:`glu.experiments.gestures.accuracy_vs_noise` returns it."""
+    x = df["noise_m"].to_numpy() * 100
+    if "ci_low" in df:
+        ax.fill_between(x, df["ci_low"], df["ci_high"], color="black", alpha=0.12, lw=0)
+    ax.plot(x, df["accuracy"], "o-", color="black", label="all actions (band: 95 % interval)")
+    actions = [c.removeprefix("accuracy_") for c in df.columns if c.startswith("accuracy_")]
+    step = 0.012 * (x.max() - x.min() if len(x) > 1 else 1.0)
+    for k, a in enumerate(actions):
+        xa = x + (k - (len(actions) - 1) / 2) * step
+        err = None
+        if f"ci_low_{a}" in df:
+            err = np.vstack(
+                [df[f"accuracy_{a}"] - df[f"ci_low_{a}"], df[f"ci_high_{a}"] - df[f"accuracy_{a}"]]
+            )
+        color = ACTION_COLORS.get(a, "0.5")
+        ax.errorbar(xa, df[f"accuracy_{a}"], yerr=err, fmt=".--", color=color, elinewidth=0.8, label=a)
+    n = df["n_sequences"].iloc[0] if "n_sequences" in df else None
     ax.set_xlabel("sensor noise (cm, std per joint)")
-    ax.set_ylabel("accuracy")
+    ax.set_ylabel("accuracy" + (f" ({n} gestures, {n // max(len(actions), 1)} per action)" if n else ""))
     ax.set_ylim(0, 1.02)
-    ax.legend(fontsize=8, frameon=False)
+    ax.legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return ax
 
 
@@ -143,9 +160,14 @@ def plot_segment_scores(ax: Axes, df: pd.DataFrame) -> Axes:
             linewidth=1.5,
         )
     ax.set_xticks(np.arange(len(df)), labels, fontsize=7)
-    ax.set_ylabel(r"$\frac{1}{T}\log L(G \mid A)$")
+    ax.set_ylabel(r"$(1/T)\,\log L(G \mid A)$")
     ax.set_title("per-frame log-likelihood of each segment (black edge: the recognised action)", fontsize=9)
-    ax.legend(fontsize=8, frameon=False)
+    handles = [
+        Patch(color=ACTION_COLORS.get(c.removeprefix("loglik_"), "0.5"), label=c.removeprefix("loglik_"))
+        for c in cols
+    ]
+    handles.append(Patch(facecolor="white", edgecolor="black", linewidth=1.5, label="recognised"))
+    ax.legend(handles=handles, fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return ax
 
 

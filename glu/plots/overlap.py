@@ -8,8 +8,8 @@
 * **legend on data**: a legend whose entries, or its frame when it has one, cover a line, a marker, a
   bar, a band, an error bar or an image of any axes;
 * **label on data**: a text placed in an axes (a value label, an annotation) that covers a line, a
-  marker, an error bar or an opaque bar of that axes (text on an image — the cells of a heat map — and
-  on translucent shading is meant to be read there);
+  marker, an error bar or the edge of an opaque bar of that axes (text inside a bar, on an image — the
+  cells of a heat map — or on translucent shading is meant to be read there);
 * **label across the frame**: such a text that crosses the axes' frame, or that is placed at a data point
   but drawn outside the axes (a value label run past the frame).
 
@@ -21,6 +21,7 @@ there (``<name>.txt``, empty when there are none); the test suite reads them aft
 
 from __future__ import annotations
 
+import io
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -28,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.artist import Artist
 from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import RendererAgg
 from matplotlib.collections import Collection, PathCollection
 from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
@@ -61,11 +63,32 @@ class _Drawn:
     artist: Artist
 
 
-def figure_problems(fig: Figure) -> list[str]:
-    """Draw ``fig`` and return one line per readability problem (see the module docstring); [] if none."""
-    with _recording_texts(fig) as drawn_texts:
-        fig.canvas.draw()
-    renderer = fig.canvas.get_renderer()
+def figure_problems(fig: Figure, dpi: float = 150.0) -> list[str]:
+    """Render ``fig`` as it is saved and return one line per readability problem (module docstring); [] if none.
+
+    The figure is rendered as :func:`glu.plots.style.save_figure` saves it (PNG at ``dpi``, cropped with
+    ``bbox_inches="tight"``, which moves whatever is placed relative to the figure's edges), and checked
+    as drawn, before matplotlib restores its layout.
+    """
+    found: list[list[str]] = []
+    drawn: list[Text] = []
+    draw = fig.draw
+
+    def checked_draw(renderer) -> None:
+        drawn.clear()
+        draw(renderer)
+        found.append(_problems(fig, renderer, drawn))
+
+    fig.draw = checked_draw
+    try:
+        with _recording_texts(drawn):
+            fig.savefig(io.BytesIO(), format="png", dpi=dpi, bbox_inches="tight")
+    finally:
+        del fig.draw
+    return found[-1] if found else []
+
+
+def _problems(fig: Figure, renderer, drawn_texts: list[Text]) -> list[str]:
     texts = [t for t in (_drawn(t, renderer) for t in dict.fromkeys(drawn_texts)) if t is not None]
     legends = [lg for lg in _legends(fig) if lg.get_visible()]
     problems: list[str] = []
@@ -111,7 +134,7 @@ def figure_problems(fig: Figure) -> list[str]:
                 )
         on = Bbox.intersection(t.box, inner)
         for artist, what in _data(ax, renderer, background=False) if on is not None else ():
-            if _covers(artist, on, ax, renderer):
+            if _covers(artist, on, ax, renderer, inside_ok=True):
                 problems.append(f"label on data: {t.name} covers {what}")
                 break
     return list(dict.fromkeys(problems))
@@ -119,11 +142,9 @@ def figure_problems(fig: Figure) -> list[str]:
 
 # ---------------------------------------------------------------- what is drawn
 @contextmanager
-def _recording_texts(fig: Figure) -> Iterator[list[Text]]:
-    """Collect every Text the renderer is asked to draw while the figure is drawn."""
-    drawn: list[Text] = []
-    renderer = fig.canvas.get_renderer()
-    cls = type(renderer)
+def _recording_texts(drawn: list[Text]) -> Iterator[list[Text]]:
+    """Append to ``drawn`` every Text the Agg renderer is asked to draw meanwhile."""
+    cls = RendererAgg
     original = cls.draw_text
 
     def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
@@ -250,8 +271,12 @@ def _opaque(artist: Artist) -> bool:
     return True
 
 
-def _covers(artist: Artist, box: Bbox, ax: Axes, renderer) -> bool:
-    """Whether ``artist`` (clipped to its axes) draws anything inside ``box`` (display pixels)."""
+def _covers(artist: Artist, box: Bbox, ax: Axes, renderer, inside_ok: bool = False) -> bool:
+    """Whether ``artist`` (clipped to its axes) draws anything inside ``box`` (display pixels).
+
+    ``inside_ok``: a box wholly inside a bar or patch does not count, only one across its edge (a value
+    label written inside its bar is readable; one across the bar's edge is not).
+    """
     area = Bbox.intersection(box, ax.bbox) if artist.get_clip_on() else box
     if area is None or area.width <= TOLERANCE_PX or area.height <= TOLERANCE_PX:
         return False
@@ -269,7 +294,7 @@ def _covers(artist: Artist, box: Bbox, ax: Axes, renderer) -> bool:
         ext = path.get_extents()
         if ext.width < 0.5 and ext.height < 0.5:
             return False
-        return path.intersects_bbox(area, filled=bool(artist.get_fill()))
+        return path.intersects_bbox(area, filled=bool(artist.get_fill()) and not inside_ok)
     if isinstance(artist, PathCollection):  # scatter: markers at the offsets
         offsets = artist.get_offset_transform().transform(artist.get_offsets())
         sizes = artist.get_sizes()

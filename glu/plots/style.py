@@ -28,6 +28,24 @@ DPI = 150
 ACTION_COLORS = {"grasp": "#4C72B0", "tap": "#DD8452", "touch": "#55A868", "push": "#8172B3"}
 VALUE_COLORS = {"slow": "#8DA0CB", "medium": "#FC8D62", "fast": "#66C2A5"}
 ORIGINAL_MARK = {"marker": "_", "color": "black", "markersize": 14, "markeredgewidth": 2, "linestyle": "none"}
+ORIGINAL_LABEL = "original model (BN_lab.mat)"
+"""Legend entry of the original model's values, drawn with :data:`ORIGINAL_MARK`."""
+WORD_COLORS = {"and": "#4C72B0", "but": "#DD8452"}
+"""The two conjunctions of TCDS Fig. 7 (and sentences containing them)."""
+RULE_LABELS = {
+    "virtual": "virtual evidence",
+    "jeffrey": "Jeffrey's rule",
+    "hard": "hard decision",
+    "product": "product rule",
+}
+"""How figures name the fusion rules (``jeffrey`` is Jeffrey's rule, a proper name)."""
+FOOTER_SIZE = 7.5
+"""Points: the footer naming the data."""
+
+
+def rule_label(rule: str) -> str:
+    """The fusion rule ``rule`` as figures name it (:data:`RULE_LABELS`), else ``rule`` itself."""
+    return RULE_LABELS.get(rule, rule)
 
 
 def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
@@ -40,7 +58,9 @@ def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = (
     path.parent.mkdir(parents=True, exist_ok=True)
     check = os.environ.get(CHECK_ENV)
     if check:  # the test suite's readability check (glu.plots.overlap), before saving
-        atomic_write_text(Path(check) / f"{path.name}.txt", "".join(f"{p}\n" for p in figure_problems(fig)))
+        atomic_write_text(
+            Path(check) / f"{path.name}.txt", "".join(f"{p}\n" for p in figure_problems(fig, DPI))
+        )
     out = []
     for fmt in formats:
         target = path.with_suffix(f".{fmt}")
@@ -52,19 +72,30 @@ def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = (
 
 
 def stamp(fig: Figure, footer: str) -> None:
-    """Lay the figure out, then write ``footer`` (its data source, …) in small grey text below everything."""
-    fig.tight_layout()
-    fig.text(0.005, -0.01, footer, fontsize=6.5, color="0.35", ha="left", va="top")
+    """Lay the figure out, then write ``footer`` (its data source, …) in small grey text below everything.
+
+    A figure made with a layout engine (``layout="constrained"``, for legends outside every panel) keeps
+    it; any other is laid out once with ``tight_layout``. The footer is written below the figure's
+    bottom edge, so it cannot overlap anything the layout placed.
+    """
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
+    fig.text(0.005, -0.01, footer, fontsize=FOOTER_SIZE, color="0.3", ha="left", va="top")
 
 
-def new_figure(ncols: int = 1, width: float = 4.2, height: float = 3.2) -> tuple[Figure, list[Axes]]:
-    """A figure with ``ncols`` side-by-side axes."""
-    fig, axes = plt.subplots(1, ncols, figsize=(width * ncols, height), squeeze=False)
-    return fig, list(axes[0])
+def new_figure(
+    ncols: int = 1, width: float = 4.2, height: float = 3.2, nrows: int = 1, **kwargs
+) -> tuple[Figure, list[Axes]]:
+    """A figure with ``nrows`` × ``ncols`` axes of ``width`` × ``height`` inches each, listed row by row.
+
+    ``kwargs`` go to :func:`matplotlib.pyplot.subplots` (``sharex``, ``sharey``, ``layout``, …).
+    """
+    fig, axes = plt.subplots(nrows, ncols, figsize=(width * ncols, height * nrows), squeeze=False, **kwargs)
+    return fig, list(axes.flat)
 
 
 def bars_with_original(ax: Axes, x: np.ndarray, p: np.ndarray, colors, original: np.ndarray | None) -> None:
     """Bars of ``p`` at ``x``, and the original model's values as black marks (if given)."""
     ax.bar(x, p, color=colors, edgecolor="0.2", linewidth=0.6)
     if original is not None:
-        ax.plot(x, original, **ORIGINAL_MARK, label="original model (BN_lab.mat)")
+        ax.plot(x, original, **ORIGINAL_MARK, label=ORIGINAL_LABEL)
