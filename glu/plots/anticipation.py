@@ -30,7 +30,7 @@ PUBLISHED_LABEL = "TCDS 2020 Fig. 5 (read from the authors' EPS)"
 LOGLIK_LABEL = r"$(1/t)\,\log L(G_1^t \mid A)$"
 SYMLOG_THRESHOLD = 10.0
 """With a shared y axis over a wide range: linear within ±this, logarithmic beyond."""
-SYMLOG_TICKS = (10, 5, 0, -5, -10, -20, -50, -100, -200, -500, -1000)
+SYMLOG_TICKS = (10, 5, 0, -5, -10, -30, -100, -300, -1000)
 
 
 def _color(v: str) -> str:
@@ -71,7 +71,7 @@ def plot_anticipation(
     top.set_ylabel(LOGLIK_LABEL)
     if ylim is not None:
         if ylim[0] < -3 * SYMLOG_THRESHOLD:
-            top.set_yscale("symlog", linthresh=SYMLOG_THRESHOLD, linscale=2.0)
+            top.set_yscale("symlog", linthresh=SYMLOG_THRESHOLD, linscale=1.5)
             ticks = [v for v in SYMLOG_TICKS if ylim[0] <= v <= ylim[1]]
             top.yaxis.set_major_locator(FixedLocator(ticks))
             top.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}".replace("-", "−")))
@@ -101,7 +101,7 @@ def plot_anticipation(
     bottom.set_ylim(0, 1)
     bottom.set_ylabel(rf"$p_{{comb}}({node})$")
     bottom.set_xlabel("frame of the recording (updates every 5 frames)")
-    bottom.set_title(textwrap.fill(prediction_summary(curves, predictions, node), 80), fontsize=8)
+    bottom.set_title(textwrap.fill(prediction_summary(curves, predictions, node), 85), fontsize=8)
     if published is not None and len(axes) > 2:
         _final_bars(axes[2], d, published, node)
     return axes
@@ -126,7 +126,7 @@ def prediction_summary(curves: pd.DataFrame, predictions: pd.DataFrame, node: st
             stretches.append([key, t, t, [p]])
     parts = []
     for (action, value), t0, t1, ps in stretches:
-        when = f"t = {t0}" if t0 == t1 else f"t = {t0}–{t1}"
+        when = f"t\u00a0=\u00a0{t0}" if t0 == t1 else f"t\u00a0=\u00a0{t0}–{t1}"  # unbreakable
         lo, hi = f"{min(ps):.2f}", f"{max(ps):.2f}"
         p = hi if lo == hi else f"{lo}–{hi}"
         parts.append(f"{when}: {action} ahead → {value} {p}")

@@ -46,10 +46,10 @@ def _color(features: str) -> str:
 def condition_label(factor: str, level: str, width: int = 14) -> str:
     """A condition as a short multi-line label: ``"body size\\n0.8"``, ``"sensor noise\\n3 cm"``."""
     if factor in ("combined", "performer"):
-        return textwrap.fill(level if factor == "performer" else f"all at once: {level}", width)
+        return textwrap.fill(level if factor == "performer" else f"combined: {level}", width)
     if factor == "mirror":
         return level
-    return f"{factor}\n{level}"
+    return f"{textwrap.fill(factor, width)}\n{level}"
 
 
 def plot_accuracy_vs_viewpoint(
@@ -166,7 +166,7 @@ def plot_invariance_effects(ax: Axes, effects: pd.DataFrame, train: str) -> Axes
                 bold = bool(sure.get((r, c), False))
                 weight = "bold" if bold else "normal"
                 ax.text(j, i, f"{v:+.2f}", ha="center", va="center", fontsize=7, fontweight=weight)
-    ax.set_xticks(range(len(cols)), [condition_label(*c.split("\t"), width=11) for c in cols], fontsize=7)
+    ax.set_xticks(range(len(cols)), [condition_label(*c.split("\t"), width=10) for c in cols], fontsize=7)
     ax.set_yticks(range(len(rows)), rows, fontsize=7.5)
     ax.set_title(
         f"Δ accuracy when an invariance is added (trained on {train}; bold: 95 % interval excludes 0)",

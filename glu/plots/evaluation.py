@@ -49,7 +49,7 @@ METRIC_LABEL = {
     "effect": "effect right",
     "all": "sentence right",
 }
-COINCIDE = 0.004
+COINCIDE = 0.01
 """Lines closer than this fraction of the axis' range at every point coincide (and the title says so)."""
 
 
@@ -175,17 +175,22 @@ def plot_reliability(
 ) -> Axes:
     """Reliability diagram of the effect (ObjVel): how often the top value was right, against its
     probability, per calibration bin; marker area ∝ the share of the strategy's episodes in the bin
-    (:func:`size_of_share` for a key)."""
+    (:func:`size_of_share` for a key). Lines drawn first are wider, so that one lying on another shows
+    as a border around it."""
     sel = _pooled(reliability, noise, viewpoint, posterior)
     sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0)]
     ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
     total = sel.groupby("strategy").n.transform("sum")
     series = {}
+    drawn = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
     for strategy, g in sel.assign(share=sel.n / total).groupby("strategy", sort=False):
-        if strategies is None or strategy in strategies:
+        if strategy in drawn:
             c = STRATEGY_COLORS.get(strategy, "black")
             ls = STRATEGY_STYLE.get(strategy, "-")
-            ax.plot(g.confidence, g.accuracy, color=c, lw=1.0, ls=ls, label=strategy_label(strategy))
+            lw = 1.0 + 0.8 * (
+                len(drawn) - 1 - drawn.index(strategy)
+            )  # the first widest: overlaps stay visible
+            ax.plot(g.confidence, g.accuracy, color=c, lw=lw, ls=ls, label=strategy_label(strategy))
             ax.scatter(g.confidence, g.accuracy, s=size_of_share(g.share), color=c, alpha=0.7, lw=0)
             series[strategy] = (g.confidence.to_numpy(dtype=float), g.accuracy.to_numpy(dtype=float))
     ax.set_xlim(0.3, 1.0)

@@ -121,7 +121,9 @@ def plot_accuracy_vs_noise(ax: Axes, df: pd.DataFrame) -> Axes:
     x = df["noise_m"].to_numpy() * 100
     if "ci_low" in df:
         ax.fill_between(x, df["ci_low"], df["ci_high"], color="black", alpha=0.12, lw=0)
-    ax.plot(x, df["accuracy"], "o-", color="black", label="all actions (band: 95 % interval)")
+    n = int(df["n_sequences"].iloc[0]) if "n_sequences" in df else None
+    label = "all actions" if n is None else f"all {n} gestures"
+    ax.plot(x, df["accuracy"], "o-", color="black", label=f"{label} (band: 95 % interval)")
     actions = [c.removeprefix("accuracy_") for c in df.columns if c.startswith("accuracy_")]
     step = 0.012 * (x.max() - x.min() if len(x) > 1 else 1.0)
     for k, a in enumerate(actions):
@@ -132,12 +134,12 @@ def plot_accuracy_vs_noise(ax: Axes, df: pd.DataFrame) -> Axes:
                 [df[f"accuracy_{a}"] - df[f"ci_low_{a}"], df[f"ci_high_{a}"] - df[f"accuracy_{a}"]]
             )
         color = ACTION_COLORS.get(a, "0.5")
-        ax.errorbar(xa, df[f"accuracy_{a}"], yerr=err, fmt=".--", color=color, elinewidth=0.8, label=a)
-    n = df["n_sequences"].iloc[0] if "n_sequences" in df else None
+        each = "" if n is None else f" ({n // max(len(actions), 1)})"
+        ax.errorbar(xa, df[f"accuracy_{a}"], yerr=err, fmt=".--", color=color, elinewidth=0.8, label=a + each)
     ax.set_xlabel("sensor noise (cm, std per joint)")
-    ax.set_ylabel("accuracy" + (f" ({n} gestures, {n // max(len(actions), 1)} per action)" if n else ""))
+    ax.set_ylabel("accuracy (95 % Wilson intervals)")
     ax.set_ylim(0, 1.02)
-    ax.legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.legend(fontsize=8, frameon=False, loc="lower left")
     return ax
 
 

@@ -185,8 +185,8 @@ def plot_effect_vs_soft_evidence(
         ]
         if has_original:
             handles += [
-                Patch(facecolor="white", edgecolor="0.2", label="glu (wide bars)"),
-                Patch(facecolor="white", **ORIGINAL_BAR, label=f"{ORIGINAL_LABEL} (narrow)"),
+                Patch(facecolor="white", edgecolor="0.2", label="glu, wide"),
+                Patch(facecolor="white", **ORIGINAL_BAR, label=f"{ORIGINAL_LABEL}, narrow"),
             ]
         axes[-1].legend(
             handles=handles,

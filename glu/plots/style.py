@@ -9,6 +9,7 @@ inline backend in a notebook, a non-interactive one on a headless machine; savin
 from __future__ import annotations
 
 import os
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -76,11 +77,13 @@ def stamp(fig: Figure, footer: str) -> None:
 
     A figure made with a layout engine (``layout="constrained"``, for legends outside every panel) keeps
     it; any other is laid out once with ``tight_layout``. The footer is written below the figure's
-    bottom edge, so it cannot overlap anything the layout placed.
+    bottom edge, so it cannot overlap anything the layout placed, in lines about as wide as the figure.
     """
     if fig.get_layout_engine() is None:
         fig.tight_layout()
-    fig.text(0.005, -0.01, footer, fontsize=FOOTER_SIZE, color="0.3", ha="left", va="top")
+    chars = int(fig.get_figwidth() * 72 / (0.56 * FOOTER_SIZE))  # about as wide as the figure
+    text = "\n".join(textwrap.wrap(footer, max(chars, 40), break_on_hyphens=False))
+    fig.text(0.005, -0.01, text, fontsize=FOOTER_SIZE, color="0.3", ha="left", va="top")
 
 
 def new_figure(
