@@ -161,3 +161,85 @@ def test_the_figure_is_checked_as_saved_tightly_cropped(fig):
     stamp(f, "the data this figure was drawn from")
     problems = figure_problems(f)
     assert any("the data this figure" in p and "legend" in p for p in problems), problems
+
+
+def _anticipation_frames(case: str = "sphere", n: int = 40):
+    """Small made-up frames shaped like AnticipationRun.curves(), .predictions() and published_comparison()."""
+    import pandas as pd
+
+    t = np.arange(1, n + 1)
+    frames = 120 + t
+    rows = []
+    for k, action in enumerate(("grasp", "tap", "touch")):
+        ll = -0.05 * (k + 1) * t + np.sin(t / 5 + k)
+        p = np.full(n, [0.2, 0.6, 0.2][k])
+        rows += [
+            {"case": case, "models": "made-up", "frame": f, "t": i, "seconds": (i - 1) / 30, "action": action}
+            | {"loglik_per_frame": v, "p_hmm": q}
+            for f, i, v, q in zip(frames, t, ll, p, strict=True)
+        ]
+    curves = pd.DataFrame(rows)
+    updates = t[4::5]
+    preds = pd.DataFrame(
+        [
+            {"case": case, "frame": 120 + u, "t": u, "node": "ObjVel", "value": v, "p": p}
+            for u in updates
+            for v, p in zip(("slow", "medium", "fast"), (0.05, 0.43, 0.52), strict=True)
+        ]
+    )
+    pub = [
+        ("loglik_per_frame", r.action, r.t, r.loglik_per_frame, r.loglik_per_frame + 1e-5, 3e-5)
+        for r in curves.itertuples()
+    ]
+    pub += [
+        ("ObjVel", v, updates[-1], p, p + 1e-6, 6e-6)
+        for v, p in (("slow", 0.05), ("medium", 0.43), ("fast", 0.52))
+    ]
+    published = pd.DataFrame(pub, columns=["quantity", "key", "t", "ours", "paper", "resolution"])
+    published["difference"] = published["ours"] - published["paper"]
+    return curves, preds, published
+
+
+def test_the_check_changes_no_saved_file_and_passes_the_hero_figure(tmp_path, monkeypatch):
+    """The hero's layout (constrained, a legend above, a seconds axis on top) moves when drawn twice: the
+    check must watch the drawing that is saved, not draw first."""
+    from glu.plots import anticipation_figure
+    from glu.plots.style import save_figure, stamp
+
+    curves, preds, published = _anticipation_frames()
+    written = {}
+    for name, check in (("plain", None), ("checked", tmp_path / "check")):
+        if check is not None:
+            monkeypatch.setenv(CHECK_ENV, str(check))
+        f = anticipation_figure([(curves, preds), (curves.assign(case="box"), preds)], [published, None])
+        stamp(f, "made-up data")
+        written[name] = [p.read_bytes() for p in save_figure(f, tmp_path / name / "hero")]
+        plt.close(f)
+    assert written["plain"] == written["checked"]
+    assert (tmp_path / "check" / "hero.txt").read_text() == ""
+
+
+REAL_DATA_NOTEBOOKS = ["02", "08", "10"]
+"""The notebooks with figures only the real data has: the original HMMs' scores, the hero (TCDS Fig. 5
+against the paper), the seated taps. The other notebooks' figures are checked in the quick run of
+tests/test_notebooks.py."""
+
+
+@pytest.mark.shared_data
+def test_the_figures_only_the_real_data_has_pass_the_check(shared_data, tmp_path, monkeypatch):
+    from glu.reproduce import reproduce
+
+    check = tmp_path / "check"
+    monkeypatch.setenv(CHECK_ENV, str(check))
+    out = tmp_path / "out"
+    summary = reproduce(
+        data=shared_data, quick=True, out=out, jobs=2, log=lambda _: None, only=REAL_DATA_NOTEBOOKS
+    )
+    assert all(n["status"] == "ok" for n in summary["notebooks"])
+    pngs = sorted((out / "figures").glob("*.png"))
+    names = {p.stem for p in pngs}
+    assert {"hmm_original_scores", "tcds_anticipation_original", "hmm_feature_settings"} <= names
+    problems = [
+        f"{p.stem}: {line}" for p in pngs for line in (check / f"{p.stem}.txt").read_text().splitlines()
+    ]
+    assert not problems, "\n".join(problems)

@@ -13,6 +13,7 @@ import jupytext
 import papermill as pm
 import pytest
 
+from glu.plots.overlap import CHECK_ENV
 from glu.reproduce import NotebookError, list_notebooks, reproduce
 
 EXPECTED_FIGURES = {
@@ -59,13 +60,24 @@ AGAIN = ["01", "02", "08"]
 EM), and the recordings."""
 
 
+FIGURE_CHECKS: dict[Path, Path] = {}
+"""Each quick run's folder → where it wrote the readability check of every figure (glu.plots.overlap)."""
+
+
 @pytest.fixture(scope="session")
 def quick_runs(tmp_path_factory):
-    """A complete quick run on synthetic data, and a second run of :data:`AGAIN` with the same parameters."""
+    """A complete quick run on synthetic data, and a second run of :data:`AGAIN` with the same parameters.
+
+    Both check every figure they save for overlapping text (``GLU_FIGURE_CHECK``, see
+    :data:`FIGURE_CHECKS`); the files are the same with and without the check.
+    """
     outs = []
     for k, only in enumerate((None, AGAIN)):
         out = tmp_path_factory.mktemp(f"run{k}")
-        summary = reproduce(data="synthetic", quick=True, out=out, jobs=2, log=_silent, only=only)
+        FIGURE_CHECKS[out] = tmp_path_factory.mktemp(f"run{k}-figure-check")
+        with pytest.MonkeyPatch.context() as env:
+            env.setenv(CHECK_ENV, str(FIGURE_CHECKS[out]))
+            summary = reproduce(data="synthetic", quick=True, out=out, jobs=2, log=_silent, only=only)
         outs.append((out, summary))
     return outs
 
@@ -102,6 +114,20 @@ def test_notebook_quick_run_writes_its_figures(quick_runs, name):
         assert res.returncode == 0, f"{rec}: {res.stderr}"
     svg = (out / "figures" / f"{EXPECTED_FIGURES[name][0]}.svg").read_text()
     assert "synthetic data" in svg  # every figure says which data it came from
+
+
+def test_no_figure_has_overlapping_text_or_a_legend_on_data(quick_runs):
+    """Every figure of the quick run passes glu.plots.overlap (tests/test_figure_overlap.py tests the check)."""
+    out, _ = quick_runs[0]
+    pngs = sorted((out / "figures").glob("*.png"))
+    assert len(pngs) >= sum(len(v) for v in EXPECTED_FIGURES.values())
+    problems = {}
+    for png in pngs:
+        report = FIGURE_CHECKS[out] / f"{png.stem}.txt"
+        assert report.is_file(), f"{png.name} was not checked"
+        if report.read_text().strip():
+            problems[png.stem] = report.read_text().splitlines()
+    assert not problems, "\n".join(f"{name}: {p}" for name, ps in problems.items() for p in ps)
 
 
 def test_the_trained_recogniser_is_published_to_models(quick_runs):

@@ -40,7 +40,9 @@ def plot_soft_sweep(ax: Axes, df: pd.DataFrame, legend: bool = True) -> Axes:
     low = [str(v) for v, g in df.groupby(target, sort=False) if g["p"].max() < NEAR_ZERO]
     title = str(df["evidence"].iloc[0])
     if low:
-        title += f"\n{' and '.join(low)} stays below {NEAR_ZERO:g} under every rule (its lines lie along the axis)"
+        title += (
+            f"\n{' and '.join(low)} stays below {NEAR_ZERO:g} under every rule (its lines lie along the axis)"
+        )
     ax.set_title(title, fontsize=9)
     if legend:
         values = dict.fromkeys(df[target])

@@ -68,8 +68,19 @@ def figure_problems(fig: Figure, dpi: float = 150.0) -> list[str]:
 
     The figure is rendered as :func:`glu.plots.style.save_figure` saves it (PNG at ``dpi``, cropped with
     ``bbox_inches="tight"``, which moves whatever is placed relative to the figure's edges), and checked
-    as drawn, before matplotlib restores its layout.
+    as drawn. Drawing a figure can move what a layout engine places, so :func:`glu.plots.style.save_figure`
+    checks the very drawing it saves (:func:`watching`) rather than calling this first.
     """
+    with watching(fig) as problems:
+        fig.savefig(io.BytesIO(), format="png", dpi=dpi, bbox_inches="tight")
+    return problems
+
+
+@contextmanager
+def watching(fig: Figure) -> Iterator[list[str]]:
+    """Check ``fig`` each time it is drawn in the block (by a ``savefig``); the yielded list then holds the
+    problems found in the last drawing. Nothing drawn is changed."""
+    problems: list[str] = []
     found: list[list[str]] = []
     drawn: list[Text] = []
     draw = fig.draw
@@ -82,10 +93,10 @@ def figure_problems(fig: Figure, dpi: float = 150.0) -> list[str]:
     fig.draw = checked_draw
     try:
         with _recording_texts(drawn):
-            fig.savefig(io.BytesIO(), format="png", dpi=dpi, bbox_inches="tight")
+            yield problems
     finally:
         del fig.draw
-    return found[-1] if found else []
+    problems.extend(found[-1] if found else [])
 
 
 def _problems(fig: Figure, renderer, drawn_texts: list[Text]) -> list[str]:

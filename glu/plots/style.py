@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import textwrap
 from collections.abc import Sequence
+from contextlib import nullcontext
 from pathlib import Path
 
 import matplotlib
@@ -20,7 +21,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from glu.files import atomic_path, atomic_write_text
-from glu.plots.overlap import CHECK_ENV, figure_problems
+from glu.plots.overlap import CHECK_ENV, watching
 
 matplotlib.rcParams["svg.hashsalt"] = "glu"
 DPI = 150
@@ -52,22 +53,22 @@ def rule_label(rule: str) -> str:
 def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
     """Save ``fig`` as ``path.<fmt>`` for each format, deterministically; returns the files written.
 
-    With the environment variable ``GLU_FIGURE_CHECK`` naming a folder, the figure's readability problems
-    (:func:`glu.plots.overlap.figure_problems`, one per line) are written there first, to ``<name>.txt``.
+    With the environment variable ``GLU_FIGURE_CHECK`` naming a folder, the readability problems of the
+    PNG as it is drawn (:func:`glu.plots.overlap.watching`, one per line) are written there, to
+    ``<name>.txt``; the files are the same with and without the check.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     check = os.environ.get(CHECK_ENV)
-    if check:  # the test suite's readability check (glu.plots.overlap), before saving
-        atomic_write_text(
-            Path(check) / f"{path.name}.txt", "".join(f"{p}\n" for p in figure_problems(fig, DPI))
-        )
     out = []
     for fmt in formats:
         target = path.with_suffix(f".{fmt}")
         meta = {"png": {"Software": None}, "svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt, {})
-        with atomic_path(target) as tmp:
+        watch = check and fmt == "png"  # the test suite's readability check (glu.plots.overlap)
+        with watching(fig) if watch else nullcontext([]) as problems, atomic_path(target) as tmp:
             fig.savefig(tmp, format=fmt, metadata=meta, bbox_inches="tight", dpi=DPI)
+        if watch:
+            atomic_write_text(Path(check) / f"{path.name}.txt", "".join(f"{p}\n" for p in problems))
         out.append(target)
     return out
 
