@@ -225,21 +225,32 @@ against the paper), the seated taps. The other notebooks' figures are checked in
 tests/test_notebooks.py."""
 
 
-@pytest.mark.shared_data
-def test_the_figures_only_the_real_data_has_pass_the_check(shared_data, tmp_path, monkeypatch):
+def _checked_run(data, out, check, monkeypatch, **kwargs) -> list[str]:
+    """Run notebooks with the check on; the problems of every figure written, as "name: problem" lines."""
     from glu.reproduce import reproduce
 
-    check = tmp_path / "check"
     monkeypatch.setenv(CHECK_ENV, str(check))
-    out = tmp_path / "out"
-    summary = reproduce(
-        data=shared_data, quick=True, out=out, jobs=2, log=lambda _: None, only=REAL_DATA_NOTEBOOKS
-    )
+    summary = reproduce(data=data, out=out, jobs=2, log=lambda _: None, **kwargs)
     assert all(n["status"] == "ok" for n in summary["notebooks"])
     pngs = sorted((out / "figures").glob("*.png"))
-    names = {p.stem for p in pngs}
+    assert pngs and all((check / f"{p.stem}.txt").is_file() for p in pngs)
+    return [f"{p.stem}: {line}" for p in pngs for line in (check / f"{p.stem}.txt").read_text().splitlines()]
+
+
+@pytest.mark.shared_data
+def test_the_figures_only_the_real_data_has_pass_the_check(shared_data, tmp_path, monkeypatch):
+    out, check = tmp_path / "out", tmp_path / "check"
+    problems = _checked_run(shared_data, out, check, monkeypatch, quick=True, only=REAL_DATA_NOTEBOOKS)
+    names = {p.stem for p in (out / "figures").glob("*.png")}
     assert {"hmm_original_scores", "tcds_anticipation_original", "hmm_feature_settings"} <= names
-    problems = [
-        f"{p.stem}: {line}" for p in pngs for line in (check / f"{p.stem}.txt").read_text().splitlines()
-    ]
+    assert not problems, "\n".join(problems)
+
+
+@pytest.mark.slow
+@pytest.mark.shared_data
+def test_every_figure_of_the_full_run_on_the_real_data_passes_the_check(shared_data, tmp_path, monkeypatch):
+    """The figures the README and the report show (about a minute)."""
+    out, check = tmp_path / "out", tmp_path / "check"
+    problems = _checked_run(shared_data, out, check, monkeypatch)
+    assert len(list((out / "figures").glob("*.png"))) >= 29
     assert not problems, "\n".join(problems)
