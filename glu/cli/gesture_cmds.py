@@ -26,9 +26,8 @@ from glu.cli.common import (
 from glu.data.source import HAND_LOG
 from glu.errors import DataError
 from glu.gestures.invariants import ALL, INVARIANCE_MEANING, INVARIANCES, RAW, Invariants
-from glu.gestures.mixsplit import RECIPES
 from glu.gestures.synthetic import GESTURES
-from glu.gestures.training import TrainingConfig
+from glu.hmm import RECIPES, TrainingConfig
 from glu.schema import ACTIONS
 
 SYNTHETIC_NOISE = 0.01
@@ -305,17 +304,20 @@ def _train(args: argparse.Namespace) -> int:
         print(f"  {a}: {len(v)} sequences, {sum(len(x) for x in v)} frames")
     bar = progress_bar(len(by_action), "train", "model")
     try:
-        rec = train_recognizer(
-            by_action,
-            args.states,
-            args.mix,
+        config = TrainingConfig(
+            n_states=args.states,
+            n_mix=args.mix,
             n_iter=args.iter,
             tol=args.tol,
             covar_reg=args.covar_reg,
+            recipe=args.recipe,
+        )
+        rec = train_recognizer(
+            by_action,
+            config,
             seed=args.seed,
             warn=False,
             meta=meta,
-            recipe=args.recipe,
             features=args.features,
             progress=(lambda a: bar.update(1)) if bar is not None else None,
         )
@@ -331,8 +333,7 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
-    from glu.gestures.original import load_original_models
-    from glu.gestures.recognizer import Recognizer
+    from glu.gestures.recognizer import Recognizer, load_original_models
 
     if spec == "original":
         from glu.data.source import ORIGINAL_HMMS, resolve_data

@@ -19,7 +19,7 @@ import numpy as np
 
 from glu.data.recordings import ORIGINAL_SEGMENTS, RECORDING_ACTION, TRAINING_RECORDINGS
 from glu.data.source import DataSource
-from glu.gestures.features import load_features
+from glu.gestures.features import LOG_SCALE, load_features
 from glu.gestures.segmentation import (
     DEFAULT_PARAMS,
     RecordingSegmentation,
@@ -29,7 +29,7 @@ from glu.gestures.segmentation import (
     segment_recording,
     segment_repetitions,
 )
-from glu.gestures.synthetic import View, synthesize_gestures, synthesize_recording
+from glu.gestures.synthetic import SyntheticGesture, View, synthesize_gestures, synthesize_recording
 from glu.gestures.trajectories import DEFAULT_POLICY, RepairPolicy, repair
 from glu.schema import ACTIONS
 
@@ -216,3 +216,27 @@ def recording_segmentations(
         ref = [Segment(a, b, action, name) for a, b in g.segments]
         out.append((RecordingSegmentation(name, pieces, repaired.events), ref))
     return out
+
+
+def synthetic_recordings(seed: int = 0, noise: float = 0.01) -> dict[str, SyntheticGesture]:
+    """Synthetic look-alikes of the six real recordings (:data:`glu.data.recordings.RECORDING_ACTION`).
+
+    Each has the recording's action; the recordings with the originals' segments have their gestures at
+    exactly those frames (so ``tap1_hand`` frames 216–351 hold a tap, as in the real log); the other
+    training recordings hold four repetitions each. Deterministic in ``seed``.
+    """
+    out = {}
+    for i, (name, action) in enumerate(RECORDING_ACTION.items()):
+        if name in ORIGINAL_SEGMENTS:
+            out[name] = synthesize_recording(
+                action, 0, seed + i, noise=noise, placements=ORIGINAL_SEGMENTS[name]
+            )
+        else:
+            out[name] = synthesize_recording(action, 4, seed + i, noise=noise)
+    return out
+
+
+def hand_log_arrays(gesture: SyntheticGesture) -> tuple[np.ndarray, np.ndarray]:
+    """A synthetic recording as a hand log holds it: timestamps (s) and features × 1000, shapes (n,), (n, 3)."""
+    traj = gesture.trajectory()
+    return traj.t, traj.xyz * LOG_SCALE

@@ -26,8 +26,7 @@ from typing import Any
 import numpy as np
 
 from glu.errors import ModelError
-from glu.gestures.batch import loglik_many, stack_models
-from glu.gestures.model import GestureHMM
+from glu.hmm import GestureHMM, loglik_many, stack_models
 
 MIN_MARGIN = 15.0
 """Nats per frame: the smallest distance outside the range that counts as far. Measured on the real data
