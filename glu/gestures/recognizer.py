@@ -42,13 +42,16 @@ from glu.files import atomic_write_json
 from glu.gestures.features import FEATURES_DESCRIPTION
 from glu.gestures.invariants import Invariants
 from glu.gestures.typicality import (
+    FRAMES_KEY,
     META_KEY,
+    FeatureRanges,
     LoglikRange,
     Typicality,
     check,
     ranges_from_meta,
     ranges_to_meta,
     sampled_range,
+    sampled_sequences,
     training_range,
 )
 from glu.hmm import (
@@ -242,10 +245,26 @@ class Recognizer:
             self.meta[META_KEY] = ranges_to_meta(ranges)
         return ranges
 
+    def feature_ranges(self) -> FeatureRanges:
+        """Where the reference gestures start and how far they move (:class:`~glu.gestures.typicality.FeatureRanges`).
+
+        A recogniser trained by glu keeps those of its training gestures; one without (the originals'
+        models) gets those of sequences sampled from its models, computed once (seeded) and kept in
+        :attr:`meta`. Only models over raw hand features can be sampled into hand features; an invariant
+        recogniser without saved ranges has none (and its gestures are not checked this way).
+        """
+        ranges = FeatureRanges.from_meta(self.meta)
+        if ranges is None and self.features.is_raw:
+            ranges = FeatureRanges.of(
+                [X for a in self.actions for X in sampled_sequences(self.models[a])], "sampled"
+            )
+            self.meta[FRAMES_KEY] = ranges.to_meta()
+        return ranges
+
     def typicality(self, X: np.ndarray) -> Typicality:
         """Whether a sequence, shape (T, D), looks like the models' reference data (see :func:`typicality.check`)."""
         X = as_sequence(X, self.n_features)
-        return check(self.loglik(X), len(X), self.actions, self.reference_ranges())
+        return check(self.loglik(X), len(X), self.actions, self.reference_ranges(), X, self.feature_ranges())
 
     # ------------------------------------------------------------------ files
 
@@ -298,6 +317,7 @@ class Recognizer:
         features = Invariants.from_dict(d.get("invariants"), source)
         try:
             ranges_from_meta(meta)  # the typicality ranges: checked now, not when a gesture is scored
+            FeatureRanges.from_meta(meta)
         except ModelError as e:
             raise ModelError(f"{source}: {e}") from None
         return cls(hmms, reports, meta, features)
@@ -374,8 +394,10 @@ def train_recognizer(
         models = {a: trained[i, a].model for a in sn}
         reports = {a: trained[i, a].report for a in sn}
         ranges = {a: training_range(models[a], sn[a]) for a in models}
+        hand = FeatureRanges.of([X for a in sn for X in sets[i][a]], "training")
         info = {
             META_KEY: ranges_to_meta(ranges),
+            FRAMES_KEY: hand.to_meta(),
             "recipe": config.recipe,
             "n_states": config.n_states,
             "n_mix": config.n_mix,
