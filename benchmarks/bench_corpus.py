@@ -5,7 +5,7 @@ Run on demand (not a test)::
     python benchmarks/bench_corpus.py [--data DIR] [--only forward episodes scaling million] [--episodes N]
 
 1. **forward** — many sequences scored against all three models in one vectorised pass
-   (:class:`glu.gestures.batch.BatchScorer`; Q = 6, M = 3, full covariance, 3-D): frame·model evaluations
+   (:class:`glu.hmm._engine.batch.BatchScorer`; Q = 6, M = 3, full covariance, 3-D): frame·model evaluations
    per second of CPU time on one core (goal ≥ 5 M), against glu's per-sequence forward and hmmlearn's
    ``score`` per sequence (goal ≥ 50×), with the largest difference to both;
 2. **episodes** — one chunk of 2000 episodes end to end on one core: simulation (world, gestures),

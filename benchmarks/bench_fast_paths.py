@@ -7,7 +7,7 @@ Run on demand (not a test)::
 Medians over repeats, on one BLAS thread; every pair is checked to give the same result first.
 
 1. **HMM initial mixtures**: the 6 per-state Gaussian mixtures of 30 HMMs (synthetic gestures, 12 per
-   action), by scikit-learn's ``GaussianMixture`` against :func:`glu.gestures.gmm_init.fit_gaussian_mixture`
+   action), by scikit-learn's ``GaussianMixture`` against :func:`glu.hmm.initialisation.fit_gaussian_mixture`
    (its own k-means with scikit-learn's labels, and EM compiled: equal to rounding, 1e-10 of each array's
    scale), for one and for three components;
 2. **ranking candidate sentences**: 141 evidence sets × the candidates (the originals' 9,941 samples with
@@ -37,7 +37,7 @@ def bench_mixtures(repeats: int) -> None:
     from sklearn.mixture import GaussianMixture
 
     from glu.gestures.corpus import synthetic_corpus
-    from glu.gestures.gmm_init import fit_gaussian_mixture
+    from glu.hmm.initialisation import fit_gaussian_mixture
 
     corpus = synthetic_corpus(12, seed=3)
     slices = []  # the frames of each state's time slices, as init_left_to_right cuts them (6 states)

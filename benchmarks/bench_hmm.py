@@ -13,7 +13,7 @@ Measures, for a 150-frame sequence:
 3. one new frame for all four models of a bank: glu's :class:`~glu.gestures.recognizer.GestureStream` step (target
    ≤ 100 µs) against rescoring the grown prefix with hmmlearn (four ``score`` calls);
 4. training one model (Q = 6, M = 3, 20 EM iterations, 20 synthetic gestures): glu's vectorised
-   Baum–Welch (:mod:`glu.gestures.baum_welch`) against hmmlearn's ``GMMHMM.fit`` from the same start;
+   Baum–Welch (:mod:`glu.hmm.em`) against hmmlearn's ``GMMHMM.fit`` from the same start;
 5. the same streaming step when the recogniser computes invariant features (all four invariances,
    :mod:`glu.gestures.invariants`) from each frame: target at most 20 % more than the raw step.
 
@@ -35,7 +35,7 @@ from timing import median_time
 def _setup(data: str | None):
     from glu.data.source import DataSource, resolve_data
     from glu.gestures.features import load_features
-    from glu.gestures.original import load_original_models
+    from glu.gestures.recognizer import load_original_models
     from glu.paths import shared_data_dir
 
     source = None
@@ -52,11 +52,11 @@ def _setup(data: str | None):
     from glu.gestures.corpus import synthetic_corpus
     from glu.gestures.recognizer import train_recognizer
     from glu.gestures.synthetic import GESTURES
+    from glu.hmm import TrainingConfig
 
     seqs = synthetic_corpus(8, seed=0, actions=GESTURES)
-    rec = train_recognizer(
-        {a: [s.xyz for s in seqs if s.action == a] for a in GESTURES}, n_iter=20, warn=False
-    )
+    by_action = {a: [s.xyz for s in seqs if s.action == a] for a in GESTURES}
+    rec = train_recognizer(by_action, TrainingConfig(n_iter=20), warn=False)
     X = np.concatenate([s.xyz for s in seqs])[:150]
     return rec, X, "4 models trained on synthetic gestures, a synthetic 150-frame sequence"
 
@@ -103,17 +103,18 @@ def main(argv: list[str] | None = None) -> int:
         rows.append((f"one new frame, {len(models)} models (stream)", glu_step, hl_step, "≤ 100 µs"))
 
         from glu.gestures.corpus import synthetic_corpus
-        from glu.gestures.training import train_hmm
+        from glu.hmm import TrainingConfig, train
 
-        train = [s.xyz for s in synthetic_corpus(20, seed=1, actions=("tap",))]
-        n_train = sum(len(x) for x in train)
+        sequences = [s.xyz for s in synthetic_corpus(20, seed=1, actions=("tap",))]
+        n_train = sum(len(x) for x in sequences)
 
         def em(engine: str):
-            return lambda: train_hmm(train, 6, 3, n_iter=20, tol=1e-12, warn=False, engine=engine)
+            config = TrainingConfig(n_iter=20, tol=1e-12)
+            return lambda: train(sequences, config, warn=False, engine=engine)
 
         glu_em = median_time(em("glu"), max(1, args.repeats // 2))
         hl_em = median_time(em("hmmlearn"), max(1, args.repeats // 3))
-        rows.append((f"EM, 20 iterations, {len(train)} sequences ({n_train} frames)", glu_em, hl_em, ""))
+        rows.append((f"EM, 20 iterations, {len(sequences)} sequences ({n_train} frames)", glu_em, hl_em, ""))
 
         from glu.gestures.recognizer import Recognizer
 

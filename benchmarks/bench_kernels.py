@@ -1,4 +1,4 @@
-"""Speed of the compiled HMM loops (glu.gestures.kernels) against the array code they replaced.
+"""Speed of the compiled HMM loops (glu.hmm._engine.kernels) against the array code they replaced.
 
 Run on demand (not a test)::
 
@@ -9,11 +9,11 @@ compiled (kept here as the reference, as ``bench_fast_paths.py`` keeps its "befo
 checked to agree first. Last, the cost of compiling from an empty cache (what the first run on a fresh
 machine pays once) and of loading the cached code, each in a fresh process.
 
-1. **scoring** (:func:`glu.gestures.batch.loglik_many`): synthetic gestures under 3 trained HMMs (Q = 6,
+1. **scoring** (:func:`glu.hmm._engine.batch.loglik_many`): synthetic gestures under 3 trained HMMs (Q = 6,
    M = 1 and 3), 30 and 450 sequences;
-2. **forward–backward** of batched Baum–Welch (:func:`glu.gestures.baum_welch_batch.forward_backward_many`):
+2. **forward–backward** of batched Baum–Welch (:func:`glu.hmm._engine.em_batch.forward_backward_many`):
    30, 300 and 2,000 sequences of 120–180 frames, Q = 6;
-3. **the mixture log-sum-exp of EM** (:func:`glu.gestures.kernels.mixture_posteriors`): 5 and 40 models'
+3. **the mixture log-sum-exp of EM** (:func:`glu.hmm._engine.kernels.mixture_posteriors`): 5 and 40 models'
    frames, Q = 6, M = 3.
 """
 
@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from glu.gestures.forward import TINY, log_emissions, scaled_step
+from glu.hmm.inference import TINY, log_emissions, scaled_step
 
 
 def best_time(fn, repeats: int) -> float:
@@ -118,7 +118,8 @@ def _row(what: str, before: float, after: float) -> None:
 _FIRST_CALLS = """
 import time, numpy as np
 t = time.perf_counter()
-from glu.gestures import kernels, gmm_init
+from glu.hmm._engine import kernels
+from glu.hmm import initialisation as gmm_init
 X = np.random.default_rng(0).normal(size=(40, 3))
 kernels.forward_backward_scaled(np.zeros((1, 2, 2)), np.array([2]), np.ones((1, 2)) / 2, np.ones((1, 2, 2)) / 2)
 kernels.loglik_banked([np.zeros((2, 1))], np.zeros((1, 1, 1, 1)), np.ones((1, 1, 1, 1, 1)), np.zeros((1, 1, 1)),
@@ -154,11 +155,12 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     from threadpoolctl import threadpool_limits
 
-    from glu.gestures import baum_welch_batch, kernels
-    from glu.gestures.batch import loglik_many, stack_models
     from glu.gestures.corpus import synthetic_corpus
-    from glu.gestures.forward import left_to_right_transmat
-    from glu.gestures.training import train_hmm
+    from glu.hmm import TrainingConfig, train
+    from glu.hmm._engine import em_batch as baum_welch_batch
+    from glu.hmm._engine import kernels
+    from glu.hmm._engine.batch import loglik_many, stack_models
+    from glu.hmm.inference import left_to_right_transmat
 
     r = args.repeats
     with threadpool_limits(1):
@@ -166,7 +168,7 @@ def main(argv: list[str] | None = None) -> int:
         print("1. scoring synthetic gestures under 3 HMMs (loglik_many)")
         for M in (1, 3):
             models = [
-                train_hmm([s.xyz for s in corpus if s.action == a], 6, M, seed=0, warn=False)[0]
+                train([s.xyz for s in corpus if s.action == a], TrainingConfig(n_mix=M), warn=False).model
                 for a in ("grasp", "tap", "touch")
             ]
             bank = stack_models(models)

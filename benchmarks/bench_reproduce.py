@@ -29,7 +29,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=1, help="whole runs (default 1)")
     args = ap.parse_args(argv)
     from glu.data import resolve_data
-    from glu.reproduce import reproduce
+    from glu.run.reproduce import reproduce
 
     walls, per_notebook = [], {}
     for _ in range(args.repeats):

@@ -8,10 +8,10 @@ Measures, on one BLAS thread, medians over repeats:
 
 1. **leave-one-segment-out on the real standing segments** (glu's recipe and defaults, raw features: 3
    models on every segment + one per held-out segment): each model trained alone by
-   :func:`~glu.gestures.training.train_hmm`, as glu did before, against
+   :func:`glu.hmm.train` on its list of sequences (the reference EM), against
    :func:`glu.experiments.recipes.leave_one_segment_out`, which trains them in one batch
-   (:func:`glu.gestures.training.train_many`); also the EM alone (the same initial models):
-   :func:`glu.gestures.baum_welch.fit` per model against :func:`glu.gestures.baum_welch_batch.fit_many`.
+   (:func:`glu.hmm.train` on a mapping of training sets); also the EM alone (the same initial models):
+   :func:`glu.hmm.em.fit` per model against :func:`glu.hmm._engine.em_batch.fit_many`.
    Skipped without the real data;
 2. **5-fold cross-validation on synthetic gestures** (20 per action, three actions: 15 models): the same
    two ways (:func:`glu.experiments.gestures.cross_validate` is the batched one);
@@ -36,7 +36,7 @@ def _fmt(seconds: float) -> str:
 
 
 def _params(m):
-    from glu.gestures.baum_welch import GMMHMMParams
+    from glu.hmm.em import GMMHMMParams
 
     return GMMHMMParams(m.startprob, m.transmat, m.weights, m.means, m.covars)
 
@@ -65,24 +65,25 @@ def _cv_sets(sequences, k, seed):
 
 
 def _compare_training(label, sets, batched, repeats, rows):
-    """Time training every set alone (train_hmm) against ``batched()``; check they agree."""
-    from glu.gestures.training import TrainingConfig, init_left_to_right, train_hmm
+    """Time training every set alone (``train`` on one list) against ``batched()``; check they agree."""
+    from glu.hmm import TrainingConfig, train
+    from glu.hmm.initialisation import init_left_to_right
 
     cfg = TrainingConfig()
 
     def alone():
-        return [train_hmm(x, name=a, warn=False) for a, x in sets]
+        return [train(x, cfg, name=a, warn=False) for a, x in sets]
 
     ref = alone()
     t_alone = median_time(alone, repeats)
     t_batch = median_time(batched, repeats)
-    rows.append((f"{label}: {len(sets)} models, train_hmm each", t_alone, t_batch))
+    rows.append((f"{label}: {len(sets)} models, each trained alone", t_alone, t_batch))
     # EM alone, from the same initial models
-    from glu.gestures import baum_welch as bw
-    from glu.gestures.baum_welch_batch import fit_many
+    from glu.hmm import em as bw
+    from glu.hmm._engine.em_batch import fit_many
 
     problems = [
-        (x, _params(init_left_to_right(x, cfg.n_states, cfg.n_mix, 0, cfg.covar_reg))) for _, x in sets
+        (x, _params(init_left_to_right(x, cfg.n_states, cfg.n_mix, cfg.covar_reg, 0))) for _, x in sets
     ]
     tols = [cfg.tol * sum(len(s) for s in x) for x, _ in problems]
     fits = [bw.fit(x, p, cfg.n_iter, t, cfg.covar_reg) for (x, p), t in zip(problems, tols, strict=True)]
@@ -162,12 +163,12 @@ def _real_source(data: str | None):
 
 def _versus_hmmlearn(sets, repeats):
     """hmmlearn's GMMHMM.fit per model, glu's fit per model and fit_many, with hmmlearn's covariance step."""
-    from glu.gestures import baum_welch as bw
-    from glu.gestures.baum_welch_batch import fit_many
-    from glu.gestures.training import _run_hmmlearn, init_left_to_right
+    from glu.hmm import em as bw
+    from glu.hmm._engine.em_batch import fit_many
+    from glu.hmm.training import _run_hmmlearn, init_left_to_right
 
     reg, n_iter = 0.03, 20
-    problems = [(x, _params(init_left_to_right(x, 6, 3, 0, reg))) for _, x in sets]
+    problems = [(x, _params(init_left_to_right(x, 6, 3, reg, 0))) for _, x in sets]
 
     def hmmlearn():
         return [_run_hmmlearn(x, tuple(p), n_iter, 1e-300, reg, 0) for x, p in problems]

@@ -19,10 +19,10 @@ import pandas as pd
 
 from glu.bn.inference import InferenceEngine
 from glu.bn.soft import SOFT_RULES
-from glu.display import is_live
 from glu.errors import GluError
 from glu.fusion import ACTION, fuse
 from glu.language.descriptions import describe
+from glu.machine import is_live
 
 NOT_OBSERVED = "—"
 
@@ -98,7 +98,7 @@ def evidence_explorer(
 ) -> Any:
     """An interactive explorer in a live kernel; the static :class:`Exploration` of the start otherwise.
 
-    ``live`` forces either form (default: :func:`glu.display.is_live`). The arguments are the starting
+    ``live`` forces either form (default: :func:`glu.machine.is_live`). The arguments are the starting
     point, as :func:`explore`.
     """
     start = explore(engine, targets, evidence, p_hmm, rule, nbest)

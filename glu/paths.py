@@ -18,7 +18,7 @@ data folders (the *layout* inside a data folder belongs to :class:`glu.data.Data
 :class:`OutputLayout` names the folder of every kind of output, either the project's own (``figures/``,
 ``results/``, ``recordings/``, ``models/`` at the top, executed notebooks and the report under ``build/``)
 or one root holding them all (``glu reproduce --out DIR``, a notebook's ``out_dir``). Notebooks (through
-:mod:`glu.outputs`) and ``glu reproduce`` both use it, so the two can never disagree.
+:mod:`glu.run.outputs`) and ``glu reproduce`` both use it, so the two can never disagree.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ class Locations:
     notebooks : the jupytext notebooks ``NN_name.py``
     data : the folder of fetched data (``real/`` under it)
     scratch : where notebooks run by hand write their outputs
-    compiled : numba's cache of the compiled HMM loops (:mod:`glu.gestures.kernels`)
+    compiled : numba's cache of the compiled HMM loops (:mod:`glu.hmm._engine.kernels`)
     """
 
     package: Path

@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from glu.display import is_live
 from glu.experiments.anticipation import AnticipationRun
+from glu.machine import is_live
 
 ACTION_RGB = {
     "grasp": (76, 114, 176),

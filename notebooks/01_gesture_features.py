@@ -1,7 +1,13 @@
 # ---
 # jupyter:
 #   glu:
+#     about: hand trajectories, tracking gaps and outliers, automatic segmentation into
+#       repetitions
 #     expected_seconds: 3
+#     figures:
+#     - gesture_segmentation
+#     tables:
+#     - gesture_segments
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -28,7 +34,6 @@
 # %% tags=["parameters"]
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
 seed: int = 0  # seed of the synthetic recordings
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
@@ -37,7 +42,7 @@ import matplotlib.pyplot as plt
 from glu import plots
 from glu.experiments import gestures
 from glu.gestures.corpus import recording_segmentations
-from glu.notebook import start
+from glu.run import start
 
 out = start("01_gesture_features", globals())
 segmentations = recording_segmentations(out.source, seed=seed)

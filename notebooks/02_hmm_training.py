@@ -1,7 +1,30 @@
 # ---
 # jupyter:
 #   glu:
+#     about: 'left-to-right GMM-HMMs: training, the original 2013 models, k-fold accuracy,
+#       accuracy vs noise, leave-one-out'
 #     expected_seconds: 6
+#     figures:
+#     - hmm_original_scores
+#     - hmm_synthetic_accuracy
+#     models:
+#     - recognizer.json
+#     quick:
+#       folds: 3
+#       n_iter: 15
+#       n_per_action: 6
+#       noise_levels:
+#       - 0.0
+#       - 0.05
+#     real_only:
+#     - hmm_original_scores
+#     - hmm_real_leave_one_out
+#     tables:
+#     - hmm_accuracy_vs_noise
+#     - hmm_original_scores
+#     - hmm_real_leave_one_out
+#     - hmm_synthetic_cv
+#     - hmm_training
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -28,6 +51,7 @@
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
 n_states: int = 6  # Q: HMM states per action
 n_mix: int = 3  # M: Gaussian components per state
+n_iter: int = 200  # most EM iterations
 n_per_action: int = 20  # synthetic corpus: gestures per action
 folds: int = 5  # k of the k-fold cross-validation
 noise_levels: list[float] = [
@@ -38,30 +62,28 @@ noise_levels: list[float] = [
 ]  # sensor noise (m) for the accuracy-vs-noise curve (3-fold)
 eval_tol: float = 1e-3  # EM tolerance (log-likelihood per frame) in the evaluation sweeps; training uses 1e-4
 seed: int = 0  # seed of the synthetic corpora and of EM initialisation
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 from glu import plots
 from glu.experiments import gestures
 from glu.gestures.corpus import gesture_sequences, synthetic_corpus
-from glu.notebook import start
+from glu.hmm import TrainingConfig
+from glu.run import start
 
 out = start("02_hmm_training", globals())
-train = {"n_states": n_states, "n_mix": n_mix}
-if quick:
-    n_per_action, folds, noise_levels, train = 6, 3, [0.0, 0.05], {**train, "n_iter": 15}
-sweep = {**train, "tol": eval_tol}
+train = TrainingConfig(n_states=n_states, n_mix=n_mix, n_iter=n_iter)
+sweep = train.replace(tol=eval_tol)
 
 # %% [markdown]
 # ## Training on the recordings
 
 # %%
 sequences = gesture_sequences(out.source, n_per_action=n_per_action, seed=seed)
-recognizer = gestures.train_on(sequences, seed=seed, **train)
+recognizer = gestures.train_on(sequences, train, seed=seed)
 report = gestures.training_table(recognizer)
 out.table(report, "hmm_training")
-recognizer.save(out.model(f"recognizer_{out.source.kind}.json"))
+recognizer.save(out.model("recognizer.json"))
 report
 
 # %% [markdown]
@@ -84,11 +106,11 @@ display_scores
 
 # %%
 corpus = synthetic_corpus(n_per_action, seed)
-predictions = gestures.cross_validate(corpus, k=folds, seed=seed, **sweep)
+predictions = gestures.cross_validate(corpus, k=folds, seed=seed, config=sweep)
 confusion = gestures.confusion_matrix(predictions)
 accuracy = gestures.accuracy(predictions)
 out.table(predictions, "hmm_synthetic_cv", accuracy=accuracy, folds=folds)
-noise = gestures.accuracy_vs_noise(noise_levels, n_per_action=n_per_action, k=3, seed=seed, **sweep)
+noise = gestures.accuracy_vs_noise(noise_levels, n_per_action=n_per_action, k=3, seed=seed, config=sweep)
 out.table(noise, "hmm_accuracy_vs_noise")
 fig, axes = plots.new_figure(2, width=4.2)
 plots.plot_confusion(axes[0], confusion)
@@ -102,7 +124,7 @@ noise
 
 # %%
 if out.source.is_real:
-    loo = gestures.leave_one_out(sequences, by="segment", seed=seed, **sweep)
+    loo = gestures.leave_one_out(sequences, by="segment", seed=seed, config=sweep)
     out.table(loo, "hmm_real_leave_one_out", accuracy=gestures.accuracy(loo[loo.testable]))
     summary = f"leave-one-segment-out accuracy: {gestures.accuracy(loo[loo.testable]):.3f} over {int(loo.testable.sum())} segments"
 else:

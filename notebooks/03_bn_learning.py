@@ -1,7 +1,16 @@
 # ---
 # jupyter:
 #   glu:
+#     about: K2 + BIC structure and BDeu/ML parameters, the original's all-zero rows
+#       and what they change
 #     expected_seconds: 3
+#     figures:
+#     - bn_structure
+#     - unseen_rows_comparison
+#     tables:
+#     - bn_learning_summary
+#     - bn_structure
+#     - unseen_rows_comparison
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -28,7 +37,6 @@
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
 words: str = "lab"  # descriptions: "lab" (transcribed, the paper's) or "asr" (speech recogniser)
 seed: int = 0  # seed (learning itself is deterministic)
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
@@ -38,7 +46,7 @@ from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
 from glu.experiments import fusion
-from glu.notebook import start
+from glu.run import start
 
 out = start("03_bn_learning", globals())
 table = load_experiments(out.source, words)

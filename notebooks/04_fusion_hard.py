@@ -1,7 +1,15 @@
 # ---
 # jupyter:
 #   glu:
+#     about: the HMMs' top action as hard evidence, on the five original test gestures
 #     expected_seconds: 2
+#     figures:
+#     - fusion_hard_on_gestures
+#     quick:
+#       n_iter: 15
+#       n_per_action: 6
+#     tables:
+#     - fusion_hard_on_gestures
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -29,8 +37,8 @@ unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the origi
 shape: str = "sphere"  # the object the gestures are applied to …
 size: str = "small"  # … and its size
 n_per_action: int = 20  # synthetic data: training gestures per action
+n_iter: int = 200  # synthetic data: most EM iterations of the HMMs
 seed: int = 0  # seed of synthetic gestures and EM initialisation
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
@@ -40,7 +48,8 @@ from glu.data import load_experiments
 from glu.experiments import fusion, gestures
 from glu.gestures import gesture_sequences, load_original_models
 from glu.gestures.corpus import held_out_gestures
-from glu.notebook import start
+from glu.hmm import TrainingConfig
+from glu.run import start
 
 out = start("04_fusion_hard", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
@@ -48,9 +57,8 @@ mat = out.source.original_hmms()
 if mat is not None:
     recognizer, models = load_original_models(mat), "original 2013 HMMs"
 else:
-    n = 6 if quick else n_per_action
-    train = {"n_iter": 15} if quick else {}
-    recognizer = gestures.train_on(gesture_sequences(out.source, n, seed), seed=seed, **train)
+    sequences = gesture_sequences(out.source, n_per_action, seed)
+    recognizer = gestures.train_on(sequences, TrainingConfig(n_iter=n_iter), seed=seed)
     models = "HMMs trained on synthetic gestures"
 segments = held_out_gestures(out.source, seed)
 print(f"{len(segments)} test gestures, {models}")

@@ -1,7 +1,18 @@
 # ---
 # jupyter:
 #   glu:
+#     about: 'soft evidence: virtual (the originals'') vs Jeffrey''s rule, on the TCDS
+#       rows and a continuous sweep'
 #     expected_seconds: 3
+#     figures:
+#     - fusion_soft_rules
+#     - fusion_soft_sweep
+#     quick:
+#       n_points: 11
+#     tables:
+#     - fusion_soft_rules
+#     - fusion_soft_sweep_box
+#     - fusion_soft_sweep_sphere
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -29,7 +40,6 @@ words: str = "lab"  # descriptions: "lab" (the paper's) or "asr"
 unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
 n_points: int = 101  # points of the p_HMM(tap) sweep
 seed: int = 0  # seed (unused: everything here is exact)
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
@@ -37,12 +47,10 @@ from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
 from glu.experiments import fusion
-from glu.notebook import start
+from glu.run import start
 
 out = start("05_fusion_soft", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
-if quick:
-    n_points = 11
 
 # %% [markdown]
 # ## TCDS effect prediction with both rules

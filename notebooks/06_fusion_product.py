@@ -1,7 +1,17 @@
 # ---
 # jupyter:
 #   glu:
+#     about: inferring the action with the product rule; the exact tap threshold for
+#       every object and effect
 #     expected_seconds: 3
+#     figures:
+#     - fusion_product_action
+#     - fusion_product_thresholds
+#     quick:
+#       n_points: 11
+#     tables:
+#     - fusion_product_sweep
+#     - fusion_product_thresholds
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -28,8 +38,8 @@
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
 words: str = "lab"  # descriptions: "lab" (the paper's) or "asr"
 unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
+n_points: int = 201  # points of the p_HMM(tap) sweep
 seed: int = 0  # seed (unused: everything here is exact)
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
@@ -37,7 +47,7 @@ from glu import plots
 from glu.bn import learn_bn
 from glu.data import load_experiments
 from glu.experiments import fusion
-from glu.notebook import start
+from glu.run import start
 
 out = start("06_fusion_product", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
@@ -45,9 +55,7 @@ bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
 # %%
 evidence = fusion.TCDS_ACTION_EVIDENCE
 threshold = fusion.tap_threshold(bn, evidence)
-sweep = fusion.soft_evidence_sweep(
-    bn, evidence, target="Action", n_points=11 if quick else 201, rules=("product",)
-)
+sweep = fusion.soft_evidence_sweep(bn, evidence, target="Action", n_points=n_points, rules=("product",))
 out.table(sweep, "fusion_product_sweep", tap_threshold=threshold)
 fig, (ax,) = plots.new_figure(1, width=6)
 plots.plot_soft_sweep(ax, sweep)

@@ -1,7 +1,16 @@
 # ---
 # jupyter:
 #   glu:
+#     about: "GLU 2017 Fig. 4 (effect prediction) and Fig. 5 (\u0394p(w)), against the\
+#       \ original model"
 #     expected_seconds: 3
+#     figures:
+#     - glu2017_effect_prediction
+#     - glu2017_word_change
+#     tables:
+#     - glu2017_effect_prediction
+#     - glu2017_word_change_code
+#     - glu2017_word_change_text
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -28,7 +37,6 @@ words: str = "lab"  # descriptions: "lab" (the paper's) or "asr"
 unseen_words: str = "zero"  # CPT rows of unseen word parents: "zero" (the original's) or "uniform"
 threshold: float = 0.02  # words shown in Fig. 5: |Δp(w)| above this
 seed: int = 0  # seed (unused: everything here is exact)
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
@@ -36,7 +44,7 @@ from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
 from glu.experiments import fusion
-from glu.notebook import start
+from glu.run import start
 
 out = start("07_glu2017_figures", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)

@@ -1,7 +1,54 @@
 # ---
 # jupyter:
 #   glu:
+#     about: 'TCDS: action and effect under soft evidence, effect anticipation on the
+#       originals'' schedule with the original HMMs (against the published Fig. 5) and
+#       HMMs trained by glu''s and the originals'' recipes (+ 6 Rerun recordings); the
+#       two recipes over seeds and EM tolerances'
 #     expected_seconds: 9
+#     figures:
+#     - tcds_action_vs_soft_evidence
+#     - tcds_anticipation_glu
+#     - tcds_anticipation_mixsplit
+#     - tcds_anticipation_original
+#     - tcds_effect_vs_soft_evidence
+#     quick:
+#       n_iter: 15
+#       n_per_action: 6
+#     real_only:
+#     - tcds_anticipation_box_original
+#     - tcds_anticipation_box_original_curves
+#     - tcds_anticipation_box_original_predictions
+#     - tcds_anticipation_box_published
+#     - tcds_anticipation_original
+#     - tcds_anticipation_sphere_original
+#     - tcds_anticipation_sphere_original_curves
+#     - tcds_anticipation_sphere_original_predictions
+#     - tcds_anticipation_sphere_published
+#     recordings:
+#     - tcds_anticipation_box_glu
+#     - tcds_anticipation_box_mixsplit
+#     - tcds_anticipation_box_original
+#     - tcds_anticipation_sphere_glu
+#     - tcds_anticipation_sphere_mixsplit
+#     - tcds_anticipation_sphere_original
+#     tables:
+#     - tcds_action_vs_soft_evidence
+#     - tcds_anticipation_box_glu_curves
+#     - tcds_anticipation_box_glu_predictions
+#     - tcds_anticipation_box_mixsplit_curves
+#     - tcds_anticipation_box_mixsplit_predictions
+#     - tcds_anticipation_box_original_curves
+#     - tcds_anticipation_box_original_predictions
+#     - tcds_anticipation_box_published
+#     - tcds_anticipation_sphere_glu_curves
+#     - tcds_anticipation_sphere_glu_predictions
+#     - tcds_anticipation_sphere_mixsplit_curves
+#     - tcds_anticipation_sphere_mixsplit_predictions
+#     - tcds_anticipation_sphere_original_curves
+#     - tcds_anticipation_sphere_original_predictions
+#     - tcds_anticipation_sphere_published
+#     - tcds_effect_vs_soft_evidence
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -38,10 +85,10 @@ score: str = "original"  # sentence score of the descriptions: "original" (as pr
 candidates: str = None  # "grammar", "samples" or a file; None: the originals' samples if the data has them
 n_states: int = 6  # our HMMs: states per action
 n_mix: int = 3  # our HMMs: Gaussian components per state
+n_iter: int = 200  # our HMMs: most EM iterations
 features: str = "centred"  # our HMMs: invariant features (glu.gestures.invariants), "raw" for none
 n_per_action: int = 20  # synthetic data: training gestures per action
 seed: int = 0  # seed of synthetic gestures and EM initialisation
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
@@ -50,8 +97,9 @@ from glu.bn import BayesNet, InferenceEngine, learn_bn
 from glu.data import load_experiments
 from glu.experiments import anticipation, fusion, gestures
 from glu.gestures import gesture_sequences, load_original_models
+from glu.hmm import TrainingConfig
 from glu.language import candidate_sentences
-from glu.notebook import start
+from glu.run import start
 
 out = start("08_tcds_figures", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
@@ -84,7 +132,7 @@ out.figure(fig, "tcds_effect_vs_soft_evidence")
 # ## Effect anticipation, frame by frame
 # With the originals' 2013 HMMs (real data only), and with HMMs trained here on the standing recordings
 # (grasp1, tap1, touch1 — never on the two seated taps shown) by two recipes: glu's, and the originals'
-# "mixsplit" (flat start, Baum–Welch, mixture splitting; `glu.gestures.mixsplit`), on start-centred
+# "mixsplit" (flat start, Baum–Welch, mixture splitting; `glu.hmm.mixsplit`), on start-centred
 # features by default (`features`; `glu.gestures.invariants`).
 
 # %%
@@ -96,13 +144,13 @@ banks = {}
 hmm_mat = out.source.original_hmms()
 if hmm_mat is not None:
     banks["original"] = load_original_models(hmm_mat)
-train = {"n_states": n_states, "n_mix": n_mix, "features": features, **({"n_iter": 15} if quick else {})}
+train = TrainingConfig(n_states=n_states, n_mix=n_mix, n_iter=n_iter)
 # the two anticipation recordings are test data: train on the other recordings only
-sequences = gesture_sequences(
-    out.source, n_per_action=6 if quick else n_per_action, seed=seed, include_test=False
+sequences = gesture_sequences(out.source, n_per_action=n_per_action, seed=seed, include_test=False)
+banks["glu"] = gestures.train_on(sequences, train, seed=seed, features=features)
+banks["mixsplit"] = gestures.train_on(
+    sequences, train.replace(recipe="mixsplit"), seed=seed, features=features
 )
-banks["glu"] = gestures.train_on(sequences, seed=seed, **train)
-banks["mixsplit"] = gestures.train_on(sequences, seed=seed, recipe="mixsplit", **train)
 
 runs, published = {}, {}
 for name, recognizer in banks.items():

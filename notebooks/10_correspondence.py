@@ -1,7 +1,55 @@
 # ---
 # jupyter:
 #   glu:
+#     about: 'the correspondence problem: HMMs trained on the robot''s own movements
+#       or one human view, recognising people turned, mirrored, seated, bigger or smaller,
+#       with raw and invariant features; the real seated taps over feature sets, EM
+#       settings and seeds (+ 1 Rerun recording)'
 #     expected_seconds: 20
+#     figures:
+#     - correspondence_conditions
+#     - correspondence_invariance_effects
+#     - correspondence_two_views
+#     - correspondence_viewpoint
+#     - hmm_feature_settings
+#     quick:
+#       feature_sets:
+#       - raw
+#       - centred
+#       - all
+#       levels:
+#       - "0\xB0"
+#       - "90\xB0"
+#       - mirrored
+#       n_iter: 10
+#       n_mix: 1
+#       n_states: 3
+#       n_test: 2
+#       n_train: 3
+#       real_features:
+#       - raw
+#       - centred
+#       real_n_iter: 10
+#       real_seeds:
+#       - 0
+#       real_settings:
+#       - Q3 M1
+#       seeds:
+#       - 0
+#       - 1
+#     real_only:
+#     - hmm_feature_settings
+#     - hmm_feature_settings_summary
+#     recordings:
+#     - correspondence_two_views
+#     tables:
+#     - correspondence_invariance_effects
+#     - correspondence_study
+#     - correspondence_summary
+#     - correspondence_two_views
+#     - hmm_feature_settings
+#     - hmm_feature_settings_summary
+#     - posture_offsets
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -46,9 +94,9 @@ feature_sets: list[str] = [
 ]  # study: feature sets compared
 n_states: int = 6  # study: HMM states per action
 n_mix: int = 1  # study: Gaussians per state
-normalise_body: bool = (
-    False  # study: features / fixed constants as in the 2017 logs (True: / measured body size)
-)
+n_iter: int = 50  # study: most EM iterations
+levels: list[str] = None  # study: the test conditions kept, by level ("0°", "mirrored", …); None: all
+normalise_body: bool = False  # study: features divided by the 2017 logs' fixed constants; True: by body size
 real_features: list[str] = ["raw", "centred", "centred+rotated"]  # real data: feature sets compared
 real_settings: list[str] = [
     "glu defaults",
@@ -57,9 +105,9 @@ real_settings: list[str] = [
     "mixsplit",
 ]  # real data: training settings, Q states, M Gaussians, reg covariance prior, or a recipe
 real_seeds: list[int] = [0, 1, 2]  # real data: EM seeds, only the first for single Gaussians
+real_n_iter: int = 200  # real data: most EM iterations
 view_gesture: int = 1  # two-view recording: the seed of the tap it shows (noise-free)
 seed: int = 0  # two-view recording: seed of the recognisers' training set and EM
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
@@ -70,17 +118,15 @@ from glu.experiments import anticipation, seated
 from glu.experiments import correspondence as corr
 from glu.gestures.corpus import gesture_sequences, original_test_segments
 from glu.gestures.synthetic import View
-from glu.notebook import start
+from glu.hmm import TrainingConfig
 from glu.plots import correspondence as cplots
+from glu.run import start
 
 out = start("10_correspondence", globals())
 conditions = corr.default_conditions(normalise_body)
-study = {"n_states": n_states, "n_mix": n_mix}
-if quick:
-    seeds, n_train, n_test, feature_sets = [0, 1], 3, 2, ["raw", "centred", "all"]
-    conditions = [c for c in conditions if c.level in ("0°", "90°", "mirrored")]
-    study = {"n_states": 3, "n_mix": 1, "n_iter": 10}
-    real_features, real_settings, real_seeds = ["raw", "centred"], ["Q3 M1"], [0]
+if levels is not None:
+    conditions = [c for c in conditions if c.level in levels]
+study = corr.STUDY_TRAINING.replace(n_states=n_states, n_mix=n_mix, n_iter=n_iter)
 
 # %% [markdown]
 # ## Recognising human gestures seen otherwise
@@ -94,7 +140,7 @@ results = corr.correspondence_study(
     n_train=n_train,
     n_test=n_test,
     normalise_body=normalise_body,
-    **study,
+    config=study,
 )
 summary = corr.summarise(results)
 out.table(results, "correspondence_study")
@@ -139,7 +185,10 @@ costs
 
 # %%
 raw_rec, inv_rec = (
-    corr.train_for("human", f, n_train, seed, normalise_body, tol=1e-3, **study) for f in ("raw", "all")
+    corr.train_for(
+        "human", f, n_train, seed, normalise_body, TrainingConfig(n_states=n_states, n_mix=n_mix, tol=1e-3)
+    )
+    for f in ("raw", "all")
 )
 views = (
     View(yaw_deg=0.0, normalise_body=normalise_body),
@@ -182,7 +231,7 @@ if out.source.is_real:
     taps = [s for s in original_test_segments(out.source) if s.recording in cases]
     settings = [seated.parse_setting(s) for s in real_settings]
     grid = seated.feature_settings(
-        standing, taps, real_features, settings, real_seeds, **({"n_iter": 10} if quick else {})
+        standing, taps, real_features, settings, real_seeds, TrainingConfig(n_iter=real_n_iter)
     )
     real_summary = seated.feature_settings_summary(grid)
     out.table(grid, "hmm_feature_settings")

@@ -1,7 +1,37 @@
 # ---
 # jupyter:
 #   glu:
+#     about: 'every fusion strategy on 20,000 simulated episodes, with 95 % intervals:
+#       accuracy and calibration against noise, early recognition, viewpoints, paired
+#       differences (the sweep of `glu evaluate`, in-process; `-p workers 2` on Dask)'
 #     expected_seconds: 22
+#     figures:
+#     - corpus_calibration
+#     - corpus_differences
+#     - corpus_early_recognition
+#     - corpus_strategies_vs_noise
+#     quick:
+#       bootstrap: 40
+#       chunk_size: 60
+#       episodes: 240
+#       fractions:
+#       - 0.4
+#       - 1.0
+#       n_iter: 10
+#       n_mix: 1
+#       n_per_action: 6
+#       n_states: 3
+#       noise_levels:
+#       - 0.0
+#       - 0.05
+#       viewpoints:
+#       - front
+#       - seated
+#       workers: 0
+#     tables:
+#     - corpus_differences
+#     - corpus_metrics
+#     - corpus_reliability
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -36,23 +66,27 @@ viewpoints: list[str] = ["front", "turned", "seated"]  # how the robot sees the 
 posteriors: list[str] = ["likelihood", "per_frame"]  # how p_HMM is read from the HMMs (corpus.POSTERIORS)
 fractions: list[float] = [0.2, 0.4, 0.6, 0.8, 1.0]  # observed fractions of each gesture
 bootstrap: int = 200  # Poisson bootstrap replicates for the 95 % intervals
+chunk_size: int = 2000  # episodes per task
+n_per_action: int = 20  # recogniser: synthetic training gestures per action
+n_states: int = 6  # recogniser: HMM states per action
+n_mix: int = 3  # recogniser: Gaussians per state
+n_iter: int = 200  # recogniser: most EM iterations
 workers: int = 0  # 0: run the chunks in this process; N: on a Dask LocalCluster of N workers
 seed: int = 0  # seed of the corpus, the recogniser's training gestures and EM
-quick: bool = False  # small, fast run (for tests)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 import tempfile
 
 from glu import plots
-from glu.notebook import start
+from glu.run import start
 from glu.sweep import config_from_dict, run_sweep
 
 out = start("11_corpus_evaluation", globals())
 settings = {
     "episodes": episodes,
     "seed": seed,
-    "chunk_size": 2000,
+    "chunk_size": chunk_size,
     "grid": {
         "noise": noise_levels,
         "viewpoints": viewpoints,
@@ -61,12 +95,8 @@ settings = {
     },
     "network": {"data": "synthetic" if out.source.root is None else str(out.source.root)},
     "evaluation": {"bootstrap": bootstrap},
+    "recognizer": {"n_per_action": n_per_action, "n_states": n_states, "n_mix": n_mix, "n_iter": n_iter},
 }
-if quick:
-    settings.update(episodes=240, chunk_size=60, evaluation={"bootstrap": 40})
-    settings["grid"].update(noise=[0.0, 0.05], viewpoints=["front", "seated"], fractions=[0.4, 1.0])
-    settings["recognizer"] = {"n_per_action": 6, "n_states": 3, "n_mix": 1, "n_iter": 10}
-    workers = 0
 config = config_from_dict(settings)
 
 # %% [markdown]

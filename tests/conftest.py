@@ -40,7 +40,7 @@ SYNTHETIC_N = 1270
 def synthetic_folder(tmp_path_factory) -> Path:
     """A synthetic data folder, as ``glu data synth`` writes it: both tables and the six hand logs."""
     from glu.data.synthetic import write_synthetic_folder
-    from glu.gestures.synthetic import hand_log_arrays, synthetic_recordings
+    from glu.gestures.corpus import hand_log_arrays, synthetic_recordings
 
     out = tmp_path_factory.mktemp("synthetic-data")
     logs = {name: hand_log_arrays(g) for name, g in synthetic_recordings(SYNTHETIC_SEED).items()}
@@ -84,11 +84,14 @@ def recognizer(source):
     """Gesture HMMs for the source: the originals' 2013 models on real data, small glu-trained ones otherwise."""
     from glu.experiments.gestures import train_on
     from glu.gestures.corpus import gesture_sequences
-    from glu.gestures.original import load_original_models
+    from glu.gestures.recognizer import load_original_models
+    from glu.hmm import TrainingConfig
 
     if source.original_hmms() is not None:
         return load_original_models(source.original_hmms())
-    return train_on(gesture_sequences(source, include_test=False), n_states=4, n_mix=1, n_iter=20)
+    return train_on(
+        gesture_sequences(source, include_test=False), TrainingConfig(n_states=4, n_mix=1, n_iter=20)
+    )
 
 
 # ---------------------------------------------------------------- the real data (reference tests)

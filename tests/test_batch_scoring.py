@@ -10,16 +10,16 @@ from scipy.interpolate import PchipInterpolator
 from scipy.stats import multivariate_normal
 
 from glu.errors import DataError
-from glu.gestures.batch import (
+from glu.gestures._pchip import pchip
+from glu.hmm._engine.batch import (
     BatchScorer,
     forward_curves_batch,
     quadratic_coefficients,
     quadratic_features,
     stack_models,
 )
-from glu.gestures.forward import left_to_right_transmat
-from glu.gestures.model import GestureHMM
-from glu.gestures.pchip import pchip
+from glu.hmm.inference import left_to_right_transmat
+from glu.hmm.model import GestureHMM
 
 
 def random_model(rng, Q, M, D=3, name=""):

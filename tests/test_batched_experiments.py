@@ -1,7 +1,7 @@
 """The experiments that train many models at once (EM batched) against training each model alone.
 
-The reference path here is the one-model one: :func:`glu.gestures.training.train_hmm` or
-:func:`glu.gestures.mixsplit.train_mixsplit` per model, and :meth:`Recognizer.loglik` per sequence.
+The reference path here is the one-model one: :func:`glu.hmm.train` on one model's list of sequences (the
+reference EM of :mod:`glu.hmm.em`, by either recipe), and :meth:`Recognizer.loglik` per sequence.
 """
 
 from __future__ import annotations
@@ -11,20 +11,15 @@ import pytest
 
 from glu.gestures.corpus import synthetic_corpus
 from glu.gestures.invariants import Invariants
-from glu.gestures.mixsplit import train_mixsplit
-from glu.gestures.model import GestureHMM
 from glu.gestures.recognizer import Recognizer
-from glu.gestures.training import train_hmm
+from glu.hmm import TrainingConfig, train
+from glu.hmm.model import GestureHMM
 
-SMALL = {"n_states": 3, "n_mix": 2, "n_iter": 10, "tol": 1e-3}
+SMALL = TrainingConfig(n_states=3, n_mix=2, n_iter=10, tol=1e-3)
 
 
-def _alone(seqs, name, seed, recipe, settings):
-    kw = {k: v for k, v in settings.items() if k not in ("n_states", "n_mix")}
-    Q, M = settings["n_states"], settings["n_mix"]
-    if recipe == "mixsplit":
-        return train_mixsplit(seqs, Q, M, name=name, warn=False, **kw)[0]
-    return train_hmm(seqs, Q, M, seed=seed, name=name, warn=False, **kw)[0]
+def _alone(seqs, name, seed, recipe, config):
+    return train(seqs, config.replace(recipe=recipe), seed=seed, name=name, warn=False).model
 
 
 def _assert_same_model(m, ref):
@@ -51,7 +46,9 @@ def test_leave_one_segment_out_equals_training_every_fold_alone(recipe, features
         ]
         models = {**full, held.action: _alone(rest, held.action, 1, recipe, SMALL)}
         expected.append(Recognizer(models, features=spec).classify(held.xyz))
-    loso, everything = leave_one_segment_out(corpus, seed=1, recipe=recipe, features=features, **SMALL)
+    loso, everything = leave_one_segment_out(
+        corpus, seed=1, config=SMALL.replace(recipe=recipe), features=features
+    )
     assert list(loso["predicted"]) == expected
     for a in actions:
         _assert_same_model(everything.models[a], full[a])
@@ -61,7 +58,7 @@ def test_cross_validation_equals_training_every_fold_alone():
     from glu.experiments.gestures import cross_validate, stratified_folds
 
     corpus = synthetic_corpus(4, seed=8)
-    pred = cross_validate(corpus, k=2, seed=3, **SMALL)
+    pred = cross_validate(corpus, k=2, seed=3, config=SMALL)
     folds = stratified_folds([s.action for s in corpus], 2, 3)
     actions = tuple(dict.fromkeys(s.action for s in corpus))
     for f in range(2):
@@ -80,7 +77,7 @@ def test_correspondence_study_equals_training_every_recogniser_alone():
     from glu.schema import ACTIONS
 
     conds = [c for c in corr.default_conditions() if c.level in ("0°", "mirrored")]
-    settings = {"n_states": 3, "n_mix": 1, "n_iter": 8, "tol": 1e-3}
+    settings = TrainingConfig(n_states=3, n_mix=1, n_iter=8, tol=1e-3)
     study = corr.correspondence_study(
         train_sources=("human",),
         feature_sets=("raw", "all"),
@@ -88,7 +85,7 @@ def test_correspondence_study_equals_training_every_recogniser_alone():
         seeds=(0, 1),
         n_train=3,
         n_test=2,
-        **settings,
+        config=settings,
     )
     for seed in (0, 1):
         corpus = corr.training_corpus("human", 3, seed)

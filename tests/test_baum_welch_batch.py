@@ -1,4 +1,4 @@
-"""Batched Baum–Welch (glu.gestures.baum_welch_batch) against fitting each model alone (baum_welch.fit,
+"""Batched Baum–Welch (glu.hmm._engine.em_batch) against fitting each model alone (baum_welch.fit,
 itself tested against hmmlearn and brute force in test_hmm.py)."""
 
 from __future__ import annotations
@@ -6,9 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from glu.gestures import baum_welch as bw
-from glu.gestures.baum_welch_batch import fit_many, forward_backward_many
-from glu.gestures.training import init_left_to_right
+from glu.hmm import em as bw
+from glu.hmm import inference
+from glu.hmm._engine.em_batch import fit_many, forward_backward_many
+from glu.hmm.initialisation import init_left_to_right
 
 
 @pytest.fixture(scope="module")
@@ -19,7 +20,7 @@ def corpus():
 
 
 def _start(seqs, Q, M, seed=0, reg=1e-3):
-    m = init_left_to_right(seqs, Q, M, seed, reg)
+    m = init_left_to_right(seqs, Q, M, reg, seed)
     return bw.GMMHMMParams(m.startprob, m.transmat, m.weights, m.means, m.covars)
 
 
@@ -80,13 +81,15 @@ def _underflowing_problem():
 
 
 def test_fit_many_redoes_only_the_underflowing_model_in_the_log_domain(monkeypatch):
-    from glu.gestures import baum_welch_batch
+    from glu.hmm._engine import em_batch as baum_welch_batch
 
     seqs, init = _underflowing_problem()
     log_b = np.array([[[-1800.0, 0.0], [0.0, -5.0]]])
     gamma, xi, ll, ok = forward_backward_many(log_b, np.array([2]), init.startprob[None], init.transmat[None])
     assert not ok[0]  # the scaled pass reports the underflow; the log domain has it finite
-    assert np.isfinite(bw.forward_backward_log(log_b, np.array([2]), init.startprob, init.transmat)[2]).all()
+    assert np.isfinite(
+        inference.forward_backward_log(log_b, np.array([2]), init.startprob, init.transmat)[2]
+    ).all()
     rng = np.random.default_rng(3)
     normal = [rng.normal(size=(n, 2)) + np.linspace(0, 3, n)[:, None] for n in (12, 20, 15)]
     problems = [(normal, _start(normal, 2, 1)), (seqs, init), (normal[1:], _start(normal[1:], 2, 1))]
@@ -97,7 +100,7 @@ def test_fit_many_redoes_only_the_underflowing_model_in_the_log_domain(monkeypat
 
     def log_domain(log_b, lengths, startprob, transmat):
         redone.append(sorted(lengths.tolist()))
-        return bw.forward_backward_log(log_b, lengths, startprob, transmat)
+        return inference.forward_backward_log(log_b, lengths, startprob, transmat)
 
     monkeypatch.setattr(baum_welch_batch, "forward_backward_log", log_domain)
     _assert_same(fit_many(problems, 6, 1e-300, 1e-2), ref)
@@ -115,7 +118,9 @@ def test_forward_backward_many_equals_one_model_at_a_time():
     gamma, xi, ll, ok = forward_backward_many(log_b, lengths, pi, A)
     assert ok.all()
     for s in range(S):
-        g, x, lls = bw.forward_backward(log_b[s : s + 1, : lengths[s]], lengths[s : s + 1], pi[s], A[s])
+        g, x, lls = inference.forward_backward(
+            log_b[s : s + 1, : lengths[s]], lengths[s : s + 1], pi[s], A[s]
+        )
         np.testing.assert_allclose(ll[s], lls[0], rtol=1e-12)
         np.testing.assert_allclose(gamma[s, : lengths[s]], g[0], atol=1e-12)
         np.testing.assert_allclose(xi[s], x, atol=1e-12)
@@ -137,22 +142,30 @@ def _assert_same_models(got, ref):
             np.testing.assert_allclose(getattr(m, a), getattr(m_ref, a), rtol=1e-8, atol=1e-12, err_msg=a)
 
 
-def test_train_many_equals_train_hmm_per_model(corpus):
-    from glu.gestures.training import train_hmm, train_many
+def test_training_many_models_equals_training_each_alone(corpus):
+    """glu.hmm.train on a mapping (batched EM) against glu.hmm.train on each model's list (the reference EM)."""
+    from glu.hmm import TrainingConfig, train
 
     sets = [[s.xyz for s in corpus if s.action == a][i:] for a in ("grasp", "tap") for i in (0, 2)]
     names, seeds = ["g0", "g2", "t0", "t2"], [0, 1, 2, 0]
-    kw = dict(n_iter=30, tol=1e-4, covar_reg=0.03, warn=False)
-    ref = [train_hmm(s, 5, 2, seed=sd, name=nm, **kw) for s, sd, nm in zip(sets, seeds, names, strict=True)]
-    _assert_same_models(train_many(sets, 5, 2, seed=seeds, name=names, **kw), ref)
+    config = TrainingConfig(n_states=5, n_mix=2, n_iter=30, tol=1e-4, covar_reg=0.03)
+    ref = [
+        train(s, config, seed=sd, name=nm, warn=False) for s, sd, nm in zip(sets, seeds, names, strict=True)
+    ]
+    batch = train(
+        dict(zip(names, sets, strict=True)), config, seed=dict(zip(names, seeds, strict=True)), warn=False
+    )
+    _assert_same_models(list(batch.values()), ref)
 
 
-def test_train_mixsplit_many_equals_train_mixsplit_per_model(corpus):
-    from glu.gestures.mixsplit import train_mixsplit, train_mixsplit_many
+def test_mixsplit_many_models_equals_mixsplit_each_alone(corpus):
+    from glu.hmm import TrainingConfig
+    from glu.hmm.mixsplit import train_batch, train_one
 
     sets = [[s.xyz for s in corpus if s.action == a][i:] for a in ("tap", "touch") for i in (0, 3)]
-    ref = [train_mixsplit(s, 4, 3, n_iter=15, name=f"m{i}", warn=False) for i, s in enumerate(sets)]
-    got = train_mixsplit_many(sets, 4, 3, n_iter=15, name=[f"m{i}" for i in range(len(sets))], warn=False)
+    config = TrainingConfig(n_states=4, n_mix=3, n_iter=15, recipe="mixsplit")
+    ref = [train_one(s, config, name=f"m{i}", warn=False) for i, s in enumerate(sets)]
+    got = train_batch(sets, config, names=[f"m{i}" for i in range(len(sets))], warn=False)
     _assert_same_models([g[:2] for g in got], [r[:2] for r in ref])
     for g, r in zip(got, ref, strict=True):
         assert [len(h) for h in g[2]] == [len(h) for h in r[2]]  # every stage ran as many iterations
@@ -160,18 +173,18 @@ def test_train_mixsplit_many_equals_train_mixsplit_per_model(corpus):
 
 def test_training_errors_name_the_model_as_one_model_training_does(corpus):
     from glu.errors import DataError
-    from glu.gestures.training import train_many
+    from glu.hmm import TrainingConfig, train
 
     ok = [s.xyz for s in corpus if s.action == "tap"]
     with pytest.raises(DataError, match="'short'.*too few"):
-        train_many([ok, [ok[0][:3]]], 6, 3, name=["tap", "short"])
+        train({"tap": ok, "short": [ok[0][:3]]}, TrainingConfig(n_states=6, n_mix=3))
 
 
 def test_mixture_posteriors_are_scipys_logsumexp_and_softmax():
     """The compiled mixture step against SciPy, with components of weight 0 (−∞) and huge magnitudes."""
     from scipy.special import logsumexp, softmax
 
-    from glu.gestures.kernels import mixture_posteriors
+    from glu.hmm._engine.kernels import mixture_posteriors
 
     rng = np.random.default_rng(5)
     lc = rng.normal(0, 50, size=(3, 40, 6, 3)) - 1e3 * rng.random((3, 40, 6, 1))

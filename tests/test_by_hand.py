@@ -14,7 +14,7 @@ import papermill as pm
 import pytest
 
 from glu import paths
-from glu.reproduce import list_notebooks
+from glu.run.reproduce import list_notebooks
 
 PUBLISHED = [paths.PROJECT_ROOT / kind for kind in paths.PUBLISHED_KINDS]
 
@@ -95,7 +95,7 @@ def test_plain_papermill_refuses_an_unknown_parameter_in_the_first_cell(tmp_path
     ("args", "message"),
     [
         (["08_tcds_figures", "-p", "rulez", "jeffrey"], "unknown parameter 'rulez' (did you mean 'rule'?)"),
-        (["08_tcds_figures", "-p", "quick", "no"], "quick must be True or False"),
+        (["08_tcds_figures", "-p", "final_update", "no"], "final_update must be True or False"),
         (["07_glu2017_figures", "-p", "threshold", "abc"], "not a number"),
         (["08_tcds_figures", "-p", "rule", "jefrey"], "rule must be one of virtual, jeffrey"),
         (["08_tcds_figures", "-p", "step", "1", "-p", "step", "2"], "-p step given more than once"),

@@ -160,7 +160,7 @@ def _one_line(status, err):
 
 
 def test_a_number_names_one_notebook_never_a_prefix_of_others():
-    from glu.reproduce import NotebookError, list_notebooks
+    from glu.run.reproduce import NotebookError, list_notebooks
 
     every = [p.stem for p in list_notebooks()]
     assert [p.stem for p in list_notebooks(["1"])] == [every[0]] == [p.stem for p in list_notebooks(["01"])]

@@ -19,10 +19,11 @@ from glu.experiments import correspondence as corr
 from glu.experiments import seated
 from glu.gestures.corpus import synthetic_corpus
 from glu.gestures.synthetic import View
+from glu.hmm import TrainingConfig
 from glu.plots import correspondence as cplots
 from glu.recording import write_two_views
 
-TINY = {"n_states": 2, "n_mix": 1, "n_iter": 3}
+TINY = {"config": TrainingConfig(n_states=2, n_mix=1, n_iter=3)}
 
 
 @pytest.fixture(scope="module")
@@ -136,7 +137,9 @@ def test_feature_settings_grid_over_features_settings_and_seeds():
     corpus = synthetic_corpus(2, seed=4)
     test = synthetic_corpus(1, seed=5)
     settings = [seated.parse_setting(s) for s in ("Q2 M1", "Q2 M2", "mixsplit Q2 M1")]
-    grid = seated.feature_settings(corpus, test, ("raw", "centred"), settings, (0, 1), n_iter=2)
+    grid = seated.feature_settings(
+        corpus, test, ("raw", "centred"), settings, (0, 1), TrainingConfig(n_iter=2)
+    )
     # single Gaussians and mixsplit have no random initialisation: one seed; two Gaussians: both seeds
     assert len(grid) == 2 * (1 + 2 + 1)
     assert list(grid.columns[:3]) == ["features", "setting", "recipe"]
@@ -154,7 +157,7 @@ def test_leave_one_segment_out_keeps_the_features():
     from glu.experiments.recipes import leave_one_segment_out
 
     corpus = synthetic_corpus(3, seed=6)
-    train = {"n_states": 2, "n_mix": 1, "n_iter": 3, "features": "centred+rotated"}
+    train = {"config": TrainingConfig(n_states=2, n_mix=1, n_iter=3), "features": "centred+rotated"}
     fast, everything = leave_one_segment_out(corpus, seed=0, **train)
     plain = leave_one_out(corpus, by="segment", seed=0, **train)
     assert list(fast["predicted"]) == list(plain["predicted"])

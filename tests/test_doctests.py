@@ -34,8 +34,8 @@ def test_the_key_entry_points_have_examples():
         "glu.fusion",
         "glu.evidence",
         "glu.bn.inference",
-        "glu.gestures.forward",
-        "glu.gestures.model",
+        "glu.hmm.inference",
+        "glu.hmm.model",
         "glu.language.descriptions",
         "glu.data.hand_logs",
     ):

@@ -12,7 +12,8 @@ from glu.errors import DataError, ModelError
 from glu.experiments.corpus import Condition
 from glu.experiments.evaluation import EvaluationSettings, Evaluator, statistic_columns
 from glu.fusion import fuse
-from glu.gestures.batch import BatchScorer
+from glu.hmm import TrainingConfig
+from glu.hmm._engine.batch import BatchScorer
 from glu.language.batch import agreement, best_sentences
 from glu.language.descriptions import nbest
 from glu.schema import ACTIONS
@@ -27,7 +28,7 @@ def small_recognizer(seed=0):
 
     corpus = synthetic_corpus(6, seed)
     by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
-    return train_recognizer(by_action, 3, 1, n_iter=10, seed=seed, warn=False)
+    return train_recognizer(by_action, TrainingConfig(n_states=3, n_mix=1, n_iter=10), seed=seed, warn=False)
 
 
 @pytest.fixture(scope="module")

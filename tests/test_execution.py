@@ -6,7 +6,8 @@ import json
 
 import pytest
 
-from glu.execution import THREAD_ENV, RunHandle, run_notebook
+from glu.machine import THREAD_ENV
+from glu.run.execution import RunHandle, run_notebook
 
 NOTEBOOK = """# %% tags=["parameters"]
 x: int = 0
@@ -88,7 +89,7 @@ def test_papermill_loads_without_jsonschemas_slow_optional_iri_checker_and_noteb
     probe = (
         "import json, sys\n"
         "{before}\n"
-        "from glu.execution import load_papermill\n"
+        "from glu.run.execution import load_papermill\n"
         "load_papermill()\n"
         "import jsonschema, nbformat, rfc3987_syntax\n"
         "nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell('1')])\n"

@@ -1,7 +1,7 @@
 """The corpus's fast paths equal the straightforward ones bit for bit: gestures, PCHIP, spike check, repair.
 
 The corpus (:mod:`glu.experiments.corpus`) simulates a chunk of episodes at once
-(:mod:`glu.gestures.synthetic_batch`, :mod:`glu.gestures.repair_many`, :func:`glu.gestures.pchip.pchip_many`);
+(:mod:`glu.gestures._synthetic_batch`, :mod:`glu.gestures._repair_many`, :func:`glu.gestures._pchip.pchip_many`);
 its results must be those of one gesture at a time (``synthesize_gesture(...).features()``, SciPy's
 ``PchipInterpolator`` and ``median_filter``, :func:`glu.gestures.trajectories.repair`), exactly.
 """
@@ -17,10 +17,10 @@ from glu.bn import InferenceEngine, learn_bn
 from glu.data import load_experiments
 from glu.errors import DataError
 from glu.experiments.corpus import GESTURE_KEY, VIEWPOINTS, Condition, GestureSettings, simulate_chunk
-from glu.gestures.pchip import pchip_many
-from glu.gestures.repair_many import repaired_many, spike_deviations
+from glu.gestures._pchip import pchip_many
+from glu.gestures._repair_many import repaired_many, spike_deviations
+from glu.gestures._synthetic_batch import gesture_features
 from glu.gestures.synthetic import GESTURES, SYNTHETIC_POLICY, View, synthesize_gesture
-from glu.gestures.synthetic_batch import gesture_features
 from glu.gestures.trajectories import DEFAULT_POLICY, DETECT_ONLY, RepairPolicy, Trajectory, repair
 
 VIEWS = [

@@ -227,7 +227,7 @@ tests/test_notebooks.py."""
 
 def _checked_run(data, out, check, monkeypatch, **kwargs) -> list[str]:
     """Run notebooks with the check on; the problems of every figure written, as "name: problem" lines."""
-    from glu.reproduce import reproduce
+    from glu.run.reproduce import reproduce
 
     monkeypatch.setenv(CHECK_ENV, str(check))
     summary = reproduce(data=data, out=out, jobs=2, log=lambda _: None, **kwargs)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from glu.cli import main
+from glu.gestures.corpus import synthetic_corpus
 from glu.gestures.features import LOG_SCALE
 from glu.gestures.synthetic import synthesize_recording
 
@@ -176,7 +177,9 @@ def test_train_arguments(capsys, tmp_path):
     status, _, err = run(capsys, "hmm", "train", "--synthetic", "0", "-o", str(tmp_path / "m.json"))
     assert_one_line_error(status, err, "expected a whole number ≥ 1, not 0")
     status, _, err = run(capsys, "hmm", "train", "--synthetic", "3", "--actions", "tap,wave", "-o", "m.json")
-    assert_one_line_error(status, err, "give distinct actions among grasp, tap, touch, push")
+    assert_one_line_error(status, err, "--actions: no synthetic wave; allowed: grasp, tap, touch, push")
+    status, _, err = run(capsys, "hmm", "train", "--synthetic", "3", "--actions", "tap,tap", "-o", "m.json")
+    assert_one_line_error(status, err, "give distinct action names")
     status, _, err = run(
         capsys, "hmm", "train", "--data", str(tmp_path / "nope"), "-o", str(tmp_path / "m.json")
     )
@@ -263,3 +266,78 @@ def test_bad_features_are_refused(capsys, tmp_path):
         status, err, "unknown invariance 'wobbly'; allowed: centred, scaled, rotated, mirrored"
     )
     assert not (tmp_path / "m.json").exists()
+
+
+def _recordings(root, n=4, seed=5, actions=("wave", "point")):
+    """One folder per action of t,x,y,z tables (metres) made from synthetic grasps and taps."""
+    from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK
+
+    metres = np.array([HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, HORIZONTAL_FALLBACK])
+    seqs = synthetic_corpus(n, seed, actions=("grasp", "tap"))
+    for label, source in zip(actions, ("grasp", "tap"), strict=True):
+        (root / label).mkdir(parents=True)
+        for i, s in enumerate(x for x in seqs if x.action == source):
+            t = np.arange(len(s.xyz)) / 30.0
+            table = np.column_stack([t, s.xyz * metres])
+            np.savetxt(root / label / f"r{i}.csv", table, delimiter=",", header="t,x,y,z", comments="")
+    return seqs
+
+
+def test_train_on_your_own_labelled_recordings(capsys, tmp_path):
+    """A folder per action (named as you like), then a manifest with frames: trained, saved, recognised."""
+    seqs = _recordings(tmp_path / "mine")
+    model = tmp_path / "mine.json"
+    args = ["--states", "3", "--mix", "1", "--iter", "20", "--features", "centred"]
+    status, out, err = run(
+        capsys, "hmm", "train", "--recordings", str(tmp_path / "mine"), "-o", str(model), *args
+    )
+    assert status == 0, err
+    assert "labelled recordings: mine (8 recordings)" in out and "point: 4 sequences" in out
+    from glu.gestures.recognizer import Recognizer
+
+    rec = Recognizer.load(model)
+    assert rec.actions == ("point", "wave") and rec.features.name == "centred"
+    held = synthetic_corpus(6, 50, actions=("grasp", "tap"))
+    correct = [rec.classify(s.xyz) == {"grasp": "wave", "tap": "point"}[s.action] for s in held]
+    assert np.mean(correct) >= 0.8, correct  # chance is 1/2
+    manifest = tmp_path / "manifest.csv"
+    rows = [
+        "file,label,frames",
+        *(f"mine/wave/r{i}.csv,wave," for i in range(3)),
+        "mine/point/r0.csv,point,2:40",
+    ]
+    manifest.write_text("\n".join(rows) + "\n")
+    args = ["--states", "2", "--mix", "1", "--iter", "5"]
+    status, out, err = run(
+        capsys, "hmm", "train", "--recordings", str(manifest), "-o", str(tmp_path / "m.json"), *args
+    )
+    assert status == 0, err
+    assert "wave: 3 sequences" in out and "point: 1 sequences, 39 frames" in out
+    assert len(seqs) == 8
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("name,label\nx.csv,tap\n", "a manifest starts with the header file,label[,frames]"),
+        ("file,label,frames\nmine/wave/r0.csv,wave,9:2\n", "line 2: frames must be A:B with 1 ≤ A ≤ B"),
+        ("file,label\nnowhere.csv,wave\n", "nowhere.csv (manifest line 2): no such recording"),
+        ("file,label\n", "the manifest lists no recordings"),
+        ("file,label\nmine/wave/r0.csv\n", "line 2: expected 2 fields, got 1"),
+    ],
+)
+def test_a_bad_manifest_is_one_line(capsys, tmp_path, content, message):
+    _recordings(tmp_path / "mine", n=1)
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(content)
+    status, _, err = run(
+        capsys, "hmm", "train", "--recordings", str(manifest), "-o", str(tmp_path / "o.json")
+    )
+    assert_one_line_error(status, err, message)
+
+
+def test_an_empty_folder_of_recordings_is_one_line(capsys, tmp_path):
+    (tmp_path / "empty" / "wave").mkdir(parents=True)
+    out = str(tmp_path / "o.json")
+    status, _, err = run(capsys, "hmm", "train", "--recordings", str(tmp_path / "empty"), "-o", out)
+    assert_one_line_error(status, err, "no recordings found; expected one subfolder per action")

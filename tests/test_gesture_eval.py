@@ -16,8 +16,9 @@ from glu.experiments.gestures import (
     wilson_interval,
 )
 from glu.gestures.corpus import LabelledSequence, synthetic_corpus
+from glu.hmm import TrainingConfig
 
-SMALL = {"n_states": 3, "n_mix": 1, "n_iter": 15}
+SMALL = {"config": TrainingConfig(n_states=3, n_mix=1, n_iter=15)}
 
 
 def test_stratified_folds_balance_each_action():

@@ -13,8 +13,7 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
-from glu.gestures.gmm_init import fit_gaussian_mixture
-from glu.gestures.training import init_left_to_right
+from glu.hmm.initialisation import fit_gaussian_mixture, init_left_to_right
 
 
 def _sklearn_fit(X, n_mix, reg, seed):
@@ -67,7 +66,7 @@ def test_the_k_means_labels_are_scikit_learns(chunk):
     k-means++) and a constant coordinate, for 2 to 5 clusters."""
     from sklearn.cluster import KMeans
 
-    from glu.gestures.gmm_init import kmeans_labels
+    from glu.hmm.initialisation import kmeans_labels
 
     n = 0
     with threadpool_limits(1):  # KMeans on one thread, as training runs it
@@ -91,7 +90,7 @@ def test_k_means_relocates_an_empty_cluster_as_scikit_learn_does():
     scikit-learn's own Lloyd loop from the same centres."""
     from sklearn.cluster._kmeans import _kmeans_single_lloyd
 
-    from glu.gestures.gmm_init import kmeans_lloyd
+    from glu.hmm._engine.gmm import kmeans_lloyd
 
     with threadpool_limits(1):
         for seed in range(20):
@@ -115,7 +114,7 @@ def test_k_means_relocates_an_empty_cluster_as_scikit_learn_does():
 def test_em_runs_as_many_rounds_as_scikit_learn():
     from sklearn.cluster import KMeans
 
-    from glu.gestures.gmm_init import gmm_em
+    from glu.hmm._engine.gmm import gmm_em
 
     rounds = []
     with threadpool_limits(1):

@@ -13,11 +13,11 @@ from scipy.special import logsumexp
 from scipy.stats import multivariate_normal
 
 from glu.errors import DataError, ModelError
-from glu.gestures.forward import forward_curve, left_to_right_transmat, p_hmm_from_loglik
-from glu.gestures.model import GestureHMM
-from glu.gestures.original import load_original_models
-from glu.gestures.recognizer import Recognizer, train_recognizer
-from glu.gestures.training import HMMConvergenceWarning, init_left_to_right, train_hmm
+from glu.gestures.recognizer import Recognizer, load_original_models, train_recognizer
+from glu.hmm import HMMConvergenceWarning, TrainingConfig, train
+from glu.hmm.inference import forward_curve, left_to_right_transmat, p_hmm_from_loglik
+from glu.hmm.initialisation import init_left_to_right
+from glu.hmm.model import GestureHMM
 
 # --- independent references (no glu code) ----------------------------------------------------------
 
@@ -241,7 +241,7 @@ def corpus():
 def test_initialisation_from_equal_time_slices():
     rng = np.random.default_rng(8)
     seqs = [rng.normal(size=(n, 3)) + np.arange(n)[:, None] / n * 10 for n in (30, 45, 60)]
-    m = init_left_to_right(seqs, n_states=3, n_mix=1)
+    m = init_left_to_right(seqs, n_states=3, n_mix=1, covar_reg=0.03)
     for q in range(3):  # state q starts at the mean of the q-th third of every sequence
         frames = np.concatenate([X[len(X) * q // 3 : len(X) * (q + 1) // 3] for X in seqs])
         np.testing.assert_allclose(m.means[q, 0], frames.mean(axis=0), rtol=1e-10)
@@ -250,7 +250,9 @@ def test_initialisation_from_equal_time_slices():
 
 def test_training_keeps_the_left_to_right_structure(corpus):
     seqs = [s.xyz for s in corpus if s.action == "grasp"]
-    m, report = train_hmm(seqs, 5, 2, n_iter=15, tol=1e-6, name="grasp", warn=False)
+    m, report = train(
+        seqs, TrainingConfig(n_states=5, n_mix=2, n_iter=15, tol=1e-6), name="grasp", warn=False
+    )
     A = m.transmat
     assert np.all(np.tril(A, -1) == 0) and np.all(np.triu(A, 2) == 0)  # only stay or step right
     assert m.startprob.tolist() == [1.0, 0.0, 0.0, 0.0, 0.0]
@@ -267,14 +269,13 @@ def test_training_keeps_the_left_to_right_structure(corpus):
 @pytest.mark.parametrize(("action", "n_states", "n_mix"), [("grasp", 6, 3), ("tap", 4, 1), ("touch", 3, 2)])
 def test_vectorised_em_with_hmmlearns_covariance_step_equals_hmmlearns_fit(corpus, action, n_states, n_mix):
     """covariance='hmmlearn' is hmmlearn's GMMHMM update: the same history and parameters after 12 iterations."""
-    from glu.gestures import baum_welch as bw
-    from glu.gestures.training import init_left_to_right
+    from glu.hmm import em as bw
+    from glu.hmm.initialisation import init_left_to_right
 
     seqs = [s.xyz for s in corpus if s.action == action]
-    ref, r_ref = train_hmm(
-        seqs, n_states, n_mix, n_iter=12, tol=1e-9, covar_reg=1e-3, warn=False, engine="hmmlearn"
-    )
-    init = init_left_to_right(seqs, n_states, n_mix, 0, 1e-3)
+    config = TrainingConfig(n_states=n_states, n_mix=n_mix, n_iter=12, tol=1e-9, covar_reg=1e-3)
+    ref, r_ref = train(seqs, config, warn=False, engine="hmmlearn")
+    init = init_left_to_right(seqs, n_states, n_mix, 1e-3, 0)
     start = bw.GMMHMMParams(init.startprob, init.transmat, init.weights, init.means, init.covars)
     ours = bw.fit(seqs, start, 12, 1e-300, 1e-3, "hmmlearn")
     np.testing.assert_allclose(ours.history, r_ref.history, rtol=1e-10)
@@ -287,11 +288,11 @@ def test_one_map_em_step_equals_the_textbook_update(corpus):
     from scipy.special import logsumexp
     from scipy.stats import multivariate_normal
 
-    from glu.gestures import baum_welch as bw
-    from glu.gestures.training import init_left_to_right
+    from glu.hmm import em as bw
+    from glu.hmm.initialisation import init_left_to_right
 
     seqs = [s.xyz for s in corpus if s.action == "touch"][:3]
-    init = init_left_to_right(seqs, 3, 2, 0, 1e-3)
+    init = init_left_to_right(seqs, 3, 2, 1e-3, 0)
     start = bw.GMMHMMParams(init.startprob, init.transmat, init.weights, init.means, init.covars)
     Q, M, D, r = 3, 2, 3, 1e-3
     with np.errstate(divide="ignore"):
@@ -346,14 +347,9 @@ def test_one_map_em_step_equals_the_textbook_update(corpus):
 
 def test_glu_em_stops_like_hmmlearn_and_gains_at_least_as_much(corpus):
     seqs = [s.xyz for s in corpus if s.action == "tap"]
-    weak = {
-        "n_iter": 200,
-        "tol": 1e-3,
-        "covar_reg": 1e-3,
-        "warn": False,
-    }  # a weak prior: nearly the likelihood
-    _, r_ours = train_hmm(seqs, 4, 2, engine="glu", **weak)
-    _, r_ref = train_hmm(seqs, 4, 2, engine="hmmlearn", **weak)
+    weak = TrainingConfig(n_states=4, n_mix=2, n_iter=200, tol=1e-3, covar_reg=1e-3)  # nearly the likelihood
+    _, r_ours = train(seqs, weak, engine="glu", warn=False)
+    _, r_ref = train(seqs, weak, engine="hmmlearn", warn=False)
     assert r_ours.converged and r_ref.converged
     assert r_ours.final_loglik >= r_ref.final_loglik - 1e-6 * abs(r_ref.final_loglik)
 
@@ -361,11 +357,11 @@ def test_glu_em_stops_like_hmmlearn_and_gains_at_least_as_much(corpus):
 def test_non_convergence_is_reported(corpus):
     seqs = [s.xyz for s in corpus if s.action == "tap"]
     with pytest.warns(HMMConvergenceWarning, match="NOT converged after 2 of 2"):
-        _, report = train_hmm(seqs, 4, 1, n_iter=2, tol=1e-9, name="tap")
+        _, report = train(seqs, TrainingConfig(n_states=4, n_mix=1, n_iter=2, tol=1e-9), name="tap")
     assert not report.converged and report.n_iter == 2
     with warnings.catch_warnings():
         warnings.simplefilter("error", HMMConvergenceWarning)
-        _, report = train_hmm(seqs, 4, 1, n_iter=300, tol=1e-3, name="tap")
+        _, report = train(seqs, TrainingConfig(n_states=4, n_mix=1, n_iter=300, tol=1e-3), name="tap")
     assert report.converged and report.n_iter < 300
     assert abs(report.history[-1] - report.history[-2]) < 1e-3 * report.n_frames
 
@@ -374,7 +370,7 @@ def test_trained_recogniser_recognises_held_out_synthetic_gestures(corpus):
     from glu.gestures.corpus import synthetic_corpus
 
     train = {a: [s.xyz for s in corpus if s.action == a] for a in ("grasp", "tap", "touch")}
-    rec = train_recognizer(train, 4, 1, n_iter=30, warn=False)
+    rec = train_recognizer(train, TrainingConfig(n_states=4, n_mix=1, n_iter=30), warn=False)
     test = synthetic_corpus(12, seed=99, actions=("grasp", "tap", "touch"))
     acc = np.mean([rec.classify(s.xyz) == s.action for s in test])
     assert acc >= 0.75  # chance is 1/3
@@ -382,11 +378,15 @@ def test_trained_recogniser_recognises_held_out_synthetic_gestures(corpus):
 
 def test_training_input_errors():
     with pytest.raises(DataError, match="no sequences"):
-        train_hmm([])
+        train([])
     with pytest.raises(DataError, match="too few"):
-        train_hmm([np.zeros((3, 3))], 6, 3)
+        train([np.zeros((3, 3))], TrainingConfig(n_states=6, n_mix=3))
     with pytest.raises(DataError, match="sequence 2"):
-        train_hmm([np.zeros((30, 3)), np.zeros((30, 2))])
+        train([np.zeros((30, 3)), np.zeros((30, 2))])
+    with pytest.raises(ModelError, match="n_states=0"):
+        TrainingConfig(n_states=0)
+    with pytest.raises(ModelError, match="unknown training recipe 'htk'"):
+        TrainingConfig(recipe="htk")
 
 
 def test_model_validation():
@@ -489,7 +489,7 @@ def test_batched_forward_backward_equals_brute_force_over_state_paths():
     """γ, Σξ and log L of a padded batch, scaled and log-domain, against enumerating every state path."""
     import itertools
 
-    from glu.gestures.baum_welch import forward_backward, forward_backward_log
+    from glu.hmm.inference import forward_backward, forward_backward_log
 
     rng = np.random.default_rng(4)
     Q, lengths = 3, np.array([4, 2, 5])
@@ -522,7 +522,7 @@ def test_batched_forward_backward_equals_brute_force_over_state_paths():
 
 
 def test_batched_forward_backward_falls_back_to_the_log_domain_on_underflow():
-    from glu.gestures.baum_welch import forward_backward, forward_backward_log
+    from glu.hmm.inference import forward_backward, forward_backward_log
 
     A = np.array([[0.9, 0.1, 0.0], [0.0, 0.9, 0.1], [0.0, 0.0, 1.0]])
     pi = np.array([1.0, 0.0, 0.0])

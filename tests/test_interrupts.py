@@ -11,12 +11,17 @@ from pathlib import Path
 
 import pytest
 
-from glu.reproduce import OWNER_FILE, clean_stale_staging
+from glu.run.reproduce import OWNER_FILE, clean_stale_staging
 
-_SLOW = """# %% tags=["parameters"]
+_SLOW = """# ---
+# jupyter:
+#   glu:
+#     about: a test notebook
+# ---
+
+# %% tags=["parameters"]
 data: str = None  # data folder
 seed: int = 0  # seed
-quick: bool = False  # quick run
 out_dir: str = None  # outputs
 
 # %%

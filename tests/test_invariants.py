@@ -13,6 +13,7 @@ from glu.errors import DataError, ModelError
 from glu.gestures.invariants import INVARIANCES, Invariants
 from glu.gestures.recognizer import Recognizer, train_recognizer
 from glu.gestures.synthetic import View, synthesize_gesture
+from glu.hmm import TrainingConfig
 
 COMBINATIONS = [c for r in range(len(INVARIANCES) + 1) for c in itertools.combinations(INVARIANCES, r)]
 
@@ -162,7 +163,9 @@ def trained():
 
     corpus = synthetic_corpus(5, seed=1, actions=("grasp", "tap", "touch"))
     by = {a: [s.xyz for s in corpus if s.action == a] for a in ("grasp", "tap", "touch")}
-    return by, train_recognizer(by, 3, 1, n_iter=10, warn=False, features="centred,rotated")
+    return by, train_recognizer(
+        by, TrainingConfig(n_states=3, n_mix=1, n_iter=10), warn=False, features="centred,rotated"
+    )
 
 
 def test_the_recogniser_scores_its_own_features(trained, tmp_path):
@@ -202,7 +205,7 @@ def test_raw_recognisers_and_version_1_files_are_unchanged(trained, tmp_path):
 
 
 def test_the_batch_scorer_of_a_recogniser_uses_its_features(trained):
-    from glu.gestures.batch import BatchScorer
+    from glu.hmm._engine.batch import BatchScorer
 
     by, rec = trained
     seqs = [by["tap"][0], by["grasp"][1][:30]]

@@ -10,7 +10,8 @@ import pandas as pd
 import pytest
 
 from glu.bn import BayesNet, learn_bn
-from glu.bn.learning import bic_family_score, encode, family_counts, k2_parents, learn_parameters
+from glu.bn.learning import bic_family_score, family_counts, k2_parents, learn_parameters
+from glu.bn.model import encode
 from glu.schema import AFFORDANCE_NODES, ROOT_NODES, WORDS, default_schema
 
 with warnings.catch_warnings():

@@ -9,11 +9,14 @@ import pytest
 
 from glu.cli import main
 from glu.errors import ModelError
-from glu.gestures import mixsplit as ms
 from glu.gestures.corpus import synthetic_corpus
-from glu.gestures.forward import left_to_right_transmat
-from glu.gestures.model import GestureHMM
 from glu.gestures.recognizer import Recognizer, train_recognizer
+from glu.hmm import TrainingConfig
+from glu.hmm import mixsplit as ms
+from glu.hmm.inference import left_to_right_transmat
+from glu.hmm.model import GestureHMM
+
+MIXSPLIT = TrainingConfig(recipe="mixsplit")
 
 
 @pytest.fixture(scope="module")
@@ -56,8 +59,11 @@ def test_split_heaviest_halves_the_heaviest_component_of_each_state():
 
 
 def test_log_likelihood_never_decreases_within_a_stage_and_components_grow(taps):
-    hmm, report, stages = ms.train_mixsplit(
-        taps, 4, 3, covar_floor=0.0, tol=1e-5, n_iter=40, name="tap", warn=False
+    hmm, report, stages = ms.train_one(
+        taps,
+        MIXSPLIT.replace(n_states=4, n_mix=3, covar_floor=0.0, tol=1e-5, n_iter=40),
+        name="tap",
+        warn=False,
     )
     assert [len(h) >= 2 for h in stages] == [True] * 3  # stages M = 1, 2, 3
     for history in stages:  # plain maximum likelihood: EM cannot lower the likelihood
@@ -69,7 +75,7 @@ def test_log_likelihood_never_decreases_within_a_stage_and_components_grow(taps)
 
 
 def test_left_to_right_zeros_survive_every_stage(taps):
-    hmm, _, _ = ms.train_mixsplit(taps, n_states=5, n_mix=2, name="tap")
+    hmm, _, _ = ms.train_one(taps, MIXSPLIT.replace(n_states=5, n_mix=2), name="tap")
     A = hmm.transmat
     assert np.all(np.tril(A, -1) == 0) and np.all(np.triu(A, 2) == 0)  # only stay or next, as the flat start
     np.testing.assert_array_equal(hmm.startprob, [1, 0, 0, 0, 0])
@@ -77,9 +83,9 @@ def test_left_to_right_zeros_survive_every_stage(taps):
 
 
 def test_the_covariance_floor_is_the_originals(taps):
-    hmm, _, _ = ms.train_mixsplit(taps, n_states=4, n_mix=2, name="tap")
+    hmm, _, _ = ms.train_one(taps, MIXSPLIT.replace(n_states=4, n_mix=2), name="tap")
     eig = np.linalg.eigvalsh(hmm.covars.reshape(-1, 3, 3))
-    assert eig.min() >= ms.COVAR_FLOOR * (1 - 1e-9)  # every covariance is ML + 0.01·I
+    assert eig.min() >= MIXSPLIT.covar_floor * (1 - 1e-9)  # every covariance is ML + 0.01·I
 
 
 def test_a_stage_is_hmmlearns_baum_welch(taps):
@@ -154,13 +160,17 @@ def test_one_em_step_with_mixtures_equals_the_textbook_m_step(taps):
 
 def test_bad_settings(taps):
     with pytest.raises(ModelError, match="covar_floor"):
-        ms.train_mixsplit(taps, covar_floor=-1)
+        MIXSPLIT.replace(covar_floor=-1)
     with pytest.raises(ModelError, match="unknown training recipe 'htk'"):
-        train_recognizer({"tap": taps}, recipe="htk")
+        TrainingConfig(recipe="htk")
 
 
 def test_recognizer_and_command_line(tmp_path, capsys, taps):
-    rec = train_recognizer({"tap": taps, "grasp": taps[:3]}, 3, 2, recipe="mixsplit", n_iter=20, warn=False)
+    rec = train_recognizer(
+        {"tap": taps, "grasp": taps[:3]},
+        TrainingConfig(n_states=3, n_mix=2, recipe="mixsplit", n_iter=20),
+        warn=False,
+    )
     assert rec.meta["recipe"] == "mixsplit" and rec.models["tap"].n_mix == 2
     out = tmp_path / "ms.json"
     argv = [
@@ -194,7 +204,7 @@ def test_fast_leave_one_segment_out_equals_the_general_one(recipe):
     from glu.experiments.recipes import leave_one_segment_out
 
     corpus = synthetic_corpus(3, seed=1)
-    settings = {"n_states": 3, "n_mix": 2, "n_iter": 8, "tol": 1e-3, "recipe": recipe}
+    settings = {"config": TrainingConfig(n_states=3, n_mix=2, n_iter=8, tol=1e-3, recipe=recipe)}
     fast, everything = leave_one_segment_out(corpus, seed=2, **settings)
     slow = leave_one_out(corpus, by="segment", seed=2, **settings)
     assert list(fast["predicted"]) == list(slow["predicted"])
@@ -207,7 +217,8 @@ def test_recipe_comparison_on_synthetic_segments():
 
     corpus = synthetic_corpus(3, seed=1)
     test = synthetic_corpus(1, seed=9)
-    df = recipe_comparison(corpus, test, seeds=(0, 1), tols=(1e-3,), n_states=3, n_mix=2, n_iter=8)
+    config = TrainingConfig(n_states=3, n_mix=2, n_iter=8)
+    df = recipe_comparison(corpus, test, seeds=(0, 1), tols=(1e-3,), config=config)
     assert list(df["recipe"]) == ["glu", "glu", "mixsplit"] and list(df["seed"]) == [0, 1, -1]
     assert (df["loso_testable"] == len(corpus)).all()
     assert np.allclose(df["loso_accuracy"], df["loso_correct"] / df["loso_testable"])

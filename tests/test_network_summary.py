@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 import pytest
 
-from glu.bn.learning import encode
+from glu.bn.model import encode
 from glu.experiments.fusion import network_summary
 
 

@@ -14,41 +14,14 @@ import papermill as pm
 import pytest
 
 from glu.plots.overlap import CHECK_ENV
-from glu.reproduce import NotebookError, list_notebooks, reproduce
+from glu.run.manifest import read_manifest
+from glu.run.parameters import read_spec
+from glu.run.reproduce import NotebookError, list_notebooks, reproduce
 
-EXPECTED_FIGURES = {
-    "01_gesture_features": ["gesture_segmentation"],
-    "02_hmm_training": ["hmm_synthetic_accuracy"],
-    "03_bn_learning": ["bn_structure", "unseen_rows_comparison"],
-    "04_fusion_hard": ["fusion_hard_on_gestures"],
-    "05_fusion_soft": ["fusion_soft_rules", "fusion_soft_sweep"],
-    "06_fusion_product": ["fusion_product_action", "fusion_product_thresholds"],
-    "07_glu2017_figures": ["glu2017_effect_prediction", "glu2017_word_change"],
-    "08_tcds_figures": [
-        "tcds_action_vs_soft_evidence",
-        "tcds_effect_vs_soft_evidence",
-        "tcds_anticipation_glu",
-    ],
-    "09_verbal_descriptions": ["verbal_and_but", "verbal_yellow_sphere_nbest", "verbal_sampling_vs_exact"],
-    "10_correspondence": [
-        "correspondence_viewpoint",
-        "correspondence_conditions",
-        "correspondence_invariance_effects",
-        "correspondence_two_views",
-    ],
-    "11_corpus_evaluation": [
-        "corpus_strategies_vs_noise",
-        "corpus_early_recognition",
-        "corpus_calibration",
-        "corpus_differences",
-    ],
-}
-EXPECTED_RECORDINGS = {
-    "08_tcds_figures": ["tcds_anticipation_sphere_glu", "tcds_anticipation_box_glu"],
-    "10_correspondence": ["correspondence_two_views"],
-}
-COMMON_PARAMETERS = {"data", "seed", "quick", "out_dir"}
+COMMON_PARAMETERS = {"data", "seed", "out_dir"}
 NOTEBOOKS = [p.stem for p in list_notebooks()]
+MANIFESTS = {p.stem: read_manifest(p) for p in list_notebooks()}
+"""What each notebook declares it writes (its header): the tests check the runs against it."""
 
 
 def _silent(_msg: str) -> None:
@@ -85,12 +58,17 @@ def quick_runs(tmp_path_factory):
 def test_every_notebook_is_known_and_parameterised():
     assert NOTEBOOKS, "no notebooks found"
     for path in list_notebooks():
-        assert path.stem in EXPECTED_FIGURES, f"{path.stem}: add its figures to EXPECTED_FIGURES"
+        manifest = MANIFESTS[path.stem]
+        assert manifest.about and manifest.figures, f"{path.stem}: its manifest names no figures"
+        assert (
+            "quick" not in pm.inspect_notebook(jupytext.read(path)) and "if quick" not in path.read_text()
+        ), f"{path.stem}: a quick run is its manifest's preset, not a `quick` flag"
         params = pm.inspect_notebook(jupytext.read(path))
         assert COMMON_PARAMETERS <= set(params), (
             f"{path.stem} lacks parameters {COMMON_PARAMETERS - set(params)}"
         )
         assert path.read_text().count('tags=["parameters"]') == 1
+        assert set(manifest.quick) <= set(params) - COMMON_PARAMETERS, f"{path.stem}: quick preset names"
         for name, p in params.items():  # what `papermill --help-notebook` lists: a type and a comment each
             assert p["inferred_type_name"] not in ("None", "Unknown type"), f"{path.stem}: {name} has no type"
             assert p["help"], f"{path.stem}: {name} has no comment"
@@ -101,18 +79,19 @@ def test_notebook_quick_run_writes_its_figures(quick_runs, name):
     out, summary = quick_runs[0]
     status = {n["name"]: n["status"] for n in summary["notebooks"]}
     assert status[name] == "ok"
-    for fig in EXPECTED_FIGURES[name]:
+    manifest = MANIFESTS[name]
+    for fig in manifest.outputs("figures", real=False):
         for ext in ("png", "svg"):
             f = out / "figures" / f"{fig}.{ext}"
             assert f.is_file() and f.stat().st_size > 1000, f
     assert (out / "notebooks" / f"{name}.ipynb").is_file()
-    for rec in EXPECTED_RECORDINGS.get(name, []):
+    for rec in manifest.outputs("recordings", real=False):
         f = out / "recordings" / f"{rec}.rrd"
         res = subprocess.run(
             [sys.executable, "-m", "rerun", "rrd", "verify", str(f)], capture_output=True, text=True
         )
         assert res.returncode == 0, f"{rec}: {res.stderr}"
-    svg = (out / "figures" / f"{EXPECTED_FIGURES[name][0]}.svg").read_text()
+    svg = (out / "figures" / f"{manifest.outputs('figures', real=False)[0]}.svg").read_text()
     assert "synthetic data" in svg  # every figure says which data it came from
 
 
@@ -120,7 +99,8 @@ def test_no_figure_has_overlapping_text_or_a_legend_on_data(quick_runs):
     """Every figure of the quick run passes glu.plots.overlap (tests/test_figure_overlap.py tests the check)."""
     out, _ = quick_runs[0]
     pngs = sorted((out / "figures").glob("*.png"))
-    assert len(pngs) >= sum(len(v) for v in EXPECTED_FIGURES.values())
+    expected = {f for m in MANIFESTS.values() for f in m.figures if f not in m.real_only}
+    assert expected <= {p.stem for p in pngs}
     problems = {}
     for png in pngs:
         report = FIGURE_CHECKS[out] / f"{png.stem}.txt"
@@ -134,7 +114,7 @@ def test_the_trained_recogniser_is_published_to_models(quick_runs):
     out, _ = quick_runs[0]
     from glu.gestures.recognizer import Recognizer
 
-    rec = Recognizer.load(out / "models" / "recognizer_synthetic.json")
+    rec = Recognizer.load(out / "models" / "recognizer.json")
     assert set(rec.actions) == {"grasp", "tap", "touch"}
 
 
@@ -171,10 +151,15 @@ def test_two_runs_are_identical(quick_runs):
         assert res.returncode == 0, f"{f.name}: {res.stdout}{res.stderr}"
 
 
-_OK = """# %% tags=["parameters"]
+_OK = """# ---
+# jupyter:
+#   glu:
+#     about: a test notebook
+# ---
+
+# %% tags=["parameters"]
 data: str = None  # data folder
 seed: int = 0  # seed
-quick: bool = False  # quick run
 out_dir: str = None  # outputs
 
 # %%
@@ -222,15 +207,21 @@ def test_a_failing_notebook_stops_the_run_and_nothing_is_published(tmp_path):
         reproduce(data="synthetic", out=out, only=[""], log=_silent, notebooks_dir=nbs)
 
 
-_TABLE = """# %% tags=["parameters"]
+_TABLE = """# ---
+# jupyter:
+#   glu:
+#     about: a test notebook
+#     tables: [NAME]
+# ---
+
+# %% tags=["parameters"]
 data: str = None  # data folder
 seed: int = 0  # seed
-quick: bool = False  # quick run
 out_dir: str = None  # outputs
 
 # %%
 import pandas as pd
-from glu.notebook import start
+from glu.run import start
 out = start(NAME, globals())
 out.table(pd.DataFrame({"x": [seed]}), NAME)
 """
@@ -291,18 +282,23 @@ def test_every_executed_notebook_names_its_data_first(quick_runs):
             if o.get("output_type") == "display_data"
         ]
         assert texts and texts[0].startswith(f"**{name}** · synthetic data (seed 0, 1270 experiments)"), name
-        assert "quick=True" in texts[0]  # the run's non-default parameters
+        spec = read_spec(list_notebooks([name])[0])
+        for key, value in MANIFESTS[name].quick.items():  # the run's non-default parameters: its preset
+            assert (f"{key}=" in texts[0]) == (value != spec[key].default), (name, key)
 
 
 def test_figures_name_the_runs_non_default_parameters(quick_runs):
     out, _ = quick_runs[0]
-    svg = (out / "figures" / "glu2017_effect_prediction.svg").read_text()
-    footer = "synthetic data (seed 0, 1270 experiments) · 07_glu2017_figures with quick=True"
+    assert MANIFESTS["05_fusion_soft"].quick == {"n_points": 11}
+    svg = (out / "figures" / "fusion_soft_sweep.svg").read_text()
+    footer = "synthetic data (seed 0, 1270 experiments) · 05_fusion_soft with n_points=11"
     assert f"<!-- {footer} -->" in svg  # matplotlib keeps each text as a comment in the SVG
     assert "data: synthetic data" not in svg  # the footer names the data once
     assert str(out) not in svg  # no machine path
-    doc = json.loads((out / "results" / "glu2017_effect_prediction.json").read_text())
-    assert doc["meta"]["notebook_parameters"] == {"quick": True}
+    doc = json.loads((out / "results" / "fusion_soft_sweep_box.json").read_text())
+    assert doc["meta"]["notebook_parameters"] == {"n_points": 11}
+    plain = (out / "figures" / "glu2017_effect_prediction.svg").read_text()  # no preset: no "with"
+    assert "<!-- synthetic data (seed 0, 1270 experiments) -->" in plain
 
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -346,7 +342,7 @@ def test_the_report_has_the_api_reference(quick_runs):
     api = out / "report" / "api.html"
     assert 'href="api.html"' in (out / "report" / "index.html").read_text()
     text = api.read_text()
-    from glu.report import API_MODULES
+    from glu.run.report import API_MODULES
 
     for name in API_MODULES:
         assert f'id="{name}"' in text

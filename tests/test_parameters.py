@@ -9,8 +9,8 @@ import papermill as pm
 import pytest
 
 from glu.errors import ParameterError
-from glu.parameters import CHOICES, RANGES, Parameter, check, non_defaults, parse_value, read_spec
-from glu.reproduce import list_notebooks
+from glu.run.parameters import CHOICES, RANGES, Parameter, check, non_defaults, parse_value, read_spec
+from glu.run.reproduce import list_notebooks
 
 NOTEBOOKS = list_notebooks()
 

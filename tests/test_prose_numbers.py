@@ -12,7 +12,7 @@ import re
 import jupytext
 import pytest
 
-from glu.reproduce import list_notebooks
+from glu.run.reproduce import list_notebooks
 
 PAPERS_NUMBERS = {
     "0.81": "TCDS 2020: tap wins only when p_HMM(tap) > 0.81 (notebook 06 compares glu's threshold)"

@@ -6,10 +6,10 @@ import json
 
 import pytest
 
-from glu import readme
 from glu.cli import main
 from glu.errors import DataError
 from glu.paths import PROJECT_ROOT
+from glu.run import readme
 
 
 def t(rows, **meta) -> dict:

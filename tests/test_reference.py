@@ -18,7 +18,7 @@ import scipy.io as sio
 from test_hmm import mat_params, ref_forward
 
 from glu.bn import InferenceEngine, learn_bn
-from glu.bn.learning import encode
+from glu.bn.model import encode
 from glu.cli import main
 from glu.data.fetch import manifest, sha256_of
 from glu.data.recordings import ORIGINAL_SEGMENTS, TRAINING_RECORDINGS
@@ -27,11 +27,11 @@ from glu.experiments import fusion as experiments
 from glu.experiments import gestures
 from glu.experiments.fusion import network_summary
 from glu.gestures.corpus import segment_recording_of
-from glu.gestures.original import load_original_models
+from glu.gestures.recognizer import load_original_models
 from glu.gestures.trajectories import read_hand_log, repair
 from glu.language import compile_network, count_by_length, load_grammar, parse_grammar, same_language
 from glu.language.sampling import sample_sentences
-from glu.reproduce import reproduce
+from glu.run.reproduce import reproduce
 from glu.schema import ROOT_NODES, default_schema
 
 with warnings.catch_warnings():
@@ -292,7 +292,7 @@ def _figures_equal_the_committed_ones(summary, out):
     import json
 
     from glu.paths import PROJECT_ROOT
-    from glu.summary import RENDERING_RECORD, rendering_versions
+    from glu.run.summary import RENDERING_RECORD, rendering_versions
 
     committed = PROJECT_ROOT / "figures"
     record = json.loads((committed / RENDERING_RECORD).read_text())

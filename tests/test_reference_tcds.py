@@ -128,7 +128,7 @@ def _anticipate_matches_the_published_curves_bars_and_caption(shared_data, capsy
 def _published_comparison_of_an_anticipation_run(real_source, learned_bn, case):
     from glu.bn import InferenceEngine
     from glu.experiments import anticipation
-    from glu.gestures.original import load_original_models
+    from glu.gestures.recognizer import load_original_models
     from glu.language import candidate_sentences
 
     run = anticipation.effect_anticipation(
@@ -154,7 +154,7 @@ def _anticipation_with_the_original_models(real_source, original_bn):
     from glu.bn import InferenceEngine
     from glu.data.recordings import RECORDING_ACTION
     from glu.experiments import anticipation
-    from glu.gestures.original import load_original_models
+    from glu.gestures.recognizer import load_original_models
 
     rec = load_original_models(real_source.original_hmms())
     eng = InferenceEngine(original_bn)

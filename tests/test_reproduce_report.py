@@ -11,15 +11,20 @@ import time
 
 import pytest
 
-from glu import report as report_module
-from glu import reproduce as reproduce_module
 from glu.paths import STAGING, OutputLayout
-from glu.reproduce import NotebookError, reproduce
+from glu.run import report as report_module
+from glu.run import reproduce as reproduce_module
+from glu.run.reproduce import NotebookError, reproduce
 
-_NB = """# %% tags=["parameters"]
+_NB = """# ---
+# jupyter:
+#   glu:
+#     about: a test notebook
+# ---
+
+# %% tags=["parameters"]
 data: str = None  # data folder
 seed: int = 0  # seed
-quick: bool = False  # quick run
 out_dir: str = None  # outputs
 
 # %%
@@ -34,10 +39,15 @@ saw = bool(wait_for) and Path(wait_for).exists()
 Path(out_dir, "figures", NAME + ".txt").write_text(f"seed {seed}, saw the page: {saw}")
 """
 
-_FAILS = """# %% tags=["parameters"]
+_FAILS = """# ---
+# jupyter:
+#   glu:
+#     about: a test notebook
+# ---
+
+# %% tags=["parameters"]
 data: str = None  # data folder
 seed: int = 0  # seed
-quick: bool = False  # quick run
 out_dir: str = None  # outputs
 
 # %%

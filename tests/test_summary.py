@@ -1,4 +1,4 @@
-"""The run summary: which tables count as comparisons with a reference (written by glu.summary.write_summary)."""
+"""The run summary: which tables count as comparisons with a reference (written by glu.run.summary.write_summary)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import json
 
 import pandas as pd
 
-from glu.summary import NotebookResult, write_summary
+from glu.run.summary import NotebookResult, write_summary
 
 
 def _table(results, name, rows, **meta):
@@ -59,8 +59,8 @@ def test_with_several_jobs_the_notebooks_that_took_longest_last_time_start_first
     from pathlib import Path
 
     from glu.paths import OutputLayout
-    from glu.reproduce import run_order
-    from glu.summary import expected_seconds
+    from glu.run.reproduce import run_order
+    from glu.run.summary import expected_seconds
 
     layout = OutputLayout.at(tmp_path)
     layout.results.mkdir(parents=True)
@@ -98,8 +98,8 @@ data: str = None  # data folder
 
 def test_a_first_run_starts_the_notebooks_that_declare_the_longest_times_first(tmp_path, monkeypatch):
     from glu.paths import OutputLayout
-    from glu.reproduce import run_order
-    from glu.summary import declared_seconds, expected_seconds
+    from glu.run.reproduce import run_order
+    from glu.run.summary import declared_seconds, expected_seconds
 
     project = OutputLayout.under(tmp_path / "project")  # the project's own folders, with no summary yet
     monkeypatch.setattr(OutputLayout, "project", classmethod(lambda cls: project))
@@ -160,8 +160,8 @@ def test_a_first_run_starts_the_notebooks_that_declare_the_longest_times_first(t
 
 def test_every_notebook_declares_its_time_and_a_first_run_starts_the_long_ones_first(tmp_path, monkeypatch):
     from glu.paths import OutputLayout
-    from glu.reproduce import list_notebooks, run_order
-    from glu.summary import declared_seconds, expected_seconds
+    from glu.run.reproduce import list_notebooks, run_order
+    from glu.run.summary import declared_seconds, expected_seconds
 
     monkeypatch.setattr(OutputLayout, "project", classmethod(lambda cls: OutputLayout.under(tmp_path / "p")))
     notebooks = list_notebooks()
@@ -177,7 +177,7 @@ def test_every_notebook_declares_its_time_and_a_first_run_starts_the_long_ones_f
 
 def test_a_quick_runs_times_do_not_order_a_full_run(tmp_path, monkeypatch):
     from glu.paths import OutputLayout
-    from glu.summary import expected_seconds
+    from glu.run.summary import expected_seconds
 
     project = OutputLayout.under(tmp_path / "project")
     monkeypatch.setattr(OutputLayout, "project", classmethod(lambda cls: project))
@@ -205,7 +205,7 @@ def test_summary_csv_is_the_cell_by_cell_long_format():
     floats, as iterrows gives them), strings and booleans mixed in, None and NaN, empty tables."""
     import numpy as np
 
-    from glu.summary import summary_csv
+    from glu.run.summary import summary_csv
 
     rng = np.random.default_rng(3)
     kinds = [

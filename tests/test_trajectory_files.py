@@ -18,6 +18,7 @@ from glu.gestures.features import (
     skeleton_features,
 )
 from glu.gestures.synthetic import synthesize_gesture
+from glu.hmm import TrainingConfig
 
 METRES = np.array([HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, HORIZONTAL_FALLBACK])
 
@@ -39,14 +40,13 @@ def _write_table(path, t, xyz, sep=","):
 def recogniser(source):
     """The originals' models with the real data; one trained by glu on synthetic gestures otherwise."""
     from glu.gestures.corpus import synthetic_corpus
-    from glu.gestures.original import load_original_models
-    from glu.gestures.recognizer import train_recognizer
+    from glu.gestures.recognizer import load_original_models, train_recognizer
 
     if source.original_hmms(3) is not None:
         return load_original_models(source.original_hmms(3))
     seqs = synthetic_corpus(6, 0)
     by_action = {a: [s.xyz for s in seqs if s.action == a] for a in dict.fromkeys(s.action for s in seqs)}
-    return train_recognizer(by_action, n_states=4, n_mix=1, n_iter=20, warn=False)
+    return train_recognizer(by_action, TrainingConfig(n_states=4, n_mix=1, n_iter=20), warn=False)
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".tsv", ".npy"])

@@ -22,29 +22,12 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
-from glu.bn.model import BayesNet
+from glu.bn.model import BayesNet, encode
 from glu.errors import DataError
 from glu.schema import Schema, default_schema
 
 UnseenRows = Literal["zero", "uniform"]
 UNSEEN_MODES: tuple[str, ...] = ("zero", "uniform")
-
-
-def encode(df: pd.DataFrame, schema: Schema) -> dict[str, np.ndarray]:
-    """Value codes of every node: node → int64 array, shape (n_rows,), indices into the node's values."""
-    out = {}
-    for node in schema.nodes:
-        if node not in df.columns:
-            raise DataError(f"the table has no column {node!r}")
-        col = df[node]
-        if isinstance(col.dtype, pd.CategoricalDtype) and tuple(col.cat.categories) == schema.values_of(node):
-            codes = np.asarray(col.cat.codes, dtype=np.int64)
-        else:
-            codes = pd.Index(schema.values_of(node)).get_indexer(col.astype(object)).astype(np.int64)
-        if (codes < 0).any():
-            raise DataError(f"column {node!r}: missing or unknown values; allowed: {schema.values_of(node)}")
-        out[node] = codes
-    return out
 
 
 def family_counts(

@@ -30,8 +30,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
-from glu.errors import ModelError
+from glu.errors import DataError, ModelError
 from glu.files import atomic_write_json
 from glu.schema import FILE_ALIASES, WORD_VALUES, Schema
 
@@ -42,6 +43,23 @@ ROW_TOL = 1e-9
 
 _MALFORMED = (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError, RecursionError)
 """What malformed JSON raises while a model is built from it (each becomes one ModelError line)."""
+
+
+def encode(df: pd.DataFrame, schema: Schema) -> dict[str, np.ndarray]:
+    """Value codes of every node: node → int64 array, shape (n_rows,), indices into the node's values."""
+    out = {}
+    for node in schema.nodes:
+        if node not in df.columns:
+            raise DataError(f"the table has no column {node!r}")
+        col = df[node]
+        if isinstance(col.dtype, pd.CategoricalDtype) and tuple(col.cat.categories) == schema.values_of(node):
+            codes = np.asarray(col.cat.codes, dtype=np.int64)
+        else:
+            codes = pd.Index(schema.values_of(node)).get_indexer(col.astype(object)).astype(np.int64)
+        if (codes < 0).any():
+            raise DataError(f"column {node!r}: missing or unknown values; allowed: {schema.values_of(node)}")
+        out[node] = codes
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -142,11 +160,8 @@ class BayesNet:
         ``data`` is a DataFrame with a column per node (value names, or categoricals) or a mapping node →
         value codes, shape (n_rows,). Rows that a zero CPT row excludes give ``-inf``.
         """
-        import pandas as pd
 
         if isinstance(data, pd.DataFrame):
-            from glu.bn.learning import encode
-
             codes = encode(data, self.schema)
         else:
             codes = data

@@ -72,8 +72,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _load_recognizer(spec: str, source: Any) -> tuple[Any, str]:
     from glu.data.source import ORIGINAL_HMMS
-    from glu.gestures.original import load_original_models
-    from glu.gestures.recognizer import Recognizer
+    from glu.gestures.recognizer import Recognizer, load_original_models
 
     if spec == "original":
         path = source.original_hmms(3)

@@ -106,7 +106,7 @@ def _fetch(args: argparse.Namespace) -> int:
 def _synth(args: argparse.Namespace) -> int:
     from glu.data.source import WORD_FILES as TABLES
     from glu.data.synthetic import write_synthetic_folder
-    from glu.gestures.synthetic import hand_log_arrays, synthetic_recordings
+    from glu.gestures.corpus import hand_log_arrays, synthetic_recordings
 
     if not MIN_ROWS <= args.n <= MAX_ROWS:
         raise DataError(f"--n {args.n} is out of range; allowed: {MIN_ROWS} to {MAX_ROWS:,}")

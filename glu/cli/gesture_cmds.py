@@ -26,9 +26,8 @@ from glu.cli.common import (
 from glu.data.source import HAND_LOG
 from glu.errors import DataError
 from glu.gestures.invariants import ALL, INVARIANCE_MEANING, INVARIANCES, RAW, Invariants
-from glu.gestures.mixsplit import RECIPES
 from glu.gestures.synthetic import GESTURES
-from glu.gestures.training import TrainingConfig
+from glu.hmm import RECIPES, TrainingConfig
 from glu.schema import ACTIONS
 
 SYNTHETIC_NOISE = 0.01
@@ -60,9 +59,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     t = hsub.add_parser(
         "train",
         help="train one left-to-right GMM-HMM per action and save the recogniser (JSON)",
-        description="Train on the automatically segmented standing recordings (--data) or on synthetic "
-        "gestures (--synthetic N, N per action). --features chooses invariant features; the recogniser "
-        "file records them and `glu recognize` applies them.",
+        description="Train on the automatically segmented standing recordings (--data), on synthetic "
+        "gestures (--synthetic N, N per action), or on your own labelled recordings (--recordings: a folder "
+        "with one subfolder per action, or a CSV manifest file,label[,frames]). --features chooses "
+        "invariant features; the recogniser file records them and `glu recognize` applies them.",
         epilog="invariances: "
         + "; ".join(f"{k} = {v}" for k, v in INVARIANCE_MEANING.items())
         + " (formulas: glu.gestures.invariants)",
@@ -72,11 +72,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     src.add_argument(
         "--synthetic", type=positive_int, metavar="N", help="train on N synthetic gestures per action"
     )
+    src.add_argument(
+        "--recordings",
+        type=Path,
+        metavar="PATH",
+        help="your labelled recordings, one gesture each: a folder with one subfolder per action (its name "
+        "is the label) holding .csv/.tsv/.npy tables, .log files or recording folders; or a CSV manifest "
+        "with the columns file,label[,frames A:B]",
+    )
     t.add_argument(
         "-o", "--out", type=output_file, required=True, metavar="RECOGNISER", help="file to write (JSON)"
     )
     t.add_argument(
-        "--actions", type=_actions, default=ACTIONS, help=f"comma-separated (default: {','.join(ACTIONS)})"
+        "--actions",
+        type=_actions,
+        default=None,
+        help=f"comma-separated (default: {','.join(ACTIONS)}; with --recordings: every label found)",
     )
     d = TrainingConfig()
     t.add_argument(
@@ -118,6 +129,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=Invariants(),
         metavar="LIST",
         help=f"{RAW} (default), {ALL}, or comma-separated invariances among {','.join(INVARIANCES)}",
+    )
+    t.add_argument(
+        "--body-size",
+        nargs=2,
+        type=positive_float,
+        metavar=("H", "V"),
+        help="--recordings: the body size of t,x,y,z tables, horizontal (shoulder) and vertical "
+        "(neck-torso), m (default: the originals' 0.33 0.23)",
     )
     t.add_argument(
         "--include-test",
@@ -194,9 +213,8 @@ def _features(s: str) -> Invariants:
 
 def _actions(s: str) -> tuple[str, ...]:
     acts = tuple(a.strip() for a in s.split(",") if a.strip())
-    bad = [a for a in acts if a not in GESTURES]
-    if bad or not acts or len(set(acts)) != len(acts):
-        raise argparse.ArgumentTypeError(f"{s!r}: give distinct actions among {', '.join(GESTURES)}")
+    if not acts or len(set(acts)) != len(acts) or not all(a.isidentifier() for a in acts):
+        raise argparse.ArgumentTypeError(f"{s!r}: give distinct action names, comma-separated")
     return acts
 
 
@@ -275,15 +293,33 @@ def _segment(args: argparse.Namespace) -> int:
 def _train(args: argparse.Namespace) -> int:
     from glu.gestures.recognizer import train_recognizer
 
-    actions = args.actions
-    if args.synthetic:
+    actions = args.actions or ACTIONS
+    if args.body_size and args.recordings is None:
+        raise DataError("--body-size goes with --recordings (the body size of your t,x,y,z tables)")
+    if args.recordings is not None:
+        from glu.gestures.corpus import labelled_recordings
+
+        seqs = labelled_recordings(args.recordings, tuple(args.body_size) if args.body_size else None)
+        print(f"data: {seqs.description} ({len(seqs)} recordings)")
+        found = tuple(dict.fromkeys(s.action for s in seqs))
+        unknown = [a for a in args.actions or () if a not in found]
+        if unknown:
+            raise DataError(
+                f"--actions {', '.join(unknown)}: no such label; the labels are {', '.join(found)}"
+            )
+        actions = args.actions or found
+        meta: dict[str, Any] = {"data": seqs.description}
+    elif args.synthetic:
         from glu.gestures.corpus import synthetic_corpus
 
+        unknown = [a for a in actions if a not in GESTURES]
+        if unknown:
+            raise DataError(f"--actions: no synthetic {', '.join(unknown)}; allowed: {', '.join(GESTURES)}")
         print(
             f"data: {args.synthetic} synthetic gestures per action (seed {args.seed}, noise {args.noise} m)"
         )
         seqs = synthetic_corpus(args.synthetic, args.seed, actions=actions, noise=args.noise)
-        meta: dict[str, Any] = {"data": f"synthetic, {args.synthetic} per action, noise {args.noise} m"}
+        meta = {"data": f"synthetic, {args.synthetic} per action, noise {args.noise} m"}
     else:
         from glu.data.source import resolve_data
         from glu.gestures.corpus import real_segments
@@ -305,17 +341,20 @@ def _train(args: argparse.Namespace) -> int:
         print(f"  {a}: {len(v)} sequences, {sum(len(x) for x in v)} frames")
     bar = progress_bar(len(by_action), "train", "model")
     try:
-        rec = train_recognizer(
-            by_action,
-            args.states,
-            args.mix,
+        config = TrainingConfig(
+            n_states=args.states,
+            n_mix=args.mix,
             n_iter=args.iter,
             tol=args.tol,
             covar_reg=args.covar_reg,
+            recipe=args.recipe,
+        )
+        rec = train_recognizer(
+            by_action,
+            config,
             seed=args.seed,
             warn=False,
             meta=meta,
-            recipe=args.recipe,
             features=args.features,
             progress=(lambda a: bar.update(1)) if bar is not None else None,
         )
@@ -331,17 +370,17 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
-    from glu.gestures.original import load_original_models
     from glu.gestures.recognizer import Recognizer
 
     if spec == "original":
         from glu.data.source import ORIGINAL_HMMS, resolve_data
+        from glu.gestures.corpus import original_recognizer
 
         source = resolve_data(data)
         _say(f"data: {source.describe()}", quiet)
         mat = source.file(ORIGINAL_HMMS[3])
         _say(f"models: {mat} (original 2013 HMMs; touch = their push model)", quiet)
-        return load_original_models(mat)
+        return original_recognizer(source)
     rec = Recognizer.load(spec)
     _say(f"models: {spec} ({', '.join(rec.actions)}; features {rec.features.name})", quiet)
     return rec
@@ -400,14 +439,14 @@ def _recognize(args: argparse.Namespace) -> int:
     verdict = rec.typicality(X)
     if args.json:
         print(json_text({**_as_json(acts, ll, p), "typicality": verdict.to_json()}))
-        if verdict.outside:
+        if verdict.atypical:
             print(verdict.message(), file=sys.stderr)
         return 0
     print(f"{'action':8s} {'log L(G|A)':>12s} {'p_HMM(A|G)':>11s}")
     for a, v, q in zip(acts, ll, p, strict=True):
         print(f"{a:8s} {v:12.3f} {q:11.4f}")
     print(f"recognised: {acts[int(np.argmax(ll))]}")
-    print(verdict.message(), file=sys.stderr if verdict.outside else sys.stdout)
+    print(verdict.message(), file=sys.stderr if verdict.atypical else sys.stdout)
     return 0
 
 

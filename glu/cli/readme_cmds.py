@@ -9,7 +9,7 @@ from pathlib import Path
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``readme``."""
-    from glu.readme import README, SUMMARY
+    from glu.run.readme import README, SUMMARY
 
     p = sub.add_parser(
         "readme",
@@ -38,7 +38,7 @@ def _readme(args: argparse.Namespace) -> int:
         raise OutputError(
             "glu is installed, not a source checkout: give --readme README.md and --summary FILE"
         )
-    from glu.readme import load_summary, readme_section, render, update_readme
+    from glu.run.readme import load_summary, readme_section, render, update_readme
 
     try:
         summary = load_summary(args.summary)

@@ -62,6 +62,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     r.add_argument("--data", help=DATA_HELP)
     r.add_argument("--out", type=Path, help="output folder (default: build/scratch/NOTEBOOK/)")
+    r.add_argument(
+        "--quick", action="store_true", help="the quick preset of the notebook's manifest (-p values win)"
+    )
     r.add_argument("--list", action="store_true", help="list the notebook's parameters and exit")
     r.set_defaults(func=_run)
 
@@ -70,7 +73,7 @@ def _reproduce(args: argparse.Namespace) -> int:
     from glu import paths
 
     require_extra("notebooks", *NOTEBOOK_MODULES)
-    from glu.reproduce import NotebookError, reproduce
+    from glu.run.reproduce import NotebookError, reproduce
 
     folder = args.notebooks or paths.NOTEBOOKS_DIR
     if not folder.is_dir():
@@ -99,8 +102,8 @@ def _reproduce(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     require_extra("notebooks", *NOTEBOOK_MODULES)
-    from glu.parameters import read_spec
-    from glu.reproduce import NotebookError, list_notebooks, run_one
+    from glu.run.parameters import read_spec
+    from glu.run.reproduce import NotebookError, list_notebooks, run_one
 
     if args.list:
         (src,) = list_notebooks([args.notebook])[:1]
@@ -111,7 +114,9 @@ def _run(args: argparse.Namespace) -> int:
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise NotebookError(f"-p {twice[0]} given more than once")
-    executed, layout = run_one(args.notebook, dict(args.parameter), data=args.data, out=args.out)
+    executed, layout = run_one(
+        args.notebook, dict(args.parameter), data=args.data, out=args.out, quick=args.quick
+    )
     print(f"executed notebook: {executed}")
     print(f"outputs: {layout.root}")
     return 0

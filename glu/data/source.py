@@ -31,29 +31,21 @@ from pathlib import Path
 import pandas as pd
 
 from glu import paths
-from glu.data.hand_logs import FILE_NAME
+from glu.data.layout import (
+    DEFAULT_SYNTHETIC_N,
+    DEFAULT_SYNTHETIC_SEED,
+    GESTURES,
+    HAND_LOG,
+    NETWORK_DEFINITION,
+    ORIGINAL_BN,
+    ORIGINAL_HMMS,
+    SENTENCE_SAMPLES,
+    SYNTHETIC_KEYWORD,
+    SYNTHETIC_MARKER,
+    WORD_FILES,
+)
 from glu.errors import DataError
 from glu.schema import Schema, default_schema
-
-WORD_FILES: dict[str, str] = {
-    "lab": "affordance-words/sent-1-5_lab_aff_bag.txt",
-    "asr": "affordance-words/sent-all_mllr3_aff_bag.txt",
-}
-"""``words`` option → experiment table (``lab``: transcriptions, the paper's; ``asr``: speech recogniser)."""
-NETWORK_DEFINITION = "affordance-words/networkDefinition.txt"
-GESTURES = "gestures"
-HAND_LOG = FILE_NAME
-ORIGINAL_BN = "reference-models/BN_lab.mat"
-ORIGINAL_HMMS: dict[int, str] = {
-    3: "reference-models/HMM_M3_Q6_mixsplit.mat",
-    1: "reference-models/HMM_M1_Q6_mixsplit.mat",
-}
-"""Gaussians per state M → the originals' HMM file."""
-SENTENCE_SAMPLES = "sentence-samples/sentence_10000samples_uniq.txt"
-SYNTHETIC_MARKER = "SYNTHETIC.json"
-SYNTHETIC_KEYWORD = "synthetic"
-DEFAULT_SYNTHETIC_N = 1270
-DEFAULT_SYNTHETIC_SEED = 0
 
 
 @dataclass(frozen=True)

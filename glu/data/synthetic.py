@@ -283,7 +283,7 @@ def write_synthetic_folder(
     out : the folder; if it exists it must be empty or an earlier synthetic folder (it is then replaced)
     n, seed : experiments per table, and the generator's seed
     recordings : hand logs to write, recording name → (timestamps, logged coordinates), e.g. from
-        :func:`glu.gestures.synthetic.synthetic_recordings`; none by default (the data layer does not make
+        :func:`glu.gestures.corpus.synthetic_recordings`; none by default (the data layer does not make
         gestures)
     progress : called with the name of each file written (for a progress bar)
     force : replace a folder that holds something else (never the published real data)
@@ -295,7 +295,7 @@ def write_synthetic_folder(
     """
     from glu.data.fetch import published_origin
     from glu.data.hand_logs import write_hand_log
-    from glu.data.source import GESTURES, NETWORK_DEFINITION, SYNTHETIC_MARKER, WORD_FILES
+    from glu.data.layout import GESTURES, NETWORK_DEFINITION, SYNTHETIC_MARKER, WORD_FILES
     from glu.data.tables import write_experiments, write_network_definition
 
     out = Path(out)

@@ -29,10 +29,10 @@ from glu.errors import DataError, ModelError
 from glu.experiments.common import tidy
 from glu.fusion import fuse
 from glu.gestures.features import load_features
-from glu.gestures.forward import p_hmm_from_loglik
 from glu.gestures.recognizer import Recognizer
 from glu.gestures.synthetic import synthesize_gesture
 from glu.gestures.trajectories import RepairPolicy, Trajectory
+from glu.hmm import p_hmm_from_loglik
 from glu.language.candidates import SentenceSet
 from glu.language.descriptions import DEFAULT_SCORE
 from glu.language.descriptions import describe as best_sentences

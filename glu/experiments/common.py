@@ -11,7 +11,7 @@ whose ``attrs`` say what it is, set here and nowhere else:
 ``parameters``
     the settings that produced it (seeds, folds, rules, …), so a table can be rerun.
 
-:class:`glu.outputs.Outputs` writes all three into the table's JSON file and ``results/summary.json``.
+:class:`glu.run.outputs.Outputs` writes all three into the table's JSON file and ``results/summary.json``.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from typing import Any
 import pandas as pd
 
 from glu.evidence import format_evidence
+from glu.hmm import TrainingConfig
 
 UNKNOWN_SOURCE = "unknown data"
 
@@ -48,6 +49,17 @@ def corpus_source(sequences: Sequence[Any]) -> str:
 def evidence_text(evidence: Mapping[str, Any]) -> str:
     """``{"Action": "grasp", "ObjVel": "slow"}`` → ``"Action=grasp, ObjVel=slow"``."""
     return format_evidence(evidence)
+
+
+def training_parameters(config: TrainingConfig | None, features: Any = None) -> dict[str, Any]:
+    """The training settings to stamp on a table: the fields of ``config`` that differ from glu's defaults,
+    and the invariant features when given (``{}`` for the defaults on raw features)."""
+    config = config or TrainingConfig()
+    default = TrainingConfig()
+    out = {k: v for k, v in config.as_dict().items() if v != getattr(default, k)}
+    if features is not None:
+        out["features"] = features
+    return out
 
 
 def _plain(v: Any) -> Any:

@@ -31,10 +31,11 @@ from glu.errors import DataError
 from glu.experiments.common import tidy
 from glu.gestures.corpus import Corpus, synthetic_corpus
 from glu.gestures.invariants import Invariants
-from glu.gestures.recognizer import Recognizer, train_recognizer, train_recognizers
+from glu.gestures.recognizer import Recognizer, train_recognizer
 from glu.gestures.robot import ROBOT_NOISE
 from glu.gestures.synthetic import SYNTHETIC_POLICY, View, synthesize_gesture
 from glu.gestures.trajectories import repair
+from glu.hmm import TrainingConfig
 from glu.schema import ACTIONS
 
 FEATURE_SETS: tuple[str, ...] = (
@@ -48,6 +49,8 @@ FEATURE_SETS: tuple[str, ...] = (
 """The feature sets compared by default: raw, translation invariance, and each other invariance added to it
 (they act on the displacement from the start, so in practice they need it), and all four."""
 TRAIN_SOURCES: tuple[str, ...] = ("robot", "human")
+STUDY_TRAINING = TrainingConfig(n_mix=1, n_iter=50, tol=1e-3)
+"""The study's HMMs: one Gaussian per state (the views' shapes, not one person's path), short EM."""
 """Where the recognisers learn: the robot's own movements, or one human view (facing the camera)."""
 HUMAN_NOISE = 0.01
 """Metres: sensor noise of the human gestures (camera skeleton), as the generator's default."""
@@ -137,14 +140,13 @@ def train_for(
     n_per_action: int = 12,
     seed: int = 0,
     normalise_body: bool = False,
-    **train: Any,
+    config: TrainingConfig | None = None,
 ) -> Recognizer:
-    """A recogniser trained on :func:`training_corpus` (``train``: Q, M, EM settings of :func:`train_recognizer`)."""
+    """A recogniser trained on :func:`training_corpus` with ``config`` (default glu's)."""
     corpus = training_corpus(source, n_per_action, seed, normalise_body)
     by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
-    return train_recognizer(
-        by_action, seed=seed, warn=False, features=features, meta={"data": corpus.description}, **train
-    )
+    meta = {"data": corpus.description}
+    return train_recognizer(by_action, config, seed=seed, warn=False, features=features, meta=meta)
 
 
 def _test_seed(seed: int) -> int:
@@ -175,10 +177,7 @@ def correspondence_study(
     n_train: int = 12,
     n_test: int = 10,
     *,
-    n_states: int = 6,
-    n_mix: int = 1,
-    n_iter: int = 50,
-    tol: float = 1e-3,
+    config: TrainingConfig = STUDY_TRAINING,
     normalise_body: bool = False,
     invariant_settings: Mapping[str, Any] | None = None,
 ) -> pd.DataFrame:
@@ -191,7 +190,7 @@ def correspondence_study(
     conditions : test conditions (default :func:`default_conditions` with ``normalise_body``)
     seeds : one training corpus, EM initialisation and test set per seed
     n_train, n_test : gestures per action for training and for each test condition
-    n_states, n_mix, n_iter, tol : the HMMs (Q, M) and EM (:func:`~glu.gestures.training.train_hmm`)
+    config : the HMMs (Q, M) and EM (:func:`glu.hmm.train`; default :data:`STUDY_TRAINING`)
     normalise_body : the features' normalisation (False: fixed constants, as the 2017 logs)
     invariant_settings : ``lock_radius``, ``min_scale``, ``anchor_frames`` of :class:`Invariants`, if not the
         defaults
@@ -225,15 +224,8 @@ def correspondence_study(
                 runs.append((seed, source, spec))
                 sets.append(by_action)
     # every model of every recogniser in one batch (each as train_recognizer would train it)
-    recs = train_recognizers(
-        sets,
-        n_states,
-        n_mix,
-        n_iter=n_iter,
-        tol=tol,
-        seed=[r[0] for r in runs],
-        warn=False,
-        features=[r[2] for r in runs],
+    recs = train_recognizer(
+        sets, config, seed=[r[0] for r in runs], features=[r[2] for r in runs], warn=False
     )
     rows = []
     for (seed, source, spec), rec in zip(runs, recs, strict=True):
@@ -267,10 +259,10 @@ def correspondence_study(
         seeds=seeds,
         n_train=n_train,
         n_test=n_test,
-        n_states=n_states,
-        n_mix=n_mix,
-        n_iter=n_iter,
-        tol=tol,
+        n_states=config.n_states,
+        n_mix=config.n_mix,
+        n_iter=config.n_iter,
+        tol=config.tol,
         normalise_body=normalise_body,
         conditions=[f"{c.factor}: {c.level}" for c in conditions],
         invariant_settings=settings,

@@ -2,7 +2,7 @@
 
 For each episode of a chunk (:mod:`glu.experiments.corpus`) and each observed fraction ``f`` of its
 gesture, the gesture HMMs give ``p_HMM(A | G_1^t)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass,
-:class:`~glu.gestures.batch.BatchScorer`; from the likelihoods as the originals, or per frame — the
+:class:`~glu.hmm._engine.batch.BatchScorer`; from the likelihoods as the originals, or per frame — the
 condition's ``posterior``, :data:`~glu.experiments.corpus.POSTERIORS`), and each strategy predicts three
 things:
 
@@ -53,9 +53,8 @@ from glu.experiments.corpus import (
 )
 from glu.experiments.intervals import BOOT_KEY, accumulate, poisson_weights
 from glu.fusion import STRATEGIES, fuse_action_tables, fuse_tables
-from glu.gestures.batch import BatchScorer
-from glu.gestures.forward import p_hmm_from_loglik
 from glu.gestures.synthetic import View
+from glu.hmm import BatchScorer, p_hmm_from_loglik
 from glu.language.batch import ASPECTS, agreement, best_sentences
 from glu.schema import ACTIONS, AFFORDANCE_NODES
 
@@ -216,7 +215,7 @@ class Evaluator:
     Attributes
     ----------
     engine : the Affordance–Words network (the world the episodes are drawn from, and the robot's model)
-    scorer : the gesture recogniser, as a :class:`~glu.gestures.batch.BatchScorer` (models in the order
+    scorer : the gesture recogniser, as a :class:`~glu.hmm._engine.batch.BatchScorer` (models in the order
         of :data:`glu.schema.ACTIONS`)
     settings : what is measured
     seed, chunk_size : the corpus's seed and chunk size

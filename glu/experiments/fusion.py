@@ -19,8 +19,8 @@ from glu.bn.model import BayesNet
 from glu.experiments.common import evidence_text, model_source, tidy
 from glu.fusion import SOFT_STRATEGIES, Strategy, check_strategy, fuse, hmm_rows
 from glu.gestures.corpus import LabelledSequence
-from glu.gestures.forward import p_hmm_from_loglik
 from glu.gestures.recognizer import Recognizer
+from glu.hmm import p_hmm_from_loglik
 
 EFFECT_CASES: dict[str, dict[str, str]] = {
     "small sphere": {"Action": "tap", "Shape": "sphere", "Size": "small"},
@@ -323,7 +323,7 @@ def network_summary(bn: BayesNet, table: pd.DataFrame, original: BayesNet | None
     -------
     DataFrame with columns quantity, ours, and with ``original``: reference (its value), difference.
     """
-    from glu.bn.learning import encode
+    from glu.bn.model import encode
 
     codes = encode(table, bn.schema)
     rows = [

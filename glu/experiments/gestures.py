@@ -2,8 +2,9 @@
 
 Every function returns a tidy pandas DataFrame (one row per test sequence, or per condition) stamped by
 :func:`~glu.experiments.common.tidy`, so numbers quoted anywhere are computed, never typed. The labelled
-sequences come from :mod:`glu.gestures.corpus`; training settings default to
-:class:`glu.gestures.training.TrainingConfig`.
+sequences come from :mod:`glu.gestures.corpus`; training settings are a
+:class:`glu.hmm.TrainingConfig` (default: glu's) and the invariant features the recogniser uses
+(:class:`glu.gestures.invariants.Invariants`, default raw).
 
 * :func:`cross_validate` — stratified k-fold: train a recogniser on k-1 folds, classify the held-out fold;
   :func:`confusion_matrix` and :func:`accuracy` summarise the predictions;
@@ -23,12 +24,14 @@ from scipy.stats import binomtest
 
 from glu.data.source import DataSource
 from glu.errors import DataError
-from glu.experiments.common import corpus_source, model_source, tidy
+from glu.experiments.common import corpus_source, model_source, tidy, training_parameters
 from glu.gestures.corpus import LabelledSequence, original_test_segments, synthetic_corpus
-from glu.gestures.forward import p_hmm_from_loglik
-from glu.gestures.original import load_original_models
-from glu.gestures.recognizer import Recognizer, train_recognizer, train_recognizers
+from glu.gestures.invariants import Invariants
+from glu.gestures.recognizer import Recognizer, load_original_models, train_recognizer
+from glu.hmm import TrainingConfig, p_hmm_from_loglik
 from glu.schema import ACTIONS
+
+Features = Invariants | str | None
 
 
 def stratified_folds(labels: Sequence[str], k: int, seed: int = 0) -> np.ndarray:
@@ -55,17 +58,15 @@ def _by_action(seqs: Sequence[LabelledSequence], actions: Sequence[str]) -> dict
     return {a: v for a, v in by_action.items() if v}
 
 
-def _train(
-    seqs: Sequence[LabelledSequence], actions: Sequence[str], seed: int, train: dict[str, Any]
-) -> Recognizer:
-    return train_recognizer(_by_action(seqs, actions), seed=seed, warn=False, **train)
-
-
 def _train_all(
-    sets: Sequence[tuple[Sequence[LabelledSequence], Sequence[str]]], seed: int, train: dict[str, Any]
+    sets: Sequence[tuple[Sequence[LabelledSequence], Sequence[str]]],
+    seed: int,
+    config: TrainingConfig | None,
+    features: Features,
 ) -> list[Recognizer]:
-    """One recogniser per (training set, actions), every model trained in one batch (each as :func:`_train`)."""
-    return train_recognizers([_by_action(s, a) for s, a in sets], seed=seed, warn=False, **train)
+    """One recogniser per (training set, actions), every model trained in one batch."""
+    sets = [_by_action(s, a) for s, a in sets]
+    return train_recognizer(sets, config, seed=seed, features=features, warn=False)
 
 
 def _predict_rows(rec: Recognizer, test: Sequence[LabelledSequence], **extra: Any) -> list[dict[str, Any]]:
@@ -90,18 +91,21 @@ def _predict_rows(rec: Recognizer, test: Sequence[LabelledSequence], **extra: An
 
 
 def cross_validate(
-    sequences: Sequence[LabelledSequence], k: int = 5, seed: int = 0, **train: Any
+    sequences: Sequence[LabelledSequence],
+    k: int = 5,
+    seed: int = 0,
+    config: TrainingConfig | None = None,
+    features: Features = None,
 ) -> pd.DataFrame:
     """Stratified k-fold cross-validation: one row per sequence with its fold, prediction and scores.
 
-    ``train`` overrides the defaults of :class:`~glu.gestures.training.TrainingConfig` (``n_states``,
-    ``n_mix``, ``n_iter``, ``tol``, ``covar_reg``).
+    ``config`` and ``features``: how each fold's recogniser is trained (default: glu's, raw features).
     Columns: fold, recording, start, end, n_frames, action, predicted, loglik_<a>, p_hmm_<a>, correct, converged.
     """
     splits = _folds(sequences, k, seed)
     actions = _actions(sequences)
-    recs = _train_all([(tr, actions) for tr, _ in splits], seed, train)
-    return _cv_frame(sequences, splits, recs, k, seed, train)
+    recs = _train_all([(tr, actions) for tr, _ in splits], seed, config, features)
+    return _cv_frame(sequences, splits, recs, k, seed, training_parameters(config, features))
 
 
 def _actions(sequences: Sequence[LabelledSequence]) -> tuple[str, ...]:
@@ -128,12 +132,12 @@ def _cv_frame(
     recs: Sequence[Recognizer],
     k: int,
     seed: int,
-    train: dict[str, Any],
+    stamp: dict[str, Any],
 ) -> pd.DataFrame:
     rows = []
     for f, ((_, te), rec) in enumerate(zip(splits, recs, strict=True)):
         rows += _predict_rows(rec, te, fold=f)
-    return tidy(pd.DataFrame(rows), "hmm_cross_validation", corpus_source(sequences), k=k, seed=seed, **train)
+    return tidy(pd.DataFrame(rows), "hmm_cross_validation", corpus_source(sequences), k=k, seed=seed, **stamp)
 
 
 def confusion_matrix(predictions: pd.DataFrame, actions: Sequence[str] | None = None) -> pd.DataFrame:
@@ -168,7 +172,8 @@ def accuracy_vs_noise(
     k: int = 5,
     seed: int = 0,
     actions: tuple[str, ...] = ACTIONS,
-    **train: Any,
+    config: TrainingConfig | None = None,
+    features: Features = None,
 ) -> pd.DataFrame:
     """k-fold accuracy on synthetic corpora with growing sensor noise (metres, std on every joint).
 
@@ -180,12 +185,16 @@ def accuracy_vs_noise(
     splits = [_folds(c, k, seed) for c in corpora]
     recs = iter(
         _train_all(
-            [(tr, _actions(c)) for c, sp in zip(corpora, splits, strict=True) for tr, _ in sp], seed, train
+            [(tr, _actions(c)) for c, sp in zip(corpora, splits, strict=True) for tr, _ in sp],
+            seed,
+            config,
+            features,
         )
     )
+    stamp = training_parameters(config, features)
     rows = []
     for noise, corpus, sp in zip(noise_levels, corpora, splits, strict=True):
-        pred = _cv_frame(corpus, sp, [next(recs) for _ in sp], k, seed, train)
+        pred = _cv_frame(corpus, sp, [next(recs) for _ in sp], k, seed, stamp)
         row = {"noise_m": float(noise), "n_sequences": len(pred), "k": k, "accuracy": accuracy(pred)}
         row["ci_low"], row["ci_high"] = wilson_interval(int(pred["correct"].sum()), len(pred))
         for a in actions:
@@ -203,12 +212,16 @@ def accuracy_vs_noise(
         n_per_action=n_per_action,
         k=k,
         seed=seed,
-        **train,
+        **stamp,
     )
 
 
 def leave_one_out(
-    sequences: Sequence[LabelledSequence], by: str = "recording", seed: int = 0, **train: Any
+    sequences: Sequence[LabelledSequence],
+    by: str = "recording",
+    seed: int = 0,
+    config: TrainingConfig | None = None,
+    features: Features = None,
 ) -> pd.DataFrame:
     """Hold out one recording (``by="recording"``) or one segment (``by="segment"``) at a time.
 
@@ -232,7 +245,7 @@ def leave_one_out(
     recs = dict(
         zip(
             [h[0] for h in trainable],
-            _train_all([(h[2], actions) for h in trainable], seed, train),
+            _train_all([(h[2], actions) for h in trainable], seed, config, features),
             strict=True,
         )
     )
@@ -258,7 +271,12 @@ def leave_one_out(
                     }
                 )
     return tidy(
-        pd.DataFrame(rows), f"hmm_leave_one_{by}_out", corpus_source(sequences), by=by, seed=seed, **train
+        pd.DataFrame(rows),
+        f"hmm_leave_one_{by}_out",
+        corpus_source(sequences),
+        by=by,
+        seed=seed,
+        **training_parameters(config, features),
     )
 
 
@@ -315,10 +333,18 @@ def segmentation_table(segmentations: Sequence[tuple[Any, list[Any]]], data_sour
     return tidy(pd.DataFrame(rows), "gesture_segmentation", data_source)
 
 
-def train_on(sequences: Sequence[LabelledSequence], seed: int = 0, **train: Any) -> Recognizer:
-    """Train one HMM per action present in ``sequences`` (``train`` overrides :class:`~glu.gestures.training.TrainingConfig`)."""
+def train_on(
+    sequences: Sequence[LabelledSequence],
+    config: TrainingConfig | None = None,
+    seed: int = 0,
+    features: Features = None,
+) -> Recognizer:
+    """A recogniser of one HMM per action present in ``sequences``, trained with ``config`` on ``features``."""
     actions = tuple(dict.fromkeys(s.action for s in sequences))
-    return _train(sequences, actions, seed, {**train, "meta": {"data": corpus_source(sequences)}})
+    meta = {"data": corpus_source(sequences)}
+    return train_recognizer(
+        _by_action(sequences, actions), config, seed=seed, features=features, meta=meta, warn=False
+    )
 
 
 def training_table(recognizer: Recognizer) -> pd.DataFrame:

@@ -1,6 +1,6 @@
 """Two ways to train the gesture HMMs, measured on the same segments: glu's recipe and the originals' mixsplit.
 
-:func:`recipe_comparison` trains both recipes (:data:`glu.gestures.mixsplit.RECIPES`) over a grid of seeds
+:func:`recipe_comparison` trains both recipes (:data:`glu.hmm.RECIPES`) over a grid of seeds
 and EM tolerances and reports, per setting, the leave-one-segment-out accuracy on the training segments
 and how the held-out test gestures (the two seated taps of effect anticipation) are recognised when the
 models are trained on every training segment. The spread over the grid says how fragile a single quoted
@@ -21,12 +21,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from glu.experiments.common import corpus_source, tidy
-from glu.experiments.gestures import accuracy
+from glu.experiments.common import corpus_source, tidy, training_parameters
+from glu.experiments.gestures import Features, accuracy
 from glu.gestures.corpus import LabelledSequence
 from glu.gestures.invariants import Invariants
-from glu.gestures.mixsplit import RECIPES
-from glu.gestures.recognizer import Recognizer, train_models
+from glu.gestures.recognizer import Recognizer
+from glu.hmm import RECIPES, TrainingConfig, train
+
+RUN_KEYS = ("seed", "features")
+"""The keys of a run (:func:`leave_one_segment_out_many`) that are not :class:`~glu.hmm.TrainingConfig` fields."""
 
 COLUMNS = [
     "recipe",
@@ -42,7 +45,10 @@ COLUMNS = [
 
 
 def leave_one_segment_out(
-    sequences: Sequence[LabelledSequence], seed: int = 0, **train: Any
+    sequences: Sequence[LabelledSequence],
+    seed: int = 0,
+    config: TrainingConfig | None = None,
+    features: Features = None,
 ) -> tuple[pd.DataFrame, Recognizer]:
     """Hold out each segment in turn, train on the rest, recognise it; and the models trained on everything.
 
@@ -56,23 +62,25 @@ def leave_one_segment_out(
     has no other segment), testable, correct; the :class:`~glu.gestures.recognizer.Recognizer` trained on
     all segments)
     """
-    return leave_one_segment_out_many(sequences, [{"seed": seed, **train}])[0]
+    run = {**(config or TrainingConfig()).as_dict(), "seed": seed, "features": features}
+    return leave_one_segment_out_many(sequences, [run])[0]
 
 
 def leave_one_segment_out_many(
     sequences: Sequence[LabelledSequence], runs: Sequence[Mapping[str, Any]]
 ) -> list[tuple[pd.DataFrame, Recognizer]]:
-    """:func:`leave_one_segment_out` for several runs, each a dict of its ``seed`` and training settings.
+    """:func:`leave_one_segment_out` for several runs, each a dict of its ``seed``, its ``features`` and
+    :class:`~glu.hmm.TrainingConfig` fields (those left out keep glu's defaults).
 
     Runs with the same training settings (all but the seed and the features) share one batch of
-    :func:`glu.gestures.recognizer.train_models`, so every model of a grid of seeds and feature sets
-    runs EM together. Returns what :func:`leave_one_segment_out` returns for each run, in order.
+    :func:`glu.hmm.train`, so every model of a grid of seeds and feature sets runs EM together. Returns
+    what :func:`leave_one_segment_out` returns for each run, in order.
     """
     actions = tuple(dict.fromkeys(s.action for s in sequences))
     seen_by: dict[str, list[np.ndarray]] = {}  # the features the models see, per feature set
     plans, groups = [], {}
     for run in runs:
-        settings = {k: v for k, v in run.items() if k not in ("meta", "progress", "features", "seed")}
+        settings = {k: v for k, v in run.items() if k not in RUN_KEYS}
         features = Invariants.parse(run.get("features"))
         if features.name not in seen_by:
             seen_by[features.name] = [
@@ -96,12 +104,13 @@ def leave_one_segment_out_many(
         group += [(a, seqs, int(run.get("seed", 0))) for a, seqs in jobs]
     trained_by = {}
     for key, (settings, jobs) in groups.items():
-        trained_by[key] = train_models(
-            [j[1] for j in jobs], seed=[j[2] for j in jobs], name=[j[0] for j in jobs], warn=False, **settings
-        )
+        batch = {(i, a): seqs for i, (a, seqs, _) in enumerate(jobs)}
+        seeds = {(i, a): sd for i, (a, _, sd) in enumerate(jobs)}
+        trained = train(batch, TrainingConfig(**settings), seed=seeds, warn=False)
+        trained_by[key] = list(trained.values())
     out = []
     for run, (features, folds, lo, n) in zip(runs, plans, strict=True):
-        settings = {k: v for k, v in run.items() if k not in ("meta", "progress", "features", "seed")}
+        settings = {k: v for k, v in run.items() if k not in RUN_KEYS}
         trained = trained_by[repr(sorted(settings.items()))][lo : lo + n]
         out.append(_loso_outcome(sequences, actions, features, folds, trained))
     return out
@@ -142,7 +151,8 @@ def recipe_comparison(
     recipes: Sequence[str] = RECIPES,
     seeds: Sequence[int] = (0,),
     tols: Sequence[float] = (1e-4,),
-    **train: Any,
+    config: TrainingConfig | None = None,
+    features: Features = None,
 ) -> pd.DataFrame:
     """Leave-one-segment-out accuracy and test recognition for each recipe, seed and EM tolerance.
 
@@ -150,10 +160,11 @@ def recipe_comparison(
     ----------
     sequences : the labelled training segments (LOSO runs over them)
     test : gestures recognised by models trained on all of ``sequences`` (e.g. the seated taps)
-    recipes : names of :data:`~glu.gestures.mixsplit.RECIPES`
+    recipes : names of :data:`~glu.hmm.RECIPES`
     seeds : seeds of glu's recipe (mixsplit ignores them and runs once per tolerance, seed reported as -1)
     tols : EM tolerances, log-likelihood per training frame
-    train : other training settings (``n_states``, ``n_mix``, ``n_iter``, …)
+    config : the other training settings (``n_states``, ``n_mix``, ``n_iter``, …; default glu's)
+    features : the invariant features the recognisers use (default raw)
 
     Returns
     -------
@@ -161,8 +172,9 @@ def recipe_comparison(
     test_predicted (the actions recognised for ``test``, comma-separated), test_correct (how many are
     right), train_loglik_per_frame (mean over actions, of the models trained on all segments).
     """
+    base = {**(config or TrainingConfig()).as_dict(), "features": features}
     grid = [
-        {**train, "tol": float(tol), "recipe": recipe, "seed": int(seed)}
+        {**base, "tol": float(tol), "recipe": recipe, "seed": int(seed)}
         for recipe in recipes
         for tol in tols
         for seed in (seeds if recipe != "mixsplit" else (-1,))
@@ -176,7 +188,7 @@ def recipe_comparison(
         seeds=list(seeds),
         tols=list(tols),
         n_test=len(test),
-        **train,
+        **{k: v for k, v in training_parameters(config, features).items() if k not in ("tol", "recipe")},
     )
 
 
@@ -186,7 +198,7 @@ def comparison_rows(
     """The rows of :func:`recipe_comparison` for a grid of runs, every run's models trained in one batch.
 
     Each entry of ``grid`` holds ``recipe``, ``seed`` (-1 for mixsplit, which has none; it trains with 0),
-    ``tol`` and the other training settings (``features``, ``n_states``, …).
+    ``tol``, ``features`` and other :class:`~glu.hmm.TrainingConfig` fields (``n_states``, …).
     """
     results = leave_one_segment_out_many(sequences, [{**g, "seed": max(int(g["seed"]), 0)} for g in grid])
     rows = []

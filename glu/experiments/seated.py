@@ -18,16 +18,16 @@ import pandas as pd
 
 from glu.data.source import DataSource
 from glu.errors import DataError
-from glu.experiments.common import corpus_source, tidy
+from glu.experiments.common import corpus_source, tidy, training_parameters
 from glu.gestures.corpus import synthetic_corpus
 from glu.gestures.invariants import Invariants
 from glu.gestures.synthetic import View
-from glu.gestures.training import TrainingConfig
+from glu.hmm import TrainingConfig
 
 SETTING_KEYS = {"Q": "n_states", "M": "n_mix", "reg": "covar_reg", "iter": "n_iter", "tol": "tol"}
 """Short names of training settings in labels such as ``"Q6 M3 reg0.03"`` (as the originals' ``HMM_M3_Q6``)."""
 DEFAULT_SETTING = "glu defaults"
-"""The label of no override: glu's recipe with :class:`~glu.gestures.training.TrainingConfig` as it is."""
+"""The label of no override: glu's recipe with :class:`~glu.hmm.training.TrainingConfig` as it is."""
 
 
 def parse_setting(label: str) -> dict[str, Any]:
@@ -35,7 +35,7 @@ def parse_setting(label: str) -> dict[str, Any]:
     → ``{"recipe": "mixsplit"}``; ``"glu defaults"`` → ``{}``."""
     import re
 
-    from glu.gestures.mixsplit import RECIPES
+    from glu.hmm import RECIPES
 
     out: dict[str, Any] = {}
     for part in [] if label.strip() == DEFAULT_SETTING else label.split():
@@ -70,7 +70,7 @@ def feature_settings(
     feature_sets: Sequence[str] = ("raw", "centred"),
     settings: Sequence[Mapping[str, Any]] = ({},),
     seeds: Sequence[int] = (0,),
-    **train: Any,
+    config: TrainingConfig | None = None,
 ) -> pd.DataFrame:
     """Leave-one-segment-out accuracy and the recognition of ``test``, per feature set, training setting and seed.
 
@@ -79,20 +79,22 @@ def feature_settings(
     the standing segments) and recognises ``test`` (the two seated taps) with models trained on all of
     them. Settings without random initialisation (mixsplit, or single Gaussians) run with the first seed
     only. Columns: features, setting, and those of ``recipe_comparison`` (recipe, seed, tol, loso_accuracy,
-    loso_correct, loso_testable, test_predicted, test_correct, train_loglik_per_frame).
+    loso_correct, loso_testable, test_predicted, test_correct, train_loglik_per_frame). ``config`` holds the
+    settings the grid's ``settings`` leave as they are (default glu's).
     """
     from glu.experiments.recipes import COLUMNS, comparison_rows
 
+    config = config or TrainingConfig()
     grid, labels = [], []
     for features in feature_sets:
         for setting in settings:
             s = dict(setting)
-            recipe, tol = s.pop("recipe", "glu"), s.pop("tol", TrainingConfig.tol)
-            single = recipe == "mixsplit" or s.get("n_mix", TrainingConfig.n_mix) == 1
+            recipe, tol = s.pop("recipe", config.recipe), s.pop("tol", config.tol)
+            single = recipe == "mixsplit" or s.get("n_mix", config.n_mix) == 1
             for seed in seeds[:1] if single else seeds:  # as recipe_comparison: mixsplit has no seed (-1)
                 grid.append(
                     {
-                        **train,
+                        **config.as_dict(),
                         **s,
                         "features": features,
                         "recipe": recipe,
@@ -113,7 +115,7 @@ def feature_settings(
         settings=[setting_label(s) for s in settings],
         seeds=list(seeds),
         n_test=len(test),
-        **train,
+        **training_parameters(config),
     )
 
 

@@ -12,14 +12,20 @@ Frame ranges are 1-based and inclusive, in the numbering of the log, as in the p
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
+from glu.data.hand_logs import FILE_NAME
 from glu.data.recordings import ORIGINAL_SEGMENTS, RECORDING_ACTION, TRAINING_RECORDINGS
 from glu.data.source import DataSource
-from glu.gestures.features import load_features
+from glu.data.trajectory_files import is_trajectory_file
+from glu.errors import DataError
+from glu.gestures.features import LOG_SCALE, load_features
+from glu.gestures.recognizer import Recognizer, load_original_models
 from glu.gestures.segmentation import (
     DEFAULT_PARAMS,
     RecordingSegmentation,
@@ -29,8 +35,9 @@ from glu.gestures.segmentation import (
     segment_recording,
     segment_repetitions,
 )
-from glu.gestures.synthetic import View, synthesize_gestures, synthesize_recording
+from glu.gestures.synthetic import SyntheticGesture, View, synthesize_gestures, synthesize_recording
 from glu.gestures.trajectories import DEFAULT_POLICY, RepairPolicy, repair
+from glu.gestures.typicality import FRAMES_KEY, FeatureRanges
 from glu.schema import ACTIONS
 
 SYNTHETIC_TEST_SEED_OFFSET = 1000
@@ -216,3 +223,148 @@ def recording_segmentations(
         ref = [Segment(a, b, action, name) for a, b in g.segments]
         out.append((RecordingSegmentation(name, pieces, repaired.events), ref))
     return out
+
+
+def synthetic_recordings(seed: int = 0, noise: float = 0.01) -> dict[str, SyntheticGesture]:
+    """Synthetic look-alikes of the six real recordings (:data:`glu.data.recordings.RECORDING_ACTION`).
+
+    Each has the recording's action; the recordings with the originals' segments have their gestures at
+    exactly those frames (so ``tap1_hand`` frames 216–351 hold a tap, as in the real log); the other
+    training recordings hold four repetitions each. Deterministic in ``seed``.
+    """
+    out = {}
+    for i, (name, action) in enumerate(RECORDING_ACTION.items()):
+        if name in ORIGINAL_SEGMENTS:
+            out[name] = synthesize_recording(
+                action, 0, seed + i, noise=noise, placements=ORIGINAL_SEGMENTS[name]
+            )
+        else:
+            out[name] = synthesize_recording(action, 4, seed + i, noise=noise)
+    return out
+
+
+def hand_log_arrays(gesture: SyntheticGesture) -> tuple[np.ndarray, np.ndarray]:
+    """A synthetic recording as a hand log holds it: timestamps (s) and features × 1000, shapes (n,), (n, 3)."""
+    traj = gesture.trajectory()
+    return traj.t, traj.xyz * LOG_SCALE
+
+
+MANIFEST_COLUMNS: tuple[str, ...] = ("file", "label", "frames")
+"""The columns of a manifest of labelled recordings (``frames`` optional: ``A:B``, 1-based, inclusive)."""
+
+
+def _recording_files(folder: Path) -> list[Path]:
+    """The recordings in one action's folder: trajectory tables, YARP logs, and recording folders."""
+    found = []
+    for p in sorted(folder.iterdir()):
+        if p.name.startswith("."):
+            continue
+        if p.is_dir() and (p / FILE_NAME).is_file():
+            found.append(p / FILE_NAME)
+        elif p.is_file() and (is_trajectory_file(p) or p.name == FILE_NAME or p.suffix == ".log"):
+            found.append(p)
+    return found
+
+
+def _read_manifest(path: Path) -> list[tuple[Path, str, tuple[int, int] | None, int]]:
+    """(file, label, frames, line) of every row of a CSV manifest; files relative to the manifest."""
+    import csv
+
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise DataError(f"{path}: cannot read the manifest ({e})") from None
+    rows = list(csv.reader(text.splitlines()))
+    if not rows or [c.strip() for c in rows[0]][:2] != ["file", "label"]:
+        raise DataError(f"{path}: a manifest starts with the header file,label[,frames]; got {rows[:1]}")
+    header = [c.strip() for c in rows[0]]
+    if len(header) > 3 or (len(header) == 3 and header[2] != "frames"):
+        raise DataError(f"{path}: columns must be {', '.join(MANIFEST_COLUMNS)}; got {', '.join(header)}")
+    out = []
+    for line, row in enumerate(rows[1:], start=2):
+        if not any(c.strip() for c in row):
+            continue
+        if len(row) != len(header):
+            raise DataError(f"{path}, line {line}: expected {len(header)} fields, got {len(row)}")
+        file, label = row[0].strip(), row[1].strip()
+        if not file or not label:
+            raise DataError(f"{path}, line {line}: empty file or label")
+        frames = None
+        if len(row) == 3 and row[2].strip():
+            a, sep, b = row[2].strip().partition(":")
+            if not sep or not a.strip().isdigit() or not b.strip().isdigit() or int(a) > int(b):
+                raise DataError(f"{path}, line {line}: frames must be A:B with 1 ≤ A ≤ B, got {row[2]!r}")
+            frames = (int(a), int(b))
+        target = Path(file) if Path(file).is_absolute() else path.parent / file
+        if target.is_dir() and (target / FILE_NAME).is_file():
+            target = target / FILE_NAME
+        out.append((target, label, frames, line))
+    if not out:
+        raise DataError(f"{path}: the manifest lists no recordings")
+    return out
+
+
+def labelled_recordings(path: str | os.PathLike, body: tuple[float, float] | None = None) -> Corpus:
+    """Your own labelled recordings, each one gesture: a folder with one subfolder per action, or a CSV manifest.
+
+    Parameters
+    ----------
+    path : a folder whose subfolders are named by action and hold that action's recordings (YARP logs,
+        recording folders with a ``data.log``, or CSV/TSV/NPY trajectory tables: :mod:`glu.data.trajectory_files`),
+        or a CSV file with the columns ``file,label[,frames]`` (files relative to it; ``frames`` ``A:B``
+        picks frames A to B of the recording, 1-based, inclusive)
+    body : the body size for hand tables without a skeleton (shoulder and neck–torso distances, m)
+
+    Returns
+    -------
+    a :class:`Corpus` of one :class:`LabelledSequence` per recording (the features as
+    :func:`~glu.gestures.features.load_features` reads them, unrepaired: a frame that is not finite is an
+    error naming the file), described by the folder or manifest's name.
+    """
+    path = Path(path)
+    if path.is_dir():
+        folders = [p for p in sorted(path.iterdir()) if p.is_dir() and not p.name.startswith(".")]
+        items = [(f, d.name, None, 0) for d in folders for f in _recording_files(d)]
+        if not items:
+            raise DataError(
+                f"{path}: no recordings found; expected one subfolder per action holding its recordings "
+                "(.csv, .tsv, .npy, .log, or folders with a data.log)"
+            )
+    elif path.is_file():
+        items = _read_manifest(path)
+    else:
+        raise DataError(f"{path}: no such folder or manifest")
+    corpus = Corpus(description=f"labelled recordings: {path.name}")
+    for file, label, frames, line in items:
+        where = f"{file}" + (f" (manifest line {line})" if line else "")
+        if not file.is_file():
+            raise DataError(f"{where}: no such recording")
+        traj = load_features(file, policy=None, body=body).pieces[0]
+        if frames is not None:
+            traj = traj.frames(*frames)
+        xyz = np.asarray(traj.xyz, dtype=float)
+        if len(xyz) == 0:
+            raise DataError(f"{where}: the recording has no frames")
+        bad = ~np.all(np.isfinite(xyz), axis=1)
+        if bad.any():
+            raise DataError(f"{where}: frame {int(np.flatnonzero(bad)[0]) + 1} is not finite")
+        start, end = frames or (int(traj.frame[0]), int(traj.frame[-1]))
+        base = path.parent if path.is_file() else path
+        name = os.path.relpath(file, base) if file.is_relative_to(base) else file.name
+        corpus.append(LabelledSequence(label, xyz, name, start, end))
+    return corpus
+
+
+def original_recognizer(source: DataSource, n_mix: int = 3) -> Recognizer:
+    """The originals' 2013 models of a data source (:func:`~glu.gestures.recognizer.load_original_models`),
+    whose typicality check knows where gestures start and how far they move from the published standing
+    recordings (:func:`real_segments`) — the originals' own training data is not published, and sequences
+    sampled from their models start elsewhere (their person's rest pose) than the published logs."""
+    path = source.original_hmms(n_mix)
+    if path is None:
+        raise DataError(f"the data source has no original HMMs with M = {n_mix} ({source.describe()})")
+    rec = load_original_models(path)
+    reference = [s.xyz for s in real_segments(source, include_original=False)]
+    if reference:
+        rec.meta[FRAMES_KEY] = FeatureRanges.of(reference, "published standing").to_meta()
+    return rec

@@ -3,7 +3,7 @@
 :class:`Recognizer` gives ``log L(G | A)`` and ``p_HMM(A | G) = L(G|A) / Σ_h L(G|h)`` (equal priors, in the
 log domain) for whole sequences or every prefix; :meth:`Recognizer.stream` gives a :class:`GestureStream`
 that consumes one frame at a time at O(1) cost per frame. :func:`train_recognizer` trains one model per
-action (:mod:`glu.gestures.training`).
+action (:mod:`glu.hmm.training`).
 
 A recogniser knows which features its models were trained on (:class:`~glu.gestures.invariants.Invariants`:
 raw, or invariant to translation, scale, rotation about the vertical, mirroring) and computes them itself
@@ -39,29 +39,38 @@ import numpy as np
 
 from glu.errors import DataError, ModelError
 from glu.files import atomic_write_json
-from glu.gestures.batch import Bank, loglik_many, stack_models
 from glu.gestures.features import FEATURES_DESCRIPTION
-from glu.gestures.forward import (
-    ForwardState,
-    forward_curve,
-    forward_step,
-    log_emissions,
-    p_hmm_from_loglik,
-)
 from glu.gestures.invariants import Invariants
-from glu.gestures.mixsplit import RECIPES, train_mixsplit_many
-from glu.gestures.model import GestureHMM, as_sequence
-from glu.gestures.training import TrainingConfig, TrainingReport, train_many
 from glu.gestures.typicality import (
+    FRAMES_KEY,
     META_KEY,
+    FeatureRanges,
     LoglikRange,
     Typicality,
     check,
     ranges_from_meta,
     ranges_to_meta,
     sampled_range,
+    sampled_sequences,
     training_range,
 )
+from glu.hmm import (
+    Bank,
+    ForwardState,
+    GestureHMM,
+    TrainingConfig,
+    TrainingReport,
+    as_sequence,
+    forward_curve,
+    forward_step,
+    load_original_hmms,
+    log_emissions,
+    loglik_many,
+    p_hmm_from_loglik,
+    stack_models,
+    train,
+)
+from glu.schema import ACTIONS
 
 FORMAT = "glu-gesture-recognizer"
 FORMAT_VERSION = 2
@@ -90,7 +99,7 @@ class GestureStream:
 
     Each :meth:`push` costs O(Σ_a Q_a² + Σ_a Q_a M_a D²), independent of how many frames came before;
     it computes the recogniser's invariant features of the frame (:class:`~glu.gestures.invariants.InvariantStream`)
-    and runs the same :func:`~glu.gestures.forward.forward_step` as the batch scoring, with the models
+    and runs the same :func:`~glu.hmm.inference.forward_step` as the batch scoring, with the models
     stacked (padded to the largest Q and M), so the results equal rescoring the prefix ``G_1^t``.
     """
 
@@ -172,7 +181,7 @@ class Recognizer:
 
     @property
     def bank(self) -> Bank:
-        """The models stacked for scoring them together (:func:`glu.gestures.batch.stack_models`, built once)."""
+        """The models stacked for scoring them together (:func:`glu.hmm._engine.batch.stack_models`, built once)."""
         if self._bank is None:
             self._bank = stack_models([self.models[a] for a in self.actions])
         return self._bank
@@ -192,7 +201,7 @@ class Recognizer:
 
     def loglik_many(self, sequences: Sequence[np.ndarray]) -> np.ndarray:
         """:meth:`loglik` of many sequences (each of shape (T_i, D)), shape (S, n_actions), in one batch
-        (:func:`glu.gestures.batch.loglik_many` on the recogniser's features): the same numbers as
+        (:func:`glu.hmm._engine.batch.loglik_many` on the recogniser's features): the same numbers as
         :meth:`loglik` of each sequence (tested)."""
         return loglik_many(self.bank, [self.transform(X) for X in sequences])
 
@@ -236,10 +245,26 @@ class Recognizer:
             self.meta[META_KEY] = ranges_to_meta(ranges)
         return ranges
 
+    def feature_ranges(self) -> FeatureRanges:
+        """Where the reference gestures start and how far they move (:class:`~glu.gestures.typicality.FeatureRanges`).
+
+        A recogniser trained by glu keeps those of its training gestures; one without (the originals'
+        models) gets those of sequences sampled from its models, computed once (seeded) and kept in
+        :attr:`meta`. Only models over raw hand features can be sampled into hand features; an invariant
+        recogniser without saved ranges has none (and its gestures are not checked this way).
+        """
+        ranges = FeatureRanges.from_meta(self.meta)
+        if ranges is None and self.features.is_raw:
+            ranges = FeatureRanges.of(
+                [X for a in self.actions for X in sampled_sequences(self.models[a])], "sampled"
+            )
+            self.meta[FRAMES_KEY] = ranges.to_meta()
+        return ranges
+
     def typicality(self, X: np.ndarray) -> Typicality:
         """Whether a sequence, shape (T, D), looks like the models' reference data (see :func:`typicality.check`)."""
         X = as_sequence(X, self.n_features)
-        return check(self.loglik(X), len(X), self.actions, self.reference_ranges())
+        return check(self.loglik(X), len(X), self.actions, self.reference_ranges(), X, self.feature_ranges())
 
     # ------------------------------------------------------------------ files
 
@@ -292,6 +317,7 @@ class Recognizer:
         features = Invariants.from_dict(d.get("invariants"), source)
         try:
             ranges_from_meta(meta)  # the typicality ranges: checked now, not when a gesture is scored
+            FeatureRanges.from_meta(meta)
         except ModelError as e:
             raise ModelError(f"{source}: {e}") from None
         return cls(hmms, reports, meta, features)
@@ -316,70 +342,37 @@ class Recognizer:
 
 
 def train_recognizer(
-    sequences: Mapping[str, Sequence[np.ndarray]],
-    n_states: int = TrainingConfig.n_states,
-    n_mix: int = TrainingConfig.n_mix,
+    sequences: Mapping[str, Sequence[np.ndarray]] | Sequence[Mapping[str, Sequence[np.ndarray]]],
+    config: TrainingConfig | None = None,
     *,
-    n_iter: int = TrainingConfig.n_iter,
-    tol: float = TrainingConfig.tol,
-    covar_reg: float = TrainingConfig.covar_reg,
-    seed: int = 0,
-    warn: bool = True,
-    meta: Mapping[str, Any] | None = None,
-    recipe: str = "glu",
-    progress: Callable[[str], None] | None = None,
-    features: Invariants | str | None = None,
-) -> Recognizer:
-    """Train one left-to-right GMM-HMM per action; ``sequences``: action → list of (T_i, D).
-
-    ``recipe``: ``"glu"`` (:func:`~glu.gestures.training.train_hmm`) or ``"mixsplit"``, the originals'
-    flat start and mixture splitting (:func:`~glu.gestures.mixsplit.train_mixsplit`); the actions' models
-    are trained together (:func:`train_models`). ``progress(action)`` is called for each model once they
-    are trained (for a progress bar). The recogniser's meta keeps the per-frame
-    log-likelihood range of each action's training sequences (:mod:`glu.gestures.typicality`).
-    ``features`` (:class:`~glu.gestures.invariants.Invariants` or a name such as ``"centred,rotated"``; default
-    raw): the models are trained on these features of the hand features given, and the recogniser applies
-    the same to whatever it scores.
-    """
-    (rec,) = train_recognizers(
-        [sequences],
-        n_states,
-        n_mix,
-        n_iter=n_iter,
-        tol=tol,
-        covar_reg=covar_reg,
-        seed=seed,
-        warn=warn,
-        meta=meta,
-        recipe=recipe,
-        features=features,
-    )
-    if progress is not None:
-        for action in rec.actions:
-            progress(action)
-    return rec
-
-
-def train_recognizers(
-    sets: Sequence[Mapping[str, Sequence[np.ndarray]]],
-    n_states: int = TrainingConfig.n_states,
-    n_mix: int = TrainingConfig.n_mix,
-    *,
-    n_iter: int = TrainingConfig.n_iter,
-    tol: float = TrainingConfig.tol,
-    covar_reg: float = TrainingConfig.covar_reg,
     seed: int | Sequence[int] = 0,
-    warn: bool = True,
-    meta: Mapping[str, Any] | None = None,
-    recipe: str = "glu",
     features: Invariants | str | None | Sequence[Invariants | str | None] = None,
-) -> list[Recognizer]:
-    """:func:`train_recognizer` for many training sets (action → list of (T_i, D)), every model in one batch.
+    meta: Mapping[str, Any] | None = None,
+    warn: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> Recognizer | list[Recognizer]:
+    """Train one left-to-right GMM-HMM per action (:func:`glu.hmm.train`), as a recogniser; or many recognisers.
 
-    ``seed`` and ``features`` are one for all recognisers or one per set; the other settings are shared.
-    Each recogniser equals what :func:`train_recognizer` returns for its set (the models to rounding:
-    :func:`train_models` batches their EM).
+    Parameters
+    ----------
+    sequences : action → list of hand-feature sequences of shape (T_i, D); or a list of such mappings, one
+        recogniser each, every model of every recogniser trained in one batch (each recogniser equal to
+        what it would be alone, to rounding)
+    config : the training settings (:class:`~glu.hmm.TrainingConfig`, its recipe included; default glu's)
+    seed : seeds the initial mixtures; with a list of training sets, one for all or one per set
+    features : the invariant features the models are trained on (:class:`~glu.gestures.invariants.Invariants`
+        or a name such as ``"centred,rotated"``; default raw); the recogniser applies the same to whatever
+        it scores. With a list of sets, one for all or one per set
+    meta : free-form information kept with each recogniser (data source, …)
+    warn : warn when EM does not converge
+    progress : called with each action once its model is trained (for a progress bar; one recogniser)
+
+    The recogniser's meta records the settings and the per-frame log-likelihood range of each action's
+    training sequences (:mod:`glu.gestures.typicality`).
     """
+    config = config or TrainingConfig()
+    many = not isinstance(sequences, Mapping)
+    sets = list(sequences) if many else [sequences]
     n = len(sets)
     seeds = [seed] * n if isinstance(seed, int | np.integer) else list(seed)
     specs = [
@@ -394,65 +387,43 @@ def train_recognizers(
         {a: seqs if f.is_raw else [f.transform(X) for X in seqs] for a, seqs in s.items()}
         for s, f in zip(sets, specs, strict=True)
     ]
-    jobs = [(a, seqs, sd) for sn, sd in zip(seen, seeds, strict=True) for a, seqs in sn.items()]
-    trained = iter(
-        train_models(
-            [j[1] for j in jobs],
-            n_states,
-            n_mix,
-            n_iter=n_iter,
-            tol=tol,
-            covar_reg=covar_reg,
-            seed=[j[2] for j in jobs],
-            name=[j[0] for j in jobs],
-            warn=warn,
-            recipe=recipe,
-        )
-    )
+    jobs = {(i, a): seqs for i, sn in enumerate(seen) for a, seqs in sn.items()}
+    trained = train(jobs, config, seed={(i, a): seeds[i] for i, a in jobs}, warn=warn)
     out = []
-    for sn, sd, spec in zip(seen, seeds, specs, strict=True):
-        models, reports = {}, {}
-        for a in sn:
-            models[a], reports[a] = next(trained)
+    for i, (sn, spec) in enumerate(zip(seen, specs, strict=True)):
+        models = {a: trained[i, a].model for a in sn}
+        reports = {a: trained[i, a].report for a in sn}
         ranges = {a: training_range(models[a], sn[a]) for a in models}
+        hand = FeatureRanges.of([X for a in sn for X in sets[i][a]], "training")
         info = {
             META_KEY: ranges_to_meta(ranges),
-            "recipe": recipe,
-            "n_states": n_states,
-            "n_mix": n_mix,
-            "n_iter": n_iter,
-            "tol": tol,
-            "covar_reg": covar_reg,
-            "seed": sd,
+            FRAMES_KEY: hand.to_meta(),
+            "recipe": config.recipe,
+            "n_states": config.n_states,
+            "n_mix": config.n_mix,
+            "n_iter": config.n_iter,
+            "tol": config.tol,
+            "covar_reg": config.covar_reg,
+            "seed": seeds[i],
             "features": spec.name,
         }
         out.append(Recognizer(models, reports, {**info, **(meta or {})}, spec))
-    return out
+    if many:
+        return out
+    if progress is not None:
+        for action in out[0].actions:
+            progress(action)
+    return out[0]
 
 
-def train_models(
-    sequences: Sequence[Sequence[np.ndarray]],
-    n_states: int = TrainingConfig.n_states,
-    n_mix: int = TrainingConfig.n_mix,
-    *,
-    n_iter: int = TrainingConfig.n_iter,
-    tol: float = TrainingConfig.tol,
-    covar_reg: float = TrainingConfig.covar_reg,
-    seed: int | Sequence[int] = 0,
-    name: str | Sequence[str] = "",
-    warn: bool = True,
-    recipe: str = "glu",
-) -> list[tuple[GestureHMM, TrainingReport]]:
-    """Many independent models by one recipe, their EM batched: (model, report) per list of sequences.
-
-    ``sequences``: one list of training sequences (T_i, D) per model (features as the models should see
-    them); ``seed`` and ``name`` one for all or one per model. ``recipe`` ``"glu"`` is
-    :func:`~glu.gestures.training.train_many`, ``"mixsplit"`` :func:`~glu.gestures.mixsplit.train_mixsplit_many`
-    (which ignores seed and covar_reg); each model equals what its one-model function returns (to rounding).
-    """
-    if recipe not in RECIPES:
-        raise ModelError(f"unknown training recipe {recipe!r}; allowed: {', '.join(RECIPES)}")
-    kw = dict(n_iter=n_iter, tol=tol, name=name, warn=warn)
-    if recipe == "mixsplit":
-        return [(m, r) for m, r, _ in train_mixsplit_many(sequences, n_states, n_mix, **kw)]
-    return train_many(sequences, n_states, n_mix, covar_reg=covar_reg, seed=seed, **kw)
+def load_original_models(
+    path: str | os.PathLike,
+    actions: Sequence[str] = ACTIONS,
+    include_garbage: bool = False,
+) -> Recognizer:
+    """The originals' 2013 HMMs as a recogniser (:func:`glu.hmm.original.load_original_hmms`): grasp (hmm3),
+    tap (hmm1), touch (hmm4, the push model); with ``include_garbage`` also hmm0 as ``"garbage"``. Their
+    inputs are the logged features / 1000."""
+    models = load_original_hmms(path, actions, include_garbage)
+    meta = {"source": str(path), "note": "original 2013 models; touch is the push model (hmm4)"}
+    return Recognizer(models, meta=meta)

@@ -52,10 +52,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from glu.data.recordings import ORIGINAL_SEGMENTS, RECORDING_ACTION
 from glu.errors import DataError
-from glu.gestures.features import LOG_SCALE, OPENNI_JOINTS, skeleton_features
-from glu.gestures.pchip import pchip
+from glu.gestures._pchip import pchip
+from glu.gestures.features import OPENNI_JOINTS, skeleton_features
 from glu.gestures.robot import ROBOT_ACTIONS, ROBOT_BODY, robot_hand_path
 from glu.gestures.trajectories import RepairPolicy, Trajectory, repair
 from glu.schema import ACTIONS
@@ -494,27 +493,3 @@ def _resample(path: np.ndarray, n: int) -> np.ndarray:
     s = np.linspace(0.0, 1.0, len(path))
     u = np.linspace(0.0, 1.0, n)
     return np.stack([np.interp(u, s, path[:, i]) for i in range(path.shape[1])], axis=1)
-
-
-def synthetic_recordings(seed: int = 0, noise: float = 0.01) -> dict[str, SyntheticGesture]:
-    """Synthetic look-alikes of the six real recordings (:data:`glu.data.recordings.RECORDING_ACTION`).
-
-    Each has the recording's action; the recordings with the originals' segments have their gestures at
-    exactly those frames (so ``tap1_hand`` frames 216–351 hold a tap, as in the real log); the other
-    training recordings hold four repetitions each. Deterministic in ``seed``.
-    """
-    out = {}
-    for i, (name, action) in enumerate(RECORDING_ACTION.items()):
-        if name in ORIGINAL_SEGMENTS:
-            out[name] = synthesize_recording(
-                action, 0, seed + i, noise=noise, placements=ORIGINAL_SEGMENTS[name]
-            )
-        else:
-            out[name] = synthesize_recording(action, 4, seed + i, noise=noise)
-    return out
-
-
-def hand_log_arrays(gesture: SyntheticGesture) -> tuple[np.ndarray, np.ndarray]:
-    """A synthetic recording as a hand log holds it: timestamps (s) and features × 1000, shapes (n,), (n, 3)."""
-    traj = gesture.trajectory()
-    return traj.t, traj.xyz * LOG_SCALE

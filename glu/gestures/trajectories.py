@@ -309,7 +309,7 @@ def repaired_xyz(
     xyz : array, shape (n_frames, 3); t : array, shape (n_frames,), strictly increasing (seconds)
     policy : the repair
     deviation : optional, shape (n_frames,): :func:`spike_deviation` of ``xyz`` if already computed
-        (e.g. by :func:`glu.gestures.repair_many.spike_deviations` for many trajectories)
+        (e.g. by :func:`glu.gestures._repair_many.spike_deviations` for many trajectories)
     source : names the trajectory in errors
 
     Returns

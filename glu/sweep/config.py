@@ -65,7 +65,7 @@ from glu.experiments.corpus import POSTERIORS, VIEWPOINTS, Condition, GestureSet
 from glu.experiments.evaluation import EvaluationSettings
 from glu.files import read_text
 from glu.gestures.synthetic import POSTURES, View
-from glu.gestures.training import TrainingConfig
+from glu.hmm import TrainingConfig
 
 MAX_EPISODES = 100_000_000
 
@@ -73,7 +73,7 @@ MAX_EPISODES = 100_000_000
 @dataclass(frozen=True)
 class RecognizerSettings:
     """The gesture HMMs: trained on ``n_per_action`` synthetic gestures per action (front view, sensor
-    noise ``noise``) with :class:`~glu.gestures.training.TrainingConfig`'s recipe, or read from ``file``."""
+    noise ``noise``) with :class:`~glu.hmm.TrainingConfig`'s recipe, or read from ``file``."""
 
     n_per_action: int = 20
     n_states: int = TrainingConfig.n_states
@@ -81,6 +81,10 @@ class RecognizerSettings:
     n_iter: int = TrainingConfig.n_iter
     noise: float = 0.01
     file: str | None = None
+
+    def training(self) -> TrainingConfig:
+        """The HMMs' training settings (the others keep glu's defaults)."""
+        return TrainingConfig(n_states=self.n_states, n_mix=self.n_mix, n_iter=self.n_iter)
 
 
 @dataclass(frozen=True)

@@ -109,7 +109,7 @@ def prepare_world(config: SweepConfig) -> tuple[Any, str]:
 
 def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple[Evaluator, dict[str, Any]]:
     """The evaluator (network learned, recogniser trained or loaded) and the sweep's provenance."""
-    from glu.gestures.batch import BatchScorer
+    from glu.hmm import BatchScorer
 
     engine, label = prepare_world(config)
     bn = engine.bn
@@ -190,15 +190,8 @@ def _recognizer(config: SweepConfig, out: Path, log: Callable[[str], None]) -> A
     by_action: dict[str, list[np.ndarray]] = {}
     for s in corpus:
         by_action.setdefault(s.action, []).append(s.xyz)
-    rec = train_recognizer(
-        by_action,
-        r.n_states,
-        r.n_mix,
-        n_iter=r.n_iter,
-        seed=config.seed,
-        warn=False,
-        meta={**recipe, "data_source": corpus.description},
-    )
+    meta = {**recipe, "data_source": corpus.description}
+    rec = train_recognizer(by_action, r.training(), seed=config.seed, warn=False, meta=meta)
     rec.save(saved)
     return rec
 
@@ -360,7 +353,7 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
     cluster = None
     try:
         if scheduler is None:
-            from glu.execution import available_cores
+            from glu.machine import available_cores
 
             n = workers or available_cores()
             cluster = LocalCluster(

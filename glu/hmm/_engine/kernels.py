@@ -4,11 +4,11 @@ The batched forward–backward of Baum–Welch and the recogniser's scoring (``l
 code whose cost on the project's models (Q = 6 states, a few dozen sequences of 100–200 frames) was almost all per-step
 dispatch: about 20 µs a frame for a few hundred multiplications. Here the same recursions run as
 compiled loops, one sequence at a time, with the same scaling, the same underflow checks and the same
-log-domain fallback; the callers (:func:`glu.gestures.baum_welch_batch.forward_backward_many`,
-:func:`glu.gestures.batch.loglik_many`) keep their signatures and their numpy set-up. The mixture
+log-domain fallback; the callers (:func:`glu.hmm._engine.em_batch.forward_backward_many`,
+:func:`glu.hmm._engine.batch.loglik_many`) keep their signatures and their numpy set-up. The mixture
 log-sum-exp of EM (:func:`mixture_posteriors`) is here too: numpy's reductions over an axis of three
-Gaussians cost more than the arithmetic. :mod:`glu.gestures.gmm_init` compiles its k-means and EM loops
-with :func:`compiled`. The corpus scorer (:class:`glu.gestures.batch.BatchScorer`) stays array code: on
+Gaussians cost more than the arithmetic. :mod:`glu.hmm.initialisation` compiles its k-means and EM loops
+with :func:`compiled`. The corpus scorer (:class:`glu.hmm._engine.batch.BatchScorer`) stays array code: on
 its batches of hundreds of sequences numpy's vectorised ``exp`` made it twice as fast as a compiled loop
 (``benchmarks/bench_corpus.py``).
 
@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from glu.gestures.forward import TINY
+from glu.hmm.inference import TINY
 
 
 def _forward_backward_scaled(log_b, lengths, startprob, transmat):
@@ -118,7 +118,7 @@ def _loglik_banked(X, starts, lengths, means, chol_inv, log_norm, startprob, tra
             total = 0.0
             for t in range(lengths[s]):
                 x = X[starts[s] + t]
-                # emissions: log Σ_m w_m N(x; μ_qm, Σ_qm), as glu.gestures.forward.log_emissions
+                # emissions: log Σ_m w_m N(x; μ_qm, Σ_qm), as glu.hmm.inference.log_emissions
                 for q in range(Q):
                     top = -np.inf
                     for m in range(M):
@@ -137,7 +137,7 @@ def _loglik_banked(X, starts, lengths, means, chol_inv, log_norm, startprob, tra
                     for m in range(M):
                         acc += np.exp(lc[m] - top)
                     log_b[q] = np.log(acc) + top
-                # the predicted state, then glu.gestures.forward.scaled_step
+                # the predicted state, then glu.hmm.inference.scaled_step
                 if t == 0:
                     for q in range(Q):
                         pred[q] = startprob[a, q]
@@ -242,7 +242,7 @@ def forward_backward_scaled(
     gamma : (S, T, Q) — ``P(q_t | G)``, renormalised per frame (0 past a sequence's end)
     xi : (S, Q, Q) — expected transition counts
     loglik : (S,) — ``log L(G)``
-    ok : (S,) bool — False where a scaled mass fell to :data:`~glu.gestures.forward.TINY` or below at some
+    ok : (S,) bool — False where a scaled mass fell to :data:`~glu.hmm.inference.TINY` or below at some
         frame (the sequence's other outputs are then meaningless: redo it in the log domain)
     """
     return compiled(_forward_backward_scaled)(
@@ -263,10 +263,10 @@ def loglik_banked(
 ) -> np.ndarray:
     """``log L(G | model)`` of every sequence under every model of a stacked bank, shape (S, A).
 
-    The emissions are :func:`glu.gestures.forward.log_emissions` and the recursion is
-    :func:`glu.gestures.forward.forward_step` (scaled, each underflowing frame redone in the log domain),
+    The emissions are :func:`glu.hmm.inference.log_emissions` and the recursion is
+    :func:`glu.hmm.inference.forward_step` (scaled, each underflowing frame redone in the log domain),
     frame by frame; the log-likelihood is the sum of the steps in frame order, as
-    :func:`glu.gestures.forward.forward_curve` accumulates it. Shapes as :class:`glu.gestures.batch.Bank`.
+    :func:`glu.hmm.inference.forward_curve` accumulates it. Shapes as :class:`glu.hmm._engine.batch.Bank`.
     """
     lengths = np.array([len(x) for x in sequences], dtype=np.int64)
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)

@@ -4,15 +4,15 @@ The model of METHOD.md §1: for each action ``a`` a left-to-right HMM with ``Q``
 are mixtures of ``M`` full-covariance Gaussians over the ``D = 3`` hand features
 (:mod:`glu.gestures.features`). :class:`GestureHMM` holds one model's parameters (immutable, validated)
 with the Cholesky factors precomputed, and scores sequences with the pure functions of
-:mod:`glu.gestures.forward`: ``log L(G_1^t | a)`` for every prefix in one pass.
+:mod:`glu.hmm.inference`: ``log L(G_1^t | a)`` for every prefix in one pass.
 
-Training is in :mod:`glu.gestures.training`, the bank of models and its streaming form in
-:mod:`glu.gestures.recognizer`, the originals' 2013 models in :mod:`glu.gestures.original`.
+Training is in :mod:`glu.hmm.training`, the bank of models and its streaming form in
+:mod:`glu.gestures.recognizer`, the originals' 2013 models in :mod:`glu.hmm.original`.
 
 Example
 -------
 >>> import numpy as np
->>> from glu.gestures.forward import left_to_right_transmat
+>>> from glu.hmm.inference import left_to_right_transmat
 >>> hmm = GestureHMM(
 ...     startprob=[1.0, 0.0], transmat=left_to_right_transmat(2, 0.9), weights=[[1.0], [1.0]],
 ...     means=[[[0.0, 0.0, 0.0]], [[1.0, 1.0, 1.0]]], covars=np.tile(np.eye(3), (2, 1, 1, 1)), name="tap")
@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from glu.errors import DataError, ModelError
-from glu.gestures.forward import forward_curve, gaussian_factors, log_emissions
+from glu.hmm.inference import forward_curve, gaussian_factors, log_emissions
 
 
 def as_sequence(X: Any, n_features: int, what: str = "sequence") -> np.ndarray:

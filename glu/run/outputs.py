@@ -1,6 +1,6 @@
 """Where a notebook's outputs go, and how they are written: figures, result tables, recordings.
 
-A notebook gets its :class:`Outputs` from :func:`glu.notebook.start`. It saves figures (PNG + SVG at
+A notebook gets its :class:`Outputs` from :func:`glu.run.notebook.start`. It saves figures (PNG + SVG at
 :data:`glu.plots.style.DPI`, deterministic, stamped with the data source and the run's non-default
 parameters, and shown inline when a kernel runs the notebook), result tables (CSV + JSON, with the
 experiment's provenance: data source and parameters) and gives paths for Rerun recordings and trained
@@ -22,8 +22,8 @@ from typing import Any
 import pandas as pd
 
 from glu.data.source import DataSource
-from glu.display import in_kernel
 from glu.files import atomic_write_text
+from glu.machine import in_kernel
 from glu.paths import OutputLayout
 
 PACKAGES = ("glu", "numpy", "scipy", "pandas", "pgmpy", "hmmlearn", "matplotlib", "rerun-sdk", "papermill")

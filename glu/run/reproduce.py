@@ -1,7 +1,7 @@
 """Run every notebook headless with papermill: figures, recordings, result tables, a summary and a report.
 
 ``glu reproduce`` (and ``make reproduce``) calls :func:`reproduce`. Each notebook runs in its own kernel
-(:mod:`glu.execution`), writing into a private staging folder. The run is all-or-nothing: only when every
+(:mod:`glu.run.execution`), writing into a private staging folder. The run is all-or-nothing: only when every
 notebook succeeded are the staged files moved into the folders of the output layout
 (:class:`glu.paths.OutputLayout`: ``figures/``, ``recordings/``, ``results/``, ``models/``, the executed
 notebooks into ``build/notebooks/``; or all under ``--out``), so figures, recordings, models and
@@ -11,7 +11,7 @@ it at once (the kernels are killed). Either way nothing is published and the sta
 a staging folder left by a killed process is removed by the next run. At the end
 ``results/summary.json`` and ``results/summary.csv`` collect every number behind every figure, the data
 source, the package versions and the comparison with the original model, and ``report/`` (by default
-``build/report/``) gets a browsable HTML report (:mod:`glu.report`). Each notebook's page of the report
+``build/report/``) gets a browsable HTML report (:mod:`glu.run.report`). Each notebook's page of the report
 is rendered as soon as that notebook has run, while the others still run, staged and published with
 the rest; only the index and the API reference are written at the end. The wall time recorded in the
 summary (``wall_time_s``) covers the whole run, the report included.
@@ -35,12 +35,14 @@ from typing import Any
 from glu import paths
 from glu.data.source import resolve_data
 from glu.errors import GluError
-from glu.execution import NotebookStopped, RunHandle, available_cores, load_papermill, run_notebook
-from glu.outputs import parameters_text
-from glu.parameters import check, non_defaults, parse_value, read_spec
+from glu.machine import available_cores
 from glu.paths import OutputLayout
-from glu.report import notebook_page, prepare_report, render_notebook_page, write_index
-from glu.summary import (
+from glu.run.execution import NotebookStopped, RunHandle, load_papermill, run_notebook
+from glu.run.manifest import ManifestError, check_outputs, read_manifest, written_outputs
+from glu.run.outputs import parameters_text
+from glu.run.parameters import check, non_defaults, parse_value, read_spec
+from glu.run.report import notebook_page, prepare_report, render_notebook_page, write_index
+from glu.run.summary import (
     NotebookResult,
     collect_summary,
     expected_seconds,
@@ -165,7 +167,7 @@ class _Progress:
 
 def run_order(notebooks: Sequence[Path], jobs: int, expected: Mapping[str, float]) -> list[tuple[int, Path]]:
     """(story number, notebook) in the order they start: story order with one job; with several, the
-    longest first by ``expected`` seconds (:func:`glu.summary.expected_seconds`: the last run's times,
+    longest first by ``expected`` seconds (:func:`glu.run.summary.expected_seconds`: the last run's times,
     else on a first run the time each notebook declares in its header), so that the last to finish is a
     short one. A notebook with no expected time starts before all others, the later ones in the story
     first. The order changes no output: each notebook runs alone in its kernel, and publishing is by name.
@@ -201,7 +203,8 @@ def reproduce(
     Parameters
     ----------
     data : data folder, ``"synthetic"``, or None (``$GLU_DATA_DIR``, the fetched data, else synthetic)
-    quick : small, fast runs (for tests); figures are still made
+    quick : small, fast runs (for tests): each notebook with the quick preset of its manifest
+        (:mod:`glu.run.manifest`); every figure is still made
     out : root for ``figures/``, ``recordings/``, ``results/``, ``models/``, ``notebooks/``, ``report/``;
         None = the project's folders (:meth:`glu.paths.OutputLayout.at`)
     jobs : notebooks run at the same time (each in its own kernel)
@@ -227,14 +230,15 @@ def reproduce(
     notebooks = list_notebooks(only, notebooks_dir)
     if not notebooks:
         raise NotebookError(f"no notebooks found in {notebooks_dir}")
-    run_params = {"quick": quick, "seed": seed}
-    non_default = {}
+    manifests, run_params, non_default = {}, {}, {}
     for nb in notebooks:  # every notebook takes these parameters: refuse before anything runs
+        manifests[nb.stem] = manifest = read_manifest(nb)
         spec = read_spec(nb)
-        missing = {"data", "out_dir", *run_params} - set(spec)
+        missing = {"data", "out_dir", "seed"} - set(spec)
         if missing:
             raise NotebookError(f"{nb.stem}: its parameters cell lacks {', '.join(sorted(missing))}")
-        non_default[nb.stem] = non_defaults(spec, check(spec, run_params, nb.stem))
+        run_params[nb.stem] = {**(manifest.quick if quick else {}), "seed": seed}
+        non_default[nb.stem] = non_defaults(spec, check(spec, run_params[nb.stem], nb.stem))
     layout = OutputLayout.at(out)
     final = layout.published()
     executed_dir = layout.notebooks
@@ -252,7 +256,7 @@ def reproduce(
         stage = staging / name
         t0 = time.perf_counter()
         out_ipynb = stage / f"{name}.ipynb"
-        params = {"data": data_param, "quick": quick, "out_dir": str(stage / "out"), "seed": seed}
+        params = {**run_params[name], "data": data_param, "out_dir": str(stage / "out")}
 
         def failed(msg: str, why: str) -> NotebookResult:
             kept = executed_dir / f"{name}.failed.ipynb"
@@ -271,6 +275,10 @@ def reproduce(
                 f"{e.ename}: {e.evalue}",
             )
         dt = time.perf_counter() - t0
+        try:
+            check_outputs(manifests[name], written_outputs(stage / "out"), source.is_real)
+        except ManifestError as e:
+            return failed(f"notebook {name} ran, but {e}", str(e))
         if report:  # its page of the report, now, while the other notebooks still run
             try:
                 render_notebook_page(out_ipynb, notebook_page(stage / "report", name))
@@ -362,6 +370,7 @@ def run_one(
     out: str | os.PathLike | None = None,
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
+    quick: bool = False,
 ) -> tuple[Path, OutputLayout]:
     """Run one notebook headless (``glu run``): check the parameters first, then execute.
 
@@ -370,6 +379,7 @@ def run_one(
     notebook : the notebook's name or number
     values : parameter name → its text on the command line (``-p NAME VALUE``), parsed by its type
     data, out : the data source and the output root (default: the notebook's scratch folder)
+    quick : start from the quick preset of the notebook's manifest (``values`` win over it)
 
     Returns the executed notebook and the layout its outputs went to. Raises
     :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
@@ -383,6 +393,8 @@ def run_one(
             flag = "--data" if plumbing == "data" else "--out"
             raise NotebookError(f"{src.stem}: give {plumbing!r} with {flag}, not -p")
     parsed = {name: parse_value(spec[name], text, src.stem) for name, text in values.items() if name in spec}
+    if quick:
+        parsed = {**read_manifest(src).quick, **parsed}
     unknown = {name: text for name, text in values.items() if name not in spec}
     check(spec, {**parsed, **unknown}, src.stem)  # refuses unknown names, with a suggestion
     source = resolve_data(data)

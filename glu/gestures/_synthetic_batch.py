@@ -5,8 +5,8 @@ repaired features of one synthetic gesture (:meth:`glu.gestures.synthetic.Synthe
 :func:`gesture_features` computes them for a whole chunk of episodes: each episode's generator draws
 exactly the numbers :func:`~glu.gestures.synthetic.synthesize_gesture` draws, in the same order, and
 then the work is shared across the episodes — the minimum-jerk hand paths of all episodes in a few
-array operations (:func:`glu.gestures.pchip.pchip_many`), the sway of all frames at once, the running
-repair of all episodes at once (:func:`glu.gestures.repair_many.repaired_many`),
+array operations (:func:`glu.gestures._pchip.pchip_many`), the sway of all frames at once, the running
+repair of all episodes at once (:func:`glu.gestures._repair_many.repaired_many`),
 and only the joints the features use. Every number is computed by the same IEEE operations as the
 one-gesture path (elementwise operations do not depend on how the arrays are batched; the rotation of
 each skeleton is the same matrix product; reductions run per episode, on the same arrays), so the
@@ -31,9 +31,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from glu.gestures._pchip import pchip_many
+from glu.gestures._repair_many import repaired_many
 from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle_frames
-from glu.gestures.pchip import pchip_many
-from glu.gestures.repair_many import repaired_many
 from glu.gestures.synthetic import (
     _BODY,
     _KEYS,

@@ -9,11 +9,11 @@ action's HMM. :class:`BatchScorer` does it for a whole batch at once:
    vector ``c_k`` per component. All frames of all sequences times all components of all models
    (A · Q · M columns) is then one matrix product, followed by one exponential per component.
 2. **The forward recursion batched** over sequences and models
-   (:func:`~glu.gestures.forward.forward_curves_batch`): one batched ``(S, Q) @ (Q, Q)`` product per frame
+   (:func:`~glu.hmm.inference.forward_curves_batch`): one batched ``(S, Q) @ (Q, Q)`` product per frame
    and model, sequences sorted by length so that finished ones drop out.
 3. **Exactness kept.** A (model, sequence) pair whose scaled forward mass underflows is recomputed by the
-   per-sequence path (:func:`~glu.gestures.forward.forward_curve` with its log-domain fallback), so the
-   result equals :meth:`GestureHMM.loglik_curve <glu.gestures.model.GestureHMM.loglik_curve>` for every
+   per-sequence path (:func:`~glu.hmm.inference.forward_curve` with its log-domain fallback), so the
+   result equals :meth:`GestureHMM.loglik_curve <glu.hmm.model.GestureHMM.loglik_curve>` for every
    sequence (tested against it and against hmmlearn).
 
 The frames are centred on the mean of the models' means before the expansion, which keeps the
@@ -22,8 +22,8 @@ cancellation error of the quadratic form far below the tolerance of the tests (1
 Example
 -------
 >>> import numpy as np
->>> from glu.gestures.forward import left_to_right_transmat
->>> from glu.gestures.model import GestureHMM
+>>> from glu.hmm.inference import left_to_right_transmat
+>>> from glu.hmm.model import GestureHMM
 >>> def hmm(shift):
 ...     return GestureHMM([1.0, 0.0], left_to_right_transmat(2, 0.9), [[1.0], [1.0]],
 ...                       [[[shift] * 3], [[shift + 1] * 3]], np.tile(np.eye(3), (2, 1, 1, 1)))
@@ -44,16 +44,16 @@ from typing import NamedTuple
 import numpy as np
 
 from glu.errors import DataError, ModelError
-from glu.gestures.forward import TINY, forward_curve, log_emissions
-from glu.gestures.kernels import loglik_banked
-from glu.gestures.model import GestureHMM, as_sequence
+from glu.hmm._engine.kernels import loglik_banked
+from glu.hmm.inference import TINY, forward_curve, log_emissions
+from glu.hmm.model import GestureHMM, as_sequence
 
 PAD_LOG_NORM = -1e300
 """log-normaliser given to the padding components of a stacked bank (never the most likely)."""
 EXP_FLOOR = -700.0
 """Scaled component log-densities below this are raised to it before exponentiating (``exp`` is several
 times slower on arguments that underflow). It adds at most e⁻⁷⁰⁰ ≈ 1e-304 to a frame's scaled emissions,
-whose largest term is 1: below any forward mass the recursion keeps (:data:`~glu.gestures.forward.TINY`,
+whose largest term is 1: below any forward mass the recursion keeps (:data:`~glu.hmm.inference.TINY`,
 under which the pair is recomputed exactly)."""
 DEFAULT_BATCH = 512
 """Sequences scored together (bounds the memory: T × A × S × Q floats per batch)."""
@@ -237,7 +237,7 @@ def forward_curves_batch(
     trans_t: np.ndarray,
     n_mix: int,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The scaled forward recursion of :func:`~glu.gestures.forward.forward_curve`, for S sequences and A
+    """The scaled forward recursion of :func:`~glu.hmm.inference.forward_curve`, for S sequences and A
     models at once, computing each frame's emissions on the way.
 
     At frame t, for the ``n_t`` sequences still running (sequences sorted by decreasing length): the
@@ -259,7 +259,7 @@ def forward_curves_batch(
     Returns
     -------
     curves : array, shape (T, A, S) — ``log L(G_1^t)`` (undefined beyond a sequence's end)
-    bad : bool array, shape (A, S) — pairs whose scaled forward mass fell to :data:`~glu.gestures.forward.TINY`
+    bad : bool array, shape (A, S) — pairs whose scaled forward mass fell to :data:`~glu.hmm.inference.TINY`
         or below at some frame (underflow, or an impossible frame): recompute those exactly
     """
     T, _, S = phi.shape
@@ -305,7 +305,7 @@ def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     sequences : the feature sequences the models see, each of shape (T_i, D)
 
     The emissions and the forward recursion run compiled, frame by frame
-    (:func:`glu.gestures.kernels.loglik_banked`), each step :func:`~glu.gestures.forward.forward_step`'s
+    (:func:`glu.hmm._engine.kernels.loglik_banked`), each step :func:`~glu.hmm.inference.forward_step`'s
     (including its log-domain fallback where the scaled mass underflows): the last entry of
     ``forward_curve`` for each sequence, to rounding (1e-12 relative, tests/test_batched_experiments.py).
     """

@@ -1,12 +1,12 @@
 """Baum–Welch for many independent GMM-HMMs at once: one padded batch of every model's sequences.
 
 Experiments train many small models (leave-one-segment-out folds, k-fold cross-validation, one model per
-action and feature set and seed); :func:`glu.gestures.baum_welch.fit` trains one. :func:`fit_many` runs
+action and feature set and seed); :func:`glu.hmm.em.fit` trains one. :func:`fit_many` runs
 the models side by side:
 
 * the sequences of every model form one batch, sorted by length (longest first), each with its model's
   transition matrix; the forward and backward recursions run compiled, one sequence at a time
-  (:func:`glu.gestures.kernels.forward_backward_scaled`, via :func:`forward_backward_many`), since as
+  (:func:`glu.hmm._engine.kernels.forward_backward_scaled`, via :func:`forward_backward_many`), since as
   array code their cost was per-frame dispatch that hardly depended on the number of sequences;
 * the emission densities and the M-step are array operations over a (model, frame) layout, frames
   padded to the model with most frames (padding has zero responsibility). Each frame is centred on its
@@ -15,10 +15,10 @@ the models side by side:
   M-step's sufficient statistics (soft counts, first and second moments) are one product of the
   responsibilities with ``φ``; the scatter about a mean ``m`` is ``Σ p x xᵀ − m sᵀ − s mᵀ + N m mᵀ``
   (s the first moment, N the count), which the centring keeps far from cancellation;
-* each model stops exactly as :func:`~glu.gestures.baum_welch.fit` would (same ``tol`` rule, same
+* each model stops exactly as :func:`~glu.hmm.em.fit` would (same ``tol`` rule, same
   ``n_iter`` cap): once converged its parameters freeze and its sequences leave the batch;
 * the scaled recursion is checked for underflow once per pass; a model with a sequence whose scaled mass
-  underflowed is redone alone in the log domain (:func:`~glu.gestures.baum_welch.forward_backward_log`),
+  underflowed is redone alone in the log domain (:func:`~glu.hmm.em.forward_backward_log`),
   exactly as ``fit`` redoes its batch, while the other models keep their scaled results.
 
 The results equal ``[fit(seqs, init, …) for seqs, init in problems]`` to rounding (summation order):
@@ -29,7 +29,7 @@ as one batch.
 Example
 -------
 >>> import numpy as np
->>> from glu.gestures.baum_welch import GMMHMMParams, fit
+>>> from glu.hmm.em import GMMHMMParams, fit
 >>> rng = np.random.default_rng(0)
 >>> def problem(shift):
 ...     seqs = [rng.normal(shift, 1.0, size=(n, 2)) for n in (20, 30)]
@@ -52,15 +52,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from glu.gestures.baum_welch import (
-    COVARIANCES,
-    EMPTY,
-    FitResult,
-    GMMHMMParams,
-    forward_backward_log,
-)
-from glu.gestures.forward import gaussian_factors
-from glu.gestures.kernels import forward_backward_scaled, mixture_posteriors
+from glu.hmm._engine.kernels import forward_backward_scaled, mixture_posteriors
+from glu.hmm.em import COVARIANCES, EMPTY, FitResult, GMMHMMParams
+from glu.hmm.inference import forward_backward_log, gaussian_factors
 
 MAX_BATCH_FLOATS = 4_000_000
 """Models are batched in chunks whose (model, component, frame, feature) arrays hold about this many floats
@@ -88,7 +82,7 @@ def forward_backward_many(
         sequences' other outputs are meaningless: redo them in the log domain)
 
     The recursions run compiled, one sequence at a time
-    (:func:`glu.gestures.kernels.forward_backward_scaled`); a sequence stops at its first underflow.
+    (:func:`glu.hmm._engine.kernels.forward_backward_scaled`); a sequence stops at its first underflow.
     """
     if np.any(np.diff(lengths) > 0):
         raise ValueError("forward_backward_many: lengths must be sorted in decreasing order")
@@ -154,16 +148,16 @@ def fit_many(
     Parameters
     ----------
     problems : (sequences, init) per model: arrays of shape (T_i, D) and the starting
-        :class:`~glu.gestures.baum_welch.GMMHMMParams`; models of different (Q, M, D) run in separate
+        :class:`~glu.hmm.em.GMMHMMParams`; models of different (Q, M, D) run in separate
         batches
     n_iter : most EM iterations, per model
     tol : the stopping tolerance on each model's total log-likelihood (one for all, or one per model)
-    covar_reg, covariance, covar_floor : as :func:`~glu.gestures.baum_welch.fit`
+    covar_reg, covariance, covar_floor : as :func:`~glu.hmm.em.fit`
 
     Returns
     -------
-    one :class:`~glu.gestures.baum_welch.FitResult` per problem, in order, equal to what
-    :func:`~glu.gestures.baum_welch.fit` returns for it (to rounding). Raises
+    one :class:`~glu.hmm.em.FitResult` per problem, in order, equal to what
+    :func:`~glu.hmm.em.fit` returns for it (to rounding). Raises
     ``numpy.linalg.LinAlgError`` when a covariance stops being positive definite.
     """
     if covariance not in COVARIANCES:

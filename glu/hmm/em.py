@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.gestures.forward import TINY, gaussian_factors, log_component_densities
+from glu.hmm.inference import _logsumexp, forward_backward, gaussian_factors, log_component_densities
 
 
 class GMMHMMParams(NamedTuple):
@@ -51,107 +51,6 @@ class FitResult(NamedTuple):
 
     params: GMMHMMParams
     history: np.ndarray
-
-
-def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
-    m = a.max(axis=axis, keepdims=True)
-    m = np.where(np.isfinite(m), m, 0.0)
-    with np.errstate(divide="ignore", under="ignore"):
-        return np.log(np.exp(a - m).sum(axis=axis)) + np.squeeze(m, axis=axis)
-
-
-def forward_backward(
-    log_b: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Forward–backward over a padded batch of sequences.
-
-    Parameters
-    ----------
-    log_b : array, shape (S, T, Q) — emission log-densities; entries past a sequence's length are ignored
-    lengths : array, shape (S,) — the length of each sequence (≥ 1)
-    startprob : array, shape (Q,)
-    transmat : array, shape (Q, Q)
-
-    Returns
-    -------
-    gamma : array, shape (S, T, Q) — ``P(q_t | G)`` (0 past a sequence's end)
-    xi_sum : array, shape (Q, Q) — expected transition counts, summed over sequences and frames
-    loglik : array, shape (S,) — ``log L(G)`` of each sequence
-
-    The recursions are scaled (each frame's largest emission factored out, each forward variable
-    normalised), as :func:`glu.gestures.forward.forward_step`; when a frame's scaled mass underflows for
-    some sequence, the whole batch is redone in the log domain (:func:`forward_backward_log`).
-    """
-    S, T, Q = log_b.shape
-    alive = np.arange(T)[None, :] < lengths[:, None]  # (S, T)
-    mx = np.where(alive, log_b.max(axis=2), 0.0)
-    with np.errstate(under="ignore", invalid="ignore"):
-        b = np.where(alive[..., None], np.exp(log_b - mx[..., None]), 1.0)  # padding: emits 1 everywhere
-    eye = np.eye(Q)
-    alpha = np.empty((S, T, Q))
-    c = np.ones((S, T))
-    a = startprob * b[:, 0]
-    c[:, 0] = a.sum(axis=1)
-    alpha[:, 0] = a / c[:, 0, None]
-    for t in range(1, T):
-        live = alive[:, t, None]
-        a = np.where(live, (alpha[:, t - 1] @ transmat) * b[:, t], alpha[:, t - 1] @ eye)
-        c[:, t] = a.sum(axis=1)
-        if not np.all(c[:, t] > TINY):  # the scaled mass underflows for some sequence
-            return forward_backward_log(log_b, lengths, startprob, transmat)
-        alpha[:, t] = a / c[:, t, None]
-    if not np.all(c[:, 0] > TINY):
-        return forward_backward_log(log_b, lengths, startprob, transmat)
-    loglik = np.where(alive, np.log(c) + mx, 0.0).sum(axis=1)
-    beta = np.ones((S, T, Q))
-    for t in range(T - 2, -1, -1):
-        nxt = alive[:, t + 1, None]
-        beta[:, t] = np.where(nxt, ((b[:, t + 1] * beta[:, t + 1]) @ transmat.T) / c[:, t + 1, None], 1.0)
-    gamma = np.where(alive[..., None], alpha * beta, 0.0)
-    gamma /= np.where(alive, gamma.sum(axis=2), 1.0)[..., None]  # as hmmlearn: renormalise each frame
-    if T > 1:
-        right = np.where(alive[:, 1:, None], b[:, 1:] * beta[:, 1:] / c[:, 1:, None], 0.0)
-        xi_sum = transmat * np.einsum("sti,stj->ij", alpha[:, :-1], right, optimize=True)
-    else:
-        xi_sum = np.zeros((Q, Q))
-    return gamma, xi_sum, loglik
-
-
-def forward_backward_log(
-    log_b: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`forward_backward` in the log domain (slower; never underflows). Same arguments and returns."""
-    S, T, Q = log_b.shape
-    with np.errstate(divide="ignore"):
-        log_a, log_pi = np.log(transmat), np.log(startprob)
-    fwd = np.full((S, T, Q), -np.inf)
-    fwd[:, 0] = log_pi + log_b[:, 0]
-    for t in range(1, T):
-        fwd[:, t] = _logsumexp(fwd[:, t - 1, :, None] + log_a, axis=1) + log_b[:, t]
-    last = lengths - 1
-    loglik = _logsumexp(fwd[np.arange(S), last], axis=1)
-    bwd = np.zeros((S, T, Q))
-    alive = np.arange(T)[None, :] < lengths[:, None]  # (S, T)
-    for t in range(T - 2, -1, -1):
-        step = _logsumexp(log_a + (log_b[:, t + 1] + bwd[:, t + 1])[:, None, :], axis=2)
-        bwd[:, t] = np.where(alive[:, t + 1, None], step, 0.0)  # the last frame of a sequence has β = 1
-    log_gamma = fwd + bwd - loglik[:, None, None]
-    log_gamma = np.where(alive[..., None], log_gamma, -np.inf)
-    log_gamma -= np.where(alive, _logsumexp(log_gamma, axis=2), 0.0)[..., None]  # as hmmlearn: renormalise
-    if T > 1:
-        pair = alive[:, 1:]  # transitions t → t+1 inside each sequence
-        log_xi = (
-            fwd[:, :-1, :, None]
-            + log_a
-            + (log_b[:, 1:] + bwd[:, 1:])[:, :, None, :]
-            - loglik[:, None, None, None]
-        )
-        with np.errstate(under="ignore"):
-            xi_sum = np.exp(np.where(pair[..., None, None], log_xi, -np.inf)).sum(axis=(0, 1))
-    else:
-        xi_sum = np.zeros((Q, Q))
-    with np.errstate(under="ignore"):
-        return np.exp(log_gamma), xi_sum, loglik
 
 
 def _pad(sequences: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -9,7 +9,7 @@
   (:func:`render_notebook_page`);
 * ``api.html`` — the reference of glu's public modules, generated from their docstrings (:func:`write_api_reference`).
 
-:func:`glu.reproduce.reproduce` renders each notebook's page as soon as that notebook has run, while the
+:func:`glu.run.reproduce.reproduce` renders each notebook's page as soon as that notebook has run, while the
 others still run, and publishes the pages with the run's other outputs; the report then only copies the
 figures and writes the API reference (:func:`prepare_report`) and the index (:func:`write_index`). A page
 that is missing, or older than its executed notebook, is rendered there.
@@ -30,8 +30,8 @@ from pathlib import Path
 from typing import Any
 
 from glu.files import atomic_write_text
-from glu.outputs import parameters_text
 from glu.paths import OutputLayout
+from glu.run.outputs import parameters_text
 
 _STYLE = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; }
@@ -107,7 +107,7 @@ API_MODULES: tuple[str, ...] = (
     "glu.gestures.features",
     "glu.gestures.recognizer",
     "glu.gestures.typicality",
-    "glu.gestures.training",
+    "glu.hmm.training",
     "glu.language.grammar",
     "glu.language.descriptions",
     "glu.experiments.fusion",
@@ -158,7 +158,7 @@ def _remove(path: Path) -> None:
 def write_report(layout: OutputLayout, summary: Mapping[str, Any]) -> Path:
     """Write the report of a run whose outputs are in ``layout``; returns ``index.html``.
 
-    ``summary`` is the run's summary (:func:`glu.summary.write_summary`): its figures, notebooks,
+    ``summary`` is the run's summary (:func:`glu.run.summary.write_summary`): its figures, notebooks,
     comparisons, data source and versions. :func:`prepare_report`, then :func:`write_index`.
     """
     return write_index(layout, summary, prepare_report(layout, summary))

@@ -3,7 +3,7 @@
 ``HMM_M3_Q6_mixsplit.mat`` (and the single-Gaussian ``HMM_M1_Q6_mixsplit.mat``) hold the variables
 ``hmm{k}_prior`` (Q), ``hmm{k}_trans`` (Q×Q), ``hmm{k}_mu`` (3×Q×M), ``hmm{k}_Sigma`` (3×3×Q×M) and
 ``hmm{k}_mixmat`` (Q×M) for k = 1 tap, 3 grasp, 4 push, 0 garbage (METHOD.md §4). There was no touch model:
-the originals used push in its place, and so does :func:`load_original_models`. Their inputs are the
+the originals used push in its place, and so does :func:`load_original_hmms`. Their inputs are the
 logged features / 1000 (:func:`glu.gestures.features.log_features`). Where the files are in a data folder
 is :meth:`glu.data.DataSource.original_hmms`'s business.
 """
@@ -18,8 +18,7 @@ from typing import Any
 import numpy as np
 
 from glu.errors import ModelError
-from glu.gestures.model import GestureHMM
-from glu.gestures.recognizer import Recognizer
+from glu.hmm.model import GestureHMM
 from glu.schema import ACTIONS
 
 ORIGINAL_MODEL_INDEX: dict[str, int] = {"grasp": 3, "tap": 1, "touch": 4, "garbage": 0}
@@ -56,15 +55,14 @@ def original_hmm(mat: Mapping[str, Any], k: int, name: str = "") -> GestureHMM:
     return GestureHMM(prior, trans, mixmat, means, covars, name=name)
 
 
-def load_original_models(
-    path: str | os.PathLike,
-    actions: Sequence[str] = ACTIONS,
-    include_garbage: bool = False,
-) -> Recognizer:
-    """The originals' 2013 HMMs as a recogniser: grasp (hmm3), tap (hmm1), touch (hmm4, the push model).
+def load_original_hmms(
+    path: str | os.PathLike, actions: Sequence[str] = ACTIONS, include_garbage: bool = False
+) -> dict[str, GestureHMM]:
+    """The originals' 2013 HMMs by action: grasp (hmm3), tap (hmm1), touch (hmm4, the push model).
 
     ``path`` is ``HMM_M3_Q6_mixsplit.mat`` or ``HMM_M1_Q6_mixsplit.mat``; with ``include_garbage`` the
-    garbage model (hmm0) is added as action ``"garbage"``. Their inputs are the logged features / 1000.
+    garbage model (hmm0) is added as ``"garbage"``. Their inputs are the logged features / 1000.
+    :func:`glu.gestures.recognizer.load_original_models` makes a recogniser of them.
     """
     from scipy.io import loadmat
 
@@ -84,5 +82,4 @@ def load_original_models(
             models[a] = original_hmm(mat, ORIGINAL_MODEL_INDEX[a], name=a)
         except ModelError as e:
             raise ModelError(f"{path}: {e}") from None
-    meta = {"source": str(path), "note": "original 2013 models; touch is the push model (hmm4)"}
-    return Recognizer(models, meta=meta)
+    return models

@@ -14,7 +14,7 @@ one per line, as papermill and ``papermill --help-notebook`` read them::
 * **choices and ranges** — :data:`CHOICES` and :data:`RANGES`, keyed by parameter name: a name means the
   same thing in every notebook, and the allowed values come from the package's own constants.
 
-``glu run`` checks before it starts a kernel; :func:`glu.notebook.start`, the first call of every
+``glu run`` checks before it starts a kernel; :func:`glu.run.notebook.start`, the first call of every
 notebook, checks again inside the kernel, so a plain papermill run is checked too.
 """
 
@@ -75,6 +75,9 @@ RANGES: dict[str, tuple[float, float]] = {
     "view_gesture": (0, 2**32 - 1),
     "n_train": (1, 100_000),
     "n_test": (1, 100_000),
+    "n_iter": (1, 100_000),
+    "real_n_iter": (1, 100_000),
+    "chunk_size": (1, 10_000_000),
 }
 """Inclusive ranges of the numeric parameters (for a list, of each element)."""
 

@@ -2,14 +2,14 @@
 
 A notebook's first code cell after its parameters is ::
 
-    from glu.notebook import start
+    from glu.run.notebook import start
     out = start("07_glu2017_figures", globals())
 
-:func:`start` checks the parameters against the notebook's own declaration (:mod:`glu.parameters`) —
+:func:`start` checks the parameters against the notebook's own declaration (:mod:`glu.run.parameters`) —
 including names that papermill injected but the notebook does not declare — so a run by hand, by plain
 papermill or by ``glu run`` fails at once, in one line, instead of after minutes of work. It resolves the
 data the same way from any working directory, shows one line naming the data (and why, when it fell
-back to synthetic data) and the non-default parameters, and returns the :class:`glu.outputs.Outputs` of
+back to synthetic data) and the non-default parameters, and returns the :class:`glu.run.outputs.Outputs` of
 the run: the staging folder ``glu reproduce`` passed as ``out_dir``, or the notebook's scratch folder
 ``build/scratch/<notebook>/`` for any other run, so only ``glu reproduce`` publishes into ``figures/``,
 ``results/``, ``recordings/`` and ``models/``.
@@ -24,10 +24,10 @@ from typing import Any
 
 from glu import paths
 from glu.data.source import resolve_data
-from glu.display import in_kernel
-from glu.outputs import Outputs, parameters_text
-from glu.parameters import check, non_defaults, read_spec
+from glu.machine import in_kernel
 from glu.paths import OutputLayout
+from glu.run.outputs import Outputs, parameters_text
+from glu.run.parameters import check, non_defaults, read_spec
 
 INJECTED_COMMENT = "# Parameters"
 """The first line of the cell papermill injects after the parameters cell."""

@@ -13,7 +13,7 @@ Once the last cell has run, the kernel is killed rather than asked to exit (nbcl
 by the cells, Rerun recordings are disconnected, a Dask cluster is closed by the code that opened it), and
 a graceful exit cost 0.4–0.5 s a notebook of interpreter teardown and polling.
 
-Kernels run with ``GLU_HEADLESS=1`` in their environment (:data:`glu.display.HEADLESS_ENV`): interactive extras (widgets,
+Kernels run with ``GLU_HEADLESS=1`` in their environment (:data:`glu.machine.HEADLESS_ENV`): interactive extras (widgets,
 the Rerun viewer) then show their static form only. ``run_notebook(..., threads=N)`` also caps the kernel's
 BLAS and OpenMP threads (:data:`THREAD_ENV`) at N, unless the caller's environment sets them: ``glu
 reproduce`` gives each of its parallel kernels its share of the cores, since two kernels whose BLAS each
@@ -32,37 +32,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from glu.display import HEADLESS_ENV
 from glu.errors import GluError
-
-THREAD_ENV: tuple[str, ...] = (
-    "OMP_NUM_THREADS",
-    "OPENBLAS_NUM_THREADS",
-    "MKL_NUM_THREADS",
-    "BLIS_NUM_THREADS",
-    "VECLIB_MAXIMUM_THREADS",
-    "NUMEXPR_NUM_THREADS",
-)
-"""The variables that size the thread pools of BLAS, OpenMP and numexpr when a process starts."""
-
-
-def available_cores() -> int:
-    """The cores this process may run on (its CPU affinity where the system has one)."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-
-
-def thread_env(threads: int | None, environ: dict[str, str] | None = None) -> dict[str, str]:
-    """The variables of :data:`THREAD_ENV` set to ``threads``, leaving out those ``environ`` already sets.
-
-    >>> thread_env(1, {"OMP_NUM_THREADS": "4"})["OPENBLAS_NUM_THREADS"], "OMP_NUM_THREADS" in thread_env(1, {"OMP_NUM_THREADS": "4"})
-    ('1', False)
-    >>> thread_env(None)
-    {}
-    """
-    environ = os.environ if environ is None else environ
-    if threads is None:
-        return {}
-    return {name: str(int(threads)) for name in THREAD_ENV if name not in environ}
+from glu.machine import HEADLESS_ENV, thread_env
 
 
 class NotebookStopped(GluError):

@@ -4,9 +4,9 @@
 :func:`write_summary` collects every result table of a run (with the data source, the package versions,
 each notebook's time and non-default parameters, and the comparisons with a reference) and writes them:
 it is :func:`collect_summary` then :func:`save_summary` (with :func:`summary_csv`, the long format), which
-:func:`glu.reproduce.reproduce` calls apart, so that the wall time it records covers the report too.
+:func:`glu.run.reproduce.reproduce` calls apart, so that the wall time it records covers the report too.
 :func:`expected_seconds` says how long each notebook should take (the last run's times, else what the
-notebook declares, :func:`declared_seconds`), so that :func:`glu.reproduce.run_order` can start the
+notebook declares, :func:`declared_seconds`), so that :func:`glu.run.reproduce.run_order` can start the
 longest first. ``figures/rendered-with.json`` (:func:`write_rendering_record`) says which data and which
 renderer versions the committed figures come from.
 """
@@ -137,7 +137,7 @@ def collect_summary(results_dir: Path, runs: list[NotebookResult], data: str, qu
     """
     import pandas as pd
 
-    from glu.outputs import package_versions
+    from glu.run.outputs import package_versions
 
     notebooks = {
         r.name: {

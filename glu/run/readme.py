@@ -479,7 +479,7 @@ def readme_section(text: str) -> str:
     """The text between :data:`BEGIN` and :data:`END` in a README (stripped); DataError without exactly one."""
     if text.count(BEGIN) != 1 or text.count(END) != 1:
         raise DataError(
-            "README.md: expected one results section between the BEGIN and END markers of glu.readme"
+            "README.md: expected one results section between the BEGIN and END markers of glu.run.readme"
         )
     return text.split(BEGIN, 1)[1].split(END, 1)[0].strip()
 

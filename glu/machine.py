@@ -1,0 +1,63 @@
+"""Where the code runs: the cores it may use, and whether a person watches (a notebook kernel) or not.
+
+:func:`available_cores` and :func:`thread_env` size the work: ``glu reproduce`` gives each notebook
+kernel its share of the cores for BLAS and OpenMP, the sweeps one thread per Dask worker.
+
+Interactive extras (the evidence explorer's widgets, the Rerun viewer in a notebook) appear only in a
+live kernel; headless runs (``glu reproduce``, ``glu run``: their kernels have ``GLU_HEADLESS=1``) and
+plain Python show the static form. The tests force either with :func:`is_live`'s ``force`` argument.
+"""
+
+from __future__ import annotations
+
+import os
+
+HEADLESS_ENV = "GLU_HEADLESS"
+"""Environment variable set (to ``1``) in the kernels of headless runs."""
+
+
+def in_kernel() -> bool:
+    """True when running inside an IPython kernel (a notebook), where outputs can be displayed."""
+    try:
+        from IPython import get_ipython
+    except ImportError:  # pragma: no cover - IPython comes with ipykernel
+        return False
+    shell = get_ipython()
+    return shell is not None and getattr(shell, "kernel", None) is not None
+
+
+def is_live(force: bool | None = None) -> bool:
+    """True in a kernel that is not headless (a person may interact); ``force`` overrides the guess."""
+    if force is not None:
+        return force
+    return in_kernel() and os.environ.get(HEADLESS_ENV, "") in ("", "0")
+
+
+THREAD_ENV: tuple[str, ...] = (
+    "OMP_NUM_THREADS",
+    "OPENBLAS_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "BLIS_NUM_THREADS",
+    "VECLIB_MAXIMUM_THREADS",
+    "NUMEXPR_NUM_THREADS",
+)
+"""The variables that size the thread pools of BLAS, OpenMP and numexpr when a process starts."""
+
+
+def available_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the system has one)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def thread_env(threads: int | None, environ: dict[str, str] | None = None) -> dict[str, str]:
+    """The variables of :data:`THREAD_ENV` set to ``threads``, leaving out those ``environ`` already sets.
+
+    >>> thread_env(1, {"OMP_NUM_THREADS": "4"})["OPENBLAS_NUM_THREADS"], "OMP_NUM_THREADS" in thread_env(1, {"OMP_NUM_THREADS": "4"})
+    ('1', False)
+    >>> thread_env(None)
+    {}
+    """
+    environ = os.environ if environ is None else environ
+    if threads is None:
+        return {}
+    return {name: str(int(threads)) for name in THREAD_ENV if name not in environ}

@@ -1,0 +1,22 @@
+"""The notebook runner: how the story's notebooks are run, checked, collected and published.
+
+One module per concern, in the order a run meets them:
+
+* :mod:`~glu.run.manifest` — what each notebook declares in its header: its figures, tables, recordings and
+  models, its quick preset, its expected seconds (the one place these are written);
+* :mod:`~glu.run.parameters` — the parameters cell of a notebook, read and checked;
+* :mod:`~glu.run.notebook` — :func:`start`, the first call of every notebook (data, parameters, outputs);
+* :mod:`~glu.run.outputs` — where a notebook's figures, tables, recordings and models are written;
+* :mod:`~glu.run.execution` — one notebook executed headless with papermill, stoppable at once;
+* :mod:`~glu.run.reproduce` — every notebook, two at a time, all-or-nothing publication;
+* :mod:`~glu.run.summary` — ``results/summary.json`` and ``.csv`` from the notebooks' tables;
+* :mod:`~glu.run.report` — the browsable report of a run;
+* :mod:`~glu.run.readme` — the README's generated sections (results, the story table).
+
+The science is below (:mod:`glu.experiments`, :mod:`glu.plots`, :mod:`glu.recording`); nothing here
+computes a number of the papers.
+"""
+
+from glu.run.notebook import start
+
+__all__ = ["start"]
