@@ -161,7 +161,7 @@ ev = ex.PUBLISHED_LISTS["fig7a"]
 probs = word_probabilities(engine, ev)
 first = trials[trials["figure"] == "fig7a"].iloc[0]
 drawn = sample_sentences(grammar, n_samples, int(first["seed"]))
-fig, (ax,) = plots.new_figure(1, width=6.4, height=3.4)
+fig, (ax,) = plots.new_figure(1, width=8.5, height=3.6)
 plots.plot_sampling(
     ax,
     all_scores(net, probs, "original"),

@@ -254,3 +254,14 @@ def test_every_figure_of_the_full_run_on_the_real_data_passes_the_check(shared_d
     problems = _checked_run(shared_data, out, check, monkeypatch)
     assert len(list((out / "figures").glob("*.png"))) >= 29
     assert not problems, "\n".join(problems)
+
+
+def test_two_labels_touching_on_one_line_are_caught(fig):
+    """Two tick labels that touch read as one word ("mediumObjVel"), though their boxes do not overlap."""
+    f, ax = fig
+    ax.set_xticks([0, 1], ["ObjVel=medium", "ObjVel=slow"])
+    ax.set_xlim(-0.5, 1.5)
+    assert figure_problems(f) == []
+    f.set_figwidth(1.8)  # narrower: the labels meet
+    problems = figure_problems(f)
+    assert any("'ObjVel=medium' and 'ObjVel=slow'" in p for p in problems), problems

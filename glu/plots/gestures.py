@@ -25,9 +25,10 @@ def plot_segmentation(
 ) -> Axes:
     """Draw a recording's features (x, y, z), the activity and the segments found on ``ax``.
 
-    Kept segments are shaded and numbered, rejected candidates hatched, tracking events marked at the
-    bottom (gaps ▼, spikes ·; jumps as dotted lines), reference segments (e.g. the originals) drawn as
-    black bars near the top. Repaired (interpolated) frames are drawn half a frame late.
+    Kept segments are shaded and numbered, rejected candidates hatched, tracking events marked in a strip
+    below the data (gaps ▼, spikes ·; jumps as dotted lines), reference segments (e.g. the originals)
+    drawn as black bars in a strip above it, under the segment numbers. Repaired (interpolated) frames
+    are drawn half a frame late.
     Deterministic: the same input gives the same picture.
     """
     pieces = segmentation.pieces if isinstance(segmentation, RecordingSegmentation) else [segmentation]
@@ -39,11 +40,19 @@ def plot_segmentation(
             ax.plot(f, tr.xyz[:, i], color=colors[axis], lw=0.8, label=axis if k == 0 else None)
         ax.plot(f, piece.activity, color="black", lw=1.2, label="activity" if k == 0 else None)
     lo, hi = ax.get_ylim()
-    ax.set_ylim(lo - 0.14 * (hi - lo), hi)  # an empty strip at the bottom for the tracking events
+    ax.set_ylim(lo - 0.14 * (hi - lo), hi + 0.24 * (hi - lo))  # strips: tracking events below, segments above
     segs = [s for p in pieces for s in p.segments]
     for i, s in enumerate(segs, 1):
         ax.axvspan(s.start, s.end, color="tab:orange", alpha=0.2, lw=0)
-        ax.text((s.start + s.end) / 2, 1.0, str(i), transform=ax.get_xaxis_transform(), ha="center", va="top")
+        ax.text(
+            (s.start + s.end) / 2,
+            0.985,
+            str(i),
+            transform=ax.get_xaxis_transform(),
+            ha="center",
+            va="top",
+            fontsize=9,
+        )
     for s, _reason in (r for p in pieces for r in p.rejected):
         ax.axvspan(s.start, s.end, facecolor="none", edgecolor="grey", hatch="//", alpha=0.5, lw=0)
     events = segmentation.events if isinstance(segmentation, RecordingSegmentation) else ()
@@ -60,7 +69,7 @@ def plot_segmentation(
         if e.kind == "jump":
             ax.axvline(e.frame - 0.5, color="purple", lw=0.6, ls=":")
     for s in reference:
-        ax.plot([s.start, s.end], [0.84, 0.84], color="black", lw=3, transform=ax.get_xaxis_transform())
+        ax.plot([s.start, s.end], [0.87, 0.87], color="black", lw=3, transform=ax.get_xaxis_transform())
     ax.set_xlabel("frame")
     ax.set_ylabel("hand features (body units)\nactivity (0–1)", fontsize=8)
     if title is not None:

@@ -3,7 +3,8 @@
 :func:`figure_problems` draws a figure (Agg) and returns one line per problem, empty when there is none:
 
 * **text on text**: two drawn text elements (tick labels, axis labels, titles, legend entries, value
-  labels, annotations, the footer) whose boxes overlap;
+  labels, annotations, the footer) whose boxes overlap, or that stand side by side on one line with less
+  than :data:`WORD_GAP_PX` between them (they read as one);
 * **text on another panel**: a text element (or a legend) of one axes inside another axes;
 * **legend on data**: a legend whose entries, or its frame when it has one, cover a line, a marker, a
   bar, a band, an error bar or an image of any axes;
@@ -42,6 +43,8 @@ from matplotlib.transforms import Bbox
 
 CHECK_ENV = "GLU_FIGURE_CHECK"
 """Environment variable: a folder where :func:`glu.plots.style.save_figure` writes each figure's problems."""
+WORD_GAP_PX = 2.0
+"""Upright texts side by side on one line need at least this gap (pixels), or they read as one."""
 TOLERANCE_PX = 1.0
 """Boxes must overlap by more than this (pixels at the figure's dpi, in both directions) to count."""
 BACKGROUND_ALPHA = 0.35
@@ -61,6 +64,7 @@ class _Drawn:
     name: str
     axes: Axes | None
     artist: Artist
+    upright: bool = True
 
 
 def figure_problems(fig: Figure, dpi: float = 150.0) -> list[str]:
@@ -107,7 +111,7 @@ def _problems(fig: Figure, renderer, drawn_texts: list[Text]) -> list[str]:
     in_legend = {id(t): lg for lg in legends for t in [*lg.get_texts(), lg.get_title()]}
     for i, a in enumerate(texts):
         for b in texts[i + 1 :]:
-            if _overlap(a.box, b.box) and _polygons_overlap(a.corners, b.corners):
+            if (_overlap(a.box, b.box) and _polygons_overlap(a.corners, b.corners)) or _side_by_side(a, b):
                 problems.append(f"text on text: {a.name} and {b.name}")
         for lg in legends:
             box = legend_boxes[id(lg)]
@@ -189,7 +193,9 @@ def _drawn(t: Text, renderer) -> _Drawn | None:
         turn = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
         local = np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
         corners = local @ turn.T + [(box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2]
-    return _Drawn(corners, box, _text_name(t), t.axes, t)
+    return _Drawn(
+        corners, box, _text_name(t), t.axes, t, upright=abs(angle) < 1e-6 or abs(angle - 180) < 1e-6
+    )
 
 
 def _corners(box: Bbox) -> np.ndarray:
@@ -213,6 +219,15 @@ def _polygons_overlap(a: np.ndarray, b: np.ndarray) -> bool:
             if min(pa.max(), pb.max()) - max(pa.min(), pb.min()) <= TOLERANCE_PX:
                 return False
     return True
+
+
+def _side_by_side(a: _Drawn, b: _Drawn) -> bool:
+    """Two upright texts on the same line closer than :data:`WORD_GAP_PX`: they read as one ("mediumObjVel")."""
+    if not (a.upright and b.upright):
+        return False  # a rotated text: its rectangle is checked as such
+    same_line = min(a.box.y1, b.box.y1) - max(a.box.y0, b.box.y0) > TOLERANCE_PX
+    gap = max(a.box.x0, b.box.x0) - min(a.box.x1, b.box.x1)
+    return same_line and gap < WORD_GAP_PX
 
 
 def _legends(fig: Figure) -> list[Legend]:

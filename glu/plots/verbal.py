@@ -108,7 +108,8 @@ def plot_and_but(ax: Axes, probs: pd.DataFrame) -> Axes:
         if "paper_p" in sub:
             label = "TCDS 2020 Fig. 7 (published)" if k == 0 else None
             ax.plot(xs, sub["paper_p"], **{**ORIGINAL_MARK, "markersize": 18}, label=label)
-    ax.set_xticks(x, [f"Action=grasp\nObjVel={g}" for g in groups])
+    ax.set_xticks(x, [f"ObjVel=\n{g}" for g in groups])
+    ax.set_xlabel("evidence: Action=grasp and")
     ax.set_ylim(0, 1.1)
     ax.set_yticks(np.linspace(0, 1, 6))
     ax.set_ylabel("p(word | evidence)")
@@ -185,7 +186,7 @@ def plot_sampling(
         ax.axvline(sb, color="tab:red", lw=1, ls="--", label=f"best of the sample: {sb:.4f}")
     ax.set_xlabel(SCORE_LABELS[score])
     ax.set_ylabel("density")
-    ax.legend(fontsize=7.5, frameon=False, loc="upper left")
+    ax.legend(fontsize=7.5, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     lines = [title] if title else []
     n_inf, m_inf = len(scores) - len(finite), len(sample_scores) - len(fs)
     if n_inf or m_inf:
