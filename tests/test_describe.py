@@ -585,8 +585,11 @@ def test_plots_draw_what_they_are_given():
     df = nbest(parse_grammar("( (a | b) [c] )"), {"a": 0.5, "b": 0.2, "c": 0.9}, n=4)
     fig, axes = plt.subplots(1, 3)
     plot_nbest(axes[0], df, title="t", highlight="c")
-    assert [t.get_text() for t in axes[0].get_yticklabels()] == list(df["sentence"])
-    assert len(axes[0].patches) == 4
+    ranked = [f"{k}. {s}" for k, s in enumerate(df["sentence"], 1)]
+    assert [t.get_text() for t in axes[0].get_yticklabels()] == ranked  # rank 1 first
+    (dots,) = axes[0].collections  # a dot per sentence at its score (a dot plot, not bars)
+    np.testing.assert_allclose(dots.get_offsets()[:, 0], df["score"])
+    assert not axes[0].patches
     probs = pd.DataFrame(
         {
             "ObjVel": ["medium", "medium", "slow", "slow"],
@@ -598,5 +601,5 @@ def test_plots_draw_what_they_are_given():
     heights = sorted(round(p.get_height(), 6) for p in axes[1].patches)
     assert heights == [0.1, 0.2, 0.8, 0.9]
     plot_sampling(axes[2], np.array([-1.0, -2.0, -np.inf]), np.array([-2.0]), -1.0)
-    assert any("1 score -inf" in t.get_text() for t in axes[2].get_legend().get_texts())
+    assert "scoring −∞ (a word of probability 0): 1 of the grammar's sentences (33 %)" in axes[2].get_title()
     plt.close(fig)
