@@ -1,4 +1,4 @@
-"""The readability check of every figure (glu.plots.overlap): it catches what it should, and no figure fails it.
+"""The readability check of figures (glu.plots.overlap): it catches what it should; no figure fails it.
 
 The first tests build figures with a known fault by hand (two labels on each other, a legend on bars, a
 value label past the frame, …) and the same figures without it: the checker must name the fault and
@@ -164,7 +164,7 @@ def test_the_figure_is_checked_as_saved_tightly_cropped(fig):
 
 
 def _anticipation_frames(case: str = "sphere", n: int = 40):
-    """Small made-up frames shaped like AnticipationRun.curves(), .predictions() and published_comparison()."""
+    """Made-up frames shaped like AnticipationRun.curves(), .predictions() and published_comparison()."""
     import pandas as pd
 
     t = np.arange(1, n + 1)

@@ -4,7 +4,10 @@ Each function draws a tidy frame of :mod:`glu.experiments` (or a model) on the a
 argument (a sequence of axes for a multi-panel figure), and returns them. The look shared by every figure
 (colours, sizes, the data-source footer, deterministic PNG and SVG) is in :mod:`glu.plots.style`. The
 functions live in one module per part of the story — :mod:`~glu.plots.gestures`,
-:mod:`~glu.plots.network`, :mod:`~glu.plots.fusion`, :mod:`~glu.plots.anticipation`, :mod:`~glu.plots.verbal`, :mod:`~glu.plots.evaluation` — and are all importable from here.
+:mod:`~glu.plots.network`, :mod:`~glu.plots.fusion`, :mod:`~glu.plots.anticipation`,
+:mod:`~glu.plots.verbal`, :mod:`~glu.plots.evaluation`, :mod:`~glu.plots.corpus` — and are all importable
+from here. A few build a whole figure (``*_figure``) where its layout is part of what it says.
+:mod:`~glu.plots.overlap` checks that no text of a figure covers another or the data.
 """
 
 from glu.plots.anticipation import anticipation_figure, plot_anticipation, shared_ylim

@@ -110,8 +110,9 @@ def plot_anticipation(
 def prediction_summary(curves: pd.DataFrame, predictions: pd.DataFrame, node: str = "ObjVel") -> str:
     """In words: which action the HMMs put ahead at the updates, and the most probable ``node`` value then.
 
-    E.g. ``"t = 5–20: tap ahead → fast 0.52; t = 25: touch ahead → slow 0.91; …"`` — consecutive updates
-    with the same leading action (the largest p_HMM) and the same most probable value are one stretch.
+    E.g. ``"t = 5–20: tap ahead → fast 0.52; t = 25: touch ahead → slow 0.91; …"``: consecutive
+    updates with the same leading action (the largest p_HMM) and the same most probable value are one
+    stretch.
     """
     d = predictions[predictions["node"] == node]
     lead = curves.loc[curves.groupby("t")["p_hmm"].idxmax(), ["t", "action"]].set_index("t")["action"]

@@ -61,7 +61,7 @@ def _drawn(table: pd.DataFrame, targets: Sequence[str]) -> list[str]:
 def strategies_vs_noise_figure(
     results: pd.DataFrame, posteriors: Sequence[str], fraction: float = 1.0
 ) -> Figure:
-    """Action accuracy (top) and effect log-loss (bottom) against the sensor noise, per way of reading p_HMM."""
+    """Action accuracy (top) and effect log-loss (bottom) against the sensor noise, per reading of p_HMM."""
     fig, axes = _grid(2, len(posteriors))
     for k, post in enumerate(posteriors):
         plot_metric_vs_noise(axes[k], results, "action", "accuracy", fraction, posterior=post)

@@ -76,7 +76,7 @@ def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str) -> None:
 
 
 def coinciding(series: dict[str, tuple[np.ndarray, np.ndarray]], span: float) -> list[list[str]]:
-    """Groups (of two or more) of the named ``(x, y)`` series that coincide: same x, |Δy| ≤ COINCIDE·span."""
+    """Groups (two or more) of the named ``(x, y)`` series that coincide: same x, |Δy| ≤ COINCIDE·span."""
     groups: list[list[str]] = []
     for name, (x, y) in series.items():
         for grp in groups:
@@ -256,12 +256,8 @@ def plot_differences(
         value = f"{sign * r.difference:+.3f} [{lo:+.3f}, {hi:+.3f}]".replace("-", "−")
         ax.text(1.02, i, value, va="center", fontsize=7, color="0.2", transform=ax.get_yaxis_transform())
         better = "higher" if _higher(metric) else "lower"
-        labels.append(
-            (
-                i,
-                f"{target} {METRIC_LABEL.get(metric, metric)} ({better} is better): {strategy_label(strategy)} − {strategy_label(baseline)}",
-            )
-        )
+        what = f"{target} {METRIC_LABEL.get(metric, metric)} ({better} is better)"
+        labels.append((i, f"{what}: {strategy_label(strategy)} − {strategy_label(baseline)}"))
     ax.axvline(0, color="0.5", lw=0.8)
     ax.set_yticks([i for i, _ in labels], [t for _, t in labels], fontsize=7)
     ax.set_ylim(len(pairs) - 0.5, -0.5)

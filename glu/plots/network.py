@@ -255,7 +255,8 @@ def plot_structure(ax: Axes, bn, reference=None, reference_name: str = "the orig
     n = len(bn.edges())
     title = f"{n} edges"
     if reference is not None:
-        title += f"; {reference_name}: {len(reference.edges())}, {only_ours} only in ours, {only_theirs} only in theirs"
+        title += f"; {reference_name}: {len(reference.edges())}"
+        title += f", {only_ours} only in ours, {only_theirs} only in theirs"
     ax.set_title(title, fontsize=9)
     handles = [Patch(facecolor=(0.45, 0.45, 0.45), label="edge parent → child")]
     if reference is not None:

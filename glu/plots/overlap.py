@@ -68,7 +68,7 @@ class _Drawn:
 
 
 def figure_problems(fig: Figure, dpi: float = 150.0) -> list[str]:
-    """Render ``fig`` as it is saved and return one line per readability problem (module docstring); [] if none.
+    """Render ``fig`` as it is saved; one line per readability problem (module docstring), [] if none.
 
     The figure is rendered as :func:`glu.plots.style.save_figure` saves it (PNG at ``dpi``, cropped with
     ``bbox_inches="tight"``, which moves whatever is placed relative to the figure's edges), and checked
@@ -222,7 +222,7 @@ def _polygons_overlap(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def _side_by_side(a: _Drawn, b: _Drawn) -> bool:
-    """Two upright texts on the same line closer than :data:`WORD_GAP_PX`: they read as one ("mediumObjVel")."""
+    """Two upright texts on one line closer than :data:`WORD_GAP_PX`: they read as one ("mediumObjVel")."""
     if not (a.upright and b.upright):
         return False  # a rotated text: its rectangle is checked as such
     same_line = min(a.box.y1, b.box.y1) - max(a.box.y0, b.box.y0) > TOLERANCE_PX

@@ -192,11 +192,13 @@ def plot_sampling(
     if n_inf or m_inf:
         lines.append(
             f"not drawn, scoring −∞ (a word of probability 0): {n_inf:,} of the grammar's sentences "
-            f"({100 * n_inf / len(scores):.0f} %), {m_inf:,} of the sample's ({100 * m_inf / max(len(sample_scores), 1):.0f} %)"
+            f"({100 * n_inf / len(scores):.0f} %), {m_inf:,} of the sample's "
+            f"({100 * m_inf / max(len(sample_scores), 1):.0f} %)"
         )
     lines.append(
         "the sample is not uniform over sentences: HSGen picks each alternative with equal chance, so short\n"
-        "branches (no size or colour, “grasps” rather than “has just grasped”) outweigh their share of the grammar"
+        "branches (no size or colour, “grasps” rather than “has just grasped”) outweigh their share of the "
+        "grammar"
     )
     ax.set_title("\n".join(lines), fontsize=8.5)
     return ax
