@@ -1,7 +1,7 @@
-"""Exact inference in the Affordance–Words network, vectorised with NumPy.
+"""The core-and-leaves engine: exact inference in networks shaped like GLU's, vectorised with NumPy.
 
-The network has a small *core* (the 8 affordance nodes: 3·4·2·3·3·3·2·2 = 2592 joint states) and many
-*leaves* (the 49 words), each hanging off core nodes only. The engine therefore
+The Affordance–Words network has a small *core* (the 8 affordance nodes: 3·4·2·3·3·3·2·2 = 2592 joint
+states) and many *leaves* (the 49 words), each hanging off core nodes only. The engine therefore
 
 1. multiplies the core CPTs into the joint ``P(core)`` once (shape (3, 4, 2, 3, 3, 3, 2, 2));
 2. folds every unobserved leaf into it through its row sums ``m_L(pa) = Σ_v P(L=v | pa)`` — 1 for a
@@ -10,13 +10,10 @@ The network has a small *core* (the 8 affordance nodes: 3·4·2·3·3·3·2·2 =
 3. answers a query by slicing the joint at the hard evidence on core nodes, multiplying in the factors of
    observed leaves and of soft evidence, and summing to the targets.
 
-Evidence types (METHOD.md §2):
-
-* hard evidence on any node: ``{"Action": "tap", "rolls": "present"}``;
-* soft evidence on core nodes, a distribution over the node's values, entered either as *virtual*
-  (likelihood) evidence, ``p(X | e) ∝ Σ_A p(X, A | e) q(A)`` — the originals' soft fusion — or by
-  *Jeffrey's rule*, which makes the node's posterior marginal equal to ``q``:
-  ``p(X | e) = Σ_a p(X | e, A=a) q(a)`` (several Jeffrey nodes: iterative proportional fitting).
+Soft evidence on core nodes is applied to the joint directly; soft evidence on a leaf, and batches with
+Jeffrey's rule on several nodes, are answered by a junction tree of the same network
+(:class:`~glu.bn.junction.JunctionTreeEngine`, built on first use). :class:`~glu.bn.inference.InferenceEngine`
+chooses this engine when the core is small (see :func:`~glu.bn.inference.choose_method`).
 
 pgmpy's VariableElimination is the independent reference in the tests; this engine is two to three orders
 of magnitude faster (``benchmarks/bench_bn.py``).
@@ -25,22 +22,27 @@ of magnitude faster (``benchmarks/bench_bn.py``).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
 from glu.bn.batch import BatchQueries
+from glu.bn.inference import (
+    IPFP_MAX_ITER,
+    IPFP_TOL,
+    InferenceEngine,
+    Method,
+    SoftEvidence,
+    core_size,
+    core_split,
+)
 from glu.bn.model import BayesNet
-from glu.bn.soft import SUM_TOL, SoftRule, check_soft_rule
-from glu.errors import EvidenceError, ImpossibleEvidenceError, ModelError, UnknownNodeError
+from glu.bn.soft import SoftRule, check_soft_rule
+from glu.errors import EvidenceError, ModelError, UnknownNodeError
 from glu.schema import unknown_node_message
 
-if TYPE_CHECKING:
-    import pandas as pd
-
-SoftEvidence = Mapping[str, Mapping[str, float] | Sequence[float] | np.ndarray]
 MAX_CORE_STATES = 1 << 22
-IPFP_TOL, IPFP_MAX_ITER = 1e-13, 10_000
+"""The largest core joint this engine builds when asked for explicitly (``method="core"``)."""
 
 
 def _broadcast(table: np.ndarray, axes: Sequence[int], ndim: int) -> np.ndarray:
@@ -53,39 +55,39 @@ def _broadcast(table: np.ndarray, axes: Sequence[int], ndim: int) -> np.ndarray:
     return t.reshape(shape)
 
 
-class InferenceEngine(BatchQueries):
+class CoreEngine(BatchQueries, InferenceEngine):
     """Exact marginals of a :class:`BayesNet` whose non-core nodes are leaves with core parents.
 
     Parameters
     ----------
     bn : the network; its affordance nodes plus every node with children form the core, all other nodes
-        must be leaves whose parents are core nodes.
+        are leaves whose parents are core nodes.
+    method, max_table : as :class:`~glu.bn.inference.InferenceEngine` (``max_table`` bounds the junction
+        tree built for soft evidence on leaves)
 
-    Examples
-    --------
-    On glu's synthetic data (the real data gives the GLU 2017 bars):
-
-    >>> from glu.bn import learn_bn
-    >>> from glu.data import load_experiments
-    >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
-    >>> p = eng.query(["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"})["ObjVel"]
-    >>> p.round(3)                                                      # slow, medium, fast
-    array([0.015, 0.121, 0.863])
+    Attributes
+    ----------
+    core, leaves : node names
+    axis : core node → its axis in the joint
+    shape : the joint's shape, one axis per core node
+    prior_joint : P(core), shape ``shape``
+    base : P(core) with every unobserved leaf summed out, shape ``shape``
+    base_mass : ``base.sum()`` (below 1 when all-zero rows exclude configurations)
     """
 
-    def __init__(self, bn: BayesNet) -> None:
-        self.bn = bn
+    def __init__(self, bn: BayesNet, method: Method = "core", max_table: int | None = None) -> None:
+        self._setup(bn, "core")
+        self._max_table = max_table
+        self._junction: Any = None
         schema = bn.schema
-        self.nodes = bn.nodes
-        has_children = {p for n in bn.nodes for p in bn.parents[n]}
-        self.core = tuple(n for n in bn.nodes if n in schema.affordance_nodes or n in has_children)
-        self.leaves = tuple(n for n in bn.nodes if n not in self.core)
+        self.core, self.leaves = core_split(bn)
         self.axis = {n: i for i, n in enumerate(self.core)}
         self.shape = tuple(schema.cardinality(n) for n in self.core)
-        n_states = int(np.prod(self.shape))
+        n_states, _ = core_size(bn)
         if n_states > MAX_CORE_STATES:
             raise ModelError(
-                f"the core joint has {n_states} states; this engine handles up to {MAX_CORE_STATES}"
+                f"the core joint of this network has {n_states:,} states; the core engine handles up to "
+                f"{MAX_CORE_STATES:,}: use method='junction' (the default 'auto' does)"
             )
         ndim = len(self.core)
         for leaf in self.leaves:
@@ -133,29 +135,8 @@ class InferenceEngine(BatchQueries):
         self.binary_leaves = tuple(binary)
         self._present_rows = np.array([self.leaf_row[w] + 1 for w in binary], dtype=np.intp)
         self._present_flat = self.leaf_table[self._present_rows].reshape(len(binary), n_states)
-        self._value_index: dict[str, dict[str, int]] = {}
-        for n in bn.nodes:
-            vals = bn.schema.values_of(n)
-            d = {v: i for i, v in enumerate(vals)}
-            for alias, v in bn.schema.aliases.get(n, {}).items():
-                if v in d:  # an alias of a value this model does not have does not apply
-                    d[alias] = d[v]
-            self._value_index[n] = d
 
     # ------------------------------------------------------------------ parsing
-    def _value(self, node: str, value: str | int) -> int:
-        idx = self._value_index.get(node)
-        if idx is None:
-            raise UnknownNodeError(unknown_node_message(node, self.nodes))
-        if isinstance(value, int | np.integer) and not isinstance(value, bool):
-            if 0 <= value < len(self.bn.schema.values_of(node)):
-                return int(value)
-        else:
-            i = idx.get(value)
-            if i is not None:
-                return i
-        return self.bn.schema.value_index(node, str(value))  # raises UnknownValueError
-
     def _split_hard(self, evidence: Mapping[str, str | int] | None) -> tuple[dict[int, int], dict[str, int]]:
         core: dict[int, int] = {}
         leaf: dict[str, int] = {}
@@ -169,75 +150,17 @@ class InferenceEngine(BatchQueries):
                     core[a] = v
         return core, leaf
 
-    def soft_vector(self, node: str, dist: Mapping[str, float] | Sequence[float] | np.ndarray) -> np.ndarray:
-        """Validate soft evidence on ``node`` and return it as a vector over the node's values."""
-        if node not in self._value_index:
-            raise UnknownNodeError(unknown_node_message(node, self.nodes))
-        if node not in self.axis:
-            raise EvidenceError(
-                f"soft evidence is supported on affordance nodes ({', '.join(self.core)}); {node!r} is a word node"
-            )
-        values = self.bn.schema.values_of(node)
-        if isinstance(dist, Mapping):
-            q = np.zeros(len(values))
-            for k, p in dist.items():
-                if isinstance(p, bool) or not isinstance(p, int | float | np.integer | np.floating):
-                    raise EvidenceError(
-                        f"soft evidence on {node}: the probability of {k!r} must be a number, got {p!r}"
-                    )
-                q[self._value(node, k)] = p
-        else:
-            try:
-                q = np.asarray(dist, dtype=float)
-            except (TypeError, ValueError):
-                raise EvidenceError(
-                    f"soft evidence on {node} must be a list of {len(values)} numbers ({', '.join(values)}) "
-                    f"or {{value: probability}}, got {dist!r}"
-                ) from None
-            if q.ndim != 1:
-                raise EvidenceError(
-                    f"soft evidence on {node} must be a flat list of {len(values)} numbers ({', '.join(values)})"
-                )
-            if q.shape != (len(values),):
-                raise EvidenceError(
-                    f"soft evidence on {node} has {q.size} entries; expected {len(values)} ({', '.join(values)})"
-                )
-        # an entry above 1 is refused before the sum, which could overflow (1e308 + 1e308)
-        if (
-            not np.all(np.isfinite(q))
-            or (q < 0).any()
-            or (q > 1.0 + SUM_TOL).any()
-            or abs(q.sum() - 1.0) > SUM_TOL
-        ):
-            shown = ", ".join(f"{v}:{p:g}" for v, p in zip(values, q, strict=True))
-            raise EvidenceError(
-                f"soft evidence on {node} is not a distribution over its values ({shown}): "
-                "entries must be non-negative and sum to 1"
-            )
-        return q / q.sum()
+    def junction(self) -> Any:
+        """The junction tree engine of the same network (built on first use), for what the core cannot do."""
+        if self._junction is None:
+            from glu.bn.junction import JunctionTreeEngine
 
-    def _describe(self, evidence: Mapping | None, soft: Mapping | None) -> str:
-        parts = [f"{k}={v}" for k, v in (evidence or {}).items()] + [f"soft({k})" for k in (soft or {})]
-        return ", ".join(parts) if parts else "no evidence"
+            self._junction = JunctionTreeEngine(self.bn, max_table=self._max_table)
+        return self._junction
 
-    def _impossible(
-        self, evidence: Mapping | None, soft: Mapping | None, hard_possible: bool = False
-    ) -> ImpossibleEvidenceError:
-        hint = ""
-        zr = self.bn.zero_rows()
-        if hard_possible:
-            hint = (
-                " (the hard evidence alone is possible: the soft evidence gives probability 0 to every "
-                "value it allows)"
-            )
-        elif zr:
-            hint = (
-                f" (the model has all-zero CPT rows for {', '.join(zr)}, which exclude some affordance "
-                "configurations; learn with unseen_words='uniform' to keep them)"
-            )
-        return ImpossibleEvidenceError(
-            f"impossible evidence: {self._describe(evidence, soft)} has probability 0 under the model{hint}"
-        )
+    def _needs_junction(self, soft: Mapping | None) -> bool:
+        """Soft evidence on a leaf (the core tables have no axis for it)."""
+        return bool(soft) and any(n not in self.axis and n in self._value_index for n in soft)
 
     # ------------------------------------------------------------------ single queries
     def _posterior_core(
@@ -311,25 +234,11 @@ class InferenceEngine(BatchQueries):
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> dict[str, np.ndarray]:
-        """Posterior marginal of each target node given hard and soft evidence.
-
-        Parameters
-        ----------
-        targets : node names (affordance or word nodes)
-        evidence : hard evidence, node → value (a value name, an alias such as ``circle``, or an index)
-        soft : soft evidence on affordance nodes, node → {value: probability} or a vector over its values
-        soft_rule : ``"virtual"`` (likelihood evidence, the originals' choice) or ``"jeffrey"``
-
-        Returns
-        -------
-        dict target → array, shape (n_values,), the posterior in the node's value order.
-
-        Raises
-        ------
-        UnknownNodeError, UnknownValueError, EvidenceError, ImpossibleEvidenceError (all ValueError)
-        """
+        """See :meth:`InferenceEngine.query <glu.bn.inference.InferenceEngine.query>`."""
         if isinstance(targets, str):
             targets = [targets]
+        if self._needs_junction(soft):
+            return self.junction().query(targets, evidence, soft, soft_rule)
         p, idx, free, leaf, core, total = self._posterior_core(evidence, soft, soft_rule)
         out: dict[str, np.ndarray] = {}
         for t in targets:
@@ -354,84 +263,15 @@ class InferenceEngine(BatchQueries):
             out[t] = r
         return out
 
-    # ------------------------------------------------------------------ labelled results (pandas)
-    def posterior(
-        self,
-        target: str,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> pd.Series:
-        """``p(target | evidence)`` as a Series indexed by the target's values, named after the target.
-
-        The labelled form of :meth:`query` (same arguments, same errors).
-
-        >>> from glu.bn import learn_bn
-        >>> from glu.data import load_experiments
-        >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
-        >>> eng.posterior("ObjVel", {"Action": "tap", "Shape": "sphere", "Size": "small"}).round(3)
-        ObjVel
-        slow      0.015
-        medium    0.121
-        fast      0.863
-        Name: ObjVel, dtype: float64
-        """
-        return self.posteriors([target], evidence, soft, soft_rule)[target]
-
-    def posteriors(
-        self,
-        targets: Sequence[str],
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> dict[str, pd.Series]:
-        """:meth:`posterior` of several targets from one computation: target → Series."""
-        import pandas as pd
-
-        res = self.query(list(targets), evidence, soft, soft_rule)
-        return {
-            t: pd.Series(p, index=pd.Index(self.bn.schema.values_of(t), name=t), name=t)
-            for t, p in res.items()
-        }
-
-    def posterior_table(
-        self,
-        target: str,
-        evidence: pd.DataFrame,
-        soft: Mapping[str, np.ndarray] | None = None,
-        soft_rule: SoftRule = "virtual",
-        errors: str = "raise",
-    ) -> pd.DataFrame:
-        """``p(target | row)`` for every row of ``evidence`` at once: a DataFrame, one column per value.
-
-        ``evidence`` has one column per observed node (value names; NaN or None = not observed in that row);
-        the result keeps its index. ``soft`` and ``errors`` are as in :meth:`query_batch`.
-
-        >>> import pandas as pd
-        >>> from glu.bn import learn_bn
-        >>> from glu.data import load_experiments
-        >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
-        >>> rows = pd.DataFrame({"Action": ["tap", "tap"], "Shape": ["sphere", "box"]}, index=["ball", "box"])
-        >>> eng.posterior_table("ObjVel", rows).round(2)
-        ObjVel  slow  medium  fast
-        ball    0.06    0.30  0.65
-        box     0.57    0.36  0.07
-        """
-        import pandas as pd
-
-        cols = {c: evidence[c].tolist() for c in evidence.columns}
-        res = self.query_batch([target], cols, soft, soft_rule, errors=errors)[target]  # type: ignore[arg-type]
-        return pd.DataFrame(
-            res, index=evidence.index, columns=pd.Index(self.bn.schema.values_of(target), name=target)
-        )
-
-    def word_probabilities(
+    def word_probability_array(
         self,
         evidence: Mapping[str, str | int] | None = None,
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> np.ndarray:
         """P(word = present | evidence) for every binary word node, shape (n_words,), in ``binary_leaves`` order."""
+        if self._needs_junction(soft):
+            return self.junction().word_probability_array(evidence, soft, soft_rule)
         p, idx, _, leaf, _, total = self._posterior_core(evidence, soft, soft_rule)
         if idx and any(not isinstance(i, slice) for i in idx):
             tab = self.leaf_table[self._present_rows][(slice(None), *idx)].reshape(
@@ -444,15 +284,6 @@ class InferenceEngine(BatchQueries):
             if w in self.binary_leaves:
                 probs[self.binary_leaves.index(w)] = float(v == 1)
         return probs
-
-    def marginals(
-        self,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> dict[str, np.ndarray]:
-        """Posterior marginals of every node (see :meth:`query`)."""
-        return self.query(list(self.nodes), evidence, soft, soft_rule)
 
     def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
         """P(hard evidence) under the model (0 for impossible evidence)."""

@@ -72,7 +72,11 @@ SEEN_PREFIX = "seen__"
 SEEN_VALUES: tuple[str, str] = ("no", "yes")
 IMPORT_TOL = 1e-5
 """Rows of an imported table may sum to 1 within this (other tools round to 6 digits); they are rescaled to
-sum to 1 exactly. All-zero rows are never accepted in a file (see :data:`SEEN_PREFIX`)."""
+sum to 1 exactly, and the import says so (``meta["renormalised"]``). A wider tolerance is the reader's
+``renormalise`` (``glu bn import --renormalise TOL``). All-zero rows are never accepted in a file (see
+:data:`SEEN_PREFIX`)."""
+RENORMALISE_DEFAULT = 1e-3
+"""The tolerance of ``glu bn import --renormalise`` given without a value."""
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _BIF_KEYWORDS = frozenset({"network", "variable", "probability", "property", "type", "discrete", "table"})
 
@@ -227,7 +231,7 @@ def export_bn(
 
 
 # ------------------------------------------------------------------ readers
-def from_bif(text: str, where: str = "<string>") -> BayesNet:
+def from_bif(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
     """A model from BIF text (variables, then probability blocks with ``table`` or one line per configuration)."""
     body = re.sub(r"//[^\n]*|/\*.*?\*/", " ", text, flags=re.S)
     values: dict[str, tuple[str, ...]] = {}
@@ -273,7 +277,7 @@ def from_bif(text: str, where: str = "<string>") -> BayesNet:
             raise ModelError(f"{where}: two probability blocks for {child!r}")
         parents[child], cpts[child] = ps, cpt
     return assemble(
-        values, parents, cpts, where, meta={"data_source": f"imported from {Path(where).name} (BIF)"}
+        values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (BIF)"}, renormalise
     )
 
 
@@ -294,7 +298,7 @@ def _table(flat: np.ndarray, shape: tuple[int, ...], node: str, where: str, orde
     return flat.reshape(shape)
 
 
-def from_xmlbif(text: str, where: str = "<string>") -> BayesNet:
+def from_xmlbif(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
     """A model from XMLBIF (0.3) text."""
     try:
         root = ET.fromstring(text)
@@ -325,11 +329,16 @@ def from_xmlbif(text: str, where: str = "<string>") -> BayesNet:
             raise ModelError(f"{where}: two definitions of {child!r}")
         parents[child], cpts[child] = ps, _table(flat, shape, child, where, order="c")
     return assemble(
-        values, parents, cpts, where, meta={"data_source": f"imported from {Path(where).name} (XMLBIF)"}
+        values,
+        parents,
+        cpts,
+        where,
+        {"data_source": f"imported from {Path(where).name} (XMLBIF)"},
+        renormalise,
     )
 
 
-def from_uai(text: str, where: str = "<string>") -> BayesNet:
+def from_uai(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
     """A model from a UAI ``BAYES`` file: nodes ``var_i``, values ``0 … k-1`` (UAI has no names)."""
     tokens = re.sub(r"#[^\n]*", " ", text).split()  # pyAgrum writes `# name` comments
     pos = 0
@@ -382,19 +391,23 @@ def from_uai(text: str, where: str = "<string>") -> BayesNet:
             _table(flat, shape, child, where, "c"),
         )
     return assemble(
-        values, parents, cpts, where, meta={"data_source": f"imported from {Path(where).name} (UAI)"}
+        values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (UAI)"}, renormalise
     )
 
 
 READERS = {"bif": from_bif, "xmlbif": from_xmlbif, "uai": from_uai}
 
 
-def import_bn(path: str | os.PathLike, fmt: str | None = None) -> BayesNet:
-    """Read a BIF, XMLBIF or UAI file (format from the suffix unless ``fmt``), validated completely."""
+def import_bn(path: str | os.PathLike, fmt: str | None = None, renormalise: float | None = None) -> BayesNet:
+    """Read a BIF, XMLBIF or UAI file (format from the suffix unless ``fmt``), validated completely.
+
+    ``renormalise``: rows whose sum is within this of 1 are rescaled to sum to 1 (default
+    :data:`IMPORT_TOL`); the model's ``meta["renormalised"]`` reports how many, and the largest deviation.
+    """
     path = Path(path)
     fmt = format_of(path, fmt)
     text = read_text(path, f"{fmt.upper()} file", error=ModelError)
-    return READERS[fmt](text, str(path))
+    return READERS[fmt](text, str(path), renormalise)
 
 
 # ------------------------------------------------------------------ assembling a BayesNet
@@ -404,11 +417,16 @@ def assemble(
     cpts: Mapping[str, np.ndarray],
     where: str,
     meta: Mapping[str, Any] | None = None,
+    renormalise: float | None = None,
 ) -> BayesNet:
     """A validated :class:`BayesNet` from any node order: indicators folded back, words last, parents sorted.
 
+    Rows that sum to 1 within ``renormalise`` (default :data:`IMPORT_TOL`) are rescaled to sum to 1; when
+    any is, ``meta["renormalised"]`` gives how many rows, the largest ``|1 − sum|``, where, and the
+    tolerance.
+
     Raises :class:`ModelError` (naming ``where``) for a node without a CPT, a CPT for no node, duplicate
-    values, wrong shapes, a cycle, rows that do not sum to 1.
+    values, wrong shapes, a cycle, a row that does not sum to 1 (naming the node and the parent values).
     """
     missing = [n for n in values if n not in cpts]
     if missing:
@@ -427,16 +445,32 @@ def assemble(
         dict(parents),
         {n: np.asarray(c, dtype=float) for n, c in cpts.items()},
     )
+    tol = IMPORT_TOL if renormalise is None else _tolerance(renormalise)
+    rescaled, worst = 0, (0.0, "")
     for n, c in cpts.items():
         shape = tuple(len(values[p]) for p in parents[n]) + (len(values[n]),)
         if c.shape != shape:
             raise ModelError(f"{where}: the table of {n!r} has shape {c.shape}, expected {shape}")
-        if not np.all(np.isfinite(c)) or (c < 0).any() or np.any(np.abs(c.sum(axis=-1) - 1) > IMPORT_TOL):
-            raise ModelError(
-                f"{where}: a row of the table of {n!r} is not a distribution (entries ≥ 0 summing to 1)"
-            )
+        _check_rows(n, c, values, parents[n], tol, where)
         sums = c.sum(axis=-1, keepdims=True)
-        cpts[n] = np.where(np.abs(sums - 1) > ROW_TOL, c / sums, c)  # only rows another tool rounded
+        off = np.abs(sums - 1) > ROW_TOL  # only rows another tool rounded
+        if off.any():
+            cpts[n] = np.where(off, c / sums, c)
+            rescaled += int(off.sum())
+            dev = np.abs(sums - 1)[..., 0]
+            k = np.unravel_index(int(np.argmax(dev)), dev.shape)
+            if dev[k] > worst[0]:
+                worst = (float(dev[k]), _row_name(n, k, values, parents[n]))
+    if rescaled:
+        meta = {
+            **(meta or {}),
+            "renormalised": {
+                "rows": rescaled,
+                "largest_deviation": worst[0],
+                "at": worst[1],
+                "tolerance": tol,
+            },
+        }
     _fold_indicators(values, parents, cpts, where)
     children = {p for ps in parents.values() for p in ps}
     named = any(v != tuple(str(i) for i in range(len(v))) for v in values.values())
@@ -462,6 +496,50 @@ def assemble(
         return BayesNet(schema=schema, parents=sorted_parents, cpts=sorted_cpts, meta=dict(meta or {}))
     except ModelError as e:
         raise ModelError(f"{where}: {e}") from None
+
+
+def _tolerance(value: float) -> float:
+    try:
+        tol = float(value)
+    except (TypeError, ValueError):
+        tol = float("nan")
+    if not 0 <= tol < 1:
+        raise ModelError(f"renormalise={value!r}: a tolerance is a number in [0, 1), e.g. 1e-4")
+    return tol
+
+
+def _row_name(node: str, index: tuple, values: Mapping, parents: Sequence[str]) -> str:
+    """``P(node | A=a, B=b)``: the row of ``node``'s table at parent value indices ``index``."""
+    if not parents:
+        return f"P({node})"
+    config = ", ".join(f"{p}={values[p][int(i)]}" for p, i in zip(parents, index, strict=True))
+    return f"P({node} | {config})"
+
+
+def _check_rows(
+    node: str, c: np.ndarray, values: Mapping, parents: Sequence[str], tol: float, where: str
+) -> None:
+    """:class:`ModelError` naming the first row of ``c`` that is not a distribution within ``tol``."""
+    sums = c.sum(axis=-1)
+    bad_entries = ~np.isfinite(c) | (c < 0)
+    bad = bad_entries.any(axis=-1) | ~(np.abs(sums - 1) <= tol)
+    if not bad.any():
+        return
+    k = tuple(int(i) for i in np.argwhere(bad)[0])
+    row = _row_name(node, k, values, parents)
+    if bad_entries[k].any():
+        raise ModelError(
+            f"{where}: the row {row} has an entry that is negative or not a number: {c[k].tolist()}"
+        )
+    hint = ""
+    if np.isfinite(sums[k]) and abs(sums[k] - 1) < 0.1:
+        suggest = float(f"{10 ** np.ceil(np.log10(abs(sums[k] - 1))):.0e}")
+        hint = f"; to rescale such rows, import with --renormalise {suggest:g} (renormalise={suggest:g})"
+    more = int(bad.sum()) - 1
+    raise ModelError(
+        f"{where}: the row {row} sums to {sums[k]:.10g}, not 1 (|1 − sum| = {abs(sums[k] - 1):.2g}, "
+        f"tolerance {tol:g}){f' — and {more} more rows' if more else ''}{hint}"
+    )
 
 
 def _fold_indicators(values: dict, parents: dict, cpts: dict, where: str) -> None:

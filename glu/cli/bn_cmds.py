@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.bn.exchange import FORMATS, ZERO_ROW_MODES
+from glu.bn.exchange import FORMATS, IMPORT_TOL, RENORMALISE_DEFAULT, ZERO_ROW_MODES
 from glu.cli.common import (
     add_data_args,
     add_evidence_args,
@@ -49,6 +49,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     ip.add_argument("model", type=Path, metavar="FILE", help="e.g. net.bif, net.xmlbif, net.uai, BN_lab.mat")
     ip.add_argument("-o", "--out", type=output_file, required=True, help="model file to write (JSON)")
     ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
+    ip.add_argument(
+        "--renormalise",
+        type=_tolerance,
+        nargs="?",
+        const=RENORMALISE_DEFAULT,
+        metavar="TOL",
+        help=f"rescale CPT rows whose sum is within TOL of 1 (default without the option: {IMPORT_TOL:g}; "
+        f"--renormalise alone: {RENORMALISE_DEFAULT:g}); the rows rescaled are reported",
+    )
     ip.set_defaults(func=_import)
 
     xp = bsub.add_parser(
@@ -114,12 +123,36 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
+def _tolerance(text: str) -> float:
+    """--renormalise TOL: a number in [0, 1)."""
+    try:
+        tol = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
+    if not 0 <= tol < 1:
+        raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
+    return tol
+
+
+def renormalised_text(meta: dict) -> str:
+    """One line on the rows an import rescaled (``meta["renormalised"]``), or '' when none was."""
+    r = meta.get("renormalised")
+    if not r:
+        return ""
+    return (
+        f"rescaled {r['rows']} CPT row(s) to sum to 1 (largest |1 − sum| = {r['largest_deviation']:.2g}, "
+        f"in {r['at']}; tolerance {r['tolerance']:g})"
+    )
+
+
 def _import(args: argparse.Namespace) -> int:
     from glu.cli.common import read_model_file
 
     if _same_file(args.model, args.out):
         raise GluError(f"-o {args.out} is the input file; write the JSON model to another file")
-    bn = read_model_file(args.model, args.format)
+    if args.renormalise is not None and args.model.suffix.lower() in (".mat", ".json"):
+        raise GluError("--renormalise applies to BIF, XMLBIF and UAI files")
+    bn = read_model_file(args.model, args.format, renormalise=args.renormalise)
     bn.save(args.out)
     zr = bn.zero_rows()
     print(
@@ -127,6 +160,9 @@ def _import(args: argparse.Namespace) -> int:
         + (f", all-zero CPT rows: {zr}" if zr else "")
         + f" (imported from {args.model})"
     )
+    note = renormalised_text(bn.meta)
+    if note:
+        print(note)
     return 0
 
 

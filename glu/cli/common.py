@@ -253,8 +253,11 @@ def read_evidence(args: argparse.Namespace) -> tuple[dict[str, str], dict[str, d
     return evidence, soft
 
 
-def read_model_file(path: Path, fmt: str | None = None) -> Any:
-    """A :class:`~glu.bn.model.BayesNet` from a file: glu's JSON, the originals' ``.mat``, or BIF/XMLBIF/UAI."""
+def read_model_file(path: Path, fmt: str | None = None, renormalise: float | None = None) -> Any:
+    """A :class:`~glu.bn.model.BayesNet` from a file: glu's JSON, the originals' ``.mat``, or BIF/XMLBIF/UAI.
+
+    ``renormalise``: the tolerance of :func:`glu.bn.exchange.import_bn` for rows that do not sum to 1.
+    """
     from glu.bn.model import BayesNet
 
     suffix = path.suffix.lower()
@@ -264,7 +267,7 @@ def read_model_file(path: Path, fmt: str | None = None) -> Any:
         return BayesNet.load(path)
     from glu.bn.exchange import import_bn
 
-    return import_bn(path, fmt)
+    return import_bn(path, fmt, renormalise)
 
 
 def load_model(args: argparse.Namespace) -> tuple[Any, str]:

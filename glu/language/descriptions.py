@@ -177,7 +177,7 @@ def word_probabilities(
     ``soft={"Action": p_hmm}`` (fusion, METHOD.md §2), with ``soft_rule`` ``"virtual"`` (the originals') or
     ``"jeffrey"``.
     """
-    probs = engine.word_probabilities(evidence, soft or None, soft_rule)
+    probs = engine.word_probability_array(evidence, soft or None, soft_rule)
     return pd.Series(
         np.asarray(probs, dtype=float), index=list(engine.binary_leaves), name="p(word | evidence)"
     )
