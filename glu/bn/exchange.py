@@ -56,7 +56,8 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
-from glu.bn.model import ROW_TOL, BayesNet
+from glu.bn.model import BayesNet
+from glu.bn.rows import normalise_rows
 from glu.errors import ModelError
 from glu.files import atomic_write_text, read_text
 from glu.schema import FILE_ALIASES, WORD_VALUES, Schema
@@ -445,32 +446,14 @@ def assemble(
         dict(parents),
         {n: np.asarray(c, dtype=float) for n, c in cpts.items()},
     )
-    tol = IMPORT_TOL if renormalise is None else _tolerance(renormalise)
-    rescaled, worst = 0, (0.0, "")
     for n, c in cpts.items():
         shape = tuple(len(values[p]) for p in parents[n]) + (len(values[n]),)
         if c.shape != shape:
             raise ModelError(f"{where}: the table of {n!r} has shape {c.shape}, expected {shape}")
-        _check_rows(n, c, values, parents[n], tol, where)
-        sums = c.sum(axis=-1, keepdims=True)
-        off = np.abs(sums - 1) > ROW_TOL  # only rows another tool rounded
-        if off.any():
-            cpts[n] = np.where(off, c / sums, c)
-            rescaled += int(off.sum())
-            dev = np.abs(sums - 1)[..., 0]
-            k = np.unravel_index(int(np.argmax(dev)), dev.shape)
-            if dev[k] > worst[0]:
-                worst = (float(dev[k]), _row_name(n, k, values, parents[n]))
-    if rescaled:
-        meta = {
-            **(meta or {}),
-            "renormalised": {
-                "rows": rescaled,
-                "largest_deviation": worst[0],
-                "at": worst[1],
-                "tolerance": tol,
-            },
-        }
+    tol = IMPORT_TOL if renormalise is None else renormalise
+    cpts, report = normalise_rows(values, parents, cpts, tol, where)
+    if report:
+        meta = {**(meta or {}), "renormalised": report}
     _fold_indicators(values, parents, cpts, where)
     children = {p for ps in parents.values() for p in ps}
     named = any(v != tuple(str(i) for i in range(len(v))) for v in values.values())
@@ -496,50 +479,6 @@ def assemble(
         return BayesNet(schema=schema, parents=sorted_parents, cpts=sorted_cpts, meta=dict(meta or {}))
     except ModelError as e:
         raise ModelError(f"{where}: {e}") from None
-
-
-def _tolerance(value: float) -> float:
-    try:
-        tol = float(value)
-    except (TypeError, ValueError):
-        tol = float("nan")
-    if not 0 <= tol < 1:
-        raise ModelError(f"renormalise={value!r}: a tolerance is a number in [0, 1), e.g. 1e-4")
-    return tol
-
-
-def _row_name(node: str, index: tuple, values: Mapping, parents: Sequence[str]) -> str:
-    """``P(node | A=a, B=b)``: the row of ``node``'s table at parent value indices ``index``."""
-    if not parents:
-        return f"P({node})"
-    config = ", ".join(f"{p}={values[p][int(i)]}" for p, i in zip(parents, index, strict=True))
-    return f"P({node} | {config})"
-
-
-def _check_rows(
-    node: str, c: np.ndarray, values: Mapping, parents: Sequence[str], tol: float, where: str
-) -> None:
-    """:class:`ModelError` naming the first row of ``c`` that is not a distribution within ``tol``."""
-    sums = c.sum(axis=-1)
-    bad_entries = ~np.isfinite(c) | (c < 0)
-    bad = bad_entries.any(axis=-1) | ~(np.abs(sums - 1) <= tol)
-    if not bad.any():
-        return
-    k = tuple(int(i) for i in np.argwhere(bad)[0])
-    row = _row_name(node, k, values, parents)
-    if bad_entries[k].any():
-        raise ModelError(
-            f"{where}: the row {row} has an entry that is negative or not a number: {c[k].tolist()}"
-        )
-    hint = ""
-    if np.isfinite(sums[k]) and abs(sums[k] - 1) < 0.1:
-        suggest = float(f"{10 ** np.ceil(np.log10(abs(sums[k] - 1))):.0e}")
-        hint = f"; to rescale such rows, import with --renormalise {suggest:g} (renormalise={suggest:g})"
-    more = int(bad.sum()) - 1
-    raise ModelError(
-        f"{where}: the row {row} sums to {sums[k]:.10g}, not 1 (|1 − sum| = {abs(sums[k] - 1):.2g}, "
-        f"tolerance {tol:g}){f' — and {more} more rows' if more else ''}{hint}"
-    )
 
 
 def _fold_indicators(values: dict, parents: dict, cpts: dict, where: str) -> None:

@@ -402,7 +402,7 @@ class InferenceEngine:
         >>> from glu.data import load_experiments
         >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
         >>> eng.word_probabilities({"Action": "tap"})[["tapping", "grasping"]].round(3).to_dict()
-        {'tapping': 0.324, 'grasping': 0.0}
+        {'tapping': 0.192, 'grasping': 0.0}
         """
         import pandas as pd
 

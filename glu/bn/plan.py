@@ -4,7 +4,8 @@ The junction tree engine (:mod:`glu.bn.junction`) works on the cliques of a tria
 module finds them from the structure alone — no table is built — so that the size of the largest table is
 known before any memory is spent:
 
-1. the moral graph: each node joined to its parents, and the parents of each node to one another;
+1. the moral graph: each node joined to its parents, and the parents of each node to one another (for a set
+   of factors, :func:`plan_from_scopes`: the variables of each factor joined to one another);
 2. an elimination order, greedy: at each step the node whose elimination adds the fewest fill-in edges,
    ties broken by the smallest table it creates (the product of the cardinalities of the node and its
    remaining neighbours), then by node order — deterministic;
@@ -87,19 +88,6 @@ class JunctionTreePlan:
         return math.prod(self.cards[v] for v in clique)
 
 
-def moral_graph(n: int, parent_index: Sequence[Sequence[int]]) -> list[set[int]]:
-    """Neighbour sets of the moral graph of a DAG given as each node's parent indices."""
-    adj: list[set[int]] = [set() for _ in range(n)]
-    for v, ps in enumerate(parent_index):
-        family = [v, *ps]
-        for i, a in enumerate(family):
-            for b in family[i + 1 :]:
-                if a != b:
-                    adj[a].add(b)
-                    adj[b].add(a)
-    return adj
-
-
 def _cost(v: int, adj: list[set[int]], logc: Sequence[float]) -> tuple[int, float, int]:
     nb = list(adj[v])
     fill = 0
@@ -168,11 +156,37 @@ def plan_junction_tree(
     ModelError
         one line with the largest table the network needs, its elimination width, and the limit
     """
-    limit = max_table_setting(max_table)
     index = {n: i for i, n in enumerate(nodes)}
-    parent_index = [[index[p] for p in parents[n]] for n in nodes]
-    order, raw = elimination_order(moral_graph(len(nodes), parent_index), cards)
+    scopes = [(index[n], *(index[p] for p in parents[n])) for n in nodes]
+    return plan_from_scopes(cards, scopes, range(len(nodes)), max_table)
+
+
+def plan_from_scopes(
+    cards: Sequence[int],
+    scopes: Sequence[Sequence[int]],
+    variables: Sequence[int],
+    max_table: int | None = None,
+) -> JunctionTreePlan:
+    """The junction tree of a set of factors over ``variables`` (each scope a set of variable indices).
+
+    The domain graph joins the variables of each scope; :func:`plan_junction_tree` is this with one scope
+    per family (a node and its parents: the moral graph). Variables outside ``variables`` must not appear in
+    a scope; ``cards`` gives the cardinality of every variable index.
+    """
+    limit = max_table_setting(max_table)
     cards = tuple(int(c) for c in cards)
+    keep = sorted(set(variables))
+    local = {v: i for i, v in enumerate(keep)}
+    adj: list[set[int]] = [set() for _ in keep]
+    for scope in scopes:
+        sc = [local[v] for v in set(scope)]
+        for i, a in enumerate(sc):
+            for b in sc[i + 1 :]:
+                adj[a].add(b)
+                adj[b].add(a)
+    order_l, raw_l = elimination_order(adj, [cards[v] for v in keep])
+    order = [keep[i] for i in order_l]
+    raw = [tuple(keep[i] for i in c) for c in raw_l]
     sizes = [math.prod(cards[v] for v in c) for c in raw]
     largest = max(sizes, default=1)
     width = max((len(c) for c in raw), default=1) - 1
