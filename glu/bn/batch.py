@@ -130,6 +130,8 @@ class BatchQueries:
         p = reduced[tuple(index)] if kept else np.broadcast_to(reduced, (n,)).copy()
         if not kept:
             p = p.reshape(n)
+        elif not core_obs:  # rows that observe nothing on the core: the same table in every row
+            p = np.broadcast_to(p, (n, *p.shape[1:])).copy()
         pos = {a: 1 + free.index(a) for a in free}
 
         def expand(table: np.ndarray, axes: Sequence[int]) -> np.ndarray:
