@@ -84,7 +84,7 @@ class CoreEngine(BatchQueries, InferenceEngine):
         self.axis = {n: i for i, n in enumerate(self.core)}
         self.shape = tuple(schema.cardinality(n) for n in self.core)
         n_states, _ = core_size(bn)
-        if n_states > MAX_CORE_STATES:
+        if n_states > MAX_CORE_STATES or len(self.core) > 60:
             raise ModelError(
                 f"the core joint of this network has {n_states:,} states; the core engine handles up to "
                 f"{MAX_CORE_STATES:,}: use method='junction' (the default 'auto' does)"

@@ -84,7 +84,8 @@ def choose_method(bn: BayesNet, method: str = "auto") -> str:
     if method != "auto":
         return method
     states, entries = core_size(bn)
-    return "core" if states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES else "junction"
+    small = states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES and len(core_split(bn)[0]) <= 60
+    return "core" if small else "junction"
 
 
 class InferenceEngine:

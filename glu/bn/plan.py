@@ -36,6 +36,9 @@ from glu.errors import ModelError
 
 MAX_TABLE_DEFAULT = 1 << 24
 """The largest clique table the engine builds by default: 16,777,216 entries (128 MiB of float64)."""
+MAX_CLIQUE_VARIABLES = 60
+"""NumPy arrays have at most 64 axes: a clique of more variables (possible only with one-valued variables,
+else its table is far past any limit) is refused like a table past the limit."""
 MAX_TABLE_ENV = "GLU_MAX_TABLE"
 """Environment variable that sets the limit for every engine of the process (a whole number ≥ 1)."""
 
@@ -190,6 +193,12 @@ def plan_from_scopes(
     sizes = [math.prod(cards[v] for v in c) for c in raw]
     largest = max(sizes, default=1)
     width = max((len(c) for c in raw), default=1) - 1
+    widest = max((len(c) for c in raw), default=0)
+    if widest > MAX_CLIQUE_VARIABLES:
+        raise ModelError(
+            f"exact inference in this network needs a table over {widest} variables (elimination width "
+            f"{width}); NumPy arrays have at most 64 axes, so glu handles up to {MAX_CLIQUE_VARIABLES}"
+        )
     if largest > limit:
         worst = raw[sizes.index(largest)]
         raise ModelError(

@@ -11,10 +11,12 @@ from typing import Any
 from glu.bn.exchange import FORMATS, IMPORT_TOL, RENORMALISE_DEFAULT, ZERO_ROW_MODES
 from glu.cli.common import (
     add_data_args,
+    add_engine_args,
     add_evidence_args,
     add_model_args,
     json_text,
     load_model,
+    make_engine,
     output_file,
     read_evidence,
 )
@@ -91,6 +93,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--target", action="extend", nargs="+", default=[], metavar="NODE", help="node(s) to infer"
     )
     add_evidence_args(q)
+    add_engine_args(q)
     q.add_argument("--json", action="store_true", help='print {"NODE": {"VALUE": p, …}, …} only')
     q.add_argument(
         "--batch",
@@ -195,10 +198,8 @@ def _answer(
 
 
 def _query(args: argparse.Namespace) -> int:
-    from glu.bn.inference import InferenceEngine
-
     bn, desc = load_model(args)
-    engine = InferenceEngine(bn)
+    engine = make_engine(bn, args)
     if args.batch:
         return _query_batch(args, bn, engine, desc)
     evidence, soft = read_evidence(args)

@@ -189,6 +189,27 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
     add_data_args(p)
 
 
+def add_engine_args(p: argparse.ArgumentParser) -> None:
+    """``--max-table``: the largest table exact inference may build (read by :func:`make_engine`)."""
+    from glu.bn.plan import MAX_TABLE_DEFAULT, MAX_TABLE_ENV
+
+    p.add_argument(
+        "--max-table",
+        type=positive_int,
+        metavar="N",
+        help=f"largest table (entries) exact inference may build in a large network; a network that needs "
+        f"more is refused with its size and elimination width (default: ${MAX_TABLE_ENV}, else "
+        f"{MAX_TABLE_DEFAULT:,})",
+    )
+
+
+def make_engine(bn: Any, args: argparse.Namespace) -> Any:
+    """The :class:`~glu.bn.inference.InferenceEngine` of ``bn`` with the command's ``--max-table``."""
+    from glu.bn.inference import InferenceEngine
+
+    return InferenceEngine(bn, max_table=getattr(args, "max_table", None))
+
+
 def add_evidence_args(p: argparse.ArgumentParser) -> None:
     """``--evidence``, ``--soft``, ``--soft-rule`` (read by :func:`read_evidence`)."""
     from glu.bn.soft import SOFT_RULES
