@@ -131,6 +131,32 @@ class Schema:
             raise UnknownValueError(f"{node} has no value {value!r}; allowed: {', '.join(vals)}") from None
 
 
+def action_node(schema: Schema) -> str:
+    """The node the gesture HMMs observe: the schema's node with ``role: action``.
+
+    A schema without roles (GLU's models saved before roles were stored, a network imported from BIF,
+    XMLBIF or UAI) falls back to the node named ``Action``. Raises :class:`DataError` (one line) when there is
+    no such node, or several nodes with the role action.
+
+    >>> action_node(default_schema())
+    'Action'
+    """
+    actions = [n for n in schema.affordance_nodes if schema.roles.get(n) == "action"]
+    if len(actions) == 1:
+        return actions[0]
+    if len(actions) > 1:
+        raise DataError(
+            f"the schema gives several nodes the role action ({', '.join(actions)}); fusion with gestures "
+            "needs one: name it with action=NODE"
+        )
+    if "Action" in schema.values:
+        return "Action"
+    raise DataError(
+        "the network has no action node: give one node `role: action` in its schema "
+        f"(nodes: {', '.join(schema.affordance_nodes[:8])})"
+    )
+
+
 def unknown_node_message(node: str, nodes: Sequence[str]) -> str:
     """One line naming an unknown node, the closest known names, and where the full list is."""
     import difflib

@@ -1,4 +1,4 @@
-"""``glu bn learn|edges|import|export`` and ``glu query``: learn the network, inspect it, ask it questions."""
+"""``glu bn learn|edges|nodes|import|export`` and ``glu query``: learn the network, inspect it, ask it questions."""
 
 from __future__ import annotations
 
@@ -40,6 +40,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     ep = bsub.add_parser("edges", help="print the edges of a model, one 'Parent -> Child' per line, sorted")
     ep.add_argument("model", type=Path, help="model file (.json from `glu bn learn`, or the original .mat)")
     ep.set_defaults(func=_edges)
+
+    np_ = bsub.add_parser(
+        "nodes",
+        help="list the nodes of a model: kind (role or word), values, parents",
+        description="One line per node: its name, its kind (the schema's role — action, object, effect — "
+        "for affordance nodes, 'word' for word nodes, 'node' when the file says nothing), its values and its "
+        "parents. --json prints [{name, kind, values, parents}, …].",
+    )
+    np_.add_argument("model", type=Path, help="model file (.json, the original .mat, or .bif/.xmlbif/.uai)")
+    np_.add_argument("--json", action="store_true", help="print a JSON list only")
+    np_.set_defaults(func=_nodes)
 
     ip = bsub.add_parser(
         "import",
@@ -90,7 +101,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_model_args(q)
     q.add_argument(
-        "--target", action="extend", nargs="+", default=[], metavar="NODE", help="node(s) to infer"
+        "--target",
+        action="extend",
+        nargs="+",
+        default=[],
+        metavar="NODE",
+        help=f"node(s) to infer; '{WORDS_TARGET}' = every word node's P(present)",
     )
     add_evidence_args(q)
     add_engine_args(q)
@@ -116,6 +132,40 @@ def _edges(args: argparse.Namespace) -> int:
     bn, _ = load_model(args)
     for parent, child in bn.edges():
         print(f"{parent} -> {child}")
+    return 0
+
+
+def node_kind(bn: Any, node: str) -> str:
+    """What a node is: its schema role (action, object, effect), ``word``, or ``node`` when unknown."""
+    if node in bn.schema.word_nodes:
+        return "word"
+    return bn.schema.roles.get(node, "node")
+
+
+def _nodes(args: argparse.Namespace) -> int:
+    args.data = None
+    bn, desc = load_model(args)
+    rows = [
+        {
+            "name": n,
+            "kind": node_kind(bn, n),
+            "values": list(bn.schema.values_of(n)),
+            "parents": list(bn.parents[n]),
+        }
+        for n in bn.nodes
+    ]
+    if args.json:
+        print(json_text(rows))
+        return 0
+    n_words = len(bn.schema.word_nodes)
+    print(f"# {desc}: {len(rows)} nodes, {n_words} of them word nodes")
+    w_name = max(len("node"), *(len(r["name"]) for r in rows))
+    w_kind = max(len("kind"), *(len(r["kind"]) for r in rows))
+    values = [", ".join(r["values"]) for r in rows]
+    w_val = min(40, max(len("values"), *(len(v) for v in values)))
+    print(f"{'node':<{w_name}}  {'kind':<{w_kind}}  {'values':<{w_val}}  parents")
+    for r, v in zip(rows, values, strict=True):
+        print(f"{r['name']:<{w_name}}  {r['kind']:<{w_kind}}  {v:<{w_val}}  {', '.join(r['parents']) or '—'}")
     return 0
 
 
@@ -188,13 +238,25 @@ def _export(args: argparse.Namespace) -> int:
     return 0
 
 
+WORDS_TARGET = "words"
+"""``--target words``: every word node's P(present) (unless the model has a node of that name)."""
+
+
 def _answer(
     bn, engine, targets: list[str], evidence: dict, soft: dict, rule: str
 ) -> dict[str, dict[str, float]]:
     if not targets:
         raise EvidenceError("no target: give at least one --target NODE")
-    res = engine.query(targets, evidence, soft or None, rule)
-    return {t: {v: float(p) for v, p in zip(bn.schema.values_of(t), res[t], strict=True)} for t in targets}
+    words = WORDS_TARGET in targets and WORDS_TARGET not in bn.schema.values
+    nodes = [t for t in targets if not (words and t == WORDS_TARGET)]
+    res = engine.query(nodes, evidence, soft or None, rule) if nodes else {}
+    out = {t: {v: float(p) for v, p in zip(bn.schema.values_of(t), res[t], strict=True)} for t in nodes}
+    if words:
+        if not engine.binary_leaves:
+            raise EvidenceError(f"--target {WORDS_TARGET}: this model has no word nodes")
+        probs = engine.word_probability_array(evidence, soft or None, rule)
+        out[WORDS_TARGET] = {w: float(p) for w, p in zip(engine.binary_leaves, probs, strict=True)}
+    return out
 
 
 def _query(args: argparse.Namespace) -> int:
@@ -210,11 +272,20 @@ def _query(args: argparse.Namespace) -> int:
         return 0
     print(f"# {desc}")
     print(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")
-    width = max(len(t) for t in answer)
-    for t, dist in answer.items():
-        vwidth = max(len(v) for v in dist)
-        for v, prob in dist.items():
-            print(f"{t:<{width}}  {v:<{vwidth}}  {prob:.6f}")
+    words = (
+        answer.pop(WORDS_TARGET) if WORDS_TARGET in answer and WORDS_TARGET not in bn.schema.values else None
+    )
+    if answer:
+        width = max(len(t) for t in answer)
+        for t, dist in answer.items():
+            vwidth = max(len(v) for v in dist)
+            for v, prob in dist.items():
+                print(f"{t:<{width}}  {v:<{vwidth}}  {prob:.6f}")
+    if words is not None:
+        wwidth = max(len("word"), *(len(w) for w in words))
+        print(f"{'word':<{wwidth}}  P(present)")
+        for w, prob in words.items():
+            print(f"{w:<{wwidth}}  {prob:.6f}")
     return 0
 
 

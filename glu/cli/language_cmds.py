@@ -134,7 +134,8 @@ def _describe(args: argparse.Namespace) -> int:
     candidates = read_candidates(args)
     bn, desc = load_model(args)
     engine = make_engine(bn, args)
-    probs = word_probabilities(engine, evidence, soft, args.soft_rule)
+    vocabulary = list(net.words) + [w for c in candidates or () for w in c]
+    probs = word_probabilities(engine, evidence, soft, args.soft_rule, vocabulary=vocabulary)
 
     t0 = time.perf_counter()
     exact = nbest(
@@ -154,6 +155,10 @@ def _describe(args: argparse.Namespace) -> int:
     say(f"# grammar: {gram_name}: {n_sentences:,} sentences of {net.min_length}–{limit} words")
     say(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")
     say(f"# score: {args.score} = {SCORE_TEXT[args.score]}")
+    others = probs.attrs["not_in_network"]
+    if others:
+        shown = ", ".join(others[:12]) + (f", … ({len(others)} words)" if len(others) > 12 else "")
+        say(f"# words that are not network nodes score as p = 1 (function words): {shown}")
     if args.must_contain:
         say(f"# only sentences containing: {' or '.join(args.must_contain)}")
     if args.sample is not None:
