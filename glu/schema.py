@@ -57,6 +57,8 @@ _GLU = _glu_spec()
 AFFORDANCE_VALUES: dict[str, tuple[str, ...]] = {n["name"]: tuple(n["values"]) for n in _GLU["nodes"]}
 """Affordance nodes in the fixed K2 order, with their values in file order (glu names)."""
 AFFORDANCE_NODES: tuple[str, ...] = tuple(AFFORDANCE_VALUES)
+AFFORDANCE_ROLES: dict[str, str] = {n["name"]: n["role"] for n in _GLU["nodes"]}
+"""GLU's affordance nodes → their roles (action, object, effect)."""
 ACTIONS: tuple[str, ...] = AFFORDANCE_VALUES["Action"]
 """The actions, in the network's order: grasp, tap, touch (every p_HMM vector follows it)."""
 ROOT_NODES: tuple[str, ...] = tuple(n["name"] for n in _GLU["nodes"] if n.get("set_by_experimenter"))

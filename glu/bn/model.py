@@ -38,7 +38,7 @@ import numpy as np
 
 from glu.errors import ModelError
 from glu.files import atomic_write_json
-from glu.schema import AFFORDANCE_NODES, FILE_ALIASES, ROLES, WORD_VALUES, Schema
+from glu.schema import AFFORDANCE_NODES, AFFORDANCE_ROLES, FILE_ALIASES, ROLES, WORD_VALUES, Schema
 
 FORMAT = "glu-bayesnet"
 VERSION = 1
@@ -222,12 +222,15 @@ class BayesNet:
                 raise ModelError(f'{where}: "schema" must be an object, not {type(extra).__name__}')
             roots = extra.get("roots")
             roles = {str(k): str(v) for k, v in extra.get("roles", {}).items()}
+            n_aff = int(d["n_affordance"])
+            if not roles and tuple(values)[:n_aff] == AFFORDANCE_NODES:  # GLU's nodes: GLU's roles
+                roles = dict(AFFORDANCE_ROLES)
             bad = sorted(r for r in roles.values() if r not in ROLES)
             if bad:
                 raise ModelError(f"{where}: unknown role(s) {bad}; roles are {', '.join(ROLES)}")
             schema = Schema(
                 values=values,
-                n_affordance=int(d["n_affordance"]),
+                n_affordance=n_aff,
                 aliases=extra.get("aliases", FILE_ALIASES),
                 roots=None if roots is None else tuple(str(r) for r in roots),
                 roles=roles,
@@ -302,7 +305,8 @@ class BayesNet:
             raise ModelError(
                 f"{path}: not an original BNT network in {variable!r} ({type(e).__name__}: {e})"
             ) from None
-        schema = Schema(values=values, n_affordance=n_aff, aliases=FILE_ALIASES)
+        roles = dict(AFFORDANCE_ROLES) if tuple(names[:n_aff]) == AFFORDANCE_NODES else {}
+        schema = Schema(values=values, n_affordance=n_aff, aliases=FILE_ALIASES, roles=roles)
         meta = {"data_source": f"original model imported from {path.name}", "origin": str(path)}
         return cls(schema=schema, parents=parents, cpts=cpts, meta=meta)
 
