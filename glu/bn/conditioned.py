@@ -85,8 +85,8 @@ class ConditionedPlan:
     plan : the propagation plan over the variables left
     observed : the observed variables, in order
     row_factors : (clique or -1, table, observed positions, strides, shape): a CPT sliced per row —
-        ``table`` has the observed axes flattened first, shape (Π observed cardinalities, *rest); the row's
-        slice is ``table[Σ code · stride]``, reshaped to ``shape`` in the clique (-1: a constant per row)
+        ``table`` has the observed axes flattened last, shape (*rest, Π observed cardinalities); the row's
+        slice is ``table[..., Σ code · stride]``, reshaped to ``shape`` in the clique (-1: a constant per row)
     soft : (variable, clique, shape) — where each soft likelihood enters
     """
 
@@ -110,13 +110,13 @@ class ConditionedPlan:
             flat = cols[pos[0]] * strides[0]
             for p, s in zip(pos[1:], strides[1:], strict=True):
                 flat = flat + cols[p] * s
-            picked = table[flat]
+            picked = table[..., flat]
             if c < 0:
                 const = const * picked
             else:
                 out.append((c, picked.reshape(shape)))
         for v, c, shape in self.soft:
-            out.append((c, likelihood[v].reshape(shape)))
+            out.append((c, likelihood[v].T.reshape(shape)))
         return out, const
 
 
@@ -151,20 +151,20 @@ def conditioned_plan(
             (k for k, cl in enumerate(cliques) if need <= set(cl)), key=lambda k: (tree.size(cliques[k]), k)
         )
 
-    base = {k: np.ones((1, *(net.cards[v] for v in cl))) for k, cl in enumerate(cliques)}
+    base = {k: np.ones((*(net.cards[v] for v in cl), 1)) for k, cl in enumerate(cliques)}
     row_factors = []
     for v, rest in zip(requisite, scopes, strict=True):
         fam = net.family[v]
         obs = [u for u in fam if u in observed]
         rest_sorted = sorted(rest)
         c = smallest(rest_sorted) if rest_sorted else -1
-        perm = [fam.index(u) for u in obs] + [fam.index(u) for u in rest_sorted]
+        perm = [fam.index(u) for u in rest_sorted] + [fam.index(u) for u in obs]
         table = np.transpose(net.cpts[v], perm)
         if not obs:
             base[c] = base[c] * table.reshape(shape_in(rest_sorted, cliques[c], net.cards))
             continue
         n_obs = math.prod(net.cards[u] for u in obs)
-        flat = np.ascontiguousarray(table.reshape(n_obs, *(net.cards[u] for u in rest_sorted)))
+        flat = np.ascontiguousarray(table.reshape(*(net.cards[u] for u in rest_sorted), n_obs))
         strides = tuple(math.prod(net.cards[u] for u in obs[i + 1 :]) for i in range(len(obs)))
         shape = shape_in(rest_sorted, cliques[c], net.cards) if c >= 0 else (-1,)
         row_factors.append((c, flat, tuple(obs_pos[u] for u in obs), strides, shape))

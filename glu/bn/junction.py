@@ -3,7 +3,7 @@
 :class:`JunctionTreeEngine` answers the queries of :class:`~glu.bn.inference.InferenceEngine` on the
 junction tree that :mod:`glu.bn.plan` finds (its size is checked against the limit before any table is
 built). It uses the Hugin architecture with messages normalised to sum to 1, on tables with a leading
-axis of rows — one row for a single query, ``n`` for ``n`` evidence sets in one batch:
+axis of rows (the last) — one row for a single query, ``n`` for ``n`` evidence sets in one batch:
 
 1. once per network: each clique's table, the product of the CPTs assigned to it; the messages of the
    network without evidence along every edge, in both directions; the marginal of every node;
@@ -100,7 +100,7 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine):
             for v in range(len(nodes))
         ]
         """The smallest clique of each variable: where its evidence enters and its marginal is read."""
-        self.potential = [np.ones((1, *(self.cards[v] for v in cl))) for cl in cliques]
+        self.potential = [np.ones((*(self.cards[v] for v in cl), 1)) for cl in cliques]
         for n in nodes:
             family = [self.index[p] for p in bn.parents[n]] + [self.index[n]]
             fam = set(family)
@@ -108,7 +108,7 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine):
             perm = np.argsort(family)
             table = np.transpose(bn.cpts[n], perm)
             shape = [self.cards[v] if v in fam else 1 for v in cliques[c]]
-            self.potential[c] = self.potential[c] * table.reshape(1, *shape)
+            self.potential[c] = self.potential[c] * table.reshape(*shape, 1)
         self._prior_messages()
         self._plans: OrderedDict[tuple, QueryPlan | ConditionedPlan] = OrderedDict()
         self._max_table = max_table
@@ -121,9 +121,9 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine):
 
     # ------------------------------------------------------------------ structure helpers
     def _sum_axes(self, a: int, b: int) -> tuple[int, ...]:
-        """Axes of clique ``a``'s table (rows first) summed out for the message to clique ``b``."""
+        """Axes of clique ``a``'s table (rows last) summed out for the message to clique ``b``."""
         sep = set(self.tree.cliques[b])
-        return tuple(1 + i for i, v in enumerate(self.tree.cliques[a]) if v not in sep)
+        return tuple(i for i, v in enumerate(self.tree.cliques[a]) if v not in sep)
 
     def _shape_in(self, a: int, b: int) -> tuple[int, ...]:
         """The shape (without rows) of a message from ``a`` broadcast over clique ``b``'s table."""
@@ -140,7 +140,7 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine):
                 t = self.potential[c]
                 for ch in self.neighbours[c]:
                     if ch != parent[c]:
-                        t = t * self.prior_msg[ch, c].reshape(1, *self._shape_in(ch, c))
+                        t = t * self.prior_msg[ch, c].reshape(*self._shape_in(ch, c), 1)
                 p = parent[c]
                 self.prior_msg[c, p] = t.sum(axis=self._sum_axes(c, p))
             for c in order:  # distribute, parents first: the product of every other incoming message
@@ -150,7 +150,7 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine):
                     t = self.potential[c]
                     for nb in self.neighbours[c]:
                         if nb != ch:
-                            t = t * self.prior_msg[nb, c].reshape(1, *self._shape_in(nb, c))
+                            t = t * self.prior_msg[nb, c].reshape(*self._shape_in(nb, c), 1)
                     self.prior_msg[c, ch] = t.sum(axis=self._sum_axes(c, ch))
         self.prior_mass: dict[int, float] = {}
         self.prior_marginal: list[np.ndarray] = []
@@ -158,12 +158,12 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine):
         for c in range(len(cliques)):
             t = self.potential[c]
             for nb in self.neighbours[c]:
-                t = t * self.prior_msg[nb, c].reshape(1, *self._shape_in(nb, c))
+                t = t * self.prior_msg[nb, c].reshape(*self._shape_in(nb, c), 1)
             full.append(t)
             self.prior_mass.setdefault(self.component[c], float(t.sum()))
         for v, h in enumerate(self.home):
-            axes = tuple(1 + i for i, u in enumerate(cliques[h]) if u != v)
-            m = full[h].sum(axis=axes)[0]
+            axes = tuple(i for i, u in enumerate(cliques[h]) if u != v)
+            m = full[h].sum(axis=axes)[:, 0]
             total = m.sum()
             self.prior_marginal.append(m / total if total > 0 else np.full(m.shape, np.nan))
 
@@ -226,27 +226,27 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine):
                 t = self.potential[c]
                 for ch in self.neighbours[c]:
                     if ch != parent[c] and not below[ch]:
-                        t = t * self.prior_msg[ch, c].reshape(1, *self._shape_in(ch, c))
+                        t = t * self.prior_msg[ch, c].reshape(*self._shape_in(ch, c), 1)
                 base[c] = t
             for c in reversed(order[1:]):
                 if below[c]:
-                    shape = (-1, *self._shape_in(c, parent[c]))
+                    shape = (*self._shape_in(c, parent[c]), -1)
                     collect.append((c, parent[c], self._sum_axes(c, parent[c]), shape))
             for c in order[1:]:
                 if c in needed:
                     p = parent[c]
                     fresh = inside[c] < n_ev  # evidence outside the subtree of c: a new message
-                    distribute.append((p, c, self._sum_axes(p, c), (-1, *self._shape_in(p, c)), fresh))
+                    distribute.append((p, c, self._sum_axes(p, c), (*self._shape_in(p, c), -1), fresh))
             for v in sorted(targets):
                 h = self.home[v]
                 if comp[h] == tree:
-                    axes = tuple(1 + i for i, u in enumerate(self.tree.cliques[h]) if u != v)
+                    axes = tuple(i for i, u in enumerate(self.tree.cliques[h]) if u != v)
                     tgt.append((v, h, axes))
         entries = tuple(
             (
                 v,
                 self.home[v],
-                (-1, *(self.cards[v] if u == v else 1 for u in self.tree.cliques[self.home[v]])),
+                (*(self.cards[v] if u == v else 1 for u in self.tree.cliques[self.home[v]]), -1),
             )
             for v in sorted(evidence)
         )
@@ -298,7 +298,7 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine):
                 return out, possible, None
         lik = {**self._one_hot(hard, rows), **likelihood}
         plan = self.plan(frozenset(lik), targets)
-        entries = [(c, lik[v].reshape(shape)) for v, c, shape in plan.entries]
+        entries = [(c, lik[v].T.reshape(shape)) for v, c, shape in plan.entries]
         return propagate(plan, entries, rows, mass=mass)
 
     def _one_hot(self, hard: Mapping[int, np.ndarray], rows: int) -> dict[int, np.ndarray]:

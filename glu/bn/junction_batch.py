@@ -32,8 +32,13 @@ class JunctionBatch:
     cards: tuple[int, ...]
     index: dict[str, int]
     condition_rows: int
+    deduplicate: bool = True
+    """Answer rows with the same hard evidence once (benchmarks turn it off to time every row)."""
 
     def plan(self, evidence: frozenset[int], targets: frozenset[int]) -> QueryPlan:  # pragma: no cover
+        raise NotImplementedError
+
+    def conditioned(self, observed, soft, targets):  # type: ignore[no-untyped-def]  # pragma: no cover
         raise NotImplementedError
 
     def _solve(self, targets, hard, soft, rule, rows):  # type: ignore[no-untyped-def]  # pragma: no cover
@@ -71,7 +76,7 @@ class JunctionBatch:
     ) -> tuple[dict[int, np.ndarray], np.ndarray, np.ndarray]:
         """:meth:`_solve` on chunks of rows (at most :data:`BATCH_ENTRIES` table entries at a time); rows with
         the same hard evidence and no soft evidence are answered once."""
-        if hard and not soft and rows > 1:
+        if self.deduplicate and hard and not soft and rows > 1:
             codes = np.stack([hard[v] for v in hard], axis=1)
             uniq, inverse = np.unique(codes, axis=0, return_inverse=True)
             if len(uniq) < rows:
@@ -80,8 +85,15 @@ class JunctionBatch:
                 )
                 inverse = inverse.ravel()
                 return {v: m[inverse] for v, m in res.items()}, ok[inverse], hp[inverse]
-        size = self.plan(frozenset(hard) | frozenset(soft), targets).size
-        step = max(1, BATCH_ENTRIES // max(size, 1))
+        plan = None
+        if rows >= self.condition_rows and hard and all(bool((c >= 0).all()) for c in hard.values()):
+            cp = self.conditioned(frozenset(hard), frozenset(soft), targets)  # what _solve will use
+            plan = cp.plan if cp is not None else None
+        if plan is None:
+            plan = self.plan(frozenset(hard) | frozenset(soft), targets)
+        step = max(1, BATCH_ENTRIES // max(plan.size, 1))
+        if plan is not self.plan(frozenset(hard) | frozenset(soft), targets):  # conditioned: keep it so
+            step = max(step, self.condition_rows)
         if rows <= step:
             return self._solve(targets, hard, soft, rule, rows)
         out: dict[int, np.ndarray] = {v: np.empty((rows, self.cards[v])) for v in targets}

@@ -1,9 +1,10 @@
 """Hugin propagation on a junction tree, vectorised over rows of evidence: the arithmetic of both plans.
 
 A :class:`QueryPlan` says, for one evidence pattern, which tables to start from, which messages to send
-and where to read each target's marginal; :func:`propagate` runs it on tables with a leading axis of rows
-(size 1 for a table that is the same in every row: NumPy broadcasting keeps the work of the parts of the
-tree that no evidence reaches at one row). The junction tree engine (:mod:`glu.bn.junction`) builds two
+and where to read each target's marginal; :func:`propagate` runs it on tables whose *last* axis is the
+rows (size 1 for a table that is the same in every row: NumPy broadcasting keeps the work of the parts of
+the tree that no evidence reaches at one row). With the rows last, every product and sum runs its inner
+loop over a contiguous run of rows, whatever the clique's shape. The junction tree engine (:mod:`glu.bn.junction`) builds two
 kinds of plan: on the network's one junction tree, with the messages of the network without evidence
 computed in advance; and on the junction tree of the network conditioned on an evidence pattern
 (:mod:`glu.bn.conditioned`), whose smaller tables pay off over a batch of rows.
@@ -32,8 +33,9 @@ class QueryPlan:
 
     Attributes
     ----------
-    base : clique → its starting table, shape (1, *cardinalities of its variables)
-    collect : (child, parent, summed axes, shape in the parent) — new messages, children first
+    base : clique → its starting table, shape (*cardinalities of its variables, 1)
+    collect : (child, parent, summed axes, shape in the parent) — new messages, children first (a shape
+        ends with -1, the rows)
     distribute : (parent, child, summed axes, shape in the child, fresh) — messages towards the targets,
         parents first; ``fresh`` False: the message ``messages[parent, child]`` computed in advance
     roots : the root of each tree with evidence; its mass is the probability of the evidence (up to scale)
@@ -67,7 +69,7 @@ def propagate(
     normalise: bool = False,
     mass: bool = False,
 ) -> tuple[dict[int, np.ndarray], np.ndarray, np.ndarray | None]:
-    """Run ``plan`` with ``entries``: (clique, array broadcastable over its table, rows first) multiplied in.
+    """Run ``plan`` with ``entries``: (clique, array broadcastable over its table, rows last) multiplied in.
 
     Returns (marginals, possible, log mass): variable → normalised marginal, shape (rows, k) (NaN in
     impossible rows); whether each row's evidence has probability > 0, shape (rows,); with ``mass``, the
@@ -83,13 +85,13 @@ def propagate(
     for c, p, axes, shape in plan.collect:
         m = reduce(table[c], axis=axes)
         if normalise:
-            s = reduce(m.reshape(len(m), -1), axis=1)
+            s = reduce(m.reshape(-1, m.shape[-1]), axis=0)
             s = np.where(s > 0, s, 1.0)
             scales.append(s)
-            m = m / s.reshape((-1,) + (1,) * (m.ndim - 1))
+            m = m / s
         up[c] = m
         table[p] = table[p] * m.reshape(shape)
-    z = [reduce(table[r].reshape(len(table[r]), -1), axis=1) for r in plan.roots]
+    z = [reduce(table[r].reshape(-1, table[r].shape[-1]), axis=0) for r in plan.roots]
     if not normalise and any(bool((x < TINY).any()) for x in z):
         return propagate(plan, entries, rows, normalise=True, mass=mass)
     possible = np.ones(rows, dtype=bool)
@@ -112,7 +114,7 @@ def propagate(
     out = {}
     ok = bool(possible.all())
     for v, c, axes in plan.targets:
-        m = reduce(table[c], axis=axes)
+        m = reduce(table[c], axis=axes).T  # (rows, k)
         if ok:
             m = m / reduce(m, axis=1).reshape(-1, 1)
         else:
@@ -158,15 +160,15 @@ def orient(root: int, neighbours: Sequence[Sequence[int]]) -> tuple[list[int], d
 
 
 def sum_axes(clique: Sequence[int], keep: Sequence[int]) -> tuple[int, ...]:
-    """Axes of a clique's table (rows first) to sum out to keep the variables ``keep``."""
+    """Axes of a clique's table (rows last) to sum out to keep the variables ``keep``."""
     k = set(keep)
-    return tuple(1 + i for i, v in enumerate(clique) if v not in k)
+    return tuple(i for i, v in enumerate(clique) if v not in k)
 
 
 def shape_in(variables: Sequence[int], clique: Sequence[int], cards: Sequence[int]) -> tuple[int, ...]:
-    """The shape, rows first (-1), of a table over ``variables`` (sorted) broadcast over ``clique``."""
+    """The shape, rows last (-1), of a table over ``variables`` (sorted) broadcast over ``clique``."""
     s = set(variables)
-    return (-1, *(cards[v] if v in s else 1 for v in clique))
+    return (*(cards[v] if v in s else 1 for v in clique), -1)
 
 
 def paths_to(root_order: Sequence[int], parent: dict[int, int | None], homes: Sequence[int]) -> set[int]:
