@@ -72,12 +72,9 @@ ZERO_ROW_MODES: tuple[str, ...] = ("refuse", "seen")
 SEEN_PREFIX = "seen__"
 SEEN_VALUES: tuple[str, str] = ("no", "yes")
 IMPORT_TOL = 1e-5
-"""Rows of an imported table may sum to 1 within this (other tools round to 6 digits); they are rescaled to
-sum to 1 exactly, and the import says so (``meta["renormalised"]``). A wider tolerance is the reader's
-``renormalise`` (``glu bn import --renormalise TOL``). All-zero rows are never accepted in a file (see
-:data:`SEEN_PREFIX`)."""
-RENORMALISE_DEFAULT = 1e-3
-"""The tolerance of ``glu bn import --renormalise`` given without a value."""
+"""Rows of an imported table may sum to 1 within this, or the readers' ``renormalise`` (other tools round to
+6 digits); they are rescaled to sum to 1 exactly, reported in ``meta["renormalised"]``. All-zero rows are
+never accepted in a file (see :data:`SEEN_PREFIX`)."""
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _BIF_KEYWORDS = frozenset({"network", "variable", "probability", "property", "type", "discrete", "table"})
 
@@ -329,14 +326,8 @@ def from_xmlbif(text: str, where: str = "<string>", renormalise: float | None = 
         if child in cpts:
             raise ModelError(f"{where}: two definitions of {child!r}")
         parents[child], cpts[child] = ps, _table(flat, shape, child, where, order="c")
-    return assemble(
-        values,
-        parents,
-        cpts,
-        where,
-        {"data_source": f"imported from {Path(where).name} (XMLBIF)"},
-        renormalise,
-    )
+    meta = {"data_source": f"imported from {Path(where).name} (XMLBIF)"}
+    return assemble(values, parents, cpts, where, meta, renormalise)
 
 
 def from_uai(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:

@@ -43,6 +43,14 @@ MAX_TABLE_ENV = "GLU_MAX_TABLE"
 """Environment variable that sets the limit for every engine of the process (a whole number ≥ 1)."""
 
 
+def _bytes(n: float) -> str:
+    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB"):
+        if n < 1024 or unit == "TiB":
+            return f"{n:,.0f} {unit}" if unit == "bytes" else f"{n:,.1f} {unit}"
+        n /= 1024
+    return ""  # pragma: no cover
+
+
 def max_table_setting(value: int | None = None) -> int:
     """The limit on the largest table: ``value`` if given, else ``$GLU_MAX_TABLE``, else the default.
 
@@ -204,7 +212,8 @@ def plan_from_scopes(
         raise ModelError(
             f"exact inference in this network needs a table of {largest:,} entries "
             f"({len(worst)} variables: elimination width {width}); the limit is {limit:,} — "
-            f"raise it with ${MAX_TABLE_ENV} or max_table= (memory: {largest * 8 / 2**20:,.0f} MiB per table)"
+            f"raise it with --max-table, ${MAX_TABLE_ENV} or max_table= (memory: {_bytes(largest * 8)} for that "
+            "table alone)"
         )
     # the elimination tree: clique k joined to the clique of its first-eliminated neighbour
     step = {v: k for k, v in enumerate(order)}

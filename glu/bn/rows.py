@@ -20,6 +20,9 @@ import numpy as np
 from glu.bn.model import ROW_TOL
 from glu.errors import ModelError
 
+RENORMALISE_DEFAULT = 1e-3
+"""The tolerance of ``glu bn import --renormalise`` given without a value."""
+
 
 def row_name(
     node: str, index: Sequence[int], values: Mapping[str, Sequence[str]], parents: Sequence[str]

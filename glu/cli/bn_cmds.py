@@ -8,7 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.bn.exchange import FORMATS, IMPORT_TOL, RENORMALISE_DEFAULT, ZERO_ROW_MODES
+from glu.bn.exchange import FORMATS, IMPORT_TOL, ZERO_ROW_MODES
+from glu.bn.rows import RENORMALISE_DEFAULT
 from glu.cli.common import (
     add_data_args,
     add_engine_args,

@@ -118,7 +118,9 @@ def word_probability_change(
     df.insert(0, "evidence", evidence_text(ev))
     if reference:
         r = InferenceEngine(reference)
-        df["delta_original"] = r.word_probability_array({**ev, "Action": "tap"}) - r.word_probability_array(ev)
+        df["delta_original"] = r.word_probability_array({**ev, "Action": "tap"}) - r.word_probability_array(
+            ev
+        )
         df["difference"] = df["delta"] - df["delta_original"]
     return tidy(
         df,
