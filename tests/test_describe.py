@@ -564,7 +564,9 @@ def test_cli_bad_grammars(tmp_path, capsys):
     unknown = tmp_path / "unknown.grm"
     unknown.write_text("( the robot zzz )\n")  # a word that is no network node scores p = 1, and is named
     assert main(["describe", "--data", "synthetic", "--grammar", str(unknown)]) == 0
-    assert "# words that are not network nodes score as p = 1 (function words): zzz" in capsys.readouterr().out
+    assert (
+        "# words that are not network nodes score as p = 1 (function words): zzz" in capsys.readouterr().out
+    )
     foreign = tmp_path / "foreign.grm"
     foreign.write_text("( zzz yyy )\n")
     assert main(["describe", "--data", "synthetic", "--grammar", str(foreign)]) == 2

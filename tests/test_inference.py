@@ -169,7 +169,9 @@ def test_virtual_evidence_on_a_word_agrees_with_pgmpy(uniform_bn):
             if target in evidence:
                 continue
             ref = _pgmpy_marginal(ve, target, evidence, virtual)
-            np.testing.assert_allclose(eng.query([target], evidence, soft={"rolls": q})[target], ref, atol=TOL)
+            np.testing.assert_allclose(
+                eng.query([target], evidence, soft={"rolls": q})[target], ref, atol=TOL
+            )
     post = eng.query(["rolls"], {"Shape": "sphere"}, soft={"rolls": q}, soft_rule="jeffrey")["rolls"]
     np.testing.assert_allclose(post, q, atol=1e-12)
 

@@ -142,4 +142,7 @@ def test_the_command_line_runs_learn_query_fuse_describe(domain, tmp_path, capsy
     )
     out = capsys.readouterr().out
     assert "the person pushes the cup" in out
-    assert "# words that are not network nodes score as p = 1 (function words): and, at, but, it, person, the" in out
+    assert (
+        "# words that are not network nodes score as p = 1 (function words): and, at, but, it, person, the"
+        in out
+    )
