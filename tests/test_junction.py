@@ -247,6 +247,20 @@ def test_glus_network_on_the_junction_tree_equals_the_core_engine(zero_bn):
     )
 
 
+def test_engines_pickle_for_dask_workers(zero_bn):
+    """The sweep ships engines to Dask workers: both engines survive pickling and answer the same."""
+    import pickle
+
+    for eng in (InferenceEngine(zero_bn), InferenceEngine(chain_net(20, 3, 13, extra_parents=2))):
+        node = eng.nodes[-1]
+        eng.query([node], {eng.nodes[0]: 0})
+        back = pickle.loads(pickle.dumps(eng))
+        assert type(back) is type(eng)
+        np.testing.assert_array_equal(
+            back.query([node], {eng.nodes[0]: 0})[node], eng.query([node], {eng.nodes[0]: 0})[node]
+        )
+
+
 # ---------------------------------------------------------------- the size limit
 def test_the_size_limit_refuses_in_one_line_with_the_estimate_and_the_width(monkeypatch):
     bn = chain_net(14, 2, 10)

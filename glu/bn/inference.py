@@ -129,8 +129,10 @@ class InferenceEngine:
     binary_leaves: tuple[str, ...]
     _value_index: dict[str, dict[str, int]]
 
-    def __new__(cls, bn: BayesNet, method: Method = "auto", max_table: int | None = None) -> Any:
-        if cls is InferenceEngine:
+    def __new__(
+        cls, bn: BayesNet | None = None, method: Method = "auto", max_table: int | None = None
+    ) -> Any:
+        if cls is InferenceEngine and bn is not None:  # (unpickling calls __new__ without arguments)
             if choose_method(bn, method) == "core":
                 from glu.bn.core import CoreEngine as cls
             else:

@@ -299,7 +299,9 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
         if getattr(args, "data", None):
             raise EvidenceError("give either --model or --data, not both")
         bn = read_model_file(model)
-        return bn, f"model {model} ({bn.meta.get('data_source', 'unknown data')})"
+        r = bn.meta.get("renormalised")
+        rescaled = f"; {r['rows']} CPT row(s) rescaled to sum to 1 on import" if r else ""
+        return bn, f"model {model} ({bn.meta.get('data_source', 'unknown data')}{rescaled})"
     from glu.bn.learning import learn_bn
     from glu.data.source import load_experiments, resolve_data
 
