@@ -231,11 +231,11 @@ def test_glu_parses_the_files_as_pgmpy_does(name):
 # ---------------------------------------------------------------- random networks
 def test_a_random_50_node_network(tmp_path):
     bn = random_network(50, seed=3, tmp=tmp_path)
-    assert check_network(bn, tmp_path, n_sets=100, n_pgmpy=5) > 80
+    assert check_network(bn, tmp_path, n_sets=100, n_pgmpy=3) > 80
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("n", "seed"), [(100, 1), (200, 1), (200, 7)])
 def test_random_networks_up_to_200_nodes(n, seed, tmp_path):
     bn = random_network(n, seed=seed, tmp=tmp_path)
-    assert check_network(bn, tmp_path, n_sets=100, n_pgmpy=5) > 80
+    assert check_network(bn, tmp_path, n_sets=100, n_pgmpy=3) > 80

@@ -2,8 +2,9 @@
 
 :class:`JunctionTreeEngine` answers the queries of :class:`~glu.bn.inference.InferenceEngine` on the
 junction tree that :mod:`glu.bn.plan` finds (its size is checked against the limit before any table is
-built). It uses the Hugin architecture with messages normalised to sum to 1, on tables with a leading
-axis of rows (the last) — one row for a single query, ``n`` for ``n`` evidence sets in one batch:
+built). It uses the Hugin architecture on tables whose last axis is the rows — one row for a single query,
+``n`` for ``n`` evidence sets in one batch (messages are rescaled only when the evidence is improbable enough
+for them to underflow, :mod:`glu.bn.propagation`):
 
 1. once per network: each clique's table, the product of the CPTs assigned to it; the messages of the
    network without evidence along every edge, in both directions; the marginal of every node;
@@ -62,7 +63,9 @@ from glu.bn.soft import SoftRule, check_soft_rule
 from glu.errors import EvidenceError, ModelError
 
 PLAN_CACHE = 64
-"""Query plans kept per engine (one per evidence pattern and set of targets)."""
+"""Query plans kept per engine (one per evidence pattern and set of targets), the most recently used …"""
+PLAN_CACHE_ENTRIES = 1 << 25
+"""… as long as their tables hold at most this many entries together (256 MiB)."""
 CONDITION_ROWS = 32
 """Rows of a batch that share an evidence pattern from which the engine plans for the pattern
 (:mod:`glu.bn.conditioned`) instead of using the network's one junction tree."""
@@ -174,7 +177,16 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine):
             return plan
         plan = make()
         self._plans[key] = plan
-        if len(self._plans) > PLAN_CACHE:
+
+        def entries(p: QueryPlan | ConditionedPlan | None) -> int:
+            if p is None:
+                return 0
+            return (p.plan if isinstance(p, ConditionedPlan) else p).size
+
+        while len(self._plans) > 1 and (
+            len(self._plans) > PLAN_CACHE
+            or sum(entries(p) for p in self._plans.values()) > PLAN_CACHE_ENTRIES
+        ):
             self._plans.popitem(last=False)
         return plan
 
