@@ -114,7 +114,7 @@ def main() -> None:
         t_q_pg = timeit(lambda: ve.query(["ObjVel"], evidence=ev, show_progress=False), repeat=3)
 
         ev_w = {"Size": "big", "Shape": "sphere", "ObjVel": "fast"}
-        t_w = timeit(lambda: eng.word_probabilities(ev_w))
+        t_w = timeit(lambda: eng.word_probability_array(ev_w))
         t_w_pg = timeit(
             lambda: [ve.query([w], evidence=ev_w, show_progress=False) for w in WORDS], repeat=1, number=3
         )

@@ -1,7 +1,9 @@
 """Fusing the gesture HMMs with the Affordance–Words network (GLU 2017 §2.4, TCDS 2020 §III-C).
 
 The HMMs observe the human's hand and give a posterior over the action, ``p_hmm(A | G)``; the network knows
-how actions, objects, effects and words go together. The one home of every fusion rule:
+how actions, objects, effects and words go together. The action node ``A`` is the schema's node with
+``role: action`` (:func:`glu.schema.action_node`: ``Action`` in GLU's network, ``Tool`` or ``Motion`` in a
+lab's own), or the one named with ``action=``. The one home of every fusion rule:
 
 ``hard``
     the top HMM action becomes hard evidence: ``p_BN(X_inf | X_obs, A = argmax p_hmm)``.
@@ -48,7 +50,7 @@ import numpy as np
 from glu.bn.inference import InferenceEngine
 from glu.bn.soft import SOFT_RULES
 from glu.errors import EvidenceError
-from glu.schema import ACTIONS
+from glu.schema import ACTIONS, action_node
 
 Strategy = Literal["hard", "virtual", "jeffrey", "product"]
 STRATEGIES: tuple[str, ...] = ("hard", *SOFT_RULES, "product")
@@ -56,6 +58,7 @@ STRATEGIES: tuple[str, ...] = ("hard", *SOFT_RULES, "product")
 SOFT_STRATEGIES: tuple[str, ...] = (*SOFT_RULES, "product")
 """The strategies that keep the HMMs' doubt (a sweep over p_hmm needs one of these)."""
 ACTION = "Action"
+"""GLU's action node; other networks name theirs by its role (:func:`glu.schema.action_node`)."""
 
 
 def check_strategy(strategy: str, allowed: Sequence[str] = STRATEGIES) -> str:
@@ -71,19 +74,21 @@ def fuse(
     evidence: Mapping[str, str] | None,
     p_hmm: Mapping[str, float] | Sequence[float] | np.ndarray | None,
     strategy: Strategy = "virtual",
+    action: str | None = None,
 ) -> dict[str, np.ndarray]:
-    """Posterior marginals of ``targets`` given observed network evidence and the HMM posterior over Action.
+    """Posterior marginals of ``targets`` given observed network evidence and the HMM posterior over the action.
 
     Parameters
     ----------
-    engine : inference engine of the Affordance–Words network
-    targets : nodes to infer (``"Action"`` among them for action recognition)
+    engine : inference engine of the network
+    targets : nodes to infer (the action node among them for action recognition)
     evidence : hard evidence on the other observed nodes (object features, effects, words); must not
-        contain Action
-    p_hmm : the gesture posterior over Action in the node's value order: array, shape (K,) — or a
+        contain the action node
+    p_hmm : the gesture posterior over the action in the node's value order: array, shape (K,) — or a
         mapping {action: p} — for one gesture; array, shape (T, K) for T gestures (or T prefixes of one);
         None for no gesture evidence (the network alone)
     strategy : one of :data:`STRATEGIES` (see the module docstring)
+    action : the action node; None: the schema's node with ``role: action`` (:func:`glu.schema.action_node`)
 
     Returns
     -------
@@ -95,41 +100,47 @@ def fuse(
     check_strategy(strategy)
     if p_hmm is None:
         return engine.query(targets, evidence)
-    if ACTION in evidence:
+    a = action if action is not None else action_node(engine.bn.schema)
+    if a in evidence:
         raise EvidenceError(
-            f"Action is observed directly (Action={evidence[ACTION]}) and also given by the gesture HMMs; "
+            f"{a} is observed directly ({a}={evidence[a]}) and also given by the gesture HMMs; "
             "the gesture evidence would be ignored — drop one of them"
         )
-    if strategy == "product" and list(targets) != [ACTION]:
+    if strategy == "product" and list(targets) != [a]:
         raise EvidenceError(
-            f"the product rule infers the action itself: targets must be ['Action'], not {list(targets)}"
+            f"the product rule infers the action itself: targets must be [{a!r}], not {list(targets)}"
         )
     if not isinstance(p_hmm, Mapping) and np.ndim(p_hmm) == 2:
-        return _fuse_rows(engine, list(targets), evidence, np.asarray(p_hmm, dtype=float), strategy)
-    q = engine.soft_vector(ACTION, p_hmm)
+        return _fuse_rows(engine, list(targets), evidence, np.asarray(p_hmm, dtype=float), strategy, a)
+    q = engine.soft_vector(a, p_hmm)
     if strategy == "hard":
         best = int(np.argmax(q))
-        return engine.query(targets, {**evidence, ACTION: best})
+        return engine.query(targets, {**evidence, a: best})
     if strategy == "product":
-        p_bn = engine.query([ACTION], evidence)[ACTION]
+        p_bn = engine.query([a], evidence)[a]
         p = p_bn * q
         if p.sum() <= 0:
-            raise engine._impossible(evidence, {ACTION: q})
-        return {ACTION: p / p.sum()}
-    return engine.query(targets, evidence, soft={ACTION: q}, soft_rule=strategy)
+            raise engine._impossible(evidence, {a: q})
+        return {a: p / p.sum()}
+    return engine.query(targets, evidence, soft={a: q}, soft_rule=strategy)
 
 
 def _fuse_rows(
-    engine: InferenceEngine, targets: list[str], evidence: dict[str, str], q: np.ndarray, strategy: str
+    engine: InferenceEngine,
+    targets: list[str],
+    evidence: dict[str, str],
+    q: np.ndarray,
+    strategy: str,
+    action: str,
 ) -> dict[str, np.ndarray]:
     """:func:`fuse` for T posteriors at once, with one batch query."""
     n = len(q)
     columns = {k: [v] * n for k, v in evidence.items()}
     if strategy == "hard":
-        return engine.query_batch(targets, {**columns, ACTION: np.argmax(q, axis=1)})
-    # the product rule is virtual evidence on Action with Action the only target
+        return engine.query_batch(targets, {**columns, action: np.argmax(q, axis=1)})
+    # the product rule is virtual evidence on the action with the action the only target
     rule = "virtual" if strategy == "product" else strategy
-    return engine.query_batch(targets, columns, soft={ACTION: q}, soft_rule=rule)
+    return engine.query_batch(targets, columns, soft={action: q}, soft_rule=rule)
 
 
 def hmm_rows(p_tap: Sequence[float] | np.ndarray, actions: Sequence[str] = ACTIONS) -> np.ndarray:

@@ -57,6 +57,8 @@ _GLU = _glu_spec()
 AFFORDANCE_VALUES: dict[str, tuple[str, ...]] = {n["name"]: tuple(n["values"]) for n in _GLU["nodes"]}
 """Affordance nodes in the fixed K2 order, with their values in file order (glu names)."""
 AFFORDANCE_NODES: tuple[str, ...] = tuple(AFFORDANCE_VALUES)
+AFFORDANCE_ROLES: dict[str, str] = {n["name"]: n["role"] for n in _GLU["nodes"]}
+"""GLU's affordance nodes → their roles (action, object, effect)."""
 ACTIONS: tuple[str, ...] = AFFORDANCE_VALUES["Action"]
 """The actions, in the network's order: grasp, tap, touch (every p_HMM vector follows it)."""
 ROOT_NODES: tuple[str, ...] = tuple(n["name"] for n in _GLU["nodes"] if n.get("set_by_experimenter"))
@@ -129,6 +131,32 @@ class Schema:
             return vals.index(value)
         except ValueError:
             raise UnknownValueError(f"{node} has no value {value!r}; allowed: {', '.join(vals)}") from None
+
+
+def action_node(schema: Schema) -> str:
+    """The node the gesture HMMs observe: the schema's node with ``role: action``.
+
+    A schema without roles (GLU's models saved before roles were stored, a network imported from BIF,
+    XMLBIF or UAI) falls back to the node named ``Action``. Raises :class:`DataError` (one line) when there is
+    no such node, or several nodes with the role action.
+
+    >>> action_node(default_schema())
+    'Action'
+    """
+    actions = [n for n in schema.affordance_nodes if schema.roles.get(n) == "action"]
+    if len(actions) == 1:
+        return actions[0]
+    if len(actions) > 1:
+        raise DataError(
+            f"the schema gives several nodes the role action ({', '.join(actions)}); fusion with gestures "
+            "needs one: name it with action=NODE"
+        )
+    if "Action" in schema.values:
+        return "Action"
+    raise DataError(
+        "the network has no action node: give one node `role: action` in its schema "
+        f"(nodes: {', '.join(schema.affordance_nodes[:8])})"
+    )
 
 
 def unknown_node_message(node: str, nodes: Sequence[str]) -> str:

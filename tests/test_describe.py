@@ -562,9 +562,15 @@ def test_cli_bad_grammars(tmp_path, capsys):
     assert main(["describe", "--data", "synthetic", "--grammar", str(bad)]) == 2
     assert f"{bad}:2:6: $b is not defined" in capsys.readouterr().err
     unknown = tmp_path / "unknown.grm"
-    unknown.write_text("( the robot zzz )\n")
-    assert main(["describe", "--data", "synthetic", "--grammar", str(unknown)]) == 2
-    assert "zzz" in capsys.readouterr().err
+    unknown.write_text("( the robot zzz )\n")  # a word that is no network node scores p = 1, and is named
+    assert main(["describe", "--data", "synthetic", "--grammar", str(unknown)]) == 0
+    assert (
+        "# words that are not network nodes score as p = 1 (function words): zzz" in capsys.readouterr().out
+    )
+    foreign = tmp_path / "foreign.grm"
+    foreign.write_text("( zzz yyy )\n")
+    assert main(["describe", "--data", "synthetic", "--grammar", str(foreign)]) == 2
+    assert "the grammar and the network share no word" in capsys.readouterr().err
     loop = tmp_path / "loop.grm"
     loop.write_text("( the robot {taps} )\n")
     assert main(["describe", "--data", "synthetic", "--grammar", str(loop)]) == 2

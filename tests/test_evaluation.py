@@ -87,7 +87,7 @@ def test_statistics_equal_a_direct_computation(setup):
             # description: Jeffrey's rule, the exact 1-best, read by agreement()
             obs = {k: row[k] for k in SETTINGS.description_evidence}
             allowed = engine.query("Action", obs)["Action"] > 0  # Jeffrey's rule on the actions obs allows
-            wp = engine.word_probabilities(obs, {"Action": q * allowed / (q * allowed).sum()}, "jeffrey")
+            wp = engine.word_probability_array(obs, {"Action": q * allowed / (q * allowed).sum()}, "jeffrey")
             sentence = nbest(None, pd.Series(wp, index=engine.binary_leaves), n=1).sentence[0]
             one = best_sentences(wp[None], engine.binary_leaves)
             assert one.sentence(0).split() == sentence.split() or sorted(one.sentence(0).split()) == sorted(

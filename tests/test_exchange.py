@@ -256,7 +256,7 @@ probability ( B | A ) {{ (a0) 0.5, 0.5; (a1) 0.25, 0.75; }}
 @pytest.mark.parametrize(
     ("a_given", "a_table", "message"),
     [
-        ("", "table 0.5, 0.6;", "not a distribution"),
+        ("", "table 0.5, 0.6;", r"the row P\(A\) sums to 1.1, not 1"),
         ("", "table 0.5;", "has 1 numbers, expected 2"),
         ("| B", "(b0) 0.5, 0.5; (b1) 0.5, 0.5;", "cycle"),
         ("", "table 0.5, x;", "malformed"),

@@ -21,7 +21,7 @@ def engine(zero_bn):
 def tables(engine, evidence, target):
     p_a = engine.query(["Action"], evidence)["Action"]
     if target == "words":
-        p_x = np.stack([engine.word_probabilities({**evidence, "Action": a}) for a in ACTIONS])
+        p_x = np.stack([engine.word_probability_array({**evidence, "Action": a}) for a in ACTIONS])
     else:
         p_x = np.stack([engine.query([target], {**evidence, "Action": a})[target] for a in ACTIONS])
     return p_a, p_x
@@ -42,7 +42,7 @@ def test_effect_and_words_equal_fuse(engine, evidence, strategy):
     for t in range(len(q)):
         soft = {} if strategy == "hard" else {"Action": q[t]}
         ev = {**evidence, "Action": ACTIONS[int(np.argmax(q[t]))]} if strategy == "hard" else evidence
-        ref = engine.word_probabilities(ev, soft or None, "virtual" if strategy == "hard" else strategy)
+        ref = engine.word_probability_array(ev, soft or None, "virtual" if strategy == "hard" else strategy)
         np.testing.assert_allclose(fuse_tables(p_w, p_a, q[t], strategy), ref, atol=1e-12)
 
 

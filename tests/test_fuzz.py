@@ -144,6 +144,7 @@ COMMANDS: dict[str, tuple[list[str], bool]] = {
     "data info": (["--data", "{data}"], True),
     "bn learn": (["--data", "{data}", "-o", "{tmp}/out/m.json"], True),
     "bn edges": (["{model}"], True),
+    "bn nodes": (["{model}"], True),
     "bn import": (["{model}", "-o", "{tmp}/out/m2.json"], True),
     "bn export": (["{model}", "--format", "bif", "--zero-rows", "seen", "-o", "{tmp}/out/m.bif"], True),
     "query": (["--model", "{model}", "--target", "ObjVel"], True),

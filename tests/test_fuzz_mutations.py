@@ -381,6 +381,11 @@ def _cases() -> dict[str, tuple[list[str], list[tuple[str, object]], bool]]:
             [("", "path:.json"), ("", "path:.mat"), ("", "path:.bif")],
             False,
         ),
+        "bn nodes": (
+            ["bn", "nodes", "{model}"],
+            [("", "path:.json"), ("", "path:.mat"), ("", "path:.bif")],
+            False,
+        ),
         "bn import": (
             ["bn", "import", "{model}", "-o", f"{OUT}/x.json"],
             [
@@ -773,6 +778,7 @@ MODEL_COMMANDS = {
     "query --json": ["query", "--model", "{m}", "--target", "ObjVel", "--json", "--evidence", "Action=tap"],
     "query": ["query", "--model", "{m}", "--target", "Action", "--soft", "Shape=circle:0.5,box:0.5"],
     "bn edges": ["bn", "edges", "{m}"],
+    "bn nodes --json": ["bn", "nodes", "{m}", "--json"],
     "bn export": ["bn", "export", "{m}", "-o", "{out}/x.bif", "--zero-rows", "seen"],
     "describe --json": ["describe", "--model", "{m}", "--nbest", "2", "--json"],
 }

@@ -87,6 +87,53 @@ def test_the_base_install_has_no_jupyter_and_no_rerun():
     assert "license" in meta and isinstance(meta["license"], str)
 
 
+IMPORT_TO_DISTRIBUTION = {
+    "yaml": "pyyaml",
+    "distributed": "dask",
+    "requests": "pooch",
+    "sklearn": "scikit-learn",
+}
+"""Import names that differ from the distribution that provides them (requests comes with pooch)."""
+
+
+def _third_party_imports(files) -> dict[str, set[str]]:
+    """Distribution → the files that import it (top-level or inside functions), for ``files``."""
+    import ast
+
+    found: dict[str, set[str]] = {}
+    for f in files:
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.Import):
+                names = [a.name.split(".")[0] for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module.split(".")[0]]
+            else:
+                continue
+            for n in names:
+                if n not in sys.stdlib_module_names and n != "glu":
+                    found.setdefault(IMPORT_TO_DISTRIBUTION.get(n, n).lower(), set()).add(f.name)
+    return found
+
+
+def test_corpus_and_evaluate_need_only_the_base_and_dask_installs():
+    """Everything `glu corpus` and `glu evaluate` import is declared in the base install or in [dask]."""
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+
+    def names(deps):
+        return {re.split(r"[<>=\[ ;]", d)[0].lower() for d in deps}
+
+    allowed = names(meta["dependencies"]) | names(meta["optional-dependencies"]["dask"])
+    pkg = ROOT / "glu"
+    layers = ("bn", "data", "experiments", "gestures", "language", "sweep")
+    files = [f for layer in layers for f in (pkg / layer).rglob("*.py")]
+    files += [pkg / m for m in ("fusion.py", "schema.py", "evidence.py", "files.py", "paths.py")]
+    files += [pkg / "cli" / "eval_cmds.py", pkg / "cli" / "common.py"]
+    used = _third_party_imports(files)
+    used.pop("pgmpy", None)  # glu.bn.pgmpy_bridge: the tests' reference, imported by no command
+    missing = {d: sorted(fs) for d, fs in used.items() if d not in allowed}
+    assert not missing, f"imported but not declared in the base or [dask] install: {missing}"
+
+
 def test_reproduce_without_the_notebook_extra_says_what_to_install(monkeypatch, capsys):
     import importlib.util
 
@@ -156,6 +203,38 @@ def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
     ).is_file()
     assert sorted(p.name for p in empty.iterdir()) == ["out"]
     assert snapshot() == before, "something was written into site-packages"
+
+
+@pytest.mark.slow
+def test_corpus_and_evaluate_run_in_the_base_and_dask_installs(tmp_path):
+    """The wheel with [dask] only (no notebooks, no test tools) in a fresh venv: `glu corpus` and a small
+    `glu evaluate` run to the end (they once ended in "internal error … pyarrow")."""
+    dist = tmp_path / "dist"
+    r = _run([sys.executable, "-m", "build", "--wheel", "--outdir", str(dist), str(ROOT)])
+    assert r.returncode == 0, r.stderr[-2000:]
+    (wheel,) = dist.glob("glu-*.whl")
+    venv = tmp_path / "venv"
+    assert _run([sys.executable, "-m", "venv", str(venv)]).returncode == 0
+    py, glu = venv / "bin" / "python", venv / "bin" / "glu"
+    r = _run([str(py), "-m", "pip", "install", "--quiet", f"{wheel}[dask]"])
+    assert r.returncode == 0, r.stderr[-2000:]
+    env = {
+        **os.environ,
+        "XDG_DATA_HOME": str(tmp_path / "xdg-data"),
+        "XDG_CACHE_HOME": str(tmp_path / "xdg-c"),
+    }
+    env.pop(paths.DATA_ENV_VAR, None)
+    work = tmp_path / "work"
+    work.mkdir()
+    r = _run(
+        [str(glu), "corpus", "--data", "synthetic", "--episodes", "60", "-o", "c.parquet"], cwd=work, env=env
+    )
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert (work / "c.parquet").stat().st_size > 0
+    cmd = ["evaluate", "--data", "synthetic", "--episodes", "120", "--scheduler", "synchronous", "-o", "ev"]
+    r = _run([str(glu), *cmd], cwd=work, env=env)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert (work / "ev" / "results.parquet").is_file()
 
 
 @pytest.mark.slow

@@ -37,7 +37,7 @@ def test_equals_nbest_with_the_networks_word_probabilities(zero_bn):
         {"Shape": "sphere", "ObjVel": "fast"},
         {"Color": "yellow", "Size": "big"},
     ]
-    probs = np.stack([engine.word_probabilities(e) for e in cases])
+    probs = np.stack([engine.word_probability_array(e) for e in cases])
     best = best_sentences(probs, engine.binary_leaves)
     for i in range(len(cases)):
         ref = nbest(None, pd.Series(probs[i], index=engine.binary_leaves), n=1)

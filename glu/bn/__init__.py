@@ -1,4 +1,4 @@
-"""The Affordance–Words Bayesian network: the model, its learning, and exact inference (pgmpy-free)."""
+"""Bayesian networks, GLU's or any other: the model, its learning, exact inference (pgmpy-free)."""
 
 from glu.bn.inference import InferenceEngine
 from glu.bn.learning import learn_bn, learn_parameters, learn_structure

@@ -9,7 +9,7 @@ row. Tested against single queries and pgmpy.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -33,6 +33,9 @@ class BatchQueries:
     leaf_ratio: dict[str, np.ndarray]
     _value_index: dict[str, dict[str, int]]
 
+    def junction(self) -> Any:  # pragma: no cover - defined by the engine
+        raise NotImplementedError
+
     def query_batch(
         self,
         targets: Sequence[str] | str,
@@ -41,24 +44,17 @@ class BatchQueries:
         soft_rule: SoftRule = "virtual",
         errors: Literal["raise", "nan"] = "raise",
     ) -> dict[str, np.ndarray]:
-        """Posterior marginals for many evidence sets at once, vectorised over the rows.
+        """See :meth:`InferenceEngine.query_batch <glu.bn.inference.InferenceEngine.query_batch>`.
 
-        Parameters
-        ----------
-        targets : node names
-        evidence : node → sequence of n values (names or indices; None, NaN or -1 = not observed), e.g. the
-            columns of a DataFrame
-        soft : node → array, shape (n, n_values): one soft-evidence distribution per row
-        soft_rule : ``"virtual"`` or ``"jeffrey"`` (one soft node only)
-        errors : ``"raise"`` an :class:`ImpossibleEvidenceError` naming the first impossible row, or give
-            that row ``nan``
-
-        Returns
-        -------
-        dict target → array, shape (n, n_values).
+        Rows with the same pattern of observed nodes share one reduced joint table; soft evidence on a leaf,
+        and Jeffrey's rule on several nodes, go to the network's junction tree.
         """
         if isinstance(targets, str):
             targets = [targets]
+        if (soft and any(s not in self.axis and s in self._value_index for s in soft)) or (
+            soft_rule == "jeffrey" and soft and len(soft) > 1
+        ):  # soft evidence on a leaf, or Jeffrey's rule on several nodes: the junction tree
+            return self.junction().query_batch(targets, evidence, soft, soft_rule, errors)
         evidence = dict(evidence or {})
         soft = dict(soft or {})
         n = _batch_length(evidence, soft)
@@ -81,8 +77,6 @@ class BatchQueries:
                 self.soft_vector(node, arr[bad])
             qs[node] = arr / sums[:, None]
         check_soft_rule(soft_rule)
-        if soft_rule == "jeffrey" and len(qs) > 1:
-            raise EvidenceError("batch queries with Jeffrey's rule take soft evidence on one node")
         out = {t: np.full((n, self.bn.schema.cardinality(t)), np.nan) for t in targets}
         # rows with the same pattern of observed nodes share one reduced table
         observed = np.stack([c >= 0 for c in codes.values()], axis=1) if codes else np.zeros((n, 0), bool)
@@ -102,24 +96,6 @@ class BatchQueries:
                     f"row {i}: {self._impossible(ev, {s: None for s in qs})}"
                     + (f" ({len(bad)} impossible rows in all)" if len(bad) > 1 else "")
                 )
-        return out
-
-    def _codes(self, node: str, values: Sequence, n: int) -> np.ndarray:
-        if node not in self._value_index:
-            raise UnknownNodeError(unknown_node_message(node, self.nodes))
-        vals = list(values)
-        if len(vals) != n:
-            raise EvidenceError(f"batch evidence on {node} has {len(vals)} rows, expected {n}")
-        out = np.empty(n, dtype=np.intp)
-        for i, v in enumerate(vals):
-            if (
-                v is None
-                or (isinstance(v, float) and np.isnan(v))
-                or (isinstance(v, int | np.integer) and v < 0)
-            ):
-                out[i] = -1
-            else:
-                out[i] = self._value(node, v)
         return out
 
     def _batch_pattern(
@@ -154,6 +130,8 @@ class BatchQueries:
         p = reduced[tuple(index)] if kept else np.broadcast_to(reduced, (n,)).copy()
         if not kept:
             p = p.reshape(n)
+        elif not core_obs:  # rows that observe nothing on the core: the same table in every row
+            p = np.broadcast_to(p, (n, *p.shape[1:])).copy()
         pos = {a: 1 + free.index(a) for a in free}
 
         def expand(table: np.ndarray, axes: Sequence[int]) -> np.ndarray:

@@ -56,7 +56,8 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
-from glu.bn.model import ROW_TOL, BayesNet
+from glu.bn.model import BayesNet
+from glu.bn.rows import normalise_rows
 from glu.errors import ModelError
 from glu.files import atomic_write_text, read_text
 from glu.schema import FILE_ALIASES, WORD_VALUES, Schema
@@ -71,8 +72,9 @@ ZERO_ROW_MODES: tuple[str, ...] = ("refuse", "seen")
 SEEN_PREFIX = "seen__"
 SEEN_VALUES: tuple[str, str] = ("no", "yes")
 IMPORT_TOL = 1e-5
-"""Rows of an imported table may sum to 1 within this (other tools round to 6 digits); they are rescaled to
-sum to 1 exactly. All-zero rows are never accepted in a file (see :data:`SEEN_PREFIX`)."""
+"""Rows of an imported table may sum to 1 within this, or the readers' ``renormalise`` (other tools round to
+6 digits); they are rescaled to sum to 1 exactly, reported in ``meta["renormalised"]``. All-zero rows are
+never accepted in a file (see :data:`SEEN_PREFIX`)."""
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _BIF_KEYWORDS = frozenset({"network", "variable", "probability", "property", "type", "discrete", "table"})
 
@@ -227,7 +229,7 @@ def export_bn(
 
 
 # ------------------------------------------------------------------ readers
-def from_bif(text: str, where: str = "<string>") -> BayesNet:
+def from_bif(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
     """A model from BIF text (variables, then probability blocks with ``table`` or one line per configuration)."""
     body = re.sub(r"//[^\n]*|/\*.*?\*/", " ", text, flags=re.S)
     values: dict[str, tuple[str, ...]] = {}
@@ -273,7 +275,7 @@ def from_bif(text: str, where: str = "<string>") -> BayesNet:
             raise ModelError(f"{where}: two probability blocks for {child!r}")
         parents[child], cpts[child] = ps, cpt
     return assemble(
-        values, parents, cpts, where, meta={"data_source": f"imported from {Path(where).name} (BIF)"}
+        values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (BIF)"}, renormalise
     )
 
 
@@ -294,7 +296,7 @@ def _table(flat: np.ndarray, shape: tuple[int, ...], node: str, where: str, orde
     return flat.reshape(shape)
 
 
-def from_xmlbif(text: str, where: str = "<string>") -> BayesNet:
+def from_xmlbif(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
     """A model from XMLBIF (0.3) text."""
     try:
         root = ET.fromstring(text)
@@ -324,12 +326,11 @@ def from_xmlbif(text: str, where: str = "<string>") -> BayesNet:
         if child in cpts:
             raise ModelError(f"{where}: two definitions of {child!r}")
         parents[child], cpts[child] = ps, _table(flat, shape, child, where, order="c")
-    return assemble(
-        values, parents, cpts, where, meta={"data_source": f"imported from {Path(where).name} (XMLBIF)"}
-    )
+    meta = {"data_source": f"imported from {Path(where).name} (XMLBIF)"}
+    return assemble(values, parents, cpts, where, meta, renormalise)
 
 
-def from_uai(text: str, where: str = "<string>") -> BayesNet:
+def from_uai(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
     """A model from a UAI ``BAYES`` file: nodes ``var_i``, values ``0 … k-1`` (UAI has no names)."""
     tokens = re.sub(r"#[^\n]*", " ", text).split()  # pyAgrum writes `# name` comments
     pos = 0
@@ -382,19 +383,23 @@ def from_uai(text: str, where: str = "<string>") -> BayesNet:
             _table(flat, shape, child, where, "c"),
         )
     return assemble(
-        values, parents, cpts, where, meta={"data_source": f"imported from {Path(where).name} (UAI)"}
+        values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (UAI)"}, renormalise
     )
 
 
 READERS = {"bif": from_bif, "xmlbif": from_xmlbif, "uai": from_uai}
 
 
-def import_bn(path: str | os.PathLike, fmt: str | None = None) -> BayesNet:
-    """Read a BIF, XMLBIF or UAI file (format from the suffix unless ``fmt``), validated completely."""
+def import_bn(path: str | os.PathLike, fmt: str | None = None, renormalise: float | None = None) -> BayesNet:
+    """Read a BIF, XMLBIF or UAI file (format from the suffix unless ``fmt``), validated completely.
+
+    ``renormalise``: rows whose sum is within this of 1 are rescaled to sum to 1 (default
+    :data:`IMPORT_TOL`); the model's ``meta["renormalised"]`` reports how many, and the largest deviation.
+    """
     path = Path(path)
     fmt = format_of(path, fmt)
     text = read_text(path, f"{fmt.upper()} file", error=ModelError)
-    return READERS[fmt](text, str(path))
+    return READERS[fmt](text, str(path), renormalise)
 
 
 # ------------------------------------------------------------------ assembling a BayesNet
@@ -404,11 +409,16 @@ def assemble(
     cpts: Mapping[str, np.ndarray],
     where: str,
     meta: Mapping[str, Any] | None = None,
+    renormalise: float | None = None,
 ) -> BayesNet:
     """A validated :class:`BayesNet` from any node order: indicators folded back, words last, parents sorted.
 
+    Rows that sum to 1 within ``renormalise`` (default :data:`IMPORT_TOL`) are rescaled to sum to 1; when
+    any is, ``meta["renormalised"]`` gives how many rows, the largest ``|1 − sum|``, where, and the
+    tolerance.
+
     Raises :class:`ModelError` (naming ``where``) for a node without a CPT, a CPT for no node, duplicate
-    values, wrong shapes, a cycle, rows that do not sum to 1.
+    values, wrong shapes, a cycle, a row that does not sum to 1 (naming the node and the parent values).
     """
     missing = [n for n in values if n not in cpts]
     if missing:
@@ -431,12 +441,10 @@ def assemble(
         shape = tuple(len(values[p]) for p in parents[n]) + (len(values[n]),)
         if c.shape != shape:
             raise ModelError(f"{where}: the table of {n!r} has shape {c.shape}, expected {shape}")
-        if not np.all(np.isfinite(c)) or (c < 0).any() or np.any(np.abs(c.sum(axis=-1) - 1) > IMPORT_TOL):
-            raise ModelError(
-                f"{where}: a row of the table of {n!r} is not a distribution (entries ≥ 0 summing to 1)"
-            )
-        sums = c.sum(axis=-1, keepdims=True)
-        cpts[n] = np.where(np.abs(sums - 1) > ROW_TOL, c / sums, c)  # only rows another tool rounded
+    tol = IMPORT_TOL if renormalise is None else renormalise
+    cpts, report = normalise_rows(values, parents, cpts, tol, where)
+    if report:
+        meta = {**(meta or {}), "renormalised": report}
     _fold_indicators(values, parents, cpts, where)
     children = {p for ps in parents.values() for p in ps}
     named = any(v != tuple(str(i) for i in range(len(v))) for v in values.values())

@@ -1,37 +1,52 @@
-"""Exact inference in the Affordance–Words network, vectorised with NumPy.
+"""Exact inference in any discrete Bayesian network: one interface, two engines.
 
-The network has a small *core* (the 8 affordance nodes: 3·4·2·3·3·3·2·2 = 2592 joint states) and many
-*leaves* (the 49 words), each hanging off core nodes only. The engine therefore
+``InferenceEngine(bn)`` answers queries about a :class:`~glu.bn.model.BayesNet` — GLU's Affordance–Words
+network, a network learned from a lab's own schema, or one imported from BIF, XMLBIF or UAI — and picks
+the engine that suits its shape:
 
-1. multiplies the core CPTs into the joint ``P(core)`` once (shape (3, 4, 2, 3, 3, 3, 2, 2));
-2. folds every unobserved leaf into it through its row sums ``m_L(pa) = Σ_v P(L=v | pa)`` — 1 for a
-   normal row, 0 for the all-zero rows of parent configurations a word never saw (the original's quirk:
-   those core states get probability 0 in every query, as in the original BNT inference);
-3. answers a query by slicing the joint at the hard evidence on core nodes, multiplying in the factors of
-   observed leaves and of soft evidence, and summing to the targets.
+:class:`~glu.bn.core.CoreEngine`
+    for networks shaped like GLU's: a small *core* (the affordance nodes and every node with children)
+    whose joint table fits in memory, and *leaves* (the words) hanging off it. It multiplies the core into
+    one table once and answers a query by slicing it: microseconds a query.
+:class:`~glu.bn.junction.JunctionTreeEngine`
+    for any other network: exact inference on a junction tree planned from the structure
+    (:mod:`glu.bn.plan`), with messages vectorised over a batch of evidence sets. The size of its largest
+    table is known before it is built; past a limit (``max_table``, ``$GLU_MAX_TABLE``) the engine is
+    refused in one line with that size and the elimination width.
 
-Evidence types (METHOD.md §2):
+``method="auto"`` (the default) takes the core engine when its tables are small (:data:`CORE_MAX_STATES`,
+:data:`CORE_MAX_ENTRIES`), else the junction tree; ``method="core"`` or ``"junction"`` forces one. Both
+give the same posteriors (the tests compare them with each other, with pgmpy and with pyAgrum).
 
-* hard evidence on any node: ``{"Action": "tap", "rolls": "present"}``;
-* soft evidence on core nodes, a distribution over the node's values, entered either as *virtual*
-  (likelihood) evidence, ``p(X | e) ∝ Σ_A p(X, A | e) q(A)`` — the originals' soft fusion — or by
+Evidence, for every engine:
+
+* hard evidence on any node: ``{"Action": "tap", "rolls": "present"}`` (value names, aliases or indices);
+* soft evidence on any node, a distribution ``q`` over its values, entered either as *virtual*
+  (likelihood) evidence, ``p(X | e) ∝ Σ_a p(X, a | e) q(a)`` — the originals' soft fusion — or by
   *Jeffrey's rule*, which makes the node's posterior marginal equal to ``q``:
-  ``p(X | e) = Σ_a p(X | e, A=a) q(a)`` (several Jeffrey nodes: iterative proportional fitting).
+  ``p(X | e) = Σ_a p(X | e, A=a) q(a)`` (several Jeffrey nodes: iterative proportional fitting);
+* evidence of probability 0 raises :class:`~glu.errors.ImpossibleEvidenceError` naming it;
+* many evidence sets at once: :meth:`InferenceEngine.query_batch` (arrays) and
+  :meth:`InferenceEngine.posterior_table` (a DataFrame).
 
-pgmpy's VariableElimination is the independent reference in the tests; this engine is two to three orders
-of magnitude faster (``benchmarks/bench_bn.py``).
+Results come in two forms: the numeric ones (:meth:`~InferenceEngine.query`,
+:meth:`~InferenceEngine.query_batch`, :meth:`~InferenceEngine.word_probability_array`: NumPy arrays in the
+nodes' value order, the fast path of every experiment) and the labelled ones
+(:meth:`~InferenceEngine.posterior`, :meth:`~InferenceEngine.posteriors`,
+:meth:`~InferenceEngine.marginals`, :meth:`~InferenceEngine.posterior_table`,
+:meth:`~InferenceEngine.word_probabilities`: pandas objects indexed by value and word names).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from glu.bn.batch import BatchQueries
 from glu.bn.model import BayesNet
-from glu.bn.soft import SUM_TOL, SoftRule, check_soft_rule
+from glu.bn.soft import SUM_TOL, SoftRule
 from glu.errors import EvidenceError, ImpossibleEvidenceError, ModelError, UnknownNodeError
 from glu.schema import unknown_node_message
 
@@ -39,27 +54,60 @@ if TYPE_CHECKING:
     import pandas as pd
 
 SoftEvidence = Mapping[str, Mapping[str, float] | Sequence[float] | np.ndarray]
-MAX_CORE_STATES = 1 << 22
+Method = Literal["auto", "core", "junction"]
+METHODS: tuple[str, ...] = ("auto", "core", "junction")
+CORE_MAX_STATES = 1 << 16
+"""``method="auto"`` takes the core engine only if the core's joint table has at most this many states …"""
+CORE_MAX_ENTRIES = 1 << 22
+"""… and its leaf tables over the core (states × (leaf values + 2)) at most this many entries."""
 IPFP_TOL, IPFP_MAX_ITER = 1e-13, 10_000
 
 
-def _broadcast(table: np.ndarray, axes: Sequence[int], ndim: int) -> np.ndarray:
-    """View ``table`` (one axis per entry of ``axes``) as broadcastable over ``ndim`` core axes."""
-    order = np.argsort(axes)
-    t = table.transpose(order)
-    shape = [1] * ndim
-    for a, s in zip(np.asarray(axes)[order], t.shape, strict=True):
-        shape[a] = s
-    return t.reshape(shape)
+def core_split(bn: BayesNet) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(core, leaves): the affordance nodes and every node with children, then the other nodes."""
+    has_children = {p for n in bn.nodes for p in bn.parents[n]}
+    core = tuple(n for n in bn.nodes if n in bn.schema.affordance_nodes or n in has_children)
+    return core, tuple(n for n in bn.nodes if n not in core)
 
 
-class InferenceEngine(BatchQueries):
-    """Exact marginals of a :class:`BayesNet` whose non-core nodes are leaves with core parents.
+def core_size(bn: BayesNet) -> tuple[int, int]:
+    """(states of the core joint, entries of the core engine's tables) — Python ints, never overflowing."""
+    core, leaves = core_split(bn)
+    states = math.prod(bn.schema.cardinality(n) for n in core)
+    return states, states * (2 + sum(bn.schema.cardinality(n) for n in leaves))
+
+
+def choose_method(bn: BayesNet, method: str = "auto") -> str:
+    """``"core"`` or ``"junction"``: the engine ``method`` asks for, or the one that suits ``bn`` (auto)."""
+    if method not in METHODS:
+        raise ModelError(f"unknown inference method {method!r}; allowed: {', '.join(METHODS)}")
+    if method != "auto":
+        return method
+    states, entries = core_size(bn)
+    small = states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES and len(core_split(bn)[0]) <= 60
+    return "core" if small else "junction"
+
+
+class InferenceEngine:
+    """Exact posterior marginals of a :class:`BayesNet` of any shape.
 
     Parameters
     ----------
-    bn : the network; its affordance nodes plus every node with children form the core, all other nodes
-        must be leaves whose parents are core nodes.
+    bn : the network
+    method : ``"auto"`` (default: the core engine for GLU-shaped networks, else the junction tree),
+        ``"core"`` or ``"junction"``
+    max_table : the largest table the junction tree may build (entries); None: ``$GLU_MAX_TABLE`` or
+        :data:`glu.bn.plan.MAX_TABLE_DEFAULT`
+
+    ``InferenceEngine(bn)`` returns an instance of the chosen subclass (:class:`~glu.bn.core.CoreEngine` or
+    :class:`~glu.bn.junction.JunctionTreeEngine`); both are ``InferenceEngine`` instances with this
+    interface.
+
+    Raises
+    ------
+    ModelError
+        a junction tree past the size limit (one line: the largest table and the elimination width), or a
+        core engine forced on a network whose core does not fit
 
     Examples
     --------
@@ -71,69 +119,32 @@ class InferenceEngine(BatchQueries):
     >>> p = eng.query(["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"})["ObjVel"]
     >>> p.round(3)                                                      # slow, medium, fast
     array([0.015, 0.121, 0.863])
+    >>> type(eng).__name__, isinstance(eng, InferenceEngine)
+    ('CoreEngine', True)
     """
 
-    def __init__(self, bn: BayesNet) -> None:
+    bn: BayesNet
+    nodes: tuple[str, ...]
+    method: str
+    binary_leaves: tuple[str, ...]
+    _value_index: dict[str, dict[str, int]]
+
+    def __new__(
+        cls, bn: BayesNet | None = None, method: Method = "auto", max_table: int | None = None
+    ) -> Any:
+        if cls is InferenceEngine and bn is not None:  # (unpickling calls __new__ without arguments)
+            if choose_method(bn, method) == "core":
+                from glu.bn.core import CoreEngine as cls
+            else:
+                from glu.bn.junction import JunctionTreeEngine as cls
+        return super().__new__(cls)
+
+    def _setup(self, bn: BayesNet, method: str) -> None:
+        """What every engine shares: the network, its nodes, value look-up (aliases included), word nodes."""
         self.bn = bn
-        schema = bn.schema
         self.nodes = bn.nodes
-        has_children = {p for n in bn.nodes for p in bn.parents[n]}
-        self.core = tuple(n for n in bn.nodes if n in schema.affordance_nodes or n in has_children)
-        self.leaves = tuple(n for n in bn.nodes if n not in self.core)
-        self.axis = {n: i for i, n in enumerate(self.core)}
-        self.shape = tuple(schema.cardinality(n) for n in self.core)
-        n_states = int(np.prod(self.shape))
-        if n_states > MAX_CORE_STATES:
-            raise ModelError(
-                f"the core joint has {n_states} states; this engine handles up to {MAX_CORE_STATES}"
-            )
-        ndim = len(self.core)
-        for leaf in self.leaves:
-            bad = [p for p in bn.parents[leaf] if p not in self.axis]
-            if bad:  # pragma: no cover - impossible by construction of the core
-                raise ModelError(f"leaf {leaf!r} has non-core parents {bad}")
-        joint = np.ones(self.shape)
-        for n in self.core:
-            axes = [self.axis[p] for p in bn.parents[n]] + [self.axis[n]]
-            joint = joint * _broadcast(bn.cpts[n], axes, ndim)
-        self.prior_joint = joint
-        """P(core) before folding in the leaves, shape ``self.shape``."""
-        # Leaves: ratio tables R_L[v, pa] = P(L=v | pa) / m_L(pa) (0 where m_L = 0) and masks m_L.
-        base = joint.copy()
-        self.leaf_axes: dict[str, tuple[int, ...]] = {}
-        self.leaf_ratio: dict[str, np.ndarray] = {}
-        rows = []
-        self.leaf_row: dict[str, int] = {}
-        for leaf in self.leaves:
-            cpt = bn.cpts[leaf]
-            axes = tuple(self.axis[p] for p in bn.parents[leaf])
-            m = cpt.sum(axis=-1)
-            ratio = np.divide(cpt, m[..., None], out=np.zeros_like(cpt), where=m[..., None] > 0)
-            ratio = np.moveaxis(ratio, -1, 0)  # (r, *pa)
-            self.leaf_axes[leaf] = axes
-            self.leaf_ratio[leaf] = ratio
-            if not np.all(m == 1.0):
-                base = base * _broadcast(m, axes, ndim)
-            self.leaf_row[leaf] = len(rows)
-            full = (
-                np.broadcast_to(
-                    ratio.reshape((ratio.shape[0],) + _broadcast(ratio[0], axes, ndim).shape),
-                    (ratio.shape[0], *self.shape),
-                )
-                if axes
-                else np.broadcast_to(ratio.reshape((-1,) + (1,) * ndim), (ratio.shape[0], *self.shape))
-            )
-            rows.extend(full)
-        self.base = base
-        """P(core, all unobserved leaves summed out), shape ``self.shape`` (not normalised when rows are zero)."""
-        self.base_mass = float(base.sum())
-        self.leaf_table = np.ascontiguousarray(np.array(rows)) if rows else np.zeros((0, *self.shape))
-        """Stacked R_L[v] over the full core, shape (Σ_L r_L, *core shape)."""
-        binary = [w for w in self.leaves if bn.schema.cardinality(w) == 2]
-        self.binary_leaves = tuple(binary)
-        self._present_rows = np.array([self.leaf_row[w] + 1 for w in binary], dtype=np.intp)
-        self._present_flat = self.leaf_table[self._present_rows].reshape(len(binary), n_states)
-        self._value_index: dict[str, dict[str, int]] = {}
+        self.method = method
+        self._value_index = {}
         for n in bn.nodes:
             vals = bn.schema.values_of(n)
             d = {v: i for i, v in enumerate(vals)}
@@ -141,8 +152,10 @@ class InferenceEngine(BatchQueries):
                 if v in d:  # an alias of a value this model does not have does not apply
                     d[alias] = d[v]
             self._value_index[n] = d
+        _, leaves = core_split(bn)
+        self.binary_leaves = tuple(w for w in leaves if bn.schema.cardinality(w) == 2)
 
-    # ------------------------------------------------------------------ parsing
+    # ------------------------------------------------------------------ parsing evidence
     def _value(self, node: str, value: str | int) -> int:
         idx = self._value_index.get(node)
         if idx is None:
@@ -156,27 +169,39 @@ class InferenceEngine(BatchQueries):
                 return i
         return self.bn.schema.value_index(node, str(value))  # raises UnknownValueError
 
-    def _split_hard(self, evidence: Mapping[str, str | int] | None) -> tuple[dict[int, int], dict[str, int]]:
-        core: dict[int, int] = {}
-        leaf: dict[str, int] = {}
-        if evidence:
-            for node, value in evidence.items():
-                v = self._value(node, value)
-                a = self.axis.get(node)
-                if a is None:
-                    leaf[node] = v
-                else:
-                    core[a] = v
-        return core, leaf
-
-    def soft_vector(self, node: str, dist: Mapping[str, float] | Sequence[float] | np.ndarray) -> np.ndarray:
-        """Validate soft evidence on ``node`` and return it as a vector over the node's values."""
+    def _check_node(self, node: str) -> None:
         if node not in self._value_index:
             raise UnknownNodeError(unknown_node_message(node, self.nodes))
-        if node not in self.axis:
-            raise EvidenceError(
-                f"soft evidence is supported on affordance nodes ({', '.join(self.core)}); {node!r} is a word node"
-            )
+
+    def _codes(self, node: str, values: Sequence, n: int) -> np.ndarray:
+        """A batch column as value indices, shape (n,): -1 where not observed (None, NaN, a negative index)."""
+        self._check_node(node)
+        if isinstance(values, np.ndarray) and values.dtype.kind in "iu" and values.ndim == 1:
+            if len(values) != n:
+                raise EvidenceError(f"batch evidence on {node} has {len(values)} rows, expected {n}")
+            out = np.where(values < 0, -1, values).astype(np.intp)
+            bad = out >= self.bn.schema.cardinality(node)
+            if bad.any():
+                self._value(node, int(out[bad][0]))  # raises UnknownValueError, naming the value
+            return out
+        vals = list(values)
+        if len(vals) != n:
+            raise EvidenceError(f"batch evidence on {node} has {len(vals)} rows, expected {n}")
+        out = np.empty(n, dtype=np.intp)
+        for i, v in enumerate(vals):
+            if (
+                v is None
+                or (isinstance(v, float) and np.isnan(v))
+                or (isinstance(v, int | np.integer) and v < 0)
+            ):
+                out[i] = -1
+            else:
+                out[i] = self._value(node, v)
+        return out
+
+    def soft_vector(self, node: str, dist: Mapping[str, float] | Sequence[float] | np.ndarray) -> np.ndarray:
+        """Validate soft evidence on ``node`` and return it as a vector over the node's values, shape (k,)."""
+        self._check_node(node)
         values = self.bn.schema.values_of(node)
         if isinstance(dist, Mapping):
             q = np.zeros(len(values))
@@ -239,71 +264,7 @@ class InferenceEngine(BatchQueries):
             f"impossible evidence: {self._describe(evidence, soft)} has probability 0 under the model{hint}"
         )
 
-    # ------------------------------------------------------------------ single queries
-    def _posterior_core(
-        self,
-        evidence: Mapping[str, str | int] | None,
-        soft: SoftEvidence | None,
-        soft_rule: str,
-    ) -> tuple[np.ndarray, tuple, list[int], dict[str, int], dict[int, int], float]:
-        core, leaf = self._split_hard(evidence)
-        idx = tuple(core.get(a, slice(None)) for a in range(len(self.shape)))
-        free = [a for a in range(len(self.shape)) if a not in core]
-        p = self.base[idx]
-        for node, v in leaf.items():
-            p = p * self.leaf_table[self.leaf_row[node] + v][idx]
-        if soft:
-            check_soft_rule(soft_rule)
-            qs = {}
-            for node, dist in soft.items():
-                q = self.soft_vector(node, dist)
-                a = self.axis[node]
-                if a in core:
-                    raise EvidenceError(f"{node} is given twice: as hard evidence and as soft evidence")
-                qs[free.index(a)] = q
-            hard_possible = bool(p.sum() > 0.0)
-            p = self._apply_soft(p, qs, soft_rule, evidence, soft)
-        else:
-            hard_possible = False
-        total = float(p.sum())
-        if not total > 0.0:
-            raise self._impossible(evidence, soft, hard_possible)
-        return p, idx, free, leaf, core, total
-
-    def _apply_soft(self, p: np.ndarray, qs: dict[int, np.ndarray], rule: str, evidence, soft) -> np.ndarray:
-        nd = p.ndim
-        if rule == "virtual":
-            for k, q in qs.items():
-                # a likelihood is defined up to a factor: scale it so that its largest entry among the
-                # values the evidence allows is 1, so tiny but valid likelihoods (1e-320) cannot underflow
-                allowed = p.sum(axis=tuple(i for i in range(nd) if i != k)) > 0
-                top = float(q[allowed].max()) if allowed.any() else 0.0
-                if top > 0.0:
-                    q = np.where(allowed, q, 0.0) / top
-                shape = [1] * nd
-                shape[k] = q.size
-                p = p * q.reshape(shape)
-            return p
-        # Jeffrey's rule; with several soft nodes, iterative proportional fitting of their marginals.
-        p = np.array(p, dtype=float)
-        for _ in range(IPFP_MAX_ITER if len(qs) > 1 else 1):
-            worst = 0.0
-            for k, q in qs.items():
-                others = tuple(i for i in range(nd) if i != k)
-                z = p.sum(axis=others)
-                if (q > 0).any() and ((z <= 0) & (q > 0)).any():
-                    raise self._impossible(evidence, soft)
-                zt = z.sum()
-                if len(qs) > 1:
-                    worst = max(worst, float(np.abs(z / zt - q).max()))
-                f = np.divide(q, z, out=np.zeros_like(q), where=z > 0)
-                shape = [1] * nd
-                shape[k] = q.size
-                p = p * f.reshape(shape)
-            if worst < IPFP_TOL:
-                break
-        return p
-
+    # ------------------------------------------------------------------ numeric results (each engine)
     def query(
         self,
         targets: Sequence[str] | str,
@@ -311,48 +272,67 @@ class InferenceEngine(BatchQueries):
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> dict[str, np.ndarray]:
-        """Posterior marginal of each target node given hard and soft evidence.
+        """Posterior marginal of each target node given hard and soft evidence (the numeric form).
 
         Parameters
         ----------
-        targets : node names (affordance or word nodes)
+        targets : node names
         evidence : hard evidence, node → value (a value name, an alias such as ``circle``, or an index)
-        soft : soft evidence on affordance nodes, node → {value: probability} or a vector over its values
+        soft : soft evidence, node → {value: probability} or a vector over its values
         soft_rule : ``"virtual"`` (likelihood evidence, the originals' choice) or ``"jeffrey"``
 
         Returns
         -------
-        dict target → array, shape (n_values,), the posterior in the node's value order.
+        dict target → array, shape (n_values,), the posterior in the node's value order
+        (:meth:`posteriors` gives the same as labelled Series).
 
         Raises
         ------
         UnknownNodeError, UnknownValueError, EvidenceError, ImpossibleEvidenceError (all ValueError)
         """
-        if isinstance(targets, str):
-            targets = [targets]
-        p, idx, free, leaf, core, total = self._posterior_core(evidence, soft, soft_rule)
-        out: dict[str, np.ndarray] = {}
-        for t in targets:
-            a = self.axis.get(t)
-            if a is None and t not in self._value_index:
-                raise UnknownNodeError(unknown_node_message(t, self.nodes))
-            if a is not None:
-                if a in core:
-                    r = np.zeros(self.shape[a])
-                    r[core[a]] = 1.0
-                else:
-                    k = free.index(a)
-                    r = p.sum(axis=tuple(i for i in range(p.ndim) if i != k)) / total
-            elif t in leaf:
-                r = np.zeros(self.bn.schema.cardinality(t))
-                r[leaf[t]] = 1.0
-            else:
-                row = self.leaf_row[t]
-                n_v = self.bn.schema.cardinality(t)
-                tab = self.leaf_table[row : row + n_v][(slice(None), *idx)]
-                r = (tab * p).reshape(n_v, -1).sum(axis=1) / total
-            out[t] = r
-        return out
+        raise NotImplementedError  # pragma: no cover - each engine defines it
+
+    def query_batch(
+        self,
+        targets: Sequence[str] | str,
+        evidence: Mapping[str, Sequence] | None = None,
+        soft: Mapping[str, np.ndarray] | None = None,
+        soft_rule: SoftRule = "virtual",
+        errors: Literal["raise", "nan"] = "raise",
+    ) -> dict[str, np.ndarray]:
+        """Posterior marginals for many evidence sets at once, vectorised over the rows.
+
+        Parameters
+        ----------
+        targets : node names
+        evidence : node → sequence of n values (names or indices; None, NaN or -1 = not observed), e.g. the
+            columns of a DataFrame
+        soft : node → array, shape (n, n_values): one soft-evidence distribution per row
+        soft_rule : ``"virtual"`` or ``"jeffrey"``
+        errors : ``"raise"`` an :class:`ImpossibleEvidenceError` naming the first impossible row, or give
+            that row ``nan``
+
+        Returns
+        -------
+        dict target → array, shape (n, n_values).
+        """
+        raise NotImplementedError  # pragma: no cover - each engine defines it
+
+    def word_probability_array(
+        self,
+        evidence: Mapping[str, str | int] | None = None,
+        soft: SoftEvidence | None = None,
+        soft_rule: SoftRule = "virtual",
+    ) -> np.ndarray:
+        """P(word = present | evidence) for every binary leaf, shape (n_words,), in ``binary_leaves`` order."""
+        if not self.binary_leaves:
+            return np.zeros(0)
+        res = self.query(list(self.binary_leaves), evidence, soft, soft_rule)
+        return np.array([res[w][1] for w in self.binary_leaves])
+
+    def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
+        """P(hard evidence) under the model (0 for impossible evidence)."""
+        raise NotImplementedError  # pragma: no cover - each engine defines it
 
     # ------------------------------------------------------------------ labelled results (pandas)
     def posterior(
@@ -394,6 +374,44 @@ class InferenceEngine(BatchQueries):
             for t, p in res.items()
         }
 
+    def marginals(
+        self,
+        evidence: Mapping[str, str | int] | None = None,
+        soft: SoftEvidence | None = None,
+        soft_rule: SoftRule = "virtual",
+    ) -> dict[str, pd.Series]:
+        """The posterior of every node: node → Series indexed by its values (:meth:`posteriors` of all nodes).
+
+        >>> from glu.bn import learn_bn
+        >>> from glu.data import load_experiments
+        >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
+        >>> m = eng.marginals({"Action": "tap"})
+        >>> len(m), m["Action"].to_dict()
+        (57, {'grasp': 0.0, 'tap': 1.0, 'touch': 0.0})
+        """
+        return self.posteriors(list(self.nodes), evidence, soft, soft_rule)
+
+    def word_probabilities(
+        self,
+        evidence: Mapping[str, str | int] | None = None,
+        soft: SoftEvidence | None = None,
+        soft_rule: SoftRule = "virtual",
+    ) -> pd.Series:
+        """P(word = present | evidence) for every word node, a Series indexed by word (``binary_leaves``).
+
+        The labelled form of :meth:`word_probability_array`.
+
+        >>> from glu.bn import learn_bn
+        >>> from glu.data import load_experiments
+        >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
+        >>> eng.word_probabilities({"Action": "tap"})[["tapping", "grasping"]].round(3).to_dict()
+        {'tapping': 0.192, 'grasping': 0.0}
+        """
+        import pandas as pd
+
+        probs = self.word_probability_array(evidence, soft, soft_rule)
+        return pd.Series(probs, index=pd.Index(self.binary_leaves, name="word"), name="p(present)")
+
     def posterior_table(
         self,
         target: str,
@@ -424,41 +442,3 @@ class InferenceEngine(BatchQueries):
         return pd.DataFrame(
             res, index=evidence.index, columns=pd.Index(self.bn.schema.values_of(target), name=target)
         )
-
-    def word_probabilities(
-        self,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> np.ndarray:
-        """P(word = present | evidence) for every binary word node, shape (n_words,), in ``binary_leaves`` order."""
-        p, idx, _, leaf, _, total = self._posterior_core(evidence, soft, soft_rule)
-        if idx and any(not isinstance(i, slice) for i in idx):
-            tab = self.leaf_table[self._present_rows][(slice(None), *idx)].reshape(
-                len(self._present_rows), -1
-            )
-        else:
-            tab = self._present_flat
-        probs = tab @ np.ravel(p) / total
-        for w, v in leaf.items():
-            if w in self.binary_leaves:
-                probs[self.binary_leaves.index(w)] = float(v == 1)
-        return probs
-
-    def marginals(
-        self,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> dict[str, np.ndarray]:
-        """Posterior marginals of every node (see :meth:`query`)."""
-        return self.query(list(self.nodes), evidence, soft, soft_rule)
-
-    def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
-        """P(hard evidence) under the model (0 for impossible evidence)."""
-        core, leaf = self._split_hard(evidence)
-        idx = tuple(core.get(a, slice(None)) for a in range(len(self.shape)))
-        p = self.base[idx]
-        for node, v in leaf.items():
-            p = p * self.leaf_table[self.leaf_row[node] + v][idx]
-        return float(np.sum(p))

@@ -9,6 +9,8 @@ JSON model file (``glu bn learn -o MODEL.json``; :meth:`BayesNet.save` / :meth:`
       "format": "glu-bayesnet", "version": 1,
       "n_affordance": 8,                      # the first 8 nodes are affordance nodes, the rest words
       "meta": {"data_source": "...", "words": "lab", "unseen_words": "zero", ...},
+      "schema": {"name": "...", "roles": {"Tool": "action", ...}, "roots": ["Tool", ...]},
+                                              # optional: a lab's own schema (GLU's is implied)
       "nodes": [
         {"name": "ObjVel", "values": ["slow", "medium", "fast"],
          "parents": ["Action", "Shape", "Size"],
@@ -17,7 +19,10 @@ JSON model file (``glu bn learn -o MODEL.json``; :meth:`BayesNet.save` / :meth:`
       ]
     }
 
-Floats are written with Python's ``repr``, so a saved model loads back bit for bit.
+Floats are written with Python's ``repr``, so a saved model loads back bit for bit. The ``schema`` entry
+keeps what a lab's own schema file said about its nodes (the role of each, which the experimenter sets:
+:func:`glu.schema.action_node` finds the action node by its role); a model over GLU's own nodes leaves it
+out (GLU's roles are implied, and its model files stay as they were).
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ import pandas as pd
 
 from glu.errors import DataError, ModelError
 from glu.files import atomic_write_json
-from glu.schema import FILE_ALIASES, WORD_VALUES, Schema
+from glu.schema import AFFORDANCE_NODES, AFFORDANCE_ROLES, FILE_ALIASES, ROLES, WORD_VALUES, Schema
 
 FORMAT = "glu-bayesnet"
 VERSION = 1
@@ -176,11 +181,22 @@ class BayesNet:
     # ------------------------------------------------------------------ input / output
     def to_dict(self) -> dict[str, Any]:
         """The JSON-ready form of the model (see the module docstring)."""
-        return {
+        out: dict[str, Any] = {
             "format": FORMAT,
             "version": VERSION,
             "n_affordance": self.schema.n_affordance,
             "meta": dict(self.meta),
+        }
+        s = self.schema
+        if s.roles and s.affordance_nodes != AFFORDANCE_NODES:  # a lab's own schema: keep its roles
+            out["schema"] = {
+                "name": s.name,
+                "roles": dict(s.roles),
+                "roots": list(s.root_nodes),
+                "aliases": {k: dict(v) for k, v in s.aliases.items()},
+            }
+        return {
+            **out,
             "nodes": [
                 {
                     "name": n,
@@ -216,7 +232,25 @@ class BayesNet:
             values = {str(n["name"]): tuple(str(v) for v in n["values"]) for n in nodes}
             if len(values) != len(nodes):
                 raise ModelError(f"{where}: a node name appears twice")
-            schema = Schema(values=values, n_affordance=int(d["n_affordance"]), aliases=FILE_ALIASES)
+            extra = d.get("schema", {})
+            if not isinstance(extra, Mapping):
+                raise ModelError(f'{where}: "schema" must be an object, not {type(extra).__name__}')
+            roots = extra.get("roots")
+            roles = {str(k): str(v) for k, v in extra.get("roles", {}).items()}
+            n_aff = int(d["n_affordance"])
+            if not roles and tuple(values)[:n_aff] == AFFORDANCE_NODES:  # GLU's nodes: GLU's roles
+                roles = dict(AFFORDANCE_ROLES)
+            bad = sorted(r for r in roles.values() if r not in ROLES)
+            if bad:
+                raise ModelError(f"{where}: unknown role(s) {bad}; roles are {', '.join(ROLES)}")
+            schema = Schema(
+                values=values,
+                n_affordance=n_aff,
+                aliases=extra.get("aliases", FILE_ALIASES),
+                roots=None if roots is None else tuple(str(r) for r in roots),
+                roles=roles,
+                name=str(extra.get("name", "")),
+            )
             parents = {str(n["name"]): tuple(str(p) for p in n["parents"]) for n in nodes}
             cpts = {str(n["name"]): np.asarray(n["cpt"], dtype=float) for n in nodes}
             meta = d.get("meta", {})
@@ -286,7 +320,8 @@ class BayesNet:
             raise ModelError(
                 f"{path}: not an original BNT network in {variable!r} ({type(e).__name__}: {e})"
             ) from None
-        schema = Schema(values=values, n_affordance=n_aff, aliases=FILE_ALIASES)
+        roles = dict(AFFORDANCE_ROLES) if tuple(names[:n_aff]) == AFFORDANCE_NODES else {}
+        schema = Schema(values=values, n_affordance=n_aff, aliases=FILE_ALIASES, roles=roles)
         meta = {"data_source": f"original model imported from {path.name}", "origin": str(path)}
         return cls(schema=schema, parents=parents, cpts=cpts, meta=meta)
 

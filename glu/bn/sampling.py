@@ -34,7 +34,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from glu.bn.inference import InferenceEngine
-from glu.errors import EvidenceError, ImpossibleEvidenceError, UnknownNodeError
+from glu.errors import EvidenceError, ImpossibleEvidenceError, ModelError, UnknownNodeError
 from glu.schema import unknown_node_message
 
 
@@ -69,6 +69,11 @@ def sample(
     """
     if not fixed:
         raise EvidenceError("sample needs at least one fixed node (it gives the number of rows)")
+    if not hasattr(engine, "base"):
+        raise ModelError(
+            "sampling draws from the core engine's joint table, and this network is answered by the junction "
+            "tree (its core is too large): sample a network shaped like GLU's"
+        )
     codes = {}
     for node, v in fixed.items():
         if node not in engine.axis:

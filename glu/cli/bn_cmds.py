@@ -1,4 +1,4 @@
-"""``glu bn learn|edges|import|export`` and ``glu query``: learn the network, inspect it, ask it questions."""
+"""``glu bn learn|edges|nodes|import|export`` and ``glu query``: learn the network, inspect it, ask it questions."""
 
 from __future__ import annotations
 
@@ -8,13 +8,16 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.bn.exchange import FORMATS, ZERO_ROW_MODES
+from glu.bn.exchange import FORMATS, IMPORT_TOL, ZERO_ROW_MODES
+from glu.bn.rows import RENORMALISE_DEFAULT
 from glu.cli.common import (
     add_data_args,
+    add_engine_args,
     add_evidence_args,
     add_model_args,
     json_text,
     load_model,
+    make_engine,
     output_file,
     read_evidence,
 )
@@ -39,6 +42,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     ep.add_argument("model", type=Path, help="model file (.json from `glu bn learn`, or the original .mat)")
     ep.set_defaults(func=_edges)
 
+    np_ = bsub.add_parser(
+        "nodes",
+        help="list the nodes of a model: kind (role or word), values, parents",
+        description="One line per node: its name, its kind (the schema's role — action, object, effect — "
+        "for affordance nodes, 'word' for word nodes, 'node' when the file says nothing), its values and its "
+        "parents. --json prints [{name, kind, values, parents}, …].",
+    )
+    np_.add_argument("model", type=Path, help="model file (.json, the original .mat, or .bif/.xmlbif/.uai)")
+    np_.add_argument("--json", action="store_true", help="print a JSON list only")
+    np_.set_defaults(func=_nodes)
+
     ip = bsub.add_parser(
         "import",
         help="convert a model from another tool (BIF, XMLBIF, UAI) or the original BNT .mat to a glu JSON model",
@@ -49,6 +63,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     ip.add_argument("model", type=Path, metavar="FILE", help="e.g. net.bif, net.xmlbif, net.uai, BN_lab.mat")
     ip.add_argument("-o", "--out", type=output_file, required=True, help="model file to write (JSON)")
     ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
+    ip.add_argument(
+        "--renormalise",
+        type=_tolerance,
+        nargs="?",
+        const=RENORMALISE_DEFAULT,
+        metavar="TOL",
+        help=f"rescale CPT rows whose sum is within TOL of 1 (default without the option: {IMPORT_TOL:g}; "
+        f"--renormalise alone: {RENORMALISE_DEFAULT:g}); the rows rescaled are reported",
+    )
     ip.set_defaults(func=_import)
 
     xp = bsub.add_parser(
@@ -79,9 +102,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_model_args(q)
     q.add_argument(
-        "--target", action="extend", nargs="+", default=[], metavar="NODE", help="node(s) to infer"
+        "--target",
+        action="extend",
+        nargs="+",
+        default=[],
+        metavar="NODE",
+        help=f"node(s) to infer; '{WORDS_TARGET}' = every word node's P(present)",
     )
     add_evidence_args(q)
+    add_engine_args(q)
     q.add_argument("--json", action="store_true", help='print {"NODE": {"VALUE": p, …}, …} only')
     q.add_argument(
         "--batch",
@@ -107,6 +136,40 @@ def _edges(args: argparse.Namespace) -> int:
     return 0
 
 
+def node_kind(bn: Any, node: str) -> str:
+    """What a node is: its schema role (action, object, effect), ``word``, or ``node`` when unknown."""
+    if node in bn.schema.word_nodes:
+        return "word"
+    return bn.schema.roles.get(node, "node")
+
+
+def _nodes(args: argparse.Namespace) -> int:
+    args.data = None
+    bn, desc = load_model(args)
+    rows = [
+        {
+            "name": n,
+            "kind": node_kind(bn, n),
+            "values": list(bn.schema.values_of(n)),
+            "parents": list(bn.parents[n]),
+        }
+        for n in bn.nodes
+    ]
+    if args.json:
+        print(json_text(rows))
+        return 0
+    n_words = len(bn.schema.word_nodes)
+    print(f"# {desc}: {len(rows)} nodes, {n_words} of them word nodes")
+    w_name = max(len("node"), *(len(r["name"]) for r in rows))
+    w_kind = max(len("kind"), *(len(r["kind"]) for r in rows))
+    values = [", ".join(r["values"]) for r in rows]
+    w_val = min(40, max(len("values"), *(len(v) for v in values)))
+    print(f"{'node':<{w_name}}  {'kind':<{w_kind}}  {'values':<{w_val}}  parents")
+    for r, v in zip(rows, values, strict=True):
+        print(f"{r['name']:<{w_name}}  {r['kind']:<{w_kind}}  {v:<{w_val}}  {', '.join(r['parents']) or '—'}")
+    return 0
+
+
 def _same_file(a: Path, b: Path) -> bool:
     try:
         return a.resolve() == b.resolve()
@@ -114,12 +177,36 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
+def _tolerance(text: str) -> float:
+    """--renormalise TOL: a number in [0, 1)."""
+    try:
+        tol = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
+    if not 0 <= tol < 1:
+        raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
+    return tol
+
+
+def renormalised_text(meta: dict) -> str:
+    """One line on the rows an import rescaled (``meta["renormalised"]``), or '' when none was."""
+    r = meta.get("renormalised")
+    if not r:
+        return ""
+    return (
+        f"rescaled {r['rows']} CPT row(s) to sum to 1 (largest |1 − sum| = {r['largest_deviation']:.2g}, "
+        f"in {r['at']}; tolerance {r['tolerance']:g})"
+    )
+
+
 def _import(args: argparse.Namespace) -> int:
     from glu.cli.common import read_model_file
 
     if _same_file(args.model, args.out):
         raise GluError(f"-o {args.out} is the input file; write the JSON model to another file")
-    bn = read_model_file(args.model, args.format)
+    if args.renormalise is not None and args.model.suffix.lower() in (".mat", ".json"):
+        raise GluError("--renormalise applies to BIF, XMLBIF and UAI files")
+    bn = read_model_file(args.model, args.format, renormalise=args.renormalise)
     bn.save(args.out)
     zr = bn.zero_rows()
     print(
@@ -127,6 +214,9 @@ def _import(args: argparse.Namespace) -> int:
         + (f", all-zero CPT rows: {zr}" if zr else "")
         + f" (imported from {args.model})"
     )
+    note = renormalised_text(bn.meta)
+    if note:
+        print(note)
     return 0
 
 
@@ -149,20 +239,30 @@ def _export(args: argparse.Namespace) -> int:
     return 0
 
 
+WORDS_TARGET = "words"
+"""``--target words``: every word node's P(present) (unless the model has a node of that name)."""
+
+
 def _answer(
     bn, engine, targets: list[str], evidence: dict, soft: dict, rule: str
 ) -> dict[str, dict[str, float]]:
     if not targets:
         raise EvidenceError("no target: give at least one --target NODE")
-    res = engine.query(targets, evidence, soft or None, rule)
-    return {t: {v: float(p) for v, p in zip(bn.schema.values_of(t), res[t], strict=True)} for t in targets}
+    words = WORDS_TARGET in targets and WORDS_TARGET not in bn.schema.values
+    nodes = [t for t in targets if not (words and t == WORDS_TARGET)]
+    res = engine.query(nodes, evidence, soft or None, rule) if nodes else {}
+    out = {t: {v: float(p) for v, p in zip(bn.schema.values_of(t), res[t], strict=True)} for t in nodes}
+    if words:
+        if not engine.binary_leaves:
+            raise EvidenceError(f"--target {WORDS_TARGET}: this model has no word nodes")
+        probs = engine.word_probability_array(evidence, soft or None, rule)
+        out[WORDS_TARGET] = {w: float(p) for w, p in zip(engine.binary_leaves, probs, strict=True)}
+    return out
 
 
 def _query(args: argparse.Namespace) -> int:
-    from glu.bn.inference import InferenceEngine
-
     bn, desc = load_model(args)
-    engine = InferenceEngine(bn)
+    engine = make_engine(bn, args)
     if args.batch:
         return _query_batch(args, bn, engine, desc)
     evidence, soft = read_evidence(args)
@@ -173,11 +273,20 @@ def _query(args: argparse.Namespace) -> int:
         return 0
     print(f"# {desc}")
     print(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")
-    width = max(len(t) for t in answer)
-    for t, dist in answer.items():
-        vwidth = max(len(v) for v in dist)
-        for v, prob in dist.items():
-            print(f"{t:<{width}}  {v:<{vwidth}}  {prob:.6f}")
+    words = (
+        answer.pop(WORDS_TARGET) if WORDS_TARGET in answer and WORDS_TARGET not in bn.schema.values else None
+    )
+    if answer:
+        width = max(len(t) for t in answer)
+        for t, dist in answer.items():
+            vwidth = max(len(v) for v in dist)
+            for v, prob in dist.items():
+                print(f"{t:<{width}}  {v:<{vwidth}}  {prob:.6f}")
+    if words is not None:
+        wwidth = max(len("word"), *(len(w) for w in words))
+        print(f"{'word':<{wwidth}}  P(present)")
+        for w, prob in words.items():
+            print(f"{w:<{wwidth}}  {prob:.6f}")
     return 0
 
 

@@ -189,6 +189,27 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
     add_data_args(p)
 
 
+def add_engine_args(p: argparse.ArgumentParser) -> None:
+    """``--max-table``: the largest table exact inference may build (read by :func:`make_engine`)."""
+    from glu.bn.plan import MAX_TABLE_DEFAULT, MAX_TABLE_ENV
+
+    p.add_argument(
+        "--max-table",
+        type=positive_int,
+        metavar="N",
+        help=f"largest table (entries) exact inference may build in a large network; a network that needs "
+        f"more is refused with its size and elimination width (default: ${MAX_TABLE_ENV}, else "
+        f"{MAX_TABLE_DEFAULT:,})",
+    )
+
+
+def make_engine(bn: Any, args: argparse.Namespace) -> Any:
+    """The :class:`~glu.bn.inference.InferenceEngine` of ``bn`` with the command's ``--max-table``."""
+    from glu.bn.inference import InferenceEngine
+
+    return InferenceEngine(bn, max_table=getattr(args, "max_table", None))
+
+
 def add_evidence_args(p: argparse.ArgumentParser) -> None:
     """``--evidence``, ``--soft``, ``--soft-rule`` (read by :func:`read_evidence`)."""
     from glu.bn.soft import SOFT_RULES
@@ -253,8 +274,11 @@ def read_evidence(args: argparse.Namespace) -> tuple[dict[str, str], dict[str, d
     return evidence, soft
 
 
-def read_model_file(path: Path, fmt: str | None = None) -> Any:
-    """A :class:`~glu.bn.model.BayesNet` from a file: glu's JSON, the originals' ``.mat``, or BIF/XMLBIF/UAI."""
+def read_model_file(path: Path, fmt: str | None = None, renormalise: float | None = None) -> Any:
+    """A :class:`~glu.bn.model.BayesNet` from a file: glu's JSON, the originals' ``.mat``, or BIF/XMLBIF/UAI.
+
+    ``renormalise``: the tolerance of :func:`glu.bn.exchange.import_bn` for rows that do not sum to 1.
+    """
     from glu.bn.model import BayesNet
 
     suffix = path.suffix.lower()
@@ -264,7 +288,7 @@ def read_model_file(path: Path, fmt: str | None = None) -> Any:
         return BayesNet.load(path)
     from glu.bn.exchange import import_bn
 
-    return import_bn(path, fmt)
+    return import_bn(path, fmt, renormalise)
 
 
 def load_model(args: argparse.Namespace) -> tuple[Any, str]:
@@ -275,7 +299,9 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
         if getattr(args, "data", None):
             raise EvidenceError("give either --model or --data, not both")
         bn = read_model_file(model)
-        return bn, f"model {model} ({bn.meta.get('data_source', 'unknown data')})"
+        r = bn.meta.get("renormalised")
+        rescaled = f"; {r['rows']} CPT row(s) rescaled to sum to 1 on import" if r else ""
+        return bn, f"model {model} ({bn.meta.get('data_source', 'unknown data')}{rescaled})"
     from glu.bn.learning import learn_bn
     from glu.data.source import load_experiments, resolve_data
 

@@ -11,10 +11,12 @@ from pathlib import Path
 
 from glu.cli.common import (
     add_description_args,
+    add_engine_args,
     add_evidence_args,
     add_model_args,
     json_text,
     load_model,
+    make_engine,
     positive_int,
     read_candidates,
     read_evidence,
@@ -44,6 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_model_args(p)
     add_evidence_args(p)
+    add_engine_args(p)
     add_description_args(p)
     p.add_argument(
         "--nbest", type=positive_int, default=10, metavar="N", help="how many sentences (default 10)"
@@ -104,7 +107,6 @@ SCORE_TEXT = {
 
 
 def _describe(args: argparse.Namespace) -> int:
-    from glu.bn.inference import InferenceEngine
     from glu.language.descriptions import nbest, rank_sentences, word_probabilities
     from glu.language.grammar import load_grammar
     from glu.language.sampling import sample_sentences
@@ -131,8 +133,9 @@ def _describe(args: argparse.Namespace) -> int:
     n_sentences = count_sentences(net, limit)
     candidates = read_candidates(args)
     bn, desc = load_model(args)
-    engine = InferenceEngine(bn)
-    probs = word_probabilities(engine, evidence, soft, args.soft_rule)
+    engine = make_engine(bn, args)
+    vocabulary = list(net.words) + [w for c in candidates or () for w in c]
+    probs = word_probabilities(engine, evidence, soft, args.soft_rule, vocabulary=vocabulary)
 
     t0 = time.perf_counter()
     exact = nbest(
@@ -152,6 +155,10 @@ def _describe(args: argparse.Namespace) -> int:
     say(f"# grammar: {gram_name}: {n_sentences:,} sentences of {net.min_length}–{limit} words")
     say(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")
     say(f"# score: {args.score} = {SCORE_TEXT[args.score]}")
+    others = probs.attrs["not_in_network"]
+    if others:
+        shown = ", ".join(others[:12]) + (f", … ({len(others)} words)" if len(others) > 12 else "")
+        say(f"# words that are not network nodes score as p = 1 (function words): {shown}")
     if args.must_contain:
         say(f"# only sentences containing: {' or '.join(args.must_contain)}")
     if args.sample is not None:

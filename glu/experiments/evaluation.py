@@ -199,7 +199,7 @@ def network_tables(engine: InferenceEngine, nodes: Sequence[str], target: str) -
             full = {**ev, "Action": a}
             try:
                 p_x[c, k] = (
-                    engine.word_probabilities(full)
+                    engine.word_probability_array(full)
                     if target == "words"
                     else engine.query([target], full)[target]
                 )

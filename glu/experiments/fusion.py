@@ -110,15 +110,17 @@ def word_probability_change(
     """
     ev = dict(WORD_EVIDENCE[evidence] if isinstance(evidence, str) else evidence)
     eng = InferenceEngine(bn)
-    without = eng.word_probabilities(ev)
-    with_tap = eng.word_probabilities({**ev, "Action": "tap"})
+    without = eng.word_probability_array(ev)
+    with_tap = eng.word_probability_array({**ev, "Action": "tap"})
     df = pd.DataFrame({"word": list(eng.binary_leaves), "p_without": without, "p_with": with_tap})
     df["delta"] = df["p_with"] - df["p_without"]
     df["shown"] = df["delta"].abs() > threshold
     df.insert(0, "evidence", evidence_text(ev))
     if reference:
         r = InferenceEngine(reference)
-        df["delta_original"] = r.word_probabilities({**ev, "Action": "tap"}) - r.word_probabilities(ev)
+        df["delta_original"] = r.word_probability_array({**ev, "Action": "tap"}) - r.word_probability_array(
+            ev
+        )
         df["difference"] = df["delta"] - df["delta_original"]
     return tidy(
         df,

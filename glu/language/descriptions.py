@@ -68,6 +68,7 @@ from glu.language.candidates import SentenceSet
 from glu.language.grammar import Grammar, load_grammar
 from glu.language.sampling import sample_sentences
 from glu.language.sentences import Sentence, WordNetwork, as_network, count_sentences, restrict
+from glu.language.words import word_probabilities
 
 WordProbs = Mapping[str, float] | pd.Series
 """P(word = present | evidence) by word: a mapping or a Series indexed by word."""
@@ -132,7 +133,8 @@ class LogProbs:
             shown = ", ".join(missing[:10]) + (f", … ({len(missing)} words)" if len(missing) > 10 else "")
             raise VocabularyError(
                 f"no probability for the word(s) {shown}: the grammar uses words the model does not have "
-                f"(the model's words: {', '.join(list(probs)[:8])}, … {len(probs)} in all)"
+                f"(the model's words: {', '.join(list(probs)[:8])}, … {len(probs)} in all); words that are "
+                "not network nodes score as probability 1 with word_probabilities(engine, …, vocabulary=grammar)"
             )
         logs = []
         for w in words:
@@ -162,24 +164,6 @@ def _as_mapping(word_probs: WordProbs) -> Mapping[str, Any]:
         return word_probs
     raise TypeError(
         f"word probabilities must be a mapping word → p or a pandas Series, not {type(word_probs).__name__}"
-    )
-
-
-def word_probabilities(
-    engine: Any,
-    evidence: Mapping[str, str | int] | None = None,
-    soft: Mapping[str, Any] | None = None,
-    soft_rule: str = "virtual",
-) -> pd.Series:
-    """P(word = present | evidence) from an :class:`~glu.bn.InferenceEngine`, a Series indexed by word, shape (n_words,).
-
-    ``soft`` is soft evidence on affordance nodes; a gesture posterior ``p_hmm`` enters as
-    ``soft={"Action": p_hmm}`` (fusion, METHOD.md §2), with ``soft_rule`` ``"virtual"`` (the originals') or
-    ``"jeffrey"``.
-    """
-    probs = engine.word_probabilities(evidence, soft or None, soft_rule)
-    return pd.Series(
-        np.asarray(probs, dtype=float), index=list(engine.binary_leaves), name="p(word | evidence)"
     )
 
 
@@ -472,13 +456,24 @@ def describe(
 
     With ``candidates=None`` the exact :func:`nbest` over the whole grammar; with a list of sentences
     (e.g. the originals' 9,941 samples) :func:`rank_sentences` over that list. ``score`` names one of
-    :data:`SCORES`.
+    :data:`SCORES`. Words of the grammar (or of the candidates) that are not network nodes score as
+    probability 1 (:mod:`glu.language.words`); they are listed in the result's ``attrs["not_in_network"]``.
 
     Returns
     -------
     DataFrame with columns rank, sentence, score, length (see :func:`nbest`).
     """
-    probs = word_probabilities(engine, evidence, soft, soft_rule)
+    if isinstance(candidates, SentenceSet):
+        vocabulary: Any = candidates.vocabulary
+    elif candidates is not None:
+        candidates = [tuple(c.split()) if isinstance(c, str) else tuple(c) for c in candidates]
+        vocabulary = [w for c in candidates for w in c]
+    else:
+        vocabulary = _network(grammar)
+    probs = word_probabilities(engine, evidence, soft, soft_rule, vocabulary=vocabulary)
     if candidates is not None:
-        return rank_sentences(candidates, probs, n, score, must_contain)
-    return nbest(grammar, probs, n, must_contain=must_contain, score=score)
+        out = rank_sentences(candidates, probs, n, score, must_contain)
+    else:
+        out = nbest(grammar, probs, n, must_contain=must_contain, score=score)
+    out.attrs["not_in_network"] = probs.attrs["not_in_network"]
+    return out
