@@ -55,7 +55,7 @@ def _broadcast(table: np.ndarray, axes: Sequence[int], ndim: int) -> np.ndarray:
     return t.reshape(shape)
 
 
-class CoreEngine(BatchQueries, InferenceEngine):
+class CoreEngine(BatchQueries, InferenceEngine, method="core"):
     """Exact marginals of a :class:`BayesNet` whose non-core nodes are leaves with core parents.
 
     Parameters

@@ -56,6 +56,9 @@ if TYPE_CHECKING:
 SoftEvidence = Mapping[str, Mapping[str, float] | Sequence[float] | np.ndarray]
 Method = Literal["auto", "core", "junction"]
 METHODS: tuple[str, ...] = ("auto", "core", "junction")
+ENGINES: dict[str, type] = {}
+"""The engine of each method, as the subclasses register themselves (``class CoreEngine(…, method="core")``);
+:mod:`glu.bn` imports both, so they are registered before any engine is made."""
 CORE_MAX_STATES = 1 << 16
 """``method="auto"`` takes the core engine only if the core's joint table has at most this many states …"""
 CORE_MAX_ENTRIES = 1 << 22
@@ -133,11 +136,17 @@ class InferenceEngine:
         cls, bn: BayesNet | None = None, method: Method = "auto", max_table: int | None = None
     ) -> Any:
         if cls is InferenceEngine and bn is not None:  # (unpickling calls __new__ without arguments)
-            if choose_method(bn, method) == "core":
-                from glu.bn.core import CoreEngine as cls
-            else:
-                from glu.bn.junction import JunctionTreeEngine as cls
+            kind = choose_method(bn, method)
+            if kind not in ENGINES:  # pragma: no cover - glu.bn imports both engines
+                raise ModelError(f"no {kind} engine is loaded (import glu.bn, which loads them)")
+            cls = ENGINES[kind]
         return super().__new__(cls)
+
+    def __init_subclass__(cls, method: str = "", **kwargs: Any) -> None:
+        """A subclass given ``method=`` is the engine :meth:`__new__` returns for that method."""
+        super().__init_subclass__(**kwargs)
+        if method:
+            ENGINES[method] = cls
 
     def _setup(self, bn: BayesNet, method: str) -> None:
         """What every engine shares: the network, its nodes, value look-up (aliases included), word nodes."""

@@ -71,7 +71,7 @@ CONDITION_ROWS = 32
 (:mod:`glu.bn.conditioned`) instead of using the network's one junction tree."""
 
 
-class JunctionTreeEngine(JunctionBatch, InferenceEngine):
+class JunctionTreeEngine(JunctionBatch, InferenceEngine, method="junction"):
     """Exact inference in any discrete :class:`BayesNet` by junction tree propagation (see the module docstring).
 
     Parameters
