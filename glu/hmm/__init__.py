@@ -5,7 +5,9 @@ Laid out the way dynamax lays out a model family, one module per concern:
 * :mod:`~glu.hmm.model` — :class:`GestureHMM`, one model's parameters, validated, and its JSON form;
 * :mod:`~glu.hmm.inference` — the forward and forward–backward recursions as pure functions over arrays:
   the readable reference, the one to edit and the oracle the fast paths are tested against;
-* :mod:`~glu.hmm.em` — Baum–Welch, one model, built on those recursions;
+* :mod:`~glu.hmm.em` — Baum–Welch, one model, built on those recursions; weighted EM from sufficient
+  statistics (:class:`SufficientStats`, :func:`expected_stats`, :func:`maximise`, :func:`fit_weighted`), for
+  uncertain labels and online learning;
 * :mod:`~glu.hmm.initialisation` — initial models: equal time slices and their Gaussian mixtures;
 * :mod:`~glu.hmm.config` — :class:`TrainingConfig`, the one home of the training settings, and
   :class:`TrainingReport`;
@@ -27,6 +29,7 @@ from glu.hmm.config import (
     TrainingConfig,
     TrainingReport,
 )
+from glu.hmm.em import GMMHMMParams, SufficientStats, expected_stats, fit_weighted, maximise
 from glu.hmm.inference import (
     ForwardState,
     forward_curve,
@@ -45,12 +48,16 @@ __all__ = [
     "Bank",
     "BatchScorer",
     "ForwardState",
+    "GMMHMMParams",
     "GestureHMM",
     "HMMConvergenceWarning",
+    "SufficientStats",
     "Trained",
     "TrainingConfig",
     "TrainingReport",
     "as_sequence",
+    "expected_stats",
+    "fit_weighted",
     "forward_curve",
     "forward_step",
     "left_to_right_transmat",
@@ -58,6 +65,7 @@ __all__ = [
     "log_emissions",
     "log_softmax",
     "loglik_many",
+    "maximise",
     "p_hmm_from_loglik",
     "stack_models",
     "train",

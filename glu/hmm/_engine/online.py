@@ -1,0 +1,131 @@
+"""The E-step of one sequence under many models at once: online learning, one episode at a time.
+
+A robot that updates its gesture models after each episode runs one E-step per episode and model
+(:func:`glu.hmm.em.expected_stats`, the readable reference, handles many sequences under one model). When
+many learners watch the same episode — the labelling schemes of :mod:`glu.experiments.online_learning`,
+each with its own models — :func:`expected_stats_bank` runs that episode under every model together: the
+emissions of every frame under every model's Gaussians are one array operation, the forward–backward
+recursions run compiled (:func:`glu.hmm._engine.kernels.forward_backward_scaled`, one model after
+another), and the statistics of every model come out stacked. A model under which the scaled recursion
+underflows is redone in the log domain (:func:`glu.hmm.inference.forward_backward_log`), as
+``expected_stats`` would.
+
+The result equals ``expected_stats([X], model_k, [w_k])`` for each model ``k`` to rounding
+(``tests/test_weighted_em.py``). :func:`glu.hmm.em.maximise` takes the stacked statistics as they are.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from glu.hmm._engine.batch import quadratic_features
+from glu.hmm._engine.kernels import forward_backward_scaled
+from glu.hmm.em import GMMHMMParams, SufficientStats
+from glu.hmm.inference import _logsumexp, forward_backward_log, gaussian_factors
+
+
+def expected_stats_bank(
+    X: np.ndarray, params: GMMHMMParams, weights: np.ndarray | None = None
+) -> SufficientStats:
+    """Sufficient statistics of one sequence under each of ``K`` models, stacked.
+
+    Parameters
+    ----------
+    X : array, shape (T, D) — the sequence
+    params : the models' parameters stacked: startprob (K, Q), transmat (K, Q, Q), weights (K, Q, M),
+        means (K, Q, M, D), covars (K, Q, M, D, D)
+    weights : array, shape (K,) — the sequence's weight for each model (default all 1); a model of weight 0
+        gets zero statistics
+
+    Returns
+    -------
+    :class:`~glu.hmm.em.SufficientStats` with batch shape (K,); ``loglik`` is ``weight · log L(X | model)``
+    (0 for weight 0). The unweighted ``log L(X | model)`` of every model is ``stats.loglik / weight``, or
+    from :func:`loglik_bank`.
+    """
+    X = np.asarray(X, dtype=float)
+    K = params.means.shape[0]
+    w = np.ones(K) if weights is None else np.asarray(weights, dtype=float)
+    stats, _ = _stats(X, params)
+    return weigh(stats, w)
+
+
+def weigh(stats: SufficientStats, weights: np.ndarray) -> SufficientStats:
+    """Unweighted stacked statistics of one sequence (batch shape (K,)) times each model's weight, shape
+    (K,); a weight of 0 gives exactly zero statistics, even under a model to which the sequence is
+    impossible."""
+    w = np.asarray(weights, dtype=float)
+    fields = []
+    for a in (stats.start, stats.trans, stats.counts, stats.first, stats.second, stats.loglik):
+        wk = w.reshape(w.shape + (1,) * (a.ndim - 1))
+        with np.errstate(invalid="ignore"):
+            fields.append(np.where(wk > 0, wk * a, 0.0))
+    return SufficientStats(*fields, w.copy(), w * stats.frames)
+
+
+def loglik_bank(X: np.ndarray, params: GMMHMMParams) -> tuple[SufficientStats, np.ndarray]:
+    """The unweighted statistics of one sequence (shape (T, D)) under each of ``K`` stacked models, and
+    ``log L(X | model)``, shape (K,) (see :func:`expected_stats_bank`)."""
+    return _stats(np.asarray(X, dtype=float), params)
+
+
+def _stats(X: np.ndarray, params: GMMHMMParams) -> tuple[SufficientStats, np.ndarray]:
+    K, Q, M, D = params.means.shape
+    T = len(X)
+    centre = X.mean(axis=0)
+    phi = quadratic_features(X, centre)  # (T, P): x_i x_j (i ≤ j), x_i, 1 of the centred frames
+    chol_inv, log_norm = gaussian_factors(params.weights, params.covars)
+    lc = (phi @ _coefficients(params.means - centre, chol_inv, log_norm)).reshape(T, K, Q, M)
+    log_b = lc[..., 0] if M == 1 else _logsumexp(lc, axis=-1)  # (T, K, Q)
+    log_b_k = np.ascontiguousarray(np.moveaxis(log_b, 0, 1))  # (K, T, Q)
+    lengths = np.full(K, T)
+    gamma, xi, loglik, ok = forward_backward_scaled(log_b_k, lengths, params.startprob, params.transmat)
+    for k in np.flatnonzero(~ok):  # the scaled mass underflowed: this model in the log domain
+        g, x, ll = forward_backward_log(
+            log_b_k[k : k + 1], lengths[:1], params.startprob[k], params.transmat[k]
+        )
+        gamma[k], xi[k], loglik[k] = g[0], x, ll[0]
+    with np.errstate(under="ignore"):
+        post_mix = np.ones_like(lc) if M == 1 else np.exp(lc - log_b[..., None])
+    pcm = np.moveaxis(gamma, 1, 0)[..., None] * post_mix  # (T, K, Q, M)
+    moments = (pcm.reshape(T, -1).T @ phi).reshape(K, Q, M, -1)  # Σ_t p φ(x_t − centre)
+    counts = moments[..., -1]
+    pairs = _pairs(D)
+    n_pairs = len(pairs)
+    first_c = moments[..., n_pairs : n_pairs + D]
+    second_c = np.empty((K, Q, M, D, D))
+    for k, (i, j) in enumerate(pairs):
+        second_c[..., i, j] = second_c[..., j, i] = moments[..., k]
+    # back from moments about the centre to raw moments
+    first = first_c + counts[..., None] * centre
+    cross = first_c[..., :, None] * centre[None, :]
+    second = (
+        second_c + cross + np.swapaxes(cross, -1, -2) + counts[..., None, None] * np.outer(centre, centre)
+    )
+    stats = SufficientStats(
+        start=gamma[:, 0],
+        trans=xi,
+        counts=counts,
+        first=first,
+        second=second,
+        loglik=loglik.copy(),
+        weight=np.ones(K),
+        frames=np.full(K, float(T)),
+    )
+    return stats, loglik
+
+
+def _pairs(D: int) -> list[tuple[int, int]]:
+    return [(i, j) for i in range(D) for j in range(i, D)]
+
+
+def _coefficients(means: np.ndarray, chol_inv: np.ndarray, log_norm: np.ndarray) -> np.ndarray:
+    """Coefficients on :func:`~glu.hmm._engine.batch.quadratic_features` of every component's
+    ``log w + log N(x; μ, Σ)``, shape (P, K·Q·M), for means already centred (shape (K, Q, M, D))."""
+    P = np.swapaxes(chol_inv, -1, -2) @ chol_inv  # Σ⁻¹ = L⁻ᵀ L⁻¹
+    b = np.einsum("...ij,...j->...i", P, means)
+    const = log_norm - 0.5 * np.einsum("...i,...i->...", means, b)
+    D = means.shape[-1]
+    rows = [(-0.5 if i == j else -1.0) * P[..., i, j] for i, j in _pairs(D)]
+    rows += [b[..., i] for i in range(D)] + [const]
+    return np.stack([r.reshape(-1) for r in rows], axis=0)
