@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from glu.errors import ModelError
-from glu.hmm import TrainingConfig, train
-from glu.hmm._engine.online import expected_stats_bank, loglik_bank
+from glu.hmm import TrainingConfig, loglik_many, stack_models, train
+from glu.hmm._engine.online import episode_stats, expected_stats_bank, loglik_bank
 from glu.hmm.em import GMMHMMParams, SufficientStats, expected_stats, fit, fit_weighted, maximise
 from glu.hmm.inference import forward_backward, left_to_right_transmat
 from glu.hmm.initialisation import init_left_to_right
@@ -227,7 +227,7 @@ def test_the_many_model_e_step_equals_the_reference_for_each_model():
         ref = expected_stats([X], m, [w[k]])
         for f in FIELDS:
             np.testing.assert_allclose(getattr(bank, f)[k], getattr(ref, f), rtol=1e-10, atol=1e-9, err_msg=f)
-    _, loglik = loglik_bank(X, stack)
+    _, loglik = episode_stats(X, stack)
     np.testing.assert_allclose(loglik, [expected_stats([X], m).loglik for m in models], rtol=1e-12)
 
 
@@ -283,3 +283,40 @@ def test_train_with_weights_refuses_what_it_cannot_do(problem):
         train(seqs, TrainingConfig(n_states=2, n_mix=1), weights=[0.0] * 6)
     with pytest.raises(ModelError, match="finite and ≥ 0"):
         train(seqs, TrainingConfig(n_states=2, n_mix=1), weights=[1, 1, 1, 1, 1, np.nan])
+
+
+def test_the_compiled_weighted_e_step_and_em_equal_the_reference(problem):
+    from glu.hmm._engine.online import expected_stats_fast, fit_weighted_fast
+
+    seqs, p0 = problem
+    w = np.array([0.3, 1.0, 0.0, 2.0, 1.0, 0.5])
+    assert_stats_close(expected_stats_fast(seqs, p0, w), expected_stats(seqs, p0, w))
+    a, b = fit_weighted_fast(seqs, w, p0, 20, 1e-9, 0.03), fit_weighted(seqs, w, p0, 20, 1e-9, 0.03)
+    assert len(a.history) == len(b.history)
+    np.testing.assert_allclose(a.history, b.history, rtol=1e-10)
+    assert_params_close(a.params, b.params)
+
+
+def test_weighted_training_goes_on_from_a_given_model():
+    rng = np.random.default_rng(9)
+    seqs = walks(rng, 6)
+    config = TrainingConfig(n_states=3, n_mix=1, n_iter=3, tol=1e-12)
+    w = np.linspace(0.2, 1.0, 6)
+    first, _ = train(seqs, config, weights=w, warn=False)
+    more, report = train(seqs, config, weights=w, warn=False, start=first)
+    ref = fit_weighted(seqs, w, params_of(first), 3, -np.inf, 0.03)  # three more iterations by hand
+    np.testing.assert_allclose(more.means, ref.params.means, rtol=1e-9)
+    assert report.history[0] == pytest.approx(float(expected_stats(seqs, params_of(first), w).loglik))
+    with pytest.raises(ModelError, match="weights="):
+        train(seqs, config, start=first)
+
+
+def test_the_many_model_scores_equal_the_recognisers_scores():
+    rng = np.random.default_rng(10)
+    for M in (1, 2):  # a bank of equal shapes: the mixtures of one size
+        same = [init_left_to_right(walks(rng, 4, 30, 31), 5, M, 0.03, seed=k) for k in range(3)]
+        stack = GMMHMMParams(*(np.stack([getattr(m, f) for m in same]) for f in GMMHMMParams._fields))
+        seqs = walks(rng, 5, 10, 50)
+        np.testing.assert_allclose(
+            loglik_bank(seqs, stack), loglik_many(stack_models(same), seqs), rtol=1e-10
+        )

@@ -107,6 +107,17 @@ class BatchQueries:
     def _codes(self, node: str, values: Sequence, n: int) -> np.ndarray:
         if node not in self._value_index:
             raise UnknownNodeError(unknown_node_message(node, self.nodes))
+        if (
+            isinstance(values, np.ndarray)
+            and values.dtype.kind in "iu"
+            and values.ndim == 1
+            and len(values) == n
+        ):
+            k = len(self.bn.schema.values_of(node))
+            if not np.any(
+                values >= k
+            ):  # value indices already (negative: not observed); else the message below
+                return np.where(values < 0, -1, values).astype(np.intp)
         vals = list(values)
         if len(vals) != n:
             raise EvidenceError(f"batch evidence on {node} has {len(vals)} rows, expected {n}")

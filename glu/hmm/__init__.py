@@ -17,12 +17,15 @@ Laid out the way dynamax lays out a model family, one module per concern:
 
 The fast paths live behind these, in the private :mod:`glu.hmm._engine`: compiled loops (numba), the
 banked scoring of many sequences against many models (:class:`BatchScorer`, :func:`loglik_many`), batched
-EM for many models at once, and the compiled loops of the initial mixtures. Each is tested equal to the
+EM for many models at once, the compiled loops of the initial mixtures, and the E-step of one episode
+under many models for online learning (:func:`episode_stats`, :func:`expected_stats_bank`,
+:func:`loglik_bank`; :func:`expected_stats_fast` for many sequences under one model). Each is tested equal to the
 reference (to rounding). The recogniser — a bank of these models over gesture features — is
 :class:`glu.gestures.Recognizer`.
 """
 
 from glu.hmm._engine.batch import Bank, BatchScorer, loglik_many, stack_models
+from glu.hmm._engine.online import episode_stats, expected_stats_bank, expected_stats_fast, loglik_bank
 from glu.hmm.config import (
     RECIPES,
     HMMConvergenceWarning,
@@ -39,6 +42,7 @@ from glu.hmm.inference import (
     log_softmax,
     p_hmm_from_loglik,
 )
+from glu.hmm.initialisation import kmeans_labels
 from glu.hmm.model import GestureHMM, as_sequence
 from glu.hmm.original import load_original_hmms
 from glu.hmm.training import Trained, train
@@ -56,14 +60,19 @@ __all__ = [
     "TrainingConfig",
     "TrainingReport",
     "as_sequence",
+    "episode_stats",
     "expected_stats",
+    "expected_stats_bank",
+    "expected_stats_fast",
     "fit_weighted",
     "forward_curve",
     "forward_step",
+    "kmeans_labels",
     "left_to_right_transmat",
     "load_original_hmms",
     "log_emissions",
     "log_softmax",
+    "loglik_bank",
     "loglik_many",
     "maximise",
     "p_hmm_from_loglik",

@@ -28,6 +28,7 @@ from glu.errors import ModelError
 from glu.hmm import em
 from glu.hmm._engine.batch import loglik_many, stack_models
 from glu.hmm._engine.em_batch import fit_many
+from glu.hmm._engine.online import expected_stats_fast, fit_weighted_fast
 from glu.hmm.config import (
     ENGINES,
     HMMConvergenceWarning,
@@ -171,14 +172,17 @@ def train_weighted(
     seed: int = 0,
     name: str = "",
     warn: bool = True,
+    start: GestureHMM | None = None,
 ) -> tuple[GestureHMM, TrainingReport]:
     """Fit one model to weighted sequences: each of shape (T_i, D) counts ``weights[i]`` times (≥ 0).
 
-    The initial model is :func:`~glu.hmm.initialisation.init_left_to_right` of the *core* sequences, those
-    weighing at least :data:`CORE_WEIGHT` of the heaviest (all of positive weight when the core has too
-    few frames); then weighted Baum–Welch (:func:`glu.hmm.em.fit_weighted`, the ``map`` covariance of
-    glu's recipe), ``tol`` per weighted training frame. The report counts the sequences of positive weight;
-    its log-likelihoods are weighted.
+    The initial model is ``start`` if given (EM goes on from it), else
+    :func:`~glu.hmm.initialisation.init_left_to_right` of the *core* sequences, those weighing at least
+    :data:`CORE_WEIGHT` of the heaviest (all of positive weight when the core has too few frames); then
+    weighted Baum–Welch (:func:`glu.hmm.em.fit_weighted`, the ``map`` covariance of glu's recipe; run by
+    its compiled twin :func:`glu.hmm._engine.online.fit_weighted_fast`, equal to rounding), ``tol`` per
+    weighted training frame. The report counts the sequences of positive weight; its log-likelihoods are
+    weighted.
     """
     seqs, _ = checked_sequences(sequences, config, name)
     try:
@@ -192,25 +196,23 @@ def train_weighted(
     if sum(len(X) for X in core) < config.n_states * config.n_mix:
         core = used
     checked_sequences(core, config, name)
-    from threadpoolctl import threadpool_limits
-
     weighted_frames = float(w @ np.array([len(X) for X in seqs]))
-    with threadpool_limits(1):
-        init = init_left_to_right(core, config.n_states, config.n_mix, config.covar_reg, seed, name)
-        start = em.GMMHMMParams(init.startprob, init.transmat, init.weights, init.means, init.covars)
-        try:
-            with warnings.catch_warnings(), np.errstate(all="ignore"):
-                warnings.simplefilter("ignore", RuntimeWarning)
-                result = em.fit_weighted(
-                    seqs, w, start, config.n_iter, config.tol * weighted_frames, config.covar_reg, "map"
-                )
-        except (ValueError, np.linalg.LinAlgError) as e:
-            raise ModelError(f"EM failed for {name or 'the model'}: {e}") from None
+    if start is None:
+        start = init_left_to_right(core, config.n_states, config.n_mix, config.covar_reg, seed, name)
+    first = em.GMMHMMParams(start.startprob, start.transmat, start.weights, start.means, start.covars)
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore", RuntimeWarning)
+            result = fit_weighted_fast(
+                seqs, w, first, config.n_iter, config.tol * weighted_frames, config.covar_reg, "map"
+            )
+    except (ValueError, np.linalg.LinAlgError) as e:
+        raise ModelError(f"EM failed for {name or 'the model'}: {e}") from None
     try:
         fitted = GestureHMM(*result.params, name=name)
     except ModelError as e:
         raise ModelError(f"EM diverged for {name or 'the model'} ({e}); try a larger covar_reg") from None
-    final = float(em.expected_stats(seqs, em.GMMHMMParams(*result.params), w).loglik)
+    final = float(expected_stats_fast(seqs, em.GMMHMMParams(*result.params), w).loglik)
     history = tuple(float(h) for h in result.history)
     delta = history[-1] - history[-2] if len(history) >= 2 else float("inf")
     converged = bool(abs(delta) < config.tol * weighted_frames)
