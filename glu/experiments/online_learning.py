@@ -250,6 +250,7 @@ def run_online(
         if lr.scheme in ("hard", "soft", "confident")
     }
     true_w = one_hot(np.asarray(episode_actions), A)
+    first_models: dict = {}  # first models by (action, buffer), shared by learners with the same buffer
     truth = np.array([lr.scheme == "true" for lr in learners])
     dynamic = np.array([lr.scheme in ("iterative", "unsupervised") for lr in learners])
     c = 0
@@ -279,7 +280,7 @@ def run_online(
             _update(state, pairs, unit, W, settings)
         for k in unsup:
             cluster_counts[k] += np.outer(W[k], true_w[i])
-        _initialise(state, W, features, i, settings, seed, skip=unsup)
+        _initialise(state, W, features, i, settings, seed, unsup, first_models)
         if unsup and i + 1 == settings.cluster_episodes:
             _cluster(state, unsup, features[: i + 1], settings, seed, cluster_counts, true_w)
         seconds[i] = time.perf_counter() - t0
@@ -327,13 +328,29 @@ def _update(
 
 
 def _first_model(
-    seqs: list[np.ndarray], w: np.ndarray, settings: OnlineSettings, seed: int, state: _State, k: int, a: int
+    seqs: list[np.ndarray],
+    w: np.ndarray,
+    settings: OnlineSettings,
+    seed: int,
+    state: _State,
+    k: int,
+    a: int,
+    cache: dict | None = None,
+    key: tuple | None = None,
 ) -> None:
-    """Train action ``a``'s first model for learner ``k`` on buffered episodes, and keep their statistics."""
-    cfg = settings.config.replace(n_iter=settings.init_iter)
-    model = train(seqs, cfg, weights=w, seed=seed, warn=False).model
-    p = GMMHMMParams(model.startprob, model.transmat, model.weights, model.means, model.covars)
-    stats = expected_stats_fast(seqs, p, w)
+    """Train action ``a``'s first model for learner ``k`` on buffered episodes, and keep their statistics.
+
+    Learners with the same buffer (the same episodes with the same weights) get the same first model:
+    ``cache`` keeps it under ``key``."""
+    if cache is not None and key in cache:
+        p, stats = cache[key]
+    else:
+        cfg = settings.config.replace(n_iter=settings.init_iter)
+        model = train(seqs, cfg, weights=w, seed=seed, warn=False).model
+        p = GMMHMMParams(model.startprob, model.transmat, model.weights, model.means, model.covars)
+        stats = expected_stats_fast(seqs, p, w)
+        if cache is not None:
+            cache[key] = p, stats
     _set(state.params, (k, a), p)
     _put(state.mean, (k, a), stats.scaled(1.0 / float(stats.weight)))
     state.total[k, a] = float(stats.weight)
@@ -348,6 +365,7 @@ def _initialise(
     settings: OnlineSettings,
     seed: int,
     skip: Sequence[int],
+    cache: dict,
 ) -> None:
     """Buffer the episode for every action without a model; train those whose buffer weighs enough."""
     need = (~state.exists) & (W > 0)
@@ -358,7 +376,8 @@ def _initialise(
         buf.append((i, float(W[k, a])))
         if sum(x for _, x in buf) >= settings.init_weight and len(buf) >= 2:
             seqs = [features[j] for j, _ in buf]
-            _first_model(seqs, np.array([x for _, x in buf]), settings, seed, state, k, a)
+            key = (int(a), tuple(buf))
+            _first_model(seqs, np.array([x for _, x in buf]), settings, seed, state, k, a, cache, key)
             buf.clear()
 
 
@@ -391,12 +410,43 @@ def _measure(
     means = np.full((L, A, Q, D), np.nan)
     ll = np.full((len(test_features), L, A), -np.inf)
     if len(pairs[0]):
+        means[pairs] = state.params.means[pairs][:, :, 0]
+    if len(pairs[0]) and len(test_features):
         ll[:, pairs[0], pairs[1]] = loglik_bank(
             test_features, GMMHMMParams(*(p[pairs] for p in state.params))
         )
-        means[pairs] = state.params.means[pairs][:, :, 0]
     cluster = ll.argmax(axis=2)  # (J, L)
     predicted = matching[np.arange(L)[None, :], cluster]  # (J, L): each cluster's action
     none = ~np.isfinite(ll.max(axis=2))
     ok = (predicted == np.asarray(test_actions)[:, None]) & ~none
     return ok.T, means
+
+
+def learn_online(
+    features: Sequence[np.ndarray],
+    episode_actions: np.ndarray,
+    scheme: str,
+    p_bn: np.ndarray | None,
+    actions: Sequence[str],
+    settings: OnlineSettings = OnlineSettings(),
+    seed: int = 0,
+    test_features: Sequence[np.ndarray] = (),
+    test_actions: np.ndarray | None = None,
+    checkpoints: Sequence[int] | None = None,
+) -> OnlineRun:
+    """One learner over the episodes (:func:`run_online` with one :class:`Learner`); measured on the held-out
+    gestures, if given, at the checkpoints (default: after the last episode only)."""
+    source = None if scheme in ("true", "unsupervised") else "network"
+    sources = {} if source is None else {"network": np.asarray(p_bn)}
+    return run_online(
+        features,
+        episode_actions,
+        [Learner(scheme, source)],
+        sources,
+        test_features,
+        np.zeros(0, int) if test_actions is None else test_actions,
+        checkpoints or [len(features)],
+        actions,
+        settings,
+        seed,
+    )

@@ -51,6 +51,7 @@ from glu.gestures.corpus import LabelledSequence
 from glu.gestures.invariants import Invariants
 from glu.gestures.recognizer import Recognizer
 from glu.gestures.synthetic import View
+from glu.gestures.typicality import META_KEY, ranges_to_meta, training_range
 from glu.hmm import (
     GestureHMM,
     TrainingConfig,
@@ -471,7 +472,24 @@ def learn_recognizer(
         **(meta or {}),
     }
     order = {a: models[a] for a in actions if a in models}
-    return Learned(Recognizer(order, meta=info, features=spec), W, rounds)
+    return Learned(with_ranges(Recognizer(order, meta=info, features=spec), seen, W, actions), W, rounds)
+
+
+def with_ranges(
+    recognizer: Recognizer, seen: Sequence[np.ndarray], W: np.ndarray, actions: Sequence[str]
+) -> Recognizer:
+    """``recognizer`` with the typicality ranges of its models (:mod:`glu.gestures.typicality`) measured on
+    the training gestures (in the recogniser's features) labelled with each action (arg-max of ``W``, shape
+    (n, A)); an action without such a gesture keeps no range (the recogniser samples one when asked)."""
+    labels = W.argmax(axis=1)
+    ranges = {}
+    for a in recognizer.actions:
+        mine = [x for x, lab in zip(seen, labels, strict=True) if lab == list(actions).index(a)]
+        if mine:
+            ranges[a] = training_range(recognizer.models[a], mine)
+    if set(ranges) == set(recognizer.actions):
+        recognizer.meta[META_KEY] = ranges_to_meta(ranges)
+    return recognizer
 
 
 def _renamed(m: GestureHMM, name: str) -> GestureHMM:

@@ -4,7 +4,8 @@ Each function draws a tidy frame of :mod:`glu.experiments` (or a model) on the a
 argument (a sequence of axes for a multi-panel figure), and returns them. The look shared by every figure
 (colours, sizes, the data-source footer, deterministic PNG and SVG) is in :mod:`glu.plots.style`. The
 functions live in one module per part of the story — :mod:`~glu.plots.gestures`,
-:mod:`~glu.plots.network`, :mod:`~glu.plots.verbal`, :mod:`~glu.plots.evaluation` — and are all importable from here.
+:mod:`~glu.plots.network`, :mod:`~glu.plots.verbal`, :mod:`~glu.plots.evaluation`,
+:mod:`~glu.plots.learning` — and are all importable from here.
 """
 
 from glu.plots.evaluation import (
@@ -21,6 +22,7 @@ from glu.plots.gestures import (
     plot_segmentation,
     plot_segmentations,
 )
+from glu.plots.learning import plot_episodes_to_match, plot_learning_curves, plot_real_gestures
 from glu.plots.network import (
     plot_action_vs_soft_evidence,
     plot_anticipation,
@@ -52,8 +54,11 @@ __all__ = [
     "plot_confusion",
     "plot_effect_prediction",
     "plot_effect_vs_soft_evidence",
+    "plot_episodes_to_match",
     "plot_fusion_on_gestures",
+    "plot_learning_curves",
     "plot_nbest",
+    "plot_real_gestures",
     "plot_sampling",
     "plot_segment_scores",
     "plot_segmentation",
