@@ -19,6 +19,7 @@ scheduler, as ``glu evaluate`` does) and returns the tidy tables:
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any, NamedTuple
@@ -362,7 +363,10 @@ def labels_table(
     seeds): label_accuracy (its arg-max), confident_fraction and confident_accuracy (above the ``confident``
     threshold), mean_p_true (its probability of the true action)."""
     first = results[0]
-    labels = np.nanmean(np.stack([r.labels for r in results]), axis=0)
+    stacked = np.stack([r.labels for r in results])
+    with warnings.catch_warnings():  # a group without confident labels in any seed stays NaN
+        warnings.simplefilter("ignore", RuntimeWarning)
+        labels = np.nanmean(stacked, axis=0)
     rows = [
         dict(
             ambiguity=amb,
