@@ -119,7 +119,8 @@ class OnlineRun(NamedTuple):
     params : the final models, stacked: each array with leading axes (L, A); ``exists`` (L, A) says which are real
     matching : int array, shape (C, L, A) — the unsupervised learners' cluster → action at each checkpoint
         (the identity for the others)
-    update_seconds : wall-clock seconds of each episode's update of every learner, shape (N,)
+    update_seconds : CPU seconds (this thread) of each episode's update of every learner, shape (N,): the
+        measurements taken at the checkpoints are not included
     """
 
     learners: list[Learner]
@@ -255,7 +256,7 @@ def run_online(
     dynamic = np.array([lr.scheme in ("iterative", "unsupervised") for lr in learners])
     c = 0
     for i, X in enumerate(features):
-        t0 = time.perf_counter()
+        t0 = time.thread_time()
         W = np.zeros((L, A))
         for k, w in static.items():
             W[k] = w[i]
@@ -283,7 +284,7 @@ def run_online(
         _initialise(state, W, features, i, settings, seed, unsup, first_models)
         if unsup and i + 1 == settings.cluster_episodes:
             _cluster(state, unsup, features[: i + 1], settings, seed, cluster_counts, true_w)
-        seconds[i] = time.perf_counter() - t0
+        seconds[i] = time.thread_time() - t0
         while c < C and checkpoints[c] == i + 1:
             for k in unsup:
                 matching[c, k] = best_matching(cluster_counts[k])
