@@ -304,7 +304,9 @@ def learning_values(summary: Mapping[str, Any]) -> dict[str, Any]:
         "learn_matched": len(reached),
         "learn_conditions": len(reached) + len(failed),
         "learn_reached": "; ".join(reached) or "none",
-        "learn_failed": f"It does not in {'; '.join(failed)}" if failed else "It reaches it in every condition",
+        "learn_failed": f"It does not in {'; '.join(failed)}"
+        if failed
+        else "It reaches it in every condition",
         "real_soft": loso.loc["soft", "accuracy"],
         "real_true": loso.loc["true", "accuracy"],
         "real_draws": loso.loc["soft", "draws"],

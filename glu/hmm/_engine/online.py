@@ -30,9 +30,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from glu.hmm._engine.batch import quadratic_features
-from glu.hmm._engine.kernels import forward_backward_scaled
+from glu.hmm._engine.kernels import compiled, forward_backward_scaled
 from glu.hmm.em import FitResult, GMMHMMParams, SufficientStats, maximise, sequence_weights
-from glu.hmm.inference import _logsumexp, forward_backward_log, gaussian_factors
+from glu.hmm.inference import TINY, _logsumexp, forward_backward_log, gaussian_factors
 
 
 def expected_stats_bank(
@@ -96,7 +96,9 @@ def loglik_bank(sequences: Sequence[np.ndarray], params: GMMHMMParams) -> np.nda
         lc = (quadratic_features(np.asarray(X, dtype=float), centre) @ coef).reshape(T, K, Q, M)
         log_b = np.ascontiguousarray(np.moveaxis(lc[..., 0] if M == 1 else _logsumexp(lc, axis=-1), 0, 1))
         lengths = np.full(K, T)
-        _, _, ll, ok = forward_backward_scaled(log_b, lengths, params.startprob, params.transmat)
+        ll, ok = compiled(_forward_scaled)(
+            log_b, np.ascontiguousarray(params.startprob), np.ascontiguousarray(params.transmat)
+        )
         for k in np.flatnonzero(~ok):
             ll[k] = forward_backward_log(
                 log_b[k : k + 1], lengths[:1], params.startprob[k], params.transmat[k]
@@ -246,3 +248,41 @@ def _coefficients(means: np.ndarray, chol_inv: np.ndarray, log_norm: np.ndarray)
     rows = [(-0.5 if i == j else -1.0) * P[..., i, j] for i, j in _pairs(D)]
     rows += [b[..., i] for i in range(D)] + [const]
     return np.stack([r.reshape(-1) for r in rows], axis=0)
+
+
+def _forward_scaled(log_b, startprob, transmat):
+    """The scaled forward recursion of each of K models over one sequence's emissions ``log_b`` (K, T, Q):
+    ``log L`` (K,) and whether the scaled mass stayed above TINY at every frame (K,) (compiled)."""
+    K, T, Q = log_b.shape
+    loglik = np.zeros(K)
+    ok = np.ones(K, dtype=np.bool_)
+    alpha = np.empty(Q)
+    new = np.empty(Q)
+    b = np.empty(Q)
+    for k in range(K):
+        A = transmat[k]
+        for t in range(T):
+            mx = -np.inf
+            for j in range(Q):
+                if log_b[k, t, j] > mx:
+                    mx = log_b[k, t, j]
+            for j in range(Q):
+                b[j] = np.exp(log_b[k, t, j] - mx)
+            total = 0.0
+            for j in range(Q):
+                if t == 0:
+                    v = startprob[k, j] * b[j]
+                else:
+                    acc = 0.0
+                    for i in range(Q):
+                        acc += alpha[i] * A[i, j]
+                    v = acc * b[j]
+                new[j] = v
+                total += v
+            if not total > TINY:
+                ok[k] = False
+                break
+            loglik[k] += np.log(total) + mx
+            for j in range(Q):
+                alpha[j] = new[j] / total
+    return loglik, ok
