@@ -82,7 +82,7 @@ import matplotlib.pyplot as plt
 from glu import plots, recording
 from glu.bn import InferenceEngine, learn_bn
 from glu.data import load_experiments
-from glu.experiments import anticipation, online_learning
+from glu.experiments import anticipation, learned_recognizers, online_learning
 from glu.experiments import learning_curves as lc
 from glu.experiments import self_supervised as ss
 from glu.gestures.corpus import gesture_sequences, original_test_segments
@@ -197,7 +197,7 @@ sentences = candidate_sentences(
     "samples" if out.source.sentence_samples() is not None else "grammar", out.source
 )
 learned = {f"{recorded_scheme} labels": life.recognizer(0), "true labels": life.recognizer(1)}
-anticipated, runs = lc.anticipation_after_learning(
+anticipated, runs = learned_recognizers.anticipation_after_learning(
     learned, engine, out.source, seed=seed, candidates=sentences
 )
 out.table(anticipated, "learning_anticipation", episodes=recorded_episodes, scheme=recorded_scheme)
@@ -220,8 +220,8 @@ if out.source.is_real:
     standing = gesture_sequences(out.source, include_test=False)
     cases = {c.recording for c in anticipation.CASES.values()}
     seated = [s for s in original_test_segments(out.source) if s.recording in cases]
-    real = ss.real_gesture_study(engine, standing, seated, draws=real_draws, data_source=source)
-    real_summary = ss.real_gesture_summary(real)
+    real = learned_recognizers.real_gesture_study(engine, standing, seated, draws=real_draws, data_source=source)
+    real_summary = learned_recognizers.real_gesture_summary(real)
     out.table(real, "learning_real_gestures")
     out.table(real_summary, "learning_real_gestures_summary")
     fig, axes = plots.new_figure(2, width=4.6)

@@ -14,6 +14,7 @@ import pytest
 from glu.bn import InferenceEngine, learn_bn
 from glu.data import load_experiments
 from glu.errors import DataError
+from glu.experiments import learned_recognizers as lr_
 from glu.experiments import learning_curves as lc
 from glu.experiments import online_learning as ol
 from glu.experiments import self_supervised as ss
@@ -131,7 +132,7 @@ def _corpus(engine, n=36, seed=0):
 
 def test_true_labels_train_what_the_recogniser_trains(engine):
     ep, actions = _corpus(engine)
-    learned = ss.learn_recognizer(ep.features, "true", true=ep.actions, actions=actions, config=SMALL, seed=1)
+    learned = lr_.learn_recognizer(ep.features, "true", true=ep.actions, actions=actions, config=SMALL, seed=1)
     by_action = {
         a: [x for x, t in zip(ep.features, ep.actions, strict=True) if t == k] for k, a in enumerate(actions)
     }
@@ -141,7 +142,7 @@ def test_true_labels_train_what_the_recogniser_trains(engine):
             learned.recognizer.models[a].means, plain.models[a].means, rtol=1e-7, atol=1e-9
         )
     # soft labels that are certain are the true labels
-    certain = ss.learn_recognizer(
+    certain = lr_.learn_recognizer(
         ep.features, "soft", ss.one_hot(ep.actions, 3), actions=actions, config=SMALL, seed=1
     )
     for a in actions:
@@ -153,13 +154,13 @@ def test_true_labels_train_what_the_recogniser_trains(engine):
 def test_iterative_and_unsupervised_relabel_until_the_labels_settle(engine):
     ep, actions = _corpus(engine, 30, seed=5)
     p = ss.network_posteriors(engine, ep.perceived, ep.world, words=True)
-    it = ss.learn_recognizer(ep.features, "iterative", p, true=ep.actions, actions=actions, config=SMALL)
+    it = lr_.learn_recognizer(ep.features, "iterative", p, true=ep.actions, actions=actions, config=SMALL)
     assert 2 <= it.rounds <= 10
     np.testing.assert_allclose(it.weights.sum(axis=1), 1.0)
-    un = ss.learn_recognizer(ep.features, "unsupervised", true=ep.actions, actions=actions, config=SMALL)
+    un = lr_.learn_recognizer(ep.features, "unsupervised", true=ep.actions, actions=actions, config=SMALL)
     assert set(un.recognizer.actions) <= set(actions)
     with pytest.raises(DataError, match="needs p_bn"):
-        ss.learn_recognizer(ep.features, "soft", actions=actions, config=SMALL)
+        lr_.learn_recognizer(ep.features, "soft", actions=actions, config=SMALL)
 
 
 # ------------------------------------------------------------------ online learning
@@ -362,10 +363,10 @@ def test_real_gesture_study_on_labelled_sequences(engine):
     from glu.gestures.corpus import synthetic_corpus
 
     corpus = synthetic_corpus(3, seed=4)
-    df = ss.real_gesture_study(
+    df = lr_.real_gesture_study(
         engine, corpus, corpus[:2], learners=("hard", "true"), draws=(0,), config=SMALL
     )
     assert set(df.test) == {"loso", "seated"} and len(df) == 2 * (9 + 2)
-    summary = ss.real_gesture_summary(df)
+    summary = lr_.real_gesture_summary(df)
     assert set(summary.columns) >= {"learner", "test", "accuracy", "label_accuracy"}
     assert isinstance(summary, pd.DataFrame) and summary["accuracy"].between(0, 1).all()

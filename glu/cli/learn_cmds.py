@@ -143,7 +143,7 @@ def _engine(data: str | None):
 
 
 def _learn(args: argparse.Namespace) -> int:
-    from glu.experiments.learning_curves import learn_gestures
+    from glu.experiments.learned_recognizers import learn_gestures
     from glu.hmm import TrainingConfig
 
     engine, label = _engine(args.data)

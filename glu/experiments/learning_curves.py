@@ -20,7 +20,7 @@ scheduler, as ``glu evaluate`` does) and returns the tidy tables:
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any, NamedTuple
 
@@ -28,9 +28,7 @@ import numpy as np
 import pandas as pd
 
 from glu.bn.inference import InferenceEngine
-from glu.data.source import DataSource
 from glu.errors import DataError
-from glu.experiments.anticipation import AnticipationRun
 from glu.experiments.common import tidy
 from glu.experiments.online_learning import Learner, OnlineSettings, run_online
 from glu.experiments.self_supervised import (
@@ -43,11 +41,8 @@ from glu.experiments.self_supervised import (
     draw_gestures,
     draw_world,
     network_posteriors,
-    with_ranges,
 )
 from glu.experiments.two_level import interval, replicate_means, two_level_weights
-from glu.gestures.recognizer import Recognizer
-from glu.hmm import TrainingConfig
 
 CHECKPOINTS: tuple[int, ...] = (10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000)
 """Where the curves are measured (those up to the number of episodes, and that number itself)."""
@@ -387,117 +382,3 @@ def update_times(results: Sequence[SeedResult]) -> dict[str, float]:
     maximum over all seeds' episodes but each seed's first (which loads the compiled kernels)."""
     t = np.concatenate([r.update_seconds[1:] for r in results])
     return {"median": float(np.median(t)), "p95": float(np.percentile(t, 95)), "max": float(t.max())}
-
-
-def learn_gestures(
-    engine: InferenceEngine,
-    episodes: int,
-    labels: str,
-    *,
-    seed: int = 0,
-    words: bool = False,
-    ambiguity: str = "mixed",
-    online: bool = False,
-    config: TrainingConfig | None = None,
-    settings: OnlineSettings | None = None,
-    effects: Sequence[str] = EFFECTS,
-    noise: float = 0.02,
-    data_source: str = "",
-) -> tuple[Recognizer, dict[str, Any]]:
-    """Watch ``episodes`` simulated episodes and learn gesture HMMs from them, labelled by ``labels``.
-
-    The episodes are those of :func:`~glu.experiments.self_supervised.simulate_episodes` (seed ``seed``, the
-    given ambiguity); their labels come from the network (``engine``) by the scheme ``labels`` (or a baseline:
-    ``true``, ``unsupervised``). Batch (:func:`~glu.experiments.self_supervised.learn_recognizer`, EM on all
-    episodes, ``iterative`` relabelling until the labels stop changing) or ``online``
-    (:func:`~glu.experiments.online_learning.learn_online`, one episode at a time). Returns the recogniser
-    (its ``meta`` says how it was learned) and a summary: the labels' arg-max accuracy, the relabelling
-    rounds, the episodes' data.
-    """
-    from glu.experiments.online_learning import learn_online
-    from glu.experiments.self_supervised import learn_recognizer, simulate_episodes
-
-    if ambiguity not in AMBIGUITIES:
-        raise DataError(f"unknown ambiguity {ambiguity!r}; allowed: {', '.join(AMBIGUITIES)}")
-    actions = engine.bn.schema.values_of("Action")
-    ep = simulate_episodes(engine, AMBIGUITIES[ambiguity], episodes, seed, effects=effects, noise=noise)
-    p_bn = network_posteriors(engine, ep.perceived, ep.world, words)
-    how = "online" if online else "batch"
-    info: dict[str, Any] = {
-        "data": f"{episodes} simulated episodes (seed {seed}, {ambiguity}: {AMBIGUITIES[ambiguity].description}); "
-        f"labels {labels}{' with words' if words else ''}, {how}; network: {data_source or 'unknown data'}",
-        "data_source": data_source,
-        "labels": labels,
-        "learning": how,
-        "episodes": episodes,
-        "ambiguity": ambiguity,
-        "words": words,
-        "effects": list(effects),
-        "label_accuracy": float((p_bn.argmax(axis=1) == ep.actions).mean()),
-    }
-    if online:
-        s = settings or OnlineSettings(config=config or OnlineSettings().config)
-        run = learn_online(ep.features, ep.actions, labels, p_bn, actions, s, seed)
-        by_action = run.weights[:, 0][:, np.argsort(run.matching[-1, 0])]  # clusters named as actions
-        rec = with_ranges(run.recognizer(0, meta=info), ep.features, by_action, actions)
-        info["rounds"] = 1
-    else:
-        learned = learn_recognizer(
-            ep.features,
-            labels,
-            p_bn,
-            true=ep.actions,
-            actions=actions,
-            config=config or TrainingConfig(),
-            seed=seed,
-            meta=info,
-        )
-        rec, info["rounds"] = learned.recognizer, learned.rounds
-    rec.meta.update(seed=seed, rounds=info["rounds"])
-    missing = [a for a in actions if a not in rec.actions]
-    if missing:
-        raise DataError(
-            f"no episode was labelled {', '.join(missing)} ({labels} labels, {ambiguity}); "
-            "watch more episodes, use words, or another labelling scheme"
-        )
-    return rec, info
-
-
-def anticipation_after_learning(
-    recognizers: Mapping[str, Recognizer],
-    engine: InferenceEngine,
-    source: DataSource,
-    *,
-    seed: int = 0,
-    candidates: Any = None,
-) -> tuple[pd.DataFrame, dict[tuple[str, str], AnticipationRun]]:
-    """What the robot anticipates and says with learned HMMs: the TCDS Fig. 5 cases
-    (:data:`glu.experiments.anticipation.CASES`) run with each recogniser (name → recogniser).
-
-    Returns a table with one row per recogniser and case — hmms, case, p_hmm_tap and ObjVel_<value> at the
-    last update, description (the best sentence among ``candidates``, the whole grammar for None) — and
-    the runs by (hmms, case).
-    """
-    from glu.experiments.anticipation import CASES, case_trajectory, effect_anticipation
-
-    rows, runs = [], {}
-    for name, recognizer in recognizers.items():
-        for case, c in CASES.items():
-            run = effect_anticipation(
-                recognizer,
-                engine,
-                case_trajectory(source, case, seed=seed),
-                c.evidence,
-                case=case,
-                models=name,
-                describe="last",
-                candidates=candidates,
-            )
-            runs[name, case] = run
-            last = run.fused["ObjVel"][-1]
-            rows.append(
-                {"hmms": name, "case": case, "p_hmm_tap": float(run.p_hmm[-1, run.actions.index("tap")])}
-                | {f"ObjVel_{v}": float(p) for v, p in zip(run.values["ObjVel"], last, strict=True)}
-                | {"description": run.description}
-            )
-    return tidy(pd.DataFrame(rows), "learning_anticipation", source.describe(), seed=seed), runs

@@ -23,6 +23,7 @@ import pandas as pd
 from glu import paths
 from glu.errors import DataError
 from glu.files import atomic_write_text
+from glu.run.readme_learning import LEARNING_REQUIRED, LEARNING_TEMPLATE, learning_values
 
 _ROOT = paths.PROJECT_ROOT
 README: Path | None = _ROOT / "README.md" if _ROOT is not None else None
@@ -100,12 +101,9 @@ exact chance is {p_draw_percent:.1f} %).
 * **Every fusion strategy on a simulated corpus** (`11_corpus_evaluation`: {corpus_episodes:,.0f} episodes; objects and actions from a scenario, effects and words drawn from the network, hand trajectories from the gesture generator under {corpus_noise:.0f} noise levels × {corpus_views:.0f} viewpoints; {ci_percent:.0f} % bootstrap intervals).
   * Read from the likelihoods, as the originals do, p_HMM is nearly certain, right or wrong: the action's log-loss is {lik_gesture_ll:.2f} [{lik_gesture_ll_lo:.2f}, {lik_gesture_ll_hi:.2f}] nats at an accuracy of {lik_gesture_acc:.3f}. Fusion then changes little (product rule {lik_product_acc:.3f}), and a hard decision is as good as a soft one.
   * Read per frame, p ∝ exp((1/t) log L), the product rule names the action in {pf_product_acc:.3f} [{pf_product_acc_lo:.3f}, {pf_product_acc_hi:.3f}] of the episodes against {pf_gesture_acc:.3f} for the gestures alone (paired difference {pf_gain:+.3f} [{pf_gain_lo:+.3f}, {pf_gain_hi:+.3f}]); with {early_percent:.0f} % of the gesture seen, {early_product:.3f} against {early_gesture:.3f}. Jeffrey's rule anticipates the effect with an ECE of {pf_jeffrey_ece:.3f} [{pf_jeffrey_ece_lo:.3f}, {pf_jeffrey_ece_hi:.3f}] against {pf_hard_ece:.3f} for a hard decision, and a log-loss of {pf_jeffrey_ll:.3f} against {pf_hard_ll:.3f}.
-  * Seen from a viewpoint turned by {turned_deg:.0f}°, the HMMs (trained facing the camera) name {turned_gesture:.3f} of the actions, below the network alone ({turned_network:.3f}): the correspondence problem.
-* **Beyond the self: learning people's gestures from what their actions did** (`12_learning_from_effects`: the robot labels unlabelled episodes with its network and learns its HMMs online from no gesture model; {learn_seeds:.0f} seeds × {learn_episodes:,.0f} episodes; two-level intervals over seeds and held-out gestures). Without words the network's labels are right for {label_mixed:.2f} of the episodes on every object, with words for {label_mixed_words:.2f}.
-  * Learning from effects reaches the accuracy of HMMs trained on the true labels ({learn_true:.3f}) within the interval in {learn_matched:.0f} of {learn_conditions:.0f} conditions (ambiguity × words): {learn_reached}.
-  * {learn_failed}.
-  * On the real standing segments, their labels hidden and each paired with an object and an effect drawn from the network, leave-one-segment-out accuracy is {real_soft:.2f} with soft labels and {real_true:.2f} with the true ones (mean of {real_draws:.0f} draws; the network's labels right for {real_labels:.2f})."""
+  * Seen from a viewpoint turned by {turned_deg:.0f}°, the HMMs (trained facing the camera) name {turned_gesture:.3f} of the actions, below the network alone ({turned_network:.3f}): the correspondence problem."""
 """The results section, with ``{name:format}`` slots filled by :func:`values`."""
+TEMPLATE += "\n" + LEARNING_TEMPLATE
 
 REQUIRED = (
     "bn_learning_summary",
@@ -134,10 +132,7 @@ REQUIRED = (
     "tcds_anticipation_sphere_glu_predictions",
     "tcds_anticipation_box_glu_predictions",
     "correspondence_summary",
-    "learning_match",
-    "learning_labels",
-    "learning_real_gestures_summary",
-)
+) + LEARNING_REQUIRED
 """The result tables the section is written from."""
 
 
@@ -261,57 +256,8 @@ def values(summary: Mapping[str, Any]) -> dict[str, Any]:
         p_draw_percent=100 * float(trials["p_draw_best"].mean()),
     )
     v.update(corpus_values(summary))
-    v.update(_correspondence(summary))
-    v.update(learning_values(summary))
+    v.update(_correspondence(summary) | learning_values(summary))
     return v
-
-
-def learning_values(summary: Mapping[str, Any]) -> dict[str, Any]:
-    """The slots of the learning-from-effects bullet (notebook 12): when the labelling schemes reach the
-    true-label HMMs within the interval (:func:`glu.experiments.learning_curves.match_table`), and when not."""
-    match, meta = _table(summary, "learning_match")
-    params = meta["parameters"]
-    labels = _table(summary, "learning_labels")[0]
-    real = _table(summary, "learning_real_gestures_summary")[0]
-    schemes = match[~match["learner"].isin(["unsupervised", "true", "network"])]
-    reached, failed = [], []
-    for (amb, words), g in schemes.groupby(["ambiguity", "words"], sort=False):
-        where = f"{amb.replace('_', ' ')} {'with' if words else 'without'} words"
-        hit = g[g["episodes_to_match"].notna()]
-        if len(hit):
-            first = hit.loc[hit["episodes_to_match"].idxmin()]
-            reached.append(f"{where} ({first['learner']} after {first['episodes_to_match']:,.0f})")
-        else:
-            best = g.loc[g["accuracy"].idxmax()]
-            failed.append(
-                f"{where} (best {best['learner']} {best['accuracy']:.3f} "
-                f"[gap {best['gap_low']:+.3f} to {best['gap_high']:+.3f}])"
-            )
-
-    def label(amb: str, words: bool) -> float:
-        rows = labels[(labels["ambiguity"] == amb) & (labels["words"].astype(bool) == words)]
-        if len(rows) != 1:
-            raise DataError(f"learning_labels: no single row for {amb}, words={words}")
-        return float(rows["label_accuracy"].iloc[0])
-
-    loso = real[real["test"] == "loso"].set_index("learner")
-    return {
-        "learn_seeds": len(params["seeds"]),
-        "learn_episodes": params["episodes"],
-        "label_mixed": label("mixed", False),
-        "label_mixed_words": label("mixed", True),
-        "learn_true": float(schemes["true_accuracy"].iloc[0]),
-        "learn_matched": len(reached),
-        "learn_conditions": len(reached) + len(failed),
-        "learn_reached": "; ".join(reached) or "none",
-        "learn_failed": f"It does not in {'; '.join(failed)}"
-        if failed
-        else "It reaches it in every condition",
-        "real_soft": loso.loc["soft", "accuracy"],
-        "real_true": loso.loc["true", "accuracy"],
-        "real_draws": loso.loc["soft", "draws"],
-        "real_labels": loso.loc["soft", "label_accuracy"],
-    }
 
 
 def corpus_values(summary: Mapping[str, Any]) -> dict[str, Any]:
