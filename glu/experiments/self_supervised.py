@@ -298,6 +298,14 @@ def label_weights(
     ``hard``: one for the network's arg-max; ``soft``: ``p_BN`` itself; ``confident``: the arg-max where
     ``max p_BN ≥ threshold``, no weight elsewhere; ``iterative``: the product rule ``p_HMM · p_BN``
     normalised (``p_BN`` alone without ``p_HMM``); ``true``: the true action (``true``, shape (n,)).
+
+    >>> p_bn = np.array([[0.5, 0.3, 0.2], [0.05, 0.92, 0.03]])
+    >>> label_weights("hard", p_bn).tolist()
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+    >>> label_weights("confident", p_bn, threshold=0.9).tolist()
+    [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+    >>> label_weights("iterative", p_bn, p_hmm=np.array([[0.2, 0.2, 0.6], [0.1, 0.8, 0.1]])).round(3).tolist()
+    [[0.357, 0.214, 0.429], [0.007, 0.989, 0.004]]
     """
     p_bn = np.asarray(p_bn, dtype=float)
     k = p_bn.shape[1]

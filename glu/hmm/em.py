@@ -235,6 +235,19 @@ def expected_stats(
     Each sequence contributes its expected counts and moments times its weight (default 1); sequences of
     weight 0 are left out (as if absent, even when impossible under the model). Statistics of disjoint
     sets of sequences add up to the statistics of their union.
+
+    >>> from glu.hmm.initialisation import init_left_to_right
+    >>> rng = np.random.default_rng(0)
+    >>> seqs = [np.cumsum(rng.normal(size=(30, 2)), axis=0) for _ in range(3)]
+    >>> m = init_left_to_right(seqs, 3, 1, 0.01)
+    >>> p = GMMHMMParams(m.startprob, m.transmat, m.weights, m.means, m.covars)
+    >>> twice = expected_stats(seqs[:1] * 2 + seqs[1:], p)         # the first sequence twice …
+    >>> weighted = expected_stats(seqs, p, [2.0, 1.0, 1.0])         # … or weighted 2
+    >>> bool(np.allclose(twice.second, weighted.second)), float(weighted.weight)
+    (True, 4.0)
+    >>> parts = expected_stats(seqs[:1], p, [2.0]) + expected_stats(seqs[1:], p)
+    >>> bool(np.allclose(parts.first, weighted.first))
+    True
     """
     w = sequence_weights(sequences, weights)
     Q, M, D = params.means.shape
