@@ -220,7 +220,9 @@ if out.source.is_real:
     standing = gesture_sequences(out.source, include_test=False)
     cases = {c.recording for c in anticipation.CASES.values()}
     seated = [s for s in original_test_segments(out.source) if s.recording in cases]
-    real = learned_recognizers.real_gesture_study(engine, standing, seated, draws=real_draws, data_source=source)
+    real = learned_recognizers.real_gesture_study(
+        engine, standing, seated, draws=real_draws, data_source=source
+    )
     real_summary = learned_recognizers.real_gesture_summary(real)
     out.table(real, "learning_real_gestures")
     out.table(real_summary, "learning_real_gestures_summary")

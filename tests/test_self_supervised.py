@@ -132,7 +132,9 @@ def _corpus(engine, n=36, seed=0):
 
 def test_true_labels_train_what_the_recogniser_trains(engine):
     ep, actions = _corpus(engine)
-    learned = lr_.learn_recognizer(ep.features, "true", true=ep.actions, actions=actions, config=SMALL, seed=1)
+    learned = lr_.learn_recognizer(
+        ep.features, "true", true=ep.actions, actions=actions, config=SMALL, seed=1
+    )
     by_action = {
         a: [x for x, t in zip(ep.features, ep.actions, strict=True) if t == k] for k, a in enumerate(actions)
     }
