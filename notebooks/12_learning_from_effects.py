@@ -12,15 +12,18 @@
 #     - learning_match
 #     - learning_real_gestures
 #     quick:
+#       ambiguities:
+#       - mixed
+#       - still
 #       bootstrap: 50
-#       episodes: 40
+#       episodes: 30
 #       real_draws:
 #       - 0
-#       recorded_episodes: 30
+#       recorded_episodes: 20
 #       seeds:
 #       - 0
 #       - 1
-#       test_per_action: 4
+#       test_per_action: 3
 #     real_only:
 #     - learning_real_gestures
 #     - learning_real_gestures_summary

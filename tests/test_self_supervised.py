@@ -372,3 +372,59 @@ def test_real_gesture_study_on_labelled_sequences(engine):
     summary = lr_.real_gesture_summary(df)
     assert set(summary.columns) >= {"learner", "test", "accuracy", "label_accuracy"}
     assert isinstance(summary, pd.DataFrame) and summary["accuracy"].between(0, 1).all()
+
+
+def test_the_recording_of_an_online_learner_reads_back(engine, tmp_path):
+    import subprocess
+    import sys
+
+    import pyarrow as pa
+    import rerun as rr
+    from rerun.chunk import RrdReader
+
+    from glu.recording import write_learning
+
+    ep, held, p = _stream(engine, 24, test=6)
+    actions = engine.bn.schema.values_of("Action")
+    run = ol.learn_online(
+        ep.features,
+        ep.actions,
+        "soft",
+        p,
+        actions,
+        ol.OnlineSettings(config=SMALL),
+        0,
+        held.features,
+        held.actions,
+        [8, 16, 24],
+    )
+    rr.set_strict_mode(True)
+    try:
+        path = write_learning(run, ep.features, tmp_path / "l.rrd", "test-learning", scene="# learning")
+    finally:
+        rr.set_strict_mode(False)
+    res = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "verify", str(path)], capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr
+
+    def column(entity, component):
+        stream = RrdReader(str(path)).stream().filter(content=entity, is_static=False, components=component)
+        batches = [c.to_record_batch().select(["episode", component]) for c in stream]
+        return pa.Table.from_batches(batches).sort_by("episode")
+
+    tap = column("/labels/tap", "Scalars:scalars")
+    assert tap.column("episode").to_pylist() == list(range(1, 25))
+    np.testing.assert_allclose(
+        [v[0] for v in tap.column("Scalars:scalars").to_pylist()], run.weights[:, 0, 1]
+    )
+    acc = column("/accuracy/held-out", "Scalars:scalars")
+    assert acc.column("episode").to_pylist() == [8, 16, 24]
+    np.testing.assert_allclose(
+        [v[0] for v in acc.column("Scalars:scalars").to_pylist()], run.accuracy()[:, 0]
+    )
+    path_tap = column("/space/models/tap/path", "LineStrips3D:strips")
+    last = np.array(path_tap.column("LineStrips3D:strips").to_pylist()[-1][0])
+    np.testing.assert_allclose(last, run.means[-1, 0, 1], rtol=1e-6)
+    texts = column("/decisions", "TextLog:text").column("TextLog:text").to_pylist()
+    assert len(texts) == 24 and texts[0][0].startswith("episode 1: ")
