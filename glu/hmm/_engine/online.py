@@ -26,6 +26,7 @@ monomials, moved back to raw moments about the origin.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -159,54 +160,77 @@ def _raw_moments(moments: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, n
     return counts, first, second
 
 
-def expected_stats_fast(
-    sequences: Sequence[np.ndarray], params: GMMHMMParams, weights: np.ndarray | None = None
-) -> SufficientStats:
-    """:func:`glu.hmm.em.expected_stats` (many sequences, one model), the recursions compiled: equal to it
-    to rounding (tested). A few short sequences — the first model of an online learner — cost a
-    fraction of the array code's per-frame dispatch."""
+class _Prepared(NamedTuple):
+    """Weighted sequences laid out once for many E-steps (everything that does not depend on the model)."""
+
+    w: np.ndarray  # (S,) the positive weights
+    lengths: np.ndarray  # (S,)
+    alive: np.ndarray  # (S, T) real frames
+    centre: np.ndarray  # (D,) the frames' mean
+    phi: np.ndarray  # (N, P) their quadratic monomials about the centre
+    frame_w: np.ndarray  # (N,) each frame's sequence weight
+
+
+def _prepare(sequences: Sequence[np.ndarray], weights: np.ndarray | None) -> _Prepared | None:
     w = sequence_weights(sequences, weights)
-    Q, M, D = params.means.shape
     keep = np.flatnonzero(w > 0)
     if len(keep) == 0:
-        return SufficientStats.zeros(Q, M, D)
+        return None
     seqs, w = [np.asarray(sequences[i], dtype=float) for i in keep], w[keep]
     lengths = np.array([len(x) for x in seqs])
-    S, T = len(seqs), int(lengths.max())
     X = np.concatenate(seqs)
     centre = X.mean(axis=0)
-    phi = quadratic_features(X, centre)
+    alive = np.arange(int(lengths.max()))[None, :] < lengths[:, None]
+    return _Prepared(w, lengths, alive, centre, quadratic_features(X, centre), np.repeat(w, lengths))
+
+
+def _estep(prep: _Prepared, params: GMMHMMParams) -> SufficientStats:
+    Q, M, _ = params.means.shape
+    S, T = prep.alive.shape
+    N = len(prep.phi)
     chol_inv, log_norm = gaussian_factors(params.weights, params.covars)
-    lc = (phi @ _coefficients(params.means - centre, chol_inv, log_norm)).reshape(len(X), Q, M)
+    lc = (prep.phi @ _coefficients(params.means - prep.centre, chol_inv, log_norm)).reshape(N, Q, M)
     log_b_flat = lc[..., 0] if M == 1 else _logsumexp(lc, axis=-1)  # (N, Q)
-    alive = np.arange(T)[None, :] < lengths[:, None]
     log_b = np.zeros((S, T, Q))
-    log_b[alive] = log_b_flat
+    log_b[prep.alive] = log_b_flat
     pi = np.broadcast_to(params.startprob, (S, Q))
     A = np.broadcast_to(params.transmat, (S, Q, Q))
-    gamma, xi, loglik, ok = forward_backward_scaled(log_b, lengths, pi, A)
+    gamma, xi, loglik, ok = forward_backward_scaled(log_b, prep.lengths, pi, A)
     for k in np.flatnonzero(~ok):  # the scaled mass underflowed: this sequence in the log domain
         g, x, ll = forward_backward_log(
-            np.where(alive[k : k + 1, :, None], log_b[k : k + 1], -np.inf),
-            lengths[k : k + 1],
+            np.where(prep.alive[k : k + 1, :, None], log_b[k : k + 1], -np.inf),
+            prep.lengths[k : k + 1],
             params.startprob,
             params.transmat,
         )
         gamma[k], xi[k], loglik[k] = g[0], x, ll[0]
     with np.errstate(under="ignore"):
         post_mix = np.ones_like(lc) if M == 1 else np.exp(lc - log_b_flat[..., None])
-    pcm = (gamma[alive] * np.repeat(w, lengths)[:, None])[..., None] * post_mix  # (N, Q, M)
-    counts, first, second = _raw_moments((pcm.reshape(len(X), -1).T @ phi).reshape(Q, M, -1), centre)
+    pcm = (gamma[prep.alive] * prep.frame_w[:, None])[..., None] * post_mix  # (N, Q, M)
+    counts, first, second = _raw_moments((pcm.reshape(N, -1).T @ prep.phi).reshape(Q, M, -1), prep.centre)
+    w = prep.w
     return SufficientStats(
         start=w @ gamma[:, 0],
-        trans=np.einsum("s,sij->ij", w, xi),
+        trans=np.tensordot(w, xi, axes=1),
         counts=counts,
         first=first,
         second=second,
         loglik=np.asarray(float(w @ loglik)),
         weight=np.asarray(float(w.sum())),
-        frames=np.asarray(float(w @ lengths)),
+        frames=np.asarray(float(w @ prep.lengths)),
     )
+
+
+def expected_stats_fast(
+    sequences: Sequence[np.ndarray], params: GMMHMMParams, weights: np.ndarray | None = None
+) -> SufficientStats:
+    """:func:`glu.hmm.em.expected_stats` (many sequences, one model), the recursions compiled: equal to it
+    to rounding (tested). A few short sequences — the first model of an online learner — cost a
+    fraction of the array code's per-frame dispatch."""
+    prep = _prepare(sequences, weights)
+    if prep is None:
+        return SufficientStats.zeros(*params.means.shape)
+    return _estep(prep, params)
 
 
 def fit_weighted_fast(
@@ -220,13 +244,13 @@ def fit_weighted_fast(
     covar_floor: float = 0.0,
 ) -> FitResult:
     """:func:`glu.hmm.em.fit_weighted` with the E-step of :func:`expected_stats_fast` (equal to rounding)."""
-    w = sequence_weights(sequences, weights)
-    if not np.any(w > 0):
+    prep = _prepare(sequences, weights)
+    if prep is None:
         raise ValueError("weighted EM needs at least one sequence of positive weight")
     params = GMMHMMParams(*(np.array(a, dtype=float) for a in init))
     history: list[float] = []
     for _ in range(n_iter):
-        stats = expected_stats_fast(sequences, params, w)
+        stats = _estep(prep, params)
         history.append(float(stats.loglik))
         params = maximise(stats, params, covar_reg, covariance, covar_floor)
         if len(history) >= 2 and history[-1] - history[-2] < tol:
