@@ -67,7 +67,7 @@
 
 # %% tags=["parameters"]
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-episodes: int = 500  # episodes each learner watches, per seed (`glu learning-curves` goes to 10,000 on Dask)
+episodes: int = 300  # episodes each learner watches, per seed (`glu learning-curves` goes to 10,000 on Dask)
 seeds: list[int] = [0, 1, 2]  # training seeds: episodes, held-out gestures and EM starts
 ambiguities: list[str] = ["spheres", "mixed", "still", "failed_taps", "noisy"]  # self_supervised.AMBIGUITIES
 test_per_action: int = 15  # held-out gestures per action and seed
@@ -75,7 +75,7 @@ bootstrap: int = 1000  # two-level bootstrap replicates (seeds × held-out episo
 recorded_scheme: str = "soft"  # the learner of the Rerun recording and of the anticipation cases
 recorded_ambiguity: str = "mixed"  # its ambiguity
 recorded_episodes: int = 200  # the episodes it watches
-real_draws: list[int] = [0, 1, 2]  # real gestures: draws of the objects, effects and words paired with them
+real_draws: list[int] = [0, 1]  # real gestures: draws of the objects, effects and words paired with them
 seed: int = 0  # seed of the recorded learner's episodes
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
@@ -124,7 +124,7 @@ labels.drop(columns="description").round(3)
 # %%
 curves = lc.curves_table(results, settings, source)
 out.table(curves, "learning_curves", update_seconds=lc.update_times(results))
-fig, axes = plt.subplots(len(ambiguities), 2, figsize=(9, 2.8 * len(ambiguities)), squeeze=False, sharex=True)
+fig, axes = plt.subplots(len(ambiguities), 2, figsize=(8, 2.3 * len(ambiguities)), squeeze=False, sharex=True)
 for i, amb in enumerate(ambiguities):
     for j, words in enumerate((False, True)):
         plots.plot_learning_curves(axes[i, j], curves, amb, words)

@@ -221,7 +221,7 @@ def real_gesture_study(
     learners: Sequence[str] = LEARNERS,
     ambiguity: Ambiguity | None = None,
     words: bool = False,
-    draws: Sequence[int] = (0, 1, 2),
+    draws: Sequence[int] = (0, 1),
     config: TrainingConfig = STUDY_TRAINING,
     invariants: Invariants | str | None = None,
     threshold: float = 0.9,

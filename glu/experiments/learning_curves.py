@@ -68,7 +68,7 @@ class StudySettings:
     bootstrap : two-level bootstrap replicates
     """
 
-    episodes: int = 500
+    episodes: int = 300
     seeds: tuple[int, ...] = (0, 1, 2)
     ambiguities: tuple[str, ...] = tuple(AMBIGUITIES)
     words: tuple[bool, ...] = (False, True)
