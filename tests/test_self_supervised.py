@@ -324,7 +324,13 @@ def test_curves_and_episodes_to_match():
     assert soft.loc[10, "gap_high"] < 0 and soft.loc[20, "gap_low"] == soft.loc[20, "gap_high"] == 0
     net = curves[curves.learner == "network"]
     assert len(net) == 2 and np.all(net["accuracy"] == 1.0)
-    match = lc.match_table(curves).set_index("learner")
+    match = lc.match_table(curves)
+    assert lc.match_lines(match) == [
+        "mixed, without words: matched by soft after 20; at 20 episodes, best soft 1.000 against 1.000 with "
+        "true labels",
+        "some labelling scheme matches the true-label HMMs in 1 of 1 conditions",
+    ]
+    match = match.set_index("learner")
     assert match.loc["soft", "episodes_to_match"] == 20 and match.loc["soft", "true_accuracy"] == 1.0
     worse = seed0.copy()
     worse[1, 1, :3] = False

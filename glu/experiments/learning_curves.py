@@ -351,6 +351,29 @@ def match_table(curves: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+def match_lines(match: pd.DataFrame) -> list[str]:
+    """One line per condition (ambiguity × words) saying, from :func:`match_table`, which schemes match the
+    true-label HMMs and after how many episodes, and the best scheme's accuracy at the last checkpoint; then
+    a line counting the conditions where some scheme matches."""
+    lines, hit = [], 0
+    schemes = match[match["learner"].isin(SCHEMES)]
+    for (amb, words), g in schemes.groupby(["ambiguity", "words"], sort=False):
+        reached = g[g["episodes_to_match"].notna()]
+        hit += len(reached) > 0
+        said = (
+            ", ".join(f"{r.learner} after {r.episodes_to_match:,.0f}" for r in reached.itertuples()) or "none"
+        )
+        best = g.loc[g["accuracy"].idxmax()]
+        lines.append(
+            f"{amb}, {'with' if words else 'without'} words: matched by {said}; at {int(best['last_episodes']):,} "
+            f"episodes, best {best['learner']} {best['accuracy']:.3f} against {best['true_accuracy']:.3f} with "
+            "true labels"
+        )
+    n = schemes.groupby(["ambiguity", "words"]).ngroups
+    lines.append(f"some labelling scheme matches the true-label HMMs in {hit} of {n} conditions")
+    return lines
+
+
 def labels_table(
     results: Sequence[SeedResult], settings: StudySettings = StudySettings(), data_source: str = ""
 ) -> pd.DataFrame:
