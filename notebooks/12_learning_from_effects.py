@@ -123,7 +123,7 @@ labels.drop(columns="description").round(3)
 
 # %%
 curves = lc.curves_table(results, settings, source)
-out.table(curves, "learning_curves", update_seconds=lc.update_times(results))
+out.table(curves, "learning_curves")
 fig, axes = plt.subplots(len(ambiguities), 2, figsize=(8, 2.3 * len(ambiguities)), squeeze=False, sharex=True)
 for i, amb in enumerate(ambiguities):
     for j, words in enumerate((False, True)):
