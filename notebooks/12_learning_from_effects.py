@@ -128,6 +128,7 @@ fig, axes = plt.subplots(len(ambiguities), 2, figsize=(8, 2.3 * len(ambiguities)
 for i, amb in enumerate(ambiguities):
     for j, words in enumerate((False, True)):
         plots.plot_learning_curves(axes[i, j], curves, amb, words)
+        axes[i, j].set_xlabel("episodes seen" if i == len(ambiguities) - 1 else "")
 axes[0, 0].legend(fontsize=6, ncol=2)
 out.figure(fig, "learning_curves", source=source)
 

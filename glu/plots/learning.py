@@ -81,6 +81,8 @@ def plot_episodes_to_match(ax: Axes, match: pd.DataFrame, schemes: Sequence[str]
     schemes = list(schemes or dict.fromkeys(m["learner"]))
     conditions = list(dict.fromkeys(zip(m["ambiguity"], m["words"], strict=True)))
     last = float(m["last_episodes"].max())
+    for lr in schemes:  # the legend: one entry per scheme, matched or not
+        ax.plot([], [], marker="o", color=LEARNER_COLORS.get(lr, "black"), ms=4, ls="none", label=lr)
     for i, (amb, words) in enumerate(conditions):
         for j, lr in enumerate(schemes):
             row = m[(m["learner"] == lr) & (m["ambiguity"] == amb) & (m["words"] == words)]
@@ -92,7 +94,7 @@ def plot_episodes_to_match(ax: Axes, match: pd.DataFrame, schemes: Sequence[str]
             if np.isnan(n):
                 ax.plot([last * 1.6], [y], marker="x", color=c, ms=5, ls="none")
             else:
-                ax.plot([n], [y], marker="o", color=c, ms=4, ls="none", label=lr if i == 0 else None)
+                ax.plot([n], [y], marker="o", color=c, ms=4, ls="none")
     ax.set_xscale("log")
     ax.set_yticks(range(len(conditions)))
     ax.set_yticklabels([f"{a}, {'words' if w else 'no words'}" for a, w in conditions], fontsize=7)
