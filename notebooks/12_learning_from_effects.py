@@ -76,6 +76,7 @@ recorded_scheme: str = "soft"  # the learner of the Rerun recording and of the a
 recorded_ambiguity: str = "mixed"  # its ambiguity
 recorded_episodes: int = 200  # the episodes it watches
 real_draws: list[int] = [0, 1]  # real gestures: draws of the objects, effects and words paired with them
+real_features: str = "centred"  # real gestures: the HMMs' features (centred: the posture offset removed)
 seed: int = 0  # seed of the recorded learner's episodes
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
@@ -209,7 +210,8 @@ anticipated.round(3)
 # The 11 standing segments (grasp, tap, touch), each paired with an object, an effect and words drawn from the
 # network given its true action (the robot's experience standing in for what it would have seen);
 # leave-one-segment-out accuracy of HMMs learned from the network's labels against true-label HMMs, and the
-# two seated taps recognised by HMMs learned from every standing segment.
+# two seated taps recognised by HMMs learned from every standing segment. On start-centred features by
+# default (`real_features`): they remove the seated posture's offset (notebook 10).
 
 # %%
 if out.source.is_real:
@@ -217,7 +219,7 @@ if out.source.is_real:
     cases = {c.recording for c in anticipation.CASES.values()}
     seated = [s for s in original_test_segments(out.source) if s.recording in cases]
     real = learned_recognizers.real_gesture_study(
-        engine, standing, seated, draws=real_draws, data_source=source
+        engine, standing, seated, draws=real_draws, invariants=real_features, data_source=source
     )
     real_summary = learned_recognizers.real_gesture_summary(real)
     out.table(real, "learning_real_gestures")

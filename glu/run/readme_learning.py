@@ -17,7 +17,7 @@ LEARNING_TEMPLATE = """\
 * **Beyond the self: learning people's gestures from what their actions did** (`12_learning_from_effects`: the robot labels unlabelled episodes with its network and learns its HMMs online from no gesture model; {learn_seeds:.0f} seeds × {learn_episodes:,.0f} episodes; two-level intervals over seeds and held-out gestures). Without words the network's labels are right for {label_mixed:.2f} of the episodes on every object, with words for {label_mixed_words:.2f}.
   * Learning from effects reaches the accuracy of HMMs trained on the true labels ({learn_true:.3f}) within the interval in {learn_matched:.0f} of {learn_conditions:.0f} conditions (ambiguity × words): {learn_reached}.
   * {learn_failed}.
-  * On the real standing segments, their labels hidden and each paired with an object and an effect drawn from the network, leave-one-segment-out accuracy is {real_soft:.2f} with soft labels and {real_true:.2f} with the true ones (mean of {real_draws:.0f} draws; the network's labels right for {real_labels:.2f})."""
+  * On the real standing segments, their labels hidden and each paired with an object and an effect drawn from the network, leave-one-segment-out accuracy ({real_features} features) is {real_soft:.2f} with soft labels and {real_true:.2f} with the true ones (mean of {real_draws:.0f} draws; the network's labels right for {real_labels:.2f})."""
 """The bullet that ends :data:`glu.run.readme.TEMPLATE`."""
 
 LEARNING_REQUIRED: tuple[str, ...] = ("learning_match", "learning_labels", "learning_real_gestures_summary")
@@ -35,7 +35,7 @@ def learning_values(summary: Mapping[str, Any]) -> dict[str, Any]:
     match, meta = _table(summary, "learning_match")
     params = meta["parameters"]
     labels = _table(summary, "learning_labels")[0]
-    real = _table(summary, "learning_real_gestures_summary")[0]
+    real, real_meta = _table(summary, "learning_real_gestures_summary")
     schemes = match[~match["learner"].isin(["unsupervised", "true", "network"])]
     reached, failed = [], []
     for (amb, words), g in schemes.groupby(["ambiguity", "words"], sort=False):
@@ -70,6 +70,7 @@ def learning_values(summary: Mapping[str, Any]) -> dict[str, Any]:
         "learn_failed": f"It does not in {'; '.join(failed)}"
         if failed
         else "It reaches it in every condition",
+        "real_features": real_meta["parameters"]["features"],
         "real_soft": loso.loc["soft", "accuracy"],
         "real_true": loso.loc["true", "accuracy"],
         "real_draws": loso.loc["soft", "draws"],
