@@ -84,6 +84,23 @@ def test_the_learned_recogniser_recognises_and_anticipates(learned, capsys, tmp_
     assert status == 0 and json.loads(out)["updates"]
 
 
+def test_the_threshold_reaches_the_confident_scheme(capsys, tmp_path):
+    out = tmp_path / "c.json"
+    argv = [
+        "learn-gestures",
+        "--episodes",
+        "36",
+        "--labels",
+        "confident",
+        "--words",
+        "--data",
+        "synthetic",
+        *SMALL,
+    ]
+    assert run(capsys, *argv, "--threshold", "0.5", "-o", str(out))[0] == 0
+    assert Recognizer.load(out).meta["threshold"] == 0.5
+
+
 def test_online_and_true_labels(capsys, tmp_path):
     out = tmp_path / "t.json"
     argv = [
@@ -168,3 +185,14 @@ def test_learning_curves_writes_the_study_tables(capsys, tmp_path):
     }
     study = json.loads((tmp_path / "learning_study.json").read_text())
     assert study["settings"]["episodes"] == 12 and study["update_seconds"]["median"] > 0
+
+
+def test_learning_curves_on_a_local_dask_cluster_equal_the_run_here(capsys, tmp_path):
+    common = ["learning-curves", "--episodes", "12", "--seeds", "0,1", "--ambiguities", "still"]
+    common += ["--test-per-action", "2", "--data", "synthetic"]
+    here, there = tmp_path / "here", tmp_path / "there"
+    assert run(capsys, *common, "--synchronous", "-o", str(here))[0] == 0
+    status, out, err = run(capsys, *common, "--workers", "1", "-o", str(there))
+    assert status == 0, err
+    for name in ("learning_curves.csv", "learning_match.csv", "learning_labels.csv"):
+        assert (here / name).read_bytes() == (there / name).read_bytes(), name

@@ -162,6 +162,7 @@ def _learn(args: argparse.Namespace) -> int:
         ambiguity=args.ambiguity,
         online=args.online,
         config=config,
+        threshold=args.threshold,
         data_source=label,
     )
     print(f"episodes: {info['data']}")

@@ -354,6 +354,7 @@ def learn_gestures(
     settings: OnlineSettings | None = None,
     effects: Sequence[str] = EFFECTS,
     noise: float = 0.02,
+    threshold: float = 0.9,
     data_source: str = "",
 ) -> tuple[Recognizer, dict[str, Any]]:
     """Watch ``episodes`` simulated episodes and learn gesture HMMs from them, labelled by ``labels``.
@@ -386,9 +387,10 @@ def learn_gestures(
         "words": words,
         "effects": list(effects),
         "label_accuracy": float((p_bn.argmax(axis=1) == ep.actions).mean()),
+        "threshold": threshold,
     }
     if online:
-        s = settings or OnlineSettings(config=config or OnlineSettings().config)
+        s = settings or OnlineSettings(config=config or OnlineSettings().config, threshold=threshold)
         run = learn_online(ep.features, ep.actions, labels, p_bn, actions, s, seed)
         by_action = run.weights[:, 0][:, np.argsort(run.matching[-1, 0])]  # clusters named as actions
         rec = with_ranges(run.recognizer(0, meta=info), ep.features, by_action, actions)
@@ -402,6 +404,7 @@ def learn_gestures(
             actions=actions,
             config=config or TrainingConfig(),
             seed=seed,
+            threshold=threshold,
             meta=info,
         )
         rec, info["rounds"] = learned.recognizer, learned.rounds
