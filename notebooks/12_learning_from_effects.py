@@ -58,7 +58,7 @@
 # words someone said — without the action's name. It labels each with its Affordance–Words network,
 # p_BN(Action | object, effect[, words]), and trains its gesture HMMs from those labels, online, one episode
 # at a time, from no gesture model at all. The labelling schemes: **hard** (the arg-max), **soft** (EM whose
-# sufficient statistics are weighted by the posterior), **confident** (the arg-max above 0.9 only) and
+# sufficient statistics are weighted by the posterior), **confident** (the arg-max above a threshold only) and
 # **iterative** (the product rule of its current HMMs and the network). The baselines: HMMs trained on the
 # **true** labels (the upper bound), **unsupervised** clusters named after the fact (the lower bound), and
 # the **network** alone, which recognises no gesture. The effects tell the actions apart well (rolling
