@@ -5,7 +5,7 @@
 #       did, labelling unlabelled episodes with its affordance network; learning curves
 #       of every labelling scheme and baseline with two-level intervals, episodes until
 #       true-label accuracy, the real gestures with their labels hidden (+ 1 Rerun recording)'
-#     expected_seconds: 20
+#     expected_seconds: 18
 #     figures:
 #     - learning_anticipation
 #     - learning_curves
