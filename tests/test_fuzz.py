@@ -161,6 +161,28 @@ COMMANDS: dict[str, tuple[list[str], bool]] = {
     "readme": (["--summary", "{tmp}/none.json", "--readme", "{tmp}/README.md"], True),
     "evaluate": (["-o", "{tmp}/out/eval", "--episodes", "12"], False),
     "corpus": (["-o", "{tmp}/out/c.parquet", "--episodes", "12"], False),
+    "learn-gestures": (
+        [
+            "--episodes",
+            "12",
+            "--labels",
+            "soft",
+            "--states",
+            "2",
+            "--mix",
+            "1",
+            "--iter",
+            "2",
+            "--data",
+            "{data}",
+        ]
+        + ["-o", "{tmp}/out/l.json"],
+        False,
+    ),
+    "learning-curves": (
+        ["--episodes", "12", "--seeds", "0", "--synchronous", "--data", "{data}", "-o", "{tmp}/out/lc"],
+        False,
+    ),
 }
 CERTAINLY_BAD = {  # one value each heavy command refuses before any work
     "data fetch": ["--timeout", "-1"],
@@ -170,6 +192,8 @@ CERTAINLY_BAD = {  # one value each heavy command refuses before any work
     "anticipate": ["--step", "0"],
     "evaluate": ["--episodes", "0"],
     "corpus": ["--episodes", "0"],
+    "learn-gestures": ["--episodes", "0"],
+    "learning-curves": ["--episodes", "0"],
 }
 
 

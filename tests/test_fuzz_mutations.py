@@ -581,6 +581,39 @@ def _cases() -> dict[str, tuple[list[str], list[tuple[str, object]], bool]]:
             ],
             True,
         ),
+        "learn-gestures": (
+            ["learn-gestures", "--episodes", "12", "--labels", "soft", "--states", "2", "--mix", "1"]
+            + ["--iter", "2", "--data", "{data}", "-o", f"{OUT}/l.json"],
+            [
+                ("--episodes", "pos_int"),
+                ("--labels", "name"),
+                ("--seed", "seed"),
+                ("--ambiguity", "name"),
+                ("--threshold", "pos_float"),
+                ("--states", "pos_int"),
+                ("--mix", "pos_int"),
+                ("--iter", "pos_int"),
+                ("--noise", "nonneg_float"),
+                ("--data", "path:"),
+                ("-o", "outfile"),
+            ],
+            True,
+        ),
+        "learning-curves": (
+            ["learning-curves", "--episodes", "12", "--seeds", "0", "--synchronous", "--data", "{data}"]
+            + ["-o", f"{OUT}/lc"],
+            [
+                ("--episodes", "pos_int"),
+                ("--seeds", ["", "x", "1,1", "-1", "0..", "a..b"]),
+                ("--ambiguities", ["", " ", "nope", "mixed,nope"]),
+                ("--test-per-action", "pos_int"),
+                ("--workers", "pos_int"),
+                ("--scheduler", ["", "nope", "tcp://", "tcp://256.0.0.1:x"]),
+                ("--data", "path:"),
+                ("-o", "outdir"),
+            ],
+            True,
+        ),
     }
 
 

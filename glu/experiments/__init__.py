@@ -4,6 +4,10 @@
 * :mod:`~glu.experiments.gestures` — evaluation of gesture recognition;
 * :mod:`~glu.experiments.anticipation` — TCDS effect anticipation, frame by frame;
 * :mod:`~glu.experiments.verbal` — the verbal descriptions of TCDS;
+* :mod:`~glu.experiments.self_supervised`, :mod:`~glu.experiments.online_learning`,
+  :mod:`~glu.experiments.learned_recognizers`, :mod:`~glu.experiments.learning_curves` — beyond the self:
+  learning people's gestures from what their actions did (notebook 12), with two-level intervals
+  (:mod:`~glu.experiments.two_level`);
 * :mod:`~glu.experiments.common` — the stamp every table carries (experiment, data source, parameters).
 
 Their figures are drawn by :mod:`glu.plots`.

@@ -28,7 +28,15 @@ from glu.errors import ModelError
 from glu.hmm import em
 from glu.hmm._engine.batch import loglik_many, stack_models
 from glu.hmm._engine.em_batch import fit_many
-from glu.hmm.config import ENGINES, TrainingConfig, TrainingReport, checked_sequences, make_report
+from glu.hmm._engine.online import expected_stats_fast, fit_weighted_fast
+from glu.hmm.config import (
+    ENGINES,
+    HMMConvergenceWarning,
+    TrainingConfig,
+    TrainingReport,
+    checked_sequences,
+    make_report,
+)
 from glu.hmm.initialisation import init_left_to_right
 from glu.hmm.model import GestureHMM
 
@@ -151,6 +159,77 @@ def train_batch(
         _finish(seqs, tuple(r.params), tuple(float(h) for h in r.history), config, nm, warn)
         for (seqs, _), r, nm in zip(checked, results, names, strict=True)
     ]
+
+
+CORE_WEIGHT = 0.5
+"""Weighted training starts from the sequences whose weight is at least this fraction of the largest."""
+
+
+def train_weighted(
+    sequences: Sequence[np.ndarray],
+    weights: Sequence[float] | np.ndarray,
+    config: TrainingConfig,
+    seed: int = 0,
+    name: str = "",
+    warn: bool = True,
+    start: GestureHMM | None = None,
+) -> tuple[GestureHMM, TrainingReport]:
+    """Fit one model to weighted sequences: each of shape (T_i, D) counts ``weights[i]`` times (≥ 0).
+
+    The initial model is ``start`` if given (EM goes on from it), else
+    :func:`~glu.hmm.initialisation.init_left_to_right` of the *core* sequences, those weighing at least
+    :data:`CORE_WEIGHT` of the heaviest (all of positive weight when the core has too few frames); then
+    weighted Baum–Welch (:func:`glu.hmm.em.fit_weighted`, the ``map`` covariance of glu's recipe; run by
+    its compiled twin :func:`glu.hmm._engine.online.fit_weighted_fast`, equal to rounding), ``tol`` per
+    weighted training frame. The report counts the sequences of positive weight; its log-likelihoods are
+    weighted.
+    """
+    seqs, _ = checked_sequences(sequences, config, name)
+    try:
+        w = em.sequence_weights(seqs, weights)
+    except ValueError as e:
+        raise ModelError(f"training data for {name or 'the model'}: {e}") from None
+    if not np.any(w > 0):
+        raise ModelError(f"training data for {name or 'the model'}: every sequence has weight 0")
+    used = [X for X, x in zip(seqs, w, strict=True) if x > 0]
+    core = [X for X, x in zip(seqs, w, strict=True) if x >= CORE_WEIGHT * w.max()]
+    if sum(len(X) for X in core) < config.n_states * config.n_mix:
+        core = used
+    checked_sequences(core, config, name)
+    weighted_frames = float(w @ np.array([len(X) for X in seqs]))
+    if start is None:
+        start = init_left_to_right(core, config.n_states, config.n_mix, config.covar_reg, seed, name)
+    first = em.GMMHMMParams(start.startprob, start.transmat, start.weights, start.means, start.covars)
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore", RuntimeWarning)
+            result = fit_weighted_fast(
+                seqs, w, first, config.n_iter, config.tol * weighted_frames, config.covar_reg, "map"
+            )
+    except (ValueError, np.linalg.LinAlgError) as e:
+        raise ModelError(f"EM failed for {name or 'the model'}: {e}") from None
+    try:
+        fitted = GestureHMM(*result.params, name=name)
+    except ModelError as e:
+        raise ModelError(f"EM diverged for {name or 'the model'} ({e}); try a larger covar_reg") from None
+    final = float(expected_stats_fast(seqs, em.GMMHMMParams(*result.params), w).loglik)
+    history = tuple(float(h) for h in result.history)
+    delta = history[-1] - history[-2] if len(history) >= 2 else float("inf")
+    converged = bool(abs(delta) < config.tol * weighted_frames)
+    report = TrainingReport(
+        name,
+        len(used),
+        sum(len(X) for X in used),
+        len(history),
+        converged,
+        history,
+        final,
+        config.tol,
+        config.n_iter,
+    )
+    if not converged and warn:
+        warnings.warn(report.describe(), HMMConvergenceWarning, stacklevel=3)
+    return fitted, report
 
 
 def _run_em(

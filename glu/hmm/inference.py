@@ -254,7 +254,11 @@ def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
 
 
 def forward_backward(
-    log_b: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
+    log_b: np.ndarray,
+    lengths: np.ndarray,
+    startprob: np.ndarray,
+    transmat: np.ndarray,
+    weights: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Forward–backward over a padded batch of sequences.
 
@@ -264,11 +268,14 @@ def forward_backward(
     lengths : array, shape (S,) — the length of each sequence (≥ 1)
     startprob : array, shape (Q,)
     transmat : array, shape (Q, Q)
+    weights : array, shape (S,), optional — each sequence's weight in ``xi_sum`` (default: all 1, the
+        plain sum; weighted EM, :func:`glu.hmm.em.expected_stats`)
 
     Returns
     -------
-    gamma : array, shape (S, T, Q) — ``P(q_t | G)`` (0 past a sequence's end)
-    xi_sum : array, shape (Q, Q) — expected transition counts, summed over sequences and frames
+    gamma : array, shape (S, T, Q) — ``P(q_t | G)`` (0 past a sequence's end; never weighted)
+    xi_sum : array, shape (Q, Q) — expected transition counts, summed over sequences (times their
+        weights) and frames
     loglik : array, shape (S,) — ``log L(G)`` of each sequence
 
     The recursions are scaled (each frame's largest emission factored out, each forward variable
@@ -291,10 +298,10 @@ def forward_backward(
         a = np.where(live, (alpha[:, t - 1] @ transmat) * b[:, t], alpha[:, t - 1] @ eye)
         c[:, t] = a.sum(axis=1)
         if not np.all(c[:, t] > TINY):  # the scaled mass underflows for some sequence
-            return forward_backward_log(log_b, lengths, startprob, transmat)
+            return forward_backward_log(log_b, lengths, startprob, transmat, weights)
         alpha[:, t] = a / c[:, t, None]
     if not np.all(c[:, 0] > TINY):
-        return forward_backward_log(log_b, lengths, startprob, transmat)
+        return forward_backward_log(log_b, lengths, startprob, transmat, weights)
     loglik = np.where(alive, np.log(c) + mx, 0.0).sum(axis=1)
     beta = np.ones((S, T, Q))
     for t in range(T - 2, -1, -1):
@@ -304,14 +311,21 @@ def forward_backward(
     gamma /= np.where(alive, gamma.sum(axis=2), 1.0)[..., None]  # as hmmlearn: renormalise each frame
     if T > 1:
         right = np.where(alive[:, 1:, None], b[:, 1:] * beta[:, 1:] / c[:, 1:, None], 0.0)
-        xi_sum = transmat * np.einsum("sti,stj->ij", alpha[:, :-1], right, optimize=True)
+        if weights is None:
+            xi_sum = transmat * np.einsum("sti,stj->ij", alpha[:, :-1], right, optimize=True)
+        else:
+            xi_sum = transmat * np.einsum("s,sti,stj->ij", weights, alpha[:, :-1], right, optimize=True)
     else:
         xi_sum = np.zeros((Q, Q))
     return gamma, xi_sum, loglik
 
 
 def forward_backward_log(
-    log_b: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
+    log_b: np.ndarray,
+    lengths: np.ndarray,
+    startprob: np.ndarray,
+    transmat: np.ndarray,
+    weights: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`forward_backward` in the log domain (slower; never underflows). Same arguments and returns."""
     S, T, Q = log_b.shape
@@ -340,7 +354,8 @@ def forward_backward_log(
             - loglik[:, None, None, None]
         )
         with np.errstate(under="ignore"):
-            xi_sum = np.exp(np.where(pair[..., None, None], log_xi, -np.inf)).sum(axis=(0, 1))
+            xi = np.exp(np.where(pair[..., None, None], log_xi, -np.inf))
+            xi_sum = xi.sum(axis=(0, 1)) if weights is None else np.einsum("s,stij->ij", weights, xi)
     else:
         xi_sum = np.zeros((Q, Q))
     with np.errstate(under="ignore"):

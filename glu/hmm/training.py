@@ -63,6 +63,8 @@ def train(
     name: str = "",
     warn: bool = True,
     engine: str = "glu",
+    weights: Sequence[float] | Mapping[Hashable, Sequence[float]] | None = None,
+    start: GestureHMM | Mapping[Hashable, GestureHMM] | None = None,
 ) -> Trained | dict[Hashable, Trained]:
     """Train one gesture HMM, or many at once.
 
@@ -78,12 +80,21 @@ def train(
     warn : emit an :class:`~glu.hmm.config.HMMConvergenceWarning` when EM does not converge
     engine : glu's recipe, one model: ``"glu"`` (:func:`glu.hmm.em.fit`) or ``"hmmlearn"`` (its
         ``GMMHMM``); many models always use glu's batched EM
+    weights : one weight ≥ 0 per training sequence (with a mapping: a mapping of the same keys to such
+        lists): weighted EM, each sequence counted ``weight`` times (:func:`glu.hmm.glu_recipe.train_weighted`;
+        glu's recipe only, one model at a time). None (the default): the unweighted training above
+    start : with ``weights``, the model(s) EM goes on from (a mapping: for some keys) instead of a fresh
+        initial model
 
     Returns
     -------
     :class:`Trained` for one model; ``{key: Trained}`` for a mapping, in its order.
     """
     config = config or TrainingConfig()
+    if weights is not None:
+        return _train_weighted(sequences, weights, config, seed, name, warn, engine, start)
+    if start is not None:
+        raise ModelError("start= continues weighted training; give weights= too")
     if not isinstance(sequences, Mapping):
         if not isinstance(seed, int | np.integer):
             raise ModelError(f"one model takes one seed, got {seed!r}")
@@ -108,3 +119,34 @@ def train(
     else:
         results = glu_recipe.train_batch(data, config, seeds, names, warn)
     return {k: Trained(m, r) for k, (m, r) in zip(keys, results, strict=True)}
+
+
+def _train_weighted(
+    sequences: Sequence[Any] | Mapping[Hashable, Sequence[Any]],
+    weights: Sequence[float] | Mapping[Hashable, Sequence[float]],
+    config: TrainingConfig,
+    seed: int | Mapping[Hashable, int],
+    name: str,
+    warn: bool,
+    engine: str,
+    start: GestureHMM | Mapping[Hashable, GestureHMM] | None,
+) -> Trained | dict[Hashable, Trained]:
+    """:func:`train` with sequence weights: glu's recipe, weighted EM, one model after another."""
+    if config.recipe != "glu" or engine != "glu":
+        raise ModelError("weighted training uses glu's recipe and EM (recipe='glu', engine='glu')")
+    if not isinstance(sequences, Mapping):
+        if (
+            isinstance(weights, Mapping)
+            or isinstance(start, Mapping)
+            or not isinstance(seed, int | np.integer)
+        ):
+            raise ModelError("one model takes one list of weights, one seed and one start")
+        return Trained(*glu_recipe.train_weighted(sequences, weights, config, int(seed), name, warn, start))
+    if not isinstance(weights, Mapping) or set(weights) != set(sequences):
+        raise ModelError("with a mapping of training sets, give a mapping of weights with the same keys")
+    out = {}
+    for k, seqs in sequences.items():
+        sd = int(seed[k]) if isinstance(seed, Mapping) else int(seed)
+        first = start.get(k) if isinstance(start, Mapping) else None
+        out[k] = Trained(*glu_recipe.train_weighted(seqs, weights[k], config, sd, model_name(k), warn, first))
+    return out

@@ -5,7 +5,8 @@ argument (a sequence of axes for a multi-panel figure), and returns them. The lo
 (colours, sizes, the data-source footer, deterministic PNG and SVG) is in :mod:`glu.plots.style`. The
 functions live in one module per part of the story — :mod:`~glu.plots.gestures`,
 :mod:`~glu.plots.network`, :mod:`~glu.plots.fusion`, :mod:`~glu.plots.anticipation`,
-:mod:`~glu.plots.verbal`, :mod:`~glu.plots.evaluation`, :mod:`~glu.plots.corpus` — and are all importable
+:mod:`~glu.plots.verbal`, :mod:`~glu.plots.evaluation`, :mod:`~glu.plots.corpus`,
+:mod:`~glu.plots.learning` — and are all importable
 from here. A few build a whole figure (``*_figure``) where its layout is part of what it says.
 :mod:`~glu.plots.overlap` checks that no text of a figure covers another or the data.
 """
@@ -32,6 +33,7 @@ from glu.plots.gestures import (
     plot_segmentation,
     plot_segmentations,
 )
+from glu.plots.learning import plot_episodes_to_match, plot_learning_curves, plot_real_gestures
 from glu.plots.network import (
     plot_action_vs_soft_evidence,
     plot_effect_prediction,
@@ -66,8 +68,11 @@ __all__ = [
     "plot_confusion",
     "plot_effect_prediction",
     "plot_effect_vs_soft_evidence",
+    "plot_episodes_to_match",
     "plot_fusion_on_gestures",
+    "plot_learning_curves",
     "plot_nbest",
+    "plot_real_gestures",
     "plot_sampling",
     "plot_segment_scores",
     "plot_segmentation",

@@ -23,6 +23,7 @@ import pandas as pd
 from glu import paths
 from glu.errors import DataError
 from glu.files import atomic_write_text
+from glu.run.readme_learning import LEARNING_REQUIRED, LEARNING_TEMPLATE, learning_values
 
 _ROOT = paths.PROJECT_ROOT
 README: Path | None = _ROOT / "README.md" if _ROOT is not None else None
@@ -102,6 +103,7 @@ exact chance is {p_draw_percent:.1f} %).
   * Read per frame, p ∝ exp((1/t) log L), the product rule names the action in {pf_product_acc:.3f} [{pf_product_acc_lo:.3f}, {pf_product_acc_hi:.3f}] of the episodes against {pf_gesture_acc:.3f} for the gestures alone (paired difference {pf_gain:+.3f} [{pf_gain_lo:+.3f}, {pf_gain_hi:+.3f}]); with {early_percent:.0f} % of the gesture seen, {early_product:.3f} against {early_gesture:.3f}. Jeffrey's rule anticipates the effect with an ECE of {pf_jeffrey_ece:.3f} [{pf_jeffrey_ece_lo:.3f}, {pf_jeffrey_ece_hi:.3f}] against {pf_hard_ece:.3f} for a hard decision, and a log-loss of {pf_jeffrey_ll:.3f} against {pf_hard_ll:.3f}.
   * Seen from a viewpoint turned by {turned_deg:.0f}°, the HMMs (trained facing the camera) name {turned_gesture:.3f} of the actions, below the network alone ({turned_network:.3f}): the correspondence problem."""
 """The results section, with ``{name:format}`` slots filled by :func:`values`."""
+TEMPLATE += "\n" + LEARNING_TEMPLATE
 
 REQUIRED = (
     "bn_learning_summary",
@@ -130,7 +132,7 @@ REQUIRED = (
     "tcds_anticipation_sphere_glu_predictions",
     "tcds_anticipation_box_glu_predictions",
     "correspondence_summary",
-)
+) + LEARNING_REQUIRED
 """The result tables the section is written from."""
 
 
@@ -254,7 +256,7 @@ def values(summary: Mapping[str, Any]) -> dict[str, Any]:
         p_draw_percent=100 * float(trials["p_draw_best"].mean()),
     )
     v.update(corpus_values(summary))
-    v.update(_correspondence(summary))
+    v.update(_correspondence(summary) | learning_values(summary))
     return v
 
 

@@ -1,0 +1,322 @@
+"""Weighted EM from sufficient statistics (glu.hmm.em) and its many-model E-step (glu.hmm._engine.online).
+
+The references are independent: brute-force enumeration of every state and component path on a tiny model,
+duplicated sequences for integer weights, sequences left out for weight 0, and the unweighted ``fit``
+(tested against hmmlearn in test_hmm.py) for weights of one.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from glu.errors import ModelError
+from glu.hmm import TrainingConfig, loglik_many, stack_models, train
+from glu.hmm._engine.online import episode_stats, expected_stats_bank, loglik_bank
+from glu.hmm.em import GMMHMMParams, SufficientStats, expected_stats, fit, fit_weighted, maximise
+from glu.hmm.inference import forward_backward, left_to_right_transmat
+from glu.hmm.initialisation import init_left_to_right
+
+FIELDS = ("start", "trans", "counts", "first", "second", "loglik", "weight", "frames")
+
+
+def walks(rng, n, lo=20, hi=40, D=3):
+    return [np.cumsum(rng.normal(size=(int(rng.integers(lo, hi)), D)), axis=0) * 0.1 for _ in range(n)]
+
+
+def params_of(model) -> GMMHMMParams:
+    return GMMHMMParams(model.startprob, model.transmat, model.weights, model.means, model.covars)
+
+
+@pytest.fixture
+def problem():
+    rng = np.random.default_rng(3)
+    seqs = walks(rng, 6)
+    return seqs, params_of(init_left_to_right(seqs, 4, 2, 0.03, seed=0))
+
+
+def assert_stats_close(a: SufficientStats, b: SufficientStats, rtol=1e-10, atol=1e-10) -> None:
+    for f in FIELDS:
+        np.testing.assert_allclose(getattr(a, f), getattr(b, f), rtol=rtol, atol=atol, err_msg=f)
+
+
+def assert_params_close(a: GMMHMMParams, b: GMMHMMParams, rtol=1e-8, atol=1e-10) -> None:
+    for x, y, name in zip(a, b, GMMHMMParams._fields, strict=True):
+        np.testing.assert_allclose(x, y, rtol=rtol, atol=atol, err_msg=name)
+
+
+# ------------------------------------------------------------------ the E-step against brute force
+
+
+def brute_force_stats(X: np.ndarray, p: GMMHMMParams) -> SufficientStats:
+    """Expected statistics of one sequence by enumerating every (state, component) path."""
+    T, D = X.shape
+    Q, M = p.weights.shape
+
+    def log_normal(x, mu, cov):
+        d = x - mu
+        return -0.5 * (D * math.log(2 * math.pi) + math.log(np.linalg.det(cov)) + d @ np.linalg.solve(cov, d))
+
+    joint = {}
+    for qs in itertools.product(range(Q), repeat=T):
+        for ms in itertools.product(range(M), repeat=T):
+            lp = math.log(p.startprob[qs[0]]) if p.startprob[qs[0]] > 0 else -math.inf
+            for t in range(1, T):
+                a = p.transmat[qs[t - 1], qs[t]]
+                lp += math.log(a) if a > 0 else -math.inf
+            for t in range(T):
+                lp += math.log(p.weights[qs[t], ms[t]]) + log_normal(
+                    X[t], p.means[qs[t], ms[t]], p.covars[qs[t], ms[t]]
+                )
+            joint[qs, ms] = lp
+    top = max(joint.values())
+    total = sum(math.exp(v - top) for v in joint.values())
+    s = SufficientStats.zeros(Q, M, D)
+    start, trans, counts = s.start.copy(), s.trans.copy(), s.counts.copy()
+    first, second = s.first.copy(), s.second.copy()
+    for (qs, ms), lp in joint.items():
+        w = math.exp(lp - top) / total
+        start[qs[0]] += w
+        for t in range(1, T):
+            trans[qs[t - 1], qs[t]] += w
+        for t in range(T):
+            counts[qs[t], ms[t]] += w
+            first[qs[t], ms[t]] += w * X[t]
+            second[qs[t], ms[t]] += w * np.outer(X[t], X[t])
+    loglik = np.asarray(top + math.log(total))
+    return SufficientStats(start, trans, counts, first, second, loglik, np.asarray(1.0), np.asarray(float(T)))
+
+
+def test_expected_stats_equal_brute_force_enumeration():
+    rng = np.random.default_rng(0)
+    Q, M, D, T = 2, 2, 2, 4
+    p = GMMHMMParams(
+        startprob=np.array([0.7, 0.3]),
+        transmat=np.array([[0.6, 0.4], [0.25, 0.75]]),
+        weights=np.array([[0.4, 0.6], [0.5, 0.5]]),
+        means=rng.normal(size=(Q, M, D)),
+        covars=np.stack([[np.eye(D) * (0.5 + q + m) for m in range(M)] for q in range(Q)]),
+    )
+    X = rng.normal(size=(T, D))
+    assert_stats_close(expected_stats([X], p), brute_force_stats(X, p))
+    two = expected_stats([X, X[::-1]], p, [0.25, 2.0])  # and weighted: the weighted sum of both
+    ref = brute_force_stats(X, p).scaled(0.25) + brute_force_stats(X[::-1], p).scaled(2.0)
+    assert_stats_close(two, SufficientStats(*(getattr(ref, f) for f in FIELDS[:6]), ref.weight, ref.frames))
+
+
+def test_weighted_xi_sum_is_the_weighted_sum_of_each_sequence():
+    rng = np.random.default_rng(1)
+    S, T, Q = 3, 7, 3
+    log_b = rng.normal(size=(S, T, Q))
+    lengths = np.array([7, 5, 6])
+    pi, A = np.array([1.0, 0, 0]), left_to_right_transmat(Q, 0.7)
+    w = np.array([0.5, 0.0, 3.0])
+    _, xi_w, _ = forward_backward(log_b, lengths, pi, A, w)
+    each = [forward_backward(log_b[s : s + 1], lengths[s : s + 1], pi, A)[1] for s in range(S)]
+    np.testing.assert_allclose(xi_w, sum(wi * x for wi, x in zip(w, each, strict=True)), rtol=1e-12)
+
+
+# ------------------------------------------------------------------ weights: duplicates, zeros, pieces
+
+
+def test_integer_weights_equal_duplicated_sequences(problem):
+    seqs, p0 = problem
+    k = [1, 2, 0, 3, 1, 2]
+    dup = [x for x, n in zip(seqs, k, strict=True) for _ in range(n)]
+    assert_stats_close(expected_stats(seqs, p0, k), expected_stats(dup, p0))
+    a, b = fit_weighted(seqs, k, p0, 15, 1e-9, 0.03), fit(dup, p0, 15, 1e-9, 0.03)
+    assert len(a.history) == len(b.history)
+    np.testing.assert_allclose(a.history, b.history, rtol=1e-11)
+    assert_params_close(a.params, b.params)
+
+
+def test_weight_zero_equals_leaving_the_sequence_out(problem):
+    seqs, p0 = problem
+    w = [1.0, 0.0, 0.7, 0.0, 1.3, 1.0]
+    kept = [x for x, wi in zip(seqs, w, strict=True) if wi]
+    assert_stats_close(expected_stats(seqs, p0, w), expected_stats(kept, p0, [wi for wi in w if wi]))
+    impossible = seqs[:2] + [np.full((10, 3), 1e6)]  # a sequence of weight 0 may even be impossible
+    assert_stats_close(expected_stats(impossible, p0, [1, 1, 0]), expected_stats(seqs[:2], p0))
+    a = fit_weighted(seqs, w, p0, 10, 1e-9, 0.03)
+    b = fit_weighted(kept, [wi for wi in w if wi], p0, 10, 1e-9, 0.03)
+    assert_params_close(a.params, b.params, rtol=1e-12)
+
+
+def test_statistics_accumulated_in_pieces_equal_those_of_the_whole(problem):
+    seqs, p0 = problem
+    w = np.array([0.2, 1.0, 0.5, 2.0, 0.0, 1.5])
+    whole = expected_stats(seqs, p0, w)
+    pieces = expected_stats(seqs[:1], p0, w[:1])
+    for i in range(1, len(seqs)):
+        pieces = pieces + expected_stats(seqs[i : i + 1], p0, w[i : i + 1])
+    assert_stats_close(pieces, whole)
+    assert whole.weight == pytest.approx(w.sum()) and whole.frames == pytest.approx(
+        w @ [len(x) for x in seqs]
+    )
+    assert_params_close(maximise(pieces, p0, 0.03), maximise(whole, p0, 0.03), rtol=1e-10)
+
+
+def test_weights_of_one_equal_plain_baum_welch_for_every_covariance_update(problem):
+    seqs, p0 = problem
+    for cov in ("map", "ml", "hmmlearn"):
+        a = fit(seqs, p0, 25, 1e-7, 0.03, cov, 0.01)
+        b = fit_weighted(seqs, None, p0, 25, 1e-7, 0.03, cov, 0.01)
+        assert len(a.history) == len(b.history), cov
+        np.testing.assert_allclose(a.history, b.history, rtol=1e-11, err_msg=cov)
+        assert_params_close(a.params, b.params)
+
+
+def test_weighted_em_never_decreases_its_objective():
+    rng = np.random.default_rng(7)
+    seqs = walks(rng, 8)
+    w = rng.uniform(0.05, 2.0, size=8)
+    p0 = params_of(init_left_to_right(seqs[:3], 4, 2, 0.01, seed=1))  # a poor start: many EM steps
+    ml = fit_weighted(seqs, w, p0, 40, -np.inf, covariance="ml", covar_floor=0.0)  # exact EM
+    assert np.all(np.diff(ml.history) >= -1e-8 * np.abs(ml.history[:-1]))
+    assert ml.history[-1] > ml.history[0]
+
+    # MAP covariances: the weighted log-likelihood plus the covariance prior's log-density never decreases
+    reg = 0.03
+
+    def objective(p: GMMHMMParams) -> float:
+        ll = float(expected_stats(seqs, p, w).loglik)
+        inv = np.linalg.inv(p.covars)
+        logdet = np.linalg.slogdet(p.covars)[1]
+        return ll + float(np.sum(-0.5 * logdet - 0.5 * reg * np.trace(inv, axis1=-2, axis2=-1)))
+
+    p, values = p0, []
+    for _ in range(25):
+        p = maximise(expected_stats(seqs, p, w), p, reg)
+        values.append(objective(p))
+    assert np.all(np.diff(values) >= -1e-8 * np.abs(values[:-1]))
+
+
+def test_the_m_step_keeps_left_to_right_zeros_and_normalised_rows(problem):
+    seqs, p0 = problem
+    p = maximise(expected_stats(seqs, p0, np.linspace(0.1, 1, 6)), p0, 0.03)
+    assert np.all(p.transmat[np.tril_indices(4, -1)] == 0) and np.all(p.startprob[1:] == 0)
+    np.testing.assert_allclose(p.transmat.sum(axis=1), 1.0)
+    np.testing.assert_allclose(p.weights.sum(axis=1), 1.0)
+    assert np.all(np.linalg.eigvalsh(p.covars) > 0)
+
+
+def test_bad_weights_are_refused_in_one_line(problem):
+    seqs, p0 = problem
+    with pytest.raises(ValueError, match="6 weights"):
+        expected_stats(seqs, p0, [1.0, 2.0])
+    with pytest.raises(ValueError, match="finite and ≥ 0"):
+        expected_stats(seqs, p0, [1, 1, 1, -1, 1, 1])
+    with pytest.raises(ValueError, match="positive weight"):
+        fit_weighted(seqs, np.zeros(6), p0, 5, 1e-3)
+
+
+# ------------------------------------------------------------------ many models, one sequence
+
+
+def test_the_many_model_e_step_equals_the_reference_for_each_model():
+    rng = np.random.default_rng(5)
+    models = [params_of(init_left_to_right(walks(rng, 4, 30, 31), 5, 2, 0.03, seed=k)) for k in range(4)]
+    stack = GMMHMMParams(*(np.stack(a) for a in zip(*models, strict=True)))
+    X = walks(rng, 1, 45, 46)[0]
+    w = np.array([1.0, 0.4, 0.0, 2.5])
+    bank = expected_stats_bank(X, stack, w)
+    for k, m in enumerate(models):
+        ref = expected_stats([X], m, [w[k]])
+        for f in FIELDS:
+            np.testing.assert_allclose(getattr(bank, f)[k], getattr(ref, f), rtol=1e-10, atol=1e-9, err_msg=f)
+    _, loglik = episode_stats(X, stack)
+    np.testing.assert_allclose(loglik, [expected_stats([X], m).loglik for m in models], rtol=1e-12)
+
+
+def test_the_many_model_e_step_survives_underflow_in_the_log_domain():
+    rng = np.random.default_rng(6)
+    Q, D = 3, 3
+    tight = GMMHMMParams(
+        np.array([1.0, 0, 0]),
+        left_to_right_transmat(Q, 0.8),
+        np.ones((Q, 1)),
+        np.zeros((Q, 1, D)) + np.arange(Q)[:, None, None] * 40.0,  # far-apart states: scaled mass underflows
+        np.tile(np.eye(D) * 1e-3, (Q, 1, 1, 1)),
+    )
+    X = np.concatenate([np.zeros((5, D)), np.full((5, D), 40.0), np.full((5, D), 80.0)]) + rng.normal(
+        0, 0.01, (15, D)
+    )
+    stack = GMMHMMParams(*(np.stack([a, a]) for a in tight))
+    bank = expected_stats_bank(X, stack, np.array([1.0, 0.0]))
+    ref = expected_stats([X], tight)
+    np.testing.assert_allclose(bank.counts[0], ref.counts, rtol=1e-9, atol=1e-12)
+    assert np.all(bank.counts[1] == 0) and bank.loglik[1] == 0
+
+
+# ------------------------------------------------------------------ train(weights=)
+
+
+def test_train_with_weights_learns_from_the_heavy_sequences():
+    rng = np.random.default_rng(8)
+    up = [np.linspace(0, 1, 30)[:, None] * [1, 2, 0] + rng.normal(0, 0.02, (30, 3)) for _ in range(5)]
+    down = [x[::-1] for x in up]
+    config = TrainingConfig(n_states=3, n_mix=1, n_iter=50)
+    model, report = train(up + down, config, weights=[1.0] * 5 + [0.0] * 5, name="up", warn=False)
+    alone, _ = train(up, config, weights=[1.0] * 5, name="up", warn=False)
+    assert report.n_sequences == 5
+    np.testing.assert_allclose(model.means, alone.means, rtol=1e-10)
+    assert model.loglik(up[0]) > model.loglik(down[0]) + 10
+    bank = train(
+        {"up": up + down, "down": up + down},
+        config,
+        weights={"up": [1] * 5 + [0.01] * 5, "down": [0.01] * 5 + [1] * 5},
+        warn=False,
+    )
+    assert bank["down"].model.name == "down" and bank["down"].model.loglik(down[1]) > bank[
+        "down"
+    ].model.loglik(up[1])
+
+
+def test_train_with_weights_refuses_what_it_cannot_do(problem):
+    seqs, _ = problem
+    with pytest.raises(ModelError, match="glu's recipe"):
+        train(seqs, TrainingConfig(recipe="mixsplit"), weights=[1.0] * 6)
+    with pytest.raises(ModelError, match="weight 0"):
+        train(seqs, TrainingConfig(n_states=2, n_mix=1), weights=[0.0] * 6)
+    with pytest.raises(ModelError, match="finite and ≥ 0"):
+        train(seqs, TrainingConfig(n_states=2, n_mix=1), weights=[1, 1, 1, 1, 1, np.nan])
+
+
+def test_the_compiled_weighted_e_step_and_em_equal_the_reference(problem):
+    from glu.hmm._engine.online import expected_stats_fast, fit_weighted_fast
+
+    seqs, p0 = problem
+    w = np.array([0.3, 1.0, 0.0, 2.0, 1.0, 0.5])
+    assert_stats_close(expected_stats_fast(seqs, p0, w), expected_stats(seqs, p0, w))
+    a, b = fit_weighted_fast(seqs, w, p0, 20, 1e-9, 0.03), fit_weighted(seqs, w, p0, 20, 1e-9, 0.03)
+    assert len(a.history) == len(b.history)
+    np.testing.assert_allclose(a.history, b.history, rtol=1e-10)
+    assert_params_close(a.params, b.params)
+
+
+def test_weighted_training_goes_on_from_a_given_model():
+    rng = np.random.default_rng(9)
+    seqs = walks(rng, 6)
+    config = TrainingConfig(n_states=3, n_mix=1, n_iter=3, tol=1e-12)
+    w = np.linspace(0.2, 1.0, 6)
+    first, _ = train(seqs, config, weights=w, warn=False)
+    more, report = train(seqs, config, weights=w, warn=False, start=first)
+    ref = fit_weighted(seqs, w, params_of(first), 3, -np.inf, 0.03)  # three more iterations by hand
+    np.testing.assert_allclose(more.means, ref.params.means, rtol=1e-9)
+    assert report.history[0] == pytest.approx(float(expected_stats(seqs, params_of(first), w).loglik))
+    with pytest.raises(ModelError, match="weights="):
+        train(seqs, config, start=first)
+
+
+def test_the_many_model_scores_equal_the_recognisers_scores():
+    rng = np.random.default_rng(10)
+    for M in (1, 2):  # a bank of equal shapes: the mixtures of one size
+        same = [init_left_to_right(walks(rng, 4, 30, 31), 5, M, 0.03, seed=k) for k in range(3)]
+        stack = GMMHMMParams(*(np.stack([getattr(m, f) for m in same]) for f in GMMHMMParams._fields))
+        seqs = walks(rng, 5, 10, 50)
+        np.testing.assert_allclose(
+            loglik_bank(seqs, stack), loglik_many(stack_models(same), seqs), rtol=1e-10
+        )
