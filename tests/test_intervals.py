@@ -134,9 +134,9 @@ def test_groups_pool_conditions_by_summing(data):
 def test_reliability_bins(data):
     cols, X, truth, frame, n = data
     r = reliability(frame, cols, [])
-    assert set(r.strategy) == {"network", "hard", "virtual"}
-    for strategy, g in r.groupby("strategy"):
-        vals, conf, b = truth[("effect", strategy)]
+    assert set(r.strategy) == {"network", "hard", "virtual"} and set(r.target) == {"action", "effect"}
+    for (target, strategy), g in r.groupby(["target", "strategy"]):
+        vals, conf, b = truth[(target, strategy)]
         assert g.n.sum() == n
         k = 2
         row = g[g.bin == k].iloc[0]

@@ -325,20 +325,21 @@ def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[s
 
 
 def reliability(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
-    """The reliability diagram of the effect's calibration bins (the estimate, row 0 of the sums).
+    """The reliability diagrams of the calibration bins (the estimate, row 0 of the sums).
 
     Returns
     -------
-    tidy DataFrame: *by, strategy, fraction, bin, lower, upper (the bin's confidence range), n (episodes
-    in the bin), confidence (their mean top-label confidence), accuracy (how often that label was right)
+    tidy DataFrame: *by, target, strategy, fraction, bin, lower, upper (the bin's confidence range), n
+    (episodes in the bin), confidence (their mean top-label confidence), accuracy (how often that label
+    was right)
     """
-    cols = [*by, "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
+    cols = [*by, "target", "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
     binned = columns[columns["bin"] >= 0]
     if binned.empty:
         return pd.DataFrame(columns=cols)
     n_bins = int(binned["bin"].max()) + 1
     stats = {st: binned[binned.stat == st] for st in ("bin_n", "bin_confidence", "bin_correct")}
-    base = stats["bin_n"][["strategy", "fraction", "bin"]].reset_index(drop=True)
+    base = stats["bin_n"][["target", "strategy", "fraction", "bin"]].reset_index(drop=True)
     base["lower"], base["upper"] = base["bin"] / n_bins, (base["bin"] + 1) / n_bins
     parts = []
     for key, g in _groups(sums, by):
