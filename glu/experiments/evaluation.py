@@ -39,14 +39,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from itertools import product
-from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 
 from glu.bn.inference import InferenceEngine
-from glu.errors import DataError, ImpossibleEvidenceError, ModelError
+from glu.errors import DataError, ModelError
 from glu.experiments.corpus import (
     VIEWPOINTS,
     Chunk,
@@ -56,6 +54,7 @@ from glu.experiments.corpus import (
     simulate_chunk,
 )
 from glu.experiments.intervals import BOOT_KEY, SEEDS_KEY, accumulate, poisson_weights, seed_counts
+from glu.experiments.network_tables import EFFECT, NetworkTables, network_tables
 from glu.fusion import STRATEGIES, fuse_action_tables, fuse_tables
 from glu.gestures.calibration import READINGS, Calibration, p_hmm_reading
 from glu.gestures.synthetic import View
@@ -76,7 +75,6 @@ APPLICABLE: dict[str, tuple[str, ...]] = {
 infers only the action, and for effects it equals virtual evidence)."""
 GESTURE_FREE: tuple[str, ...] = ("network", "true_action")
 """Strategies that ignore the gesture (their predictions are the same at every fraction)."""
-EFFECT = "ObjVel"
 DESCRIBED: tuple[str, ...] = ("Action", "Color", "Shape", "Size", "ObjVel")
 """The nodes a description is checked against."""
 LOG_FLOOR = 1e-6
@@ -167,56 +165,6 @@ def statistic_columns(settings: EvaluationSettings) -> pd.DataFrame:
                         for st in ("bin_n", "bin_confidence", "bin_correct")
                     ]
     return pd.DataFrame(rows, columns=["target", "strategy", "fraction", "stat", "bin"])
-
-
-class NetworkTables(NamedTuple):
-    """The network's answers for every combination of observed values (queried once, used per episode).
-
-    Attributes
-    ----------
-    nodes : the observed nodes, in order; an episode's combination is ``ravel_multi_index`` of its codes
-    p_action : array, shape (C, K) — ``p_BN(A | X_obs)``
-    p_given_action : array, shape (C, K, V) — ``p_BN(X | X_obs, A = a)`` of the target(s) (NaN rows for
-        combinations of probability 0)
-    """
-
-    nodes: tuple[str, ...]
-    p_action: np.ndarray
-    p_given_action: np.ndarray
-
-    def combo(self, codes: Mapping[str, np.ndarray], shape: Sequence[int]) -> np.ndarray:
-        """The combination index of each episode, shape (n,)."""
-        if not self.nodes:
-            return np.zeros(len(next(iter(codes.values()))), dtype=np.intp)
-        return np.ravel_multi_index(tuple(codes[n] for n in self.nodes), tuple(shape))
-
-
-def network_tables(engine: InferenceEngine, nodes: Sequence[str], target: str) -> NetworkTables:
-    """:class:`NetworkTables` for observed ``nodes``; ``target`` is a node (e.g. ObjVel) or ``"words"``."""
-    schema = engine.bn.schema
-    values = [schema.values_of(n) for n in nodes]
-    actions = schema.values_of("Action")
-    n_out = len(engine.binary_leaves) if target == "words" else schema.cardinality(target)
-    combos = list(product(*values))
-    p_a = np.full((len(combos), len(actions)), np.nan)
-    p_x = np.full((len(combos), len(actions), n_out), np.nan)
-    for c, vals in enumerate(combos):
-        ev = dict(zip(nodes, vals, strict=True))
-        try:
-            p_a[c] = engine.query(["Action"], ev)["Action"]
-        except ImpossibleEvidenceError:
-            continue
-        for k, a in enumerate(actions):
-            full = {**ev, "Action": a}
-            try:
-                p_x[c, k] = (
-                    engine.word_probabilities(full)
-                    if target == "words"
-                    else engine.query([target], full)[target]
-                )
-            except ImpossibleEvidenceError:
-                p_x[c, k] = 0.0  # this action is impossible here: p_a is 0 for it, so the row is never used
-    return NetworkTables(tuple(nodes), p_a, p_x)
 
 
 @dataclass(frozen=True)

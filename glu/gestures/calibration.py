@@ -109,14 +109,18 @@ def fit_temperature(loglik: np.ndarray, labels: np.ndarray) -> float:
     ll = np.asarray(loglik, dtype=float)
     y = np.asarray(labels, dtype=np.intp)
     if ll.ndim != 2 or y.shape != (len(ll),) or (y < 0).any() or (y >= ll.shape[1]).any():
-        raise DataError(f"fit_temperature: log-likelihoods (n, K) and labels (n,) in 0…K−1; got {ll.shape}, {y.shape}")
+        raise DataError(
+            f"fit_temperature: log-likelihoods (n, K) and labels (n,) in 0…K−1; got {ll.shape}, {y.shape}"
+        )
     keep = np.isfinite(ll).all(axis=1)
     ll, y = ll[keep], y[keep]
     if len(ll) == 0:
         raise DataError("fit_temperature: no held-out gesture with finite log-likelihoods")
     ll = ll - ll.max(axis=1, keepdims=True)  # the softmax is unchanged; the numbers stay small
     lo, hi = BETA_BOUNDS
-    res = minimize_scalar(log_loss_at, bounds=(lo, hi), args=(ll, y), method="bounded", options={"xatol": 1e-7})
+    res = minimize_scalar(
+        log_loss_at, bounds=(lo, hi), args=(ll, y), method="bounded", options={"xatol": 1e-7}
+    )
     best = float(res.x)
     for edge in (lo, hi):  # the bounded search never evaluates the ends themselves
         if log_loss_at(edge, ll, y) <= log_loss_at(best, ll, y):

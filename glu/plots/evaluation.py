@@ -2,17 +2,21 @@
 
 Every function draws the tables of :mod:`glu.sweep` (``results``, ``differences``, ``reliability``) on the
 axes it is given and returns them. In those tables a noise of NaN means "pooled over the noise levels"
-and a viewpoint ``"all"`` "pooled over the viewpoints"; ``posterior`` picks how p_HMM was read from the
-HMMs (:data:`glu.experiments.corpus.POSTERIORS`).
+and a viewpoint ``"all"`` "pooled over the viewpoints"; ``where`` picks one cell of the design (action
+prior, inference network, learn_experiments, p_HMM reading; default
+:data:`glu.experiments.findings.REFERENCE_CELL`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+
+from glu.experiments.findings import REFERENCE_CELL
 
 STRATEGY_COLORS = {
     "gesture": "#8C8C8C",
@@ -36,8 +40,18 @@ METRIC_LABEL = {
 }
 
 
-def _pooled(frame: pd.DataFrame, noise: float | None, viewpoint: str, posterior: str) -> pd.DataFrame:
-    sel = (frame.viewpoint == viewpoint) & (frame.posterior == posterior)
+def _cell(frame: pd.DataFrame, where: Mapping[str, Any] | None) -> pd.DataFrame:
+    """The rows of one cell of the design (``where``: column → value; None: the reference cell)."""
+    for k, v in (REFERENCE_CELL if where is None else where).items():
+        frame = frame[frame[k] == v]
+    return frame
+
+
+def _pooled(
+    frame: pd.DataFrame, noise: float | None, viewpoint: str, where: Mapping[str, Any] | None
+) -> pd.DataFrame:
+    frame = _cell(frame, where)
+    sel = frame.viewpoint == viewpoint
     return frame[sel & (frame.noise.isna() if noise is None else np.isclose(frame.noise, noise))]
 
 
@@ -75,16 +89,16 @@ def plot_metric_vs_noise(
     fraction: float = 1.0,
     viewpoint: str = "all",
     strategies: Sequence[str] | None = None,
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
 ) -> Axes:
     """One metric of one target against the sensor noise (m), a line and a 95 % band per strategy."""
+    results = _cell(results, where)
     sel = results[
         (results.target == target)
         & (results.metric == metric)
         & np.isclose(results.fraction, fraction)
         & (results.viewpoint == viewpoint)
         & results.noise.notna()
-        & (results.posterior == posterior)
     ]
     _strategy_lines(ax, sel, "noise", metric, strategies)
     ax.set_xlabel("sensor noise (cm)")
@@ -101,10 +115,10 @@ def plot_early_recognition(
     noise: float | None = None,
     viewpoint: str = "all",
     strategies: Sequence[str] | None = None,
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
 ) -> Axes:
     """One metric against the observed fraction of the gesture, a line and a 95 % band per strategy."""
-    sel = _pooled(results, noise, viewpoint, posterior)
+    sel = _pooled(results, noise, viewpoint, where)
     sel = sel[(sel.target == target) & (sel.metric == metric)]
     _strategy_lines(ax, sel, "fraction", metric, strategies)
     ax.set_xlabel("gesture observed (%)")
@@ -120,12 +134,13 @@ def plot_reliability(
     strategies: Sequence[str] | None = None,
     noise: float | None = None,
     viewpoint: str = "all",
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
+    target: str = "effect",
 ) -> Axes:
-    """Reliability diagram of the effect (ObjVel): how often the top value was right, against its
-    probability, per calibration bin; marker area ∝ the number of episodes in the bin."""
-    sel = _pooled(reliability, noise, viewpoint, posterior)
-    sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0)]
+    """Reliability diagram of a target (the effect ObjVel, or the action): how often the top value was
+    right, against its probability, per calibration bin; marker area ∝ the number of episodes in the bin."""
+    sel = _pooled(reliability, noise, viewpoint, where)
+    sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0) & (sel.target == target)]
     ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
     total = sel.groupby("strategy").n.transform("sum")
     for strategy, g in sel.assign(share=sel.n / total).groupby("strategy", sort=False):
@@ -142,9 +157,10 @@ def plot_reliability(
             ax.scatter(g.confidence, g.accuracy, s=4 + 200 * g.share, color=c, alpha=0.7, lw=0)
     ax.set_xlim(0.3, 1.0)
     ax.set_ylim(0.0, 1.0)
-    ax.set_xlabel("predicted probability of the top ObjVel value")
+    what = "ObjVel value" if target == "effect" else "action"
+    ax.set_xlabel(f"predicted probability of the top {what}")
     ax.set_ylabel("how often it was right")
-    ax.set_title(f"effect calibration ({fraction:.0%} seen)", fontsize=9)
+    ax.set_title(f"{target} calibration ({fraction:.0%} seen)", fontsize=9)
     return ax
 
 
@@ -155,13 +171,13 @@ def plot_differences(
     fraction: float = 1.0,
     noise: float | None = None,
     viewpoint: str = "all",
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
 ) -> Axes:
     """Paired differences with 95 % intervals, one row per ``(target, metric, strategy, baseline)``.
 
     A filled marker: the interval excludes 0 on the side where the metric improves.
     """
-    sel = _pooled(differences, noise, viewpoint, posterior)
+    sel = _pooled(differences, noise, viewpoint, where)
     sel = sel[np.isclose(sel.fraction, fraction)]
     labels = []
     for i, (target, metric, strategy, baseline) in enumerate(pairs):
@@ -211,16 +227,16 @@ def plot_by_viewpoint(
     metric: str,
     fraction: float = 1.0,
     strategies: Sequence[str] | None = None,
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
 ) -> Axes:
     """One metric per viewpoint (pooled over noise), grouped bars with 95 % intervals per strategy."""
+    results = _cell(results, where)
     sel = results[
         (results.target == target)
         & (results.metric == metric)
         & np.isclose(results.fraction, fraction)
         & results.noise.isna()
         & (results.viewpoint != "all")
-        & (results.posterior == posterior)
     ]
     views = list(dict.fromkeys(sel.viewpoint))
     strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
@@ -240,4 +256,65 @@ def plot_by_viewpoint(
     ax.set_xticks(np.arange(len(views)), views)
     ax.set_ylabel(METRIC_LABEL.get(metric, metric))
     ax.set_title(f"{target}: by viewpoint (all noise levels, {fraction:.0%} seen)", fontsize=9)
+    return ax
+
+
+def plot_winners(ax: Axes, winners: pd.DataFrame, target: str, metric: str) -> Axes:
+    """Which strategy wins each cell of the design for one target and metric: rows (action prior,
+    inference network), columns the p_HMM readings; each cell coloured by the winner and naming it, with
+    ``=`` before the strategies tied with it (:func:`glu.experiments.findings.winners`)."""
+    sel = winners[(winners.target == target) & (winners.metric == metric)].copy()
+    sel["network"] = [
+        "generating" if n == "generating" else f"learned {int(k)}"
+        for n, k in zip(sel.inference_network, sel.learn_experiments, strict=True)
+    ]
+    rows = list(dict.fromkeys(zip(sel.action_prior, sel.network, strict=True)))
+    cols = list(dict.fromkeys(sel.p_hmm))
+    ax.set_xlim(-0.5, len(cols) - 0.5)
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    for r in sel.itertuples():
+        i, j = rows.index((r.action_prior, r.network)), cols.index(r.p_hmm)
+        c = STRATEGY_COLORS.get(r.best, "0.5")
+        ax.add_patch(plt_rectangle(j, i, c))
+        tied = [t for t in r.tied.split(", ") if t and t != r.best]
+        text = r.best + ("\n= " + ", ".join(tied) if tied else "")
+        ax.text(j, i, text, ha="center", va="center", fontsize=6.5)
+    ax.set_xticks(range(len(cols)), cols, fontsize=7)
+    ax.set_yticks(range(len(rows)), [f"{a} actions, {n}" for a, n in rows], fontsize=7)
+    ax.set_title(f"{target}: {METRIC_LABEL.get(metric, metric)}, best (= no difference)", fontsize=9)
+    ax.tick_params(length=0)
+    return ax
+
+
+def plt_rectangle(x: float, y: float, color: str) -> Any:
+    """A cell of :func:`plot_winners`: a unit square centred on (x, y), lightly filled."""
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((x - 0.5, y - 0.5), 1, 1, facecolor=color, alpha=0.35, edgecolor="white", lw=1.5)
+
+
+def plot_segment_readings(ax: Axes, readings: pd.DataFrame) -> Axes:
+    """p_HMM on held-out real segments (:func:`glu.experiments.p_hmm.segment_readings`): for each reading,
+    the top action's probability of every segment, filled when the segment was recognised, hollow when not."""
+    order = list(dict.fromkeys(readings.reading))
+    rng = np.random.default_rng(0)
+    for k, (_, g) in enumerate(readings.groupby("reading", sort=False)):
+        x = k + rng.uniform(-0.15, 0.15, len(g))
+        ok = g.correct.to_numpy(dtype=bool)
+        ax.scatter(x[ok], g.confidence[ok], color="#4C72B0", s=18, label="recognised" if k == 0 else None)
+        ax.scatter(
+            x[~ok],
+            g.confidence[~ok],
+            facecolor="white",
+            edgecolor="#C44E52",
+            s=18,
+            label="missed" if k == 0 else None,
+        )
+        ax.hlines(
+            g.correct.mean(), k - 0.3, k + 0.3, color="0.3", lw=1.2, label="accuracy" if k == 0 else None
+        )
+    ax.set_xticks(range(len(order)), order)
+    ax.set_ylim(0.0, 1.05)
+    ax.set_ylabel("p_HMM of the top action")
+    ax.set_title("real segments, each left out", fontsize=9)
     return ax

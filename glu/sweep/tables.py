@@ -14,8 +14,8 @@ import pandas as pd
 from glu.errors import DataError
 from glu.experiments.common import tidy
 from glu.experiments.evaluation import Evaluator
+from glu.experiments.findings import DESIGN, winners
 from glu.experiments.intervals import (
-    HIGHER_IS_BETTER,
     metric_cells,
     metric_values,
     metrics,
@@ -26,10 +26,6 @@ from glu.files import atomic_path, atomic_write_json, atomic_write_text
 from glu.sweep.config import SweepConfig
 
 EXPERIMENT = "corpus_evaluation"
-REFERENCES = ("true_action",)
-"""Strategies that are references (a ceiling), not candidates for "best" in the summary."""
-DESIGN = ("action_prior", "inference_network", "learn_experiments", "p_hmm")
-"""The factors of the design every table keeps apart (never pooled)."""
 FILES = (
     "sums.parquet",
     "results.parquet",
@@ -127,7 +123,11 @@ def merge(
         sums_parts.append(sums.assign(**design))
         for name, fn, groups in (
             ("results", metrics, GROUPS),
-            ("differences", paired_differences, {k: GROUPS[k] for k in (("noise", "viewpoint"), ())}),
+            (
+                "differences",
+                paired_differences,
+                {k: GROUPS[k] for k in (("noise", "viewpoint"), ("viewpoint",), ())},
+            ),
             ("reliability", reliability, {k: GROUPS[k] for k in (("noise", "viewpoint"), ())}),
         ):
             for by, fill in groups.items():
@@ -194,51 +194,6 @@ def read_tables(folder: str | Path) -> tuple[pd.DataFrame, pd.DataFrame, pd.Data
 def _write_parquet(path: Path, df: pd.DataFrame) -> None:
     with atomic_path(path, suffix=".parquet") as tmp:
         df.to_parquet(tmp, index=False)
-
-
-def winners(table: pd.DataFrame, diffs: pd.DataFrame, fraction: float | None = None) -> pd.DataFrame:
-    """Which strategy wins each cell of the design (pooled over noise levels and viewpoints).
-
-    For each (action prior, inference network, learn_experiments, p_HMM, target, metric) at ``fraction``
-    (default the largest): ``best``, the strategy with the best estimate (the reference ``true_action``
-    left out); ``tied``, every strategy whose paired difference with it has an interval containing 0 (no
-    difference), best included; ``beats``, those it is better than with confidence; and the best
-    estimate with its interval.
-    """
-    full = table["fraction"].max() if fraction is None else fraction
-    sel = table[(table.viewpoint == "all") & table.noise.isna() & np.isclose(table.fraction, full)]
-    sel = sel[~sel.strategy.isin(REFERENCES)]
-    d = diffs[(diffs.viewpoint == "all") & diffs.noise.isna() & np.isclose(diffs.fraction, full)]
-    rows = []
-    keys = [*DESIGN, "target", "metric"]
-    d_groups = {k: g for k, g in d.groupby(keys, sort=False, dropna=False)}
-    for key, g in sel.groupby(keys, sort=False, dropna=False):
-        up = HIGHER_IS_BETTER.get(key[-1], True)
-        top = g.sort_values("estimate", ascending=not up).iloc[0]
-        tied, beats = [top.strategy], []
-        for p in d_groups.get(key, pd.DataFrame(columns=d.columns)).itertuples():
-            if top.strategy not in (p.strategy, p.baseline):
-                continue
-            other = p.baseline if p.strategy == top.strategy else p.strategy
-            if other in REFERENCES:
-                continue
-            if p.verdict == "no difference":
-                tied.append(other)
-            else:
-                beats.append(other)
-        rows.append(
-            {
-                **dict(zip(keys, key, strict=True)),
-                "fraction": full,
-                "best": top.strategy,
-                "tied": ", ".join(sorted(tied)),
-                "beats": ", ".join(sorted(beats)),
-                "estimate": float(top.estimate),
-                "ci_low": float(top.ci_low),
-                "ci_high": float(top.ci_high),
-            }
-        )
-    return pd.DataFrame(rows)
 
 
 def summarize(table: pd.DataFrame, diffs: pd.DataFrame, provenance: dict[str, Any]) -> dict[str, Any]:

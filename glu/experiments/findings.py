@@ -1,0 +1,284 @@
+"""What the corpus evaluation finds, cell by cell of its design, written from its tables.
+
+The design (:mod:`glu.sweep`) crosses how often each action is performed (``action_prior``), which network
+the robot infers with (``inference_network``, ``learn_experiments``) and how it reads p_HMM (``p_hmm``).
+:func:`winners` names the best strategy of each cell and those tied with it (paired difference whose
+interval contains 0: no difference); :func:`finding_verdicts` follows each claim of :data:`FINDINGS` (a
+paired difference between two strategies) through every cell, and :func:`finding_sentences` writes each
+as a sentence — what it is in the reference cell, and in how many cells, at which levels of each factor,
+it holds — so that no sentence about these results is typed by hand.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from glu.experiments.intervals import HIGHER_IS_BETTER, verdict
+
+DESIGN: tuple[str, ...] = ("action_prior", "inference_network", "learn_experiments", "p_hmm")
+"""The factors of the design every table keeps apart (never pooled)."""
+REFERENCES: tuple[str, ...] = ("true_action",)
+"""Strategies that are references (a ceiling), never a cell's winner."""
+REFERENCE_CELL: dict[str, Any] = {
+    "action_prior": "uniform",
+    "inference_network": "generating",
+    "learn_experiments": 0,
+    "p_hmm": "per-frame",
+}
+"""The cell of the earlier results: actions drawn uniformly, the robot's network the one that drew the
+episodes, p_HMM read per frame."""
+
+
+@dataclass(frozen=True)
+class Finding:
+    """A claim about two strategies: ``strategy`` is better than ``baseline`` on ``target``'s ``metric``.
+
+    Attributes
+    ----------
+    label : the claim in words (no numbers: those come from the tables)
+    target, metric, strategy, baseline : the paired difference it rests on
+    early : at the smallest observed fraction of the gesture (else the largest)
+    viewpoint : a viewpoint of the sweep, or ``"all"`` (pooled)
+    """
+
+    label: str
+    target: str
+    metric: str
+    strategy: str
+    baseline: str
+    early: bool = False
+    viewpoint: str = "all"
+
+
+FINDINGS: tuple[Finding, ...] = (
+    Finding(
+        "the product rule names the action better than the gesture alone",
+        "action",
+        "accuracy",
+        "product",
+        "gesture",
+    ),
+    Finding(
+        "early in the gesture, the product rule names the action better than the gesture alone",
+        "action",
+        "accuracy",
+        "product",
+        "gesture",
+        early=True,
+    ),
+    Finding(
+        "Jeffrey's rule anticipates the effect with a lower log-loss than virtual evidence (the originals')",
+        "effect",
+        "log_loss",
+        "jeffrey",
+        "virtual",
+    ),
+    Finding(
+        "Jeffrey's rule anticipates the effect better calibrated than a hard decision",
+        "effect",
+        "ece",
+        "jeffrey",
+        "hard",
+    ),
+    Finding(
+        "Jeffrey's rule anticipates the effect better than the network alone",
+        "effect",
+        "log_loss",
+        "jeffrey",
+        "network",
+    ),
+    Finding(
+        "early in the gesture, Jeffrey's rule anticipates the effect better than the network alone",
+        "effect",
+        "log_loss",
+        "jeffrey",
+        "network",
+        early=True,
+    ),
+    Finding(
+        "virtual evidence anticipates the effect better than the network alone",
+        "effect",
+        "log_loss",
+        "virtual",
+        "network",
+    ),
+    Finding(
+        "seen from a turned viewpoint, the gesture names the action better than the network alone",
+        "action",
+        "accuracy",
+        "gesture",
+        "network",
+        viewpoint="turned",
+    ),
+)
+"""The claims followed through the design (each with its interval in every cell)."""
+
+
+def _pooled(frame: pd.DataFrame, viewpoint: str = "all") -> pd.DataFrame:
+    return frame[(frame.viewpoint == viewpoint) & frame.noise.isna()]
+
+
+def winners(table: pd.DataFrame, diffs: pd.DataFrame, fraction: float | None = None) -> pd.DataFrame:
+    """Which strategy wins each cell of the design (pooled over noise levels and viewpoints).
+
+    For each (action prior, inference network, learn_experiments, p_HMM, target, metric) at ``fraction``
+    (default the largest): ``best``, the strategy with the best estimate (the reference ``true_action``
+    left out); ``tied``, every strategy whose paired difference with it has an interval containing 0 (no
+    difference), best included; ``beats``, those it is better than with confidence; and the best
+    estimate with its interval.
+    """
+    full = table["fraction"].max() if fraction is None else fraction
+    sel = _pooled(table)
+    sel = sel[np.isclose(sel.fraction, full) & ~sel.strategy.isin(REFERENCES)]
+    d = _pooled(diffs)
+    d = d[np.isclose(d.fraction, full)]
+    keys = [*DESIGN, "target", "metric"]
+    d_groups = dict(iter(d.groupby(keys, sort=False, dropna=False)))
+    rows = []
+    for key, g in sel.groupby(keys, sort=False, dropna=False):
+        up = HIGHER_IS_BETTER.get(key[-1], True)
+        top = g.sort_values("estimate", ascending=not up, kind="stable").iloc[0]
+        tied, beats = [top.strategy], []
+        for p in d_groups.get(key, d.iloc[:0]).itertuples():
+            if top.strategy not in (p.strategy, p.baseline):
+                continue
+            other = p.baseline if p.strategy == top.strategy else p.strategy
+            if other not in REFERENCES:
+                (tied if p.verdict == "no difference" else beats).append(other)
+        rows.append(
+            {
+                **dict(zip(keys, key, strict=True)),
+                "fraction": full,
+                "best": top.strategy,
+                "tied": ", ".join(sorted(tied)),
+                "beats": ", ".join(sorted(beats)),
+                "estimate": float(top.estimate),
+                "ci_low": float(top.ci_low),
+                "ci_high": float(top.ci_high),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def pair(diffs: pd.DataFrame, target: str, metric: str, strategy: str, baseline: str) -> pd.DataFrame:
+    """The rows of ``strategy − baseline`` (flipped when the table stores ``baseline − strategy``)."""
+    sel = diffs[(diffs.target == target) & (diffs.metric == metric)]
+    ab = sel[(sel.strategy == strategy) & (sel.baseline == baseline)]
+    if len(ab):
+        return ab.copy()
+    ba = sel[(sel.strategy == baseline) & (sel.baseline == strategy)].copy()
+    ba["difference"], ba["ci_low"], ba["ci_high"] = -ba["difference"], -ba["ci_high"], -ba["ci_low"]
+    ba["strategy"], ba["baseline"] = strategy, baseline
+    up = HIGHER_IS_BETTER.get(metric, True)
+    ba["verdict"] = [verdict(lo, hi, up) for lo, hi in zip(ba.ci_low, ba.ci_high, strict=True)]
+    return ba
+
+
+def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS) -> pd.DataFrame:
+    """Every finding in every cell of the design: its paired difference, interval and verdict.
+
+    Columns: finding (its label), *DESIGN, viewpoint, fraction, difference, ci_low, ci_high, verdict
+    (``better``: the strategy is better than the baseline; ``worse``; ``no difference``). Findings whose
+    viewpoint or strategies the sweep lacks are left out.
+    """
+    fractions = sorted(diffs["fraction"].dropna().unique())
+    parts = []
+    for f in findings:
+        sel = pair(diffs, f.target, f.metric, f.strategy, f.baseline)
+        sel = _pooled(sel, f.viewpoint)
+        if sel.empty or not fractions:
+            continue
+        at = fractions[0] if f.early else fractions[-1]
+        sel = sel[np.isclose(sel.fraction, at)]
+        parts.append(
+            sel[[*DESIGN, "viewpoint", "fraction", "difference", "ci_low", "ci_high", "verdict"]].assign(
+                finding=f.label
+            )
+        )
+    cols = ["finding", *DESIGN, "viewpoint", "fraction", "difference", "ci_low", "ci_high", "verdict"]
+    return pd.concat(parts, ignore_index=True)[cols] if parts else pd.DataFrame(columns=cols)
+
+
+def cell_label(row: Mapping[str, Any]) -> str:
+    """``"network prior, learned (100), calibrated"``: a cell of the design in words."""
+    net = row["inference_network"]
+    if net == "learned":
+        net = f"learned ({int(row['learn_experiments'])})"
+    return f"{row['action_prior']} actions, {net} network, p_HMM {row['p_hmm']}"
+
+
+def factor_levels(verdicts: pd.DataFrame) -> dict[str, list[str]]:
+    """Each factor's levels as the sentences name them (learned networks by their table size)."""
+    net = [
+        "generating" if n == "generating" else f"learned ({int(k)})"
+        for n, k in dict.fromkeys(zip(verdicts.inference_network, verdicts.learn_experiments, strict=True))
+    ]
+    return {
+        "actions": list(dict.fromkeys(verdicts.action_prior)),
+        "network": net,
+        "p_HMM": list(dict.fromkeys(verdicts.p_hmm)),
+    }
+
+
+def _level(row: Any, factor: str) -> str:
+    if factor == "actions":
+        return row.action_prior
+    if factor == "p_HMM":
+        return row.p_hmm
+    return (
+        "generating" if row.inference_network == "generating" else f"learned ({int(row.learn_experiments)})"
+    )
+
+
+def finding_sentences(verdicts: pd.DataFrame, reference: Mapping[str, Any] = REFERENCE_CELL) -> list[str]:
+    """One sentence per finding of :func:`finding_verdicts`: its verdict and difference in the reference
+    cell, then in how many cells it holds (the strategy better), and how often at each factor level."""
+    out = []
+    for label, g in verdicts.groupby("finding", sort=False):
+        ref = g
+        for k, v in reference.items():
+            ref = ref[ref[k] == v]
+        r = ref.iloc[0] if len(ref) else None
+        head = label[0].upper() + label[1:]
+        if r is not None:
+            where = f"{r.fraction:.0%} of the gesture seen" + (
+                "" if r.viewpoint == "all" else f", viewpoint {r.viewpoint}"
+            )
+            said = {"better": "holds", "worse": "is reversed", "no difference": "is not supported"}[r.verdict]
+            head += (
+                f": in the reference cell ({cell_label(r)}; {where}) it {said} "
+                f"(difference {r.difference:+.3f} [{r.ci_low:+.3f}, {r.ci_high:+.3f}])"
+            )
+        n = len(g)
+        counts = g.verdict.value_counts()
+        body = (
+            f"across the design it holds in {counts.get('better', 0)} of {n} cells, with no difference in "
+            f"{counts.get('no difference', 0)} and the reverse in {counts.get('worse', 0)}"
+        )
+        levels = []
+        for factor, values in factor_levels(g).items():
+            if len(values) < 2:
+                continue
+            per = []
+            for v in values:
+                h = g[[_level(row, factor) == v for row in g.itertuples()]]
+                per.append(f"{v} {int((h.verdict == 'better').sum())}/{len(h)}")
+            levels.append(f"{factor}: {', '.join(per)}")
+        out.append(f"{head}; {body}" + (f" ({'; '.join(levels)})." if levels else "."))
+    return out
+
+
+def seed_spread(seeds: pd.DataFrame, cell: Mapping[str, Any] = REFERENCE_CELL) -> pd.DataFrame:
+    """Per strategy of the action target, the accuracy of each recogniser seed at the full gesture in one
+    cell: the spread the seed level of the intervals carries. Columns: strategy, min, max, seeds."""
+    sel = seeds[(seeds.target == "action") & (seeds.metric == "accuracy")]
+    for k, v in cell.items():
+        sel = sel[sel[k] == v]
+    sel = sel[np.isclose(sel.fraction, sel.fraction.max())]
+    out = sel.groupby("strategy", sort=False).estimate.agg(["min", "max", "count"]).reset_index()
+    return out.rename(columns={"count": "seeds"})
