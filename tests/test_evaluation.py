@@ -109,7 +109,9 @@ def test_statistics_equal_a_direct_computation(setup):
                 assert cell(frame, "effect", "virtual", f, "bin_n", b)[i] == 1.0
                 assert cell(frame, "effect", "virtual", f, "bin_confidence", b)[i] == pytest.approx(p.max())
                 b = min(int(q.max() * SETTINGS.bins), SETTINGS.bins - 1)
-                assert cell(frame, "action", "gesture", f, "bin_correct", b)[i] == float(np.argmax(q) == a_true)
+                assert cell(frame, "action", "gesture", f, "bin_correct", b)[i] == float(
+                    np.argmax(q) == a_true
+                )
             # description: Jeffrey's rule, the exact 1-best, read by agreement()
             obs = {k: row[k] for k in SETTINGS.description_evidence}
             allowed = engine.query("Action", obs)["Action"] > 0  # Jeffrey's rule on the actions obs allows

@@ -376,7 +376,7 @@ def test_the_notebook_reads_a_finished_sweep(synchronous):
     from glu.sweep.tables import read_tables
 
     out, result = synchronous
-    table, diffs, rel, seeds, summary = read_tables(out)
+    table, diffs, rel, seeds, calibration, summary = read_tables(out)
     pd.testing.assert_frame_equal(table, result.metrics)
     assert summary["fingerprint"] == result.summary["fingerprint"]
     with pytest.raises(DataError, match="not the output folder of a finished"):

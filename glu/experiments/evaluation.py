@@ -340,14 +340,39 @@ class Evaluator:
 
     def episode_statistics(self, episodes: Chunk, replication: int = 0) -> list[list[np.ndarray]]:
         """Per-episode statistics for each reading: blocks of columns in the order of ``self.columns``
-        (each shape (n, k)), one list of blocks per reading of ``self.readings``."""
+        (each shape (n, k)), one list of blocks per reading of ``self.readings``.
+
+        Every description of the chunk (all readings, strategies and fractions) is found in one call of
+        :func:`~glu.language.batch.best_sentences`, whose cost is mostly per call, not per row.
+        """
         loglik, ends = self.loglik(episodes.features, replication)
         rep = self.replications[replication]
-        cache: dict[tuple, np.ndarray] = {}  # blocks the readings of one network share
-        out = []
-        for r in self.readings:
+        cache: dict[tuple, np.ndarray] = {}  # blocks, and what the readings of one network share
+        out, jobs, todo = [], [], {}
+        for i, r in enumerate(self.readings):
             q = self._read(loglik, ends, r.p_hmm, replication)
-            out.append(self._statistics(episodes, q, rep.tables[r.network], r.network, cache))
+            blocks, keys = self._statistics(episodes, q, rep.tables[r.network], r.network, i, cache, todo)
+            out.append(blocks)
+            jobs.append(keys)
+        if todo:  # description probabilities to decode, by key, in order of first use
+            n = len(episodes.features)
+            best = best_sentences(
+                np.concatenate([p.reshape(-1, p.shape[-1]) for p in todo.values()]),
+                list(self.world.binary_leaves),
+            )
+            values = {node: self.world.bn.schema.values_of(node) for node in DESCRIBED}
+            reps = np.array([p.shape[0] * p.shape[1] // n for p in todo.values()])
+            truth = {k: np.concatenate([np.repeat(episodes.codes[k], f) for f in reps]) for k in DESCRIBED}
+            ok = agreement(best, truth, values)
+            ok = np.stack([ok[a] for a in (*ASPECTS, "all")], axis=1)  # (rows, aspects)
+            F = len(self.settings.fractions)
+            at = 0
+            for k, f in zip(todo, reps, strict=True):
+                block = ok[at : at + n * f].reshape(n, f, -1)
+                cache[k] = np.broadcast_to(block, (n, F, block.shape[2])).reshape(n, -1)
+                at += n * f
+            for blocks, keys in zip(out, jobs, strict=True):
+                blocks += [cache[k] for k in keys]
         return out
 
     def _statistics(
@@ -356,11 +381,15 @@ class Evaluator:
         q: np.ndarray,
         tables: Mapping[str, NetworkTables],
         network: str,
+        reading: int,
         cache: dict[tuple, np.ndarray],
-    ) -> list[np.ndarray]:
-        """The blocks of one reading. ``cache`` keeps blocks that other readings of the same network share:
-        those of the gesture-free strategies, and the hard decision's, which depends on p_HMM only through
-        its top action (the same under every reading unless the calibrated one is flat)."""
+        todo: dict[tuple, np.ndarray],
+    ) -> tuple[list[np.ndarray], list[tuple]]:
+        """The action and effect blocks of one reading, and the keys of its description blocks, whose word
+        probabilities (shape (n, f, W)) go to ``todo`` to be decoded together. Keys are shared by the
+        readings of one network for the gesture-free strategies and for the hard decision, which depends
+        on p_HMM only through its top action (the same under every reading unless the calibrated one is
+        flat); the others carry the reading's index."""
         s, codes = self.settings, episodes.codes
         shape = {n: self.world.shape[self.world.axis[n]] for n in AFFORDANCE_NODES}
         n, F, K = q.shape
@@ -368,10 +397,8 @@ class Evaluator:
         top = np.argmax(q, axis=-1).tobytes()
 
         def key(target: str, strat: str) -> tuple:
-            return (network, target, strat, top if strat == "hard" else b"")
-
-        def shared(strat: str) -> bool:
-            return strat in GESTURE_FREE or strat == "hard"
+            shared = strat in GESTURE_FREE or strat == "hard"
+            return (network, target, strat, top if strat == "hard" else b"", -1 if shared else reading)
 
         blocks = [np.ones((n, 1))]
         t = tables["action"]
@@ -384,43 +411,27 @@ class Evaluator:
                     p = np.broadcast_to(p_a[:, None, :], q.shape)
                 else:
                     p = fuse_action_tables(p_a[:, None, :], q, strat)
-                block = _prediction_stats(p, action, s, s.bins)
-                if not shared(strat):
-                    blocks.append(block)
-                    continue
-                cache[key("action", strat)] = block
+                cache[key("action", strat)] = _prediction_stats(p, action, s, s.bins)
             blocks.append(cache[key("action", strat)])
         t = tables["effect"]
         c = t.combo(codes, [shape[x] for x in t.nodes])
         p_a, p_x = t.p_action[c], t.p_given_action[c]  # (n, K), (n, K, V)
         for strat in s.strategies_for("effect"):
             if key("effect", strat) not in cache:
-                block = _prediction_stats(self._fused(strat, p_a, p_x, q, action), codes[EFFECT], s, s.bins)
-                if not shared(strat):
-                    blocks.append(block)
-                    continue
-                cache[key("effect", strat)] = block
+                p = self._fused(strat, p_a, p_x, q, action)
+                cache[key("effect", strat)] = _prediction_stats(p, codes[EFFECT], s, s.bins)
             blocks.append(cache[key("effect", strat)])
         t = tables["description"]
         c = t.combo(codes, [shape[x] for x in t.nodes])
         p_a, p_w = t.p_action[c], t.p_given_action[c]
-        words = list(self.world.binary_leaves)
-        values = {node: self.world.bn.schema.values_of(node) for node in DESCRIBED}
-        truth_codes = {node: codes[node] for node in DESCRIBED}
+        keys = []
         for strat in s.strategies_for("description"):
-            if key("description", strat) not in cache:
-                probs = self._fused(strat, p_a, p_w, q, action)  # (n, F, W)
+            k = key("description", strat)
+            if k not in todo:
                 f = 1 if strat in GESTURE_FREE else F  # the same sentence at every fraction
-                best = best_sentences(probs[:, :f].reshape(n * f, -1), words)
-                ok = agreement(best, {k: np.repeat(v, f) for k, v in truth_codes.items()}, values)
-                ok = np.stack([ok[a].reshape(n, f) for a in (*ASPECTS, "all")], axis=2)
-                block = np.broadcast_to(ok, (n, F, ok.shape[2])).reshape(n, -1)
-                if not shared(strat):
-                    blocks.append(block)
-                    continue
-                cache[key("description", strat)] = block
-            blocks.append(cache[key("description", strat)])
-        return blocks
+                todo[k] = self._fused(strat, p_a, p_w, q, action)[:, :f]
+            keys.append(k)
+        return blocks, keys
 
     def _fused(
         self, strat: str, p_a: np.ndarray, p_x: np.ndarray, q: np.ndarray, action: np.ndarray

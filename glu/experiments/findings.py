@@ -282,3 +282,164 @@ def seed_spread(seeds: pd.DataFrame, cell: Mapping[str, Any] = REFERENCE_CELL) -
     sel = sel[np.isclose(sel.fraction, sel.fraction.max())]
     out = sel.groupby("strategy", sort=False).estimate.agg(["min", "max", "count"]).reset_index()
     return out.rename(columns={"count": "seeds"})
+
+
+def design_text(summary: Mapping[str, Any]) -> str:
+    """One sentence naming the design of a sweep from its summary: episodes, seeds, factors, replicates."""
+    p = summary["parameters"]
+    g = p["grid"]
+    nets = [
+        n if n == "generating" else f"learned from {', '.join(map(str, g['learn_experiments']))} experiments"
+        for n in g["inference_network"]
+    ]
+    return (
+        f"{summary['episodes']:,} episodes over {p['recognizer_seeds']} recogniser seeds; action prior "
+        f"{' / '.join(g['action_prior'])} × inference network {' / '.join(nets)} × p_HMM "
+        f"{' / '.join(g['p_hmm'])}; noise {', '.join(f'{x:g}' for x in g['noise'])} m × viewpoints "
+        f"{', '.join(g['viewpoints'])}; {p['evaluation']['bootstrap']} two-level bootstrap replicates."
+    )
+
+
+def winners_table(win: pd.DataFrame, shown: Sequence[tuple[str, str]]) -> pd.DataFrame:
+    """:func:`winners` as a table: one row per (target, metric, action prior, network), one column per p_HMM
+    reading, cells ``"jeffrey 0.912 [0.90, 0.93] = virtual"``."""
+    rows = win[[(t, m) in set(shown) for t, m in zip(win.target, win.metric, strict=True)]].copy()
+    rows["network"] = [
+        n if n == "generating" else f"learned ({int(k)})"
+        for n, k in zip(rows.inference_network, rows.learn_experiments, strict=True)
+    ]
+    rows["cell"] = [
+        f"{r.best} {r.estimate:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]"
+        + "".join(f" = {t}" for t in r.tied.split(", ") if t and t != r.best)
+        for r in rows.itertuples()
+    ]
+    return rows.pivot_table(
+        index=["target", "metric", "action_prior", "network"],
+        columns="p_hmm",
+        values="cell",
+        aggfunc="first",
+        sort=False,
+    )
+
+
+def contrast_cells(table: pd.DataFrame) -> list[dict[str, Any]]:
+    """The reference cell and the one furthest from it that the sweep has: the network's action prior and
+    the network learned from the fewest experiments, p_HMM read as in the reference cell."""
+    have = table.drop_duplicates(list(DESIGN))[list(DESIGN)]
+    ref = dict(REFERENCE_CELL)
+    if not ((have[list(ref)] == pd.Series(ref)).all(axis=1)).any():
+        ref = have.iloc[0].to_dict()
+    other = dict(ref)
+    if "network" in set(have.action_prior):
+        other["action_prior"] = "network"
+    learned = have[have.inference_network == "learned"]
+    if len(learned):
+        other["inference_network"], other["learn_experiments"] = (
+            "learned",
+            int(learned.learn_experiments.min()),
+        )
+    return [ref, other]
+
+
+def _cell_rows(
+    table: pd.DataFrame, cell: Mapping[str, Any], target: str, metric: str, fraction: float
+) -> pd.DataFrame:
+    sel = _pooled(table)
+    for k, v in cell.items():
+        sel = sel[sel[k] == v]
+    return sel[(sel.target == target) & (sel.metric == metric) & np.isclose(sel.fraction, fraction)]
+
+
+def network_alone_sentences(table: pd.DataFrame) -> list[str]:
+    """For the contrasted cells, early and at the full gesture: the effect's log-loss and ECE of the network
+    alone beside every fusion rule and the true action (an oracle)."""
+    out = []
+    fractions = sorted(table.fraction.dropna().unique())
+    for cell in contrast_cells(table):
+        for f in (fractions[0], fractions[-1]):
+            parts = []
+            for metric in ("log_loss", "ece"):
+                g = _cell_rows(table, cell, "effect", metric, f).set_index("strategy")
+                if "network" not in g.index:
+                    continue
+                net = g.loc["network"]
+                rules = [s for s in g.index if s not in ("network", *REFERENCES)]
+                name = "log-loss" if metric == "log_loss" else "ECE"
+                parts.append(
+                    f"{name} {net.estimate:.3f} [{net.ci_low:.3f}, {net.ci_high:.3f}] for the network alone, "
+                    + ", ".join(f"{s} {g.loc[s].estimate:.3f}" for s in rules)
+                    + (
+                        f", the true action {g.loc['true_action'].estimate:.3f}"
+                        if "true_action" in g.index
+                        else ""
+                    )
+                )
+            if parts:
+                out.append(
+                    f"The effect with {f:.0%} of the gesture seen ({cell_label(cell)}): "
+                    + "; ".join(parts)
+                    + "."
+                )
+    return out
+
+
+def p_hmm_table(table: pd.DataFrame, cell: Mapping[str, Any] | None = None) -> pd.DataFrame:
+    """p_HMM alone (strategy ``gesture``) at the full gesture under each reading: accuracy, log-loss, ECE
+    with intervals, in one cell of actions and network (default the reference cell's)."""
+    cell = {k: v for k, v in (cell or REFERENCE_CELL).items() if k != "p_hmm"}
+    sel = _pooled(table)
+    for k, v in cell.items():
+        sel = sel[sel[k] == v]
+    sel = sel[
+        (sel.target == "action") & (sel.strategy == "gesture") & np.isclose(sel.fraction, sel.fraction.max())
+    ]
+    return sel.pivot_table(index="p_hmm", columns="metric", values="estimate", sort=False)[
+        ["accuracy", "log_loss", "ece"]
+    ]
+
+
+def p_hmm_sentences(
+    table: pd.DataFrame, calibration: pd.DataFrame, segments: pd.DataFrame | None = None
+) -> list[str]:
+    """What the tables say of p_HMM as a probability: its ECE under each reading on held-out synthetic
+    gestures, the fitted inverse temperatures, and (with the real data) the held-out real segments."""
+    t = p_hmm_table(table)
+    out = [
+        "On the corpus's held-out synthetic gestures (reference cell, full gesture), p_HMM alone names "
+        + "; ".join(
+            f"{r} {t.loc[r, 'accuracy']:.3f} of the actions with an ECE of {t.loc[r, 'ece']:.3f}"
+            for r in t.index
+        )
+        + "."
+    ]
+    if len(calibration):
+        full = calibration[np.isclose(calibration.fraction, calibration.fraction.max())]
+        out.append(
+            f"The calibrated reading's inverse temperature at the full gesture, fitted per seed on held-out "
+            f"training gestures: β = {full.beta.min():.3g} to {full.beta.max():.3g} (the likelihood reading is β = 1)."
+        )
+    if segments is not None and len(segments):
+        s = segments.set_index("reading")
+        n = int(s["segments"].iloc[0])
+        out.append(
+            f"On the {n} real standing segments, each left out: read from the likelihoods, p_HMM is at least 0.99 "
+            f"for {int(s.loc['likelihood', 'certain'])} of them while naming {s.loc['likelihood', 'accuracy']:.2f} "
+            "correctly (ECE "
+            + ", ".join(f"{r} {s.loc[r, 'ece']:.3f}" for r in s.index)
+            + "; log-loss "
+            + ", ".join(f"{r} {s.loc[r, 'log_loss']:.3f}" for r in s.index)
+            + ")."
+        )
+    return out
+
+
+def seed_sentence(spread: pd.DataFrame) -> str:
+    """One sentence from :func:`seed_spread`: how far apart the recogniser seeds put each strategy."""
+    if spread.empty:
+        return "No seed-level estimates in this cell."
+    k = int(spread.seeds.max())
+    return (
+        f"Over {k} recogniser seeds (reference cell, full gesture), accuracy ranges "
+        + "; ".join(f"{r.strategy} {r['min']:.3f}–{r['max']:.3f}" for _, r in spread.iterrows())
+        + "."
+    )

@@ -209,7 +209,7 @@ def plot_differences(
     ax.axvline(0, color="0.5", lw=0.8)
     ax.set_yticks([i for i, _ in labels], [t for _, t in labels], fontsize=7)
     ax.invert_yaxis()
-    ax.set_xlabel("difference (95 % paired bootstrap interval)")
+    ax.set_xlabel("difference (95 % paired interval)")
     ax.set_title(f"paired differences ({fraction:.0%} seen)", fontsize=9)
     return ax
 
@@ -262,7 +262,8 @@ def plot_by_viewpoint(
 def plot_winners(ax: Axes, winners: pd.DataFrame, target: str, metric: str) -> Axes:
     """Which strategy wins each cell of the design for one target and metric: rows (action prior,
     inference network), columns the p_HMM readings; each cell coloured by the winner and naming it, with
-    ``=`` before the strategies tied with it (:func:`glu.experiments.findings.winners`)."""
+    ``=`` before the initials of the strategies tied with it (:data:`INITIALS`;
+    :func:`glu.experiments.findings.winners`)."""
     sel = winners[(winners.target == target) & (winners.metric == metric)].copy()
     sel["network"] = [
         "generating" if n == "generating" else f"learned {int(k)}"
@@ -276,12 +277,14 @@ def plot_winners(ax: Axes, winners: pd.DataFrame, target: str, metric: str) -> A
         i, j = rows.index((r.action_prior, r.network)), cols.index(r.p_hmm)
         c = STRATEGY_COLORS.get(r.best, "0.5")
         ax.add_patch(plt_rectangle(j, i, c))
-        tied = [t for t in r.tied.split(", ") if t and t != r.best]
-        text = r.best + ("\n= " + ", ".join(tied) if tied else "")
-        ax.text(j, i, text, ha="center", va="center", fontsize=6.5)
+        tied = [INITIALS.get(t, t) for t in r.tied.split(", ") if t and t != r.best]
+        ax.text(j, i + (0.12 if tied else 0.0), r.best, ha="center", va="center", fontsize=7, weight="bold")
+        if tied:
+            ax.text(j, i + 0.32, "= " + " ".join(tied), ha="center", va="center", fontsize=6.5)
     ax.set_xticks(range(len(cols)), cols, fontsize=7)
     ax.set_yticks(range(len(rows)), [f"{a} actions, {n}" for a, n in rows], fontsize=7)
     ax.set_title(f"{target}: {METRIC_LABEL.get(metric, metric)}, best (= no difference)", fontsize=9)
+    ax.set_xlabel("p_HMM reading", fontsize=7)
     ax.tick_params(length=0)
     return ax
 
@@ -317,4 +320,45 @@ def plot_segment_readings(ax: Axes, readings: pd.DataFrame) -> Axes:
     ax.set_ylim(0.0, 1.05)
     ax.set_ylabel("p_HMM of the top action")
     ax.set_title("real segments, each left out", fontsize=9)
+    return ax
+
+
+INITIALS = {"gesture": "G", "network": "N", "hard": "H", "virtual": "V", "jeffrey": "J", "product": "P"}
+"""The strategies' initials in :func:`plot_winners`."""
+READING_STYLE = {
+    "likelihood": ("#C44E52", "-"),
+    "per-frame": ("#4C72B0", "--"),
+    "calibrated": ("#55A868", "-."),
+}
+
+
+def plot_p_hmm_reliability(
+    ax: Axes, reliability: pd.DataFrame, fraction: float = 1.0, where: Mapping[str, Any] | None = None
+) -> Axes:
+    """Reliability diagram of p_HMM itself (target action, strategy gesture), one line per reading of p_HMM
+    in the sweep (through the bins that hold at least 2 % of the gestures; marker area ∝ the bin's share);
+    ``where`` picks the action prior and network (not the reading)."""
+    sel = reliability[
+        (reliability.target == "action")
+        & (reliability.strategy == "gesture")
+        & reliability.noise.isna()
+        & (reliability.viewpoint == "all")
+        & np.isclose(reliability.fraction, fraction)
+        & (reliability.n > 0)
+    ]
+    for k, v in (where or {}).items():
+        sel = sel[sel[k] == v]
+    ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
+    for reading, g in sel.groupby("p_hmm", sort=False):
+        color, ls = READING_STYLE.get(reading, ("black", "-"))
+        share = g.n / g.n.sum()
+        many = g[share >= 0.02]  # the line joins bins holding at least 2 % of the gestures
+        ax.plot(many.confidence, many.accuracy, color=color, ls=ls, lw=1.0, label=f"p_HMM {reading}")
+        ax.scatter(g.confidence, g.accuracy, s=4 + 200 * share, color=color, alpha=0.7, lw=0)
+    ax.set_xlim(0.3, 1.0)
+    ax.set_ylim(0.0, 1.0)
+    ax.set_xlabel("p_HMM of the top action")
+    ax.set_ylabel("how often it was right")
+    ax.set_title(f"p_HMM on held-out synthetic gestures ({fraction:.0%} seen)", fontsize=9)
+    ax.legend(fontsize=7)
     return ax

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -171,24 +171,38 @@ def merge(
     return table, diffs, rel, seeds, summary
 
 
-def read_tables(folder: str | Path) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, pd.DataFrame, dict]:
-    """The tables a finished sweep wrote to ``folder`` (results, differences, reliability, seeds, summary)."""
+class SweepTables(NamedTuple):
+    """The tables of a finished sweep (:func:`read_tables`)."""
+
+    metrics: pd.DataFrame
+    differences: pd.DataFrame
+    reliability: pd.DataFrame
+    seeds: pd.DataFrame
+    calibration: pd.DataFrame
+    summary: dict[str, Any]
+
+
+def read_tables(folder: str | Path) -> SweepTables:
+    """The tables a finished sweep wrote to ``folder``, stamped as :func:`merge` stamps them."""
     folder = Path(folder)
+    names = ("results", "differences", "reliability", "seeds", "calibration")
     try:
         summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
-        frames = [
-            pd.read_parquet(folder / f"{n}.parquet")
-            for n in ("results", "differences", "reliability", "seeds")
-        ]
+        frames = [pd.read_parquet(folder / f"{n}.parquet") for n in names]
     except (OSError, ValueError) as e:
         raise DataError(f"{folder}: not the output folder of a finished `glu evaluate` ({e})") from None
-    if summary.get("experiment") != EXPERIMENT:
+    if not isinstance(summary, dict) or summary.get("experiment") != EXPERIMENT:
         raise DataError(f"{folder}: summary.json is not a corpus evaluation's")
-    for df, name in zip(
-        frames, (EXPERIMENT, "corpus_differences", "corpus_reliability", "corpus_seeds"), strict=True
-    ):
+    experiments = (
+        EXPERIMENT,
+        "corpus_differences",
+        "corpus_reliability",
+        "corpus_seeds",
+        "corpus_calibration",
+    )
+    for df, name in zip(frames, experiments, strict=True):
         tidy(df, name, summary["data_source"], **summary["parameters"])
-    return (*frames, summary)
+    return SweepTables(*frames, summary)
 
 
 def _write_parquet(path: Path, df: pd.DataFrame) -> None:
