@@ -70,7 +70,7 @@ from glu.experiments.corpus import ACTION_PRIORS, VIEWPOINTS, Condition, Gesture
 from glu.experiments.evaluation import INFERENCE_NETWORKS, EvaluationSettings, Reading
 from glu.files import read_text
 from glu.gestures.calibration import READINGS
-from glu.gestures.synthetic import POSTURES, View
+from glu.gestures.views import POSTURES, View
 from glu.hmm import TrainingConfig
 
 MAX_EPISODES = 100_000_000
