@@ -361,7 +361,8 @@ def summarise(results: pd.DataFrame, replicates: int = BOOTSTRAP, seed: int = 0)
         rng = np.random.default_rng(np.random.SeedSequence([seed, len(rows)]))
         stats = [np.stack([np.ones(len(o)), o], axis=1) for o in _outcome_matrix(g["outcomes"])]
         sums = two_level_sums(stats, replicates, rng)
-        lo, hi = percentile_interval((sums[1:, 1] / sums[1:, 0])[:, None])
+        with np.errstate(invalid="ignore"):  # a replicate that drew no gesture is left out
+            lo, hi = percentile_interval((sums[1:, 1] / sums[1:, 0])[:, None])
         rows.append(
             {
                 **dict(zip(keys, key, strict=True)),
@@ -427,7 +428,8 @@ def invariance_effects(results: pd.DataFrame, replicates: int = BOOTSTRAP, seed:
                     for u, v in zip(_outcome_matrix(g["a"]), _outcome_matrix(g["b"]), strict=True)
                 ]
                 sums = two_level_sums(stats, replicates, rng)
-                d = (sums[:, 1] - sums[:, 2]) / sums[:, 0]
+                with np.errstate(invalid="ignore"):  # a replicate that drew no gesture is left out
+                    d = (sums[:, 1] - sums[:, 2]) / sums[:, 0]
                 lo, hi = (float(v[0]) for v in percentile_interval(d[1:, None]))
                 rows.append(
                     {

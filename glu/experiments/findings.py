@@ -204,12 +204,20 @@ def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS
     return pd.concat(parts, ignore_index=True)[cols] if parts else pd.DataFrame(columns=cols)
 
 
+ACTION_WORDS = {
+    "uniform": "uniform actions",
+    "network": "actions from the network's prior",
+    "scenario": "scenario actions",
+}
+
+
 def cell_label(row: Mapping[str, Any]) -> str:
-    """``"network prior, learned (100), calibrated"``: a cell of the design in words."""
+    """``"actions from the network's prior, learned (100) network, p_HMM calibrated"``: a cell in words."""
     net = row["inference_network"]
     if net == "learned":
         net = f"learned ({int(row['learn_experiments'])})"
-    return f"{row['action_prior']} actions, {net} network, p_HMM {row['p_hmm']}"
+    prior = ACTION_WORDS.get(row["action_prior"], f"{row['action_prior']} actions")
+    return f"{prior}, {net} network, p_HMM {row['p_hmm']}"
 
 
 def factor_levels(verdicts: pd.DataFrame) -> dict[str, list[str]]:
@@ -219,7 +227,7 @@ def factor_levels(verdicts: pd.DataFrame) -> dict[str, list[str]]:
         for n, k in dict.fromkeys(zip(verdicts.inference_network, verdicts.learn_experiments, strict=True))
     ]
     return {
-        "actions": list(dict.fromkeys(verdicts.action_prior)),
+        "actions": [ACTION_WORDS.get(a, a) for a in dict.fromkeys(verdicts.action_prior)],
         "network": net,
         "p_HMM": list(dict.fromkeys(verdicts.p_hmm)),
     }
@@ -227,7 +235,7 @@ def factor_levels(verdicts: pd.DataFrame) -> dict[str, list[str]]:
 
 def _level(row: Any, factor: str) -> str:
     if factor == "actions":
-        return row.action_prior
+        return ACTION_WORDS.get(row.action_prior, row.action_prior)
     if factor == "p_HMM":
         return row.p_hmm
     return (
@@ -268,8 +276,8 @@ def finding_sentences(verdicts: pd.DataFrame, reference: Mapping[str, Any] = REF
             for v in values:
                 h = g[[_level(row, factor) == v for row in g.itertuples()]]
                 per.append(f"{v} {int((h.verdict == 'better').sum())}/{len(h)}")
-            levels.append(f"{factor}: {', '.join(per)}")
-        out.append(f"{head}; {body}" + (f" ({'; '.join(levels)})." if levels else "."))
+            levels.append(", ".join(per) if factor == "actions" else f"{factor}: {', '.join(per)}")
+        out.append(f"{head}; {body}" + (f" (where it holds: {'; '.join(levels)})." if levels else "."))
     return out
 
 
