@@ -78,7 +78,8 @@ over the seeds and the test gestures).
 curves and bars are reproduced within the figure's resolution (max |difference| {anticipation_max:.1e}), and \
 both captions are the paper's: "{sphere_caption}", "{box_caption}".
 * **Verbal descriptions.** Ranking the originals' {n_samples:,.0f} sampled sentences with their score \
-(1 + Σ log p)/L, glu prints TCDS Table II, Fig. 7 and Fig. 8: {same_sentences:.0f} of {n_sentences:.0f} sentences \
+(1 + Σ log p)/L, glu prints TCDS Table II, Fig. 7 and Fig. 8 (whose sentences are the best among those that name \
+a colour, as the originals' code ranked them): {same_sentences:.0f} of {n_sentences:.0f} sentences \
 and {same_scores:.0f} of {n_scores:.0f} scores to the printed digit. The grammar has {n_grammar:,.0f} sentences; \
 glu finds the exact N-best under either score without scoring them one by one. Random samples of {trial_samples:,.0f} \
 sentences, as the originals drew them, held the grammar's best in {trials_found:.0f} of {trials:.0f} trials (the \
