@@ -83,7 +83,6 @@ RANGES: dict[str, tuple[float, float]] = {
     "n_train": (1, 100_000),
     "n_test": (1, 100_000),
     "n_iter": (1, 100_000),
-    "real_n_iter": (1, 100_000),
     "chunk_size": (1, 10_000_000),
     "recognizer_seeds": (1, 1000),
     "calibration_per_action": (1, 100_000),
