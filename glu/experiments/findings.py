@@ -79,7 +79,7 @@ FINDINGS: tuple[Finding, ...] = (
         "virtual",
     ),
     Finding(
-        "Jeffrey's rule anticipates the effect better calibrated than a hard decision",
+        "Jeffrey's rule anticipates the effect with a smaller calibration error than a hard decision",
         "effect",
         "ece",
         "jeffrey",
