@@ -339,7 +339,7 @@ def log_path(rec, entity: str, xyz: np.ndarray, seconds: np.ndarray, color: tupl
 def write_two_views(runs: Sequence, path: str | os.PathLike, recording_id: str, scene: str = "") -> Path:
     """Write one gesture seen from several viewpoints, raw and aligned, with each recogniser's posterior.
 
-    ``runs``: :class:`glu.experiments.correspondence.ViewRun` objects, one per view. Layout (view ``i``
+    ``runs``: :class:`glu.experiments.two_views.ViewRun` objects, one per view. Layout (view ``i``
     = 1, 2, …)::
 
         /scene                        markdown: what is shown (static)

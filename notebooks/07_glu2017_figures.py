@@ -44,6 +44,7 @@ from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
 from glu.experiments import fusion
+from glu.experiments.replication_text import effect_sentence, word_change_sentences
 from glu.run import start
 
 out = start("07_glu2017_figures", globals())
@@ -65,7 +66,8 @@ effect
 # %% [markdown]
 # ## Fig. 5 · Word prediction: Δp(w) = p(w | F, E, A=tap) − p(w | F, E)
 # F = {Size=big, Shape=sphere}, E = {ObjVel=fast}. The original code also put Color=yellow in the evidence;
-# both versions are computed.
+# both versions are computed and compared below. (The paper's text says "rolling"; its figure's word is
+# "rolls".)
 
 # %%
 changes = {}
@@ -76,9 +78,6 @@ fig, (ax,) = plots.new_figure(1, width=7, height=3.6)
 plots.plot_word_change(ax, changes["text"], other=changes["code"])
 out.figure(fig, "glu2017_word_change")
 change = changes["code"]
+for sentence in [effect_sentence(effect), *word_change_sentences(changes)]:
+    out.say("* " + sentence)
 change[change.shown][["word", "p_without", "p_with", "delta"]]
-
-# %% [markdown]
-# A tap on a small sphere most likely sends it off fast, while a big box barely moves: the same action, a
-# different effect. Adding the tap raises the probability of tap and push words and of "rolls" (the paper's
-# text says "rolling"; its figure's word is "rolls"), and lowers touch and poke words.

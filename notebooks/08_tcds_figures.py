@@ -96,6 +96,7 @@ from glu import plots, recording
 from glu.bn import BayesNet, InferenceEngine, learn_bn
 from glu.data import load_experiments
 from glu.experiments import anticipation, fusion, gestures
+from glu.experiments.replication_text import leader_text
 from glu.gestures import gesture_sequences, load_original_models
 from glu.hmm import TrainingConfig
 from glu.language import candidate_sentences
@@ -197,7 +198,10 @@ for name, recognizer in banks.items():
         changes = "; ".join(
             f"{v} from t = {t} (frame {f}, p {p:.2f})" for t, f, v, p in run.prediction_changes()
         )
-        print(f"{case}, {name} HMMs: predicted ObjVel {changes}; “{run.description}”")
+        leads = leader_text(run.actions, run.p_hmm, run.update_t)
+        out.say(
+            f"* {case}, {name} HMMs: leading model {leads}; predicted ObjVel {changes}; “{run.description}”"
+        )
 # glu's and the originals' recipes share one y axis, to be compared by eye; the original HMMs beside the paper
 ylim = plots.shared_ylim([r.curves() for (_, name), r in runs.items() if name != "original"])
 for name in banks:
@@ -207,19 +211,13 @@ for name in banks:
     out.figure(fig, f"tcds_anticipation_{name}")
 
 # %% [markdown]
-# With the originals' HMMs the grasp model leads at the first update (a lift: medium velocity), then the
-# touch model (the sphere stays still); only when the tap model overtakes, late in the movement, does the
-# sphere's prediction turn to motion, while the big box is most likely slow from the second update on (the
-# updates where the prediction changes are printed above). With the original score over the originals'
-# samples the descriptions are the paper's captions. HMMs trained here on the standing recordings, by
-# either recipe, call the seated taps taps when their features are start-centred (`features="centred"`).
-# On raw features they take them for another action — not because the data is small, but because a seated
-# person's hand moves in another place of the torso frame than every standing repetition, so the models'
-# tails decide. Centring removes that offset online; glu's default covariance prior (`covar_reg`, chosen by
-# leave-one-segment-out on the standing segments) keeps three Gaussians per state from fitting one
-# person's path too closely. Notebook 10 measures the offsets, and the spread of both recipes over feature
-# sets, settings and seeds. Open `recordings/tcds_anticipation_*.rrd` in the
-# Rerun viewer to replay each run.
+# The lines above say, for each run, which model leads at the updates, where the predicted effect changes,
+# and the final description (with the original score over the originals' samples: the paper's captions,
+# as counted above). The HMMs trained here see start-centred features by default: a seated person's hand
+# moves in another place of the torso frame than every standing repetition. Notebook 10 measures that
+# offset, chooses the features and the covariance prior by nested cross-validation on the standing
+# segments only, and says how typical the seated taps are for the models that recognise them. Open
+# `recordings/tcds_anticipation_*.rrd` in the Rerun viewer to replay each run.
 
 # %% [markdown]
 # ## Replay it in the Rerun viewer

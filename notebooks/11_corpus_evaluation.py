@@ -1,37 +1,50 @@
 # ---
 # jupyter:
 #   glu:
-#     about: 'every fusion strategy on 20,000 simulated episodes, with 95 % intervals:
-#       accuracy and calibration against noise, early recognition, viewpoints, paired
-#       differences (the sweep of `glu evaluate`, in-process; `-p workers 2` on Dask)'
-#     expected_seconds: 22
+#     about: 'every fusion strategy on simulated episodes, a factorial design built to
+#       fail: action prior × inference network (generating or learned) × p_HMM reading,
+#       over recogniser seeds, with two-level intervals; the network alone and the true
+#       action beside the rules; p_HMM''s own calibration, synthetic and real'
+#     expected_seconds: 30
 #     figures:
 #     - corpus_calibration
 #     - corpus_differences
 #     - corpus_early_recognition
+#     - corpus_p_hmm_calibration
 #     - corpus_strategies_vs_noise
+#     - corpus_winners
 #     quick:
 #       bootstrap: 40
-#       chunk_size: 60
+#       calibration_per_action: 3
 #       episodes: 240
 #       fractions:
 #       - 0.4
 #       - 1.0
+#       learn_experiments:
+#       - 100
 #       n_iter: 10
-#       n_mix: 1
 #       n_per_action: 6
 #       n_states: 3
 #       noise_levels:
 #       - 0.0
 #       - 0.05
+#       recognizer_seeds: 2
 #       viewpoints:
 #       - front
-#       - seated
-#       workers: 0
+#       - turned
+#     real_only:
+#     - p_hmm_real_calibration
+#     - p_hmm_real_segments
 #     tables:
+#     - corpus_calibration
 #     - corpus_differences
+#     - corpus_findings
 #     - corpus_metrics
 #     - corpus_reliability
+#     - corpus_seeds
+#     - corpus_winners
+#     - p_hmm_real_calibration
+#     - p_hmm_real_segments
 #   jupytext:
 #     formats: py:percent
 #     notebook_metadata_filter: glu,kernelspec,jupytext,-jupytext.text_representation.format_version,-jupytext.text_representation.jupytext_version
@@ -45,143 +58,196 @@
 # ---
 
 # %% [markdown]
-# # 11 · Every fusion strategy, measured on a large simulated corpus
+# # 11 · Every fusion strategy on a simulated corpus, in a design that can fail
 #
 # The papers illustrate fusion on five real segments; their future work asks for quantitative tests on
-# larger corpora. Here glu simulates episodes — an object and a person's action from a scenario, the effect
-# and the words drawn from the Affordance–Words network, the person's hand from the gesture generator under
-# sensor noise and from several viewpoints — and measures, with bootstrap intervals, what each strategy
-# gets right: the action (after seeing the effect), the effect before it happens (anticipation), and the
-# best verbal description; as the noise grows, as more of the gesture is seen, and how well calibrated the
-# predictions are. It is the sweep `glu evaluate` runs as Dask tasks; at this size it runs in this process:
-# on 2 cores a LocalCluster of 2 workers is no faster here, and under `glu reproduce` its workers would compete
-# with the other notebook for the cores. `-p workers 2` runs it on a cluster, which pays off for larger corpora
-# (the README's speed table).
+# larger corpora. Here glu simulates episodes — an object and a person's action, the effect and the words
+# drawn from an Affordance–Words network, the hand from the gesture generator under sensor noise and from
+# several viewpoints — and measures what each strategy gets right: the action (after seeing the effect),
+# the effect before it happens (anticipation), the best verbal description.
+#
+# **What the simulation assumes.** The effects and words are drawn from a network, and the gestures from
+# the very generator the HMMs are trained on. If the robot infers with that same network, the comparison
+# only says how the rules behave under a correct model. So the design crosses three ways of being wrong:
+# how often each action is performed (`action_prior`: uniformly, or as the network's prior says), which
+# network the robot infers with (`inference_network`: the generating one, or one glu learned by K2 + BIC
+# from a simulated experiment table of `learn_experiments` rows — the robot's own limited experience),
+# and how it reads p_HMM (`p_hmm`: from the likelihoods as the originals, per frame, or calibrated by a
+# temperature fitted on held-out training gestures). Every recogniser seed is a replication with its own
+# recogniser, learned networks and episodes; every interval is a two-level bootstrap over the seeds and the
+# episodes within each, and a paired difference whose interval contains 0 counts as no difference. The
+# network alone and the true action (an oracle) stand beside the fusion rules. `docs/corpus-evaluation.md`
+# describes the design; the full grid runs with `glu evaluate --config` on Dask, and `sweep_dir` reads its
+# tables here.
 
 # %% tags=["parameters"]
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-episodes: int = 20000  # simulated episodes in all, shared by the noise × viewpoint conditions
-noise_levels: list[float] = [0.0, 0.02, 0.05, 0.1]  # sensor noise on every joint (m)
-viewpoints: list[str] = ["front", "turned", "seated"]  # how the robot sees the person (corpus.VIEWPOINTS)
-posteriors: list[str] = ["likelihood", "per_frame"]  # how p_HMM is read from the HMMs (corpus.POSTERIORS)
-fractions: list[float] = [0.2, 0.4, 0.6, 0.8, 1.0]  # observed fractions of each gesture
-bootstrap: int = 200  # Poisson bootstrap replicates for the 95 % intervals
-chunk_size: int = 2000  # episodes per task
-n_per_action: int = 20  # recogniser: synthetic training gestures per action
+sweep_dir: str = None  # a finished `glu evaluate -o DIR` folder: show its tables instead of running a sweep
+episodes: int = 7200  # simulated episodes in all, shared by the conditions and the recogniser seeds
+recognizer_seeds: int = 10  # replications: each its own recogniser, learned networks and episodes
+action_prior: list[str] = ["uniform", "network"]  # how often each action is performed
+inference_network: list[str] = ["generating", "learned"]  # the network the robot infers with
+learn_experiments: list[int] = [100, 1270]  # rows of the experiment tables the learned networks see
+p_hmm: list[str] = ["likelihood", "per-frame", "calibrated"]  # how p_HMM is read from the HMMs
+noise_levels: list[float] = [0.0, 0.05]  # sensor noise on every joint (m)
+viewpoints: list[str] = ["front", "turned"]  # how the robot sees the person (corpus.VIEWPOINTS)
+fractions: list[float] = [0.2, 0.6, 1.0]  # observed fractions of each gesture
+bootstrap: int = 200  # two-level bootstrap replicates for the 95 % intervals
+chunk_size: int = 2000  # episodes per recogniser seed in one task
+n_per_action: int = 10  # recogniser: synthetic training gestures per action
+calibration_per_action: int = 10  # recogniser: held-out gestures the calibrated reading is fitted on
 n_states: int = 6  # recogniser: HMM states per action
-n_mix: int = 3  # recogniser: Gaussians per state
-n_iter: int = 200  # recogniser: most EM iterations
+n_mix: int = 1  # recogniser: Gaussians per state
+n_iter: int = 50  # recogniser: most EM iterations
 workers: int = 0  # 0: run the chunks in this process; N: on a Dask LocalCluster of N workers
-seed: int = 0  # seed of the corpus, the recogniser's training gestures and EM
+seed: int = 0  # seed of the corpus, the recognisers, their calibration and the learned networks
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
 import tempfile
 
+import matplotlib.pyplot as plt
+
 from glu import plots
+from glu.experiments import findings as fd
+from glu.experiments import p_hmm as ph
+from glu.gestures.corpus import gesture_sequences
+from glu.plots import evaluation as eplots
+from glu.plots import new_figure
 from glu.run import start
 from glu.sweep import config_from_dict, run_sweep
+from glu.sweep.tables import read_tables
 
 out = start("11_corpus_evaluation", globals())
-settings = {
-    "episodes": episodes,
-    "seed": seed,
-    "chunk_size": chunk_size,
-    "grid": {
-        "noise": noise_levels,
-        "viewpoints": viewpoints,
-        "posteriors": posteriors,
-        "fractions": fractions,
-    },
-    "network": {"data": "synthetic" if out.source.root is None else str(out.source.root)},
-    "evaluation": {"bootstrap": bootstrap},
-    "recognizer": {"n_per_action": n_per_action, "n_states": n_states, "n_mix": n_mix, "n_iter": n_iter},
-}
-config = config_from_dict(settings)
-
-# %% [markdown]
-# ## The sweep
-#
-# One task per chunk of episodes and condition; every episode is scored at every observed fraction by
-# every strategy. Here the chunks go to a temporary folder; `glu evaluate -o DIR` keeps them, so an
-# interrupted sweep resumes where it stopped.
-
-# %%
-with tempfile.TemporaryDirectory() as sweep_dir:
-    result = run_sweep(
-        config,
-        sweep_dir,
-        scheduler=None if workers else "synchronous",
-        workers=workers or None,
-        progress=False,
+if sweep_dir is None:
+    config = config_from_dict(
+        {
+            "episodes": episodes,
+            "seed": seed,
+            "chunk_size": chunk_size,
+            "recognizer_seeds": recognizer_seeds,
+            "grid": {
+                "action_prior": action_prior,
+                "inference_network": inference_network,
+                "learn_experiments": learn_experiments,
+                "p_hmm": p_hmm,
+                "noise": noise_levels,
+                "viewpoints": viewpoints,
+                "fractions": fractions,
+            },
+            "network": {"data": "synthetic" if out.source.root is None else str(out.source.root)},
+            "evaluation": {"bootstrap": bootstrap},
+            "recognizer": {
+                "n_per_action": n_per_action,
+                "n_states": n_states,
+                "n_mix": n_mix,
+                "n_iter": n_iter,
+                "calibration_per_action": calibration_per_action,
+            },
+        }
     )
-table, diffs, rel = result.metrics, result.differences, result.reliability
+    with tempfile.TemporaryDirectory() as folder:
+        run_sweep(
+            config,
+            folder,
+            scheduler=None if workers else "synchronous",
+            workers=workers or None,
+            progress=False,
+        )
+        table, diffs, rel, seeds, calibration, summary = read_tables(folder)
+else:
+    table, diffs, rel, seeds, calibration, summary = read_tables(sweep_dir)
+source = summary["data_source"]
 pooled = table[(table.viewpoint == "all") | table.noise.isna()]
-out.table(pooled, "corpus_metrics", episodes=result.summary["episodes"])
-out.table(diffs[diffs.noise.isna()], "corpus_differences")
+out.table(pooled, "corpus_metrics", episodes=summary["episodes"])
+out.table(diffs[diffs.noise.isna() & (diffs.viewpoint == "all")], "corpus_differences")
 out.table(rel[rel.noise.isna()], "corpus_reliability")
-full = max(config.evaluation.fractions)
-overall = table[(table.viewpoint == "all") & table.noise.isna() & (table.fraction == full)]
-overall.pivot_table(
-    index=["posterior", "target", "metric"], columns="strategy", values="estimate", sort=False
-).round(3)
+out.table(seeds[seeds.fraction == seeds.fraction.max()], "corpus_seeds")
+out.table(calibration, "corpus_calibration")
+out.say(fd.design_text(summary))
 
 # %% [markdown]
-# ## Which strategy wins as the sensor noise grows
-#
-# Left, p_HMM as the originals read it from the likelihoods; right, per frame (`posteriors`). Every band is a
-# bootstrap interval (`glu.experiments.intervals.LEVEL`).
+# ## Which strategy wins in which cell
+# Each cell names the best strategy at the full gesture (pooled over noise levels and viewpoints) and, after
+# `=`, the initials of those with no difference from it (G gesture, N network, H hard, V virtual, J Jeffrey,
+# P product; the true action, an oracle, left out).
 
 # %%
-fig = plots.strategies_vs_noise_figure(table, posteriors[:2], full)
-out.figure(fig, "corpus_strategies_vs_noise", source=result.summary["data_source"])
+win = fd.winners(table, diffs)
+out.table(win, "corpus_winners")
+shown = [("action", "accuracy"), ("effect", "log_loss"), ("effect", "ece"), ("description", "all")]
+rows = win.groupby(list(fd.DESIGN[:3])).ngroups
+fig, axes = plt.subplots(2, 2, figsize=(10, 0.9 * rows + 2.5))
+for ax, (target, metric) in zip(axes.ravel(), shown, strict=True):
+    eplots.plot_winners(ax, win, target, metric)
+out.figure(fig, "corpus_winners", source=source)
+fd.winners_table(win, shown)
 
 # %% [markdown]
-# ## Early recognition: how much of the gesture is needed
+# ## The earlier findings, followed through the design
+# Each claim is a paired difference between two strategies; its verdict in every cell, and a sentence per
+# claim written from them.
 
 # %%
-fig = plots.early_recognition_figure(table, posteriors[:2])
-out.figure(fig, "corpus_early_recognition", source=result.summary["data_source"])
+verdicts = fd.finding_verdicts(diffs)
+out.table(verdicts, "corpus_findings")
+for sentence in fd.finding_sentences(verdicts):
+    out.say("* " + sentence)
 
 # %% [markdown]
-# ## Calibration of the anticipated effect, and the viewpoints
+# ## Against the sensor noise, early in the gesture, and how well calibrated
+# The reference cell (uniform actions, the generating network, p_HMM per frame) beside the most mismatched
+# one; bands are two-level intervals.
 
 # %%
-fig = plots.calibration_figure(rel, table, posteriors, full)
-out.figure(fig, "corpus_calibration", source=result.summary["data_source"])
+cells = fd.contrast_cells(table)
+full = table.fraction.max()
+out.figure(plots.strategies_vs_noise_figure(table, cells, full), "corpus_strategies_vs_noise", source=source)
+out.figure(plots.early_recognition_figure(table, cells), "corpus_early_recognition", source=source)
+out.figure(plots.calibration_figure(rel, table, cells, full), "corpus_calibration", source=source)
+for line in fd.network_alone_sentences(table):
+    out.say("* " + line)
 
 # %% [markdown]
-# ## Paired differences between strategies (same episodes)
+# ## Paired differences, in the reference cell and the most mismatched one
 
 # %%
 pairs = [
-    ("action", "accuracy", "product", "gesture"),
-    ("action", "log_loss", "product", "gesture"),
-    ("action", "accuracy", "hard", "gesture"),
-    ("effect", "accuracy", "virtual", "network"),
-    ("effect", "log_loss", "virtual", "hard"),
-    ("effect", "log_loss", "jeffrey", "virtual"),
-    ("effect", "ece", "virtual", "hard"),
-    ("description", "all", "virtual", "hard"),
-    ("description", "all", "jeffrey", "virtual"),
+    (f.target, f.metric, f.strategy, f.baseline) for f in fd.FINDINGS if f.viewpoint == "all" and not f.early
 ]
-fig = plots.differences_figure(diffs, pairs, posteriors[:2], full)
-out.figure(fig, "corpus_differences", source=result.summary["data_source"])
-lines = [
-    f"p_HMM {b['posterior']}, {b['target']} {b['metric']}: {', '.join(b['best'])} {b['estimate']:.3f} "
-    f"[{b['ci_low']:.3f}, {b['ci_high']:.3f}], better than {', '.join(b['significantly_better_than']) or 'none'}"
-    for b in result.summary["best"]
-]
-print("\n".join(lines))
+out.figure(plots.differences_figure(diffs, pairs, cells, full), "corpus_differences", source=source)
 
 # %% [markdown]
-# Read from the likelihoods (as the originals), the HMMs' posteriors are nearly certain after a few dozen
-# frames, right or wrong — their log-loss is several nats: fusion then changes little, and a hard decision
-# is as good as any soft rule. Read per frame, p_HMM keeps some honest doubt and soft fusion pays: the
-# product rule names the action more often than the gesture alone (most clearly early in the gesture, under
-# strong noise, and for the viewpoints the HMMs were not trained on), and soft evidence — Jeffrey's rule
-# most of all — anticipates the effect with a lower log-loss and a smaller calibration error than a hard
-# decision. Seen from a turned viewpoint the gestures mislead more than they help: the network alone is then
-# more accurate, the correspondence problem of notebook 10. The lines above name, for each target and metric,
-# the best strategy and those it beats with confidence; every number with its interval is in
-# `results/corpus_metrics.csv`.
+# ## Is p_HMM a probability?
+# Left: p_HMM's own reliability on the corpus's held-out synthetic gestures, under each reading (the
+# reference cell's actions and network). Right, with the real data: each real standing segment left out,
+# recognised by HMMs trained on the others; the calibrated reading's temperature is fitted on the other
+# segments only, each scored by models that saw neither.
+
+# %%
+real = out.source.is_real
+fig, axes = new_figure(2 if real else 1, width=4.2, height=3.4)
+eplots.plot_p_hmm_reliability(
+    axes[0], rel, full, where={k: v for k, v in fd.REFERENCE_CELL.items() if k != "p_hmm"}
+)
+if real:
+    segments = ph.segment_readings(gesture_sequences(out.source, include_test=False), seed=seed)
+    out.table(segments, "p_hmm_real_segments")
+    segment_summary = ph.segment_calibration(segments)
+    out.table(segment_summary, "p_hmm_real_calibration")
+    eplots.plot_segment_readings(axes[1], segments)
+    axes[1].legend(fontsize=7)
+out.figure(fig, "corpus_p_hmm_calibration", source=source)
+for line in fd.p_hmm_sentences(table, calibration, segment_summary if real else None):
+    out.say("* " + line)
+segment_summary if real else fd.p_hmm_table(table)
+
+# %% [markdown]
+# ## How much the recogniser's seed moves the result
+# Each seed's own accuracy at the full gesture (reference cell); the seed level of every interval above
+# carries this spread.
+
+# %%
+spread = fd.seed_spread(seeds)
+out.say(fd.seed_sentence(spread))
+spread

@@ -56,10 +56,32 @@ def test_the_gesture_shows_the_episodes_action(engine):
 
 def test_scenario_weights(engine):
     sc = Scenario.from_mapping({"Action": {"tap": 1.0}, "Shape": {"sphere": 3.0, "box": 1.0}})
-    ch = simulate_chunk(engine, Condition(0.0, "front"), 0, 0, 400, 400, scenario=sc)
+    ch = simulate_chunk(engine, Condition(0.0, "front", "scenario"), 0, 0, 400, 400, scenario=sc)
     assert (ch.episodes.Action == "tap").all()
+    uniform = simulate_chunk(engine, Condition(0.0, "front"), 0, 0, 400, 400, scenario=sc)
+    assert (uniform.episodes.Action == "tap").mean() < 0.5  # the uniform prior ignores the Action weights
     assert abs((ch.episodes.Shape == "sphere").mean() - 0.75) < 0.07
     assert sc.as_dict()["Action"] == {"grasp": 0.0, "tap": 1.0, "touch": 0.0}
+
+
+def test_action_priors(engine):
+    """Actions drawn uniformly, or as often as the network's prior p(Action) says."""
+    prior = engine.query(["Action"], {})["Action"]
+    n = 6000
+    for name, expected in (("uniform", np.full(3, 1 / 3)), ("network", prior)):
+        ch = simulate_chunk(engine, Condition(0.0, "front", name), 0, 0, n, n)
+        freq = np.bincount(ch.codes["Action"], minlength=3) / n
+        assert np.abs(freq - expected).max() < 3 * np.sqrt(0.25 / n) + 1e-3, name
+        assert (ch.episodes.action_prior == name).all()
+    with pytest.raises(DataError, match="unknown action prior 'learned'"):
+        Condition(0.0, "front", "learned")
+
+
+def test_replications_have_their_own_episodes(engine):
+    a = simulate_chunk(engine, Condition(0.0, "front"), 0, 0, 8, 8, replication=0)
+    b = simulate_chunk(engine, Condition(0.0, "front"), 0, 0, 8, 8, replication=1)
+    assert not np.array_equal(a.episodes.duration_s, b.episodes.duration_s)
+    assert (b.episodes.replication == 1).all()
 
 
 @pytest.mark.parametrize(

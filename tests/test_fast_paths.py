@@ -66,7 +66,9 @@ def test_chunk_equals_the_episode_by_episode_reference():
         chunk = simulate_chunk(engine, cond, 5, 1, 30, 40, gestures=settings)
         actions = engine.bn.schema.values_of("Action")
         for i in range(30):
-            rng = np.random.default_rng(np.random.SeedSequence(5, spawn_key=(GESTURE_KEY, 40 + i)))
+            rng = np.random.default_rng(
+                np.random.SeedSequence(5, spawn_key=(GESTURE_KEY, 0, 40 + i))
+            )  # replication 0
             g = synthesize_gesture(
                 actions[chunk.codes["Action"][i]],
                 rng,

@@ -7,7 +7,17 @@ import pandas as pd
 import pytest
 
 from glu.experiments.evaluation import EvaluationSettings, statistic_columns
-from glu.experiments.intervals import accumulate, metrics, paired_differences, poisson_weights, reliability
+from glu.experiments.intervals import (
+    accumulate,
+    clopper_pearson,
+    metrics,
+    paired_differences,
+    poisson_weights,
+    reliability,
+    seed_counts,
+    two_level_sums,
+    verdict,
+)
 
 SETTINGS = EvaluationSettings(
     fractions=(1.0,), strategies=("network", "hard", "virtual"), bins=4, bootstrap=400
@@ -124,9 +134,9 @@ def test_groups_pool_conditions_by_summing(data):
 def test_reliability_bins(data):
     cols, X, truth, frame, n = data
     r = reliability(frame, cols, [])
-    assert set(r.strategy) == {"network", "hard", "virtual"}
-    for strategy, g in r.groupby("strategy"):
-        vals, conf, b = truth[("effect", strategy)]
+    assert set(r.strategy) == {"network", "hard", "virtual"} and set(r.target) == {"action", "effect"}
+    for (target, strategy), g in r.groupby(["target", "strategy"]):
+        vals, conf, b = truth[(target, strategy)]
         assert g.n.sum() == n
         k = 2
         row = g[g.bin == k].iloc[0]
@@ -134,3 +144,88 @@ def test_reliability_bins(data):
             vals["correct"][b == k].mean()
         )
         assert (row.lower, row.upper) == (0.5, 0.75)
+
+
+# ------------------------------------------------------------------ two levels: seeds, then episodes
+
+
+def test_seed_counts_resample_the_seeds():
+    c = seed_counts(7, 500, np.random.default_rng(0))
+    assert c.shape == (501, 7) and (c[0] == 1).all() and (c.sum(axis=1) == 7).all()
+    assert abs(c[1:].mean() - 1.0) < 0.05 and (c[1:] == 0).any() and (c[1:] >= 2).any()
+
+
+def test_one_seed_is_the_one_level_bootstrap():
+    a = poisson_weights(50, 30, np.random.default_rng(3))
+    b = poisson_weights(50, 30, np.random.default_rng(3), counts=np.ones(31))
+    np.testing.assert_array_equal(a, b)
+    assert (seed_counts(1, 30, np.random.default_rng(0)) == 1).all()
+
+
+def seeds_data(rng):
+    """Items of 6 seeds whose means differ (a seed effect) and whose items vary (an episode effect)."""
+    return [
+        rng.normal(loc, 1.0, size=(n, 1))
+        for loc, n in zip((0, 1, 3, 0.5, 2, 1.5), (40, 60, 50, 45, 55, 50), strict=True)
+    ]
+
+
+def test_two_level_variance_equals_the_closed_form():
+    """Var(Σ_k Σ_e w x) = Σ_k S_k² − (Σ_k S_k)²/K + Σ_k Q_k for multinomial seeds and Poisson episodes."""
+    data = seeds_data(np.random.default_rng(1))
+    sums = two_level_sums(data, 40000, np.random.default_rng(2))[:, 0]
+    S = np.array([x.sum() for x in data])
+    Q = np.array([(x**2).sum() for x in data])
+    expected = (S**2).sum() - S.sum() ** 2 / len(S) + Q.sum()
+    assert sums[0] == pytest.approx(S.sum(), rel=1e-12)
+    assert sums[1:].var() == pytest.approx(expected, rel=0.04)
+    assert sums[1:].mean() == pytest.approx(S.sum(), rel=0.02)
+
+
+def test_two_level_interval_equals_a_brute_force_hierarchical_bootstrap():
+    """The pooled mean's percentile interval, against resampling seeds and then each copy's items explicitly."""
+    rng = np.random.default_rng(4)
+    data = seeds_data(rng)
+    ones = [np.hstack([np.ones((len(x), 1)), x]) for x in data]
+    sums = two_level_sums(ones, 6000, np.random.default_rng(5))
+    fast = sums[1:, 1] / sums[1:, 0]
+    brute = []
+    for _ in range(6000):
+        picked = rng.integers(0, len(data), len(data))
+        items = [data[k][rng.integers(0, len(data[k]), len(data[k]))] for k in picked]
+        brute.append(np.concatenate(items).mean())
+    lo_f, hi_f = np.percentile(fast, [2.5, 97.5])
+    lo_b, hi_b = np.percentile(brute, [2.5, 97.5])
+    width = hi_b - lo_b
+    assert abs(lo_f - lo_b) < 0.08 * width and abs(hi_f - hi_b) < 0.08 * width
+    assert sums[0, 1] / sums[0, 0] == pytest.approx(np.concatenate(data).mean(), rel=1e-12)
+
+
+def test_the_seed_level_widens_the_interval():
+    """Seeds that disagree give a wider interval than their pooled episodes resampled alone."""
+    data = seeds_data(np.random.default_rng(6))
+    ones = [np.hstack([np.ones((len(x), 1)), x]) for x in data]
+    two = two_level_sums(ones, 2000, np.random.default_rng(7))
+    one = accumulate([np.vstack(ones)], poisson_weights(sum(map(len, ones)), 2000, np.random.default_rng(7)))
+    w2 = np.diff(np.percentile(two[1:, 1] / two[1:, 0], [2.5, 97.5]))[0]
+    w1 = np.diff(np.percentile(one[1:, 1] / one[1:, 0], [2.5, 97.5]))[0]
+    assert w2 > 2 * w1
+
+
+@pytest.mark.parametrize("k,n", [(0, 11), (3, 11), (8, 11), (11, 11), (1, 2), (2, 2), (47, 120)])
+def test_clopper_pearson_matches_scipy_exact_interval(k, n):
+    from scipy.stats import binomtest
+
+    ref = binomtest(k, n).proportion_ci(confidence_level=0.95, method="exact")
+    lo, hi = clopper_pearson(k, n)
+    assert lo == pytest.approx(ref.low, abs=1e-12) and hi == pytest.approx(ref.high, abs=1e-12)
+    if k == 0:
+        assert hi == pytest.approx(1 - 0.025 ** (1 / n), rel=1e-12)  # closed form
+    if k == n:
+        assert lo == pytest.approx(0.025 ** (1 / n), rel=1e-12)
+
+
+def test_verdicts():
+    assert verdict(0.01, 0.2) == "better" and verdict(0.01, 0.2, higher_is_better=False) == "worse"
+    assert verdict(-0.2, -0.01) == "worse" and verdict(-0.2, -0.01, False) == "better"
+    assert verdict(-0.1, 0.1) == "no difference" and verdict(np.nan, 0.1) == "no difference"

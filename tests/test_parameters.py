@@ -34,10 +34,16 @@ def test_the_declaration_is_what_papermill_reads(path):
 def test_choices_come_from_the_package():
     from glu.bn.learning import UNSEEN_MODES
     from glu.bn.soft import SOFT_RULES
+    from glu.experiments.correspondence import STUDY_FEATURE_NAMES
+    from glu.gestures.calibration import READINGS
     from glu.gestures.invariants import FEATURE_NAMES
 
     assert CHOICES["rule"] is SOFT_RULES and CHOICES["unseen_words"] is UNSEEN_MODES
-    assert CHOICES["features"] is FEATURE_NAMES and CHOICES["feature_sets"] is FEATURE_NAMES
+    assert CHOICES["features"] is FEATURE_NAMES and CHOICES["feature_sets"] is STUDY_FEATURE_NAMES
+    assert set(FEATURE_NAMES) < set(STUDY_FEATURE_NAMES) and {"body", "body+centred"} < set(
+        STUDY_FEATURE_NAMES
+    )
+    assert CHOICES["p_hmm"] == tuple(READINGS)
 
 
 def test_each_element_of_a_list_of_choices_is_checked():

@@ -111,7 +111,7 @@ def test_labelling_schemes():
 def test_per_frame_reading_tempers_the_likelihoods():
     ll = np.array([[-100.0, -110.0, -np.inf]])
     sharp = ss.p_hmm_reading(ll, np.array([50]), "likelihood")
-    soft = ss.p_hmm_reading(ll, np.array([50]), "per_frame")
+    soft = ss.p_hmm_reading(ll, np.array([50]), "per-frame")
     np.testing.assert_allclose(sharp[0, :2], [1 / (1 + np.exp(-10)), np.exp(-10) / (1 + np.exp(-10))])
     np.testing.assert_allclose(soft[0, :2], [1 / (1 + np.exp(-0.2)), np.exp(-0.2) / (1 + np.exp(-0.2))])
     assert sharp[0, 2] == soft[0, 2] == 0

@@ -19,19 +19,25 @@ from glu.sweep import config_from_dict, load_config, run_sweep
 
 SMALL = """\
 episodes = 64
-chunk_size = 8
+chunk_size = 4
 seed = 3
+recognizer_seeds = 2
 
 [grid]
 noise = [0.0, 0.05]
 viewpoints = ["front", "seated"]
 fractions = [0.5, 1.0]
+action_prior = ["network"]
+inference_network = ["generating", "learned"]
+learn_experiments = [150]
+p_hmm = ["likelihood", "calibrated"]
 
 [recognizer]
 n_per_action = 6
 n_states = 3
 n_mix = 1
 n_iter = 10
+calibration_per_action = 4
 
 [network]
 data = "synthetic"
@@ -39,7 +45,15 @@ data = "synthetic"
 [evaluation]
 bootstrap = 20
 """
-TABLES = ("results.parquet", "differences.parquet", "reliability.parquet", "sums.parquet", "summary.json")
+TABLES = (
+    "results.parquet",
+    "differences.parquet",
+    "reliability.parquet",
+    "seeds.parquet",
+    "calibration.parquet",
+    "sums.parquet",
+    "summary.json",
+)
 
 
 def quiet(_msg: str) -> None:
@@ -77,9 +91,13 @@ def same_tables(a: Path, b: Path) -> None:
 
 def test_the_tables(synchronous):
     out, result = synchronous
-    assert result.computed == 8 and result.reused == 0  # 4 conditions × 2 chunks of 8 episodes
+    assert result.computed == 8 and result.reused == 0  # 4 conditions × 2 chunks of 4 episodes per seed
     table = pd.read_parquet(out / "results.parquet")
     assert set(table.columns) >= {
+        "action_prior",
+        "inference_network",
+        "learn_experiments",
+        "p_hmm",
         "noise",
         "viewpoint",
         "target",
@@ -91,12 +109,43 @@ def test_the_tables(synchronous):
         "ci_high",
     }
     assert set(table.viewpoint) == {"front", "seated", "all"}
+    assert set(table.p_hmm) == {"likelihood", "calibrated"} and set(table.action_prior) == {"network"}
+    assert set(zip(table.inference_network, table.learn_experiments, strict=True)) == {
+        ("generating", 0),
+        ("learned", 150),
+    }
+    assert {"network", "true_action"} <= set(table[table.target == "effect"].strategy)
     full = table[(table.viewpoint == "all") & table.noise.isna()]
-    assert (full.n_episodes == 64).all()
+    assert (full.n_episodes == 64).all()  # 4 conditions × 2 seeds × 8 episodes
     assert (full.ci_low <= full.estimate + 1e-12).all() and (full.estimate <= full.ci_high + 1e-12).all()
     assert set(full.metric) == {"accuracy", "log_loss", "brier", "ece", "verb", "object", "effect", "all"}
     assert result.metrics.attrs["experiment"] == "corpus_evaluation"
     assert "synthetic data" in result.summary["data_source"] and "/" not in result.summary["data_source"]
+    diffs = pd.read_parquet(out / "differences.parquet")
+    assert set(diffs.verdict) <= {"better", "worse", "no difference"}
+    seeds = pd.read_parquet(out / "seeds.parquet")
+    assert set(seeds.recognizer_seed) == {0, 1} and seeds.estimate.notna().any()
+    cal = pd.read_parquet(out / "calibration.parquet")
+    assert len(cal) == 4 and cal.beta.between(0, 1).all()  # 2 seeds × 2 fractions
+    rel = pd.read_parquet(out / "reliability.parquet")
+    assert {"gesture"} <= set(rel[rel.target == "action"].strategy)  # p_HMM's own reliability
+    assert (out / "recognizers" / "seed-001.json").is_file()
+
+
+def test_the_seeds_make_the_pooled_estimate(synchronous):
+    """Each seed's estimates pool (with equal episodes per seed) to the table's estimate; the seeds differ."""
+    out, _ = synchronous
+    table = pd.read_parquet(out / "results.parquet")
+    seeds = pd.read_parquet(out / "seeds.parquet")
+    keys = ["inference_network", "learn_experiments", "p_hmm", "target", "strategy", "fraction", "metric"]
+    pooled = table[(table.viewpoint == "all") & table.noise.isna() & (table.metric == "accuracy")]
+    mean = seeds[seeds.metric == "accuracy"].groupby(keys).estimate.mean()
+    merged = pooled.set_index(keys).estimate
+    pd.testing.assert_series_equal(
+        mean.sort_index(), merged.loc[mean.index].sort_index(), check_names=False, rtol=1e-12
+    )
+    g = seeds[(seeds.strategy == "gesture") & (seeds.metric == "accuracy")]
+    assert g.groupby("recognizer_seed").estimate.mean().nunique() == 2
 
 
 def test_resume_computes_only_the_missing_chunks(config_file, synchronous, tmp_path):
@@ -252,6 +301,13 @@ def test_an_unreachable_scheduler_is_one_line(config_file, tmp_path, capsys):
         ("[grid]\nfractions = [0.0]\n", "fractions"),
         ("[views.left]\nyaw = 3\n", "unknown key 'yaw' in views.left; allowed: yaw_deg"),
         ("[scenario.Action]\nkick = 1\n", "no value 'kick'"),
+        ("[scenario.Action]\ntap = 1\n", "applies only with grid.action_prior"),
+        ("[grid]\np_hmm = ['raw']\n", "grid.p_hmm: unknown value 'raw'; allowed: likelihood, per-frame"),
+        ("[grid]\naction_prior = ['empirical']\n", "grid.action_prior: unknown value 'empirical'"),
+        ("[grid]\ninference_network = ['oracle']\n", "allowed: generating, learned"),
+        ("[grid]\nlearn_experiments = [5]\n", "grid.learn_experiments=5: a whole number from 10"),
+        ("recognizer_seeds = 0\n", "recognizer_seeds=0: a whole number from 1"),
+        ("[recognizer]\nfile = 'r.json'\n", "needs recognizer_seeds = 1"),
         ("[network]\nwords = 'asl'\n", "network.words='asl'; allowed: lab, asr"),
         ("[evaluation]\neffect_evidence = ['ObjVel']\n", "leave it out"),
         ("[recognizer]\nn_states = 0\n", "recognizer.n_states=0"),
@@ -284,26 +340,44 @@ def test_bad_arguments_are_one_line(tmp_path, capsys, argv, message):
 
 def test_the_defaults_are_valid_and_overridable():
     c = config_from_dict({})
-    assert len(c.conditions) == 12 and c.per_condition == 1667
-    assert c.with_overrides(episodes=24, seed=None).per_condition == 2
+    assert len(c.conditions) == 24 and c.recognizer_seeds == 10 and c.per_condition == 500
+    assert len(c.readings) == 12  # (generating + 3 learned) × 3 readings of p_HMM
+    assert c.with_overrides(episodes=480, seed=None).per_condition == 2
 
 
 def test_glu_corpus_writes_parquet(config_file, tmp_path, capsys):
     status, out, err = run(
-        capsys, "corpus", "--config", str(config_file), "--episodes", "8", "-o", str(tmp_path / "c.parquet")
+        capsys, "corpus", "--config", str(config_file), "--episodes", "16", "-o", str(tmp_path / "c.parquet")
     )
     assert status == 0, err
     df = pd.read_parquet(tmp_path / "c.parquet")
-    assert len(df) == 8 and {"Action", "ObjVel", "words", "xyz", "noise", "viewpoint"} <= set(df.columns)
+    assert len(df) == 16 and {"Action", "ObjVel", "words", "xyz", "noise", "viewpoint", "replication"} <= set(
+        df.columns
+    )
+    assert set(df.replication) == {0, 1}
 
 
-def test_posteriors_share_the_episodes(config_file, synchronous, tmp_path):
-    """A second posterior adds conditions scored on the same episodes: the first posterior's rows are unchanged."""
+def test_readings_share_the_episodes(config_file, synchronous, tmp_path):
+    """Another reading of p_HMM is scored on the same episodes: the other readings' rows are unchanged."""
     ref, _ = synchronous
-    config = load_config(config_file).with_overrides(posteriors=("likelihood", "per_frame"))
+    config = load_config(config_file).with_overrides(p_hmm=("likelihood", "per-frame", "calibrated"))
     result = run_sweep(config, tmp_path, scheduler="synchronous", log=quiet)
-    assert result.computed == 16 and set(result.metrics.posterior) == {"likelihood", "per_frame"}
-    both = result.metrics[result.metrics.posterior == "likelihood"].reset_index(drop=True)
+    assert set(result.metrics.p_hmm) == {"likelihood", "per-frame", "calibrated"}
     one = pd.read_parquet(ref / "results.parquet")
-    pd.testing.assert_frame_equal(both[one.columns], one, check_exact=True)
+    both = result.metrics[result.metrics.p_hmm != "per-frame"]
+    key = ["inference_network", "p_hmm", "noise", "viewpoint", "target", "strategy", "fraction", "metric"]
+    both = both.set_index(key).sort_index()
+    one = one.set_index(key).sort_index()
+    pd.testing.assert_series_equal(both.estimate, one.estimate, check_exact=True)
     assert result.summary["episodes"] == 64
+
+
+def test_the_notebook_reads_a_finished_sweep(synchronous):
+    from glu.sweep.tables import read_tables
+
+    out, result = synchronous
+    table, diffs, rel, seeds, calibration, summary = read_tables(out)
+    pd.testing.assert_frame_equal(table, result.metrics)
+    assert summary["fingerprint"] == result.summary["fingerprint"]
+    with pytest.raises(DataError, match="not the output folder of a finished"):
+        read_tables(out / "chunks")

@@ -1,7 +1,8 @@
 """``glu evaluate`` and ``glu corpus``: measure every fusion strategy on a simulated corpus, on Dask.
 
-``glu evaluate`` runs the sweep of :mod:`glu.sweep` (the factor grid strategy × noise × observed fraction
-× viewpoint × seed chunks) on a LocalCluster sized to the machine, or on an existing Dask cluster
+``glu evaluate`` runs the sweep of :mod:`glu.sweep` (the factorial design action prior × inference network
+× p_HMM reading × noise × viewpoint, over recogniser seeds, every strategy at every observed fraction; see
+docs/corpus-evaluation.md) on a LocalCluster sized to the machine, or on an existing Dask cluster
 (``--scheduler tcp://host:8786``), and writes the merged tables to ``-o DIR``; run it again on the same
 folder to finish an interrupted sweep. ``glu corpus`` writes the simulated episodes themselves to Parquet.
 """
@@ -26,7 +27,7 @@ def _scheduler(text: str) -> str:
 
 def _shared(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", type=Path, metavar="FILE.toml", help="sweep settings (see glu.sweep.config)")
-    p.add_argument("--episodes", type=positive_int, metavar="N", help="episodes in all (default 20000)")
+    p.add_argument("--episodes", type=positive_int, metavar="N", help="episodes in all (default 120000)")
     p.add_argument("--seed", type=seed, metavar="S", help="the corpus's seed (default 0)")
     p.add_argument(
         "--data", help="data the network is learned from (default: $GLU_DATA_DIR, data/real, else synthetic)"
@@ -97,17 +98,20 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def overall_text(summary: dict) -> str:
-    """The overall metrics at the full gesture as a small text table: posterior, target, metric, then each
-    strategy's estimate and [95 % interval], pooled over noise levels and viewpoints."""
+    """The winner of each cell of the design at the full gesture, pooled over noise levels and viewpoints:
+    one line per (action prior, network, p_HMM, target, metric), with the strategies tied with it."""
     import pandas as pd
 
-    rows = pd.DataFrame(summary["overall"])
+    best = pd.DataFrame(summary["best"])
     lines = [f"{summary['episodes']} episodes; {summary['data_source']}"]
-    for (posterior, target, metric), g in rows.groupby(["posterior", "target", "metric"], sort=False):
-        cells = "  ".join(
-            f"{r.strategy} {r.estimate:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]" for r in g.itertuples()
+    for r in best.itertuples():
+        net = r.inference_network + (f"-{r.learn_experiments}" if r.learn_experiments else "")
+        tied = [s for s in r.tied.split(", ") if s and s != r.best]
+        lines.append(
+            f"  {r.action_prior:8s} {net:14s} {r.p_hmm:10s} {r.target:11s} {r.metric:9s} "
+            f"{r.best} {r.estimate:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]"
+            + (f" (no difference: {', '.join(tied)})" if tied else "")
         )
-        lines.append(f"  {posterior:10s} {target:11s} {metric:9s} {cells}")
     return "\n".join(lines)
 
 
@@ -118,20 +122,21 @@ def _corpus(args: argparse.Namespace) -> int:
     engine, label = prepare_world(config)
     from glu.experiments.corpus import write_corpus
 
-    seen = [
-        c for c in config.conditions if c.posterior == config.posteriors[0]
-    ]  # the posterior changes no episode
     path = write_corpus(
         args.out,
         engine,
-        seen,
+        config.conditions,
         config.per_condition,
         config.seed,
         config.chunk_size,
         label,
+        replications=config.recognizer_seeds,
         scenario=config.scenario,
         gestures=config.gestures,
         views={v: config.views[v] for v in config.viewpoints},
     )
-    print(f"{config.n_episodes} episodes ({len(seen)} conditions) → {path}")
+    print(
+        f"{config.n_episodes} episodes ({len(config.conditions)} conditions × {config.recognizer_seeds} "
+        f"replications) → {path}"
+    )
     return 0

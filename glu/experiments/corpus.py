@@ -2,7 +2,8 @@
 
 An **episode** is one person acting on one object in front of the robot:
 
-1. the object (Color, Shape, Size) and the person's action are drawn from a :class:`Scenario`;
+1. the person's action is drawn uniformly or from the network's prior p(Action) (the condition's
+   ``action_prior``, :data:`ACTION_PRIORS`), the object (Color, Shape, Size) from a :class:`Scenario`;
 2. the effects (ObjVel, ObjHandVel, HandVel, Contact) and the words a person would use to describe it are
    drawn from the Affordance–Words network given them (:func:`glu.bn.sampling.sample`) — the network
    learned from the robot's own experiments (the real data, or glu's synthetic generator without it);
@@ -11,20 +12,28 @@ An **episode** is one person acting on one object in front of the robot:
    tracking gaps and spikes, repaired as the recogniser's training data are;
 4. the robot sees growing prefixes of it (the observed fractions of :mod:`glu.experiments.evaluation`).
 
+**What this world assumes.** The effects and words come from a Bayesian network of the same family as
+the robot's (by default the very network the robot uses, unless the evaluation learns its own from
+independent simulated experiments), and the gestures from the generator the recognisers are trained on.
+Measured here is how fusion rules behave when the robot's models are right, or learned from limited
+experience of the same world; not how they fare on people, objects and effects outside that family.
+
 Episodes are generated in chunks (:func:`simulate_chunk`), so a corpus of any size never sits in memory,
 and :func:`write_corpus` streams one to Parquet, one row group per chunk.
 
-**Seeds.** Episode ``i`` of a corpus with seed ``s`` has the same object, action, effects, words and
-person in every condition (its gesture uses the generator seeded by ``(s, i)``; the conditions change only
-the noise and the viewpoint), so conditions are compared on the same episodes. Its world draws are
-seeded by ``(s, chunk)``: a corpus depends on its chunk size, never on which machine ran which chunk.
+**Seeds.** Episode ``i`` of replication ``r`` of a corpus with seed ``s`` has the same object, action,
+effects, words and person under every noise level and viewpoint (its gesture uses the generator seeded by
+``(s, r, i)``; those conditions change only the noise and the viewpoint), so they are compared on the same
+episodes. Its world draws are seeded by ``(s, r, chunk)``: a corpus depends on its chunk size, never on
+which machine ran which chunk. Each replication (one recogniser seed of the evaluation) has its own
+episodes; the action prior changes the actions drawn, and with them the rest of the episode.
 
 Example
 -------
 >>> from glu.bn import InferenceEngine, learn_bn
 >>> from glu.data import load_experiments
 >>> engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
->>> chunk = simulate_chunk(engine, Condition(0.02, "front"), seed=0, chunk=0, n=4, chunk_size=4)
+>>> chunk = simulate_chunk(engine, Condition(0.02, "front", "network"), seed=0, chunk=0, n=4, chunk_size=4)
 >>> list(chunk.episodes.columns[:6])
 ['episode', 'Action', 'Color', 'Shape', 'Size', 'ObjVel']
 >>> len(chunk.features), chunk.features[0].shape[1]
@@ -63,6 +72,12 @@ VIEWPOINTS: dict[str, View] = {
 seated at a higher table (:class:`~glu.gestures.synthetic.View`)."""
 WORLD_KEY, GESTURE_KEY = 0, 1
 """Spawn keys of the world draws (per chunk) and of each episode's gesture (per episode)."""
+ACTION_PRIORS: dict[str, str] = {
+    "uniform": "every action equally often",
+    "network": "as often as the network's prior p(Action) says (the robot's own experiments)",
+    "scenario": "with the weights of [scenario.Action]",
+}
+"""How often each action is performed in the episodes."""
 
 
 @dataclass(frozen=True)
@@ -72,7 +87,8 @@ class Scenario:
     Attributes
     ----------
     weights : root node (Action, Color, Shape, Size) → weights over its values in the schema's order
-        (normalised; a node left out is uniform)
+        (normalised; a node left out is uniform). The Action weights apply to conditions whose action
+        prior is ``scenario`` (:data:`ACTION_PRIORS`)
     """
 
     weights: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
@@ -121,35 +137,28 @@ class Scenario:
         }
 
 
-POSTERIORS: dict[str, str] = {
-    "likelihood": "p_HMM(A | G_1^t) ∝ L(G_1^t | A), equal priors (the originals')",
-    "per_frame": "p_HMM(A | G_1^t) ∝ exp((1/t) log L(G_1^t | A)), the per-frame log-likelihood TCDS plots",
-}
-"""How the robot turns its HMMs' likelihoods into ``p_HMM``. A likelihood multiplies t frame densities as if
-the frames were independent given the states, which makes ``p_HMM`` nearly certain after a few dozen
-frames, right or wrong; the per-frame version tempers it by the number of frames seen."""
-
-
 @dataclass(frozen=True)
 class Condition:
-    """How the robot sees the episodes (sensor noise, viewpoint) and reads its HMMs (posterior).
+    """How the episodes are drawn (the action prior) and how the robot sees them (sensor noise, viewpoint).
 
     Attributes
     ----------
     noise : standard deviation of the sensor noise on every joint, metres
     viewpoint : a name of :data:`VIEWPOINTS` (or of ``views`` given to :func:`simulate_chunk`)
-    posterior : a name of :data:`POSTERIORS` (the simulation ignores it; the evaluation uses it)
+    action_prior : a name of :data:`ACTION_PRIORS`
     """
 
     noise: float
     viewpoint: str
-    posterior: str = "likelihood"
+    action_prior: str = "uniform"
 
     def __post_init__(self) -> None:
         if not (isinstance(self.noise, int | float) and 0 <= self.noise < math.inf):
             raise DataError(f"noise={self.noise!r}: the sensor noise must be a number ≥ 0 (metres)")
-        if self.posterior not in POSTERIORS:
-            raise DataError(f"unknown posterior {self.posterior!r}; allowed: {', '.join(POSTERIORS)}")
+        if self.action_prior not in ACTION_PRIORS:
+            raise DataError(
+                f"unknown action prior {self.action_prior!r}; allowed: {', '.join(ACTION_PRIORS)}"
+            )
 
 
 @dataclass(frozen=True)
@@ -179,7 +188,7 @@ class Chunk(NamedTuple):
     ----------
     episodes : one row per episode: episode (its index in the corpus), the 8 affordance nodes (value
         names), words (the words drawn, space-separated, in vocabulary order), n_frames, duration_s,
-        body_size, noise, viewpoint
+        body_size, noise, viewpoint, action_prior, replication
     codes : node → int array, shape (n,), value indices of every node (affordance nodes and words)
     features : n arrays of shape (T_i, 3), the repaired gesture features the robot sees
     """
@@ -208,18 +217,20 @@ def simulate_chunk(
     scenario: Scenario = Scenario(),
     gestures: GestureSettings = GestureSettings(),
     views: Mapping[str, View] = VIEWPOINTS,
+    replication: int = 0,
 ) -> Chunk:
-    """Episodes ``chunk · chunk_size`` … ``+ n − 1`` of the corpus with ``seed``, seen in ``condition``.
+    """Episodes ``chunk · chunk_size`` … ``+ n − 1`` of replication ``replication`` of the corpus with ``seed``.
 
     Parameters
     ----------
     engine : the Affordance–Words network the effects and words are drawn from
-    condition : sensor noise and viewpoint
+    condition : the action prior, sensor noise and viewpoint
     seed, chunk, n, chunk_size : the corpus's seed, the chunk's index, its number of episodes (``n ≤
         chunk_size``; only the last chunk is shorter) and the corpus's chunk size
-    scenario : the distribution of actions and objects
+    scenario : the distribution of objects (and of actions for the action prior ``scenario``)
     gestures : the generator's tracking problems
     views : viewpoint names → :class:`~glu.gestures.synthetic.View`
+    replication : which replication (recogniser seed) the episodes belong to; each has its own
     """
     if condition.viewpoint not in views:
         raise DataError(f"unknown viewpoint {condition.viewpoint!r}; allowed: {', '.join(views)}")
@@ -227,16 +238,20 @@ def simulate_chunk(
         raise DataError(f"a chunk holds 1 to chunk_size={chunk_size} episodes, not {n}")
     view = views[condition.viewpoint]
     first = chunk * chunk_size
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(WORLD_KEY, chunk)))
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(WORLD_KEY, replication, chunk)))
     roots = {}
     for node in ROOT_NODES:
         p = scenario.probabilities(node)
+        if node == "Action" and condition.action_prior == "uniform":
+            p = np.full(len(p), 1.0 / len(p))
+        elif node == "Action" and condition.action_prior == "network":
+            p = np.asarray(engine.query(["Action"], {})["Action"], dtype=float)
         roots[node] = categorical(np.broadcast_to(p, (chunk_size, len(p))), rng)[:n]
     codes = sample(engine, roots, rng)
     schema = engine.bn.schema
     actions = schema.values_of("Action")
     rngs = [
-        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(GESTURE_KEY, first + i)))
+        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(GESTURE_KEY, replication, first + i)))
         for i in range(n)
     ]
     batch = gesture_features(
@@ -257,6 +272,7 @@ def simulate_chunk(
     table["words"] = [" ".join(w for w, on in zip(words, row, strict=True) if on) for row in present]
     table.update(n_frames=n_frames, duration_s=duration, body_size=size)
     table.update(noise=np.full(n, float(condition.noise)), viewpoint=[condition.viewpoint] * n)
+    table.update(action_prior=[condition.action_prior] * n, replication=np.full(n, replication))
     return Chunk(pd.DataFrame(table), codes, features)
 
 
@@ -266,12 +282,18 @@ def iter_corpus(
     n_per_condition: int,
     seed: int,
     chunk_size: int,
+    replications: int = 1,
     **settings: Any,
 ) -> Iterator[tuple[Condition, Chunk]]:
-    """Every chunk of a corpus, condition by condition (``settings``: scenario, gestures, views)."""
+    """Every chunk of a corpus, condition by condition, replication by replication (``settings``:
+    scenario, gestures, views)."""
     for condition in conditions:
-        for k, n in chunk_ranges(n_per_condition, chunk_size):
-            yield condition, simulate_chunk(engine, condition, seed, k, n, chunk_size, **settings)
+        for r in range(replications):
+            for k, n in chunk_ranges(n_per_condition, chunk_size):
+                yield (
+                    condition,
+                    simulate_chunk(engine, condition, seed, k, n, chunk_size, **settings, replication=r),
+                )
 
 
 def write_corpus(
@@ -282,13 +304,15 @@ def write_corpus(
     seed: int = 0,
     chunk_size: int = 2000,
     data_source: str = "",
+    replications: int = 1,
     **settings: Any,
 ) -> Path:
     """Stream a simulated corpus into one Parquet file, one row group per chunk (written atomically).
 
     Columns: those of :attr:`Chunk.episodes`, plus ``xyz`` — the gesture features, a list of
     ``3 · n_frames`` float32 numbers (frame after frame, x y z). The file's metadata records the seed,
-    the chunk size, the conditions and ``data_source``. At most one chunk is in memory at a time.
+    the chunk size, the conditions, the replications and ``data_source``. At most one chunk is in memory at
+    a time.
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -299,7 +323,8 @@ def write_corpus(
                 "seed": seed,
                 "chunk_size": chunk_size,
                 "n_per_condition": n_per_condition,
-                "conditions": [[c.noise, c.viewpoint] for c in conditions],
+                "replications": replications,
+                "conditions": [[c.noise, c.viewpoint, c.action_prior] for c in conditions],
                 "data_source": data_source,
             }
         )
@@ -307,7 +332,9 @@ def write_corpus(
     writer = None
     with atomic_path(path, suffix=".parquet") as tmp:
         try:
-            for _, chunk in iter_corpus(engine, conditions, n_per_condition, seed, chunk_size, **settings):
+            for _, chunk in iter_corpus(
+                engine, conditions, n_per_condition, seed, chunk_size, replications, **settings
+            ):
                 table = pa.Table.from_pandas(chunk.episodes, preserve_index=False)
                 xyz = pa.array(
                     [x.astype(np.float32).ravel() for x in chunk.features], type=pa.list_(pa.float32())

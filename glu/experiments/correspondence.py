@@ -2,26 +2,30 @@
 
 The papers leave it as future work: the robot learns its actions from its own movements, and must recognise
 them when a person makes them, seen from where the robot stands. This module measures how far gesture
-HMMs carry over, and what invariant features (:mod:`glu.gestures.invariants`) buy and cost:
+HMMs carry over, and what invariant features (:mod:`glu.gestures.invariants`) and the body frame of the
+shoulder line (:func:`glu.gestures.features.to_body_frame`) buy and cost:
 
 * :func:`correspondence_study` trains recognisers on the robot's own movements (``View(performer="robot")``)
-  and, separately, on one human view (a person facing the camera), each with several feature sets, and
-  recognises fresh human gestures under one change at a time (:func:`default_conditions`): the viewpoint
-  (yaw 0–180°), a mirror image, a seated posture, body size, sensor noise, and all at once. The test
-  gestures of one seed are the same movements in every condition (the generator draws a person in full
-  whatever the view), so conditions and feature sets are compared on paired data;
-* :func:`summarise` gives the mean accuracy over seeds with a 95 % t-interval, :func:`invariance_effects`
-  the paired change of accuracy when one invariance is added (negative: the invariance costs accuracy);
-* :func:`two_views` runs one action seen from two viewpoints through a raw and an invariant recogniser,
-  for :func:`glu.recording.write_two_views`.
+  and, separately, on one human view (standard people facing the camera), each with several feature sets,
+  and recognises fresh human gestures under one change at a time (:func:`default_conditions`): the
+  viewpoint (yaw 0–180°), a mirror image, a seated posture, body size, sensor noise, and all at once. The
+  test people are **not** the training ones seen otherwise: each has an arm length and a movement style of
+  their own (``View.variety``), and the sensor noise is added to what the camera sees, so no feature set
+  undoes a test view by construction. The test gestures of one seed are the same people in every condition,
+  so conditions and feature sets are compared on paired data;
+* :func:`summarise` gives the accuracy pooled over seeds with a two-level bootstrap interval (over the
+  seeds, and the test gestures within each: :mod:`glu.experiments.intervals`); :func:`invariance_effects`
+  the paired change of accuracy when one invariance is added (negative: it costs accuracy).
 
-The real data's side of it, the seated taps, is :mod:`glu.experiments.seated`. Every function returns a tidy frame stamped by :func:`~glu.experiments.common.tidy`.
+One gesture seen from two viewpoints is :mod:`glu.experiments.two_views`; the real data's side of it, the
+seated taps, :mod:`glu.experiments.nested` and :mod:`glu.experiments.seated`. Every function returns a tidy
+frame stamped by :func:`~glu.experiments.common.tidy`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -29,12 +33,13 @@ import pandas as pd
 
 from glu.errors import DataError
 from glu.experiments.common import tidy
-from glu.gestures.corpus import Corpus, synthetic_corpus
-from glu.gestures.invariants import Invariants
+from glu.experiments.intervals import HIGHER_IS_BETTER, LEVEL, percentile_interval, two_level_sums, verdict
+from glu.gestures._synthetic_batch import gesture_features
+from glu.gestures.corpus import Corpus, LabelledSequence
+from glu.gestures.invariants import FEATURE_NAMES, Invariants
 from glu.gestures.recognizer import Recognizer, train_recognizer
 from glu.gestures.robot import ROBOT_NOISE
-from glu.gestures.synthetic import SYNTHETIC_POLICY, View, synthesize_gesture
-from glu.gestures.trajectories import repair
+from glu.gestures.synthetic import View
 from glu.hmm import TrainingConfig
 from glu.schema import ACTIONS
 
@@ -45,13 +50,30 @@ FEATURE_SETS: tuple[str, ...] = (
     "centred+rotated",
     "centred+mirrored",
     "all",
+    "body",
+    "body+centred",
 )
 """The feature sets compared by default: raw, translation invariance, and each other invariance added to it
-(they act on the displacement from the start, so in practice they need it), and all four."""
+(they act on the displacement from the start, so in practice they need it), all four; and the body frame
+of the shoulder line (``body``), alone and start-centred — the rotation ``rotated`` makes from the
+movement's heading, made instead from the body."""
+BODY = "body"
+"""The prefix of a feature set computed in the shoulder line's frame (:func:`parse_feature_set`)."""
+STUDY_FEATURE_NAMES: tuple[str, ...] = (
+    *FEATURE_NAMES,
+    BODY,
+    *(f"{BODY}+{n}" for n in FEATURE_NAMES if n != "raw"),
+)
+"""Every feature set the study can compare: those of :data:`glu.gestures.invariants.FEATURE_NAMES`, and each
+in the shoulder line's frame."""
+VARIETY = 1.0
+"""How far the test people's arm lengths and movement styles differ from the training people's."""
+BOOTSTRAP = 1000
+"""Two-level bootstrap replicates of the study's intervals."""
 TRAIN_SOURCES: tuple[str, ...] = ("robot", "human")
+"""Where the recognisers learn: the robot's own movements, or one human view (facing the camera)."""
 STUDY_TRAINING = TrainingConfig(n_mix=1, n_iter=50, tol=1e-3)
 """The study's HMMs: one Gaussian per state (the views' shapes, not one person's path), short EM."""
-"""Where the recognisers learn: the robot's own movements, or one human view (facing the camera)."""
 HUMAN_NOISE = 0.01
 """Metres: sensor noise of the human gestures (camera skeleton), as the generator's default."""
 REFERENCE = ("viewpoint", "0°")
@@ -79,6 +101,22 @@ class Condition:
     dropout_rate: float = 0.2
 
 
+def parse_feature_set(name: str) -> tuple[bool, Invariants]:
+    """``"body+centred"`` → (True, centred): whether the features are in the shoulder line's frame, and the
+    invariances applied to them (``"raw"``, ``"all"``, … as :meth:`Invariants.parse`)."""
+    parts = [p.strip() for p in name.replace(",", "+").split("+") if p.strip()]
+    body = BODY in parts
+    rest = [p for p in parts if p != BODY]
+    return body, Invariants.parse("+".join(rest) if rest else "raw")
+
+
+def feature_set_name(body: bool, invariants: Invariants) -> str:
+    """The inverse of :func:`parse_feature_set`: ``"body+centred"``, ``"body"``, ``"centred+rotated"``."""
+    if not body:
+        return invariants.name
+    return BODY if invariants.is_raw else f"{BODY}+{invariants.name}"
+
+
 def default_conditions(
     normalise_body: bool = False,
     yaws: Sequence[float] = (0, 30, 60, 90, 120, 150, 180),
@@ -88,49 +126,71 @@ def default_conditions(
     seated: bool = True,
     combined: bool = True,
     robot: bool = True,
+    variety: float = VARIETY,
 ) -> list[Condition]:
     """The study's conditions: one factor at a time away from a standing person facing the camera.
 
     ``normalise_body`` is the test views' feature normalisation (False: fixed constants, as the 2017
-    logs, so body size shows in the features). The reference (yaw 0°) is the first condition; with
-    ``robot``, the last is the robot's own movements (held out), the training domain of robot-trained
-    recognisers.
+    logs, so body size shows in the features); ``variety`` how far the test people differ from the
+    training ones in arm length and movement style (``View.variety``). The reference (yaw 0°) is the
+    first condition; with ``robot``, the last is the robot's own movements (held out), the training
+    domain of robot-trained recognisers.
     """
-    base = View(yaw_deg=0.0, normalise_body=normalise_body)
-    conds = [
-        Condition("viewpoint", f"{y:g}°", View(yaw_deg=float(y), normalise_body=normalise_body)) for y in yaws
-    ]
+
+    def view(**kw: Any) -> View:
+        return View(yaw_deg=kw.pop("yaw_deg", 0.0), normalise_body=normalise_body, variety=variety, **kw)
+
+    conds = [Condition("viewpoint", f"{y:g}°", view(yaw_deg=float(y))) for y in yaws]
     if mirror:
-        conds.append(
-            Condition("mirror", "mirrored", View(yaw_deg=0.0, mirror=True, normalise_body=normalise_body))
-        )
+        conds.append(Condition("mirror", "mirrored", view(mirror=True)))
     if seated:
-        conds.append(
-            Condition("posture", "seated", View(yaw_deg=0.0, posture="seated", normalise_body=normalise_body))
-        )
-    conds += [
-        Condition("body size", f"{s:g}", View(yaw_deg=0.0, size=float(s), normalise_body=normalise_body))
-        for s in sizes
-    ]
-    conds += [Condition("sensor noise", f"{n * 100:g} cm", base, float(n)) for n in noises]
+        conds.append(Condition("posture", "seated", view(posture="seated")))
+    conds += [Condition("body size", f"{s:g}", view(size=float(s))) for s in sizes]
+    conds += [Condition("sensor noise", f"{n * 100:g} cm", view(), float(n)) for n in noises]
     if combined:
-        view = View(yaw_deg=90.0, mirror=True, posture="seated", size=1.2, normalise_body=normalise_body)
-        conds.append(Condition("combined", "seated, mirrored, 90°, body size 1.2", view))
+        both = view(yaw_deg=90.0, mirror=True, posture="seated", size=1.2)
+        conds.append(Condition("combined", "seated, mirrored, 90°, body size 1.2", both))
     if robot:
         view = View(performer="robot", normalise_body=normalise_body)
         conds.append(Condition("performer", "the robot itself", view, ROBOT_NOISE, 0.0, 0.0))
     return conds
 
 
-def training_corpus(source: str, n_per_action: int, seed: int, normalise_body: bool = False) -> Corpus:
-    """The training gestures of ``source``: the robot's own movements, or one human view (facing the camera)."""
+def gestures(
+    n_per_action: int,
+    seed: int,
+    view: View,
+    noise: float = HUMAN_NOISE,
+    spike_rate: float = 0.005,
+    dropout_rate: float = 0.2,
+) -> Corpus:
+    """``n_per_action`` synthetic gestures per action seen as ``view``: the sequences of
+    :func:`glu.gestures.corpus.synthetic_corpus` with the same arguments, computed in one batch."""
+    n = n_per_action * len(ACTIONS)
+    actions = [ACTIONS[i % len(ACTIONS)] for i in range(n)]
+    rngs = [np.random.default_rng(c) for c in np.random.SeedSequence(seed).spawn(n)]
+    batch = gesture_features(
+        actions, rngs, noise=noise, spike_rate=spike_rate, dropout_rate=dropout_rate, view=view
+    )
+    seqs = [
+        LabelledSequence(a, x, f"synthetic-{i}", 1, len(x))
+        for i, (a, x) in enumerate(zip(actions, batch.features, strict=True))
+    ]
+    return Corpus(
+        seqs, f"synthetic data: gestures (seed {seed}, {n_per_action} per action, {view.describe()})"
+    )
+
+
+def training_corpus(
+    source: str, n_per_action: int, seed: int, normalise_body: bool = False, body_frame: bool = False
+) -> Corpus:
+    """The training gestures of ``source``: the robot's own movements, or one human view (standard people
+    facing the camera); in the shoulder line's frame with ``body_frame``."""
     if source == "robot":
-        view = View(performer="robot", normalise_body=normalise_body)
-        return synthetic_corpus(
-            n_per_action, seed, view=view, noise=ROBOT_NOISE, spike_rate=0.0, dropout_rate=0.0
-        )
+        view = View(performer="robot", normalise_body=normalise_body, body_frame=body_frame)
+        return gestures(n_per_action, seed, view, ROBOT_NOISE, 0.0, 0.0)
     if source == "human":
-        return synthetic_corpus(n_per_action, seed, view=View(normalise_body=normalise_body))
+        return gestures(n_per_action, seed, View(normalise_body=normalise_body, body_frame=body_frame))
     raise DataError(f"unknown training source {source!r}; allowed: {', '.join(TRAIN_SOURCES)}")
 
 
@@ -142,7 +202,8 @@ def train_for(
     normalise_body: bool = False,
     config: TrainingConfig | None = None,
 ) -> Recognizer:
-    """A recogniser trained on :func:`training_corpus` with ``config`` (default glu's)."""
+    """A recogniser trained on :func:`training_corpus` with ``config`` (default glu's); ``features`` an
+    :class:`Invariants` name (torso frame)."""
     corpus = training_corpus(source, n_per_action, seed, normalise_body)
     by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
     meta = {"data": corpus.description}
@@ -154,18 +215,14 @@ def _test_seed(seed: int) -> int:
     return int(np.random.SeedSequence([seed, 13]).generate_state(1)[0])
 
 
-def _accuracies(rec: Recognizer, corpora: Sequence[Corpus]) -> list[tuple[float, dict[str, float]]]:
-    """Accuracy, and per action, of ``rec`` on each corpus (every sequence scored in one batch)."""
+def _outcomes(rec: Recognizer, corpora: Sequence[Corpus]) -> list[np.ndarray]:
+    """Whether ``rec`` recognises each gesture of each corpus (every sequence scored in one batch)."""
     ll = rec.loglik_many([s.xyz for corpus in corpora for s in corpus])
     predicted = np.array(rec.actions)[np.argmax(ll, axis=1)]  # as Recognizer.classify
     out, lo = [], 0
     for corpus in corpora:
-        actions = np.array([s.action for s in corpus])
-        hits = predicted[lo : lo + len(corpus)] == actions
+        out.append(predicted[lo : lo + len(corpus)] == np.array([s.action for s in corpus]))
         lo += len(corpus)
-        out.append(
-            (float(hits.mean()), {a: float(hits[actions == a].mean()) for a in dict.fromkeys(actions)})
-        )
     return out
 
 
@@ -173,7 +230,7 @@ def correspondence_study(
     train_sources: Sequence[str] = TRAIN_SOURCES,
     feature_sets: Sequence[str] = FEATURE_SETS,
     conditions: Sequence[Condition] | None = None,
-    seeds: Sequence[int] = (0, 1, 2, 3, 4),
+    seeds: Sequence[int] = tuple(range(10)),
     n_train: int = 12,
     n_test: int = 10,
     *,
@@ -186,7 +243,7 @@ def correspondence_study(
     Parameters
     ----------
     train_sources : subset of :data:`TRAIN_SOURCES`
-    feature_sets : invariant feature sets (names for :meth:`Invariants.parse`, e.g. ``"centred+rotated"``)
+    feature_sets : feature sets (:func:`parse_feature_set`: ``"centred+rotated"``, ``"body+centred"``, …)
     conditions : test conditions (default :func:`default_conditions` with ``normalise_body``)
     seeds : one training corpus, EM initialisation and test set per seed
     n_train, n_test : gestures per action for training and for each test condition
@@ -198,45 +255,52 @@ def correspondence_study(
     Returns
     -------
     One row per (seed, train, features, condition): seed, train, features, factor, level, yaw_deg,
-    mirror, posture, size, noise_m, n_test, accuracy, and accuracy_<action> per action.
+    mirror, posture, size, noise_m, n_test, accuracy, accuracy_<action> per action, and outcomes (one
+    character per test gesture, in order: ``1`` recognised, ``0`` not; the two-level bootstrap resamples
+    them).
     """
     conditions = list(conditions or default_conditions(normalise_body))
     settings = dict(invariant_settings or {})
-    specs = [Invariants.parse(f, **settings) for f in feature_sets]
-    runs, sets = [], []  # (seed, source, spec) of every recogniser, and its training set
-    tests = {}
+    specs = [parse_feature_set(f) for f in feature_sets]
+    specs = [(body, Invariants.parse(inv, **settings)) for body, inv in specs]
+    runs, sets = [], []  # (seed, source, body, invariants) of every recogniser, and its training set
+    tests: dict[tuple[int, bool], list[Corpus]] = {}
+    frames = sorted({body for body, _ in specs})
     for seed in seeds:
-        tests[seed] = [
-            synthetic_corpus(
-                n_test,
-                _test_seed(seed),
-                view=c.view,
-                noise=c.noise,
-                spike_rate=c.spike_rate,
-                dropout_rate=c.dropout_rate,
-            )
-            for c in conditions
-        ]  # the same movements in every human condition: only the view or the sensor differs
+        for body in frames:  # the same people in every condition: only the view or the sensor differs
+            tests[seed, body] = [
+                gestures(
+                    n_test,
+                    _test_seed(seed),
+                    replace(c.view, body_frame=body),
+                    c.noise,
+                    c.spike_rate,
+                    c.dropout_rate,
+                )
+                for c in conditions
+            ]
         for source in train_sources:
-            corpus = training_corpus(source, n_train, seed, normalise_body)
-            by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
-            for spec in specs:
-                runs.append((seed, source, spec))
-                sets.append(by_action)
+            for body in frames:
+                corpus = training_corpus(source, n_train, seed, normalise_body, body)
+                by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
+                for b, inv in specs:
+                    if b == body:
+                        runs.append((seed, source, body, inv))
+                        sets.append(by_action)
     # every model of every recogniser in one batch (each as train_recognizer would train it)
     recs = train_recognizer(
-        sets, config, seed=[r[0] for r in runs], features=[r[2] for r in runs], warn=False
+        sets, config, seed=[r[0] for r in runs], features=[r[3] for r in runs], warn=False
     )
     rows = []
-    for (seed, source, spec), rec in zip(runs, recs, strict=True):
-        for c, test, (acc, per_action) in zip(
-            conditions, tests[seed], _accuracies(rec, tests[seed]), strict=True
-        ):
+    for (seed, source, body, inv), rec in zip(runs, recs, strict=True):
+        test = tests[seed, body]
+        for c, corpus, hits in zip(conditions, test, _outcomes(rec, test), strict=True):
+            actions = np.array([s.action for s in corpus])
             rows.append(
                 {
                     "seed": seed,
                     "train": source,
-                    "features": spec.name,
+                    "features": feature_set_name(body, inv),
                     "factor": c.factor,
                     "level": c.level,
                     "yaw_deg": c.view.yaw_deg,
@@ -244,18 +308,26 @@ def correspondence_study(
                     "posture": c.view.posture,
                     "size": c.view.size,
                     "noise_m": c.noise,
-                    "n_test": len(test),
-                    "accuracy": acc,
-                    **{f"accuracy_{a}": v for a, v in per_action.items()},
+                    "n_test": len(corpus),
+                    "accuracy": float(hits.mean()),
+                    **{f"accuracy_{a}": float(hits[actions == a].mean()) for a in dict.fromkeys(actions)},
+                    "outcomes": "".join("1" if h else "0" for h in hits),
                 }
             )
+    order = {name: k for k, name in enumerate(feature_set_name(b, i) for b, i in specs)}
+    frame = pd.DataFrame(rows)
+    frame = frame.sort_values(
+        ["seed", "train", "features"],
+        key=lambda c: c.map(order) if c.name == "features" else c,
+        kind="stable",
+    )
     return tidy(
-        pd.DataFrame(rows),
+        frame.reset_index(drop=True),
         "correspondence_study",
-        f"synthetic data: the robot's own movements and one human view → human gestures seen otherwise "
+        f"synthetic data: the robot's own movements and one human view → other people seen otherwise "
         f"({n_train} training, {n_test} test gestures per action and seed)",
         train_sources=train_sources,
-        feature_sets=[s.name for s in specs],
+        feature_sets=[feature_set_name(b, i) for b, i in specs],
         seeds=seeds,
         n_train=n_train,
         n_test=n_test,
@@ -265,47 +337,49 @@ def correspondence_study(
         tol=config.tol,
         normalise_body=normalise_body,
         conditions=[f"{c.factor}: {c.level}" for c in conditions],
+        variety=sorted({c.view.variety for c in conditions}),
         invariant_settings=settings,
     )
 
 
-def t_interval(values: Sequence[float], confidence: float = 0.95) -> tuple[float, float, float]:
-    """Mean and two-sided ``confidence`` t-interval of ``values`` (NaN bounds for fewer than 2 values)."""
-    from scipy import stats
-
-    v = np.asarray(values, dtype=float)
-    mean = float(v.mean()) if len(v) else float("nan")
-    if len(v) < 2:
-        return mean, float("nan"), float("nan")
-    half = float(stats.t.ppf(0.5 + confidence / 2, len(v) - 1) * v.std(ddof=1) / np.sqrt(len(v)))
-    return mean, mean - half, mean + half
+def _outcome_matrix(text: pd.Series) -> list[np.ndarray]:
+    """Each row's ``outcomes`` as a 0/1 array."""
+    return [np.frombuffer(t.encode(), dtype=np.uint8) - ord("0") for t in text]
 
 
-def summarise(results: pd.DataFrame, confidence: float = 0.95) -> pd.DataFrame:
-    """Mean accuracy over seeds with its ``confidence`` t-interval, per (train, features, condition).
+def summarise(results: pd.DataFrame, replicates: int = BOOTSTRAP, seed: int = 0) -> pd.DataFrame:
+    """Accuracy pooled over seeds with its two-level bootstrap interval, per (train, features, condition).
 
-    Columns: train, features, factor, level, yaw_deg, n_seeds, accuracy, ci_low, ci_high (the interval
-    clipped to [0, 1]). Rows keep the order of the study.
+    The interval resamples the seeds, then each seed's test gestures
+    (:func:`glu.experiments.intervals.two_level_sums`); it has width 0 only when every gesture of every
+    seed was recognised alike. Columns: train, features, factor, level, yaw_deg, n_seeds, accuracy,
+    ci_low, ci_high, seed_min, seed_max (the seeds' own accuracies). Rows keep the order of the study.
     """
     keys = ["train", "features", "factor", "level"]
     rows = []
     for key, g in results.groupby(keys, sort=False):
-        mean, lo, hi = t_interval(g["accuracy"], confidence)
+        rng = np.random.default_rng(np.random.SeedSequence([seed, len(rows)]))
+        stats = [np.stack([np.ones(len(o)), o], axis=1) for o in _outcome_matrix(g["outcomes"])]
+        sums = two_level_sums(stats, replicates, rng)
+        with np.errstate(invalid="ignore"):  # a replicate that drew no gesture is left out
+            lo, hi = percentile_interval((sums[1:, 1] / sums[1:, 0])[:, None])
         rows.append(
             {
                 **dict(zip(keys, key, strict=True)),
                 "yaw_deg": g["yaw_deg"].iloc[0],
                 "n_seeds": len(g),
-                "accuracy": mean,
-                "ci_low": max(lo, 0.0) if lo == lo else lo,
-                "ci_high": min(hi, 1.0) if hi == hi else hi,
+                "accuracy": sums[0, 1] / sums[0, 0],
+                "ci_low": float(lo[0]),
+                "ci_high": float(hi[0]),
+                "seed_min": g["accuracy"].min(),
+                "seed_max": g["accuracy"].max(),
             }
         )
     return tidy(
         pd.DataFrame(rows),
         "correspondence_summary",
         results.attrs.get("data_source", ""),
-        confidence=confidence,
+        interval=f"{LEVEL:.0%} two-level bootstrap over seeds and test gestures ({replicates} replicates)",
         **results.attrs.get("parameters", {}),
     )
 
@@ -326,27 +400,37 @@ def main_table(summary: pd.DataFrame, train: str) -> pd.DataFrame:
     return table.loc[order, list(dict.fromkeys(s["features"]))]
 
 
-def invariance_effects(results: pd.DataFrame, confidence: float = 0.95) -> pd.DataFrame:
-    """What adding one invariance changes: paired accuracy differences over seeds, per condition.
+def invariance_effects(results: pd.DataFrame, replicates: int = BOOTSTRAP, seed: int = 0) -> pd.DataFrame:
+    """What adding one invariance changes: paired accuracy differences, per condition.
 
-    For every feature set F of the study that has an invariance X and whose set without X was also run,
-    ``delta = accuracy(F) − accuracy(F without X)`` on the same seed and test gestures. Columns: train,
-    invariance, features, baseline, factor, level, delta, ci_low, ci_high, costs (the whole interval
-    below 0: the invariance costs accuracy there), helps (the whole interval above 0).
+    For every feature set F of the study that has an invariance X and whose set without X was also run
+    (in the same frame), ``delta = accuracy(F) − accuracy(F without X)`` on the same seeds and test
+    gestures, with a two-level bootstrap interval of the paired difference. Columns: train, invariance,
+    features, baseline, factor, level, delta, ci_low, ci_high, verdict (``better``, ``worse``, ``no
+    difference``), costs (the whole interval below 0: the invariance costs accuracy there), helps.
     """
-    sets = {Invariants.parse(f).name: Invariants.parse(f) for f in dict.fromkeys(results["features"])}
+    names = list(dict.fromkeys(results["features"]))
+    sets = {n: parse_feature_set(n) for n in names}
     keys = ["seed", "train", "factor", "level"]
     rows = []
-    for name, spec in sets.items():
+    for name, (body, spec) in sets.items():
         for x in spec.names:
-            base = Invariants(tuple(n for n in spec.names if n != x)).name
+            base = feature_set_name(body, Invariants(tuple(n for n in spec.names if n != x)))
             if base not in sets:
                 continue
-            a = results[results["features"] == name].set_index(keys)["accuracy"]
-            b = results[results["features"] == base].set_index(keys)["accuracy"]
-            d = (a - b.reindex(a.index)).dropna().reset_index()
-            for (train, factor, level), g in d.groupby(["train", "factor", "level"], sort=False):
-                mean, lo, hi = t_interval(g["accuracy"], confidence)
+            a = results[results["features"] == name].set_index(keys)["outcomes"]
+            b = results[results["features"] == base].set_index(keys)["outcomes"].reindex(a.index)
+            pairs = pd.DataFrame({"a": a, "b": b}).dropna().reset_index()
+            for (train, factor, level), g in pairs.groupby(["train", "factor", "level"], sort=False):
+                rng = np.random.default_rng(np.random.SeedSequence([seed, len(rows)]))
+                stats = [
+                    np.stack([np.ones(len(u)), u, v], axis=1)
+                    for u, v in zip(_outcome_matrix(g["a"]), _outcome_matrix(g["b"]), strict=True)
+                ]
+                sums = two_level_sums(stats, replicates, rng)
+                with np.errstate(invalid="ignore"):  # a replicate that drew no gesture is left out
+                    d = (sums[:, 1] - sums[:, 2]) / sums[:, 0]
+                lo, hi = (float(v[0]) for v in percentile_interval(d[1:, None]))
                 rows.append(
                     {
                         "train": train,
@@ -355,9 +439,10 @@ def invariance_effects(results: pd.DataFrame, confidence: float = 0.95) -> pd.Da
                         "baseline": base,
                         "factor": factor,
                         "level": level,
-                        "delta": mean,
+                        "delta": float(d[0]),
                         "ci_low": lo,
                         "ci_high": hi,
+                        "verdict": verdict(lo, hi, HIGHER_IS_BETTER["accuracy"]),
                         "costs": bool(hi < 0),
                         "helps": bool(lo > 0),
                     }
@@ -366,112 +451,5 @@ def invariance_effects(results: pd.DataFrame, confidence: float = 0.95) -> pd.Da
         pd.DataFrame(rows),
         "correspondence_invariance_effects",
         results.attrs.get("data_source", ""),
-        confidence=confidence,
+        interval=f"{LEVEL:.0%} two-level paired bootstrap ({replicates} replicates)",
     )
-
-
-# ------------------------------------------------------------------ one action, two viewpoints
-
-
-@dataclass
-class ViewRun:
-    """One gesture seen from one viewpoint, through a raw and an invariant recogniser.
-
-    Attributes
-    ----------
-    label : e.g. ``"yaw 0°"``
-    view : how it was seen
-    seconds : time from the first frame, shape (T,)
-    skeleton : the person in the camera frame, metres, shape (T, 15, 3)
-    raw : the hand features as seen, shape (T, 3)
-    aligned : the invariant features of the invariant recogniser, shape (T, 3)
-    actions : the recognisers' actions
-    p_raw, p_aligned : ``p_HMM(A | G_1^t)`` of each recogniser, shape (T, n_actions)
-    """
-
-    label: str
-    view: View
-    seconds: np.ndarray
-    skeleton: np.ndarray
-    raw: np.ndarray
-    aligned: np.ndarray
-    actions: tuple[str, ...]
-    p_raw: np.ndarray
-    p_aligned: np.ndarray
-    parameters: dict[str, object] = field(default_factory=dict)
-
-    def curves(self) -> pd.DataFrame:
-        """Tidy per-frame posteriors: columns view, recogniser, t, seconds, action, p_hmm."""
-        T, A = self.p_raw.shape
-        frames = []
-        for name, p in (("raw", self.p_raw), ("aligned", self.p_aligned)):
-            frames.append(
-                pd.DataFrame(
-                    {
-                        "view": self.label,
-                        "recogniser": name,
-                        "t": np.repeat(np.arange(1, T + 1), A),
-                        "seconds": np.repeat(self.seconds, A),
-                        "action": np.tile(self.actions, T),
-                        "p_hmm": p.ravel(),
-                    }
-                )
-            )
-        return tidy(
-            pd.concat(frames, ignore_index=True),
-            "correspondence_two_views",
-            f"synthetic data: one gesture seen as {self.view.describe()}",
-            **self.parameters,
-        )
-
-
-def two_views_curves(runs: Sequence[ViewRun]) -> pd.DataFrame:
-    """The per-frame posteriors of every view in one tidy frame (:meth:`ViewRun.curves` concatenated)."""
-    frames = [r.curves() for r in runs]
-    out = pd.concat(frames, ignore_index=True)
-    return tidy(
-        out,
-        "correspondence_two_views",
-        "synthetic data: one gesture seen as " + "; ".join(r.view.describe() for r in runs),
-        **frames[0].attrs["parameters"],
-    )
-
-
-def two_views(
-    raw: Recognizer,
-    invariant: Recognizer,
-    action: str = "tap",
-    views: Sequence[View] = (View(yaw_deg=0.0), View(yaw_deg=120.0, mirror=True)),
-    seed: int = 0,
-    noise: float = HUMAN_NOISE,
-) -> list[ViewRun]:
-    """The same synthetic gesture (one seed) seen from each of ``views``, scored frame by frame.
-
-    ``raw`` should be a raw-feature recogniser and ``invariant`` one with invariant features; both stream
-    the gesture (:meth:`Recognizer.stream`), so the posteriors are what the robot would see online.
-    No spikes or dropouts, so every view has the same frames.
-    """
-    out = []
-    for view in views:
-        rng = np.random.default_rng(np.random.SeedSequence([seed, 17]))
-        g = synthesize_gesture(action, rng, noise=noise, spike_rate=0.0, dropout_rate=0.0, view=view)
-        traj = repair(g.trajectory(), SYNTHETIC_POLICY).pieces[0]
-        X = traj.xyz
-        p_raw = raw.stream().extend(X)[1]
-        p_inv = invariant.stream().extend(X)[1]
-        label = f"yaw {view.yaw_deg or 0:g}°" + (", mirrored" if view.mirror else "")
-        out.append(
-            ViewRun(
-                label,
-                view,
-                traj.t - traj.t[0],
-                g.skeleton,
-                X,
-                invariant.transform(X),
-                raw.actions,
-                p_raw,
-                p_inv[:, [invariant.actions.index(a) for a in raw.actions]],
-                {"action": action, "seed": seed, "noise_m": noise, "features": invariant.features.name},
-            )
-        )
-    return out

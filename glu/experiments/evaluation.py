@@ -1,10 +1,12 @@
 """Every fusion strategy measured on simulated episodes: what each episode contributes to each metric.
 
 For each episode of a chunk (:mod:`glu.experiments.corpus`) and each observed fraction ``f`` of its
-gesture, the gesture HMMs give ``p_HMM(A | G_1^t)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass,
-:class:`~glu.hmm._engine.batch.BatchScorer`; from the likelihoods as the originals, or per frame — the
-condition's ``posterior``, :data:`~glu.experiments.corpus.POSTERIORS`), and each strategy predicts three
-things:
+gesture, the gesture HMMs of the episode's recogniser seed (a :class:`Replication`) give ``log L(G_1^t |
+A)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass, :class:`~glu.hmm._engine.batch.BatchScorer`). Each
+:class:`Reading` turns them into ``p_HMM`` (as the originals, per frame, or calibrated:
+:mod:`glu.gestures.calibration`) and infers with one network: the one the episodes were drawn from
+(``generating``), or one glu learned from a simulated experiment table (``learned``). Under each reading
+each strategy predicts three things:
 
 ``action``
     p(Action) once the robot has seen the object and the effect (``action_evidence``, by default Color,
@@ -23,10 +25,13 @@ things:
     its verb name the action, its object words the object, its effect phrase the motion
     (:func:`glu.language.batch.agreement`)? Strategies as for the effect.
 
+The network alone and the true action (an oracle: the best any recogniser could do) stand beside the
+fusion rules for the effect and the description; for the action the oracle is right by definition.
 Each prediction contributes per-episode statistics — correct (top choice right), log-loss
-``−ln max(p_true, LOG_FLOOR)``, Brier ``Σ_k (p_k − y_k)²``, and for the effect the top-label calibration
-bins (count, confidence, correct) — which :mod:`glu.experiments.intervals` sums with bootstrap weights.
-The network is queried once per distinct evidence (:func:`network_tables`), never per episode.
+``−ln max(p_true, LOG_FLOOR)``, Brier ``Σ_k (p_k − y_k)²``, and at the full gesture the top-label
+calibration bins (count, confidence, correct) of the action and the effect — which
+:mod:`glu.experiments.intervals` sums with two-level bootstrap weights (seeds, then episodes). Each network
+is queried once per distinct evidence (:func:`network_tables`), never per episode.
 """
 
 from __future__ import annotations
@@ -34,16 +39,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from itertools import product
-from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
 
 from glu.bn.inference import InferenceEngine
-from glu.errors import DataError, ImpossibleEvidenceError, ModelError
+from glu.errors import DataError, ModelError
 from glu.experiments.corpus import (
-    POSTERIORS,
     VIEWPOINTS,
     Chunk,
     Condition,
@@ -51,10 +53,12 @@ from glu.experiments.corpus import (
     Scenario,
     simulate_chunk,
 )
-from glu.experiments.intervals import BOOT_KEY, accumulate, poisson_weights
+from glu.experiments.intervals import BOOT_KEY, SEEDS_KEY, accumulate, poisson_weights, seed_counts
+from glu.experiments.network_tables import EFFECT, NetworkTables, network_tables
 from glu.fusion import STRATEGIES, fuse_action_tables, fuse_tables
+from glu.gestures.calibration import READINGS, Calibration, p_hmm_reading
 from glu.gestures.synthetic import View
-from glu.hmm import BatchScorer, p_hmm_from_loglik
+from glu.hmm import BatchScorer
 from glu.language.batch import ASPECTS, agreement, best_sentences
 from glu.schema import ACTIONS, AFFORDANCE_NODES
 
@@ -71,7 +75,6 @@ APPLICABLE: dict[str, tuple[str, ...]] = {
 infers only the action, and for effects it equals virtual evidence)."""
 GESTURE_FREE: tuple[str, ...] = ("network", "true_action")
 """Strategies that ignore the gesture (their predictions are the same at every fraction)."""
-EFFECT = "ObjVel"
 DESCRIBED: tuple[str, ...] = ("Action", "Color", "Shape", "Size", "ObjVel")
 """The nodes a description is checked against."""
 LOG_FLOOR = 1e-6
@@ -128,6 +131,11 @@ class EvaluationSettings:
         if not (isinstance(self.log_floor, float) and 0 < self.log_floor < 1):
             raise DataError(f"log_floor={self.log_floor!r}: a number in (0, 1)")
 
+    @property
+    def full_index(self) -> int:
+        """The index of the largest observed fraction (where the calibration bins are kept)."""
+        return int(np.argmax(self.fractions))
+
     def strategies_for(self, target: str) -> tuple[str, ...]:
         """The chosen strategies that predict ``target``, in :data:`EVAL_STRATEGIES` order."""
         return tuple(s for s in EVAL_STRATEGIES if s in self.strategies and s in APPLICABLE[target])
@@ -137,10 +145,11 @@ def statistic_columns(settings: EvaluationSettings) -> pd.DataFrame:
     """The per-episode statistics a chunk sums, one row per column of its statistics matrix.
 
     Columns: target, strategy, fraction, stat (``correct``, ``log_loss``, ``brier``; ``bin_n``,
-    ``bin_confidence``, ``bin_correct`` with ``bin`` ≥ 0 for the effect; the aspects of
-    :data:`glu.language.batch.ASPECTS` and ``all`` for descriptions), bin (−1 if none). Row 0 is the
-    episode count (target ``episodes``).
+    ``bin_confidence``, ``bin_correct`` with ``bin`` ≥ 0 for the action and the effect, at the largest
+    observed fraction only; the aspects of :data:`glu.language.batch.ASPECTS` and ``all`` for
+    descriptions), bin (−1 if none). Row 0 is the episode count (target ``episodes``).
     """
+    full = max(settings.fractions)
     rows: list[tuple[str, str, float, str, int]] = [("episodes", "", math.nan, "n", -1)]
     for target in TARGETS:
         for s in settings.strategies_for(target):
@@ -149,7 +158,7 @@ def statistic_columns(settings: EvaluationSettings) -> pd.DataFrame:
                     rows += [(target, s, f, a, -1) for a in (*ASPECTS, "all")]
                     continue
                 rows += [(target, s, f, st, -1) for st in PREDICTION_STATS]
-                if target == "effect":
+                if f == full:
                     rows += [
                         (target, s, f, st, b)
                         for b in range(settings.bins)
@@ -158,54 +167,76 @@ def statistic_columns(settings: EvaluationSettings) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["target", "strategy", "fraction", "stat", "bin"])
 
 
-class NetworkTables(NamedTuple):
-    """The network's answers for every combination of observed values (queried once, used per episode).
+@dataclass(frozen=True)
+class Reading:
+    """How the robot reads one episode: the network it infers with, and how it reads p_HMM.
 
     Attributes
     ----------
-    nodes : the observed nodes, in order; an episode's combination is ``ravel_multi_index`` of its codes
-    p_action : array, shape (C, K) — ``p_BN(A | X_obs)``
-    p_given_action : array, shape (C, K, V) — ``p_BN(X | X_obs, A = a)`` of the target(s) (NaN rows for
-        combinations of probability 0)
+    inference_network : ``"generating"`` (the network the episodes are drawn from) or ``"learned"`` (learned
+        by glu from an independent simulated experiment table, :data:`INFERENCE_NETWORKS`)
+    learn_experiments : rows of that table (0 for the generating network)
+    p_hmm : a name of :data:`glu.gestures.calibration.READINGS`
     """
 
-    nodes: tuple[str, ...]
-    p_action: np.ndarray
-    p_given_action: np.ndarray
+    inference_network: str = "generating"
+    learn_experiments: int = 0
+    p_hmm: str = "likelihood"
 
-    def combo(self, codes: Mapping[str, np.ndarray], shape: Sequence[int]) -> np.ndarray:
-        """The combination index of each episode, shape (n,)."""
-        if not self.nodes:
-            return np.zeros(len(next(iter(codes.values()))), dtype=np.intp)
-        return np.ravel_multi_index(tuple(codes[n] for n in self.nodes), tuple(shape))
+    def __post_init__(self) -> None:
+        if self.inference_network not in INFERENCE_NETWORKS:
+            raise DataError(
+                f"unknown inference network {self.inference_network!r}; allowed: {', '.join(INFERENCE_NETWORKS)}"
+            )
+        if self.p_hmm not in READINGS:
+            raise DataError(f"unknown reading of p_HMM {self.p_hmm!r}; allowed: {', '.join(READINGS)}")
+        learned = self.inference_network == "learned"
+        if learned != (self.learn_experiments > 0):
+            raise DataError("learn_experiments: a positive number of rows for a learned network, 0 otherwise")
+
+    @property
+    def network(self) -> str:
+        """The network's label: ``generating`` or ``learned-N``."""
+        return "generating" if self.inference_network == "generating" else f"learned-{self.learn_experiments}"
 
 
-def network_tables(engine: InferenceEngine, nodes: Sequence[str], target: str) -> NetworkTables:
-    """:class:`NetworkTables` for observed ``nodes``; ``target`` is a node (e.g. ObjVel) or ``"words"``."""
-    schema = engine.bn.schema
-    values = [schema.values_of(n) for n in nodes]
-    actions = schema.values_of("Action")
-    n_out = len(engine.binary_leaves) if target == "words" else schema.cardinality(target)
-    combos = list(product(*values))
-    p_a = np.full((len(combos), len(actions)), np.nan)
-    p_x = np.full((len(combos), len(actions), n_out), np.nan)
-    for c, vals in enumerate(combos):
-        ev = dict(zip(nodes, vals, strict=True))
-        try:
-            p_a[c] = engine.query(["Action"], ev)["Action"]
-        except ImpossibleEvidenceError:
-            continue
-        for k, a in enumerate(actions):
-            full = {**ev, "Action": a}
-            try:
-                p_x[c, k] = (
-                    engine.word_probability_array(full)
-                    if target == "words"
-                    else engine.query([target], full)[target]
-                )
-            except ImpossibleEvidenceError:
-                p_x[c, k] = 0.0  # this action is impossible here: p_a is 0 for it, so the row is never used
-    return NetworkTables(tuple(nodes), p_a, p_x)
+INFERENCE_NETWORKS: dict[str, str] = {
+    "generating": "the network the episodes are drawn from (a correct model of the world)",
+    "learned": "learned by K2 + BIC from learn_experiments rows drawn from that network (limited experience)",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Replication:
+    """One recogniser seed's robot: its recogniser, the calibration of its p_HMM, the networks it infers with.
+
+    Attributes
+    ----------
+    scorer : the gesture recogniser as a :class:`~glu.hmm._engine.batch.BatchScorer` (models in the order of
+        :data:`glu.schema.ACTIONS`)
+    calibration : the calibrated reading's β per observed fraction (None: no ``calibrated`` reading)
+    tables : network label (:attr:`Reading.network`) → target → :class:`NetworkTables`
+    """
+
+    scorer: BatchScorer
+    calibration: Calibration | None
+    tables: Mapping[str, Mapping[str, NetworkTables]]
+
+    def __post_init__(self) -> None:
+        names = tuple(m.name for m in self.scorer.models)
+        if names != ACTIONS:
+            raise ModelError(
+                f"the recogniser's models must be {', '.join(ACTIONS)} in this order, not {names}"
+            )
+
+
+def target_tables(engine: InferenceEngine, settings: EvaluationSettings) -> dict[str, NetworkTables]:
+    """The :class:`NetworkTables` of each target for one network (queried once per network)."""
+    return {
+        "action": network_tables(engine, settings.action_evidence, EFFECT),
+        "effect": network_tables(engine, settings.effect_evidence, EFFECT),
+        "description": network_tables(engine, settings.description_evidence, "words"),
+    }
 
 
 @dataclass(frozen=True, eq=False)
@@ -214,44 +245,45 @@ class Evaluator:
 
     Attributes
     ----------
-    engine : the Affordance–Words network (the world the episodes are drawn from, and the robot's model)
-    scorer : the gesture recogniser, as a :class:`~glu.hmm._engine.batch.BatchScorer` (models in the order
-        of :data:`glu.schema.ACTIONS`)
+    world : the Affordance–Words network the episodes are drawn from
+    replications : one :class:`Replication` per recogniser seed; each has its own episodes
+    readings : how each episode is read (network × p_HMM); every chunk is scored under each
     settings : what is measured
     seed, chunk_size : the corpus's seed and chunk size
     scenario, gestures, views : the corpus's settings (:func:`~glu.experiments.corpus.simulate_chunk`)
     """
 
-    engine: InferenceEngine
-    scorer: BatchScorer
+    world: InferenceEngine
+    replications: tuple[Replication, ...]
+    readings: tuple[Reading, ...] = (Reading(),)
     settings: EvaluationSettings = EvaluationSettings()
     seed: int = 0
     chunk_size: int = 2000
     scenario: Scenario = Scenario()
     gestures: GestureSettings = GestureSettings()
     views: Mapping[str, View] = field(default_factory=lambda: dict(VIEWPOINTS))
-    tables: dict[str, NetworkTables] = field(init=False, repr=False)
     columns: pd.DataFrame = field(init=False, repr=False)
+    counts: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        names = tuple(m.name for m in self.scorer.models)
-        if names != ACTIONS:
-            raise ModelError(
-                f"the recogniser's models must be {', '.join(ACTIONS)} in this order, not {names}"
-            )
-        s = self.settings
-        tables = {
-            "action": network_tables(self.engine, s.action_evidence, EFFECT),
-            "effect": network_tables(self.engine, s.effect_evidence, EFFECT),
-            "description": network_tables(self.engine, s.description_evidence, "words"),
-        }
-        object.__setattr__(self, "tables", tables)
-        object.__setattr__(self, "columns", statistic_columns(s))
+        if not self.replications:
+            raise DataError("an evaluation needs at least one recogniser (replication)")
+        if not self.readings or len(set(self.readings)) != len(self.readings):
+            raise DataError("an evaluation needs distinct readings (network × p_HMM), at least one")
+        for r in self.readings:
+            missing = [k for k, rep in enumerate(self.replications) if r.network not in rep.tables]
+            if missing:
+                raise DataError(f"replication {missing[0]} has no {r.network} network")
+            if r.p_hmm == "calibrated" and any(rep.calibration is None for rep in self.replications):
+                raise DataError("the calibrated reading of p_HMM needs every replication's calibration")
+        object.__setattr__(self, "columns", statistic_columns(self.settings))
+        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(SEEDS_KEY,)))
+        object.__setattr__(self, "counts", seed_counts(len(self.replications), self.settings.bootstrap, rng))
 
-    def simulate(self, condition: Condition, chunk: int, n: int) -> Chunk:
-        """The episodes of one chunk (:func:`~glu.experiments.corpus.simulate_chunk`)."""
+    def simulate(self, condition: Condition, chunk: int, n: int, replication: int = 0) -> Chunk:
+        """The episodes of one chunk of one replication (:func:`~glu.experiments.corpus.simulate_chunk`)."""
         return simulate_chunk(
-            self.engine,
+            self.world,
             condition,
             self.seed,
             chunk,
@@ -260,83 +292,146 @@ class Evaluator:
             self.scenario,
             self.gestures,
             self.views,
+            replication,
         )
 
-    def run_chunk(self, condition: Condition, chunk: int, n: int) -> np.ndarray:
-        """Simulate and score one chunk: its statistics summed with bootstrap weights, shape (B + 1, K).
+    def weights(self, replication: int, chunk: int, n: int) -> np.ndarray:
+        """The two-level bootstrap weights of a chunk's episodes, shape (n, B + 1)
+        (:func:`~glu.experiments.intervals.poisson_weights` with this replication's seed counts)."""
+        key = (BOOT_KEY, replication, chunk)
+        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=key))
+        return poisson_weights(n, self.settings.bootstrap, rng, self.counts[:, replication])
 
-        Row 0 holds the plain sums (every weight 1), rows 1… the bootstrap replicates; column k is
-        ``self.columns`` row k. The weights depend on (seed, chunk) only, so every condition and strategy
-        is resampled on the same episodes (paired).
+    def run_chunk(self, condition: Condition, replication: int, chunk: int, n: int) -> np.ndarray:
+        """Simulate and score one chunk of one replication under every reading: shape (R, B + 1, K).
+
+        ``[r, 0]`` holds the plain sums of reading r (every weight 1), ``[r, 1:]`` the bootstrap
+        replicates; column k is ``self.columns`` row k. The weights depend on (seed, replication, chunk)
+        only, so every reading and strategy is resampled on the same episodes (paired).
         """
-        return self.run_chunks([condition], chunk, n)[0]
+        episodes = self.simulate(condition, chunk, n, replication)
+        weights = self.weights(replication, chunk, n)
+        blocks = [b for reading in self.episode_statistics(episodes, replication) for b in reading]
+        sums = accumulate([np.concatenate(blocks, axis=1)], weights)  # one product for every reading
+        return sums.reshape(len(sums), len(self.readings), -1).transpose(1, 0, 2)
 
-    def run_chunks(self, conditions: Sequence[Condition], chunk: int, n: int) -> list[np.ndarray]:
-        """:meth:`run_chunk` for conditions that differ only in their posterior: one simulation for all."""
-        if len({(c.noise, c.viewpoint) for c in conditions}) != 1:
-            raise DataError("run_chunks: the conditions must share their noise and viewpoint")
-        episodes = self.simulate(conditions[0], chunk, n)
-        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(BOOT_KEY, chunk)))
-        weights = poisson_weights(n, self.settings.bootstrap, rng)
-        return [accumulate(self.episode_statistics(episodes, c.posterior), weights) for c in conditions]
-
-    def p_hmm(self, features: Sequence[np.ndarray], posterior: str = "likelihood") -> np.ndarray:
-        """``p_HMM(A | G_1^t)`` at every observed fraction, shape (n, F, K) (``posterior``: :data:`POSTERIORS`)."""
+    def loglik(self, features: Sequence[np.ndarray], replication: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """``log L(G_1^t | A)`` at every observed fraction, shape (n, F, K), and t, shape (n, F)."""
         lengths = np.array([len(x) for x in features])
         f = np.asarray(self.settings.fractions)
         ends = np.maximum(np.ceil(np.round(f[None, :] * lengths[:, None], 9)).astype(int), 1)
-        loglik = self.scorer.loglik_at(features, ends)
-        if posterior == "per_frame":
-            loglik = loglik / ends[:, :, None]
-        elif posterior != "likelihood":
-            raise DataError(f"unknown posterior {posterior!r}; allowed: {', '.join(POSTERIORS)}")
-        q = p_hmm_from_loglik(loglik)
-        bad = ~np.isfinite(q).all(axis=-1)
-        q[bad] = 1.0 / q.shape[-1]  # every model finds the prefix impossible: no information
-        return q
+        return self.replications[replication].scorer.loglik_at(features, ends), ends
 
-    def episode_statistics(self, episodes: Chunk, posterior: str = "likelihood") -> list[np.ndarray]:
-        """Per-episode statistics, blocks of columns in the order of ``self.columns`` (each shape (n, k))."""
+    def p_hmm(
+        self, features: Sequence[np.ndarray], reading: str = "likelihood", replication: int = 0
+    ) -> np.ndarray:
+        """``p_HMM(A | G_1^t)`` at every observed fraction, shape (n, F, K)."""
+        loglik, ends = self.loglik(features, replication)
+        return self._read(loglik, ends, reading, replication)
+
+    def _read(self, loglik: np.ndarray, ends: np.ndarray, reading: str, replication: int) -> np.ndarray:
+        cal = self.replications[replication].calibration
+        beta = None
+        if reading == "calibrated":
+            beta = np.broadcast_to(
+                np.array([cal.at(f) for f in self.settings.fractions])[None, :], ends.shape
+            )
+        return p_hmm_reading(loglik, ends, reading, beta)
+
+    def episode_statistics(self, episodes: Chunk, replication: int = 0) -> list[list[np.ndarray]]:
+        """Per-episode statistics for each reading: blocks of columns in the order of ``self.columns``
+        (each shape (n, k)), one list of blocks per reading of ``self.readings``.
+
+        Every description of the chunk (all readings, strategies and fractions) is found in one call of
+        :func:`~glu.language.batch.best_sentences`, whose cost is mostly per call, not per row.
+        """
+        loglik, ends = self.loglik(episodes.features, replication)
+        rep = self.replications[replication]
+        cache: dict[tuple, np.ndarray] = {}  # blocks, and what the readings of one network share
+        out, jobs, todo = [], [], {}
+        for i, r in enumerate(self.readings):
+            q = self._read(loglik, ends, r.p_hmm, replication)
+            blocks, keys = self._statistics(episodes, q, rep.tables[r.network], r.network, i, cache, todo)
+            out.append(blocks)
+            jobs.append(keys)
+        if todo:  # description probabilities to decode, by key, in order of first use
+            n = len(episodes.features)
+            best = best_sentences(
+                np.concatenate([p.reshape(-1, p.shape[-1]) for p in todo.values()]),
+                list(self.world.binary_leaves),
+            )
+            values = {node: self.world.bn.schema.values_of(node) for node in DESCRIBED}
+            reps = np.array([p.shape[0] * p.shape[1] // n for p in todo.values()])
+            truth = {k: np.concatenate([np.repeat(episodes.codes[k], f) for f in reps]) for k in DESCRIBED}
+            ok = agreement(best, truth, values)
+            ok = np.stack([ok[a] for a in (*ASPECTS, "all")], axis=1)  # (rows, aspects)
+            F = len(self.settings.fractions)
+            at = 0
+            for k, f in zip(todo, reps, strict=True):
+                block = ok[at : at + n * f].reshape(n, f, -1)
+                cache[k] = np.broadcast_to(block, (n, F, block.shape[2])).reshape(n, -1)
+                at += n * f
+            for blocks, keys in zip(out, jobs, strict=True):
+                blocks += [cache[k] for k in keys]
+        return out
+
+    def _statistics(
+        self,
+        episodes: Chunk,
+        q: np.ndarray,
+        tables: Mapping[str, NetworkTables],
+        network: str,
+        reading: int,
+        cache: dict[tuple, np.ndarray],
+        todo: dict[tuple, np.ndarray],
+    ) -> tuple[list[np.ndarray], list[tuple]]:
+        """The action and effect blocks of one reading, and the keys of its description blocks, whose word
+        probabilities (shape (n, f, W)) go to ``todo`` to be decoded together. Keys are shared by the
+        readings of one network for the gesture-free strategies and for the hard decision, which depends
+        on p_HMM only through its top action (the same under every reading unless the calibrated one is
+        flat); the others carry the reading's index."""
         s, codes = self.settings, episodes.codes
-        shape = {n: self.engine.shape[self.engine.axis[n]] for n in AFFORDANCE_NODES}
-        q = self.p_hmm(episodes.features, posterior)  # (n, F, K)
+        shape = {n: self.world.shape[self.world.axis[n]] for n in AFFORDANCE_NODES}
         n, F, K = q.shape
         action = codes["Action"]
+        top = np.argmax(q, axis=-1).tobytes()
+
+        def key(target: str, strat: str) -> tuple:
+            shared = strat in GESTURE_FREE or strat == "hard"
+            return (network, target, strat, top if strat == "hard" else b"", -1 if shared else reading)
+
         blocks = [np.ones((n, 1))]
-        # action
-        t = self.tables["action"]
+        t = tables["action"]
         p_a = t.p_action[t.combo(codes, [shape[x] for x in t.nodes])]  # (n, K)
         for strat in s.strategies_for("action"):
-            if strat == "gesture":
-                p = q
-            elif strat == "network":
-                p = np.broadcast_to(p_a[:, None, :], q.shape)
-            else:
-                p = fuse_action_tables(p_a[:, None, :], q, strat)
-            blocks.append(_prediction_stats(p, action, s))
-        # effect
-        t = self.tables["effect"]
+            if key("action", strat) not in cache:
+                if strat == "gesture":
+                    p = q
+                elif strat == "network":
+                    p = np.broadcast_to(p_a[:, None, :], q.shape)
+                else:
+                    p = fuse_action_tables(p_a[:, None, :], q, strat)
+                cache[key("action", strat)] = _prediction_stats(p, action, s, s.bins)
+            blocks.append(cache[key("action", strat)])
+        t = tables["effect"]
         c = t.combo(codes, [shape[x] for x in t.nodes])
         p_a, p_x = t.p_action[c], t.p_given_action[c]  # (n, K), (n, K, V)
-        truth = codes[EFFECT]
         for strat in s.strategies_for("effect"):
-            p = self._fused(strat, p_a, p_x, q, action)
-            blocks.append(_prediction_stats(p, truth, s, bins=s.bins))
-        # descriptions
-        t = self.tables["description"]
+            if key("effect", strat) not in cache:
+                p = self._fused(strat, p_a, p_x, q, action)
+                cache[key("effect", strat)] = _prediction_stats(p, codes[EFFECT], s, s.bins)
+            blocks.append(cache[key("effect", strat)])
+        t = tables["description"]
         c = t.combo(codes, [shape[x] for x in t.nodes])
         p_a, p_w = t.p_action[c], t.p_given_action[c]
-        words = list(self.engine.binary_leaves)
-        values = {node: self.engine.bn.schema.values_of(node) for node in DESCRIBED}
-        truth_codes = {node: codes[node] for node in DESCRIBED}
+        keys = []
         for strat in s.strategies_for("description"):
-            probs = self._fused(strat, p_a, p_w, q, action)  # (n, F, W)
-            f = 1 if strat in GESTURE_FREE else F  # the same sentence at every fraction
-            best = best_sentences(probs[:, :f].reshape(n * f, -1), words)
-            ok = agreement(best, {k: np.repeat(v, f) for k, v in truth_codes.items()}, values)
-            ok = np.stack([ok[a].reshape(n, f) for a in (*ASPECTS, "all")], axis=2)
-            blocks.append(np.broadcast_to(ok, (n, F, ok.shape[2])).reshape(n, -1))
-        return blocks
+            k = key("description", strat)
+            if k not in todo:
+                f = 1 if strat in GESTURE_FREE else F  # the same sentence at every fraction
+                todo[k] = self._fused(strat, p_a, p_w, q, action)[:, :f]
+            keys.append(k)
+        return blocks, keys
 
     def _fused(
         self, strat: str, p_a: np.ndarray, p_x: np.ndarray, q: np.ndarray, action: np.ndarray
@@ -361,7 +456,8 @@ def _uniform_if_undefined(p: np.ndarray) -> np.ndarray:
 
 
 def _prediction_stats(p: np.ndarray, truth: np.ndarray, s: EvaluationSettings, bins: int = 0) -> np.ndarray:
-    """correct, log-loss, Brier (and calibration bins) per episode and fraction, shape (n, F · k)."""
+    """correct, log-loss, Brier per episode and fraction (and calibration bins at the full fraction),
+    shape (n, F · 3 + 3 · bins), in the order of :func:`statistic_columns`."""
     n, F, V = p.shape
     p = _uniform_if_undefined(p)
     y = np.broadcast_to(truth[:, None], (n, F))
@@ -370,39 +466,19 @@ def _prediction_stats(p: np.ndarray, truth: np.ndarray, s: EvaluationSettings, b
     correct = (top == y).astype(float)
     log_loss = -np.log(np.maximum(p_true, s.log_floor))
     brier = (p**2).sum(axis=-1) - 2 * p_true + 1.0
-    cols = [correct, log_loss, brier]
-    if bins:
-        conf = np.take_along_axis(p, top[..., None], axis=-1)[..., 0]
-        b = np.minimum((conf * bins).astype(int), bins - 1)
-        onehot = b[..., None] == np.arange(bins)  # (n, F, bins)
-        per_bin = np.stack([onehot, onehot * conf[..., None], onehot * correct[..., None]], axis=-1)
-        return np.concatenate(
-            [np.stack(cols, axis=-1), per_bin.reshape(n, F, bins * 3).astype(float)], axis=-1
-        ).reshape(n, -1)
-    return np.stack(cols, axis=-1).reshape(n, -1)
-
-
-def describe_settings(evaluator: Evaluator) -> dict[str, Any]:
-    """The settings of an evaluator as plain data (for result files)."""
-    s = evaluator.settings
-    return {
-        "fractions": list(s.fractions),
-        "strategies": list(s.strategies),
-        "action_evidence": list(s.action_evidence),
-        "effect_evidence": list(s.effect_evidence),
-        "description_evidence": list(s.description_evidence),
-        "bins": s.bins,
-        "bootstrap": s.bootstrap,
-        "log_floor": s.log_floor,
-        "seed": evaluator.seed,
-        "chunk_size": evaluator.chunk_size,
-        "scenario": evaluator.scenario.as_dict(),
-        "gestures": {
-            "spike_rate": evaluator.gestures.spike_rate,
-            "dropout_rate": evaluator.gestures.dropout_rate,
-        },
-        "views": {
-            k: {"yaw_deg": v.yaw_deg, "mirror": v.mirror, "posture": v.posture, "size": v.size}
-            for k, v in evaluator.views.items()
-        },
-    }
+    stats = np.stack([correct, log_loss, brier], axis=-1)  # (n, F, 3)
+    if not bins:
+        return stats.reshape(n, -1)
+    j = s.full_index
+    conf = np.take_along_axis(p[:, j], top[:, j, None], axis=-1)[:, 0]
+    b = np.minimum((conf * bins).astype(int), bins - 1)
+    onehot = b[:, None] == np.arange(bins)  # (n, bins)
+    per_bin = np.stack([onehot, onehot * conf[:, None], onehot * correct[:, j, None]], axis=-1)
+    return np.concatenate(
+        [
+            stats[:, : j + 1].reshape(n, -1),
+            per_bin.reshape(n, -1).astype(float),
+            stats[:, j + 1 :].reshape(n, -1),
+        ],
+        axis=1,
+    )

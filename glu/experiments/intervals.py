@@ -1,4 +1,4 @@
-"""Bootstrap intervals that stream: sums with Poisson weights, merged across chunks, turned into metrics.
+"""Bootstrap intervals that stream, at two levels: over recogniser seeds, and over episodes within each.
 
 A corpus of a million episodes cannot be resampled as a whole, so glu uses the **Poisson bootstrap**
 (Hanley & MacGibbon 2006; Chamandy et al. 2012, "Estimating uncertainty for massive data streams"): each
@@ -12,15 +12,28 @@ estimate is from ``S_0``:
 * the expected calibration error (top label, equal-width bins) is ``Σ_bins |S_b[correct_bin] −
   S_b[confidence_bin]| / S_b[n]``.
 
+**Two levels.** When the result depends on a trained recogniser, its training seed is a source of
+variation of its own (one recogniser can be luckier than another on every episode). The experiment is
+then replicated with K recognisers (seeds), each on its own episodes, and the bootstrap resamples both
+levels: replicate b draws K seeds with replacement (multinomial counts ``c_{b,k}``, :func:`seed_counts`),
+and for each copy of a seed, its episodes with Poisson(1) weights. An episode of seed k then weighs the
+sum of ``c_{b,k}`` independent Poisson(1) numbers, i.e. ``w ~ Poisson(c_{b,k})`` (:func:`poisson_weights`
+with ``counts``): the two-level resample in one weight per episode, still summable chunk by chunk. With
+one seed ``c_{b,1} = 1`` and this is the one-level bootstrap. The estimate pools every seed's episodes
+(row 0: every weight 1). :func:`two_level_sums` does the same for statistics held in memory (the
+correspondence study: seeds × test gestures).
+
 The 95 % interval is the 2.5th to 97.5th percentile of the replicates (percentile bootstrap). The ECE is
 biased upwards by sampling noise, its replicates more so: for a well-calibrated predictor the interval can
 sit mostly above the estimate. Because the
-weights belong to episodes (the same for every strategy, fraction and condition of an episode), the
+weights belong to episodes (the same for every strategy, fraction and reading of an episode), the
 difference of two strategies is resampled *paired*: :func:`paired_differences` takes the percentiles of
-the replicates' differences.
+the replicates' differences, and a difference whose interval contains 0 is reported as no difference
+(:func:`verdict`).
 
 :func:`metrics`, :func:`paired_differences` and :func:`reliability` turn merged sums (one row per
-condition and replicate) into tidy tables.
+condition and replicate) into tidy tables. :func:`clopper_pearson` gives the exact interval of a single
+proportion (k of n), for the few real segments.
 """
 
 from __future__ import annotations
@@ -36,6 +49,8 @@ from glu.errors import DataError
 
 BOOT_KEY = 2
 """Spawn key of a chunk's bootstrap weights."""
+SEEDS_KEY = 3
+"""Spawn key of the seed-level counts of a two-level bootstrap."""
 LEVEL = 0.95
 """Interval coverage."""
 MEAN_METRICS: dict[str, str] = {"correct": "accuracy", "log_loss": "log_loss", "brier": "brier"}
@@ -52,12 +67,90 @@ HIGHER_IS_BETTER: dict[str, bool] = {
 }
 
 
-def poisson_weights(n: int, replicates: int, rng: np.random.Generator) -> np.ndarray:
-    """Bootstrap weights of ``n`` episodes, shape (n, replicates + 1): column 0 all ones, then Poisson(1)."""
+def seed_counts(n_seeds: int, replicates: int, rng: np.random.Generator) -> np.ndarray:
+    """How often each of ``n_seeds`` seeds is drawn in each replicate, shape (replicates + 1, n_seeds).
+
+    Row 0 is all ones (the estimate uses every seed once); rows 1 … are multinomial(n_seeds, uniform): a
+    resample of the seeds with replacement.
+    """
+    if n_seeds < 1:
+        raise DataError(f"a bootstrap over seeds needs at least one seed, not {n_seeds}")
+    out = np.ones((replicates + 1, n_seeds), dtype=np.int64)
+    if replicates:
+        out[1:] = rng.multinomial(n_seeds, np.full(n_seeds, 1.0 / n_seeds), size=replicates)
+    return out
+
+
+def poisson_weights(
+    n: int, replicates: int, rng: np.random.Generator, counts: np.ndarray | None = None
+) -> np.ndarray:
+    """Bootstrap weights of ``n`` episodes, shape (n, replicates + 1): column 0 all ones, then Poisson.
+
+    Parameters
+    ----------
+    n, replicates : episodes and bootstrap replicates
+    rng : the generator of the weights
+    counts : array, shape (replicates + 1,) — for a two-level bootstrap, how often the episodes' seed is
+        drawn in each replicate (a column of :func:`seed_counts`); replicate b's weights are then
+        Poisson(``counts[b]``). Default: all ones (one level, Poisson(1)).
+    """
     w = np.empty((n, replicates + 1))
     w[:, 0] = 1.0
-    w[:, 1:] = rng.poisson(1.0, size=(n, replicates))
+    if counts is None:
+        w[:, 1:] = rng.poisson(1.0, size=(n, replicates))
+    else:
+        counts = np.asarray(counts, dtype=float)
+        if counts.shape != (replicates + 1,):
+            raise DataError(f"counts of shape {counts.shape}; expected ({replicates + 1},)")
+        w[:, 1:] = rng.poisson(counts[1:], size=(n, replicates))
     return w
+
+
+def two_level_sums(stats: Sequence[np.ndarray], replicates: int, rng: np.random.Generator) -> np.ndarray:
+    """Two-level bootstrap sums of per-item statistics held in memory, shape (replicates + 1, S).
+
+    Parameters
+    ----------
+    stats : one array per seed, shape (n_k, S) — the statistics of each of its items (test gestures,
+        episodes); column 0 is usually 1 (the count)
+    replicates : bootstrap replicates
+    rng : the generator (the seed counts first, then each seed's weights in turn)
+
+    Row 0 is the plain sum over every seed and item; row b weighs seed k's items by
+    Poisson(``c_{b,k}``) (see the module docstring).
+    """
+    counts = seed_counts(len(stats), replicates, rng)
+    width = {np.asarray(x).shape[1] for x in stats}
+    if len(width) != 1:
+        raise DataError("two_level_sums: every seed needs the same statistics (columns)")
+    total = np.zeros((replicates + 1, width.pop()))
+    for k, x in enumerate(stats):
+        x = np.asarray(x, dtype=float)
+        total += poisson_weights(len(x), replicates, rng, counts[:, k]).T @ x
+    return total
+
+
+def clopper_pearson(k: int, n: int, level: float = LEVEL) -> tuple[float, float]:
+    """The exact (Clopper–Pearson) two-sided interval of a proportion of ``k`` successes in ``n`` trials."""
+    from scipy import stats
+
+    if not (0 <= k <= n) or n < 1:
+        raise DataError(f"clopper_pearson: need 0 ≤ k ≤ n and n ≥ 1, not k={k}, n={n}")
+    a = (1 - level) / 2
+    lo = 0.0 if k == 0 else float(stats.beta.ppf(a, k, n - k + 1))
+    hi = 1.0 if k == n else float(stats.beta.ppf(1 - a, k + 1, n - k))
+    return lo, hi
+
+
+def verdict(low: float, high: float, higher_is_better: bool = True) -> str:
+    """``"better"``, ``"worse"`` or ``"no difference"`` for the interval of a difference (A − B)."""
+    if not (np.isfinite(low) and np.isfinite(high)):
+        return "no difference"
+    if low > 0:
+        return "better" if higher_is_better else "worse"
+    if high < 0:
+        return "worse" if higher_is_better else "better"
+    return "no difference"
 
 
 def accumulate(blocks: Sequence[np.ndarray], weights: np.ndarray) -> np.ndarray:
@@ -65,7 +158,7 @@ def accumulate(blocks: Sequence[np.ndarray], weights: np.ndarray) -> np.ndarray:
     return np.concatenate([weights.T @ np.asarray(b, dtype=float) for b in blocks], axis=1)
 
 
-def _interval(reps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def percentile_interval(reps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Percentile interval over axis 0 (NaN without replicates)."""
     if len(reps) == 0:
         nan = np.full(reps.shape[1:], np.nan)
@@ -159,7 +252,7 @@ def metrics(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.
     for key, g in _groups(sums, by):
         S = _stat_matrix(g, len(columns))
         vals = metric_values(S, cells)
-        lo, hi = _interval(vals[1:])
+        lo, hi = percentile_interval(vals[1:])
         part = cells.keys.copy()
         for name, v in zip(by, key, strict=True):
             part.insert(len(part.columns) - 4, name, v)
@@ -180,7 +273,8 @@ def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[s
     Returns
     -------
     tidy DataFrame: *by, target, fraction, metric, strategy, baseline, difference (strategy − baseline),
-    ci_low, ci_high, better (the interval excludes 0 on the side where the metric improves), for every
+    ci_low, ci_high, better (the interval excludes 0 on the side where the metric improves), verdict
+    (``better``, ``worse`` or ``no difference``: :func:`verdict`), for every
     pair of strategies predicting the same target (strategy after baseline in the settings' order)
     """
     cells = metric_cells(columns)
@@ -206,12 +300,13 @@ def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[s
     for key, g in _groups(sums, by):
         vals = metric_values(_stat_matrix(g, len(columns)), cells)
         d = vals[:, second] - vals[:, first]
-        lo, hi = _interval(d[1:])
+        lo, hi = percentile_interval(d[1:])
         part = pairs.copy()
         for j, (name, v) in enumerate(zip(by, key, strict=True)):
             part.insert(j, name, v)
         part["difference"], part["ci_low"], part["ci_high"] = d[0], lo, hi
         part["better"] = np.where(up, lo > 0, hi < 0)
+        part["verdict"] = [verdict(a, b, u) for a, b, u in zip(lo, hi, up, strict=True)]
         parts.append(part)
     cols = [
         *by,
@@ -224,25 +319,27 @@ def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[s
         "ci_low",
         "ci_high",
         "better",
+        "verdict",
     ]
     return pd.concat(parts, ignore_index=True)[cols] if parts else pd.DataFrame(columns=cols)
 
 
 def reliability(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
-    """The reliability diagram of the effect's calibration bins (the estimate, row 0 of the sums).
+    """The reliability diagrams of the calibration bins (the estimate, row 0 of the sums).
 
     Returns
     -------
-    tidy DataFrame: *by, strategy, fraction, bin, lower, upper (the bin's confidence range), n (episodes
-    in the bin), confidence (their mean top-label confidence), accuracy (how often that label was right)
+    tidy DataFrame: *by, target, strategy, fraction, bin, lower, upper (the bin's confidence range), n
+    (episodes in the bin), confidence (their mean top-label confidence), accuracy (how often that label
+    was right)
     """
-    cols = [*by, "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
+    cols = [*by, "target", "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
     binned = columns[columns["bin"] >= 0]
     if binned.empty:
         return pd.DataFrame(columns=cols)
     n_bins = int(binned["bin"].max()) + 1
     stats = {st: binned[binned.stat == st] for st in ("bin_n", "bin_confidence", "bin_correct")}
-    base = stats["bin_n"][["strategy", "fraction", "bin"]].reset_index(drop=True)
+    base = stats["bin_n"][["target", "strategy", "fraction", "bin"]].reset_index(drop=True)
     base["lower"], base["upper"] = base["bin"] / n_bins, (base["bin"] + 1) / n_bins
     parts = []
     for key, g in _groups(sums, by):

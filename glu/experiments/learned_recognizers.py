@@ -99,7 +99,7 @@ def learn_recognizer(
     config: TrainingConfig = STUDY_TRAINING,
     seed: int = 0,
     threshold: float = 0.9,
-    posterior: str = "per_frame",
+    posterior: str = "per-frame",
     max_rounds: int = 10,
     invariants: Invariants | str | None = None,
     meta: Mapping[str, Any] | None = None,
@@ -225,7 +225,7 @@ def real_gesture_study(
     config: TrainingConfig = STUDY_TRAINING,
     invariants: Invariants | str | None = None,
     threshold: float = 0.9,
-    posterior: str = "per_frame",
+    posterior: str = "per-frame",
     data_source: str = "",
 ) -> pd.DataFrame:
     """The real gestures with their labels hidden: leave-one-segment-out and the seated taps, per learner.

@@ -78,7 +78,7 @@ class OnlineSettings:
     init_iter: int = 10
     step: float = 1.0
     threshold: float = 0.9
-    posterior: str = "per_frame"
+    posterior: str = "per-frame"
     cluster_episodes: int = 15
 
     def __post_init__(self) -> None:

@@ -58,8 +58,8 @@ BASELINES: tuple[str, ...] = ("true", "unsupervised")
 lower bound). The third baseline, the network alone, recognises no gesture: its accuracy is that of its
 labels."""
 LEARNERS: tuple[str, ...] = SCHEMES + BASELINES
-POSTERIOR_READINGS: tuple[str, ...] = ("likelihood", "per_frame")
-"""How ``p_HMM`` is read from the likelihoods when the robot relabels (:data:`glu.experiments.corpus.POSTERIORS`)."""
+POSTERIOR_READINGS: tuple[str, ...] = ("likelihood", "per-frame")
+"""How ``p_HMM`` is read from the likelihoods when the robot relabels (two of :data:`glu.gestures.calibration.READINGS`)."""
 ACTION_KEY, PERCEPTION_KEY = 3, 4
 """Spawn keys of the actions and of the perception noise (the corpus uses 0 for the world, 1 for gestures)."""
 TEST_OFFSET = 10_000_000
@@ -275,13 +275,13 @@ def one_hot(labels: np.ndarray, k: int) -> np.ndarray:
     return out
 
 
-def p_hmm_reading(loglik: np.ndarray, n_frames: np.ndarray, posterior: str = "per_frame") -> np.ndarray:
+def p_hmm_reading(loglik: np.ndarray, n_frames: np.ndarray, posterior: str = "per-frame") -> np.ndarray:
     """``p_HMM(A | G)`` from log-likelihoods (n, A): equal priors, from the likelihoods or per frame
     (``exp((1/T) log L)``, the tempered reading); ``-inf`` (no model) gives probability 0."""
     if posterior not in POSTERIOR_READINGS:
         raise DataError(f"unknown posterior reading {posterior!r}; allowed: {', '.join(POSTERIOR_READINGS)}")
     ll = np.asarray(loglik, dtype=float)
-    if posterior == "per_frame":
+    if posterior == "per-frame":
         ll = ll / np.asarray(n_frames, dtype=float)[:, None]
     return np.exp(log_softmax(ll))
 

@@ -33,7 +33,7 @@ import numpy as np
 
 from glu.gestures._pchip import pchip_many
 from glu.gestures._repair_many import repaired_many
-from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle_frames
+from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle_frames, to_body_frame
 from glu.gestures.synthetic import (
     _BODY,
     _KEYS,
@@ -45,6 +45,7 @@ from glu.gestures.synthetic import (
     SYNTHETIC_POLICY,
     View,
     _check_action,
+    _person_style,
     _rest_pose,
     synthesize_gesture,
 )
@@ -150,6 +151,8 @@ def gesture_features(
                 tf = tf + jitter[j - 1]
             p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
             keys.append((tf, p * size))
+        if view.variety > 0:
+            keys = _person_style(keys, spec, rng, size, view.variety)
         keys.sort(key=lambda k: k[0])
         key_times.append(np.array([k[0] for k in keys]))
         key_points.append(np.stack([k[1] for k in keys]))
@@ -193,7 +196,7 @@ def gesture_features(
         t = t + jit
         if keep is not None:
             skel, t = skel[keep], t[keep]
-        xyzs.append(_features(skel, view.normalise_body))
+        xyzs.append(_features(skel, view.normalise_body, view.body_frame))
         ts.append(t)
         duration[i], sizes[i] = t[-1] - t[0], size
     return GestureBatch(repaired_many(xyzs, ts, policy), duration, sizes)
@@ -240,7 +243,7 @@ def _skeleton(
     return world
 
 
-def _features(skel: np.ndarray, measure: bool) -> np.ndarray:
+def _features(skel: np.ndarray, measure: bool, body_frame: bool = False) -> np.ndarray:
     """:func:`~glu.gestures.features.skeleton_features` of the joints of :func:`_skeleton`, shape (n, 3)."""
     if measure:
         mid = middle_frames(len(skel))
@@ -248,7 +251,10 @@ def _features(skel: np.ndarray, measure: bool) -> np.ndarray:
         v = _mean_distance(skel[mid, 4], skel[mid, 1], VERTICAL_FALLBACK)
     else:
         h, v = HORIZONTAL_FALLBACK, VERTICAL_FALLBACK
-    return (skel[:, 0] - skel[:, 1]) / np.array([h, v, h])
+    rel = skel[:, 0] - skel[:, 1]
+    if body_frame:
+        rel = to_body_frame(rel, skel[:, 2], skel[:, 3])
+    return rel / np.array([h, v, h])
 
 
 def _mean_distance(a: np.ndarray, b: np.ndarray, fallback: float) -> float:

@@ -14,6 +14,14 @@ sequence (frames 45–55 %). When no skeleton is available the original used the
 shoulder width horizontally and a neck–torso distance vertically. No rotation is applied: the skeleton
 must be in the person's frame above (the sensor's frame for a person facing it, as in the recordings).
 
+**The body frame** (``frame="body"``, :func:`to_body_frame`) is an alternative that glu adds: the hand
+minus the torso is turned about the vertical into the frame the shoulder line defines, so that x runs from
+the left shoulder to the right one and z towards the back, whichever way the person faces the camera. The
+shoulder line is the running mean of right shoulder − left shoulder over the frames so far (online, and
+averaging out the joints' noise). Unlike the movement-heading rotation of :mod:`glu.gestures.invariants`,
+it keeps the movement's direction relative to the body. It needs the shoulders, which the published hand
+logs do not hold.
+
 The YARP logs of 2017 hold these features already, but computed from millimetres with the metre
 constants, i.e. 1000 × the units of the 2013 models; the original scripts divide them by 1000
 (:data:`LOG_SCALE`, :func:`log_features`).
@@ -138,6 +146,34 @@ def normalisation_factors(
     )
 
 
+FRAMES: tuple[str, ...] = ("torso", "body")
+"""The frames the features can be computed in: the skeleton's own (the originals'), or the shoulder line's."""
+
+
+def to_body_frame(rel: np.ndarray, left_shoulder: np.ndarray, right_shoulder: np.ndarray) -> np.ndarray:
+    """Hand-minus-torso vectors turned into the body frame of the shoulder line, shape (T, 3) → (T, 3).
+
+    Frame t uses the running mean ``m_t`` of ``right_shoulder − left_shoulder`` over frames 1 … t
+    (horizontal part, frames with a missing shoulder skipped; until one is seen, no turn): with
+    ``u = m_t / |m_t|``, ``x' = u_x x + u_z z`` and ``z' = −u_z x + u_x z`` (y unchanged), so a person
+    facing the camera (shoulders along +x) keeps their features, and one turned by ψ gets them back.
+    """
+    line = (
+        np.asarray(right_shoulder, dtype=float)[:, [0, 2]] - np.asarray(left_shoulder, dtype=float)[:, [0, 2]]
+    )
+    ok = np.isfinite(line).all(axis=1)
+    total = np.cumsum(np.where(ok[:, None], line, 0.0), axis=0)
+    norm = np.hypot(total[:, 0], total[:, 1])
+    safe = norm > 0
+    ux = np.where(safe, total[:, 0] / np.where(safe, norm, 1.0), 1.0)
+    uz = np.where(safe, total[:, 1] / np.where(safe, norm, 1.0), 0.0)
+    rel = np.asarray(rel, dtype=float)
+    out = rel.copy()
+    out[:, 0] = ux * rel[:, 0] + uz * rel[:, 2]
+    out[:, 2] = -uz * rel[:, 0] + ux * rel[:, 2]
+    return out
+
+
 def skeleton_features(
     skeleton: np.ndarray,
     joints: tuple[str, ...] = OPENNI_JOINTS,
@@ -145,6 +181,7 @@ def skeleton_features(
     middle: tuple[float, float] = MIDDLE,
     hand: str = "right_hand",
     measure: bool = True,
+    frame: str = "torso",
 ) -> tuple[np.ndarray, Normalisation]:
     """The original gesture features of a skeleton sequence (METHOD.md §4).
 
@@ -156,6 +193,8 @@ def skeleton_features(
     hand : the joint that gestures
     measure : divide by the body's measured factors (the 2013 system); False: by the ``fallback``
         constants whatever the body, as the 2017 logs were computed (body size then stays in the features)
+    frame : ``"torso"`` (the skeleton's frame, the originals') or ``"body"`` (turned into the shoulder
+        line's frame, :func:`to_body_frame`)
 
     Returns
     -------
@@ -167,7 +206,13 @@ def skeleton_features(
         norm = normalisation_factors(skeleton, joints, fallback, middle)
     else:
         norm = Normalisation(fallback[0], fallback[1], True, True)
+    if frame not in FRAMES:
+        raise DataError(f"unknown feature frame {frame!r}; allowed: {', '.join(FRAMES)}")
     rel = _joint(skeleton, joints, hand) - _joint(skeleton, joints, "torso")
+    if frame == "body":
+        rel = to_body_frame(
+            rel, _joint(skeleton, joints, "left_shoulder"), _joint(skeleton, joints, "right_shoulder")
+        )
     scale = np.array([norm.horizontal, norm.vertical, norm.horizontal])
     return rel / scale, norm
 

@@ -31,8 +31,16 @@ relative to the camera (``yaw_deg``; by default a random ± 10°, as in the real
 (``standing`` at a table, or ``seated`` with the hand resting on the thigh and the table higher and
 further relative to the torso, as in the seated recordings of TCDS), the body size, and whether the
 features are normalised by the body's measured size (the 2013 system) or by fixed constants (the 2017 logs,
-where body size stays in the features). ``view=None`` and ``View()`` draw the same sequences as before
-views existed.
+where body size stays in the features), in the torso's frame or the shoulder line's (``body_frame``,
+:func:`glu.gestures.features.to_body_frame`). ``view=None`` and ``View()`` draw the same sequences as
+before views existed.
+
+**People unlike the training ones.** ``View(variety=v)`` with ``v > 0`` also gives each person an arm
+length of their own (the hand's positions relative to the right shoulder scaled by a factor in
+``1 ± 0.15 v``) and a movement style of their own (every key pose of the movement displaced by
+``N(0, (0.03 v m)²)`` per axis, its timing by a further ``± 0.04 v``): a seen movement is then no rigid
+transform of the generator's standard one, which invariant features cannot undo by construction. The
+sensor noise is added after the view, to the skeleton the camera sees.
 
 **Robot mode.** ``View(performer="robot")`` draws the robot's own grasp, tap and touch instead: the
 end effector of an iCub-like arm in the robot's body frame (:mod:`glu.gestures.robot`), as a skeleton of
@@ -57,6 +65,7 @@ from glu.gestures._pchip import pchip
 from glu.gestures.features import OPENNI_JOINTS, skeleton_features
 from glu.gestures.robot import ROBOT_ACTIONS, ROBOT_BODY, robot_hand_path
 from glu.gestures.trajectories import RepairPolicy, Trajectory, repair
+from glu.gestures.views import DEFAULT_VIEW, View
 from glu.schema import ACTIONS
 
 GESTURES: tuple[str, ...] = (*ACTIONS, "push")
@@ -91,67 +100,6 @@ _SEATED_REST = np.array([0.2, -0.22, -0.22])
 """Seated: the right hand at rest on the thigh, relative to the torso (size 1)."""
 _SEATED_OBJECT_SHIFT = np.array([0.0, 0.12, -0.2])
 """Seated: the table is higher and further, relative to the torso (size 1)."""
-POSTURES: tuple[str, ...] = ("standing", "seated")
-PERFORMERS: tuple[str, ...] = ("human", "robot")
-"""Who moves: a person seen by the robot's camera, or the robot itself (its end effector, its body frame)."""
-
-
-@dataclass(frozen=True)
-class View:
-    """How the robot's camera sees the person (all fields optional; the defaults are the generator's).
-
-    Attributes
-    ----------
-    yaw_deg : the person's turn about the vertical axis relative to the camera, degrees (0 = facing it,
-        90 = side-on); ``None`` draws a random turn in ± 10°, as in the real recordings
-    mirror : the movement mirrored across the person's sagittal plane (x → −x relative to the torso):
-        the same action made with the other hand, or seen from in front instead of from behind
-    posture : ``"standing"`` (at a table) or ``"seated"`` (hand resting on the thigh, table higher and
-        further relative to the torso)
-    size : body size factor (1 = shoulders 0.33 m apart; for the robot, its own body); ``None`` draws
-        one in 0.85–1.15 for a person, 1 for the robot
-    normalise_body : features divided by the body's measured shoulder and neck–torso distances (the 2013
-        system); False: by the constants 0.33 m and 0.23 m whatever the body, as the 2017 logs were
-        computed, so body size (and the robot's smaller body) stays in the features
-    performer : ``"human"`` (a person seen by the robot's camera) or ``"robot"`` (the robot's own
-        movement, its end effector in its body frame; :mod:`glu.gestures.robot`)
-    """
-
-    yaw_deg: float | None = None
-    mirror: bool = False
-    posture: str = "standing"
-    size: float | None = None
-    normalise_body: bool = True
-    performer: str = "human"
-
-    def __post_init__(self) -> None:
-        if self.yaw_deg is not None and not np.isfinite(self.yaw_deg):
-            raise DataError(f"view yaw_deg={self.yaw_deg} is not a finite angle in degrees")
-        if self.posture not in POSTURES:
-            raise DataError(f"unknown posture {self.posture!r}; allowed: {', '.join(POSTURES)}")
-        if self.size is not None and not 0.3 <= self.size <= 3.0:
-            raise DataError(f"view size={self.size} is outside 0.3–3 (1 = shoulders 0.33 m apart)")
-        if self.performer not in PERFORMERS:
-            raise DataError(f"unknown performer {self.performer!r}; allowed: {', '.join(PERFORMERS)}")
-        if self.performer == "robot" and self.posture != "standing":
-            raise DataError("the robot has one posture: give posture only for a human performer")
-
-    def describe(self) -> str:
-        """One line, e.g. ``human, standing, yaw 90°, mirrored, size 1.2``."""
-        human = self.performer == "human"
-        yaw = "yaw ±10°" if self.yaw_deg is None and human else f"yaw {self.yaw_deg or 0:g}°"
-        parts = [
-            *([self.performer, self.posture] if human else ["robot"]),
-            yaw,
-            "mirrored" * self.mirror,
-            f"size {self.size:g}" if self.size else "",
-            "fixed scale" * (not self.normalise_body),
-        ]
-        return ", ".join(p for p in parts if p)
-
-
-DEFAULT_VIEW = View()
-
 # Key poses: (time fraction, offset from the object or None for rest).
 _KEYS: dict[str, list[tuple[float, tuple[float, float, float] | None]]] = {
     "grasp": [
@@ -211,7 +159,8 @@ class SyntheticGesture:
 
     def trajectory(self) -> Trajectory:
         """The features of the skeleton (:func:`glu.gestures.features.skeleton_features`) as a trajectory, unrepaired."""
-        xyz, _ = skeleton_features(self.skeleton, measure=self.view.normalise_body)
+        frame = "body" if self.view.body_frame else "torso"
+        xyz, _ = skeleton_features(self.skeleton, measure=self.view.normalise_body, frame=frame)
         n = len(xyz)
         return Trajectory(
             xyz, self.t, np.arange(1, n + 1), np.ones(n, dtype=bool), f"synthetic {self.action}"
@@ -278,8 +227,28 @@ def _hand_path(action: str, rng: np.random.Generator, size: float, view: View = 
             tf = tf + rng.uniform(-0.02, 0.02)
         p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
         keys.append((tf, p * size))
+    if view.variety > 0:
+        keys = _person_style(keys, spec, rng, size, view.variety)
     keys.sort(key=lambda k: k[0])
     return _min_jerk_path(keys, n)
+
+
+def _person_style(
+    keys: list[tuple[float, np.ndarray]], spec: list, rng: np.random.Generator, size: float, variety: float
+) -> list[tuple[float, np.ndarray]]:
+    """A person's own arm length and movement style (see the module docstring), drawn after the key poses."""
+    arm = rng.uniform(1 - 0.15 * variety, 1 + 0.15 * variety)
+    shift = rng.normal(0.0, 0.03 * variety, size=(len(spec), 3))
+    warp = rng.uniform(-0.04 * variety, 0.04 * variety, size=len(spec))
+    shoulder = np.asarray(_BODY["right_shoulder"]) * size
+    out = []
+    for j, (tf, p) in enumerate(keys):
+        inner = 0 < j < len(spec) - 1
+        q = p + (shift[j] * size if spec[j][1] is not None else 0.0)
+        out.append(
+            (float(np.clip(tf + warp[j], 0.05, 0.95)) if inner else tf, shoulder + arm * (q - shoulder))
+        )
+    return out
 
 
 def _skeletons(

@@ -1,13 +1,15 @@
 """The figures of the corpus evaluation, whole: panels of :mod:`glu.plots.evaluation` and one legend each.
 
 Each function takes the sweep's tables (:mod:`glu.sweep`) and returns a laid-out figure (constrained
-layout; the legend above the panels, naming every strategy drawn once). The panels are two columns wide,
-one per way of reading p_HMM (:data:`glu.experiments.corpus.POSTERIORS`), to fit a page.
+layout; the legend above the panels, naming every strategy drawn once). The panels are one column per cell
+of the design given (``cells``: e.g. the reference cell and the most mismatched one,
+:func:`glu.experiments.findings.contrast_cells`), to fit a page.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import matplotlib.pyplot as plt
 import pandas as pd
@@ -58,26 +60,25 @@ def _drawn(table: pd.DataFrame, targets: Sequence[str]) -> list[str]:
     return list(dict.fromkeys(table[table.target.isin(targets)].strategy))
 
 
-def strategies_vs_noise_figure(
-    results: pd.DataFrame, posteriors: Sequence[str], fraction: float = 1.0
-) -> Figure:
-    """Action accuracy (top) and effect log-loss (bottom) against the sensor noise, per reading of p_HMM."""
-    fig, axes = _grid(2, len(posteriors))
-    for k, post in enumerate(posteriors):
-        plot_metric_vs_noise(axes[k], results, "action", "accuracy", fraction, posterior=post)
-        plot_metric_vs_noise(
-            axes[len(posteriors) + k], results, "effect", "log_loss", fraction, posterior=post
-        )
+Cells = Sequence[Mapping[str, Any]]
+
+
+def strategies_vs_noise_figure(results: pd.DataFrame, cells: Cells, fraction: float = 1.0) -> Figure:
+    """Action accuracy (top) and effect log-loss (bottom) against the sensor noise, per cell of the design."""
+    fig, axes = _grid(2, len(cells))
+    for k, cell in enumerate(cells):
+        plot_metric_vs_noise(axes[k], results, "action", "accuracy", fraction, where=cell)
+        plot_metric_vs_noise(axes[len(cells) + k], results, "effect", "log_loss", fraction, where=cell)
     strategy_legend(fig, _drawn(results, ("action", "effect")))
     return fig
 
 
-def early_recognition_figure(results: pd.DataFrame, posteriors: Sequence[str]) -> Figure:
+def early_recognition_figure(results: pd.DataFrame, cells: Cells) -> Figure:
     """Action accuracy (top) and effect log-loss (bottom) against the fraction of the gesture seen."""
-    fig, axes = _grid(2, len(posteriors))
-    for k, post in enumerate(posteriors):
-        plot_early_recognition(axes[k], results, "action", "accuracy", posterior=post)
-        plot_early_recognition(axes[len(posteriors) + k], results, "effect", "log_loss", posterior=post)
+    fig, axes = _grid(2, len(cells))
+    for k, cell in enumerate(cells):
+        plot_early_recognition(axes[k], results, "action", "accuracy", where=cell)
+        plot_early_recognition(axes[len(cells) + k], results, "effect", "log_loss", where=cell)
     strategy_legend(fig, _drawn(results, ("action", "effect")))
     return fig
 
@@ -85,22 +86,18 @@ def early_recognition_figure(results: pd.DataFrame, posteriors: Sequence[str]) -
 def calibration_figure(
     reliability: pd.DataFrame,
     results: pd.DataFrame,
-    posteriors: Sequence[str],
+    cells: Cells,
     fraction: float = 1.0,
     strategies: Sequence[str] = ("network", "hard", "virtual", "jeffrey", "true_action"),
     by_viewpoint: Sequence[str] = ("gesture", "network", "hard", "product"),
 ) -> Figure:
-    """Reliability diagrams of the effect per way of reading p_HMM (top); the effect's ECE against noise
-    and the action accuracy per viewpoint, with the last way (bottom). A key gives the marker sizes."""
+    """Reliability diagrams of the effect in the first two cells (top); the effect's ECE against noise and
+    the action accuracy per viewpoint in the first cell (bottom). A key gives the marker sizes."""
     fig, axes = _grid(2, 2, height=3.2)
-    for ax, post in zip(axes[:2], posteriors[:2], strict=False):
-        plot_reliability(ax, reliability, fraction, strategies=strategies, posterior=post)
-    plot_metric_vs_noise(
-        axes[2], results, "effect", "ece", fraction, strategies=strategies, posterior=posteriors[-1]
-    )
-    plot_by_viewpoint(
-        axes[3], results, "action", "accuracy", fraction, strategies=by_viewpoint, posterior=posteriors[-1]
-    )
+    for ax, cell in zip(axes[:2], cells[:2], strict=False):
+        plot_reliability(ax, reliability, fraction, strategies=strategies, where=cell)
+    plot_metric_vs_noise(axes[2], results, "effect", "ece", fraction, strategies=strategies, where=cells[0])
+    plot_by_viewpoint(axes[3], results, "action", "accuracy", fraction, strategies=by_viewpoint, where=cells[0])
     shown = list(dict.fromkeys([*strategies, *by_viewpoint]))
     sizes = [
         Line2D(
@@ -122,14 +119,14 @@ def calibration_figure(
 def differences_figure(
     differences: pd.DataFrame,
     pairs: Sequence[tuple[str, str, str, str]],
-    posteriors: Sequence[str],
+    cells: Cells,
     fraction: float = 1.0,
 ) -> Figure:
-    """Paired differences, one panel per way of reading p_HMM (stacked), with a key to colours and markers."""
-    fig, axes = _grid(len(posteriors), 1, height=2.9)
+    """Paired differences, one panel per cell of the design (stacked), with a key to colours and markers."""
+    fig, axes = _grid(len(cells), 1, height=2.9)
     fig.set_figwidth(9.0)
-    for ax, post in zip(axes, posteriors, strict=True):
-        plot_differences(ax, differences, pairs, fraction, posterior=post)
+    for ax, cell in zip(axes, cells, strict=True):
+        plot_differences(ax, differences, pairs, fraction, where=cell)
     marks = [
         Line2D(
             [],

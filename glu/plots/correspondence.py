@@ -26,6 +26,8 @@ FEATURE_COLORS = {
     "centred+rotated": "#C44E52",
     "centred+mirrored": "#8172B3",
     ALL: "#DD8452",
+    "body": "#937860",
+    "body+centred": "#DA8BC3",
 }
 """Colour of each default feature set (others get grey)."""
 SETTING_COLORS = ("#4C72B0", "#DD8452", "#55A868", "#C44E52", "#8172B3", "#937860")
@@ -236,10 +238,39 @@ def plot_feature_settings(ax: Axes, grid: pd.DataFrame) -> Axes:
     return ax
 
 
+def plot_nested_cv(ax: Axes, summary: pd.DataFrame) -> Axes:
+    """The real data's nested cross-validation: per seed, the outer accuracy with its exact (Clopper–Pearson)
+    interval; beside it, what tuning and reporting on the same segments gives, and the always-tap baseline.
+
+    ``summary`` as :attr:`glu.experiments.nested.NestedCV.summary`.
+    """
+    x = np.arange(len(summary))
+    ax.errorbar(
+        x,
+        summary["accuracy"],
+        yerr=[summary["accuracy"] - summary["ci_low"], summary["ci_high"] - summary["accuracy"]],
+        fmt="o",
+        color="#4C72B0",
+        capsize=3,
+        label="nested (exact 95 % interval)",
+    )
+    ax.plot(
+        x, summary["tuned_accuracy"], "_", color="#C44E52", ms=14, mew=2, label="tuned on the same segments"
+    )
+    ax.plot(x, summary["always_tap"], "_", color="0.5", ms=14, mew=2, label='always "tap"')
+    ax.set_xticks(x, [f"seed {s}" for s in summary["seed"]], fontsize=8)
+    ax.set_xlim(-0.6, len(summary) - 0.4)
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("leave-one-segment-out accuracy")
+    ax.set_title("real standing segments", fontsize=9)
+    ax.legend(fontsize=7, frameon=False, loc="lower left")
+    return ax
+
+
 def plot_two_views(axes: Sequence[Axes], curves: pd.DataFrame, action: str) -> Sequence[Axes]:
     """``p_HMM(action | G_1^t)`` over time for each view (one axis each), raw (dashed) and invariant (solid).
 
-    ``curves``: the concatenated :meth:`glu.experiments.correspondence.ViewRun.curves` of the views.
+    ``curves``: the concatenated :meth:`glu.experiments.two_views.ViewRun.curves` of the views.
     """
     for ax, (view, g) in zip(axes, curves.groupby("view", sort=False), strict=False):
         for name, ls in (("raw", "--"), ("aligned", "-")):

@@ -2,8 +2,9 @@
 
 Every function draws the tables of :mod:`glu.sweep` (``results``, ``differences``, ``reliability``) on the
 axes it is given and returns them. In those tables a noise of NaN means "pooled over the noise levels"
-and a viewpoint ``"all"`` "pooled over the viewpoints"; ``posterior`` picks how p_HMM was read from the
-HMMs (:data:`glu.experiments.corpus.POSTERIORS`). Strategies whose lines coincide are named in the panel's
+and a viewpoint ``"all"`` "pooled over the viewpoints"; ``where`` picks one cell of the design (action
+prior, inference network, learn_experiments, p_HMM reading; default
+:data:`glu.experiments.findings.REFERENCE_CELL`), which the panel's title names. Strategies whose lines coincide are named in the panel's
 title, so that a line hidden under another is not missed; the legends are drawn once per figure
 (:mod:`glu.plots.corpus`).
 """
@@ -11,11 +12,14 @@ title, so that a line hidden under another is not missed; the legends are drawn 
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+
+from glu.experiments.findings import REFERENCE_CELL, cell_label
 
 STRATEGY_COLORS = {
     "gesture": "#8C8C8C",
@@ -37,8 +41,12 @@ STRATEGY_LABELS = {
     "true_action": "true action given",
 }
 """How figures name the strategies of :mod:`glu.experiments.corpus` (``jeffrey`` is Jeffrey's rule)."""
-POSTERIOR_LABELS = {"likelihood": r"$p_{HMM}$ from the likelihoods", "per_frame": r"$p_{HMM}$ per frame"}
-"""How figures name the ways of reading p_HMM (:data:`glu.experiments.corpus.POSTERIORS`)."""
+POSTERIOR_LABELS = {
+    "likelihood": r"$p_{HMM}$ from the likelihoods",
+    "per-frame": r"$p_{HMM}$ per frame",
+    "calibrated": r"$p_{HMM}$ calibrated",
+}
+"""How figures name the readings of p_HMM (:data:`glu.gestures.calibration.READINGS`)."""
 METRIC_LABEL = {
     "accuracy": "accuracy",
     "log_loss": "log-loss (nats)",
@@ -63,8 +71,23 @@ def posterior_label(posterior: str) -> str:
     return POSTERIOR_LABELS.get(posterior, posterior)
 
 
-def _pooled(frame: pd.DataFrame, noise: float | None, viewpoint: str, posterior: str) -> pd.DataFrame:
-    sel = (frame.viewpoint == viewpoint) & (frame.posterior == posterior)
+def where_label(where: Mapping[str, Any] | None) -> str:
+    """A cell of the design in words (:func:`glu.experiments.findings.cell_label`; None: the reference cell)."""
+    return cell_label({**REFERENCE_CELL, **(where or {})})
+
+
+def _cell(frame: pd.DataFrame, where: Mapping[str, Any] | None) -> pd.DataFrame:
+    """The rows of one cell of the design (``where``: column → value; None: the reference cell)."""
+    for k, v in (REFERENCE_CELL if where is None else where).items():
+        frame = frame[frame[k] == v]
+    return frame
+
+
+def _pooled(
+    frame: pd.DataFrame, noise: float | None, viewpoint: str, where: Mapping[str, Any] | None
+) -> pd.DataFrame:
+    frame = _cell(frame, where)
+    sel = frame.viewpoint == viewpoint
     return frame[sel & (frame.noise.isna() if noise is None else np.isclose(frame.noise, noise))]
 
 
@@ -125,21 +148,21 @@ def plot_metric_vs_noise(
     fraction: float = 1.0,
     viewpoint: str = "all",
     strategies: Sequence[str] | None = None,
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
 ) -> Axes:
     """One metric of one target against the sensor noise (m), a line and a 95 % band per strategy."""
+    results = _cell(results, where)
     sel = results[
         (results.target == target)
         & (results.metric == metric)
         & np.isclose(results.fraction, fraction)
         & (results.viewpoint == viewpoint)
         & results.noise.notna()
-        & (results.posterior == posterior)
     ]
     note = _strategy_lines(ax, sel, "noise", metric, strategies)
-    where = "all viewpoints" if viewpoint == "all" else viewpoint
-    first = f"{target} {METRIC_LABEL.get(metric, metric)}, {posterior_label(posterior)}"
-    _title(ax, f"{first}\n({where}, {fraction:.0%} of the gesture seen)", note)
+    views = "all viewpoints" if viewpoint == "all" else viewpoint
+    first = f"{target} {METRIC_LABEL.get(metric, metric)} ({views}, {fraction:.0%} of the gesture seen)"
+    _title(ax, f"{first}\n{where_label(where)}", note)
     ax.set_xlabel("sensor noise (cm)")
     return ax
 
@@ -152,15 +175,15 @@ def plot_early_recognition(
     noise: float | None = None,
     viewpoint: str = "all",
     strategies: Sequence[str] | None = None,
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
 ) -> Axes:
     """One metric against the observed fraction of the gesture, a line and a 95 % band per strategy."""
-    sel = _pooled(results, noise, viewpoint, posterior)
+    sel = _pooled(results, noise, viewpoint, where)
     sel = sel[(sel.target == target) & (sel.metric == metric)]
     note = _strategy_lines(ax, sel, "fraction", metric, strategies)
     how = "all noise levels" if noise is None else f"noise {noise * 100:g} cm"
     ax.set_xlabel("gesture observed (%)")
-    _title(ax, f"{target} {METRIC_LABEL.get(metric, metric)}, {posterior_label(posterior)}\n({how})", note)
+    _title(ax, f"{target} {METRIC_LABEL.get(metric, metric)} ({how})\n{where_label(where)}", note)
     return ax
 
 
@@ -171,14 +194,15 @@ def plot_reliability(
     strategies: Sequence[str] | None = None,
     noise: float | None = None,
     viewpoint: str = "all",
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
+    target: str = "effect",
 ) -> Axes:
-    """Reliability diagram of the effect (ObjVel): how often the top value was right, against its
-    probability, per calibration bin; marker area ∝ the share of the strategy's episodes in the bin
+    """Reliability diagram of a target (the effect ObjVel, or the action): how often the top value was
+    right, against its probability, per calibration bin; marker area ∝ the share of the strategy's episodes in the bin
     (:func:`size_of_share` for a key). Lines drawn first are wider, so that one lying on another shows
     as a border around it."""
-    sel = _pooled(reliability, noise, viewpoint, posterior)
-    sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0)]
+    sel = _pooled(reliability, noise, viewpoint, where)
+    sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0) & (sel.target == target)]
     ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
     total = sel.groupby("strategy").n.transform("sum")
     series = {}
@@ -195,11 +219,12 @@ def plot_reliability(
             series[strategy] = (g.confidence.to_numpy(dtype=float), g.accuracy.to_numpy(dtype=float))
     ax.set_xlim(0.3, 1.0)
     ax.set_ylim(0.0, 1.0)
-    ax.set_xlabel("predicted probability of the top ObjVel value")
+    what = "ObjVel value" if target == "effect" else "action"
+    ax.set_xlabel(f"predicted probability of the top {what}")
     ax.set_ylabel("how often it was right")
     _title(
         ax,
-        f"effect calibration ({fraction:.0%} seen), {posterior_label(posterior)}",
+        f"{target} calibration ({fraction:.0%} seen)\n{where_label(where)}",
         _coincide_note(coinciding(series, 1.0)),
     )
     return ax
@@ -217,7 +242,7 @@ def plot_differences(
     fraction: float = 1.0,
     noise: float | None = None,
     viewpoint: str = "all",
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
 ) -> Axes:
     """Paired differences with 95 % intervals, one row per ``(target, metric, strategy, baseline)``.
 
@@ -225,7 +250,7 @@ def plot_differences(
     improves (hollow: it does not). Each row's difference and interval are written in a column right of
     the axes, since the metrics (accuracy, nats, ECE) share one axis.
     """
-    sel = _pooled(differences, noise, viewpoint, posterior)
+    sel = _pooled(differences, noise, viewpoint, where)
     sel = sel[np.isclose(sel.fraction, fraction)]
     labels = []
     for i, (target, metric, strategy, baseline) in enumerate(pairs):
@@ -262,7 +287,7 @@ def plot_differences(
     ax.set_yticks([i for i, _ in labels], [t for _, t in labels], fontsize=7)
     ax.set_ylim(len(pairs) - 0.5, -0.5)
     ax.set_xlabel("difference (95 % paired bootstrap interval)")
-    ax.set_title(f"paired differences ({fraction:.0%} seen), {posterior_label(posterior)}", fontsize=9)
+    ax.set_title(f"paired differences ({fraction:.0%} seen)\n{where_label(where)}", fontsize=9)
     return ax
 
 
@@ -283,16 +308,16 @@ def plot_by_viewpoint(
     metric: str,
     fraction: float = 1.0,
     strategies: Sequence[str] | None = None,
-    posterior: str = "likelihood",
+    where: Mapping[str, Any] | None = None,
 ) -> Axes:
     """One metric per viewpoint (pooled over noise), grouped bars with 95 % intervals per strategy."""
+    results = _cell(results, where)
     sel = results[
         (results.target == target)
         & (results.metric == metric)
         & np.isclose(results.fraction, fraction)
         & results.noise.isna()
         & (results.viewpoint != "all")
-        & (results.posterior == posterior)
     ]
     views = list(dict.fromkeys(sel.viewpoint))
     strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
@@ -312,7 +337,112 @@ def plot_by_viewpoint(
     ax.set_xticks(np.arange(len(views)), views)
     ax.set_ylabel(METRIC_LABEL.get(metric, metric))
     ax.set_title(
-        f"{target} {METRIC_LABEL.get(metric, metric)} by viewpoint, {posterior_label(posterior)}", fontsize=9
+        f"{target} {METRIC_LABEL.get(metric, metric)} by viewpoint\n{where_label(where)}", fontsize=9
     )
     ax.set_xlabel(f"viewpoint (all noise levels, {fraction:.0%} seen)")
+    return ax
+
+
+def plot_winners(ax: Axes, winners: pd.DataFrame, target: str, metric: str) -> Axes:
+    """Which strategy wins each cell of the design for one target and metric: rows (action prior,
+    inference network), columns the p_HMM readings; each cell coloured by the winner and naming it, with
+    ``=`` before the initials of the strategies tied with it (:data:`INITIALS`;
+    :func:`glu.experiments.findings.winners`)."""
+    sel = winners[(winners.target == target) & (winners.metric == metric)].copy()
+    sel["network"] = [
+        "generating" if n == "generating" else f"learned {int(k)}"
+        for n, k in zip(sel.inference_network, sel.learn_experiments, strict=True)
+    ]
+    rows = list(dict.fromkeys(zip(sel.action_prior, sel.network, strict=True)))
+    cols = list(dict.fromkeys(sel.p_hmm))
+    ax.set_xlim(-0.5, len(cols) - 0.5)
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    for r in sel.itertuples():
+        i, j = rows.index((r.action_prior, r.network)), cols.index(r.p_hmm)
+        c = STRATEGY_COLORS.get(r.best, "0.5")
+        ax.add_patch(plt_rectangle(j, i, c))
+        tied = [INITIALS.get(t, t) for t in r.tied.split(", ") if t and t != r.best]
+        ax.text(j, i + (0.12 if tied else 0.0), r.best, ha="center", va="center", fontsize=7, weight="bold")
+        if tied:
+            ax.text(j, i + 0.32, "= " + " ".join(tied), ha="center", va="center", fontsize=6.5)
+    ax.set_xticks(range(len(cols)), cols, fontsize=7)
+    ax.set_yticks(range(len(rows)), [f"{a} actions, {n}" for a, n in rows], fontsize=7)
+    ax.set_title(f"{target}: {METRIC_LABEL.get(metric, metric)}, best (= no difference)", fontsize=9)
+    ax.set_xlabel("p_HMM reading", fontsize=7)
+    ax.tick_params(length=0)
+    return ax
+
+
+def plt_rectangle(x: float, y: float, color: str) -> Any:
+    """A cell of :func:`plot_winners`: a unit square centred on (x, y), lightly filled."""
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((x - 0.5, y - 0.5), 1, 1, facecolor=color, alpha=0.35, edgecolor="white", lw=1.5)
+
+
+def plot_segment_readings(ax: Axes, readings: pd.DataFrame) -> Axes:
+    """p_HMM on held-out real segments (:func:`glu.experiments.p_hmm.segment_readings`): for each reading,
+    the top action's probability of every segment, filled when the segment was recognised, hollow when not."""
+    order = list(dict.fromkeys(readings.reading))
+    rng = np.random.default_rng(0)
+    for k, (_, g) in enumerate(readings.groupby("reading", sort=False)):
+        x = k + rng.uniform(-0.15, 0.15, len(g))
+        ok = g.correct.to_numpy(dtype=bool)
+        ax.scatter(x[ok], g.confidence[ok], color="#4C72B0", s=18, label="recognised" if k == 0 else None)
+        ax.scatter(
+            x[~ok],
+            g.confidence[~ok],
+            facecolor="white",
+            edgecolor="#C44E52",
+            s=18,
+            label="missed" if k == 0 else None,
+        )
+        ax.hlines(
+            g.correct.mean(), k - 0.3, k + 0.3, color="0.3", lw=1.2, label="accuracy" if k == 0 else None
+        )
+    ax.set_xticks(range(len(order)), order)
+    ax.set_ylim(0.0, 1.05)
+    ax.set_ylabel("p_HMM of the top action")
+    ax.set_title("real segments, each left out", fontsize=9)
+    return ax
+
+
+INITIALS = {"gesture": "G", "network": "N", "hard": "H", "virtual": "V", "jeffrey": "J", "product": "P"}
+"""The strategies' initials in :func:`plot_winners`."""
+READING_STYLE = {
+    "likelihood": ("#C44E52", "-"),
+    "per-frame": ("#4C72B0", "--"),
+    "calibrated": ("#55A868", "-."),
+}
+
+
+def plot_p_hmm_reliability(
+    ax: Axes, reliability: pd.DataFrame, fraction: float = 1.0, where: Mapping[str, Any] | None = None
+) -> Axes:
+    """Reliability diagram of p_HMM itself (target action, strategy gesture), one line per reading of p_HMM
+    in the sweep (through the bins that hold at least 2 % of the gestures; marker area ∝ the bin's share);
+    ``where`` picks the action prior and network (not the reading)."""
+    sel = reliability[
+        (reliability.target == "action")
+        & (reliability.strategy == "gesture")
+        & reliability.noise.isna()
+        & (reliability.viewpoint == "all")
+        & np.isclose(reliability.fraction, fraction)
+        & (reliability.n > 0)
+    ]
+    for k, v in (where or {}).items():
+        sel = sel[sel[k] == v]
+    ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
+    for reading, g in sel.groupby("p_hmm", sort=False):
+        color, ls = READING_STYLE.get(reading, ("black", "-"))
+        share = g.n / g.n.sum()
+        many = g[share >= 0.02]  # the line joins bins holding at least 2 % of the gestures
+        ax.plot(many.confidence, many.accuracy, color=color, ls=ls, lw=1.0, label=f"p_HMM {reading}")
+        ax.scatter(g.confidence, g.accuracy, s=4 + 200 * share, color=color, alpha=0.7, lw=0)
+    ax.set_xlim(0.3, 1.0)
+    ax.set_ylim(0.0, 1.0)
+    ax.set_xlabel("p_HMM of the top action")
+    ax.set_ylabel("how often it was right")
+    ax.set_title(f"p_HMM on held-out synthetic gestures ({fraction:.0%} seen)", fontsize=9)
+    ax.legend(fontsize=7)
     return ax

@@ -134,6 +134,19 @@ class Outputs:
         self.written.extend([csv, js])
         return csv
 
+    def say(self, text: str) -> None:
+        """Show a sentence written by code from the tables: Markdown in a running kernel, plain text elsewhere.
+
+        Notebook prose that names a number or a comparison goes through here (or a table), never into a
+        markdown cell, so a changed result cannot leave a stale sentence.
+        """
+        if in_kernel():
+            from IPython.display import Markdown, display
+
+            display(Markdown(text))
+        else:
+            print(text)
+
     def model(self, name: str) -> Path:
         """Path for a trained model file ``models/<name>`` (the folder is created)."""
         self.layout.models.mkdir(parents=True, exist_ok=True)

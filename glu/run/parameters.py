@@ -35,6 +35,10 @@ from glu.bn.learning import UNSEEN_MODES
 from glu.bn.soft import SOFT_RULES
 from glu.data.source import WORD_FILES
 from glu.errors import ParameterError
+from glu.experiments.corpus import ACTION_PRIORS
+from glu.experiments.correspondence import STUDY_FEATURE_NAMES
+from glu.experiments.evaluation import INFERENCE_NETWORKS
+from glu.gestures.calibration import READINGS
 from glu.gestures.invariants import FEATURE_NAMES
 from glu.language.descriptions import SCORES
 from glu.schema import AFFORDANCE_VALUES
@@ -47,8 +51,11 @@ CHOICES: dict[str, tuple[str, ...]] = {
     "shape": AFFORDANCE_VALUES["Shape"],
     "size": AFFORDANCE_VALUES["Size"],
     "features": FEATURE_NAMES,
-    "feature_sets": FEATURE_NAMES,
+    "feature_sets": STUDY_FEATURE_NAMES,
     "real_features": FEATURE_NAMES,
+    "action_prior": tuple(ACTION_PRIORS),
+    "inference_network": tuple(INFERENCE_NETWORKS),
+    "p_hmm": tuple(READINGS),
 }
 """Allowed values of the string parameters that take one of a few values (for a list, of each element)."""
 
@@ -76,8 +83,12 @@ RANGES: dict[str, tuple[float, float]] = {
     "n_train": (1, 100_000),
     "n_test": (1, 100_000),
     "n_iter": (1, 100_000),
-    "real_n_iter": (1, 100_000),
     "chunk_size": (1, 10_000_000),
+    "recognizer_seeds": (1, 1000),
+    "calibration_per_action": (1, 100_000),
+    "learn_experiments": (10, 10_000_000),
+    "yaws": (-360.0, 360.0),
+    "variety": (0.0, 3.0),
 }
 """Inclusive ranges of the numeric parameters (for a list, of each element)."""
 

@@ -18,11 +18,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import pandas as pd
-
 from glu import paths
 from glu.errors import DataError
 from glu.files import atomic_write_text
+from glu.run import readme_studies as studies
 from glu.run.readme_learning import LEARNING_REQUIRED, LEARNING_TEMPLATE, learning_values
 
 _ROOT = paths.PROJECT_ROOT
@@ -61,47 +60,43 @@ cases (`fusion_soft_sweep`).
 segments as tap; {original_other}.
   * Trained by glu on synthetic gestures: {cv_folds:.0f}-fold accuracy {cv_accuracy:.2f}, and {noise_accuracy:.2f} \
 with {noise_cm:.0f} cm sensor noise ({noise_folds:.0f}-fold).
-  * Two training recipes on the {loso_n:.0f} real segments of the three standing recordings (one person), \
-leave-one-segment-out on raw features: glu's {glu_span} over {glu_settings:.0f} seeds, the \
-originals' mixsplit (flat start, mixture splitting) {mixsplit_min:.2f}; with one segment worth \
-{segment_points:.0f} points, single accuracies are fragile. Trained on all of them, on raw features, neither \
-recipe recognises the two seated taps of the anticipation experiment (at most {glu_seated:.0f} and \
-{mixsplit_seated:.0f} of {n_seated:.0f}); the next bullet says why.
+  * On the {loso_n:.0f} real segments of the three standing recordings (one person), leave-one-segment-out on \
+raw features gives {raw_loso_span} over {raw_loso_runs:.0f} covariance priors and seeds; with one segment worth \
+{segment_points:.0f} points, single accuracies are fragile.
 * **The correspondence problem, on the real data** (`10_correspondence`). The seated hand works elsewhere in the \
 torso frame: mean height y of the two seated taps {seated_y_lo:.2f} and {seated_y_hi:.2f}, at most \
 {standing_y_max:.2f} for every standing repetition; depth z {seated_z_lo:.2f} and {seated_z_hi:.2f}, at least \
-{standing_z_min:.2f} standing. Raw-feature models decide the seated taps by their tails: both are tap in \
-{raw_all:.0f} of {raw_runs:.0f} runs over recipes, settings and seeds. Start-centred features (`glu hmm train \
---features centred`, computed online) remove the offset: both are tap in {centred_all:.0f} of {centred_runs:.0f} \
-runs, in every run with {centred_always}; leave-one-segment-out on the standing segments goes from \
-{raw_mean:.2f} ± {raw_sd:.2f} ({raw_min:.2f}–{raw_max:.2f}) raw to {centred_mean:.2f} ± {centred_sd:.2f} \
-({centred_min:.2f}–{centred_max:.2f}) centred. Effect anticipation with glu's centred HMMs (`08_tcds_figures`) \
-ends as the originals' does: the sphere will move (p(ObjVel = slow) {glu_sphere_slow:.3f}), the box will not \
-({glu_box_slow:.3f}).
-* **Invariant features, on synthetic people** (`10_correspondence`; HMMs trained on one standing person facing \
-the camera, {study_seeds:.0f} seeds). Turned by {yaw_lo:.0f}–{yaw_hi:.0f}°, raw features fall to \
-{raw_turn_min:.2f}–{raw_turn_max:.2f} (front view {raw_front:.2f}), `rotated` keeps \
-{rot_turn_min:.2f}–{rot_turn_max:.2f}; a mirror image {raw_mirror:.2f} raw, {mir_mirror:.2f} `mirrored`; seated \
-{raw_seated:.2f} raw, {cen_seated:.2f} `centred`; seated, mirrored, turned and bigger at once {raw_combined:.2f} \
-raw, {all_combined:.2f} with all four. Where an invariance costs: centring anchors a gesture on its first frame, \
-so with {study_noise_cm:.0f} cm of sensor noise accuracy falls from {raw_noise:.2f} (raw) to {cen_noise:.2f}. Trained \
-on the robot's own movements (an iCub-like arm), no feature set recognises a person's gestures better than \
-{robot_best:.2f}, while the robot recognises its own at {robot_own_min:.2f}–{robot_own_max:.2f}: its hand comes \
-down to the table from above, a person's comes up from beside the hip.
+{standing_z_min:.2f} standing.
+{nested_text}
+  * Effect anticipation with glu's centred HMMs (`08_tcds_figures`) ends as the originals' does: the sphere will \
+move (p(ObjVel = slow) {glu_sphere_slow:.3f}), the box will not ({glu_box_slow:.3f}).
+* **Invariant features and the body frame, on synthetic people** (`10_correspondence`; HMMs trained on standard \
+people facing the camera, tested on other people, {study_seeds:.0f} seeds, {ci_percent:.0f} % two-level intervals \
+over the seeds and the test gestures).
+{study_text}
 * **Effect anticipation (TCDS Fig. 5).** With the original HMMs, on the originals' schedule (an update every \
 {step:.0f} frames, the last at the last multiple of {step:.0f}), {anticipation_within:.0f} of {anticipation_n:.0f} values of the published \
 curves and bars are reproduced within the figure's resolution (max |difference| {anticipation_max:.1e}), and \
 both captions are the paper's: "{sphere_caption}", "{box_caption}".
 * **Verbal descriptions.** Ranking the originals' {n_samples:,.0f} sampled sentences with their score \
-(1 + Σ log p)/L, glu prints TCDS Table II, Fig. 7 and Fig. 8: {same_sentences:.0f} of {n_sentences:.0f} sentences \
+(1 + Σ log p)/L, glu prints TCDS Table II, Fig. 7 and Fig. 8 (whose sentences are the best among those that name \
+a colour, as the originals' code ranked them): {same_sentences:.0f} of {n_sentences:.0f} sentences \
 and {same_scores:.0f} of {n_scores:.0f} scores to the printed digit. The grammar has {n_grammar:,.0f} sentences; \
 glu finds the exact N-best under either score without scoring them one by one. Random samples of {trial_samples:,.0f} \
 sentences, as the originals drew them, held the grammar's best in {trials_found:.0f} of {trials:.0f} trials (the \
 exact chance is {p_draw_percent:.1f} %).
-* **Every fusion strategy on a simulated corpus** (`11_corpus_evaluation`: {corpus_episodes:,.0f} episodes; objects and actions from a scenario, effects and words drawn from the network, hand trajectories from the gesture generator under {corpus_noise:.0f} noise levels × {corpus_views:.0f} viewpoints; {ci_percent:.0f} % bootstrap intervals).
-  * Read from the likelihoods, as the originals do, p_HMM is nearly certain, right or wrong: the action's log-loss is {lik_gesture_ll:.2f} [{lik_gesture_ll_lo:.2f}, {lik_gesture_ll_hi:.2f}] nats at an accuracy of {lik_gesture_acc:.3f}. Fusion then changes little (product rule {lik_product_acc:.3f}), and a hard decision is as good as a soft one.
-  * Read per frame, p ∝ exp((1/t) log L), the product rule names the action in {pf_product_acc:.3f} [{pf_product_acc_lo:.3f}, {pf_product_acc_hi:.3f}] of the episodes against {pf_gesture_acc:.3f} for the gestures alone (paired difference {pf_gain:+.3f} [{pf_gain_lo:+.3f}, {pf_gain_hi:+.3f}]); with {early_percent:.0f} % of the gesture seen, {early_product:.3f} against {early_gesture:.3f}. Jeffrey's rule anticipates the effect with an ECE of {pf_jeffrey_ece:.3f} [{pf_jeffrey_ece_lo:.3f}, {pf_jeffrey_ece_hi:.3f}] against {pf_hard_ece:.3f} for a hard decision, and a log-loss of {pf_jeffrey_ll:.3f} against {pf_hard_ll:.3f}.
-  * Seen from a viewpoint turned by {turned_deg:.0f}°, the HMMs (trained facing the camera) name {turned_gesture:.3f} of the actions, below the network alone ({turned_network:.3f}): the correspondence problem."""
+* **Every fusion strategy on a simulated corpus** (`11_corpus_evaluation`: {corpus_episodes:,.0f} episodes over \
+{corpus_seeds:.0f} recogniser seeds, each with its own recogniser, learned networks and episodes; {ci_percent:.0f} % \
+two-level intervals, and a paired difference whose interval contains 0 counts as none). The effects and words \
+are drawn from a network and the gestures from the generator the HMMs are trained on, so the design crosses \
+the ways the robot's models can be wrong: actions drawn uniformly or from the network's prior, the robot's \
+network the generating one or learned from {corpus_learned} simulated experiments, and p_HMM read from the \
+likelihoods, per frame, or calibrated on held-out training gestures (`docs/corpus-evaluation.md`).
+  * The earlier findings, each followed through the {corpus_cells:.0f} cells of the design:
+{findings_text}
+{network_text}
+{p_hmm_text}
+  * {seed_text}"""
 """The results section, with ``{name:format}`` slots filled by :func:`values`."""
 TEMPLATE += "\n" + LEARNING_TEMPLATE
 
@@ -119,19 +114,24 @@ REQUIRED = (
     "hmm_original_scores",
     "hmm_synthetic_cv",
     "hmm_accuracy_vs_noise",
-    "hmm_feature_settings",
     "tcds_anticipation_sphere_published",
     "tcds_anticipation_box_published",
     "tcds_anticipation_sphere_original_predictions",
     "verbal_published_descriptions",
     "verbal_sampling_vs_exact",
     "corpus_metrics",
-    "corpus_differences",
+    "corpus_findings",
+    "corpus_seeds",
+    "corpus_calibration",
+    "p_hmm_real_calibration",
     "posture_offsets",
-    "hmm_feature_settings_summary",
     "tcds_anticipation_sphere_glu_predictions",
     "tcds_anticipation_box_glu_predictions",
     "correspondence_summary",
+    "correspondence_invariance_effects",
+    "correspondence_nested_cv",
+    "correspondence_candidates",
+    "seated_typicality",
 ) + LEARNING_REQUIRED
 """The result tables the section is written from."""
 
@@ -158,9 +158,7 @@ def load_summary(path: str | os.PathLike = SUMMARY) -> dict[str, Any]:
     return summary
 
 
-def _table(summary: Mapping[str, Any], name: str) -> tuple[pd.DataFrame, dict[str, Any]]:
-    t = summary["tables"][name]
-    return pd.DataFrame(t["rows"]), t["meta"]
+_table = studies.table
 
 
 def values(summary: Mapping[str, Any]) -> dict[str, Any]:
@@ -215,20 +213,7 @@ def values(summary: Mapping[str, Any]) -> dict[str, Any]:
         noise_cm=100 * worst["noise_m"],
         noise_folds=noise_meta["parameters"]["k"],
     )
-    grid = _table(summary, "hmm_feature_settings")[0]
-    raw = grid[grid["features"] == "raw"]
-    v["loso_n"] = int(grid["loso_testable"].max())
-    v["segment_points"] = 100 / v["loso_n"]
-    for r, rows in (
-        ("glu", raw[raw["setting"] == "glu defaults"]),
-        ("mixsplit", raw[raw["recipe"] == "mixsplit"]),
-    ):
-        if rows.empty:
-            raise DataError(f"the summary's hmm_feature_settings has no raw-feature rows of the {r} recipe")
-        v[f"{r}_min"], v[f"{r}_max"] = rows["loso_accuracy"].min(), rows["loso_accuracy"].max()
-        v[f"{r}_settings"], v[f"{r}_seated"] = len(rows), rows["test_correct"].max()
-        v[f"{r}_span"] = _span(v[f"{r}_min"], v[f"{r}_max"])
-    v["n_seated"] = len(str(raw["test_predicted"].iloc[0]).split(","))
+    v.update(studies.loso_values(summary))
     within, n, worst_diff = 0, 0, 0.0
     for case in ("sphere", "box"):
         df, meta = _table(summary, f"tcds_anticipation_{case}_published")
@@ -255,177 +240,9 @@ def values(summary: Mapping[str, Any]) -> dict[str, Any]:
         trial_samples=trials["n_samples"].max(),
         p_draw_percent=100 * float(trials["p_draw_best"].mean()),
     )
-    v.update(corpus_values(summary))
-    v.update(_correspondence(summary) | learning_values(summary))
-    return v
-
-
-def corpus_values(summary: Mapping[str, Any]) -> dict[str, Any]:
-    """The slots of the corpus bullet, from the tables of notebook 11 (pooled over noise and viewpoints)."""
-    from glu.experiments.intervals import LEVEL
-
-    table, meta = _table(summary, "corpus_metrics")
-    diffs = _table(summary, "corpus_differences")[0]
-    grid = meta["parameters"]["grid"]
-    full, early = max(grid["fractions"]), min(grid["fractions"])
-
-    def cell(
-        posterior: str,
-        target: str,
-        strategy: str,
-        metric: str,
-        fraction: float = full,
-        viewpoint: str = "all",
-    ) -> pd.Series:
-        sel = table[
-            (table.posterior == posterior)
-            & (table.target == target)
-            & (table.strategy == strategy)
-            & (table.metric == metric)
-            & (table.fraction == fraction)
-            & (table.viewpoint == viewpoint)
-            & table.noise.isna()
-        ]
-        if len(sel) != 1:
-            raise DataError(
-                f"corpus_metrics: no single row for {posterior} {target} {strategy} {metric} {fraction}"
-            )
-        return sel.iloc[0]
-
-    v: dict[str, Any] = {
-        "corpus_episodes": meta["episodes"],
-        "corpus_noise": len(grid["noise"]),
-        "corpus_views": len(grid["viewpoints"]),
-        "ci_percent": 100 * LEVEL,
-    }
-    g = cell("likelihood", "action", "gesture", "log_loss")
-    v.update(
-        lik_gesture_ll=g.estimate,
-        lik_gesture_ll_lo=g.ci_low,
-        lik_gesture_ll_hi=g.ci_high,
-        lik_gesture_acc=cell("likelihood", "action", "gesture", "accuracy").estimate,
-        lik_product_acc=cell("likelihood", "action", "product", "accuracy").estimate,
-    )
-    p = cell("per_frame", "action", "product", "accuracy")
-    v.update(
-        pf_product_acc=p.estimate,
-        pf_product_acc_lo=p.ci_low,
-        pf_product_acc_hi=p.ci_high,
-        pf_gesture_acc=cell("per_frame", "action", "gesture", "accuracy").estimate,
-    )
-    d = diffs[
-        (diffs.posterior == "per_frame")
-        & (diffs.target == "action")
-        & (diffs.metric == "accuracy")
-        & (diffs.fraction == full)
-        & (diffs.strategy == "product")
-        & (diffs.baseline == "gesture")
-        & (diffs.viewpoint == "all")
-        & diffs.noise.isna()
-    ].iloc[0]
-    v.update(
-        pf_gain=d.difference,
-        pf_gain_lo=d.ci_low,
-        pf_gain_hi=d.ci_high,
-        early_percent=100 * early,
-        early_product=cell("per_frame", "action", "product", "accuracy", early).estimate,
-        early_gesture=cell("per_frame", "action", "gesture", "accuracy", early).estimate,
-    )
-    j = cell("per_frame", "effect", "jeffrey", "ece")
-    v.update(
-        pf_jeffrey_ece=j.estimate,
-        pf_jeffrey_ece_lo=j.ci_low,
-        pf_jeffrey_ece_hi=j.ci_high,
-        pf_hard_ece=cell("per_frame", "effect", "hard", "ece").estimate,
-        pf_jeffrey_ll=cell("per_frame", "effect", "jeffrey", "log_loss").estimate,
-        pf_hard_ll=cell("per_frame", "effect", "hard", "log_loss").estimate,
-    )
-    v.update(
-        turned_deg=meta["parameters"]["views"]["turned"]["yaw_deg"],
-        turned_gesture=cell("per_frame", "action", "gesture", "accuracy", viewpoint="turned").estimate,
-        turned_network=cell("per_frame", "action", "network", "accuracy", viewpoint="turned").estimate,
-    )
-    return v
-
-
-ALL_FOUR = "centred+scaled+rotated+mirrored"
-
-
-def _span(lo: float, hi: float) -> str:
-    """``"0.45–0.55"``, or ``"0.73"`` when both ends print alike."""
-    return f"{lo:.2f}" if f"{lo:.2f}" == f"{hi:.2f}" else f"{lo:.2f}–{hi:.2f}"
-
-
-def _correspondence(summary: Mapping[str, Any]) -> dict[str, Any]:
-    """The slots of the two correspondence bullets (notebooks 08 and 10)."""
-    v: dict[str, Any] = {}
-    off = _table(summary, "posture_offsets")[0]
-    sat, stand = off[off["posture"] == "seated"], off[off["posture"] == "standing"]
-    v.update(
-        seated_y_lo=sat["y"].min(),
-        seated_y_hi=sat["y"].max(),
-        standing_y_max=stand["y"].max(),
-        seated_z_lo=sat["z"].min(),
-        seated_z_hi=sat["z"].max(),
-        standing_z_min=stand["z"].min(),
-    )
-    grid = _table(summary, "hmm_feature_settings_summary")[0].set_index("features")
-    for f in ("raw", "centred"):
-        r = grid.loc[f]
-        v.update(
-            {
-                f"{f}_all": r["runs_all_test_correct"],
-                f"{f}_runs": r["runs"],
-                f"{f}_mean": r["loso_mean"],
-                f"{f}_sd": r["loso_sd"],
-                f"{f}_min": r["loso_min"],
-                f"{f}_max": r["loso_max"],
-            }
-        )
-    v["centred_always"] = grid.loc["centred", "settings_always_all_test_correct"] or "no setting"
-    for case in ("sphere", "box"):
-        pred = _table(summary, f"tcds_anticipation_{case}_glu_predictions")[0]
-        last = pred[(pred["node"] == "ObjVel") & (pred["frame"] == pred["frame"].max())].set_index("value")[
-            "p"
-        ]
-        v[f"glu_{case}_slow"] = last["slow"]
-    study, meta = _table(summary, "correspondence_summary")
-    h = study[study["train"] == "human"]
-
-    def acc(features: str, factor: str, level: str | None = None) -> pd.Series:
-        rows = h[(h["features"] == features) & (h["factor"] == factor)]
-        return rows["accuracy"] if level is None else rows[rows["level"] == level]["accuracy"]
-
-    turned = h[(h["factor"] == "viewpoint") & (h["yaw_deg"] > 0)]
-    v.update(
-        study_seeds=len(meta["parameters"]["seeds"]),
-        yaw_lo=turned["yaw_deg"].min(),
-        yaw_hi=turned["yaw_deg"].max(),
-        raw_front=acc("raw", "viewpoint", "0°").iloc[0],
-        raw_turn_min=turned[turned["features"] == "raw"]["accuracy"].min(),
-        raw_turn_max=turned[turned["features"] == "raw"]["accuracy"].max(),
-        rot_turn_min=turned[turned["features"] == "centred+rotated"]["accuracy"].min(),
-        rot_turn_max=turned[turned["features"] == "centred+rotated"]["accuracy"].max(),
-        raw_mirror=acc("raw", "mirror").iloc[0],
-        mir_mirror=acc("centred+mirrored", "mirror").iloc[0],
-        raw_seated=acc("raw", "posture").iloc[0],
-        cen_seated=acc("centred", "posture").iloc[0],
-        raw_combined=acc("raw", "combined").iloc[0],
-        all_combined=acc(ALL_FOUR, "combined").iloc[0],
-    )
-    noise = h[(h["factor"] == "sensor noise")]
-    lowest = noise["level"].iloc[0]  # the first noise condition of the study
-    v.update(
-        study_noise_cm=float(lowest.split()[0]),
-        raw_noise=acc("raw", "sensor noise", lowest).iloc[0],
-        cen_noise=acc("centred", "sensor noise", lowest).iloc[0],
-    )
-    r = study[study["train"] == "robot"]
-    v.update(
-        robot_best=r[r["factor"] != "performer"]["accuracy"].max(),
-        robot_own_min=r[r["factor"] == "performer"]["accuracy"].min(),
-        robot_own_max=r[r["factor"] == "performer"]["accuracy"].max(),
-    )
+    v.update(studies.corpus_values(summary))
+    v.update(studies.correspondence_values(summary))
+    v.update(learning_values(summary))
     return v
 
 

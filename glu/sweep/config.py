@@ -1,24 +1,28 @@
 """The settings of a corpus sweep: defaults, a TOML file, validation with one-line errors.
 
 A sweep file (``glu evaluate --config FILE.toml``) may set any of these; everything left out keeps the
-default shown::
+default shown (``docs/corpus-evaluation.md`` explains the design)::
 
-    episodes = 20000          # in all, shared equally by the conditions (rounded up)
+    episodes = 120000         # in all, shared equally by (action prior, noise, viewpoint) and the seeds
     seed = 0
-    chunk_size = 2000         # episodes per task (and per resumable piece)
+    chunk_size = 2000         # episodes per recogniser seed in one task (and per resumable piece)
+    recognizer_seeds = 10     # K replications: each its own recogniser, learned networks and episodes
 
-    [grid]                    # the factors: noise × viewpoint × posterior are conditions; every episode
-    noise = [0.0, 0.02, 0.05, 0.1]               # is scored at every fraction by every strategy
+    [grid]                    # the factors; every episode is scored at every fraction by every strategy
+    action_prior = ["uniform", "network"]        # how often each action is performed (also "scenario")
+    inference_network = ["generating", "learned"]  # the robot's network: the world's, or learned
+    learn_experiments = [100, 1270, 10000]       # rows of the experiment tables the learned ones see
+    p_hmm = ["likelihood", "per-frame", "calibrated"]  # how p_HMM is read (glu.gestures.calibration)
+    noise = [0.0, 0.02, 0.05, 0.1]
     viewpoints = ["front", "turned", "seated"]
-    posteriors = ["likelihood"]                  # also "per_frame" (glu.experiments.corpus.POSTERIORS)
     fractions = [0.2, 0.4, 0.6, 0.8, 1.0]
     strategies = ["gesture", "network", "hard", "virtual", "jeffrey", "product", "true_action"]
 
     [views.left]              # more viewpoints (or new definitions of the named ones)
     yaw_deg = -40.0           # also: mirror = true, posture = "seated", size = 1.1
 
-    [scenario.Action]         # weights of a root node's values (Action, Color, Shape, Size); default uniform
-    tap = 2.0
+    [scenario.Shape]          # weights of a root node's values (Color, Shape, Size; Action with the
+    sphere = 2.0              # action prior "scenario"); default uniform
 
     [gestures]
     spike_rate = 0.005
@@ -30,9 +34,10 @@ default shown::
     n_mix = 3
     n_iter = 200
     noise = 0.01
-    # file = "recognizer.json"
+    calibration_per_action = 20   # held-out training gestures the calibrated reading is fitted on
+    # file = "recognizer.json"    (then recognizer_seeds = 1)
 
-    [network]                 # the Affordance–Words network: learned from this data
+    [network]                 # the Affordance–Words network that draws the episodes: learned from this data
     # data = "../shared/data"   (default: $GLU_DATA_DIR, data/real, else synthetic)
     words = "lab"
     unseen_words = "zero"
@@ -61,25 +66,29 @@ from typing import Any
 from glu.bn.learning import UNSEEN_MODES
 from glu.data.source import WORD_FILES
 from glu.errors import DataError
-from glu.experiments.corpus import POSTERIORS, VIEWPOINTS, Condition, GestureSettings, Scenario
-from glu.experiments.evaluation import EvaluationSettings
+from glu.experiments.corpus import ACTION_PRIORS, VIEWPOINTS, Condition, GestureSettings, Scenario
+from glu.experiments.evaluation import INFERENCE_NETWORKS, EvaluationSettings, Reading
 from glu.files import read_text
-from glu.gestures.synthetic import POSTURES, View
+from glu.gestures.calibration import READINGS
+from glu.gestures.views import POSTURES, View
 from glu.hmm import TrainingConfig
 
 MAX_EPISODES = 100_000_000
+MAX_SEEDS = 1000
 
 
 @dataclass(frozen=True)
 class RecognizerSettings:
     """The gesture HMMs: trained on ``n_per_action`` synthetic gestures per action (front view, sensor
-    noise ``noise``) with :class:`~glu.hmm.TrainingConfig`'s recipe, or read from ``file``."""
+    noise ``noise``) with :class:`~glu.hmm.TrainingConfig`'s recipe, or read from ``file``; the calibrated
+    reading of p_HMM is fitted on ``calibration_per_action`` more gestures of the same kind."""
 
     n_per_action: int = 20
     n_states: int = TrainingConfig.n_states
     n_mix: int = TrainingConfig.n_mix
     n_iter: int = TrainingConfig.n_iter
     noise: float = 0.01
+    calibration_per_action: int = 20
     file: str | None = None
 
     def training(self) -> TrainingConfig:
@@ -100,12 +109,16 @@ class NetworkSettings:
 class SweepConfig:
     """Everything that defines a sweep's results (see the module docstring for the file format)."""
 
-    episodes: int = 20_000
+    episodes: int = 120_000
     seed: int = 0
     chunk_size: int = 2000
+    recognizer_seeds: int = 10
+    action_prior: tuple[str, ...] = ("uniform", "network")
+    inference_network: tuple[str, ...] = ("generating", "learned")
+    learn_experiments: tuple[int, ...] = (100, 1270, 10000)
+    p_hmm: tuple[str, ...] = tuple(READINGS)
     noise: tuple[float, ...] = (0.0, 0.02, 0.05, 0.1)
     viewpoints: tuple[str, ...] = ("front", "turned", "seated")
-    posteriors: tuple[str, ...] = ("likelihood",)
     views: Mapping[str, View] = field(default_factory=lambda: dict(VIEWPOINTS))
     scenario: Scenario = Scenario()
     gestures: GestureSettings = GestureSettings()
@@ -119,13 +132,38 @@ class SweepConfig:
         _whole("chunk_size", self.chunk_size, 1, 1_000_000)
         if not self.noise or any(not _number(x) or x < 0 for x in self.noise):
             raise DataError(f"grid.noise {list(self.noise)}: give one or more noise levels ≥ 0 (metres)")
-        if any(len(set(v)) != len(v) for v in (self.noise, self.viewpoints, self.posteriors)):
-            raise DataError("grid: each noise level, viewpoint and posterior may appear once")
-        bad = [p for p in self.posteriors if p not in POSTERIORS]
-        if bad or not self.posteriors:
-            raise DataError(
-                f"grid.posteriors: unknown posterior {bad[0] if bad else '(none)'!r}; allowed: {', '.join(POSTERIORS)}"
-            )
+        _whole("recognizer_seeds", self.recognizer_seeds, 1, MAX_SEEDS)
+        factors = {
+            "action_prior": (self.action_prior, ACTION_PRIORS),
+            "inference_network": (self.inference_network, INFERENCE_NETWORKS),
+            "p_hmm": (self.p_hmm, READINGS),
+        }
+        for name, (given, allowed) in factors.items():
+            bad = [v for v in given if v not in allowed]
+            if bad or not given:
+                raise DataError(
+                    f"grid.{name}: unknown value {bad[0] if bad else '(none)'!r}; allowed: {', '.join(allowed)}"
+                )
+        for name in (
+            "noise",
+            "viewpoints",
+            "action_prior",
+            "inference_network",
+            "p_hmm",
+            "learn_experiments",
+        ):
+            v = getattr(self, name)
+            if len(set(v)) != len(v):
+                raise DataError(f"grid.{name}: each value may appear once")
+        if "learned" in self.inference_network:
+            if not self.learn_experiments:
+                raise DataError("grid.learn_experiments: give the rows of at least one experiment table")
+            for n in self.learn_experiments:
+                _whole("grid.learn_experiments", n, 10, 10_000_000)
+        if "scenario" in self.action_prior and "Action" not in self.scenario.weights:
+            raise DataError("grid.action_prior 'scenario' needs [scenario.Action] weights")
+        if "Action" in self.scenario.weights and "scenario" not in self.action_prior:
+            raise DataError('[scenario.Action] applies only with grid.action_prior = ["scenario", …]')
         if not self.viewpoints:
             raise DataError("grid.viewpoints: give at least one viewpoint")
         unknown = [v for v in self.viewpoints if v not in self.views]
@@ -135,10 +173,18 @@ class SweepConfig:
                 "(define more in [views.NAME])"
             )
         r = self.recognizer
-        for name, lo in (("n_per_action", 2), ("n_states", 1), ("n_mix", 1), ("n_iter", 1)):
+        for name, lo in (
+            ("n_per_action", 2),
+            ("n_states", 1),
+            ("n_mix", 1),
+            ("n_iter", 1),
+            ("calibration_per_action", 1),
+        ):
             _whole(f"recognizer.{name}", getattr(r, name), lo, 100_000)
         if not _number(r.noise) or r.noise < 0:
             raise DataError(f"recognizer.noise={r.noise!r}: the training noise must be a number ≥ 0 (metres)")
+        if r.file is not None and self.recognizer_seeds != 1:
+            raise DataError("recognizer.file: one recogniser from a file needs recognizer_seeds = 1")
         if self.network.words not in WORD_FILES:
             raise DataError(f"network.words={self.network.words!r}; allowed: {', '.join(WORD_FILES)}")
         if self.network.unseen_words not in UNSEEN_MODES:
@@ -148,21 +194,31 @@ class SweepConfig:
 
     @property
     def conditions(self) -> list[Condition]:
-        """The conditions, noise-major: (noise, viewpoint, posterior) for every triple of the grid."""
+        """The simulated conditions, action-prior-major: (noise, viewpoint, action prior) for every triple."""
         return [
-            Condition(float(n), v, p) for n in self.noise for v in self.viewpoints for p in self.posteriors
+            Condition(float(n), v, a) for a in self.action_prior for n in self.noise for v in self.viewpoints
         ]
 
     @property
+    def readings(self) -> list[Reading]:
+        """How every episode is read: each inference network (one per table size if learned) × p_HMM."""
+        nets = [
+            (name, n)
+            for name in self.inference_network
+            for n in (self.learn_experiments if name == "learned" else (0,))
+        ]
+        return [Reading(name, n, p) for name, n in nets for p in self.p_hmm]
+
+    @property
     def per_condition(self) -> int:
-        """Episodes per condition: ``episodes`` shared equally by the (noise, viewpoint) pairs, rounded up
-        (every posterior reads the same episodes)."""
-        return math.ceil(self.episodes / (len(self.noise) * len(self.viewpoints)))
+        """Episodes per condition and recogniser seed: ``episodes`` shared equally, rounded up (every
+        reading reads the same episodes)."""
+        return math.ceil(self.episodes / (len(self.conditions) * self.recognizer_seeds))
 
     @property
     def n_episodes(self) -> int:
-        """Episodes simulated: :attr:`per_condition` for each (noise, viewpoint) pair."""
-        return self.per_condition * len(self.noise) * len(self.viewpoints)
+        """Episodes simulated: :attr:`per_condition` for each condition and recogniser seed."""
+        return self.per_condition * len(self.conditions) * self.recognizer_seeds
 
     def with_overrides(self, **changes: Any) -> SweepConfig:
         """A copy with top-level fields changed (``None`` values are ignored)."""
@@ -174,10 +230,14 @@ class SweepConfig:
             "episodes": self.episodes,
             "seed": self.seed,
             "chunk_size": self.chunk_size,
+            "recognizer_seeds": self.recognizer_seeds,
             "grid": {
+                "action_prior": list(self.action_prior),
+                "inference_network": list(self.inference_network),
+                "learn_experiments": list(self.learn_experiments),
+                "p_hmm": list(self.p_hmm),
                 "noise": list(self.noise),
                 "viewpoints": list(self.viewpoints),
-                "posteriors": list(self.posteriors),
                 "fractions": list(self.evaluation.fractions),
                 "strategies": list(self.evaluation.strategies),
             },
@@ -216,6 +276,7 @@ SECTIONS: dict[str, tuple[str, ...]] = {
         "episodes",
         "seed",
         "chunk_size",
+        "recognizer_seeds",
         "grid",
         "views",
         "scenario",
@@ -224,7 +285,16 @@ SECTIONS: dict[str, tuple[str, ...]] = {
         "network",
         "evaluation",
     ),
-    "grid": ("noise", "viewpoints", "posteriors", "fractions", "strategies"),
+    "grid": (
+        "action_prior",
+        "inference_network",
+        "learn_experiments",
+        "p_hmm",
+        "noise",
+        "viewpoints",
+        "fractions",
+        "strategies",
+    ),
     "gestures": tuple(f.name for f in fields(GestureSettings)),
     "recognizer": tuple(f.name for f in fields(RecognizerSettings)),
     "network": tuple(f.name for f in fields(NetworkSettings)),
@@ -258,7 +328,7 @@ def load_config(path: str | os.PathLike) -> SweepConfig:
 def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepConfig:
     """A :class:`SweepConfig` from the tables of a sweep file (relative paths resolved against ``base``)."""
     _keys("", doc)
-    top = {k: doc[k] for k in ("episodes", "seed", "chunk_size") if k in doc}
+    top = {k: doc[k] for k in ("episodes", "seed", "chunk_size", "recognizer_seeds") if k in doc}
     grid = _table(doc, "grid")
     views = dict(VIEWPOINTS)
     for name, spec in _table(doc, "views").items():
@@ -302,8 +372,9 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
         extra["noise"] = _list("grid.noise", grid["noise"])
     if "viewpoints" in grid:
         extra["viewpoints"] = _list("grid.viewpoints", grid["viewpoints"])
-    if "posteriors" in grid:
-        extra["posteriors"] = _list("grid.posteriors", grid["posteriors"])
+    for name in ("action_prior", "inference_network", "learn_experiments", "p_hmm"):
+        if name in grid:
+            extra[name] = _list(f"grid.{name}", grid[name])
     return SweepConfig(
         **top,
         **extra,

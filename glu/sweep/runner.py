@@ -1,9 +1,11 @@
 """Run a corpus sweep as Dask tasks, resumably, and merge the chunks into tables.
 
-The grid of a sweep is strategy × noise × observed fraction × viewpoint × seed chunks. One **task** is one
-chunk of episodes in one condition (noise, viewpoint): it simulates the episodes once and scores them at
-every fraction with every strategy, since those share the gesture and its forward pass
-(:meth:`glu.experiments.evaluation.Evaluator.run_chunk`). Tasks run
+The grid of a sweep is action prior × noise × viewpoint (the simulated conditions) × recogniser seed ×
+inference network × p_HMM reading (the readings) × strategy × observed fraction. One **task** is one chunk
+of episodes of one condition, for every recogniser seed: it simulates each seed's episodes once and scores
+them at every fraction with every strategy under every reading, since those share the gesture and its
+forward pass (:meth:`glu.experiments.evaluation.Evaluator.run_chunk`); the seeds' two-level bootstrap sums
+add up (:mod:`glu.experiments.intervals`), so a task stores one sum per reading. Tasks run
 
 * on a ``LocalCluster`` sized to the machine (one single-threaded worker process per core) by default;
 * on an existing cluster with ``scheduler="tcp://host:8786"`` (``dask scheduler`` and ``dask worker``,
@@ -18,15 +20,20 @@ are merged in index order, so the same settings give the same tables on any clus
 The output folder::
 
     OUT/sweep.json          the settings, the data source and a fingerprint of everything behind the numbers
-    OUT/recognizer.json     the gesture HMMs used (trained once, reused on resume)
-    OUT/chunks/*.npz        the summed statistics of each chunk (estimate and bootstrap replicates)
-    OUT/sums.parquet        the chunks merged: one row per condition and replicate
-    OUT/results.parquet     THE table: every metric with its 95 % interval, per condition, pooled over the
+    OUT/recognizers/seed-NNN.json   the gesture HMMs of each recogniser seed (trained once, reused on resume)
+    OUT/chunks/*.npz        the summed statistics of each chunk (estimate, bootstrap replicates, and each
+                            seed's own estimate)
+    OUT/sums.parquet        the chunks merged: one row per condition, reading and replicate
+    OUT/results.parquet     THE table: every metric with its 95 % two-level interval, per action prior,
+                            inference network, p_HMM reading, noise and viewpoint, pooled over the
                             viewpoints (viewpoint "all"), over the noise levels (noise NaN), and both
-    OUT/differences.parquet paired differences between strategies, with intervals
-    OUT/reliability.parquet the effect's reliability diagrams
+    OUT/differences.parquet paired differences between strategies, with intervals and verdicts
+    OUT/reliability.parquet reliability diagrams of p_HMM (target action, strategy gesture) and of every
+                            strategy's action and effect
+    OUT/seeds.parquet       each recogniser seed's own estimates (pooled over noise and viewpoints)
+    OUT/calibration.parquet the calibrated reading's β per seed and observed fraction
     OUT/summary.json, OUT/summary.csv   the tidy summary: the overall metrics at the full gesture, and
-                            which strategy is best for each target and metric
+                            which strategy wins each cell of the design
 """
 
 from __future__ import annotations
@@ -48,20 +55,18 @@ import numpy as np
 import pandas as pd
 
 from glu import __version__
-from glu.errors import DataError, GluError, ModelError
+from glu.errors import DataError, GluError
 from glu.experiments.corpus import Condition
 from glu.experiments.evaluation import Evaluator
 from glu.files import atomic_write_json
-from glu.schema import ACTIONS
+from glu.sweep import robots
 from glu.sweep.config import SweepConfig
 from glu.sweep.tables import chunk_path, merge, write_chunk
 
 FORMAT = "glu-sweep"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 SYNCHRONOUS = "synchronous"
 ADDRESS = re.compile(r"^(tcp|tls|ws|wss)://[^\s/]+:\d+/?$")
-RECOGNIZER_SEED_OFFSET = 5000
-"""The recogniser's training gestures are drawn with ``seed + 5000``, apart from the episodes."""
 
 
 def check_scheduler(address: str | None) -> str | None:
@@ -82,6 +87,7 @@ class SweepResult:
     metrics: pd.DataFrame
     differences: pd.DataFrame
     reliability: pd.DataFrame
+    seeds: pd.DataFrame
     summary: dict[str, Any]
     computed: int
     reused: int
@@ -108,20 +114,25 @@ def prepare_world(config: SweepConfig) -> tuple[Any, str]:
 
 
 def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple[Evaluator, dict[str, Any]]:
-    """The evaluator (network learned, recogniser trained or loaded) and the sweep's provenance."""
-    from glu.hmm import BatchScorer
+    """The evaluator (networks learned, recognisers trained or loaded, calibrated) and the sweep's provenance."""
+    from glu.experiments.evaluation import Replication, target_tables
 
     engine, label = prepare_world(config)
     bn = engine.bn
-    recognizer = _recognizer(config, out, log)
-    missing = [a for a in ACTIONS if a not in recognizer.models]
-    if missing:
-        raise ModelError(
-            f"the recogniser has no model for {', '.join(missing)}; it needs {', '.join(ACTIONS)}"
-        )
+    recognizers = robots.recognizers(config, out, log)
+    calibrations = robots.calibrations(config, recognizers)
+    learned = robots.learned_networks(config, engine)
+    generating = target_tables(engine, config.evaluation)
+    replications = []
+    for k, rec in enumerate(recognizers):
+        tables = {"generating": generating}
+        for n, net in learned[k].items():
+            tables[f"learned-{n}"] = target_tables(net, config.evaluation)
+        replications.append(Replication(robots.scorer(rec), calibrations[k], tables))
     evaluator = Evaluator(
         engine,
-        BatchScorer([recognizer.models[a] for a in ACTIONS]),
+        tuple(replications),
+        tuple(config.readings),
         config.evaluation,
         config.seed,
         config.chunk_size,
@@ -130,7 +141,7 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
         {v: config.views[v] for v in config.viewpoints},
     )
     # what the numbers depend on: the settings (where the data and the recogniser file are does not
-    # matter, what they hold does), the data, the network, the models, glu's version
+    # matter, what they hold does), the data, the networks, the models, glu's version
     settings = config.as_dict()
     settings["network"]["data"] = settings["recognizer"]["file"] = None
     digest = hashlib.sha256()
@@ -138,7 +149,7 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
         json.dumps(settings, sort_keys=True),
         label,
         json.dumps(bn.to_dict()),
-        json.dumps(recognizer.to_dict()["models"]),
+        *(json.dumps(rec.to_dict()["models"]) for rec in recognizers),
         __version__,
     ):
         digest.update(part.encode())
@@ -150,9 +161,16 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
         "data_source": label,
         "settings": _public(config.as_dict()),
         "conditions": [asdict(c) for c in config.conditions],
-        "episodes_per_condition": config.per_condition,
+        "readings": [asdict(r) for r in config.readings],
+        "episodes_per_condition_and_seed": config.per_condition,
         "episodes": config.n_episodes,
         "statistics": len(evaluator.columns),
+        "calibration": [
+            {"recognizer_seed": k, "fraction": float(f), "beta": float(b), "n_gestures": c.n_gestures}
+            for k, c in enumerate(calibrations)
+            if c is not None
+            for f, b in zip(c.fractions, c.beta, strict=True)
+        ],
     }
     return evaluator, provenance
 
@@ -167,48 +185,23 @@ def _public(settings: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def _recognizer(config: SweepConfig, out: Path, log: Callable[[str], None]) -> Any:
-    from glu.gestures.corpus import synthetic_corpus
-    from glu.gestures.recognizer import Recognizer, train_recognizer
-
-    r = config.recognizer
-    if r.file:
-        return Recognizer.load(r.file)
-    saved = out / "recognizer.json"
-    recipe = {"sweep_recipe": {**asdict(r), "seed": config.seed}}
-    if saved.is_file():
-        try:
-            rec = Recognizer.load(saved)
-            if rec.meta.get("sweep_recipe") == recipe["sweep_recipe"]:
-                return rec
-        except ModelError:
-            pass
-    log(
-        f"training the gesture HMMs on {r.n_per_action} synthetic gestures per action (Q={r.n_states}, M={r.n_mix})"
-    )
-    corpus = synthetic_corpus(r.n_per_action, config.seed + RECOGNIZER_SEED_OFFSET, noise=r.noise)
-    by_action: dict[str, list[np.ndarray]] = {}
-    for s in corpus:
-        by_action.setdefault(s.action, []).append(s.xyz)
-    meta = {**recipe, "data_source": corpus.description}
-    rec = train_recognizer(by_action, r.training(), seed=config.seed, warn=False, meta=meta)
-    rec.save(saved)
-    return rec
-
-
 # ------------------------------------------------------------------------------------------ the tasks
-def compute_chunk(
-    evaluator: Evaluator, indices: tuple[int, ...], conditions: tuple[Condition, ...], chunk: int, n: int
-) -> tuple:
-    """One task (run on a worker): one chunk of episodes, simulated once and scored for each of
-    ``conditions`` (the same noise and viewpoint, other posteriors), on one BLAS thread."""
+def compute_chunk(evaluator: Evaluator, index: int, condition: Condition, chunk: int, n: int) -> tuple:
+    """One task (run on a worker): one chunk of episodes of ``condition`` for every recogniser seed,
+    scored under every reading, on one BLAS thread.
+
+    Returns (index, chunk, n, sums of shape (R, B + 1, K) summed over the seeds, each seed's plain sums
+    of shape (n_seeds, R, K), CPU seconds).
+    """
     import scipy.ndimage  # noqa: F401 - loaded before the limit, which binds only libraries already loaded
     from threadpoolctl import threadpool_limits
 
     t0 = time.process_time()
     with threadpool_limits(1):
-        sums = evaluator.run_chunks(conditions, chunk, n)
-    return indices, chunk, n, sums, time.process_time() - t0
+        per_seed = [evaluator.run_chunk(condition, k, chunk, n) for k in range(len(evaluator.replications))]
+    total = np.sum(per_seed, axis=0)
+    own = np.stack([s[:, 0] for s in per_seed])
+    return index, chunk, n, total, own, time.process_time() - t0
 
 
 # ------------------------------------------------------------------------------------------ the sweep
@@ -230,8 +223,9 @@ def run_sweep(
     scheduler : None (a LocalCluster), a Dask address ``tcp://host:port``, or ``"synchronous"``
     workers : LocalCluster worker processes (default: one per core available)
     progress : show a progress bar (None: only on a terminal)
-    max_chunks : run at most this many tasks now (a task is one chunk of episodes, scored for every
-        posterior); the rest on a later run; tables are written only when every chunk is done
+    max_chunks : run at most this many tasks now (a task is one chunk of episodes of one condition, for
+        every recogniser seed and reading); the rest on a later run; tables are written only when every
+        chunk is done
     log : where one-line messages go
     """
     t0 = time.perf_counter()
@@ -266,42 +260,39 @@ def run_sweep(
     from glu.experiments.corpus import chunk_ranges
 
     chunks = chunk_ranges(config.per_condition, config.chunk_size)
-    tasks, missing = [], 0
-    for noise in config.noise:  # one task per (noise, viewpoint, chunk): the posteriors share the episodes
-        for view in config.viewpoints:
-            group = [
-                (i, c) for i, c in enumerate(conditions) if (c.noise, c.viewpoint) == (float(noise), view)
-            ]
-            for k, n in chunks:
-                todo_here = [(i, c) for i, c in group if not chunk_path(out, i, k).is_file()]
-                if todo_here:
-                    tasks.append((tuple(i for i, _ in todo_here), tuple(c for _, c in todo_here), k, n))
-                    missing += len(todo_here)
+    tasks = [
+        (i, c, k, n)
+        for i, c in enumerate(conditions)
+        for k, n in chunks
+        if not chunk_path(out, i, k).is_file()
+    ]
     total = len(conditions) * len(chunks)
     todo = tasks if max_chunks is None else tasks[: max(int(max_chunks), 0)]
-    reused = total - missing
+    reused = total - len(tasks)
     where = {None: "a LocalCluster", SYNCHRONOUS: "this process"}.get(scheduler, scheduler)
     log(
-        f"glu evaluate: {config.n_episodes} episodes, {len(conditions)} conditions, {total} chunks "
+        f"glu evaluate: {config.n_episodes} episodes, {len(conditions)} conditions × "
+        f"{config.recognizer_seeds} recogniser seeds × {len(config.readings)} readings, {total} chunks "
         f"({reused} already done), on {where}; {provenance['data_source']}"
     )
     cpu = _run_tasks(
         evaluator, todo, out, provenance["fingerprint"], scheduler, workers, progress, reused, total
     )
-    computed = sum(len(t[0]) for t in todo)
+    computed = len(todo)
     if reused + computed < total:
         log(f"glu evaluate: {reused + computed} of {total} chunks done; run again to finish")
         empty = pd.DataFrame()
-        return SweepResult(out, empty, empty, empty, {}, computed, reused, time.perf_counter() - t0, cpu)
+        return SweepResult(
+            out, empty, empty, empty, empty, {}, computed, reused, time.perf_counter() - t0, cpu
+        )
     tables = merge(out, config, evaluator, provenance)
     return SweepResult(out, *tables, computed, reused, time.perf_counter() - t0, cpu)
 
 
 def _save(out: Path, fingerprint: str, result: tuple, bar: Any) -> float:
-    indices, chunk, n, sums, cpu = result
-    for index, s in zip(indices, sums, strict=True):
-        write_chunk(out, fingerprint, index, chunk, n, s)
-        bar.update(1)
+    index, chunk, n, sums, own, cpu = result
+    write_chunk(out, fingerprint, index, chunk, n, sums, own)
+    bar.update(1)
     return cpu
 
 
@@ -382,7 +373,7 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
                 shared,
                 *t,
                 pure=False,
-                key=f"glu-chunk-{'-'.join(map(str, t[0]))}-{t[2]}-{fingerprint[:8]}",
+                key=f"glu-chunk-{t[0]}-{t[2]}-{fingerprint[:8]}",
             )
             for t in todo
         ]

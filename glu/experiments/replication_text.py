@@ -1,0 +1,108 @@
+"""The replication notebooks' interpretation in sentences, written from their tables (notebooks 07–09).
+
+Each function reads the tidy frames a notebook has just computed and returns sentences, so that a changed
+result cannot leave a sentence that contradicts it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+
+def _dist(g: pd.DataFrame, value: str = "ObjVel") -> str:
+    return ", ".join(f"{r[value]} {r.p:.3f}" for _, r in g.iterrows())
+
+
+def effect_sentence(effect: pd.DataFrame) -> str:
+    """GLU 2017 Fig. 4 in words: p(ObjVel) after a tap on each object, and its most likely value."""
+    parts = []
+    for case, g in effect.groupby("case", sort=False):
+        top = g.loc[g.p.idxmax()]
+        parts.append(f"on a {case}, p(ObjVel) is {_dist(g)} (most likely {top.ObjVel})")
+    return "After a tap: " + "; ".join(parts) + "."
+
+
+def word_change_sentences(changes: Mapping[str, pd.DataFrame], n: int = 4) -> list[str]:
+    """GLU 2017 Fig. 5 in words: the words the tap raises and lowers most, and how far the two evidence
+    variants (the paper's text, the original code's) differ."""
+    first = next(iter(changes.values()))
+    shown = first[first["shown"]].sort_values("delta")
+    up = shown[shown.delta > 0].iloc[::-1][:n]
+    down = shown[shown.delta < 0][:n]
+    out = [
+        "Adding the tap raises "
+        + ", ".join(f'"{r.word}" ({r.delta:+.3f})' for r in up.itertuples())
+        + " most, and lowers "
+        + ", ".join(f'"{r.word}" ({r.delta:+.3f})' for r in down.itertuples())
+        + " most."
+    ]
+    if len(changes) > 1:
+        frames = [c.set_index("word")["delta"] for c in changes.values()]
+        gap = max(float((f - frames[0].reindex(f.index)).abs().max()) for f in frames[1:])
+        names = " and ".join(changes)
+        verdict = "equal to rounding" if gap < 1e-12 else "different"
+        out.append(f"The {names} variants of the evidence give Δp(w) {verdict} (max |difference| {gap:.1e}).")
+    return out
+
+
+def verbal_sentences(
+    reproduced: pd.DataFrame, and_but: pd.DataFrame, versus: pd.DataFrame, trials: pd.DataFrame
+) -> list[str]:
+    """Notebook 09's results in words: the published lists reproduced, "and" against "but", what the exact
+    search over the grammar finds against the samples, and how often random samples hold the best."""
+    scored = reproduced["same_score"].dropna().astype(bool)
+    out = [
+        f"{int(reproduced['same_sentence'].sum())} of {len(reproduced)} published sentences and "
+        f"{int(scored.sum())} of {len(scored)} printed scores are reproduced."
+    ]
+    parts = []
+    for objvel, g in and_but.groupby("ObjVel", sort=False):
+        p = g.set_index("word")["p"]
+        likelier = "but" if p.get("but", 0) > p.get("and", 0) else "and"
+        parts.append(
+            f"with ObjVel={objvel} p(and) {p.get('and', np.nan):.3f}, p(but) {p.get('but', np.nan):.3f} ({likelier} likelier)"
+        )
+    out.append("After a grasp: " + "; ".join(parts) + ".")
+    for score, g in versus.groupby("score_name", sort=False):
+        inside = g[g["exact_in_samples"]]["figure"].tolist()
+        outside = g[~g["exact_in_samples"]]
+        text = f"Under the {score} score, the grammar's best sentence is among the samples for "
+        text += ", ".join(inside) or "no evidence set"
+        if len(outside):
+            text += (
+                "; elsewhere the samples' best ranks "
+                + ", ".join(f"{int(r.samples_rank)} ({r.figure})" for r in outside.itertuples())
+                + " in the grammar"
+            )
+        out.append(text + ".")
+    other = versus.groupby("figure", sort=False)["rank_under_other"].max()
+    differ = other[other > 1]
+    out.append(
+        f"The two scores pick different best sentences for {len(differ)} of {len(other)} evidence sets"
+        + (
+            " (" + ", ".join(f"{f}: rank {int(r)} under the other" for f, r in differ.items()) + ")"
+            if len(differ)
+            else ""
+        )
+        + "."
+    )
+    out.append(
+        f"Random samples of {int(trials['n_samples'].max()):,} sentences held the grammar's best in "
+        f"{int(trials['found_best'].sum())} of {len(trials)} trials (exact chance "
+        f"{100 * trials['p_draw_best'].mean():.1f} %)."
+    )
+    return out
+
+
+def leader_text(actions: Sequence[str], p_hmm: np.ndarray, update_t: Sequence[int]) -> str:
+    """``"grasp from t = 5, touch from t = 10, tap from t = 70"``: the HMMs' leading action at the updates,
+    where it changes (``p_hmm`` shape (T, A), ``update_t`` 1-based frames)."""
+    out: list[tuple[int, str]] = []
+    for t in update_t:
+        a = actions[int(np.argmax(p_hmm[int(t) - 1]))]
+        if not out or out[-1][1] != a:
+            out.append((int(t), a))
+    return ", ".join(f"{a} from t = {t}" for t, a in out)
