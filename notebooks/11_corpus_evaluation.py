@@ -113,7 +113,6 @@ from glu.experiments import findings as fd
 from glu.experiments import p_hmm as ph
 from glu.gestures.corpus import gesture_sequences
 from glu.plots import evaluation as eplots
-from glu.plots import new_figure
 from glu.run import start
 from glu.sweep import config_from_dict, run_sweep
 from glu.sweep.tables import read_tables
@@ -226,17 +225,14 @@ out.figure(plots.differences_figure(diffs, pairs, cells, full), "corpus_differen
 
 # %%
 real = out.source.is_real
-fig, axes = new_figure(2 if real else 1, width=4.2, height=3.4)
-eplots.plot_p_hmm_reliability(
-    axes[0], rel, full, where={k: v for k, v in fd.REFERENCE_CELL.items() if k != "p_hmm"}
-)
+segments = None
 if real:
     segments = ph.segment_readings(gesture_sequences(out.source, include_test=False), seed=seed)
     out.table(segments, "p_hmm_real_segments")
     segment_summary = ph.segment_calibration(segments)
     out.table(segment_summary, "p_hmm_real_calibration")
-    eplots.plot_segment_readings(axes[1], segments)
-    axes[1].legend(fontsize=7)
+cell = {k: v for k, v in fd.REFERENCE_CELL.items() if k != "p_hmm"}
+fig = plots.p_hmm_calibration_figure(rel, full, where=cell, segments=segments)
 out.figure(fig, "corpus_p_hmm_calibration", source=source)
 for line in fd.p_hmm_sentences(table, calibration, segment_summary if real else None):
     out.say("* " + line)

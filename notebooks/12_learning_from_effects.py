@@ -125,13 +125,7 @@ labels.drop(columns="description").round(3)
 # %%
 curves = lc.curves_table(results, settings, source)
 out.table(curves, "learning_curves")
-fig, axes = plt.subplots(len(ambiguities), 2, figsize=(8, 2.3 * len(ambiguities)), squeeze=False, sharex=True)
-for i, amb in enumerate(ambiguities):
-    for j, words in enumerate((False, True)):
-        plots.plot_learning_curves(axes[i, j], curves, amb, words)
-        axes[i, j].set_xlabel("episodes seen" if i == len(ambiguities) - 1 else "")
-axes[0, 0].legend(fontsize=6, ncol=2)
-out.figure(fig, "learning_curves", source=source)
+out.figure(plots.learning_curves_figure(curves, ambiguities), "learning_curves", source=source)
 
 # %% [markdown]
 # ## When learning from effects reaches true-label accuracy, and when it does not
@@ -141,10 +135,7 @@ out.figure(fig, "learning_curves", source=source)
 # %%
 match = lc.match_table(curves)
 out.table(match, "learning_match")
-fig, (ax,) = plots.new_figure(1, width=8, height=0.35 * len(ambiguities) * 2 + 1.2)
-plots.plot_episodes_to_match(ax, match)
-ax.legend(fontsize=7, loc="lower right")
-out.figure(fig, "learning_match", source=source)
+out.figure(plots.episodes_to_match_figure(match), "learning_match", source=source)
 print("\n".join(lc.match_lines(match)))
 
 # %% [markdown]
@@ -224,11 +215,7 @@ if out.source.is_real:
     real_summary = learned_recognizers.real_gesture_summary(real)
     out.table(real, "learning_real_gestures")
     out.table(real_summary, "learning_real_gestures_summary")
-    fig, axes = plots.new_figure(2, width=4.6)
-    plots.plot_real_gestures(axes[0], real_summary, "loso")
-    plots.plot_real_gestures(axes[1], real_summary, "seated")
-    axes[0].legend(fontsize=7)
-    out.figure(fig, "learning_real_gestures", source=source)
+    out.figure(plots.real_gestures_figure(real_summary), "learning_real_gestures", source=source)
     shown = real_summary.round(3)
 else:
     shown = "the real gestures are in the real data only"

@@ -16,6 +16,7 @@ from glu.plots.corpus import (
     calibration_figure,
     differences_figure,
     early_recognition_figure,
+    p_hmm_calibration_figure,
     strategies_vs_noise_figure,
 )
 from glu.plots.evaluation import (
@@ -33,7 +34,14 @@ from glu.plots.gestures import (
     plot_segmentation,
     plot_segmentations,
 )
-from glu.plots.learning import plot_episodes_to_match, plot_learning_curves, plot_real_gestures
+from glu.plots.learning import (
+    episodes_to_match_figure,
+    learning_curves_figure,
+    plot_episodes_to_match,
+    plot_learning_curves,
+    plot_real_gestures,
+    real_gestures_figure,
+)
 from glu.plots.network import (
     plot_action_vs_soft_evidence,
     plot_effect_prediction,
@@ -51,6 +59,7 @@ __all__ = [
     "anticipation_figure",
     "calibration_figure",
     "differences_figure",
+    "p_hmm_calibration_figure",
     "early_recognition_figure",
     "strategies_vs_noise_figure",
     "shared_ylim",
@@ -71,6 +80,9 @@ __all__ = [
     "plot_episodes_to_match",
     "plot_fusion_on_gestures",
     "plot_learning_curves",
+    "learning_curves_figure",
+    "episodes_to_match_figure",
+    "real_gestures_figure",
     "plot_nbest",
     "plot_real_gestures",
     "plot_sampling",

@@ -17,13 +17,16 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from glu.plots.evaluation import (
+    READING_STYLE,
     STRATEGY_COLORS,
     STRATEGY_STYLE,
     plot_by_viewpoint,
     plot_differences,
     plot_early_recognition,
     plot_metric_vs_noise,
+    plot_p_hmm_reliability,
     plot_reliability,
+    plot_segment_readings,
     size_of_share,
     strategy_label,
 )
@@ -97,7 +100,9 @@ def calibration_figure(
     for ax, cell in zip(axes[:2], cells[:2], strict=False):
         plot_reliability(ax, reliability, fraction, strategies=strategies, where=cell)
     plot_metric_vs_noise(axes[2], results, "effect", "ece", fraction, strategies=strategies, where=cells[0])
-    plot_by_viewpoint(axes[3], results, "action", "accuracy", fraction, strategies=by_viewpoint, where=cells[0])
+    plot_by_viewpoint(
+        axes[3], results, "action", "accuracy", fraction, strategies=by_viewpoint, where=cells[0]
+    )
     shown = list(dict.fromkeys([*strategies, *by_viewpoint]))
     sizes = [
         Line2D(
@@ -139,4 +144,25 @@ def differences_figure(
         Line2D([], [], marker="o", color="0.3", mfc="white", ls="none", label="hollow: it does not"),
     ]
     strategy_legend(fig, list(dict.fromkeys(p[2] for p in pairs)), marks, ncols=3)
+    return fig
+
+
+def p_hmm_calibration_figure(
+    reliability: pd.DataFrame,
+    fraction: float = 1.0,
+    where: Mapping[str, Any] | None = None,
+    segments: pd.DataFrame | None = None,
+) -> Figure:
+    """p_HMM's own reliability on the corpus's held-out synthetic gestures, one line per reading (left), and,
+    given the real segments' readings, p_HMM on each segment left out (right); one legend above."""
+    fig, axes = _grid(1, 1 if segments is None else 2, height=3.4)
+    plot_p_hmm_reliability(axes[0], reliability, fraction, where=where)
+    handles = [
+        Line2D([], [], color=c, ls=ls, marker="o", ms=3, label=f"p_HMM {reading}")
+        for reading, (c, ls) in READING_STYLE.items()
+    ]
+    if segments is not None:
+        plot_segment_readings(axes[1], segments)
+        handles += axes[1].get_legend_handles_labels()[0]
+    fig.legend(handles=handles, loc="outside upper center", ncols=3, fontsize=8, frameon=False)
     return fig

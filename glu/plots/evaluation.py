@@ -444,5 +444,4 @@ def plot_p_hmm_reliability(
     ax.set_xlabel("p_HMM of the top action")
     ax.set_ylabel("how often it was right")
     ax.set_title(f"p_HMM on held-out synthetic gestures ({fraction:.0%} seen)", fontsize=9)
-    ax.legend(fontsize=7)
     return ax

@@ -8,9 +8,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 LEARNER_COLORS = {
     "hard": "#C44E52",
@@ -131,3 +133,42 @@ def plot_real_gestures(ax: Axes, summary: pd.DataFrame, test: str = "loso") -> A
     ax.set_ylabel("accuracy")
     ax.set_title("leave-one-segment-out, standing" if test == "loso" else "the two seated taps", fontsize=9)
     return ax
+
+
+def _legend_above(fig: Figure, ax: Axes, ncols: int = 4) -> None:
+    """The legend of ``ax``'s labelled artists, once, above the figure's panels (never on the data)."""
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside upper center", ncols=ncols, fontsize=7, frameon=False)
+
+
+def learning_curves_figure(curves: pd.DataFrame, ambiguities: Sequence[str]) -> Figure:
+    """The learning curves: one row per ambiguity, without and with words, one legend above."""
+    size = (8, 2.3 * len(ambiguities) + 0.6)
+    fig, axes = plt.subplots(
+        len(ambiguities), 2, figsize=size, squeeze=False, sharex=True, layout="constrained"
+    )
+    for i, amb in enumerate(ambiguities):
+        for j, words in enumerate((False, True)):
+            plot_learning_curves(axes[i, j], curves, amb, words)
+            axes[i, j].set_xlabel("episodes seen" if i == len(ambiguities) - 1 else "")
+    _legend_above(fig, axes[0, 0])
+    return fig
+
+
+def episodes_to_match_figure(match: pd.DataFrame) -> Figure:
+    """Episodes until each scheme matches the true labels, per condition, one legend above."""
+    m = match[match["learner"] != "unsupervised"]
+    n = len(set(zip(m["ambiguity"], m["words"], strict=True)))
+    fig, ax = plt.subplots(figsize=(8, 0.35 * n + 1.6), layout="constrained")
+    plot_episodes_to_match(ax, match)
+    _legend_above(fig, ax, ncols=5)
+    return fig
+
+
+def real_gestures_figure(summary: pd.DataFrame) -> Figure:
+    """The real gestures, labels hidden: leave-one-segment-out (left) and the seated taps (right)."""
+    fig, axes = plt.subplots(1, 2, figsize=(9.2, 3.6), layout="constrained")
+    plot_real_gestures(axes[0], summary, "loso")
+    plot_real_gestures(axes[1], summary, "seated")
+    _legend_above(fig, axes[0], ncols=2)
+    return fig
