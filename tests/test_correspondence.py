@@ -128,26 +128,13 @@ def test_body_frame_pairs_with_body_frame():
 
 def test_plots_draw_the_study(study):
     s = corr.summarise(study)
-    fig, axes = plt.subplots(1, 4, figsize=(16, 3))
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3))
     assert cplots.plot_accuracy_vs_viewpoint(axes[0], s, "human") is axes[0]
     assert len(axes[0].lines) == 5 + 1  # one line per feature set, and chance
     cplots.plot_accuracy_by_condition(axes[1], s, "robot")
     assert len(axes[1].patches) == 5 * 2  # the reference and the robot itself, per feature set
     cplots.plot_invariance_effects(axes[2], corr.invariance_effects(study), "human")
     assert len(axes[2].images) == 1
-    grid = pd.DataFrame(
-        {
-            "features": ["raw", "raw", "centred"],
-            "setting": ["a", "b", "a"],
-            "loso_accuracy": [0.4, 0.5, 0.7],
-            "test_correct": [0, 1, 2],
-        }
-    )
-    grid.attrs["parameters"] = {"n_test": 2}
-    cplots.plot_feature_settings(axes[3], grid)
-    assert len(axes[3].collections) == 2  # the two means
-    filled = [ln for ln in axes[3].lines if ln.get_xdata().size and ln.get_markerfacecolor() != "none"]
-    assert len(filled) == 1  # only the run that recognised both test gestures
     plt.close(fig)
 
 
@@ -157,24 +144,6 @@ def test_settings_are_labelled_and_parsed_back():
     assert seated.parse_setting("Q6 reg0.03") == {"n_states": 6, "covar_reg": 0.03}
     with pytest.raises(Exception, match="KEYvalue"):
         seated.parse_setting("Q=6")
-
-
-def test_feature_settings_grid_over_features_settings_and_seeds():
-    corpus = synthetic_corpus(2, seed=4)
-    test = synthetic_corpus(1, seed=5)
-    settings = [seated.parse_setting(s) for s in ("Q2 M1", "Q2 M2", "mixsplit Q2 M1")]
-    grid = seated.feature_settings(
-        corpus, test, ("raw", "centred"), settings, (0, 1), TrainingConfig(n_iter=2)
-    )
-    # single Gaussians and mixsplit have no random initialisation: one seed; two Gaussians: both seeds
-    assert len(grid) == 2 * (1 + 2 + 1)
-    assert list(grid.columns[:3]) == ["features", "setting", "recipe"]
-    assert set(grid["recipe"]) == {"glu", "mixsplit"} and (grid["loso_testable"] == 6).all()
-    assert grid["test_correct"].between(0, 3).all() and grid.attrs["parameters"]["n_test"] == 3
-    summary = seated.feature_settings_summary(grid)
-    raw = grid[grid["features"] == "raw"]["loso_accuracy"]
-    row = summary.set_index("features").loc["raw"]
-    assert row["runs"] == 4 and row["loso_mean"] == pytest.approx(raw.mean()) and row["loso_max"] == raw.max()
 
 
 def test_leave_one_segment_out_keeps_the_features():

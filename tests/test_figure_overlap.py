@@ -221,8 +221,8 @@ def test_the_check_changes_no_saved_file_and_passes_the_hero_figure(tmp_path, mo
 
 REAL_DATA_NOTEBOOKS = ["02", "08", "10"]
 """The notebooks with figures only the real data has: the original HMMs' scores, the hero (TCDS Fig. 5
-against the paper), the seated taps. The other notebooks' figures are checked in the quick run of
-tests/test_notebooks.py."""
+against the paper), the nested cross-validation on the standing segments. The other notebooks' figures are
+checked in the quick run of tests/test_notebooks.py."""
 
 
 def _checked_run(data, out, check, monkeypatch, **kwargs) -> list[str]:
@@ -242,7 +242,7 @@ def test_the_figures_only_the_real_data_has_pass_the_check(shared_data, tmp_path
     out, check = tmp_path / "out", tmp_path / "check"
     problems = _checked_run(shared_data, out, check, monkeypatch, quick=True, only=REAL_DATA_NOTEBOOKS)
     names = {p.stem for p in (out / "figures").glob("*.png")}
-    assert {"hmm_original_scores", "tcds_anticipation_original", "hmm_feature_settings"} <= names
+    assert {"hmm_original_scores", "tcds_anticipation_original", "correspondence_nested_cv"} <= names
     assert not problems, "\n".join(problems)
 
 

@@ -3,26 +3,23 @@
 The published recordings hold one person's standing repetitions (grasp1, tap1, touch1, push1) and two
 taps made seated, towards a small sphere and a big box (METHOD.md §4–5). The seated hand moves in
 another part of the torso frame (:func:`posture_offsets`), so HMMs trained on raw standing features judge
-the seated taps by their tails. :func:`feature_settings` measures, per feature set
-(:mod:`glu.gestures.invariants`), training setting and seed, the leave-one-segment-out accuracy on the
-standing segments and how the seated taps are recognised (:func:`glu.experiments.recipes.recipe_comparison`);
-:func:`feature_settings_summary` condenses it.
+the seated taps by their tails. Training settings are named by short labels (:func:`parse_setting`,
+:func:`setting_label`); the choice among them, made without the seated taps in view, is
+:mod:`glu.experiments.nested`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
 import pandas as pd
 
 from glu.data.source import DataSource
 from glu.errors import DataError
-from glu.experiments.common import corpus_source, tidy, training_parameters
+from glu.experiments.common import tidy
 from glu.gestures.corpus import synthetic_corpus
-from glu.gestures.invariants import Invariants
 from glu.gestures.synthetic import View
-from glu.hmm import TrainingConfig
 
 SETTING_KEYS = {"Q": "n_states", "M": "n_mix", "reg": "covar_reg", "iter": "n_iter", "tol": "tol"}
 """Short names of training settings in labels such as ``"Q6 M3 reg0.03"`` (as the originals' ``HMM_M3_Q6``)."""
@@ -62,93 +59,6 @@ def setting_label(setting: Mapping[str, Any]) -> str:
     if not setting:
         return DEFAULT_SETTING
     return " ".join(str(v) if k == "recipe" else f"{short.get(k, k)}{v:g}" for k, v in setting.items())
-
-
-def feature_settings(
-    sequences: Sequence[Any],
-    test: Sequence[Any] = (),
-    feature_sets: Sequence[str] = ("raw", "centred"),
-    settings: Sequence[Mapping[str, Any]] = ({},),
-    seeds: Sequence[int] = (0,),
-    config: TrainingConfig | None = None,
-) -> pd.DataFrame:
-    """Leave-one-segment-out accuracy and the recognition of ``test``, per feature set, training setting and seed.
-
-    For each feature set and setting (:func:`parse_setting`; the recipe, Q, M, covariance prior, EM
-    tolerance), :func:`glu.experiments.recipes.recipe_comparison` trains on ``sequences`` (for the real data:
-    the standing segments) and recognises ``test`` (the two seated taps) with models trained on all of
-    them. Settings without random initialisation (mixsplit, or single Gaussians) run with the first seed
-    only. Columns: features, setting, and those of ``recipe_comparison`` (recipe, seed, tol, loso_accuracy,
-    loso_correct, loso_testable, test_predicted, test_correct, train_loglik_per_frame). ``config`` holds the
-    settings the grid's ``settings`` leave as they are (default glu's).
-    """
-    from glu.experiments.recipes import COLUMNS, comparison_rows
-
-    config = config or TrainingConfig()
-    grid, labels = [], []
-    for features in feature_sets:
-        for setting in settings:
-            s = dict(setting)
-            recipe, tol = s.pop("recipe", config.recipe), s.pop("tol", config.tol)
-            single = recipe == "mixsplit" or s.get("n_mix", config.n_mix) == 1
-            for seed in seeds[:1] if single else seeds:  # as recipe_comparison: mixsplit has no seed (-1)
-                grid.append(
-                    {
-                        **config.as_dict(),
-                        **s,
-                        "features": features,
-                        "recipe": recipe,
-                        "tol": float(tol),
-                        "seed": -1 if recipe == "mixsplit" else int(seed),
-                    }
-                )
-                labels.append((Invariants.parse(features).name, setting_label(setting)))
-    rows = comparison_rows(sequences, test, grid)  # every model of the grid trained in one batch per setting
-    frame = pd.DataFrame(rows, columns=COLUMNS)
-    frame.insert(0, "setting", [lab[1] for lab in labels])
-    frame.insert(0, "features", [lab[0] for lab in labels])
-    return tidy(
-        frame,
-        "hmm_feature_settings",
-        corpus_source(sequences),
-        feature_sets=list(feature_sets),
-        settings=[setting_label(s) for s in settings],
-        seeds=list(seeds),
-        n_test=len(test),
-        **training_parameters(config),
-    )
-
-
-def feature_settings_summary(grid: pd.DataFrame) -> pd.DataFrame:
-    """Per feature set, over every setting and seed of :func:`feature_settings`: leave-one-segment-out accuracy
-    (runs, mean, sd, min, max), how many runs recognised every test gesture, and the settings where all did."""
-    n_test = int(grid.attrs.get("parameters", {}).get("n_test", 0))
-    rows = []
-    for features, g in grid.groupby("features", sort=False):
-        a = g["loso_accuracy"]
-        every = g[g["test_correct"] == n_test]
-        always = [
-            s for s, h in g.groupby("setting", sort=False) if n_test and (h["test_correct"] == n_test).all()
-        ]
-        rows.append(
-            {
-                "features": features,
-                "runs": len(g),
-                "loso_mean": a.mean(),
-                "loso_sd": a.std(ddof=1),
-                "loso_min": a.min(),
-                "loso_max": a.max(),
-                "n_test": n_test,
-                "runs_all_test_correct": len(every),
-                "settings_always_all_test_correct": ", ".join(always),
-            }
-        )
-    return tidy(
-        pd.DataFrame(rows),
-        "hmm_feature_settings_summary",
-        grid.attrs.get("data_source", ""),
-        **grid.attrs.get("parameters", {}),
-    )
 
 
 def posture_offsets(source: DataSource, n_per_action: int = 4) -> pd.DataFrame:

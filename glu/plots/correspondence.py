@@ -14,7 +14,6 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
-from matplotlib.lines import Line2D
 
 from glu.gestures.invariants import ALL, INVARIANCES
 from glu.plots.style import ACTION_COLORS
@@ -30,8 +29,6 @@ FEATURE_COLORS = {
     "body+centred": "#DA8BC3",
 }
 """Colour of each default feature set (others get grey)."""
-SETTING_COLORS = ("#4C72B0", "#DD8452", "#55A868", "#C44E52", "#8172B3", "#937860")
-"""Colour of each training setting in :func:`plot_feature_settings`, in order."""
 RECOGNISER_LABELS = {"raw": "raw features", "aligned": f"invariant features ({ALL})"}
 """How :func:`plot_two_views` names the two recognisers of :meth:`ViewRun.curves`."""
 
@@ -173,67 +170,6 @@ def plot_invariance_effects(ax: Axes, effects: pd.DataFrame, train: str) -> Axes
     ax.set_title(
         f"Δ accuracy when an invariance is added (trained on {train}; bold: 95 % interval excludes 0)",
         fontsize=8.5,
-    )
-    return ax
-
-
-def plot_feature_settings(ax: Axes, grid: pd.DataFrame) -> Axes:
-    """Leave-one-segment-out accuracy on the real segments, one point per (setting, seed), per feature set;
-    filled points: the models trained on every segment also recognised every test gesture (the seated taps).
-
-    ``grid`` as :func:`glu.experiments.seated.feature_settings` returns it. Each setting has its colour and
-    marker; the black line is the mean over settings and seeds of each feature set.
-    """
-    features = list(dict.fromkeys(grid["features"]))
-    settings = list(dict.fromkeys(grid["setting"]))
-    n_test = int(grid.attrs.get("parameters", {}).get("n_test", 0))
-    markers = "osD^v<>"
-    for i, f in enumerate(features):
-        g = grid[grid["features"] == f]
-        for j, st in enumerate(settings):
-            h = g[g["setting"] == st]
-            c = SETTING_COLORS[j % len(SETTING_COLORS)]
-            x = i + (j - (len(settings) - 1) / 2) * 0.15 + np.linspace(-0.03, 0.03, len(h))
-            for xi, (_, r) in zip(x, h.iterrows(), strict=True):
-                full = n_test > 0 and r["test_correct"] == n_test
-                ax.plot(
-                    xi,
-                    r["loso_accuracy"],
-                    markers[j % len(markers)],
-                    color=c,
-                    ms=5,
-                    mfc=c if full else "none",
-                )
-        ax.hlines(g["loso_accuracy"].mean(), i - 0.4, i + 0.4, color="black", lw=1.5)
-    handles = [
-        Line2D(
-            [],
-            [],
-            marker=markers[j % len(markers)],
-            color=SETTING_COLORS[j % len(SETTING_COLORS)],
-            ls="none",
-            label=st,
-        )
-        for j, st in enumerate(settings)
-    ]
-    handles += [
-        Line2D([], [], marker="o", color="0.3", ls="none", label="filled: the seated taps both recognised"),
-        Line2D([], [], marker="o", color="0.3", mfc="none", ls="none", label="hollow: not both"),
-        Line2D([], [], color="black", lw=1.5, label="mean over settings and seeds"),
-    ]
-    ax.set_xticks(range(len(features)), [feature_label(f) for f in features], fontsize=8)
-    ax.set_xlim(-0.5, len(features) - 0.5)
-    ax.set_ylabel("leave-one-segment-out accuracy")
-    lo = float(grid["loso_accuracy"].min())
-    ax.set_ylim(max(0.0, np.floor(lo * 10) / 10 - 0.05), 1.03)
-    ax.legend(
-        handles=handles,
-        fontsize=7.5,
-        frameon=False,
-        title="training setting",
-        title_fontsize=7.5,
-        loc="upper left",
-        bbox_to_anchor=(1.01, 1.0),
     )
     return ax
 
