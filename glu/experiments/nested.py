@@ -271,7 +271,7 @@ def seated_report(
                     "candidate": r.tuned_candidate,
                     "predicted": actions[k],
                     "p_tap": float(p[actions.index("tap")]),
-                    "per-frame": float(ll[k] / len(x)),
+                    "per_frame": float(ll[k] / len(x)),
                     "training_low": rng.low,
                     "training_high": rng.high,
                     "below": rng.low - float(ll[k] / len(x)),

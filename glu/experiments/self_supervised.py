@@ -44,11 +44,11 @@ from glu.bn.inference import InferenceEngine
 from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.experiments.corpus import GESTURE_KEY, WORLD_KEY, GestureSettings, Scenario
+from glu.gestures import calibration
 from glu.gestures._synthetic_batch import gesture_features
 from glu.gestures.synthetic import View
 from glu.hmm import (
     TrainingConfig,
-    log_softmax,
 )
 
 SCHEMES: tuple[str, ...] = ("hard", "soft", "confident", "iterative")
@@ -277,13 +277,12 @@ def one_hot(labels: np.ndarray, k: int) -> np.ndarray:
 
 def p_hmm_reading(loglik: np.ndarray, n_frames: np.ndarray, posterior: str = "per-frame") -> np.ndarray:
     """``p_HMM(A | G)`` from log-likelihoods (n, A): equal priors, from the likelihoods or per frame
-    (``exp((1/T) log L)``, the tempered reading); ``-inf`` (no model) gives probability 0."""
+    (``exp((1/T) log L)``, the tempered reading); ``-inf`` (no model) gives probability 0. The formula's
+    home is :func:`glu.gestures.calibration.p_hmm_reading`; this study allows the readings that need no
+    fitted temperature (:data:`POSTERIOR_READINGS`)."""
     if posterior not in POSTERIOR_READINGS:
         raise DataError(f"unknown posterior reading {posterior!r}; allowed: {', '.join(POSTERIOR_READINGS)}")
-    ll = np.asarray(loglik, dtype=float)
-    if posterior == "per-frame":
-        ll = ll / np.asarray(n_frames, dtype=float)[:, None]
-    return np.exp(log_softmax(ll))
+    return calibration.p_hmm_reading(loglik, n_frames, posterior)
 
 
 def label_weights(
