@@ -293,3 +293,50 @@ def test_bn_edges_json_are_the_printed_edges(capsys, tmp_path, synthetic_folder)
     assert [" -> ".join(e) for e in edges] == text.splitlines()
     nodes = json.loads(model.read_text())["nodes"]  # the model file's own parent lists, read without glu
     assert sorted(map(tuple, edges)) == sorted((p, n["name"]) for n in nodes for p in n["parents"])
+
+
+# ------------------------------------------------------------------ the documentation's commands
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCUMENTS = [ROOT / "README.md", ROOT / "data" / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def _documented_commands(text: str):
+    """(line number, command) for every ``glu …`` line of a code block (fenced, indented, or ``$ glu``)."""
+    lines = text.splitlines()
+    fenced = False
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        if line.strip().startswith("```"):
+            fenced = not fenced
+        elif fenced or line.startswith("    "):
+            command = line.strip().removeprefix("$ ")
+            start = i + 1
+            while command.endswith("\\"):
+                i += 1
+                command = command[:-1] + " " + lines[i].strip()
+            if command.startswith("glu ") and not re.match(r"^glu [\w -]+: ", command):  # not an error shown
+                yield start, command
+        i += 1
+
+
+def test_every_documented_command_parses_with_no_deprecated_spelling(capsys):
+    """The commands of README.md and docs/ are what the parser accepts today (``[optional]`` parts given,
+    the first of ``a|b`` alternatives taken), and none of them uses a deprecated spelling."""
+    import shlex
+
+    checked = 0
+    for doc in DOCUMENTS:
+        for number, command in _documented_commands(doc.read_text(encoding="utf-8")):
+            words = re.split(r"\s+#\s", command)[0].replace("[", " ").replace("]", " ")
+            argv = [w.split("|")[0] if "|" in w and "://" not in w else w for w in shlex.split(words)[1:]]
+            capsys.readouterr()
+            try:
+                build_parser().parse_args(argv)
+            except SystemExit:
+                pass
+            err = capsys.readouterr().err
+            assert not err, f"{doc.relative_to(ROOT)}:{number}: {command}\n{err}"
+            checked += 1
+    assert checked >= 40

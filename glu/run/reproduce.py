@@ -394,7 +394,7 @@ def run_one(
     spec = read_spec(src)
     for plumbing in ("data", "out_dir"):
         if plumbing in values:
-            flag = "--data" if plumbing == "data" else "--out"
+            flag = "--data" if plumbing == "data" else "-o/--out"
             raise NotebookError(f"{src.stem}: give {plumbing!r} with {flag}, not -p")
     parsed = {name: parse_value(spec[name], text, src.stem) for name, text in values.items() if name in spec}
     if quick:
