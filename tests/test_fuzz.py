@@ -179,18 +179,8 @@ COMMANDS: dict[str, tuple[list[str], bool]] = {
         False,
     ),
     "learning-curves": (
-        [
-            "--episodes",
-            "12",
-            "--seeds",
-            "0",
-            "--scheduler",
-            "synchronous",
-            "--data",
-            "{data}",
-            "-o",
-            "{tmp}/out/lc",
-        ],
+        ["--episodes", "12", "--seeds", "0", "--scheduler", "synchronous"]
+        + ["--data", "{data}", "-o", "{tmp}/out/lc"],
         False,
     ),
 }

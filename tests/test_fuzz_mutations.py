@@ -600,18 +600,8 @@ def _cases() -> dict[str, tuple[list[str], list[tuple[str, object]], bool]]:
             True,
         ),
         "learning-curves": (
-            [
-                "learning-curves",
-                "--episodes",
-                "12",
-                "--seeds",
-                "0",
-                "--scheduler",
-                "synchronous",
-                "--data",
-                "{data}",
-            ]
-            + ["-o", f"{OUT}/lc"],
+            ["learning-curves", "--episodes", "12", "--seeds", "0", "--scheduler", "synchronous"]
+            + ["--data", "{data}", "-o", f"{OUT}/lc"],
             [
                 ("--episodes", "pos_int"),
                 ("--seeds", ["", "x", "1,1", "-1", "0..", "a..b"]),

@@ -375,32 +375,27 @@ def add_deprecated_alias(
     ``const``: the old spelling was a flag, equivalent to ``new`` with this value (``replacement`` says so).
     """
     target = next(a for a in p._actions if new in a.option_strings)
-    spelling = "/".join(target.option_strings)
     if const is None and target.nargs == 0:  # a flag for a flag (store_true)
-        const, replacement = target.const, replacement or spelling
+        const, replacement = target.const, replacement or "/".join(target.option_strings)
     if const is not None:
-        p.add_argument(
-            old,
-            action=DeprecatedAlias,
-            dest=target.dest,
-            nargs=0,
-            const=const,
-            default=argparse.SUPPRESS,
-            replacement=replacement or f"{new} {const}",
-            help=argparse.SUPPRESS,
-        )
-        return
+        value: dict[str, Any] = {"nargs": 0, "const": const}
+        replacement = replacement or f"{new} {const}"
+    else:
+        value = {
+            "type": target.type,
+            "nargs": target.nargs,
+            "choices": target.choices,
+            "metavar": target.metavar,
+        }
+        replacement = replacement or "/".join(target.option_strings)
     p.add_argument(
         old,
         action=DeprecatedAlias,
         dest=target.dest,
-        type=target.type,
-        nargs=target.nargs,
-        choices=target.choices,
-        metavar=target.metavar,
         default=argparse.SUPPRESS,
-        replacement=replacement or spelling,
+        replacement=replacement,
         help=argparse.SUPPRESS,
+        **value,
     )
 
 

@@ -37,12 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=seed, default=0, help="seed passed to every notebook (default 0)")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")
-    p.add_argument(
-        "--notebooks",
-        type=Path,
-        metavar="DIR",
-        help="run the jupytext notebooks NN_name.py in DIR instead of glu's own",
-    )
+    _add_notebooks_option(p)
     p.set_defaults(func=_reproduce)
 
     r = sub.add_parser(
@@ -76,24 +71,35 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--list", action="store_true", help="list the notebook's parameters and exit")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr (only errors)")
     add_json_option(r, "the executed notebook and the outputs folder (with --list: the parameters)")
-    r.add_argument(
-        "--notebooks",
-        type=Path,
-        metavar="DIR",
-        help="find the notebook among the jupytext notebooks NN_name.py in DIR instead of glu's own",
-    )
+    _add_notebooks_option(r)
     r.set_defaults(func=_run)
 
 
-def _reproduce(args: argparse.Namespace) -> int:
-    from glu import paths
+def _add_notebooks_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--notebooks",
+        type=Path,
+        metavar="DIR",
+        help="the jupytext notebooks NN_name.py of DIR instead of glu's own",
+    )
 
-    require_extra("notebooks", *NOTEBOOK_MODULES)
-    from glu.run.reproduce import NotebookError, reproduce
+
+def _notebooks_folder(args: argparse.Namespace) -> Path:
+    """The folder of ``--notebooks`` (glu's own by default); NotebookError when it is not a folder."""
+    from glu import paths
+    from glu.run.reproduce import NotebookError
 
     folder = args.notebooks or paths.NOTEBOOKS_DIR
     if not folder.is_dir():
         raise NotebookError(f"--notebooks {folder}: no such folder")
+    return folder
+
+
+def _reproduce(args: argparse.Namespace) -> int:
+    require_extra("notebooks", *NOTEBOOK_MODULES)
+    from glu.run.reproduce import reproduce
+
+    folder = _notebooks_folder(args)
     summary = reproduce(
         data=args.data,
         quick=args.quick,
@@ -117,15 +123,11 @@ def _reproduce(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from glu import paths
-
     require_extra("notebooks", *NOTEBOOK_MODULES)
     from glu.run.parameters import read_spec
     from glu.run.reproduce import NotebookError, list_notebooks, run_one
 
-    folder = args.notebooks or paths.NOTEBOOKS_DIR
-    if not folder.is_dir():
-        raise NotebookError(f"--notebooks {folder}: no such folder")
+    folder = _notebooks_folder(args)
     if args.list:
         (src,) = list_notebooks([args.notebook], folder)[:1]
         spec = read_spec(src).values()
