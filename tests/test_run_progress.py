@@ -38,6 +38,23 @@ def test_plain_lines_name_each_code_cell_once_with_its_first_line():
     assert re.fullmatch(r"nb: 3 cells in \d+\.\d s", lines[3])
 
 
+def test_a_plain_log_hears_from_a_long_cell_every_heartbeat():
+    from glu.run.progress import HEARTBEAT
+
+    stream = io.StringIO()
+    with CellProgress("nb", live=False, stream=stream) as progress:
+        _feed(progress)
+        started = progress.last_line  # when cell 3 started
+        progress.beat(started + HEARTBEAT / 2)  # not yet
+        progress.beat(started + HEARTBEAT)
+        progress.beat(started + HEARTBEAT * 1.5)  # not again yet
+        progress.beat(started + HEARTBEAT * 2)
+    beats = [line for line in stream.getvalue().splitlines() if "still running" in line]
+    assert len(beats) == 2 and all(line.startswith("nb: cell 3/3 still running at ") for line in beats)
+    elapsed = [float(re.search(r"at (\d+\.\d) s", line).group(1)) for line in beats]
+    assert elapsed[1] - elapsed[0] == pytest.approx(HEARTBEAT, abs=0.11)
+
+
 def test_on_a_terminal_one_bar_counts_the_cells_done():
     stream = io.StringIO()
     with CellProgress("nb", live=True, stream=stream) as progress:

@@ -1,9 +1,13 @@
 """Progress of one notebook run (``glu run``) on stderr: code cell n of N, its first line, the time so far.
 
 On a terminal it is one tqdm bar, redrawn every second so that the clock moves during a long cell; in a
-log or a pipe it is one plain line per code cell, so nothing there holds bar characters::
+log or a pipe it is one plain line per code cell, and one more every :data:`HEARTBEAT` seconds that a cell
+keeps running, so nothing there holds bar characters and no minute passes in silence::
 
-    08_tcds_figures: cell 5/23 at 3.1 s: run = effect_anticipation(
+    08_tcds_figures: cell 6/7 at 11.6 s: engine = InferenceEngine(bn)
+    08_tcds_figures: cell 6/7 still running at 41.6 s
+    08_tcds_figures: cell 7/7 at 42.1 s: case, name = next(iter(runs))
+    08_tcds_figures: 7 cells in 42.4 s
 
 :class:`CellProgress` hands out the :class:`~glu.run.execution.RunHandle` whose cell starts it reports.
 """
@@ -19,6 +23,9 @@ from glu.run.execution import RunHandle
 
 WIDTH = 60
 """How many characters of a cell's first line are shown."""
+
+HEARTBEAT = 30.0
+"""Seconds a cell may run before a plain log says it still is (and again after as many more)."""
 
 
 def _short(line: str, width: int = WIDTH) -> str:
@@ -40,36 +47,50 @@ class CellProgress:
         self.stream = stream if stream is not None else sys.stderr
         self.live = self.stream.isatty() if live is None else live
         self.handle = RunHandle(on_cell=self._on_cell)
-        self.t0 = time.perf_counter()
+        self.t0 = self.last_line = time.perf_counter()
         self.bar: Any = None
         self.shown = 0
+        self._lock = threading.Lock()
         self._stop = threading.Event()
         self._ticker: threading.Thread | None = None
 
+    def _say(self, text: str, now: float) -> None:
+        print(f"{self.name}: {text}", file=self.stream, flush=True)
+        self.last_line = now
+
     def _on_cell(self, index: int, n_cells: int) -> None:
         h = self.handle
-        if h.code_cell == self.shown:  # not a code cell (markdown, raw): nothing runs
-            return
-        self.shown = h.code_cell
-        if self.bar is not None:
-            self.bar.total = h.n_code_cells
-            self.bar.n = h.code_cell - 1  # cells finished
-            self.bar.set_postfix_str(f"cell {h.code_cell}: {_short(h.first_line, 40)}", refresh=True)
-            return
-        elapsed = time.perf_counter() - self.t0
-        print(
-            f"{self.name}: cell {h.code_cell}/{h.n_code_cells} at {elapsed:.1f} s: {_short(h.first_line)}",
-            file=self.stream,
-            flush=True,
-        )
+        with self._lock:
+            if h.code_cell == self.shown:  # not a code cell (markdown, raw): nothing runs
+                return
+            self.shown = h.code_cell
+            if self.bar is not None:
+                self.bar.total = h.n_code_cells
+                self.bar.n = h.code_cell - 1  # cells finished
+                self.bar.set_postfix_str(f"cell {h.code_cell}: {_short(h.first_line, 40)}", refresh=True)
+                return
+            now = time.perf_counter()
+            self._say(
+                f"cell {h.code_cell}/{h.n_code_cells} at {now - self.t0:.1f} s: {_short(h.first_line)}", now
+            )
+
+    def beat(self, now: float) -> None:
+        """Once a second: redraw the bar (its clock), or say in a plain log that a long cell still runs."""
+        with self._lock:
+            if self.bar is not None:
+                self.bar.refresh()
+            elif self.shown and now - self.last_line >= HEARTBEAT:
+                self._say(
+                    f"cell {self.shown}/{self.handle.n_code_cells} still running at {now - self.t0:.1f} s",
+                    now,
+                )
 
     def _tick(self) -> None:
         while not self._stop.wait(1.0):
-            if self.bar is not None:
-                self.bar.refresh()
+            self.beat(time.perf_counter())
 
     def __enter__(self) -> CellProgress:
-        self.t0 = time.perf_counter()
+        self.t0 = self.last_line = time.perf_counter()
         if self.live:
             from tqdm import tqdm
 
@@ -82,8 +103,8 @@ class CellProgress:
                 bar_format="{desc}: {bar:20} {n_fmt}/{total_fmt} cells done [{elapsed}]{postfix}",
             )
             self.bar.set_postfix_str("starting its kernel", refresh=True)
-            self._ticker = threading.Thread(target=self._tick, name="glu-run-progress", daemon=True)
-            self._ticker.start()
+        self._ticker = threading.Thread(target=self._tick, name="glu-run-progress", daemon=True)
+        self._ticker.start()
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -93,7 +114,5 @@ class CellProgress:
         if self.bar is not None:
             self.bar.close()
         if exc[0] is None:
-            elapsed = time.perf_counter() - self.t0
-            print(
-                f"{self.name}: {self.handle.code_cell} cells in {elapsed:.1f} s", file=self.stream, flush=True
-            )
+            now = time.perf_counter()
+            self._say(f"{self.handle.code_cell} cells in {now - self.t0:.1f} s", now)
