@@ -8,6 +8,7 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.glu-installed
+LAB_STAMP := $(VENV)/.glu-lab-installed
 DATA ?=
 ARGS ?=
 
@@ -32,8 +33,12 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/python -m pytest $(ARGS)
 
-lab: $(STAMP)
+# JupyterLab's extra, installed again only when pyproject.toml (or the venv) changed
+$(LAB_STAMP): $(STAMP) pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[lab]'
+	touch $(LAB_STAMP)
+
+lab: $(LAB_STAMP)
 	$(if $(DATA),GLU_DATA_DIR=$(abspath $(DATA))) $(BIN)/jupyter lab --config=jupyter_lab_config.py $(ARGS)
 
 bench: $(STAMP)

@@ -2,7 +2,7 @@
 
 Everything else is in ``pyproject.toml``. The notebooks stay at the top of the repository, where readers and
 JupyterLab find them; mapped into the package, a wheel carries them, so an installed glu runs them from any
-folder (``glu reproduce --out DIR``). The packages are found (``glu`` and every subpackage) rather than listed,
+folder (``glu reproduce -o DIR``). The packages are found (``glu`` and every subpackage) rather than listed,
 so a new subpackage cannot be left out of the wheel.
 """
 

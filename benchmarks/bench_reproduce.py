@@ -5,7 +5,7 @@ Run on demand (not a test)::
     python benchmarks/bench_reproduce.py [--data DIR] [--jobs 2] [--repeats 1]
 
 Runs every notebook headless into a temporary folder (nothing is published into the project), as
-`glu reproduce --out TMP` does, and prints the total wall time and each notebook's time. The total is the
+`glu reproduce -o TMP` does, and prints the total wall time and each notebook's time. The total is the
 summary's ``wall_time_s``: the whole run as a user waits for it, the HTML report included (its notebook
 pages are rendered as each notebook finishes, the index and the API reference at the end). The folder is
 new, so the notebooks start in the order of the project's last run (``results/summary.json``), else of

@@ -9,7 +9,7 @@ The one owner of paths. glu runs in two settings, and :func:`locate` tells them 
 * **an installed package** (a wheel in any environment): nothing is ever written inside the package
   (``site-packages``). Data lives in the user's data folder (platformdirs: ``~/.local/share/glu/real`` on
   Linux, ``~/Library/Application Support/glu/real`` on macOS, ``%LOCALAPPDATA%\\glu\\real`` on Windows),
-  scratch runs and compiled code in the user's cache folder, and ``glu reproduce`` needs ``--out DIR``. The notebooks ship
+  scratch runs and compiled code in the user's cache folder, and ``glu reproduce`` needs ``-o DIR``. The notebooks ship
   inside the package as ``glu.notebooks`` (the repository's ``notebooks/`` folder, mapped by
   ``[tool.setuptools] package-dir`` in ``pyproject.toml``), so they run from any folder.
 
@@ -17,7 +17,7 @@ The one owner of paths. glu runs in two settings, and :func:`locate` tells them 
 data folders (the *layout* inside a data folder belongs to :class:`glu.data.DataSource`). Outputs: an
 :class:`OutputLayout` names the folder of every kind of output, either the project's own (``figures/``,
 ``results/``, ``recordings/``, ``models/`` at the top, executed notebooks and the report under ``build/``)
-or one root holding them all (``glu reproduce --out DIR``, a notebook's ``out_dir``). Notebooks (through
+or one root holding them all (``glu reproduce -o DIR``, a notebook's ``out_dir``). Notebooks (through
 :mod:`glu.run.outputs`) and ``glu reproduce`` both use it, so the two can never disagree.
 """
 
@@ -155,7 +155,7 @@ class OutputLayout:
         r = PROJECT_ROOT
         if r is None:
             raise OutputError(
-                f"glu is installed, not a source checkout: give an output folder (--out DIR); "
+                f"glu is installed, not a source checkout: give an output folder (-o DIR); "
                 f"nothing is written inside the package ({PACKAGE_DIR})"
             )
         return cls(

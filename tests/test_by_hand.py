@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -127,10 +128,13 @@ def test_glu_run_lists_the_parameters_with_their_choices():
 
 def test_glu_run_runs_one_notebook_into_its_out_folder(tmp_path):
     before = _snapshot()
-    res = _glu("run", "07", "-p", "threshold", "0.05", "--data", "synthetic", "--out", str(tmp_path))
+    res = _glu("run", "07", "-p", "threshold", "0.05", "--data", "synthetic", "-o", str(tmp_path))
     assert res.returncode == 0, res.stderr
     assert _snapshot() == before
-    assert (tmp_path / "notebooks" / "07_glu2017_figures.ipynb").is_file()
+    executed = json.loads((tmp_path / "notebooks" / "07_glu2017_figures.ipynb").read_text())
+    n_code = sum(c["cell_type"] == "code" for c in executed["cells"])
+    shown = [int(n) for n in re.findall(rf"^07_glu2017_figures: cell (\d+)/{n_code} at ", res.stderr, re.M)]
+    assert shown == list(range(1, n_code + 1))  # not a pipe's silence: every code cell as it starts
     svg = (tmp_path / "figures" / "glu2017_word_change.svg").read_text()
     assert "07_glu2017_figures with threshold=0.05" in svg
     doc = json.loads((tmp_path / "results" / "glu2017_word_change_text.json").read_text())

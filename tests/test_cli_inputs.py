@@ -100,7 +100,7 @@ def test_impossible_sentences_print_as_impossible_never_as_inf(capsys):
     "mirror", ["http://[::1", "ftp:", "http://host:port/x", "file:///tmp", "localhost:8000"]
 )
 def test_a_malformed_mirror_url_is_refused_before_any_request(capsys, tmp_path, mirror):
-    status, out, err = _glu(capsys, "data", "fetch", "--dest", tmp_path / "d", "--mirror", mirror)
+    status, out, err = _glu(capsys, "data", "fetch", "-o", tmp_path / "d", "--mirror", mirror)
     assert status == 2 and err.count("\n") == 1 and "expected an http://, https:// or ftp:// URL" in err
     assert not (tmp_path / "d").exists()
 
@@ -180,7 +180,7 @@ def test_failed_evaluate_and_fetch_leave_no_folder_behind(capsys, tmp_path):
             capsys,
             "data",
             "fetch",
-            "--dest",
+            "-o",
             tmp_path / "a" / "b" / "d",
             "--mirror",
             "http://127.0.0.1:9/",

@@ -129,7 +129,7 @@ def test_fetch_command_reports_failures_with_status_2(server, mirror_manifest, t
     root, url, _ = server
     path, n = mirror_manifest
     (root / "affordance-words" / "networkDefinition.txt").unlink()
-    status = main(["data", "fetch", "--dest", str(tmp_path / "d"), "--mirror", url, "--manifest", str(path)])
+    status = main(["data", "fetch", "-o", str(tmp_path / "d"), "--mirror", url, "--manifest", str(path)])
     err = capsys.readouterr().err
     assert status == 2
     last = err.strip().splitlines()[-1]
@@ -137,7 +137,7 @@ def test_fetch_command_reports_failures_with_status_2(server, mirror_manifest, t
     assert f"[{n}/{n}]" in err
     assert f"nothing was written to {tmp_path / 'd'}" in last
     assert not (tmp_path / "d").exists()
-    assert main(["data", "fetch", "--dest", str(tmp_path / "d2"), "--mirror", "http://127.0.0.1:9"]) == 2
+    assert main(["data", "fetch", "-o", str(tmp_path / "d2"), "--mirror", "http://127.0.0.1:9"]) == 2
 
 
 def test_the_manifest_names_the_pinned_commits():

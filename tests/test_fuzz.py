@@ -107,7 +107,6 @@ def _kind(action: argparse.Action) -> str:
         return "number"
     if name in ("output_file", "output_folder", "Path") or action.dest in (
         "out",
-        "dest",
         "plot",
         "notebooks",
     ):
@@ -137,7 +136,7 @@ LEAVES = {" ".join(path): sp for path, sp in _leaves(build_parser())}
 # (heavy ones: a valid reproduce or sweep would take minutes).
 COMMANDS: dict[str, tuple[list[str], bool]] = {
     "data fetch": (
-        ["--dest", "{tmp}/out/data", "--mirror", "http://127.0.0.1:9/data", "--timeout", "2"],
+        ["-o", "{tmp}/out/data", "--mirror", "http://127.0.0.1:9/data", "--timeout", "2"],
         False,
     ),
     "data synth": (["-o", "{tmp}/out/synth", "--n", "200"], True),
@@ -154,8 +153,8 @@ COMMANDS: dict[str, tuple[list[str], bool]] = {
         False,
     ),
     "recognize": (["{log}", "--models", "{recogniser}"], True),
-    "reproduce": (["--out", "{tmp}/out/repro", "--quick"], False),
-    "run": (["07_glu2017_figures", "--out", "{tmp}/out/run"], False),
+    "reproduce": (["-o", "{tmp}/out/repro", "--quick"], False),
+    "run": (["07_glu2017_figures", "-o", "{tmp}/out/run"], False),
     "describe": (["--model", "{model}"], True),
     "anticipate": (["--case", "sphere", "--models", "{recogniser}", "--data", "{data}"], False),
     "readme": (["--summary", "{tmp}/none.json", "--readme", "{tmp}/README.md"], True),
@@ -180,7 +179,8 @@ COMMANDS: dict[str, tuple[list[str], bool]] = {
         False,
     ),
     "learning-curves": (
-        ["--episodes", "12", "--seeds", "0", "--synchronous", "--data", "{data}", "-o", "{tmp}/out/lc"],
+        ["--episodes", "12", "--seeds", "0", "--scheduler", "synchronous"]
+        + ["--data", "{data}", "-o", "{tmp}/out/lc"],
         False,
     ),
 }

@@ -3,7 +3,7 @@
 tests/test_fuzz.py draws bad values per argument type and a fixed set of corrupted files. This module adds:
 cases that *must* fail (an expensive command given only invalid settings may not run: ``--only 0`` once ran
 every notebook), inputs and outputs in one work folder whose every file is compared before and after a failed
-run (folders made above ``--dest`` or ``-o`` count), recursive mutations of model and recogniser JSON (keys
+run (folders made above ``-o`` count), recursive mutations of model and recogniser JSON (keys
 deleted, values replaced by arbitrary JSON, non-finite numbers, deep nesting, truncation), random byte flips
 in the originals' ``.mat`` (without the real data, in the synthetic network saved in the same BNT layout),
 and evidence batches from a file and from stdin with one answer per line.
@@ -341,11 +341,11 @@ OUT = "{out}"
 def _cases() -> dict[str, tuple[list[str], list[tuple[str, object]], bool]]:
     return {
         "data fetch": (
-            ["data", "fetch", "--dest", f"{OUT}/d", "--mirror", "http://127.0.0.1:9/", "--timeout", "0.5"],
+            ["data", "fetch", "-o", f"{OUT}/d", "--mirror", "http://127.0.0.1:9/", "--timeout", "0.5"],
             [
                 ("--timeout", "pos_float"),
                 ("--mirror", "url"),
-                ("--dest", "path:"),
+                ("-o", "path:"),
                 ("--manifest", "path:.json"),
             ],
             True,
@@ -543,7 +543,7 @@ def _cases() -> dict[str, tuple[list[str], list[tuple[str, object]], bool]]:
             [
                 ("--case", "name"),
                 ("--step", "pos_int"),
-                ("--rule", "name"),
+                ("--soft-rule", "name"),
                 ("--models", "path:.json"),
                 ("--score", "name"),
                 ("--candidates", "path:.txt"),
@@ -600,8 +600,8 @@ def _cases() -> dict[str, tuple[list[str], list[tuple[str, object]], bool]]:
             True,
         ),
         "learning-curves": (
-            ["learning-curves", "--episodes", "12", "--seeds", "0", "--synchronous", "--data", "{data}"]
-            + ["-o", f"{OUT}/lc"],
+            ["learning-curves", "--episodes", "12", "--seeds", "0", "--scheduler", "synchronous"]
+            + ["--data", "{data}", "-o", f"{OUT}/lc"],
             [
                 ("--episodes", "pos_int"),
                 ("--seeds", ["", "x", "1,1", "-1", "0..", "a..b"]),

@@ -195,8 +195,8 @@ def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
         r = _run([str(glu), *cmd], cwd=empty, env=env)
         assert r.returncode == 0, (cmd, r.stderr)
     r = _run([str(glu), "reproduce", "--quick"], cwd=empty, env=env)
-    assert r.returncode == 2 and "give an output folder (--out DIR)" in r.stderr
-    r = _run([str(glu), "reproduce", "--quick", "--out", "out"], cwd=empty, env=env)
+    assert r.returncode == 2 and "give an output folder (-o DIR)" in r.stderr
+    r = _run([str(glu), "reproduce", "--quick", "-o", "out"], cwd=empty, env=env)
     assert r.returncode == 0, r.stderr[-3000:]
     assert (empty / "out" / "results" / "summary.json").is_file() and (
         empty / "out" / "report" / "index.html"

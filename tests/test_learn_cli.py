@@ -42,7 +42,7 @@ def learned(tmp_path_factory):
         "36",
         "--labels",
         "soft",
-        "--words",
+        "--with-words",
         "--data",
         "synthetic",
         *SMALL,
@@ -92,7 +92,7 @@ def test_the_threshold_reaches_the_confident_scheme(capsys, tmp_path):
         "36",
         "--labels",
         "confident",
-        "--words",
+        "--with-words",
         "--data",
         "synthetic",
         *SMALL,
@@ -176,7 +176,9 @@ def test_learning_curves_writes_the_study_tables(capsys, tmp_path):
         "--test-per-action",
         "2",
     ]
-    status, out, _ = run(capsys, *argv, "--synchronous", "--data", "synthetic", "-o", str(tmp_path))
+    status, out, _ = run(
+        capsys, *argv, "--scheduler", "synchronous", "--data", "synthetic", "-o", str(tmp_path)
+    )
     assert status == 0, out
     curves = pd.read_csv(tmp_path / "learning_curves.csv")
     assert set(curves["episodes"]) == {10, 12} and set(curves["seeds"]) == {2}
@@ -191,7 +193,7 @@ def test_learning_curves_on_a_local_dask_cluster_equal_the_run_here(capsys, tmp_
     common = ["learning-curves", "--episodes", "12", "--seeds", "0,1", "--ambiguities", "still"]
     common += ["--test-per-action", "2", "--data", "synthetic"]
     here, there = tmp_path / "here", tmp_path / "there"
-    assert run(capsys, *common, "--synchronous", "-o", str(here))[0] == 0
+    assert run(capsys, *common, "--scheduler", "synchronous", "-o", str(here))[0] == 0
     status, out, err = run(capsys, *common, "--workers", "1", "-o", str(there))
     assert status == 0, err
     for name in ("learning_curves.csv", "learning_match.csv", "learning_labels.csv"):

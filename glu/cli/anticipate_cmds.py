@@ -8,7 +8,16 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.cli.common import add_data_args, add_description_args, json_text, positive_int, read_candidates
+from glu.cli.common import (
+    add_data_args,
+    add_deprecated_alias,
+    add_description_args,
+    add_json_option,
+    add_soft_rule_option,
+    json_text,
+    positive_int,
+    read_candidates,
+)
 from glu.errors import DataError
 
 DESCRIPTION = """\
@@ -24,7 +33,6 @@ p_comb(ObjVel | Shape, Size, G_1^t). The scene is described by the best sentence
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``anticipate``."""
-    from glu.bn.soft import SOFT_RULES
     from glu.experiments.anticipation import CASES, ORIGINAL_STEP
 
     p = sub.add_parser(
@@ -45,15 +53,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="original",
         metavar="original|RECOGNISER",
         help="'original' (the 2013 HMMs of the data folder; touch = their push model) or a recogniser file "
-        "from `glu hmm train` (default: original)",
+        "from glu hmm train (default: original)",
     )
     add_data_args(p)
-    p.add_argument(
-        "--rule",
-        choices=SOFT_RULES,
-        default=SOFT_RULES[0],
-        help="how p_HMM enters the network: virtual evidence (the originals') or Jeffrey's rule",
-    )
+    add_soft_rule_option(p, "p_HMM")
+    add_deprecated_alias(p, "--rule", "--soft-rule")
     p.add_argument(
         "--step",
         type=positive_int,
@@ -66,7 +70,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="also fuse at the last frame t = T (not on the originals' schedule; marked extra)",
     )
     add_description_args(p)
-    p.add_argument("--json", action="store_true", help="print one JSON object only")
+    add_json_option(p, "one object (case, frames, loglik_per_frame, updates, description)")
     p.set_defaults(func=_anticipate)
 
 
@@ -107,7 +111,7 @@ def _anticipate(args: argparse.Namespace) -> int:
         models=args.models,
         step=args.step,
         final_update=args.final_update,
-        rule=args.rule,
+        rule=args.soft_rule,
         targets=("ObjVel",),
         describe="last",
         score=args.score,
@@ -122,7 +126,7 @@ def _anticipate(args: argparse.Namespace) -> int:
         + ", ".join(f"{k}={v}" for k, v in case.evidence.items())
     )
     say(
-        f"# soft evidence: {args.rule}; updates every {args.step} frames"
+        f"# soft evidence: {args.soft_rule}; updates every {args.step} frames"
         + (" and at t = T (extra)" if args.final_update else " (the originals' schedule)")
         + f"; description: {args.score} score over {args.candidates}"
     )

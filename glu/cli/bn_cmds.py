@@ -14,6 +14,7 @@ from glu.cli.common import (
     add_data_args,
     add_engine_args,
     add_evidence_args,
+    add_json_option,
     add_model_args,
     json_text,
     load_model,
@@ -28,18 +29,36 @@ from glu.evidence import check_disjoint, format_evidence
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``bn`` command group and ``query``."""
     p = sub.add_parser(
-        "bn", help="learn, import or inspect the Affordance–Words network", description=__doc__
+        "bn",
+        help="learn, import or inspect the Affordance–Words network",
+        description="Learn the Affordance–Words network from the robot's experiments, list its edges and "
+        "nodes, or convert it from and to the exchange formats of other tools (BIF, XMLBIF, UAI). "
+        "Questions to a network: glu query and glu describe.",
     )
     bsub = p.add_subparsers(dest="bn_command", metavar="SUBCOMMAND")
     bsub.required = True
 
-    lp = bsub.add_parser("learn", help="learn structure (K2 + BIC) and parameters from the experiments")
+    lp = bsub.add_parser(
+        "learn",
+        help="learn structure (K2 + BIC) and parameters from the experiments",
+        description="Learn the network's structure (K2 with the BIC score) and its "
+        "conditional probability tables from the experiments of --data, or from your own --schema and "
+        "--experiments, and write it as a glu JSON model.",
+    )
     add_data_args(lp)
-    lp.add_argument("-o", "--out", type=output_file, required=True, help="model file to write (JSON)")
+    lp.add_argument(
+        "-o", "--out", type=output_file, required=True, metavar="MODEL", help="model file to write (JSON)"
+    )
     lp.set_defaults(func=_learn)
 
-    ep = bsub.add_parser("edges", help="print the edges of a model, one 'Parent -> Child' per line, sorted")
-    ep.add_argument("model", type=Path, help="model file (.json from `glu bn learn`, or the original .mat)")
+    ep = bsub.add_parser(
+        "edges",
+        help="print the edges of a model, one 'Parent -> Child' per line, sorted",
+        description="Print the edges of a model, one 'Parent -> Child' per line, sorted by parent then child. "
+        '--json prints [["Parent", "Child"], …].',
+    )
+    ep.add_argument("model", type=Path, help="model file (.json from glu bn learn, or the original .mat)")
+    add_json_option(ep, "[[parent, child], …]")
     ep.set_defaults(func=_edges)
 
     np_ = bsub.add_parser(
@@ -50,7 +69,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "parents. --json prints [{name, kind, values, parents}, …].",
     )
     np_.add_argument("model", type=Path, help="model file (.json, the original .mat, or .bif/.xmlbif/.uai)")
-    np_.add_argument("--json", action="store_true", help="print a JSON list only")
+    add_json_option(np_, "[{name, kind, values, parents}, …]")
     np_.set_defaults(func=_nodes)
 
     ip = bsub.add_parser(
@@ -58,10 +77,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="convert a model from another tool (BIF, XMLBIF, UAI) or the original BNT .mat to a glu JSON model",
         description="Read a BIF, XMLBIF or UAI file (the format from the suffix, or --format), or the "
         "originals' BN_lab.mat, validate it completely and write a glu JSON model. Indicator nodes "
-        "seen__NODE written by `glu bn export --zero-rows seen` become NODE's all-zero rows again.",
+        "seen__NODE written by glu bn export --zero-rows seen become NODE's all-zero rows again.",
     )
     ip.add_argument("model", type=Path, metavar="FILE", help="e.g. net.bif, net.xmlbif, net.uai, BN_lab.mat")
-    ip.add_argument("-o", "--out", type=output_file, required=True, help="model file to write (JSON)")
+    ip.add_argument(
+        "-o", "--out", type=output_file, required=True, metavar="MODEL", help="model file to write (JSON)"
+    )
     ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
     ip.add_argument(
         "--renormalise",
@@ -86,7 +107,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "model", type=Path, metavar="MODEL", help="model file (.json, the original .mat, or an exchange file)"
     )
     xp.add_argument("--format", choices=tuple(FORMATS), help="output format (default: from the suffix of -o)")
-    xp.add_argument("-o", "--out", type=output_file, required=True, help="file to write")
+    xp.add_argument(
+        "-o",
+        "--out",
+        type=output_file,
+        required=True,
+        metavar="FILE",
+        help="file to write (.bif, .xmlbif, .uai)",
+    )
     xp.add_argument(
         "--zero-rows",
         choices=ZERO_ROW_MODES,
@@ -111,7 +139,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_evidence_args(q)
     add_engine_args(q)
-    q.add_argument("--json", action="store_true", help='print {"NODE": {"VALUE": p, …}, …} only')
+    add_json_option(q, '{"NODE": {"VALUE": p, …}, …}')
     q.add_argument(
         "--batch",
         metavar="QUERIES.jsonl",
@@ -131,6 +159,9 @@ def _learn(args: argparse.Namespace) -> int:
 def _edges(args: argparse.Namespace) -> int:
     args.data = None
     bn, _ = load_model(args)
+    if args.json:
+        print(json_text([list(edge) for edge in bn.edges()]))
+        return 0
     for parent, child in bn.edges():
         print(f"{parent} -> {child}")
     return 0

@@ -143,7 +143,7 @@ def json_text(obj: Any) -> str:
 
 def add_data_option(p: argparse.ArgumentParser, purpose: str = "") -> None:
     """``--data``: the data folder (the same help everywhere, plus what this command uses it for)."""
-    p.add_argument("--data", help=DATA_HELP + (f"; {purpose}" if purpose else ""))
+    p.add_argument("--data", metavar="DIR", help=DATA_HELP + (f"; {purpose}" if purpose else ""))
 
 
 def add_data_args(p: argparse.ArgumentParser) -> None:
@@ -212,8 +212,6 @@ def make_engine(bn: Any, args: argparse.Namespace) -> Any:
 
 def add_evidence_args(p: argparse.ArgumentParser) -> None:
     """``--evidence``, ``--soft``, ``--soft-rule`` (read by :func:`read_evidence`)."""
-    from glu.bn.soft import SOFT_RULES
-
     p.add_argument(
         "--evidence", action="extend", nargs="+", default=[], metavar="NODE=VALUE", help="hard evidence"
     )
@@ -225,12 +223,7 @@ def add_evidence_args(p: argparse.ArgumentParser) -> None:
         help="soft evidence on an affordance node, a distribution over its values, "
         "e.g. a gesture posterior Action=grasp:0.2,tap:0.6,touch:0.2",
     )
-    p.add_argument(
-        "--soft-rule",
-        choices=SOFT_RULES,
-        default=SOFT_RULES[0],
-        help="how soft evidence enters: virtual (likelihood) evidence, as the originals, or Jeffrey's rule",
-    )
+    add_soft_rule_option(p)
 
 
 def add_description_args(p: argparse.ArgumentParser) -> None:
@@ -354,3 +347,95 @@ def require_extra(extra: str, *modules: str) -> None:
             f"this command needs {', '.join(missing)}, which the plain `pip install glu` leaves out; "
             f"install them with: pip install 'glu[{extra}]'"
         )
+
+
+# ------------------------------------------------------------------ one spelling per option
+
+
+class DeprecatedAlias(argparse.Action):
+    """An old spelling of an option that still works, hidden from ``--help``: it stores into the new option's
+    destination and says once, on stderr, which spelling to use instead."""
+
+    def __init__(self, option_strings, dest, replacement: str, **kwargs):  # type: ignore[no-untyped-def]
+        self.replacement = replacement
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):  # type: ignore[no-untyped-def]
+        import sys
+
+        print(f"{parser.prog}: {option_string} is deprecated; use {self.replacement}", file=sys.stderr)
+        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
+
+
+def add_deprecated_alias(
+    p: argparse.ArgumentParser, old: str, new: str, replacement: str | None = None, const: Any = None
+) -> None:
+    """Keep ``old`` working as a hidden alias of the option ``new`` (one deprecation line on stderr).
+
+    ``const``: the old spelling was a flag, equivalent to ``new`` with this value (``replacement`` says so).
+    """
+    target = next(a for a in p._actions if new in a.option_strings)
+    if const is None and target.nargs == 0:  # a flag for a flag (store_true)
+        const, replacement = target.const, replacement or "/".join(target.option_strings)
+    if const is not None:
+        value: dict[str, Any] = {"nargs": 0, "const": const}
+        replacement = replacement or f"{new} {const}"
+    else:
+        value = {
+            "type": target.type,
+            "nargs": target.nargs,
+            "choices": target.choices,
+            "metavar": target.metavar,
+        }
+        replacement = replacement or "/".join(target.option_strings)
+    p.add_argument(
+        old,
+        action=DeprecatedAlias,
+        dest=target.dest,
+        default=argparse.SUPPRESS,
+        replacement=replacement,
+        help=argparse.SUPPRESS,
+        **value,
+    )
+
+
+def add_json_option(p: argparse.ArgumentParser, what: str) -> None:
+    """``--json``: ``what`` as strict JSON, alone on stdout (anything else the command says goes to stderr)."""
+    p.add_argument("--json", action="store_true", help=f"strict JSON on stdout, nothing else: {what}")
+
+
+def add_soft_rule_option(p: argparse.ArgumentParser, what: str = "soft evidence") -> None:
+    """``--soft-rule``: how a distribution over a node's values enters the network."""
+    from glu.bn.soft import SOFT_RULES
+
+    p.add_argument(
+        "--soft-rule",
+        choices=SOFT_RULES,
+        default=SOFT_RULES[0],
+        help=f"how {what} enters the network: virtual (likelihood) evidence, as the originals, or Jeffrey's rule",
+    )
+
+
+def scheduler_address(text: str) -> str:
+    """--scheduler ADDRESS: a Dask scheduler address (tcp://host:port) or 'synchronous'."""
+    from glu.errors import DataError
+    from glu.sweep.runner import check_scheduler
+
+    try:
+        return check_scheduler(text) or text
+    except DataError as e:
+        raise argparse.ArgumentTypeError(str(e).removeprefix(f"--scheduler {text!r}: ")) from None
+
+
+def add_cluster_args(p: argparse.ArgumentParser, unit: str) -> None:
+    """``--scheduler`` and ``--workers``: where the Dask tasks (one per ``unit``) run."""
+    p.add_argument(
+        "--scheduler",
+        type=scheduler_address,
+        metavar="ADDRESS",
+        help=f"an existing Dask scheduler, e.g. tcp://127.0.0.1:8786 ('synchronous': run here, one {unit} "
+        "after another); default: a LocalCluster with one worker per core",
+    )
+    p.add_argument(
+        "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: one per core)"
+    )

@@ -7,7 +7,16 @@ import sys
 from pathlib import Path
 
 from glu import paths
-from glu.cli.common import add_data_option, integer, output_folder, progress_bar, seed
+from glu.cli.common import (
+    add_data_option,
+    add_deprecated_alias,
+    add_json_option,
+    integer,
+    json_text,
+    output_folder,
+    progress_bar,
+    seed,
+)
 from glu.data.source import DEFAULT_SYNTHETIC_N, WORD_FILES
 from glu.data.synthetic import MAX_ROWS, MIN_ROWS
 from glu.errors import DataError, FetchError
@@ -15,17 +24,31 @@ from glu.errors import DataError, FetchError
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``data`` command group."""
-    p = sub.add_parser("data", help="fetch, synthesise or inspect data", description=__doc__)
+    p = sub.add_parser(
+        "data",
+        help="fetch, synthesise or inspect data",
+        description="Get the real data (glu data fetch), write a synthetic data folder (glu data synth), "
+        "or see which data source a command would use and what it holds (glu data info).",
+    )
     dsub = p.add_subparsers(dest="data_command", metavar="SUBCOMMAND")
     dsub.required = True
 
-    f = dsub.add_parser("fetch", help="download the real data at pinned commits, verifying checksums")
+    f = dsub.add_parser(
+        "fetch",
+        help="download the real data at pinned commits, verifying checksums",
+        description="Download the authors' published data (GPL-3.0) at pinned commits and check every "
+        "file's sha256. The data folder appears, by one rename, only when every file is verified; a failed "
+        "or interrupted fetch leaves it as it was, and the next run downloads only what is missing.",
+    )
     f.add_argument(
-        "--dest",
+        "-o",
+        "--out",
         type=Path,
         default=paths.REAL_DATA_DIR,
-        help=f"data folder (default: {paths.HERE.real_data_label})",
+        metavar="DIR",
+        help=f"data folder to write (default: {paths.HERE.real_data_label})",
     )
+    add_deprecated_alias(f, "--dest", "--out")
     f.add_argument("--mirror", metavar="URL", help="fetch {URL}/{local path} instead of from GitHub")
     f.add_argument("--timeout", type=float, default=60.0, help="seconds per request (default 60)")
     f.add_argument(
@@ -38,7 +61,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.set_defaults(func=_fetch)
 
     s = dsub.add_parser(
-        "synth", help="write a synthetic data folder with the real data's layout (tables and hand logs)"
+        "synth",
+        help="write a synthetic data folder with the real data's layout (tables and hand logs)",
+        description="Write synthetic experiments (simple physics, the same 49 words) and synthetic "
+        "gesture recordings in the layout of the real data, so that every command and notebook runs on them.",
     )
     s.add_argument(
         "--n",
@@ -47,7 +73,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"experiments per table ({MIN_ROWS} to {MAX_ROWS:,}; default {DEFAULT_SYNTHETIC_N})",
     )
     s.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
-    s.add_argument("-o", "--out", type=output_folder, required=True, help="output folder")
+    s.add_argument("-o", "--out", type=output_folder, required=True, metavar="DIR", help="output folder")
     s.add_argument(
         "--force",
         action="store_true",
@@ -55,11 +81,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     s.set_defaults(func=_synth)
 
-    i = dsub.add_parser("info", help="say which data source is used and what it holds")
+    i = dsub.add_parser(
+        "info",
+        help="say which data source is used and what it holds",
+        description="Say which data source the commands use (--data, $GLU_DATA_DIR, the fetched data, "
+        "else synthetic) and summarise its experiment table: the counts of each node's values and the most "
+        'frequent words. --json prints {"data", "words", "experiments", "values", "most_frequent_words"}.',
+    )
     add_data_option(i)
     i.add_argument(
         "--words", choices=tuple(WORD_FILES), default="lab", help="which experiment table (default lab)"
     )
+    add_json_option(i, "the summary")
     i.set_defaults(func=_info)
 
 
@@ -82,7 +115,7 @@ def _fetch(args: argparse.Namespace) -> int:
 
     try:
         results = fetch_all(
-            args.dest,
+            args.out,
             mirror=args.mirror,
             progress=progress,
             timeout=args.timeout,
@@ -94,12 +127,12 @@ def _fetch(args: argparse.Namespace) -> int:
     failed = [r for r in results if r.status == "failed"]
     ok = len(results) - len(failed)
     if failed:
-        kept = f"; the {ok} verified files wait in {partial_folder(args.dest)} for the next run" if ok else ""
+        kept = f"; the {ok} verified files wait in {partial_folder(args.out)} for the next run" if ok else ""
         raise FetchError(
             f"{len(failed)} of {len(results)} files could not be fetched (first: {failed[0].detail}); "
-            f"nothing was written to {args.dest}{kept}; run the command again to retry"
+            f"nothing was written to {args.out}{kept}; run the command again to retry"
         )
-    print(f"{ok}/{len(results)} files verified in {args.dest}")
+    print(f"{ok}/{len(results)} files verified in {args.out}")
     return 0
 
 
@@ -135,12 +168,26 @@ def _info(args: argparse.Namespace) -> int:
     from glu.data.source import load_experiments, resolve_data
 
     source = resolve_data(args.data)
-    print(f"data: {source.location()}")
     df = load_experiments(source, args.words)
-    print(f"experiments: {len(df)} (words={args.words})")
-    for node in df.columns[:8]:
-        counts = df[node].value_counts(sort=False)
-        print(f"  {node:10s} " + "  ".join(f"{v}={c}" for v, c in counts.items()))
+    values = {
+        node: {str(v): int(c) for v, c in df[node].value_counts(sort=False).items()}
+        for node in df.columns[:8]
+    }
     present = (df.iloc[:, 8:] == "present").sum().sort_values(ascending=False)
-    print("most frequent words: " + ", ".join(f"{w} ({c})" for w, c in present.head(10).items()))
+    frequent = {str(w): int(c) for w, c in present.head(10).items()}
+    if args.json:
+        info = {
+            "data": source.location(),
+            "words": args.words,
+            "experiments": len(df),
+            "values": values,
+            "most_frequent_words": frequent,
+        }
+        print(json_text(info))
+        return 0
+    print(f"data: {source.location()}")
+    print(f"experiments: {len(df)} (words={args.words})")
+    for node, counts in values.items():
+        print(f"  {node:10s} " + "  ".join(f"{v}={c}" for v, c in counts.items()))
+    print("most frequent words: " + ", ".join(f"{w} ({c})" for w, c in frequent.items()))
     return 0

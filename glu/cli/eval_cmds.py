@@ -12,26 +12,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from glu.cli.common import output_file, output_folder, positive_int, seed
-
-
-def _scheduler(text: str) -> str:
-    from glu.errors import DataError
-    from glu.sweep.runner import check_scheduler
-
-    try:
-        return check_scheduler(text) or text
-    except DataError as e:
-        raise argparse.ArgumentTypeError(str(e).removeprefix(f"--scheduler {text!r}: ")) from None
+from glu.cli.common import add_cluster_args, add_data_option, output_file, output_folder, positive_int, seed
 
 
 def _shared(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", type=Path, metavar="FILE.toml", help="sweep settings (see glu.sweep.config)")
     p.add_argument("--episodes", type=positive_int, metavar="N", help="episodes in all (default 120000)")
     p.add_argument("--seed", type=seed, metavar="S", help="the corpus's seed (default 0)")
-    p.add_argument(
-        "--data", help="data the network is learned from (default: $GLU_DATA_DIR, data/real, else synthetic)"
-    )
+    add_data_option(p, "the network is learned from its experiments")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -39,19 +27,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     e = sub.add_parser(
         "evaluate",
         help="measure every fusion strategy on a simulated corpus (Dask sweep)",
-        description=__doc__,
+        description="Measure every fusion strategy (gesture only, network only, hard, virtual, Jeffrey, "
+        "product) on simulated episodes: the factorial design action prior × inference network × p_HMM "
+        "reading × noise × viewpoint, over recogniser seeds, every strategy at every observed fraction of "
+        "the gesture (docs/corpus-evaluation.md). Runs on a LocalCluster sized to the machine or on an "
+        "existing Dask cluster (--scheduler), and writes the merged tables to -o DIR; run it again on the "
+        "same folder to finish an interrupted sweep.",
     )
     _shared(e)
-    e.add_argument(
-        "--scheduler",
-        type=_scheduler,
-        metavar="ADDRESS",
-        help="an existing Dask scheduler, e.g. tcp://127.0.0.1:8786 ('synchronous': run here, "
-        "one chunk after another); default: a LocalCluster with one worker per core",
-    )
-    e.add_argument(
-        "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: one per core)"
-    )
+    add_cluster_args(e, "chunk")
     e.add_argument(
         "--max-chunks",
         type=positive_int,
@@ -63,7 +47,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     e.set_defaults(func=_evaluate)
 
-    c = sub.add_parser("corpus", help="write a simulated corpus of episodes to Parquet", description=__doc__)
+    c = sub.add_parser(
+        "corpus",
+        help="write a simulated corpus of episodes to Parquet",
+        description="Write the simulated episodes of a sweep's design (the same settings as glu evaluate: "
+        "--config, --episodes, --seed, --data) to one Parquet file, one row per episode, without scoring "
+        "them.",
+    )
     _shared(c)
     c.add_argument(
         "-o", "--out", type=output_file, required=True, metavar="FILE.parquet", help="file to write"

@@ -14,6 +14,7 @@ from typing import Any
 
 from glu.cli.common import (
     add_data_option,
+    add_json_option,
     json_text,
     nonneg_float,
     output_file,
@@ -30,20 +31,33 @@ from glu.gestures.synthetic import GESTURES
 from glu.hmm import RECIPES, TrainingConfig
 from glu.schema import ACTIONS
 
+LOG_TEXT = (
+    "A LOG is a YARP hand log (data.log), a recording folder holding one, or the name of a recording of the "
+    "data folder (tap1_hand: DATA/gestures/tap1_hand/data.log)."
+)
+"""What the help of the commands taking a hand log says about it (the module's docstring, without markup)."""
+FRAMES_TEXT = "Frames A:B are 1-based and inclusive, in the numbering of the log, as in the papers."
+
 SYNTHETIC_NOISE = 0.01
 """Default sensor noise (m) of ``glu hmm train --synthetic``."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``gestures`` and ``hmm`` command groups and ``recognize``."""
-    g = sub.add_parser("gestures", help="inspect and segment hand-trajectory logs", description=__doc__)
+    g = sub.add_parser(
+        "gestures",
+        help="inspect and segment hand-trajectory logs",
+        description="Inspect hand-trajectory logs: repair their tracking problems and find the gesture "
+        "repetitions in them. " + LOG_TEXT,
+    )
     gsub = g.add_subparsers(dest="gestures_command", metavar="SUBCOMMAND")
     gsub.required = True
     s = gsub.add_parser(
         "segment",
         help="find the gesture repetitions in a hand log and print them",
         description="Repair a hand log (interpolate short gaps, split at long ones, replace spikes), "
-        "then find the repetitions of the gesture from the distance of the hand to its rest pose.",
+        "then find the repetitions of the gesture from the distance of the hand to its rest pose. --json "
+        'prints {"log", "recording", "tracking", "events", "segments", "left_out"}; the rest goes to stderr.',
     )
     s.add_argument("log", help="hand log: a data.log, a recording folder, or a recording name")
     add_data_option(s, "used to find a recording by name")
@@ -51,9 +65,16 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--plot", type=output_image, metavar="PNG", help="also draw the segmentation into this image"
     )
     s.add_argument("--label", help="action performed (default: from the recording's name, if known)")
+    add_json_option(s, "the segments and tracking events")
     s.set_defaults(func=_segment)
 
-    h = sub.add_parser("hmm", help="train gesture HMMs", description=__doc__)
+    h = sub.add_parser(
+        "hmm",
+        help="train gesture HMMs",
+        description="Train one left-to-right GMM-HMM per action, on the real recordings, synthetic gestures "
+        "or your own labelled recordings, and save them as a recogniser file that glu recognize and glu "
+        "anticipate take (--models FILE).",
+    )
     hsub = h.add_subparsers(dest="hmm_command", metavar="SUBCOMMAND")
     hsub.required = True
     t = hsub.add_parser(
@@ -62,7 +83,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Train on the automatically segmented standing recordings (--data), on synthetic "
         "gestures (--synthetic N, N per action), or on your own labelled recordings (--recordings: a folder "
         "with one subfolder per action, or a CSV manifest file,label[,frames]). --features chooses "
-        "invariant features; the recogniser file records them and `glu recognize` applies them.",
+        "invariant features; the recogniser file records them and glu recognize applies them.",
         epilog="invariances: "
         + "; ".join(f"{k} = {v}" for k, v in INVARIANCE_MEANING.items())
         + " (formulas: glu.gestures.invariants)",
@@ -150,7 +171,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         "recognize",
         help="posterior p_HMM(A | G) of a gesture in a hand log",
         description="Score a hand log (or frames A:B of it) under each action's HMM and print the "
-        "log-likelihoods and the posterior with equal priors; --stream prints them after every frame.",
+        "log-likelihoods and the posterior with equal priors; --stream prints them after every frame. "
+        + LOG_TEXT
+        + " "
+        + FRAMES_TEXT,
     )
     r.add_argument(
         "log",
@@ -163,13 +187,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="original",
         metavar="original|RECOGNISER",
         help="'original' (the 2013 models of the data folder; touch = their push model) or a recogniser "
-        "file from `glu hmm train` (default: original)",
+        "file from glu hmm train (default: original)",
     )
     add_data_option(r)
     r.add_argument(
         "--stream", action="store_true", help="one line per frame: log L(G_1^t | A), p_HMM(A | G_1^t)"
     )
-    r.add_argument("--json", action="store_true", help='print JSON: {"loglik": {…}, "posterior": {…}}')
+    add_json_option(r, '{"loglik": {…}, "posterior": {…}, "typicality": {…}} (with --stream: one a frame)')
     r.add_argument("--repair", action="store_true", help="repair the log first (default: frames as logged)")
     r.add_argument(
         "--body-size",
@@ -246,28 +270,16 @@ def _say(msg: str, quiet: bool) -> None:
 def _segment(args: argparse.Namespace) -> int:
     from glu.gestures.corpus import RECORDING_ACTION, original_segments
     from glu.gestures.segmentation import segment_recording
-    from glu.gestures.trajectories import summarize_events
 
     path, source = _resolve_log(args.log, args.data)
     if source is not None:
-        print(f"data: {source.describe()}")
+        _say(f"data: {source.describe()}", args.json)
     name = path.parent.name if path.name == HAND_LOG else path.stem
     seg = segment_recording(path, label=args.label if args.label is not None else RECORDING_ACTION.get(name))
-    print(f"log: {path} ({seg.recording})")
-    print(f"tracking: {summarize_events(seg.events)}")
-    for e in seg.events:
-        if e.kind in ("gap", "jump", "short-piece"):
-            print(f"  {e.describe()}")
-    print(f"segments: {len(seg.segments)}")
-    for i, s in enumerate(seg.segments, 1):
-        print(
-            f"  {i}. frames {s.start}:{s.end} ({s.n_frames} frames, peak activity {s.peak:.2f})"
-            + (f"  {s.label}" if s.label else "")
-        )
-    if seg.rejected:
-        print(f"left out: {len(seg.rejected)}")
-        for s, why in seg.rejected:
-            print(f"  frames {s.start}:{s.end}: {why}")
+    if args.json:
+        print(json_text({"log": str(path), **seg.as_dict()}))
+    else:
+        _print_segmentation(path, seg)
     if args.plot:
         import matplotlib
 
@@ -286,8 +298,28 @@ def _segment(args: argparse.Namespace) -> int:
         fmt = Path(args.plot).suffix.lstrip(".").lower() or "png"
         (written,) = save_figure(fig, args.plot, formats=(fmt,))
         plt.close(fig)
-        print(f"plot: {written}")
+        _say(f"plot: {written}", args.json)
     return 0
+
+
+def _print_segmentation(path: Path, seg: Any) -> None:
+    from glu.gestures.trajectories import summarize_events
+
+    print(f"log: {path} ({seg.recording})")
+    print(f"tracking: {summarize_events(seg.events)}")
+    for e in seg.events:
+        if e.kind in ("gap", "jump", "short-piece"):
+            print(f"  {e.describe()}")
+    print(f"segments: {len(seg.segments)}")
+    for i, s in enumerate(seg.segments, 1):
+        print(
+            f"  {i}. frames {s.start}:{s.end} ({s.n_frames} frames, peak activity {s.peak:.2f})"
+            + (f"  {s.label}" if s.label else "")
+        )
+    if seg.rejected:
+        print(f"left out: {len(seg.rejected)}")
+        for s, why in seg.rejected:
+            print(f"  frames {s.start}:{s.end}: {why}")
 
 
 def _train(args: argparse.Namespace) -> int:

@@ -13,6 +13,7 @@ from glu.cli.common import (
     add_description_args,
     add_engine_args,
     add_evidence_args,
+    add_json_option,
     add_model_args,
     json_text,
     load_model,
@@ -76,11 +77,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="L",
         help="only sentences of at most L words (needed when the grammar repeats with { } or < >)",
     )
-    p.add_argument(
-        "--json",
-        action="store_true",
-        help='print only [{"sentence": …, "score": …}, …] (best first; score null for -inf)',
-    )
+    add_json_option(p, '[{"sentence": …, "score": …}, …] (best first; score null for −∞)')
     p.set_defaults(func=_describe)
 
 

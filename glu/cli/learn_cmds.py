@@ -13,7 +13,9 @@ import argparse
 from pathlib import Path
 
 from glu.cli.common import (
+    add_cluster_args,
     add_data_option,
+    add_deprecated_alias,
     nonneg_float,
     output_file,
     output_folder,
@@ -49,12 +51,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     from glu.experiments.self_supervised import AMBIGUITIES, LEARNERS
     from glu.hmm import TrainingConfig
 
-    ambiguity_help = "; ".join(f"{k}: {a.description}" for k, a in AMBIGUITIES.items())
+    ambiguity_help = "; ".join(f"{k}: {a.description}" for k, a in AMBIGUITIES.items()).replace("%", "%%")
     p = sub.add_parser(
         "learn-gestures",
         help="learn gesture HMMs from unlabelled episodes, labelled by the affordance network",
-        description=__doc__.split("\n\n")[1],
-        epilog=f"ambiguities: {ambiguity_help}",
+        description="Simulate episodes (a person's gesture on an object, the effect, the words), label each "
+        "with the Affordance–Words network learned from the robot's own experiments, train gesture HMMs from "
+        "those labels and write a recogniser that glu recognize and glu anticipate take (--models FILE).",
     )
     p.add_argument("--episodes", type=positive_int, required=True, metavar="N", help="episodes watched")
     p.add_argument(
@@ -66,13 +69,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "until the labels stop changing; true: the true actions (the upper bound); unsupervised: clusters "
         "named after the fact (the lower bound)",
     )
-    p.add_argument("--words", action="store_true", help="the robot also hears the words someone said")
+    p.add_argument("--with-words", action="store_true", help="the robot also hears the words someone said")
+    add_deprecated_alias(p, "--words", "--with-words")
     p.add_argument("--seed", type=seed, default=0, help="seed of the episodes and of EM (default 0)")
     p.add_argument(
         "--ambiguity",
         choices=tuple(AMBIGUITIES),
         default="mixed",
-        help="how well the effects tell the actions apart (default mixed)",
+        help=f"how well the effects tell the actions apart (default mixed): {ambiguity_help}",
     )
     p.add_argument("--online", action="store_true", help="learn one episode at a time (default: all at once)")
     p.add_argument(
@@ -106,8 +110,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     c = sub.add_parser(
         "learning-curves",
         help="the study of learning from effects: learning curves of every scheme (Dask, one task per seed)",
-        description=__doc__.split("\n\n")[1],
-        epilog=f"ambiguities: {ambiguity_help}",
+        description="Run the study of notebook 12: every labelling scheme and baseline, every ambiguity, with "
+        "and without words, one Dask task per training seed, and write its tables (learning_curves.csv, "
+        "learning_match.csv, learning_labels.csv, learning_study.json) to -o DIR.",
     )
     c.add_argument(
         "--episodes", type=positive_int, default=10_000, metavar="N", help="per seed (default 10000)"
@@ -118,14 +123,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=lambda s: tuple(x.strip() for x in s.split(",") if x.strip()),
         default=tuple(AMBIGUITIES),
         metavar="LIST",
-        help=f"comma-separated among {','.join(AMBIGUITIES)} (default all)",
+        help=f"the worlds to study, comma-separated (default all): {ambiguity_help}",
     )
     c.add_argument("--test-per-action", type=positive_int, default=30, metavar="N", help="held-out gestures")
-    c.add_argument(
-        "--workers", type=int, default=None, metavar="N", help="LocalCluster workers (default: cores)"
-    )
-    c.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://host:8786")
-    c.add_argument("--synchronous", action="store_true", help="run the seeds here, one after another")
+    add_cluster_args(c, "seed")
+    add_deprecated_alias(c, "--synchronous", "--scheduler", const="synchronous")
     add_data_option(c, "the network is learned from its experiments")
     c.add_argument(
         "-o", "--out", type=output_folder, required=True, metavar="DIR", help="folder for the tables"
@@ -158,7 +160,7 @@ def _learn(args: argparse.Namespace) -> int:
         args.episodes,
         args.labels,
         seed=args.seed,
-        words=args.words,
+        words=args.with_words,
         ambiguity=args.ambiguity,
         online=args.online,
         config=config,
@@ -180,12 +182,11 @@ def _curves(args: argparse.Namespace) -> int:
     from glu.errors import DataError
     from glu.experiments import learning_curves as lc
     from glu.files import atomic_write_json, atomic_write_text
-    from glu.sweep.runner import check_scheduler
+    from glu.sweep.runner import SYNCHRONOUS
 
     bad = [a for a in args.ambiguities if a not in _ambiguities()]
     if bad:
         raise DataError(f"--ambiguities: unknown {bad[0]!r}; allowed: {', '.join(_ambiguities())}")
-    check_scheduler(args.scheduler)
     engine, label = _engine(args.data)
     settings = lc.StudySettings(
         episodes=args.episodes,
@@ -193,15 +194,17 @@ def _curves(args: argparse.Namespace) -> int:
         ambiguities=args.ambiguities,
         test_per_action=args.test_per_action,
     )
-    workers = 0 if args.synchronous else (args.workers or _cores())
+    here = args.scheduler == SYNCHRONOUS
+    scheduler = None if here else args.scheduler
+    workers = 0 if here else (args.workers or _cores())
     print(
         f"network: {label}; {len(args.seeds)} seeds × {args.episodes} episodes, {len(settings.learners())} learners"
     )
     results = lc.learning_study(
         engine,
         settings,
-        workers=0 if args.scheduler else workers,
-        scheduler=args.scheduler,
+        workers=0 if scheduler else workers,
+        scheduler=scheduler,
         progress=lambda s: print(f"  seed {s} done", flush=True),
     )
     out = Path(args.out)

@@ -14,7 +14,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "readme",
         help="write the README's results section from results/summary.json (a full run on the real data)",
-        description="Render the results section of README.md from the summary of `make reproduce DATA=…` "
+        description="Render the results section of README.md from the summary of make reproduce DATA=… "
         "(every number in it comes from the summary) and write it between its markers; --check only "
         "says whether the README is up to date (exit status 1 if not).",
     )

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from glu.cli.common import DATA_HELP, positive_int, require_extra, seed
+from glu.cli.common import add_data_option, add_json_option, json_text, positive_int, require_extra, seed
 
 NOTEBOOK_MODULES = ("papermill", "jupytext", "ipykernel", "nbconvert", "rerun")
 """What running the notebooks needs: the extra ``glu[notebooks]``."""
@@ -17,13 +17,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "reproduce",
         help="run every notebook: figures, recordings, results summary, report",
-        description="Run every notebook headless; publish their outputs only when all succeed.",
+        description="Run every notebook headless, in parallel kernels; publish their figures, recordings, "
+        "results, models and executed notebooks only when all succeed (a failed or interrupted run leaves "
+        "the outputs of the last run as they were), then write the results summary and the report.",
     )
-    p.add_argument("--data", help=DATA_HELP)
+    add_data_option(p)
     p.add_argument("--quick", action="store_true", help="small, fast runs (as the tests do)")
     p.add_argument(
+        "-o",
         "--out",
         type=Path,
+        metavar="DIR",
         help="write figures/, recordings/, results/, models/, notebooks/, report/ here "
         "(default: the project's folders in a source checkout; required when glu is installed)",
     )
@@ -33,21 +37,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=seed, default=0, help="seed passed to every notebook (default 0)")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")
-    p.add_argument(
-        "--notebooks",
-        type=Path,
-        metavar="DIR",
-        help="run the jupytext notebooks NN_name.py in DIR instead of glu's own",
-    )
+    _add_notebooks_option(p)
     p.set_defaults(func=_reproduce)
 
     r = sub.add_parser(
         "run",
         help="run one notebook headless with other parameters (into its scratch folder)",
         description=(
-            "Run one notebook headless. Parameters are checked against the notebook's parameters cell "
-            "before anything executes. Outputs go to build/scratch/NOTEBOOK/ unless --out is given; "
-            "only `glu reproduce` publishes into figures/, results/, recordings/, models/."
+            "Run one notebook headless, showing each cell as it starts on stderr (--quiet: nothing). "
+            "Parameters are checked against the notebook's parameters cell before anything executes. "
+            "Outputs go to build/scratch/NOTEBOOK/ unless -o DIR is given; only glu reproduce publishes into "
+            'figures/, results/, recordings/, models/. --json prints {"notebook", "executed", "outputs"} '
+            "(with --list: the parameters)."
         ),
     )
     r.add_argument("notebook", help="the notebook's name or number (e.g. 08_tcds_figures or 8)")
@@ -58,26 +59,47 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="append",
         default=[],
         metavar=("NAME", "VALUE"),
-        help="set a parameter (repeatable); `glu run NOTEBOOK --list` shows them",
+        help="set a parameter (repeatable); glu run NOTEBOOK --list shows them",
     )
-    r.add_argument("--data", help=DATA_HELP)
-    r.add_argument("--out", type=Path, help="output folder (default: build/scratch/NOTEBOOK/)")
+    add_data_option(r)
+    r.add_argument(
+        "-o", "--out", type=Path, metavar="DIR", help="output folder (default: build/scratch/NOTEBOOK/)"
+    )
     r.add_argument(
         "--quick", action="store_true", help="the quick preset of the notebook's manifest (-p values win)"
     )
     r.add_argument("--list", action="store_true", help="list the notebook's parameters and exit")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr (only errors)")
+    add_json_option(r, "the executed notebook and the outputs folder (with --list: the parameters)")
+    _add_notebooks_option(r)
     r.set_defaults(func=_run)
 
 
-def _reproduce(args: argparse.Namespace) -> int:
-    from glu import paths
+def _add_notebooks_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--notebooks",
+        type=Path,
+        metavar="DIR",
+        help="the jupytext notebooks NN_name.py of DIR instead of glu's own",
+    )
 
-    require_extra("notebooks", *NOTEBOOK_MODULES)
-    from glu.run.reproduce import NotebookError, reproduce
+
+def _notebooks_folder(args: argparse.Namespace) -> Path:
+    """The folder of ``--notebooks`` (glu's own by default); NotebookError when it is not a folder."""
+    from glu import paths
+    from glu.run.reproduce import NotebookError
 
     folder = args.notebooks or paths.NOTEBOOKS_DIR
     if not folder.is_dir():
         raise NotebookError(f"--notebooks {folder}: no such folder")
+    return folder
+
+
+def _reproduce(args: argparse.Namespace) -> int:
+    require_extra("notebooks", *NOTEBOOK_MODULES)
+    from glu.run.reproduce import reproduce
+
+    folder = _notebooks_folder(args)
     summary = reproduce(
         data=args.data,
         quick=args.quick,
@@ -105,9 +127,14 @@ def _run(args: argparse.Namespace) -> int:
     from glu.run.parameters import read_spec
     from glu.run.reproduce import NotebookError, list_notebooks, run_one
 
+    folder = _notebooks_folder(args)
     if args.list:
-        (src,) = list_notebooks([args.notebook])[:1]
-        for p in read_spec(src).values():
+        (src,) = list_notebooks([args.notebook], folder)[:1]
+        spec = read_spec(src).values()
+        if args.json:
+            print(json_text([_parameter_json(p) for p in spec]))
+            return 0
+        for p in spec:
             print(p.describe())
         return 0
     names = [name for name, _ in args.parameter]
@@ -115,8 +142,30 @@ def _run(args: argparse.Namespace) -> int:
     if twice:
         raise NotebookError(f"-p {twice[0]} given more than once")
     executed, layout = run_one(
-        args.notebook, dict(args.parameter), data=args.data, out=args.out, quick=args.quick
+        args.notebook,
+        dict(args.parameter),
+        data=args.data,
+        out=args.out,
+        notebooks_dir=folder,
+        quick=args.quick,
+        progress=not args.quiet,
+        **({"log": lambda line: None} if args.quiet else {}),
     )
+    if args.json:
+        print(json_text({"notebook": executed.stem, "executed": str(executed), "outputs": str(layout.root)}))
+        return 0
     print(f"executed notebook: {executed}")
     print(f"outputs: {layout.root}")
     return 0
+
+
+def _parameter_json(p) -> dict:  # type: ignore[no-untyped-def]
+    """A notebook parameter for ``glu run --list --json``."""
+    return {
+        "name": p.name,
+        "type": p.type,
+        "default": p.default,
+        "choices": list(p.choices) if p.choices else None,
+        "range": list(p.range) if p.range else None,
+        "help": p.help,
+    }

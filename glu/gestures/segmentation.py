@@ -32,7 +32,13 @@ from typing import NamedTuple
 import numpy as np
 
 from glu.errors import DataError
-from glu.gestures.trajectories import DEFAULT_POLICY, RepairPolicy, TrackingEvent, Trajectory
+from glu.gestures.trajectories import (
+    DEFAULT_POLICY,
+    RepairPolicy,
+    TrackingEvent,
+    Trajectory,
+    summarize_events,
+)
 
 
 @dataclass(frozen=True)
@@ -62,6 +68,17 @@ class Segment:
         """``start:end (n frames)``, with the label if any."""
         lab = f" {self.label}" if self.label else ""
         return f"{self.start}:{self.end} ({self.n_frames} frames){lab}"
+
+    def as_dict(self) -> dict:
+        """``{start, end, frames, peak, label}`` in plain Python types (peak None when NaN)."""
+        peak = float(self.peak)
+        return {
+            "start": int(self.start),
+            "end": int(self.end),
+            "frames": int(self.n_frames),
+            "peak": peak if np.isfinite(peak) else None,
+            "label": self.label,
+        }
 
 
 @dataclass(frozen=True)
@@ -246,6 +263,25 @@ class RecordingSegmentation:
     def rejected(self) -> list[tuple[Segment, str]]:
         """All candidates rejected, with the reason."""
         return [r for p in self.pieces for r in p.rejected]
+
+    def as_dict(self) -> dict:
+        """``{recording, tracking, events, segments, left_out}`` in plain Python types (for JSON)."""
+        return {
+            "recording": self.recording,
+            "tracking": summarize_events(self.events),
+            "events": [
+                {
+                    "kind": e.kind,
+                    "frame": int(e.frame),
+                    "time": float(e.time),
+                    "size": float(e.size),
+                    "action": e.action,
+                }
+                for e in self.events
+            ],
+            "segments": [s.as_dict() for s in self.segments],
+            "left_out": [{**s.as_dict(), "reason": why} for s, why in self.rejected],
+        }
 
 
 def segment_recording(

@@ -50,6 +50,8 @@ class RunHandle:
     threads : the kernel's BLAS/OpenMP threads (:func:`thread_env`); None leaves them to the libraries
     cwd : the kernel's working directory (None: this process's)
     cell, n_cells : the cell running now (0-based) and how many there are
+    code_cell, n_code_cells : the same counted over code cells only (1-based: 0 before the first)
+    first_line : the first non-blank line of the code cell running now
     """
 
     on_cell: Callable[[int, int], None] | None = None
@@ -57,12 +59,19 @@ class RunHandle:
     cwd: str | None = None
     cell: int = -1
     n_cells: int = 0
+    code_cell: int = 0
+    n_code_cells: int = 0
+    first_line: str = ""
     stopped: bool = False
     _client: Any = field(default=None, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
-    def _cell_started(self, index: int, n_cells: int) -> None:
+    def _cell_started(self, index: int, n_cells: int, cell: Any = None) -> None:
         self.cell, self.n_cells = index, n_cells
+        if cell is not None and cell.get("cell_type") == "code":
+            self.code_cell += 1
+            lines = (line.strip() for line in str(cell.get("source", "")).splitlines())
+            self.first_line = next((line for line in lines if line), "")
         if self.on_cell is not None:
             self.on_cell(index, n_cells)
 
@@ -99,10 +108,11 @@ def _engine_class() -> type:
             super().__init__(nb_man, **kw)
             self.handle = handle
             n_cells = len(nb_man.nb.cells)
+            handle.n_code_cells = sum(c.get("cell_type") == "code" for c in nb_man.nb.cells)
             started = nb_man.cell_start
 
             def cell_start(cell, cell_index=None, **k):  # type: ignore[no-untyped-def]
-                handle._cell_started(cell_index, n_cells)
+                handle._cell_started(cell_index, n_cells, cell)
                 return started(cell, cell_index, **k)
 
             nb_man.cell_start = cell_start

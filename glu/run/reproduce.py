@@ -41,6 +41,7 @@ from glu.run.execution import NotebookStopped, RunHandle, load_papermill, run_no
 from glu.run.manifest import ManifestError, check_outputs, read_manifest, written_outputs
 from glu.run.outputs import parameters_text
 from glu.run.parameters import check, non_defaults, parse_value, read_spec
+from glu.run.progress import CellProgress
 from glu.run.report import notebook_page, prepare_report, render_notebook_page, write_index
 from glu.run.summary import (
     NotebookResult,
@@ -371,6 +372,7 @@ def run_one(
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
     quick: bool = False,
+    progress: bool = True,
 ) -> tuple[Path, OutputLayout]:
     """Run one notebook headless (``glu run``): check the parameters first, then execute.
 
@@ -380,6 +382,8 @@ def run_one(
     values : parameter name → its text on the command line (``-p NAME VALUE``), parsed by its type
     data, out : the data source and the output root (default: the notebook's scratch folder)
     quick : start from the quick preset of the notebook's manifest (``values`` win over it)
+    progress : report each code cell as it starts, on stderr (:class:`glu.run.progress.CellProgress`: a
+        bar on a terminal, one line per cell otherwise)
 
     Returns the executed notebook and the layout its outputs went to. Raises
     :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
@@ -390,7 +394,7 @@ def run_one(
     spec = read_spec(src)
     for plumbing in ("data", "out_dir"):
         if plumbing in values:
-            flag = "--data" if plumbing == "data" else "--out"
+            flag = "--data" if plumbing == "data" else "-o/--out"
             raise NotebookError(f"{src.stem}: give {plumbing!r} with {flag}, not -p")
     parsed = {name: parse_value(spec[name], text, src.stem) for name, text in values.items() if name in spec}
     if quick:
@@ -408,7 +412,11 @@ def run_one(
     shown = parameters_text(parsed) or "default parameters"
     log(f"glu run: {src.stem} with {shown}, {source.location()} …")
     try:
-        run_notebook(src, executed, params, cwd=src.parent)
+        if progress:
+            with CellProgress(src.stem) as cells:
+                run_notebook(src, executed, params, cwd=src.parent, handle=cells.handle)
+        else:
+            run_notebook(src, executed, params, cwd=src.parent)
     except pm.PapermillExecutionError as e:
         raise NotebookError(
             f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; executed copy at {executed}"
