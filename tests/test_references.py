@@ -64,9 +64,9 @@ def resolve(path: Path, name: str) -> Path | None:
 
 
 def slug(heading: str) -> str:
-    """The anchor MyST (``myst_heading_anchors``) and GitHub give a heading."""
+    """The anchor MyST (``myst_heading_anchors``, mdit-py-plugins' ``slugify``) and GitHub give a heading."""
     text = heading.strip().lower().replace(" ", "-")
-    return re.sub(r"[^\w\- ]", "", text)
+    return re.sub(r"[^\w\u4e00-\u9fff\- ]", "", text)
 
 
 def anchors(page: Path) -> set[str]:
@@ -84,6 +84,12 @@ def test_the_checker_finds_references_and_skips_files_written_by_code(tmp_path):
     assert references(f) == [(1, "docs/method.md", ""), (1, "../docs/data.md", "the-published-data")]
     assert slug("3.4 The all-zero word rows") == "34-the-all-zero-word-rows"
     assert slug("Beyond the self: learning people's gestures") == "beyond-the-self-learning-peoples-gestures"
+    try:
+        from mdit_py_plugins.anchors.index import slugify
+    except ImportError:
+        return
+    for heading in ("3.4 The all-zero word rows", "2. Fusion", "Every fusion strategy: 95 % (p_HMM) — ok"):
+        assert slug(heading) == slugify(heading)
 
 
 def test_every_referenced_page_is_in_the_repository():
@@ -167,3 +173,28 @@ def test_each_page_has_one_title_and_no_skipped_heading_level(page):
     assert levels[0] == 1 and levels.count(1) == 1, f"{page.name}: one top-level heading, first"
     skipped = [(a, b) for a, b in zip(levels, levels[1:], strict=False) if b > a + 1]
     assert not skipped, f"{page.name}: heading levels skipped {skipped}"
+
+
+TARGET = re.compile(r"\]\(([^)\s#]+)(?:#[^)\s]*)?\)")
+"""The target of a Markdown link or image."""
+
+
+def test_every_relative_link_and_image_of_the_pages_exists():
+    missing = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        text = re.sub(r"(?ms)^```.*?^```", "", page.read_text(encoding="utf-8"))
+        for target in TARGET.findall(text):
+            if re.match(r"[a-z]+:", target):  # https:, mailto:
+                continue
+            if not (page.parent / target).resolve().exists():
+                missing.append(f"{page.relative_to(ROOT)}: {target}")
+    assert not missing, "links to files that do not exist:\n" + "\n".join(missing)
+
+
+def test_no_page_shows_a_machine_path():
+    shown = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        for n, line in enumerate(page.read_text(encoding="utf-8").splitlines(), 1):
+            if re.search(r"\.\./shared|/work/|/home/|/tmp/|/Users/", line):
+                shown.append(f"{page.relative_to(ROOT)}:{n}: {line.strip()}")
+    assert not shown, "pages showing paths of one machine:\n" + "\n".join(shown)
