@@ -8,8 +8,8 @@ compares it, and a test checks that the page is what this module writes from the
 
 Example
 -------
->>> print(fmt(0.00063), fmt(2.5), fmt(3.2e-5))
-0.63 ms 2.50 s 32.0 µs
+>>> print(fmt(0.0063), fmt(2.5), fmt(3.2e-5))
+6.30 ms 2.50 s 32.0 µs
 """
 
 from __future__ import annotations
