@@ -140,3 +140,16 @@ def test_a_generated_section_is_replaced_between_its_markers_only(tmp_path):
     page.write_text("<!-- E -->\n<!-- B -->\n")
     with pytest.raises(DataError, match="expected one generated section"):
         generated.section(page.read_text(), "<!-- B -->", "<!-- E -->")
+
+
+def test_the_readme_stays_a_front_page():
+    lines = _read("README.md").splitlines()
+    assert len(lines) <= 250, f"README.md has {len(lines)} lines; move detail into docs/"
+    assert lines[2:6] == [
+        "```bash",
+        "make reproduce   # fresh machine: create .venv, install glu, run every notebook → figures/, recordings/, "
+        "results/",
+        "make test        # fresh machine: create .venv, install glu and its test tools, lint (ruff), run the test "
+        "suite",
+        "```",
+    ]
