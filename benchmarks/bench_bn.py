@@ -1,6 +1,7 @@
 """Benchmark glu's BN learning and exact inference against pgmpy, on the same queries.
 
 Run on demand (not part of the tests):  python benchmarks/bench_bn.py [--data DIR] [--json OUT.json]
+(default output: ``benchmarks/results/bn.json``, the schema of ``timing.py``).
 Targets (2-core machine): one query with affordance evidence ≤ 20 µs; all 49 word marginals ≤ 0.1 ms; a
 query with virtual evidence ≤ 50 µs; 10,000 evidence sets ≤ 0.1 s; learning ≤ 0.2 s; `glu query` cold
 start ≤ 1 s.
@@ -9,14 +10,16 @@ start ≤ 1 s.
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import subprocess
 import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
+from timing import fmt, report
+from timing import row as result_row
 
 
 def timeit(fn, repeat: int = 5, number: int | None = None) -> float:
@@ -43,7 +46,9 @@ def timeit(fn, repeat: int = 5, number: int | None = None) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--data", default=None, help="data folder (default: as glu resolves it)")
-    ap.add_argument("--json", default=None, help="also write the results as JSON here")
+    ap.add_argument(
+        "--json", default=None, help="write the results here (default: benchmarks/results/bn.json)"
+    )
     args = ap.parse_args()
 
     from glu.bn import InferenceEngine, learn_bn
@@ -52,18 +57,11 @@ def main() -> None:
 
     source = resolve_data(args.data)
     df = load_experiments(source, "lab")
-    print(f"# {df.attrs['data_source']}")
     rows = []
 
-    def row(name, ours, theirs, target):
-        ratio = theirs / ours if theirs else float("nan")
+    def row(name, ours, theirs, target, reference="pgmpy"):
         rows.append(
-            {"benchmark": name, "glu_s": ours, "pgmpy_s": theirs, "speedup": ratio, "target_s": target}
-        )
-        ok = "ok" if ours <= target else "MISSED"
-        print(
-            f"{name:42s} glu {fmt(ours):>10s}   pgmpy {fmt(theirs) if theirs else '-':>10s}   "
-            f"×{ratio:8.0f}   target {fmt(target):>8s} {ok}"
+            result_row(name, ours, reference if theirs else None, theirs, f"≤ {fmt(target)}", ours <= target)
         )
 
     t_learn = timeit(lambda: learn_bn(df), repeat=5, number=1)
@@ -149,11 +147,11 @@ def main() -> None:
         )
         t_b_pg = t_q_pg * n  # extrapolated from the single query
 
-    row("learning: K2 + parameters (real data)", t_learn, t_learn_pgmpy, 0.2)
-    row("query ObjVel | 3 affordance evidence", t_q, t_q_pg, 20e-6)
+    row("learning: K2 + parameters", t_learn, t_learn_pgmpy, 0.2, "the same K2 with pgmpy's BIC")
+    row("query ObjVel | 3 affordance evidence", t_q, t_q_pg, 20e-6, "pgmpy VariableElimination")
     row("all 49 word marginals | 3 evidence", t_w, t_w_pg, 0.1e-3)
     row("query ObjVel | virtual evidence on Action", t_v, t_v_pg, 50e-6)
-    row("batch: 10,000 evidence sets (4 nodes)", t_b, t_b_pg, 0.1)
+    row("batch: 10,000 evidence sets (4 nodes)", t_b, t_b_pg, 0.1, "pgmpy, one query × 10,000 (extrapolated)")
     row("batch: 10,000 soft-evidence rows, 2 targets", t_bs, None, 0.1)
 
     cold = []
@@ -167,23 +165,13 @@ def main() -> None:
             )
             cold.append(time.perf_counter() - t0)
     row("`glu query --data` cold start (median of 5)", statistics.median(cold), None, 1.0)
-    print(f"(pgmpy import alone: {t_pgmpy_import:.2f} s)")
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(
-                {"data_source": df.attrs["data_source"], "pgmpy_import_s": t_pgmpy_import, "rows": rows},
-                f,
-                indent=1,
-            )
-
-
-def fmt(seconds: float) -> str:
-    """Seconds in a readable unit."""
-    if seconds >= 1:
-        return f"{seconds:.2f} s"
-    if seconds >= 1e-3:
-        return f"{seconds * 1e3:.2f} ms"
-    return f"{seconds * 1e6:.1f} µs"
+    report(
+        "bn",
+        "the Affordance–Words network: learning and exact inference, glu against pgmpy on the same queries",
+        rows,
+        notes=[df.attrs["data_source"], f"pgmpy's import alone: {t_pgmpy_import:.2f} s"],
+        out=Path(args.json) if args.json else None,
+    )
 
 
 if __name__ == "__main__":

@@ -34,6 +34,10 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from timing import RESULTS, report, row
+
+ROWS: list[dict] = []
+NOTES: list[str] = []
 
 
 def _load() -> str:
@@ -86,19 +90,15 @@ def bench_forward(evaluator, repeats: int) -> None:
     err_hl = float(np.abs(np.array([curves[i, len(x) - 1] for i, x in enumerate(sub)]) - scores).max())
     ours = batch / len(X)
     mean_t = n_fm / scorer.n_models / len(X)
-    print(
-        f"forward: {len(X)} sequences (mean {mean_t:.0f} frames) × {scorer.n_models} models "
-        f"(Q={scorer.bank.log_norm.shape[1]}, M={scorer.bank.log_norm.shape[2]}, full covariance, D=3)"
+    shape = (
+        f"{len(X)} sequences (mean {mean_t:.0f} frames) × {scorer.n_models} models "
+        f"(Q={scorer.bank.log_norm.shape[1]}, M={scorer.bank.log_norm.shape[2]}, full covariance)"
     )
-    print(
-        f"  batch: {batch:.3f} s CPU → {n_fm / batch / 1e6:.2f} M frame·model evaluations/s on one core (goal ≥ 5 M)"
-    )
-    print(
-        f"  per sequence, all {scorer.n_models} models: batch {ours * 1e6:.0f} µs (every prefix), glu per-sequence "
-        f"{per_seq * 1e6:.0f} µs ({per_seq / ours:.1f}×), hmmlearn score {hl_seq * 1e6:.0f} µs "
-        f"(whole sequence only; {hl_seq / ours:.0f}×, goal ≥ 50×)"
-    )
-    print(f"  agreement: max |Δ| to glu's per-sequence curves {err_glu:.1e}, to hmmlearn {err_hl:.1e}")
+    what = f"{n_fm / batch / 1e6:.2f} M frame·model evaluations/s of CPU on one core (goal ≥ 5 M)"
+    name = f"forward: {shape}, every prefix, one batch, per sequence"
+    ROWS.append(row(name, ours, "glu's per-sequence forward", per_seq, what=what))
+    ROWS.append(row(name, ours, "hmmlearn score, whole sequence only", hl_seq, "≥ 50×", hl_seq / ours >= 50))
+    NOTES.append(f"forward: max |Δ| to glu's per-sequence curves {err_glu:.1e}, to hmmlearn {err_hl:.1e}")
 
 
 def bench_episodes(evaluator) -> None:
@@ -118,16 +118,19 @@ def bench_episodes(evaluator) -> None:
     accumulate(blocks, poisson_weights(n, evaluator.settings.bootstrap, np.random.default_rng(0)))
     t4 = time.process_time()
     total = (t1 - t0) + (t3 - t2) + (t4 - t3)
-    print(
-        f"episodes: one chunk of {n} episodes on one core ({q.shape[1]} fractions, "
-        f"{len(evaluator.columns)} statistics, {evaluator.settings.bootstrap} replicates)"
+    what = (
+        f"a chunk of {n} on one core ({q.shape[1]} fractions, {len(evaluator.columns)} statistics, "
+        f"{evaluator.settings.bootstrap} replicates), CPU time"
     )
-    print(
-        f"  simulate {1e3 * (t1 - t0) / n:.3f} ms/episode (world, gestures, features), HMMs "
-        f"{1e3 * (t2 - t1) / n:.3f}, all statistics {1e3 * (t3 - t2) / n:.3f} (HMMs included), bootstrap sums "
-        f"{1e3 * (t4 - t3) / n:.3f}"
+    ROWS.append(
+        row(f"episodes: one episode end to end ({n / total:.0f} per second per core)", total / n, what=what)
     )
-    print(f"  total {1e3 * total / n:.3f} ms CPU per episode → {n / total:.0f} episodes/s per core")
+    ROWS.append(
+        row("episodes: simulation (world, gestures, features), per episode", (t1 - t0) / n, what=what)
+    )
+    ROWS.append(
+        row("episodes: all statistics (HMMs, fusion, descriptions), per episode", (t3 - t2) / n, what=what)
+    )
 
 
 def _sweep(cfg, workers: int, out: Path):
@@ -147,14 +150,21 @@ def bench_scaling(cfg, tmp: Path, episodes: int) -> None:
     w1, client1, p1 = _sweep(c, 1, tmp / "w1")
     load1 = _load()
     w2, client2, p2 = _sweep(c, 2, tmp / "w2")
-    print(
-        f"scaling: {c.n_episodes} episodes, chunks of 1000: 1 worker {w1:.1f} s (load {load1}), 2 workers "
-        f"{w2:.1f} s (load {_load()}) → {w1 / w2:.2f}× measured (goal ≥ 1.7×)"
+    ROWS.append(
+        row(
+            f"scaling: {c.n_episodes} episodes on a LocalCluster of 2 workers",
+            w2,
+            "1 worker",
+            w1,
+            "≥ 1.7×",
+            w1 / w2 >= 1.7,
+            what=f"wall time; load average {load1} and {_load()} after the runs",
+        )
     )
     # On free cores a run takes about its client's CPU (prepare, merge, writes: serial) plus its tasks' CPU
     # divided by the workers; the measured times also hold the waiting for a core on a busy machine.
-    print(
-        f"  CPU: tasks {p1:.1f} s (1 worker) and {p2:.1f} s (2 workers), client {client1:.1f} s and {client2:.1f} s"
+    NOTES.append(
+        f"scaling: CPU of the tasks {p1:.1f} s (1 worker) and {p2:.1f} s (2 workers), client {client1:.1f} s and {client2:.1f} s"
         f" → on 2 free cores {(client1 + p1) / (client2 + p2 / 2):.2f}× (tasks as measured), "
         f"{(client1 + p1) / (client1 + p1 / 2):.2f}× (tasks as fast as with 1 worker)"
     )
@@ -162,16 +172,20 @@ def bench_scaling(cfg, tmp: Path, episodes: int) -> None:
         (tmp / "w1" / f).read_bytes() == (tmp / "w2" / f).read_bytes()
         for f in ("results.parquet", "sums.parquet")
     )
-    print(f"  identical tables from 1 and 2 workers: {same}")
+    NOTES.append(f"scaling: identical tables from 1 and 2 workers: {same}")
 
 
 def bench_million(cfg, tmp: Path, episodes: int) -> None:
     c = cfg.with_overrides(episodes=episodes, chunk_size=5000)
     wall, _, cpu = _sweep(c, 2, tmp / "million")
-    print(
-        f"million: {c.n_episodes} episodes on a LocalCluster of 2 workers: {wall:.0f} s "
-        f"({wall / 60:.1f} min; goal ≤ 10 min; load average now {_load()}); tasks {cpu:.0f} s CPU, "
-        f"{1e3 * cpu / c.n_episodes:.2f} ms per episode → {cpu / 2 / 60:.1f} min on 2 free cores"
+    ROWS.append(
+        row(
+            f"million: glu evaluate --episodes {c.n_episodes}, LocalCluster of 2 workers",
+            wall,
+            target="≤ 10 min",
+            met=wall <= 600,
+            what=f"wall time (load average {_load()} after); tasks {1e3 * cpu / c.n_episodes:.2f} ms CPU per episode",
+        )
     )
 
 
@@ -196,12 +210,11 @@ def main(argv: list[str] | None = None) -> int:
     import scipy.ndimage  # noqa: F401
     from threadpoolctl import threadpool_limits
 
-    print(f"machine: {os.cpu_count()} cores, load average {_load()}")
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         with threadpool_limits(1):
             cfg, evaluator, prov = _setup(args.data, tmp)
-            print(f"data: {prov['data_source']}")
+            NOTES.append(f"data: {prov['data_source']}")
             if "forward" in args.only:
                 bench_forward(evaluator, args.repeats)
             if "episodes" in args.only:
@@ -210,7 +223,29 @@ def main(argv: list[str] | None = None) -> int:
             bench_scaling(cfg, tmp, args.episodes)
         if "million" in args.only:
             bench_million(cfg, tmp, args.million)
+    kept_rows, kept_notes = _kept(args.only)
+    report(
+        "corpus",
+        "the corpus evaluation: batched HMM scoring, episodes per second, Dask scaling, a million episodes",
+        kept_rows + ROWS,
+        kept_notes + NOTES,
+    )
     return 0
+
+
+def _kept(run: list[str]) -> tuple[list[dict], list[str]]:
+    """The rows and notes of the parts not run now (``--only`` updates some), from the last results."""
+    import json
+
+    path = RESULTS / "corpus.json"
+    if not path.exists():
+        return [], []
+    old = json.loads(path.read_text(encoding="utf-8"))
+    mine = tuple(f"{part}:" for part in run)
+    return (
+        [r for r in old["rows"] if not r["name"].startswith(mine)],
+        [n for n in old["notes"] if not n.startswith(mine) and not n.startswith("data:")],
+    )
 
 
 if __name__ == "__main__":

@@ -20,17 +20,13 @@ Run on demand (not a test)::
 
 Every pair of answers is checked to agree (1e-9) before it is timed. Times are medians of 7 repeats of
 enough calls to last ≥ 0.2 s. The table is printed and written as JSON to
-``benchmarks/results/networks.json`` (``name``, ``what``, ``machine``, and one row per benchmark with
-``name``, ``what``, ``glu_s``, ``reference``, ``reference_s``, ``ratio`` = reference / glu, ``target``,
-``met``).
+``benchmarks/results/networks.json`` in the schema of ``timing.py``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import statistics
 import subprocess
 import sys
@@ -39,6 +35,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from timing import machine, report
 
 RESULTS = Path(__file__).resolve().parent / "results"
 NETWORKS = ("alarm", "child", "insurance")
@@ -63,10 +60,6 @@ def per_call(fn, repeats: int = 7) -> float:
             fn()
         times.append((time.perf_counter() - t0) / number)
     return statistics.median(times)
-
-
-def fmt(s: float) -> str:
-    return f"{s:.2f} s" if s >= 1 else f"{s * 1e3:.2f} ms" if s >= 1e-3 else f"{s * 1e6:.1f} µs"
 
 
 def sample_sets(bn, nodes: list[str], n: int, seed: int) -> dict[str, np.ndarray]:
@@ -244,17 +237,6 @@ def glu_rows(baseline: Path | None, data: str | None, tmp: Path) -> list[dict]:
     return rows
 
 
-def machine_note() -> str:
-    import numpy
-
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    return (
-        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
-        f"{platform.python_version()}, NumPy {numpy.__version__}; load average {load:.1f} at the start"
-        + (" — a shared machine: preliminary" if load > 0.5 else "")
-    )
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument(
@@ -272,7 +254,7 @@ def main() -> None:
     if folder is None:
         shared = shared_data_dir()
         folder = shared / "bn-networks" if shared else None
-    note = machine_note()
+    note = machine()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         if folder is not None and folder.is_dir():
@@ -281,23 +263,14 @@ def main() -> None:
         else:
             print("# no bnlearn networks found (give --networks DIR): only GLU's network")
         rows += glu_rows(args.baseline, args.data, Path(tmp))
-    print(f"# {note}")
-    print(f"{'benchmark':58s} {'glu':>10s} {'reference':>10s} {'ratio':>8s}  target")
-    for r in rows:
-        ref = fmt(r["reference_s"]) if r["reference_s"] else "-"
-        ratio = f"×{r['ratio']:.2f}" if r["ratio"] else "-"
-        ok = "" if r["met"] is None else ("ok" if r["met"] else "MISSED")
-        print(f"{r['name']:58s} {fmt(r['glu_s']):>10s} {ref:>10s} {ratio:>8s}  {r['target']} {ok}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    doc = {
-        "name": "networks",
-        "what": "exact inference in any network: glu against pyAgrum's LazyPropagation (bnlearn networks), "
+    report(
+        "networks",
+        "exact inference in any network: glu against pyAgrum's LazyPropagation (bnlearn networks), "
         "and GLU's own network against a baseline checkout",
-        "machine": note,
-        "rows": rows,
-    }
-    args.out.write_text(json.dumps(doc, indent=1) + "\n")
-    print(f"wrote {args.out}")
+        rows,
+        out=args.out,
+        machine_note=note,
+    )
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ Run on demand (not a test)::
     python benchmarks/bench_reproduce.py [--data DIR] [--jobs 2] [--repeats 1]
 
 Runs every notebook headless into a temporary folder (nothing is published into the project), as
-`glu reproduce -o TMP` does, and prints the total wall time and each notebook's time. The total is the
+`glu reproduce -o TMP` does, and prints and writes (``benchmarks/results/reproduce.json``) the total wall
+time and each notebook's time. The total is the
 summary's ``wall_time_s``: the whole run as a user waits for it, the HTML report included (its notebook
 pages are rendered as each notebook finishes, the index and the API reference at the end). The folder is
 new, so the notebooks start in the order of the project's last run (``results/summary.json``), else of
@@ -19,6 +20,8 @@ import argparse
 import statistics
 import sys
 import tempfile
+
+from timing import report, row
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -39,16 +42,24 @@ def main(argv: list[str] | None = None) -> int:
         for nb in summary["notebooks"]:
             per_notebook.setdefault(nb["name"], []).append(nb["seconds"])
     wall = statistics.median(walls)
-    print(f"glu reproduce: {resolve_data(args.data).describe()}, -j {args.jobs}, {args.repeats} run(s)")
-    for name, secs in per_notebook.items():
-        print(f"  {name:28s} {statistics.median(secs):6.1f} s")
+    rows = [
+        row(
+            f"glu reproduce, every notebook, {args.jobs} at a time, report included (median of {args.repeats})",
+            wall,
+            target="≤ 45 s",
+            met=wall <= 45,
+        )
+    ]
+    rows += [row(f"notebook {name}", statistics.median(secs)) for name, secs in per_notebook.items()]
     busy = sum(statistics.median(secs) for secs in per_notebook.values())
-    print(
-        f"  {'(notebooks, summed)':28s} {busy:6.1f} s   on {args.jobs} at a time: at least {busy / args.jobs:.1f} s"
-    )
-    print(f"runs: {', '.join(f'{w:.1f}' for w in walls)} s")
-    print(
-        f"whole collection: {wall:.1f} s (median wall time)   goal ≤ 45 s: {'met' if wall <= 45 else 'MISSED'}"
+    report(
+        "reproduce",
+        "the whole collection: glu reproduce, notebook by notebook (wall time)",
+        rows,
+        notes=[
+            f"{resolve_data(args.data).describe()}, -j {args.jobs}",
+            f"runs: {', '.join(f'{w:.1f}' for w in walls)} s; the notebooks summed {busy:.1f} s",
+        ],
     )
     return 0
 

@@ -16,8 +16,8 @@ Run on demand (not a test)::
    notebook's default size), CPU time, and the lockstep update of all its learners after one episode;
 4. **cli** — ``glu learn-gestures --episodes 2000 --labels soft`` (batch weighted EM, Q = 6, M = 3).
 
-Prints a table and writes ``benchmarks/results/self_supervised.json``: rows ``{what, seconds, goal}`` (goal
-None where there is none; with ``--only``, the other rows of the file are kept). CPU times are of this process (robust to other load on the machine); wall times
+Prints a table and writes ``benchmarks/results/self_supervised.json`` in the schema of ``timing.py`` (with
+``--only``, the other rows of the file are kept). CPU times are of this process (robust to other load on the machine); wall times
 are printed with the machine's load average, since they are not.
 """
 
@@ -33,6 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from timing import report, row
 
 RESULTS = Path(__file__).resolve().parent / "results" / "self_supervised.json"
 
@@ -184,22 +185,30 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     for name in args.only:
         rows += BENCHES[name](args.data)
-    print(f"\n{'what':78s} {'seconds':>10s} {'goal':>8s}")
-    for r in rows:
-        goal = "" if r["goal"] is None else f"{r['goal']:g}"
-        print(f"{r['what']:78s} {r['seconds']:10.4f} {goal:>8s}")
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    rows = [
+        row(
+            r["what"],
+            r["seconds"],
+            target=None if r["goal"] is None else f"≤ {r['goal']:g} s",
+            met=None if r["goal"] is None else r["seconds"] <= r["goal"],
+        )
+        for r in rows
+    ]
     kept = []  # rows of the benchmarks not run now stay as they were (``--only`` updates some)
     if RESULTS.exists():
-        mine = {r["what"] for r in rows}
+        mine = {r["name"] for r in rows}
         kept = [
             r
             for r in json.loads(RESULTS.read_text(encoding="utf-8")).get("rows", [])
-            if r["what"] not in mine
+            if r.get("name") not in mine
         ]
-    doc = {"load_average": _load(), "cores": os.cpu_count(), "rows": kept + rows}
-    RESULTS.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
-    print(f"wrote {RESULTS}")
+    report(
+        "self_supervised",
+        "learning gestures from effects: the notebook at its default size, one online update, the study, the CLI",
+        kept + rows,
+        notes=["CPU times are of the process (robust to other load); wall times are not"],
+        out=RESULTS,
+    )
     return 0
 
 

@@ -28,11 +28,7 @@ import argparse
 import sys
 
 import numpy as np
-from timing import median_time
-
-
-def _fmt(seconds: float) -> str:
-    return f"{seconds:.2f} s" if seconds >= 1 else f"{seconds * 1e3:.0f} ms"
+from timing import median_time, report, row
 
 
 def _params(m):
@@ -77,7 +73,11 @@ def _compare_training(label, sets, batched, repeats, rows):
     ref = alone()
     t_alone = median_time(alone, repeats)
     t_batch = median_time(batched, repeats)
-    rows.append((f"{label}: {len(sets)} models, each trained alone", t_alone, t_batch))
+    rows.append(
+        row(
+            f"{label}: {len(sets)} models, trained in one batch", t_batch, "each model trained alone", t_alone
+        )
+    )
     # EM alone, from the same initial models
     from glu.hmm import em as bw
     from glu.hmm._engine.em_batch import fit_many
@@ -99,7 +99,11 @@ def _compare_training(label, sets, batched, repeats, rows):
     )
     t_many = median_time(lambda: fit_many(problems, cfg.n_iter, tols, cfg.covar_reg), repeats)
     n_iter = [len(a.history) for a in fits]
-    rows.append((f"{label}: EM only ({min(n_iter)}–{max(n_iter)} iterations), fit each", t_fit, t_many))
+    rows.append(
+        row(
+            f"{label}: EM only ({min(n_iter)}–{max(n_iter)} iterations), one batch", t_many, "fit each", t_fit
+        )
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -114,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     from glu.experiments.recipes import leave_one_segment_out
     from glu.gestures.corpus import gesture_sequences, synthetic_corpus
 
-    rows: list[tuple[str, float, float]] = []
+    rows: list[dict] = []
     with threadpool_limits(1):
         source = _real_source(args.data)
         if source is not None:
@@ -138,13 +142,12 @@ def main(argv: list[str] | None = None) -> int:
         )
         hl_rows = _versus_hmmlearn(_cv_sets(corpus, 5, 0), args.repeats)
 
-    print(f"{'measurement':72s} {'one at a time':>14s} {'batched':>10s} {'speed-up':>9s}")
-    for name, alone, batch in rows:
-        print(f"{name:72s} {_fmt(alone):>14s} {_fmt(batch):>10s} {alone / batch:>8.1f}×")
-    print()
-    print(f"{'EM as hmmlearn GMMHMM, 20 iterations, 15 CV models':72s} {'time':>14s} {'vs hmmlearn':>10s}")
-    for name, t, ratio in hl_rows:
-        print(f"{name:72s} {_fmt(t):>14s} {ratio:>9.1f}×")
+    report(
+        "training",
+        "training many gesture HMMs: one batched Baum–Welch against one model at a time (one BLAS thread)",
+        rows + hl_rows,
+        notes=["every pair is checked to give the same models first (histories to 1e-8 relative)"],
+    )
     return 0
 
 
@@ -165,7 +168,8 @@ def _versus_hmmlearn(sets, repeats):
     """hmmlearn's GMMHMM.fit per model, glu's fit per model and fit_many, with hmmlearn's covariance step."""
     from glu.hmm import em as bw
     from glu.hmm._engine.em_batch import fit_many
-    from glu.hmm.training import _run_hmmlearn, init_left_to_right
+    from glu.hmm.glu_recipe import _run_hmmlearn
+    from glu.hmm.initialisation import init_left_to_right
 
     reg, n_iter = 0.03, 20
     problems = [(x, _params(init_left_to_right(x, 6, 3, reg, 0))) for _, x in sets]
@@ -180,10 +184,10 @@ def _versus_hmmlearn(sets, repeats):
     t_hl = median_time(hmmlearn, repeats)
     t_fit = median_time(lambda: [bw.fit(x, p, n_iter, 1e-300, reg, "hmmlearn") for x, p in problems], repeats)
     t_many = median_time(lambda: fit_many(problems, n_iter, 1e-300, reg, "hmmlearn"), repeats)
+    what = f"EM as hmmlearn's GMMHMM, {n_iter} iterations, {len(problems)} CV models"
     return [
-        ("hmmlearn GMMHMM.fit, each model", t_hl, 1.0),
-        ("glu baum_welch.fit, each model", t_fit, t_hl / t_fit),
-        ("glu fit_many, one batch", t_many, t_hl / t_many),
+        row(f"{what}: glu's fit, each model", t_fit, "hmmlearn GMMHMM.fit, each model", t_hl),
+        row(f"{what}: glu's fit_many, one batch", t_many, "hmmlearn GMMHMM.fit, each model", t_hl),
     ]
 
 

@@ -17,7 +17,7 @@ word, values ``absent`` and ``present``)::
 
 :func:`read_schema_file` reads one; :func:`default_schema` is GLU's own, the file
 ``glu/resources/schemas/glu.json``, from which this module's constants are taken. Value order is the order
-of the original data files (METHOD.md §1) and is used everywhere: CPT axes, posterior vectors, categorical
+of the original data files (docs/method.md §1.1) and is used everywhere: CPT axes, posterior vectors, categorical
 columns. In glu the Shape value ``circle`` of the files is called ``sphere`` (the papers' name); ``circle``
 is accepted as an alias on input. A word node takes the values ``absent`` and ``present`` (the files' ``-``
 and the word itself).

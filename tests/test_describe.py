@@ -124,7 +124,7 @@ def test_zero_probability_sentences_come_last_fewest_impossible_words_first():
 
 PROB_VALUES = [0.0, 0.05, 0.25, 0.5, 0.5, 0.8, 1.0]
 START = {"paper": 0, "original": 1}
-"""Where each score's sum starts (METHOD.md §5.1), written here independently of glu."""
+"""Where each score's sum starts (docs/method.md §6.2), written here independently of glu."""
 
 
 def _tree_strategy():

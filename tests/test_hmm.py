@@ -418,7 +418,7 @@ def mat_params(mat, k):
 
 
 def write_original_mat(models: dict[int, GestureHMM], path) -> None:
-    """Save models in the layout of the originals' .mat files (METHOD.md §4), independently of glu's reader."""
+    """Save models in the layout of the originals' .mat files (docs/method.md §4.4), independently of glu's reader."""
     from scipy.io import savemat
 
     out = {}

@@ -48,7 +48,7 @@ LOG_LINES = {  # lines in each real log (wc -l), an independent count
     "tap_notable_seated_1": 384,
     "touch1_hand": 819,
 }
-HMM_ORDER = {"grasp": 3, "tap": 1, "touch": 4, "garbage": 0}  # hmm{k} of the .mat files (METHOD.md §4)
+HMM_ORDER = {"grasp": 3, "tap": 1, "touch": 4, "garbage": 0}  # hmm{k} of the .mat files (docs/method.md §4.4)
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -91,7 +91,7 @@ def _learning_reproduces_the_original_network(lab_table, learned_bn, original_bn
         assert learned_bn.parents[node] == ()
     worst = max(float(np.abs(learned_bn.cpts[n] - original_bn.cpts[n]).max()) for n in original_bn.nodes)
     assert worst == 0.0
-    # the quirk (METHOD.md §3): all-zero rows for but/and/falls/falling at three (ObjVel, HandVel, Contact)
+    # the quirk (docs/method.md §3.4): all-zero rows for but/and/falls/falling at three (ObjVel, HandVel, Contact)
     zero = {w: 3 for w in ("but", "and", "falls", "falling")}
     assert original_bn.zero_rows() == zero and learned_bn.zero_rows() == zero
     rows = np.argwhere(learned_bn.cpts["but"].sum(axis=-1) == 0)
@@ -144,7 +144,7 @@ def _network_summary_of_the_original(learned_bn, original_bn, lab_table):
     assert df.loc["edges", "ours"] == 66 and df.loc["log_likelihood", "ours"] == pytest.approx(
         -19692.2025, abs=1e-4
     )
-    assert df.loc["lost_prior_mass", "ours"] == pytest.approx(0.0165, abs=5e-5)  # METHOD.md §3: 1.65 %
+    assert df.loc["lost_prior_mass", "ours"] == pytest.approx(0.0165, abs=5e-5)  # docs/method.md §3.4: 1.65 %
     assert (df["difference"].abs() == 0).all()
 
 

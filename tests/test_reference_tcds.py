@@ -64,7 +64,7 @@ def _published_descriptions_with_the_learned_and_the_original_network(real_sourc
         rep = ex.published_descriptions(InferenceEngine(bn), samples, score="original")
         assert rep["same_sentence"].all() and rep["same_score"].dropna().astype(bool).all()
         assert len(rep) == 34 and rep["same_score"].notna().sum() == 30
-    # every printed score is the paper's formula plus 1/L, to the printed precision (METHOD.md §5.1)
+    # every printed score is the paper's formula plus 1/L, to the printed precision (docs/method.md §6.2)
     from glu.language import score_sentence, word_probabilities
 
     engine = InferenceEngine(learned_bn)

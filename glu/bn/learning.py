@@ -1,4 +1,4 @@
-"""Learn the Affordance–Words network exactly as the original (METHOD.md §3).
+"""Learn the Affordance–Words network exactly as the original (docs/method.md §3).
 
 * Structure, step 1: K2 greedy search over the affordance nodes in their fixed order, BIC score
   (``log-likelihood − ½ · free parameters · ln N``), at most ``max_parents`` parents; the root nodes

@@ -5,7 +5,7 @@ some core nodes fixed per row (e.g. the action and the object, chosen by a scena
 chose them on the robot). It draws from exactly the distribution the engine answers queries with:
 
 1. the free core nodes jointly from ``P(core)`` times the leaves' row masses, sliced at the fixed values and
-   normalised — so with the original's all-zero word rows (METHOD.md §3) the configurations they exclude
+   normalised — so with the original's all-zero word rows (docs/method.md §3.4) the configurations they exclude
    are never drawn, as they have probability 0 in every query;
 2. each leaf (word) from its CPT row given its parents, ``P(w | pa) / m_w(pa)``.
 

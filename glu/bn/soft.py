@@ -1,7 +1,7 @@
 """Soft evidence on a network node: the two rules and what a valid soft distribution is.
 
 A soft observation of a node X is a distribution ``q`` over its values (for Action: the gesture HMMs'
-posterior ``p_HMM(A | G)``). It enters the network by one of two rules (METHOD.md §2):
+posterior ``p_HMM(A | G)``). It enters the network by one of two rules (docs/method.md §2.2):
 
 ``virtual``
     virtual (likelihood) evidence, ``p(Y | e) ∝ Σ_x p(Y, x | e) q(x)`` — the originals' soft fusion;

@@ -6,7 +6,7 @@ A hand log (``gestures/<recording>/data.log``) has one frame a line, about 30 fr
     -1 1495933414.180140 644.291918 -809.62949 -934.764515
 
 ``index`` is the YARP envelope counter (an integer, ``-1`` when absent), ``timestamp`` is in seconds, and
-``x y z`` are the hand features as logged (METHOD.md §4: the right hand minus the torso, x and z divided
+``x y z`` are the hand features as logged (docs/method.md §4.2: the right hand minus the torso, x and z divided
 by the shoulder distance, y by the neck–torso distance, all × 1000 — that is, 1000 × the units of the
 original models). Blank lines are skipped and do not count as frames. Timestamps must increase.
 

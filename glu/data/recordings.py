@@ -1,6 +1,6 @@
 """The gesture recordings of the real data: which action each shows, and the originals' segments of them.
 
-The published data (METHOD.md §4) holds six YARP hand logs of one person: four training recordings with
+The published data (docs/method.md §4.1) holds six YARP hand logs of one person: four training recordings with
 several repetitions of one gesture each, and two single taps, towards a small sphere and a big box, that
 the originals cut by hand for their test segments and the effect-anticipation figures. Synthetic data
 folders (``glu data synth``) have recordings of the same names, with their gestures at the same frames.

@@ -5,7 +5,7 @@ Besides YARP hand logs (:mod:`glu.data.hand_logs`), glu reads a recording from a
 * **the hand in the torso frame**, columns ``t, x, y, z``: ``t`` in seconds (strictly increasing), ``x y z``
   the right hand minus the torso in **metres**, x to the person's right, y up, z towards the person's back
   (a reach forward makes z < 0). glu divides x and z by a horizontal body size and y by a vertical one
-  (default: the originals' 0.33 m and 0.23 m, METHOD.md §4) to get the models' features.
+  (default: the originals' 0.33 m and 0.23 m, docs/method.md §4.2) to get the models' features.
 * **a skeleton**, columns ``t`` and ``<joint>_x, <joint>_y, <joint>_z`` for the joints ``torso``,
   ``right_hand``, and for the body size ``left_shoulder``, ``right_shoulder``, ``neck`` (others are
   ignored), in metres, in the person's frame as above; glu computes the features as the original system

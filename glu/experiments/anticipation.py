@@ -8,7 +8,7 @@ touches it. :func:`effect_anticipation` runs it; :func:`case_trajectory` gets th
 originals' hand-cut segments of the real recordings, or a synthetic tap);
 :func:`glu.recording.write_anticipation` turns a run into a Rerun recording.
 
-**The originals' schedule** (METHOD.md §5.1): updates at t = 5, 10, …, the last multiple of 5 within the
+**The originals' schedule** (docs/method.md §7.4): updates at t = 5, 10, …, the last multiple of 5 within the
 segment (t is 1-based within the segment: 90 of T = 94 for the sphere, 145 of T = 146 for the box), and
 the scene's description is the best sentence given the evidence of the last update. glu follows it by
 default; ``final_update=True`` adds one more update at t = T, marked ``extra``.
@@ -71,7 +71,7 @@ CASES: dict[str, AnticipationCase] = {
         "a person taps a big box",
     ),
 }
-"""The two TCDS cases (METHOD.md §4–5): 1-based inclusive frames of the hand logs."""
+"""The two TCDS cases (docs/method.md §4.3): 1-based inclusive frames of the hand logs."""
 
 
 @dataclass

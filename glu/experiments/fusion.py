@@ -1,4 +1,4 @@
-"""The papers' network and fusion experiments as functions returning tidy DataFrames (METHOD.md §5).
+"""The papers' network and fusion experiments as functions returning tidy DataFrames (docs/method.md §7).
 
 Each function takes the network(s) it needs and returns one row per number behind a figure, stamped by
 :func:`~glu.experiments.common.tidy`. When the original model is given (``reference=``, the BN imported

@@ -1,7 +1,7 @@
 """The correspondence problem on the real data: the seated taps of effect anticipation.
 
 The published recordings hold one person's standing repetitions (grasp1, tap1, touch1, push1) and two
-taps made seated, towards a small sphere and a big box (METHOD.md §4–5). The seated hand moves in
+taps made seated, towards a small sphere and a big box (docs/method.md §5.3). The seated hand moves in
 another part of the torso frame (:func:`posture_offsets`), so HMMs trained on raw standing features judge
 the seated taps by their tails. Training settings are named by short labels (:func:`parse_setting`,
 :func:`setting_label`); the choice among them, made without the seated taps in view, is

@@ -1,4 +1,4 @@
-"""The verbal-description experiments of TCDS 2020 (METHOD.md §5), each a function returning a tidy DataFrame.
+"""The verbal-description experiments of TCDS 2020 (docs/method.md §7.5), each a function returning a tidy DataFrame.
 
 Every function takes an :class:`~glu.bn.InferenceEngine` (word probabilities given evidence) and
 optionally a grammar (default: glu's, the originals' language). Two ways to choose a description:

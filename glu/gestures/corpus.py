@@ -1,6 +1,6 @@
 """Labelled gesture sequences of a data source: the real recordings, or a seeded synthetic corpus.
 
-The real data (``gestures/<recording>/data.log``, METHOD.md §4; :mod:`glu.data.recordings`) holds four
+The real data (``gestures/<recording>/data.log``, docs/method.md §4.1; :mod:`glu.data.recordings`) holds four
 training recordings of one person repeating one gesture (cut into repetitions automatically by
 :mod:`glu.gestures.segmentation`) and two single taps towards a small sphere and a big box, of which the
 originals cut their test segments by hand. Without real recordings, every

@@ -1,4 +1,4 @@
-"""Gesture features: a skeleton's right hand in the torso frame, normalised by body size (METHOD.md §4).
+"""Gesture features: a skeleton's right hand in the torso frame, normalised by body size (docs/method.md §4.2).
 
 The features of the original system (Saponaro et al., CR-HRI 2013; the ``humanHandProcessor`` of
 GLU 2017) are, per frame, the right hand minus the torso,
@@ -59,7 +59,7 @@ AXIS_MEANING: dict[str, str] = {
 }
 FEATURES_DESCRIPTION = (
     "right hand minus torso; x (right) and z (back) / mean shoulder distance, y (up) / mean neck-torso "
-    "distance (METHOD.md §4); YARP hand logs / 1000"
+    "distance (docs/method.md §4.2); YARP hand logs / 1000"
 )
 """What the gesture models expect, recorded in every recogniser file."""
 LOG_SCALE = 1000.0
@@ -183,7 +183,7 @@ def skeleton_features(
     measure: bool = True,
     frame: str = "torso",
 ) -> tuple[np.ndarray, Normalisation]:
-    """The original gesture features of a skeleton sequence (METHOD.md §4).
+    """The original gesture features of a skeleton sequence (docs/method.md §4.2).
 
     Parameters
     ----------

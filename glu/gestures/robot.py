@@ -1,6 +1,6 @@
 """The robot's own movements: end-effector trajectories of an iCub-like robot's grasp, tap and touch.
 
-The robot learns its affordances from its own actions (METHOD.md §1), so its own movements are the first
+The robot learns its affordances from its own actions (docs/method.md §1), so its own movements are the first
 gesture data it has. This module draws them in the robot's body frame, the way its arm controller makes
 them: a Cartesian reach through waypoints, each segment a straight minimum-jerk move that starts and ends
 at rest (as iCub's Cartesian controller does), with a short hold at contact:

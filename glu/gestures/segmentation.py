@@ -1,6 +1,6 @@
 """Gesture segments: the original frame ranges, and automatic segmentation of a recording into repetitions.
 
-The originals cut their test segments by hand (METHOD.md §4, :data:`glu.gestures.corpus.ORIGINAL_SEGMENTS`). For training,
+The originals cut their test segments by hand (docs/method.md §4.3, :data:`glu.gestures.corpus.ORIGINAL_SEGMENTS`). For training,
 the recordings ``grasp1_hand``, ``tap1_hand``, ``touch1_hand`` and ``push1_hand`` hold several repetitions
 of one gesture each; :func:`segment_repetitions` finds them automatically:
 

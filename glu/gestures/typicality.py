@@ -18,7 +18,7 @@ meta under :data:`FRAMES_KEY`):
 
 * **a hand that does not move** — its largest extent along an axis is under :data:`STILL_FRACTION` of the
   smallest extent of a reference gesture (a frozen tracker, the wrong joint);
-* **axes that do not fit the frame** (x right, y up, z back, torso-centred: ``docs/method.md`` §4) — where it
+* **axes that do not fit the frame** (x right, y up, z back, torso-centred: ``docs/method.md`` §4.2) — where it
   starts (:func:`start_position`) lies farther outside where the reference gestures start, on some axis, than
   half their range is wide (at least :data:`MIN_START_MARGIN` units): axes swapped or mislabelled, another unit,
   or another posture.

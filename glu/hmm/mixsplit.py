@@ -1,4 +1,4 @@
-"""The originals' HMM training recipe, "mixsplit": flat start, Baum–Welch, mixture splitting (METHOD.md §5.1).
+"""The originals' HMM training recipe, "mixsplit": flat start, Baum–Welch, mixture splitting (docs/method.md §5.1).
 
 Saponaro's thesis (appendix on gesture recognition) trained the 2013 models
 (``HMM_M3_Q6_mixsplit.mat``) like this:

@@ -1,6 +1,6 @@
 """One gesture HMM: a left-to-right hidden Markov model with Gaussian-mixture emissions.
 
-The model of METHOD.md §1: for each action ``a`` a left-to-right HMM with ``Q`` states whose emissions
+The model of docs/method.md §1.2: for each action ``a`` a left-to-right HMM with ``Q`` states whose emissions
 are mixtures of ``M`` full-covariance Gaussians over the ``D = 3`` hand features
 (:mod:`glu.gestures.features`). :class:`GestureHMM` holds one model's parameters (immutable, validated)
 with the Cholesky factors precomputed, and scores sequences with the pure functions of

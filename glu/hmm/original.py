@@ -2,7 +2,7 @@
 
 ``HMM_M3_Q6_mixsplit.mat`` (and the single-Gaussian ``HMM_M1_Q6_mixsplit.mat``) hold the variables
 ``hmm{k}_prior`` (Q), ``hmm{k}_trans`` (Q×Q), ``hmm{k}_mu`` (3×Q×M), ``hmm{k}_Sigma`` (3×3×Q×M) and
-``hmm{k}_mixmat`` (Q×M) for k = 1 tap, 3 grasp, 4 push, 0 garbage (METHOD.md §4). There was no touch model:
+``hmm{k}_mixmat`` (Q×M) for k = 1 tap, 3 grasp, 4 push, 0 garbage (docs/method.md §4.4). There was no touch model:
 the originals used push in its place, and so does :func:`load_original_hmms`. Their inputs are the
 logged features / 1000 (:func:`glu.gestures.features.log_features`). Where the files are in a data folder
 is :meth:`glu.data.DataSource.original_hmms`'s business.
@@ -23,7 +23,7 @@ from glu.schema import ACTIONS
 
 ORIGINAL_MODEL_INDEX: dict[str, int] = {"grasp": 3, "tap": 1, "touch": 4, "garbage": 0}
 """Variable index k of ``hmm{k}_*`` in the original .mat files. There was no touch model: the originals
-used the push model (k = 4) in its place (METHOD.md §4)."""
+used the push model (k = 4) in its place (docs/method.md §4.4)."""
 
 
 def original_hmm(mat: Mapping[str, Any], k: int, name: str = "") -> GestureHMM:

@@ -1,7 +1,7 @@
 """Which sentences a description is chosen from: the whole grammar, the originals' samples, or a file.
 
 The originals did not search their grammar: they drew 10,000 sentences at random from it (HTK's HSGen),
-kept the 9,941 distinct ones, and ranked those (METHOD.md §5.1). That list is part of the published data
+kept the 9,941 distinct ones, and ranked those (docs/method.md §6.3). That list is part of the published data
 (:meth:`glu.data.DataSource.sentence_samples`). :func:`candidate_sentences` turns a ``--candidates``
 choice into what :func:`glu.language.describe` takes: ``None`` for the exact search over the grammar, or
 the sentences to rank, prepared once (:class:`SentenceSet`).

@@ -1,7 +1,7 @@
 """Sentences scored by the BN's word probabilities, and the exact N-best descriptions of a grammar.
 
 **Two scores** (:data:`SCORES`). The papers' score of a sentence ``s = w_1 … w_L`` given evidence ``e``
-(METHOD.md §5) is the mean log probability of its words,
+(docs/method.md §6.2) is the mean log probability of its words,
 
     paper:     score(s) = (1/L) Σ_k log p(w_k = present | e),
 
@@ -10,7 +10,7 @@ sentence's sum at 1 instead of 0, so every score printed in TCDS Table II, Fig. 
 
     original:  score(s) = (1 + Σ_k log p(w_k = present | e)) / L
 
-(METHOD.md §5.1). The ``+1/L`` favours short sentences and changes rankings. ``paper`` is glu's default;
+(docs/method.md §6.2). The ``+1/L`` favours short sentences and changes rankings. ``paper`` is glu's default;
 ``original`` reproduces the printed numbers. A word of probability 0 gives ``-inf`` under both.
 
 **Candidates.** The originals ranked the 9,941 distinct sentences of 10,000 random draws from the grammar
@@ -79,7 +79,7 @@ MAX_ALL_SCORES = 50_000_000
 NBEST_COLUMNS = ["rank", "sentence", "score", "length"]
 SCORES: dict[str, int] = {"paper": 0, "original": 1}
 """Sentence scores by name → the constant ``c`` in ``(c + Σ_k log p(w_k)) / L``: ``paper`` is the papers'
-formula, ``original`` what the originals' code computed and printed (METHOD.md §5.1)."""
+formula, ``original`` what the originals' code computed and printed (docs/method.md §6.2)."""
 DEFAULT_SCORE = "paper"
 """The score used unless another is asked for: the papers' formula."""
 

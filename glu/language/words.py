@@ -56,7 +56,7 @@ def word_probabilities(
     ----------
     engine : the network's inference engine (its word nodes: ``engine.binary_leaves``)
     evidence, soft, soft_rule : as :meth:`~glu.bn.InferenceEngine.query`; a gesture posterior ``p_hmm``
-        enters as ``soft={action node: p_hmm}`` (fusion, METHOD.md §2)
+        enters as ``soft={action node: p_hmm}`` (fusion, docs/method.md §2.2)
     vocabulary : the grammar (or its words) the sentences come from: its words that are not network
         nodes are added with probability :data:`NOT_IN_NETWORK_PROBABILITY` and listed in
         ``attrs["not_in_network"]``

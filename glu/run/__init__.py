@@ -11,7 +11,9 @@ One module per concern, in the order a run meets them:
 * :mod:`~glu.run.reproduce` — every notebook, two at a time, all-or-nothing publication;
 * :mod:`~glu.run.summary` — ``results/summary.json`` and ``.csv`` from the notebooks' tables;
 * :mod:`~glu.run.report` — the browsable report of a run;
-* :mod:`~glu.run.readme` — the README's generated sections (results, the story table).
+* :mod:`~glu.run.readme` — the README's results section, from ``results/summary.json``;
+* :mod:`~glu.run.generated` — the pages' other generated sections (the README's story table, from the
+  manifests), and :mod:`~glu.run.speed` — the speed page's tables, from the benchmarks' results.
 
 The science is below (:mod:`glu.experiments`, :mod:`glu.plots`, :mod:`glu.recording`); nothing here
 computes a number of the papers.

@@ -20,7 +20,7 @@ from typing import Any
 
 from glu import paths
 from glu.errors import DataError
-from glu.files import atomic_write_text
+from glu.run import generated
 from glu.run import readme_studies as studies
 from glu.run.readme_learning import LEARNING_REQUIRED, LEARNING_TEMPLATE, learning_values
 
@@ -28,13 +28,11 @@ _ROOT = paths.PROJECT_ROOT
 README: Path | None = _ROOT / "README.md" if _ROOT is not None else None
 """The checkout's README (None when glu is installed: then give the files explicitly)."""
 SUMMARY: Path | None = _ROOT / "results" / "summary.json" if _ROOT is not None else None
-BEGIN = (
-    "<!-- BEGIN results: written by `glu readme` from results/summary.json; edit glu/readme.py, not here -->"
-)
+BEGIN = "<!-- BEGIN results: written by `glu readme` from results/summary.json; edit glu/run/readme.py, not here -->"
 END = "<!-- END results -->"
 
 TEMPLATE = """\
-Every number below comes from `make reproduce DATA=../shared/data` (the tables of its {notebooks} notebooks): \
+Every number below comes from `make reproduce` on the real data (the tables of its {notebooks} notebooks): \
 `glu readme` writes this section from `results/summary.json`.
 
 * **The Affordance–Words network.** Learned exactly as the original: the same {edges:.0f} edges ({differing_edges:.0f} \
@@ -296,22 +294,9 @@ def matches_template(section: str) -> bool:
 
 def readme_section(text: str) -> str:
     """The text between :data:`BEGIN` and :data:`END` in a README (stripped); DataError without exactly one."""
-    if text.count(BEGIN) != 1 or text.count(END) != 1:
-        raise DataError(
-            "README.md: expected one results section between the BEGIN and END markers of glu.run.readme"
-        )
-    return text.split(BEGIN, 1)[1].split(END, 1)[0].strip()
+    return generated.section(text, BEGIN, END)
 
 
 def update_readme(summary: Mapping[str, Any], path: str | os.PathLike = README) -> bool:
     """Write the rendered section into the README (atomically); True if it changed."""
-    path = Path(path)
-    text = path.read_text(encoding="utf-8")
-    old = readme_section(text)
-    new = render(summary)
-    if old == new:
-        return False
-    head, rest = text.split(BEGIN, 1)
-    tail = rest.split(END, 1)[1]
-    atomic_write_text(path, f"{head}{BEGIN}\n{new}\n{END}{tail}")
-    return True
+    return generated.replace_section(path, BEGIN, END, render(summary))

@@ -9,7 +9,7 @@ add up (:mod:`glu.experiments.intervals`), so a task stores one sum per reading.
 
 * on a ``LocalCluster`` sized to the machine (one single-threaded worker process per core) by default;
 * on an existing cluster with ``scheduler="tcp://host:8786"`` (``dask scheduler`` and ``dask worker``,
-  see the README); the workers need glu installed;
+  see ``docs/sweeps.md``); the workers need glu installed;
 * in this process, one after another, with ``scheduler="synchronous"`` (tests, notebooks, debugging).
 
 Each finished chunk is written by this process (workers need no shared disk) to ``OUT/chunks/`` through

@@ -20,7 +20,7 @@ fast-math, no fused multiply-add), so the numbers are the same on every machine 
 numba is imported when a kernel is first needed, so a notebook that never touches an HMM does not pay for
 it, and the machine code is cached (``build/compiled/`` in a checkout, the user's cache folder for an
 installed package: :attr:`glu.paths.Locations.compiled`; ``$NUMBA_CACHE_DIR`` wins), so only the first
-process compiles (about 3 s) and later ones load it (about 0.5 s with numba's import).
+process compiles and later ones load it (both times measured in ``docs/speed.md``, the ``kernels`` table).
 """
 
 from __future__ import annotations
