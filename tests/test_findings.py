@@ -84,6 +84,11 @@ def test_finding_verdicts_and_sentences():
     assert "network: generating 2/4, learned (100) 2/4" in sentences[0]
     assert "it is reversed (difference -0.200 [-0.300, -0.100])" in sentences[1]
     assert "holds in 0 of 8 cells, with no difference in 0 and the reverse in 8" in sentences[1]
+    brief = fd.finding_sentences(v, {**CELLS[1]}, brief=True)  # the README's form
+    assert brief[0] == (
+        "Jeffrey beats virtual: in the reference cell (100% of the gesture seen) it holds (difference -0.050 "
+        "[-0.070, -0.030]); across the design it holds in 4 of 8 cells, with no difference in 4 and the reverse in 0."
+    )
     early = fd.finding_verdicts(
         diff_rows(), (fd.Finding("early", "effect", "log_loss", "jeffrey", "virtual", early=True),)
     )

@@ -370,9 +370,9 @@ def test_the_section_reads_every_number_from_the_summary(summary):
         "7,200 episodes over 10 recogniser seeds",
         "95 % two-level intervals",
         "learned from 100 or 1,270 simulated experiments",
-        "followed through the 2 cells of the design",
-        "in the reference cell (uniform actions, generating network, p_HMM per-frame; 100% of the gesture seen) "
-        "it holds (difference -0.054 [-0.070, -0.040])",
+        "followed through the 2 cells of the design (the reference cell: uniform actions, generating network, "
+        "p_HMM per-frame;",
+        "in the reference cell (100% of the gesture seen) it holds (difference -0.054 [-0.070, -0.040])",
         "holds in 1 of 2 cells, with no difference in 1",
         "log-loss 0.913 [0.893, 0.933] for the network alone, hard 1.321, virtual 0.950, jeffrey 0.895",
         "likelihood 0.605 of the actions with an ECE of 0.394",

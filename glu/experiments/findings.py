@@ -243,9 +243,15 @@ def _level(row: Any, factor: str) -> str:
     )
 
 
-def finding_sentences(verdicts: pd.DataFrame, reference: Mapping[str, Any] = REFERENCE_CELL) -> list[str]:
+def finding_sentences(
+    verdicts: pd.DataFrame, reference: Mapping[str, Any] = REFERENCE_CELL, brief: bool = False
+) -> list[str]:
     """One sentence per finding of :func:`finding_verdicts`: its verdict and difference in the reference
-    cell, then in how many cells it holds (the strategy better), and how often at each factor level."""
+    cell, then in how many cells it holds (the strategy better), and how often at each factor level.
+
+    ``brief``: without naming the reference cell (the caller names it once) and without the counts per
+    factor level (the README's form; the notebook gives them).
+    """
     out = []
     for label, g in verdicts.groupby("finding", sort=False):
         ref = g
@@ -258,8 +264,9 @@ def finding_sentences(verdicts: pd.DataFrame, reference: Mapping[str, Any] = REF
                 "" if r.viewpoint == "all" else f", viewpoint {r.viewpoint}"
             )
             said = {"better": "holds", "worse": "is reversed", "no difference": "is not supported"}[r.verdict]
+            cell = where if brief else f"{cell_label(r)}; {where}"
             head += (
-                f": in the reference cell ({cell_label(r)}; {where}) it {said} "
+                f": in the reference cell ({cell}) it {said} "
                 f"(difference {r.difference:+.3f} [{r.ci_low:+.3f}, {r.ci_high:+.3f}])"
             )
         n = len(g)
@@ -270,7 +277,7 @@ def finding_sentences(verdicts: pd.DataFrame, reference: Mapping[str, Any] = REF
         )
         levels = []
         for factor, values in factor_levels(g).items():
-            if len(values) < 2:
+            if brief or len(values) < 2:
                 continue
             per = []
             for v in values:

@@ -90,7 +90,8 @@ are drawn from a network and the gestures from the generator the HMMs are traine
 the ways the robot's models can be wrong: actions drawn uniformly or from the network's prior, the robot's \
 network the generating one or learned from {corpus_learned} simulated experiments, and p_HMM read from the \
 likelihoods, per frame, or calibrated on held-out training gestures (`docs/corpus-evaluation.md`).
-  * The earlier findings, each followed through the {corpus_cells:.0f} cells of the design:
+  * The earlier findings, each followed through the {corpus_cells:.0f} cells of the design (the reference cell: \
+{reference_cell}; notebook 11 gives the cells where each holds):
 {findings_text}
 {network_text}
 {p_hmm_text}

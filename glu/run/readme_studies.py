@@ -89,7 +89,8 @@ def corpus_values(summary: Mapping[str, Any]) -> dict[str, Any]:
         "ci_percent": 100 * LEVEL,
         "corpus_learned": " or ".join(learned) or "no",
         "corpus_cells": len(cells),
-        "findings_text": _bullets(fd.finding_sentences(verdicts), "    "),
+        "reference_cell": fd.cell_label(fd.REFERENCE_CELL),
+        "findings_text": _bullets(fd.finding_sentences(verdicts, brief=True), "    "),
         "network_text": _bullets(fd.network_alone_sentences(metrics)),
     }
     segments = table(summary, "p_hmm_real_calibration")[0]
