@@ -227,6 +227,25 @@ def _run_fields(run: AnticipationRun, note: str) -> dict[str, Any]:
     )
 
 
+VIEWER_ASSETS_ENV = "RERUN_NOTEBOOK_ASSET"
+VIEWER_ASSETS = "serve-local"
+"""Where the inline Rerun viewer's files come from: ``serve-local``, the installed ``rerun-notebook``'s, served on
+localhost by the kernel (so the viewer works offline); ``$RERUN_NOTEBOOK_ASSET`` set by the user wins."""
+
+
+def viewer_class() -> Any:
+    """Rerun's inline notebook viewer (``rerun.notebook.Viewer``), its files served offline (:data:`VIEWER_ASSETS`);
+    None without ``rerun-notebook``."""
+    # the viewer's JavaScript and WebAssembly come from the installed rerun-notebook, served on localhost by
+    # the kernel, never from the web (rerun-notebook's default is app.rerun.io); read when it is imported
+    os.environ.setdefault(VIEWER_ASSETS_ENV, VIEWER_ASSETS)
+    try:
+        from rerun.notebook import Viewer
+    except ImportError:
+        return None
+    return Viewer
+
+
 def show_anticipation(
     run: AnticipationRun, recording_id: str, note: str = "", live: bool | None = None
 ) -> Any:
@@ -238,9 +257,8 @@ def show_anticipation(
     if not is_live(live):
         return None
     rr = _rr()
-    try:
-        from rerun.notebook import Viewer
-    except ImportError:  # pragma: no cover - rerun-sdk always has the module
+    Viewer = viewer_class()
+    if Viewer is None:
         return None
     rec = rr.RecordingStream("glu", recording_id=recording_id, send_properties=False)
     rec.set_log_time_enabled(False)

@@ -10,13 +10,15 @@ from glu.cli.common import DATA_HELP, positive_int, require_extra, seed
 
 NOTEBOOK_MODULES = ("papermill", "jupytext", "ipykernel", "nbconvert", "rerun")
 """What running the notebooks needs: the extra ``glu[notebooks]``."""
+SITE_MODULES = ("sphinx", "myst_nb", "pydata_sphinx_theme")
+"""What building the documentation site needs: the extra ``glu[docs]`` (in ``glu[notebooks]``)."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``reproduce`` and ``run`` commands."""
     p = sub.add_parser(
         "reproduce",
-        help="run every notebook: figures, recordings, results summary, report",
+        help="run every notebook: figures, recordings, results summary, documentation site",
         description="Run every notebook headless; publish their outputs only when all succeed.",
     )
     p.add_argument("--data", help=DATA_HELP)
@@ -24,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--out",
         type=Path,
-        help="write figures/, recordings/, results/, models/, notebooks/, report/ here "
+        help="write figures/, recordings/, results/, models/, notebooks/, site/ here "
         "(default: the project's folders in a source checkout; required when glu is installed)",
     )
     p.add_argument("-j", "--jobs", type=positive_int, default=2, help="notebooks run in parallel (default 2)")
@@ -32,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--only", nargs="+", metavar="NOTEBOOK", help="run only these notebooks (names or numbers)"
     )
     p.add_argument("--seed", type=seed, default=0, help="seed passed to every notebook (default 0)")
-    p.add_argument("--no-report", action="store_true", help="skip the HTML report")
+    p.add_argument("--no-site", action="store_true", help="skip the documentation site (build/site/)")
     p.add_argument(
         "--notebooks",
         type=Path,
@@ -73,6 +75,8 @@ def _reproduce(args: argparse.Namespace) -> int:
     from glu import paths
 
     require_extra("notebooks", *NOTEBOOK_MODULES)
+    if not args.no_site:
+        require_extra("docs", *SITE_MODULES)
     from glu.run.reproduce import NotebookError, reproduce
 
     folder = args.notebooks or paths.NOTEBOOKS_DIR
@@ -85,7 +89,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         jobs=args.jobs,
         only=args.only,
         seed=args.seed,
-        report=not args.no_report,
+        site=not args.no_site,
         notebooks_dir=folder,
     )
     print(
