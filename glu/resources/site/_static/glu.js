@@ -13,11 +13,12 @@ document.addEventListener("DOMContentLoaded", function () {
   document.querySelectorAll(".bd-article img").forEach(function (img) {
     img.addEventListener("click", function (e) {
       e.preventDefault();
+      // the caption's text (without its "#" anchor), then the legend: the sentence that interprets it
       var fig = img.closest("figure");
-      var text = fig ? fig.querySelector("figcaption") : null;
-      var legend = fig ? fig.querySelector(".glu-interpretation") : null;
+      var text = fig ? fig.querySelector("figcaption .caption-text") || fig.querySelector("figcaption") : null;
+      var legend = fig ? fig.querySelector("figcaption .legend") : null;
       cap.textContent = (text ? text.textContent.trim() : (img.getAttribute("alt") || "")) +
-        (legend ? " " + legend.textContent.trim() : "");
+        (legend && !text.contains(legend) ? " " + legend.textContent.trim() : "");
       big.src = img.currentSrc || img.src;
       big.alt = img.alt;
       box.classList.add("open");
