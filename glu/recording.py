@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from glu.experiments.anticipation import AnticipationRun
-from glu.machine import is_live
+from glu.machine import is_live, viewer_class
 
 ACTION_RGB = {
     "grasp": (76, 114, 176),
@@ -225,25 +225,6 @@ def _run_fields(run: AnticipationRun, note: str) -> dict[str, Any]:
         descriptions=run.descriptions or None,
         values=run.values,
     )
-
-
-VIEWER_ASSETS_ENV = "RERUN_NOTEBOOK_ASSET"
-VIEWER_ASSETS = "serve-local"
-"""Where the inline Rerun viewer's files come from: ``serve-local``, the installed ``rerun-notebook``'s, served on
-localhost by the kernel (so the viewer works offline); ``$RERUN_NOTEBOOK_ASSET`` set by the user wins."""
-
-
-def viewer_class() -> Any:
-    """Rerun's inline notebook viewer (``rerun.notebook.Viewer``), its files served offline (:data:`VIEWER_ASSETS`);
-    None without ``rerun-notebook``."""
-    # the viewer's JavaScript and WebAssembly come from the installed rerun-notebook, served on localhost by
-    # the kernel, never from the web (rerun-notebook's default is app.rerun.io); read when it is imported
-    os.environ.setdefault(VIEWER_ASSETS_ENV, VIEWER_ASSETS)
-    try:
-        from rerun.notebook import Viewer
-    except ImportError:
-        return None
-    return Viewer
 
 
 def show_anticipation(

@@ -12,9 +12,10 @@ import pytest
 from glu import paths
 from glu.paths import STAGING, OutputLayout
 from glu.run import site as site_module
+from glu.run.captions import caption_figures, figure_captions
 from glu.run.execution import present_executed, shown_path
 from glu.run.reproduce import reproduce
-from glu.run.site import API_MODULES, SiteError, build_site, figure_captions
+from glu.run.site import API_MODULES, SiteError, build_site
 
 
 def _figure_cell(name: str) -> nbformat.NotebookNode:
@@ -48,7 +49,7 @@ def test_a_figures_caption_is_its_sections_title_and_the_sentence_that_interpret
         4: ("Fig. 5 · Word changes", "How the words change with the tap."),
         7: ("Its part", ""),
     }
-    captions = site_module.caption_figures(nb)
+    captions = caption_figures(nb)
     assert captions == {
         "a.png": "**The figures.** The sphere rolls away, the box stays.",
         "b.png": "**Fig. 5 · Word changes.** How the words change with the tap.",

@@ -1,5 +1,5 @@
 """The inline Rerun viewer of notebook 08 works offline: its JavaScript and WebAssembly come from the installed
-rerun-notebook, served on localhost by the kernel (glu.recording.viewer_class), never from app.rerun.io."""
+rerun-notebook, served on localhost by the kernel (glu.machine.viewer_class), never from app.rerun.io."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ pytest.importorskip("rerun_notebook", reason="rerun-notebook is not installed (t
 
 _KERNEL = """
 import sys
-from glu.recording import viewer_class
+from glu.machine import viewer_class
 assert viewer_class() is not None
 import rerun_notebook
 print("viewer:", rerun_notebook.ESM_MOD, rerun_notebook.__version__, flush=True)

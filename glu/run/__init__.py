@@ -10,7 +10,8 @@ One module per concern, in the order a run meets them:
 * :mod:`~glu.run.execution` — one notebook executed headless with papermill, stoppable at once;
 * :mod:`~glu.run.reproduce` — every notebook, two at a time, all-or-nothing publication;
 * :mod:`~glu.run.summary` — ``results/summary.json`` and ``.csv`` from the notebooks' tables;
-* :mod:`~glu.run.site` — the documentation site of a run (Sphinx, MyST-NB);
+* :mod:`~glu.run.site` — the documentation site of a run (Sphinx, MyST-NB), its figures captioned by
+  :mod:`~glu.run.captions`;
 * :mod:`~glu.run.readme` — the README's generated sections (results, the story table).
 
 The science is below (:mod:`glu.experiments`, :mod:`glu.plots`, :mod:`glu.recording`); nothing here
