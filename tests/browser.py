@@ -168,3 +168,17 @@ def walk_site(driver, site: Path) -> dict:
         p for p in problems["unreachable"] if p not in ("genindex.html", "search.html")
     ]
     return {"problems": problems, "pages": len(pages), "images": n_images}
+
+
+def search(driver, site: Path, words: str, timeout: float = 30) -> list[str]:
+    """The pages (relative to ``site``) the site's own search lists for ``words``."""
+    from urllib.parse import quote, unquote, urlsplit
+
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    driver.get((site / "search.html").as_uri() + f"?q={quote(words)}")
+    wait_loaded(driver)
+    script = "return Array.from(document.querySelectorAll('#search-results li a')).map(a => a.href)"
+    WebDriverWait(driver, timeout).until(lambda d: d.execute_script(script))
+    hrefs = driver.execute_script(script)
+    return sorted({Path(unquote(urlsplit(h).path)).relative_to(site).as_posix() for h in hrefs})

@@ -11,7 +11,7 @@ from pathlib import Path
 import jupytext
 import papermill as pm
 import pytest
-from browser import browser, needs_browser, walk_site
+from browser import browser, needs_browser, search, walk_site
 
 from glu.plots.overlap import CHECK_ENV
 from glu.run.manifest import read_manifest
@@ -312,9 +312,11 @@ def test_the_site_opens_in_a_real_browser_every_page_image_and_link_working(quic
     site = out / "site"
     with browser(tmp_path / "profile") as driver:
         seen = walk_site(driver, site)
+        found = search(driver, site, "affordance")
     assert seen["problems"] == {"console": [], "links": [], "images": [], "unreachable": []}
     for name in NOTEBOOKS:  # each executed notebook is a page
         assert (site / "notebooks" / f"{name}.html").is_file()
+    assert "notebooks/03_bn_learning.html" in found  # the site's search, offline
     pngs = [f for f in summary["figures"] if f.endswith(".png")]
     assert seen["images"] >= 2 * len(pngs)  # each figure on its notebook's page and in the index's gallery
 

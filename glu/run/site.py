@@ -143,7 +143,7 @@ def _index(
         "",
         f"**Data:** {_md_escape(summary.get('data_source', 'unknown'))} · **mode:** "
         f"{'quick (small, fast runs)' if quick else 'full'}"
-        + (f" · **wall time:** {wall} s" if wall is not None else "")
+        + (f" · **wall time:** {wall:.1f} s" if wall is not None else "")
         + f" · {len(notebooks)} notebooks · {n_figures} figures",
         "",
         "## Ours against the originals",
@@ -183,12 +183,15 @@ def _index(
         "Every figure of the run with its caption and the notebook that drew it; click one to see it at full "
         "size. Each is also saved as SVG beside the PNG (`figures/`).",
         "",
-        "::::{container} glu-gallery",
     ]
     by_notebook = summary.get("figures_by_notebook", {})
-    for fname, nb in sorted(by_notebook.items(), key=lambda item: (item[1], item[0])):
-        if not fname.endswith(".png") or not (layout.figures / fname).is_file():
-            continue
+    shown = [
+        (fname, nb)
+        for fname, nb in sorted(by_notebook.items(), key=lambda item: (item[1], item[0]))
+        if fname.endswith(".png") and (layout.figures / fname).is_file()
+    ]
+    lines += ["::::{container} glu-gallery"] if shown else ["This run drew no figures.", ""]
+    for fname, nb in shown:
         caption = captions.get(fname, "")
         link = f"[{nb}](notebooks/{nb}.ipynb)" if nb in notebooks else nb
         lines += [
@@ -198,7 +201,8 @@ def _index(
             f"{caption} — `{fname[:-4]}`, {link}".strip(" —"),
             ":::",
         ]
-    lines += ["::::", "", "## Recordings", ""]
+    lines += ["::::", ""] if shown else []
+    lines += ["## Recordings", ""]
     recordings = summary.get("recordings", [])
     if recordings:
         lines += [
@@ -307,6 +311,8 @@ def assemble(
             raise SiteError(f"the executed notebook {name}.ipynb is missing from {layout.notebooks.name}/")
         nb = nbformat.read(ipynb, as_version=4)
         captions.update(caption_figures(nb))
+        if not any(c.cell_type == "markdown" and c.source.lstrip().startswith("# ") for c in nb.cells):
+            nb.cells.insert(0, nbformat.v4.new_markdown_cell(f"# {name}"))  # a page needs a title
         target = source / "notebooks" / f"{name}.ipynb"
         _write_if_changed(target, nbformat.writes(nb) + "\n")
         keep.add(target)
