@@ -251,9 +251,7 @@ def reproduce(
         non_default[nb.stem] = non_defaults(spec, check(spec, run_params[nb.stem], nb.stem))
     layout = OutputLayout.at(out)
     shown = {  # what the executed notebooks show of the data and the output folder (no machine path)
-        "data": ("synthetic", source.describe())
-        if source.root is None
-        else (shown_path(source.root), source.describe()),
+        "data": _shown_data(source),
         "out_dir": (shown_path(layout.root), "published to figures/, results/, recordings/, models/ there"),
     }
     final = layout.published()
@@ -364,6 +362,12 @@ def reproduce(
     return summary
 
 
+def _shown_data(source: Any) -> tuple[str, str]:
+    """The data as an executed notebook shows it: ``synthetic``, or its folder relative to the project
+    (:func:`shown_path`), with what it is (:meth:`glu.data.DataSource.describe`: its public origin)."""
+    return ("synthetic" if source.root is None else shown_path(source.root), source.describe())
+
+
 def _stop_all(pending: set[Future], futures: Mapping[Future, str], bar: _Progress) -> None:
     """Cancel what has not started, and kill the kernels of what is running."""
     for f in pending:
@@ -422,11 +426,6 @@ def run_one(
         raise NotebookError(
             f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; executed copy at {executed}"
         ) from None
-    shown = {
-        "data": ("synthetic", source.describe())
-        if source.root is None
-        else (shown_path(source.root), source.describe()),
-        "out_dir": (shown_path(layout.root), ""),
-    }
+    shown = {"data": _shown_data(source), "out_dir": (shown_path(layout.root), "")}
     present_executed(executed, shown, shown_path(src), shown_path(executed))
     return executed, layout
