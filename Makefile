@@ -1,5 +1,6 @@
 # glu: the two entry points of the README, and a few more.
-#   make reproduce   set up .venv, then run every notebook (figures/, recordings/, results/, models/, report)
+#   make reproduce   set up .venv, then run every notebook (figures/, recordings/, results/, models/, build/site/)
+#   make docs        the documentation site (build/site/index.html) again, from the last `make reproduce`
 #   make test        set up .venv, then lint (ruff) and run the test suite
 #   make lab         JupyterLab on the repository, the notebooks open as notebooks
 #   make bench       speed benchmarks (glu vs pgmpy, pyAgrum, hmmlearn); make bench-reproduce: the whole run
@@ -12,7 +13,7 @@ LAB_STAMP := $(VENV)/.glu-lab-installed
 DATA ?=
 ARGS ?=
 
-.PHONY: reproduce test lint lab bench bench-reproduce clean venv
+.PHONY: reproduce docs test lint lab bench bench-reproduce clean venv
 
 venv: $(STAMP)
 
@@ -25,6 +26,9 @@ $(STAMP): pyproject.toml
 reproduce: $(STAMP)
 	$(BIN)/glu reproduce $(if $(DATA),--data $(DATA)) $(ARGS)
 	$(BIN)/glu readme --if-complete
+
+docs: $(STAMP)
+	$(BIN)/python -m glu.run.site
 
 lint: $(STAMP)
 	$(BIN)/ruff check glu tests benchmarks $(wildcard notebooks/*.py)

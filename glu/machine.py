@@ -11,6 +11,7 @@ plain Python show the static form. The tests force either with :func:`is_live`'s
 from __future__ import annotations
 
 import os
+from typing import Any
 
 HEADLESS_ENV = "GLU_HEADLESS"
 """Environment variable set (to ``1``) in the kernels of headless runs."""
@@ -61,3 +62,22 @@ def thread_env(threads: int | None, environ: dict[str, str] | None = None) -> di
     if threads is None:
         return {}
     return {name: str(int(threads)) for name in THREAD_ENV if name not in environ}
+
+
+VIEWER_ASSETS_ENV = "RERUN_NOTEBOOK_ASSET"
+VIEWER_ASSETS = "serve-local"
+"""Where the inline Rerun viewer's files come from: ``serve-local``, the installed ``rerun-notebook``'s, served on
+localhost by the kernel (so the viewer works offline); ``$RERUN_NOTEBOOK_ASSET`` set by the user wins."""
+
+
+def viewer_class() -> Any:
+    """Rerun's inline notebook viewer (``rerun.notebook.Viewer``), its files served offline (:data:`VIEWER_ASSETS`);
+    None without ``rerun-notebook``."""
+    # the viewer's JavaScript and WebAssembly come from the installed rerun-notebook, served on localhost by
+    # the kernel, never from the web (rerun-notebook's default is app.rerun.io); read when it is imported
+    os.environ.setdefault(VIEWER_ASSETS_ENV, VIEWER_ASSETS)
+    try:
+        from rerun.notebook import Viewer
+    except ImportError:
+        return None
+    return Viewer

@@ -16,8 +16,8 @@ The one owner of paths. glu runs in two settings, and :func:`locate` tells them 
 ``--data DIR`` and ``$GLU_DATA_DIR`` win over both. Inputs: the package's resources, the notebooks, the
 data folders (the *layout* inside a data folder belongs to :class:`glu.data.DataSource`). Outputs: an
 :class:`OutputLayout` names the folder of every kind of output, either the project's own (``figures/``,
-``results/``, ``recordings/``, ``models/`` at the top, executed notebooks and the report under ``build/``)
-or one root holding them all (``glu reproduce -o DIR``, a notebook's ``out_dir``). Notebooks (through
+``results/``, ``recordings/``, ``models/`` at the top, executed notebooks and the documentation site under
+``build/``) or one root holding them all (``glu reproduce -o DIR``, a notebook's ``out_dir``). Notebooks (through
 :mod:`glu.run.outputs`) and ``glu reproduce`` both use it, so the two can never disagree.
 """
 
@@ -108,9 +108,15 @@ def locate(package_dir: Path, user_data: Path | None = None, user_cache: Path | 
 
 PACKAGE_DIR: Path = Path(__file__).resolve().parent
 HERE: Locations = locate(PACKAGE_DIR)
-"""Where this glu reads and writes."""
+"""Where this glu reads and writes.
+
+:meta hide-value:
+"""
 PROJECT_ROOT: Path | None = HERE.checkout
-"""The source checkout, or None when glu is installed from a wheel."""
+"""The source checkout, or None when glu is installed from a wheel.
+
+:meta hide-value:
+"""
 RESOURCES_DIR: Path = PACKAGE_DIR / "resources"
 NOTEBOOKS_DIR: Path = HERE.notebooks
 
@@ -123,10 +129,13 @@ SHARED_DATA_ENV_VAR = "GLU_SHARED_DATA"
 
 PUBLISHED_KINDS: tuple[str, ...] = ("figures", "results", "recordings", "models")
 """Outputs a notebook writes and ``glu reproduce`` publishes."""
-OUTPUT_KINDS: tuple[str, ...] = (*PUBLISHED_KINDS, "notebooks", "report")
-"""Every kind of output: the published ones, the executed notebooks and the browsable report."""
+OUTPUT_KINDS: tuple[str, ...] = (*PUBLISHED_KINDS, "notebooks", "site")
+"""Every kind of output: the published ones, the executed notebooks and the documentation site."""
 STAGING = ".glu-staging"
-"""Folder (under an output root) where a ``glu reproduce`` run stages its files until they are published."""
+"""Folder (under an output root) where a ``glu reproduce`` run stages its files until they are published.
+
+:meta hide-value:
+"""
 
 
 @dataclass(frozen=True)
@@ -138,7 +147,7 @@ class OutputLayout:
     root : the folder that holds them (the project root, or ``--out``)
     figures, results, recordings, models : what notebooks write (PNG + SVG, CSV + JSON, ``.rrd``, JSON)
     notebooks : executed notebooks (``.ipynb``)
-    report : the browsable HTML report
+    site : the documentation site (:mod:`glu.run.site`)
     """
 
     root: Path
@@ -147,7 +156,7 @@ class OutputLayout:
     recordings: Path
     models: Path
     notebooks: Path
-    report: Path
+    site: Path
 
     @classmethod
     def project(cls) -> OutputLayout:
@@ -165,7 +174,7 @@ class OutputLayout:
             r / "recordings",
             r / "models",
             r / "build" / "notebooks",
-            r / "build" / "report",
+            r / "build" / "site",
         )
 
     @classmethod
@@ -195,6 +204,11 @@ class OutputLayout:
         return {kind: self.folder(kind) for kind in PUBLISHED_KINDS}
 
     @property
+    def site_source(self) -> Path:
+        """Where the site's sources are assembled and built (beside ``site``: ``site-source/``)."""
+        return self.site.with_name(self.site.name + "-source")
+
+    @property
     def staging(self) -> Path:
         """Where ``glu reproduce`` stages runs before publishing them."""
         return self.root / STAGING
@@ -202,7 +216,10 @@ class OutputLayout:
 
 SCRATCH_DIR: Path = HERE.scratch
 """Where notebooks run by hand (JupyterLab, nbconvert, papermill, ``glu run``) write their outputs:
-``build/scratch/`` in a checkout, the user's cache folder otherwise."""
+``build/scratch/`` in a checkout, the user's cache folder otherwise.
+
+:meta hide-value:
+"""
 
 
 def scratch_dir(notebook: str) -> Path:

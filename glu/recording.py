@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from glu.experiments.anticipation import AnticipationRun
-from glu.machine import is_live
+from glu.machine import is_live, viewer_class
 
 ACTION_RGB = {
     "grasp": (76, 114, 176),
@@ -238,9 +238,8 @@ def show_anticipation(
     if not is_live(live):
         return None
     rr = _rr()
-    try:
-        from rerun.notebook import Viewer
-    except ImportError:  # pragma: no cover - rerun-sdk always has the module
+    Viewer = viewer_class()
+    if Viewer is None:
         return None
     rec = rr.RecordingStream("glu", recording_id=recording_id, send_properties=False)
     rec.set_log_time_enabled(False)

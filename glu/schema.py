@@ -46,7 +46,10 @@ ROLES: tuple[str, ...] = ("action", "object", "effect")
 """What an affordance node is: the robot's action, a feature of the object, or an effect of the action."""
 WORD_VALUES: tuple[str, str] = ("absent", "present")
 GLU_SCHEMA_FILE: Path = RESOURCES_DIR / "schemas" / "glu.json"
-"""GLU's schema: the 8 affordance nodes of the papers and their 49 words."""
+"""GLU's schema: the 8 affordance nodes of the papers and their 49 words.
+
+:meta hide-value:
+"""
 
 
 def _glu_spec() -> dict[str, Any]:

@@ -81,9 +81,13 @@ def test_live_the_widgets_update_the_answer(engine):
     assert "cannot answer" in box.view.value and "impossible evidence" in box.view.value
 
 
-def test_the_rerun_viewer_shows_only_when_live(tmp_path):
+def test_the_rerun_viewer_shows_only_when_live(tmp_path, monkeypatch):
     pytest.importorskip("rerun_notebook")
     from glu.recording import show_anticipation
+
+    # a URL the viewer would load its files from (never fetched here): no asset server in this process; the
+    # files served offline are tests/test_viewer_offline.py's business
+    monkeypatch.setenv("RERUN_NOTEBOOK_ASSET", "http://127.0.0.1:9/widget.js")
 
     class _Run:  # the fields a run has, small
         actions = list(ACTIONS)

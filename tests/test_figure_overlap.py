@@ -230,7 +230,7 @@ def _checked_run(data, out, check, monkeypatch, **kwargs) -> list[str]:
     from glu.run.reproduce import reproduce
 
     monkeypatch.setenv(CHECK_ENV, str(check))
-    summary = reproduce(data=data, out=out, jobs=2, log=lambda _: None, **kwargs)
+    summary = reproduce(data=data, out=out, jobs=2, log=lambda _: None, site=False, **kwargs)
     assert all(n["status"] == "ok" for n in summary["notebooks"])
     pngs = sorted((out / "figures").glob("*.png"))
     assert pngs and all((check / f"{p.stem}.txt").is_file() for p in pngs)

@@ -199,7 +199,7 @@ def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
     r = _run([str(glu), "reproduce", "--quick", "-o", "out"], cwd=empty, env=env)
     assert r.returncode == 0, r.stderr[-3000:]
     assert (empty / "out" / "results" / "summary.json").is_file() and (
-        empty / "out" / "report" / "index.html"
+        empty / "out" / "site" / "index.html"
     ).is_file()
     assert sorted(p.name for p in empty.iterdir()) == ["out"]
     assert snapshot() == before, "something was written into site-packages"

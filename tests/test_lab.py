@@ -148,3 +148,142 @@ def test_saving_from_lab_keeps_the_file_as_it_is_in_git(lab, name):
     assert saved["path"] == f"notebooks/{name}.py"
     assert path.read_bytes() == before, "saving from JupyterLab changed the notebook's source"
     assert not list(path.parent.glob("*.ipynb"))  # and no paired .ipynb appears
+
+
+def _post(url: str, body: dict) -> dict:
+    req = urllib.request.Request(
+        url,
+        data=json.dumps(body).encode(),
+        method="POST",
+        headers={"Authorization": f"token {TOKEN}", "Content-Type": "application/json"},
+    )
+    with urllib.request.urlopen(req, timeout=60) as r:
+        return json.loads(r.read())
+
+
+def _delete(url: str) -> None:
+    req = urllib.request.Request(url, method="DELETE", headers={"Authorization": f"token {TOKEN}"})
+    with urllib.request.urlopen(req, timeout=30):
+        pass
+
+
+def _message(msg_type: str, content: dict, session: str) -> dict:
+    import uuid
+
+    return {
+        "header": {
+            "msg_id": uuid.uuid4().hex,
+            "msg_type": msg_type,
+            "username": "test",
+            "session": session,
+            "date": "2026-11-27T00:00:00Z",
+            "version": "5.3",
+        },
+        "parent_header": {},
+        "metadata": {},
+        "content": content,
+        "channel": "shell",
+        "buffers": [],
+    }
+
+
+def _run_in_a_kernel(base: str, kernel_id: str, code: str) -> tuple[dict, list[dict], int]:
+    """Over the kernel's websocket, as Lab does: its language_info, then ``code`` executed: its outputs, as
+    nbformat stores them, and its execution count."""
+    import asyncio
+    import uuid
+
+    from tornado.httpclient import HTTPRequest
+    from tornado.websocket import websocket_connect
+
+    session = uuid.uuid4().hex
+
+    async def talk() -> tuple[dict, list[dict], int]:
+        url = base.replace("http://", "ws://") + f"/api/kernels/{kernel_id}/channels?session_id={session}"
+        ws = await websocket_connect(HTTPRequest(url, headers={"Authorization": f"token {TOKEN}"}))
+        try:
+
+            async def reply_to(msg: dict, collect: list | None = None) -> dict:
+                ws.write_message(json.dumps(msg))
+                msg_id, reply, idle = msg["header"]["msg_id"], None, False
+                while reply is None or not idle:
+                    raw = await asyncio.wait_for(ws.read_message(), timeout=120)
+                    m = json.loads(raw)
+                    if m.get("parent_header", {}).get("msg_id") != msg_id:
+                        continue
+                    kind = m["header"]["msg_type"]
+                    if m["channel"] == "shell":
+                        reply = m
+                    elif kind == "status" and m["content"]["execution_state"] == "idle":
+                        idle = True
+                    elif collect is not None and kind in ("stream", "execute_result", "display_data"):
+                        collect.append(m)
+                return reply
+
+            info = await reply_to(_message("kernel_info_request", {}, session))
+            outputs: list[dict] = []
+            done = await reply_to(
+                _message("execute_request", {"code": code, "silent": False, "store_history": True}, session),
+                outputs,
+            )
+        finally:
+            ws.close()
+        cells = []
+        for m in outputs:
+            kind, c = m["header"]["msg_type"], m["content"]
+            if kind == "stream":
+                cells.append({"output_type": "stream", "name": c["name"], "text": c["text"]})
+            else:
+                out = {"output_type": kind, "data": c["data"], "metadata": c.get("metadata", {})}
+                if kind == "execute_result":
+                    out["execution_count"] = c["execution_count"]
+                cells.append(out)
+        return info["content"]["language_info"], cells, done["content"]["execution_count"]
+
+    return asyncio.run(talk())
+
+
+@pytest.mark.parametrize("name", ["02_hmm_training", "08_tcds_figures"])
+def test_saving_from_lab_after_a_kernel_ran_a_cell_keeps_the_file_as_it_is_in_git(lab, name):
+    """As a session in Lab: a real kernel starts for the notebook and runs a cell; Lab then writes the kernel's
+    spec (its display name) and language_info into the notebook's metadata and saves. The file is unchanged."""
+    base, root = lab
+    path = root / "notebooks" / f"{name}.py"
+    before = path.read_bytes()
+    assert before == (ROOT / "notebooks" / f"{name}.py").read_bytes()
+    session = _post(
+        f"{base}/api/sessions",
+        {
+            "path": f"notebooks/{name}.py",
+            "type": "notebook",
+            "name": f"{name}.py",
+            "kernel": {"name": "python3"},
+        },
+    )
+    try:
+        language_info, outputs, count = _run_in_a_kernel(
+            base, session["kernel"]["id"], "import sys\nprint('ran in', sys.implementation.name)\n6 * 7"
+        )
+        spec = _get(f"{base}/api/kernelspecs")["kernelspecs"][session["kernel"]["name"]]["spec"]
+    finally:
+        _delete(f"{base}/api/sessions/{session['id']}")
+    assert any(o.get("data", {}).get("text/plain") == "42" for o in outputs), outputs
+    model = _get(f"{base}/api/contents/notebooks/{name}.py?content=1")
+    nb = model["content"]
+    # what Lab's notebook panel sets once its kernel is ready, from the kernel's spec and its kernel_info
+    nb["metadata"]["kernelspec"] = {
+        "name": session["kernel"]["name"],
+        "display_name": spec["display_name"],
+        "language": spec["language"],
+    }
+    nb["metadata"]["language_info"] = language_info
+    first = next(c for c in nb["cells"] if c["cell_type"] == "code")
+    first["outputs"], first["execution_count"] = outputs, count
+    saved = _put(
+        f"{base}/api/contents/notebooks/{name}.py", {"type": "notebook", "format": "json", "content": nb}
+    )
+    assert saved["path"] == f"notebooks/{name}.py"
+    assert path.read_bytes() == before, (
+        "saving from JupyterLab after running a kernel changed the notebook's source"
+    )
+    assert not list(path.parent.glob("*.ipynb"))

@@ -284,7 +284,7 @@ def _render_from_elsewhere(shared_data, tmp_path, only):
     link = tmp_path / "the-data-seen-from-elsewhere"
     link.symlink_to(shared_data)
     out = tmp_path / "out"
-    return reproduce(data=link, out=out, jobs=2, only=only, log=lambda _: None, report=False), out
+    return reproduce(data=link, out=out, jobs=2, only=only, log=lambda _: None, site=False), out
 
 
 def _figures_equal_the_committed_ones(summary, out):

@@ -42,13 +42,23 @@ def references(path: Path) -> list[tuple[int, str, str]]:
     """(line, file, anchor) of every reference to a ``*.md`` file in a file (anchor "" if none).
 
     A file name joined onto a folder in code (``tmp_path / "R.md"``, ``f"{out}/README.md"``) is a file the
-    code writes, not a reference, and is skipped.
+    code writes, not a reference, and is skipped; so is, in Python, a string literal that is nothing but a
+    file name (``pages["index.md"] = …``: a page the documentation site writes).
     """
     out = []
+    python = path.suffix == ".py"
     for n, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
         for m in REFERENCE.finditer(line):
-            before = line[: m.start()]
+            before, after = line[: m.start()], line[m.end() :]
             if re.search(r"(/\s*[\"']|\})$", before) or m.group(1).startswith("/"):
+                continue
+            if (
+                python
+                and not m.group(2)
+                and before[-1:] in "\"'"
+                and before[-1:]
+                and after[:1] == before[-1:]
+            ):
                 continue
             out.append((n, m.group(1), (m.group(2) or "")[1:]))
     return out
@@ -79,7 +89,7 @@ def test_the_checker_finds_references_and_skips_files_written_by_code(tmp_path):
     f = tmp_path / "x.py"
     f.write_text(
         '"""See docs/method.md §4.2 and [data](../docs/data.md#the-published-data)."""\n'
-        'page = tmp_path / "R.md"\nother = f"{out}/README.md"\n'
+        'page = tmp_path / "R.md"\nother = f"{out}/README.md"\npages = {"index.md": text}\n'
     )
     assert references(f) == [(1, "docs/method.md", ""), (1, "../docs/data.md", "the-published-data")]
     assert slug("3.4 The all-zero word rows") == "34-the-all-zero-word-rows"

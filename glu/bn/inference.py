@@ -94,6 +94,10 @@ def choose_method(bn: BayesNet, method: str = "auto") -> str:
 class InferenceEngine:
     """Exact posterior marginals of a :class:`BayesNet` of any shape.
 
+    ``InferenceEngine(bn)`` returns an instance of the chosen subclass (:class:`~glu.bn.core.CoreEngine` or
+    :class:`~glu.bn.junction.JunctionTreeEngine`); both are ``InferenceEngine`` instances with this
+    interface.
+
     Parameters
     ----------
     bn : the network
@@ -101,10 +105,6 @@ class InferenceEngine:
         ``"core"`` or ``"junction"``
     max_table : the largest table the junction tree may build (entries); None: ``$GLU_MAX_TABLE`` or
         :data:`glu.bn.plan.MAX_TABLE_DEFAULT`
-
-    ``InferenceEngine(bn)`` returns an instance of the chosen subclass (:class:`~glu.bn.core.CoreEngine` or
-    :class:`~glu.bn.junction.JunctionTreeEngine`); both are ``InferenceEngine`` instances with this
-    interface.
 
     Raises
     ------

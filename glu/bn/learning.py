@@ -119,7 +119,7 @@ def learn_parameters(
 ) -> dict[str, np.ndarray]:
     """CPTs for a given structure: BDeu(``ess``) for affordance nodes, maximum likelihood for words.
 
-    Returns node → array, shape (*parent cardinalities, cardinality).
+    Returns node → array, shape ``(*parent cardinalities, cardinality)``.
     """
     schema = schema or default_schema()
     if unseen_words not in UNSEEN_MODES:

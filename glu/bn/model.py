@@ -75,7 +75,7 @@ class BayesNet:
     ----------
     schema : nodes and values (affordance nodes first)
     parents : node → tuple of parent names, in node order
-    cpts : node → array, shape (*parent cardinalities, cardinality)
+    cpts : node → array, shape ``(*parent cardinalities, cardinality)``
     meta : free-form provenance (data source, learning options, …)
     """
 
@@ -104,7 +104,7 @@ class BayesNet:
         """Check the model completely; :class:`ModelError` (one line) for the first problem.
 
         Node names and each node's values are non-empty and distinct; parents are known nodes, distinct and
-        in node order; the graph is acyclic; each CPT has the shape (*parent cardinalities, cardinality),
+        in node order; the graph is acyclic; each CPT has the shape ``(*parent cardinalities, cardinality)``,
         finite non-negative entries, and rows that sum to 1 — or are all zeros, which only word nodes may
         have (the original's parent configurations never seen, see :mod:`glu.bn.learning`).
         """

@@ -10,16 +10,19 @@ from glu.cli.common import add_data_option, add_json_option, json_text, positive
 
 NOTEBOOK_MODULES = ("papermill", "jupytext", "ipykernel", "nbconvert", "rerun")
 """What running the notebooks needs: the extra ``glu[notebooks]``."""
+SITE_MODULES = ("sphinx", "myst_nb", "pydata_sphinx_theme")
+"""What building the documentation site needs: the extra ``glu[docs]`` (in ``glu[notebooks]``)."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``reproduce`` and ``run`` commands."""
     p = sub.add_parser(
         "reproduce",
-        help="run every notebook: figures, recordings, results summary, report",
+        help="run every notebook: figures, recordings, results summary, documentation site",
         description="Run every notebook headless, in parallel kernels; publish their figures, recordings, "
         "results, models and executed notebooks only when all succeed (a failed or interrupted run leaves "
-        "the outputs of the last run as they were), then write the results summary and the report.",
+        "the outputs of the last run as they were), then write the results summary and the documentation "
+        "site (build/site/).",
     )
     add_data_option(p)
     p.add_argument("--quick", action="store_true", help="small, fast runs (as the tests do)")
@@ -28,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--out",
         type=Path,
         metavar="DIR",
-        help="write figures/, recordings/, results/, models/, notebooks/, report/ here "
+        help="write figures/, recordings/, results/, models/, notebooks/, site/ here "
         "(default: the project's folders in a source checkout; required when glu is installed)",
     )
     p.add_argument("-j", "--jobs", type=positive_int, default=2, help="notebooks run in parallel (default 2)")
@@ -36,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--only", nargs="+", metavar="NOTEBOOK", help="run only these notebooks (names or numbers)"
     )
     p.add_argument("--seed", type=seed, default=0, help="seed passed to every notebook (default 0)")
-    p.add_argument("--no-report", action="store_true", help="skip the HTML report")
+    p.add_argument("--no-site", action="store_true", help="skip the documentation site (build/site/)")
     _add_notebooks_option(p)
     p.set_defaults(func=_reproduce)
 
@@ -97,6 +100,8 @@ def _notebooks_folder(args: argparse.Namespace) -> Path:
 
 def _reproduce(args: argparse.Namespace) -> int:
     require_extra("notebooks", *NOTEBOOK_MODULES)
+    if not args.no_site:
+        require_extra("docs", *SITE_MODULES)
     from glu.run.reproduce import reproduce
 
     folder = _notebooks_folder(args)
@@ -107,7 +112,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         jobs=args.jobs,
         only=args.only,
         seed=args.seed,
-        report=not args.no_report,
+        site=not args.no_site,
         notebooks_dir=folder,
     )
     print(

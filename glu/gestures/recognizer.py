@@ -353,6 +353,9 @@ def train_recognizer(
 ) -> Recognizer | list[Recognizer]:
     """Train one left-to-right GMM-HMM per action (:func:`glu.hmm.train`), as a recogniser; or many recognisers.
 
+    The recogniser's meta records the settings and the per-frame log-likelihood range of each action's
+    training sequences (:mod:`glu.gestures.typicality`).
+
     Parameters
     ----------
     sequences : action → list of hand-feature sequences of shape (T_i, D); or a list of such mappings, one
@@ -366,9 +369,6 @@ def train_recognizer(
     meta : free-form information kept with each recogniser (data source, …)
     warn : warn when EM does not converge
     progress : called with each action once its model is trained (for a progress bar; one recogniser)
-
-    The recogniser's meta records the settings and the per-frame log-likelihood range of each action's
-    training sequences (:mod:`glu.gestures.typicality`).
     """
     config = config or TrainingConfig()
     many = not isinstance(sequences, Mapping)

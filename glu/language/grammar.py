@@ -29,7 +29,10 @@ from glu.errors import GrammarError
 from glu.paths import RESOURCES_DIR
 
 DEFAULT_GRAMMAR_PATH: Path = RESOURCES_DIR / "grammar.grm"
-"""glu's default grammar, equivalent to ``data/affordance-words/grammar.grm`` of the originals."""
+"""glu's default grammar, equivalent to ``data/affordance-words/grammar.grm`` of the originals.
+
+:meta hide-value:
+"""
 
 META = frozenset("{}[]<>|=$();\\/*")
 """HParse's meta characters: they end a word unless escaped with a backslash."""

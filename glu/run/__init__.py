@@ -10,7 +10,8 @@ One module per concern, in the order a run meets them:
 * :mod:`~glu.run.execution` — one notebook executed headless with papermill, stoppable at once;
 * :mod:`~glu.run.reproduce` — every notebook, two at a time, all-or-nothing publication;
 * :mod:`~glu.run.summary` — ``results/summary.json`` and ``.csv`` from the notebooks' tables;
-* :mod:`~glu.run.report` — the browsable report of a run;
+* :mod:`~glu.run.site` — the documentation site of a run (Sphinx, MyST-NB), its figures captioned by
+  :mod:`~glu.run.captions`;
 * :mod:`~glu.run.readme` — the README's results section, from ``results/summary.json``;
 * :mod:`~glu.run.generated` — the pages' other generated sections (the README's story table, from the
   manifests), and :mod:`~glu.run.speed` — the speed page's tables, from the benchmarks' results.

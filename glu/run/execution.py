@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from glu.errors import GluError
+from glu.files import atomic_write_text
 from glu.machine import HEADLESS_ENV, thread_env
 
 
@@ -239,3 +240,55 @@ def run_notebook(
         if handle.stopped:
             raise NotebookStopped(f"{src.stem}: stopped") from None
         raise
+
+
+def shown_path(path: str | os.PathLike, root: Path | None = None) -> str:
+    """How an executed notebook shows a folder of this machine: relative to the project (``"."`` for the
+    project itself, ``"data/real"``), else only its last part (``"…/data"``); never a machine path.
+
+    >>> shown_path("/home/me/glu/data/real", root=Path("/home/me/glu")), shown_path("/srv/x/data", root=Path("/home/me/glu"))
+    ('data/real', '…/data')
+    """
+    from glu import paths
+
+    root = paths.PROJECT_ROOT if root is None else root
+    p = Path(path)
+    if root is not None:
+        try:
+            return p.resolve().relative_to(Path(root).resolve()).as_posix() or "."
+        except ValueError:
+            pass
+    return f"…/{p.name}"
+
+
+def present_executed(
+    ipynb: Path, shown: dict[str, tuple[Any, str]], input_path: str, output_path: str
+) -> None:
+    """Rewrite the executed notebook ``ipynb`` so that it shows no path of this machine.
+
+    In the parameters cell papermill injected, each ``name`` of ``shown`` is assigned its value as a reader
+    should see it, with a comment (``shown[name] = (value, comment)``): the data folder relative to the
+    project (or named by its origin), the published output folder rather than the run's staging folder.
+    papermill's record of the run (``metadata.papermill``) gets the same values, and the notebook's source
+    and executed copy as ``input_path`` and ``output_path``.
+    """
+    import json
+    import re
+
+    import nbformat
+
+    nb = nbformat.read(ipynb, as_version=4)
+    for cell in nb.cells:
+        if "injected-parameters" not in cell.metadata.get("tags", []):
+            continue
+        lines = cell.source.split("\n")
+        for name, (value, comment) in shown.items():
+            line = f"{name} = {json.dumps(value, ensure_ascii=False)}" + (f"  # {comment}" if comment else "")
+            lines = [line if re.match(rf"{re.escape(name)}\s*=", old) else old for old in lines]
+        cell.source = "\n".join(lines)
+    record = nb.metadata.get("papermill")
+    if record is not None:
+        params = record.get("parameters") or {}
+        params.update({name: value for name, (value, _) in shown.items() if name in params})
+        record["input_path"], record["output_path"] = input_path, output_path
+    atomic_write_text(ipynb, nbformat.writes(nb) + "\n")

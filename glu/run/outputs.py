@@ -88,12 +88,13 @@ class Outputs:
         text = source or self.data_label  # names its origin ("real data: …", "synthetic data …")
         return text + (f" · {self.notebook} with {self.parameters_label}" if self.parameters else "")
 
-    def figure(self, fig: Any, name: str, source: str | None = None) -> list[Path]:
+    def figure(self, fig: Any, name: str, source: str | None = None) -> None:
         """Stamp ``fig`` with :meth:`footer`, save ``figures/<name>.png`` and ``.svg``, and show the PNG.
 
         In a running kernel the saved PNG itself is displayed (tagged with its file name in the output's
         metadata, ``{"glu": {"figure": "<name>.png"}}``), so the executed notebook shows exactly the file
-        that was written; the figure is then closed.
+        that was written; the figure is then closed. Returns None, so that a cell ending with it shows no
+        path (the files are in :attr:`written`).
         """
         from glu.plots.style import save_figure, stamp
 
@@ -104,10 +105,10 @@ class Outputs:
 
         plt.close(fig)
         _show_png(files[0])
-        return files
 
-    def table(self, df: pd.DataFrame, name: str | None = None, **extra: Any) -> Path:
+    def table(self, df: pd.DataFrame, name: str | None = None, **extra: Any) -> None:
         """Save the numbers behind a figure as ``results/<name>.csv`` and ``.json`` (with provenance).
+        Returns None, so that a cell ending with it shows no path (the files are in :attr:`written`).
 
         ``name`` defaults to the frame's experiment (``df.attrs["experiment"]``); the JSON's ``meta`` holds
         the experiment, its data source and parameters (from :func:`glu.experiments.common.tidy`), the
@@ -132,7 +133,6 @@ class Outputs:
         js = self.layout.results / f"{name}.json"
         atomic_write_text(js, json.dumps(doc, indent=1, sort_keys=False) + "\n")
         self.written.extend([csv, js])
-        return csv
 
     def say(self, text: str) -> None:
         """Show a sentence written by code from the tables: Markdown in a running kernel, plain text elsewhere.

@@ -1,4 +1,4 @@
-"""Run every notebook headless with papermill: figures, recordings, result tables, a summary and a report.
+"""Run every notebook headless with papermill: figures, recordings, result tables, a summary and a site.
 
 ``glu reproduce`` (and ``make reproduce``) calls :func:`reproduce`. Each notebook runs in its own kernel
 (:mod:`glu.run.execution`), writing into a private staging folder. The run is all-or-nothing: only when every
@@ -10,11 +10,14 @@ the notebook and the cell and keeps its executed copy (``NAME.failed.ipynb``); C
 it at once (the kernels are killed). Either way nothing is published and the staging folder is removed;
 a staging folder left by a killed process is removed by the next run. At the end
 ``results/summary.json`` and ``results/summary.csv`` collect every number behind every figure, the data
-source, the package versions and the comparison with the original model, and ``report/`` (by default
-``build/report/``) gets a browsable HTML report (:mod:`glu.run.report`). Each notebook's page of the report
-is rendered as soon as that notebook has run, while the others still run, staged and published with
-the rest; only the index and the API reference are written at the end. The wall time recorded in the
-summary (``wall_time_s``) covers the whole run, the report included.
+source, the package versions and the comparison with the original model, and ``site/`` (by default
+``build/site/``) gets the documentation site of the run (:mod:`glu.run.site`: the executed notebooks, the
+docs pages, the API reference). The wall time recorded in the summary (``wall_time_s``) covers running
+and publishing the notebooks; the site's build time is logged after it.
+
+The executed notebooks show no path of this machine (:func:`glu.run.execution.present_executed`): their
+injected parameters name the data relative to the project (or by its origin) and the published output
+folder, not the staging folder the kernels wrote into.
 
 :func:`run_one` runs a single notebook the same way (``glu run``), into its scratch folder by default.
 """
@@ -37,12 +40,18 @@ from glu.data.source import resolve_data
 from glu.errors import GluError
 from glu.machine import available_cores
 from glu.paths import OutputLayout
-from glu.run.execution import NotebookStopped, RunHandle, load_papermill, run_notebook
+from glu.run.execution import (
+    NotebookStopped,
+    RunHandle,
+    load_papermill,
+    present_executed,
+    run_notebook,
+    shown_path,
+)
 from glu.run.manifest import ManifestError, check_outputs, read_manifest, written_outputs
 from glu.run.outputs import parameters_text
 from glu.run.parameters import check, non_defaults, parse_value, read_spec
 from glu.run.progress import CellProgress
-from glu.run.report import notebook_page, prepare_report, render_notebook_page, write_index
 from glu.run.summary import (
     NotebookResult,
     collect_summary,
@@ -197,7 +206,7 @@ def reproduce(
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
     progress: bool | None = None,
-    report: bool = True,
+    site: bool = True,
 ) -> dict[str, Any]:
     """Run the notebooks and publish their outputs if all succeed; returns the summary (also in results/).
 
@@ -206,7 +215,7 @@ def reproduce(
     data : data folder, ``"synthetic"``, or None (``$GLU_DATA_DIR``, the fetched data, else synthetic)
     quick : small, fast runs (for tests): each notebook with the quick preset of its manifest
         (:mod:`glu.run.manifest`); every figure is still made
-    out : root for ``figures/``, ``recordings/``, ``results/``, ``models/``, ``notebooks/``, ``report/``;
+    out : root for ``figures/``, ``recordings/``, ``results/``, ``models/``, ``notebooks/``, ``site/``;
         None = the project's folders (:meth:`glu.paths.OutputLayout.at`)
     jobs : notebooks run at the same time (each in its own kernel)
     only : run only these notebooks (names or numbers)
@@ -214,12 +223,13 @@ def reproduce(
     log : where progress lines go (stderr by default)
     notebooks_dir : the folder of jupytext notebooks ``NN_name.py``
     progress : live progress bar; None = when stderr is a terminal
-    report : also write the HTML report (each notebook's page as soon as it has run)
+    site : also build the documentation site of the run (:func:`glu.run.site.build_site`)
 
     Raises
     ------
     NotebookError : a notebook failed (nothing published); KeyboardInterrupt : interrupted (nothing
-    published, kernels killed, staging removed)
+    published, kernels killed, staging removed); :class:`glu.run.site.SiteError` : the notebooks' outputs
+    were published but the site could not be built (the previous site is kept)
     """
     t_start = time.perf_counter()
     if not 1 <= jobs <= 64:
@@ -241,6 +251,10 @@ def reproduce(
         run_params[nb.stem] = {**(manifest.quick if quick else {}), "seed": seed}
         non_default[nb.stem] = non_defaults(spec, check(spec, run_params[nb.stem], nb.stem))
     layout = OutputLayout.at(out)
+    shown = {  # what the executed notebooks show of the data and the output folder (no machine path)
+        "data": _shown_data(source),
+        "out_dir": (shown_path(layout.root), "published to figures/, results/, recordings/, models/ there"),
+    }
     final = layout.published()
     executed_dir = layout.notebooks
     clean_stale_staging(layout.staging)
@@ -280,12 +294,7 @@ def reproduce(
             check_outputs(manifests[name], written_outputs(stage / "out"), source.is_real)
         except ManifestError as e:
             return failed(f"notebook {name} ran, but {e}", str(e))
-        if report:  # its page of the report, now, while the other notebooks still run
-            try:
-                render_notebook_page(out_ipynb, notebook_page(stage / "report", name))
-            except Exception as e:
-                why = f"its report page could not be rendered: {type(e).__name__}: {e}"
-                return failed(f"notebook {name} ran, but {why}", why)
+        present_executed(out_ipynb, shown, shown_path(nb), shown_path(executed_dir / f"{name}.ipynb"))
         bar.finished(name, f"[{i}/{len(notebooks)}] {name}: ok in {dt:.1f} s")
         return NotebookResult(name, "ok", dt, out_ipynb, parameters=non_default[name])
 
@@ -333,7 +342,6 @@ def reproduce(
             os.replace(r.executed, executed)
             r.executed = executed
             (executed_dir / f"{r.name}.failed.ipynb").unlink(missing_ok=True)
-            _move_tree(staging / r.name / "report", layout.report)  # its page, rendered as it finished
     finally:
         shutil.rmtree(staging, ignore_errors=True)
         try:
@@ -345,15 +353,20 @@ def reproduce(
     summary = collect_summary(final["results"], results, source.describe(), quick)
     csv = summary_csv(summary)
     write_rendering_record(final["figures"], source.describe(), quick)
-    pages = prepare_report(layout, summary) if report else {}
-    # the wall time covers all the user waits for but writing the files that state it (summary.json, the
-    # index: about 0.1 s)
     summary["wall_time_s"] = round(time.perf_counter() - t_start, 3)
     summary_file = save_summary(final["results"], summary, csv)
-    if report:
-        log(f"glu reproduce: report in {write_index(layout, summary, pages)}")
     log(f"glu reproduce: done in {summary['wall_time_s']:.1f} s; summary in {summary_file}")
+    if site:
+        from glu.run.site import build_site
+
+        build_site(layout, summary, log=log, notebooks_dir=notebooks_dir)
     return summary
+
+
+def _shown_data(source: Any) -> tuple[str, str]:
+    """The data as an executed notebook shows it: ``synthetic``, or its folder relative to the project
+    (:func:`shown_path`), with what it is (:meth:`glu.data.DataSource.describe`: its public origin)."""
+    return ("synthetic" if source.root is None else shown_path(source.root), source.describe())
 
 
 def _stop_all(pending: set[Future], futures: Mapping[Future, str], bar: _Progress) -> None:
@@ -409,8 +422,8 @@ def run_one(
         "out_dir": str(layout.root),
     }
     executed = layout.notebooks / f"{src.stem}.ipynb"
-    shown = parameters_text(parsed) or "default parameters"
-    log(f"glu run: {src.stem} with {shown}, {source.location()} …")
+    label = parameters_text(parsed) or "default parameters"
+    log(f"glu run: {src.stem} with {label}, {source.location()} …")
     try:
         if progress:
             with CellProgress(src.stem) as cells:
@@ -421,4 +434,6 @@ def run_one(
         raise NotebookError(
             f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; executed copy at {executed}"
         ) from None
+    shown = {"data": _shown_data(source), "out_dir": (shown_path(layout.root), "")}
+    present_executed(executed, shown, shown_path(src), shown_path(executed))
     return executed, layout

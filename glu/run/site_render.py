@@ -1,0 +1,50 @@
+"""MyST-NB's renderer for glu's notebooks: each figure a glu notebook saved is shown with its caption.
+
+:func:`glu.run.site.caption_figures` puts each figure's caption into the metadata of the output that shows it
+(``{"glu": {"figure": "NAME.png", "caption": "…"}}``); this renderer (MyST-NB's ``nb_render_plugin =
+"glu"``, an entry point of the group ``myst_nb.renderers``) wraps that image in a figure with the caption, its
+Markdown rendered inline. Any other output is rendered as MyST-NB renders it.
+"""
+
+from __future__ import annotations
+
+from docutils import nodes
+from myst_nb.core.render import MimeData, NbElementRenderer
+
+
+class FigureRenderer(NbElementRenderer):
+    """MyST-NB's default renderer, with a caption under every figure of glu's (see the module docstring)."""
+
+    def _inline(self, data: MimeData, markdown: str) -> list[nodes.Node]:
+        return self.render_markdown_inline(
+            MimeData(
+                "text/markdown",
+                markdown,
+                data.cell_metadata,
+                {},
+                data.cell_index,
+                data.output_index,
+                data.line,
+            )
+        )
+
+    def render_image(self, data: MimeData) -> list[nodes.Element]:
+        """The image, inside a figure with its caption when the output carries one.
+
+        The caption shows the section's title and the file; the sentence that interprets the figure, which
+        the page shows right after it anyway, is the figure's legend, shown when the figure is opened."""
+        images = super().render_image(data)
+        meta = data.output_metadata.get("glu") or {}
+        title, text, name = meta.get("title", ""), meta.get("text", ""), meta.get("figure", "")
+        if not (title or text) or len(images) != 1:
+            return images
+        image = images[0]
+        image["alt"] = name or "figure"
+        figure = nodes.figure("", image, classes=["glu-figure"])
+        short = f"**{title}** · `{name}`" if title else f"`{name}`"
+        figure += nodes.caption("", "", *self._inline(data, short))
+        if text:
+            figure += nodes.legend(
+                "", nodes.paragraph("", "", *self._inline(data, text)), classes=["glu-interpretation"]
+            )
+        return [figure]

@@ -1,0 +1,208 @@
+"""The documentation site (glu.run.site): captions from the notebooks' prose, executed notebooks without machine
+paths, and a small run on a data folder on disk whose site shows none of this machine's paths."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from glu import paths
+from glu.paths import STAGING, OutputLayout
+from glu.run import site as site_module
+from glu.run.captions import caption_figures, figure_captions
+from glu.run.execution import present_executed, shown_path
+from glu.run.reproduce import reproduce
+from glu.run.site import API_MODULES, SiteError, build_site
+
+
+def _figure_cell(name: str) -> nbformat.NotebookNode:
+    cell = nbformat.v4.new_code_cell("out.figure(fig, 'x')")
+    cell.outputs = [
+        nbformat.v4.new_output(
+            "display_data", data={"image/png": "iVBORw0KGgo="}, metadata={"glu": {"figure": f"{name}.png"}}
+        )
+    ]
+    return cell
+
+
+def test_a_figures_caption_is_its_sections_title_and_the_sentence_that_interprets_it():
+    md, code = nbformat.v4.new_markdown_cell, nbformat.v4.new_code_cell
+    nb = nbformat.v4.new_notebook(
+        cells=[
+            md("# 07 · The figures\n\nThe notebook's introduction."),
+            _figure_cell("a"),  # followed by its interpretation
+            md("The sphere rolls away,\nthe box stays.\n\nA second paragraph."),
+            md(
+                "## Fig. 5 · Word changes\nHow the words change with the tap."
+            ),  # heading and text, no blank line
+            _figure_cell("b"),  # followed by a new section: the text under its own heading
+            code("x = 1"),
+            md("## Another section:\n\n### Its part"),
+            _figure_cell("c"),  # a heading without text, nothing after: the title alone
+        ]
+    )
+    assert figure_captions(nb) == {
+        1: ("The figures", "The sphere rolls away, the box stays."),
+        4: ("Fig. 5 · Word changes", "How the words change with the tap."),
+        7: ("Its part", ""),
+    }
+    captions = caption_figures(nb)
+    assert captions == {
+        "a.png": "**The figures.** The sphere rolls away, the box stays.",
+        "b.png": "**Fig. 5 · Word changes.** How the words change with the tap.",
+        "c.png": "**Its part.**",
+    }
+    assert nb.cells[4].outputs[0].metadata["glu"] == {
+        "figure": "b.png",
+        "title": "Fig. 5 · Word changes",
+        "text": "How the words change with the tap.",
+    }
+
+
+def test_a_folder_is_shown_relative_to_the_project_or_by_its_name_only(tmp_path):
+    root = tmp_path / "project"
+    assert shown_path(root / "data" / "real", root) == "data/real"
+    assert shown_path(root, root) == "."
+    assert shown_path(tmp_path / "elsewhere" / "data", root) == "…/data"
+
+
+def test_the_executed_notebook_names_the_published_folders_not_the_staging_one(tmp_path):
+    nb = nbformat.v4.new_notebook(
+        cells=[
+            nbformat.v4.new_code_cell("data = None  # data folder\nout_dir = None  # outputs"),
+            nbformat.v4.new_code_cell(
+                f'# Parameters\nseed = 0\ndata = "{tmp_path}/data"\nout_dir = "{tmp_path}/{STAGING}/abc/01/out"\n',
+                metadata={"tags": ["injected-parameters"]},
+            ),
+        ]
+    )
+    nb.metadata["papermill"] = {
+        "parameters": {"seed": 0, "data": f"{tmp_path}/data", "out_dir": f"{tmp_path}/{STAGING}/abc/01/out"},
+        "input_path": {"cells": "the whole notebook"},
+        "output_path": f"{tmp_path}/{STAGING}/abc/01/01.ipynb",
+    }
+    ipynb = tmp_path / "01.ipynb"
+    nbformat.write(nb, ipynb)
+    present_executed(
+        ipynb,
+        {"data": ("…/data", "real data: origin@1234"), "out_dir": (".", "published there")},
+        "notebooks/01.py",
+        "build/notebooks/01.ipynb",
+    )
+    text = ipynb.read_text()
+    assert str(tmp_path) not in text and STAGING not in text
+    done = nbformat.read(ipynb, as_version=4)
+    assert done.cells[1].source.split("\n") == [
+        "# Parameters",
+        "seed = 0",
+        'data = "…/data"  # real data: origin@1234',
+        'out_dir = "."  # published there',
+        "",
+    ]
+    assert done.cells[0].source == nb.cells[0].source  # the notebook's own parameters cell is as it was
+    assert done.metadata.papermill.parameters == {"seed": 0, "data": "…/data", "out_dir": "."}
+    assert done.metadata.papermill.input_path == "notebooks/01.py"
+    assert done.metadata.papermill.output_path == "build/notebooks/01.ipynb"
+
+
+@pytest.fixture(scope="module")
+def site_run(tmp_path_factory, synthetic_folder):
+    """A quick run of two notebooks on a data folder on disk (not the project's), with its site."""
+    out = tmp_path_factory.mktemp("site-run") / "out"
+    summary = reproduce(
+        data=synthetic_folder, quick=True, out=out, jobs=2, only=["01", "08"], log=lambda _: None
+    )
+    return out, summary
+
+
+def _machine_paths(folder: Path, data: Path, out: Path) -> dict[str, list[str]]:
+    """Which of this machine's paths each text file under ``folder`` shows."""
+    needles = {
+        "the project root": str(paths.PROJECT_ROOT),
+        "the data folder": str(data),
+        "the home folder": str(Path.home()),
+        "the output folder": str(out),
+        "the staging folder": STAGING,
+    }
+    found: dict[str, list[str]] = {}
+    for f in sorted(folder.rglob("*")):
+        if not f.is_file() or f.suffix in (".png", ".svg", ".woff", ".woff2", ".ttf", ".ico", ".gif", ".jpg"):
+            continue
+        text = f.read_text(encoding="utf-8", errors="replace")
+        hits = [what for what, needle in needles.items() if needle in text]
+        if hits:
+            found[f.relative_to(folder).as_posix()] = hits
+    return found
+
+
+def test_no_notebook_and_no_page_of_the_site_shows_a_path_of_this_machine(site_run, synthetic_folder):
+    out, _ = site_run
+    layout = OutputLayout.under(out)
+    assert sorted(p.name for p in layout.notebooks.glob("*.ipynb")) == [
+        "01_gesture_features.ipynb",
+        "08_tcds_figures.ipynb",
+    ]
+    assert (layout.site / "index.html").is_file()
+    for folder in (layout.notebooks, layout.site):
+        assert _machine_paths(folder, synthetic_folder, out) == {}, folder.name
+    injected = [
+        c
+        for c in json.loads((layout.notebooks / "08_tcds_figures.ipynb").read_text())["cells"]
+        if "injected-parameters" in c["metadata"].get("tags", [])
+    ]
+    source = "".join(injected[0]["source"])
+    from glu.data import resolve_data
+
+    described = resolve_data(synthetic_folder).describe()  # named by what it is, never by its path
+    assert f'data = "…/{synthetic_folder.name}"  # {described}' in source
+    assert f'out_dir = "…/{out.name}"' in source
+
+
+def test_the_site_has_the_notebooks_the_docs_the_api_and_the_recordings(site_run):
+    out, summary = site_run
+    site = OutputLayout.under(out).site
+    for name in ("01_gesture_features", "08_tcds_figures"):
+        page = (site / "notebooks" / f"{name}.html").read_text()
+        assert 'class="glu-figure' in page and "glu-interpretation" in page
+    index = (site / "index.html").read_text()
+    for rec in summary["recordings"]:
+        assert f"<code>rerun recordings/{rec}</code>" in index and f'href="../recordings/{rec}"' in index
+    assert summary["recordings"] and summary["versions"]["numpy"] in index
+    assert summary["data_source"] in index  # the data source, named without its path
+    assert index.count("<figure") >= len([f for f in summary["figures"] if f.endswith(".png")])
+    for module in API_MODULES:
+        page = (site / "api" / f"{module}.html").read_text()
+        assert "__dataclass_fields__" not in page and "__delattr__" not in page and "__init__" not in page
+    manifest = (site / "api" / "glu.run.manifest.html").read_text()
+    assert "expected_seconds" in manifest and "Manifest" in manifest  # a dataclass, its fields listed
+    docs = sorted(p.stem for p in (paths.PROJECT_ROOT / "docs").glob("*.md"))
+    assert docs and all((site / "docs" / f"{d}.html").is_file() for d in docs)
+    assert (site / "search.html").is_file() and (site / "searchindex.js").is_file()
+
+
+def test_make_docs_builds_the_site_again_from_the_last_run_and_a_warning_fails_it(
+    site_run, monkeypatch, tmp_path
+):
+    out, _ = site_run
+    layout = OutputLayout.under(out)
+    pages = sorted(p.relative_to(layout.site) for p in layout.site.rglob("*.html"))
+    assert site_module.main(["--out", str(out)]) == 0  # `make docs`, from results/summary.json
+    assert sorted(p.relative_to(layout.site) for p in layout.site.rglob("*.html")) == pages
+    before = (layout.site / "index.html").read_bytes()
+    docs = tmp_path / "docs"
+    docs.mkdir()
+    (docs / "broken.md").write_text("# Broken\n\nSee {ref}`no-such-label`.\n")
+    monkeypatch.setattr(site_module, "DOCS_DIR", docs)
+    with pytest.raises(SiteError, match=r"(?s)1 Sphinx warning.*no-such-label") as e:
+        build_site(layout, log=lambda _: None)
+    assert str(out) not in str(e.value) and str(paths.PROJECT_ROOT) not in str(e.value)
+    assert (layout.site / "index.html").read_bytes() == before  # the previous site is as it was
+    assert not (layout.site / "docs" / "broken.html").exists()
+
+
+def test_the_site_needs_a_run(tmp_path):
+    with pytest.raises(SiteError, match="run `glu reproduce` first"):
+        build_site(OutputLayout.under(tmp_path), log=lambda _: None)
