@@ -42,7 +42,7 @@ Shapes: ``S`` sequences, ``T`` frames (padded), ``Q`` states, ``M`` Gaussians pe
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields
 from typing import NamedTuple
 
@@ -351,10 +351,26 @@ def fit_weighted(
     w = sequence_weights(sequences, weights)
     if not np.any(w > 0):
         raise ValueError("weighted EM needs at least one sequence of positive weight")
+    return iterate(
+        lambda p: expected_stats(sequences, p, w), init, n_iter, tol, covar_reg, covariance, covar_floor
+    )
+
+
+def iterate(
+    estep: Callable[[GMMHMMParams], SufficientStats],
+    init: GMMHMMParams,
+    n_iter: int,
+    tol: float,
+    covar_reg: float = 0.0,
+    covariance: str = "map",
+    covar_floor: float = 0.0,
+) -> FitResult:
+    """The EM loop of :func:`fit_weighted`: ``estep`` (the model → its expected statistics) and
+    :func:`maximise` from ``init``, at most ``n_iter`` times, until an iteration gains less than ``tol``."""
     params = GMMHMMParams(*(np.array(a, dtype=float) for a in init))
     history: list[float] = []
     for _ in range(n_iter):
-        stats = expected_stats(sequences, params, w)
+        stats = estep(params)
         history.append(float(stats.loglik))
         params = maximise(stats, params, covar_reg, covariance, covar_floor)
         if len(history) >= 2 and history[-1] - history[-2] < tol:
