@@ -247,7 +247,8 @@ def fit_weighted_fast(
     prep = _prepare(sequences, weights)
     if prep is None:
         raise ValueError("weighted EM needs at least one sequence of positive weight")
-    return iterate(lambda p: _estep(prep, p), init, n_iter, tol, covar_reg, covariance, covar_floor)
+    options = {"covar_reg": covar_reg, "covariance": covariance, "covar_floor": covar_floor}
+    return iterate(lambda p: _estep(prep, p), init, n_iter, tol, **options)
 
 
 def _pairs(D: int) -> list[tuple[int, int]]:
