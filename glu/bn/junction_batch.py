@@ -132,7 +132,8 @@ class JunctionBatch:
         n = _batch_length(evidence, soft)
         check_soft_rule(soft_rule)
         hard = {self.index[node]: self._codes(node, vals, n) for node, vals in evidence.items()}
-        qs = {self.index[node]: self._batch_soft(node, arr, n, evidence) for node, arr in soft.items()}
+        checked = {node: self._batch_soft(node, arr, n, evidence) for node, arr in soft.items()}
+        qs = {self.index[node]: q for node, q in checked.items()}
         want = frozenset(self.index[t] for t in targets)
         out = {t: np.full((n, self.cards[self.index[t]]), np.nan) for t in targets}
         possible = np.ones(n, dtype=bool)
