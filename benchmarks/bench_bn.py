@@ -18,22 +18,14 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from timing import fmt, report
+from timing import calls_lasting, fmt, report
 from timing import row as result_row
 
 
 def timeit(fn, repeat: int = 5, number: int | None = None) -> float:
     """Best-of-``repeat`` seconds per call (``number`` calls per repeat, auto-chosen to last ≥ 0.2 s)."""
     if number is None:
-        number, t = 1, 0.0
-        while True:
-            t0 = time.perf_counter()
-            for _ in range(number):
-                fn()
-            t = time.perf_counter() - t0
-            if t >= 0.2:
-                break
-            number *= 2 if t > 0.02 else 10
+        number = calls_lasting(fn)
     best = float("inf")
     for _ in range(repeat):
         t0 = time.perf_counter()

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -35,31 +34,15 @@ import time
 from pathlib import Path
 
 import numpy as np
-from timing import machine, report
+from timing import RESULTS, calls_lasting, machine, median_time, report
 
-RESULTS = Path(__file__).resolve().parent / "results"
 NETWORKS = ("alarm", "child", "insurance")
 N_OBSERVED, N_BATCH = 5, 10_000
 
 
 def per_call(fn, repeats: int = 7) -> float:
     """Median over ``repeats`` of the mean seconds per call, ``number`` calls chosen to last ≥ 0.2 s."""
-    number, t = 1, 0.0
-    while True:
-        t0 = time.perf_counter()
-        for _ in range(number):
-            fn()
-        t = time.perf_counter() - t0
-        if t >= 0.2:
-            break
-        number *= 2 if t > 0.02 else 10
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            fn()
-        times.append((time.perf_counter() - t0) / number)
-    return statistics.median(times)
+    return median_time(fn, repeats, calls_lasting(fn))
 
 
 def sample_sets(bn, nodes: list[str], n: int, seed: int) -> dict[str, np.ndarray]:

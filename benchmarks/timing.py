@@ -31,6 +31,19 @@ from glu.run.speed import SCHEMA, fmt  # the page is written from these files by
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
+def calls_lasting(fn: Callable[[], object], seconds: float = 0.2) -> int:
+    """How many calls of ``fn`` last at least ``seconds`` together (1, 10, 100, … then doubling)."""
+    number = 1
+    while True:
+        t0 = time.perf_counter()
+        for _ in range(number):
+            fn()
+        t = time.perf_counter() - t0
+        if t >= seconds:
+            return number
+        number *= 2 if t > seconds / 10 else 10
+
+
 def median_time(fn: Callable[[], object], repeats: int, number: int = 1) -> float:
     """Median over ``repeats`` of the mean time of ``number`` calls of ``fn``, in seconds."""
     times = []

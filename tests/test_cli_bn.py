@@ -9,18 +9,12 @@ import sys
 import numpy as np
 import pytest
 import scipy.io as sio
+from cli_run import run
 from test_model_io import write_bnt_mat
 
 from glu.bn import InferenceEngine
-from glu.cli import main
 
 SPHERE = ["--target", "ObjVel", "--evidence", "Action=tap", "Shape=sphere", "Size=small"]
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    status = main(list(argv))
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def test_query_json_prints_exactly_the_posterior(source, zero_bn, capsys):

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_run import train_recogniser
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -210,25 +211,7 @@ def files(tmp_path_factory, synthetic_folder):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert main(["bn", "learn", "--data", str(synthetic_folder), "-o", str(model)]) == 0
-        assert (
-            main(
-                [
-                    "hmm",
-                    "train",
-                    "--synthetic",
-                    "3",
-                    "--states",
-                    "3",
-                    "--mix",
-                    "1",
-                    "--iter",
-                    "5",
-                    "-o",
-                    str(recogniser),
-                ]
-            )
-            == 0
-        )
+        train_recogniser(recogniser, states=3, n_iter=5)
     log = base / "tap.log"
     log.write_bytes((synthetic_folder / "gestures" / "tap1_hand" / "data.log").read_bytes())
     return {"model": model, "recogniser": recogniser, "log": log, "data": synthetic_folder}

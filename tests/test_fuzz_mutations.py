@@ -42,6 +42,7 @@ from pathlib import Path
 from unittest import mock
 
 import pytest
+from cli_run import train_recogniser
 from conftest import SHARED
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -286,25 +287,7 @@ def assets(tmp_path_factory, synthetic_folder) -> dict[str, Path]:
     root = tmp_path_factory.mktemp("fuzz-assets")
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         assert main(["bn", "learn", "--data", str(synthetic_folder), "-o", str(root / "model.json")]) == 0
-        assert (
-            main(
-                [
-                    "hmm",
-                    "train",
-                    "--synthetic",
-                    "3",
-                    "--states",
-                    "2",
-                    "--mix",
-                    "1",
-                    "--iter",
-                    "3",
-                    "-o",
-                    str(root / "recogniser.json"),
-                ]
-            )
-            == 0
-        )
+        train_recogniser(root / "recogniser.json")
     log = next((synthetic_folder / "gestures").glob("*/data.log"))
     (root / "hand.log").write_text("".join(log.read_text().splitlines(keepends=True)[:60]))
     (root / "candidates.txt").write_text("the robot taps the ball\nthe robot is tapping the sphere\n")

@@ -6,20 +6,11 @@ import json
 
 import numpy as np
 import pytest
+from cli_run import run
 
-from glu.cli import main
 from glu.gestures.corpus import synthetic_corpus
 from glu.gestures.features import LOG_SCALE
 from glu.gestures.synthetic import synthesize_recording
-
-
-def run(capsys, *argv):
-    try:
-        status = main(list(argv))
-    except SystemExit as e:  # argparse usage errors exit from parse_args
-        status = e.code
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def _write_log(path, xyz, t):

@@ -338,6 +338,20 @@ def test_batch_raises_on_impossible_rows_by_default(zero_bn):
     assert np.isfinite(out["Action"][0]).all() and np.isnan(out["Action"][1]).all()
 
 
+@pytest.mark.parametrize("method", ["core", "junction"])
+def test_bad_batch_soft_evidence_is_one_clear_error_on_both_engines(zero_bn, method):
+    eng = InferenceEngine(zero_bn, method=method)
+    shapes = {"Shape": ["sphere", "box"]}
+    with pytest.raises(UnknownNodeError, match=r"unknown node 'Colour'"):
+        eng.query_batch(["ObjVel"], shapes, soft={"Colour": np.full((2, 2), 0.5)})
+    with pytest.raises(EvidenceError, match="given twice"):
+        eng.query_batch(["ObjVel"], shapes, soft={"Shape": np.full((2, 2), 0.5)})
+    with pytest.raises(EvidenceError, match=r"must have shape \(n=2, n_values\)"):
+        eng.query_batch(["ObjVel"], shapes, soft={"Action": np.full((2, 3, 1), 1 / 3)})
+    with pytest.raises(EvidenceError, match="not a distribution"):
+        eng.query_batch(["ObjVel"], shapes, soft={"Action": np.array([[0.5, 0.5, 0.0], [-0.1, 1.1, 0.0]])})
+
+
 # ---------------------------------------------------------------- errors
 def test_errors_are_clear_value_errors(zero_bn):
     eng = InferenceEngine(zero_bn)

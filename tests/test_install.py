@@ -152,9 +152,8 @@ def _run(cmd, **kw):
     return subprocess.run(cmd, capture_output=True, text=True, check=False, **kw)
 
 
-@pytest.mark.slow
-def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
-    """Build the wheel, install it with its notebooks extra in a new venv, run glu from an empty folder."""
+def _install_wheel(tmp_path: Path, extra: str) -> tuple[Path, Path]:
+    """Build the wheel and install it with ``extra`` in a new venv under ``tmp_path``: (python, glu)."""
     dist = tmp_path / "dist"
     r = _run([sys.executable, "-m", "build", "--wheel", "--outdir", str(dist), str(ROOT)])
     assert r.returncode == 0, r.stderr[-2000:]
@@ -162,8 +161,27 @@ def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
     venv = tmp_path / "venv"
     assert _run([sys.executable, "-m", "venv", str(venv)]).returncode == 0
     py, glu = venv / "bin" / "python", venv / "bin" / "glu"
-    r = _run([str(py), "-m", "pip", "install", "--quiet", f"{wheel}[notebooks]"])
+    r = _run([str(py), "-m", "pip", "install", "--quiet", f"{wheel}[{extra}]"])
     assert r.returncode == 0, r.stderr[-2000:]
+    return py, glu
+
+
+def _fresh_env(tmp_path: Path, **extra: str) -> dict[str, str]:
+    """The environment with its own XDG data and cache folders under ``tmp_path`` and no data folder set."""
+    env = {
+        **os.environ,
+        "XDG_DATA_HOME": str(tmp_path / "xdg-data"),
+        "XDG_CACHE_HOME": str(tmp_path / "xdg-cache"),
+        **extra,
+    }
+    env.pop(paths.DATA_ENV_VAR, None)
+    return env
+
+
+@pytest.mark.slow
+def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
+    """Build the wheel, install it with its notebooks extra in a new venv, run glu from an empty folder."""
+    py, glu = _install_wheel(tmp_path, "notebooks")
     site = Path(
         _run(
             [str(py), "-c", "import glu, pathlib; print(pathlib.Path(glu.__file__).parent.parent)"]
@@ -178,15 +196,7 @@ def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
     before = snapshot()
     empty = tmp_path / "empty"
     empty.mkdir()
-    env = {
-        **os.environ,
-        "XDG_DATA_HOME": str(tmp_path / "xdg-data"),
-        "XDG_CACHE_HOME": str(tmp_path / "xdg-cache"),
-        "RERUN_ANALYTICS": "0",
-        "MPLBACKEND": "Agg",
-        "PYTHONDONTWRITEBYTECODE": "1",
-    }
-    env.pop(paths.DATA_ENV_VAR, None)
+    env = _fresh_env(tmp_path, RERUN_ANALYTICS="0", MPLBACKEND="Agg", PYTHONDONTWRITEBYTECODE="1")
     for cmd in (
         ["data", "info"],
         ["query", "--target", "ObjVel", "--evidence", "Action=tap"],
@@ -209,21 +219,8 @@ def test_the_wheel_in_a_fresh_venv_runs_from_an_empty_folder(tmp_path):
 def test_corpus_and_evaluate_run_in_the_base_and_dask_installs(tmp_path):
     """The wheel with [dask] only (no notebooks, no test tools) in a fresh venv: `glu corpus` and a small
     `glu evaluate` run to the end (they once ended in "internal error … pyarrow")."""
-    dist = tmp_path / "dist"
-    r = _run([sys.executable, "-m", "build", "--wheel", "--outdir", str(dist), str(ROOT)])
-    assert r.returncode == 0, r.stderr[-2000:]
-    (wheel,) = dist.glob("glu-*.whl")
-    venv = tmp_path / "venv"
-    assert _run([sys.executable, "-m", "venv", str(venv)]).returncode == 0
-    py, glu = venv / "bin" / "python", venv / "bin" / "glu"
-    r = _run([str(py), "-m", "pip", "install", "--quiet", f"{wheel}[dask]"])
-    assert r.returncode == 0, r.stderr[-2000:]
-    env = {
-        **os.environ,
-        "XDG_DATA_HOME": str(tmp_path / "xdg-data"),
-        "XDG_CACHE_HOME": str(tmp_path / "xdg-c"),
-    }
-    env.pop(paths.DATA_ENV_VAR, None)
+    _, glu = _install_wheel(tmp_path, "dask")
+    env = _fresh_env(tmp_path)
     work = tmp_path / "work"
     work.mkdir()
     r = _run(

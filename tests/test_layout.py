@@ -54,14 +54,15 @@ def component(module: str) -> str:
     return best
 
 
-def imported_modules(path: Path, name: str) -> list[tuple[int, str]]:
-    """(line, module) for every import of a glu module in a file, including imports inside functions."""
+def glu_imports(path: Path, name: str) -> list[tuple[int, str, tuple[str, ...] | None]]:
+    """(line, module, names) for every import of a glu module in a file, including imports inside functions:
+    names None for ``import glu.x``, else the names of ``from glu.x import …`` (relative imports resolved)."""
     tree = ast.parse(path.read_text(), filename=str(path))
     is_package = path.name == "__init__.py"
-    out = []
+    out: list[tuple[int, str, tuple[str, ...] | None]] = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            out += [(node.lineno, a.name) for a in node.names if a.name.split(".")[0] == "glu"]
+            out += [(node.lineno, a.name, None) for a in node.names if a.name.split(".")[0] == "glu"]
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = name.split(".")
@@ -69,11 +70,20 @@ def imported_modules(path: Path, name: str) -> list[tuple[int, str]]:
                 mod = ".".join(base + ([node.module] if node.module else []))
             else:
                 mod = node.module or ""
-            if mod.split(".")[0] != "glu":
-                continue
-            for a in node.names:  # `from glu import plots` imports the module glu.plots
-                sub = f"{mod}.{a.name}"
-                out.append((node.lineno, sub if component(sub) != component(mod) else mod))
+            if mod.split(".")[0] == "glu":
+                out.append((node.lineno, mod, tuple(a.name for a in node.names)))
+    return out
+
+
+def imported_modules(path: Path, name: str) -> list[tuple[int, str]]:
+    """(line, module) for every import of a glu module in a file, including imports inside functions."""
+    out = []
+    for line, mod, names in glu_imports(path, name):
+        if names is None:
+            out.append((line, mod))
+        for a in names or ():  # `from glu import plots` imports the module glu.plots
+            sub = f"{mod}.{a}"
+            out.append((line, sub if component(sub) != component(mod) else mod))
     return out
 
 
@@ -122,28 +132,18 @@ def module_imports(path: Path, name: str, known: set[str]) -> set[str]:
     """The glu modules a file imports, at any depth of the file (functions included), each resolved to the
     module file it loads: ``from glu.hmm import em`` is ``glu.hmm.em``, ``from glu.hmm import train`` is
     the package face ``glu.hmm``."""
-    tree = ast.parse(path.read_text(), filename=str(path))
-    is_package = path.name == "__init__.py"
-    out = set()
 
     def nearest(mod: str) -> str | None:
         while mod and mod not in known:
             mod = mod.rpartition(".")[0]
         return mod or None
 
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            out |= {nearest(a.name) for a in node.names if a.name.split(".")[0] == "glu"}
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = name.split(".")
-                base = base[: len(base) - node.level + (1 if is_package else 0)]
-                mod = ".".join(base + ([node.module] if node.module else []))
-            else:
-                mod = node.module or ""
-            if mod.split(".")[0] != "glu":
-                continue
-            out |= {f"{mod}.{a.name}" if f"{mod}.{a.name}" in known else nearest(mod) for a in node.names}
+    out = set()
+    for _, mod, names in glu_imports(path, name):
+        if names is None:
+            out.add(nearest(mod))
+        for a in names or ():
+            out.add(f"{mod}.{a}" if f"{mod}.{a}" in known else nearest(mod))
     return {m for m in out if m and m != name}
 
 

@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from cli_run import run
 
 from glu.cli import main
 from glu.gestures.features import LOG_SCALE
@@ -15,15 +16,6 @@ from glu.gestures.recognizer import Recognizer
 from glu.gestures.synthetic import synthesize_recording
 
 SMALL = ["--states", "3", "--mix", "1", "--iter", "8"]
-
-
-def run(capsys, *argv):
-    try:
-        status = main(list(argv))
-    except SystemExit as e:  # argparse usage errors exit from parse_args
-        status = e.code
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def assert_one_line_error(status, err, *fragments):

@@ -15,11 +15,11 @@ import warnings
 import numpy as np
 import pytest
 import scipy.io as sio
+from cli_run import run
 from test_hmm import mat_params, ref_forward
 
 from glu.bn import InferenceEngine, learn_bn
 from glu.bn.model import encode
-from glu.cli import main
 from glu.data.fetch import manifest, sha256_of
 from glu.data.recordings import ORIGINAL_SEGMENTS, TRAINING_RECORDINGS
 from glu.errors import ImpossibleEvidenceError
@@ -49,12 +49,6 @@ LOG_LINES = {  # lines in each real log (wc -l), an independent count
     "touch1_hand": 819,
 }
 HMM_ORDER = {"grasp": 3, "tap": 1, "touch": 4, "garbage": 0}  # hmm{k} of the .mat files (docs/method.md §4.4)
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    status = main(list(argv))
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def _files_schema_and_grammar(shared_data, real_source):

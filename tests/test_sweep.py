@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from cli_run import run
 
-from glu.cli import main
 from glu.errors import DataError
 from glu.sweep import config_from_dict, load_config, run_sweep
 
@@ -58,15 +58,6 @@ TABLES = (
 
 def quiet(_msg: str) -> None:
     pass
-
-
-def run(capsys, *argv):
-    try:
-        status = main(list(argv))
-    except SystemExit as e:
-        status = e.code
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 @pytest.fixture(scope="module")

@@ -13,9 +13,8 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from glu.bn.soft import SUM_TOL, SoftRule, check_soft_rule
-from glu.errors import EvidenceError, ImpossibleEvidenceError, UnknownNodeError
-from glu.schema import unknown_node_message
+from glu.bn.soft import SoftRule, check_soft_rule
+from glu.errors import EvidenceError
 
 if TYPE_CHECKING:  # pragma: no cover
     from glu.bn.model import BayesNet
@@ -58,24 +57,9 @@ class BatchQueries:
         evidence = dict(evidence or {})
         soft = dict(soft or {})
         n = _batch_length(evidence, soft)
-        for t in targets:
-            if t not in self._value_index:
-                raise UnknownNodeError(unknown_node_message(t, self.nodes))
+        targets = self._targets(targets)
         codes = {node: self._codes(node, vals, n) for node, vals in evidence.items()}
-        qs = {}
-        for node, arr in soft.items():
-            if node in codes:
-                raise EvidenceError(f"{node} is given twice: as hard evidence and as soft evidence")
-            arr = np.asarray(arr, dtype=float)
-            if arr.ndim != 2 or arr.shape[0] != n:
-                raise EvidenceError(f"batch soft evidence on {node} must have shape (n={n}, n_values)")
-            for row in arr[: min(n, 1)]:
-                self.soft_vector(node, row)
-            sums = arr.sum(axis=1)
-            if (arr < 0).any() or not np.all(np.abs(sums - 1) <= SUM_TOL):
-                bad = int(np.flatnonzero((np.abs(sums - 1) > SUM_TOL) | (arr < 0).any(axis=1))[0])
-                self.soft_vector(node, arr[bad])
-            qs[node] = arr / sums[:, None]
+        qs = {node: self._batch_soft(node, arr, n, codes) for node, arr in soft.items()}
         check_soft_rule(soft_rule)
         out = {t: np.full((n, self.bn.schema.cardinality(t)), np.nan) for t in targets}
         # rows with the same pattern of observed nodes share one reduced table
@@ -90,12 +74,7 @@ class BatchQueries:
         if errors == "raise":
             bad = np.flatnonzero(np.isnan(out[targets[0]][:, 0])) if targets else []
             if len(bad):
-                i = int(bad[0])
-                ev = {node: self.bn.schema.values_of(node)[c[i]] for node, c in codes.items() if c[i] >= 0}
-                raise ImpossibleEvidenceError(
-                    f"row {i}: {self._impossible(ev, {s: None for s in qs})}"
-                    + (f" ({len(bad)} impossible rows in all)" if len(bad) > 1 else "")
-                )
+                raise self._impossible_row(int(bad[0]), codes, list(qs), len(bad))
         return out
 
     def _batch_pattern(

@@ -208,6 +208,30 @@ class InferenceEngine:
                 out[i] = self._value(node, v)
         return out
 
+    def _targets(self, targets: Sequence[str] | str) -> list[str]:
+        """The target nodes as a list, each checked to be a node of the network."""
+        targets = [targets] if isinstance(targets, str) else list(targets)
+        for t in targets:
+            self._check_node(t)
+        return targets
+
+    def _batch_soft(self, node: str, arr: np.ndarray, n: int, evidence: Mapping[str, Sequence]) -> np.ndarray:
+        """Batch soft evidence on ``node`` checked (shape (n, n_values), every row a distribution, the node not
+        also in the hard ``evidence``) and normalised to sum 1 per row."""
+        self._check_node(node)
+        if node in evidence:
+            raise EvidenceError(f"{node} is given twice: as hard evidence and as soft evidence")
+        arr = np.asarray(arr, dtype=float)
+        if arr.ndim != 2 or arr.shape[0] != n:
+            raise EvidenceError(f"batch soft evidence on {node} must have shape (n={n}, n_values)")
+        for row in arr[: min(n, 1)]:
+            self.soft_vector(node, row)
+        sums = arr.sum(axis=1)
+        if (arr < 0).any() or not np.all(np.abs(sums - 1) <= SUM_TOL):
+            bad = int(np.flatnonzero((np.abs(sums - 1) > SUM_TOL) | (arr < 0).any(axis=1))[0])
+            self.soft_vector(node, arr[bad])
+        return arr / sums[:, None]
+
     def soft_vector(self, node: str, dist: Mapping[str, float] | Sequence[float] | np.ndarray) -> np.ndarray:
         """Validate soft evidence on ``node`` and return it as a vector over the node's values, shape (k,)."""
         self._check_node(node)
@@ -271,6 +295,22 @@ class InferenceEngine:
             )
         return ImpossibleEvidenceError(
             f"impossible evidence: {self._describe(evidence, soft)} has probability 0 under the model{hint}"
+        )
+
+    def _impossible_row(
+        self,
+        i: int,
+        codes: Mapping[str, np.ndarray],
+        soft: Sequence[str],
+        n_bad: int,
+        hard_possible: bool = False,
+    ) -> ImpossibleEvidenceError:
+        """The error for row ``i`` of a batch (node → value codes, -1 = not observed; the soft nodes), the
+        first of ``n_bad`` impossible rows."""
+        ev = {node: self.bn.schema.values_of(node)[c[i]] for node, c in codes.items() if c[i] >= 0}
+        return ImpossibleEvidenceError(
+            f"row {i}: {self._impossible(ev, dict.fromkeys(soft), hard_possible)}"
+            + (f" ({n_bad} impossible rows in all)" if n_bad > 1 else "")
         )
 
     # ------------------------------------------------------------------ numeric results (each engine)

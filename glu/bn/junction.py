@@ -408,12 +408,6 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine, method="junction"):
                 qs[self.index[node]] = q[None, :]
         return hard, qs
 
-    def _targets(self, targets: Sequence[str] | str) -> list[str]:
-        targets = [targets] if isinstance(targets, str) else list(targets)
-        for t in targets:
-            self._check_node(t)
-        return targets
-
     def query(
         self,
         targets: Sequence[str] | str,
@@ -429,18 +423,6 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine, method="junction"):
         if not possible[0]:
             raise self._impossible(evidence, soft, bool(hard_possible[0]))
         return {t: np.array(out[self.index[t]][0]) for t in targets}
-
-    def word_probability_array(
-        self,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> np.ndarray:
-        """P(word = present | evidence) for every binary leaf, shape (n_words,), in ``binary_leaves`` order."""
-        if not self.binary_leaves:
-            return np.zeros(0)
-        res = self.query(list(self.binary_leaves), evidence, soft, soft_rule)
-        return np.array([res[w][1] for w in self.binary_leaves])
 
     def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
         """P(hard evidence) under the model (0 for impossible evidence)."""

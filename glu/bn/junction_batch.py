@@ -16,8 +16,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from glu.bn.batch import _batch_length
-from glu.bn.soft import SUM_TOL, SoftRule, check_soft_rule
-from glu.errors import EvidenceError, ImpossibleEvidenceError
+from glu.bn.soft import SoftRule, check_soft_rule
 
 if TYPE_CHECKING:  # pragma: no cover
     from glu.bn.propagation import QueryPlan
@@ -133,21 +132,8 @@ class JunctionBatch:
         n = _batch_length(evidence, soft)
         check_soft_rule(soft_rule)
         hard = {self.index[node]: self._codes(node, vals, n) for node, vals in evidence.items()}
-        qs = {}
-        for node, arr in soft.items():
-            self._check_node(node)
-            if node in evidence:
-                raise EvidenceError(f"{node} is given twice: as hard evidence and as soft evidence")
-            arr = np.asarray(arr, dtype=float)
-            if arr.ndim != 2 or arr.shape[0] != n:
-                raise EvidenceError(f"batch soft evidence on {node} must have shape (n={n}, n_values)")
-            for row in arr[: min(n, 1)]:
-                self.soft_vector(node, row)
-            sums = arr.sum(axis=1)
-            if (arr < 0).any() or not np.all(np.abs(sums - 1) <= SUM_TOL):
-                bad = int(np.flatnonzero((np.abs(sums - 1) > SUM_TOL) | (arr < 0).any(axis=1))[0])
-                self.soft_vector(node, arr[bad])
-            qs[self.index[node]] = arr / sums[:, None]
+        checked = {node: self._batch_soft(node, arr, n, evidence) for node, arr in soft.items()}
+        qs = {self.index[node]: q for node, q in checked.items()}
         want = frozenset(self.index[t] for t in targets)
         out = {t: np.full((n, self.cards[self.index[t]]), np.nan) for t in targets}
         possible = np.ones(n, dtype=bool)
@@ -163,20 +149,8 @@ class JunctionBatch:
             for t in targets:
                 out[t][rows] = res[self.index[t]]
             possible[rows], hard_possible[rows] = ok, hp
-        n_bad = int((~possible).sum())
-        first_bad = None
-        if n_bad:
+        if errors == "raise" and not possible.all():
             k = int(np.flatnonzero(~possible)[0])
-            first_bad = (k, bool(hard_possible[k]))
-        if errors == "raise" and first_bad is not None:
-            i, hp = first_bad
-            ev = {
-                node: self.bn.schema.values_of(node)[c[i]]
-                for node, c in zip(evidence, hard.values(), strict=True)
-                if c[i] >= 0
-            }
-            raise ImpossibleEvidenceError(
-                f"row {i}: {self._impossible(ev, {s: None for s in soft}, hp)}"
-                + (f" ({n_bad} impossible rows in all)" if n_bad > 1 else "")
-            )
+            codes = {node: hard[self.index[node]] for node in evidence}
+            raise self._impossible_row(k, codes, list(soft), int((~possible).sum()), bool(hard_possible[k]))
         return out

@@ -439,3 +439,19 @@ def add_cluster_args(p: argparse.ArgumentParser, unit: str) -> None:
     p.add_argument(
         "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: one per core)"
     )
+
+
+def add_hmm_size_args(p: argparse.ArgumentParser) -> None:
+    """``--states``, ``--mix`` and ``--iter`` of the gesture HMMs, defaults from :class:`~glu.hmm.TrainingConfig`."""
+    from glu.hmm import TrainingConfig
+
+    d = TrainingConfig()
+    p.add_argument(
+        "--states", type=positive_int, default=d.n_states, help=f"Q, states per HMM (default {d.n_states})"
+    )
+    p.add_argument(
+        "--mix", type=positive_int, default=d.n_mix, help=f"M, Gaussians per state (default {d.n_mix})"
+    )
+    p.add_argument(
+        "--iter", type=positive_int, default=d.n_iter, help=f"most EM iterations (default {d.n_iter})"
+    )

@@ -14,6 +14,7 @@ from typing import Any
 
 from glu.cli.common import (
     add_data_option,
+    add_hmm_size_args,
     add_json_option,
     json_text,
     nonneg_float,
@@ -110,16 +111,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=None,
         help=f"comma-separated (default: {','.join(ACTIONS)}; with --recordings: every label found)",
     )
+    add_hmm_size_args(t)
     d = TrainingConfig()
-    t.add_argument(
-        "--states", type=positive_int, default=d.n_states, help=f"Q, states per HMM (default {d.n_states})"
-    )
-    t.add_argument(
-        "--mix", type=positive_int, default=d.n_mix, help=f"M, Gaussians per state (default {d.n_mix})"
-    )
-    t.add_argument(
-        "--iter", type=positive_int, default=d.n_iter, help=f"most EM iterations (default {d.n_iter})"
-    )
     t.add_argument(
         "--tol", type=positive_float, default=d.tol, help=f"EM tolerance per frame (default {d.tol:g})"
     )

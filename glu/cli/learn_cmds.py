@@ -16,6 +16,7 @@ from glu.cli.common import (
     add_cluster_args,
     add_data_option,
     add_deprecated_alias,
+    add_hmm_size_args,
     nonneg_float,
     output_file,
     output_folder,
@@ -49,7 +50,6 @@ def _seeds(text: str) -> tuple[int, ...]:
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``learn-gestures`` and ``learning-curves`` commands."""
     from glu.experiments.self_supervised import AMBIGUITIES, LEARNERS
-    from glu.hmm import TrainingConfig
 
     ambiguity_help = "; ".join(f"{k}: {a.description}" for k, a in AMBIGUITIES.items()).replace("%", "%%")
     p = sub.add_parser(
@@ -85,16 +85,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=0.9,
         help="--labels confident: p_BN threshold (default 0.9)",
     )
-    d = TrainingConfig()
-    p.add_argument(
-        "--states", type=positive_int, default=d.n_states, help=f"HMM states (default {d.n_states})"
-    )
-    p.add_argument(
-        "--mix", type=positive_int, default=d.n_mix, help=f"Gaussians per state (default {d.n_mix})"
-    )
-    p.add_argument(
-        "--iter", type=positive_int, default=d.n_iter, help=f"most EM iterations (default {d.n_iter})"
-    )
+    add_hmm_size_args(p)
     p.add_argument(
         "--noise",
         type=nonneg_float,

@@ -42,9 +42,9 @@ Shapes: ``S`` sequences, ``T`` frames (padded), ``Q`` states, ``M`` Gaussians pe
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -351,12 +351,26 @@ def fit_weighted(
     w = sequence_weights(sequences, weights)
     if not np.any(w > 0):
         raise ValueError("weighted EM needs at least one sequence of positive weight")
+    options = {"covar_reg": covar_reg, "covariance": covariance, "covar_floor": covar_floor}
+    return iterate(lambda p: expected_stats(sequences, p, w), init, n_iter, tol, **options)
+
+
+def iterate(
+    estep: Callable[[GMMHMMParams], SufficientStats],
+    init: GMMHMMParams,
+    n_iter: int,
+    tol: float,
+    **mstep: Any,
+) -> FitResult:
+    """The EM loop of :func:`fit_weighted`: ``estep`` (the model → its expected statistics) and
+    :func:`maximise` (with the options ``mstep``) from ``init``, at most ``n_iter`` times, until an
+    iteration gains less than ``tol``."""
     params = GMMHMMParams(*(np.array(a, dtype=float) for a in init))
     history: list[float] = []
     for _ in range(n_iter):
-        stats = expected_stats(sequences, params, w)
+        stats = estep(params)
         history.append(float(stats.loglik))
-        params = maximise(stats, params, covar_reg, covariance, covar_floor)
+        params = maximise(stats, params, **mstep)
         if len(history) >= 2 and history[-1] - history[-2] < tol:
             break
     return FitResult(params, np.array(history))

@@ -89,14 +89,7 @@ def plot_accuracy_vs_viewpoint(
     ax.set_ylim(0, 1.02)
     ax.set_title(f"trained on {'the robot' if train == 'robot' else 'one human view'}", fontsize=9)
     if legend:
-        ax.legend(
-            fontsize=8,
-            frameon=False,
-            title="features",
-            title_fontsize=8,
-            loc="upper left",
-            bbox_to_anchor=(1.01, 1.0),
-        )
+        _features_legend(ax)
     return ax
 
 
@@ -132,14 +125,7 @@ def plot_accuracy_by_condition(
     ax.set_ylabel("accuracy (95 % interval)")
     ax.set_ylim(0, 1.05)
     if legend:
-        ax.legend(
-            fontsize=8,
-            frameon=False,
-            title="features",
-            title_fontsize=8,
-            loc="upper left",
-            bbox_to_anchor=(1.01, 1.0),
-        )
+        _features_legend(ax)
     return ax
 
 
@@ -224,3 +210,15 @@ def plot_two_views(axes: Sequence[Axes], curves: pd.DataFrame, action: str) -> S
     axes[0].set_ylabel(rf"$p_{{HMM}}({action} \mid G_1^t)$")
     axes[-1].legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return axes
+
+
+def _features_legend(ax: Axes) -> None:
+    """The legend of the feature sets, right of the axes."""
+    ax.legend(
+        fontsize=8,
+        frameon=False,
+        title="features",
+        title_fontsize=8,
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+    )

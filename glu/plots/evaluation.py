@@ -20,6 +20,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 
 from glu.experiments.findings import REFERENCE_CELL, cell_label
+from glu.plots.style import RULE_LABELS
 
 STRATEGY_COLORS = {
     "gesture": "#8C8C8C",
@@ -34,10 +35,7 @@ STRATEGY_STYLE = {"true_action": ":", "network": "--", "gesture": "--"}
 STRATEGY_LABELS = {
     "gesture": "gesture (HMMs alone)",
     "network": "network alone",
-    "hard": "hard decision",
-    "virtual": "virtual evidence",
-    "jeffrey": "Jeffrey's rule",
-    "product": "product rule",
+    **RULE_LABELS,
     "true_action": "true action given",
 }
 """How figures name the strategies of :mod:`glu.experiments.corpus` (``jeffrey`` is Jeffrey's rule)."""

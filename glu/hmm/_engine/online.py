@@ -32,7 +32,7 @@ import numpy as np
 
 from glu.hmm._engine.batch import quadratic_features
 from glu.hmm._engine.kernels import compiled, forward_backward_scaled
-from glu.hmm.em import FitResult, GMMHMMParams, SufficientStats, maximise, sequence_weights
+from glu.hmm.em import FitResult, GMMHMMParams, SufficientStats, iterate, sequence_weights
 from glu.hmm.inference import TINY, _logsumexp, forward_backward_log, gaussian_factors
 
 
@@ -247,15 +247,8 @@ def fit_weighted_fast(
     prep = _prepare(sequences, weights)
     if prep is None:
         raise ValueError("weighted EM needs at least one sequence of positive weight")
-    params = GMMHMMParams(*(np.array(a, dtype=float) for a in init))
-    history: list[float] = []
-    for _ in range(n_iter):
-        stats = _estep(prep, params)
-        history.append(float(stats.loglik))
-        params = maximise(stats, params, covar_reg, covariance, covar_floor)
-        if len(history) >= 2 and history[-1] - history[-2] < tol:
-            break
-    return FitResult(params, np.array(history))
+    options = {"covar_reg": covar_reg, "covariance": covariance, "covar_floor": covar_floor}
+    return iterate(lambda p: _estep(prep, p), init, n_iter, tol, **options)
 
 
 def _pairs(D: int) -> list[tuple[int, int]]:
