@@ -15,6 +15,7 @@ import traceback
 from collections.abc import Sequence
 
 from glu import __version__
+from glu.cli.guard import guarded_run
 from glu.errors import GluError, Terminated
 
 COMMAND_MODULES: tuple[str, ...] = (
@@ -63,6 +64,11 @@ def _terminate(signum: int, frame: object) -> None:
     raise Terminated()
 
 
+def _os_error_text(e: OSError) -> str:
+    where = f"{e.filename!r}: " if getattr(e, "filename", None) else ""
+    return f"{where}{e.strerror or e}"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``glu`` console script; returns the exit status.
 
@@ -76,7 +82,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if nul is not None:  # no file name or value can hold one; the OS would refuse it deep inside
         print(f"glu: error: argument {nul!r} contains a NUL byte", file=sys.stderr)
         return EXIT_BAD_INPUT
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except OSError as e:  # a path the system refuses to look at (too long, a symlink loop)
+        print(f"glu: error: {_os_error_text(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     sub = getattr(args, f"{args.command}_command", None)
     name = f"glu {args.command}" + (f" {sub}" if sub else "")
     debug = getattr(args, "debug", False) or os.environ.get(DEBUG_ENV, "") not in ("", "0")
@@ -86,7 +96,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError:  # not the main thread (a test calling main() from a thread): keep the default
         pass
     try:
-        status = args.func(args)
+        with guarded_run(args):
+            status = args.func(args)
     except GluError as e:
         print(f"{name}: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -99,8 +110,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:
         return 0
     except OSError as e:
-        where = f" {e.filename!r}" if getattr(e, "filename", None) else ""
-        print(f"{name}: error:{where} {e.strerror or e}", file=sys.stderr)
+        print(f"{name}: error: {_os_error_text(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as e:  # a bug: one line, the traceback on request
         if debug:

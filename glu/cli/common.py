@@ -18,6 +18,7 @@ from typing import Any
 from glu.data.source import SYNTHETIC_KEYWORD, WORD_FILES
 from glu.errors import EvidenceError, MissingDependencyError
 from glu.evidence import check_disjoint, parse_evidence, parse_soft
+from glu.files import is_special, is_stdout
 from glu.paths import HERE
 
 DATA_HELP = (
@@ -84,10 +85,25 @@ def _writable_folder(folder: Path) -> str | None:
     return None
 
 
+def special_output_problem(text: str) -> str | None:
+    """For ``-`` and an existing device, FIFO or socket (written through by :mod:`glu.files`): '' when it
+    can be written, else why not; None for any other path."""
+    if is_stdout(text):
+        return ""
+    if not is_special(text):
+        return None
+    return "" if os.access(text, os.W_OK) else f"cannot write {text}: permission denied"
+
+
 def output_file(text: str) -> Path:
     """-o FILE: a file path whose folder can be written (checked before any work, not after it)."""
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a file name, not an empty string")
+    problem = special_output_problem(text)
+    if problem is not None:
+        if problem:
+            raise argparse.ArgumentTypeError(problem)
+        return Path(text)
     path = Path(text)
     if path.is_dir() or text.endswith(("/", os.sep)):
         raise argparse.ArgumentTypeError(f"{text} is a folder; give a file name")
@@ -104,6 +120,8 @@ IMAGE_SUFFIXES = (".png", ".svg", ".pdf", ".jpg", ".jpeg", ".eps", ".tif", ".tif
 def output_image(text: str) -> Path:
     """--plot FILE: an image file (by its suffix) whose folder can be written."""
     path = output_file(text)
+    if is_stdout(text):
+        raise argparse.ArgumentTypeError("an image is not written to standard output; give a file name")
     if path.suffix.lower() not in IMAGE_SUFFIXES:
         raise argparse.ArgumentTypeError(f"{text}: an image is {', '.join(IMAGE_SUFFIXES)}")
     return path
@@ -113,6 +131,10 @@ def output_folder(text: str) -> Path:
     """-o DIR: a folder that exists or can be made, and can be written."""
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a folder name, not an empty string")
+    if is_stdout(text) or is_special(text):
+        raise argparse.ArgumentTypeError(
+            f"{text} is not a folder: this command writes several files; give a folder"
+        )
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a file; give a folder")

@@ -102,6 +102,9 @@ def _engine_class() -> type:
             started = nb_man.cell_start
 
             def cell_start(cell, cell_index=None, **k):  # type: ignore[no-untyped-def]
+                if handle.stopped:  # a stop that came between two cells: no further cell runs
+                    handle.stop()
+                    raise NotebookStopped("stopped")
                 handle._cell_started(cell_index, n_cells)
                 return started(cell, cell_index, **k)
 
@@ -120,7 +123,11 @@ def _engine_class() -> type:
             }
             if self.handle.cwd is not None:
                 kwargs.setdefault("cwd", self.handle.cwd)
-            return await super().async_start_new_kernel(env=env, **kwargs)
+            started = await super().async_start_new_kernel(env=env, **kwargs)
+            if self.handle.stopped:  # stopped while the kernel was being launched, before its pid was known
+                self.handle.stop()
+                raise NotebookStopped("stopped while its kernel started")
+            return started
 
         start_new_kernel = run_sync(async_start_new_kernel)  # the sync name is bound to the base method
 

@@ -38,6 +38,7 @@ from glu.errors import GluError
 from glu.machine import available_cores
 from glu.paths import OutputLayout
 from glu.run.execution import NotebookStopped, RunHandle, load_papermill, run_notebook
+from glu.run.lock import run_lock
 from glu.run.manifest import ManifestError, check_outputs, read_manifest, written_outputs
 from glu.run.outputs import parameters_text
 from glu.run.parameters import check, non_defaults, parse_value, read_spec
@@ -190,6 +191,18 @@ def reproduce(
     data: str | os.PathLike | None = None,
     quick: bool = False,
     out: str | os.PathLike | None = None,
+    **kwargs: Any,
+) -> dict[str, Any]:
+    """:func:`_reproduce` holding the lock of the output folder (:func:`glu.run.lock.run_lock`): a second
+    run on the same project or ``--out`` folder is refused in one line naming the first's process id."""
+    with run_lock(OutputLayout.at(out).root):
+        return _reproduce(data, quick, out, **kwargs)
+
+
+def _reproduce(
+    data: str | os.PathLike | None = None,
+    quick: bool = False,
+    out: str | os.PathLike | None = None,
     jobs: int = 1,
     only: Sequence[str] | None = None,
     seed: int = 0,
@@ -304,6 +317,8 @@ def reproduce(
                 done, pending = wait(pending, timeout=0.25, return_when=FIRST_COMPLETED)
                 bar.tick()
                 for f in done:
+                    if f.cancelled():  # not started: cancelled when another notebook failed
+                        continue
                     try:
                         r = f.result()
                     except NotebookStopped:
