@@ -47,6 +47,7 @@ True
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from collections.abc import Mapping, Sequence
@@ -229,67 +230,209 @@ def export_bn(
 
 
 # ------------------------------------------------------------------ readers
+MAX_DECLARED = 1 << 24
+"""The largest table (entries) or number of values a file may declare: checked before anything of that
+size is allocated, so a file declaring 10⁹ values is refused in one line instead of exhausting memory."""
+
+
+def check_declared(n: int, what: str, where: str) -> int:
+    """``n`` when it is at most :data:`MAX_DECLARED`; else :class:`ModelError` naming ``what`` and the size."""
+    if n > MAX_DECLARED:
+        raise ModelError(f"{where}: {what} declares {n:,} entries; glu reads at most {MAX_DECLARED:,}")
+    return n
+
+
+_BIF_TOKEN = re.compile(r"\s+|//[^\n]*|/\*|[{}()\[\];,|]|(?:[^\s{}()\[\];,|/]|/(?![/*]))+")
+
+
+def _bif_tokens(text: str, where: str) -> list[str]:
+    """BIF's tokens in one pass: words and numbers, punctuation; comments and white space dropped."""
+    tokens, pos, n, match = [], 0, len(text), _BIF_TOKEN.match
+    while pos < n:
+        m = match(text, pos)
+        tok = m.group()  # the pattern matches any character: a lone "/" is a word
+        if tok == "/*":
+            end = text.find("*/", pos + 2)
+            if end < 0:
+                raise ModelError(f"{where}: a /* comment is never closed")
+            pos = end + 2
+            continue
+        pos = m.end()
+        if not (tok[0].isspace() or tok.startswith("//")):
+            tokens.append(tok)
+    return tokens
+
+
+class _BifReader:
+    """A cursor over BIF tokens; every step moves forward, so reading is linear in the file."""
+
+    def __init__(self, tokens: list[str], where: str):
+        self.tokens, self.i, self.where = tokens, 0, where
+
+    def next(self, what: str) -> str:
+        if self.i >= len(self.tokens):
+            raise ModelError(f"{self.where}: the file ends early (expected {what})")
+        self.i += 1
+        return self.tokens[self.i - 1]
+
+    def peek(self) -> str | None:
+        return self.tokens[self.i] if self.i < len(self.tokens) else None
+
+    def expect(self, tok: str, context: str) -> None:
+        got = self.next(repr(tok))
+        if got != tok:
+            raise ModelError(f"{self.where}: {context}: expected {tok!r}, found {got!r}")
+
+    def until(self, stop: str, what: str) -> list[str]:
+        """The tokens up to ``stop`` (consumed), commas dropped."""
+        out = []
+        while True:
+            tok = self.next(f"{what} ending with {stop!r}")
+            if tok == stop:
+                return out
+            if tok != ",":
+                out.append(tok)
+
+    def skip_block(self, context: str) -> None:
+        self.expect("{", context)
+        depth = 1
+        while depth:
+            tok = self.next("'}'")
+            depth += {"{": 1, "}": -1}.get(tok, 0)
+
+
+def _numbers(tokens: list[str], context: str, where: str) -> list[float]:
+    try:
+        return [float(t) for t in tokens]
+    except ValueError as e:
+        raise ModelError(f"{where}: {context}: malformed number ({e})") from None
+
+
 def from_bif(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
-    """A model from BIF text (variables, then probability blocks with ``table`` or one line per configuration)."""
-    body = re.sub(r"//[^\n]*|/\*.*?\*/", " ", text, flags=re.S)
+    """A model from BIF text (variables, then probability blocks with ``table``, ``default`` or one line per
+    configuration), read in one pass over its tokens (linear in the file's length)."""
+    r = _BifReader(_bif_tokens(text, where), where)
     values: dict[str, tuple[str, ...]] = {}
-    for m in re.finditer(r"variable\s+([^\s{]+)\s*\{(.*?)\}\s*(?=variable|probability|$)", body, flags=re.S):
-        name, block = m.group(1), m.group(2)
-        t = re.search(r"type\s+discrete\s*\[\s*(\d+)\s*\]\s*\{([^}]*)\}", block, flags=re.S)
-        if t is None:
-            raise ModelError(f"{where}: variable {name!r} is not 'type discrete [ n ] {{ values }}'")
-        vals = tuple(v.strip() for v in t.group(2).replace("\n", " ").split(",") if v.strip())
-        if len(vals) != int(t.group(1)):
-            raise ModelError(f"{where}: variable {name!r} declares {t.group(1)} values but lists {len(vals)}")
-        if name in values:
-            raise ModelError(f"{where}: variable {name!r} is declared twice")
-        values[name] = vals
+    index: dict[str, dict[str, int]] = {}
     parents: dict[str, tuple[str, ...]] = {}
     cpts: dict[str, np.ndarray] = {}
-    for m in re.finditer(r"probability\s*\(([^)]*)\)\s*\{(.*?)\}", body, flags=re.S):
-        head, block = m.group(1), m.group(2)
-        child, _, given = head.partition("|")
-        child = child.strip()
-        ps = tuple(p.strip() for p in given.replace(",", " ").split() if p.strip())
-        for n in (child, *ps):
-            if n not in values:
-                raise ModelError(f"{where}: probability of {child!r} names an undeclared variable {n!r}")
-        shape = tuple(len(values[p]) for p in ps) + (len(values[child]),)
-        cpt = np.full(shape, np.nan)
-        tab = re.search(r"table\s+([^;]*);", block)
-        try:
-            if tab is not None:
-                cpt = np.array([float(x) for x in tab.group(1).replace(",", " ").split()])
-                cpt = _table(cpt, shape, child, where, order="parents-slowest")
-            for row in re.finditer(r"\(([^)]*)\)\s*([^;]*);", block):
-                idx = tuple(
-                    _value_index(values[p], v.strip(), p, where)
-                    for p, v in zip(ps, row.group(1).split(","), strict=True)
-                )
-                cpt[idx] = [float(x) for x in row.group(2).replace(",", " ").split()]
-        except (ValueError, TypeError) as e:
-            raise ModelError(
-                f"{where}: probability of {child!r}: malformed numbers or configuration ({e})"
-            ) from None
-        if child in cpts:
-            raise ModelError(f"{where}: two probability blocks for {child!r}")
-        parents[child], cpts[child] = ps, cpt
+    while r.peek() is not None:
+        kw = r.next("a block")
+        if kw == "network":
+            r.next("the network's name")
+            r.skip_block("network")
+        elif kw == "variable":
+            name = r.next("a variable name")
+            vals = _bif_variable(r, name)
+            if name in values:
+                raise ModelError(f"{where}: variable {name!r} is declared twice")
+            values[name] = vals
+            index[name] = {v: k for k, v in enumerate(vals)}
+        elif kw == "probability":
+            child, ps, cpt = _bif_probability(r, values, index)
+            if child in cpts:
+                raise ModelError(f"{where}: two probability blocks for {child!r}")
+            parents[child], cpts[child] = ps, cpt
+        else:
+            raise ModelError(f"{where}: expected 'network', 'variable' or 'probability', found {kw!r}")
     return assemble(
         values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (BIF)"}, renormalise
     )
 
 
-def _value_index(vals: Sequence[str], v: str, node: str, where: str) -> int:
+def _bif_variable(r: _BifReader, name: str) -> tuple[str, ...]:
+    where, context = r.where, f"variable {name!r}"
+    r.expect("{", context)
+    vals: tuple[str, ...] | None = None
+    while (tok := r.next("'}'")) != "}":
+        if tok == "type":
+            bad = ModelError(f"{where}: variable {name!r} is not 'type discrete [ n ] {{ values }}'")
+            if r.next("discrete") != "discrete" or r.next("[") != "[":
+                raise bad
+            n = r.next("the number of values")
+            if not n.isdigit() or r.next("]") != "]" or r.next("{") != "{":
+                raise bad
+            check_declared(int(n), context, where)
+            vals = tuple(r.until("}", "the values"))
+            if len(vals) != int(n):
+                raise ModelError(f"{where}: variable {name!r} declares {n} values but lists {len(vals)}")
+            if r.peek() == ";":
+                r.next(";")
+        elif tok == "property":
+            r.until(";", "a property")
+        else:
+            raise ModelError(f"{where}: {context}: expected 'type' or 'property', found {tok!r}")
+    if vals is None:
+        raise ModelError(f"{where}: variable {name!r} is not 'type discrete [ n ] {{ values }}'")
+    return vals
+
+
+def _bif_probability(
+    r: _BifReader, values: Mapping[str, tuple[str, ...]], index: Mapping[str, Mapping[str, int]]
+) -> tuple[str, tuple[str, ...], np.ndarray]:
+    where = r.where
+    r.expect("(", "probability")
+    head = r.until(")", "the probability's variables")
+    if not head or (len(head) > 1 and head[1] != "|") or "|" in head[2:]:
+        raise ModelError(f"{where}: malformed 'probability ( {' '.join(head)} )'")
+    child, ps = head[0], tuple(head[2:])
+    for n in (child, *ps):
+        if n not in values:
+            raise ModelError(f"{where}: probability of {child!r} names an undeclared variable {n!r}")
+    shape = tuple(len(values[p]) for p in ps) + (len(values[child]),)
+    check_declared(math.prod(shape), f"the table of {child!r}", where)
+    cpt = np.full(shape, np.nan)
+    context = f"probability of {child!r}"
+    r.expect("{", context)
+    while (tok := r.next("'}'")) != "}":
+        if tok == "table":
+            cpt = _table(
+                np.array(_numbers(r.until(";", "a table"), context, where)),
+                shape,
+                child,
+                where,
+                "parents-slowest",
+            )
+        elif tok == "default":
+            row = _numbers(r.until(";", "a default row"), context, where)
+            if len(row) != shape[-1]:
+                raise ModelError(f"{where}: {context}: a row has {len(row)} numbers, expected {shape[-1]}")
+            cpt[np.isnan(cpt).all(axis=-1)] = row
+        elif tok == "(":
+            config = r.until(")", "a configuration")
+            if len(config) != len(ps):
+                raise ModelError(
+                    f"{where}: {context}: the configuration ({', '.join(config)}) names {len(config)} value(s) "
+                    f"for {len(ps)} parent(s)"
+                )
+            idx = tuple(
+                _value_index(index[p], values[p], v, p, where) for p, v in zip(ps, config, strict=True)
+            )
+            row = _numbers(r.until(";", "a row"), context, where)
+            if len(row) != shape[-1]:
+                raise ModelError(f"{where}: {context}: a row has {len(row)} numbers, expected {shape[-1]}")
+            cpt[idx] = row
+        elif tok == "property":
+            r.until(";", "a property")
+        else:
+            raise ModelError(
+                f"{where}: {context}: expected 'table', 'default', '(' or 'property', found {tok!r}"
+            )
+    return child, ps, cpt
+
+
+def _value_index(index: Mapping[str, int], vals: Sequence[str], v: str, node: str, where: str) -> int:
     try:
-        return vals.index(v)
-    except ValueError:
-        raise ModelError(f"{where}: {node!r} has no value {v!r}; values: {', '.join(vals)}") from None
+        return index[v]
+    except KeyError:
+        shown = ", ".join(vals[:20]) + (", …" if len(vals) > 20 else "")
+        raise ModelError(f"{where}: {node!r} has no value {v!r}; values: {shown}") from None
 
 
 def _table(flat: np.ndarray, shape: tuple[int, ...], node: str, where: str, order: str) -> np.ndarray:
-    if flat.size != int(np.prod(shape)):
+    if flat.size != math.prod(shape):
         raise ModelError(
-            f"{where}: the table of {node!r} has {flat.size} numbers, expected {int(np.prod(shape))}"
+            f"{where}: the table of {node!r} has {flat.size} numbers, expected {math.prod(shape):,}"
         )
     if order == "parents-slowest":  # BIF's `table`: the child's values vary slowest (pgmpy, bnlearn)
         return np.moveaxis(flat.reshape((shape[-1], *shape[:-1])), 0, -1)
@@ -350,7 +493,10 @@ def from_uai(text: str, where: str = "<string>", renormalise: float | None = Non
         raise ModelError(f"{where}: not a UAI Bayesian network (the first word must be BAYES)")
     pos = 1
     n = take("the number of variables")
-    cards = [take("a cardinality") for _ in range(n)]
+    if n > len(tokens):  # each variable needs its cardinality in the file
+        raise ModelError(f"{where}: declares {n:,} variables but the file has {len(tokens):,} numbers")
+    cards = [check_declared(take("a cardinality"), "a variable's cardinality", where) for _ in range(n)]
+    check_declared(sum(cards), "the variables' values", where)
     n_fun = take("the number of functions")
     if n_fun != n or n < 1 or min(cards, default=0) < 1:
         raise ModelError(
@@ -359,6 +505,8 @@ def from_uai(text: str, where: str = "<string>", renormalise: float | None = Non
     scopes = []
     for _ in range(n_fun):
         k = take("a scope size")
+        if k > len(tokens) - pos:
+            raise ModelError(f"{where}: a scope of {k:,} variables is longer than the rest of the file")
         scopes.append([take("a variable index") for _ in range(k)])
     names = [f"var_{i}" for i in range(n)]
     values = {names[i]: tuple(str(v) for v in range(cards[i])) for i in range(n)}
@@ -368,6 +516,11 @@ def from_uai(text: str, where: str = "<string>", renormalise: float | None = Non
             raise ModelError(f"{where}: a scope names variables outside 0 … {n - 1}: {scope}")
         child = names[scope[-1]]
         size = take(f"the table size of {child}")
+        expected = check_declared(math.prod(cards[i] for i in scope), f"the table of {child!r}", where)
+        if size != expected:
+            raise ModelError(
+                f"{where}: the table of {child!r} declares {size:,} numbers, expected {expected:,}"
+            )
         if pos + size > len(tokens):
             raise ModelError(f"{where}: the table of {child!r} is cut short")
         try:

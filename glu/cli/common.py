@@ -87,9 +87,16 @@ def _writable_folder(folder: Path) -> str | None:
 
 def special_output_problem(text: str) -> str | None:
     """For ``-`` and an existing device, FIFO or socket (written through by :mod:`glu.files`): '' when it
-    can be written, else why not; None for any other path."""
+    can be written, else why not; for a path the system cannot resolve (a loop of symbolic links, too
+    long), why not; None for any other path."""
     if is_stdout(text):
         return ""
+    try:
+        os.stat(text)
+    except FileNotFoundError:
+        pass
+    except OSError as e:
+        return f"cannot write {text}: {e.strerror}"
     if not is_special(text):
         return None
     return "" if os.access(text, os.W_OK) else f"cannot write {text}: permission denied"

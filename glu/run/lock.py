@@ -37,7 +37,21 @@ def _holder(fd: int) -> str:
 def run_lock(root: str | os.PathLike) -> Iterator[Path]:
     """Hold the reproduce lock of ``root`` for the block; :class:`RunLockedError` if another run holds it."""
     root = Path(root)
+    made = [p for p in (root, *root.parents) if not p.exists()]  # removed again if the run leaves them empty
     root.mkdir(parents=True, exist_ok=True)
+    try:
+        with _locked(root) as lock:
+            yield lock
+    finally:
+        for folder in made:
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+
+
+@contextmanager
+def _locked(root: Path) -> Iterator[Path]:
     lock = root / LOCK_FILE
     while True:
         fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
