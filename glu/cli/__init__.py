@@ -64,6 +64,18 @@ def _terminate(signum: int, frame: object) -> None:
     raise Terminated()
 
 
+def _interrupt_inside(e: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM an exception wraps: numba's dispatcher turns a signal raised while compiled
+    code runs into ``SystemError: CPUDispatcher(…) returned a result with an exception set``."""
+    seen = set()
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return e
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return None
+
+
 def _os_error_text(e: OSError) -> str:
     where = f"{e.filename!r}: " if getattr(e, "filename", None) else ""
     return f"{where}{e.strerror or e}"
@@ -113,6 +125,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{name}: error: {_os_error_text(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as e:  # a bug: one line, the traceback on request
+        stop = _interrupt_inside(e)
+        if stop is not None:  # an interrupt that compiled code (numba) wrapped in a SystemError
+            print(
+                f"{name}: {'terminated' if isinstance(stop, Terminated) else 'interrupted'}", file=sys.stderr
+            )
+            return 143 if isinstance(stop, Terminated) else 130
         if debug:
             traceback.print_exc()
         print(

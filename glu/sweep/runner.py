@@ -38,15 +38,17 @@ The output folder::
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
 import os
 import re
 import shutil
+import signal
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -330,7 +332,72 @@ def _check_reachable(address: str, timeout: float = 10.0) -> None:
         raise DataError(f"cannot reach the Dask scheduler at {address}: {e.strerror or e}") from None
 
 
+def _same(obj: Any) -> Any:
+    return obj
+
+
+class WorkerLostError(GluError):
+    """A Dask worker died during the sweep (killed, out of memory); the finished chunks are kept."""
+
+
+LOST_WORKER_ERRORS = frozenset(
+    {"KilledWorker", "CommClosedError", "StreamClosedError", "FutureCancelledError"}
+)
+"""What dask.distributed raises for a task whose worker went away."""
+
+
+def _worker_lost(e: BaseException) -> bool:
+    return type(e).__name__ in LOST_WORKER_ERRORS
+
+
+def _kill_workers(cluster: Any) -> None:
+    """SIGKILL the worker processes of a LocalCluster (None: nothing), so that closing it is quick and
+    silent: a worker told to stop in the middle of a chunk prints tracebacks of its own."""
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        pid = getattr(nanny, "pid", None)
+        if pid:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+
+
+@contextlib.contextmanager
+def _ctrl_c_held() -> Iterator[None]:
+    """Block SIGINT in this thread for the block: the threads and worker processes started in it inherit
+    the blocked signal, so a Ctrl-C at the terminal (sent to the whole process group) reaches this process
+    only, and the workers print no traceback of their own; a Ctrl-C that came during the block is
+    delivered when it ends (the cluster is then closed as on any interrupt)."""
+    try:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    except (AttributeError, ValueError, OSError):  # no POSIX signal masks here
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
+    with _quiet_dask_logs():  # glu says what went wrong in one line; the cluster's own logs stay out of it
+        return _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar)
+
+
+@contextlib.contextmanager
+def _quiet_dask_logs() -> Iterator[None]:
+    """dask.distributed's log handlers silent for the block, closing the cluster included (its own
+    ``silence_logs`` ends before: a stop then printed the closing connections' tracebacks)."""
+    handlers = [h for h in logging.getLogger("distributed").handlers if isinstance(h, logging.StreamHandler)]
+    levels = [h.level for h in handlers]
+    for h in handlers:
+        h.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for h, level in zip(handlers, levels, strict=True):
+            h.setLevel(level)
+
+
+def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
@@ -347,26 +414,33 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
             from glu.machine import available_cores
 
             n = workers or available_cores()
-            cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=":0",
-                silence_logs=logging.ERROR,
-            )
-            client = Client(cluster)
+            with (
+                _ctrl_c_held()
+            ):  # the workers and the cluster's threads never see Ctrl-C: the parent stops them
+                cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=":0",
+                    silence_logs=logging.CRITICAL,
+                )
+                client = Client(cluster)
         else:
             try:
                 client = Client(scheduler, timeout="30s")
             except (OSError, TimeoutError) as e:
                 raise DataError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
-    except BaseException:
+    except BaseException as e:
         if cluster is not None:
+            if isinstance(e, KeyboardInterrupt):
+                _kill_workers(cluster)
             cluster.close()
         raise
     try:
         cpu = 0.0
-        shared = client.scatter(evaluator, broadcast=True)
+        # a task, not scattered data: a worker that dies takes its copy with it, and the cluster recomputes
+        # a task's result where scattered data would be lost for good (the sweep then waited forever)
+        shared = client.submit(_same, evaluator, pure=False, key=f"glu-evaluator-{fingerprint[:8]}")
         futures = [
             client.submit(
                 compute_chunk,
@@ -385,12 +459,21 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
             except Exception as e:
                 for f in futures:
                     f.cancel()
+                if _worker_lost(e):
+                    raise WorkerLostError(
+                        f"a Dask worker was lost (its process died or was killed) while computing a chunk "
+                        f"({type(e).__name__}); the chunks finished so far are saved in {out}: run the same "
+                        "command again to resume from them"
+                    ) from None
                 raise RuntimeError(
                     f"a sweep task failed on the cluster ({type(e).__name__}: {e}); "
                     "do the workers have glu installed, in the same version?"
                 ) from e
             cpu += _save(out, fingerprint, result, bar)
         return cpu
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers are killed, not asked to finish (nor to talk)
+        _kill_workers(cluster)
+        raise
     finally:
         client.close()
         if cluster is not None:
