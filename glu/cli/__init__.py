@@ -88,6 +88,32 @@ def main(argv: Sequence[str] | None = None) -> int:
     leave nothing half-written). Anything else is a bug: one line asking for a report, status 1, and the
     traceback with ``--debug`` or ``GLU_DEBUG=1``.
     """
+    previous = None
+    try:  # first: a SIGTERM while the parser is built (imports) ends as any other, 143 and one line
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:  # not the main thread (a test calling main() from a thread): keep the default
+        pass
+    try:
+        return _main(argv)
+    except KeyboardInterrupt as e:  # before the command started: building the parser, reading arguments
+        return _stopped("glu", e)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _stopped(name: str, e: KeyboardInterrupt) -> int:
+    """The one line of a stop, and its status; what the interrupted libraries leave to be collected
+    (an event loop of a killed kernel's client, …) is then dropped silently at exit, not reported."""
+    sys.unraisablehook = lambda unraisable: None
+    if isinstance(e, Terminated):
+        print(f"{name}: terminated", file=sys.stderr)
+        return 143
+    print(f"{name}: interrupted", file=sys.stderr)
+    return 130
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     nul = next((a for a in argv if "\x00" in a), None)
@@ -102,23 +128,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     sub = getattr(args, f"{args.command}_command", None)
     name = f"glu {args.command}" + (f" {sub}" if sub else "")
     debug = getattr(args, "debug", False) or os.environ.get(DEBUG_ENV, "") not in ("", "0")
-    previous = None
-    try:
-        previous = signal.signal(signal.SIGTERM, _terminate)
-    except ValueError:  # not the main thread (a test calling main() from a thread): keep the default
-        pass
     try:
         with guarded_run(args):
             status = args.func(args)
     except GluError as e:
         print(f"{name}: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except Terminated:
-        print(f"{name}: terminated", file=sys.stderr)
-        return 143
-    except KeyboardInterrupt:
-        print(f"{name}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as e:  # Ctrl-C, or SIGTERM (Terminated)
+        return _stopped(name, e)
     except BrokenPipeError:
         return 0
     except OSError as e:
@@ -127,10 +144,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as e:  # a bug: one line, the traceback on request
         stop = _interrupt_inside(e)
         if stop is not None:  # an interrupt that compiled code (numba) wrapped in a SystemError
-            print(
-                f"{name}: {'terminated' if isinstance(stop, Terminated) else 'interrupted'}", file=sys.stderr
-            )
-            return 143 if isinstance(stop, Terminated) else 130
+            return _stopped(name, stop)
         if debug:
             traceback.print_exc()
         print(
@@ -139,9 +153,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
     return int(status or 0)
 
 
