@@ -141,6 +141,12 @@ def _main(argv: Sequence[str] | None) -> int:
     except OSError as e:
         print(f"{name}: error: {_os_error_text(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except RecursionError:  # JSON or YAML nested deeper than Python reads (a model, a schema, a query line)
+        print(
+            f"{name}: error: an input file is nested too deeply to read; is it the right file?",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     except Exception as e:  # a bug: one line, the traceback on request
         stop = _interrupt_inside(e)
         if stop is not None:  # an interrupt that compiled code (numba) wrapped in a SystemError

@@ -337,6 +337,10 @@ def _batch_line(bn, engine, line: str, i: int, default_rule: str) -> dict[str, A
     except EvidenceError as e:
         raise EvidenceError(f"line {i}: {e}") from None
     rule = q.get("soft_rule", default_rule)
+    from glu.bn.soft import SOFT_RULES
+
+    if rule not in SOFT_RULES:
+        raise EvidenceError(f"line {i}: unknown soft_rule {rule!r}; allowed: {', '.join(SOFT_RULES)}")
     try:
         return _answer(bn, engine, targets, evidence, soft, rule)
     except GluError as e:

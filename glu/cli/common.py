@@ -327,6 +327,8 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
     if model is not None:
         if getattr(args, "data", None):
             raise EvidenceError("give either --model or --data, not both")
+        if getattr(args, "schema", None) or getattr(args, "experiments", None):
+            raise EvidenceError("give either --model or --schema/--experiments, not both")
         bn = read_model_file(model)
         r = bn.meta.get("renormalised")
         rescaled = f"; {r['rows']} CPT row(s) rescaled to sum to 1 on import" if r else ""

@@ -248,6 +248,10 @@ def _segment(args: argparse.Namespace) -> int:
     from glu.gestures.segmentation import segment_recording
     from glu.gestures.trajectories import summarize_events
 
+    if args.label is not None and args.label not in ACTIONS:
+        raise DataError(
+            f"--label {args.label!r}: not an action of the recordings; allowed: {', '.join(ACTIONS)}"
+        )
     path, source = _resolve_log(args.log, args.data)
     if source is not None:
         print(f"data: {source.describe()}")
