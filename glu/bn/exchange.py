@@ -50,13 +50,14 @@ from __future__ import annotations
 import math
 import os
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
 import numpy as np
 
+from glu.bn.bif import check_declared, read_bif, table_from_flat
 from glu.bn.model import BayesNet
 from glu.bn.rows import normalise_rows
 from glu.errors import ModelError
@@ -230,213 +231,13 @@ def export_bn(
 
 
 # ------------------------------------------------------------------ readers
-MAX_DECLARED = 1 << 24
-"""The largest table (entries) or number of values a file may declare: checked before anything of that
-size is allocated, so a file declaring 10⁹ values is refused in one line instead of exhausting memory."""
-
-
-def check_declared(n: int, what: str, where: str) -> int:
-    """``n`` when it is at most :data:`MAX_DECLARED`; else :class:`ModelError` naming ``what`` and the size."""
-    if n > MAX_DECLARED:
-        raise ModelError(f"{where}: {what} declares {n:,} entries; glu reads at most {MAX_DECLARED:,}")
-    return n
-
-
-_BIF_TOKEN = re.compile(r"\s+|//[^\n]*|/\*|[{}()\[\];,|]|(?:[^\s{}()\[\];,|/]|/(?![/*]))+")
-
-
-def _bif_tokens(text: str, where: str) -> list[str]:
-    """BIF's tokens in one pass: words and numbers, punctuation; comments and white space dropped."""
-    tokens, pos, n, match = [], 0, len(text), _BIF_TOKEN.match
-    while pos < n:
-        m = match(text, pos)
-        tok = m.group()  # the pattern matches any character: a lone "/" is a word
-        if tok == "/*":
-            end = text.find("*/", pos + 2)
-            if end < 0:
-                raise ModelError(f"{where}: a /* comment is never closed")
-            pos = end + 2
-            continue
-        pos = m.end()
-        if not (tok[0].isspace() or tok.startswith("//")):
-            tokens.append(tok)
-    return tokens
-
-
-class _BifReader:
-    """A cursor over BIF tokens; every step moves forward, so reading is linear in the file."""
-
-    def __init__(self, tokens: list[str], where: str):
-        self.tokens, self.i, self.where = tokens, 0, where
-
-    def next(self, what: str) -> str:
-        if self.i >= len(self.tokens):
-            raise ModelError(f"{self.where}: the file ends early (expected {what})")
-        self.i += 1
-        return self.tokens[self.i - 1]
-
-    def peek(self) -> str | None:
-        return self.tokens[self.i] if self.i < len(self.tokens) else None
-
-    def expect(self, tok: str, context: str) -> None:
-        got = self.next(repr(tok))
-        if got != tok:
-            raise ModelError(f"{self.where}: {context}: expected {tok!r}, found {got!r}")
-
-    def until(self, stop: str, what: str) -> list[str]:
-        """The tokens up to ``stop`` (consumed), commas dropped."""
-        out = []
-        while True:
-            tok = self.next(f"{what} ending with {stop!r}")
-            if tok == stop:
-                return out
-            if tok != ",":
-                out.append(tok)
-
-    def skip_block(self, context: str) -> None:
-        self.expect("{", context)
-        depth = 1
-        while depth:
-            tok = self.next("'}'")
-            depth += {"{": 1, "}": -1}.get(tok, 0)
-
-
-def _numbers(tokens: list[str], context: str, where: str) -> list[float]:
-    try:
-        return [float(t) for t in tokens]
-    except ValueError as e:
-        raise ModelError(f"{where}: {context}: malformed number ({e})") from None
-
-
 def from_bif(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
     """A model from BIF text (variables, then probability blocks with ``table``, ``default`` or one line per
-    configuration), read in one pass over its tokens (linear in the file's length)."""
-    r = _BifReader(_bif_tokens(text, where), where)
-    values: dict[str, tuple[str, ...]] = {}
-    index: dict[str, dict[str, int]] = {}
-    parents: dict[str, tuple[str, ...]] = {}
-    cpts: dict[str, np.ndarray] = {}
-    while r.peek() is not None:
-        kw = r.next("a block")
-        if kw == "network":
-            r.next("the network's name")
-            r.skip_block("network")
-        elif kw == "variable":
-            name = r.next("a variable name")
-            vals = _bif_variable(r, name)
-            if name in values:
-                raise ModelError(f"{where}: variable {name!r} is declared twice")
-            values[name] = vals
-            index[name] = {v: k for k, v in enumerate(vals)}
-        elif kw == "probability":
-            child, ps, cpt = _bif_probability(r, values, index)
-            if child in cpts:
-                raise ModelError(f"{where}: two probability blocks for {child!r}")
-            parents[child], cpts[child] = ps, cpt
-        else:
-            raise ModelError(f"{where}: expected 'network', 'variable' or 'probability', found {kw!r}")
+    configuration), read in one pass over its tokens (:func:`glu.bn.bif.read_bif`: linear in its length)."""
+    values, parents, cpts = read_bif(text, where)
     return assemble(
         values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (BIF)"}, renormalise
     )
-
-
-def _bif_variable(r: _BifReader, name: str) -> tuple[str, ...]:
-    where, context = r.where, f"variable {name!r}"
-    r.expect("{", context)
-    vals: tuple[str, ...] | None = None
-    while (tok := r.next("'}'")) != "}":
-        if tok == "type":
-            bad = ModelError(f"{where}: variable {name!r} is not 'type discrete [ n ] {{ values }}'")
-            if r.next("discrete") != "discrete" or r.next("[") != "[":
-                raise bad
-            n = r.next("the number of values")
-            if not n.isdigit() or r.next("]") != "]" or r.next("{") != "{":
-                raise bad
-            check_declared(int(n), context, where)
-            vals = tuple(r.until("}", "the values"))
-            if len(vals) != int(n):
-                raise ModelError(f"{where}: variable {name!r} declares {n} values but lists {len(vals)}")
-            if r.peek() == ";":
-                r.next(";")
-        elif tok == "property":
-            r.until(";", "a property")
-        else:
-            raise ModelError(f"{where}: {context}: expected 'type' or 'property', found {tok!r}")
-    if vals is None:
-        raise ModelError(f"{where}: variable {name!r} is not 'type discrete [ n ] {{ values }}'")
-    return vals
-
-
-def _bif_probability(
-    r: _BifReader, values: Mapping[str, tuple[str, ...]], index: Mapping[str, Mapping[str, int]]
-) -> tuple[str, tuple[str, ...], np.ndarray]:
-    where = r.where
-    r.expect("(", "probability")
-    head = r.until(")", "the probability's variables")
-    if not head or (len(head) > 1 and head[1] != "|") or "|" in head[2:]:
-        raise ModelError(f"{where}: malformed 'probability ( {' '.join(head)} )'")
-    child, ps = head[0], tuple(head[2:])
-    for n in (child, *ps):
-        if n not in values:
-            raise ModelError(f"{where}: probability of {child!r} names an undeclared variable {n!r}")
-    shape = tuple(len(values[p]) for p in ps) + (len(values[child]),)
-    check_declared(math.prod(shape), f"the table of {child!r}", where)
-    cpt = np.full(shape, np.nan)
-    context = f"probability of {child!r}"
-    r.expect("{", context)
-    while (tok := r.next("'}'")) != "}":
-        if tok == "table":
-            cpt = _table(
-                np.array(_numbers(r.until(";", "a table"), context, where)),
-                shape,
-                child,
-                where,
-                "parents-slowest",
-            )
-        elif tok == "default":
-            row = _numbers(r.until(";", "a default row"), context, where)
-            if len(row) != shape[-1]:
-                raise ModelError(f"{where}: {context}: a row has {len(row)} numbers, expected {shape[-1]}")
-            cpt[np.isnan(cpt).all(axis=-1)] = row
-        elif tok == "(":
-            config = r.until(")", "a configuration")
-            if len(config) != len(ps):
-                raise ModelError(
-                    f"{where}: {context}: the configuration ({', '.join(config)}) names {len(config)} value(s) "
-                    f"for {len(ps)} parent(s)"
-                )
-            idx = tuple(
-                _value_index(index[p], values[p], v, p, where) for p, v in zip(ps, config, strict=True)
-            )
-            row = _numbers(r.until(";", "a row"), context, where)
-            if len(row) != shape[-1]:
-                raise ModelError(f"{where}: {context}: a row has {len(row)} numbers, expected {shape[-1]}")
-            cpt[idx] = row
-        elif tok == "property":
-            r.until(";", "a property")
-        else:
-            raise ModelError(
-                f"{where}: {context}: expected 'table', 'default', '(' or 'property', found {tok!r}"
-            )
-    return child, ps, cpt
-
-
-def _value_index(index: Mapping[str, int], vals: Sequence[str], v: str, node: str, where: str) -> int:
-    try:
-        return index[v]
-    except KeyError:
-        shown = ", ".join(vals[:20]) + (", …" if len(vals) > 20 else "")
-        raise ModelError(f"{where}: {node!r} has no value {v!r}; values: {shown}") from None
-
-
-def _table(flat: np.ndarray, shape: tuple[int, ...], node: str, where: str, order: str) -> np.ndarray:
-    if flat.size != math.prod(shape):
-        raise ModelError(
-            f"{where}: the table of {node!r} has {flat.size} numbers, expected {math.prod(shape):,}"
-        )
-    if order == "parents-slowest":  # BIF's `table`: the child's values vary slowest (pgmpy, bnlearn)
-        return np.moveaxis(flat.reshape((shape[-1], *shape[:-1])), 0, -1)
-    return flat.reshape(shape)
 
 
 def from_xmlbif(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
@@ -468,7 +269,7 @@ def from_xmlbif(text: str, where: str = "<string>", renormalise: float | None = 
             raise ModelError(f"{where}: the table of {child!r} has a malformed number ({e})") from None
         if child in cpts:
             raise ModelError(f"{where}: two definitions of {child!r}")
-        parents[child], cpts[child] = ps, _table(flat, shape, child, where, order="c")
+        parents[child], cpts[child] = ps, table_from_flat(flat, shape, child, where, order="c")
     meta = {"data_source": f"imported from {Path(where).name} (XMLBIF)"}
     return assemble(values, parents, cpts, where, meta, renormalise)
 
@@ -533,7 +334,7 @@ def from_uai(text: str, where: str = "<string>", renormalise: float | None = Non
         shape = tuple(cards[i] for i in scope)
         parents[child], cpts[child] = (
             tuple(names[i] for i in scope[:-1]),
-            _table(flat, shape, child, where, "c"),
+            table_from_flat(flat, shape, child, where, "c"),
         )
     return assemble(
         values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (UAI)"}, renormalise

@@ -38,17 +38,15 @@ The output folder::
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import logging
 import os
 import re
 import shutil
-import signal
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -61,6 +59,7 @@ from glu.errors import DataError, GluError
 from glu.experiments.corpus import Condition
 from glu.experiments.evaluation import Evaluator
 from glu.files import atomic_write_json
+from glu.machine import ctrl_c_held, kill_local_workers, quiet_dask_logs
 from glu.sweep import robots
 from glu.sweep.config import SweepConfig
 from glu.sweep.tables import chunk_path, merge, write_chunk
@@ -350,51 +349,9 @@ def _worker_lost(e: BaseException) -> bool:
     return type(e).__name__ in LOST_WORKER_ERRORS
 
 
-def _kill_workers(cluster: Any) -> None:
-    """SIGKILL the worker processes of a LocalCluster (None: nothing), so that closing it is quick and
-    silent: a worker told to stop in the middle of a chunk prints tracebacks of its own."""
-    for nanny in list(getattr(cluster, "workers", {}).values()):
-        pid = getattr(nanny, "pid", None)
-        if pid:
-            with contextlib.suppress(OSError):
-                os.kill(pid, signal.SIGKILL)
-
-
-@contextlib.contextmanager
-def _ctrl_c_held() -> Iterator[None]:
-    """Block SIGINT in this thread for the block: the threads and worker processes started in it inherit
-    the blocked signal, so a Ctrl-C at the terminal (sent to the whole process group) reaches this process
-    only, and the workers print no traceback of their own; a Ctrl-C that came during the block is
-    delivered when it ends (the cluster is then closed as on any interrupt)."""
-    try:
-        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    except (AttributeError, ValueError, OSError):  # no POSIX signal masks here
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-
-
 def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
-    with _quiet_dask_logs():  # glu says what went wrong in one line; the cluster's own logs stay out of it
+    with quiet_dask_logs():  # glu says what went wrong in one line; the cluster's own logs stay out of it
         return _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar)
-
-
-@contextlib.contextmanager
-def _quiet_dask_logs() -> Iterator[None]:
-    """dask.distributed's log handlers silent for the block, closing the cluster included (its own
-    ``silence_logs`` ends before: a stop then printed the closing connections' tracebacks)."""
-    handlers = [h for h in logging.getLogger("distributed").handlers if isinstance(h, logging.StreamHandler)]
-    levels = [h.level for h in handlers]
-    for h in handlers:
-        h.setLevel(logging.CRITICAL + 1)
-    try:
-        yield
-    finally:
-        for h, level in zip(handlers, levels, strict=True):
-            h.setLevel(level)
 
 
 def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
@@ -414,9 +371,7 @@ def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) 
             from glu.machine import available_cores
 
             n = workers or available_cores()
-            with (
-                _ctrl_c_held()
-            ):  # the workers and the cluster's threads never see Ctrl-C: the parent stops them
+            with ctrl_c_held():  # the workers and the cluster threads never see Ctrl-C: glu stops them
                 cluster = LocalCluster(
                     n_workers=n,
                     threads_per_worker=1,
@@ -433,7 +388,7 @@ def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) 
     except BaseException as e:
         if cluster is not None:
             if isinstance(e, KeyboardInterrupt):
-                _kill_workers(cluster)
+                kill_local_workers(cluster)
             cluster.close()
         raise
     try:
@@ -472,7 +427,7 @@ def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) 
             cpu += _save(out, fingerprint, result, bar)
         return cpu
     except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers are killed, not asked to finish (nor to talk)
-        _kill_workers(cluster)
+        kill_local_workers(cluster)
         raise
     finally:
         client.close()
