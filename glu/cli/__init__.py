@@ -1,7 +1,8 @@
 """The ``glu`` command line: thin wrappers over the package, one module per group of commands.
 
 Bad input (a missing file, an unknown node or value, impossible evidence, …) prints one line on stderr —
-what was wrong, where, what is allowed — and exits with status 2, never with a traceback.
+what was wrong, where, what is allowed — and exits with status 2, never with a traceback; a notebook that
+fails in ``glu reproduce`` or ``glu run`` prints its name, cell and error and exits with status 1.
 """
 
 from __future__ import annotations
@@ -133,7 +134,7 @@ def _main(argv: Sequence[str] | None) -> int:
             status = args.func(args)
     except GluError as e:
         print(f"{name}: error: {e}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return getattr(e, "exit_status", EXIT_BAD_INPUT)  # 2: bad input; 1: a run that failed (a notebook)
     except KeyboardInterrupt as e:  # Ctrl-C, or SIGTERM (Terminated)
         return _stopped(name, e)
     except BrokenPipeError:

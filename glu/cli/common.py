@@ -309,7 +309,14 @@ def read_model_file(path: Path, fmt: str | None = None, renormalise: float | Non
     ``renormalise``: the tolerance of :func:`glu.bn.exchange.import_bn` for rows that do not sum to 1.
     """
     from glu.bn.model import BayesNet
+    from glu.errors import ModelError
 
+    try:
+        path.stat()
+    except FileNotFoundError:
+        pass  # each reader says "no such file" in its own words
+    except OSError as e:  # a loop of symbolic links, a name too long
+        raise ModelError(f"{path}: cannot read the model ({e.strerror})") from None
     suffix = path.suffix.lower()
     if fmt is None and suffix == ".mat":
         return BayesNet.from_bnt_mat(path)

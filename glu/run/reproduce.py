@@ -60,6 +60,12 @@ class NotebookError(GluError):
     """A notebook failed while running, or a notebook name matches none."""
 
 
+class NotebookFailed(NotebookError):
+    """A notebook's cell raised: the run failed (exit status 1, not the 2 of bad input)."""
+
+    exit_status = 1
+
+
 def list_notebooks(only: Sequence[str] | None = None, folder: Path = paths.NOTEBOOKS_DIR) -> list[Path]:
     """The notebooks (jupytext ``NN_name.py`` files) in story order; ``only`` selects by name or number."""
     found = sorted(p for p in folder.glob("[0-9][0-9]_*.py"))
@@ -334,7 +340,7 @@ def _reproduce(
             pool.shutdown(wait=True, cancel_futures=True)
             bar.close()
         if failed is not None:
-            raise NotebookError(
+            raise NotebookFailed(
                 f"{failed.error}; executed copy kept at {failed.executed}; nothing was published: "
                 "the outputs of earlier runs are as they were"
             )
@@ -425,7 +431,7 @@ def run_one(
     try:
         run_notebook(src, executed, params, cwd=src.parent)
     except pm.PapermillExecutionError as e:
-        raise NotebookError(
+        raise NotebookFailed(
             f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; executed copy at {executed}"
         ) from None
     return executed, layout
