@@ -70,6 +70,9 @@ class RunHandle:
         """Kill the notebook's kernel (if it has one yet); the run then ends with :class:`NotebookStopped`."""
         with self._lock:
             self.stopped = True
+            log = getattr(self._client, "log", None)
+            if log is not None:  # its "Kernel died while waiting for execute reply" is the stop itself
+                log.disabled = True
             km = getattr(self._client, "km", None)
             pid = _kernel_pid(km)
         if pid is not None:
