@@ -9,6 +9,7 @@ the package.
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
 import os
@@ -93,10 +94,10 @@ def special_output_problem(text: str) -> str | None:
         return ""
     try:
         os.stat(text)
-    except FileNotFoundError:
-        pass
     except OSError as e:
-        return f"cannot write {text}: {e.strerror}"
+        if e.errno in (errno.ELOOP, errno.ENAMETOOLONG):
+            return f"cannot write {text}: {e.strerror}"
+        return None  # missing, or a folder that is a file: the checks of output_file say which
     if not is_special(text):
         return None
     return "" if os.access(text, os.W_OK) else f"cannot write {text}: permission denied"
