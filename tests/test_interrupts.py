@@ -226,3 +226,22 @@ def test_two_runs_at_once_one_of_them_refused(tmp_path):
     ]
     outs = [p.communicate(timeout=60)[0] for p in procs]
     assert sorted(o.split()[0] for o in outs) == ["held", "refused", "refused"], outs
+
+
+@pytest.mark.parametrize(
+    ("stop", "status", "word"), [(KeyboardInterrupt, 130, "interrupted"), (None, 143, "terminated")]
+)
+def test_an_interrupt_wrapped_by_compiled_code_is_still_an_interrupt(monkeypatch, capsys, stop, status, word):
+    """numba's dispatcher turns a signal raised while compiled code runs into a SystemError (hmm train)."""
+    from glu.cli import bn_cmds, main
+    from glu.errors import Terminated
+
+    def handler(args):
+        try:
+            raise (stop or Terminated)()
+        except KeyboardInterrupt:
+            raise SystemError("CPUDispatcher(<function f>) returned a result with an exception set")  # noqa: B904
+
+    monkeypatch.setattr(bn_cmds, "_edges", handler)
+    assert main(["bn", "edges", "model.json"]) == status
+    assert capsys.readouterr().err == f"glu bn edges: {word}\n"

@@ -103,10 +103,17 @@ def main(argv: Sequence[str] | None = None) -> int:
             signal.signal(signal.SIGTERM, previous)
 
 
+def _is_glu_process() -> bool:
+    """Whether this process is the ``glu`` command (the console script, or ``python -m glu``)."""
+    parts = os.path.normpath(sys.argv[0] if sys.argv else "").split(os.sep)
+    return parts[-1] == "glu" or parts[-2:] == ["glu", "__main__.py"]
+
+
 def _stopped(name: str, e: KeyboardInterrupt) -> int:
     """The one line of a stop, and its status; what the interrupted libraries leave to be collected
     (an event loop of a killed kernel's client, …) is then dropped silently at exit, not reported."""
-    sys.unraisablehook = lambda unraisable: None
+    if _is_glu_process():  # the process ends now (not a test calling main())
+        sys.unraisablehook = lambda unraisable: None
     if isinstance(e, Terminated):
         print(f"{name}: terminated", file=sys.stderr)
         return 143
