@@ -220,7 +220,7 @@ def run_notebook(
     out_ipynb.parent.mkdir(parents=True, exist_ok=True)
     nb = jupytext.read(src)
     try:
-        return pm.execute_notebook(
+        executed = pm.execute_notebook(
             nb,
             str(out_ipynb),
             parameters=parameters,
@@ -239,3 +239,6 @@ def run_notebook(
         if handle.stopped:
             raise NotebookStopped(f"{src.stem}: stopped") from None
         raise
+    if handle.stopped:  # its kernel was killed and papermill ended quietly: the notebook did not finish
+        raise NotebookStopped(f"{src.stem}: stopped")
+    return executed
