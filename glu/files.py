@@ -5,6 +5,11 @@ complete (``os.replace`` is atomic on one file system), so an interrupted or fai
 file, or nothing, never a truncated one. The new file gets the permissions a plain ``open(path, "w")``
 would give (``0o666`` minus the process's umask), not the ``0o600`` of a temporary file.
 
+Only a regular file (or a new one) is ever renamed over. An output path that exists and is something else
+— a character or block device such as ``/dev/null``, a FIFO, a socket — is opened and written through once
+the content is complete, as any Unix tool does (so ``-o /dev/null`` discards the output and leaves the
+device a device). The path ``-`` (:data:`STDOUT`) writes the content to standard output.
+
 This module is the one implementation of atomic writes in glu; models, tables, figures and data folders
 all use it.
 """
@@ -14,12 +19,41 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import stat
+import sys
 import tempfile
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
+
+STDOUT = "-"
+"""The output path that means standard output (``-o -``)."""
+
+_stdout: BinaryIO | None = None
+
+
+def set_stdout(stream: BinaryIO | None) -> None:
+    """Where the path ``-`` is written (default: ``sys.stdout.buffer``); the command line gives the real
+    standard output here while it sends its own messages to stderr."""
+    global _stdout
+    _stdout = stream
+
+
+def is_stdout(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is ``-``, standard output."""
+    return os.fspath(path) == STDOUT
+
+
+def is_special(path: str | os.PathLike) -> bool:
+    """Whether ``path`` exists and is neither a regular file nor a folder (a device, a FIFO, a socket),
+    following symbolic links: such a path is written through, never replaced."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
 
 
 def _umask() -> int:
@@ -39,18 +73,39 @@ def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]
 
     The folder is created if needed. On an exception (or ``KeyboardInterrupt``) the temporary file is
     removed and ``path`` is left as it was.
+
+    When ``path`` is a device, FIFO or socket (:func:`is_special`) or ``-`` (:data:`STDOUT`), the
+    temporary file is in the system's temporary folder and its content is written through to ``path`` (to
+    standard output) at the end; nothing is renamed over it.
     """
+    through = is_stdout(path) or is_special(path)
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent)
+    if not through:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=None if through else path.parent)
     os.close(fd)
     tmp = Path(name)
     try:
         yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
+        if through:
+            _write_through(tmp, path)
+        else:
+            os.chmod(tmp, 0o666 & ~_umask())
+            os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def _write_through(complete: Path, path: Path) -> None:
+    """Copy the file ``complete`` into the existing non-regular ``path`` (or standard output)."""
+    with open(complete, "rb") as src:
+        if is_stdout(path):
+            dest = _stdout or sys.stdout.buffer
+            shutil.copyfileobj(src, dest)
+            dest.flush()
+            return
+        with open(path, "wb") as dest:  # a device or FIFO: opened for writing, never truncated or replaced
+            shutil.copyfileobj(src, dest)
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:

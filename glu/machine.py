@@ -3,6 +3,11 @@
 :func:`available_cores` and :func:`thread_env` size the work: ``glu reproduce`` gives each notebook
 kernel its share of the cores for BLAS and OpenMP, the sweeps one thread per Dask worker.
 
+A Dask LocalCluster of this machine is started inside :func:`ctrl_c_held` (its workers never receive the
+terminal's Ctrl-C, so they print no tracebacks of their own: glu stops them), stopped after
+:func:`kill_local_workers` on an interrupt (at once, silently), with :func:`quiet_dask_logs` around the whole
+(glu reports what went wrong in one line).
+
 Interactive extras (the evidence explorer's widgets, the Rerun viewer in a notebook) appear only in a
 live kernel; headless runs (``glu reproduce``, ``glu run``: their kernels have ``GLU_HEADLESS=1``) and
 plain Python show the static form. The tests force either with :func:`is_live`'s ``force`` argument.
@@ -10,7 +15,11 @@ plain Python show the static form. The tests force either with :func:`is_live`'s
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import os
+import signal
+from collections.abc import Iterator
 from typing import Any
 
 HEADLESS_ENV = "GLU_HEADLESS"
@@ -81,3 +90,46 @@ def viewer_class() -> Any:
     except ImportError:
         return None
     return Viewer
+
+
+@contextlib.contextmanager
+def ctrl_c_held() -> Iterator[None]:
+    """Block SIGINT in this thread for the block: the threads and worker processes started in it inherit
+    the blocked signal, so a Ctrl-C at the terminal (sent to the whole process group) reaches this process
+    only; a Ctrl-C that came during the block is delivered when it ends."""
+    try:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    except (AttributeError, ValueError, OSError):  # no POSIX signal masks here
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def kill_local_workers(cluster: Any) -> None:
+    """SIGKILL the worker processes of a Dask LocalCluster (None: nothing), so that closing it after an
+    interrupt is quick and silent: a worker told to stop in the middle of a task prints tracebacks."""
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        pid = getattr(nanny, "pid", None)
+        if pid:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+
+
+@contextlib.contextmanager
+def quiet_dask_logs() -> Iterator[None]:
+    """dask.distributed's log handlers silent for the block, closing the cluster included (the cluster's
+    own ``silence_logs`` ends before: a stop then printed the closing connections' tracebacks)."""
+    with contextlib.suppress(ImportError):  # its import installs the handlers
+        import distributed  # noqa: F401
+    handlers = [h for h in logging.getLogger("distributed").handlers if isinstance(h, logging.StreamHandler)]
+    levels = [h.level for h in handlers]
+    for h in handlers:
+        h.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for h, level in zip(handlers, levels, strict=True):
+            h.setLevel(level)

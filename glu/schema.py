@@ -225,6 +225,11 @@ def schema_from_dict(d: Any, where: str = "schema") -> Schema:
         for alias, v in amap.items():
             if v not in values[node]:
                 raise DataError(f"{where}: alias {alias!r} of {node!r} names an unknown value {v!r}")
+            if alias in values[node] and alias != v:  # would silently relabel every row of that value
+                raise DataError(
+                    f"{where}: alias {alias!r} of {node!r} is itself one of its values; an alias is another "
+                    f"name for a value, not a way to merge {alias!r} into {v!r}"
+                )
     all_values = dict(values)
     all_values.update({w: WORD_VALUES for w in words})
     return Schema(

@@ -133,3 +133,29 @@ def learned_bn(lab_table):
     from glu.bn import learn_bn
 
     return learn_bn(lab_table)
+
+
+# ---------------------------------------------------------------- the machine's /dev/null
+def _dev_null_is_a_device() -> bool:
+    import stat
+
+    try:
+        return stat.S_ISCHR(os.stat("/dev/null").st_mode)
+    except OSError:
+        return False
+
+
+def pytest_sessionstart(session):
+    session.config._dev_null_at_start = _dev_null_is_a_device()
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """Fail the run if ``/dev/null`` was a character device when it started and is not one now (a writer
+    renaming a file over a device, issue 26). When it was already broken, say so without failing."""
+    if _dev_null_is_a_device():
+        return
+    if getattr(session.config, "_dev_null_at_start", True):
+        print("\nERROR: /dev/null is no longer a character device: a test or a glu writer replaced it")
+        session.exitstatus = 1
+    else:
+        print("\nwarning: /dev/null was not a character device when the tests started (replaced before)")

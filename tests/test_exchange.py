@@ -242,7 +242,7 @@ def test_cli_export_and_import(zero_bn, tmp_path, capsys):
         == 0
     )
     assert main(["bn", "import", str(tmp_path / "m.bif"), "-o", str(tmp_path / "m.bif")]) == 2
-    assert "is the input file" in capsys.readouterr().err
+    assert "is also an input" in capsys.readouterr().err
 
 
 BIF = """network x {{ }}

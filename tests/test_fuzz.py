@@ -16,7 +16,10 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import os
 import re
+import socket
+import stat
 import warnings
 from pathlib import Path
 
@@ -27,6 +30,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from glu.cli import build_parser, main
+from glu.schema import GLU_SCHEMA_FILE
 
 PROFILE = settings(
     max_examples=30, deadline=None, derandomize=True, database=None, suppress_health_check=list(HealthCheck)
@@ -214,7 +218,38 @@ def files(tmp_path_factory, synthetic_folder):
         train_recogniser(recogniser, states=3, n_iter=5)
     log = base / "tap.log"
     log.write_bytes((synthetic_folder / "gestures" / "tap1_hand" / "data.log").read_bytes())
-    return {"model": model, "recogniser": recogniser, "log": log, "data": synthetic_folder}
+    loop = base / "loop"
+    loop.symlink_to(loop)
+    return {
+        "model": model,
+        "recogniser": recogniser,
+        "log": log,
+        "data": synthetic_folder,
+        "special": special_file(base),
+        "loop": loop,
+    }
+
+
+def null_device(folder: Path) -> Path | None:
+    """A character device like /dev/null (major 1, minor 3) made in ``folder``; None unless root."""
+    if os.geteuid() != 0:
+        return None
+    dev = folder / "null"
+    os.mknod(dev, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    return dev
+
+
+def special_file(folder: Path) -> Path:
+    """A file that is not a regular file, made in ``folder`` (never a system path): a null device when
+    root, else a Unix socket (opening it fails: a clear error, never a hang as a FIFO without a reader)."""
+    dev = null_device(folder)
+    if dev is not None:
+        return dev
+    path = folder / "sock"
+    s = socket.socket(socket.AF_UNIX)
+    s.bind(str(path))
+    s.close()
+    return path
 
 
 def _check(category: str, argv: list[str], tmp: Path, capsys) -> None:
@@ -268,7 +303,9 @@ def _check(category: str, argv: list[str], tmp: Path, capsys) -> None:
 def _value(kind: str):
     return {
         "number": st.sampled_from(NUMBERS),
-        "path": st.sampled_from(["", "/nonexistent/x/y", "{tmp}", "{tmp}/out/", "{model}", "/dev/null"]),
+        "path": st.sampled_from(
+            ["", "/nonexistent/x/y", "{tmp}", "{tmp}/out/", "{model}", "{special}", "{loop}"]
+        ),
         "choice": st.sampled_from(WORDS),
         "evidence": st.sampled_from(EVIDENCE),
         "soft": st.sampled_from(SOFT),
@@ -524,3 +561,111 @@ def _report():
         print(f"\nfuzz: {summary['total']} inputs, {len(MISBEHAVED)} misbehaved")
         for k, v in summary["inputs"].items():
             print(f"  {v:5d}  {k}")
+
+
+# ---------------------------------------------------------------- devices, FIFOs, symlink loops, inputs as outputs
+def _run(argv: list[str], capsys) -> tuple[int, str, str]:
+    capsys.readouterr()
+    try:
+        status = main([str(a) for a in argv])
+    except SystemExit as e:  # a usage error, from argparse
+        status = e.code
+    out, err = capsys.readouterr()
+    COUNTS["devices and inputs"] += 1
+    return status, out, err
+
+
+def _one_error_line(err: str) -> str:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and ": error: " in lines[0] and "Traceback" not in err, err
+    return lines[0]
+
+
+def test_an_output_device_is_written_through_never_replaced(tmp_path, files, capsys):
+    dev = null_device(tmp_path)
+    if dev is None:
+        pytest.skip("making a character device needs root")
+    for argv in (
+        ["bn", "learn", "--data", files["data"], "-o", dev],
+        ["bn", "export", files["model"], "--format", "bif", "--zero-rows", "seen", "-o", dev],
+    ):
+        status, out, err = _run(argv, capsys)
+        assert status == 0 and f"wrote {dev}" in out, err
+        assert stat.S_ISCHR(os.lstat(dev).st_mode)  # still the device, not a file renamed over it
+        assert list(tmp_path.iterdir()) == [dev]  # no temporary file left beside it
+
+
+def test_an_output_fifo_is_written_through(tmp_path, files, capsys):
+    import threading
+
+    fifo = tmp_path / "pipe.bif"
+    os.mkfifo(fifo)
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()))
+    reader.start()
+    status, _, err = _run(["bn", "export", files["model"], "--zero-rows", "seen", "-o", fifo], capsys)
+    reader.join(timeout=60)
+    assert status == 0, err
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    assert got and got[0].startswith(b"network") and b"variable ObjVel" in got[0]
+
+
+def test_dash_writes_the_file_to_stdout_and_messages_to_stderr(files, capsys):
+    status, out, err = _run(
+        ["bn", "export", files["model"], "--format", "bif", "--zero-rows", "seen", "-o", "-"], capsys
+    )
+    assert status == 0
+    assert out.startswith("network") and "wrote -" not in out and "wrote -" in err
+
+
+def test_a_folder_output_cannot_be_a_device_or_stdout(tmp_path, files, capsys):
+    for target in ("-", files["special"]):
+        status, _, err = _run(["data", "synth", "-o", target], capsys)
+        assert status == 2 and "give a folder" in _one_error_line(err)
+
+
+def test_symlink_loops_and_overlong_paths_are_one_line(tmp_path, files, capsys):
+    long = tmp_path / ("x" * 300) / "m.json"
+    for argv in (
+        ["bn", "edges", files["loop"]],
+        ["bn", "learn", "--data", files["loop"], "-o", tmp_path / "m.json"],
+        ["bn", "learn", "--data", files["data"], "-o", files["loop"]],
+        ["bn", "learn", "--data", files["data"], "-o", long],
+        ["bn", "edges", long],
+    ):
+        status, _, err = _run(argv, capsys)
+        assert status == 2, err
+        _one_error_line(err)
+
+
+@pytest.mark.parametrize("which", ["experiments", "schema", "link", "data-file"])
+def test_an_output_that_is_an_input_is_refused_before_any_work(tmp_path, files, capsys, which):
+    import shutil
+
+    data = tmp_path / "data"
+    shutil.copytree(files["data"], data)
+    schema = tmp_path / "schema.json"
+    schema.write_bytes(GLU_SCHEMA_FILE.read_bytes())
+    table = tmp_path / "experiments.csv"
+    table.write_text("a\n")
+    (tmp_path / "link").symlink_to(table)
+    target = {
+        "experiments": table,
+        "schema": schema,
+        "link": tmp_path / "link",
+        "data-file": data / "affordance-words" / "networkDefinition.txt",
+    }[which]
+    before = target.read_bytes()
+    own = ["--schema", schema, "--experiments", table]
+    argv = ["bn", "learn", *(["--data", data] if which == "data-file" else own), "-o", target]
+    status, _, err = _run(argv, capsys)
+    assert status == 2 and "input" in _one_error_line(err)
+    assert target.read_bytes() == before
+
+
+def test_corpus_refuses_its_config_as_output(tmp_path, capsys):
+    config = tmp_path / "sweep.toml"
+    config.write_text("episodes = 12\n")
+    status, _, err = _run(["corpus", "--config", config, "-o", config], capsys)
+    assert status == 2 and "--config" in _one_error_line(err)
+    assert config.read_text() == "episodes = 12\n"

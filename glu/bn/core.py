@@ -260,7 +260,7 @@ class CoreEngine(BatchQueries, InferenceEngine, method="core"):
                 n_v = self.bn.schema.cardinality(t)
                 tab = self.leaf_table[row : row + n_v][(slice(None), *idx)]
                 r = (tab * p).reshape(n_v, -1).sum(axis=1) / total
-            out[t] = r
+            out[t] = np.clip(r, 0.0, 1.0)  # a sum divided by the total may round to 1.0000000000000002
         return out
 
     def word_probability_array(
@@ -283,7 +283,7 @@ class CoreEngine(BatchQueries, InferenceEngine, method="core"):
         for w, v in leaf.items():
             if w in self.binary_leaves:
                 probs[self.binary_leaves.index(w)] = float(v == 1)
-        return probs
+        return np.clip(probs, 0.0, 1.0)
 
     def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
         """P(hard evidence) under the model (0 for impossible evidence)."""

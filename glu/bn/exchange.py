@@ -47,15 +47,17 @@ True
 
 from __future__ import annotations
 
+import math
 import os
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
 import numpy as np
 
+from glu.bn.bif import check_declared, read_bif, table_from_flat
 from glu.bn.model import BayesNet
 from glu.bn.rows import normalise_rows
 from glu.errors import ModelError
@@ -230,70 +232,12 @@ def export_bn(
 
 # ------------------------------------------------------------------ readers
 def from_bif(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
-    """A model from BIF text (variables, then probability blocks with ``table`` or one line per configuration)."""
-    body = re.sub(r"//[^\n]*|/\*.*?\*/", " ", text, flags=re.S)
-    values: dict[str, tuple[str, ...]] = {}
-    for m in re.finditer(r"variable\s+([^\s{]+)\s*\{(.*?)\}\s*(?=variable|probability|$)", body, flags=re.S):
-        name, block = m.group(1), m.group(2)
-        t = re.search(r"type\s+discrete\s*\[\s*(\d+)\s*\]\s*\{([^}]*)\}", block, flags=re.S)
-        if t is None:
-            raise ModelError(f"{where}: variable {name!r} is not 'type discrete [ n ] {{ values }}'")
-        vals = tuple(v.strip() for v in t.group(2).replace("\n", " ").split(",") if v.strip())
-        if len(vals) != int(t.group(1)):
-            raise ModelError(f"{where}: variable {name!r} declares {t.group(1)} values but lists {len(vals)}")
-        if name in values:
-            raise ModelError(f"{where}: variable {name!r} is declared twice")
-        values[name] = vals
-    parents: dict[str, tuple[str, ...]] = {}
-    cpts: dict[str, np.ndarray] = {}
-    for m in re.finditer(r"probability\s*\(([^)]*)\)\s*\{(.*?)\}", body, flags=re.S):
-        head, block = m.group(1), m.group(2)
-        child, _, given = head.partition("|")
-        child = child.strip()
-        ps = tuple(p.strip() for p in given.replace(",", " ").split() if p.strip())
-        for n in (child, *ps):
-            if n not in values:
-                raise ModelError(f"{where}: probability of {child!r} names an undeclared variable {n!r}")
-        shape = tuple(len(values[p]) for p in ps) + (len(values[child]),)
-        cpt = np.full(shape, np.nan)
-        tab = re.search(r"table\s+([^;]*);", block)
-        try:
-            if tab is not None:
-                cpt = np.array([float(x) for x in tab.group(1).replace(",", " ").split()])
-                cpt = _table(cpt, shape, child, where, order="parents-slowest")
-            for row in re.finditer(r"\(([^)]*)\)\s*([^;]*);", block):
-                idx = tuple(
-                    _value_index(values[p], v.strip(), p, where)
-                    for p, v in zip(ps, row.group(1).split(","), strict=True)
-                )
-                cpt[idx] = [float(x) for x in row.group(2).replace(",", " ").split()]
-        except (ValueError, TypeError) as e:
-            raise ModelError(
-                f"{where}: probability of {child!r}: malformed numbers or configuration ({e})"
-            ) from None
-        if child in cpts:
-            raise ModelError(f"{where}: two probability blocks for {child!r}")
-        parents[child], cpts[child] = ps, cpt
+    """A model from BIF text (variables, then probability blocks with ``table``, ``default`` or one line per
+    configuration), read in one pass over its tokens (:func:`glu.bn.bif.read_bif`: linear in its length)."""
+    values, parents, cpts = read_bif(text, where)
     return assemble(
         values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (BIF)"}, renormalise
     )
-
-
-def _value_index(vals: Sequence[str], v: str, node: str, where: str) -> int:
-    try:
-        return vals.index(v)
-    except ValueError:
-        raise ModelError(f"{where}: {node!r} has no value {v!r}; values: {', '.join(vals)}") from None
-
-
-def _table(flat: np.ndarray, shape: tuple[int, ...], node: str, where: str, order: str) -> np.ndarray:
-    if flat.size != int(np.prod(shape)):
-        raise ModelError(
-            f"{where}: the table of {node!r} has {flat.size} numbers, expected {int(np.prod(shape))}"
-        )
-    if order == "parents-slowest":  # BIF's `table`: the child's values vary slowest (pgmpy, bnlearn)
-        return np.moveaxis(flat.reshape((shape[-1], *shape[:-1])), 0, -1)
-    return flat.reshape(shape)
 
 
 def from_xmlbif(text: str, where: str = "<string>", renormalise: float | None = None) -> BayesNet:
@@ -325,7 +269,7 @@ def from_xmlbif(text: str, where: str = "<string>", renormalise: float | None = 
             raise ModelError(f"{where}: the table of {child!r} has a malformed number ({e})") from None
         if child in cpts:
             raise ModelError(f"{where}: two definitions of {child!r}")
-        parents[child], cpts[child] = ps, _table(flat, shape, child, where, order="c")
+        parents[child], cpts[child] = ps, table_from_flat(flat, shape, child, where, order="c")
     meta = {"data_source": f"imported from {Path(where).name} (XMLBIF)"}
     return assemble(values, parents, cpts, where, meta, renormalise)
 
@@ -350,7 +294,10 @@ def from_uai(text: str, where: str = "<string>", renormalise: float | None = Non
         raise ModelError(f"{where}: not a UAI Bayesian network (the first word must be BAYES)")
     pos = 1
     n = take("the number of variables")
-    cards = [take("a cardinality") for _ in range(n)]
+    if n > len(tokens):  # each variable needs its cardinality in the file
+        raise ModelError(f"{where}: declares {n:,} variables but the file has {len(tokens):,} numbers")
+    cards = [check_declared(take("a cardinality"), "a variable's cardinality", where) for _ in range(n)]
+    check_declared(sum(cards), "the variables' values", where)
     n_fun = take("the number of functions")
     if n_fun != n or n < 1 or min(cards, default=0) < 1:
         raise ModelError(
@@ -359,6 +306,8 @@ def from_uai(text: str, where: str = "<string>", renormalise: float | None = Non
     scopes = []
     for _ in range(n_fun):
         k = take("a scope size")
+        if k > len(tokens) - pos:
+            raise ModelError(f"{where}: a scope of {k:,} variables is longer than the rest of the file")
         scopes.append([take("a variable index") for _ in range(k)])
     names = [f"var_{i}" for i in range(n)]
     values = {names[i]: tuple(str(v) for v in range(cards[i])) for i in range(n)}
@@ -368,6 +317,11 @@ def from_uai(text: str, where: str = "<string>", renormalise: float | None = Non
             raise ModelError(f"{where}: a scope names variables outside 0 … {n - 1}: {scope}")
         child = names[scope[-1]]
         size = take(f"the table size of {child}")
+        expected = check_declared(math.prod(cards[i] for i in scope), f"the table of {child!r}", where)
+        if size != expected:
+            raise ModelError(
+                f"{where}: the table of {child!r} declares {size:,} numbers, expected {expected:,}"
+            )
         if pos + size > len(tokens):
             raise ModelError(f"{where}: the table of {child!r} is cut short")
         try:
@@ -380,7 +334,7 @@ def from_uai(text: str, where: str = "<string>", renormalise: float | None = Non
         shape = tuple(cards[i] for i in scope)
         parents[child], cpts[child] = (
             tuple(names[i] for i in scope[:-1]),
-            _table(flat, shape, child, where, "c"),
+            table_from_flat(flat, shape, child, where, "c"),
         )
     return assemble(
         values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (UAI)"}, renormalise

@@ -422,7 +422,7 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine, method="junction"):
         out, possible, hard_possible = self._solve(want, hard, qs, soft_rule, 1)
         if not possible[0]:
             raise self._impossible(evidence, soft, bool(hard_possible[0]))
-        return {t: np.array(out[self.index[t]][0]) for t in targets}
+        return {t: np.clip(np.array(out[self.index[t]][0]), 0.0, 1.0) for t in targets}  # rounding past 1
 
     def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
         """P(hard evidence) under the model (0 for impossible evidence)."""

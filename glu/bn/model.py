@@ -309,6 +309,15 @@ class BayesNet:
                     aliases = FILE_ALIASES.get(name, {})
                     values[name] = tuple(aliases.get(v, v) for v in vals)
             dag = np.asarray(net.dag)
+            n_cpd = len(np.atleast_1d(net.bnet.CPD))
+            if dag.shape != (len(names), len(names)) or n_cpd != len(names) or len(set(names)) != len(names):
+                raise ModelError(
+                    f"{path}: an inconsistent BNT network in {variable!r}: {len(names)} node names "
+                    f"({len(set(names))} distinct), a {'×'.join(map(str, dag.shape))} dag, {n_cpd} CPDs; "
+                    "all must agree"
+                )
+            if not 0 < n_aff <= len(names):
+                raise ModelError(f"{path}: {n_aff} affordance nodes among {len(names)} nodes in {variable!r}")
             parents = {
                 names[j]: tuple(names[i] for i in np.flatnonzero(dag[:, j])) for j in range(len(names))
             }
@@ -316,6 +325,8 @@ class BayesNet:
             for j, name in enumerate(names):
                 shape = tuple(len(values[p]) for p in parents[name]) + (len(values[name]),)
                 cpts[name] = np.asarray(net.bnet.CPD[j].CPT, dtype=float).reshape(shape)
+        except ModelError:
+            raise
         except (AttributeError, IndexError, KeyError, TypeError, ValueError) as e:
             raise ModelError(
                 f"{path}: not an original BNT network in {variable!r} ({type(e).__name__}: {e})"

@@ -1,7 +1,8 @@
 """The ``glu`` command line: thin wrappers over the package, one module per group of commands.
 
 Bad input (a missing file, an unknown node or value, impossible evidence, …) prints one line on stderr —
-what was wrong, where, what is allowed — and exits with status 2, never with a traceback.
+what was wrong, where, what is allowed — and exits with status 2, never with a traceback; a notebook that
+fails in ``glu reproduce`` or ``glu run`` prints its name, cell and error and exits with status 1.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import traceback
 from collections.abc import Sequence
 
 from glu import __version__
+from glu.cli.guard import guarded_run
 from glu.errors import GluError, Terminated
 
 COMMAND_MODULES: tuple[str, ...] = (
@@ -63,6 +65,23 @@ def _terminate(signum: int, frame: object) -> None:
     raise Terminated()
 
 
+def _interrupt_inside(e: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM an exception wraps: numba's dispatcher turns a signal raised while compiled
+    code runs into ``SystemError: CPUDispatcher(…) returned a result with an exception set``."""
+    seen = set()
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return e
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return None
+
+
+def _os_error_text(e: OSError) -> str:
+    where = f"{e.filename!r}: " if getattr(e, "filename", None) else ""
+    return f"{where}{e.strerror or e}"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``glu`` console script; returns the exit status.
 
@@ -70,39 +89,76 @@ def main(argv: Sequence[str] | None = None) -> int:
     leave nothing half-written). Anything else is a bug: one line asking for a report, status 1, and the
     traceback with ``--debug`` or ``GLU_DEBUG=1``.
     """
+    previous = None
+    try:  # first: a SIGTERM while the parser is built (imports) ends as any other, 143 and one line
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:  # not the main thread (a test calling main() from a thread): keep the default
+        pass
+    try:
+        return _main(argv)
+    except KeyboardInterrupt as e:  # before the command started: building the parser, reading arguments
+        return _stopped("glu", e)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _is_glu_process() -> bool:
+    """Whether this process is the ``glu`` command (the console script, or ``python -m glu``)."""
+    parts = os.path.normpath(sys.argv[0] if sys.argv else "").split(os.sep)
+    return parts[-1] == "glu" or parts[-2:] == ["glu", "__main__.py"]
+
+
+def _stopped(name: str, e: KeyboardInterrupt) -> int:
+    """The one line of a stop, and its status; what the interrupted libraries leave to be collected
+    (an event loop of a killed kernel's client, …) is then dropped silently at exit, not reported."""
+    if _is_glu_process():  # the process ends now (not a test calling main())
+        sys.unraisablehook = lambda unraisable: None
+    if isinstance(e, Terminated):
+        print(f"{name}: terminated", file=sys.stderr)
+        return 143
+    print(f"{name}: interrupted", file=sys.stderr)
+    return 130
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     nul = next((a for a in argv if "\x00" in a), None)
     if nul is not None:  # no file name or value can hold one; the OS would refuse it deep inside
         print(f"glu: error: argument {nul!r} contains a NUL byte", file=sys.stderr)
         return EXIT_BAD_INPUT
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except OSError as e:  # a path the system refuses to look at (too long, a symlink loop)
+        print(f"glu: error: {_os_error_text(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     sub = getattr(args, f"{args.command}_command", None)
     name = f"glu {args.command}" + (f" {sub}" if sub else "")
     debug = getattr(args, "debug", False) or os.environ.get(DEBUG_ENV, "") not in ("", "0")
-    previous = None
     try:
-        previous = signal.signal(signal.SIGTERM, _terminate)
-    except ValueError:  # not the main thread (a test calling main() from a thread): keep the default
-        pass
-    try:
-        status = args.func(args)
+        with guarded_run(args):
+            status = args.func(args)
     except GluError as e:
         print(f"{name}: error: {e}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except Terminated:
-        print(f"{name}: terminated", file=sys.stderr)
-        return 143
-    except KeyboardInterrupt:
-        print(f"{name}: interrupted", file=sys.stderr)
-        return 130
+        return getattr(e, "exit_status", EXIT_BAD_INPUT)  # 2: bad input; 1: a run that failed (a notebook)
+    except KeyboardInterrupt as e:  # Ctrl-C, or SIGTERM (Terminated)
+        return _stopped(name, e)
     except BrokenPipeError:
         return 0
     except OSError as e:
-        where = f" {e.filename!r}" if getattr(e, "filename", None) else ""
-        print(f"{name}: error:{where} {e.strerror or e}", file=sys.stderr)
+        print(f"{name}: error: {_os_error_text(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except RecursionError:  # JSON or YAML nested deeper than Python reads (a model, a schema, a query line)
+        print(
+            f"{name}: error: an input file is nested too deeply to read; is it the right file?",
+            file=sys.stderr,
+        )
         return EXIT_BAD_INPUT
     except Exception as e:  # a bug: one line, the traceback on request
+        stop = _interrupt_inside(e)
+        if stop is not None:  # an interrupt that compiled code (numba) wrapped in a SystemError
+            return _stopped(name, stop)
         if debug:
             traceback.print_exc()
         print(
@@ -111,9 +167,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
     return int(status or 0)
 
 

@@ -95,6 +95,11 @@ def _anticipate(args: argparse.Namespace) -> int:
     from glu.data.source import load_experiments, resolve_data
     from glu.experiments.anticipation import CASES, case_trajectory, effect_anticipation
 
+    if args.schema is not None or args.experiments is not None:  # offered by the shared options, not used
+        raise DataError(
+            "anticipate runs the paper's network on its recorded cases; --schema/--experiments are not used "
+            "here (give --data)"
+        )
     source = resolve_data(args.data)
     case = CASES[args.case]
     recognizer, models = _load_recognizer(args.models, source)

@@ -201,13 +201,6 @@ def _nodes(args: argparse.Namespace) -> int:
     return 0
 
 
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        return a.resolve() == b.resolve()
-    except OSError:
-        return False
-
-
 def _tolerance(text: str) -> float:
     """--renormalise TOL: a number in [0, 1)."""
     try:
@@ -233,8 +226,6 @@ def renormalised_text(meta: dict) -> str:
 def _import(args: argparse.Namespace) -> int:
     from glu.cli.common import read_model_file
 
-    if _same_file(args.model, args.out):
-        raise GluError(f"-o {args.out} is the input file; write the JSON model to another file")
     if args.renormalise is not None and args.model.suffix.lower() in (".mat", ".json"):
         raise GluError("--renormalise applies to BIF, XMLBIF and UAI files")
     bn = read_model_file(args.model, args.format, renormalise=args.renormalise)
@@ -255,8 +246,6 @@ def _export(args: argparse.Namespace) -> int:
     from glu.bn.exchange import export_bn, format_of, seen_evidence
     from glu.cli.common import read_model_file
 
-    if _same_file(args.model, args.out):
-        raise GluError(f"-o {args.out} is the input model; choose another file")
     fmt = format_of(args.out, args.format)
     bn = read_model_file(args.model)
     export_bn(bn, args.out, fmt, zero_rows=args.zero_rows)
@@ -379,6 +368,10 @@ def _batch_line(bn, engine, line: str, i: int, default_rule: str) -> dict[str, A
     except EvidenceError as e:
         raise EvidenceError(f"line {i}: {e}") from None
     rule = q.get("soft_rule", default_rule)
+    from glu.bn.soft import SOFT_RULES
+
+    if rule not in SOFT_RULES:
+        raise EvidenceError(f"line {i}: unknown soft_rule {rule!r}; allowed: {', '.join(SOFT_RULES)}")
     try:
         return _answer(bn, engine, targets, evidence, soft, rule)
     except GluError as e:

@@ -9,6 +9,7 @@ the package.
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
 import os
@@ -18,6 +19,7 @@ from typing import Any
 from glu.data.source import SYNTHETIC_KEYWORD, WORD_FILES
 from glu.errors import EvidenceError, MissingDependencyError
 from glu.evidence import check_disjoint, parse_evidence, parse_soft
+from glu.files import is_special, is_stdout
 from glu.paths import HERE
 
 DATA_HELP = (
@@ -84,10 +86,32 @@ def _writable_folder(folder: Path) -> str | None:
     return None
 
 
+def special_output_problem(text: str) -> str | None:
+    """For ``-`` and an existing device, FIFO or socket (written through by :mod:`glu.files`): '' when it
+    can be written, else why not; for a path the system cannot resolve (a loop of symbolic links, too
+    long), why not; None for any other path."""
+    if is_stdout(text):
+        return ""
+    try:
+        os.stat(text)
+    except OSError as e:
+        if e.errno in (errno.ELOOP, errno.ENAMETOOLONG):
+            return f"cannot write {text}: {e.strerror}"
+        return None  # missing, or a folder that is a file: the checks of output_file say which
+    if not is_special(text):
+        return None
+    return "" if os.access(text, os.W_OK) else f"cannot write {text}: permission denied"
+
+
 def output_file(text: str) -> Path:
     """-o FILE: a file path whose folder can be written (checked before any work, not after it)."""
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a file name, not an empty string")
+    problem = special_output_problem(text)
+    if problem is not None:
+        if problem:
+            raise argparse.ArgumentTypeError(problem)
+        return Path(text)
     path = Path(text)
     if path.is_dir() or text.endswith(("/", os.sep)):
         raise argparse.ArgumentTypeError(f"{text} is a folder; give a file name")
@@ -104,6 +128,8 @@ IMAGE_SUFFIXES = (".png", ".svg", ".pdf", ".jpg", ".jpeg", ".eps", ".tif", ".tif
 def output_image(text: str) -> Path:
     """--plot FILE: an image file (by its suffix) whose folder can be written."""
     path = output_file(text)
+    if is_stdout(text):
+        raise argparse.ArgumentTypeError("an image is not written to standard output; give a file name")
     if path.suffix.lower() not in IMAGE_SUFFIXES:
         raise argparse.ArgumentTypeError(f"{text}: an image is {', '.join(IMAGE_SUFFIXES)}")
     return path
@@ -113,6 +139,10 @@ def output_folder(text: str) -> Path:
     """-o DIR: a folder that exists or can be made, and can be written."""
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a folder name, not an empty string")
+    if is_stdout(text) or is_special(text):
+        raise argparse.ArgumentTypeError(
+            f"{text} is not a folder: this command writes several files; give a folder"
+        )
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a file; give a folder")
@@ -273,7 +303,14 @@ def read_model_file(path: Path, fmt: str | None = None, renormalise: float | Non
     ``renormalise``: the tolerance of :func:`glu.bn.exchange.import_bn` for rows that do not sum to 1.
     """
     from glu.bn.model import BayesNet
+    from glu.errors import ModelError
 
+    try:
+        path.stat()
+    except FileNotFoundError:
+        pass  # each reader says "no such file" in its own words
+    except OSError as e:  # a loop of symbolic links, a name too long
+        raise ModelError(f"{path}: cannot read the model ({e.strerror})") from None
     suffix = path.suffix.lower()
     if fmt is None and suffix == ".mat":
         return BayesNet.from_bnt_mat(path)
@@ -291,6 +328,8 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
     if model is not None:
         if getattr(args, "data", None):
             raise EvidenceError("give either --model or --data, not both")
+        if getattr(args, "schema", None) or getattr(args, "experiments", None):
+            raise EvidenceError("give either --model or --schema/--experiments, not both")
         bn = read_model_file(model)
         r = bn.meta.get("renormalised")
         rescaled = f"; {r['rows']} CPT row(s) rescaled to sum to 1 on import" if r else ""

@@ -264,6 +264,10 @@ def _segment(args: argparse.Namespace) -> int:
     from glu.gestures.corpus import RECORDING_ACTION, original_segments
     from glu.gestures.segmentation import segment_recording
 
+    if args.label is not None and args.label not in ACTIONS:
+        raise DataError(
+            f"--label {args.label!r}: not an action of the recordings; allowed: {', '.join(ACTIONS)}"
+        )
     path, source = _resolve_log(args.log, args.data)
     if source is not None:
         _say(f"data: {source.describe()}", args.json)

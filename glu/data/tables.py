@@ -13,6 +13,7 @@ the line, the column and what is allowed.
 
 from __future__ import annotations
 
+import csv
 import io
 import os
 from pathlib import Path
@@ -255,6 +256,10 @@ def read_experiment_table(path: str | os.PathLike, schema: Schema) -> pd.DataFra
     except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as e:
         raise DataError(f"{path}: not a table with a header line ({e})".replace("\n", " ")) from None
     raw.columns = [str(c).strip() for c in raw.columns]
+    header = [c.strip() for c in next(csv.reader(io.StringIO(text), delimiter=sep), [])]
+    twice = next((c for i, c in enumerate(header) if c in header[:i]), None)
+    if twice is not None:  # pandas would keep both, the second renamed "c.1": one would be ignored
+        raise DataError(f"{path}:1: the column {twice!r} appears twice; each node and word has one column")
     if len(raw) == 0:
         raise DataError(f"{path}: no experiments after the header line")
     missing = [n for n in schema.affordance_nodes if n not in raw.columns]

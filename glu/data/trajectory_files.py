@@ -95,7 +95,12 @@ def read_trajectory_table(path: str | os.PathLike) -> TrajectoryTable:
             raise DataError(f"{path}: no such file") from None
         except (OSError, ValueError) as e:
             raise DataError(f"{path}: not a NumPy array file ({e})") from None
-        return _from_array(np.asarray(arr), str(path))
+        arr = np.asarray(arr)
+        if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+            raise DataError(
+                f"{path}: an array of {arr.dtype} values; a trajectory is real numbers (t, x, y, z)"
+            )
+        return _from_array(arr, str(path))
     if suffix not in TABLE_SUFFIXES:
         raise DataError(f"{path}: unknown suffix; trajectories are .csv, .tsv, .npy (or a YARP .log)")
     text = read_text(path, "trajectory table", encoding="utf-8-sig")

@@ -43,6 +43,7 @@ from glu.experiments.self_supervised import (
     network_posteriors,
 )
 from glu.experiments.two_level import interval, replicate_means, two_level_weights
+from glu.machine import ctrl_c_held, kill_local_workers, quiet_dask_logs
 
 CHECKPOINTS: tuple[int, ...] = (10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000)
 """Where the curves are measured (those up to the number of episodes, and that number itself)."""
@@ -219,14 +220,27 @@ def learning_study(
             if progress is not None:
                 progress(sd)
         return out
+    with quiet_dask_logs():
+        return _on_dask(engine, settings, workers, scheduler, progress)
+
+
+def _on_dask(engine, settings, workers, scheduler, progress) -> list[SeedResult]:
     from dask.distributed import Client, LocalCluster, as_completed
 
     cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-        )
-    client = Client(cluster if cluster is not None else scheduler)
+    try:
+        with ctrl_c_held():  # Ctrl-C reaches this process only; the workers are stopped from here
+            if scheduler is None:
+                cluster = LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+                )
+            client = Client(cluster if cluster is not None else scheduler)
+    except BaseException as e:
+        if cluster is not None:
+            if isinstance(e, KeyboardInterrupt):
+                kill_local_workers(cluster)
+            cluster.close()
+        raise
     try:
         futures = {client.submit(run_seed, engine, sd, settings, pure=False): sd for sd in settings.seeds}
         results = {}
@@ -235,6 +249,9 @@ def learning_study(
             if progress is not None:
                 progress(futures[fut])
         return [results[sd] for sd in settings.seeds]
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers are killed, not asked to finish
+        kill_local_workers(cluster)
+        raise
     finally:
         client.close()
         if cluster is not None:

@@ -138,6 +138,10 @@ def original_test_segments(source: DataSource) -> list[LabelledSequence]:
     return out
 
 
+MAX_SYNTHETIC_PER_ACTION = 100_000
+"""The most synthetic gestures per action :func:`synthetic_corpus` makes (each is a few hundred frames)."""
+
+
 def synthetic_corpus(
     n_per_action: int,
     seed: int = 0,
@@ -152,7 +156,14 @@ def synthetic_corpus(
 
     ``view``: how they are seen (:class:`~glu.gestures.synthetic.View`; default the generator's: a person
     facing the camera), or the robot's own movements (``View(performer="robot")``).
+    ``n_per_action`` is at most :data:`MAX_SYNTHETIC_PER_ACTION` (DataError beyond).
     """
+    if n_per_action > MAX_SYNTHETIC_PER_ACTION:
+        from glu.errors import DataError
+
+        raise DataError(
+            f"{n_per_action:,} synthetic gestures per action: at most {MAX_SYNTHETIC_PER_ACTION:,} are made"
+        )
     gestures = synthesize_gestures(
         n_per_action * len(actions),
         seed,

@@ -230,6 +230,10 @@ def trajectory_features(traj: Trajectory) -> Trajectory:
     return traj.with_xyz(log_features(traj.xyz))
 
 
+BODY_SIZE_RANGE = (0.01, 10.0)
+"""A body size (horizontal or vertical, metres) glu accepts: smaller ones turn coordinates into infinities."""
+
+
 def table_features(path: str | os.PathLike, body: tuple[float, float] | None = None) -> Trajectory:
     """The features of a CSV/TSV/NPY recording (:mod:`glu.data.trajectory_files`), as a trajectory.
 
@@ -239,9 +243,16 @@ def table_features(path: str | os.PathLike, body: tuple[float, float] | None = N
     table = read_trajectory_table(path)
     if table.kind == "hand":
         h, v = body or (HORIZONTAL_FALLBACK, VERTICAL_FALLBACK)
-        if not (0 < h < 10 and 0 < v < 10):
-            raise DataError(f"body size ({h}, {v}) m: both must be positive and below 10 m")
+        if not (
+            BODY_SIZE_RANGE[0] <= h < BODY_SIZE_RANGE[1] and BODY_SIZE_RANGE[0] <= v < BODY_SIZE_RANGE[1]
+        ):
+            raise DataError(
+                f"body size ({h:g}, {v:g}) m: both must be between {BODY_SIZE_RANGE[0]:g} and "
+                f"{BODY_SIZE_RANGE[1]:g} m (a person's shoulder width and neck-torso length)"
+            )
         xyz = table.hand / np.array([h, v, h])
+        if not np.isfinite(xyz[np.isfinite(table.hand)]).all():
+            raise DataError(f"{path}: coordinates too large for the body size ({h:g}, {v:g}) m: not finite")
     else:
         names = SKELETON_JOINTS
         skeleton = np.stack([table.joints.get(j, np.full((len(table.t), 3), np.nan)) for j in names], axis=1)

@@ -143,6 +143,10 @@ class Invariants:
             return cls((), **settings)
         parts = text.replace("+", ",").split(",") if isinstance(text, str) else list(text)
         names = [p.strip() for p in parts if p.strip()]
+        if not names and isinstance(text, str) and text.strip():  # " , ": a list of nothing, not "raw"
+            raise DataError(
+                f"{text!r}: no invariance named; give {RAW}, {ALL} or names among {', '.join(INVARIANCES)}"
+            )
         if names == [ALL]:
             names = list(INVARIANCES)
         elif names in ([RAW], []):

@@ -51,6 +51,12 @@ def as_sequence(X: Any, n_features: int, what: str = "sequence") -> np.ndarray:
     return X
 
 
+MAX_MEAN = 1e6
+"""The largest magnitude of an HMM mean glu accepts (features are hand positions in body sizes, of order 1)."""
+MAX_COVAR = 1e12
+"""The largest magnitude of a covariance entry glu accepts."""
+
+
 @dataclass(frozen=True, eq=False)
 class GestureHMM:
     """A left-to-right HMM with Gaussian-mixture emissions (parameters only; immutable).
@@ -96,6 +102,12 @@ class GestureHMM:
             a = arrs[k]
             if np.any(a < 0) or not np.allclose(a.sum(axis=axis), 1.0, rtol=0, atol=1e-6):
                 raise ModelError(f"{who}: {k} must be non-negative and sum to one (along axis {axis})")
+        for k, bound in (("means", MAX_MEAN), ("covars", MAX_COVAR)):  # beyond: scores overflow to -inf, nan
+            if np.abs(arrs[k]).max(initial=0.0) > bound:
+                raise ModelError(
+                    f"{who}: {k} as large as {np.abs(arrs[k]).max():.3g}; at most {bound:g} in magnitude "
+                    "(features are positions in body sizes: such a model gives no finite likelihood)"
+                )
         cov = arrs["covars"]
         if not np.allclose(cov, np.swapaxes(cov, -1, -2), rtol=1e-8, atol=1e-12):
             raise ModelError(f"{who}: covariances must be symmetric")
@@ -103,6 +115,10 @@ class GestureHMM:
             chol_inv, log_norm = gaussian_factors(arrs["weights"], cov)
         except np.linalg.LinAlgError:
             raise ModelError(f"{who}: a covariance matrix is not positive definite") from None
+        if not np.all(np.isfinite(log_norm)):
+            raise ModelError(
+                f"{who}: a covariance matrix is too close to singular (its density is not finite)"
+            )
         for k, a in arrs.items():
             a.flags.writeable = False
             object.__setattr__(self, k, a)

@@ -80,6 +80,9 @@ class RunHandle:
         """Kill the notebook's kernel (if it has one yet); the run then ends with :class:`NotebookStopped`."""
         with self._lock:
             self.stopped = True
+            log = getattr(self._client, "log", None)
+            if log is not None:  # its "Kernel died while waiting for execute reply" is the stop itself
+                log.disabled = True
             km = getattr(self._client, "km", None)
             pid = _kernel_pid(km)
         if pid is not None:
@@ -113,6 +116,9 @@ def _engine_class() -> type:
             started = nb_man.cell_start
 
             def cell_start(cell, cell_index=None, **k):  # type: ignore[no-untyped-def]
+                if handle.stopped:  # a stop that came between two cells: no further cell runs
+                    handle.stop()
+                    raise NotebookStopped("stopped")
                 handle._cell_started(cell_index, n_cells, cell)
                 return started(cell, cell_index, **k)
 
@@ -131,7 +137,11 @@ def _engine_class() -> type:
             }
             if self.handle.cwd is not None:
                 kwargs.setdefault("cwd", self.handle.cwd)
-            return await super().async_start_new_kernel(env=env, **kwargs)
+            started = await super().async_start_new_kernel(env=env, **kwargs)
+            if self.handle.stopped:  # stopped while the kernel was being launched, before its pid was known
+                self.handle.stop()
+                raise NotebookStopped("stopped while its kernel started")
+            return started
 
         start_new_kernel = run_sync(async_start_new_kernel)  # the sync name is bound to the base method
 
@@ -221,7 +231,7 @@ def run_notebook(
     out_ipynb.parent.mkdir(parents=True, exist_ok=True)
     nb = jupytext.read(src)
     try:
-        return pm.execute_notebook(
+        executed = pm.execute_notebook(
             nb,
             str(out_ipynb),
             parameters=parameters,
@@ -240,6 +250,9 @@ def run_notebook(
         if handle.stopped:
             raise NotebookStopped(f"{src.stem}: stopped") from None
         raise
+    if handle.stopped:  # its kernel was killed and papermill ended quietly: the notebook did not finish
+        raise NotebookStopped(f"{src.stem}: stopped")
+    return executed
 
 
 def shown_path(path: str | os.PathLike, root: Path | None = None) -> str:

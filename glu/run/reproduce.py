@@ -48,6 +48,7 @@ from glu.run.execution import (
     run_notebook,
     shown_path,
 )
+from glu.run.lock import run_lock
 from glu.run.manifest import ManifestError, check_outputs, read_manifest, written_outputs
 from glu.run.outputs import parameters_text
 from glu.run.parameters import check, non_defaults, parse_value, read_spec
@@ -67,6 +68,12 @@ OWNER_FILE = "owner.pid"
 
 class NotebookError(GluError):
     """A notebook failed while running, or a notebook name matches none."""
+
+
+class NotebookFailed(NotebookError):
+    """A notebook's cell raised: the run failed (exit status 1, not the 2 of bad input)."""
+
+    exit_status = 1
 
 
 def list_notebooks(only: Sequence[str] | None = None, folder: Path = paths.NOTEBOOKS_DIR) -> list[Path]:
@@ -200,6 +207,18 @@ def reproduce(
     data: str | os.PathLike | None = None,
     quick: bool = False,
     out: str | os.PathLike | None = None,
+    **kwargs: Any,
+) -> dict[str, Any]:
+    """:func:`_reproduce` holding the lock of the output folder (:func:`glu.run.lock.run_lock`): a second
+    run on the same project or ``--out`` folder is refused in one line naming the first's process id."""
+    with run_lock(OutputLayout.at(out).root):
+        return _reproduce(data, quick, out, **kwargs)
+
+
+def _reproduce(
+    data: str | os.PathLike | None = None,
+    quick: bool = False,
+    out: str | os.PathLike | None = None,
     jobs: int = 1,
     only: Sequence[str] | None = None,
     seed: int = 0,
@@ -314,6 +333,8 @@ def reproduce(
                 done, pending = wait(pending, timeout=0.25, return_when=FIRST_COMPLETED)
                 bar.tick()
                 for f in done:
+                    if f.cancelled():  # not started: cancelled when another notebook failed
+                        continue
                     try:
                         r = f.result()
                     except NotebookStopped:
@@ -329,7 +350,7 @@ def reproduce(
             pool.shutdown(wait=True, cancel_futures=True)
             bar.close()
         if failed is not None:
-            raise NotebookError(
+            raise NotebookFailed(
                 f"{failed.error}; executed copy kept at {failed.executed}; nothing was published: "
                 "the outputs of earlier runs are as they were"
             )
@@ -431,7 +452,7 @@ def run_one(
         else:
             run_notebook(src, executed, params, cwd=src.parent)
     except pm.PapermillExecutionError as e:
-        raise NotebookError(
+        raise NotebookFailed(
             f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; executed copy at {executed}"
         ) from None
     shown = {"data": _shown_data(source), "out_dir": (shown_path(layout.root), "")}

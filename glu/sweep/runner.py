@@ -59,6 +59,7 @@ from glu.errors import DataError, GluError
 from glu.experiments.corpus import Condition
 from glu.experiments.evaluation import Evaluator
 from glu.files import atomic_write_json
+from glu.machine import ctrl_c_held, kill_local_workers, quiet_dask_logs
 from glu.sweep import robots
 from glu.sweep.config import SweepConfig
 from glu.sweep.tables import chunk_path, merge, write_chunk
@@ -330,7 +331,30 @@ def _check_reachable(address: str, timeout: float = 10.0) -> None:
         raise DataError(f"cannot reach the Dask scheduler at {address}: {e.strerror or e}") from None
 
 
+def _same(obj: Any) -> Any:
+    return obj
+
+
+class WorkerLostError(GluError):
+    """A Dask worker died during the sweep (killed, out of memory); the finished chunks are kept."""
+
+
+LOST_WORKER_ERRORS = frozenset(
+    {"KilledWorker", "CommClosedError", "StreamClosedError", "FutureCancelledError"}
+)
+"""What dask.distributed raises for a task whose worker went away."""
+
+
+def _worker_lost(e: BaseException) -> bool:
+    return type(e).__name__ in LOST_WORKER_ERRORS
+
+
 def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
+    with quiet_dask_logs():  # glu says what went wrong in one line; the cluster's own logs stay out of it
+        return _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar)
+
+
+def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
@@ -347,26 +371,31 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
             from glu.machine import available_cores
 
             n = workers or available_cores()
-            cluster = LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=":0",
-                silence_logs=logging.ERROR,
-            )
-            client = Client(cluster)
+            with ctrl_c_held():  # the workers and the cluster threads never see Ctrl-C: glu stops them
+                cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=":0",
+                    silence_logs=logging.CRITICAL,
+                )
+                client = Client(cluster)
         else:
             try:
                 client = Client(scheduler, timeout="30s")
             except (OSError, TimeoutError) as e:
                 raise DataError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
-    except BaseException:
+    except BaseException as e:
         if cluster is not None:
+            if isinstance(e, KeyboardInterrupt):
+                kill_local_workers(cluster)
             cluster.close()
         raise
     try:
         cpu = 0.0
-        shared = client.scatter(evaluator, broadcast=True)
+        # a task, not scattered data: a worker that dies takes its copy with it, and the cluster recomputes
+        # a task's result where scattered data would be lost for good (the sweep then waited forever)
+        shared = client.submit(_same, evaluator, pure=False, key=f"glu-evaluator-{fingerprint[:8]}")
         futures = [
             client.submit(
                 compute_chunk,
@@ -385,12 +414,21 @@ def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> 
             except Exception as e:
                 for f in futures:
                     f.cancel()
+                if _worker_lost(e):
+                    raise WorkerLostError(
+                        f"a Dask worker was lost (its process died or was killed) while computing a chunk "
+                        f"({type(e).__name__}); the chunks finished so far are saved in {out}: run the same "
+                        "command again to resume from them"
+                    ) from None
                 raise RuntimeError(
                     f"a sweep task failed on the cluster ({type(e).__name__}: {e}); "
                     "do the workers have glu installed, in the same version?"
                 ) from e
             cpu += _save(out, fingerprint, result, bar)
         return cpu
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers are killed, not asked to finish (nor to talk)
+        kill_local_workers(cluster)
+        raise
     finally:
         client.close()
         if cluster is not None:

@@ -4,6 +4,7 @@ reliability diagrams, each seed's estimates and a summary (:func:`merge`)."""
 from __future__ import annotations
 
 import json
+import zipfile
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -66,7 +67,7 @@ def read_chunk(path: Path, fingerprint: str) -> tuple[np.ndarray, np.ndarray, np
         with np.load(path) as z:
             meta = json.loads(str(z["meta"]))
             estimate, replicates, seeds = z["estimate"], z["replicates"], z["seeds"]
-    except (OSError, ValueError, KeyError) as e:
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as e:  # a truncated file: BadZipFile
         raise DataError(f"{path}: unreadable chunk ({e}); delete it and run the sweep again") from None
     if meta.get("fingerprint") != fingerprint:
         raise DataError(
