@@ -8,6 +8,7 @@ The story table comes from the notebooks' manifests (:mod:`glu.run.generated`), 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -121,7 +122,8 @@ def _other_pages(args: argparse.Namespace) -> bool:
     from glu.run import generated
     from glu.run.readme import README
 
-    if README is None or args.readme.resolve() != README.resolve():
+    # os.path.realpath, not Path.resolve: a symlink loop given as --readme is then read, and refused as such
+    if README is None or os.path.realpath(args.readme) != os.path.realpath(README):
         return False
     stale = False
     for page, begin, end, write in _pages():
