@@ -16,8 +16,8 @@ Run on demand (not a test)::
 The models are the default recogniser of a sweep (trained on synthetic gestures, Q = 6, M = 3); the
 network is learned from ``--data`` (default: $GLU_DATA_DIR, data/real, else synthetic). The design is one
 cell of the factorial sweep (one recogniser seed, uniform actions, the generating network, p_HMM from the
-likelihoods): each further reading of an episode (network × p_HMM) adds its fusion and descriptions. Timings are CPU
-time of this process where one process does the work (robust to other load on the machine), wall time
+likelihoods): each further reading of an episode (network × p_HMM) adds its fusion and descriptions. Timings
+are CPU time of this process where one process does the work (robust to other load on the machine), wall time
 for the cluster runs (sensitive to it: the machine's load average is printed with them).
 """
 
@@ -164,8 +164,9 @@ def bench_scaling(cfg, tmp: Path, episodes: int) -> None:
     # On free cores a run takes about its client's CPU (prepare, merge, writes: serial) plus its tasks' CPU
     # divided by the workers; the measured times also hold the waiting for a core on a busy machine.
     NOTES.append(
-        f"scaling: CPU of the tasks {p1:.1f} s (1 worker) and {p2:.1f} s (2 workers), client {client1:.1f} s and {client2:.1f} s"
-        f" → on 2 free cores {(client1 + p1) / (client2 + p2 / 2):.2f}× (tasks as measured), "
+        f"scaling: CPU of the tasks {p1:.1f} s (1 worker) and {p2:.1f} s (2 workers), client "
+        f"{client1:.1f} s and {client2:.1f} s → on 2 free cores "
+        f"{(client1 + p1) / (client2 + p2 / 2):.2f}× (tasks as measured), "
         f"{(client1 + p1) / (client1 + p1 / 2):.2f}× (tasks as fast as with 1 worker)"
     )
     same = all(
@@ -184,7 +185,8 @@ def bench_million(cfg, tmp: Path, episodes: int) -> None:
             wall,
             target="≤ 10 min",
             met=wall <= 600,
-            what=f"wall time (load average {_load()} after); tasks {1e3 * cpu / c.n_episodes:.2f} ms CPU per episode",
+            what=f"wall time (load average {_load()} after); tasks {1e3 * cpu / c.n_episodes:.2f} ms CPU "
+            "per episode",
         )
     )
 

@@ -158,7 +158,8 @@ def main(argv: list[str] | None = None) -> int:
         bench_sampling(args.repeats)
     report(
         "fast_paths",
-        "the fast paths against the straightforward way each replaced (one BLAS thread; same results checked first)",
+        "the fast paths against the straightforward way each replaced (one BLAS thread; same results "
+        "checked first)",
         ROWS,
         NOTES,
     )

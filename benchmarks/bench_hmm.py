@@ -10,8 +10,8 @@ Measures, for a 150-frame sequence:
    emissions once and runs one forward pass (target ≤ 2 ms); hmmlearn rescores every prefix with
    ``score`` (about 1.3 s);
 2. the log-likelihood of the whole sequence under one model (one ``score`` call);
-3. one new frame for all four models of a bank: glu's :class:`~glu.gestures.recognizer.GestureStream` step (target
-   ≤ 100 µs) against rescoring the grown prefix with hmmlearn (four ``score`` calls);
+3. one new frame for all four models of a bank: glu's :class:`~glu.gestures.recognizer.GestureStream` step
+   (target ≤ 100 µs) against rescoring the grown prefix with hmmlearn (four ``score`` calls);
 4. training one model (Q = 6, M = 3, 20 EM iterations, 20 synthetic gestures): glu's vectorised
    Baum–Welch (:mod:`glu.hmm.em`) against hmmlearn's ``GMMHMM.fit`` from the same start;
 5. the same streaming step when the recogniser computes invariant features (all four invariances,

@@ -126,8 +126,10 @@ t = time.perf_counter()
 from glu.hmm._engine import kernels
 from glu.hmm import initialisation as gmm_init
 X = np.random.default_rng(0).normal(size=(40, 3))
-kernels.forward_backward_scaled(np.zeros((1, 2, 2)), np.array([2]), np.ones((1, 2)) / 2, np.ones((1, 2, 2)) / 2)
-kernels.loglik_banked([np.zeros((2, 1))], np.zeros((1, 1, 1, 1)), np.ones((1, 1, 1, 1, 1)), np.zeros((1, 1, 1)),
+kernels.forward_backward_scaled(np.zeros((1, 2, 2)), np.array([2]), np.ones((1, 2)) / 2, \
+np.ones((1, 2, 2)) / 2)
+kernels.loglik_banked([np.zeros((2, 1))], np.zeros((1, 1, 1, 1)), np.ones((1, 1, 1, 1, 1)), \
+np.zeros((1, 1, 1)),
                       np.ones((1, 1)), np.ones((1, 1, 1)))
 kernels.mixture_posteriors(np.zeros((1, 2, 2, 2)))
 gmm_init.fit_gaussian_mixture(X, 3, 0.01, 0)

@@ -46,7 +46,8 @@ def per_call(fn, repeats: int = 7) -> float:
 
 
 def sample_sets(bn, nodes: list[str], n: int, seed: int) -> dict[str, np.ndarray]:
-    """Values of ``nodes`` in ``n`` joint samples of the network (ancestral sampling, seeded): node → codes."""
+    """Values of ``nodes`` in ``n`` joint samples of the network (ancestral sampling, seeded): node →
+    codes."""
     rng = np.random.default_rng(seed)
     codes: dict[str, np.ndarray] = {}
     todo = list(bn.nodes)
@@ -96,7 +97,8 @@ def network_rows(name: str, folder: Path, quick: bool, tmp: Path) -> list[dict]:
     rows = [
         {
             "name": f"{name}: all posteriors, one evidence set",
-            "what": f"{len(nodes)} nodes, {N_OBSERVED} observed ({', '.join(observed)}); glu {type(eng).__name__}",
+            "what": f"{len(nodes)} nodes, {N_OBSERVED} observed ({', '.join(observed)}); glu "
+            f"{type(eng).__name__}",
             "glu_s": t_glu,
             "reference": f"pyAgrum {gum.__version__} LazyPropagation",
             "reference_s": t_pa,
@@ -150,7 +152,7 @@ def network_rows(name: str, folder: Path, quick: bool, tmp: Path) -> list[dict]:
     return rows
 
 
-GLU_SCRIPT = r"""
+GLU_SCRIPT = """
 import json, statistics, sys, time
 import numpy as np
 sys.path.insert(0, sys.argv[1])
@@ -171,7 +173,8 @@ batch = {"Action": rng.integers(0, 3, n), "Shape": rng.integers(0, 2, n), "Size"
 out = {
     "single": per_call(lambda: eng.query(["ObjVel"], ev)),
     "words": per_call(lambda: words(ev_w)),
-    "virtual": per_call(lambda: eng.query(["ObjVel"], {"Shape": "sphere", "Size": "small"}, soft={"Action": q})),
+    "virtual": per_call(lambda: eng.query(["ObjVel"], {"Shape": "sphere", "Size": "small"}, \
+soft={"Action": q})),
     "batch": per_call(lambda: eng.query_batch(["ObjVel"], batch, errors="nan"), repeats=5),
     "answers": [eng.query(["ObjVel"], ev)["ObjVel"].tolist(), list(map(float, words(ev_w)))],
 }

@@ -46,7 +46,8 @@ def main(argv: list[str] | None = None) -> int:
     wall = statistics.median(walls)
     rows = [
         row(
-            f"glu reproduce, every notebook, {args.jobs} at a time, report included (median of {args.repeats})",
+            f"glu reproduce, every notebook, {args.jobs} at a time, report included (median of "
+            f"{args.repeats})",
             wall,
             target="≤ 45 s",
             met=wall <= 45,

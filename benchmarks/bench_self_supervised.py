@@ -4,10 +4,10 @@ Run on demand (not a test)::
 
     python benchmarks/bench_self_supervised.py [--data DIR] [--only notebook update study cli]
 
-1. **notebook** — ``12_learning_from_effects`` at its default size, run headless as ``glu reproduce --only 12``
-   does (into a temporary folder): wall time, and CPU time of the kernel process (robust to other load);
-   goal: at most 20 s (what it adds to ``glu reproduce`` on 2 cores, where it runs next to the other
-   notebooks);
+1. **notebook** — ``12_learning_from_effects`` at its default size, run headless as
+   ``glu reproduce --only 12`` does (into a temporary folder): wall time, and CPU time of the kernel process
+   (robust to other load); goal: at most 20 s (what it adds to ``glu reproduce`` on 2 cores, where it runs
+   next to the other notebooks);
 2. **update** — one online learner (soft labels, the study's HMMs: Q = 6, one Gaussian) updating its models
    after one episode, once it has a model of every action: labels, the E-step of the episode under its
    three models, the stepwise-EM step and the M-step; median, 95th percentile and maximum over 300
@@ -17,8 +17,8 @@ Run on demand (not a test)::
 4. **cli** — ``glu learn-gestures --episodes 2000 --labels soft`` (batch weighted EM, Q = 6, M = 3).
 
 Prints a table and writes ``benchmarks/results/self_supervised.json`` in the schema of ``timing.py`` (with
-``--only``, the other rows of the file are kept). CPU times are of this process (robust to other load on the machine); wall times
-are printed with the machine's load average, since they are not.
+``--only``, the other rows of the file are kept). CPU times are of this process (robust to other load on the
+machine); wall times are printed with the machine's load average, since they are not.
 """
 
 from __future__ import annotations
@@ -204,7 +204,8 @@ def main(argv: list[str] | None = None) -> int:
         ]
     report(
         "self_supervised",
-        "learning gestures from effects: the notebook at its default size, one online update, the study, the CLI",
+        "learning gestures from effects: the notebook at its default size, one online update, the "
+        "study, the CLI",
         kept + rows,
         notes=["CPU times are of the process (robust to other load); wall times are not"],
         out=RESULTS,

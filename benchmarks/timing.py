@@ -4,8 +4,8 @@ The benchmarks run as scripts (``from timing import median_time, row, report``).
 :func:`report`, which prints its table and writes ``benchmarks/results/NAME.json``::
 
     {"schema": 1, "benchmark": NAME, "what": ..., "command": "python benchmarks/bench_NAME.py ...",
-     "machine": "x86_64, 2 cores, Python 3.11, NumPy 2.4; load average 1.2 at the start", "date": "2026-11-27",
-     "notes": [...], "rows": [ROW, ...]}
+     "machine": "x86_64, 2 cores, Python 3.11, NumPy 2.4; load average 1.2 at the start", "date":
+     "2026-11-27", "notes": [...], "rows": [ROW, ...]}
 
 and each ``ROW`` (:func:`row`) is ``{"name", "what", "glu_s", "reference", "reference_s", "ratio", "target",
 "met"}``: glu's seconds, the reference's name and seconds (or null), ``ratio`` = reference / glu, a target in

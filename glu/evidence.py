@@ -26,7 +26,8 @@ SoftEvidence = Mapping[str, Mapping[str, float]]
 
 
 def parse_evidence(items: Iterable[str]) -> dict[str, str]:
-    """``["Action=tap", "Shape=sphere"]`` → ``{"Action": "tap", "Shape": "sphere"}``; a node twice is an error."""
+    """``["Action=tap", "Shape=sphere"]`` → ``{"Action": "tap", "Shape": "sphere"}``; a node twice is an
+    error."""
     out: dict[str, str] = {}
     for item in items:
         node, sep, value = item.partition("=")
@@ -40,7 +41,8 @@ def parse_evidence(items: Iterable[str]) -> dict[str, str]:
 
 
 def parse_soft(items: Iterable[str]) -> dict[str, dict[str, float]]:
-    """``["Action=grasp:0.2,tap:0.6,touch:0.2"]`` → ``{"Action": {"grasp": 0.2, "tap": 0.6, "touch": 0.2}}``."""
+    """``["Action=grasp:0.2,tap:0.6,touch:0.2"]`` →
+    ``{"Action": {"grasp": 0.2, "tap": 0.6, "touch": 0.2}}``."""
     out: dict[str, dict[str, float]] = {}
     for item in items:
         node, sep, spec = item.partition("=")

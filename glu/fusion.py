@@ -36,7 +36,8 @@ Example
 >>> p = fuse(engine, ["ObjVel"], {"Shape": "sphere"}, [0.1, 0.8, 0.1], "virtual")["ObjVel"]
 >>> p.shape, round(float(p.sum()), 12)
 ((3,), 1.0)
->>> fuse(engine, ["ObjVel"], {"Shape": "sphere"}, [[0.1, 0.8, 0.1], [0.8, 0.1, 0.1]], "jeffrey")["ObjVel"].shape
+>>> fuse(engine, ["ObjVel"], {"Shape": "sphere"}, [[0.1, 0.8, 0.1], [0.8, 0.1, 0.1]],
+...      "jeffrey")["ObjVel"].shape
 (2, 3)
 """
 
@@ -76,7 +77,8 @@ def fuse(
     strategy: Strategy = "virtual",
     action: str | None = None,
 ) -> dict[str, np.ndarray]:
-    """Posterior marginals of ``targets`` given observed network evidence and the HMM posterior over the action.
+    """Posterior marginals of ``targets`` given observed network evidence and the HMM posterior over the
+    action.
 
     Parameters
     ----------

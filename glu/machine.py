@@ -62,7 +62,8 @@ def available_cores() -> int:
 def thread_env(threads: int | None, environ: dict[str, str] | None = None) -> dict[str, str]:
     """The variables of :data:`THREAD_ENV` set to ``threads``, leaving out those ``environ`` already sets.
 
-    >>> thread_env(1, {"OMP_NUM_THREADS": "4"})["OPENBLAS_NUM_THREADS"], "OMP_NUM_THREADS" in thread_env(1, {"OMP_NUM_THREADS": "4"})
+    >>> thread_env(1, {"OMP_NUM_THREADS": "4"})["OPENBLAS_NUM_THREADS"], "OMP_NUM_THREADS" in thread_env(1,
+    ...     {"OMP_NUM_THREADS": "4"})
     ('1', False)
     >>> thread_env(None)
     {}
@@ -75,13 +76,14 @@ def thread_env(threads: int | None, environ: dict[str, str] | None = None) -> di
 
 VIEWER_ASSETS_ENV = "RERUN_NOTEBOOK_ASSET"
 VIEWER_ASSETS = "serve-local"
-"""Where the inline Rerun viewer's files come from: ``serve-local``, the installed ``rerun-notebook``'s, served on
-localhost by the kernel (so the viewer works offline); ``$RERUN_NOTEBOOK_ASSET`` set by the user wins."""
+"""Where the inline Rerun viewer's files come from: ``serve-local``, the installed ``rerun-notebook``'s,
+served on localhost by the kernel (so the viewer works offline); ``$RERUN_NOTEBOOK_ASSET`` set by the user
+wins."""
 
 
 def viewer_class() -> Any:
-    """Rerun's inline notebook viewer (``rerun.notebook.Viewer``), its files served offline (:data:`VIEWER_ASSETS`);
-    None without ``rerun-notebook``."""
+    """Rerun's inline notebook viewer (``rerun.notebook.Viewer``), its files served offline
+    (:data:`VIEWER_ASSETS`); None without ``rerun-notebook``."""
     # the viewer's JavaScript and WebAssembly come from the installed rerun-notebook, served on localhost by
     # the kernel, never from the web (rerun-notebook's default is app.rerun.io); read when it is imported
     os.environ.setdefault(VIEWER_ASSETS_ENV, VIEWER_ASSETS)

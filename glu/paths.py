@@ -9,15 +9,16 @@ The one owner of paths. glu runs in two settings, and :func:`locate` tells them 
 * **an installed package** (a wheel in any environment): nothing is ever written inside the package
   (``site-packages``). Data lives in the user's data folder (platformdirs: ``~/.local/share/glu/real`` on
   Linux, ``~/Library/Application Support/glu/real`` on macOS, ``%LOCALAPPDATA%\\glu\\real`` on Windows),
-  scratch runs and compiled code in the user's cache folder, and ``glu reproduce`` needs ``-o DIR``. The notebooks ship
-  inside the package as ``glu.notebooks`` (the repository's ``notebooks/`` folder, mapped by
+  scratch runs and compiled code in the user's cache folder, and ``glu reproduce`` needs ``-o DIR``. The
+  notebooks ship inside the package as ``glu.notebooks`` (the repository's ``notebooks/`` folder, mapped by
   ``[tool.setuptools] package-dir`` in ``pyproject.toml``), so they run from any folder.
 
 ``--data DIR`` and ``$GLU_DATA_DIR`` win over both. Inputs: the package's resources, the notebooks, the
 data folders (the *layout* inside a data folder belongs to :class:`glu.data.DataSource`). Outputs: an
 :class:`OutputLayout` names the folder of every kind of output, either the project's own (``figures/``,
 ``results/``, ``recordings/``, ``models/`` at the top, executed notebooks and the documentation site under
-``build/``) or one root holding them all (``glu reproduce -o DIR``, a notebook's ``out_dir``). Notebooks (through
+``build/``) or one root holding them all (``glu reproduce -o DIR``, a notebook's ``out_dir``). Notebooks
+(through
 :mod:`glu.run.outputs`) and ``glu reproduce`` both use it, so the two can never disagree.
 """
 
@@ -160,7 +161,8 @@ class OutputLayout:
 
     @classmethod
     def project(cls) -> OutputLayout:
-        """The project's own folders: ``figures/``, ``results/``, ``recordings/``, ``models/``, ``build/…``."""
+        """The project's own folders: ``figures/``, ``results/``, ``recordings/``, ``models/``,
+        ``build/…``."""
         r = PROJECT_ROOT
         if r is None:
             raise OutputError(
@@ -190,7 +192,8 @@ class OutputLayout:
 
     @classmethod
     def scratch(cls, notebook: str) -> OutputLayout:
-        """A notebook's own scratch folder, for runs that do not publish: :meth:`under` ``scratch_dir(notebook)``."""
+        """A notebook's own scratch folder, for runs that do not publish: :meth:`under`
+        ``scratch_dir(notebook)``."""
         return cls.under(scratch_dir(notebook))
 
     def folder(self, kind: str) -> Path:

@@ -68,7 +68,8 @@ def new_recording(path: str | os.PathLike, recording_id: str, blueprint=None, ap
 
 
 def anticipation_blueprint(actions: Sequence[str]):
-    """Viewer layout: the hand in 3-D and the scene text on the left; HMM series and fused bars on the right."""
+    """Viewer layout: the hand in 3-D and the scene text on the left; HMM series and fused bars on the
+    right."""
     import rerun.blueprint as rrb
 
     return rrb.Blueprint(
@@ -256,7 +257,8 @@ def show_anticipation(
 def write_anticipation(
     run: AnticipationRun, path: str | os.PathLike, recording_id: str, note: str = ""
 ) -> Path:
-    """Write an effect-anticipation run (:func:`glu.experiments.anticipation.effect_anticipation`) as a recording.
+    """Write an effect-anticipation run (:func:`glu.experiments.anticipation.effect_anticipation`) as a
+    recording.
 
     ``note`` (e.g. the notebook's data source and non-default parameters) ends the scene text.
     """
@@ -436,7 +438,8 @@ def log_labels(rec, weights: np.ndarray, actions: Sequence[str], true_actions: S
 
 
 def log_series_on(rec, entity: str, values: np.ndarray, names: Sequence[str], steps: np.ndarray) -> None:
-    """One series per column of ``values`` (shape (n, k)) under ``entity/<name>`` on the ``episode`` timeline."""
+    """One series per column of ``values`` (shape (n, k)) under ``entity/<name>`` on the ``episode``
+    timeline."""
     rr = _rr()
     for j, name in enumerate(names):
         rec.log(

@@ -17,10 +17,10 @@ word, values ``absent`` and ``present``)::
 
 :func:`read_schema_file` reads one; :func:`default_schema` is GLU's own, the file
 ``glu/resources/schemas/glu.json``, from which this module's constants are taken. Value order is the order
-of the original data files (docs/method.md §1.1) and is used everywhere: CPT axes, posterior vectors, categorical
-columns. In glu the Shape value ``circle`` of the files is called ``sphere`` (the papers' name); ``circle``
-is accepted as an alias on input. A word node takes the values ``absent`` and ``present`` (the files' ``-``
-and the word itself).
+of the original data files (docs/method.md §1.1) and is used everywhere: CPT axes, posterior vectors,
+categorical columns. In glu the Shape value ``circle`` of the files is called ``sphere`` (the papers' name);
+``circle`` is accepted as an alias on input. A word node takes the values ``absent`` and ``present`` (the
+files' ``-`` and the word itself).
 
 >>> s = read_schema_file(GLU_SCHEMA_FILE)
 >>> s.affordance_nodes[:3], s.root_nodes, len(s.word_nodes), s.roles["ObjVel"]

@@ -126,7 +126,10 @@ noise
 if out.source.is_real:
     loo = gestures.leave_one_out(sequences, by="segment", seed=seed, config=sweep)
     out.table(loo, "hmm_real_leave_one_out", accuracy=gestures.accuracy(loo[loo.testable]))
-    summary = f"leave-one-segment-out accuracy: {gestures.accuracy(loo[loo.testable]):.3f} over {int(loo.testable.sum())} segments"
+    summary = (
+        f"leave-one-segment-out accuracy: {gestures.accuracy(loo[loo.testable]):.3f} over "
+        f"{int(loo.testable.sum())} segments"
+    )
 else:
     summary = "synthetic data: see the cross-validation above"
 summary

@@ -65,7 +65,8 @@ original = BayesNet.from_bnt_mat(mat) if mat else None
 edges = fusion.structure_comparison(bn, original)
 out.table(edges, reference=edges.attrs["parameters"]["reference"])
 print(
-    f"edges: ours {int(edges.in_ours.sum())}, reference {int(edges.in_reference.sum())}, differing {int(edges.difference.sum())}"
+    f"edges: ours {int(edges.in_ours.sum())}, reference {int(edges.in_reference.sum())}, differing "
+    f"{int(edges.difference.sum())}"
 )
 
 fig, (ax,) = plots.new_figure(1, width=4.5, height=8)

@@ -84,5 +84,5 @@ thresholds
 
 # %% [markdown]
 # When the scene contradicts a tap (a small sphere that did not move), the HMMs must be very sure — above
-# the threshold printed above — before tap wins; when the scene supports it (a sphere rolling fast), almost any gesture evidence
-# will do. The paper's "0.81" is this threshold read off a coarse grid.
+# the threshold printed above — before tap wins; when the scene supports it (a sphere rolling fast), almost
+# any gesture evidence will do. The paper's "0.81" is this threshold read off a coarse grid.

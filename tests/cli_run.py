@@ -8,7 +8,8 @@ from glu.cli import main
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
-    """``glu ARGV`` in this process: (exit status, stdout, stderr); argparse's usage errors give their status."""
+    """``glu ARGV`` in this process: (exit status, stdout, stderr); argparse's usage errors give their
+    status."""
     try:
         status = main(list(argv))
     except SystemExit as e:  # argparse usage errors exit from parse_args

@@ -1,4 +1,5 @@
-"""Batched scoring of many sequences against every model: equal to the per-sequence forward and to hmmlearn."""
+"""Batched scoring of many sequences against every model: equal to the per-sequence forward and to
+hmmlearn."""
 
 from __future__ import annotations
 
@@ -111,7 +112,8 @@ def test_underflowing_pairs_are_recomputed_exactly():
 
 
 def test_recogniser_and_original_models(recognizer):
-    """The fixture's bank (the original 2013 models on real data): batch equals the recogniser's own curves."""
+    """The fixture's bank (the original 2013 models on real data): batch equals the recogniser's own
+    curves."""
     rng = np.random.default_rng(4)
     X = [rng.normal(scale=0.3, size=(int(rng.integers(20, 90)), 3)) - [0, 1, 1] for _ in range(10)]
     curves = BatchScorer(recognizer).loglik_curves(X)

@@ -143,7 +143,8 @@ def _assert_same_models(got, ref):
 
 
 def test_training_many_models_equals_training_each_alone(corpus):
-    """glu.hmm.train on a mapping (batched EM) against glu.hmm.train on each model's list (the reference EM)."""
+    """glu.hmm.train on a mapping (batched EM) against glu.hmm.train on each model's list (the reference
+    EM)."""
     from glu.hmm import TrainingConfig, train
 
     sets = [[s.xyz for s in corpus if s.action == a][i:] for a in ("grasp", "tap") for i in (0, 2)]

@@ -1,4 +1,5 @@
-"""Notebooks run by hand (plain papermill, `glu run`): checked at once, written to a scratch folder, never published."""
+"""Notebooks run by hand (plain papermill, `glu run`): checked at once, written to a scratch folder, never
+published."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """One spelling per option, one help text per command, no markup in ``--help`` (issue 25).
 
-Every test walks the real parser (:func:`glu.cli.build_parser`), so a new command or option is held to the same
-rules without being listed here; the few exceptions are listed below, each with its reason.
+Every test walks the real parser (:func:`glu.cli.build_parser`), so a new command or option is held to the
+same rules without being listed here; the few exceptions are listed below, each with its reason.
 """
 
 from __future__ import annotations

@@ -147,7 +147,8 @@ def test_settings_are_labelled_and_parsed_back():
 
 
 def test_leave_one_segment_out_keeps_the_features():
-    """The fast leave-one-segment-out of glu.experiments.recipes equals the plain one with invariant features."""
+    """The fast leave-one-segment-out of glu.experiments.recipes equals the plain one with invariant
+    features."""
     from glu.experiments.gestures import leave_one_out
     from glu.experiments.recipes import leave_one_segment_out
 

@@ -88,7 +88,8 @@ def _effect_anticipation_with_centred_glu_hmms(real_source, learned_bn, centred_
 
 
 def test_the_seated_taps(shared_data, real_source, learned_bn, tmp_path, capsys, subtests):
-    """Issue 13: trained on the standing recordings only, centred HMMs call both seated taps tap; raw ones do not."""
+    """Issue 13: trained on the standing recordings only, centred HMMs call both seated taps tap; raw ones do
+    not."""
     with subtests.test("the seated taps sit apart from every standing repetition"):
         _the_seated_taps_sit_apart_from_every_standing_repetition(real_source)
     for seed in (0, 1, 2):

@@ -1,4 +1,5 @@
-"""Sentence scores and the exact N-best: against brute force over every sentence, on tiny and full grammars."""
+"""Sentence scores and the exact N-best: against brute force over every sentence, on tiny and full
+grammars."""
 
 from __future__ import annotations
 
@@ -299,7 +300,8 @@ def test_exact_nbest_is_fast():
 
 @pytest.mark.slow
 def test_nbest_equals_brute_force_over_the_full_grammar():
-    """All 9,331,200 sentences, streamed slot by slot from the reference expander and scored one by one (~1 min)."""
+    """All 9,331,200 sentences, streamed slot by slot from the reference expander and scored one by one (~1
+    min)."""
     g = load_grammar()
     tree = {name: _as_tree(e) for name, e in g.definitions.items()}
     slots = [sorted(expand(("ref", item.name), tree)) for item in g.sentence.items]

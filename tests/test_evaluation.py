@@ -130,7 +130,8 @@ def test_statistics_equal_a_direct_computation(setup):
 
 
 def test_the_readings_of_p_hmm(setup):
-    """p_HMM per frame (softmax of (1/t) log L) and calibrated (softmax of β log L), with the per-sequence forward."""
+    """p_HMM per frame (softmax of (1/t) log L) and calibrated (softmax of β log L), with the per-sequence
+    forward."""
     _, rec, ev, chunk, *_ = setup
     per_frame = ev.p_hmm(chunk.features, "per-frame")
     calibrated = ev.p_hmm(chunk.features, "calibrated")

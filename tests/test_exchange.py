@@ -77,7 +77,8 @@ def _agrum_posterior(path, target, evidence):
 
 
 def _check(bn, path, names, states, tool, tol=TOL):
-    """Every query answered by ``tool`` on ``path`` equals glu's answer on ``bn`` (names/states map glu → file)."""
+    """Every query answered by ``tool`` on ``path`` equals glu's answer on ``bn`` (names/states map glu →
+    file)."""
     engine = InferenceEngine(bn)
     extra = {names(k): states(k, v) for k, v in seen_evidence(bn).items()}
     model = _pgmpy(path) if tool == "pgmpy" else None

@@ -1,9 +1,10 @@
 """The corpus's fast paths equal the straightforward ones bit for bit: gestures, PCHIP, spike check, repair.
 
 The corpus (:mod:`glu.experiments.corpus`) simulates a chunk of episodes at once
-(:mod:`glu.gestures._synthetic_batch`, :mod:`glu.gestures._repair_many`, :func:`glu.gestures._pchip.pchip_many`);
-its results must be those of one gesture at a time (``synthesize_gesture(...).features()``, SciPy's
-``PchipInterpolator`` and ``median_filter``, :func:`glu.gestures.trajectories.repair`), exactly.
+(:mod:`glu.gestures._synthetic_batch`, :mod:`glu.gestures._repair_many`,
+:func:`glu.gestures._pchip.pchip_many`); its results must be those of one gesture at a time
+(``synthesize_gesture(...).features()``, SciPy's ``PchipInterpolator`` and ``median_filter``,
+:func:`glu.gestures.trajectories.repair`), exactly.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Features as the original (docs/method.md §4.2): torso-centred hand, body-size factors over the middle 45–55 %."""
+"""Features as the original (docs/method.md §4.2): torso-centred hand, body-size factors over the middle 45–55
+%."""
 
 from __future__ import annotations
 

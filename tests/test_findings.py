@@ -86,8 +86,9 @@ def test_finding_verdicts_and_sentences():
     assert "holds in 0 of 8 cells, with no difference in 0 and the reverse in 8" in sentences[1]
     brief = fd.finding_sentences(v, {**CELLS[1]}, brief=True)  # the README's form
     assert brief[0] == (
-        "Jeffrey beats virtual: in the reference cell (100% of the gesture seen) it holds (difference -0.050 "
-        "[-0.070, -0.030]); across the design it holds in 4 of 8 cells, with no difference in 4 and the reverse in 0."
+        "Jeffrey beats virtual: in the reference cell (100% of the gesture seen) it holds (difference "
+        "-0.050 [-0.070, -0.030]); across the design it holds in 4 of 8 cells, with no difference in "
+        "4 and the reverse in 0."
     )
     early = fd.finding_verdicts(
         diff_rows(), (fd.Finding("early", "effect", "log_loss", "jeffrey", "virtual", early=True),)

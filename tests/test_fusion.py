@@ -1,4 +1,5 @@
-"""Fusion strategies against closed forms built from pgmpy's hard-evidence posteriors (synthetic and real data)."""
+"""Fusion strategies against closed forms built from pgmpy's hard-evidence posteriors (synthetic and real
+data)."""
 
 from __future__ import annotations
 

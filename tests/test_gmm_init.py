@@ -1,4 +1,5 @@
-"""The HMM states' initial mixtures: glu's compiled EM against scikit-learn's GaussianMixture, array for array.
+"""The HMM states' initial mixtures: glu's compiled EM against scikit-learn's GaussianMixture, array for
+array.
 
 The sums run in another order than scikit-learn's, so the arrays agree to rounding (within 1e-14 of each
 array's scale on these problems, degenerate ones included); 1e-10 is allowed here, and a different number
@@ -143,7 +144,8 @@ def test_a_covariance_that_is_not_positive_definite_is_scikit_learns_error():
 
 
 def test_the_initial_hmm_is_what_scikit_learn_gives(source):
-    """init_left_to_right on real-shaped gesture features, against the same slices fitted by GaussianMixture."""
+    """init_left_to_right on real-shaped gesture features, against the same slices fitted by
+    GaussianMixture."""
     from glu.gestures.corpus import gesture_sequences
 
     seqs = [s.xyz for s in gesture_sequences(source, include_test=False)][:6]

@@ -268,7 +268,8 @@ def test_training_keeps_the_left_to_right_structure(corpus):
 
 @pytest.mark.parametrize(("action", "n_states", "n_mix"), [("grasp", 6, 3), ("tap", 4, 1), ("touch", 3, 2)])
 def test_vectorised_em_with_hmmlearns_covariance_step_equals_hmmlearns_fit(corpus, action, n_states, n_mix):
-    """covariance='hmmlearn' is hmmlearn's GMMHMM update: the same history and parameters after 12 iterations."""
+    """covariance='hmmlearn' is hmmlearn's GMMHMM update: the same history and parameters after 12
+    iterations."""
     from glu.hmm import em as bw
     from glu.hmm.initialisation import init_left_to_right
 
@@ -418,7 +419,8 @@ def mat_params(mat, k):
 
 
 def write_original_mat(models: dict[int, GestureHMM], path) -> None:
-    """Save models in the layout of the originals' .mat files (docs/method.md §4.4), independently of glu's reader."""
+    """Save models in the layout of the originals' .mat files (docs/method.md §4.4), independently of glu's
+    reader."""
     from scipy.io import savemat
 
     out = {}

@@ -117,7 +117,8 @@ def test_virtual_evidence_agrees_with_pgmpy(uniform_bn):
 
 
 def test_jeffrey_rule_is_the_mixture_of_hard_posteriors(uniform_bn):
-    """Jeffrey: p(X | e, q) = Σ_a p(X | e, A=a) q(a), each term from pgmpy; and the Action marginal becomes q."""
+    """Jeffrey: p(X | e, q) = Σ_a p(X | e, A=a) q(a), each term from pgmpy; and the Action marginal becomes
+    q."""
     eng = InferenceEngine(uniform_bn)
     ve = VariableElimination(to_pgmpy(uniform_bn))
     q = np.array([0.15, 0.7, 0.15])
@@ -159,7 +160,8 @@ def test_soft_evidence_certain_equals_hard_evidence(zero_bn):
 
 
 def test_virtual_evidence_on_a_word_agrees_with_pgmpy(uniform_bn):
-    """Soft evidence on a leaf (a word) goes to the junction tree; pgmpy's virtual evidence is the reference."""
+    """Soft evidence on a leaf (a word) goes to the junction tree; pgmpy's virtual evidence is the
+    reference."""
     eng = InferenceEngine(uniform_bn)
     ve = VariableElimination(to_pgmpy(uniform_bn))
     q = np.array([0.3, 0.7])
@@ -244,7 +246,8 @@ def test_brute_force_on_tiny_networks(zero_rows):
 
 
 def test_a_tiny_likelihood_on_the_only_possible_value_is_not_called_impossible():
-    """Virtual evidence is a likelihood: q and c·q give one posterior, however small q is (log-domain safe)."""
+    """Virtual evidence is a likelihood: q and c·q give one posterior, however small q is (log-domain
+    safe)."""
     bn = _tiny_bn(0, zero_rows=False)
     bn.cpts["B"][:] = [[1.0, 0.0], [1.0, 0.0], [0.0, 1.0]]  # B=b1 ⇔ A=a2: only a2 is possible given B=b1
     eng = InferenceEngine(bn)

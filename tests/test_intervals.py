@@ -1,4 +1,5 @@
-"""The streaming Poisson bootstrap: estimates equal direct means, intervals match closed forms, pairs are paired."""
+"""The streaming Poisson bootstrap: estimates equal direct means, intervals match closed forms, pairs are
+paired."""
 
 from __future__ import annotations
 
@@ -183,7 +184,8 @@ def test_two_level_variance_equals_the_closed_form():
 
 
 def test_two_level_interval_equals_a_brute_force_hierarchical_bootstrap():
-    """The pooled mean's percentile interval, against resampling seeds and then each copy's items explicitly."""
+    """The pooled mean's percentile interval, against resampling seeds and then each copy's items
+    explicitly."""
     rng = np.random.default_rng(4)
     data = seeds_data(rng)
     ones = [np.hstack([np.ones((len(x), 1)), x]) for x in data]

@@ -1,4 +1,5 @@
-"""`make lab`: a real JupyterLab, configured by the project, opens the notebooks as notebooks and saves them unchanged."""
+"""`make lab`: a real JupyterLab, configured by the project, opens the notebooks as notebooks and saves them
+unchanged."""
 
 from __future__ import annotations
 
@@ -48,7 +49,8 @@ def _put(url: str, body: dict) -> dict:
 
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
-    """JupyterLab with the project's configuration, on a copy of the notebooks (so saving cannot harm them)."""
+    """JupyterLab with the project's configuration, on a copy of the notebooks (so saving cannot harm
+    them)."""
     root = tmp_path_factory.mktemp("lab-root")
     shutil.copytree(ROOT / "notebooks", root / "notebooks", ignore=shutil.ignore_patterns("*.ipynb"))
     shutil.copy(ROOT / "pyproject.toml", root / "pyproject.toml")  # jupytext's settings
@@ -245,8 +247,9 @@ def _run_in_a_kernel(base: str, kernel_id: str, code: str) -> tuple[dict, list[d
 
 @pytest.mark.parametrize("name", ["02_hmm_training", "08_tcds_figures"])
 def test_saving_from_lab_after_a_kernel_ran_a_cell_keeps_the_file_as_it_is_in_git(lab, name):
-    """As a session in Lab: a real kernel starts for the notebook and runs a cell; Lab then writes the kernel's
-    spec (its display name) and language_info into the notebook's metadata and saves. The file is unchanged."""
+    """As a session in Lab: a real kernel starts for the notebook and runs a cell; Lab then writes the
+    kernel's spec (its display name) and language_info into the notebook's metadata and saves. The file is
+    unchanged."""
     base, root = lab
     path = root / "notebooks" / f"{name}.py"
     before = path.read_bytes()

@@ -1,4 +1,5 @@
-"""The batched best description equals the exact N-best's first sentence; agreement reads the sentence right."""
+"""The batched best description equals the exact N-best's first sentence; agreement reads the sentence
+right."""
 
 from __future__ import annotations
 

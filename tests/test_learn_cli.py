@@ -1,5 +1,5 @@
-"""`glu learn-gestures` writes a recogniser that `glu recognize` and `glu anticipate` take; `glu learning-curves`
-writes the study's tables; bad input is one line with exit status 2."""
+"""`glu learn-gestures` writes a recogniser that `glu recognize` and `glu anticipate` take;
+`glu learning-curves` writes the study's tables; bad input is one line with exit status 2."""
 
 from __future__ import annotations
 

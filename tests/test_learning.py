@@ -1,4 +1,5 @@
-"""Structure and parameter learning against pgmpy's scores and estimators and closed forms (the original: test_reference)."""
+"""Structure and parameter learning against pgmpy's scores and estimators and closed forms (the original:
+test_reference)."""
 
 from __future__ import annotations
 

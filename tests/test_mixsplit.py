@@ -1,4 +1,5 @@
-"""The originals' training recipe (mixsplit): closed forms, EM properties, hmmlearn, and the recipe comparison."""
+"""The originals' training recipe (mixsplit): closed forms, EM properties, hmmlearn, and the recipe
+comparison."""
 
 from __future__ import annotations
 
@@ -115,7 +116,8 @@ def test_a_stage_is_hmmlearns_baum_welch(taps):
 
 
 def _posteriors_by_hand(hmm, X):
-    """Component posteriors r[t, q, m] of one sequence, by a log-domain forward-backward written here (scipy)."""
+    """Component posteriors r[t, q, m] of one sequence, by a log-domain forward-backward written here
+    (scipy)."""
     from scipy.special import logsumexp
     from scipy.stats import multivariate_normal
 

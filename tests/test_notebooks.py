@@ -1,4 +1,5 @@
-"""Every notebook runs headless with papermill in quick mode, writes its figures, and does so deterministically."""
+"""Every notebook runs headless with papermill in quick mode, writes its figures, and does so
+deterministically."""
 
 from __future__ import annotations
 
@@ -98,7 +99,8 @@ def test_notebook_quick_run_writes_its_figures(quick_runs, name):
 
 
 def test_no_figure_has_overlapping_text_or_a_legend_on_data(quick_runs):
-    """Every figure of the quick run passes glu.plots.overlap (tests/test_figure_overlap.py tests the check)."""
+    """Every figure of the quick run passes glu.plots.overlap (tests/test_figure_overlap.py tests the
+    check)."""
     out, _ = quick_runs[0]
     pngs = sorted((out / "figures").glob("*.png"))
     expected = {f for m in MANIFESTS.values() for f in m.figures if f not in m.real_only}

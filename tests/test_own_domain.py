@@ -3,9 +3,9 @@
 A person waves at, points at or pushes a cup or a ball, and says what happened; the schema calls the action
 node ``Motion`` (``role: action``) and its words are only the content words — the grammar adds "the",
 "person", "it", "and", "but", which are no nodes of the network. The chain learn → fuse → describe runs in
-the Python API and on the command line (and with gesture HMMs trained from the command line on the lab's own recordings).
-The generator below is the reference: pushing makes things fall, a ball more than a cup; waving and
-pointing leave them still.
+the Python API and on the command line (and with gesture HMMs trained from the command line on the lab's own
+recordings). The generator below is the reference: pushing makes things fall, a ball more than a cup; waving
+and pointing leave them still.
 """
 
 from __future__ import annotations

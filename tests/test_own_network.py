@@ -1,4 +1,5 @@
-"""A lab's own network: a made-up tool-use dataset with other nodes and words runs learn → query → fuse → describe.
+"""A lab's own network: a made-up tool-use dataset with other nodes and words runs learn → query → fuse →
+describe.
 
 The generator below is the reference: a robot pulls or pushes a ball or a cube with a stick, a hook or a
 rake; the hook and the rake bring objects closer, the stick pushes them away, balls move farther than
@@ -44,7 +45,8 @@ TOOLS, SHAPES = ("stick", "hook", "rake"), ("ball", "cube")
 
 
 def tool_use_table(n: int = 600, seed: int = 0) -> list[dict[str, str]]:
-    """The made-up experiments: Tool and ObjShape set, Direction and Distance by simple rules, a description."""
+    """The made-up experiments: Tool and ObjShape set, Direction and Distance by simple rules, a
+    description."""
     rng = np.random.default_rng(seed)
     rows = []
     for _ in range(n):

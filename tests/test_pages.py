@@ -1,7 +1,8 @@
 """The generated parts of the README and of docs/ are what the code writes, never typed by hand.
 
 * the README's story table — from the notebooks' manifests (:mod:`glu.run.generated`);
-* the command table of ``docs/cli.md`` — from the parser of ``glu`` (:func:`glu.cli.readme_cmds.command_table`);
+* the command table of ``docs/cli.md`` — from the parser of ``glu``
+  (:func:`glu.cli.readme_cmds.command_table`);
 * the tables of ``docs/speed.md`` — from ``benchmarks/results/*.json`` (:mod:`glu.run.speed`), which every
   benchmark writes in one schema.
 
@@ -147,9 +148,9 @@ def test_the_readme_stays_a_front_page():
     assert len(lines) <= 250, f"README.md has {len(lines)} lines; move detail into docs/"
     assert lines[2:6] == [
         "```bash",
-        "make reproduce   # fresh machine: create .venv, install glu, run every notebook → figures/, recordings/, "
-        "results/",
-        "make test        # fresh machine: create .venv, install glu and its test tools, lint (ruff), run the test "
-        "suite",
+        "make reproduce   # fresh machine: create .venv, install glu, run every notebook → figures/, "
+        "recordings/, results/",
+        "make test        # fresh machine: create .venv, install glu and its test tools, lint (ruff), "
+        "run the test suite",
         "```",
     ]

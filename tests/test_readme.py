@@ -83,7 +83,8 @@ def corpus_tables() -> dict:
     metrics.append({**metrics[0], "noise": 0.1, "estimate": 9.9})  # a row of one noise level: never quoted
     findings = [
         {
-            "finding": "Jeffrey's rule anticipates the effect with a lower log-loss than virtual evidence (the originals')",
+            "finding": "Jeffrey's rule anticipates the effect with a lower log-loss than virtual evidence "
+            "(the originals')",
             **cell,
             "viewpoint": "all",
             "fraction": 1.0,
@@ -260,7 +261,8 @@ def learning_tables() -> dict:
 
 @pytest.fixture
 def summary() -> dict:
-    """A summary with known numbers in every table the README reads (the numbers are inputs, not glu's output)."""
+    """A summary with known numbers in every table the README reads (the numbers are inputs, not glu's
+    output)."""
     bn = [
         ("edges", 66, 66, 0),
         ("differing_edges", 0, 0, 0),
@@ -370,8 +372,8 @@ def test_the_section_reads_every_number_from_the_summary(summary):
         "7,200 episodes over 10 recogniser seeds",
         "95 % two-level intervals",
         "learned from 100 or 1,270 simulated experiments",
-        "followed through the 2 cells of the design (the reference cell: uniform actions, generating network, "
-        "p_HMM per-frame;",
+        "followed through the 2 cells of the design (the reference cell: uniform actions, generating "
+        "network, p_HMM per-frame;",
         "in the reference cell (100% of the gesture seen) it holds (difference -0.054 [-0.070, -0.040])",
         "holds in 1 of 2 cells, with no difference in 1",
         "log-loss 0.913 [0.893, 0.933] for the network alone, hard 1.321, virtual 0.950, jeffrey 0.895",
@@ -392,11 +394,11 @@ def test_the_section_reads_every_number_from_the_summary(summary):
         "`centred` at 3 cm.",
         "3 seeds × 10,000 episodes",
         "right for 0.58 of the episodes on every object, with words for 0.94",
-        "true labels (0.993) within the interval in 2 of 3 conditions (ambiguity × words): spheres without words "
-        "(hard after 10); still with words (soft after 100).",
+        "true labels (0.993) within the interval in 2 of 3 conditions (ambiguity × words): spheres "
+        "without words (hard after 10); still with words (soft after 100).",
         "It does not in still without words (best soft 0.520 [gap -0.573 to -0.423]).",
-        "leave-one-segment-out accuracy (centred features) is 0.64 with soft labels and 0.73 with the true ones (mean "
-        "of 3 draws; the network's labels right for 0.61)",
+        "leave-one-segment-out accuracy (centred features) is 0.64 with soft labels and 0.73 with the "
+        "true ones (mean of 3 draws; the network's labels right for 0.61)",
     ):
         assert expected in " ".join(text.split()), expected
     assert readme.matches_template(text)

@@ -85,7 +85,8 @@ def _learning_reproduces_the_original_network(lab_table, learned_bn, original_bn
         assert learned_bn.parents[node] == ()
     worst = max(float(np.abs(learned_bn.cpts[n] - original_bn.cpts[n]).max()) for n in original_bn.nodes)
     assert worst == 0.0
-    # the quirk (docs/method.md §3.4): all-zero rows for but/and/falls/falling at three (ObjVel, HandVel, Contact)
+    # the quirk (docs/method.md §3.4): all-zero rows for but/and/falls/falling at three (ObjVel, HandVel,
+    # Contact)
     zero = {w: 3 for w in ("but", "and", "falls", "falling")}
     assert original_bn.zero_rows() == zero and learned_bn.zero_rows() == zero
     rows = np.argwhere(learned_bn.cpts["but"].sum(axis=-1) == 0)

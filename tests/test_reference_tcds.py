@@ -1,4 +1,5 @@
-"""Reference tests against TCDS 2020 as printed: the sentence lists, the conjunction bars, effect anticipation.
+"""Reference tests against TCDS 2020 as printed: the sentence lists, the conjunction bars, effect
+anticipation.
 
 The published numbers are in ``glu/resources/published/tcds2020.json`` (typed once from the authors' LaTeX
 and figure files, each entry naming where). These tests need the real data (the originals' sampled
@@ -83,7 +84,8 @@ def _conjunction_bars_of_fig7(learned_bn):
 
 
 def _exact_search_under_each_score(real_source, learned_bn):
-    """The issue's example: under {grasp, medium} the original score's best of the grammar is 9th under the paper's."""
+    """The issue's example: under {grasp, medium} the original score's best of the grammar is 9th under the
+    paper's."""
     from glu.bn import InferenceEngine
     from glu.language import candidate_sentences
 
@@ -193,7 +195,8 @@ def test_published_descriptions(shared_data, real_source, learned_bn, original_b
 
 
 def test_published_effect_anticipation(shared_data, real_source, learned_bn, original_bn, capsys, subtests):
-    """TCDS Fig. 5 and its caption: effect anticipation for the sphere and the box with the original models."""
+    """TCDS Fig. 5 and its caption: effect anticipation for the sphere and the box with the original
+    models."""
     for case in ("sphere", "box"):
         with subtests.test("`glu anticipate` matches the published curves, bars and caption", case=case):
             _anticipate_matches_the_published_curves_bars_and_caption(shared_data, capsys, case)

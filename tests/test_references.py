@@ -2,8 +2,8 @@
 
 Every mention of a ``*.md`` file — in the package, the tests, the notebooks, the benchmarks, the pages,
 ``pyproject.toml`` and the ``Makefile`` — names a file of the repository; every link with an anchor
-(a page's name, ``#`` and a heading's anchor) and every section cited as ``docs/method.md §N.M`` names a heading of that page; and
-every module the README's package map names exists.
+(a page's name, ``#`` and a heading's anchor) and every section cited as ``docs/method.md §N.M`` names a
+heading of that page; and every module the README's package map names exists.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""``glu run`` shows each code cell as it starts (cell n/N, its first line, the time so far); ``--quiet`` nothing."""
+"""``glu run`` shows each code cell as it starts (cell n/N, its first line, the time so far); ``--quiet``
+nothing."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Learning gestures from effects (glu.experiments.self_supervised, online_learning, learning_curves, two_level).
+"""Learning gestures from effects (glu.experiments.self_supervised, online_learning, learning_curves,
+two_level).
 
 References: the network's own single queries, the unweighted recogniser training, a hand-written online
 loop over the readable E- and M-steps, learners run alone against learners run together, and closed forms

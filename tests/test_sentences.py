@@ -1,4 +1,5 @@
-"""Sentences of a grammar: hand-counted tiny grammars, enumeration against direct expansion, HSGen sampling."""
+"""Sentences of a grammar: hand-counted tiny grammars, enumeration against direct expansion, HSGen
+sampling."""
 
 from __future__ import annotations
 

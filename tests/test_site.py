@@ -1,5 +1,5 @@
-"""The documentation site (glu.run.site): captions from the notebooks' prose, executed notebooks without machine
-paths, and a small run on a data folder on disk whose site shows none of this machine's paths."""
+"""The documentation site (glu.run.site): captions from the notebooks' prose, executed notebooks without
+machine paths, and a small run on a data folder on disk whose site shows none of this machine's paths."""
 
 from __future__ import annotations
 
@@ -74,7 +74,8 @@ def test_the_executed_notebook_names_the_published_folders_not_the_staging_one(t
         cells=[
             nbformat.v4.new_code_cell("data = None  # data folder\nout_dir = None  # outputs"),
             nbformat.v4.new_code_cell(
-                f'# Parameters\nseed = 0\ndata = "{tmp_path}/data"\nout_dir = "{tmp_path}/{STAGING}/abc/01/out"\n',
+                f'# Parameters\nseed = 0\ndata = "{tmp_path}/data"\nout_dir = '
+                f'"{tmp_path}/{STAGING}/abc/01/out"\n',
                 metadata={"tags": ["injected-parameters"]},
             ),
         ]

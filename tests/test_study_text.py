@@ -79,8 +79,8 @@ def test_study_sentences():
     )
     assert "Turned by 90–180°: raw 0.35–0.37, `centred+rotated` 0.74–0.76, `body` 0.81–0.83." in text[0]
     assert (
-        text[1]
-        == "A mirror image: raw 0.33 [0.28, 0.38], `centred+mirrored` 0.81 [0.76, 0.86], `body` 0.34 [0.29, 0.39]."
+        text[1] == "A mirror image: raw 0.33 [0.28, 0.38], `centred+mirrored` 0.81 [0.76, 0.86], `body` 0.34 "
+        "[0.29, 0.39]."
     )
     assert "`rotated` at 0°." in text[2] and "mirrored" not in text[2]
     assert "better than 0.40 [0.30, 0.50] (raw, 0°), while the robot recognises its own at 0.97." in text[3]
@@ -142,8 +142,9 @@ def test_replication_sentences():
         }
     )
     assert effect_sentence(effect) == (
-        "After a tap: on a small sphere, p(ObjVel) is slow 0.048, medium 0.429, fast 0.524 (most likely fast); "
-        "on a big box, p(ObjVel) is slow 0.999, medium 0.001, fast 0.000 (most likely slow)."
+        "After a tap: on a small sphere, p(ObjVel) is slow 0.048, medium 0.429, fast 0.524 (most "
+        "likely fast); on a big box, p(ObjVel) is slow 0.999, medium 0.001, fast 0.000 (most likely "
+        "slow)."
     )
     change = pd.DataFrame(
         {"word": ["rolls", "pokes", "the"], "delta": [0.064, -0.055, 0.0], "shown": [True, True, False]}
@@ -153,7 +154,8 @@ def test_replication_sentences():
     assert text[0] == 'Adding the tap raises "rolls" (+0.064) most, and lowers "pokes" (-0.055) most.'
     assert (
         text[1]
-        == "The text and code variants of the evidence give Δp(w) equal to rounding (max |difference| 2.0e-16)."
+        == "The text and code variants of the evidence give Δp(w) equal to rounding (max |difference| "
+        "2.0e-16)."
     )
     reproduced = pd.DataFrame({"same_sentence": [True] * 3 + [False], "same_score": [True, True, None, None]})
     and_but = pd.DataFrame(
@@ -187,7 +189,8 @@ def test_replication_sentences():
     )
     assert (
         text[4]
-        == "The two scores pick different best sentences for 1 of 2 evidence sets (fig7a: rank 9 under the other)."
+        == "The two scores pick different best sentences for 1 of 2 evidence sets (fig7a: rank 9 under "
+        "the other)."
     )
     assert (
         text[5]

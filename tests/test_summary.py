@@ -1,4 +1,5 @@
-"""The run summary: which tables count as comparisons with a reference (written by glu.run.summary.write_summary)."""
+"""The run summary: which tables count as comparisons with a reference (written by
+glu.run.summary.write_summary)."""
 
 from __future__ import annotations
 

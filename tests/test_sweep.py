@@ -1,4 +1,5 @@
-"""glu evaluate: settings and their errors, resuming, and the same table locally and on a real Dask cluster."""
+"""glu evaluate: settings and their errors, resuming, and the same table locally and on a real Dask
+cluster."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""The synthetic generator: schema, determinism, physics, range checks, and that its structure is learnable."""
+"""The synthetic generator: schema, determinism, physics, range checks, and that its structure is
+learnable."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""YARP hand logs: exact loading, line-precise errors (also under fuzzing), gap/spike/jump detection and repair."""
+"""YARP hand logs: exact loading, line-precise errors (also under fuzzing), gap/spike/jump detection and
+repair."""
 
 from __future__ import annotations
 

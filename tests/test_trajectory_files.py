@@ -1,4 +1,5 @@
-"""Own recordings: CSV/TSV/NPY trajectories and skeletons read as the YARP logs are; unfamiliar gestures flagged."""
+"""Own recordings: CSV/TSV/NPY trajectories and skeletons read as the YARP logs are; unfamiliar gestures
+flagged."""
 
 from __future__ import annotations
 

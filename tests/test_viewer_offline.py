@@ -1,5 +1,6 @@
-"""The inline Rerun viewer of notebook 08 works offline: its JavaScript and WebAssembly come from the installed
-rerun-notebook, served on localhost by the kernel (glu.machine.viewer_class), never from app.rerun.io."""
+"""The inline Rerun viewer of notebook 08 works offline: its JavaScript and WebAssembly come from the
+installed rerun-notebook, served on localhost by the kernel (glu.machine.viewer_class), never from
+app.rerun.io."""
 
 from __future__ import annotations
 

@@ -78,7 +78,8 @@ class NetworkArrays:
 
 @dataclass(frozen=True, eq=False)
 class ConditionedPlan:
-    """A :class:`~glu.bn.propagation.QueryPlan` on the network conditioned on ``observed``, and how rows enter it.
+    """A :class:`~glu.bn.propagation.QueryPlan` on the network conditioned on ``observed``, and how rows enter
+    it.
 
     Attributes
     ----------

@@ -127,7 +127,8 @@ class CoreEngine(BatchQueries, InferenceEngine, method="core"):
             )
             rows.extend(full)
         self.base = base
-        """P(core, all unobserved leaves summed out), shape ``self.shape`` (not normalised when rows are zero)."""
+        """P(core, all unobserved leaves summed out), shape ``self.shape`` (not normalised when rows are
+        zero)."""
         self.base_mass = float(base.sum())
         self.leaf_table = np.ascontiguousarray(np.array(rows)) if rows else np.zeros((0, *self.shape))
         """Stacked R_L[v] over the full core, shape (Σ_L r_L, *core shape)."""
@@ -269,7 +270,8 @@ class CoreEngine(BatchQueries, InferenceEngine, method="core"):
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> np.ndarray:
-        """P(word = present | evidence) for every binary word node, shape (n_words,), in ``binary_leaves`` order."""
+        """P(word = present | evidence) for every binary word node, shape (n_words,), in ``binary_leaves``
+        order."""
         if self._needs_junction(soft):
             return self.junction().word_probability_array(evidence, soft, soft_rule)
         p, idx, _, leaf, _, total = self._posterior_core(evidence, soft, soft_rule)

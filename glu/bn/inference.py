@@ -183,7 +183,8 @@ class InferenceEngine:
             raise UnknownNodeError(unknown_node_message(node, self.nodes))
 
     def _codes(self, node: str, values: Sequence, n: int) -> np.ndarray:
-        """A batch column as value indices, shape (n,): -1 where not observed (None, NaN, a negative index)."""
+        """A batch column as value indices, shape (n,): -1 where not observed (None, NaN, a negative
+        index)."""
         self._check_node(node)
         if isinstance(values, np.ndarray) and values.dtype.kind in "iu" and values.ndim == 1:
             if len(values) != n:
@@ -216,8 +217,8 @@ class InferenceEngine:
         return targets
 
     def _batch_soft(self, node: str, arr: np.ndarray, n: int, evidence: Mapping[str, Sequence]) -> np.ndarray:
-        """Batch soft evidence on ``node`` checked (shape (n, n_values), every row a distribution, the node not
-        also in the hard ``evidence``) and normalised to sum 1 per row."""
+        """Batch soft evidence on ``node`` checked (shape (n, n_values), every row a distribution, the node
+        not also in the hard ``evidence``) and normalised to sum 1 per row."""
         self._check_node(node)
         if node in evidence:
             raise EvidenceError(f"{node} is given twice: as hard evidence and as soft evidence")
@@ -254,11 +255,13 @@ class InferenceEngine:
                 ) from None
             if q.ndim != 1:
                 raise EvidenceError(
-                    f"soft evidence on {node} must be a flat list of {len(values)} numbers ({', '.join(values)})"
+                    f"soft evidence on {node} must be a flat list of {len(values)} numbers "
+                    f"({', '.join(values)})"
                 )
             if q.shape != (len(values),):
                 raise EvidenceError(
-                    f"soft evidence on {node} has {q.size} entries; expected {len(values)} ({', '.join(values)})"
+                    f"soft evidence on {node} has {q.size} entries; expected {len(values)} "
+                    f"({', '.join(values)})"
                 )
         # an entry above 1 is refused before the sum, which could overflow (1e308 + 1e308)
         if (
@@ -373,7 +376,8 @@ class InferenceEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> np.ndarray:
-        """P(word = present | evidence) for every binary leaf, shape (n_words,), in ``binary_leaves`` order."""
+        """P(word = present | evidence) for every binary leaf, shape (n_words,), in ``binary_leaves``
+        order."""
         if not self.binary_leaves:
             return np.zeros(0)
         res = self.query(list(self.binary_leaves), evidence, soft, soft_rule)

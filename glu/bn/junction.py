@@ -72,7 +72,8 @@ CONDITION_ROWS = 32
 
 
 class JunctionTreeEngine(JunctionBatch, InferenceEngine, method="junction"):
-    """Exact inference in any discrete :class:`BayesNet` by junction tree propagation (see the module docstring).
+    """Exact inference in any discrete :class:`BayesNet` by junction tree propagation (see the module
+    docstring).
 
     Parameters
     ----------
@@ -117,7 +118,8 @@ class JunctionTreeEngine(JunctionBatch, InferenceEngine, method="junction"):
         self._max_table = max_table
         self._arrays: NetworkArrays | None = None
         self.condition_rows = CONDITION_ROWS
-        """Rows sharing a pattern from which a batch is planned per pattern (tests set it to force either way)."""
+        """Rows sharing a pattern from which a batch is planned per pattern (tests set it to force either
+        way)."""
 
     def _clique_size(self, c: int) -> tuple[int, int]:
         return self.tree.size(self.tree.cliques[c]), c

@@ -87,7 +87,8 @@ def k2_parents(
 def learn_structure(
     df: pd.DataFrame, schema: Schema | None = None, max_parents: int = 10
 ) -> dict[str, tuple[str, ...]]:
-    """K2 + BIC in two steps (affordance nodes in order, then words among affordance nodes): node → parents."""
+    """K2 + BIC in two steps (affordance nodes in order, then words among affordance nodes): node →
+    parents."""
     schema = schema or default_schema()
     codes = encode(df, schema)
     return _structure(codes, schema, max_parents)

@@ -210,9 +210,9 @@ def plan_from_scopes(
     if largest > limit:
         worst = raw[sizes.index(largest)]
         raise ModelError(
-            f"exact inference in this network needs a table of {largest:,} entries "
-            f"({len(worst)} variables: elimination width {width}); the limit is {limit:,} — "
-            f"raise it with --max-table, ${MAX_TABLE_ENV} or max_table= (memory: {_bytes(largest * 8)} for that "
+            f"exact inference in this network needs a table of {largest:,} entries ({len(worst)} "
+            f"variables: elimination width {width}); the limit is {limit:,} — raise it with "
+            f"--max-table, ${MAX_TABLE_ENV} or max_table= (memory: {_bytes(largest * 8)} for that "
             "table alone)"
         )
     # the elimination tree: clique k joined to the clique of its first-eliminated neighbour

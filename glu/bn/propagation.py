@@ -4,10 +4,10 @@ A :class:`QueryPlan` says, for one evidence pattern, which tables to start from,
 and where to read each target's marginal; :func:`propagate` runs it on tables whose *last* axis is the
 rows (size 1 for a table that is the same in every row: NumPy broadcasting keeps the work of the parts of
 the tree that no evidence reaches at one row). With the rows last, every product and sum runs its inner
-loop over a contiguous run of rows, whatever the clique's shape. The junction tree engine (:mod:`glu.bn.junction`) builds two
-kinds of plan: on the network's one junction tree, with the messages of the network without evidence
-computed in advance; and on the junction tree of the network conditioned on an evidence pattern
-(:mod:`glu.bn.conditioned`), whose smaller tables pay off over a batch of rows.
+loop over a contiguous run of rows, whatever the clique's shape. The junction tree engine
+(:mod:`glu.bn.junction`) builds two kinds of plan: on the network's one junction tree, with the messages of
+the network without evidence computed in advance; and on the junction tree of the network conditioned on an
+evidence pattern (:mod:`glu.bn.conditioned`), whose smaller tables pay off over a batch of rows.
 
 Messages are not rescaled, unless a root's mass falls below :data:`TINY` (or to 0, which could be an
 underflow): then the plan runs again with every new message normalised to sum 1 per row, so that evidence

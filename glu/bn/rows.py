@@ -5,7 +5,8 @@ A CPT of shape (*parent cardinalities, cardinality) has one row per parent confi
 
 >>> values = {"A": ("a0", "a1"), "B": ("b0", "b1")}
 >>> cpt = np.array([[0.5, 0.5], [0.25, 0.75001]])
->>> fixed, report = normalise_rows(values, {"A": (), "B": ("A",)}, {"A": np.array([0.5, 0.5]), "B": cpt}, 1e-4)
+>>> fixed, report = normalise_rows(values, {"A": (), "B": ("A",)},
+...                                {"A": np.array([0.5, 0.5]), "B": cpt}, 1e-4)
 >>> report["rows"], report["at"], round(float(fixed["B"][1].sum()), 12)
 (1, 'P(B | A=a1)', 1.0)
 """

@@ -5,8 +5,8 @@ some core nodes fixed per row (e.g. the action and the object, chosen by a scena
 chose them on the robot). It draws from exactly the distribution the engine answers queries with:
 
 1. the free core nodes jointly from ``P(core)`` times the leaves' row masses, sliced at the fixed values and
-   normalised — so with the original's all-zero word rows (docs/method.md §3.4) the configurations they exclude
-   are never drawn, as they have probability 0 in every query;
+   normalised — so with the original's all-zero word rows (docs/method.md §3.4) the configurations they
+   exclude are never drawn, as they have probability 0 in every query;
 2. each leaf (word) from its CPT row given its parents, ``P(w | pa) / m_w(pa)``.
 
 Fixing nodes is an intervention on them (their own distribution is replaced by the caller's), which for
@@ -39,7 +39,8 @@ from glu.schema import unknown_node_message
 
 
 def categorical(probs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """One draw per row of ``probs`` (shape (n, k), rows with a positive sum, not necessarily 1): int, shape (n,).
+    """One draw per row of ``probs`` (shape (n, k), rows with a positive sum, not necessarily 1): int, shape
+    (n,).
 
     Uses one uniform number per row (inverse CDF), so the draws depend only on ``rng`` and ``probs``.
     """

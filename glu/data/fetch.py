@@ -190,7 +190,8 @@ def _check_destination(dest: Path) -> None:
 
 
 def publish(partial: Path, dest: Path) -> None:
-    """Make the complete folder ``partial`` the folder ``dest``; the other files of an existing ``dest`` are kept.
+    """Make the complete folder ``partial`` the folder ``dest``; the other files of an existing ``dest`` are
+    kept.
 
     They are linked into ``partial`` first, then :func:`glu.files.replace_folder` swaps the folders, so at
     no moment does ``dest`` hold a mix of old and new files.

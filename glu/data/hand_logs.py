@@ -6,8 +6,8 @@ A hand log (``gestures/<recording>/data.log``) has one frame a line, about 30 fr
     -1 1495933414.180140 644.291918 -809.62949 -934.764515
 
 ``index`` is the YARP envelope counter (an integer, ``-1`` when absent), ``timestamp`` is in seconds, and
-``x y z`` are the hand features as logged (docs/method.md §4.2: the right hand minus the torso, x and z divided
-by the shoulder distance, y by the neck–torso distance, all × 1000 — that is, 1000 × the units of the
+``x y z`` are the hand features as logged (docs/method.md §4.2: the right hand minus the torso, x and z
+divided by the shoulder distance, y by the neck–torso distance, all × 1000 — that is, 1000 × the units of the
 original models). Blank lines are skipped and do not count as frames. Timestamps must increase.
 
 >>> log = parse_hand_log("-1 10.0 1 2 3\n-1 10.033 4 5 6\n")
@@ -128,8 +128,9 @@ def _parse_line(line: bytes, source: str, lineno: int) -> tuple[float, float, fl
             raise DataError(f"{source}:{lineno}:{col}: {name} {f!r} is not a finite number: {_show(line)}")
         if name != "timestamp" and abs(v) > MAX_LOGGED_COORDINATE:
             raise DataError(
-                f"{source}:{lineno}:{col}: {name} {f!r} is outside ±{MAX_LOGGED_COORDINATE:,.0f}, the range of "
-                f"a hand relative to the torso in logged units (1000 × body units): {_show(line)}"
+                f"{source}:{lineno}:{col}: {name} {f!r} is outside ±{MAX_LOGGED_COORDINATE:,.0f}, the "
+                "range of a hand relative to the torso in logged units (1000 × body units): "
+                f"{_show(line)}"
             )
         values.append(v)
     return values[0], values[1], values[2], values[3]

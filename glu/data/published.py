@@ -48,7 +48,8 @@ def published(name: str = TCDS2020) -> dict[str, Any]:
 
 
 def num2str(x: float) -> str:
-    """``x`` as MATLAB's ``num2str`` prints a scalar: ``max(digits before the point, 1) + 4`` significant digits.
+    """``x`` as MATLAB's ``num2str`` prints a scalar: ``max(digits before the point, 1) + 4`` significant
+    digits.
 
     That is 5 significant digits below 1 in magnitude, trailing zeros dropped (how the originals printed
     every sentence score).

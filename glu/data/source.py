@@ -1,7 +1,7 @@
 """Where the data comes from: ``--data DIR``, ``$GLU_DATA_DIR``, the fetched data, else synthetic.
 
-The fetched data is ``data/real/`` in a source checkout and the user's data folder (``~/.local/share/glu/real``
-on Linux) when glu is installed (:mod:`glu.paths`).
+The fetched data is ``data/real/`` in a source checkout and the user's data folder
+(``~/.local/share/glu/real`` on Linux) when glu is installed (:mod:`glu.paths`).
 
 A data folder has the layout of the public data (and of ``glu data fetch`` / ``glu data synth``)::
 
@@ -97,8 +97,8 @@ class DataSource:
         if self.origin == "data/real":
             return f"fetched into {paths.HERE.real_data_label}"
         return (
-            f"no real data found: no --data, no ${paths.DATA_ENV_VAR}, nothing in {paths.HERE.real_data_label} "
-            "(`glu data fetch` downloads it)"
+            f"no real data found: no --data, no ${paths.DATA_ENV_VAR}, nothing in "
+            f"{paths.HERE.real_data_label} (`glu data fetch` downloads it)"
         )
 
     def location(self) -> str:
@@ -148,7 +148,8 @@ class DataSource:
         return self.optional(f"{GESTURES}/{recording}/{HAND_LOG}") is not None
 
     def hand_log(self, recording: str) -> Path:
-        """The hand log ``gestures/<recording>/data.log``; :class:`DataError` naming the recordings if absent."""
+        """The hand log ``gestures/<recording>/data.log``; :class:`DataError` naming the recordings if
+        absent."""
         if not self.has_hand_log(recording):
             have = self.recordings()
             raise DataError(
@@ -180,7 +181,8 @@ def check_words(words: str) -> str:
 
 
 def resolve_data(data: str | os.PathLike | None = None) -> DataSource:
-    """Choose the data source: ``data`` if given, else ``$GLU_DATA_DIR``, else the fetched data, else synthetic.
+    """Choose the data source: ``data`` if given, else ``$GLU_DATA_DIR``, else the fetched data, else
+    synthetic.
 
     The fetched data is :data:`glu.paths.REAL_DATA_DIR` (``data/real/`` in a checkout, the user's data
     folder when installed).
@@ -212,7 +214,8 @@ def _folder_source(root: Path, origin: str) -> DataSource:
         )
     if not (root / "affordance-words").is_dir() and not (root / "gestures").is_dir():
         raise DataError(
-            f"{root}: not a glu data folder (given by {where}): it has neither affordance-words/ nor gestures/"
+            f"{root}: not a glu data folder (given by {where}): it has neither affordance-words/ nor "
+            "gestures/"
         )
     marker = root / SYNTHETIC_MARKER
     if marker.is_file() and not _is_published(root):  # the checksums decide: a stray marker cannot relabel

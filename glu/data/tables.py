@@ -286,8 +286,8 @@ def read_experiment_table(path: str | os.PathLike, schema: Schema) -> pd.DataFra
             bad = np.flatnonzero(~present & ~cell.isin(_ABSENT))
             if bad.size:
                 raise DataError(
-                    f"{path}:{bad[0] + 2}: column {w}: {raw[w].iloc[bad[0]]!r}; allowed: present/absent, 1/0, "
-                    f"{w}/-"
+                    f"{path}:{bad[0] + 2}: column {w}: {raw[w].iloc[bad[0]]!r}; allowed: "
+                    f"present/absent, 1/0, {w}/-"
                 )
             columns[w] = pd.Categorical.from_codes(
                 present.to_numpy().astype(np.int8), categories=list(WORD_VALUES)

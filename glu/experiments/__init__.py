@@ -9,7 +9,8 @@
   with two-level intervals, and what it finds (``docs/corpus-evaluation.md``);
 * :mod:`~glu.experiments.p_hmm` — p_HMM's three readings on held-out real segments;
 * :mod:`~glu.experiments.correspondence`, :mod:`~glu.experiments.two_views`, :mod:`~glu.experiments.nested`,
-  :mod:`~glu.experiments.seated` — the correspondence problem, synthetic and real (``docs/correspondence.md``);
+  :mod:`~glu.experiments.seated` — the correspondence problem, synthetic and real
+  (``docs/correspondence.md``);
 * :mod:`~glu.experiments.replication_text`, :mod:`~glu.experiments.correspondence_text` — the notebooks'
   interpretation, written from their tables;
 * :mod:`~glu.experiments.self_supervised`, :mod:`~glu.experiments.online_learning`,

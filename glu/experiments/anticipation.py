@@ -159,7 +159,8 @@ class AnticipationRun:
         return self.loglik / np.arange(1, len(self.loglik) + 1)[:, None]
 
     def curves(self) -> pd.DataFrame:
-        """Tidy per-frame series: columns ``case, models, frame, t, seconds, action, loglik_per_frame, p_hmm``.
+        """Tidy per-frame series: columns
+        ``case, models, frame, t, seconds, action, loglik_per_frame, p_hmm``.
 
         ``seconds``: the frame's time since the segment's first frame.
         """
@@ -207,7 +208,8 @@ class AnticipationRun:
         )
 
     def prediction_changes(self, node: str = "ObjVel") -> list[tuple[int, int, str, float]]:
-        """Where the most probable value of ``node`` changes: (t, frame, value, its p_comb), first update included."""
+        """Where the most probable value of ``node`` changes: (t, frame, value, its p_comb), first update
+        included."""
         out: list[tuple[int, int, str, float]] = []
         for k, (t, f) in enumerate(zip(self.update_t, self.update_frames, strict=True)):
             j = int(np.argmax(self.fused[node][k]))
@@ -222,7 +224,8 @@ class AnticipationRun:
         }
         lines = [
             f"# Effect anticipation: {CASES[self.case].description if self.case in CASES else self.case}",
-            f"*Evidence*: {', '.join(f'{k}={v}' for k, v in self.evidence.items())}; gesture HMMs: {self.models}.",
+            f"*Evidence*: {', '.join(f'{k}={v}' for k, v in self.evidence.items())}; gesture HMMs: "
+            f"{self.models}.",
             f"*Frames* {int(self.frames[0])}–{int(self.frames[-1])} ({len(self.frames)} frames).",
             "",
             f"At the last update (frame {int(self.update_frames[-1])}, t = {int(self.update_t[-1])}):",
@@ -248,7 +251,8 @@ def _bn_order(recognizer: Recognizer, actions: Sequence[str]) -> np.ndarray:
 
 
 def update_indices(n_frames: int, step: int = ORIGINAL_STEP, final_update: bool = False) -> np.ndarray:
-    """0-based indices of the fusion updates in a segment of ``n_frames``: t = step, 2·step, … ≤ T, and T if asked.
+    """0-based indices of the fusion updates in a segment of ``n_frames``: t = step, 2·step, … ≤ T, and T if
+    asked.
 
     >>> (update_indices(94) + 1).tolist()[-3:], (update_indices(94, final_update=True) + 1).tolist()[-2:]
     ([80, 85, 90], [90, 94])
@@ -296,7 +300,8 @@ def effect_anticipation(
     targets : nodes whose fused posterior is recorded
     describe : the best verbal description at every update (True) or at the last one only (``"last"``)
     score : the sentence score (``"paper"`` or ``"original"``, :data:`glu.language.SCORES`)
-    candidates : the sentences to choose from (the originals': their 9,941 samples), None for the whole grammar
+    candidates : the sentences to choose from (the originals': their 9,941 samples), None for the whole
+        grammar
     """
     actions = engine.bn.schema.values_of("Action")
     order = _bn_order(recognizer, actions)

@@ -63,7 +63,8 @@ def training_parameters(config: TrainingConfig | None, features: Any = None) -> 
 
 
 def _plain(v: Any) -> Any:
-    """A parameter value as JSON-ready data (tuples → lists, mappings → dicts, settings objects → their name)."""
+    """A parameter value as JSON-ready data (tuples → lists, mappings → dicts, settings objects → their
+    name)."""
     if hasattr(v, "name") and hasattr(v, "to_dict"):  # e.g. gesture Invariants: "centred+rotated"
         return v.name
     if isinstance(v, Mapping):

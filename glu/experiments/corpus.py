@@ -219,7 +219,8 @@ def simulate_chunk(
     views: Mapping[str, View] = VIEWPOINTS,
     replication: int = 0,
 ) -> Chunk:
-    """Episodes ``chunk · chunk_size`` … ``+ n − 1`` of replication ``replication`` of the corpus with ``seed``.
+    """Episodes ``chunk · chunk_size`` … ``+ n − 1`` of replication ``replication`` of the corpus with
+    ``seed``.
 
     Parameters
     ----------

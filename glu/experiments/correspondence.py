@@ -238,7 +238,8 @@ def correspondence_study(
     normalise_body: bool = False,
     invariant_settings: Mapping[str, Any] | None = None,
 ) -> pd.DataFrame:
-    """Accuracy of recognisers trained on the robot's or one human's gestures, on human gestures seen otherwise.
+    """Accuracy of recognisers trained on the robot's or one human's gestures, on human gestures seen
+    otherwise.
 
     Parameters
     ----------

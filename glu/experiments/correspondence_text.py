@@ -59,8 +59,9 @@ def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame) -> list[str]:
                 name = f if f == "raw" else f"`{f}`"
                 per.append(f"{name} {_span(t['accuracy'])}")
         out.append(
-            "Trained on one human view and tested on other people (their own arm lengths and movement styles), "
-            f"facing the camera: {_named(h, 'viewpoint', ('raw', 'centred+rotated', 'body'), '0°')}. Turned by "
+            "Trained on one human view and tested on other people (their own arm lengths and movement "
+            "styles), facing the camera: "
+            f"{_named(h, 'viewpoint', ('raw', 'centred+rotated', 'body'), '0°')}. Turned by "
             f"{turned['yaw_deg'].min():.0f}–{turned['yaw_deg'].max():.0f}°: " + ", ".join(per) + "."
         )
     for factor, level, feats, what in (
@@ -98,7 +99,8 @@ def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame) -> list[str]:
         )
     zero = int((summary["ci_high"] - summary["ci_low"] == 0).sum())
     out.append(
-        f"{zero} of {len(summary)} intervals have zero width (every test gesture of every seed recognised alike)."
+        f"{zero} of {len(summary)} intervals have zero width (every test gesture of every seed "
+        "recognised alike)."
     )
     return out
 
@@ -113,9 +115,9 @@ def nested_sentences(summary: pd.DataFrame, seated: pd.DataFrame, candidates: pd
     )
     tuned = summary["tuned_accuracy"]
     out.append(
-        f"Nested leave-one-segment-out on the {int(summary['testable'].iloc[0])} standing segments, the feature "
-        f"set and covariance prior chosen inside each fold on standing data only: {per}. Tuned and reported on "
-        f"the same segments instead, the best candidate scores {_span(tuned)} "
+        f"Nested leave-one-segment-out on the {int(summary['testable'].iloc[0])} standing segments, the "
+        f"feature set and covariance prior chosen inside each fold on standing data only: {per}. Tuned and "
+        f"reported on the same segments instead, the best candidate scores {_span(tuned)} "
         f"({', '.join(dict.fromkeys(summary['tuned_candidate']))}); a recogniser that always answers "
         f'"tap" scores {summary["always_tap"].iloc[0]:.2f}.'
     )
@@ -123,18 +125,19 @@ def nested_sentences(summary: pd.DataFrame, seated: pd.DataFrame, candidates: pd
     cen = candidates[candidates["features"] != "raw"]
     if len(raw) and len(cen):
         out.append(
-            f"Plain leave-one-segment-out over candidates and seeds: raw features {_span(raw['loso_accuracy'])}, "
-            f"{', '.join(dict.fromkeys(cen['features']))} {_span(cen['loso_accuracy'])}."
+            "Plain leave-one-segment-out over candidates and seeds: raw features "
+            f"{_span(raw['loso_accuracy'])}, {', '.join(dict.fromkeys(cen['features']))} "
+            f"{_span(cen['loso_accuracy'])}."
         )
     for rec, g in seated.groupby("recording", sort=False):
         taps = int((g["predicted"] == "tap").sum())
         out.append(
             f"Seated tap {rec}: recognised as tap by {taps} of {len(g)} seeds' models (p(tap) "
-            f"{_span(g['p_tap'])}), yet its per-frame log-likelihood lies {_span(g['below'])} nats below every "
-            f"training sequence (theirs: {_span(g['training_low'])} to {_span(g['training_high'])} nats per "
-            f"frame); tap first leads at frame {_frames(g['tap_first'])}, the hand starts to move at frame "
-            f"{int(g['onset'].iloc[0])} of {int(g['n_frames'].iloc[0])}, and tap leads for good from frame "
-            f"{_frames(g['tap_from'])}."
+            f"{_span(g['p_tap'])}), yet its per-frame log-likelihood lies {_span(g['below'])} nats "
+            f"below every training sequence (theirs: {_span(g['training_low'])} to "
+            f"{_span(g['training_high'])} nats per frame); tap first leads at frame "
+            f"{_frames(g['tap_first'])}, the hand starts to move at frame {int(g['onset'].iloc[0])} of "
+            f"{int(g['n_frames'].iloc[0])}, and tap leads for good from frame {_frames(g['tap_from'])}."
         )
     if len(seated):
         right = int(seated.groupby("recording")["always_tap"].first().sum())

@@ -186,7 +186,8 @@ class Reading:
     def __post_init__(self) -> None:
         if self.inference_network not in INFERENCE_NETWORKS:
             raise DataError(
-                f"unknown inference network {self.inference_network!r}; allowed: {', '.join(INFERENCE_NETWORKS)}"
+                f"unknown inference network {self.inference_network!r}; allowed: "
+                f"{', '.join(INFERENCE_NETWORKS)}"
             )
         if self.p_hmm not in READINGS:
             raise DataError(f"unknown reading of p_HMM {self.p_hmm!r}; allowed: {', '.join(READINGS)}")

@@ -430,16 +430,17 @@ def p_hmm_sentences(
     if len(calibration):
         full = calibration[np.isclose(calibration.fraction, calibration.fraction.max())]
         out.append(
-            f"The calibrated reading's inverse temperature at the full gesture, fitted per seed on held-out "
-            f"training gestures: β = {full.beta.min():.3g} to {full.beta.max():.3g} (the likelihood reading is β = 1)."
+            "The calibrated reading's inverse temperature at the full gesture, fitted per seed on "
+            f"held-out training gestures: β = {full.beta.min():.3g} to {full.beta.max():.3g} (the "
+            "likelihood reading is β = 1)."
         )
     if segments is not None and len(segments):
         s = segments.set_index("reading")
         n = int(s["segments"].iloc[0])
         out.append(
-            f"On the {n} real standing segments, each left out: read from the likelihoods, p_HMM is at least 0.99 "
-            f"for {int(s.loc['likelihood', 'certain'])} of them while naming {s.loc['likelihood', 'accuracy']:.2f} "
-            "correctly (ECE "
+            f"On the {n} real standing segments, each left out: read from the likelihoods, p_HMM is at "
+            f"least 0.99 for {int(s.loc['likelihood', 'certain'])} of them while naming "
+            f"{s.loc['likelihood', 'accuracy']:.2f} correctly (ECE "
             + ", ".join(f"{r} {s.loc[r, 'ece']:.3f}" for r in s.index)
             + "; log-loss "
             + ", ".join(f"{r} {s.loc[r, 'log_loss']:.3f}" for r in s.index)

@@ -63,7 +63,8 @@ def _label(q: Sequence[float] | None) -> str:
 
 
 ORIGINAL_REFERENCE = "original model (BN_lab.mat)"
-"""What a table's ``difference`` column is taken against when a reference model is given (the summary's label)."""
+"""What a table's ``difference`` column is taken against when a reference model is given (the summary's
+label)."""
 
 
 def _reference(reference: BayesNet | None) -> str | None:

@@ -1,4 +1,5 @@
-"""Evaluation of gesture recognition: cross-validation on synthetic gestures, real recordings, original models.
+"""Evaluation of gesture recognition: cross-validation on synthetic gestures, real recordings, original
+models.
 
 Every function returns a tidy pandas DataFrame (one row per test sequence, or per condition) stamped by
 :func:`~glu.experiments.common.tidy`, so numbers quoted anywhere are computed, never typed. The labelled
@@ -100,7 +101,8 @@ def cross_validate(
     """Stratified k-fold cross-validation: one row per sequence with its fold, prediction and scores.
 
     ``config`` and ``features``: how each fold's recogniser is trained (default: glu's, raw features).
-    Columns: fold, recording, start, end, n_frames, action, predicted, loglik_<a>, p_hmm_<a>, correct, converged.
+    Columns: fold, recording, start, end, n_frames, action, predicted, loglik_<a>, p_hmm_<a>, correct,
+    converged.
     """
     splits = _folds(sequences, k, seed)
     actions = _actions(sequences)
@@ -339,7 +341,8 @@ def train_on(
     seed: int = 0,
     features: Features = None,
 ) -> Recognizer:
-    """A recogniser of one HMM per action present in ``sequences``, trained with ``config`` on ``features``."""
+    """A recogniser of one HMM per action present in ``sequences``, trained with ``config`` on
+    ``features``."""
     actions = tuple(dict.fromkeys(s.action for s in sequences))
     meta = {"data": corpus_source(sequences)}
     return train_recognizer(
@@ -348,7 +351,8 @@ def train_on(
 
 
 def training_table(recognizer: Recognizer) -> pd.DataFrame:
-    """How training went, one row per action: sequences, frames, EM iterations, convergence, log-likelihood."""
+    """How training went, one row per action: sequences, frames, EM iterations, convergence,
+    log-likelihood."""
     rows = []
     for a, r in recognizer.reports.items():
         rows.append(

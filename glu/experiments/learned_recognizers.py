@@ -111,8 +111,8 @@ def learn_recognizer(
     features : the training gestures' hand features, arrays of shape (T_i, 3)
     scheme : one of :data:`LEARNERS`
     p_bn : ``p_BN(A | …)`` of each gesture, shape (n, A) (every scheme but the baselines)
-    true : the true action of each gesture, int array of shape (n,) (``true``; ``unsupervised`` uses it only to
-        name its clusters after training, by the best matching)
+    true : the true action of each gesture, int array of shape (n,) (``true``; ``unsupervised`` uses it only
+        to name its clusters after training, by the best matching)
     actions, config, seed : the models' names (the columns of ``p_bn``), training settings and seed
     threshold : the ``confident`` scheme's
     posterior : how ``iterative`` and ``unsupervised`` read ``p_HMM`` (:data:`POSTERIOR_READINGS`)
@@ -194,7 +194,8 @@ def _renamed(m: GestureHMM, name: str) -> GestureHMM:
 def _loglik(
     models: Mapping[str, GestureHMM], actions: Sequence[str], seqs: Sequence[np.ndarray]
 ) -> np.ndarray:
-    """``log L(G | a)`` of every sequence under every action's model, shape (n, A); ``-inf`` without a model."""
+    """``log L(G | a)`` of every sequence under every action's model, shape (n, A); ``-inf`` without a
+    model."""
     have = [a for a in actions if a in models]
     ll = Recognizer({a: models[a] for a in have}).loglik_many(seqs)
     out = np.full((len(seqs), len(actions)), -np.inf)
@@ -377,8 +378,9 @@ def learn_gestures(
     p_bn = network_posteriors(engine, ep.perceived, ep.world, words)
     how = "online" if online else "batch"
     info: dict[str, Any] = {
-        "data": f"{episodes} simulated episodes (seed {seed}, {ambiguity}: {AMBIGUITIES[ambiguity].description}); "
-        f"labels {labels}{' with words' if words else ''}, {how}; network: {data_source or 'unknown data'}",
+        "data": f"{episodes} simulated episodes (seed {seed}, {ambiguity}: "
+        f"{AMBIGUITIES[ambiguity].description}); labels {labels}{' with words' if words else ''}, "
+        f"{how}; network: {data_source or 'unknown data'}",
         "data_source": data_source,
         "labels": labels,
         "learning": how,

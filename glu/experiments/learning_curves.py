@@ -382,9 +382,9 @@ def match_lines(match: pd.DataFrame) -> list[str]:
         )
         best = g.loc[g["accuracy"].idxmax()]
         lines.append(
-            f"{amb}, {'with' if words else 'without'} words: matched by {said}; at {int(best['last_episodes']):,} "
-            f"episodes, best {best['learner']} {best['accuracy']:.3f} against {best['true_accuracy']:.3f} with "
-            "true labels"
+            f"{amb}, {'with' if words else 'without'} words: matched by {said}; at "
+            f"{int(best['last_episodes']):,} episodes, best {best['learner']} {best['accuracy']:.3f} "
+            f"against {best['true_accuracy']:.3f} with true labels"
         )
     n = schemes.groupby(["ambiguity", "words"]).ngroups
     lines.append(f"some labelling scheme matches the true-label HMMs in {hit} of {n} conditions")

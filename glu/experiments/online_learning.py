@@ -98,7 +98,8 @@ class OnlineSettings:
 
 class Learner(NamedTuple):
     """One learner: its labelling scheme (:data:`~glu.experiments.self_supervised.LEARNERS`) and the labels'
-    source, a key of the ``p_bn`` mapping given to :func:`run_online` (None for ``true`` and ``unsupervised``)."""
+    source, a key of the ``p_bn`` mapping given to :func:`run_online` (None for ``true`` and
+    ``unsupervised``)."""
 
     scheme: str
     source: Any = None
@@ -116,7 +117,8 @@ class OnlineRun(NamedTuple):
     weights : array, shape (N, L, A) — the label weight each episode got from each learner
     episode_actions : int array, shape (N,); test_actions : int array, shape (J,)
     means : array, shape (C, L, A, Q, D) — each model's state means (the first Gaussian), NaN without a model
-    params : the final models, stacked: each array with leading axes (L, A); ``exists`` (L, A) says which are real
+    params : the final models, stacked: each array with leading axes (L, A); ``exists`` (L, A) says which are
+        real
     matching : int array, shape (C, L, A) — the unsupervised learners' cluster → action at each checkpoint
         (the identity for the others)
     update_seconds : CPU seconds (this thread) of each episode's update of every learner, shape (N,): the
@@ -404,7 +406,8 @@ def _cluster(
 def _measure(
     state: _State, matching: np.ndarray, test_features: Sequence[np.ndarray], test_actions: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Which held-out gestures every learner recognises right (L, J), and its models' state means (L, A, Q, D)."""
+    """Which held-out gestures every learner recognises right (L, J), and its models' state means (L, A, Q,
+    D)."""
     L, A = state.exists.shape
     Q, D = state.params.means.shape[2], state.params.means.shape[-1]
     pairs = np.nonzero(state.exists)

@@ -1,4 +1,5 @@
-"""Two ways to train the gesture HMMs, measured on the same segments: glu's recipe and the originals' mixsplit.
+"""Two ways to train the gesture HMMs, measured on the same segments: glu's recipe and the originals'
+mixsplit.
 
 :func:`recipe_comparison` trains both recipes (:data:`glu.hmm.RECIPES`) over a grid of seeds
 and EM tolerances and reports, per setting, the leave-one-segment-out accuracy on the training segments
@@ -29,7 +30,8 @@ from glu.gestures.recognizer import Recognizer
 from glu.hmm import RECIPES, TrainingConfig, train
 
 RUN_KEYS = ("seed", "features")
-"""The keys of a run (:func:`leave_one_segment_out_many`) that are not :class:`~glu.hmm.TrainingConfig` fields."""
+"""The keys of a run (:func:`leave_one_segment_out_many`) that are not :class:`~glu.hmm.TrainingConfig`
+fields."""
 
 COLUMNS = [
     "recipe",

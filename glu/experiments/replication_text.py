@@ -63,7 +63,8 @@ def verbal_sentences(
         p = g.set_index("word")["p"]
         likelier = "but" if p.get("but", 0) > p.get("and", 0) else "and"
         parts.append(
-            f"with ObjVel={objvel} p(and) {p.get('and', np.nan):.3f}, p(but) {p.get('but', np.nan):.3f} ({likelier} likelier)"
+            f"with ObjVel={objvel} p(and) {p.get('and', np.nan):.3f}, p(but) "
+            f"{p.get('but', np.nan):.3f} ({likelier} likelier)"
         )
     out.append("After a grasp: " + "; ".join(parts) + ".")
     for score, g in versus.groupby("score_name", sort=False):

@@ -22,14 +22,15 @@ from glu.gestures.corpus import synthetic_corpus
 from glu.gestures.synthetic import View
 
 SETTING_KEYS = {"Q": "n_states", "M": "n_mix", "reg": "covar_reg", "iter": "n_iter", "tol": "tol"}
-"""Short names of training settings in labels such as ``"Q6 M3 reg0.03"`` (as the originals' ``HMM_M3_Q6``)."""
+"""Short names of training settings in labels such as ``"Q6 M3 reg0.03"`` (as the originals'
+``HMM_M3_Q6``)."""
 DEFAULT_SETTING = "glu defaults"
 """The label of no override: glu's recipe with :class:`~glu.hmm.training.TrainingConfig` as it is."""
 
 
 def parse_setting(label: str) -> dict[str, Any]:
-    """``"Q6 M3 reg0.03"`` → ``{"n_states": 6, "n_mix": 3, "covar_reg": 0.03}``; a recipe name (``"mixsplit"``)
-    → ``{"recipe": "mixsplit"}``; ``"glu defaults"`` → ``{}``."""
+    """``"Q6 M3 reg0.03"`` → ``{"n_states": 6, "n_mix": 3, "covar_reg": 0.03}``; a recipe name
+    (``"mixsplit"``) → ``{"recipe": "mixsplit"}``; ``"glu defaults"`` → ``{}``."""
     import re
 
     from glu.hmm import RECIPES
@@ -54,7 +55,8 @@ def parse_setting(label: str) -> dict[str, Any]:
 
 
 def setting_label(setting: Mapping[str, Any]) -> str:
-    """``{"n_states": 6, "n_mix": 3, "covar_reg": 0.03}`` → ``"Q6 M3 reg0.03"`` (the inverse of :func:`parse_setting`)."""
+    """``{"n_states": 6, "n_mix": 3, "covar_reg": 0.03}`` → ``"Q6 M3 reg0.03"`` (the inverse
+    of :func:`parse_setting`)."""
     short = {v: k for k, v in SETTING_KEYS.items()}
     if not setting:
         return DEFAULT_SETTING

@@ -1,4 +1,5 @@
-"""Learning gestures from what people's actions did: the robot labels what it sees with its affordance network.
+"""Learning gestures from what people's actions did: the robot labels what it sees with its affordance
+network.
 
 TCDS 2020 (§III-B): "If the human performs an unknown action on a spherical object and obtains a high
 velocity, the robot will be able to infer that the action is most probably a tap … This information can
@@ -59,7 +60,8 @@ lower bound). The third baseline, the network alone, recognises no gesture: its 
 labels."""
 LEARNERS: tuple[str, ...] = SCHEMES + BASELINES
 POSTERIOR_READINGS: tuple[str, ...] = ("likelihood", "per-frame")
-"""How ``p_HMM`` is read from the likelihoods when the robot relabels (two of :data:`glu.gestures.calibration.READINGS`)."""
+"""How ``p_HMM`` is read from the likelihoods when the robot relabels (two
+of :data:`glu.gestures.calibration.READINGS`)."""
 ACTION_KEY, PERCEPTION_KEY = 3, 4
 """Spawn keys of the actions and of the perception noise (the corpus uses 0 for the world, 1 for gestures)."""
 TEST_OFFSET = 10_000_000

@@ -1,4 +1,5 @@
-"""Two-level bootstrap intervals: training runs (seeds) and, within each, the held-out episodes it was measured on.
+"""Two-level bootstrap intervals: training runs (seeds) and, within each, the held-out episodes it was
+measured on.
 
 A learning curve's accuracy varies for two reasons: the training run (which episodes the robot happened to
 see, how EM started) and the finite set of held-out gestures it was measured on. One run's test set says

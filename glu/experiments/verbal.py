@@ -1,4 +1,5 @@
-"""The verbal-description experiments of TCDS 2020 (docs/method.md §7.5), each a function returning a tidy DataFrame.
+"""The verbal-description experiments of TCDS 2020 (docs/method.md §7.5), each a function returning a tidy
+DataFrame.
 
 Every function takes an :class:`~glu.bn.InferenceEngine` (word probabilities given evidence) and
 optionally a grammar (default: glu's, the originals' language). Two ways to choose a description:
@@ -272,7 +273,8 @@ def exact_vs_samples(
     grammar: Grammar | None = None,
     evidence_sets: Mapping[str, Mapping[str, str]] = PUBLISHED_LISTS,
 ) -> pd.DataFrame:
-    """The best description of the whole grammar against the best of the originals' samples, under both scores.
+    """The best description of the whole grammar against the best of the originals' samples, under both
+    scores.
 
     Returns
     -------

@@ -23,7 +23,8 @@ Example
 -------
 >>> import numpy as np
 >>> ll = np.array([[-100.0, -130.0, -160.0]])
->>> p_hmm_reading(ll, np.array([30]), "likelihood").round(3), p_hmm_reading(ll, np.array([30]), "per-frame").round(3)
+>>> p_hmm_reading(ll, np.array([30]), "likelihood").round(3), p_hmm_reading(ll, np.array([30]),
+...                                                                     "per-frame").round(3)
 (array([[1., 0., 0.]]), array([[0.665, 0.245, 0.09 ]]))
 """
 
@@ -47,7 +48,8 @@ BETA_BOUNDS = (0.0, 1.0)
 
 
 def softmax_rows(scores: np.ndarray) -> np.ndarray:
-    """``exp(s) / Σ exp(s)`` along the last axis, computed stably; rows with no finite score become uniform."""
+    """``exp(s) / Σ exp(s)`` along the last axis, computed stably; rows with no finite score become
+    uniform."""
     s = np.asarray(scores, dtype=float)
     top = np.max(np.where(np.isfinite(s), s, -np.inf), axis=-1, keepdims=True)
     ok = np.isfinite(top)

@@ -152,7 +152,8 @@ def synthetic_corpus(
     dropout_rate: float = 0.2,
     view: View | None = None,
 ) -> Corpus:
-    """``n_per_action`` synthetic gestures per action, as repaired feature sequences (:mod:`glu.gestures.synthetic`).
+    """``n_per_action`` synthetic gestures per action, as repaired feature sequences
+    (:mod:`glu.gestures.synthetic`).
 
     ``view``: how they are seen (:class:`~glu.gestures.synthetic.View`; default the generator's: a person
     facing the camera), or the robot's own movements (``View(performer="robot")``).
@@ -255,7 +256,8 @@ def synthetic_recordings(seed: int = 0, noise: float = 0.01) -> dict[str, Synthe
 
 
 def hand_log_arrays(gesture: SyntheticGesture) -> tuple[np.ndarray, np.ndarray]:
-    """A synthetic recording as a hand log holds it: timestamps (s) and features × 1000, shapes (n,), (n, 3)."""
+    """A synthetic recording as a hand log holds it: timestamps (s) and features × 1000, shapes (n,),
+    (n, 3)."""
     traj = gesture.trajectory()
     return traj.t, traj.xyz * LOG_SCALE
 
@@ -316,14 +318,15 @@ def _read_manifest(path: Path) -> list[tuple[Path, str, tuple[int, int] | None, 
 
 
 def labelled_recordings(path: str | os.PathLike, body: tuple[float, float] | None = None) -> Corpus:
-    """Your own labelled recordings, each one gesture: a folder with one subfolder per action, or a CSV manifest.
+    """Your own labelled recordings, each one gesture: a folder with one subfolder per action, or a CSV
+    manifest.
 
     Parameters
     ----------
     path : a folder whose subfolders are named by action and hold that action's recordings (YARP logs,
-        recording folders with a ``data.log``, or CSV/TSV/NPY trajectory tables: :mod:`glu.data.trajectory_files`),
-        or a CSV file with the columns ``file,label[,frames]`` (files relative to it; ``frames`` ``A:B``
-        picks frames A to B of the recording, 1-based, inclusive)
+        recording folders with a ``data.log``, or CSV/TSV/NPY trajectory
+        tables: :mod:`glu.data.trajectory_files`), or a CSV file with the columns ``file,label[,frames]``
+        (files relative to it; ``frames`` ``A:B`` picks frames A to B of the recording, 1-based, inclusive)
     body : the body size for hand tables without a skeleton (shoulder and neck–torso distances, m)
 
     Returns

@@ -1,4 +1,5 @@
-"""Gesture features: a skeleton's right hand in the torso frame, normalised by body size (docs/method.md §4.2).
+"""Gesture features: a skeleton's right hand in the torso frame, normalised by body size (docs/method.md
+§4.2).
 
 The features of the original system (Saponaro et al., CR-HRI 2013; the ``humanHandProcessor`` of
 GLU 2017) are, per frame, the right hand minus the torso,
@@ -198,7 +199,8 @@ def skeleton_features(
 
     Returns
     -------
-    features : array, shape (n_frames, 3) — ``((hand - torso)_x / h, (hand - torso)_y / v, (hand - torso)_z / h)``
+    features : array, shape (n_frames, 3) —
+        ``((hand - torso)_x / h, (hand - torso)_y / v, (hand - torso)_z / h)``
     normalisation : the factors ``h`` and ``v`` used
     """
     skeleton = _check_skeleton(skeleton, joints)

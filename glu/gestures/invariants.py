@@ -88,7 +88,8 @@ FEATURE_NAMES: tuple[str, ...] = (
     *("+".join(c) for r in range(1, len(INVARIANCES) + 1) for c in combinations(INVARIANCES, r)),
     ALL,
 )
-"""Every feature set by its canonical name (``raw``, ``centred``, …, ``centred+scaled+rotated+mirrored``, ``all``)."""
+"""Every feature set by its canonical name (``raw``, ``centred``, …, ``centred+scaled+rotated+mirrored``,
+``all``)."""
 LOCK_RADIUS = 0.4
 """Default ρ: horizontal distance from the start (feature units, about 13 cm) that fixes the heading."""
 MIN_SCALE = 0.25
@@ -136,7 +137,8 @@ class Invariants:
 
     @classmethod
     def parse(cls, text: str | Iterable[str] | Invariants | None, **settings: Any) -> Invariants:
-        """``"centred,scaled"`` (or ``"centred+scaled"``, a list of names, ``"raw"``, ``"all"``) → Invariants."""
+        """``"centred,scaled"`` (or ``"centred+scaled"``, a list of names, ``"raw"``, ``"all"``) →
+        Invariants."""
         if isinstance(text, Invariants):
             return text if not settings else cls(text.names, **settings)
         if text is None:
@@ -172,7 +174,8 @@ class Invariants:
         return "; ".join(INVARIANCE_MEANING[n] for n in self.names)
 
     def to_dict(self) -> dict[str, Any]:
-        """What a recogniser file records: ``{"names": [...], "lock_radius": ρ, "min_scale": …, "anchor_frames": k}``."""
+        """What a recogniser file records:
+        ``{"names": [...], "lock_radius": ρ, "min_scale": …, "anchor_frames": k}``."""
         return {
             "names": list(self.names),
             "lock_radius": self.lock_radius,

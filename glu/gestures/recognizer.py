@@ -98,9 +98,10 @@ class GestureStream:
     """Incremental forward recursion over every model of a recogniser: one frame in, one posterior out.
 
     Each :meth:`push` costs O(Σ_a Q_a² + Σ_a Q_a M_a D²), independent of how many frames came before;
-    it computes the recogniser's invariant features of the frame (:class:`~glu.gestures.invariants.InvariantStream`)
-    and runs the same :func:`~glu.hmm.inference.forward_step` as the batch scoring, with the models
-    stacked (padded to the largest Q and M), so the results equal rescoring the prefix ``G_1^t``.
+    it computes the recogniser's invariant features of the frame
+    (:class:`~glu.gestures.invariants.InvariantStream`) and runs the
+    same :func:`~glu.hmm.inference.forward_step` as the batch scoring, with the models stacked (padded to the
+    largest Q and M), so the results equal rescoring the prefix ``G_1^t``.
     """
 
     def __init__(self, recognizer: Recognizer) -> None:
@@ -121,7 +122,8 @@ class GestureStream:
             self._invariant.reset()
 
     def push(self, x: np.ndarray) -> StreamStep:
-        """Consume one frame of hand features, shape (D,); return ``log L(G_1^t | A)`` and ``p_HMM(A | G_1^t)``."""
+        """Consume one frame of hand features, shape (D,); return ``log L(G_1^t | A)`` and
+        ``p_HMM(A | G_1^t)``."""
         x = np.asarray(x, dtype=float)
         if x.shape != (self._D,) or not np.all(np.isfinite(x)):
             raise DataError(f"a frame must be {self._D} finite numbers, got {x!r}")
@@ -134,7 +136,8 @@ class GestureStream:
         return StreamStep(self.t, ll, p_hmm_from_loglik(ll))
 
     def extend(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Push every frame of X, shape (T, D); return loglik and p_hmm per frame, each shape (T, n_actions)."""
+        """Push every frame of X, shape (T, D); return loglik and p_hmm per frame, each shape (T,
+        n_actions)."""
         X = as_sequence(X, self._D)
         ll = np.empty((len(X), len(self.actions)))
         for t, x in enumerate(X):
@@ -153,8 +156,8 @@ class Recognizer:
     models : action → :class:`GestureHMM` (the order is the order of every output vector)
     reports : action → :class:`TrainingReport`, if trained by glu
     meta : free-form information saved with the recogniser (data source, seed, parameters)
-    features : the invariant features the models were trained on (:class:`~glu.gestures.invariants.Invariants`,
-        or its name such as ``"centred"``); default raw
+    features : the invariant features the models were trained on
+        (:class:`~glu.gestures.invariants.Invariants`, or its name such as ``"centred"``); default raw
     """
 
     def __init__(
@@ -181,7 +184,8 @@ class Recognizer:
 
     @property
     def bank(self) -> Bank:
-        """The models stacked for scoring them together (:func:`glu.hmm._engine.batch.stack_models`, built once)."""
+        """The models stacked for scoring them together (:func:`glu.hmm._engine.batch.stack_models`, built
+        once)."""
         if self._bank is None:
             self._bank = stack_models([self.models[a] for a in self.actions])
         return self._bank
@@ -191,7 +195,8 @@ class Recognizer:
         return f"Recognizer({shapes}; features {self.features.name})"
 
     def transform(self, X: np.ndarray) -> np.ndarray:
-        """The features the models see: the recogniser's invariant features of hand features X, shape (T, D)."""
+        """The features the models see: the recogniser's invariant features of hand features X, shape (T,
+        D)."""
         X = as_sequence(X, self.n_features)
         return X if self.features.is_raw else self.features.transform(X)
 
@@ -216,7 +221,8 @@ class Recognizer:
         return pd.Series(self.p_hmm(X), index=pd.Index(self.actions, name="action"), name="p_HMM(A | G)")
 
     def loglik_curve(self, X: np.ndarray) -> np.ndarray:
-        """``log L(G_1^t | A)`` for every prefix, shape (T, n_actions): one forward pass over the stacked bank."""
+        """``log L(G_1^t | A)`` for every prefix, shape (T, n_actions): one forward pass over the stacked
+        bank."""
         bank = self.bank
         log_b = log_emissions(self.transform(X), bank.means, bank.chol_inv, bank.log_norm)
         return forward_curve(log_b, bank.startprob, bank.transmat)
@@ -234,7 +240,8 @@ class Recognizer:
         return GestureStream(self)
 
     def reference_ranges(self) -> dict[str, LoglikRange]:
-        """Per action, the per-frame log-likelihoods of the reference sequences (:mod:`glu.gestures.typicality`).
+        """Per action, the per-frame log-likelihoods of the reference sequences
+        (:mod:`glu.gestures.typicality`).
 
         A recogniser trained by glu keeps its training range; one without (the originals' models) gets the
         range of sequences sampled from each model, computed once (seeded) and kept in :attr:`meta`.
@@ -246,7 +253,8 @@ class Recognizer:
         return ranges
 
     def feature_ranges(self) -> FeatureRanges:
-        """Where the reference gestures start and how far they move (:class:`~glu.gestures.typicality.FeatureRanges`).
+        """Where the reference gestures start and how far they move
+        (:class:`~glu.gestures.typicality.FeatureRanges`).
 
         A recogniser trained by glu keeps those of its training gestures; one without (the originals'
         models) gets those of sequences sampled from its models, computed once (seeded) and kept in
@@ -262,7 +270,8 @@ class Recognizer:
         return ranges
 
     def typicality(self, X: np.ndarray) -> Typicality:
-        """Whether a sequence, shape (T, D), looks like the models' reference data (see :func:`typicality.check`)."""
+        """Whether a sequence, shape (T, D), looks like the models' reference data
+        (see :func:`typicality.check`)."""
         X = as_sequence(X, self.n_features)
         return check(self.loglik(X), len(X), self.actions, self.reference_ranges(), X, self.feature_ranges())
 
@@ -351,7 +360,8 @@ def train_recognizer(
     warn: bool = True,
     progress: Callable[[str], None] | None = None,
 ) -> Recognizer | list[Recognizer]:
-    """Train one left-to-right GMM-HMM per action (:func:`glu.hmm.train`), as a recogniser; or many recognisers.
+    """Train one left-to-right GMM-HMM per action (:func:`glu.hmm.train`), as a recogniser; or many
+    recognisers.
 
     The recogniser's meta records the settings and the per-frame log-likelihood range of each action's
     training sequences (:mod:`glu.gestures.typicality`).

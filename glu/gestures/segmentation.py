@@ -1,8 +1,9 @@
 """Gesture segments: the original frame ranges, and automatic segmentation of a recording into repetitions.
 
-The originals cut their test segments by hand (docs/method.md §4.3, :data:`glu.gestures.corpus.ORIGINAL_SEGMENTS`). For training,
-the recordings ``grasp1_hand``, ``tap1_hand``, ``touch1_hand`` and ``push1_hand`` hold several repetitions
-of one gesture each; :func:`segment_repetitions` finds them automatically:
+The originals cut their test segments by hand (docs/method.md
+§4.3, :data:`glu.gestures.corpus.ORIGINAL_SEGMENTS`). For training, the recordings ``grasp1_hand``,
+``tap1_hand``, ``touch1_hand`` and ``push1_hand`` hold several repetitions of one gesture
+each; :func:`segment_repetitions` finds them automatically:
 
 1. the trajectory (feature units) is cleaned by a running median and smoothed by a moving average;
 2. the **rest pose** is the median position of the frames whose z is in the top ``1 - rest_quantile``
@@ -18,8 +19,8 @@ of one gesture each; :func:`segment_repetitions` finds them automatically:
    split the trajectory, is *partial*).
 
 The parameters are a :class:`SegmentationParams`; the defaults were chosen by looking at the six real
-recordings (the figure of :func:`glu.plots.plot_segmentation`) and are checked on synthetic recordings with known
-repetitions. Segments are 1-based inclusive frame ranges of the source log, as in the papers.
+recordings (the figure of :func:`glu.plots.plot_segmentation`) and are checked on synthetic recordings with
+known repetitions. Segments are 1-based inclusive frame ranges of the source log, as in the papers.
 """
 
 from __future__ import annotations

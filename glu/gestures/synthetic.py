@@ -16,7 +16,8 @@ The hand passes smoothly (monotone cubic interpolation) through the key poses, o
 minimum-jerk time course (slow start and end, fastest in the middle). Variability, all drawn
 from one seeded generator per sequence:
 
-* **speed** — duration 2.5–5 s (the real repetitions last 2.7–5.5 s), key times jittered; still frames at rest before and after;
+* **speed** — duration 2.5–5 s (the real repetitions last 2.7–5.5 s), key times jittered; still frames at rest
+  before and after;
 * **amplitude** — the excursion from rest scaled by 0.85–1.15; object position ± 5 cm;
 * **person** — body size 0.85–1.15 (shoulder width 0.28–0.38 m), position in the room, a turn of
   ± 10° about the vertical, slow sway of the torso;
@@ -142,7 +143,8 @@ class SyntheticGesture:
     Attributes
     ----------
     action : one of :data:`GESTURES`
-    skeleton : array, shape (n_frames, 15, 3), metres, joints in :data:`glu.gestures.features.OPENNI_JOINTS` order
+    skeleton : array, shape (n_frames, 15, 3), metres, joints in :data:`glu.gestures.features.OPENNI_JOINTS`
+        order
     t : array, shape (n_frames,), seconds (gaps where the skeleton dropped out)
     size : the person's size factor (1 = shoulders 0.33 m apart)
     segments : for a continuous recording, the true (first, last) frames of each repetition
@@ -158,7 +160,8 @@ class SyntheticGesture:
     view: View = DEFAULT_VIEW
 
     def trajectory(self) -> Trajectory:
-        """The features of the skeleton (:func:`glu.gestures.features.skeleton_features`) as a trajectory, unrepaired."""
+        """The features of the skeleton (:func:`glu.gestures.features.skeleton_features`) as a trajectory,
+        unrepaired."""
         frame = "body" if self.view.body_frame else "torso"
         xyz, _ = skeleton_features(self.skeleton, measure=self.view.normalise_body, frame=frame)
         n = len(xyz)
@@ -254,7 +257,8 @@ def _person_style(
 def _skeletons(
     hand: np.ndarray, person: _Person, t: np.ndarray, rng: np.random.Generator, view: View = DEFAULT_VIEW
 ) -> np.ndarray:
-    """Full skeletons in the sensor frame, shape (n_frames, 15, 3), for hand positions relative to the torso."""
+    """Full skeletons in the sensor frame, shape (n_frames, 15, 3), for hand positions relative to the
+    torso."""
     if view.mirror:
         hand = hand * np.array([-1.0, 1.0, 1.0])
     n = len(hand)
@@ -318,7 +322,8 @@ def synthesize_gesture(
     rest_frames: tuple[int, int] = (3, 15),
     view: View | None = None,
 ) -> SyntheticGesture:
-    """One synthetic repetition of ``action`` drawn with ``rng``, seen as ``view`` (see the module docstring)."""
+    """One synthetic repetition of ``action`` drawn with ``rng``, seen as ``view`` (see the module
+    docstring)."""
     view = view or DEFAULT_VIEW
     _check_action(action, view)
     person = _person(rng, view)
@@ -351,7 +356,8 @@ def synthesize_gestures(
     dropout_rate: float = 0.2,
     view: View | None = None,
 ) -> list[SyntheticGesture]:
-    """``n`` synthetic gestures, actions in turn (``actions[i % len(actions)]``), sequence i seeded by (seed, i).
+    """``n`` synthetic gestures, actions in turn (``actions[i % len(actions)]``), sequence i seeded by (seed,
+    i).
 
     Parameters
     ----------

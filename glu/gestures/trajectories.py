@@ -422,7 +422,8 @@ def _repair_spans(
 
 
 def summarize_events(events: tuple[TrackingEvent, ...] | list[TrackingEvent]) -> str:
-    """One line counting the events by kind and action, e.g. ``2 gaps (1 interpolated, 1 split), 5 spikes``."""
+    """One line counting the events by kind and action, e.g.
+    ``2 gaps (1 interpolated, 1 split), 5 spikes``."""
     if not events:
         return "no tracking problems found"
     parts = []

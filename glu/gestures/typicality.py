@@ -18,10 +18,10 @@ meta under :data:`FRAMES_KEY`):
 
 * **a hand that does not move** — its largest extent along an axis is under :data:`STILL_FRACTION` of the
   smallest extent of a reference gesture (a frozen tracker, the wrong joint);
-* **axes that do not fit the frame** (x right, y up, z back, torso-centred: ``docs/method.md`` §4.2) — where it
-  starts (:func:`start_position`) lies farther outside where the reference gestures start, on some axis, than
-  half their range is wide (at least :data:`MIN_START_MARGIN` units): axes swapped or mislabelled, another unit,
-  or another posture.
+* **axes that do not fit the frame** (x right, y up, z back, torso-centred: ``docs/method.md`` §4.2) — where
+  it starts (:func:`start_position`) lies farther outside where the reference gestures start, on some axis,
+  than half their range is wide (at least :data:`MIN_START_MARGIN` units): axes swapped or mislabelled,
+  another unit, or another posture.
 
 >>> r = LoglikRange(low=-1.0, high=2.0, reference="training")
 >>> r.outside(-10.5), r.outside(-20.0)

@@ -19,8 +19,8 @@ The fast paths live behind these, in the private :mod:`glu.hmm._engine`: compile
 banked scoring of many sequences against many models (:class:`BatchScorer`, :func:`loglik_many`), batched
 EM for many models at once, the compiled loops of the initial mixtures, and the E-step of one episode
 under many models for online learning (:func:`episode_stats`, :func:`expected_stats_bank`,
-:func:`loglik_bank`; :func:`expected_stats_fast` for many sequences under one model). Each is tested equal to the
-reference (to rounding). The recogniser — a bank of these models over gesture features — is
+:func:`loglik_bank`; :func:`expected_stats_fast` for many sequences under one model). Each is tested equal to
+the reference (to rounding). The recogniser — a bank of these models over gesture features — is
 :class:`glu.gestures.Recognizer`.
 """
 

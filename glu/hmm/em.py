@@ -216,7 +216,8 @@ class SufficientStats:
 def sequence_weights(
     sequences: Sequence[np.ndarray], weights: Sequence[float] | np.ndarray | None
 ) -> np.ndarray:
-    """``weights`` as a float array of shape (S,) (all ones for None); ValueError unless each is finite ≥ 0."""
+    """``weights`` as a float array of shape (S,) (all ones for None); ValueError unless each is finite
+    ≥ 0."""
     if weights is None:
         return np.ones(len(sequences))
     w = np.asarray(weights, dtype=float)

@@ -1,4 +1,5 @@
-"""The Gaussian mixtures that start each HMM state: scikit-learn's ``GaussianMixture`` fit, without scikit-learn.
+"""The Gaussian mixtures that start each HMM state: scikit-learn's ``GaussianMixture`` fit, without
+scikit-learn.
 
 :func:`glu.hmm.training.init_left_to_right` fits one mixture per state to the frames of that state's
 time slices, as ``GaussianMixture(n_mix, covariance_type="full", reg_covar=…, random_state=seed,
@@ -111,7 +112,8 @@ def fit_gaussian_mixture(
     tol: float = SKLEARN_TOL,
     max_iter: int = SKLEARN_MAX_ITER,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A full-covariance Gaussian mixture fitted by EM as scikit-learn's ``GaussianMixture`` fits it (to rounding).
+    """A full-covariance Gaussian mixture fitted by EM as scikit-learn's ``GaussianMixture`` fits it (to
+    rounding).
 
     Parameters
     ----------
@@ -152,11 +154,13 @@ def init_left_to_right(
     seed: int = 0,
     name: str = "",
 ) -> GestureHMM:
-    """An initial left-to-right model: each sequence cut into ``n_states`` equal time slices, slice q → state q.
+    """An initial left-to-right model: each sequence cut into ``n_states`` equal time slices, slice q → state
+    q.
 
     The frames of slice q (over all sequences) give state q's mixture (scikit-learn's ``GaussianMixture``
-    fit, seeded, as :func:`~glu.hmm.initialisation.fit_gaussian_mixture` computes it without scikit-learn; with too few frames,
-    one Gaussian copied ``n_mix`` times with means spread along its main axis). Self-transition probabilities are ``1 - 1 / (mean frames per state)``, clipped to [0.5, 0.98].
+    fit, seeded, as :func:`~glu.hmm.initialisation.fit_gaussian_mixture` computes it without scikit-learn;
+    with too few frames, one Gaussian copied ``n_mix`` times with means spread along its main axis).
+    Self-transition probabilities are ``1 - 1 / (mean frames per state)``, clipped to [0.5, 0.98].
     ``sequences`` are arrays of shape (T_i, D).
     """
     D = sequences[0].shape[1]

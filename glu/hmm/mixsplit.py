@@ -1,4 +1,5 @@
-"""The originals' HMM training recipe, "mixsplit": flat start, Baum–Welch, mixture splitting (docs/method.md §5.1).
+"""The originals' HMM training recipe, "mixsplit": flat start, Baum–Welch, mixture splitting (docs/method.md
+§5.1).
 
 Saponaro's thesis (appendix on gesture recognition) trained the 2013 models
 (``HMM_M3_Q6_mixsplit.mat``) like this:
@@ -14,14 +15,16 @@ Saponaro's thesis (appendix on gesture recognition) trained the 2013 models
 The variable names of the original files (``prior``, ``trans``, ``mu``, ``Sigma``, ``mixmat``) are those of
 K. Murphy's HMM toolbox, whose Gaussian M-step adds ``0.01·I`` to every re-estimated covariance; the
 original models' covariances all have eigenvalues above 0.01 (the smallest is 0.0108), as that floor
-implies. :data:`~glu.hmm.config.COVAR_FLOOR` (``TrainingConfig.covar_floor``) reproduces it: covariances are the maximum-likelihood ones plus
-``covar_floor·I`` (``covar_floor = 0`` is plain maximum likelihood, for which the log-likelihood never
-decreases within a stage). A component that loses all its frames keeps its previous covariance.
+implies. :data:`~glu.hmm.config.COVAR_FLOOR` (``TrainingConfig.covar_floor``) reproduces it: covariances are
+the maximum-likelihood ones plus ``covar_floor·I`` (``covar_floor = 0`` is plain maximum likelihood, for which
+the log-likelihood never decreases within a stage). A component that loses all its frames keeps its previous
+covariance.
 
 glu's own recipe (:mod:`glu.hmm.glu_recipe`) starts instead from equal time slices of each sequence,
 fits all M components of a slice at once (scikit-learn ``GaussianMixture``) and regularises covariances
-with a weak inverse-Wishart prior; :data:`~glu.hmm.config.RECIPES` names both, ``TrainingConfig.recipe`` and ``glu hmm train --recipe`` choose.
-Baum–Welch is :func:`glu.hmm.em.fit` in both (``ml`` covariances here, ``map`` in glu's).
+with a weak inverse-Wishart prior; :data:`~glu.hmm.config.RECIPES` names both, ``TrainingConfig.recipe`` and
+``glu hmm train --recipe`` choose. Baum–Welch is :func:`glu.hmm.em.fit` in both (``ml`` covariances here,
+``map`` in glu's).
 
 Example
 -------
@@ -57,7 +60,8 @@ _EMPTY = 1e-10
 
 
 def flat_start(sequences: Sequence[np.ndarray], n_states: int, name: str = "") -> GestureHMM:
-    """The flat-start model: every state one Gaussian with the global mean and covariance, 0.5 stay / 0.5 next.
+    """The flat-start model: every state one Gaussian with the global mean and covariance, 0.5 stay / 0.5
+    next.
 
     ``sequences`` are arrays of shape (T_i, D); the covariance is the maximum-likelihood one of all their
     frames pooled (divided by the number of frames).

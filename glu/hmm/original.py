@@ -2,8 +2,8 @@
 
 ``HMM_M3_Q6_mixsplit.mat`` (and the single-Gaussian ``HMM_M1_Q6_mixsplit.mat``) hold the variables
 ``hmm{k}_prior`` (Q), ``hmm{k}_trans`` (Q×Q), ``hmm{k}_mu`` (3×Q×M), ``hmm{k}_Sigma`` (3×3×Q×M) and
-``hmm{k}_mixmat`` (Q×M) for k = 1 tap, 3 grasp, 4 push, 0 garbage (docs/method.md §4.4). There was no touch model:
-the originals used push in its place, and so does :func:`load_original_hmms`. Their inputs are the
+``hmm{k}_mixmat`` (Q×M) for k = 1 tap, 3 grasp, 4 push, 0 garbage (docs/method.md §4.4). There was no touch
+model: the originals used push in its place, and so does :func:`load_original_hmms`. Their inputs are the
 logged features / 1000 (:func:`glu.gestures.features.log_features`). Where the files are in a data folder
 is :meth:`glu.data.DataSource.original_hmms`'s business.
 """

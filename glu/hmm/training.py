@@ -81,8 +81,9 @@ def train(
     engine : glu's recipe, one model: ``"glu"`` (:func:`glu.hmm.em.fit`) or ``"hmmlearn"`` (its
         ``GMMHMM``); many models always use glu's batched EM
     weights : one weight ≥ 0 per training sequence (with a mapping: a mapping of the same keys to such
-        lists): weighted EM, each sequence counted ``weight`` times (:func:`glu.hmm.glu_recipe.train_weighted`;
-        glu's recipe only, one model at a time). None (the default): the unweighted training above
+        lists): weighted EM, each sequence counted ``weight`` times
+        (:func:`glu.hmm.glu_recipe.train_weighted`; glu's recipe only, one model at a time). None (the
+        default): the unweighted training above
     start : with ``weights``, the model(s) EM goes on from (a mapping: for some keys) instead of a fresh
         initial model
 

@@ -1,4 +1,5 @@
-"""Verbal descriptions (docs/method.md §6): the grammar, its sentences, and sentences scored by the BN's word probabilities.
+"""Verbal descriptions (docs/method.md §6): the grammar, its sentences, and sentences scored by the BN's word
+probabilities.
 
 * :mod:`glu.language.grammar` — HTK HParse grammars: :func:`parse_grammar`, :func:`load_grammar`.
 * :mod:`glu.language.sentences` — the deterministic word network, counting, enumeration.

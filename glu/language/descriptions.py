@@ -107,7 +107,8 @@ def _network(grammar: Grammar | WordNetwork | None) -> WordNetwork:
 # --------------------------------------------------------------------------------------- log probabilities
 @dataclass(frozen=True)
 class LogProbs:
-    """Log word probabilities as exact integers: ``log p(w) = num[w] / scale`` exactly, or ``-inf`` (``zero[w]``).
+    """Log word probabilities as exact integers: ``log p(w) = num[w] / scale`` exactly, or ``-inf``
+    (``zero[w]``).
 
     Attributes
     ----------
@@ -126,15 +127,17 @@ class LogProbs:
 
     @classmethod
     def from_probs(cls, words: Sequence[str], word_probs: WordProbs) -> LogProbs:
-        """The log probabilities of ``words`` looked up in ``word_probs``; VocabularyError for a missing word."""
+        """The log probabilities of ``words`` looked up in ``word_probs``; VocabularyError for a missing
+        word."""
         probs = _as_mapping(word_probs)
         missing = [w for w in words if w not in probs]
         if missing:
             shown = ", ".join(missing[:10]) + (f", … ({len(missing)} words)" if len(missing) > 10 else "")
             raise VocabularyError(
-                f"no probability for the word(s) {shown}: the grammar uses words the model does not have "
-                f"(the model's words: {', '.join(list(probs)[:8])}, … {len(probs)} in all); words that are "
-                "not network nodes score as probability 1 with word_probabilities(engine, …, vocabulary=grammar)"
+                f"no probability for the word(s) {shown}: the grammar uses words the model does not "
+                f"have (the model's words: {', '.join(list(probs)[:8])}, … {len(probs)} in all); words "
+                "that are not network nodes score as probability 1 with word_probabilities(engine, …, "
+                "vocabulary=grammar)"
             )
         logs = []
         for w in words:
@@ -191,7 +194,8 @@ def _split(sentence: str | Iterable[str]) -> Sentence:
 def score_sentence(sentence: str | Iterable[str], word_probs: WordProbs, score: str = DEFAULT_SCORE) -> float:
     """The score of one sentence (a string or a sequence of words); -inf if a word has p = 0.
 
-    ``score="paper"``: ``(1/L) Σ_k log p(w_k)`` over its L words; ``"original"``: ``(1 + Σ_k log p(w_k)) / L``.
+    ``score="paper"``: ``(1/L) Σ_k log p(w_k)`` over its L words; ``"original"``:
+    ``(1 + Σ_k log p(w_k)) / L``.
 
     >>> round(score_sentence("the ball", {"the": 0.5, "ball": 0.25}), 6)
     -1.039721
@@ -382,7 +386,8 @@ def sample_nbest(
     seed: int | None = 0,
     score: str = DEFAULT_SCORE,
 ) -> pd.DataFrame:
-    """The originals' method: the ``n`` best distinct sentences among ``n_samples`` random ones (HSGen-like, seeded).
+    """The originals' method: the ``n`` best distinct sentences among ``n_samples`` random ones (HSGen-like,
+    seeded).
 
     Returns
     -------
@@ -397,7 +402,8 @@ def sample_nbest(
 def all_scores(
     grammar: Grammar | WordNetwork | None, word_probs: WordProbs, score: str = DEFAULT_SCORE
 ) -> np.ndarray:
-    """The score of every sentence of a finite grammar, vectorised, in no particular order; shape (n_sentences,).
+    """The score of every sentence of a finite grammar, vectorised, in no particular order; shape
+    (n_sentences,).
 
     Sums are ordinary floating-point sums (not the exact ones of :func:`nbest`); use it for distributions
     and ranks, up to :data:`MAX_ALL_SCORES` sentences.

@@ -436,7 +436,8 @@ def _check_references(defs: Mapping[str, Expr], sentence: Expr, source: str) -> 
 
 
 def parse_grammar(text: str, source: str = "<string>") -> Grammar:
-    """Parse a grammar in HTK HParse syntax; raises :class:`GrammarError` (with line, column) when malformed."""
+    """Parse a grammar in HTK HParse syntax; raises :class:`GrammarError` (with line, column) when
+    malformed."""
     if not isinstance(text, str):
         raise GrammarError(f"a grammar is text, not {type(text).__name__}", source)
     parser = _Parser(_tokenize(text, source), source)

@@ -23,7 +23,8 @@ MAX_SAMPLES = 200_000
 
 
 def sample_sentences(grammar: Grammar, n: int, seed: int | None = 0) -> list[Sentence]:
-    """``n`` random sentences as HTK's HSGen makes them (uniform alternatives, fair coins); seeded, may repeat.
+    """``n`` random sentences as HTK's HSGen makes them (uniform alternatives, fair coins); seeded, may
+    repeat.
 
     Parameters
     ----------
@@ -132,7 +133,8 @@ def _compile(
 
 
 def sample_probability(grammar: Grammar, sentence: str | Iterable[str]) -> float:
-    """The probability that one sentence of :func:`sample_sentences` is ``sentence`` (0 if not in the grammar).
+    """The probability that one sentence of :func:`sample_sentences` is ``sentence`` (0 if not in the
+    grammar).
 
     Sums over every derivation (a chart over word positions); a repetition stops with probability 1/2
     before each further round, as in the sampler. So ``1 - (1 - p)**K`` is the chance that K random

@@ -121,7 +121,8 @@ class WordNetwork:
         return longest[self.start]
 
     def check_length_limit(self, max_length: int | None) -> int:
-        """The length limit to use: ``max_length``, or the longest sentence; GrammarError for an infinite network without one."""
+        """The length limit to use: ``max_length``, or the longest sentence; GrammarError for an infinite
+        network without one."""
         if max_length is None:
             if self.max_length is None:
                 raise GrammarError(
@@ -137,7 +138,8 @@ class WordNetwork:
         return int(max_length)
 
     def accepts(self, sentence: str | Iterable[str]) -> bool:
-        """Whether ``sentence`` (a string of words separated by spaces, or a sequence of words) is in the language."""
+        """Whether ``sentence`` (a string of words separated by spaces, or a sequence of words) is in the
+        language."""
         words = sentence.split() if isinstance(sentence, str) else list(sentence)
         index = {w: i for i, w in enumerate(self.words)}
         s = self.start
@@ -360,7 +362,8 @@ def as_network(grammar_or_net: Grammar | WordNetwork) -> WordNetwork:
 
 # -------------------------------------------------------------------------------- counting, enumerating
 def count_by_length(grammar: Grammar | WordNetwork, max_length: int | None = None) -> dict[int, int]:
-    """Number of sentences of each length (in words), for lengths up to ``max_length``; zero counts left out."""
+    """Number of sentences of each length (in words), for lengths up to ``max_length``; zero counts left
+    out."""
     net = as_network(grammar)
     limit = net.check_length_limit(max_length)
     # cnt[l][s] = sentences of exactly l words from state s

@@ -4,9 +4,9 @@ Every function draws the tables of :mod:`glu.sweep` (``results``, ``differences`
 axes it is given and returns them. In those tables a noise of NaN means "pooled over the noise levels"
 and a viewpoint ``"all"`` "pooled over the viewpoints"; ``where`` picks one cell of the design (action
 prior, inference network, learn_experiments, p_HMM reading; default
-:data:`glu.experiments.findings.REFERENCE_CELL`), which the panel's title names. Strategies whose lines coincide are named in the panel's
-title, so that a line hidden under another is not missed; the legends are drawn once per figure
-(:mod:`glu.plots.corpus`).
+:data:`glu.experiments.findings.REFERENCE_CELL`), which the panel's title names. Strategies whose lines
+coincide are named in the panel's title, so that a line hidden under another is not missed; the legends are
+drawn once per figure (:mod:`glu.plots.corpus`).
 """
 
 from __future__ import annotations
@@ -70,7 +70,8 @@ def posterior_label(posterior: str) -> str:
 
 
 def where_label(where: Mapping[str, Any] | None) -> str:
-    """A cell of the design in words (:func:`glu.experiments.findings.cell_label`; None: the reference cell)."""
+    """A cell of the design in words (:func:`glu.experiments.findings.cell_label`; None: the reference
+    cell)."""
     return cell_label({**REFERENCE_CELL, **(where or {})})
 
 
@@ -196,8 +197,8 @@ def plot_reliability(
     target: str = "effect",
 ) -> Axes:
     """Reliability diagram of a target (the effect ObjVel, or the action): how often the top value was
-    right, against its probability, per calibration bin; marker area ∝ the share of the strategy's episodes in the bin
-    (:func:`size_of_share` for a key). Lines drawn first are wider, so that one lying on another shows
+    right, against its probability, per calibration bin; marker area ∝ the share of the strategy's episodes in
+    the bin (:func:`size_of_share` for a key). Lines drawn first are wider, so that one lying on another shows
     as a border around it."""
     sel = _pooled(reliability, noise, viewpoint, where)
     sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0) & (sel.target == target)]

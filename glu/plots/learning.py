@@ -1,4 +1,5 @@
-"""Figures of learning gestures from effects: learning curves with intervals, episodes to match, real gestures.
+"""Figures of learning gestures from effects: learning curves with intervals, episodes to match, real
+gestures.
 
 Each function draws a table of :mod:`glu.experiments.learning_curves` or
 :mod:`glu.experiments.self_supervised` on the axes it is given and returns them.

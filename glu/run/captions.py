@@ -17,7 +17,8 @@ _HEADING = re.compile(r"^#{1,6}\s+(.*)$")
 
 
 def _blocks(markdown: str) -> list[tuple[str, str]]:
-    """A markdown cell as ("heading", text) and ("text", paragraph) blocks, in order; a heading is one line."""
+    """A markdown cell as ("heading", text) and ("text", paragraph) blocks, in order; a heading is one
+    line."""
     blocks: list[tuple[str, str]] = []
     lines: list[str] = []
 

@@ -135,7 +135,8 @@ class Outputs:
         self.written.extend([csv, js])
 
     def say(self, text: str) -> None:
-        """Show a sentence written by code from the tables: Markdown in a running kernel, plain text elsewhere.
+        """Show a sentence written by code from the tables: Markdown in a running kernel, plain text
+        elsewhere.
 
         Notebook prose that names a number or a comparison goes through here (or a table), never into a
         markdown cell, so a changed result cannot leave a stale sentence.

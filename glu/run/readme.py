@@ -28,70 +28,76 @@ _ROOT = paths.PROJECT_ROOT
 README: Path | None = _ROOT / "README.md" if _ROOT is not None else None
 """The checkout's README (None when glu is installed: then give the files explicitly)."""
 SUMMARY: Path | None = _ROOT / "results" / "summary.json" if _ROOT is not None else None
-BEGIN = "<!-- BEGIN results: written by `glu readme` from results/summary.json; edit glu/run/readme.py, not here -->"
+BEGIN = (
+    "<!-- BEGIN results: written by `glu readme` from results/summary.json; edit glu/run/readme.py, not "
+    "here -->"
+)
 END = "<!-- END results -->"
 
 TEMPLATE = """\
 Every number below comes from `make reproduce` on the real data (the tables of its {notebooks} notebooks): \
 `glu readme` writes this section from `results/summary.json`.
 
-* **The Affordance–Words network.** Learned exactly as the original: the same {edges:.0f} edges ({differing_edges:.0f} \
-differ), every CPT equal (max |difference| {max_cpt_difference:g}), and the same log-likelihood of the training data \
-({log_likelihood:.4f}, difference {log_likelihood_difference:g}).
+* **The Affordance–Words network.** Learned exactly as the original: the same {edges:.0f} edges \
+({differing_edges:.0f} differ), every CPT equal (max |difference| {max_cpt_difference:g}), and the same \
+log-likelihood of the training data ({log_likelihood:.4f}, difference {log_likelihood_difference:g}).
   * GLU 2017 Fig. 4: a tap on a small sphere gives p(ObjVel) = (slow {fig4_sphere_slow:.3f}, medium \
 {fig4_sphere_medium:.3f}, fast {fig4_sphere_fast:.3f}); on a big box, slow {fig4_box_slow:.4f}.
-  * GLU 2017 Fig. 5: Δp(w) for every word equals the original model's (max |difference| {fig5_difference:g}). \
-"rolls" rises by {fig5_rolls:+.3f}, tap/push words rise, touch/poke words fall.
+  * GLU 2017 Fig. 5: Δp(w) for every word equals the original model's (max |difference| \
+{fig5_difference:g}). "rolls" rises by {fig5_rolls:+.3f}, tap/push words rise, touch/poke words fall.
   * TCDS: action and effect under soft evidence equal the original model's values (max |difference| \
 {tcds_soft_difference:g}).
-* **The original's quirk.** For a word, a parent configuration never seen in training gets an all-zero CPT row \
-({zero_rows:.0f} rows). Every query then excludes three affordance configurations ({lost_mass_percent:.2f} % of the \
-prior mass). glu keeps this by default, because the published bars depend on it; `--unseen-words uniform` fixes \
-it. The fix moves Δp(w) by up to {unseen_max:.3f} (`unseen_rows_comparison`).
-* **The tap threshold.** Bisection finds that tap wins p_comb(Action | small sphere, still) only above p_HMM(tap) = \
-{tap_threshold:.4f}; the paper read "0.81" off a grid. `06_fusion_product` gives the threshold for all \
-{n_thresholds:.0f} (Shape, Size, ObjVel) combinations.
-* **Soft fusion, both ways.** The originals enter p_HMM as virtual (likelihood) evidence. Their references define \
-soft evidence by Jeffrey's rule. glu has both, and they differ by up to {soft_rules_max:.2f} in between certain \
-cases (`fusion_soft_sweep`).
-* **Gesture HMMs.** The original 2013 models recognise {original_tap:.0f} of the {original_n:.0f} original test \
-segments as tap; {original_other}.
-  * Trained by glu on synthetic gestures: {cv_folds:.0f}-fold accuracy {cv_accuracy:.2f}, and {noise_accuracy:.2f} \
-with {noise_cm:.0f} cm sensor noise ({noise_folds:.0f}-fold).
-  * On the {loso_n:.0f} real segments of the three standing recordings (one person), leave-one-segment-out on \
-raw features gives {raw_loso_span} over {raw_loso_runs:.0f} covariance priors and seeds; with one segment worth \
-{segment_points:.0f} points, single accuracies are fragile.
-* **The correspondence problem, on the real data** (`10_correspondence`). The seated hand works elsewhere in the \
-torso frame: mean height y of the two seated taps {seated_y_lo:.2f} and {seated_y_hi:.2f}, at most \
-{standing_y_max:.2f} for every standing repetition; depth z {seated_z_lo:.2f} and {seated_z_hi:.2f}, at least \
-{standing_z_min:.2f} standing.
+* **The original's quirk.** For a word, a parent configuration never seen in training gets an all-zero CPT \
+row ({zero_rows:.0f} rows). Every query then excludes three affordance configurations \
+({lost_mass_percent:.2f} % of the prior mass). glu keeps this by default, because the published bars depend \
+on it; `--unseen-words uniform` fixes it. The fix moves Δp(w) by up to {unseen_max:.3f} \
+(`unseen_rows_comparison`).
+* **The tap threshold.** Bisection finds that tap wins p_comb(Action | small sphere, still) only above \
+p_HMM(tap) = {tap_threshold:.4f}; the paper read "0.81" off a grid. `06_fusion_product` gives the threshold \
+for all {n_thresholds:.0f} (Shape, Size, ObjVel) combinations.
+* **Soft fusion, both ways.** The originals enter p_HMM as virtual (likelihood) evidence. Their references \
+define soft evidence by Jeffrey's rule. glu has both, and they differ by up to {soft_rules_max:.2f} in \
+between certain cases (`fusion_soft_sweep`).
+* **Gesture HMMs.** The original 2013 models recognise {original_tap:.0f} of the {original_n:.0f} original \
+test segments as tap; {original_other}.
+  * Trained by glu on synthetic gestures: {cv_folds:.0f}-fold accuracy {cv_accuracy:.2f}, and \
+{noise_accuracy:.2f} with {noise_cm:.0f} cm sensor noise ({noise_folds:.0f}-fold).
+  * On the {loso_n:.0f} real segments of the three standing recordings (one person), leave-one-segment-out \
+on raw features gives {raw_loso_span} over {raw_loso_runs:.0f} covariance priors and seeds; with one segment \
+worth {segment_points:.0f} points, single accuracies are fragile.
+* **The correspondence problem, on the real data** (`10_correspondence`). The seated hand works elsewhere in \
+the torso frame: mean height y of the two seated taps {seated_y_lo:.2f} and {seated_y_hi:.2f}, at most \
+{standing_y_max:.2f} for every standing repetition; depth z {seated_z_lo:.2f} and {seated_z_hi:.2f}, at \
+least {standing_z_min:.2f} standing.
 {nested_text}
-  * Effect anticipation with glu's centred HMMs (`08_tcds_figures`) ends as the originals' does: the sphere will \
-move (p(ObjVel = slow) {glu_sphere_slow:.3f}), the box will not ({glu_box_slow:.3f}).
-* **Invariant features and the body frame, on synthetic people** (`10_correspondence`; HMMs trained on standard \
-people facing the camera, tested on other people, {study_seeds:.0f} seeds, {ci_percent:.0f} % two-level intervals \
-over the seeds and the test gestures).
+  * Effect anticipation with glu's centred HMMs (`08_tcds_figures`) ends as the originals' does: the sphere \
+will move (p(ObjVel = slow) {glu_sphere_slow:.3f}), the box will not ({glu_box_slow:.3f}).
+* **Invariant features and the body frame, on synthetic people** (`10_correspondence`; HMMs trained on \
+standard people facing the camera, tested on other people, {study_seeds:.0f} seeds, {ci_percent:.0f} % \
+two-level intervals over the seeds and the test gestures).
 {study_text}
 * **Effect anticipation (TCDS Fig. 5).** With the original HMMs, on the originals' schedule (an update every \
-{step:.0f} frames, the last at the last multiple of {step:.0f}), {anticipation_within:.0f} of {anticipation_n:.0f} values of the published \
-curves and bars are reproduced within the figure's resolution (max |difference| {anticipation_max:.1e}), and \
-both captions are the paper's: "{sphere_caption}", "{box_caption}".
-* **Verbal descriptions.** Ranking the originals' {n_samples:,.0f} sampled sentences with their score \
-(1 + Σ log p)/L, glu prints TCDS Table II, Fig. 7 and Fig. 8 (whose sentences are the best among those that name \
-a colour, as the originals' code ranked them): {same_sentences:.0f} of {n_sentences:.0f} sentences \
-and {same_scores:.0f} of {n_scores:.0f} scores to the printed digit. The grammar has {n_grammar:,.0f} sentences; \
-glu finds the exact N-best under either score without scoring them one by one. Random samples of {trial_samples:,.0f} \
-sentences, as the originals drew them, held the grammar's best in {trials_found:.0f} of {trials:.0f} trials (the \
-exact chance is {p_draw_percent:.1f} %).
-* **Every fusion strategy on a simulated corpus** (`11_corpus_evaluation`: {corpus_episodes:,.0f} episodes over \
-{corpus_seeds:.0f} recogniser seeds, each with its own recogniser, learned networks and episodes; {ci_percent:.0f} % \
-two-level intervals, and a paired difference whose interval contains 0 counts as none). The effects and words \
-are drawn from a network and the gestures from the generator the HMMs are trained on, so the design crosses \
-the ways the robot's models can be wrong: actions drawn uniformly or from the network's prior, the robot's \
-network the generating one or learned from {corpus_learned} simulated experiments, and p_HMM read from the \
-likelihoods, per frame, or calibrated on held-out training gestures (`docs/corpus-evaluation.md`).
-  * The earlier findings, each followed through the {corpus_cells:.0f} cells of the design (the reference cell: \
-{reference_cell}; notebook 11 gives the cells where each holds):
+{step:.0f} frames, the last at the last multiple of {step:.0f}), {anticipation_within:.0f} of \
+{anticipation_n:.0f} values of the published curves and bars are reproduced within the figure's resolution \
+(max |difference| {anticipation_max:.1e}), and both captions are the paper's: "{sphere_caption}", \
+"{box_caption}".
+* **Verbal descriptions.** Ranking the originals' {n_samples:,.0f} sampled sentences with their score (1 + Σ \
+log p)/L, glu prints TCDS Table II, Fig. 7 and Fig. 8 (whose sentences are the best among those that name a \
+colour, as the originals' code ranked them): {same_sentences:.0f} of {n_sentences:.0f} sentences and \
+{same_scores:.0f} of {n_scores:.0f} scores to the printed digit. The grammar has {n_grammar:,.0f} sentences; \
+glu finds the exact N-best under either score without scoring them one by one. Random samples of \
+{trial_samples:,.0f} sentences, as the originals drew them, held the grammar's best in {trials_found:.0f} of \
+{trials:.0f} trials (the exact chance is {p_draw_percent:.1f} %).
+* **Every fusion strategy on a simulated corpus** (`11_corpus_evaluation`: {corpus_episodes:,.0f} episodes \
+over {corpus_seeds:.0f} recogniser seeds, each with its own recogniser, learned networks and episodes; \
+{ci_percent:.0f} % two-level intervals, and a paired difference whose interval contains 0 counts as none). \
+The effects and words are drawn from a network and the gestures from the generator the HMMs are trained on, \
+so the design crosses the ways the robot's models can be wrong: actions drawn uniformly or from the \
+network's prior, the robot's network the generating one or learned from {corpus_learned} simulated \
+experiments, and p_HMM read from the likelihoods, per frame, or calibrated on held-out training gestures \
+(`docs/corpus-evaluation.md`).
+  * The earlier findings, each followed through the {corpus_cells:.0f} cells of the design (the reference \
+cell: {reference_cell}; notebook 11 gives the cells where each holds):
 {findings_text}
 {network_text}
 {p_hmm_text}
@@ -136,7 +142,8 @@ REQUIRED = (
 
 
 def load_summary(path: str | os.PathLike = SUMMARY) -> dict[str, Any]:
-    """The summary of ``glu reproduce``; :class:`DataError` if it is missing or not a full run on the real data."""
+    """The summary of ``glu reproduce``; :class:`DataError` if it is missing or not a full run on the real
+    data."""
     path = Path(path)
     try:
         summary = json.loads(path.read_text(encoding="utf-8"))
@@ -276,7 +283,8 @@ def _squeeze(text: str) -> str:
 
 
 def section_pattern() -> re.Pattern[str]:
-    """A regular expression matching :data:`TEMPLATE` with any number (or, for text slots, any text) in each slot.
+    """A regular expression matching :data:`TEMPLATE` with any number (or, for text slots, any text) in each
+    slot.
 
     It matches the section with its whitespace squeezed to single spaces (:func:`matches_template`).
     """
@@ -289,12 +297,14 @@ def section_pattern() -> re.Pattern[str]:
 
 
 def matches_template(section: str) -> bool:
-    """True when ``section`` is :data:`TEMPLATE` with a number in every numeric slot, whatever the line breaks."""
+    """True when ``section`` is :data:`TEMPLATE` with a number in every numeric slot, whatever the line
+    breaks."""
     return section_pattern().fullmatch(_squeeze(section)) is not None
 
 
 def readme_section(text: str) -> str:
-    """The text between :data:`BEGIN` and :data:`END` in a README (stripped); DataError without exactly one."""
+    """The text between :data:`BEGIN` and :data:`END` in a README (stripped); DataError without exactly
+    one."""
     return generated.section(text, BEGIN, END)
 
 

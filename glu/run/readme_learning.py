@@ -1,4 +1,5 @@
-"""The README's bullet on learning gestures from effects (notebook 12), and its numbers, for :mod:`glu.run.readme`.
+"""The README's bullet on learning gestures from effects (notebook 12), and its numbers,
+for :mod:`glu.run.readme`.
 
 Its own module so that :mod:`glu.run.readme` stays short; the rules are :mod:`glu.run.readme`'s: every slot
 is filled by :func:`learning_values` from the summary's tables, and only the papers' numbers are typed.
@@ -14,10 +15,18 @@ import pandas as pd
 from glu.errors import DataError
 
 LEARNING_TEMPLATE = """\
-* **Beyond the self: learning people's gestures from what their actions did** (`12_learning_from_effects`: the robot labels unlabelled episodes with its network and learns its HMMs online from no gesture model; {learn_seeds:.0f} seeds × {learn_episodes:,.0f} episodes; two-level intervals over seeds and held-out gestures). Without words the network's labels are right for {label_mixed:.2f} of the episodes on every object, with words for {label_mixed_words:.2f}.
-  * Learning from effects reaches the accuracy of HMMs trained on the true labels ({learn_true:.3f}) within the interval in {learn_matched:.0f} of {learn_conditions:.0f} conditions (ambiguity × words): {learn_reached}.
+* **Beyond the self: learning people's gestures from what their actions did** (`12_learning_from_effects`: \
+the robot labels unlabelled episodes with its network and learns its HMMs online from no gesture model; \
+{learn_seeds:.0f} seeds × {learn_episodes:,.0f} episodes; two-level intervals over seeds and held-out \
+gestures). Without words the network's labels are right for {label_mixed:.2f} of the episodes on every \
+object, with words for {label_mixed_words:.2f}.
+  * Learning from effects reaches the accuracy of HMMs trained on the true labels ({learn_true:.3f}) within \
+the interval in {learn_matched:.0f} of {learn_conditions:.0f} conditions (ambiguity × words): {learn_reached}.
   * {learn_failed}.
-  * On the real standing segments, their labels hidden and each paired with an object and an effect drawn from the network, leave-one-segment-out accuracy ({real_features} features) is {real_soft:.2f} with soft labels and {real_true:.2f} with the true ones (mean of {real_draws:.0f} draws; the network's labels right for {real_labels:.2f})."""
+  * On the real standing segments, their labels hidden and each paired with an object and an effect drawn \
+from the network, leave-one-segment-out accuracy ({real_features} features) is {real_soft:.2f} with soft \
+labels and {real_true:.2f} with the true ones (mean of {real_draws:.0f} draws; the network's labels right \
+for {real_labels:.2f})."""
 """The bullet that ends :data:`glu.run.readme.TEMPLATE`."""
 
 LEARNING_REQUIRED: tuple[str, ...] = ("learning_match", "learning_labels", "learning_real_gestures_summary")
@@ -31,7 +40,8 @@ def _table(summary: Mapping[str, Any], name: str) -> tuple[pd.DataFrame, dict[st
 
 def learning_values(summary: Mapping[str, Any]) -> dict[str, Any]:
     """The slots of the learning-from-effects bullet (notebook 12): when the labelling schemes reach the
-    true-label HMMs within the interval (:func:`glu.experiments.learning_curves.match_table`), and when not."""
+    true-label HMMs within the interval (:func:`glu.experiments.learning_curves.match_table`), and when
+    not."""
     match, meta = _table(summary, "learning_match")
     params = meta["parameters"]
     labels = _table(summary, "learning_labels")[0]

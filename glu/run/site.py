@@ -1,7 +1,7 @@
 """The documentation site of a run: the executed notebooks, the docs pages and the API reference, with Sphinx.
 
-``glu reproduce`` ends with :func:`build_site`, which writes the layout's ``site/`` folder (``build/site/`` in a
-checkout, ``OUT/site/`` with ``--out``); ``make docs`` (``python -m glu.run.site``) builds it again from the
+``glu reproduce`` ends with :func:`build_site`, which writes the layout's ``site/`` folder (``build/site/`` in
+a checkout, ``OUT/site/`` with ``--out``); ``make docs`` (``python -m glu.run.site``) builds it again from the
 last run. The site is made with the tools of the scientific Python ecosystem's notebook collections: Sphinx,
 MyST-NB (the stack of Jupyter Book 1) and the PyData theme. It holds
 
@@ -18,8 +18,8 @@ MyST-NB (the stack of Jupyter Book 1) and the PyData theme. It holds
 
 The sources are assembled in the layout's ``site-source/`` folder (kept, with Sphinx's doctrees, so that the
 next build only reads again what changed); the HTML is written there afresh and then replaces ``site/``, so a
-failed build leaves the previous site as it was. Any Sphinx warning fails the build (:class:`SiteError`). Nothing is
-fetched from the web: the theme's files are installed with it.
+failed build leaves the previous site as it was. Any Sphinx warning fails the build (:class:`SiteError`).
+Nothing is fetched from the web: the theme's files are installed with it.
 """
 
 from __future__ import annotations
@@ -135,11 +135,11 @@ def _index(
     lines = [
         "# glu: gestures, language and affordances, reproduced",
         "",
-        "A Python reproduction of Saponaro et al., *Interactive Robot Learning of Gestures, Language and "
-        "Affordances* (GLU 2017) and its follow-up *Beyond the Self* (IEEE TCDS 2020): gesture HMMs, the "
-        "Affordance–Words Bayesian network, their fusion, and verbal descriptions. This site is the record of "
-        "one run of every notebook (`glu reproduce`): the executed notebooks, their figures, the comparison "
-        "with the originals, and the API reference.",
+        "A Python reproduction of Saponaro et al., *Interactive Robot Learning of Gestures, Language "
+        "and Affordances* (GLU 2017) and its follow-up *Beyond the Self* (IEEE TCDS 2020): gesture "
+        "HMMs, the Affordance–Words Bayesian network, their fusion, and verbal descriptions. This "
+        "site is the record of one run of every notebook (`glu reproduce`): the executed notebooks, "
+        "their figures, the comparison with the originals, and the API reference.",
         "",
         f"**Data:** {_md_escape(summary.get('data_source', 'unknown'))} · **mode:** "
         f"{'quick (small, fast runs)' if quick else 'full'}"
@@ -206,9 +206,9 @@ def _index(
     recordings = summary.get("recordings", [])
     if recordings:
         lines += [
-            "Each anticipation and episode run is also a [Rerun](https://rerun.io) recording: the hand in 3-D, "
-            "the HMM scores, the fused beliefs frame by frame. Open one in the Rerun viewer (installed with "
-            "`glu[notebooks]`) from the output folder:",
+            "Each anticipation and episode run is also a [Rerun](https://rerun.io) recording: the "
+            "hand in 3-D, the HMM scores, the fused beliefs frame by frame. Open one in the Rerun "
+            "viewer (installed with `glu[notebooks]`) from the output folder:",
             "",
             "```{raw} html",
             '<table class="table glu-recordings"><thead><tr><th>recording</th><th>notebook</th>'

@@ -1,10 +1,11 @@
 """The speed page's tables, written from the benchmarks' results — never typed by hand.
 
-Every benchmark in ``benchmarks/`` writes ``benchmarks/results/NAME.json`` in one schema (``benchmarks/timing.py``:
-the benchmark, what it measures, the command, the machine and its load, the date, notes, and rows of glu's
-seconds against a reference's, with a target). :func:`render` turns those files into the generated section of
-``docs/speed.md`` (between :data:`BEGIN` and :data:`END`); ``glu readme`` writes it and ``glu readme --check``
-compares it, and a test checks that the page is what this module writes from the files.
+Every benchmark in ``benchmarks/`` writes ``benchmarks/results/NAME.json`` in one schema
+(``benchmarks/timing.py``: the benchmark, what it measures, the command, the machine and its load, the date,
+notes, and rows of glu's seconds against a reference's, with a target). :func:`render` turns those files into
+the generated section of ``docs/speed.md`` (between :data:`BEGIN` and :data:`END`); ``glu readme`` writes it
+and ``glu readme --check`` compares it, and a test checks that the page is what this module writes from the
+files.
 
 Example
 -------

@@ -1,8 +1,8 @@
 """Compiled loops (numba): the HMM recursions here, and :func:`compiled` for the other modules' loops.
 
 The batched forward–backward of Baum–Welch and the recogniser's scoring (``loglik_many``) were array
-code whose cost on the project's models (Q = 6 states, a few dozen sequences of 100–200 frames) was almost all per-step
-dispatch: about 20 µs a frame for a few hundred multiplications. Here the same recursions run as
+code whose cost on the project's models (Q = 6 states, a few dozen sequences of 100–200 frames) was almost all
+per-step dispatch: about 20 µs a frame for a few hundred multiplications. Here the same recursions run as
 compiled loops, one sequence at a time, with the same scaling, the same underflow checks and the same
 log-domain fallback; the callers (:func:`glu.hmm._engine.em_batch.forward_backward_many`,
 :func:`glu.hmm._engine.batch.loglik_many`) keep their signatures and their numpy set-up. The mixture
@@ -206,9 +206,9 @@ def _mixture_posteriors(lc, log_b, post):
 
 @cache
 def _jit() -> Any:
-    """numba's ``njit`` as glu compiles with it: machine code cached on disk (:attr:`glu.paths.Locations.compiled`,
-    never inside an installed package; ``$NUMBA_CACHE_DIR`` wins), no GIL, numpy's error model (a division
-    by zero gives inf or nan, as the array code did)."""
+    """numba's ``njit`` as glu compiles with it: machine code cached on disk
+    (:attr:`glu.paths.Locations.compiled`, never inside an installed package; ``$NUMBA_CACHE_DIR`` wins), no
+    GIL, numpy's error model (a division by zero gives inf or nan, as the array code did)."""
     import numba
 
     from glu.paths import HERE
