@@ -9,7 +9,8 @@ probability block of one row per parent value per node), and **one wide parent**
 and whose child has one row per value (the shape that made the earlier regular-expression reader
 quadratic: each row looked its value up in a list); and **unclosed** variable blocks (a file cut or mangled:
 the earlier reader's pattern for a block searched to the end of the file from every ``variable``, 13.7 s for
-8,000 lines, about 55 s for 16,000; glu now refuses it at the first block, after reading it once). For each, the best of N calls of
+8,000 lines, about 55 s for 16,000; glu now refuses it at the first block, after reading it once). For each,
+the best of N calls of
 :func:`glu.bn.exchange.from_bif` on the text (the file is generated in memory), and seconds per 10,000
 lines: a linear reader keeps that ratio flat. Results go to ``benchmarks/results/bif_import.json``
 (``timing.report``).
@@ -96,7 +97,8 @@ def main() -> None:
     report(
         "bif_import",
         "Reading BIF files of 10,000 to 100,000 lines (glu.bn.exchange.from_bif, best of "
-        f"{args.repeats}): a ratio near 1 at every length is a linear reader; a quadratic one falls as 1/length",
+        f"{args.repeats}): a ratio near 1 at every length is a linear reader; a quadratic one falls as "
+        "1/length",
         rows,
         notes=["unclosed: a cut or mangled file, refused at its first block after one pass"],
     )

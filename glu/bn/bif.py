@@ -25,7 +25,8 @@ size is allocated, so a file declaring 10⁹ values is refused in one line inste
 
 
 def check_declared(n: int, what: str, where: str) -> int:
-    """``n`` when it is at most :data:`MAX_DECLARED`; else :class:`ModelError` naming ``what`` and the size."""
+    """``n`` when it is at most :data:`MAX_DECLARED`; else :class:`ModelError` naming ``what`` and the
+    size."""
     if n > MAX_DECLARED:
         raise ModelError(f"{where}: {what} declares {n:,} entries; glu reads at most {MAX_DECLARED:,}")
     return n
@@ -159,8 +160,8 @@ def _bif_probability(
             config = r.until(")", "a configuration")
             if len(config) != len(ps):
                 raise ModelError(
-                    f"{where}: {context}: the configuration ({', '.join(config)}) names {len(config)} value(s) "
-                    f"for {len(ps)} parent(s)"
+                    f"{where}: {context}: the configuration ({', '.join(config)}) names {len(config)} "
+                    f"value(s) for {len(ps)} parent(s)"
                 )
             idx = tuple(
                 _value_index(index[p], values[p], v, p, where) for p, v in zip(ps, config, strict=True)

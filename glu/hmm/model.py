@@ -52,7 +52,8 @@ def as_sequence(X: Any, n_features: int, what: str = "sequence") -> np.ndarray:
 
 
 MAX_MEAN = 1e6
-"""The largest magnitude of an HMM mean glu accepts (features are hand positions in body sizes, of order 1)."""
+"""The largest magnitude of an HMM mean glu accepts (features are hand positions in body sizes, of
+order 1)."""
 MAX_COVAR = 1e12
 """The largest magnitude of a covariance entry glu accepts."""
 
