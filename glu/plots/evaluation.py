@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.ticker import MaxNLocator
 
 from glu.experiments.findings import REFERENCE_CELL, cell_label
 from glu.plots.style import RULE_LABELS
@@ -285,6 +286,7 @@ def plot_differences(
     ax.axvline(0, color="0.5", lw=0.8)
     ax.set_yticks([i for i, _ in labels], [t for _, t in labels], fontsize=7)
     ax.set_ylim(len(pairs) - 0.5, -0.5)
+    ax.xaxis.set_major_locator(MaxNLocator(nbins=5))  # a narrow panel: at most six readable tick labels
     ax.set_xlabel("difference (95 % paired bootstrap interval)")
     ax.set_title(f"paired differences ({fraction:.0%} seen)\n{where_label(where)}", fontsize=9)
     return ax
