@@ -172,8 +172,8 @@ def replace_folder(complete: str | os.PathLike, dest: str | os.PathLike) -> Path
 def read_text(
     path: str | os.PathLike, what: str = "file", encoding: str = "utf-8", error: type | None = None
 ) -> str:
-    """The text of an input file; ``error`` (default :class:`~glu.errors.DataError`) names the file and ``what``
-    it should be when it is missing, a folder, unreadable or not text."""
+    """The text of an input file; ``error`` (default :class:`~glu.errors.DataError`) names the file and
+    ``what`` it should be when it is missing, a folder, unreadable or not text."""
     from glu.errors import DataError
 
     error = error or DataError

@@ -81,7 +81,8 @@ def uniform_bn(table):
 
 @pytest.fixture(scope="session")
 def recognizer(source):
-    """Gesture HMMs for the source: the originals' 2013 models on real data, small glu-trained ones otherwise."""
+    """Gesture HMMs for the source: the originals' 2013 models on real data, small glu-trained ones
+    otherwise."""
     from glu.experiments.gestures import train_on
     from glu.gestures.corpus import gesture_sequences
     from glu.gestures.recognizer import load_original_models

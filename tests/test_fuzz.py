@@ -390,7 +390,8 @@ def _hand_log(m, tmp_path_factory, files, capsys):
 
 
 def _json_mutations(obj, draw_path: list[int], replacement):
-    """Replace the node reached by ``draw_path`` (indices into dict items / list elements) with ``replacement``."""
+    """Replace the node reached by ``draw_path`` (indices into dict items / list elements) with
+    ``replacement``."""
     if not draw_path or not isinstance(obj, dict | list) or not obj:
         return replacement
     keys = list(obj) if isinstance(obj, dict) else list(range(len(obj)))
@@ -563,7 +564,7 @@ def _report():
             print(f"  {v:5d}  {k}")
 
 
-# ---------------------------------------------------------------- devices, FIFOs, symlink loops, inputs as outputs
+# ----------------------------------------------------------- devices, FIFOs, symlink loops, inputs as outputs
 def _run(argv: list[str], capsys) -> tuple[int, str, str]:
     capsys.readouterr()
     try:

@@ -1,4 +1,5 @@
-"""A second fuzz suite (issue #11), complementing tests/test_fuzz.py with other generators and stricter checks.
+"""A second fuzz suite (issue #11), complementing tests/test_fuzz.py with other generators and stricter
+checks.
 
 tests/test_fuzz.py draws bad values per argument type and a fixed set of corrupted files. This module adds:
 cases that *must* fail (an expensive command given only invalid settings may not run: ``--only 0`` once ran
@@ -19,9 +20,9 @@ Each generated input runs ``glu.cli.main(argv)`` in-process and must behave as t
   no folder created, no input changed).
 
 The subcommands are listed from the parser: a new one without a fuzz case fails
-:func:`test_every_subcommand_has_a_case_here`, naming it. The default profile (CI) is small and derandomised; the
-``slow`` variants run many more examples (``pytest -m slow tests/test_fuzz_mutations.py``). Per-category counts are
-printed at the end of the session (``category: N inputs, M misbehaved``).
+:func:`test_every_subcommand_has_a_case_here`, naming it. The default profile (CI) is small and derandomised;
+the ``slow`` variants run many more examples (``pytest -m slow tests/test_fuzz_mutations.py``). Per-category
+counts are printed at the end of the session (``category: N inputs, M misbehaved``).
 """
 
 from __future__ import annotations
@@ -738,7 +739,7 @@ def test_corrupted_hand_logs(command, profile, assets):
     example()
 
 
-# ------------------------------------------------------------------ categories "model JSON", "recogniser JSON"
+# ----------------------------------------------------------------- categories "model JSON", "recogniser JSON"
 
 _json_leaf = st.one_of(
     st.none(),
@@ -828,12 +829,13 @@ test_mutated_model_json = _files_case("model JSON", "model", ".json", MODEL_COMM
 test_mutated_recogniser_json = _files_case("recogniser JSON", "recogniser", ".json", RECOGNISER_COMMANDS)
 
 
-# ------------------------------------------------------------------ category ".mat files" (the originals' model)
+# --------------------------------------------------------------- category ".mat files" (the originals' model)
 
 
 @pytest.fixture(scope="module")
 def original_mat(tmp_path_factory, assets) -> bytes:
-    """The originals' BN_lab.mat when the real data is here; else the synthetic network in the same BNT layout."""
+    """The originals' BN_lab.mat when the real data is here; else the synthetic network in the same BNT
+    layout."""
     if SHARED is not None:
         return (SHARED / "reference-models" / "BN_lab.mat").read_bytes()
     from test_model_io import write_bnt_mat
@@ -935,7 +937,7 @@ def test_evidence_batches(via, profile, assets):
     example()
 
 
-# ------------------------------------------------------------------ issue 26: huge declared sizes, silently wrong inputs
+# ------------------------------------------------------- issue 26: huge declared sizes, silently wrong inputs
 # Each case writes its files into the work folder and must fail with one line naming what is wrong; judge()
 # also checks that nothing in the folder changed. The expected word comes from the case, not from glu.
 

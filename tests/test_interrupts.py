@@ -103,7 +103,7 @@ def test_a_staging_folder_left_by_a_killed_run_is_removed(tmp_path):
     assert clean_stale_staging(Path(tmp_path / "none")) == []
 
 
-# ---------------------------------------------------------------- signals at random moments, kernel start-up included
+# -------------------------------------------------------- signals at random moments, kernel start-up included
 def _processes_with(token: str) -> list[int]:
     """The processes whose environment holds ``token`` (the run and every kernel it started)."""
     found = []

@@ -133,7 +133,8 @@ def with_seen_indicators(
 
 
 def seen_evidence(bn: BayesNet) -> dict[str, str]:
-    """The evidence to give another tool with a ``zero_rows="seen"`` export: ``{"seen__<node>": "yes", …}``."""
+    """The evidence to give another tool with a ``zero_rows="seen"`` export:
+    ``{"seen__<node>": "yes", …}``."""
     return {SEEN_PREFIX + n: "yes" for n in bn.zero_rows()}
 
 

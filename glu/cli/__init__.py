@@ -162,8 +162,8 @@ def _main(argv: Sequence[str] | None) -> int:
         if debug:
             traceback.print_exc()
         print(
-            f"{name}: internal error: {type(e).__name__}: {e} — this is a bug in glu; please report it with the "
-            f"command you ran (set {DEBUG_ENV}=1 or pass --debug for the traceback)",
+            f"{name}: internal error: {type(e).__name__}: {e} — this is a bug in glu; please report it "
+            f"with the command you ran (set {DEBUG_ENV}=1 or pass --debug for the traceback)",
             file=sys.stderr,
         )
         return 1

@@ -1,4 +1,5 @@
-"""``glu bn learn|edges|nodes|import|export`` and ``glu query``: learn the network, inspect it, ask it questions."""
+"""``glu bn learn|edges|nodes|import|export`` and ``glu query``: learn the network, inspect it, ask it
+questions."""
 
 from __future__ import annotations
 
@@ -54,8 +55,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     ep = bsub.add_parser(
         "edges",
         help="print the edges of a model, one 'Parent -> Child' per line, sorted",
-        description="Print the edges of a model, one 'Parent -> Child' per line, sorted by parent then child. "
-        '--json prints [["Parent", "Child"], …].',
+        description="Print the edges of a model, one 'Parent -> Child' per line, sorted by parent then "
+        'child. --json prints [["Parent", "Child"], …].',
     )
     ep.add_argument("model", type=Path, help="model file (.json from glu bn learn, or the original .mat)")
     add_json_option(ep, "[[parent, child], …]")
@@ -74,7 +75,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     ip = bsub.add_parser(
         "import",
-        help="convert a model from another tool (BIF, XMLBIF, UAI) or the original BNT .mat to a glu JSON model",
+        help="convert a model from another tool (BIF, XMLBIF, UAI) or the original BNT .mat to a glu "
+        "JSON model",
         description="Read a BIF, XMLBIF or UAI file (the format from the suffix, or --format), or the "
         "originals' BN_lab.mat, validate it completely and write a glu JSON model. Indicator nodes "
         "seen__NODE written by glu bn export --zero-rows seen become NODE's all-zero rows again.",

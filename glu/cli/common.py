@@ -257,7 +257,8 @@ def add_evidence_args(p: argparse.ArgumentParser) -> None:
 
 
 def add_description_args(p: argparse.ArgumentParser) -> None:
-    """``--score`` and ``--candidates``: how verbal descriptions are scored, and which sentences are ranked."""
+    """``--score`` and ``--candidates``: how verbal descriptions are scored, and which sentences are
+    ranked."""
     from glu.language.candidates import CANDIDATES, DEFAULT_CANDIDATES
     from glu.language.descriptions import DEFAULT_SCORE, SCORES
 
@@ -439,7 +440,8 @@ def add_deprecated_alias(
 
 
 def add_json_option(p: argparse.ArgumentParser, what: str) -> None:
-    """``--json``: ``what`` as strict JSON, alone on stdout (anything else the command says goes to stderr)."""
+    """``--json``: ``what`` as strict JSON, alone on stdout (anything else the command says goes to
+    stderr)."""
     p.add_argument("--json", action="store_true", help=f"strict JSON on stdout, nothing else: {what}")
 
 
@@ -451,7 +453,8 @@ def add_soft_rule_option(p: argparse.ArgumentParser, what: str = "soft evidence"
         "--soft-rule",
         choices=SOFT_RULES,
         default=SOFT_RULES[0],
-        help=f"how {what} enters the network: virtual (likelihood) evidence, as the originals, or Jeffrey's rule",
+        help=f"how {what} enters the network: virtual (likelihood) evidence, as the originals, or "
+        "Jeffrey's rule",
     )
 
 
@@ -481,7 +484,8 @@ def add_cluster_args(p: argparse.ArgumentParser, unit: str) -> None:
 
 
 def add_hmm_size_args(p: argparse.ArgumentParser) -> None:
-    """``--states``, ``--mix`` and ``--iter`` of the gesture HMMs, defaults from :class:`~glu.hmm.TrainingConfig`."""
+    """``--states``, ``--mix`` and ``--iter`` of the gesture HMMs, defaults from
+    :class:`~glu.hmm.TrainingConfig`."""
     from glu.hmm import TrainingConfig
 
     d = TrainingConfig()

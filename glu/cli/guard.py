@@ -91,7 +91,8 @@ def check_outputs_not_inputs(args: argparse.Namespace) -> None:
         for real, named in inputs.items():
             if out == real:
                 raise InputOverwriteError(
-                    f"{flag} {text} is also an input ({named}); it would be overwritten; write to another path"
+                    f"{flag} {text} is also an input ({named}); it would be overwritten; "
+                    "write to another path"
                 )
             if out.is_file() and real.is_dir() and real in out.parents:
                 raise InputOverwriteError(

@@ -1,4 +1,5 @@
-"""``glu describe``: the best verbal descriptions of a situation, from the grammar and the BN's word probabilities."""
+"""``glu describe``: the best verbal descriptions of a situation, from the grammar and the BN's word
+probabilities."""
 
 from __future__ import annotations
 

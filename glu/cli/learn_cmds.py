@@ -1,4 +1,5 @@
-"""``glu learn-gestures`` and ``glu learning-curves``: the robot learns people's gestures from what their actions did.
+"""``glu learn-gestures`` and ``glu learning-curves``: the robot learns people's gestures from what their
+actions did.
 
 ``glu learn-gestures`` simulates episodes — a person's gesture on an object, the effect, the words — labels
 each with the Affordance–Words network learned from the robot's own experiments, trains gesture HMMs from
@@ -101,9 +102,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     c = sub.add_parser(
         "learning-curves",
         help="the study of learning from effects: learning curves of every scheme (Dask, one task per seed)",
-        description="Run the study of notebook 12: every labelling scheme and baseline, every ambiguity, with "
-        "and without words, one Dask task per training seed, and write its tables (learning_curves.csv, "
-        "learning_match.csv, learning_labels.csv, learning_study.json) to -o DIR.",
+        description="Run the study of notebook 12: every labelling scheme and baseline, every ambiguity, "
+        "with and without words, one Dask task per training seed, and write its tables "
+        "(learning_curves.csv, learning_match.csv, learning_labels.csv, learning_study.json) to -o DIR.",
     )
     c.add_argument(
         "--episodes", type=positive_int, default=10_000, metavar="N", help="per seed (default 10000)"
@@ -160,7 +161,8 @@ def _learn(args: argparse.Namespace) -> int:
     )
     print(f"episodes: {info['data']}")
     print(
-        f"labels: arg-max of p_BN right for {info['label_accuracy']:.3f} of the episodes; rounds {info['rounds']}"
+        f"labels: arg-max of p_BN right for {info['label_accuracy']:.3f} of the episodes; "
+        f"rounds {info['rounds']}"
     )
     rec.save(args.out)
     print(f"wrote {args.out} ({', '.join(rec.actions)}; Q={args.states}, M={args.mix})")
@@ -189,7 +191,8 @@ def _curves(args: argparse.Namespace) -> int:
     scheduler = None if here else args.scheduler
     workers = 0 if here else (args.workers or _cores())
     print(
-        f"network: {label}; {len(args.seeds)} seeds × {args.episodes} episodes, {len(settings.learners())} learners"
+        f"network: {label}; {len(args.seeds)} seeds × {args.episodes} episodes, "
+        f"{len(settings.learners())} learners"
     )
     results = lc.learning_study(
         engine,

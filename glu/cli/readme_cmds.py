@@ -23,9 +23,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="write the generated sections of the README and docs/ (story table, results, commands, speed)",
         description="Write the README's story table (from the notebooks' manifests), its results section "
         "(from the summary of a full make reproduce on the real data: every number in it comes from the "
-        "summary), and the command table of docs/cli.md and the tables of docs/speed.md (from the benchmarks' "
-        "results), each between its markers; --check only says whether they are up to date (exit status 1 "
-        "if not).",
+        "summary), and the command table of docs/cli.md and the tables of docs/speed.md (from the "
+        "benchmarks' results), each between its markers; --check only says whether they are up to date "
+        "(exit status 1 if not).",
     )
     p.add_argument(
         "--summary", type=Path, default=SUMMARY, help="summary.json (default: results/summary.json)"
@@ -80,7 +80,8 @@ COMMANDS_END = "<!-- END commands -->"
 
 
 def command_table() -> str:
-    """Every command and subcommand of ``glu`` with its one-line help, as a Markdown table (``docs/cli.md``)."""
+    """Every command and subcommand of ``glu`` with its one-line help, as a Markdown table
+    (``docs/cli.md``)."""
     from glu.cli import build_parser
 
     def walk(parser: argparse.ArgumentParser, path: list[str]):

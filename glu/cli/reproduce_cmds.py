@@ -122,7 +122,8 @@ def _reproduce(args: argparse.Namespace) -> int:
     )
     for c in summary["comparison_with_reference"]:
         print(
-            f"  {c['table']}: max |ours − {c['reference']}| = {c['max_abs_difference']:.3g} over {c['rows']} numbers"
+            f"  {c['table']}: max |ours − {c['reference']}| = {c['max_abs_difference']:.3g} "
+            f"over {c['rows']} numbers"
         )
     return 0
 

@@ -13,11 +13,11 @@ Once the last cell has run, the kernel is killed rather than asked to exit (nbcl
 by the cells, Rerun recordings are disconnected, a Dask cluster is closed by the code that opened it), and
 a graceful exit cost 0.4–0.5 s a notebook of interpreter teardown and polling.
 
-Kernels run with ``GLU_HEADLESS=1`` in their environment (:data:`glu.machine.HEADLESS_ENV`): interactive extras (widgets,
-the Rerun viewer) then show their static form only. ``run_notebook(..., threads=N)`` also caps the kernel's
-BLAS and OpenMP threads (:data:`THREAD_ENV`) at N, unless the caller's environment sets them: ``glu
-reproduce`` gives each of its parallel kernels its share of the cores, since two kernels whose BLAS each
-spin up a thread per core slow each other down (the whole collection took 65.9 s on 2 cores with
+Kernels run with ``GLU_HEADLESS=1`` in their environment (:data:`glu.machine.HEADLESS_ENV`): interactive
+extras (widgets, the Rerun viewer) then show their static form only. ``run_notebook(..., threads=N)`` also
+caps the kernel's BLAS and OpenMP threads (:data:`THREAD_ENV`) at N, unless the caller's environment sets
+them: ``glu reproduce`` gives each of its parallel kernels its share of the cores, since two kernels whose
+BLAS each spin up a thread per core slow each other down (the whole collection took 65.9 s on 2 cores with
 two-thread BLAS in each of 2 kernels, 59.2 s with one; the same outputs).
 """
 
@@ -259,7 +259,8 @@ def shown_path(path: str | os.PathLike, root: Path | None = None) -> str:
     """How an executed notebook shows a folder of this machine: relative to the project (``"."`` for the
     project itself, ``"data/real"``), else only its last part (``"…/data"``); never a machine path.
 
-    >>> shown_path("/home/me/glu/data/real", root=Path("/home/me/glu")), shown_path("/srv/x/data", root=Path("/home/me/glu"))
+    >>> (shown_path("/home/me/glu/data/real", root=Path("/home/me/glu")),
+    ...  shown_path("/srv/x/data", root=Path("/home/me/glu")))
     ('data/real', '…/data')
     """
     from glu import paths

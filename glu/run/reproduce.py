@@ -305,7 +305,10 @@ def _reproduce(
             run_notebook(nb, out_ipynb, params, cwd=nb.parent, handle=handle)
         except pm.PapermillExecutionError as e:
             return failed(
-                f"notebook {name} failed in cell {e.cell_index} (execution count {e.exec_count}): {e.ename}: {e.evalue}",
+                (
+                    f"notebook {name} failed in cell {e.cell_index} (execution count {e.exec_count}): "
+                    f"{e.ename}: {e.evalue}"
+                ),
                 f"{e.ename}: {e.evalue}",
             )
         dt = time.perf_counter() - t0
@@ -453,7 +456,8 @@ def run_one(
             run_notebook(src, executed, params, cwd=src.parent)
     except pm.PapermillExecutionError as e:
         raise NotebookFailed(
-            f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; executed copy at {executed}"
+            f"notebook {src.stem} failed in cell {e.cell_index}: {e.ename}: {e.evalue}; "
+            f"executed copy at {executed}"
         ) from None
     shown = {"data": _shown_data(source), "out_dir": (shown_path(layout.root), "")}
     present_executed(executed, shown, shown_path(src), shown_path(executed))

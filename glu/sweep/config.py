@@ -142,7 +142,8 @@ class SweepConfig:
             bad = [v for v in given if v not in allowed]
             if bad or not given:
                 raise DataError(
-                    f"grid.{name}: unknown value {bad[0] if bad else '(none)'!r}; allowed: {', '.join(allowed)}"
+                    f"grid.{name}: unknown value {bad[0] if bad else '(none)'!r}; "
+                    f"allowed: {', '.join(allowed)}"
                 )
         for name in (
             "noise",

@@ -64,8 +64,8 @@ def recognizers(config: SweepConfig, out: Path, log: Callable[[str], None]) -> l
         todo.append((k, recipe, saved))
     if todo:
         log(
-            f"training {len(todo)} gesture recognisers on {r.n_per_action} synthetic gestures per action each "
-            f"(Q={r.n_states}, M={r.n_mix})"
+            f"training {len(todo)} gesture recognisers on {r.n_per_action} synthetic gestures per action "
+            f"each (Q={r.n_states}, M={r.n_mix})"
         )
         sets, seeds, metas = [], [], []
         for k, recipe, _ in todo:

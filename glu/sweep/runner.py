@@ -115,7 +115,8 @@ def prepare_world(config: SweepConfig) -> tuple[Any, str]:
 
 
 def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple[Evaluator, dict[str, Any]]:
-    """The evaluator (networks learned, recognisers trained or loaded, calibrated) and the sweep's provenance."""
+    """The evaluator (networks learned, recognisers trained or loaded, calibrated) and the sweep's
+    provenance."""
     from glu.experiments.evaluation import Replication, target_tables
 
     engine, label = prepare_world(config)
