@@ -123,6 +123,14 @@ def _pooled(frame: pd.DataFrame, viewpoint: str = "all") -> pd.DataFrame:
     return frame[(frame.viewpoint == viewpoint) & frame.noise.isna()]
 
 
+def _bare(df: pd.DataFrame) -> pd.DataFrame:
+    """``df`` without its ``attrs`` (a view of the same data): pandas deep-copies a stamped table's attrs
+    on every row or group it hands out, the bulk of the time of a loop over rows."""
+    out = df.copy(deep=False)
+    out.attrs = {}
+    return out
+
+
 def winners(table: pd.DataFrame, diffs: pd.DataFrame, fraction: float | None = None) -> pd.DataFrame:
     """Which strategy wins each cell of the design (pooled over noise levels and viewpoints).
 
@@ -132,6 +140,7 @@ def winners(table: pd.DataFrame, diffs: pd.DataFrame, fraction: float | None = N
     difference), best included; ``beats``, those it is better than with confidence; and the best
     estimate with its interval.
     """
+    table, diffs = _bare(table), _bare(diffs)
     full = table["fraction"].max() if fraction is None else fraction
     sel = _pooled(table)
     sel = sel[np.isclose(sel.fraction, full) & ~sel.strategy.isin(REFERENCES)]

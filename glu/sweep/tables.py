@@ -151,6 +151,9 @@ def merge(
     )
     params = provenance["settings"]
     source = provenance["data_source"]
+    # summarised before the tables are stamped: pandas deep-copies a frame's attrs (here every setting of the
+    # sweep) on every row or column it hands out, which made summarize several times slower
+    summary = summarize(table, diffs, provenance)
     for df, name in (
         (table, EXPERIMENT),
         (diffs, "corpus_differences"),
@@ -159,7 +162,6 @@ def merge(
         (calibration, "corpus_calibration"),
     ):
         tidy(df, name, source, **params)
-    summary = summarize(table, diffs, provenance)
     _write_parquet(out / "sums.parquet", pd.concat(sums_parts, ignore_index=True))
     _write_parquet(out / "results.parquet", table)
     _write_parquet(out / "differences.parquet", diffs)
