@@ -11,7 +11,8 @@ notebooks; the documentation site, built after it (``glu.run.site``, logged with
 included. The folder is
 new, so the notebooks start in the order of the project's last run (``results/summary.json``), else of
 the times the notebooks declare (``glu: expected_seconds`` in their headers), longest first. The goal
-(issue #9): the whole collection on the real data in at most 45 s on 2 cores.
+(issue #22, with notebooks 11 and 12 at their default sizes): the whole collection on the real data in at
+most 60 s on 2 cores.
 """
 
 from __future__ import annotations
@@ -46,11 +47,11 @@ def main(argv: list[str] | None = None) -> int:
     wall = statistics.median(walls)
     rows = [
         row(
-            f"glu reproduce, every notebook, {args.jobs} at a time, report included (median of "
+            f"glu reproduce, every notebook, {args.jobs} at a time, the site not included (median of "
             f"{args.repeats})",
             wall,
-            target="≤ 45 s",
-            met=wall <= 45,
+            target="≤ 60 s",
+            met=wall <= 60,
         )
     ]
     rows += [row(f"notebook {name}", statistics.median(secs)) for name, secs in per_notebook.items()]

@@ -62,7 +62,7 @@ def bench_notebook(data: str | None) -> list[dict]:
     with tempfile.TemporaryDirectory(prefix="glu-bench-12-") as out:
         c0, t0 = children_cpu(), time.perf_counter()
         summary = reproduce(
-            data=data, out=out, jobs=1, log=lambda _s: None, progress=False, only=["12"], report=False
+            data=data, out=out, jobs=1, log=lambda _s: None, progress=False, only=["12"], site=False
         )
         wall, cpu = time.perf_counter() - t0, children_cpu() - c0
     seconds = next(nb["seconds"] for nb in summary["notebooks"] if nb["name"].startswith("12"))
