@@ -78,6 +78,7 @@ def test_notebooks_run_side_by_side_each_in_its_own_folder_and_leave_this_proces
     assert __import__("os").getcwd() == here
 
 
+@pytest.mark.slow  # a fresh interpreter importing papermill twice (5 s)
 def test_papermill_loads_without_jsonschemas_slow_optional_iri_checker_and_notebooks_still_validate():
     """rfc3987_syntax (installed with JupyterLab) builds a grammar at import (1.6 s); jsonschema only uses
     it for the ``iri`` format, which nbformat never checks. In a fresh process load_papermill leaves it out;

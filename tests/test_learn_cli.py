@@ -181,6 +181,7 @@ def test_learning_curves_writes_the_study_tables(capsys, tmp_path):
     assert study["settings"]["episodes"] == 12 and study["update_seconds"]["median"] > 0
 
 
+@pytest.mark.slow  # a LocalCluster (3 s); tests/test_sweep.py runs a real scheduler and worker by default
 def test_learning_curves_on_a_local_dask_cluster_equal_the_run_here(capsys, tmp_path):
     common = ["learning-curves", "--episodes", "12", "--seeds", "0,1", "--ambiguities", "still"]
     common += ["--test-per-action", "2", "--data", "synthetic"]

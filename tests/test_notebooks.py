@@ -231,6 +231,7 @@ out.table(pd.DataFrame({"x": [seed]}), NAME)
 """
 
 
+@pytest.mark.slow  # a third quick run (15 s): the default suite keeps the complete run and its repeat
 def test_a_partial_run_updates_the_summary_of_the_same_data(tmp_path):
     nbs = tmp_path / "nbs"
     nbs.mkdir()
