@@ -120,6 +120,16 @@ def kill_local_workers(cluster: Any) -> None:
                 os.kill(pid, signal.SIGKILL)
 
 
+def close_cluster(cluster: Any, error: BaseException) -> None:
+    """Close a LocalCluster (None: nothing) whose start or use ``error`` ended; after an interrupt its workers
+    are killed first (:func:`kill_local_workers`), so the close is quick and silent."""
+    if cluster is None:
+        return
+    if isinstance(error, KeyboardInterrupt):
+        kill_local_workers(cluster)
+    cluster.close()
+
+
 @contextlib.contextmanager
 def quiet_dask_logs() -> Iterator[None]:
     """dask.distributed's log handlers silent for the block, closing the cluster included (the cluster's

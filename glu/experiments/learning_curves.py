@@ -43,7 +43,7 @@ from glu.experiments.self_supervised import (
     network_posteriors,
 )
 from glu.experiments.two_level import interval, replicate_means, two_level_weights
-from glu.machine import ctrl_c_held, kill_local_workers, quiet_dask_logs
+from glu.machine import close_cluster, ctrl_c_held, kill_local_workers, quiet_dask_logs
 
 CHECKPOINTS: tuple[int, ...] = (10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000)
 """Where the curves are measured (those up to the number of episodes, and that number itself)."""
@@ -236,10 +236,7 @@ def _on_dask(engine, settings, workers, scheduler, progress) -> list[SeedResult]
                 )
             client = Client(cluster if cluster is not None else scheduler)
     except BaseException as e:
-        if cluster is not None:
-            if isinstance(e, KeyboardInterrupt):
-                kill_local_workers(cluster)
-            cluster.close()
+        close_cluster(cluster, e)
         raise
     try:
         futures = {client.submit(run_seed, engine, sd, settings, pure=False): sd for sd in settings.seeds}

@@ -59,7 +59,7 @@ from glu.errors import DataError, GluError
 from glu.experiments.corpus import Condition
 from glu.experiments.evaluation import Evaluator
 from glu.files import atomic_write_json
-from glu.machine import ctrl_c_held, kill_local_workers, quiet_dask_logs
+from glu.machine import close_cluster, ctrl_c_held, kill_local_workers, quiet_dask_logs
 from glu.sweep import robots
 from glu.sweep.config import SweepConfig
 from glu.sweep.tables import chunk_path, merge, write_chunk
@@ -387,10 +387,7 @@ def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) 
             except (OSError, TimeoutError) as e:
                 raise DataError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
     except BaseException as e:
-        if cluster is not None:
-            if isinstance(e, KeyboardInterrupt):
-                kill_local_workers(cluster)
-            cluster.close()
+        close_cluster(cluster, e)
         raise
     try:
         cpu = 0.0
