@@ -237,8 +237,11 @@ def notebook_file(name: str) -> Path:
 
 def shared_data_dir() -> Path | None:
     """The real data the reference tests use: ``$GLU_SHARED_DATA``, ``../shared/data`` (CI), or what
-    ``glu data fetch`` downloaded (``data/real/`` in a checkout); None when none of them holds it."""
+    ``glu data fetch`` downloaded (``data/real/`` in a checkout); None when none of them holds it, or when
+    ``$GLU_SHARED_DATA`` is ``none`` (the suite as a fresh clone without the data runs it)."""
     env = os.environ.get(SHARED_DATA_ENV_VAR)
+    if env == "none":
+        return None
     candidates = [Path(env)] if env else []
     if PROJECT_ROOT is not None:
         candidates.append(PROJECT_ROOT.parent / "shared" / "data")

@@ -45,7 +45,6 @@ from unittest import mock
 import numpy as np
 import pytest
 from cli_run import train_recogniser
-from conftest import SHARED
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -833,24 +832,28 @@ test_mutated_recogniser_json = _files_case("recogniser JSON", "recogniser", ".js
 
 
 @pytest.fixture(scope="module")
-def original_mat(tmp_path_factory, assets) -> bytes:
-    """The originals' BN_lab.mat when the real data is here; else the synthetic network in the same BNT
-    layout."""
-    if SHARED is not None:
-        return (SHARED / "reference-models" / "BN_lab.mat").read_bytes()
+def original_mats(tmp_path_factory, assets) -> dict[str, bytes]:
+    """The synthetic network in the originals' BNT layout, uncompressed (``-v6``) and compressed (``-v7``,
+    as the originals' ``BN_lab.mat``): SciPy's reader crashed on some corruptions of the uncompressed form
+    only, so both are fuzzed whether or not the real data is here."""
     from test_model_io import write_bnt_mat
 
     from glu.bn import BayesNet
 
-    path = tmp_path_factory.mktemp("bnt") / "BN_lab.mat"
-    write_bnt_mat(BayesNet.load(assets["model"]), path)
-    return path.read_bytes()
+    folder = tmp_path_factory.mktemp("bnt")
+    out = {}
+    for form, compress in (("uncompressed", False), ("compressed", True)):
+        path = folder / f"BN_{form}.mat"
+        write_bnt_mat(BayesNet.load(assets["model"]), path, do_compression=compress)
+        out[form] = path.read_bytes()
+    return out
 
 
+@pytest.mark.parametrize("form", ["uncompressed", "compressed"])
 @pytest.mark.parametrize("command", ["bn import", "query"])
 @pytest.mark.parametrize("profile", PROFILE_PARAMS)
-def test_corrupted_mat_files(command, profile, assets, original_mat):
-    original = original_mat
+def test_corrupted_mat_files(command, profile, form, assets, original_mats):
+    original = original_mats[form]
 
     @PROFILES[profile]
     @given(

@@ -67,6 +67,8 @@ def test_the_reference_tests_find_the_real_data_where_ci_or_glu_data_fetch_put_i
     assert paths.shared_data_dir() == chosen
     monkeypatch.setenv(paths.SHARED_DATA_ENV_VAR, str(tmp_path / "missing"))  # a wrong setting falls through
     assert paths.shared_data_dir() == shared
+    monkeypatch.setenv(paths.SHARED_DATA_ENV_VAR, "none")  # the suite as a fresh clone sees it (.ci/run)
+    assert paths.shared_data_dir() is None
 
 
 def test_the_notebooks_ship_in_the_package():

@@ -18,7 +18,7 @@ PACKAGE = Path(glu.__file__).resolve().parent
 
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("glu", "glu.errors", "glu.machine"),
-    ("glu.paths", "glu.files"),
+    ("glu.paths", "glu.files", "glu.matfile"),
     ("glu.schema",),
     ("glu.evidence",),
     ("glu.data",),

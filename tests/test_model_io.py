@@ -27,7 +27,7 @@ def test_json_round_trip_is_bit_exact(zero_bn, tmp_path):
     assert np.asarray(objvel["cpt"]).shape == (3, 2, 3, 3)
 
 
-def write_bnt_mat(bn: BayesNet, path, variable: str = "netobj_lab") -> None:
+def write_bnt_mat(bn: BayesNet, path, variable: str = "netobj_lab", do_compression: bool = False) -> None:
     """Write ``bn`` as the originals' MATLAB code saved it (BNT struct), independently of glu's reader.
 
     ``dag[i, j] = 1`` for an edge i → j; ``CPD{k}.CPT[i_1, …, i_m, v]`` with parents in node order; the
@@ -52,7 +52,7 @@ def write_bnt_mat(bn: BayesNet, path, variable: str = "netobj_lab") -> None:
         "dag": dag,
         "bnet": {"CPD": cpds},
     }
-    sio.savemat(path, {variable: net})
+    sio.savemat(path, {variable: net}, do_compression=do_compression)
 
 
 def test_mat_import_reads_the_bnt_layout(zero_bn, tmp_path):

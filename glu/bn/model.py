@@ -284,17 +284,19 @@ class BayesNet:
     @classmethod
     def from_bnt_mat(cls, path: str | os.PathLike, variable: str = "netobj_lab") -> BayesNet:
         """Import an original model saved by the authors' MATLAB code (BNT), e.g. ``BN_lab.mat``."""
-        import scipy.io as sio
+        from glu.matfile import MatFileError, read_mat
 
         path = Path(path)
         if not path.is_file():
             raise ModelError(f"{path}: no such file")
         try:
-            net = sio.loadmat(path, squeeze_me=True, struct_as_record=False)[variable]
+            net = read_mat(path, squeeze_me=True, struct_as_record=False)[variable]
         except FileNotFoundError:
             raise ModelError(f"{path}: no such file") from None
         except KeyError:
             raise ModelError(f"{path}: no variable {variable!r} in the .mat file") from None
+        except MatFileError as e:
+            raise ModelError(f"{e}") from None
         except Exception as e:  # scipy raises many types for a damaged file (MatReadError, IndexError, …)
             raise ModelError(f"{path}: not a readable MATLAB file ({type(e).__name__}: {e})") from None
         try:  # the BNT structure: nodeNames, AFFORDNODES, nodeValueNames, dag, bnet.CPD{j}.CPT

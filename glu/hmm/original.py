@@ -64,14 +64,16 @@ def load_original_hmms(
     garbage model (hmm0) is added as ``"garbage"``. Their inputs are the logged features / 1000.
     :func:`glu.gestures.recognizer.load_original_models` makes a recogniser of them.
     """
-    from scipy.io import loadmat
+    from glu.matfile import MatFileError, read_mat
 
     path = Path(path)
     if not path.is_file():
         raise ModelError(f"{path}: no such file (expected an original HMM .mat file)")
     try:
-        mat = loadmat(path)
-    except Exception as e:  # scipy raises several types for a malformed file
+        mat = read_mat(path)
+    except MatFileError as e:
+        raise ModelError(str(e)) from None
+    except Exception as e:  # scipy raises several types for a damaged file
         raise ModelError(f"{path}: not a readable MATLAB file ({e})") from None
     names = list(actions) + (["garbage"] if include_garbage else [])
     models = {}
