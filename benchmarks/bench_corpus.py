@@ -45,8 +45,8 @@ def _load() -> str:
 
 
 def _setup(data: str | None, out: Path):
-    from glu.sweep import config_from_dict
-    from glu.sweep.runner import prepare
+    from glu.studies.corpus_evaluation.config import config_from_dict
+    from glu.studies.corpus_evaluation.sweep import prepare
 
     one_cell = {"action_prior": ["uniform"], "inference_network": ["generating"], "p_hmm": ["likelihood"]}
     cfg = config_from_dict(
@@ -62,7 +62,7 @@ def _setup(data: str | None, out: Path):
 
 
 def bench_forward(evaluator, repeats: int) -> None:
-    from glu.experiments.corpus import Condition
+    from glu.studies.episodes import Condition
 
     scorer = evaluator.replications[0].scorer
     chunk = evaluator.simulate(Condition(0.02, "front"), 0, 2000)
@@ -102,8 +102,8 @@ def bench_forward(evaluator, repeats: int) -> None:
 
 
 def bench_episodes(evaluator) -> None:
-    from glu.experiments.corpus import Condition
-    from glu.experiments.intervals import poisson_weights
+    from glu.stats import poisson_weights
+    from glu.studies.episodes import Condition
 
     cond, n = Condition(0.02, "front"), 2000
     t0 = time.process_time()
@@ -113,7 +113,7 @@ def bench_episodes(evaluator) -> None:
     t2 = time.process_time()
     blocks = evaluator.episode_statistics(chunk)[0]  # HMMs again, fusion, descriptions, statistics
     t3 = time.process_time()
-    from glu.experiments.intervals import accumulate
+    from glu.stats import accumulate
 
     accumulate(blocks, poisson_weights(n, evaluator.settings.bootstrap, np.random.default_rng(0)))
     t4 = time.process_time()
@@ -134,7 +134,7 @@ def bench_episodes(evaluator) -> None:
 
 
 def _sweep(cfg, workers: int, out: Path):
-    from glu.sweep import run_sweep
+    from glu.studies.corpus_evaluation.sweep import run_sweep
 
     shutil.rmtree(out, ignore_errors=True)
     out.mkdir(parents=True)

@@ -12,7 +12,7 @@ Run on demand (not a test)::
    after one episode, once it has a model of every action: labels, the E-step of the episode under its
    three models, the stepwise-EM step and the M-step; median, 95th percentile and maximum over 300
    episodes, in CPU time of the update; goal: at most 10 ms;
-3. **study** — the study's seeds in this process (``glu.experiments.learning_curves.learning_study`` at the
+3. **study** — the study's seeds in this process (``glu.studies.learning.study.learning_study`` at the
    notebook's default size), CPU time, and the lockstep update of all its learners after one episode;
 4. **cli** — ``glu learn-gestures --episodes 2000 --labels soft`` (batch weighted EM, Q = 6, M = 3).
 
@@ -85,9 +85,9 @@ def bench_notebook(data: str | None) -> list[dict]:
 
 
 def bench_update(data: str | None) -> list[dict]:
-    from glu.experiments import online_learning as ol
-    from glu.experiments import self_supervised as ss
     from glu.hmm import TrainingConfig
+    from glu.studies.learning import online as ol
+    from glu.studies.learning import self_supervised as ss
 
     engine, _ = _engine(data)
     actions = engine.bn.schema.values_of("Action")
@@ -125,7 +125,7 @@ def bench_update(data: str | None) -> list[dict]:
 
 
 def bench_study(data: str | None) -> list[dict]:
-    from glu.experiments import learning_curves as lc
+    from glu.studies.learning import study as lc
 
     engine, _ = _engine(data)
     settings = lc.StudySettings()

@@ -9,12 +9,12 @@ Measures, on one BLAS thread, medians over repeats:
 1. **leave-one-segment-out on the real standing segments** (glu's recipe and defaults, raw features: 3
    models on every segment + one per held-out segment): each model trained alone by
    :func:`glu.hmm.train` on its list of sequences (the reference EM), against
-   :func:`glu.experiments.recipes.leave_one_segment_out`, which trains them in one batch
+   :func:`glu.studies.replication.recipes.leave_one_segment_out`, which trains them in one batch
    (:func:`glu.hmm.train` on a mapping of training sets); also the EM alone (the same initial models):
    :func:`glu.hmm.em.fit` per model against :func:`glu.hmm._engine.em_batch.fit_many`.
    Skipped without the real data;
 2. **5-fold cross-validation on synthetic gestures** (20 per action, three actions: 15 models): the same
-   two ways (:func:`glu.experiments.gestures.cross_validate` is the batched one);
+   two ways (:func:`glu.studies.replication.gestures.cross_validate` is the batched one);
 3. **the same EM as hmmlearn** (``covariance="hmmlearn"``, the update of hmmlearn 0.3's ``GMMHMM``,
    20 iterations, the 15 cross-validation models from the same initial models): hmmlearn's
    ``GMMHMM.fit`` per model, glu's ``fit`` per model, and ``fit_many``.
@@ -49,7 +49,7 @@ def _loso_sets(sequences):
 
 
 def _cv_sets(sequences, k, seed):
-    from glu.experiments.gestures import stratified_folds
+    from glu.studies.replication.gestures import stratified_folds
 
     folds = stratified_folds([s.action for s in sequences], k, seed)
     actions = tuple(dict.fromkeys(s.action for s in sequences))
@@ -114,9 +114,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     from threadpoolctl import threadpool_limits
 
-    from glu.experiments.gestures import cross_validate
-    from glu.experiments.recipes import leave_one_segment_out
     from glu.gestures.corpus import gesture_sequences, synthetic_corpus
+    from glu.studies.replication.gestures import cross_validate
+    from glu.studies.replication.recipes import leave_one_segment_out
 
     rows: list[dict] = []
     with threadpool_limits(1):

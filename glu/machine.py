@@ -11,6 +11,9 @@ terminal's Ctrl-C, so they print no tracebacks of their own: glu stops them), st
 Interactive extras (the evidence explorer's widgets, the Rerun viewer in a notebook) appear only in a
 live kernel; headless runs (``glu reproduce``, ``glu run``: their kernels have ``GLU_HEADLESS=1``) and
 plain Python show the static form. The tests force either with :func:`is_live`'s ``force`` argument.
+
+A sweep's ``--scheduler`` is checked by :func:`check_scheduler` (an address, or :data:`SYNCHRONOUS`: in this
+process) and, before any work, :func:`check_reachable`.
 """
 
 from __future__ import annotations
@@ -18,9 +21,12 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import re
 import signal
 from collections.abc import Iterator
 from typing import Any
+
+from glu.errors import DataError
 
 HEADLESS_ENV = "GLU_HEADLESS"
 """Environment variable set (to ``1``) in the kernels of headless runs."""
@@ -145,3 +151,31 @@ def quiet_dask_logs() -> Iterator[None]:
     finally:
         for h, level in zip(handlers, levels, strict=True):
             h.setLevel(level)
+
+
+# ------------------------------------------------------------------ Dask schedulers
+
+SYNCHRONOUS = "synchronous"
+ADDRESS = re.compile(r"^(tcp|tls|ws|wss)://[^\s/]+:\d+/?$")
+
+
+def check_scheduler(address: str | None) -> str | None:
+    """``address`` if it is None, ``synchronous`` or a Dask address ``tcp://host:port``; else DataError."""
+    if address is None or address == SYNCHRONOUS or ADDRESS.match(address):
+        return address
+    raise DataError(
+        f"--scheduler {address!r}: expected a Dask scheduler address such as tcp://127.0.0.1:8786, "
+        f"or '{SYNCHRONOUS}' to run in this process"
+    )
+
+
+def check_reachable(address: str, timeout: float = 10.0) -> None:
+    """DataError unless something accepts TCP connections at the scheduler's host and port."""
+    import socket
+
+    host, _, port = address.split("://", 1)[1].rstrip("/").rpartition(":")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
+            pass
+    except OSError as e:
+        raise DataError(f"cannot reach the Dask scheduler at {address}: {e.strerror or e}") from None

@@ -39,10 +39,9 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 # %%
 import matplotlib.pyplot as plt
 
-from glu import plots
-from glu.experiments import gestures
 from glu.gestures.corpus import recording_segmentations
 from glu.run import start
+from glu.studies.replication import gesture_figures, gestures
 
 out = start("01_gesture_features", globals())
 segmentations = recording_segmentations(out.source, seed=seed)
@@ -51,7 +50,7 @@ out.table(table, "gesture_segments")
 
 # %%
 fig, axes = plt.subplots(len(segmentations), 1, figsize=(10, 2.3 * len(segmentations)), squeeze=False)
-plots.plot_segmentations(axes[:, 0], segmentations)
+gesture_figures.plot_segmentations(axes[:, 0], segmentations)
 out.figure(fig, "gesture_segmentation")
 table.groupby("recording", sort=False).agg(
     segments=("segment", "max"),

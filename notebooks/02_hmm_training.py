@@ -66,10 +66,10 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 
 # %%
 from glu import plots
-from glu.experiments import gestures
 from glu.gestures.corpus import gesture_sequences, synthetic_corpus
 from glu.hmm import TrainingConfig
 from glu.run import start
+from glu.studies.replication import gesture_figures, gestures
 
 out = start("02_hmm_training", globals())
 train = TrainingConfig(n_states=n_states, n_mix=n_mix, n_iter=n_iter)
@@ -94,7 +94,7 @@ if out.source.original_hmms() is not None:
     scores = gestures.original_scores(out.source)
     out.table(scores, "hmm_original_scores")
     fig, (ax,) = plots.new_figure(1, width=8)
-    plots.plot_segment_scores(ax, scores)
+    gesture_figures.plot_segment_scores(ax, scores)
     out.figure(fig, "hmm_original_scores")
     display_scores = scores[["recording", "start", "end", "winner"]]
 else:
@@ -113,9 +113,9 @@ out.table(predictions, "hmm_synthetic_cv", accuracy=accuracy, folds=folds)
 noise = gestures.accuracy_vs_noise(noise_levels, n_per_action=n_per_action, k=3, seed=seed, config=sweep)
 out.table(noise, "hmm_accuracy_vs_noise")
 fig, axes = plots.new_figure(2, width=4.2)
-plots.plot_confusion(axes[0], confusion)
+gesture_figures.plot_confusion(axes[0], confusion)
 axes[0].set_title(f"{folds}-fold CV, accuracy {accuracy:.3f}", fontsize=9)
-plots.plot_accuracy_vs_noise(axes[1], noise)
+gesture_figures.plot_accuracy_vs_noise(axes[1], noise)
 out.figure(fig, "hmm_synthetic_accuracy", source=predictions.attrs["data_source"])
 noise
 

@@ -45,8 +45,8 @@ import time
 from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
-from glu.experiments import fusion
 from glu.run import start
+from glu.studies.replication import fusion, network_figures
 
 out = start("03_bn_learning", globals())
 table = load_experiments(out.source, words)
@@ -70,7 +70,7 @@ print(
 )
 
 fig, (ax,) = plots.new_figure(1, width=4.5, height=8)
-plots.plot_structure(ax, bn, original)
+network_figures.plot_structure(ax, bn, original)
 out.figure(fig, "bn_structure")
 
 # %% [markdown]
@@ -89,7 +89,7 @@ out.table(comparison, "unseen_rows_comparison")
 print(f"uniform rows move these numbers by up to {comparison.uniform_minus_zero.abs().max():.2f}")
 print(numbers.to_string(index=False))
 fig, (ax,) = plots.new_figure(1, width=5, height=4.5)
-plots.plot_unseen_rows(ax, comparison)
+network_figures.plot_unseen_rows(ax, comparison)
 out.figure(fig, "unseen_rows_comparison")
 comparison.loc[comparison.uniform_minus_zero.abs().sort_values(ascending=False).index[:5]]
 

@@ -45,11 +45,11 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 from glu import plots
 from glu.bn import learn_bn
 from glu.data import load_experiments
-from glu.experiments import fusion, gestures
 from glu.gestures import gesture_sequences, load_original_models
 from glu.gestures.corpus import held_out_gestures
 from glu.hmm import TrainingConfig
 from glu.run import start
+from glu.studies.replication import fusion, fusion_figures, gestures
 
 out = start("04_fusion_hard", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
@@ -67,7 +67,7 @@ print(f"{len(segments)} test gestures, {models}")
 table = fusion.fusion_on_gestures(bn, recognizer, segments, {"Shape": shape, "Size": size})
 out.table(table, "fusion_hard_on_gestures", models=models)
 fig, (ax,) = plots.new_figure(1, width=max(6, 1.3 * len(segments)))
-plots.plot_fusion_on_gestures(ax, table, value="fast")
+fusion_figures.plot_fusion_on_gestures(ax, table, value="fast")
 out.figure(fig, "fusion_hard_on_gestures")
 table.pivot_table(index=["recording", "start", "hmm_top"], columns=["strategy", "ObjVel"], values="p").round(
     3

@@ -46,8 +46,8 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
-from glu.experiments import fusion
 from glu.run import start
+from glu.studies.replication import fusion, fusion_figures, network_figures
 
 out = start("05_fusion_soft", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
@@ -62,8 +62,8 @@ original = BayesNet.from_bnt_mat(mat) if mat else None
 table = fusion.effect_vs_soft_evidence(bn, rules=("virtual", "jeffrey"), reference=original)
 out.table(table, "fusion_soft_rules")
 fig, axes = plots.new_figure(2, width=3.8, height=3.4, nrows=2, sharex=True)
-plots.plot_effect_vs_soft_evidence(axes[:2], table, rule="virtual", legend=False)
-plots.plot_effect_vs_soft_evidence(axes[2:], table, rule="jeffrey")
+network_figures.plot_effect_vs_soft_evidence(axes[:2], table, rule="virtual", legend=False)
+network_figures.plot_effect_vs_soft_evidence(axes[2:], table, rule="jeffrey")
 out.figure(fig, "fusion_soft_rules")
 
 # %% [markdown]
@@ -74,7 +74,7 @@ fig, axes = plots.new_figure(2, width=4.6)
 for ax, shape in zip(axes, ("sphere", "box"), strict=True):
     sweep = fusion.soft_evidence_sweep(bn, {"Shape": shape}, n_points=n_points)
     out.table(sweep, f"fusion_soft_sweep_{shape}")
-    plots.plot_soft_sweep(ax, sweep, legend=shape == "box")
+    fusion_figures.plot_soft_sweep(ax, sweep, legend=shape == "box")
 out.figure(fig, "fusion_soft_sweep")
 pivot = sweep.pivot_table(index="p_hmm_tap", columns=["rule", "ObjVel"], values="p")
 pivot.iloc[:: max(1, len(pivot) // 5)]

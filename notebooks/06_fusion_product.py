@@ -46,8 +46,8 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 from glu import plots
 from glu.bn import learn_bn
 from glu.data import load_experiments
-from glu.experiments import fusion
 from glu.run import start
+from glu.studies.replication import fusion, fusion_figures
 
 out = start("06_fusion_product", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
@@ -58,7 +58,7 @@ threshold = fusion.tap_threshold(bn, evidence)
 sweep = fusion.soft_evidence_sweep(bn, evidence, target="Action", n_points=n_points, rules=("product",))
 out.table(sweep, "fusion_product_sweep", tap_threshold=threshold)
 fig, (ax,) = plots.new_figure(1, width=6)
-plots.plot_soft_sweep(ax, sweep)
+fusion_figures.plot_soft_sweep(ax, sweep)
 ax.axvline(threshold, color="0.3", linestyle=":", linewidth=1)
 ax.annotate(
     f"tap wins above {threshold:.4f}",
@@ -78,7 +78,7 @@ print(f"tap wins p_comb(Action | Size=small, Shape=sphere, ObjVel=slow) when p_H
 thresholds = fusion.tap_thresholds(bn)
 out.table(thresholds, "fusion_product_thresholds")
 fig, (ax,) = plots.new_figure(1, width=5, height=5)
-plots.plot_tap_thresholds(ax, thresholds)
+fusion_figures.plot_tap_thresholds(ax, thresholds)
 out.figure(fig, "fusion_product_thresholds")
 thresholds
 

@@ -43,9 +43,9 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
-from glu.experiments import fusion
-from glu.experiments.replication_text import effect_sentence, word_change_sentences
 from glu.run import start
+from glu.studies.replication import fusion, network_figures
+from glu.studies.replication.text import effect_sentence, word_change_sentences
 
 out = start("07_glu2017_figures", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
@@ -59,7 +59,7 @@ original = BayesNet.from_bnt_mat(mat) if mat else None
 effect = fusion.effect_prediction(bn, original)
 out.table(effect, "glu2017_effect_prediction")
 fig, axes = plots.new_figure(2)
-plots.plot_effect_prediction(axes, effect)
+network_figures.plot_effect_prediction(axes, effect)
 out.figure(fig, "glu2017_effect_prediction")
 effect
 
@@ -75,7 +75,7 @@ for variant in ("text", "code"):
     changes[variant] = fusion.word_probability_change(bn, variant, original, threshold=threshold)
     out.table(changes[variant], f"glu2017_word_change_{variant}", evidence=variant)
 fig, (ax,) = plots.new_figure(1, width=7, height=3.6)
-plots.plot_word_change(ax, changes["text"], other=changes["code"])
+network_figures.plot_word_change(ax, changes["text"], other=changes["code"])
 out.figure(fig, "glu2017_word_change")
 change = changes["code"]
 for sentence in [effect_sentence(effect), *word_change_sentences(changes)]:

@@ -92,15 +92,17 @@ seed: int = 0  # seed of synthetic gestures and EM initialisation
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-from glu import plots, recording
+from glu import plots
 from glu.bn import BayesNet, InferenceEngine, learn_bn
 from glu.data import load_experiments
-from glu.experiments import anticipation, fusion, gestures
-from glu.experiments.replication_text import leader_text
 from glu.gestures import gesture_sequences, load_original_models
 from glu.hmm import TrainingConfig
 from glu.language import candidate_sentences
 from glu.run import start
+from glu.studies.anticipation import experiment as anticipation
+from glu.studies.anticipation import figures, recordings
+from glu.studies.replication import fusion, gestures, network_figures
+from glu.studies.replication.text import leader_text
 
 out = start("08_tcds_figures", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
@@ -115,7 +117,7 @@ threshold = fusion.tap_threshold(bn)
 actions = fusion.action_vs_soft_evidence(bn, reference=original)
 out.table(actions, "tcds_action_vs_soft_evidence", tap_threshold=threshold)
 fig, (ax,) = plots.new_figure(1, width=7)
-plots.plot_action_vs_soft_evidence(ax, actions, threshold)
+network_figures.plot_action_vs_soft_evidence(ax, actions, threshold)
 out.figure(fig, "tcds_action_vs_soft_evidence")
 print(f"tap wins when p_HMM(tap) > {threshold:.6f} (the paper: 0.81)")
 
@@ -126,7 +128,7 @@ print(f"tap wins when p_HMM(tap) > {threshold:.6f} (the paper: 0.81)")
 effects = fusion.effect_vs_soft_evidence(bn, rules=("virtual",), reference=original)
 out.table(effects, "tcds_effect_vs_soft_evidence")
 fig, axes = plots.new_figure(2)
-plots.plot_effect_vs_soft_evidence(axes, effects, rule="virtual")
+network_figures.plot_effect_vs_soft_evidence(axes, effects, rule="virtual")
 out.figure(fig, "tcds_effect_vs_soft_evidence")
 
 # %% [markdown]
@@ -179,7 +181,7 @@ for name, recognizer in banks.items():
             final_description=run.description,
             prediction_changes=run.prediction_changes(),
         )
-        recording.write_anticipation(
+        recordings.write_anticipation(
             run,
             out.recording(f"tcds_anticipation_{case}_{name}"),
             f"glu-anticipation-{case}-{name}-{seed}",
@@ -203,11 +205,11 @@ for name, recognizer in banks.items():
             f"* {case}, {name} HMMs: leading model {leads}; predicted ObjVel {changes}; “{run.description}”"
         )
 # glu's and the originals' recipes share one y axis, to be compared by eye; the original HMMs beside the paper
-ylim = plots.shared_ylim([r.curves() for (_, name), r in runs.items() if name != "original"])
+ylim = figures.shared_ylim([r.curves() for (_, name), r in runs.items() if name != "original"])
 for name in banks:
     cases = [(runs[case, name].curves(), runs[case, name].predictions()) for case in anticipation.CASES]
     paper = [published.get(case) for case in anticipation.CASES] if name == "original" else None
-    fig = plots.anticipation_figure(cases, paper, ylim=None if name == "original" else ylim)
+    fig = figures.anticipation_figure(cases, paper, ylim=None if name == "original" else ylim)
     out.figure(fig, f"tcds_anticipation_{name}")
 
 # %% [markdown]
@@ -227,4 +229,4 @@ for name in banks:
 
 # %%
 case, name = next(iter(runs))
-recording.show_anticipation(runs[case, name], f"live-{case}-{name}", note=out.footer())
+recordings.show_anticipation(runs[case, name], f"live-{case}-{name}", note=out.footer())

@@ -60,8 +60,6 @@ import numpy as np
 from glu import plots
 from glu.bn import InferenceEngine, learn_bn
 from glu.data import load_experiments
-from glu.experiments import verbal as ex
-from glu.experiments.replication_text import verbal_sentences
 from glu.language import (
     all_scores,
     candidate_sentences,
@@ -74,6 +72,8 @@ from glu.language import (
 )
 from glu.language import nbest as exact_nbest
 from glu.run import start
+from glu.studies.replication import verbal, verbal_figures
+from glu.studies.replication.text import verbal_sentences
 
 out = start("09_verbal_descriptions", globals())
 engine = InferenceEngine(learn_bn(load_experiments(out.source, words), unseen_words=unseen_words))
@@ -85,7 +85,7 @@ samples = (
     candidate_sentences("samples", out.source) if has_samples else sample_sentences(grammar, n_samples, seed)
 )
 seeds = range(seed, seed + n_trials)
-probs = word_probabilities(engine, ex.EVIDENCE_AND_BUT["medium"])
+probs = word_probabilities(engine, verbal.EVIDENCE_AND_BUT["medium"])
 t0 = time.perf_counter()
 exact_nbest(net, probs, nbest, score=score)
 print(
@@ -102,7 +102,7 @@ print(
 # best among the sampled sentences that name a colour, not the best of all.
 
 # %%
-reproduced = ex.published_descriptions(engine, samples, score="original")
+reproduced = verbal.published_descriptions(engine, samples, score="original")
 out.table(
     reproduced,
     "verbal_published_descriptions",
@@ -121,11 +121,11 @@ reproduced[["figure", "rank", "paper_sentence", "paper_score", "sentence", "prin
 # ## "and" or "but": a grasp, then the object moves or stays still (Fig. 7)
 
 # %%
-and_but = ex.and_but_probabilities(engine, compare=out.source.is_real)
-lists = ex.and_but_nbest(engine, nbest, score=score, candidates=samples)
+and_but = verbal.and_but_probabilities(engine, compare=out.source.is_real)
+lists = verbal.and_but_nbest(engine, nbest, score=score, candidates=samples)
 out.table(and_but, "verbal_and_but_probabilities", reference="TCDS 2020 Fig. 7 bars (published EPS)")
 out.table(lists, "verbal_and_but_nbest")
-fig = plots.and_but_figure(and_but, lists, score=score)
+fig = verbal_figures.and_but_figure(and_but, lists, score=score)
 out.figure(fig, "verbal_and_but")
 and_but
 
@@ -133,11 +133,11 @@ and_but
 # ## The big yellow sphere that moved fast (Table II)
 
 # %%
-yellow = ex.yellow_sphere_nbest(engine, nbest, net, score=score, candidates=samples)
+yellow = verbal.yellow_sphere_nbest(engine, nbest, net, score=score, candidates=samples)
 out.table(yellow, "verbal_yellow_sphere_nbest")
 fig, (ax,) = plots.new_figure(1, width=7, height=3.6)
-title = ", ".join(f"{k}={v}" for k, v in ex.EVIDENCE_YELLOW_SPHERE.items())
-plots.plot_nbest(ax, yellow, title=f"{title} ({score} score, the samples)", score=score)
+title = ", ".join(f"{k}={v}" for k, v in verbal.EVIDENCE_YELLOW_SPHERE.items())
+verbal_figures.plot_nbest(ax, yellow, title=f"{title} ({score} score, the samples)", score=score)
 out.figure(fig, "verbal_yellow_sphere_nbest")
 
 # %% [markdown]
@@ -147,7 +147,7 @@ out.figure(fig, "verbal_yellow_sphere_nbest")
 # score. The `+1/L` of the original score favours short sentences, so the two scores need not agree.
 
 # %%
-versus = ex.exact_vs_samples(engine, samples, grammar)
+versus = verbal.exact_vs_samples(engine, samples, grammar)
 out.table(versus, "verbal_exact_vs_samples")
 versus.drop(columns=["evidence"])
 
@@ -157,14 +157,14 @@ versus.drop(columns=["evidence"])
 # original score. `p_draw_best` is the exact probability that such a sample contains the grammar's best.
 
 # %%
-trials = ex.sampling_trials(engine, seeds, ex.PUBLISHED_LISTS, n_samples, nbest, grammar, score="original")
+trials = verbal.sampling_trials(engine, seeds, verbal.PUBLISHED_LISTS, n_samples, nbest, grammar, score="original")
 out.table(trials, "verbal_sampling_vs_exact", n_trials=len(trials), n_found=int(trials["found_best"].sum()))
-ev = ex.PUBLISHED_LISTS["fig7a"]
+ev = verbal.PUBLISHED_LISTS["fig7a"]
 probs = word_probabilities(engine, ev)
 first = trials[trials["figure"] == "fig7a"].iloc[0]
 drawn = sample_sentences(grammar, n_samples, int(first["seed"]))
 fig, (ax,) = plots.new_figure(1, width=8.5, height=3.6)
-plots.plot_sampling(
+verbal_figures.plot_sampling(
     ax,
     all_scores(net, probs, "original"),
     score_sentences(drawn, probs, "original"),

@@ -122,28 +122,28 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 # %%
 import matplotlib.pyplot as plt
 
-from glu import plots, recording
-from glu.experiments import anticipation, nested, seated, two_views
-from glu.experiments import correspondence as corr
-from glu.experiments.correspondence_text import nested_sentences, study_sentences
+from glu import plots
 from glu.gestures.corpus import gesture_sequences, original_test_segments
 from glu.gestures.synthetic import View
 from glu.hmm import TrainingConfig
-from glu.plots import correspondence as cplots
 from glu.run import start
+from glu.studies.anticipation import experiment as anticipation
+from glu.studies.correspondence import experiment as correspondence
+from glu.studies.correspondence import figures, nested, recordings, seated, two_views
+from glu.studies.correspondence.text import nested_sentences, study_sentences
 
 out = start("10_correspondence", globals())
-conditions = corr.default_conditions(normalise_body, yaws=yaws, variety=variety)
+conditions = correspondence.default_conditions(normalise_body, yaws=yaws, variety=variety)
 if levels is not None:
     conditions = [c for c in conditions if c.level in levels]
-study = corr.STUDY_TRAINING.replace(n_states=n_states, n_mix=n_mix, n_iter=n_iter)
+study = correspondence.STUDY_TRAINING.replace(n_states=n_states, n_mix=n_mix, n_iter=n_iter)
 
 # %% [markdown]
 # ## Recognising other people's gestures seen otherwise
 # Accuracy pooled over seeds with its two-level interval (shaded); chance is one in three.
 
 # %%
-results = corr.correspondence_study(
+results = correspondence.correspondence_study(
     feature_sets=feature_sets,
     conditions=conditions,
     seeds=seeds,
@@ -152,21 +152,21 @@ results = corr.correspondence_study(
     normalise_body=normalise_body,
     config=study,
 )
-summary = corr.summarise(results, bootstrap)
+summary = correspondence.summarise(results, bootstrap)
 out.table(results, "correspondence_study")
 out.table(summary, "correspondence_summary")
 fig, axes = plots.new_figure(2, width=5.2, height=3.6)
-for ax, train in zip(axes, corr.TRAIN_SOURCES, strict=True):
-    cplots.plot_accuracy_vs_viewpoint(ax, summary, train, legend=ax is axes[-1])
+for ax, train in zip(axes, correspondence.TRAIN_SOURCES, strict=True):
+    figures.plot_accuracy_vs_viewpoint(ax, summary, train, legend=ax is axes[-1])
 out.figure(fig, "correspondence_viewpoint", source=results.attrs["data_source"])
 fig, axes = plots.new_figure(1, width=11, height=3.4)
-cplots.plot_accuracy_by_condition(axes[0], summary, "human")
+figures.plot_accuracy_by_condition(axes[0], summary, "human")
 axes[0].set_title("trained on one human view", fontsize=9)
 out.figure(fig, "correspondence_conditions", source=results.attrs["data_source"])
-corr.main_table(summary, "human")
+correspondence.main_table(summary, "human")
 
 # %%
-corr.main_table(summary, "robot")
+correspondence.main_table(summary, "robot")
 
 # %% [markdown]
 # ## Where an invariance costs accuracy
@@ -174,11 +174,11 @@ corr.main_table(summary, "robot")
 # have a two-level interval that excludes zero.
 
 # %%
-effects = corr.invariance_effects(results, bootstrap)
+effects = correspondence.invariance_effects(results, bootstrap)
 out.table(effects, "correspondence_invariance_effects")
 fig, axes = plt.subplots(2, 1, figsize=(11, 6.5))
-for ax, train in zip(axes, corr.TRAIN_SOURCES, strict=True):
-    cplots.plot_invariance_effects(ax, effects, train)
+for ax, train in zip(axes, correspondence.TRAIN_SOURCES, strict=True):
+    figures.plot_invariance_effects(ax, effects, train)
 out.figure(fig, "correspondence_invariance_effects", source=results.attrs["data_source"])
 for sentence in study_sentences(summary, effects):
     out.say("* " + sentence)
@@ -193,7 +193,7 @@ for sentence in study_sentences(summary, effects):
 
 # %%
 raw_rec, inv_rec = (
-    corr.train_for(
+    correspondence.train_for(
         "human", f, n_train, seed, normalise_body, TrainingConfig(n_states=n_states, n_mix=n_mix, tol=1e-3)
     )
     for f in ("raw", "all")
@@ -203,7 +203,7 @@ views = (
     View(yaw_deg=120.0, mirror=True, normalise_body=normalise_body),
 )
 runs = two_views.two_views(raw_rec, inv_rec, "tap", views, seed=view_gesture, noise=0.0)
-recording.write_two_views(
+recordings.write_two_views(
     runs,
     out.recording("correspondence_two_views"),
     f"glu-correspondence-two-views-{seed}",
@@ -212,7 +212,7 @@ recording.write_two_views(
 curves = two_views.two_views_curves(runs)
 out.table(curves, "correspondence_two_views")
 fig, axes = plots.new_figure(len(runs), width=4.2, height=2.8)
-cplots.plot_two_views(axes, curves, "tap")
+figures.plot_two_views(axes, curves, "tap")
 out.figure(fig, "correspondence_two_views", source=curves.attrs["data_source"])
 last = curves[curves["t"] == curves.groupby("view")["t"].transform("max")]
 last.pivot_table(index=["view", "recogniser"], columns="action", values="p_hmm").round(3)
@@ -246,7 +246,7 @@ if out.source.is_real:
     out.table(cv.candidates, "correspondence_candidates")
     out.table(typicality, "seated_typicality")
     fig, axes = plots.new_figure(1, width=5, height=3.4)
-    cplots.plot_nested_cv(axes[0], cv.summary)
+    figures.plot_nested_cv(axes[0], cv.summary)
     out.figure(fig, "correspondence_nested_cv", source=cv.summary.attrs["data_source"])
     for sentence in nested_sentences(cv.summary, typicality, cv.candidates):
         out.say("* " + sentence)

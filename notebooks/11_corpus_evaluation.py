@@ -108,14 +108,12 @@ import tempfile
 
 import matplotlib.pyplot as plt
 
-from glu import plots
-from glu.experiments import findings as fd
-from glu.experiments import p_hmm as ph
 from glu.gestures.corpus import gesture_sequences
-from glu.plots import evaluation as eplots
 from glu.run import start
-from glu.sweep import config_from_dict, run_sweep
-from glu.sweep.tables import read_tables
+from glu.studies.corpus_evaluation import figures, findings, p_hmm_readings
+from glu.studies.corpus_evaluation.config import config_from_dict
+from glu.studies.corpus_evaluation.sweep import run_sweep
+from glu.studies.corpus_evaluation.tables import read_tables
 
 out = start("11_corpus_evaluation", globals())
 if sweep_dir is None:
@@ -163,7 +161,7 @@ out.table(diffs[diffs.noise.isna() & (diffs.viewpoint == "all")], "corpus_differ
 out.table(rel[rel.noise.isna()], "corpus_reliability")
 out.table(seeds[seeds.fraction == seeds.fraction.max()], "corpus_seeds")
 out.table(calibration, "corpus_calibration")
-out.say(fd.design_text(summary))
+out.say(findings.design_text(summary))
 
 # %% [markdown]
 # ## Which strategy wins in which cell
@@ -172,15 +170,15 @@ out.say(fd.design_text(summary))
 # P product; the true action, an oracle, left out).
 
 # %%
-win = fd.winners(table, diffs)
+win = findings.winners(table, diffs)
 out.table(win, "corpus_winners")
 shown = [("action", "accuracy"), ("effect", "log_loss"), ("effect", "ece"), ("description", "all")]
-rows = win.groupby(list(fd.DESIGN[:3])).ngroups
+rows = win.groupby(list(findings.DESIGN[:3])).ngroups
 fig, axes = plt.subplots(2, 2, figsize=(10, 0.9 * rows + 2.5))
 for ax, (target, metric) in zip(axes.ravel(), shown, strict=True):
-    eplots.plot_winners(ax, win, target, metric)
+    figures.plot_winners(ax, win, target, metric)
 out.figure(fig, "corpus_winners", source=source)
-fd.winners_table(win, shown)
+findings.winners_table(win, shown)
 
 # %% [markdown]
 # ## The earlier findings, followed through the design
@@ -188,9 +186,9 @@ fd.winners_table(win, shown)
 # claim written from them.
 
 # %%
-verdicts = fd.finding_verdicts(diffs)
+verdicts = findings.finding_verdicts(diffs)
 out.table(verdicts, "corpus_findings")
-for sentence in fd.finding_sentences(verdicts):
+for sentence in findings.finding_sentences(verdicts):
     out.say("* " + sentence)
 
 # %% [markdown]
@@ -199,12 +197,12 @@ for sentence in fd.finding_sentences(verdicts):
 # one; bands are two-level intervals.
 
 # %%
-cells = fd.contrast_cells(table)
+cells = findings.contrast_cells(table)
 full = table.fraction.max()
-out.figure(plots.strategies_vs_noise_figure(table, cells, full), "corpus_strategies_vs_noise", source=source)
-out.figure(plots.early_recognition_figure(table, cells), "corpus_early_recognition", source=source)
-out.figure(plots.calibration_figure(rel, table, cells, full), "corpus_calibration", source=source)
-for line in fd.network_alone_sentences(table):
+out.figure(figures.strategies_vs_noise_figure(table, cells, full), "corpus_strategies_vs_noise", source=source)
+out.figure(figures.early_recognition_figure(table, cells), "corpus_early_recognition", source=source)
+out.figure(figures.calibration_figure(rel, table, cells, full), "corpus_calibration", source=source)
+for line in findings.network_alone_sentences(table):
     out.say("* " + line)
 
 # %% [markdown]
@@ -212,9 +210,9 @@ for line in fd.network_alone_sentences(table):
 
 # %%
 pairs = [
-    (f.target, f.metric, f.strategy, f.baseline) for f in fd.FINDINGS if f.viewpoint == "all" and not f.early
+    (f.target, f.metric, f.strategy, f.baseline) for f in findings.FINDINGS if f.viewpoint == "all" and not f.early
 ]
-out.figure(plots.differences_figure(diffs, pairs, cells, full), "corpus_differences", source=source)
+out.figure(figures.differences_figure(diffs, pairs, cells, full), "corpus_differences", source=source)
 
 # %% [markdown]
 # ## Is p_HMM a probability?
@@ -227,16 +225,16 @@ out.figure(plots.differences_figure(diffs, pairs, cells, full), "corpus_differen
 real = out.source.is_real
 segments = None
 if real:
-    segments = ph.segment_readings(gesture_sequences(out.source, include_test=False), seed=seed)
+    segments = p_hmm_readings.segment_readings(gesture_sequences(out.source, include_test=False), seed=seed)
     out.table(segments, "p_hmm_real_segments")
-    segment_summary = ph.segment_calibration(segments)
+    segment_summary = p_hmm_readings.segment_calibration(segments)
     out.table(segment_summary, "p_hmm_real_calibration")
-cell = {k: v for k, v in fd.REFERENCE_CELL.items() if k != "p_hmm"}
-fig = plots.p_hmm_calibration_figure(rel, full, where=cell, segments=segments)
+cell = {k: v for k, v in findings.REFERENCE_CELL.items() if k != "p_hmm"}
+fig = figures.p_hmm_calibration_figure(rel, full, where=cell, segments=segments)
 out.figure(fig, "corpus_p_hmm_calibration", source=source)
-for line in fd.p_hmm_sentences(table, calibration, segment_summary if real else None):
+for line in findings.p_hmm_sentences(table, calibration, segment_summary if real else None):
     out.say("* " + line)
-segment_summary if real else fd.p_hmm_table(table)
+segment_summary if real else findings.p_hmm_table(table)
 
 # %% [markdown]
 # ## How much the recogniser's seed moves the result
@@ -244,6 +242,6 @@ segment_summary if real else fd.p_hmm_table(table)
 # carries this spread.
 
 # %%
-spread = fd.seed_spread(seeds)
-out.say(fd.seed_sentence(spread))
+spread = findings.seed_spread(seeds)
+out.say(findings.seed_sentence(spread))
 spread

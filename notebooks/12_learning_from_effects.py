@@ -83,20 +83,19 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 # %%
 import matplotlib.pyplot as plt
 
-from glu import plots, recording
 from glu.bn import InferenceEngine, learn_bn
 from glu.data import load_experiments
-from glu.experiments import anticipation, learned_recognizers, online_learning
-from glu.experiments import learning_curves as lc
-from glu.experiments import self_supervised as ss
 from glu.gestures.corpus import gesture_sequences, original_test_segments
 from glu.language import candidate_sentences
 from glu.run import start
+from glu.studies.anticipation import experiment as anticipation
+from glu.studies.anticipation.figures import plot_anticipation
+from glu.studies.learning import figures, learned_recognizers, online, recordings, self_supervised, study
 
 out = start("12_learning_from_effects", globals())
 engine = InferenceEngine(learn_bn(load_experiments(out.source)))
 source = out.source.describe()
-settings = lc.StudySettings(
+settings = study.StudySettings(
     episodes=episodes,
     seeds=tuple(seeds),
     ambiguities=tuple(ambiguities),
@@ -110,22 +109,22 @@ settings = lc.StudySettings(
 # episodes above the `confident` threshold and how often those are right.
 
 # %%
-results = lc.learning_study(engine, settings)
-labels = lc.labels_table(results, settings, source)
+results = study.learning_study(engine, settings)
+labels = study.labels_table(results, settings, source)
 out.table(labels, "learning_labels")
 labels.drop(columns="description").round(3)
 
 # %% [markdown]
 # ## Learning curves
 # Held-out accuracy of the HMMs each learner has after each number of episodes; bands are two-level
-# bootstrap intervals (seeds, then held-out gestures within each seed: `glu.experiments.two_level`). The true
+# bootstrap intervals (seeds, then held-out gestures within each seed: `glu.stats`). The true
 # labels and the unsupervised clusters are the same in every panel (the gestures are); the network alone is
 # flat (it sees no gesture).
 
 # %%
-curves = lc.curves_table(results, settings, source)
+curves = study.curves_table(results, settings, source)
 out.table(curves, "learning_curves")
-out.figure(plots.learning_curves_figure(curves, ambiguities), "learning_curves", source=source)
+out.figure(figures.learning_curves_figure(curves, ambiguities), "learning_curves", source=source)
 
 # %% [markdown]
 # ## When learning from effects reaches true-label accuracy, and when it does not
@@ -133,10 +132,10 @@ out.figure(plots.learning_curves_figure(curves, ambiguities), "learning_curves",
 # their paired accuracy difference reaches zero and stays there up to the last checkpoint.
 
 # %%
-match = lc.match_table(curves)
+match = study.match_table(curves)
 out.table(match, "learning_match")
-out.figure(plots.episodes_to_match_figure(match), "learning_match", source=source)
-print("\n".join(lc.match_lines(match)))
+out.figure(figures.episodes_to_match_figure(match), "learning_match", source=source)
+print("\n".join(study.match_lines(match)))
 
 # %% [markdown]
 # ## One learner's life, episode by episode (Rerun recording)
@@ -145,15 +144,15 @@ print("\n".join(lc.match_lines(match)))
 # confidence, the held-out accuracy so far, and the models' mean trajectories taking shape in 3-D.
 
 # %%
-amb = ss.AMBIGUITIES[recorded_ambiguity]
-seen = ss.simulate_episodes(engine, amb, recorded_episodes, seed)
-test = ss.simulate_episodes(engine, amb, 3 * test_per_action, seed, offset=ss.TEST_OFFSET, balanced=True)
-p_bn = ss.network_posteriors(engine, seen.perceived, seen.world)
+amb = self_supervised.AMBIGUITIES[recorded_ambiguity]
+seen = self_supervised.simulate_episodes(engine, amb, recorded_episodes, seed)
+test = self_supervised.simulate_episodes(engine, amb, 3 * test_per_action, seed, offset=self_supervised.TEST_OFFSET, balanced=True)
+p_bn = self_supervised.network_posteriors(engine, seen.perceived, seen.world)
 every = [n for n in range(10, recorded_episodes + 1, 10)] or [recorded_episodes]
-life = online_learning.run_online(
+life = online.run_online(
     seen.features,
     seen.actions,
-    [online_learning.Learner(recorded_scheme, "network"), online_learning.Learner("true")],
+    [online.Learner(recorded_scheme, "network"), online.Learner("true")],
     {"network": p_bn},
     test.features,
     test.actions,
@@ -162,7 +161,7 @@ life = online_learning.run_online(
     settings.online,
     seed,
 )
-recording.write_learning(
+recordings.write_learning(
     life,
     seen.features,
     out.recording("learning_online"),
@@ -192,7 +191,7 @@ out.table(anticipated, "learning_anticipation", episodes=recorded_episodes, sche
 fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), sharex="col")
 for j, case in enumerate(anticipation.CASES):
     run = runs[f"{recorded_scheme} labels", case]
-    plots.plot_anticipation(axes[:, j], run.curves(), run.predictions())
+    plot_anticipation(axes[:, j], run.curves(), run.predictions())
 out.figure(fig, "learning_anticipation", source=source)
 anticipated.round(3)
 
@@ -215,7 +214,7 @@ if out.source.is_real:
     real_summary = learned_recognizers.real_gesture_summary(real)
     out.table(real, "learning_real_gestures")
     out.table(real_summary, "learning_real_gestures_summary")
-    out.figure(plots.real_gestures_figure(real_summary), "learning_real_gestures", source=source)
+    out.figure(figures.real_gestures_figure(real_summary), "learning_real_gestures", source=source)
     shown = real_summary.round(3)
 else:
     shown = "the real gestures are in the real data only"

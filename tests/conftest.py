@@ -6,10 +6,10 @@ Two kinds of tests use data:
   on whatever data there is. They take the ``source`` fixture (or a fixture built on it), which runs them
   on a synthetic data folder always, and also on the real data when it is present (CI). Without the real
   data they still run, on synthetic data.
-* **reference tests** (``tests/test_reference*.py``, ``tests/test_correspondence_reference.py``) compare
-  glu with the originals' models and the published numbers; they need the real data and skip with a
-  reason without it. Each covers one published artefact, its parts as subtests, so that a clone without
-  the data skips nine tests.
+* **reference tests** (``tests/studies/test_reference*.py``,
+  ``tests/studies/test_correspondence_reference.py``) compare glu with the originals' models and the published
+  numbers; they need the real data and skip with a reason without it. Each covers one published artefact, its
+  parts as subtests, so that a clone without the data skips nine tests.
 """
 
 from __future__ import annotations
@@ -83,10 +83,10 @@ def uniform_bn(table):
 def recognizer(source):
     """Gesture HMMs for the source: the originals' 2013 models on real data, small glu-trained ones
     otherwise."""
-    from glu.experiments.gestures import train_on
     from glu.gestures.corpus import gesture_sequences
     from glu.gestures.recognizer import load_original_models
     from glu.hmm import TrainingConfig
+    from glu.studies.replication.gestures import train_on
 
     if source.original_hmms() is not None:
         return load_original_models(source.original_hmms())

@@ -33,7 +33,7 @@ p_comb(ObjVel | Shape, Size, G_1^t). The scene is described by the best sentence
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``anticipate``."""
-    from glu.experiments.anticipation import CASES, ORIGINAL_STEP
+    from glu.studies.anticipation.experiment import CASES, ORIGINAL_STEP
 
     p = sub.add_parser(
         "anticipate",
@@ -93,7 +93,7 @@ def _anticipate(args: argparse.Namespace) -> int:
     from glu.bn.inference import InferenceEngine
     from glu.bn.learning import learn_bn
     from glu.data.source import load_experiments, resolve_data
-    from glu.experiments.anticipation import CASES, case_trajectory, effect_anticipation
+    from glu.studies.anticipation.experiment import CASES, case_trajectory, effect_anticipation
 
     if args.schema is not None or args.experiments is not None:  # offered by the shared options, not used
         raise DataError(

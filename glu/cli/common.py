@@ -461,7 +461,7 @@ def add_soft_rule_option(p: argparse.ArgumentParser, what: str = "soft evidence"
 def scheduler_address(text: str) -> str:
     """--scheduler ADDRESS: a Dask scheduler address (tcp://host:port) or 'synchronous'."""
     from glu.errors import DataError
-    from glu.sweep.runner import check_scheduler
+    from glu.machine import check_scheduler
 
     try:
         return check_scheduler(text) or text

@@ -1,10 +1,11 @@
 """``glu evaluate`` and ``glu corpus``: measure every fusion strategy on a simulated corpus, on Dask.
 
-``glu evaluate`` runs the sweep of :mod:`glu.sweep` (the factorial design action prior × inference network
-× p_HMM reading × noise × viewpoint, over recogniser seeds, every strategy at every observed fraction; see
-docs/corpus-evaluation.md) on a LocalCluster sized to the machine, or on an existing Dask cluster
-(``--scheduler tcp://host:8786``), and writes the merged tables to ``-o DIR``; run it again on the same
-folder to finish an interrupted sweep. ``glu corpus`` writes the simulated episodes themselves to Parquet.
+``glu evaluate`` runs the sweep of :mod:`glu.studies.corpus_evaluation.sweep` (the factorial design action
+prior × inference network × p_HMM reading × noise × viewpoint, over recogniser seeds, every strategy at every
+observed fraction; see docs/corpus-evaluation.md) on a LocalCluster sized to the machine, or on an existing
+Dask cluster (``--scheduler tcp://host:8786``), and writes the merged tables to ``-o DIR``; run it again on
+the same folder to finish an interrupted sweep. ``glu corpus`` writes the simulated episodes themselves to
+Parquet.
 """
 
 from __future__ import annotations
@@ -16,7 +17,12 @@ from glu.cli.common import add_cluster_args, add_data_option, output_file, outpu
 
 
 def _shared(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--config", type=Path, metavar="FILE.toml", help="sweep settings (see glu.sweep.config)")
+    p.add_argument(
+        "--config",
+        type=Path,
+        metavar="FILE.toml",
+        help="sweep settings (see glu.studies.corpus_evaluation.config)",
+    )
     p.add_argument("--episodes", type=positive_int, metavar="N", help="episodes in all (default 120000)")
     p.add_argument("--seed", type=seed, metavar="S", help="the corpus's seed (default 0)")
     add_data_option(p, "the network is learned from its experiments")
@@ -64,7 +70,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _config(args: argparse.Namespace):
     from dataclasses import replace
 
-    from glu.sweep.config import SweepConfig, load_config
+    from glu.studies.corpus_evaluation.config import SweepConfig, load_config
 
     config = load_config(args.config) if args.config else SweepConfig()
     config = config.with_overrides(episodes=args.episodes, seed=args.seed)
@@ -74,7 +80,7 @@ def _config(args: argparse.Namespace):
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from glu.sweep.runner import run_sweep
+    from glu.studies.corpus_evaluation.sweep import run_sweep
 
     result = run_sweep(
         _config(args), args.out, scheduler=args.scheduler, workers=args.workers, max_chunks=args.max_chunks
@@ -106,11 +112,11 @@ def overall_text(summary: dict) -> str:
 
 
 def _corpus(args: argparse.Namespace) -> int:
-    from glu.sweep.runner import prepare_world
+    from glu.studies.corpus_evaluation.sweep import prepare_world
 
     config = _config(args)
     engine, label = prepare_world(config)
-    from glu.experiments.corpus import write_corpus
+    from glu.studies.corpus_evaluation.corpus import write_corpus
 
     path = write_corpus(
         args.out,

@@ -283,7 +283,8 @@ def _segment(args: argparse.Namespace) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from glu.plots import plot_segmentation, save_figure
+        from glu.plots import save_figure
+        from glu.studies.replication.gesture_figures import plot_segmentation
 
         fig, ax = plt.subplots(figsize=(12, 4), layout="constrained")
         plot_segmentation(

@@ -28,7 +28,7 @@ from glu.cli.common import (
 
 
 def _ambiguities() -> tuple[str, ...]:
-    from glu.experiments.self_supervised import AMBIGUITIES
+    from glu.studies.learning.self_supervised import AMBIGUITIES
 
     return tuple(AMBIGUITIES)
 
@@ -50,7 +50,7 @@ def _seeds(text: str) -> tuple[int, ...]:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``learn-gestures`` and ``learning-curves`` commands."""
-    from glu.experiments.self_supervised import AMBIGUITIES, LEARNERS
+    from glu.studies.learning.self_supervised import AMBIGUITIES, LEARNERS
 
     ambiguity_help = "; ".join(f"{k}: {a.description}" for k, a in AMBIGUITIES.items()).replace("%", "%%")
     p = sub.add_parser(
@@ -137,8 +137,8 @@ def _engine(data: str | None):
 
 
 def _learn(args: argparse.Namespace) -> int:
-    from glu.experiments.learned_recognizers import learn_gestures
     from glu.hmm import TrainingConfig
+    from glu.studies.learning.learned_recognizers import learn_gestures
 
     engine, label = _engine(args.data)
     print(f"network: learned from {label}")
@@ -173,9 +173,9 @@ def _curves(args: argparse.Namespace) -> int:
     import json
 
     from glu.errors import DataError
-    from glu.experiments import learning_curves as lc
     from glu.files import atomic_write_json, atomic_write_text
-    from glu.sweep.runner import SYNCHRONOUS
+    from glu.machine import SYNCHRONOUS
+    from glu.studies.learning import study as lc
 
     bad = [a for a in args.ambiguities if a not in _ambiguities()]
     if bad:

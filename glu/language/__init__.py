@@ -8,7 +8,8 @@ probabilities.
   ranking a list of sentences, :func:`describe`.
 * :mod:`glu.language.candidates` — the sentences to choose from: the grammar, the originals' samples, a file.
 
-The TCDS experiments built on them are in :mod:`glu.experiments.verbal`, their figures in :mod:`glu.plots`.
+The TCDS experiments built on them are in :mod:`glu.studies.replication.verbal`, their figures in
+:mod:`glu.plots`.
 """
 
 from glu.language.candidates import CANDIDATES, SentenceSet, candidate_sentences, read_sentences

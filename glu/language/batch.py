@@ -34,9 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from glu.errors import VocabularyError
-from glu.language.descriptions import PROB_TOL, default_network
+from glu.language.descriptions import PROB_TOL, word_network
 from glu.language.grammar import Grammar
-from glu.language.sentences import WordNetwork, as_network
+from glu.language.sentences import WordNetwork
 
 LOG_ZERO = -1e6
 """``log p`` used for a word of probability 0."""
@@ -114,7 +114,7 @@ def best_sentences(
     columns : the word of each column (every word of the grammar must be among them)
     grammar : a Grammar, its WordNetwork, or None for glu's default grammar (must be finite)
     """
-    net = default_network() if grammar is None else as_network(grammar)
+    net = word_network(grammar)
     probs = np.asarray(word_probs, dtype=float)
     if probs.ndim != 2 or probs.shape[1] != len(columns):
         raise VocabularyError(

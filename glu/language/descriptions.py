@@ -100,7 +100,8 @@ def default_network() -> WordNetwork:
     return compile_network(load_grammar())
 
 
-def _network(grammar: Grammar | WordNetwork | None) -> WordNetwork:
+def word_network(grammar: Grammar | WordNetwork | None = None) -> WordNetwork:
+    """The word network of ``grammar`` (a :class:`Grammar` or one already compiled); None: the default."""
     return default_network() if grammar is None else as_network(grammar)
 
 
@@ -345,7 +346,7 @@ def nbest(
     if int(n) != n or n < 1:
         raise EvidenceError(f"the number of sentences must be a whole number ≥ 1, not {n!r}")
     n = int(n)
-    net = _network(grammar)
+    net = word_network(grammar)
     if must_contain is not None or exclude is not None:
         must = None if must_contain is None else list(must_contain)
         unknown = sorted(set(must or ()) - set(net.words))
@@ -409,7 +410,7 @@ def all_scores(
     and ranks, up to :data:`MAX_ALL_SCORES` sentences.
     """
     offset = score_offset(score)
-    net = _network(grammar)
+    net = word_network(grammar)
     total = count_sentences(net)
     if total > MAX_ALL_SCORES:
         raise GrammarError(
@@ -475,7 +476,7 @@ def describe(
         candidates = [tuple(c.split()) if isinstance(c, str) else tuple(c) for c in candidates]
         vocabulary = [w for c in candidates for w in c]
     else:
-        vocabulary = _network(grammar)
+        vocabulary = word_network(grammar)
     probs = word_probabilities(engine, evidence, soft, soft_rule, vocabulary=vocabulary)
     if candidates is not None:
         out = rank_sentences(candidates, probs, n, score, must_contain)

@@ -16,7 +16,9 @@ One module per concern, in the order a run meets them:
 * :mod:`~glu.run.generated` — the pages' other generated sections (the README's story table, from the
   manifests), and :mod:`~glu.run.speed` — the speed page's tables, from the benchmarks' results.
 
-The science is below (:mod:`glu.experiments`, :mod:`glu.plots`, :mod:`glu.recording`); nothing here
+The science is below, in :mod:`glu.studies` (one package per study) and the library under it; the runner
+knows no study by name: the README's results section and the parameters' choices come from the studies'
+own declarations (:func:`glu.studies.readme_parts`, :func:`glu.studies.parameter_choices`), and nothing here
 computes a number of the papers.
 """
 

@@ -111,7 +111,7 @@ class Outputs:
         Returns None, so that a cell ending with it shows no path (the files are in :attr:`written`).
 
         ``name`` defaults to the frame's experiment (``df.attrs["experiment"]``); the JSON's ``meta`` holds
-        the experiment, its data source and parameters (from :func:`glu.experiments.common.tidy`), the
+        the experiment, its data source and parameters (from :func:`glu.tidy.tidy`), the
         notebook, and ``extra``.
         """
         name = name or df.attrs.get("experiment")

@@ -11,8 +11,9 @@ one per line, as papermill and ``papermill --help-notebook`` read them::
 * **names** — only declared names (a near miss gets a suggestion);
 * **types** — ``bool`` is ``True`` or ``False`` (not ``"no"``), ``int`` an integer, ``float`` a finite
   number, ``str`` a string, ``list[float]`` a list of numbers; ``None`` only where the default is None;
-* **choices and ranges** — :data:`CHOICES` and :data:`RANGES`, keyed by parameter name: a name means the
-  same thing in every notebook, and the allowed values come from the package's own constants.
+* **choices and ranges** — :func:`choices` and :data:`RANGES`, keyed by parameter name: a name means the
+  same thing in every notebook, and the allowed values come from the package's own constants (the
+  library's in :data:`CHOICES`, each study's from its package: :func:`glu.studies.parameter_choices`).
 
 ``glu run`` checks before it starts a kernel; :func:`glu.run.notebook.start`, the first call of every
 notebook, checks again inside the kernel, so a plain papermill run is checked too.
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import ast
 import difflib
+import functools
 import io
 import math
 import re
@@ -35,9 +37,6 @@ from glu.bn.learning import UNSEEN_MODES
 from glu.bn.soft import SOFT_RULES
 from glu.data.source import WORD_FILES
 from glu.errors import ParameterError
-from glu.experiments.corpus import ACTION_PRIORS
-from glu.experiments.correspondence import STUDY_FEATURE_NAMES
-from glu.experiments.evaluation import INFERENCE_NETWORKS
 from glu.gestures.calibration import READINGS
 from glu.gestures.invariants import FEATURE_NAMES
 from glu.language.descriptions import SCORES
@@ -51,13 +50,20 @@ CHOICES: dict[str, tuple[str, ...]] = {
     "shape": AFFORDANCE_VALUES["Shape"],
     "size": AFFORDANCE_VALUES["Size"],
     "features": FEATURE_NAMES,
-    "feature_sets": STUDY_FEATURE_NAMES,
     "real_features": FEATURE_NAMES,
-    "action_prior": tuple(ACTION_PRIORS),
-    "inference_network": tuple(INFERENCE_NETWORKS),
     "p_hmm": tuple(READINGS),
 }
-"""Allowed values of the string parameters that take one of a few values (for a list, of each element)."""
+"""Allowed values of the library's string parameters that take one of a few values (for a list, of each
+element); :func:`choices` adds the studies' own."""
+
+
+@functools.cache
+def choices() -> dict[str, tuple[str, ...]]:
+    """Allowed values of every string parameter that takes one of a few: :data:`CHOICES` and the studies'."""
+    from glu.studies import parameter_choices
+
+    return {**CHOICES, **parameter_choices()}
+
 
 RANGES: dict[str, tuple[float, float]] = {
     "seed": (0, 2**32 - 1),
@@ -111,7 +117,7 @@ class Parameter:
     @property
     def choices(self) -> tuple[str, ...] | None:
         """The allowed values, if the parameter takes one of a few."""
-        return CHOICES.get(self.name)
+        return choices().get(self.name)
 
     @property
     def range(self) -> tuple[float, float] | None:

@@ -67,7 +67,7 @@ API_MODULES: tuple[str, ...] = (
     "glu.hmm.training",
     "glu.language.grammar",
     "glu.language.descriptions",
-    "glu.experiments.fusion",
+    "glu.studies.replication.fusion",
     "glu.recording",
     "glu.run.manifest",
     "glu.paths",

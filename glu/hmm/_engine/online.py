@@ -2,7 +2,7 @@
 
 A robot that updates its gesture models after each episode runs one E-step per episode and model
 (:func:`glu.hmm.em.expected_stats`, the readable reference, handles many sequences under one model). When
-many learners watch the same episode — the labelling schemes of :mod:`glu.experiments.online_learning`,
+many learners watch the same episode — the labelling schemes of :mod:`glu.studies.learning.online`,
 each with its own models — :func:`expected_stats_bank` runs that episode under every model together: the
 emissions of every frame under every model's Gaussians are one array operation, the forward–backward
 recursions run compiled (:func:`glu.hmm._engine.kernels.forward_backward_scaled`, one model after

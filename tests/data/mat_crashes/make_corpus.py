@@ -2,8 +2,8 @@
 
 Each file is a tiny matrix written by ``scipy.io.savemat`` with a few bytes patched, so that SciPy's compiled
 reader indexes its table of data types out of range (a segmentation fault, SciPy 1.17 and earlier). None of
-them holds data from anywhere but this script. ``tests/test_matfile.py`` checks that each one still crashes
-a plain ``scipy.io.loadmat`` in a child process, and that glu refuses each with one line.
+them holds data from anywhere but this script. ``tests/library/test_matfile.py`` checks that each one still
+crashes a plain ``scipy.io.loadmat`` in a child process, and that glu refuses each with one line.
 
     python tests/data/mat_crashes/make_corpus.py
 """
@@ -70,7 +70,9 @@ def main() -> None:
     cases["complex_reads_next_matrix"] = k2
     # 5: characters in an array of no dimensions: SciPy turns them into strings reading dims[-1]
     header = bytes(saved({"x": x})[:128])
-    body = element(6, struct.pack("<II", 4, 0)) + element(5, b"") + element(1, b"s") + element(16, b"abcdefgh")
+    body = (
+        element(6, struct.pack("<II", 4, 0)) + element(5, b"") + element(1, b"s") + element(16, b"abcdefgh")
+    )
     cases["char_without_dimensions"] = bytearray(header + element(14, body))
     # 6, 7: the compressed form of 1 and 4
     cases["compressed_numeric_type_241"] = compressed(cases["numeric_type_241"])

@@ -1,0 +1,595 @@
+"""Figures of the corpus evaluation: which fusion strategy wins where, with 95 % intervals.
+
+The ``plot_*`` functions draw the sweep's tables (:mod:`glu.studies.corpus_evaluation.tables`:
+``results``, ``differences``, ``reliability``) on the axes they are given and return them. In those tables a
+noise of NaN means "pooled over the noise levels" and a viewpoint ``"all"`` "pooled over the viewpoints";
+``where`` picks one cell of the design (action prior, inference network, learn_experiments, p_HMM reading;
+default :data:`glu.studies.corpus_evaluation.findings.REFERENCE_CELL`), which the panel's title names.
+Strategies whose lines coincide are named in the panel's title, so that a line hidden under another is not
+missed.
+
+The ``*_figure`` functions lay out whole figures from those panels (constrained layout; one legend above the
+panels, naming every strategy drawn once), one column per cell of the design given (``cells``: e.g. the
+reference cell and the most mismatched one, :func:`glu.studies.corpus_evaluation.findings.contrast_cells`), to
+fit a page.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
+
+from glu.plots.style import RULE_LABELS
+from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label
+
+STRATEGY_COLORS = {
+    "gesture": "#8C8C8C",
+    "network": "#937860",
+    "hard": "#C44E52",
+    "virtual": "#4C72B0",
+    "jeffrey": "#55A868",
+    "product": "#DD8452",
+    "true_action": "#222222",
+}
+STRATEGY_STYLE = {"true_action": ":", "network": "--", "gesture": "--"}
+STRATEGY_LABELS = {
+    "gesture": "gesture (HMMs alone)",
+    "network": "network alone",
+    **RULE_LABELS,
+    "true_action": "true action given",
+}
+"""How figures name the strategies of :mod:`glu.studies.corpus_evaluation.corpus` (``jeffrey`` is Jeffrey's
+rule)."""
+POSTERIOR_LABELS = {
+    "likelihood": r"$p_{HMM}$ from the likelihoods",
+    "per-frame": r"$p_{HMM}$ per frame",
+    "calibrated": r"$p_{HMM}$ calibrated",
+}
+"""How figures name the readings of p_HMM (:data:`glu.gestures.calibration.READINGS`)."""
+METRIC_LABEL = {
+    "accuracy": "accuracy",
+    "log_loss": "log-loss (nats)",
+    "brier": "Brier score",
+    "ece": "ECE",
+    "verb": "verb right",
+    "object": "object right",
+    "effect": "effect right",
+    "all": "sentence right",
+}
+COINCIDE = 0.01
+"""Lines closer than this fraction of the axis' range at every point coincide (and the title says so)."""
+
+
+def strategy_label(strategy: str) -> str:
+    """A strategy as figures name it (:data:`STRATEGY_LABELS`)."""
+    return STRATEGY_LABELS.get(strategy, strategy)
+
+
+def posterior_label(posterior: str) -> str:
+    """A way of reading p_HMM as figures name it (:data:`POSTERIOR_LABELS`)."""
+    return POSTERIOR_LABELS.get(posterior, posterior)
+
+
+def where_label(where: Mapping[str, Any] | None) -> str:
+    """A cell of the design in words (:func:`glu.studies.corpus_evaluation.findings.cell_label`; None: the
+    reference cell)."""
+    return cell_label({**REFERENCE_CELL, **(where or {})})
+
+
+def _cell(frame: pd.DataFrame, where: Mapping[str, Any] | None) -> pd.DataFrame:
+    """The rows of one cell of the design (``where``: column → value; None: the reference cell)."""
+    for k, v in (REFERENCE_CELL if where is None else where).items():
+        frame = frame[frame[k] == v]
+    return frame
+
+
+def _pooled(
+    frame: pd.DataFrame, noise: float | None, viewpoint: str, where: Mapping[str, Any] | None
+) -> pd.DataFrame:
+    frame = _cell(frame, where)
+    sel = frame.viewpoint == viewpoint
+    return frame[sel & (frame.noise.isna() if noise is None else np.isclose(frame.noise, noise))]
+
+
+def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str) -> None:
+    c = STRATEGY_COLORS.get(strategy, "black")
+    ls = STRATEGY_STYLE.get(strategy, "-")
+    ax.plot(x, g.estimate, color=c, ls=ls, marker="o", ms=3, lw=1.3, label=strategy_label(strategy))
+    ax.fill_between(x, g.ci_low, g.ci_high, color=c, alpha=0.15, lw=0)
+
+
+def coinciding(series: dict[str, tuple[np.ndarray, np.ndarray]], span: float) -> list[list[str]]:
+    """Groups (two or more) of the named ``(x, y)`` series that coincide: same x, |Δy| ≤ COINCIDE·span."""
+    groups: list[list[str]] = []
+    for name, (x, y) in series.items():
+        for grp in groups:
+            gx, gy = series[grp[0]]
+            if len(gx) == len(x) and np.allclose(gx, x) and np.nanmax(np.abs(gy - y)) <= COINCIDE * span:
+                grp.append(name)
+                break
+        else:
+            groups.append([name])
+    return [g for g in groups if len(g) > 1]
+
+
+def _coincide_note(groups: list[list[str]]) -> str:
+    return "; ".join(" = ".join(strategy_label(s) for s in g) for g in groups) + (
+        " (lines coincide)" if groups else ""
+    )
+
+
+def _strategy_lines(
+    ax: Axes, sel: pd.DataFrame, x: str, metric: str, strategies: Sequence[str] | None
+) -> str:
+    """A line and a 95 % band per strategy of ``sel`` against column ``x`` (a fraction, drawn in %).
+
+    Returns the note naming the strategies whose lines coincide ("" if none).
+    """
+    series = {}
+    for strategy, g in sel.groupby("strategy", sort=False):
+        if strategies is None or strategy in strategies:
+            g = g.sort_values(x)
+            _line(ax, g[x].to_numpy() * 100, g, strategy)
+            series[strategy] = (g[x].to_numpy(dtype=float), g.estimate.to_numpy(dtype=float))
+    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
+    lo, hi = ax.get_ylim()
+    return _coincide_note(coinciding(series, hi - lo))
+
+
+def _title(ax: Axes, first: str, note: str) -> None:
+    ax.set_title(first + ("\n" + textwrap.fill(note, 60) if note else ""), fontsize=9)
+
+
+def plot_metric_vs_noise(
+    ax: Axes,
+    results: pd.DataFrame,
+    target: str,
+    metric: str,
+    fraction: float = 1.0,
+    viewpoint: str = "all",
+    strategies: Sequence[str] | None = None,
+    where: Mapping[str, Any] | None = None,
+) -> Axes:
+    """One metric of one target against the sensor noise (m), a line and a 95 % band per strategy."""
+    results = _cell(results, where)
+    sel = results[
+        (results.target == target)
+        & (results.metric == metric)
+        & np.isclose(results.fraction, fraction)
+        & (results.viewpoint == viewpoint)
+        & results.noise.notna()
+    ]
+    note = _strategy_lines(ax, sel, "noise", metric, strategies)
+    views = "all viewpoints" if viewpoint == "all" else viewpoint
+    first = f"{target} {METRIC_LABEL.get(metric, metric)} ({views}, {fraction:.0%} of the gesture seen)"
+    _title(ax, f"{first}\n{where_label(where)}", note)
+    ax.set_xlabel("sensor noise (cm)")
+    return ax
+
+
+def plot_early_recognition(
+    ax: Axes,
+    results: pd.DataFrame,
+    target: str,
+    metric: str = "accuracy",
+    noise: float | None = None,
+    viewpoint: str = "all",
+    strategies: Sequence[str] | None = None,
+    where: Mapping[str, Any] | None = None,
+) -> Axes:
+    """One metric against the observed fraction of the gesture, a line and a 95 % band per strategy."""
+    sel = _pooled(results, noise, viewpoint, where)
+    sel = sel[(sel.target == target) & (sel.metric == metric)]
+    note = _strategy_lines(ax, sel, "fraction", metric, strategies)
+    how = "all noise levels" if noise is None else f"noise {noise * 100:g} cm"
+    ax.set_xlabel("gesture observed (%)")
+    _title(ax, f"{target} {METRIC_LABEL.get(metric, metric)} ({how})\n{where_label(where)}", note)
+    return ax
+
+
+def plot_reliability(
+    ax: Axes,
+    reliability: pd.DataFrame,
+    fraction: float = 1.0,
+    strategies: Sequence[str] | None = None,
+    noise: float | None = None,
+    viewpoint: str = "all",
+    where: Mapping[str, Any] | None = None,
+    target: str = "effect",
+) -> Axes:
+    """Reliability diagram of a target (the effect ObjVel, or the action): how often the top value was
+    right, against its probability, per calibration bin; marker area ∝ the share of the strategy's episodes in
+    the bin (:func:`size_of_share` for a key). Lines drawn first are wider, so that one lying on another shows
+    as a border around it."""
+    sel = _pooled(reliability, noise, viewpoint, where)
+    sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0) & (sel.target == target)]
+    ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
+    total = sel.groupby("strategy").n.transform("sum")
+    series = {}
+    drawn = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
+    for strategy, g in sel.assign(share=sel.n / total).groupby("strategy", sort=False):
+        if strategy in drawn:
+            c = STRATEGY_COLORS.get(strategy, "black")
+            ls = STRATEGY_STYLE.get(strategy, "-")
+            lw = 1.0 + 0.8 * (
+                len(drawn) - 1 - drawn.index(strategy)
+            )  # the first widest: overlaps stay visible
+            ax.plot(g.confidence, g.accuracy, color=c, lw=lw, ls=ls, label=strategy_label(strategy))
+            ax.scatter(g.confidence, g.accuracy, s=size_of_share(g.share), color=c, alpha=0.7, lw=0)
+            series[strategy] = (g.confidence.to_numpy(dtype=float), g.accuracy.to_numpy(dtype=float))
+    ax.set_xlim(0.3, 1.0)
+    ax.set_ylim(0.0, 1.0)
+    what = "ObjVel value" if target == "effect" else "action"
+    ax.set_xlabel(f"predicted probability of the top {what}")
+    ax.set_ylabel("how often it was right")
+    _title(
+        ax,
+        f"{target} calibration ({fraction:.0%} seen)\n{where_label(where)}",
+        _coincide_note(coinciding(series, 1.0)),
+    )
+    return ax
+
+
+def size_of_share(share):
+    """Marker area (points²) of a calibration bin holding ``share`` of a strategy's episodes."""
+    return 4 + 200 * np.asarray(share, dtype=float)
+
+
+def plot_differences(
+    ax: Axes,
+    differences: pd.DataFrame,
+    pairs: Sequence[tuple[str, str, str, str]],
+    fraction: float = 1.0,
+    noise: float | None = None,
+    viewpoint: str = "all",
+    where: Mapping[str, Any] | None = None,
+) -> Axes:
+    """Paired differences with 95 % intervals, one row per ``(target, metric, strategy, baseline)``.
+
+    The colour is the strategy's; a filled marker: the interval excludes 0 on the side where the metric
+    improves (hollow: it does not). Each row's difference and interval are written in a column right of
+    the axes, since the metrics (accuracy, nats, ECE) share one axis.
+    """
+    sel = _pooled(differences, noise, viewpoint, where)
+    sel = sel[np.isclose(sel.fraction, fraction)]
+    labels = []
+    for i, (target, metric, strategy, baseline) in enumerate(pairs):
+        row = sel[
+            (sel.target == target)
+            & (sel.metric == metric)
+            & (sel.strategy == strategy)
+            & (sel.baseline == baseline)
+        ]
+        sign = 1.0
+        if row.empty:  # stored the other way round
+            row = sel[
+                (sel.target == target)
+                & (sel.metric == metric)
+                & (sel.strategy == baseline)
+                & (sel.baseline == strategy)
+            ]
+            sign = -1.0
+        if row.empty:
+            continue
+        r = row.iloc[0]
+        lo, hi = sorted((sign * r.ci_low, sign * r.ci_high))
+        c = STRATEGY_COLORS.get(strategy, "black")
+        ax.plot([lo, hi], [i, i], color=c, lw=2)
+        ax.plot(
+            [sign * r.difference], [i], marker="o", color=c, mfc=c if _better(metric, lo, hi) else "white"
+        )
+        value = f"{sign * r.difference:+.3f} [{lo:+.3f}, {hi:+.3f}]".replace("-", "−")
+        ax.text(1.02, i, value, va="center", fontsize=7, color="0.2", transform=ax.get_yaxis_transform())
+        better = "higher" if _higher(metric) else "lower"
+        what = f"{target} {METRIC_LABEL.get(metric, metric)} ({better} is better)"
+        labels.append((i, f"{what}: {strategy_label(strategy)} − {strategy_label(baseline)}"))
+    ax.axvline(0, color="0.5", lw=0.8)
+    ax.set_yticks([i for i, _ in labels], [t for _, t in labels], fontsize=7)
+    ax.set_ylim(len(pairs) - 0.5, -0.5)
+    ax.xaxis.set_major_locator(MaxNLocator(nbins=5))  # a narrow panel: at most six readable tick labels
+    ax.set_xlabel("difference (95 % paired bootstrap interval)")
+    ax.set_title(f"paired differences ({fraction:.0%} seen)\n{where_label(where)}", fontsize=9)
+    return ax
+
+
+def _higher(metric: str) -> bool:
+    from glu.stats import HIGHER_IS_BETTER
+
+    return HIGHER_IS_BETTER.get(metric, True)
+
+
+def _better(metric: str, lo: float, hi: float) -> bool:
+    return lo > 0 if _higher(metric) else hi < 0
+
+
+def plot_by_viewpoint(
+    ax: Axes,
+    results: pd.DataFrame,
+    target: str,
+    metric: str,
+    fraction: float = 1.0,
+    strategies: Sequence[str] | None = None,
+    where: Mapping[str, Any] | None = None,
+) -> Axes:
+    """One metric per viewpoint (pooled over noise), grouped bars with 95 % intervals per strategy."""
+    results = _cell(results, where)
+    sel = results[
+        (results.target == target)
+        & (results.metric == metric)
+        & np.isclose(results.fraction, fraction)
+        & results.noise.isna()
+        & (results.viewpoint != "all")
+    ]
+    views = list(dict.fromkeys(sel.viewpoint))
+    strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
+    width = 0.8 / max(len(strats), 1)
+    for k, strategy in enumerate(strats):
+        g = sel[sel.strategy == strategy].set_index("viewpoint").loc[views]
+        x = np.arange(len(views)) + (k - (len(strats) - 1) / 2) * width
+        ax.bar(
+            x,
+            g.estimate,
+            width,
+            color=STRATEGY_COLORS.get(strategy, "black"),
+            label=strategy_label(strategy),
+            yerr=[g.estimate - g.ci_low, g.ci_high - g.estimate],
+            error_kw={"lw": 0.8},
+        )
+    ax.set_xticks(np.arange(len(views)), views)
+    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
+    ax.set_title(
+        f"{target} {METRIC_LABEL.get(metric, metric)} by viewpoint\n{where_label(where)}", fontsize=9
+    )
+    ax.set_xlabel(f"viewpoint (all noise levels, {fraction:.0%} seen)")
+    return ax
+
+
+def plot_winners(ax: Axes, winners: pd.DataFrame, target: str, metric: str) -> Axes:
+    """Which strategy wins each cell of the design for one target and metric: rows (action prior,
+    inference network), columns the p_HMM readings; each cell coloured by the winner and naming it, with
+    ``=`` before the initials of the strategies tied with it (:data:`INITIALS`;
+    :func:`glu.studies.corpus_evaluation.findings.winners`)."""
+    sel = winners[(winners.target == target) & (winners.metric == metric)].copy()
+    sel["network"] = [
+        "generating" if n == "generating" else f"learned {int(k)}"
+        for n, k in zip(sel.inference_network, sel.learn_experiments, strict=True)
+    ]
+    rows = list(dict.fromkeys(zip(sel.action_prior, sel.network, strict=True)))
+    cols = list(dict.fromkeys(sel.p_hmm))
+    ax.set_xlim(-0.5, len(cols) - 0.5)
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    for r in sel.itertuples():
+        i, j = rows.index((r.action_prior, r.network)), cols.index(r.p_hmm)
+        c = STRATEGY_COLORS.get(r.best, "0.5")
+        ax.add_patch(plt_rectangle(j, i, c))
+        tied = [INITIALS.get(t, t) for t in r.tied.split(", ") if t and t != r.best]
+        ax.text(j, i + (0.12 if tied else 0.0), r.best, ha="center", va="center", fontsize=7, weight="bold")
+        if tied:
+            ax.text(j, i + 0.32, "= " + " ".join(tied), ha="center", va="center", fontsize=6.5)
+    ax.set_xticks(range(len(cols)), cols, fontsize=7)
+    ax.set_yticks(range(len(rows)), [f"{a} actions, {n}" for a, n in rows], fontsize=7)
+    ax.set_title(f"{target}: {METRIC_LABEL.get(metric, metric)}, best (= no difference)", fontsize=9)
+    ax.set_xlabel("p_HMM reading", fontsize=7)
+    ax.tick_params(length=0)
+    return ax
+
+
+def plt_rectangle(x: float, y: float, color: str) -> Any:
+    """A cell of :func:`plot_winners`: a unit square centred on (x, y), lightly filled."""
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((x - 0.5, y - 0.5), 1, 1, facecolor=color, alpha=0.35, edgecolor="white", lw=1.5)
+
+
+def plot_segment_readings(ax: Axes, readings: pd.DataFrame) -> Axes:
+    """p_HMM on held-out real segments
+    (:func:`glu.studies.corpus_evaluation.p_hmm_readings.segment_readings`): for each reading, the top
+    action's probability of every segment, filled when the segment was recognised, hollow when not."""
+    order = list(dict.fromkeys(readings.reading))
+    rng = np.random.default_rng(0)
+    for k, (_, g) in enumerate(readings.groupby("reading", sort=False)):
+        x = k + rng.uniform(-0.15, 0.15, len(g))
+        ok = g.correct.to_numpy(dtype=bool)
+        ax.scatter(x[ok], g.confidence[ok], color="#4C72B0", s=18, label="recognised" if k == 0 else None)
+        ax.scatter(
+            x[~ok],
+            g.confidence[~ok],
+            facecolor="white",
+            edgecolor="#C44E52",
+            s=18,
+            label="missed" if k == 0 else None,
+        )
+        ax.hlines(
+            g.correct.mean(), k - 0.3, k + 0.3, color="0.3", lw=1.2, label="accuracy" if k == 0 else None
+        )
+    ax.set_xticks(range(len(order)), order)
+    ax.set_ylim(0.0, 1.05)
+    ax.set_ylabel("p_HMM of the top action")
+    ax.set_title("real segments, each left out", fontsize=9)
+    return ax
+
+
+INITIALS = {"gesture": "G", "network": "N", "hard": "H", "virtual": "V", "jeffrey": "J", "product": "P"}
+"""The strategies' initials in :func:`plot_winners`."""
+READING_STYLE = {
+    "likelihood": ("#C44E52", "-"),
+    "per-frame": ("#4C72B0", "--"),
+    "calibrated": ("#55A868", "-."),
+}
+
+
+def plot_p_hmm_reliability(
+    ax: Axes, reliability: pd.DataFrame, fraction: float = 1.0, where: Mapping[str, Any] | None = None
+) -> Axes:
+    """Reliability diagram of p_HMM itself (target action, strategy gesture), one line per reading of p_HMM
+    in the sweep (through the bins that hold at least 2 % of the gestures; marker area ∝ the bin's share);
+    ``where`` picks the action prior and network (not the reading)."""
+    sel = reliability[
+        (reliability.target == "action")
+        & (reliability.strategy == "gesture")
+        & reliability.noise.isna()
+        & (reliability.viewpoint == "all")
+        & np.isclose(reliability.fraction, fraction)
+        & (reliability.n > 0)
+    ]
+    for k, v in (where or {}).items():
+        sel = sel[sel[k] == v]
+    ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
+    for reading, g in sel.groupby("p_hmm", sort=False):
+        color, ls = READING_STYLE.get(reading, ("black", "-"))
+        share = g.n / g.n.sum()
+        many = g[share >= 0.02]  # the line joins bins holding at least 2 % of the gestures
+        ax.plot(many.confidence, many.accuracy, color=color, ls=ls, lw=1.0, label=f"p_HMM {reading}")
+        ax.scatter(g.confidence, g.accuracy, s=4 + 200 * share, color=color, alpha=0.7, lw=0)
+    ax.set_xlim(0.3, 1.0)
+    ax.set_ylim(0.0, 1.0)
+    ax.set_xlabel("p_HMM of the top action")
+    ax.set_ylabel("how often it was right")
+    ax.set_title(f"p_HMM on held-out synthetic gestures ({fraction:.0%} seen)", fontsize=9)
+    return ax
+
+
+PANEL = (3.9, 3.0)
+"""Inches: the size of one panel."""
+
+
+def _grid(nrows: int, ncols: int, height: float = PANEL[1]) -> tuple[Figure, list]:
+    fig, axes = plt.subplots(
+        nrows, ncols, figsize=(PANEL[0] * ncols, height * nrows), layout="constrained", squeeze=False
+    )
+    return fig, list(axes.flat)
+
+
+def strategy_legend(fig: Figure, strategies: Sequence[str], extra: Sequence = (), ncols: int = 4) -> None:
+    """One legend above the panels: a line per strategy (and ``extra`` handles)."""
+    handles = [
+        Line2D(
+            [],
+            [],
+            color=STRATEGY_COLORS.get(s, "black"),
+            ls=STRATEGY_STYLE.get(s, "-"),
+            marker="o",
+            ms=3,
+            label=strategy_label(s),
+        )
+        for s in strategies
+    ]
+    fig.legend(handles=[*handles, *extra], loc="outside upper center", ncols=ncols, fontsize=8, frameon=False)
+
+
+def _drawn(table: pd.DataFrame, targets: Sequence[str]) -> list[str]:
+    return list(dict.fromkeys(table[table.target.isin(targets)].strategy))
+
+
+Cells = Sequence[Mapping[str, Any]]
+
+
+def strategies_vs_noise_figure(results: pd.DataFrame, cells: Cells, fraction: float = 1.0) -> Figure:
+    """Action accuracy (top) and effect log-loss (bottom) against the sensor noise, per cell of the design."""
+    fig, axes = _grid(2, len(cells))
+    for k, cell in enumerate(cells):
+        plot_metric_vs_noise(axes[k], results, "action", "accuracy", fraction, where=cell)
+        plot_metric_vs_noise(axes[len(cells) + k], results, "effect", "log_loss", fraction, where=cell)
+    strategy_legend(fig, _drawn(results, ("action", "effect")))
+    return fig
+
+
+def early_recognition_figure(results: pd.DataFrame, cells: Cells) -> Figure:
+    """Action accuracy (top) and effect log-loss (bottom) against the fraction of the gesture seen."""
+    fig, axes = _grid(2, len(cells))
+    for k, cell in enumerate(cells):
+        plot_early_recognition(axes[k], results, "action", "accuracy", where=cell)
+        plot_early_recognition(axes[len(cells) + k], results, "effect", "log_loss", where=cell)
+    strategy_legend(fig, _drawn(results, ("action", "effect")))
+    return fig
+
+
+def calibration_figure(
+    reliability: pd.DataFrame,
+    results: pd.DataFrame,
+    cells: Cells,
+    fraction: float = 1.0,
+    strategies: Sequence[str] = ("network", "hard", "virtual", "jeffrey", "true_action"),
+    by_viewpoint: Sequence[str] = ("gesture", "network", "hard", "product"),
+) -> Figure:
+    """Reliability diagrams of the effect in the first two cells (top); the effect's ECE against noise and
+    the action accuracy per viewpoint in the first cell (bottom). A key gives the marker sizes."""
+    fig, axes = _grid(2, 2, height=3.2)
+    for ax, cell in zip(axes[:2], cells[:2], strict=False):
+        plot_reliability(ax, reliability, fraction, strategies=strategies, where=cell)
+    plot_metric_vs_noise(axes[2], results, "effect", "ece", fraction, strategies=strategies, where=cells[0])
+    plot_by_viewpoint(
+        axes[3], results, "action", "accuracy", fraction, strategies=by_viewpoint, where=cells[0]
+    )
+    shown = list(dict.fromkeys([*strategies, *by_viewpoint]))
+    sizes = [
+        Line2D(
+            [],
+            [],
+            marker="o",
+            ls="none",
+            color="0.5",
+            alpha=0.7,
+            ms=size_of_share(s) ** 0.5,
+            label=f"{s:.0%} of the episodes in a bin",
+        )
+        for s in (0.05, 0.25, 0.5)
+    ]
+    strategy_legend(fig, [s for s in STRATEGY_COLORS if s in shown], sizes, ncols=5)
+    return fig
+
+
+def differences_figure(
+    differences: pd.DataFrame,
+    pairs: Sequence[tuple[str, str, str, str]],
+    cells: Cells,
+    fraction: float = 1.0,
+) -> Figure:
+    """Paired differences, one panel per cell of the design (stacked), with a key to colours and markers."""
+    fig, axes = _grid(len(cells), 1, height=2.9)
+    fig.set_figwidth(9.0)
+    for ax, cell in zip(axes, cells, strict=True):
+        plot_differences(ax, differences, pairs, fraction, where=cell)
+    marks = [
+        Line2D(
+            [],
+            [],
+            marker="o",
+            color="0.3",
+            ls="none",
+            label="filled: the interval excludes 0 on the better side",
+        ),
+        Line2D([], [], marker="o", color="0.3", mfc="white", ls="none", label="hollow: it does not"),
+    ]
+    strategy_legend(fig, list(dict.fromkeys(p[2] for p in pairs)), marks, ncols=3)
+    return fig
+
+
+def p_hmm_calibration_figure(
+    reliability: pd.DataFrame,
+    fraction: float = 1.0,
+    where: Mapping[str, Any] | None = None,
+    segments: pd.DataFrame | None = None,
+) -> Figure:
+    """p_HMM's own reliability on the corpus's held-out synthetic gestures, one line per reading (left), and,
+    given the real segments' readings, p_HMM on each segment left out (right); one legend above."""
+    fig, axes = _grid(1, 1 if segments is None else 2, height=3.4)
+    plot_p_hmm_reliability(axes[0], reliability, fraction, where=where)
+    handles = [
+        Line2D([], [], color=c, ls=ls, marker="o", ms=3, label=f"p_HMM {reading}")
+        for reading, (c, ls) in READING_STYLE.items()
+    ]
+    if segments is not None:
+        plot_segment_readings(axes[1], segments)
+        handles += axes[1].get_legend_handles_labels()[0]
+    fig.legend(handles=handles, loc="outside upper center", ncols=3, fontsize=8, frameon=False)
+    return fig

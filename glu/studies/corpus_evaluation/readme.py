@@ -1,0 +1,73 @@
+"""The README's bullet on the corpus evaluation (notebook 11), written from its tables.
+
+The sentences come from the functions that write the notebook's interpretation
+(:mod:`glu.studies.corpus_evaluation.findings`), so the README and the notebook cannot say different things.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import pandas as pd
+
+from glu.stats import LEVEL
+from glu.studies.corpus_evaluation import findings as fd
+
+Tables = Mapping[str, tuple[pd.DataFrame, dict[str, Any]]]
+
+TEMPLATE = """\
+* **Every fusion strategy on a simulated corpus** (`11_corpus_evaluation`: {corpus_episodes:,.0f} episodes \
+over {corpus_seeds:.0f} recogniser seeds, each with its own recogniser, learned networks and episodes; \
+{ci_percent:.0f} % two-level intervals, and a paired difference whose interval contains 0 counts as none). \
+The effects and words are drawn from a network and the gestures from the generator the HMMs are trained on, \
+so the design crosses the ways the robot's models can be wrong: actions drawn uniformly or from the \
+network's prior, the robot's network the generating one or learned from {corpus_learned} simulated \
+experiments, and p_HMM read from the likelihoods, per frame, or calibrated on held-out training gestures \
+(`docs/corpus-evaluation.md`).
+  * The earlier findings, each followed through the {corpus_cells:.0f} cells of the design (the reference \
+cell: {reference_cell}; notebook 11 gives the cells where each holds):
+{findings_text}
+{network_text}
+{p_hmm_text}
+  * {seed_text}"""
+"""The bullet, with ``{name:format}`` slots filled by :func:`values`."""
+
+REQUIRED: tuple[str, ...] = (
+    "corpus_metrics",
+    "corpus_findings",
+    "corpus_seeds",
+    "corpus_calibration",
+    "p_hmm_real_calibration",
+)
+"""The result tables the bullet is written from."""
+
+
+def _bullets(sentences: list[str], indent: str = "  ") -> str:
+    return "\n".join(f"{indent}* {s}" for s in sentences)
+
+
+def values(tables: Tables) -> dict[str, Any]:
+    """Every slot of :data:`TEMPLATE`, from the run's tables (name → (rows, meta))."""
+    metrics, meta = tables["corpus_metrics"]
+    params = meta["parameters"]
+    grid = params["grid"]
+    verdicts = tables["corpus_findings"][0]
+    cells = verdicts.drop_duplicates(list(fd.DESIGN))
+    learned = [f"{n:,}" for n in grid["learn_experiments"]] if "learned" in grid["inference_network"] else []
+    v: dict[str, Any] = {
+        "corpus_episodes": meta["episodes"],
+        "corpus_seeds": params["recognizer_seeds"],
+        "ci_percent": 100 * LEVEL,
+        "corpus_learned": " or ".join(learned) or "no",
+        "corpus_cells": len(cells),
+        "reference_cell": fd.cell_label(fd.REFERENCE_CELL),
+        "findings_text": _bullets(fd.finding_sentences(verdicts, brief=True), "    "),
+        "network_text": _bullets(fd.network_alone_sentences(metrics)),
+    }
+    segments = tables["p_hmm_real_calibration"][0]
+    v["p_hmm_text"] = _bullets(
+        fd.p_hmm_sentences(metrics, tables["corpus_calibration"][0], segments if len(segments) else None)
+    )
+    v["seed_text"] = fd.seed_sentence(fd.seed_spread(tables["corpus_seeds"][0]))
+    return v

@@ -1,0 +1,417 @@
+"""Run a corpus sweep as Dask tasks, resumably, and merge the chunks into tables.
+
+The grid of a sweep is action prior × noise × viewpoint (the simulated conditions) × recogniser seed ×
+inference network × p_HMM reading (the readings) × strategy × observed fraction. One **task** is one chunk
+of episodes of one condition, for every recogniser seed: it simulates each seed's episodes once and scores
+them at every fraction with every strategy under every reading, since those share the gesture and its
+forward pass (:meth:`glu.studies.corpus_evaluation.evaluation.Evaluator.run_chunk`); the seeds' two-level
+bootstrap sums add up (:mod:`glu.studies.corpus_evaluation.intervals`), so a task stores one sum per reading.
+Tasks run
+
+* on a ``LocalCluster`` sized to the machine (one single-threaded worker process per core) by default;
+* on an existing cluster with ``scheduler="tcp://host:8786"`` (``dask scheduler`` and ``dask worker``,
+  see ``docs/sweeps.md``); the workers need glu installed;
+* in this process, one after another, with ``scheduler="synchronous"`` (tests, notebooks, debugging).
+
+Each finished chunk is written by this process (workers need no shared disk) to ``OUT/chunks/`` through
+a temporary file and a rename, so an interrupted sweep leaves only whole chunks; running it again computes
+only the missing ones. A chunk's numbers depend only on the settings, the seed and its index, and chunks
+are merged in index order, so the same settings give the same tables on any cluster.
+
+The output folder::
+
+    OUT/sweep.json          the settings, the data source and a fingerprint of everything behind the numbers
+    OUT/recognizers/seed-NNN.json   the gesture HMMs of each recogniser seed (trained once, reused on resume)
+    OUT/chunks/*.npz        the summed statistics of each chunk (estimate, bootstrap replicates, and each
+                            seed's own estimate)
+    OUT/sums.parquet        the chunks merged: one row per condition, reading and replicate
+    OUT/results.parquet     THE table: every metric with its 95 % two-level interval, per action prior,
+                            inference network, p_HMM reading, noise and viewpoint, pooled over the
+                            viewpoints (viewpoint "all"), over the noise levels (noise NaN), and both
+    OUT/differences.parquet paired differences between strategies, with intervals and verdicts
+    OUT/reliability.parquet reliability diagrams of p_HMM (target action, strategy gesture) and of every
+                            strategy's action and effect
+    OUT/seeds.parquet       each recogniser seed's own estimates (pooled over noise and viewpoints)
+    OUT/calibration.parquet the calibrated reading's β per seed and observed fraction
+    OUT/summary.json, OUT/summary.csv   the tidy summary: the overall metrics at the full gesture, and
+                            which strategy wins each cell of the design
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+import shutil
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from glu import __version__
+from glu.errors import DataError, GluError
+from glu.files import atomic_write_json
+from glu.machine import (
+    SYNCHRONOUS,
+    check_reachable,
+    check_scheduler,
+    close_cluster,
+    ctrl_c_held,
+    kill_local_workers,
+    quiet_dask_logs,
+)
+from glu.studies.corpus_evaluation import robots
+from glu.studies.corpus_evaluation.config import SweepConfig
+from glu.studies.corpus_evaluation.evaluation import Evaluator
+from glu.studies.corpus_evaluation.tables import chunk_path, merge, write_chunk
+from glu.studies.episodes import Condition
+
+FORMAT = "glu-sweep"
+FORMAT_VERSION = 2
+
+
+@dataclass
+class SweepResult:
+    """What a sweep produced: the folder, its tables, and how much was computed now."""
+
+    out: Path
+    metrics: pd.DataFrame
+    differences: pd.DataFrame
+    reliability: pd.DataFrame
+    seeds: pd.DataFrame
+    summary: dict[str, Any]
+    computed: int
+    reused: int
+    seconds: float
+    task_cpu_seconds: float = 0.0
+    """CPU time the tasks computed now took, summed over workers (the parallel part of ``seconds``)."""
+
+
+# ------------------------------------------------------------------------------------------ preparing
+def prepare_world(config: SweepConfig) -> tuple[Any, str]:
+    """The Affordance–Words network of a sweep (an inference engine) and a one-line label of its data."""
+    from glu.bn import InferenceEngine, learn_bn
+    from glu.data import load_experiments, resolve_data
+
+    net = config.network
+    source = resolve_data(net.data)
+    table = load_experiments(source, net.words)
+    bn = learn_bn(table, unseen_words=net.unseen_words)
+    label = (
+        f"{source.describe()}: network learned from {len(table)} experiments (words={net.words}, "
+        f"unseen word rows {net.unseen_words}); gestures from glu's synthetic generator"
+    )
+    return InferenceEngine(bn), label
+
+
+def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple[Evaluator, dict[str, Any]]:
+    """The evaluator (networks learned, recognisers trained or loaded, calibrated) and the sweep's
+    provenance."""
+    from glu.studies.corpus_evaluation.evaluation import Replication, target_tables
+
+    engine, label = prepare_world(config)
+    bn = engine.bn
+    recognizers = robots.recognizers(config, out, log)
+    calibrations = robots.calibrations(config, recognizers)
+    learned = robots.learned_networks(config, engine)
+    generating = target_tables(engine, config.evaluation)
+    replications = []
+    for k, rec in enumerate(recognizers):
+        tables = {"generating": generating}
+        for n, net in learned[k].items():
+            tables[f"learned-{n}"] = target_tables(net, config.evaluation)
+        replications.append(Replication(robots.scorer(rec), calibrations[k], tables))
+    evaluator = Evaluator(
+        engine,
+        tuple(replications),
+        tuple(config.readings),
+        config.evaluation,
+        config.seed,
+        config.chunk_size,
+        config.scenario,
+        config.gestures,
+        {v: config.views[v] for v in config.viewpoints},
+    )
+    # what the numbers depend on: the settings (where the data and the recogniser file are does not
+    # matter, what they hold does), the data, the networks, the models, glu's version
+    settings = config.as_dict()
+    settings["network"]["data"] = settings["recognizer"]["file"] = None
+    digest = hashlib.sha256()
+    for part in (
+        json.dumps(settings, sort_keys=True),
+        label,
+        json.dumps(bn.to_dict()),
+        *(json.dumps(rec.to_dict()["models"]) for rec in recognizers),
+        __version__,
+    ):
+        digest.update(part.encode())
+    provenance = {
+        "format": FORMAT,
+        "version": FORMAT_VERSION,
+        "fingerprint": digest.hexdigest()[:32],
+        "glu": __version__,
+        "data_source": label,
+        "settings": _public(config.as_dict()),
+        "conditions": [asdict(c) for c in config.conditions],
+        "readings": [asdict(r) for r in config.readings],
+        "episodes_per_condition_and_seed": config.per_condition,
+        "episodes": config.n_episodes,
+        "statistics": len(evaluator.columns),
+        "calibration": [
+            {"recognizer_seed": k, "fraction": float(f), "beta": float(b), "n_gestures": c.n_gestures}
+            for k, c in enumerate(calibrations)
+            if c is not None
+            for f, b in zip(c.fractions, c.beta, strict=True)
+        ],
+    }
+    return evaluator, provenance
+
+
+def _public(settings: dict[str, Any]) -> dict[str, Any]:
+    """The settings without machine paths (a data folder or a recogniser file is named by its last part)."""
+    out = json.loads(json.dumps(settings))
+    for section, key in (("network", "data"), ("recognizer", "file")):
+        v = out[section].get(key)
+        if v and v != "synthetic":
+            out[section][key] = Path(v).name
+    return out
+
+
+# ------------------------------------------------------------------------------------------ the tasks
+def compute_chunk(evaluator: Evaluator, index: int, condition: Condition, chunk: int, n: int) -> tuple:
+    """One task (run on a worker): one chunk of episodes of ``condition`` for every recogniser seed,
+    scored under every reading, on one BLAS thread.
+
+    Returns (index, chunk, n, sums of shape (R, B + 1, K) summed over the seeds, each seed's plain sums
+    of shape (n_seeds, R, K), CPU seconds).
+    """
+    import scipy.ndimage  # noqa: F401 - loaded before the limit, which binds only libraries already loaded
+    from threadpoolctl import threadpool_limits
+
+    t0 = time.process_time()
+    with threadpool_limits(1):
+        per_seed = [evaluator.run_chunk(condition, k, chunk, n) for k in range(len(evaluator.replications))]
+    total = np.sum(per_seed, axis=0)
+    own = np.stack([s[:, 0] for s in per_seed])
+    return index, chunk, n, total, own, time.process_time() - t0
+
+
+# ------------------------------------------------------------------------------------------ the sweep
+def run_sweep(
+    config: SweepConfig,
+    out: str | os.PathLike,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    progress: bool | None = None,
+    max_chunks: int | None = None,
+    log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
+) -> SweepResult:
+    """Run (or resume) a sweep into the folder ``out`` and write its tables (see the module docstring).
+
+    Parameters
+    ----------
+    config : the settings
+    out : the output folder (created; a folder holding a sweep with other settings is refused)
+    scheduler : None (a LocalCluster), a Dask address ``tcp://host:port``, or ``"synchronous"``
+    workers : LocalCluster worker processes (default: one per core available)
+    progress : show a progress bar (None: only on a terminal)
+    max_chunks : run at most this many tasks now (a task is one chunk of episodes of one condition, for
+        every recogniser seed and reading); the rest on a later run; tables are written only when every
+        chunk is done
+    log : where one-line messages go
+    """
+    t0 = time.perf_counter()
+    check_scheduler(scheduler)
+    if scheduler not in (None, SYNCHRONOUS):
+        check_reachable(scheduler)  # before any work: an unreachable cluster is bad input, said at once
+    out = Path(out)
+    created = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    try:  # bad settings or data found while preparing leave no new folder behind
+        evaluator, provenance = prepare(config, out, log)
+        sweep_file = out / "sweep.json"
+        if sweep_file.is_file():
+            try:
+                old = json.loads(sweep_file.read_text())
+            except (OSError, ValueError):
+                old = {}
+            if not isinstance(old, dict) or old.get("fingerprint") != provenance["fingerprint"]:
+                raise DataError(
+                    f"{out} holds a sweep with other settings or data (sweep.json); "
+                    "use another output folder or delete that one"
+                )
+        else:
+            atomic_write_json(sweep_file, provenance)
+    except BaseException:
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
+    for stale in (out / "chunks").glob(".c*.npz*"):  # a write cut short by a hard kill (never a whole chunk)
+        stale.unlink(missing_ok=True)
+    conditions = config.conditions
+    from glu.studies.corpus_evaluation.corpus import chunk_ranges
+
+    chunks = chunk_ranges(config.per_condition, config.chunk_size)
+    tasks = [
+        (i, c, k, n)
+        for i, c in enumerate(conditions)
+        for k, n in chunks
+        if not chunk_path(out, i, k).is_file()
+    ]
+    total = len(conditions) * len(chunks)
+    todo = tasks if max_chunks is None else tasks[: max(int(max_chunks), 0)]
+    reused = total - len(tasks)
+    where = {None: "a LocalCluster", SYNCHRONOUS: "this process"}.get(scheduler, scheduler)
+    log(
+        f"glu evaluate: {config.n_episodes} episodes, {len(conditions)} conditions × "
+        f"{config.recognizer_seeds} recogniser seeds × {len(config.readings)} readings, {total} chunks "
+        f"({reused} already done), on {where}; {provenance['data_source']}"
+    )
+    cpu = _run_tasks(
+        evaluator, todo, out, provenance["fingerprint"], scheduler, workers, progress, reused, total
+    )
+    computed = len(todo)
+    if reused + computed < total:
+        log(f"glu evaluate: {reused + computed} of {total} chunks done; run again to finish")
+        empty = pd.DataFrame()
+        return SweepResult(
+            out, empty, empty, empty, empty, {}, computed, reused, time.perf_counter() - t0, cpu
+        )
+    tables = merge(out, config, evaluator, provenance)
+    return SweepResult(out, *tables, computed, reused, time.perf_counter() - t0, cpu)
+
+
+def _save(out: Path, fingerprint: str, result: tuple, bar: Any) -> float:
+    index, chunk, n, sums, own, cpu = result
+    write_chunk(out, fingerprint, index, chunk, n, sums, own)
+    bar.update(1)
+    return cpu
+
+
+def _run_tasks(evaluator, todo, out, fingerprint, scheduler, workers, progress, done, total) -> float:
+    from tqdm import tqdm
+
+    bar = tqdm(
+        total=total,
+        initial=done,
+        unit="chunk",
+        desc="glu evaluate",
+        disable=None if progress is None else not progress,
+        file=sys.stderr,
+        dynamic_ncols=True,
+    )
+    try:
+        if not todo:
+            return 0.0
+        if scheduler == SYNCHRONOUS:
+            return sum(_save(out, fingerprint, compute_chunk(evaluator, *task), bar) for task in todo)
+        return _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar)
+    finally:
+        bar.close()
+
+
+def _same(obj: Any) -> Any:
+    return obj
+
+
+class WorkerLostError(GluError):
+    """A Dask worker died during the sweep (killed, out of memory); the finished chunks are kept."""
+
+
+LOST_WORKER_ERRORS = frozenset(
+    {"KilledWorker", "CommClosedError", "StreamClosedError", "FutureCancelledError"}
+)
+"""What dask.distributed raises for a task whose worker went away."""
+
+
+def _worker_lost(e: BaseException) -> bool:
+    return type(e).__name__ in LOST_WORKER_ERRORS
+
+
+def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
+    with quiet_dask_logs():  # glu says what went wrong in one line; the cluster's own logs stay out of it
+        return _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar)
+
+
+def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        from glu.errors import MissingDependencyError
+
+        raise MissingDependencyError(
+            "running on Dask needs dask.distributed, which the plain `pip install glu` leaves out; "
+            "install it with: pip install 'glu[dask]'"
+        ) from None
+
+    cluster = None
+    try:
+        if scheduler is None:
+            from glu.machine import available_cores
+
+            n = workers or available_cores()
+            with ctrl_c_held():  # the workers and the cluster threads never see Ctrl-C: glu stops them
+                cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=":0",
+                    silence_logs=logging.CRITICAL,
+                )
+                client = Client(cluster)
+        else:
+            try:
+                client = Client(scheduler, timeout="30s")
+            except (OSError, TimeoutError) as e:
+                raise DataError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
+    except BaseException as e:
+        close_cluster(cluster, e)
+        raise
+    try:
+        cpu = 0.0
+        # a task, not scattered data: a worker that dies takes its copy with it, and the cluster recomputes
+        # a task's result where scattered data would be lost for good (the sweep then waited forever)
+        shared = client.submit(_same, evaluator, pure=False, key=f"glu-evaluator-{fingerprint[:8]}")
+        futures = [
+            client.submit(
+                compute_chunk,
+                shared,
+                *t,
+                pure=False,
+                key=f"glu-chunk-{t[0]}-{t[2]}-{fingerprint[:8]}",
+            )
+            for t in todo
+        ]
+        for fut in as_completed(futures):
+            try:
+                result = fut.result()
+            except GluError:
+                raise
+            except Exception as e:
+                for f in futures:
+                    f.cancel()
+                if _worker_lost(e):
+                    raise WorkerLostError(
+                        f"a Dask worker was lost (its process died or was killed) while computing a chunk "
+                        f"({type(e).__name__}); the chunks finished so far are saved in {out}: run the same "
+                        "command again to resume from them"
+                    ) from None
+                raise RuntimeError(
+                    f"a sweep task failed on the cluster ({type(e).__name__}: {e}); "
+                    "do the workers have glu installed, in the same version?"
+                ) from e
+            cpu += _save(out, fingerprint, result, bar)
+        return cpu
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers are killed, not asked to finish (nor to talk)
+        kill_local_workers(cluster)
+        raise
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

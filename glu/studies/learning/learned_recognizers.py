@@ -1,0 +1,461 @@
+"""Recognisers learned from effects, all episodes at once: from simulated episodes, on the real gestures.
+
+* :func:`learn_recognizer` — one HMM per action trained on unlabelled gestures labelled by a scheme of
+  :mod:`glu.studies.learning.self_supervised` (weighted EM, :func:`glu.hmm.train` with ``weights``);
+  ``iterative`` (and the ``unsupervised`` baseline) relabel and retrain until the arg-max labels of every
+  gesture stop changing;
+* :func:`learn_gestures` — watch simulated episodes and learn a recogniser from them, batch or online
+  (:mod:`glu.studies.learning.online`): what ``glu learn-gestures`` writes;
+* :func:`real_gesture_study` — the real standing segments with their labels hidden, each paired with an object
+  and an effect drawn from the network given its true action: leave-one-segment-out accuracy and the seated
+  taps, for each scheme against the true labels;
+* :func:`anticipation_after_learning` — what the robot anticipates and says with learned HMMs (the TCDS
+  Fig. 5 cases).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+import pandas as pd
+
+from glu.bn.inference import InferenceEngine
+from glu.data.source import DataSource
+from glu.errors import DataError, ModelError
+from glu.gestures.corpus import LabelledSequence
+from glu.gestures.invariants import Invariants
+from glu.gestures.recognizer import Recognizer
+from glu.gestures.typicality import META_KEY, ranges_to_meta, training_range
+from glu.hmm import GestureHMM, TrainingConfig, kmeans_labels, train
+from glu.schema import ACTIONS
+from glu.studies.anticipation.experiment import AnticipationRun
+from glu.studies.learning.online import OnlineSettings
+from glu.studies.learning.self_supervised import (
+    AMBIGUITIES,
+    BASELINES,
+    EFFECTS,
+    LEARNERS,
+    STUDY_TRAINING,
+    Ambiguity,
+    best_matching,
+    draw_world,
+    label_weights,
+    network_posteriors,
+    one_hot,
+    p_hmm_reading,
+    resampled,
+)
+from glu.tidy import tidy
+
+
+class Learned(NamedTuple):
+    """What :func:`learn_recognizer` returns.
+
+    Attributes
+    ----------
+    recognizer : the learned gesture HMMs (actions without any label weight have no model)
+    weights : array, shape (n, A) — the final label weights of the training episodes
+    rounds : relabelling rounds run (1 for the schemes that do not relabel)
+    """
+
+    recognizer: Recognizer
+    weights: np.ndarray
+    rounds: int
+
+
+def _fit_all(
+    features: Sequence[np.ndarray],
+    W: np.ndarray,
+    actions: Sequence[str],
+    config: TrainingConfig,
+    seed: int,
+    start: Mapping[str, GestureHMM] | None = None,
+) -> dict[str, GestureHMM]:
+    """One model per action with enough label weight: weighted training (from ``start`` when given)."""
+    lengths = np.array([len(x) for x in features])
+    models = {}
+    for a, name in enumerate(actions):
+        w = W[:, a]
+        if w @ lengths < config.n_states * config.n_mix or not np.any(w > 0):
+            continue
+        first = start.get(name) if start is not None else None
+        models[name] = train(
+            list(features), config, weights=w, seed=seed, name=name, warn=False, start=first
+        ).model
+    if not models:
+        raise ModelError("no action has enough label weight to train its model")
+    return models
+
+
+def learn_recognizer(
+    features: Sequence[np.ndarray],
+    scheme: str,
+    p_bn: np.ndarray | None = None,
+    *,
+    true: np.ndarray | None = None,
+    actions: Sequence[str] = ACTIONS,
+    config: TrainingConfig = STUDY_TRAINING,
+    seed: int = 0,
+    threshold: float = 0.9,
+    posterior: str = "per-frame",
+    max_rounds: int = 10,
+    invariants: Invariants | str | None = None,
+    meta: Mapping[str, Any] | None = None,
+) -> Learned:
+    """Train one HMM per action on unlabelled gestures, labelled by ``scheme`` (batch: all at once).
+
+    Parameters
+    ----------
+    features : the training gestures' hand features, arrays of shape (T_i, 3)
+    scheme : one of :data:`LEARNERS`
+    p_bn : ``p_BN(A | …)`` of each gesture, shape (n, A) (every scheme but the baselines)
+    true : the true action of each gesture, int array of shape (n,) (``true``; ``unsupervised`` uses it only
+        to name its clusters after training, by the best matching)
+    actions, config, seed : the models' names (the columns of ``p_bn``), training settings and seed
+    threshold : the ``confident`` scheme's
+    posterior : how ``iterative`` and ``unsupervised`` read ``p_HMM`` (:data:`POSTERIOR_READINGS`)
+    max_rounds : most relabelling rounds (``iterative``, ``unsupervised``: until the arg-max labels of every
+        gesture stop changing)
+    invariants : the features the models are trained on (computed by the recogniser, as for any)
+    """
+    if scheme not in LEARNERS:
+        raise DataError(f"unknown labelling scheme {scheme!r}; allowed: {', '.join(LEARNERS)}")
+    spec = Invariants.parse(invariants)
+    seen = [x if spec.is_raw else spec.transform(x) for x in features]
+    n, k = len(seen), len(actions)
+    lengths = np.array([len(x) for x in seen])
+    if scheme == "unsupervised":
+        W = one_hot(kmeans_labels(resampled(seen), k, seed), k)
+    elif scheme == "true":
+        W = label_weights("true", np.zeros((n, k)), true=true)
+    else:
+        if p_bn is None or np.shape(p_bn) != (n, k):
+            raise DataError(f"scheme {scheme!r} needs p_bn of shape ({n}, {k})")
+        W = label_weights(scheme, p_bn, threshold)
+    models = _fit_all(seen, W, actions, config, seed)
+    rounds = 1
+    if scheme in ("iterative", "unsupervised"):
+        labels = W.argmax(axis=1)
+        for rounds in range(2, max_rounds + 1):  # noqa: B007 - the last value is reported
+            ll = _loglik(models, actions, seen)
+            p_hmm = p_hmm_reading(ll, lengths, posterior)
+            W = label_weights("iterative", p_bn, p_hmm=p_hmm) if scheme == "iterative" else p_hmm
+            models = _fit_all(seen, W, actions, config, seed, start=models)
+            new = W.argmax(axis=1)
+            if np.array_equal(new, labels):
+                break
+            labels = new
+    if scheme == "unsupervised":
+        if true is None:
+            raise DataError(
+                "the unsupervised baseline needs the true actions to name its clusters afterwards"
+            )
+        perm = best_matching(W.T @ one_hot(np.asarray(true), k))
+        models = {
+            actions[perm[c]]: _renamed(models[actions[c]], actions[perm[c]])
+            for c in range(k)
+            if actions[c] in models
+        }
+        W = W[:, np.argsort(perm)]
+    info = {
+        "scheme": scheme,
+        "rounds": rounds,
+        "training_gestures": n,
+        **dict(config.as_dict()),
+        **(meta or {}),
+    }
+    order = {a: models[a] for a in actions if a in models}
+    return Learned(with_ranges(Recognizer(order, meta=info, features=spec), seen, W, actions), W, rounds)
+
+
+def with_ranges(
+    recognizer: Recognizer, seen: Sequence[np.ndarray], W: np.ndarray, actions: Sequence[str]
+) -> Recognizer:
+    """``recognizer`` with the typicality ranges of its models (:mod:`glu.gestures.typicality`) measured on
+    the training gestures (in the recogniser's features) labelled with each action (arg-max of ``W``, shape
+    (n, A)); an action without such a gesture keeps no range (the recogniser samples one when asked)."""
+    labels = W.argmax(axis=1)
+    ranges = {}
+    for a in recognizer.actions:
+        mine = [x for x, lab in zip(seen, labels, strict=True) if lab == list(actions).index(a)]
+        if mine:
+            ranges[a] = training_range(recognizer.models[a], mine)
+    if set(ranges) == set(recognizer.actions):
+        recognizer.meta[META_KEY] = ranges_to_meta(ranges)
+    return recognizer
+
+
+def _renamed(m: GestureHMM, name: str) -> GestureHMM:
+    return GestureHMM(m.startprob, m.transmat, m.weights, m.means, m.covars, name=name)
+
+
+def _loglik(
+    models: Mapping[str, GestureHMM], actions: Sequence[str], seqs: Sequence[np.ndarray]
+) -> np.ndarray:
+    """``log L(G | a)`` of every sequence under every action's model, shape (n, A); ``-inf`` without a
+    model."""
+    have = [a for a in actions if a in models]
+    ll = Recognizer({a: models[a] for a in have}).loglik_many(seqs)
+    out = np.full((len(seqs), len(actions)), -np.inf)
+    for j, a in enumerate(have):
+        out[:, list(actions).index(a)] = ll[:, j]
+    return out
+
+
+def classify(recognizer: Recognizer, actions: Sequence[str], seqs: Sequence[np.ndarray]) -> np.ndarray:
+    """The predicted action index (into ``actions``) of each sequence, shape (n,)."""
+    ll = recognizer.loglik_many(seqs)
+    names = np.array([list(actions).index(a) for a in recognizer.actions])
+    return names[ll.argmax(axis=1)]
+
+
+# ------------------------------------------------------------------ the real gestures
+
+
+def real_gesture_study(
+    engine: InferenceEngine,
+    standing: Sequence[LabelledSequence],
+    seated: Sequence[LabelledSequence] = (),
+    *,
+    learners: Sequence[str] = LEARNERS,
+    ambiguity: Ambiguity | None = None,
+    words: bool = False,
+    draws: Sequence[int] = (0, 1),
+    config: TrainingConfig = STUDY_TRAINING,
+    invariants: Invariants | str | None = None,
+    threshold: float = 0.9,
+    posterior: str = "per-frame",
+    data_source: str = "",
+) -> pd.DataFrame:
+    """The real gestures with their labels hidden: leave-one-segment-out and the seated taps, per learner.
+
+    For each draw, every standing segment is paired with an object, an effect and words drawn from the
+    network given its true action (the robot's own experience standing in for what it would have seen), and
+    labelled by ``p_BN(A | object, perceived effect[, words])``. For each held-out segment, HMMs learned from
+    the other segments by each learner recognise it; HMMs learned from every standing segment recognise
+    the seated taps. The ``true`` learner does not depend on the draw (it is run for each, for the pairing).
+
+    Returns
+    -------
+    DataFrame, one row per draw, learner and test gesture: draw, learner, test (``loso`` or ``seated``),
+    recording, start, end, action, predicted (None when the learned models lack every action), correct,
+    label_accuracy (the training labels' arg-max accuracy of that draw, over all standing segments).
+    """
+    ambiguity = ambiguity or AMBIGUITIES["mixed"]
+    actions = engine.bn.schema.values_of("Action")
+    stand = [s for s in standing if s.action in actions]
+    true = np.array([actions.index(s.action) for s in stand])
+    feats = [s.xyz for s in stand]
+    rows = []
+    fixed: dict[str, list[tuple[str, LabelledSequence, str | None]]] = {}  # learners that ignore the draw
+    for d in draws:
+        world, perceived = draw_world(engine, true, ambiguity, d, 0)
+        p_bn = network_posteriors(engine, perceived, world, words)
+        label_acc = float((p_bn.argmax(axis=1) == true).mean())
+        for learner in learners:
+            if learner in fixed:
+                rows += [_row(d, learner, test, s, pred, label_acc) for test, s, pred in fixed[learner]]
+                continue
+            common = dict(
+                true=true,
+                actions=actions,
+                config=config,
+                seed=draws[0] if learner in BASELINES else d,
+                threshold=threshold,
+                posterior=posterior,
+                invariants=invariants,
+            )
+            outcome = []
+            for i, held in enumerate(stand):
+                rest = [j for j in range(len(stand)) if j != i]
+                try:
+                    rec = learn_recognizer(
+                        [feats[j] for j in rest], learner, p_bn[rest], **{**common, "true": true[rest]}
+                    ).recognizer
+                    predicted = actions[classify(rec, actions, [held.xyz])[0]]
+                except ModelError:
+                    predicted = None
+                outcome.append(("loso", held, predicted))
+            if seated:
+                rec = learn_recognizer(feats, learner, p_bn, **common).recognizer
+                for s, p in zip(seated, classify(rec, actions, [s.xyz for s in seated]), strict=True):
+                    outcome.append(("seated", s, actions[p]))
+            if learner in BASELINES:  # true labels and clusters: the same whatever the objects and effects
+                fixed[learner] = outcome
+            rows += [_row(d, learner, test, s, pred, label_acc) for test, s, pred in outcome]
+    return tidy(
+        pd.DataFrame(rows),
+        "learning_real_gestures",
+        data_source,
+        ambiguity=ambiguity.name,
+        words=words,
+        draws=list(draws),
+        threshold=threshold,
+        posterior=posterior,
+        features=Invariants.parse(invariants).name,
+        n_states=config.n_states,
+        n_mix=config.n_mix,
+    )
+
+
+def _row(
+    draw: int, learner: str, test: str, s: LabelledSequence, predicted: str | None, label_acc: float
+) -> dict:
+    return {
+        "draw": draw,
+        "learner": learner,
+        "test": test,
+        "recording": s.recording,
+        "start": s.start,
+        "end": s.end,
+        "action": s.action,
+        "predicted": predicted,
+        "correct": predicted == s.action,
+        "label_accuracy": label_acc,
+    }
+
+
+def real_gesture_summary(results: pd.DataFrame) -> pd.DataFrame:
+    """Per learner and test: accuracy over draws and gestures, its range over draws, the labels' accuracy."""
+    g = results.groupby(["learner", "test", "draw"], sort=False).agg(
+        accuracy=("correct", "mean"), label_accuracy=("label_accuracy", "first"), n=("correct", "size")
+    )
+    out = (
+        g.groupby(["learner", "test"], sort=False)
+        .agg(
+            accuracy=("accuracy", "mean"),
+            accuracy_min=("accuracy", "min"),
+            accuracy_max=("accuracy", "max"),
+            label_accuracy=("label_accuracy", "mean"),
+            gestures=("n", "first"),
+            draws=("n", "size"),
+        )
+        .reset_index()
+    )
+    return tidy(
+        out,
+        "learning_real_gestures_summary",
+        results.attrs.get("data_source", ""),
+        **results.attrs.get("parameters", {}),
+    )
+
+
+def learn_gestures(
+    engine: InferenceEngine,
+    episodes: int,
+    labels: str,
+    *,
+    seed: int = 0,
+    words: bool = False,
+    ambiguity: str = "mixed",
+    online: bool = False,
+    config: TrainingConfig | None = None,
+    settings: OnlineSettings | None = None,
+    effects: Sequence[str] = EFFECTS,
+    noise: float = 0.02,
+    threshold: float = 0.9,
+    data_source: str = "",
+) -> tuple[Recognizer, dict[str, Any]]:
+    """Watch ``episodes`` simulated episodes and learn gesture HMMs from them, labelled by ``labels``.
+
+    The episodes are those of :func:`~glu.studies.learning.self_supervised.simulate_episodes` (seed ``seed``,
+    the given ambiguity); their labels come from the network (``engine``) by the scheme ``labels`` (or a
+    baseline: ``true``, ``unsupervised``). Batch
+    (:func:`~glu.studies.learning.self_supervised.learn_recognizer`, EM on all episodes, ``iterative``
+    relabelling until the labels stop changing) or ``online``
+    (:func:`~glu.studies.learning.online.learn_online`, one episode at a time). Returns the recogniser (its
+    ``meta`` says how it was learned) and a summary: the labels' arg-max accuracy, the relabelling rounds, the
+    episodes' data.
+    """
+    from glu.studies.learning.online import learn_online
+    from glu.studies.learning.self_supervised import simulate_episodes
+
+    if ambiguity not in AMBIGUITIES:
+        raise DataError(f"unknown ambiguity {ambiguity!r}; allowed: {', '.join(AMBIGUITIES)}")
+    actions = engine.bn.schema.values_of("Action")
+    ep = simulate_episodes(engine, AMBIGUITIES[ambiguity], episodes, seed, effects=effects, noise=noise)
+    p_bn = network_posteriors(engine, ep.perceived, ep.world, words)
+    how = "online" if online else "batch"
+    info: dict[str, Any] = {
+        "data": f"{episodes} simulated episodes (seed {seed}, {ambiguity}: "
+        f"{AMBIGUITIES[ambiguity].description}); labels {labels}{' with words' if words else ''}, "
+        f"{how}; network: {data_source or 'unknown data'}",
+        "data_source": data_source,
+        "labels": labels,
+        "learning": how,
+        "episodes": episodes,
+        "ambiguity": ambiguity,
+        "words": words,
+        "effects": list(effects),
+        "label_accuracy": float((p_bn.argmax(axis=1) == ep.actions).mean()),
+        "threshold": threshold,
+    }
+    if online:
+        s = settings or OnlineSettings(config=config or OnlineSettings().config, threshold=threshold)
+        run = learn_online(ep.features, ep.actions, labels, p_bn, actions, s, seed)
+        by_action = run.weights[:, 0][:, np.argsort(run.matching[-1, 0])]  # clusters named as actions
+        rec = with_ranges(run.recognizer(0, meta=info), ep.features, by_action, actions)
+        info["rounds"] = 1
+    else:
+        learned = learn_recognizer(
+            ep.features,
+            labels,
+            p_bn,
+            true=ep.actions,
+            actions=actions,
+            config=config or TrainingConfig(),
+            seed=seed,
+            threshold=threshold,
+            meta=info,
+        )
+        rec, info["rounds"] = learned.recognizer, learned.rounds
+    rec.meta.update(seed=seed, rounds=info["rounds"])
+    missing = [a for a in actions if a not in rec.actions]
+    if missing:
+        raise DataError(
+            f"no episode was labelled {', '.join(missing)} ({labels} labels, {ambiguity}); "
+            "watch more episodes, use words, or another labelling scheme"
+        )
+    return rec, info
+
+
+def anticipation_after_learning(
+    recognizers: Mapping[str, Recognizer],
+    engine: InferenceEngine,
+    source: DataSource,
+    *,
+    seed: int = 0,
+    candidates: Any = None,
+) -> tuple[pd.DataFrame, dict[tuple[str, str], AnticipationRun]]:
+    """What the robot anticipates and says with learned HMMs: the TCDS Fig. 5 cases
+    (:data:`glu.studies.anticipation.experiment.CASES`) run with each recogniser (name → recogniser).
+
+    Returns a table with one row per recogniser and case — hmms, case, p_hmm_tap and ObjVel_<value> at the
+    last update, description (the best sentence among ``candidates``, the whole grammar for None) — and
+    the runs by (hmms, case).
+    """
+    from glu.studies.anticipation.experiment import CASES, case_trajectory, effect_anticipation
+
+    rows, runs = [], {}
+    for name, recognizer in recognizers.items():
+        for case, c in CASES.items():
+            run = effect_anticipation(
+                recognizer,
+                engine,
+                case_trajectory(source, case, seed=seed),
+                c.evidence,
+                case=case,
+                models=name,
+                describe="last",
+                candidates=candidates,
+            )
+            runs[name, case] = run
+            last = run.fused["ObjVel"][-1]
+            rows.append(
+                {"hmms": name, "case": case, "p_hmm_tap": float(run.p_hmm[-1, run.actions.index("tap")])}
+                | {f"ObjVel_{v}": float(p) for v, p in zip(run.values["ObjVel"], last, strict=True)}
+                | {"description": run.description}
+            )
+    return tidy(pd.DataFrame(rows), "learning_anticipation", source.describe(), seed=seed), runs

@@ -1,0 +1,456 @@
+"""Learning gestures online, as a robot would live it: one episode at a time, from no gesture model at all.
+
+Each **learner** (a labelling scheme of :mod:`glu.studies.learning.self_supervised`, in one ambiguity, with or
+without words) keeps, per action, the sufficient statistics of what it has seen
+(:class:`glu.hmm.SufficientStats`) and its current HMM. After each episode it
+
+1. labels the episode: from its network alone (``hard``, ``soft``, ``confident``), from the product rule of
+   its current HMMs and its network once it has a model of every action (``iterative``; before that the
+   network alone), from the true action (``true``), or from its HMMs alone (``unsupervised``: the clusters
+   are named after the fact by the best matching with the true actions seen so far);
+2. runs the E-step of the episode under each of its models, and for each action with a label weight ``w > 0``
+   updates the statistics by a stepwise-EM step (Cappé & Moulines 2009; Liang & Klein 2009) — the running
+   weighted mean ``s ← (1 − η) s + η s_episode`` with ``η = w / W^α``, ``W`` the action's label weight so
+   far — and re-estimates the model from ``W · s`` (:func:`glu.hmm.maximise`). With ``α = 1`` (the default)
+   this is the plain accumulation ``Σ w s_episode``; ``α < 1`` forgets the early episodes faster;
+3. an action without a model buffers its labelled episodes until their weight reaches ``init_weight``, then
+   trains its first model on them (weighted EM, a few iterations). The unsupervised learner first clusters
+   its first ``cluster_episodes`` episodes (k-means on the resampled trajectories).
+
+Many learners watch the same episodes (the gestures are the same in every ambiguity): :func:`run_online` runs
+them in lockstep, the E-step of every learner's every model on each episode in one call
+(:func:`glu.hmm.episode_stats`), and measures them all on the same held-out gestures at the
+checkpoints.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from glu.errors import DataError
+from glu.gestures.recognizer import Recognizer
+from glu.hmm import (
+    GestureHMM,
+    GMMHMMParams,
+    SufficientStats,
+    TrainingConfig,
+    episode_stats,
+    expected_stats_fast,
+    kmeans_labels,
+    loglik_bank,
+    maximise,
+    train,
+)
+from glu.studies.learning.self_supervised import (
+    LEARNERS,
+    POSTERIOR_READINGS,
+    STUDY_TRAINING,
+    best_matching,
+    label_weights,
+    one_hot,
+    p_hmm_reading,
+    resampled,
+)
+
+
+@dataclass(frozen=True)
+class OnlineSettings:
+    """How the online learners learn.
+
+    Attributes
+    ----------
+    config : the HMMs (states, Gaussians, covariance prior; ``n_iter`` and ``tol`` are unused online)
+    init_weight : an action's first model is trained once its buffered label weight reaches this
+    init_iter : EM iterations of that first training
+    step : ``α`` of the stepwise-EM step ``η = w / W^α``, in (0.5, 1]; 1 accumulates
+    threshold : the ``confident`` scheme's
+    posterior : how ``iterative`` and ``unsupervised`` read ``p_HMM`` (:data:`POSTERIOR_READINGS`)
+    cluster_episodes : the unsupervised learner clusters this many first episodes
+    """
+
+    config: TrainingConfig = STUDY_TRAINING
+    init_weight: float = 3.0
+    init_iter: int = 10
+    step: float = 1.0
+    threshold: float = 0.9
+    posterior: str = "per-frame"
+    cluster_episodes: int = 15
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.init_weight, int | float) and self.init_weight > 0):
+            raise DataError(f"init_weight={self.init_weight!r}: a number > 0")
+        if not (isinstance(self.init_iter, int) and self.init_iter >= 1):
+            raise DataError(f"init_iter={self.init_iter!r}: a whole number ≥ 1")
+        if not (isinstance(self.step, int | float) and 0.5 < self.step <= 1):
+            raise DataError(f"step={self.step!r}: the stepwise-EM exponent must be in (0.5, 1]")
+        if not (isinstance(self.threshold, int | float) and 0 <= self.threshold <= 1):
+            raise DataError(f"threshold={self.threshold!r}: a probability in [0, 1]")
+        if self.posterior not in POSTERIOR_READINGS:
+            raise DataError(f"posterior={self.posterior!r}; allowed: {', '.join(POSTERIOR_READINGS)}")
+        if not (isinstance(self.cluster_episodes, int) and self.cluster_episodes >= 3):
+            raise DataError(f"cluster_episodes={self.cluster_episodes!r}: a whole number ≥ 3")
+
+
+class Learner(NamedTuple):
+    """One learner: its labelling scheme (:data:`~glu.studies.learning.self_supervised.LEARNERS`) and the
+    labels' source, a key of the ``p_bn`` mapping given to :func:`run_online` (None for ``true`` and
+    ``unsupervised``)."""
+
+    scheme: str
+    source: Any = None
+
+
+class OnlineRun(NamedTuple):
+    """What :func:`run_online` returns.
+
+    Attributes
+    ----------
+    learners : the learners, in the order of every ``L`` axis
+    actions : the action names, in the order of every ``A`` axis
+    checkpoints : episodes seen at each measurement, shape (C,)
+    correct : bool array, shape (C, L, J) — each held-out gesture recognised right
+    weights : array, shape (N, L, A) — the label weight each episode got from each learner
+    episode_actions : int array, shape (N,); test_actions : int array, shape (J,)
+    means : array, shape (C, L, A, Q, D) — each model's state means (the first Gaussian), NaN without a model
+    params : the final models, stacked: each array with leading axes (L, A); ``exists`` (L, A) says which are
+        real
+    matching : int array, shape (C, L, A) — the unsupervised learners' cluster → action at each checkpoint
+        (the identity for the others)
+    update_seconds : CPU seconds (this thread) of each episode's update of every learner, shape (N,): the
+        measurements taken at the checkpoints are not included
+    """
+
+    learners: list[Learner]
+    actions: tuple[str, ...]
+    checkpoints: np.ndarray
+    correct: np.ndarray
+    weights: np.ndarray
+    episode_actions: np.ndarray
+    test_actions: np.ndarray
+    means: np.ndarray
+    params: GMMHMMParams
+    exists: np.ndarray
+    matching: np.ndarray
+    update_seconds: np.ndarray
+
+    def accuracy(self) -> np.ndarray:
+        """Held-out accuracy of every learner at every checkpoint, shape (C, L)."""
+        return self.correct.mean(axis=2)
+
+    def recognizer(self, learner: int, meta: Mapping[str, Any] | None = None) -> Recognizer:
+        """The final models of one learner as a recogniser (actions without a model left out; the
+        unsupervised learner's clusters named by their final matching)."""
+        perm = self.matching[-1, learner]
+        models = {}
+        for a in range(len(self.actions)):
+            if self.exists[learner, a]:
+                name = self.actions[perm[a]]
+                p = GMMHMMParams(*(x[learner, a] for x in self.params))
+                models[name] = GestureHMM(*p, name=name)
+        ordered = {a: models[a] for a in self.actions if a in models}
+        return Recognizer(ordered, meta={"scheme": self.learners[learner].scheme, **(meta or {})})
+
+
+@dataclass
+class _State:
+    """The learners' models and statistics, stacked over (learner, action)."""
+
+    params: GMMHMMParams
+    mean: SufficientStats
+    total: np.ndarray
+    exists: np.ndarray
+    buffers: list[list[list[tuple[int, float]]]] = field(default_factory=list)
+
+
+def _empty_state(L: int, A: int, config: TrainingConfig, D: int) -> _State:
+    Q, M = config.n_states, config.n_mix
+    eye = np.broadcast_to(np.eye(D), (L, A, Q, M, D, D)).copy()
+    params = GMMHMMParams(
+        np.zeros((L, A, Q)),
+        np.zeros((L, A, Q, Q)),
+        np.full((L, A, Q, M), 1.0 / M),
+        np.zeros((L, A, Q, M, D)),
+        eye,
+    )
+    return _State(
+        params,
+        SufficientStats.zeros(Q, M, D, (L, A)),
+        np.zeros((L, A)),
+        np.zeros((L, A), dtype=bool),
+        [[[] for _ in range(A)] for _ in range(L)],
+    )
+
+
+def _set(params: GMMHMMParams, idx: tuple, new: GMMHMMParams) -> None:
+    for a, b in zip(params, new, strict=True):
+        a[idx] = b
+
+
+def _take(stats: SufficientStats, idx: tuple) -> SufficientStats:
+    return SufficientStats(*(getattr(stats, f)[idx] for f in SufficientStats.__dataclass_fields__))
+
+
+def _put(stats: SufficientStats, idx: tuple, new: SufficientStats) -> None:
+    for f in SufficientStats.__dataclass_fields__:
+        getattr(stats, f)[idx] = getattr(new, f)
+
+
+def run_online(
+    features: Sequence[np.ndarray],
+    episode_actions: np.ndarray,
+    learners: Sequence[Learner],
+    p_bn: Mapping[Any, np.ndarray],
+    test_features: Sequence[np.ndarray],
+    test_actions: np.ndarray,
+    checkpoints: Sequence[int],
+    actions: Sequence[str],
+    settings: OnlineSettings = OnlineSettings(),
+    seed: int = 0,
+) -> OnlineRun:
+    """Run every learner over the episodes in order, measuring all of them at the checkpoints.
+
+    Parameters
+    ----------
+    features : the episodes' gestures, arrays of shape (T_i, D), in the order they are seen (N of them)
+    episode_actions : their true actions, int array of shape (N,) (only ``true`` and the after-the-fact
+        naming of the unsupervised clusters read them)
+    learners : the learners (:class:`Learner`)
+    p_bn : label source → ``p_BN(A | what the robot perceived)`` of each episode, shape (N, A)
+    test_features, test_actions : the held-out gestures (J of them) and their true actions
+    checkpoints : after how many episodes to measure (each in 1 … N)
+    actions : the action names (the columns of ``p_bn``)
+    settings : how the learners learn (:class:`OnlineSettings`)
+    seed : seeds the first models' initial mixtures and the clustering
+    """
+    N, A, L = len(features), len(actions), len(learners)
+    for lr in learners:
+        if lr.scheme not in LEARNERS:
+            raise DataError(f"unknown learner {lr.scheme!r}; allowed: {', '.join(LEARNERS)}")
+        if lr.scheme not in ("true", "unsupervised") and lr.source not in p_bn:
+            raise DataError(f"learner {lr.scheme!r}: no network posteriors for {lr.source!r}")
+    checkpoints = np.array(sorted(set(int(c) for c in checkpoints)))
+    if len(checkpoints) == 0 or checkpoints[0] < 1 or checkpoints[-1] > N:
+        raise DataError(f"checkpoints must lie in 1 … {N} (the episodes), got {checkpoints.tolist()}")
+    config, D = settings.config, features[0].shape[1]
+    Q = config.n_states
+    state = _empty_state(L, A, config, D)
+    unsup = [k for k, lr in enumerate(learners) if lr.scheme == "unsupervised"]
+    cluster_counts = np.zeros((L, A, A))
+    C = len(checkpoints)
+    correct = np.zeros((C, L, len(test_features)), dtype=bool)
+    means = np.full((C, L, A, Q, D), np.nan)
+    matching = np.tile(np.arange(A), (C, L, 1))
+    all_weights = np.zeros((N, L, A))
+    seconds = np.zeros(N)
+    static = {
+        k: label_weights(lr.scheme, p_bn[lr.source], settings.threshold)
+        for k, lr in enumerate(learners)
+        if lr.scheme in ("hard", "soft", "confident")
+    }
+    true_w = one_hot(np.asarray(episode_actions), A)
+    first_models: dict = {}  # first models by (action, buffer), shared by learners with the same buffer
+    truth = np.array([lr.scheme == "true" for lr in learners])
+    dynamic = np.array([lr.scheme in ("iterative", "unsupervised") for lr in learners])
+    c = 0
+    for i, X in enumerate(features):
+        t0 = time.thread_time()
+        W = np.zeros((L, A))
+        for k, w in static.items():
+            W[k] = w[i]
+        W[truth] = true_w[i]
+        # the E-step of every model that learns from this episode, or whose likelihood labels it
+        pairs = np.nonzero(state.exists & ((W > 0) | dynamic[:, None]))
+        loglik = np.full((L, A), -np.inf)
+        unit = None
+        if len(pairs[0]):
+            unit, ll = episode_stats(X, GMMHMMParams(*(p[pairs] for p in state.params)))
+            loglik[pairs] = ll
+        for k in np.flatnonzero(dynamic):
+            lr = learners[k]
+            if state.exists[k].all():
+                p_hmm = p_hmm_reading(loglik[k : k + 1], np.array([len(X)]), settings.posterior)
+                src = p_bn[lr.source][i : i + 1] if lr.scheme == "iterative" else None
+                W[k] = label_weights("iterative", src, p_hmm=p_hmm)[0] if src is not None else p_hmm[0]
+            elif lr.scheme == "iterative":
+                W[k] = p_bn[lr.source][i]
+        all_weights[i] = W
+        if unit is not None:
+            _update(state, pairs, unit, W, settings)
+        for k in unsup:
+            cluster_counts[k] += np.outer(W[k], true_w[i])
+        _initialise(state, W, features, i, settings, seed, unsup, first_models)
+        if unsup and i + 1 == settings.cluster_episodes:
+            _cluster(state, unsup, features[: i + 1], settings, seed, cluster_counts, true_w)
+        seconds[i] = time.thread_time() - t0
+        while c < C and checkpoints[c] == i + 1:
+            for k in unsup:
+                matching[c, k] = best_matching(cluster_counts[k])
+            correct[c], means[c] = _measure(state, matching[c], test_features, test_actions)
+            c += 1
+    return OnlineRun(
+        list(learners),
+        tuple(actions),
+        checkpoints,
+        correct,
+        all_weights,
+        np.asarray(episode_actions),
+        np.asarray(test_actions),
+        means,
+        state.params,
+        state.exists.copy(),
+        matching,
+        seconds,
+    )
+
+
+def _update(
+    state: _State, pairs: tuple, unit: SufficientStats, W: np.ndarray, settings: OnlineSettings
+) -> None:
+    """The stepwise-EM step and the M-step of every model with a positive label weight."""
+    w = W[pairs]
+    keep = w > 0
+    if not keep.any():
+        return
+    idx = tuple(p[keep] for p in pairs)
+    w = w[keep]
+    total = state.total[idx] + w
+    eta = np.minimum(1.0, w / total**settings.step)
+    old = _take(state.mean, idx)
+    new = _take(unit, (np.flatnonzero(keep),))
+    mean = old.scaled(1.0 - eta) + new.scaled(eta)
+    _put(state.mean, idx, mean)
+    state.total[idx] = total
+    cfg = settings.config
+    params = maximise(mean.scaled(total), GMMHMMParams(*(p[idx] for p in state.params)), cfg.covar_reg, "map")
+    _set(state.params, idx, params)
+
+
+def _first_model(
+    seqs: list[np.ndarray],
+    w: np.ndarray,
+    settings: OnlineSettings,
+    seed: int,
+    state: _State,
+    k: int,
+    a: int,
+    cache: dict | None = None,
+    key: tuple | None = None,
+) -> None:
+    """Train action ``a``'s first model for learner ``k`` on buffered episodes, and keep their statistics.
+
+    Learners with the same buffer (the same episodes with the same weights) get the same first model:
+    ``cache`` keeps it under ``key``."""
+    if cache is not None and key in cache:
+        p, stats = cache[key]
+    else:
+        cfg = settings.config.replace(n_iter=settings.init_iter)
+        model = train(seqs, cfg, weights=w, seed=seed, warn=False).model
+        p = GMMHMMParams(model.startprob, model.transmat, model.weights, model.means, model.covars)
+        stats = expected_stats_fast(seqs, p, w)
+        if cache is not None:
+            cache[key] = p, stats
+    _set(state.params, (k, a), p)
+    _put(state.mean, (k, a), stats.scaled(1.0 / float(stats.weight)))
+    state.total[k, a] = float(stats.weight)
+    state.exists[k, a] = True
+
+
+def _initialise(
+    state: _State,
+    W: np.ndarray,
+    features: Sequence[np.ndarray],
+    i: int,
+    settings: OnlineSettings,
+    seed: int,
+    skip: Sequence[int],
+    cache: dict,
+) -> None:
+    """Buffer the episode for every action without a model; train those whose buffer weighs enough."""
+    need = (~state.exists) & (W > 0)
+    for k, a in zip(*np.nonzero(need), strict=True):
+        if k in skip:
+            continue
+        buf = state.buffers[k][a]
+        buf.append((i, float(W[k, a])))
+        if sum(x for _, x in buf) >= settings.init_weight and len(buf) >= 2:
+            seqs = [features[j] for j, _ in buf]
+            key = (int(a), tuple(buf))
+            _first_model(seqs, np.array([x for _, x in buf]), settings, seed, state, k, a, cache, key)
+            buf.clear()
+
+
+def _cluster(
+    state: _State,
+    learners: Sequence[int],
+    seen: Sequence[np.ndarray],
+    settings: OnlineSettings,
+    seed: int,
+    cluster_counts: np.ndarray,
+    true_w: np.ndarray,
+) -> None:
+    """The unsupervised learners' first models: k-means of the episodes seen so far, one model per cluster."""
+    A = state.exists.shape[1]
+    labels = kmeans_labels(resampled(seen), A, seed)
+    for k in learners:
+        for a in range(A):
+            members = np.flatnonzero(labels == a)
+            _first_model([seen[j] for j in members], np.ones(len(members)), settings, seed, state, k, a)
+        cluster_counts[k] = one_hot(labels, A).T @ true_w[: len(seen)]
+
+
+def _measure(
+    state: _State, matching: np.ndarray, test_features: Sequence[np.ndarray], test_actions: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which held-out gestures every learner recognises right (L, J), and its models' state means (L, A, Q,
+    D)."""
+    L, A = state.exists.shape
+    Q, D = state.params.means.shape[2], state.params.means.shape[-1]
+    pairs = np.nonzero(state.exists)
+    means = np.full((L, A, Q, D), np.nan)
+    ll = np.full((len(test_features), L, A), -np.inf)
+    if len(pairs[0]):
+        means[pairs] = state.params.means[pairs][:, :, 0]
+    if len(pairs[0]) and len(test_features):
+        ll[:, pairs[0], pairs[1]] = loglik_bank(
+            test_features, GMMHMMParams(*(p[pairs] for p in state.params))
+        )
+    cluster = ll.argmax(axis=2)  # (J, L)
+    predicted = matching[np.arange(L)[None, :], cluster]  # (J, L): each cluster's action
+    none = ~np.isfinite(ll.max(axis=2))
+    ok = (predicted == np.asarray(test_actions)[:, None]) & ~none
+    return ok.T, means
+
+
+def learn_online(
+    features: Sequence[np.ndarray],
+    episode_actions: np.ndarray,
+    scheme: str,
+    p_bn: np.ndarray | None,
+    actions: Sequence[str],
+    settings: OnlineSettings = OnlineSettings(),
+    seed: int = 0,
+    test_features: Sequence[np.ndarray] = (),
+    test_actions: np.ndarray | None = None,
+    checkpoints: Sequence[int] | None = None,
+) -> OnlineRun:
+    """One learner over the episodes (:func:`run_online` with one :class:`Learner`); measured on the held-out
+    gestures, if given, at the checkpoints (default: after the last episode only)."""
+    source = None if scheme in ("true", "unsupervised") else "network"
+    sources = {} if source is None else {"network": np.asarray(p_bn)}
+    return run_online(
+        features,
+        episode_actions,
+        [Learner(scheme, source)],
+        sources,
+        test_features,
+        np.zeros(0, int) if test_actions is None else test_actions,
+        checkpoints or [len(features)],
+        actions,
+        settings,
+        seed,
+    )

@@ -1,0 +1,343 @@
+"""Every notebook runs headless with papermill in quick mode, writes its figures, and does so
+deterministically."""
+
+from __future__ import annotations
+
+import filecmp
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import jupytext
+import papermill as pm
+import pytest
+from browser import browser, needs_browser, search, walk_site
+
+from glu.plots.overlap import CHECK_ENV
+from glu.run.manifest import read_manifest
+from glu.run.parameters import read_spec
+from glu.run.reproduce import NotebookError, list_notebooks, reproduce
+
+COMMON_PARAMETERS = {"data", "seed", "out_dir"}
+NOTEBOOKS = [p.stem for p in list_notebooks()]
+MANIFESTS = {p.stem: read_manifest(p) for p in list_notebooks()}
+"""What each notebook declares it writes (its header): the tests check the runs against it."""
+
+
+def _silent(_msg: str) -> None:
+    pass
+
+
+AGAIN = ["01", "02", "08"]
+"""Notebooks run a second time to check determinism: segmentation, HMM training (random initialisation,
+EM), and the recordings."""
+
+
+FIGURE_CHECKS: dict[Path, Path] = {}
+"""Each quick run's folder → where it wrote the readability check of every figure (glu.plots.overlap)."""
+
+
+@pytest.fixture(scope="session")
+def quick_runs(tmp_path_factory):
+    """A complete quick run on synthetic data, and a second run of :data:`AGAIN` with the same parameters.
+
+    Both check every figure they save for overlapping text (``GLU_FIGURE_CHECK``, see
+    :data:`FIGURE_CHECKS`); the files are the same with and without the check.
+    """
+    outs = []
+    for k, only in enumerate((None, AGAIN)):
+        out = tmp_path_factory.mktemp(f"run{k}")
+        FIGURE_CHECKS[out] = tmp_path_factory.mktemp(f"run{k}-figure-check")
+        with pytest.MonkeyPatch.context() as env:
+            env.setenv(CHECK_ENV, str(FIGURE_CHECKS[out]))
+            summary = reproduce(
+                data="synthetic", quick=True, out=out, jobs=2, log=_silent, only=only, site=only is None
+            )
+        outs.append((out, summary))
+    return outs
+
+
+def test_every_notebook_is_known_and_parameterised():
+    assert NOTEBOOKS, "no notebooks found"
+    for path in list_notebooks():
+        manifest = MANIFESTS[path.stem]
+        assert manifest.about and manifest.figures, f"{path.stem}: its manifest names no figures"
+        assert (
+            "quick" not in pm.inspect_notebook(jupytext.read(path)) and "if quick" not in path.read_text()
+        ), f"{path.stem}: a quick run is its manifest's preset, not a `quick` flag"
+        params = pm.inspect_notebook(jupytext.read(path))
+        assert COMMON_PARAMETERS <= set(params), (
+            f"{path.stem} lacks parameters {COMMON_PARAMETERS - set(params)}"
+        )
+        assert path.read_text().count('tags=["parameters"]') == 1
+        assert set(manifest.quick) <= set(params) - COMMON_PARAMETERS, f"{path.stem}: quick preset names"
+        for name, p in params.items():  # what `papermill --help-notebook` lists: a type and a comment each
+            assert p["inferred_type_name"] not in ("None", "Unknown type"), f"{path.stem}: {name} has no type"
+            assert p["help"], f"{path.stem}: {name} has no comment"
+
+
+@pytest.mark.parametrize("name", NOTEBOOKS)
+def test_notebook_quick_run_writes_its_figures(quick_runs, name):
+    out, summary = quick_runs[0]
+    status = {n["name"]: n["status"] for n in summary["notebooks"]}
+    assert status[name] == "ok"
+    manifest = MANIFESTS[name]
+    for fig in manifest.outputs("figures", real=False):
+        for ext in ("png", "svg"):
+            f = out / "figures" / f"{fig}.{ext}"
+            assert f.is_file() and f.stat().st_size > 1000, f
+    assert (out / "notebooks" / f"{name}.ipynb").is_file()
+    for rec in manifest.outputs("recordings", real=False):
+        f = out / "recordings" / f"{rec}.rrd"
+        res = subprocess.run(
+            [sys.executable, "-m", "rerun", "rrd", "verify", str(f)], capture_output=True, text=True
+        )
+        assert res.returncode == 0, f"{rec}: {res.stderr}"
+    svg = (out / "figures" / f"{manifest.outputs('figures', real=False)[0]}.svg").read_text()
+    assert "synthetic data" in svg  # every figure says which data it came from
+
+
+def test_no_figure_has_overlapping_text_or_a_legend_on_data(quick_runs):
+    """Every figure of the quick run passes glu.plots.overlap (tests/library/test_figure_overlap.py tests the
+    check)."""
+    out, _ = quick_runs[0]
+    pngs = sorted((out / "figures").glob("*.png"))
+    expected = {f for m in MANIFESTS.values() for f in m.figures if f not in m.real_only}
+    assert expected <= {p.stem for p in pngs}
+    problems = {}
+    for png in pngs:
+        report = FIGURE_CHECKS[out] / f"{png.stem}.txt"
+        assert report.is_file(), f"{png.name} was not checked"
+        if report.read_text().strip():
+            problems[png.stem] = report.read_text().splitlines()
+    assert not problems, "\n".join(f"{name}: {p}" for name, ps in problems.items() for p in ps)
+
+
+def test_the_trained_recogniser_is_published_to_models(quick_runs):
+    out, _ = quick_runs[0]
+    from glu.gestures.recognizer import Recognizer
+
+    rec = Recognizer.load(out / "models" / "recognizer.json")
+    assert set(rec.actions) == {"grasp", "tap", "touch"}
+
+
+def test_summary_has_every_number_and_the_provenance(quick_runs):
+    out, summary = quick_runs[0]
+    doc = json.loads((out / "results" / "summary.json").read_text())
+    assert doc["data_source"].startswith("synthetic data")
+    assert doc["versions"]["numpy"] and doc["versions"]["glu"]
+    assert "glu2017_effect_prediction" in doc["tables"]
+    rows = doc["tables"]["glu2017_effect_prediction"]["rows"]
+    assert len(rows) == 6 and abs(sum(r["p"] for r in rows) - 2) < 1e-9
+    csv = (out / "results" / "summary.csv").read_text().splitlines()
+    assert csv[0] == "table,row,column,value" and len(csv) > 100
+
+
+def test_two_runs_are_identical(quick_runs):
+    (a, sa), (b, sb) = quick_runs
+    figs = sorted((b / "figures").iterdir())  # the second run's (a subset of the first's)
+    assert len([f for f in figs if f.suffix == ".png"]) >= 4
+    for f in figs:
+        assert filecmp.cmp(f, a / "figures" / f.name, shallow=False), f"{f.name} differs between runs"
+    tables = [f for f in sorted((b / "results").glob("*.csv")) if f.name != "summary.csv"]
+    assert tables
+    for f in tables:
+        assert f.read_bytes() == (a / "results" / f.name).read_bytes(), f.name
+    recordings = sorted((b / "recordings").glob("*.rrd"))
+    assert recordings
+    for f in recordings:
+        res = subprocess.run(
+            [sys.executable, "-m", "rerun", "rrd", "compare", str(f), str(a / "recordings" / f.name)],
+            capture_output=True,
+            text=True,
+        )
+        assert res.returncode == 0, f"{f.name}: {res.stdout}{res.stderr}"
+
+
+_OK = """# ---
+# jupyter:
+#   glu:
+#     about: a test notebook
+# ---
+
+# %% tags=["parameters"]
+data: str = None  # data folder
+seed: int = 0  # seed
+out_dir: str = None  # outputs
+
+# %%
+from pathlib import Path
+Path(out_dir, "figures").mkdir(parents=True, exist_ok=True)
+Path(out_dir, "figures", "new.txt").write_text("new")
+"""
+_FAIL = (
+    _OK
+    + """
+# %%
+x = 1
+
+# %%
+raise RuntimeError("deliberate failure")
+"""
+)
+
+
+def test_a_failing_notebook_stops_the_run_and_nothing_is_published(tmp_path):
+    nbs = tmp_path / "nbs"
+    nbs.mkdir()
+    (nbs / "01_ok.py").write_text(_OK)
+    (nbs / "02_fails.py").write_text(_FAIL.replace('"new"', '"newer"'))
+    out = tmp_path / "out"
+    (out / "figures").mkdir(parents=True)
+    (out / "figures" / "earlier.png").write_bytes(b"earlier output")
+    (out / "results").mkdir()
+    (out / "results" / "summary.json").write_text("{}")
+    with pytest.raises(NotebookError) as e:
+        reproduce(data="synthetic", out=out, jobs=1, log=_silent, notebooks_dir=nbs)
+    msg = str(e.value)
+    assert "notebook 02_fails failed in cell" in msg and "RuntimeError: deliberate failure" in msg
+    assert (out / "notebooks" / "02_fails.failed.ipynb").is_file()
+    assert (out / "figures" / "earlier.png").read_bytes() == b"earlier output"
+    assert not (
+        out / "figures" / "new.txt"
+    ).exists()  # all or nothing: the notebook that succeeded did not land
+    assert "nothing was published" in msg
+    assert (out / "results" / "summary.json").read_text() == "{}"  # no summary of a failed run
+    assert not (out / ".glu-staging").exists()
+    with pytest.raises(NotebookError, match="no notebook matches 'nope'"):
+        reproduce(data="synthetic", out=out, only=["nope"], log=_silent, notebooks_dir=nbs)
+    with pytest.raises(NotebookError, match="no notebook matches ''"):
+        reproduce(data="synthetic", out=out, only=[""], log=_silent, notebooks_dir=nbs)
+
+
+_TABLE = """# ---
+# jupyter:
+#   glu:
+#     about: a test notebook
+#     tables: [NAME]
+# ---
+
+# %% tags=["parameters"]
+data: str = None  # data folder
+seed: int = 0  # seed
+out_dir: str = None  # outputs
+
+# %%
+import pandas as pd
+from glu.run import start
+out = start(NAME, globals())
+out.table(pd.DataFrame({"x": [seed]}), NAME)
+"""
+
+
+@pytest.mark.slow  # a third quick run (15 s): the default suite keeps the complete run and its repeat
+def test_a_partial_run_updates_the_summary_of_the_same_data(tmp_path):
+    nbs = tmp_path / "nbs"
+    nbs.mkdir()
+    for name in ("01_a", "02_b"):
+        (nbs / f"{name}.py").write_text(_TABLE.replace("NAME", repr(name)))
+    out = tmp_path / "out"
+    full = reproduce(data="synthetic", out=out, log=_silent, notebooks_dir=nbs, seed=1)
+    assert set(full["tables"]) == {"01_a", "02_b"} and full["ran"] == ["01_a", "02_b"]
+    part = reproduce(data="synthetic", out=out, log=_silent, notebooks_dir=nbs, only=["02"], seed=5)
+    assert part["ran"] == ["02_b"] and set(part["tables"]) == {"01_a", "02_b"}
+    assert part["tables"]["01_a"]["rows"] == [{"x": 1}] and part["tables"]["02_b"]["rows"] == [{"x": 5}]
+    other = reproduce(data="synthetic", quick=True, out=out, log=_silent, notebooks_dir=nbs, only=["02"])
+    assert set(other["tables"]) == {"02_b"}  # another mode: a fresh summary, nothing mixed
+
+
+def test_notebook_sources_have_no_outputs():
+    for path in list_notebooks():
+        nb = jupytext.read(path)
+        assert all(not c.get("outputs") for c in nb.cells if c.cell_type == "code")
+        assert Path(path).suffix == ".py"
+
+
+def test_every_executed_notebook_shows_every_figure_it_wrote(quick_runs):
+    """A reader of an executed notebook sees each figure inline: the very PNG that was saved."""
+    import base64
+
+    out, summary = quick_runs[0]
+    written: dict[str, set[str]] = {}
+    for fname, nb in summary["figures_by_notebook"].items():
+        if fname.endswith(".png"):
+            written.setdefault(nb, set()).add(fname)
+    assert written, "no figures were written"
+    for name in NOTEBOOKS:
+        nb = json.loads((out / "notebooks" / f"{name}.ipynb").read_text())
+        shown = {}
+        for cell in nb["cells"]:
+            for o in cell.get("outputs", []):
+                if "image/png" in o.get("data", {}):
+                    shown[o["metadata"]["glu"]["figure"]] = base64.b64decode(o["data"]["image/png"])
+        assert set(shown) == written.get(name, set()), f"{name}: figures written vs shown differ"
+        for fname, png in shown.items():
+            assert png == (out / "figures" / fname).read_bytes(), f"{name}: {fname} shown is not the file"
+
+
+def test_every_executed_notebook_names_its_data_first(quick_runs):
+    out, _ = quick_runs[0]
+    for name in NOTEBOOKS:
+        nb = json.loads((out / "notebooks" / f"{name}.ipynb").read_text())
+        texts = [
+            "".join(o["data"].get("text/markdown", ""))
+            for c in nb["cells"]
+            for o in c.get("outputs", [])
+            if o.get("output_type") == "display_data"
+        ]
+        assert texts and texts[0].startswith(f"**{name}** · synthetic data (seed 0, 1270 experiments)"), name
+        spec = read_spec(list_notebooks([name])[0])
+        for key, value in MANIFESTS[name].quick.items():  # the run's non-default parameters: its preset
+            assert (f"{key}=" in texts[0]) == (value != spec[key].default), (name, key)
+
+
+def test_figures_name_the_runs_non_default_parameters(quick_runs):
+    out, _ = quick_runs[0]
+    assert MANIFESTS["05_fusion_soft"].quick == {"n_points": 11}
+    svg = (out / "figures" / "fusion_soft_sweep.svg").read_text()
+    footer = "synthetic data (seed 0, 1270 experiments) · 05_fusion_soft with n_points=11"
+    assert f"<!-- {footer} -->" in svg  # matplotlib keeps each text as a comment in the SVG
+    assert "data: synthetic data" not in svg  # the footer names the data once
+    assert str(out) not in svg  # no machine path
+    doc = json.loads((out / "results" / "fusion_soft_sweep_box.json").read_text())
+    assert doc["meta"]["notebook_parameters"] == {"n_points": 11}
+    plain = (out / "figures" / "glu2017_effect_prediction.svg").read_text()  # no preset: no "with"
+    assert "<!-- synthetic data (seed 0, 1270 experiments) -->" in plain
+
+
+@needs_browser
+def test_the_site_opens_in_a_real_browser_every_page_image_and_link_working(quick_runs, tmp_path):
+    """Every page of the site loads in headless Chromium without a network and without a console error; every
+    internal link leads to a file (and anchor) that exists; every figure renders, and opens at its natural
+    size with its caption when clicked."""
+    out, summary = quick_runs[0]
+    site = out / "site"
+    with browser(tmp_path / "profile") as driver:
+        seen = walk_site(driver, site)
+        found = search(driver, site, "affordance")
+    assert seen["problems"] == {"console": [], "links": [], "images": [], "unreachable": []}
+    for name in NOTEBOOKS:  # each executed notebook is a page
+        assert (site / "notebooks" / f"{name}.html").is_file()
+    assert "notebooks/03_bn_learning.html" in found  # the site's search, offline
+    pngs = [f for f in summary["figures"] if f.endswith(".png")]
+    assert seen["images"] >= 2 * len(pngs)  # each figure on its notebook's page and in the index's gallery
+
+
+def test_no_executed_notebook_and_no_page_of_the_site_shows_a_machine_path(quick_runs):
+    out, _ = quick_runs[0]
+    root = str(Path(__file__).resolve().parents[2])
+    for folder in (out / "notebooks", out / "site"):
+        files = [
+            f for f in folder.rglob("*") if f.is_file() and f.suffix in (".ipynb", ".html", ".js", ".txt")
+        ]
+        assert files
+        for f in files:
+            text = f.read_text(encoding="utf-8", errors="replace")
+            for what, needle in (
+                ("project", root),
+                ("home", str(Path.home())),
+                ("out", str(out)),
+                ("staging", ".glu-staging"),
+            ):
+                assert needle not in text, f"{f.relative_to(out)} shows the {what} folder"

@@ -1,0 +1,267 @@
+"""The readability check of figures (glu.plots.overlap): it catches what it should; no figure fails it.
+
+The first tests build figures with a known fault by hand (two labels on each other, a legend on bars, a
+value label past the frame, …) and the same figures without it: the checker must name the fault and
+pass the clean version. The last tests read the checker's verdict on every figure the notebooks write:
+the quick run of the notebook tests (synthetic data) has ``GLU_FIGURE_CHECK`` set, and with the real data
+the notebooks whose figures exist only there (the original HMMs, the seated taps) run quickly here.
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from glu.plots.overlap import CHECK_ENV, figure_problems  # noqa: E402
+
+
+@pytest.fixture
+def fig():
+    f, ax = plt.subplots(figsize=(4, 3))
+    yield f, ax
+    plt.close(f)
+
+
+def test_two_tick_labels_on_each_other_are_caught(fig):
+    f, ax = fig
+    ax.set_xticks([0, 0.02], ["a long tick label", "another long one"])
+    problems = figure_problems(f)
+    assert any("text on text" in p and "a long tick label" in p for p in problems), problems
+
+
+def test_tick_labels_apart_pass(fig):
+    f, ax = fig
+    ax.set_xticks([0, 1], ["a label", "another"])
+    ax.set_xlim(-0.5, 1.5)
+    assert figure_problems(f) == []
+
+
+def test_rotated_labels_are_rotated_rectangles(fig):
+    """Two 45° labels side by side: their upright boxes overlap, the labels themselves do not."""
+    f, ax = fig
+    ax.set_xticks([0, 1], ["rotated label one", "rotated label two"], rotation=45, ha="right")
+    ax.set_xlim(-0.5, 1.5)
+    assert figure_problems(f) == []
+    ax.set_xlim(-20, 20)  # now they touch along their length
+    problems = figure_problems(f)
+    assert any("rotated label one" in p and "rotated label two" in p for p in problems), problems
+
+
+def test_a_legend_on_bars_is_caught_and_one_beside_them_passes(fig):
+    f, ax = fig
+    ax.bar([0, 1, 2], [0.95, 0.5, 0.3], label="bars")
+    ax.set_ylim(0, 1)
+    ax.legend(loc="upper left")
+    problems = figure_problems(f)
+    assert any(p.startswith("legend on data") and "bar" in p for p in problems), problems
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1))
+    assert figure_problems(f) == []
+
+
+def test_a_legend_on_a_line_or_a_band_is_caught(fig):
+    f, ax = fig
+    x = np.linspace(0, 1, 50)
+    ax.fill_between(x, 0.8, 0.95, alpha=0.12, label="band")
+    ax.plot(x, 0.1 + 0 * x, label="line")
+    ax.legend(loc="upper right", frameon=False)
+    problems = figure_problems(f)
+    assert any("legend on data" in p and "PolyCollection" in p for p in problems), problems
+    ax.set_ylim(0, 1.6)  # room above the band: the legend sits on nothing
+    assert figure_problems(f) == []
+
+
+def test_a_legend_on_markers_is_caught(fig):
+    f, ax = fig
+    ax.plot([0.05, 0.5], [0.95, 0.5], "o", ls="none", label="points")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.legend(loc="upper left")
+    assert any("legend on data" in p and "'points'" in p for p in figure_problems(f))
+
+
+def test_a_value_label_on_a_line_and_past_the_frame_is_caught(fig):
+    f, ax = fig
+    ax.barh([0, 1], [0.3, 0.97])
+    ax.axvline(0.33, ls=":", label="uniform")
+    ax.set_xlim(0, 1)
+    ax.text(0.31, 0, "0.300", va="center")  # on the dotted line
+    ax.text(0.98, 1, "0.970", va="center")  # runs past the right frame
+    ax.text(1.05, 0, "1.050", va="center")  # placed at a data point outside the axes
+    problems = figure_problems(f)
+    assert any("label on data: '0.300'" in p and "uniform" in p for p in problems), problems
+    assert any("'0.970' crosses the frame" in p for p in problems), problems
+    assert any("'1.050', placed at a data point, is outside" in p for p in problems), problems
+
+
+def test_value_labels_on_a_heat_map_and_on_shading_pass(fig):
+    f, ax = fig
+    ax.imshow(np.arange(4).reshape(2, 2))
+    for i in range(2):
+        for j in range(2):
+            ax.text(j, i, f"{i + j}", ha="center", va="center")
+    ax.axvspan(-0.5, 0.5, alpha=0.2)
+    assert figure_problems(f) == []
+
+
+def test_a_tick_label_reaching_into_the_next_panel_is_caught():
+    f, (a, b) = plt.subplots(1, 2, figsize=(6, 3))
+    b.set_yticks([0.5], ["a y tick label long enough to reach the panel on its left"])
+    problems = figure_problems(f)
+    plt.close(f)
+    assert any("text on another panel: 'a y tick label" in p and "panel 1" in p for p in problems), problems
+
+
+def test_the_footer_on_the_x_label_is_caught(fig):
+    f, ax = fig
+    ax.set_xlabel("an x label")
+    f.tight_layout()
+    f.canvas.draw()
+    box = ax.xaxis.label.get_window_extent(f.canvas.get_renderer())
+    x, y = f.transFigure.inverted().transform(((box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2))
+    f.text(x, y, "data: somewhere", ha="center", va="center")
+    problems = figure_problems(f)
+    assert any("text on text" in p and "'an x label'" in p and "'data: somewhere'" in p for p in problems)
+
+
+def test_the_check_is_written_beside_the_figures_when_asked(tmp_path, monkeypatch, fig):
+    from glu.plots.style import save_figure
+
+    f, ax = fig
+    ax.set_xticks([0, 0.01], ["one label", "two labels"])
+    monkeypatch.setenv(CHECK_ENV, str(tmp_path / "check"))
+    save_figure(f, tmp_path / "figures" / "crowded")
+    report = (tmp_path / "check" / "crowded.txt").read_text()
+    assert "text on text: 'one label' and 'two labels'" in report
+
+
+def test_a_value_label_inside_its_bar_passes_and_one_across_its_edge_is_caught(fig):
+    f, ax = fig
+    ax.bar([0, 1], [0.8, 0.05], width=0.6)
+    ax.set_ylim(0, 1)
+    ax.text(0, 0.4, "0.80", ha="center", va="center")  # inside the bar
+    assert figure_problems(f) == []
+    ax.text(1, 0.05, "0.05", ha="center", va="center")  # across the top of the short bar
+    assert any("label on data: '0.05'" in p for p in figure_problems(f))
+
+
+def test_the_figure_is_checked_as_saved_tightly_cropped(fig):
+    """A legend at the figure's bottom edge moves, in the cropped file, onto a footer written below it."""
+    from glu.plots.style import stamp
+
+    f, ax = fig
+    ax.plot([0, 1], [0, 1], label="a line")
+    f.legend(loc="lower center", ncols=1)
+    f.subplots_adjust(bottom=0.3)
+    assert figure_problems(f) == []
+    stamp(f, "the data this figure was drawn from")
+    problems = figure_problems(f)
+    assert any("the data this figure" in p and "legend" in p for p in problems), problems
+
+
+def _anticipation_frames(case: str = "sphere", n: int = 40):
+    """Made-up frames shaped like AnticipationRun.curves(), .predictions() and published_comparison()."""
+    import pandas as pd
+
+    t = np.arange(1, n + 1)
+    frames = 120 + t
+    rows = []
+    for k, action in enumerate(("grasp", "tap", "touch")):
+        ll = -0.05 * (k + 1) * t + np.sin(t / 5 + k)
+        p = np.full(n, [0.2, 0.6, 0.2][k])
+        rows += [
+            {"case": case, "models": "made-up", "frame": f, "t": i, "seconds": (i - 1) / 30, "action": action}
+            | {"loglik_per_frame": v, "p_hmm": q}
+            for f, i, v, q in zip(frames, t, ll, p, strict=True)
+        ]
+    curves = pd.DataFrame(rows)
+    updates = t[4::5]
+    preds = pd.DataFrame(
+        [
+            {"case": case, "frame": 120 + u, "t": u, "node": "ObjVel", "value": v, "p": p}
+            for u in updates
+            for v, p in zip(("slow", "medium", "fast"), (0.05, 0.43, 0.52), strict=True)
+        ]
+    )
+    pub = [
+        ("loglik_per_frame", r.action, r.t, r.loglik_per_frame, r.loglik_per_frame + 1e-5, 3e-5)
+        for r in curves.itertuples()
+    ]
+    pub += [
+        ("ObjVel", v, updates[-1], p, p + 1e-6, 6e-6)
+        for v, p in (("slow", 0.05), ("medium", 0.43), ("fast", 0.52))
+    ]
+    published = pd.DataFrame(pub, columns=["quantity", "key", "t", "ours", "paper", "resolution"])
+    published["difference"] = published["ours"] - published["paper"]
+    return curves, preds, published
+
+
+def test_the_check_changes_no_saved_file_and_passes_the_hero_figure(tmp_path, monkeypatch):
+    """The hero's layout (constrained, a legend above, a seconds axis on top) moves when drawn twice: the
+    check must watch the drawing that is saved, not draw first."""
+    from glu.plots.style import save_figure, stamp
+    from glu.studies.anticipation.figures import anticipation_figure
+
+    curves, preds, published = _anticipation_frames()
+    written = {}
+    for name, check in (("plain", None), ("checked", tmp_path / "check")):
+        if check is not None:
+            monkeypatch.setenv(CHECK_ENV, str(check))
+        f = anticipation_figure([(curves, preds), (curves.assign(case="box"), preds)], [published, None])
+        stamp(f, "made-up data")
+        written[name] = [p.read_bytes() for p in save_figure(f, tmp_path / name / "hero")]
+        plt.close(f)
+    assert written["plain"] == written["checked"]
+    assert (tmp_path / "check" / "hero.txt").read_text() == ""
+
+
+REAL_DATA_NOTEBOOKS = ["02", "08", "10"]
+"""The notebooks with figures only the real data has: the original HMMs' scores, the hero (TCDS Fig. 5
+against the paper), the nested cross-validation on the standing segments. The other notebooks' figures are
+checked in the quick run of tests/harness/test_notebooks.py."""
+
+
+def _checked_run(data, out, check, monkeypatch, **kwargs) -> list[str]:
+    """Run notebooks with the check on; the problems of every figure written, as "name: problem" lines."""
+    from glu.run.reproduce import reproduce
+
+    monkeypatch.setenv(CHECK_ENV, str(check))
+    summary = reproduce(data=data, out=out, jobs=2, log=lambda _: None, site=False, **kwargs)
+    assert all(n["status"] == "ok" for n in summary["notebooks"])
+    pngs = sorted((out / "figures").glob("*.png"))
+    assert pngs and all((check / f"{p.stem}.txt").is_file() for p in pngs)
+    return [f"{p.stem}: {line}" for p in pngs for line in (check / f"{p.stem}.txt").read_text().splitlines()]
+
+
+@pytest.mark.shared_data
+def test_the_figures_only_the_real_data_has_pass_the_check(shared_data, tmp_path, monkeypatch):
+    out, check = tmp_path / "out", tmp_path / "check"
+    problems = _checked_run(shared_data, out, check, monkeypatch, quick=True, only=REAL_DATA_NOTEBOOKS)
+    names = {p.stem for p in (out / "figures").glob("*.png")}
+    assert {"hmm_original_scores", "tcds_anticipation_original", "correspondence_nested_cv"} <= names
+    assert not problems, "\n".join(problems)
+
+
+@pytest.mark.slow
+@pytest.mark.shared_data
+def test_every_figure_of_the_full_run_on_the_real_data_passes_the_check(shared_data, tmp_path, monkeypatch):
+    """The figures the README and the report show (about a minute)."""
+    out, check = tmp_path / "out", tmp_path / "check"
+    problems = _checked_run(shared_data, out, check, monkeypatch)
+    assert len(list((out / "figures").glob("*.png"))) >= 29
+    assert not problems, "\n".join(problems)
+
+
+def test_two_labels_touching_on_one_line_are_caught(fig):
+    """Two tick labels that touch read as one word ("mediumObjVel"), though their boxes do not overlap."""
+    f, ax = fig
+    ax.set_xticks([0, 1], ["ObjVel=medium", "ObjVel=slow"])
+    ax.set_xlim(-0.5, 1.5)
+    assert figure_problems(f) == []
+    f.set_figwidth(1.8)  # narrower: the labels meet
+    problems = figure_problems(f)
+    assert any("'ObjVel=medium' and 'ObjVel=slow'" in p for p in problems), problems

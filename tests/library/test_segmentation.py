@@ -1,0 +1,145 @@
+"""Segments: the originals' ranges, automatic segmentation against known truth, the segmentation figure."""
+
+from __future__ import annotations
+
+import io
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from glu.errors import DataError  # noqa: E402
+from glu.gestures.corpus import (  # noqa: E402
+    ORIGINAL_SEGMENTS,
+    TRAINING_RECORDINGS,
+    original_segments,
+    real_segments,
+    segment_recording_of,
+)
+from glu.gestures.segmentation import Segment, extract, segment_recording, segment_repetitions  # noqa: E402
+from glu.gestures.synthetic import GESTURES, synthesize_recording  # noqa: E402
+from glu.gestures.trajectories import Trajectory, repair  # noqa: E402
+from glu.studies.replication.gesture_figures import plot_segmentation  # noqa: E402
+
+
+def _iou(a: tuple[int, int], b: tuple[int, int]) -> float:
+    inter = max(0, min(a[1], b[1]) - max(a[0], b[0]) + 1)
+    return inter / (max(a[1], b[1]) - min(a[0], b[0]) + 1)
+
+
+def _features(rec) -> Trajectory:
+    return rec.trajectory()
+
+
+def test_original_ranges_are_those_of_the_papers():
+    assert ORIGINAL_SEGMENTS == {
+        "tap1_hand": ((216, 351), (401, 511), (557, 664)),
+        "tap_notable_seated_1": ((121, 214),),
+        "norobotview_tap_notable_seated_2": ((230, 375),),
+    }
+    assert [s.label for s in original_segments("tap1_hand")] == ["tap"] * 3
+    assert original_segments("grasp1_hand") == []
+
+
+@pytest.mark.parametrize("action", GESTURES)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_automatic_segmentation_finds_the_true_repetitions(action, seed):
+    rec = synthesize_recording(action, 4, seed=seed, noise=0.01, spike_rate=0.005)
+    (piece,) = repair(_features(rec)).pieces
+    seg = segment_repetitions(piece, label=action)
+    found = [(s.start, s.end) for s in seg.segments]
+    assert len(found) == len(rec.segments) == 4, (found, rec.segments)
+    for f, (a, b) in zip(found, rec.segments, strict=True):
+        # inside the true movement (± 5 frames), covering most of it: its first and last frames are
+        # minimum-jerk slow, within the sensor noise of the rest pose
+        assert a - 5 <= f[0] <= f[1] <= b + 5, (f, (a, b))
+        assert (min(f[1], b) - max(f[0], a) + 1) / (b - a + 1) > 0.7, (f, (a, b))
+    assert all(s.label == action for s in seg.segments)
+
+
+def test_a_repetition_cut_by_the_end_is_partial():
+    rec = synthesize_recording("tap", 3, seed=2, noise=0.005)
+    a, b = rec.segments[-1]
+    cut = _features(rec).take(slice(0, (a + b) // 2))  # stop in the middle of the last repetition
+    seg = segment_repetitions(cut)
+    assert len(seg.segments) == 2
+    assert any("partial" in why for _, why in seg.rejected)
+
+
+def test_extract_and_bad_input():
+    rec = synthesize_recording("push", 2, seed=0)
+    tr = _features(rec)
+    s = Segment(*rec.segments[0])
+    np.testing.assert_array_equal(extract(tr, s), tr.xyz[s.start - 1 : s.end])
+    with pytest.raises(DataError, match="no frame"):
+        extract(tr, Segment(10**6, 10**6 + 5))
+    with pytest.raises(DataError, match="cannot be segmented"):
+        segment_repetitions(tr.take(slice(0, 1)))
+
+
+def _png(seg, ref=()) -> tuple[bytes, int]:
+    fig, ax = plt.subplots(figsize=(8, 3))
+    plot_segmentation(ax, seg, "title", reference=ref)
+    n_spans = len(ax.patches)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", metadata={"Software": None})
+    plt.close(fig)
+    return buf.getvalue(), n_spans
+
+
+def test_plot_is_deterministic_and_shows_every_segment():
+    rec = synthesize_recording("touch", 3, seed=4)
+    seg = segment_repetitions(repair(_features(rec)).pieces[0])
+    png1, spans = _png(seg)
+    png2, _ = _png(seg)
+    assert png1 == png2
+    assert spans == len(seg.segments) + len(seg.rejected)
+
+
+# --- the recordings of a data folder (synthetic look-alikes, and the real ones when present) ----------
+
+
+def test_tap1_repetitions_match_the_originals_hand_cut_segments(source):
+    seg = segment_recording_of(source, "tap1_hand")
+    found = [(s.start, s.end) for s in seg.segments]
+    assert len(found) == 3
+    # the hand-cut ranges hold the taps (in the real log, and at the synthetic look-alike's placements)
+    for f, (a, b) in zip(found, ORIGINAL_SEGMENTS["tap1_hand"], strict=True):
+        assert _iou(f, (a, b)) > 0.75, (f, (a, b))
+
+
+@pytest.mark.parametrize("name", TRAINING_RECORDINGS)
+def test_recordings_yield_labelled_segments(source, name):
+    seg = segment_recording_of(source, name)
+    assert len(seg.segments) >= 2
+    n = len(np.loadtxt(source.hand_log(name)))
+    prev_end = 0
+    for s in seg.segments:
+        assert s.label == name.split("1_")[0]
+        assert prev_end < s.start <= s.end <= n  # ordered, disjoint, within the log
+        assert s.n_frames >= 45
+        prev_end = s.end
+
+
+def test_segments_for_training(source):
+    seqs = real_segments(source)
+    actions = {s.action for s in seqs}
+    assert actions == {"grasp", "tap", "touch", "push"}
+    singles = [(s.recording, s.start, s.end) for s in seqs if s.recording.startswith(("tap_", "norobot"))]
+    assert singles == [("tap_notable_seated_1", 121, 214), ("norobotview_tap_notable_seated_2", 230, 375)]
+    for s in seqs:
+        assert (
+            s.xyz.shape[1] == 3 and len(s.xyz) >= s.end - s.start + 1
+        )  # interpolated frames add, never remove
+        assert np.abs(s.xyz).max() < 5  # feature units, not the log's millimetre-like values
+
+
+def test_plot_a_recording(source):
+    seg = segment_recording(source.hand_log("push1_hand"))
+    png1, _ = _png(seg, original_segments("push1_hand"))
+    png2, _ = _png(seg, original_segments("push1_hand"))
+    assert png1 == png2 and png1[:8] == b"\x89PNG\r\n\x1a\n"

@@ -1,0 +1,181 @@
+"""Effect anticipation: per-frame HMM scores equal prefix rescoring, fusion equals single BN queries."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from glu.bn import InferenceEngine
+from glu.cli import main
+from glu.data import resolve_data
+from glu.errors import DataError, ModelError
+from glu.fusion import fuse
+from glu.gestures.recognizer import Recognizer
+from glu.studies.anticipation import experiment as anticipation
+from glu.studies.anticipation import recordings
+
+
+@pytest.fixture(scope="module")
+def setup(source, recognizer, zero_bn):
+    return source, recognizer, InferenceEngine(zero_bn)
+
+
+def test_case_trajectory_is_the_logged_segment_in_model_units(setup):
+    src, _, _ = setup
+    traj = anticipation.case_trajectory(src, "sphere")
+    raw = np.loadtxt(src.hand_log("tap_notable_seated_1"))
+    assert traj.frame.tolist() == list(range(121, 215))
+    np.testing.assert_allclose(traj.xyz, raw[120:214, 2:5] / 1000)
+
+
+def test_run_equals_prefix_rescoring_and_single_queries(setup):
+    src, rec, eng = setup
+    case = anticipation.CASES["box"]
+    traj = anticipation.case_trajectory(src, "box")
+    run = anticipation.effect_anticipation(rec, eng, traj, case.evidence, case="box", models="bank", step=5)
+    order = [rec.actions.index(a) for a in ("grasp", "tap", "touch")]
+    for t in (1, 7, 50, len(traj)):
+        ll = rec.loglik(traj.xyz[:t])[order]  # the whole-sequence path on the prefix, not the curve
+        np.testing.assert_allclose(run.loglik[t - 1], ll, rtol=1e-9)
+        np.testing.assert_allclose(run.loglik_per_frame[t - 1], ll / t, rtol=1e-9)
+        np.testing.assert_allclose(run.p_hmm[t - 1], rec.p_hmm(traj.xyz[:t])[order], atol=1e-12)
+    # the originals' schedule: t = 5, 10, …, the last multiple of 5 (not T)
+    assert run.update_t.tolist() == list(range(5, len(traj) + 1, 5))
+    assert run.update_frames.tolist() == [int(traj.frame[t - 1]) for t in range(5, len(traj) + 1, 5)]
+    assert not run.update_extra.any()
+    for k, f in enumerate(run.update_frames):
+        i = int(np.flatnonzero(traj.frame == f)[0])
+        single = fuse(eng, ["ObjVel"], case.evidence, run.p_hmm[i], "virtual")["ObjVel"]
+        np.testing.assert_allclose(run.fused["ObjVel"][k], single, atol=1e-12)
+    curves = run.curves()
+    assert len(curves) == 3 * len(traj) and set(curves["action"]) == {"grasp", "tap", "touch"}
+
+
+def test_a_bank_without_an_action_is_refused(setup):
+    src, rec, eng = setup
+    partial = Recognizer({a: rec.models[a] for a in ("grasp", "tap")})
+    with pytest.raises(ModelError, match="no model for touch"):
+        anticipation.effect_anticipation(
+            partial, eng, anticipation.case_trajectory(src, "sphere"), {"Shape": "sphere"}
+        )
+
+
+def test_recording_of_a_run(setup, tmp_path):
+    src, rec, eng = setup
+    case = anticipation.CASES["sphere"]
+    run = anticipation.effect_anticipation(
+        rec,
+        eng,
+        anticipation.case_trajectory(src, "sphere"),
+        case.evidence,
+        case="sphere",
+        models="bank",
+        describe=True,
+    )
+    assert len(run.descriptions) == len(run.update_frames)
+    assert set(run.descriptions[-1].split()) & {"ball", "sphere"}  # the grammar's words for a sphere
+    path = recordings.write_anticipation(run, tmp_path / "s.rrd", "test-sphere")
+    res = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "verify", str(path)], capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr
+    assert "tap" in run.scene() and "Shape=sphere" in run.scene()
+
+
+def test_synthetic_case_trajectory_is_seeded():
+    src = resolve_data("synthetic")
+    a = anticipation.case_trajectory(src, "sphere", seed=3)
+    b = anticipation.case_trajectory(src, "sphere", seed=3)
+    c = anticipation.case_trajectory(src, "sphere", seed=4)
+    np.testing.assert_array_equal(a.xyz, b.xyz)
+    assert a.xyz.shape != c.xyz.shape or not np.array_equal(a.xyz, c.xyz)
+
+
+def test_the_extra_update_at_t_equal_T_only_on_request(setup):
+    src, rec, eng = setup
+    traj = anticipation.case_trajectory(src, "sphere")
+    T = len(traj)
+    plain = anticipation.effect_anticipation(rec, eng, traj, {"Shape": "sphere"}, step=5)
+    extra = anticipation.effect_anticipation(rec, eng, traj, {"Shape": "sphere"}, step=5, final_update=True)
+    if T % 5:
+        assert extra.update_t.tolist() == [*plain.update_t.tolist(), T]
+        assert extra.update_extra.tolist() == [False] * len(plain.update_t) + [True]
+        assert extra.as_dict()["updates"][-1]["extra"] is True
+    else:
+        assert extra.update_t.tolist() == plain.update_t.tolist() and not extra.update_extra.any()
+    assert all("extra" not in u for u in plain.as_dict()["updates"])
+    seven = anticipation.effect_anticipation(rec, eng, traj, {"Shape": "sphere"}, step=7)
+    assert seven.update_t.tolist() == list(range(7, T + 1, 7))
+    assert (anticipation.update_indices(94) + 1).tolist() == list(range(5, 91, 5))
+    assert (anticipation.update_indices(146, 5, True) + 1).tolist() == [*range(5, 146, 5), 146]
+    with pytest.raises(DataError, match="fewer than the update step"):
+        anticipation.update_indices(3, 5)
+
+
+def test_run_as_dict_has_the_documented_shape(setup):
+    src, rec, eng = setup
+    case = anticipation.CASES["box"]
+    traj = anticipation.case_trajectory(src, "box")
+    run = anticipation.effect_anticipation(
+        rec, eng, traj, case.evidence, case="box", targets=("ObjVel",), describe="last"
+    )
+    d = json.loads(json.dumps(run.as_dict(), allow_nan=False))
+    assert list(d) == ["case", "frames", "loglik_per_frame", "updates", "description"]
+    assert d["case"] == "box" and d["frames"] == [int(traj.frame[0]), int(traj.frame[-1])]
+    assert list(d["loglik_per_frame"]) == ["grasp", "tap", "touch"]
+    lpf = np.array([d["loglik_per_frame"][a] for a in ("grasp", "tap", "touch")]).T
+    np.testing.assert_allclose(lpf, run.loglik / np.arange(1, len(traj) + 1)[:, None])  # index i is t = i + 1
+    for u in d["updates"]:
+        assert list(u) == ["t", "frame", "p_hmm", "ObjVel"] and u["frame"] == int(traj.frame[u["t"] - 1])
+        assert list(u["ObjVel"]) == ["slow", "medium", "fast"]
+        np.testing.assert_allclose(list(u["p_hmm"].values()), run.p_hmm[u["t"] - 1])
+    assert d["description"] == run.descriptions[-1] and len(run.descriptions) == 1
+
+
+def test_cli_anticipate(setup, tmp_path, capsys):
+    src, rec, _ = setup
+    path = tmp_path / "bank.json"
+    rec.save(path)
+    argv = ["anticipate", "--case", "sphere", "--models", str(path), "--data", str(src.root)]
+    assert main([*argv, "--json", "--final-update"]) == 0
+    out, err = capsys.readouterr()
+    d = json.loads(out)
+    assert set(d) == {"case", "frames", "loglik_per_frame", "updates", "description"}
+    assert f"{src.kind} data" in err and "and at t = T (extra)" in err
+    T = d["frames"][1] - d["frames"][0] + 1
+    assert [u["t"] for u in d["updates"] if not u.get("extra")] == list(range(5, T + 1, 5))
+    assert main([*argv, "--step", "10"]) == 0
+    out = capsys.readouterr().out
+    assert "description: " in out and "(the originals' schedule)" in out
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--models", "original", "--data", "synthetic"], "originals' HMMs"),
+        (["--models", "/nonexistent.json", "--data", "synthetic"], "no such recogniser file"),
+        (["--candidates", "samples", "--data", "synthetic"], "sampled sentences are not in the data"),
+        (["--step", "1000"], "fewer than the update step"),
+    ],
+)
+def test_cli_anticipate_bad_input_is_one_line(setup, tmp_path, capsys, extra, message):
+    src, rec, _ = setup
+    path = tmp_path / "bank.json"
+    rec.save(path)
+    argv = [
+        "anticipate",
+        "--case",
+        "box",
+        "--models",
+        str(path),
+        "--data",
+        str(src.root),
+        *extra,
+    ]  # last wins
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err

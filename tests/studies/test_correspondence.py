@@ -1,0 +1,231 @@
+"""The correspondence study: tidy results, two-level intervals from the per-gesture outcomes, paired effects
+by hand, the body frame, the two-view recording read back in strict mode, and invariance end to end (a
+turned, mirrored tap scores the same)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pytest
+import rerun as rr
+from rerun.chunk import RrdReader
+
+from glu.gestures.corpus import synthetic_corpus
+from glu.gestures.synthetic import View
+from glu.hmm import TrainingConfig
+from glu.studies.correspondence import experiment as corr
+from glu.studies.correspondence import figures as cplots
+from glu.studies.correspondence import seated, two_views
+from glu.studies.correspondence.recordings import write_two_views
+
+TINY = {"config": TrainingConfig(n_states=2, n_mix=1, n_iter=3)}
+
+
+FEATURES = ("raw", "centred", "centred+rotated", "body", "body+centred")
+
+
+@pytest.fixture(scope="module")
+def study():
+    conds = [c for c in corr.default_conditions() if c.level in ("0°", "90°", "the robot itself")]
+    return corr.correspondence_study(
+        feature_sets=FEATURES,
+        conditions=conds,
+        seeds=(0, 1),
+        n_train=2,
+        n_test=1,
+        **TINY,
+    )
+
+
+def test_the_study_is_tidy_and_stamped(study):
+    assert len(study) == 2 * 2 * 5 * 3  # seeds × training sources × feature sets × conditions
+    assert set(study["train"]) == {"robot", "human"}
+    assert list(dict.fromkeys(study["features"])) == list(FEATURES)
+    assert study["accuracy"].between(0, 1).all() and (study["n_test"] == 3).all()
+    hits = np.array([[c == "1" for c in o] for o in study["outcomes"]])
+    np.testing.assert_allclose(hits.mean(axis=1), study["accuracy"])  # one character per test gesture
+    assert study.attrs["parameters"]["variety"] == [0.0, 1.0]  # other people; the robot as it is
+    assert study.attrs["experiment"] == "correspondence_study"
+    assert study.attrs["data_source"].startswith("synthetic data")
+    assert study.attrs["parameters"]["seeds"] == [0, 1] and study.attrs["parameters"]["n_states"] == 2
+    robot = study[study["factor"] == "performer"]
+    assert (robot["level"] == "the robot itself").all()
+
+
+def test_summary_pools_the_seeds_with_two_level_intervals(study):
+    s = corr.summarise(study, replicates=300)
+    assert len(s) == len(study) // 2 and (s["n_seeds"] == 2).all()
+    for row in s.itertuples():
+        g = study[
+            (study["train"] == row.train)
+            & (study["features"] == row.features)
+            & (study["level"] == row.level)
+        ]
+        hits = np.array([c == "1" for o in g["outcomes"] for c in o])
+        assert row.accuracy == pytest.approx(hits.mean())
+        assert row.ci_low <= row.accuracy + 1e-12 and row.accuracy <= row.ci_high + 1e-12
+        assert (row.seed_min, row.seed_max) == (g["accuracy"].min(), g["accuracy"].max())
+        if 0 < hits.mean() < 1:
+            assert row.ci_high > row.ci_low  # never a zero-width interval where the gestures differ
+        else:
+            assert row.ci_high == row.ci_low
+    table = corr.main_table(s, "human")
+    assert list(table.columns) == list(FEATURES)
+    assert table.index[0] == "viewpoint: 0°"
+
+
+def test_feature_set_names():
+    assert corr.parse_feature_set("body+centred") == (True, corr.Invariants.parse("centred"))
+    assert corr.parse_feature_set("all")[0] is False and corr.parse_feature_set("body")[1].is_raw
+    for name in ("raw", "body", "body+centred+rotated", "centred+mirrored"):
+        assert corr.feature_set_name(*corr.parse_feature_set(name)) == name
+    assert set(FEATURES) <= set(corr.STUDY_FEATURE_NAMES)
+
+
+def outcome_rows(features_outcomes):
+    rows = []
+    for f, per_seed in features_outcomes.items():
+        for seed, o in enumerate(per_seed):
+            rows.append(
+                {
+                    "seed": seed,
+                    "train": "human",
+                    "features": f,
+                    "factor": "viewpoint",
+                    "level": "0°",
+                    "outcomes": o,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def test_invariance_effects_are_paired_differences():
+    # centring costs here: on every seed the raw recogniser is right more often, on the same gestures
+    effects = corr.invariance_effects(
+        outcome_rows({"raw": ["1111101111", "1101111111"], "centred": ["0101100011", "1000110101"]}), 500
+    )
+    (e,) = effects.itertuples()
+    assert (e.invariance, e.baseline) == ("centred", "raw")
+    assert e.delta == pytest.approx((10 / 20) - (18 / 20))
+    assert e.ci_high < 0 and e.costs and not e.helps and e.verdict == "worse"
+    same = corr.invariance_effects(outcome_rows({"raw": ["1010", "0110"], "centred": ["1010", "0110"]}), 200)
+    assert same.iloc[0].delta == 0 and same.iloc[0].ci_low == 0 == same.iloc[0].ci_high
+    assert same.iloc[0].verdict == "no difference"
+
+
+def test_body_frame_pairs_with_body_frame():
+    """Adding centring to the body frame is compared with the body frame, not with raw."""
+    effects = corr.invariance_effects(
+        outcome_rows({"raw": ["11", "11"], "body": ["10", "10"], "body+centred": ["01", "01"]}), 100
+    )
+    assert set(zip(effects.features, effects.baseline, strict=True)) == {("body+centred", "body")}
+
+
+def test_plots_draw_the_study(study):
+    s = corr.summarise(study)
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3))
+    assert cplots.plot_accuracy_vs_viewpoint(axes[0], s, "human") is axes[0]
+    assert len(axes[0].lines) == 5 + 1  # one line per feature set, and chance
+    cplots.plot_accuracy_by_condition(axes[1], s, "robot")
+    assert len(axes[1].patches) == 5 * 2  # the reference and the robot itself, per feature set
+    cplots.plot_invariance_effects(axes[2], corr.invariance_effects(study), "human")
+    assert len(axes[2].images) == 1
+    plt.close(fig)
+
+
+def test_settings_are_labelled_and_parsed_back():
+    for label in ("glu defaults", "Q6 M3 reg0.03", "M1", "mixsplit", "mixsplit Q4"):
+        assert seated.setting_label(seated.parse_setting(label)) == label
+    assert seated.parse_setting("Q6 reg0.03") == {"n_states": 6, "covar_reg": 0.03}
+    with pytest.raises(Exception, match="KEYvalue"):
+        seated.parse_setting("Q=6")
+
+
+def test_leave_one_segment_out_keeps_the_features():
+    """The fast leave-one-segment-out of glu.studies.replication.recipes equals the plain one with invariant
+    features."""
+    from glu.studies.replication.gestures import leave_one_out
+    from glu.studies.replication.recipes import leave_one_segment_out
+
+    corpus = synthetic_corpus(3, seed=6)
+    train = {"config": TrainingConfig(n_states=2, n_mix=1, n_iter=3), "features": "centred+rotated"}
+    fast, everything = leave_one_segment_out(corpus, seed=0, **train)
+    plain = leave_one_out(corpus, by="segment", seed=0, **train)
+    assert list(fast["predicted"]) == list(plain["predicted"])
+    assert everything.features.name == "centred+rotated"
+
+
+# ---------------------------------------------------------------- one gesture, two viewpoints
+@pytest.fixture(scope="module")
+def runs():
+    raw = corr.train_for("human", "raw", 3, seed=0, **TINY)
+    inv = corr.train_for("human", "centred+rotated+mirrored", 3, seed=0, **TINY)
+    views = (View(yaw_deg=0.0, size=1.0), View(yaw_deg=120.0, mirror=True, size=1.0))
+    return two_views.two_views(raw, inv, "tap", views, seed=2, noise=0.0)
+
+
+def test_an_invariant_recogniser_does_not_see_the_turn_or_the_mirror(runs):
+    front, back = runs
+    assert front.label == "yaw 0°" and back.label == "yaw 120°, mirrored"
+    np.testing.assert_allclose(back.aligned, front.aligned, atol=1e-9)  # the features, exactly
+    np.testing.assert_allclose(back.p_aligned, front.p_aligned, atol=1e-9)  # so the posterior, frame by frame
+    assert not np.allclose(back.raw, front.raw, atol=1e-3)
+    curves = two_views.two_views_curves(runs)
+    assert (
+        set(curves["recogniser"]) == {"raw", "aligned"}
+        and curves.attrs["experiment"] == "correspondence_two_views"
+    )
+
+
+@pytest.fixture
+def strict():
+    rr.set_strict_mode(True)
+    yield
+    rr.set_strict_mode(False)
+
+
+def _column(path, entity, component):
+    stream = RrdReader(str(path)).stream().filter(content=entity, is_static=False, components=component)
+    return pa.Table.from_batches([c.to_record_batch().select(["frame", component]) for c in stream]).sort_by(
+        "frame"
+    )
+
+
+def test_two_view_recording_reads_back(runs, tmp_path, strict):
+    path = write_two_views(runs, tmp_path / "two.rrd", "test-two-views")
+    res = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "verify", str(path)], capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr
+    for i, run in enumerate(runs, start=1):
+        for name, p in (("raw", run.p_raw), ("aligned", run.p_aligned)):
+            tap = _column(path, f"/view{i}/p_hmm/{name}/tap", "Scalars:scalars")
+            assert tap.column("frame").to_pylist() == list(range(1, len(p) + 1))
+            np.testing.assert_allclose([v[0] for v in tap.column("Scalars:scalars").to_pylist()], p[:, 1])
+        pos = _column(path, f"/view{i}/features/aligned/position", "Points3D:positions")
+        np.testing.assert_allclose(
+            pos.column("Points3D:positions").to_pylist()[-1][0], run.aligned[-1], rtol=1e-6
+        )
+        joints = _column(path, f"/view{i}/camera/joints", "Points3D:positions")
+        assert len(joints.column("Points3D:positions").to_pylist()[0]) == 15
+    assert len(RrdReader(str(path)).blueprints()) == 1
+    again = write_two_views(runs, tmp_path / "again.rrd", "test-two-views-again")
+    cmp = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "compare", str(path), str(again)], capture_output=True
+    )
+    assert cmp.returncode == 0
+
+
+def test_posture_offsets_of_synthetic_standing_and_seated_gestures():
+    from glu.data import resolve_data
+
+    off = seated.posture_offsets(resolve_data("synthetic"))  # no hand logs: the generator's two postures
+    assert set(off["posture"]) == {"standing", "seated"} and {"x", "y", "z"} <= set(off.columns)
+    mean = off.groupby("posture")[["y", "z"]].mean()
+    assert mean.loc["seated", "y"] > mean.loc["standing", "y"]  # seated: the hand works higher, further out
+    assert mean.loc["seated", "z"] < mean.loc["standing", "z"]

@@ -1,0 +1,437 @@
+"""Learning gestures from effects (glu.studies.learning.self_supervised, online_learning, learning_curves,
+two_level).
+
+References: the network's own single queries, the unweighted recogniser training, a hand-written online
+loop over the readable E- and M-steps, learners run alone against learners run together, and closed forms
+for the bootstrap.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from glu.bn import InferenceEngine, learn_bn
+from glu.data import load_experiments
+from glu.errors import DataError
+from glu.gestures.recognizer import train_recognizer
+from glu.hmm import GMMHMMParams, TrainingConfig, expected_stats, maximise, train
+from glu.stats import interval, replicate_means, two_level_weights
+from glu.studies.learning import learned_recognizers as lr_
+from glu.studies.learning import online as ol
+from glu.studies.learning import self_supervised as ss
+from glu.studies.learning import study as lc
+
+SMALL = TrainingConfig(n_states=3, n_mix=1, n_iter=20, tol=1e-3)
+
+
+@pytest.fixture(scope="module")
+def engine():
+    return InferenceEngine(learn_bn(load_experiments("synthetic")))
+
+
+# ------------------------------------------------------------------ the world
+
+
+def test_episodes_share_actions_and_gestures_across_ambiguities(engine):
+    a = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], 12, seed=3)
+    b = ss.simulate_episodes(engine, ss.AMBIGUITIES["still"], 12, seed=3)
+    assert np.array_equal(a.actions, b.actions)
+    assert all(np.array_equal(x, y) for x, y in zip(a.features, b.features, strict=True))
+    held = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], 12, seed=3, offset=ss.TEST_OFFSET)
+    assert not any(np.array_equal(x, y) for x, y in zip(a.features, held.features, strict=True))
+    other = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], 12, seed=4)
+    assert not np.array_equal(a.actions, other.actions) or not np.array_equal(
+        a.features[0], other.features[0]
+    )
+
+
+def test_objects_that_never_move_and_failed_taps(engine):
+    schema = engine.bn.schema
+    slow, tap = schema.values_of("ObjVel").index("slow"), schema.values_of("Action").index("tap")
+    actions = np.arange(600) % 3
+    world, seen = ss.draw_world(engine, actions, ss.AMBIGUITIES["still"], seed=0)
+    assert np.all(world["ObjVel"] == slow) and np.array_equal(seen["ObjVel"], world["ObjVel"])
+    failing = ss.Ambiguity("all fail", failed_taps=1.0)
+    world, _ = ss.draw_world(engine, actions, failing, seed=0)
+    assert np.all(world["ObjVel"][actions == tap] == slow)
+    normal, _ = ss.draw_world(engine, actions, ss.AMBIGUITIES["mixed"], seed=0)
+    assert np.mean(normal["ObjVel"][actions == tap] == slow) < 0.5  # taps usually move things
+    # the other actions' effects keep the network's distribution: p(slow | grasp) as the engine says
+    p = engine.query(["ObjVel"], {"Action": "grasp"})["ObjVel"][slow]
+    grasp = world["ObjVel"][actions == 0]
+    assert abs(np.mean(grasp == slow) - p) < 4 * np.sqrt(p * (1 - p) / len(grasp))
+
+
+def test_perception_noise_replaces_the_effect_by_a_uniform_value(engine):
+    actions = np.arange(3000) % 3
+    world, seen = ss.draw_world(engine, actions, ss.Ambiguity("blind", perception_noise=1.0), seed=1)
+    freq = np.bincount(seen["ObjVel"], minlength=3) / len(actions)
+    np.testing.assert_allclose(freq, 1 / 3, atol=0.03)
+    assert np.array_equal(seen["Shape"], world["Shape"])  # the object is seen as it is
+    world, seen = ss.draw_world(engine, actions, ss.Ambiguity("some", perception_noise=0.3), seed=1)
+    changed = np.mean(seen["ObjVel"] != world["ObjVel"])
+    assert abs(changed - 0.3 * 2 / 3) < 0.03  # a uniform redraw keeps the value one time in three
+
+
+def test_bad_ambiguities_are_refused():
+    with pytest.raises(DataError, match="probability"):
+        ss.Ambiguity("x", failed_taps=1.5)
+
+
+def test_network_posteriors_equal_single_queries(engine):
+    ep = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], 8, seed=2)
+    schema = engine.bn.schema
+    for words in (False, True):
+        p = ss.network_posteriors(engine, ep.perceived, ep.world, words)
+        for i in range(8):
+            ev = {n: schema.values_of(n)[v[i]] for n, v in ep.perceived.items()}
+            if words:
+                ev |= {w: schema.values_of(w)[ep.world[w][i]] for w in schema.word_nodes}
+            np.testing.assert_allclose(p[i], engine.query(["Action"], ev)["Action"], rtol=1e-12)
+
+
+# ------------------------------------------------------------------ labels
+
+
+def test_labelling_schemes():
+    p = np.array([[0.5, 0.3, 0.2], [0.05, 0.92, 0.03]])
+    np.testing.assert_array_equal(ss.label_weights("hard", p), [[1, 0, 0], [0, 1, 0]])
+    np.testing.assert_array_equal(ss.label_weights("soft", p), p)
+    np.testing.assert_array_equal(ss.label_weights("confident", p, 0.9), [[0, 0, 0], [0, 1, 0]])
+    q = np.array([[0.2, 0.2, 0.6], [0.1, 0.1, 0.8]])
+    fused = ss.label_weights("iterative", p, p_hmm=q)
+    np.testing.assert_allclose(fused[0], np.array([0.1, 0.06, 0.12]) / 0.28)
+    np.testing.assert_array_equal(ss.label_weights("iterative", p), p)  # no HMMs yet: the network alone
+    np.testing.assert_array_equal(ss.label_weights("true", p, true=np.array([2, 0])), [[0, 0, 1], [1, 0, 0]])
+    with pytest.raises(DataError, match="unknown labelling scheme"):
+        ss.label_weights("guess", p)
+
+
+def test_per_frame_reading_tempers_the_likelihoods():
+    ll = np.array([[-100.0, -110.0, -np.inf]])
+    sharp = ss.p_hmm_reading(ll, np.array([50]), "likelihood")
+    soft = ss.p_hmm_reading(ll, np.array([50]), "per-frame")
+    np.testing.assert_allclose(sharp[0, :2], [1 / (1 + np.exp(-10)), np.exp(-10) / (1 + np.exp(-10))])
+    np.testing.assert_allclose(soft[0, :2], [1 / (1 + np.exp(-0.2)), np.exp(-0.2) / (1 + np.exp(-0.2))])
+    assert sharp[0, 2] == soft[0, 2] == 0
+
+
+def test_best_matching_finds_the_permutation():
+    counts = np.array([[1, 9, 0], [0, 1, 8], [7, 0, 2]], dtype=float)
+    np.testing.assert_array_equal(ss.best_matching(counts), [1, 2, 0])
+
+
+# ------------------------------------------------------------------ batch learning
+
+
+def _corpus(engine, n=36, seed=0):
+    ep = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], n, seed)
+    return ep, engine.bn.schema.values_of("Action")
+
+
+def test_true_labels_train_what_the_recogniser_trains(engine):
+    ep, actions = _corpus(engine)
+    learned = lr_.learn_recognizer(
+        ep.features, "true", true=ep.actions, actions=actions, config=SMALL, seed=1
+    )
+    by_action = {
+        a: [x for x, t in zip(ep.features, ep.actions, strict=True) if t == k] for k, a in enumerate(actions)
+    }
+    plain = train_recognizer(by_action, SMALL, seed=1, warn=False)
+    for a in actions:
+        np.testing.assert_allclose(
+            learned.recognizer.models[a].means, plain.models[a].means, rtol=1e-7, atol=1e-9
+        )
+    # soft labels that are certain are the true labels
+    certain = lr_.learn_recognizer(
+        ep.features, "soft", ss.one_hot(ep.actions, 3), actions=actions, config=SMALL, seed=1
+    )
+    for a in actions:
+        np.testing.assert_allclose(
+            certain.recognizer.models[a].means, plain.models[a].means, rtol=1e-7, atol=1e-9
+        )
+
+
+def test_iterative_and_unsupervised_relabel_until_the_labels_settle(engine):
+    ep, actions = _corpus(engine, 30, seed=5)
+    p = ss.network_posteriors(engine, ep.perceived, ep.world, words=True)
+    it = lr_.learn_recognizer(ep.features, "iterative", p, true=ep.actions, actions=actions, config=SMALL)
+    assert 2 <= it.rounds <= 10
+    np.testing.assert_allclose(it.weights.sum(axis=1), 1.0)
+    un = lr_.learn_recognizer(ep.features, "unsupervised", true=ep.actions, actions=actions, config=SMALL)
+    assert set(un.recognizer.actions) <= set(actions)
+    with pytest.raises(DataError, match="needs p_bn"):
+        lr_.learn_recognizer(ep.features, "soft", actions=actions, config=SMALL)
+
+
+# ------------------------------------------------------------------ online learning
+
+
+def _stream(engine, n=40, seed=0, test=12):
+    ep = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], n, seed)
+    held = ss.simulate_episodes(
+        engine, ss.AMBIGUITIES["mixed"], test, seed, offset=ss.TEST_OFFSET, balanced=True
+    )
+    p = ss.network_posteriors(engine, ep.perceived, ep.world, words=True)
+    return ep, held, p
+
+
+def test_the_online_update_is_stepwise_em_over_the_readable_steps(engine):
+    """One true-label learner, replayed by hand with glu.hmm.em's reference E- and M-steps."""
+    ep, held, _ = _stream(engine, 30)
+    settings = ol.OnlineSettings(config=SMALL, init_weight=3.0, init_iter=5, step=0.8)
+    actions = engine.bn.schema.values_of("Action")
+    run = ol.learn_online(ep.features, ep.actions, "true", None, actions, settings, seed=2)
+    cfg = SMALL.replace(n_iter=5)
+    models, mean, total, buf = {}, {}, {}, {a: [] for a in range(3)}
+    for X, a in zip(ep.features, ep.actions.tolist(), strict=True):
+        if a in models:
+            unit = expected_stats([X], models[a])
+            total[a] += 1.0
+            eta = min(1.0, 1.0 / total[a] ** 0.8)
+            mean[a] = mean[a].scaled(1 - eta) + unit.scaled(eta)
+            models[a] = maximise(mean[a].scaled(total[a]), models[a], SMALL.covar_reg)
+        else:
+            buf[a].append(X)
+            if len(buf[a]) >= 3:
+                m = train(buf[a], cfg, weights=np.ones(len(buf[a])), seed=2, warn=False).model
+                models[a] = GMMHMMParams(m.startprob, m.transmat, m.weights, m.means, m.covars)
+                stats = expected_stats(buf[a], models[a])
+                mean[a], total[a] = stats.scaled(1 / float(stats.weight)), float(stats.weight)
+    for a in range(3):
+        np.testing.assert_allclose(run.params.means[0, a], models[a].means, rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(run.params.covars[0, a], models[a].covars, rtol=1e-8, atol=1e-10)
+
+
+def test_learners_in_lockstep_learn_what_each_learns_alone(engine):
+    ep, held, p = _stream(engine, 40)
+    actions = engine.bn.schema.values_of("Action")
+    settings = ol.OnlineSettings(config=SMALL, cluster_episodes=9)
+    learners = [
+        ol.Learner("soft", "n"),
+        ol.Learner("iterative", "n"),
+        ol.Learner("true"),
+        ol.Learner("unsupervised"),
+    ]
+    args = (held.features, held.actions, [20, 40], actions, settings, 0)
+    together = ol.run_online(ep.features, ep.actions, learners, {"n": p}, *args)
+    for k, lr in enumerate(learners):
+        alone = ol.run_online(ep.features, ep.actions, [lr], {"n": p}, *args)
+        np.testing.assert_array_equal(together.correct[:, k], alone.correct[:, 0])
+        np.testing.assert_allclose(together.params.means[k], alone.params.means[0], rtol=1e-10)
+        np.testing.assert_allclose(together.weights[:, k], alone.weights[:, 0], rtol=1e-10)
+
+
+def test_online_learning_from_true_labels_recognises_held_out_gestures(engine):
+    ep, held, p = _stream(engine, 60, seed=1, test=30)
+    actions = engine.bn.schema.values_of("Action")
+    run = ol.learn_online(
+        ep.features,
+        ep.actions,
+        "true",
+        None,
+        actions,
+        ol.OnlineSettings(config=SMALL),
+        0,
+        held.features,
+        held.actions,
+        [60],
+    )
+    assert run.accuracy()[-1, 0] >= 0.8
+    rec = run.recognizer(0)
+    assert rec.actions == tuple(actions) and rec.meta["scheme"] == "true"
+    pred = [rec.classify(x) for x in held.features]
+    assert (
+        np.mean([pr == actions[a] for pr, a in zip(pred, held.actions, strict=True)]) == run.accuracy()[-1, 0]
+    )
+
+
+def test_the_first_episodes_are_labelled_by_the_network_alone(engine):
+    ep = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], 30, 0)
+    p = ss.network_posteriors(engine, ep.perceived, ep.world)  # without words: uncertain labels
+    actions = engine.bn.schema.values_of("Action")
+    run = ol.learn_online(ep.features, ep.actions, "iterative", p, actions, ol.OnlineSettings(config=SMALL))
+    np.testing.assert_allclose(run.weights[:5, 0], p[:5])  # no gesture model yet: the network alone
+    assert not np.allclose(run.weights[-10:, 0], p[-10:])  # later: the product with its HMMs
+
+
+def test_online_settings_are_checked():
+    with pytest.raises(DataError, match="step"):
+        ol.OnlineSettings(step=0.3)
+    with pytest.raises(DataError, match="posterior"):
+        ol.OnlineSettings(posterior="vote")
+
+
+# ------------------------------------------------------------------ intervals and tables
+
+
+def test_two_level_bootstrap_weights_and_means():
+    rng = np.random.default_rng(0)
+    W = two_level_weights(4, 10, 200, rng)
+    assert W.shape == (201, 4, 10) and np.all(W[0] == 1)
+    np.testing.assert_array_equal(W[1:].sum(axis=(1, 2)), 40)  # 4 seeds drawn, 10 units each
+    values = rng.random((4, 10, 2))
+    reps = replicate_means(values, W)
+    np.testing.assert_allclose(reps[0], values.mean(axis=(0, 1)))
+    b = 5
+    np.testing.assert_allclose(reps[b], np.einsum("sj,sjk->k", W[b], values) / W[b].sum())
+
+
+def test_two_level_intervals_see_the_spread_between_seeds():
+    """Seeds that differ and episodes that agree within a seed: the interval is the seeds' bootstrap."""
+    rng = np.random.default_rng(1)
+    values = np.repeat(np.array([0.2, 0.4, 0.6, 0.8])[:, None], 50, axis=1)[..., None]
+    reps = replicate_means(values, two_level_weights(4, 50, 4000, rng))
+    lo, hi = interval(reps)
+    # the mean of 4 seeds resampled: its replicates have variance σ²/4 with σ² the seeds' (biased) variance
+    assert np.std(reps[1:, 0]) == pytest.approx(np.sqrt(values[:, 0, 0].var() / 4), rel=0.05)
+    assert lo[0] < 0.4 and hi[0] > 0.6
+
+
+def _fake_results(correct_by_seed):
+    learners = [("true", "", None), ("soft", "mixed", False)]
+    out = []
+    for s, c in enumerate(correct_by_seed):
+        out.append(
+            lc.SeedResult(
+                s,
+                learners,
+                np.array([10, 20]),
+                np.asarray(c, bool),
+                [("mixed", False)],
+                np.ones((1, c.shape[2]), bool),
+                np.array([[0.5, 0.1, 0.9, 0.4]]),
+                np.zeros(20),
+            )
+        )
+    return out
+
+
+def test_curves_and_episodes_to_match():
+    J = 6
+    seed0 = np.zeros((2, 2, J), bool)
+    seed0[:, 0] = True  # true labels: all right
+    seed0[0, 1, :2] = True  # soft: 2 of 6 after 10 episodes …
+    seed0[1, 1] = True  # … all after 20
+    results = _fake_results([seed0, seed0.copy()])
+    settings = lc.StudySettings(
+        episodes=20, seeds=(0, 1), ambiguities=("mixed",), words=(False,), bootstrap=200
+    )
+    curves = lc.curves_table(results, settings)
+    soft = curves[(curves.learner == "soft")].set_index("episodes")
+    assert soft.loc[10, "accuracy"] == pytest.approx(2 / 6) and soft.loc[20, "accuracy"] == 1.0
+    assert soft.loc[10, "gap_high"] < 0 and soft.loc[20, "gap_low"] == soft.loc[20, "gap_high"] == 0
+    net = curves[curves.learner == "network"]
+    assert len(net) == 2 and np.all(net["accuracy"] == 1.0)
+    match = lc.match_table(curves)
+    assert lc.match_lines(match) == [
+        "mixed, without words: matched by soft after 20; at 20 episodes, best soft 1.000 against 1.000 with "
+        "true labels",
+        "some labelling scheme matches the true-label HMMs in 1 of 1 conditions",
+    ]
+    match = match.set_index("learner")
+    assert match.loc["soft", "episodes_to_match"] == 20 and match.loc["soft", "true_accuracy"] == 1.0
+    worse = seed0.copy()
+    worse[1, 1, :3] = False
+    match = lc.match_table(lc.curves_table(_fake_results([worse, worse]), settings)).set_index("learner")
+    assert np.isnan(match.loc["soft", "episodes_to_match"])
+
+
+def test_the_study_runs_end_to_end(engine):
+    settings = lc.StudySettings(
+        episodes=20,
+        seeds=(0, 1),
+        ambiguities=("mixed", "still"),
+        test_per_action=3,
+        bootstrap=30,
+        online=ol.OnlineSettings(config=SMALL, cluster_episodes=9),
+    )
+    results = lc.learning_study(engine, settings)
+    curves = lc.curves_table(results, settings, "synthetic")
+    assert set(curves.learner) == {"true", "unsupervised", "network", *ss.SCHEMES}
+    assert curves.attrs["experiment"] == "learning_curves" and curves["seeds"].iloc[0] == 2
+    assert curves["accuracy"].between(0, 1).all()
+    labels = lc.labels_table(results, settings)
+    still = labels[(labels.ambiguity == "still") & ~labels.words.astype(bool)].iloc[0]
+    mixed = labels[(labels.ambiguity == "mixed") & labels.words.astype(bool)].iloc[0]
+    assert still.label_accuracy < mixed.label_accuracy
+    assert set(lc.update_times(results)) == {"median", "p95", "max"}
+
+
+def test_study_settings_are_checked():
+    with pytest.raises(DataError, match="ambiguity"):
+        lc.StudySettings(ambiguities=("foggy",))
+    with pytest.raises(DataError, match="learner"):
+        lc.StudySettings(schemes=("guess",))
+    assert lc.StudySettings(episodes=300).checkpoints == (10, 20, 50, 100, 200, 300)
+
+
+def test_real_gesture_study_on_labelled_sequences(engine):
+    from glu.gestures.corpus import synthetic_corpus
+
+    corpus = synthetic_corpus(3, seed=4)
+    df = lr_.real_gesture_study(
+        engine, corpus, corpus[:2], learners=("hard", "true"), draws=(0,), config=SMALL
+    )
+    assert set(df.test) == {"loso", "seated"} and len(df) == 2 * (9 + 2)
+    summary = lr_.real_gesture_summary(df)
+    assert set(summary.columns) >= {"learner", "test", "accuracy", "label_accuracy"}
+    assert isinstance(summary, pd.DataFrame) and summary["accuracy"].between(0, 1).all()
+
+
+def test_the_recording_of_an_online_learner_reads_back(engine, tmp_path):
+    import subprocess
+    import sys
+
+    import pyarrow as pa
+    import rerun as rr
+    from rerun.chunk import RrdReader
+
+    from glu.studies.learning.recordings import write_learning
+
+    ep, held, p = _stream(engine, 24, test=6)
+    actions = engine.bn.schema.values_of("Action")
+    run = ol.learn_online(
+        ep.features,
+        ep.actions,
+        "soft",
+        p,
+        actions,
+        ol.OnlineSettings(config=SMALL),
+        0,
+        held.features,
+        held.actions,
+        [8, 16, 24],
+    )
+    rr.set_strict_mode(True)
+    try:
+        path = write_learning(run, ep.features, tmp_path / "l.rrd", "test-learning", scene="# learning")
+    finally:
+        rr.set_strict_mode(False)
+    res = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "verify", str(path)], capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr
+
+    def column(entity, component):
+        stream = RrdReader(str(path)).stream().filter(content=entity, is_static=False, components=component)
+        batches = [c.to_record_batch().select(["episode", component]) for c in stream]
+        return pa.Table.from_batches(batches).sort_by("episode")
+
+    tap = column("/labels/tap", "Scalars:scalars")
+    assert tap.column("episode").to_pylist() == list(range(1, 25))
+    np.testing.assert_allclose(
+        [v[0] for v in tap.column("Scalars:scalars").to_pylist()], run.weights[:, 0, 1]
+    )
+    acc = column("/accuracy/held-out", "Scalars:scalars")
+    assert acc.column("episode").to_pylist() == [8, 16, 24]
+    np.testing.assert_allclose(
+        [v[0] for v in acc.column("Scalars:scalars").to_pylist()], run.accuracy()[:, 0]
+    )
+    path_tap = column("/space/models/tap/path", "LineStrips3D:strips")
+    last = np.array(path_tap.column("LineStrips3D:strips").to_pylist()[-1][0])
+    np.testing.assert_allclose(last, run.means[-1, 0, 1], rtol=1e-6)
+    texts = column("/decisions", "TextLog:text").column("TextLog:text").to_pylist()
+    assert len(texts) == 24 and texts[0][0].startswith("episode 1: ")

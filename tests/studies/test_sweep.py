@@ -1,0 +1,376 @@
+"""glu evaluate: settings and their errors, resuming, and the same table locally and on a real Dask
+cluster."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from cli_run import run
+
+from glu.errors import DataError
+from glu.studies.corpus_evaluation.config import config_from_dict, load_config
+from glu.studies.corpus_evaluation.sweep import run_sweep
+
+SMALL = """\
+episodes = 64
+chunk_size = 4
+seed = 3
+recognizer_seeds = 2
+
+[grid]
+noise = [0.0, 0.05]
+viewpoints = ["front", "seated"]
+fractions = [0.5, 1.0]
+action_prior = ["network"]
+inference_network = ["generating", "learned"]
+learn_experiments = [150]
+p_hmm = ["likelihood", "calibrated"]
+
+[recognizer]
+n_per_action = 6
+n_states = 3
+n_mix = 1
+n_iter = 10
+calibration_per_action = 4
+
+[network]
+data = "synthetic"
+
+[evaluation]
+bootstrap = 20
+"""
+TABLES = (
+    "results.parquet",
+    "differences.parquet",
+    "reliability.parquet",
+    "seeds.parquet",
+    "calibration.parquet",
+    "sums.parquet",
+    "summary.json",
+)
+
+
+def quiet(_msg: str) -> None:
+    pass
+
+
+@pytest.fixture(scope="module")
+def config_file(tmp_path_factory):
+    p = tmp_path_factory.mktemp("cfg") / "small.toml"
+    p.write_text(SMALL)
+    return p
+
+
+@pytest.fixture(scope="module")
+def synchronous(config_file, tmp_path_factory):
+    """The reference run: every chunk in this process."""
+    out = tmp_path_factory.mktemp("sync")
+    result = run_sweep(load_config(config_file), out, scheduler="synchronous", log=quiet)
+    return out, result
+
+
+def same_tables(a: Path, b: Path) -> None:
+    for name in TABLES:
+        assert (a / name).read_bytes() == (b / name).read_bytes(), name
+
+
+def test_the_tables(synchronous):
+    out, result = synchronous
+    assert result.computed == 8 and result.reused == 0  # 4 conditions × 2 chunks of 4 episodes per seed
+    table = pd.read_parquet(out / "results.parquet")
+    assert set(table.columns) >= {
+        "action_prior",
+        "inference_network",
+        "learn_experiments",
+        "p_hmm",
+        "noise",
+        "viewpoint",
+        "target",
+        "strategy",
+        "fraction",
+        "metric",
+        "estimate",
+        "ci_low",
+        "ci_high",
+    }
+    assert set(table.viewpoint) == {"front", "seated", "all"}
+    assert set(table.p_hmm) == {"likelihood", "calibrated"} and set(table.action_prior) == {"network"}
+    assert set(zip(table.inference_network, table.learn_experiments, strict=True)) == {
+        ("generating", 0),
+        ("learned", 150),
+    }
+    assert {"network", "true_action"} <= set(table[table.target == "effect"].strategy)
+    full = table[(table.viewpoint == "all") & table.noise.isna()]
+    assert (full.n_episodes == 64).all()  # 4 conditions × 2 seeds × 8 episodes
+    assert (full.ci_low <= full.estimate + 1e-12).all() and (full.estimate <= full.ci_high + 1e-12).all()
+    assert set(full.metric) == {"accuracy", "log_loss", "brier", "ece", "verb", "object", "effect", "all"}
+    assert result.metrics.attrs["experiment"] == "corpus_evaluation"
+    assert "synthetic data" in result.summary["data_source"] and "/" not in result.summary["data_source"]
+    diffs = pd.read_parquet(out / "differences.parquet")
+    assert set(diffs.verdict) <= {"better", "worse", "no difference"}
+    seeds = pd.read_parquet(out / "seeds.parquet")
+    assert set(seeds.recognizer_seed) == {0, 1} and seeds.estimate.notna().any()
+    cal = pd.read_parquet(out / "calibration.parquet")
+    assert len(cal) == 4 and cal.beta.between(0, 1).all()  # 2 seeds × 2 fractions
+    rel = pd.read_parquet(out / "reliability.parquet")
+    assert {"gesture"} <= set(rel[rel.target == "action"].strategy)  # p_HMM's own reliability
+    assert (out / "recognizers" / "seed-001.json").is_file()
+
+
+def test_the_seeds_make_the_pooled_estimate(synchronous):
+    """Each seed's estimates pool (with equal episodes per seed) to the table's estimate; the seeds differ."""
+    out, _ = synchronous
+    table = pd.read_parquet(out / "results.parquet")
+    seeds = pd.read_parquet(out / "seeds.parquet")
+    keys = ["inference_network", "learn_experiments", "p_hmm", "target", "strategy", "fraction", "metric"]
+    pooled = table[(table.viewpoint == "all") & table.noise.isna() & (table.metric == "accuracy")]
+    mean = seeds[seeds.metric == "accuracy"].groupby(keys).estimate.mean()
+    merged = pooled.set_index(keys).estimate
+    pd.testing.assert_series_equal(
+        mean.sort_index(), merged.loc[mean.index].sort_index(), check_names=False, rtol=1e-12
+    )
+    g = seeds[(seeds.strategy == "gesture") & (seeds.metric == "accuracy")]
+    assert g.groupby("recognizer_seed").estimate.mean().nunique() == 2
+
+
+def test_resume_computes_only_the_missing_chunks(config_file, synchronous, tmp_path):
+    ref, _ = synchronous
+    out = tmp_path / "resume"
+    shutil.copytree(ref, out)
+    (out / "chunks" / "c002-000001.npz").unlink()  # as if interrupted before this chunk
+    (out / "chunks" / ".c003-000000.npz.abcd.npz").write_bytes(b"half a file")  # an interrupted write
+    for name in TABLES:
+        (out / name).unlink()
+    result = run_sweep(load_config(config_file), out, scheduler="synchronous", log=quiet)
+    assert (result.computed, result.reused) == (1, 7)
+    assert not list((out / "chunks").glob(".*"))  # the half-written file is gone
+    same_tables(ref, out)
+
+
+def test_a_sweep_in_pieces_gives_the_same_tables(config_file, synchronous, tmp_path):
+    ref, _ = synchronous
+    config = load_config(config_file)
+    first = run_sweep(config, tmp_path, scheduler="synchronous", max_chunks=3, log=quiet)
+    assert first.computed == 3 and first.metrics.empty and not (tmp_path / "results.parquet").exists()
+    rest = run_sweep(config, tmp_path, scheduler="synchronous", log=quiet)
+    assert (rest.computed, rest.reused) == (5, 3)
+    same_tables(ref, tmp_path)
+
+
+def test_a_folder_with_other_settings_is_refused(config_file, synchronous):
+    ref, _ = synchronous
+    other = load_config(config_file).with_overrides(seed=4)
+    with pytest.raises(DataError, match="holds a sweep with other settings"):
+        run_sweep(other, ref, scheduler="synchronous", log=quiet)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _wait_for_port(port: int, proc: subprocess.Popen, timeout: float = 60) -> None:
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        if proc.poll() is not None:
+            raise RuntimeError(f"the dask process exited with {proc.returncode}")
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.2)
+    raise TimeoutError(f"nothing listens on 127.0.0.1:{port}")
+
+
+@pytest.fixture
+def dask_cluster(tmp_path):
+    """A real `dask scheduler` and `dask worker` on 127.0.0.1 (free ports), stopped afterwards."""
+    port = _free_port()
+    env = {**os.environ, "DASK_DISTRIBUTED__LOGGING__DISTRIBUTED": "error"}
+    cli = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+    sched = subprocess.Popen(
+        [
+            *cli,
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--no-dashboard",
+            "--dashboard-address",
+            "127.0.0.1:0",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+        cwd=tmp_path,
+    )
+    procs = [sched]
+    try:
+        _wait_for_port(port, sched)
+        worker = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "distributed.cli.dask_worker",
+                f"tcp://127.0.0.1:{port}",
+                "--nworkers",
+                "1",
+                "--nthreads",
+                "1",
+                "--no-dashboard",
+                "--host",
+                "127.0.0.1",
+                "--local-directory",
+                str(tmp_path / "w"),
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            env=env,
+            cwd=tmp_path,
+        )
+        procs.append(worker)
+        yield f"tcp://127.0.0.1:{port}"
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in reversed(procs):
+            try:
+                p.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+
+
+def test_a_real_scheduler_and_worker_give_the_local_runs_table(
+    config_file, synchronous, dask_cluster, tmp_path, capsys
+):
+    """The acceptance test of the issue: `--scheduler tcp://127.0.0.1:PORT` equals the LocalCluster run."""
+    ref, _ = synchronous
+    local, remote = tmp_path / "local", tmp_path / "remote"
+    status, out, err = run(
+        capsys, "evaluate", "--config", str(config_file), "--workers", "1", "-o", str(local)
+    )
+    assert status == 0, err
+    assert "8 chunks computed" in out and "accuracy" in out
+    status, out, err = run(
+        capsys, "evaluate", "--config", str(config_file), "--scheduler", dask_cluster, "-o", str(remote)
+    )
+    assert status == 0, err
+    assert f"on {dask_cluster}" in err
+    same_tables(local, remote)
+    same_tables(ref, local)
+
+
+def test_an_unreachable_scheduler_is_one_line(config_file, tmp_path, capsys):
+    status, out, err = run(
+        capsys,
+        "evaluate",
+        "--config",
+        str(config_file),
+        "--scheduler",
+        f"tcp://127.0.0.1:{_free_port()}",
+        "-o",
+        str(tmp_path / "x"),
+    )
+    assert status == 2 and err.count("\n") == 1 and "cannot reach the Dask scheduler" in err, err
+
+
+@pytest.mark.parametrize(
+    ("toml", "message"),
+    [
+        ("episodes = 0\n", "episodes=0: a whole number from 1"),
+        ("episode = 10\n", "unknown key 'episode' in the top level; allowed: episodes"),
+        ("[grid]\nnoise = [-1.0]\n", "grid.noise"),
+        ("[grid]\nviewpoints = ['upside']\n", "unknown viewpoint 'upside'"),
+        ("[grid]\nstrategies = ['best']\n", "unknown strategy 'best'"),
+        ("[grid]\nfractions = [0.0]\n", "fractions"),
+        ("[views.left]\nyaw = 3\n", "unknown key 'yaw' in views.left; allowed: yaw_deg"),
+        ("[scenario.Action]\nkick = 1\n", "no value 'kick'"),
+        ("[scenario.Action]\ntap = 1\n", "applies only with grid.action_prior"),
+        ("[grid]\np_hmm = ['raw']\n", "grid.p_hmm: unknown value 'raw'; allowed: likelihood, per-frame"),
+        ("[grid]\naction_prior = ['empirical']\n", "grid.action_prior: unknown value 'empirical'"),
+        ("[grid]\ninference_network = ['oracle']\n", "allowed: generating, learned"),
+        ("[grid]\nlearn_experiments = [5]\n", "grid.learn_experiments=5: a whole number from 10"),
+        ("recognizer_seeds = 0\n", "recognizer_seeds=0: a whole number from 1"),
+        ("[recognizer]\nfile = 'r.json'\n", "needs recognizer_seeds = 1"),
+        ("[network]\nwords = 'asl'\n", "network.words='asl'; allowed: lab, asr"),
+        ("[evaluation]\neffect_evidence = ['ObjVel']\n", "leave it out"),
+        ("[recognizer]\nn_states = 0\n", "recognizer.n_states=0"),
+        ("episodes = [\n", "small.toml"),
+    ],
+)
+def test_bad_settings_are_one_line(tmp_path, capsys, toml, message):
+    cfg = tmp_path / "small.toml"
+    cfg.write_text(toml)
+    status, out, err = run(capsys, "evaluate", "--config", str(cfg), "-o", str(tmp_path / "out"))
+    assert status == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+    assert message in err and str(cfg) in err, err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--episodes", "0"], "expected a whole number ≥ 1"),
+        (["--seed", "-1"], "a seed is a whole number in [0, 2**32 - 1]"),
+        (["--scheduler", "localhost"], "expected a Dask scheduler address such as tcp://127.0.0.1:8786"),
+        (["--config", "nope.toml"], "nope.toml: no such sweep file"),
+    ],
+)
+def test_bad_arguments_are_one_line(tmp_path, capsys, argv, message):
+    status, out, err = run(capsys, "evaluate", *argv, "-o", str(tmp_path / "out"))
+    assert status == 2 and "Traceback" not in err and message in err, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_defaults_are_valid_and_overridable():
+    c = config_from_dict({})
+    assert len(c.conditions) == 24 and c.recognizer_seeds == 10 and c.per_condition == 500
+    assert len(c.readings) == 12  # (generating + 3 learned) × 3 readings of p_HMM
+    assert c.with_overrides(episodes=480, seed=None).per_condition == 2
+
+
+def test_glu_corpus_writes_parquet(config_file, tmp_path, capsys):
+    status, out, err = run(
+        capsys, "corpus", "--config", str(config_file), "--episodes", "16", "-o", str(tmp_path / "c.parquet")
+    )
+    assert status == 0, err
+    df = pd.read_parquet(tmp_path / "c.parquet")
+    assert len(df) == 16 and {"Action", "ObjVel", "words", "xyz", "noise", "viewpoint", "replication"} <= set(
+        df.columns
+    )
+    assert set(df.replication) == {0, 1}
+
+
+def test_readings_share_the_episodes(config_file, synchronous, tmp_path):
+    """Another reading of p_HMM is scored on the same episodes: the other readings' rows are unchanged."""
+    ref, _ = synchronous
+    config = load_config(config_file).with_overrides(p_hmm=("likelihood", "per-frame", "calibrated"))
+    result = run_sweep(config, tmp_path, scheduler="synchronous", log=quiet)
+    assert set(result.metrics.p_hmm) == {"likelihood", "per-frame", "calibrated"}
+    one = pd.read_parquet(ref / "results.parquet")
+    both = result.metrics[result.metrics.p_hmm != "per-frame"]
+    key = ["inference_network", "p_hmm", "noise", "viewpoint", "target", "strategy", "fraction", "metric"]
+    both = both.set_index(key).sort_index()
+    one = one.set_index(key).sort_index()
+    pd.testing.assert_series_equal(both.estimate, one.estimate, check_exact=True)
+    assert result.summary["episodes"] == 64
+
+
+def test_the_notebook_reads_a_finished_sweep(synchronous):
+    from glu.studies.corpus_evaluation.tables import read_tables
+
+    out, result = synchronous
+    table, diffs, rel, seeds, calibration, summary = read_tables(out)
+    pd.testing.assert_frame_equal(table, result.metrics)
+    assert summary["fingerprint"] == result.summary["fingerprint"]
+    with pytest.raises(DataError, match="not the output folder of a finished"):
+        read_tables(out / "chunks")
