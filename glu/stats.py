@@ -31,10 +31,19 @@ p-values; :func:`adjusted_verdict` reads a verdict from an adjusted p-value. Wit
 smallest bootstrap p-value is ``2 / (B + 1)``, so Holm's first threshold ``α / m`` is out of reach for a
 family of ``m > α (B + 1) / 2`` differences whatever the data (25 at B = 1,000): such families are adjusted
 by Benjamini–Hochberg, which rejects the ``k`` smallest when ``p_(k) ≤ k α / m``.
+
+**Equivalence.** That an interval contains 0 says that no difference was found, not that there is none.
+"A matches B" is claimed only by an equivalence test against a margin ``m`` declared beforehand: the two
+one-sided tests (TOST; Schuirmann 1987) of ``H0: δ ≤ −m`` and ``H0: δ ≥ m``, each at level α.
+:func:`tost_p_value` reads them from the bootstrap replicates of the difference (``p = max(p_−, p_+)``,
+each one-sided p-value counted as :func:`bootstrap_p_value` counts; equivalence at α exactly when the
+``1 − 2α`` percentile interval lies inside ``(−m, m)``, up to one replicate), and
+:func:`equivalence_verdict` says ``"equivalent"`` or not from a (possibly adjusted) p-value.
 """
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Sequence
 
@@ -288,3 +297,37 @@ def adjusted_verdict(estimate: float, p_adjusted: float, higher_is_better: bool 
     if not (np.isfinite(estimate) and np.isfinite(p_adjusted)) or p_adjusted > ALPHA or estimate == 0:
         return "no difference"
     return "better" if (estimate > 0) == higher_is_better else "worse"
+
+
+def tost_p_value(replicates: np.ndarray, margin: float) -> np.ndarray:
+    """Bootstrap p-values of the two one-sided tests of equivalence (TOST) within ``± margin``.
+
+    ``p = max(p_−, p_+)`` with ``p_− = (1 + #{d* ≤ −m}) / (B + 1)`` (the null ``δ ≤ −m``) and ``p_+ = (1 +
+    #{d* ≥ m}) / (B + 1)`` (the null ``δ ≥ m``) over the ``B`` finite replicates ``d*`` of each column (row 0,
+    the estimate, excluded). A small p says the difference lies inside the margin; rejecting at α is the
+    ``1 − 2α`` percentile interval lying inside ``(−m, m)``. A column without finite replicates: NaN.
+
+    Parameters
+    ----------
+    replicates : array, shape (B + 1, ...) — row 0 the estimate, rows 1 … the replicates of a difference
+    margin : the equivalence margin ``m > 0``, in the difference's units, declared before the data are seen
+
+    >>> reps = np.array([0.0, -0.03, -0.01, 0.0, 0.01, 0.015])
+    >>> float(tost_p_value(reps, 0.02))  # one replicate of five at or below −0.02, none at or above 0.02
+    0.3333333333333333
+    """
+    if not (isinstance(margin, int | float) and 0 < margin < math.inf):
+        raise DataError(f"margin={margin!r}: the equivalence margin must be a number > 0")
+    reps = np.asarray(replicates, dtype=float)[1:]
+    finite = np.isfinite(reps)
+    b = finite.sum(axis=0)
+    low = (finite & (reps <= -margin)).sum(axis=0)
+    high = (finite & (reps >= margin)).sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        p = (1.0 + np.maximum(low, high)) / (b + 1)
+    return np.where(b > 0, np.minimum(p, 1.0), np.nan)
+
+
+def equivalence_verdict(p_tost: float, alpha: float = ALPHA) -> bool:
+    """Whether a TOST p-value (:func:`tost_p_value`, adjusted or not) establishes equivalence at ``alpha``."""
+    return bool(np.isfinite(p_tost) and p_tost <= alpha)
