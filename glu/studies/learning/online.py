@@ -47,10 +47,11 @@ from glu.hmm import (
     train,
 )
 from glu.studies.learning.self_supervised import (
-    LEARNERS,
+    ONLINE_LEARNERS,
     POSTERIOR_READINGS,
     STUDY_TRAINING,
     best_matching,
+    first_labels,
     label_weights,
     one_hot,
     p_hmm_reading,
@@ -97,9 +98,9 @@ class OnlineSettings:
 
 
 class Learner(NamedTuple):
-    """One learner: its labelling scheme (:data:`~glu.studies.learning.self_supervised.LEARNERS`) and the
-    labels' source, a key of the ``p_bn`` mapping given to :func:`run_online` (None for ``true`` and
-    ``unsupervised``)."""
+    """One learner: its labelling scheme (:data:`~glu.studies.learning.self_supervised.ONLINE_LEARNERS`) and
+    the labels' source, a key of the ``p_bn`` mapping given to :func:`run_online` (None for ``true`` and
+    ``unsupervised``; for ``supervised``, how many labelled episodes per action)."""
 
     scheme: str
     source: Any = None
@@ -200,6 +201,75 @@ def _put(stats: SufficientStats, idx: tuple, new: SufficientStats) -> None:
         getattr(stats, f)[idx] = getattr(new, f)
 
 
+class _Labels:
+    """How each learner labels each episode: the static labels, computed once, and the rules of those that
+    read their own HMMs (:func:`run_online`)."""
+
+    def __init__(self, learners, episode_actions, p_bn, A: int, settings: OnlineSettings) -> None:
+        L = len(learners)
+        true = np.asarray(episode_actions)
+        self.learners, self.p_bn, self.settings = list(learners), p_bn, settings
+        self.static: dict[int, np.ndarray] = {}
+        for k, lr in enumerate(learners):
+            if lr.scheme in ("hard", "soft", "confident"):
+                self.static[k] = label_weights(lr.scheme, p_bn[lr.source], settings.threshold)
+            elif lr.scheme == "random":  # one-hot labels drawn by the caller
+                self.static[k] = label_weights("hard", p_bn[lr.source])
+            elif lr.scheme == "true":
+                self.static[k] = one_hot(true, A)
+            elif lr.scheme == "supervised":
+                self.static[k] = first_labels(true, int(lr.source), A)
+        self.dynamic = np.array([lr.scheme in DYNAMIC for lr in learners], dtype=bool).reshape(L)
+        self.clusters = [k for k, lr in enumerate(learners) if lr.scheme in ("unsupervised", "clustering")]
+        # what names the clusters after the fact: the true actions, or the network's posteriors
+        self.naming = {
+            k: (one_hot(true, A) if learners[k].scheme == "unsupervised" else p_bn[learners[k].source])
+            for k in self.clusters
+        }
+        # the first model of an action is trained once its buffer weighs this much and holds this many
+        self.init_weight = np.array(
+            [min(settings.init_weight, lr.source) if lr.scheme == "supervised" else settings.init_weight
+             for lr in learners]
+        )  # fmt: skip
+        self.init_count = np.array([min(2, lr.source) if lr.scheme == "supervised" else 2 for lr in learners])
+
+    def static_weights(self, i: int, L: int, A: int) -> np.ndarray:
+        W = np.zeros((L, A))
+        for k, w in self.static.items():
+            W[k] = w[i]
+        return W
+
+    def dynamic_weights(self, W: np.ndarray, i: int, loglik: np.ndarray, n_frames: int, exists) -> None:
+        """The labels of the learners that read their HMMs, into ``W`` (L, A): the product rule with the
+        network (``iterative``: p_HMM read as ``settings.posterior``; ``em``: the likelihood itself), or
+        p_HMM alone (the clusters); the network alone while some action has no model."""
+        for k in np.flatnonzero(self.dynamic):
+            lr = self.learners[k]
+            product = lr.scheme in ("iterative", "em")
+            if exists[k].all():
+                reading = "likelihood" if lr.scheme == "em" else self.settings.posterior
+                p_hmm = p_hmm_reading(loglik[k : k + 1], np.array([n_frames]), reading)
+                src = self.p_bn[lr.source][i : i + 1] if product else None
+                W[k] = label_weights("iterative", src, p_hmm=p_hmm)[0] if product else p_hmm[0]
+            elif product:
+                W[k] = self.p_bn[lr.source][i]
+
+
+DYNAMIC: tuple[str, ...] = ("iterative", "em", "unsupervised", "clustering")
+"""The learners whose labels read their own HMMs."""
+
+
+def _check_learners(learners: Sequence[Learner], p_bn: Mapping[Any, np.ndarray]) -> None:
+    for lr in learners:
+        if lr.scheme not in ONLINE_LEARNERS:
+            raise DataError(f"unknown learner {lr.scheme!r}; allowed: {', '.join(ONLINE_LEARNERS)}")
+        if lr.scheme == "supervised":
+            if isinstance(lr.source, bool) or not isinstance(lr.source, int | np.integer) or lr.source < 1:
+                raise DataError(f"learner 'supervised': labels per action {lr.source!r}, a whole number ≥ 1")
+        elif lr.scheme not in ("true", "unsupervised") and lr.source not in p_bn:
+            raise DataError(f"learner {lr.scheme!r}: no network posteriors for {lr.source!r}")
+
+
 def run_online(
     features: Sequence[np.ndarray],
     episode_actions: np.ndarray,
@@ -217,10 +287,11 @@ def run_online(
     Parameters
     ----------
     features : the episodes' gestures, arrays of shape (T_i, D), in the order they are seen (N of them)
-    episode_actions : their true actions, int array of shape (N,) (only ``true`` and the after-the-fact
-        naming of the unsupervised clusters read them)
+    episode_actions : their true actions, int array of shape (N,) (only ``true``, ``supervised`` and the
+        after-the-fact naming of the ``unsupervised`` clusters read them)
     learners : the learners (:class:`Learner`)
-    p_bn : label source → ``p_BN(A | what the robot perceived)`` of each episode, shape (N, A)
+    p_bn : label source → ``p_BN(A | what the robot perceived)`` of each episode, shape (N, A) (for
+        ``random``: the random labels, one-hot)
     test_features, test_actions : the held-out gestures (J of them) and their true actions
     checkpoints : after how many episodes to measure (each in 1 … N)
     actions : the action names (the columns of ``p_bn``)
@@ -228,67 +299,45 @@ def run_online(
     seed : seeds the first models' initial mixtures and the clustering
     """
     N, A, L = len(features), len(actions), len(learners)
-    for lr in learners:
-        if lr.scheme not in LEARNERS:
-            raise DataError(f"unknown learner {lr.scheme!r}; allowed: {', '.join(LEARNERS)}")
-        if lr.scheme not in ("true", "unsupervised") and lr.source not in p_bn:
-            raise DataError(f"learner {lr.scheme!r}: no network posteriors for {lr.source!r}")
+    _check_learners(learners, p_bn)
     checkpoints = np.array(sorted(set(int(c) for c in checkpoints)))
     if len(checkpoints) == 0 or checkpoints[0] < 1 or checkpoints[-1] > N:
         raise DataError(f"checkpoints must lie in 1 … {N} (the episodes), got {checkpoints.tolist()}")
     config, D = settings.config, features[0].shape[1]
-    Q = config.n_states
     state = _empty_state(L, A, config, D)
-    unsup = [k for k, lr in enumerate(learners) if lr.scheme == "unsupervised"]
+    labels = _Labels(learners, episode_actions, p_bn, A, settings)
+    clusters = labels.clusters
     cluster_counts = np.zeros((L, A, A))
     C = len(checkpoints)
     correct = np.zeros((C, L, len(test_features)), dtype=bool)
-    means = np.full((C, L, A, Q, D), np.nan)
+    means = np.full((C, L, A, config.n_states, D), np.nan)
     matching = np.tile(np.arange(A), (C, L, 1))
     all_weights = np.zeros((N, L, A))
     seconds = np.zeros(N)
-    static = {
-        k: label_weights(lr.scheme, p_bn[lr.source], settings.threshold)
-        for k, lr in enumerate(learners)
-        if lr.scheme in ("hard", "soft", "confident")
-    }
-    true_w = one_hot(np.asarray(episode_actions), A)
     first_models: dict = {}  # first models by (action, buffer), shared by learners with the same buffer
-    truth = np.array([lr.scheme == "true" for lr in learners])
-    dynamic = np.array([lr.scheme in ("iterative", "unsupervised") for lr in learners])
     c = 0
     for i, X in enumerate(features):
         t0 = time.thread_time()
-        W = np.zeros((L, A))
-        for k, w in static.items():
-            W[k] = w[i]
-        W[truth] = true_w[i]
+        W = labels.static_weights(i, L, A)
         # the E-step of every model that learns from this episode, or whose likelihood labels it
-        pairs = np.nonzero(state.exists & ((W > 0) | dynamic[:, None]))
+        pairs = np.nonzero(state.exists & ((W > 0) | labels.dynamic[:, None]))
         loglik = np.full((L, A), -np.inf)
         unit = None
         if len(pairs[0]):
             unit, ll = episode_stats(X, GMMHMMParams(*(p[pairs] for p in state.params)))
             loglik[pairs] = ll
-        for k in np.flatnonzero(dynamic):
-            lr = learners[k]
-            if state.exists[k].all():
-                p_hmm = p_hmm_reading(loglik[k : k + 1], np.array([len(X)]), settings.posterior)
-                src = p_bn[lr.source][i : i + 1] if lr.scheme == "iterative" else None
-                W[k] = label_weights("iterative", src, p_hmm=p_hmm)[0] if src is not None else p_hmm[0]
-            elif lr.scheme == "iterative":
-                W[k] = p_bn[lr.source][i]
+        labels.dynamic_weights(W, i, loglik, len(X), state.exists)
         all_weights[i] = W
         if unit is not None:
             _update(state, pairs, unit, W, settings)
-        for k in unsup:
-            cluster_counts[k] += np.outer(W[k], true_w[i])
-        _initialise(state, W, features, i, settings, seed, unsup, first_models)
-        if unsup and i + 1 == settings.cluster_episodes:
-            _cluster(state, unsup, features[: i + 1], settings, seed, cluster_counts, true_w)
+        for k in clusters:
+            cluster_counts[k] += np.outer(W[k], labels.naming[k][i])
+        _initialise(state, W, features, i, labels, seed, clusters, first_models)
+        if clusters and i + 1 == settings.cluster_episodes:
+            _cluster(state, clusters, features[: i + 1], settings, seed, cluster_counts, labels.naming)
         seconds[i] = time.thread_time() - t0
         while c < C and checkpoints[c] == i + 1:
-            for k in unsup:
+            for k in clusters:
                 matching[c, k] = best_matching(cluster_counts[k])
             correct[c], means[c] = _measure(state, matching[c], test_features, test_actions)
             c += 1
@@ -365,7 +414,7 @@ def _initialise(
     W: np.ndarray,
     features: Sequence[np.ndarray],
     i: int,
-    settings: OnlineSettings,
+    labels: _Labels,
     seed: int,
     skip: Sequence[int],
     cache: dict,
@@ -377,10 +426,11 @@ def _initialise(
             continue
         buf = state.buffers[k][a]
         buf.append((i, float(W[k, a])))
-        if sum(x for _, x in buf) >= settings.init_weight and len(buf) >= 2:
+        if sum(x for _, x in buf) >= labels.init_weight[k] and len(buf) >= labels.init_count[k]:
             seqs = [features[j] for j, _ in buf]
             key = (int(a), tuple(buf))
-            _first_model(seqs, np.array([x for _, x in buf]), settings, seed, state, k, a, cache, key)
+            w = np.array([x for _, x in buf])
+            _first_model(seqs, w, labels.settings, seed, state, k, a, cache, key)
             buf.clear()
 
 
@@ -391,16 +441,17 @@ def _cluster(
     settings: OnlineSettings,
     seed: int,
     cluster_counts: np.ndarray,
-    true_w: np.ndarray,
+    naming: Mapping[int, np.ndarray],
 ) -> None:
-    """The unsupervised learners' first models: k-means of the episodes seen so far, one model per cluster."""
+    """The clustering learners' first models: k-means of the episodes seen so far, one model per cluster;
+    each cluster's counts against what names it (the true actions, or the network's posteriors)."""
     A = state.exists.shape[1]
     labels = kmeans_labels(resampled(seen), A, seed)
     for k in learners:
         for a in range(A):
             members = np.flatnonzero(labels == a)
             _first_model([seen[j] for j in members], np.ones(len(members)), settings, seed, state, k, a)
-        cluster_counts[k] = one_hot(labels, A).T @ true_w[: len(seen)]
+        cluster_counts[k] = one_hot(labels, A).T @ naming[k][: len(seen)]
 
 
 def _measure(

@@ -11,6 +11,11 @@ and trains its gesture HMMs from those labels (weighted EM, :func:`glu.hmm.em.fi
 * :class:`Ambiguity` — how well the effects tell the actions apart: the objects people act on, objects
   that never move, taps that fail (the object stays put, as after a touch), noisy perception of the effect.
   :data:`AMBIGUITIES` names the study's.
+* :class:`World` — who the people are and how the robot sees them (sensor noise, people's own arm lengths and
+  movement styles, turned views, body-frame features), and whether the effects depend on the gesture as well
+  as on the action (:class:`glu.studies.episodes.GestureEffects`: a fast tap sends the object further, the
+  slowest taps fail). :data:`WORLDS` names the study's: ``easy`` (the generator's people facing the camera,
+  effects of the action alone) and ``hard``.
 * :func:`simulate_episodes` — episodes drawn as the corpus draws them
   (:mod:`glu.studies.corpus_evaluation.corpus`): the action, then the person's gesture
   (:mod:`glu.gestures.synthetic`, one seeded generator per episode, the same in every ambiguity), the object,
@@ -37,7 +42,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -51,7 +56,17 @@ from glu.gestures.synthetic import View
 from glu.hmm import (
     TrainingConfig,
 )
-from glu.studies.episodes import GESTURE_KEY, WORLD_KEY, GestureSettings, Scenario
+from glu.schema import AFFORDANCE_VALUES
+from glu.studies.episodes import (
+    GESTURE_KEY,
+    GESTURE_WORLDS,
+    WORLD_KEY,
+    GestureEffects,
+    GestureSettings,
+    Scenario,
+    effects_given_gesture,
+    gesture_speed,
+)
 
 SCHEMES: tuple[str, ...] = ("hard", "soft", "confident", "iterative")
 """How the robot labels an episode from its network (and, for ``iterative``, its current HMMs)."""
@@ -60,11 +75,27 @@ BASELINES: tuple[str, ...] = ("true", "unsupervised")
 lower bound). The third baseline, the network alone, recognises no gesture: its accuracy is that of its
 labels."""
 LEARNERS: tuple[str, ...] = SCHEMES + BASELINES
+"""The learners that learn all episodes at once (:func:`glu.studies.learning.learned_recognizers
+.learn_recognizer`, ``glu learn-gestures``) as well as online."""
+CONTROLS: tuple[str, ...] = ("random", "clustering", "em")
+"""Controls that could explain learning from effects away, each beside the schemes in every condition
+(online, :mod:`glu.studies.learning.online`): ``random`` — labels drawn at random, right as often as the
+network's arg-max in that condition (:func:`matched_random_labels`), wrong uniformly; ``clustering`` — the
+gestures clustered without labels, each cluster named after the fact by the network's posteriors of its
+episodes (no true action); ``em`` — semi-supervised EM with the action latent, each episode weighted by
+``p(A | gesture, object, effect) ∝ p(gesture | A) · p_BN(A | object, effect)`` (the likelihood itself, not
+its per-frame reading)."""
+SUPERVISED: tuple[int, ...] = (1, 5)
+"""The ``supervised`` learners: the true labels of the first 1 and 5 episodes of each action, nothing
+else (the true-label learner is supervision by every label)."""
+ONLINE_LEARNERS: tuple[str, ...] = LEARNERS + CONTROLS + ("supervised",)
+"""Every learner :func:`glu.studies.learning.online.run_online` runs."""
 POSTERIOR_READINGS: tuple[str, ...] = ("likelihood", "per-frame")
 """How ``p_HMM`` is read from the likelihoods when the robot relabels (two
 of :data:`glu.gestures.calibration.READINGS`)."""
-ACTION_KEY, PERCEPTION_KEY = 3, 4
-"""Spawn keys of the actions and of the perception noise (the corpus uses 0 for the world, 1 for gestures)."""
+ACTION_KEY, PERCEPTION_KEY, VIEW_KEY = 3, 4, 6
+"""Spawn keys of the actions, of the perception noise and of each person's turn (the corpus uses 0 for the
+world, 1 for gestures; the study's bootstrap 5)."""
 TEST_OFFSET = 10_000_000
 """Held-out episodes are numbered from here (their gestures never meet a training episode's)."""
 STUDY_TRAINING = TrainingConfig(n_states=6, n_mix=1, n_iter=50, tol=1e-3)
@@ -122,6 +153,74 @@ AMBIGUITIES: dict[str, Ambiguity] = {
 """The study's ambiguities, from effects that tell actions apart well to effects that mislead."""
 
 
+@dataclass(frozen=True)
+class World:
+    """Who the people are, how the robot sees them, and what makes the effects.
+
+    Attributes
+    ----------
+    name : a short name
+    description : one line, for tables and figures
+    noise : standard deviation of the sensor noise on every joint, metres
+    variety : how far each person's arm length and movement style differ from the generator's standard
+        ones (:class:`~glu.gestures.synthetic.View`; 0: the standard people)
+    max_yaw : each person turned by a random angle, a multiple of 5° in ``[−max_yaw, max_yaw]`` (degrees);
+        None: facing the camera within ± 10°, as in the recordings
+    body_frame : the features in the shoulder line's frame (which a turn leaves alone) instead of the torso's
+    effects : whether and how the effects depend on the gesture as well as on the action
+        (:class:`~glu.studies.episodes.GestureEffects`); in such a world a fraction ``failed_taps`` of an
+        :class:`Ambiguity` makes the *slowest* taps fail, not random ones
+    """
+
+    name: str
+    description: str = ""
+    noise: float = 0.02
+    variety: float = 0.0
+    max_yaw: float | None = None
+    body_frame: bool = False
+    effects: GestureEffects = field(default_factory=GestureEffects)
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.noise, int | float) and 0 <= self.noise < 1):
+            raise DataError(f"world {self.name!r}: noise={self.noise!r} must be metres in [0, 1)")
+        yaw = self.max_yaw
+        if yaw is not None and not (isinstance(yaw, int | float) and 0 <= yaw <= 180):
+            raise DataError(f"world {self.name!r}: max_yaw={self.max_yaw!r} must be degrees in [0, 180]")
+        View(variety=self.variety)  # checks the variety
+
+    def views(self, n: int, seed: int, offset: int = 0) -> list[View]:
+        """The view of each of ``n`` episodes (each person's own turn from ``(seed, VIEW_KEY, offset)``)."""
+        if self.max_yaw is None:
+            return [View(variety=self.variety, body_frame=self.body_frame)] * n
+        k = int(self.max_yaw // 5)
+        yaws = 5.0 * _rng(seed, VIEW_KEY, offset).integers(-k, k + 1, size=n)
+        return [View(yaw_deg=float(y), variety=self.variety, body_frame=self.body_frame) for y in yaws]
+
+
+WORLDS: dict[str, World] = {
+    w.name: w
+    for w in (
+        World(
+            "easy",
+            "the generator's people facing the camera, 2 cm of sensor noise; effects of the action alone",
+        ),
+        World(
+            "hard",
+            "people varied (their own arm length and movement style), 5 cm of sensor noise, each turned by "
+            "up to 60° (body-frame features); the faster the gesture, the faster the object moves, whatever "
+            "the action, and the slowest quarter of the taps fail",
+            noise=0.05,
+            variety=1.0,
+            max_yaw=60.0,
+            body_frame=True,
+            effects=replace(GESTURE_WORLDS["gesture"], actions=AFFORDANCE_VALUES["Action"]),
+        ),
+    )
+}
+"""The study's worlds: the generator's world, where the label noise cannot depend on the gesture, and a
+harder one."""
+
+
 class Episodes(NamedTuple):
     """Episodes as the world made them and as the robot perceived them.
 
@@ -161,24 +260,32 @@ def draw_gestures(
     actions: np.ndarray,
     seed: int,
     offset: int = 0,
-    noise: float = 0.02,
+    noise: float | None = None,
     gestures: GestureSettings | None = None,
-    view: View | None = None,
+    world: World | None = None,
 ) -> list[np.ndarray]:
     """The repaired hand features of each episode's gesture (the generator seeded by ``(seed, GESTURE_KEY,
-    offset + i)``), arrays of shape (T_i, 3)."""
+    offset + i)``), arrays of shape (T_i, 3), as the robot sees them in ``world`` (default ``easy``;
+    ``noise``, if given, replaces its sensor noise)."""
     names = engine.bn.schema.values_of("Action")
     gestures = gestures or GestureSettings()
-    rngs = [_rng(seed, GESTURE_KEY, offset + i) for i in range(len(actions))]
-    batch = gesture_features(
-        [names[a] for a in actions],
-        rngs,
-        noise=noise,
-        spike_rate=gestures.spike_rate,
-        dropout_rate=gestures.dropout_rate,
-        view=view or View(),
-    )
-    return batch.features
+    world = world or WORLDS["easy"]
+    noise = world.noise if noise is None else noise
+    views = world.views(len(actions), seed, offset)
+    out: list[np.ndarray] = [np.empty((0, 3))] * len(actions)
+    for view in dict.fromkeys(views):  # one batch per view, in the order they first appear
+        rows = [i for i, v in enumerate(views) if v == view]
+        batch = gesture_features(
+            [names[actions[i]] for i in rows],
+            [_rng(seed, GESTURE_KEY, offset + i) for i in rows],
+            noise=noise,
+            spike_rate=gestures.spike_rate,
+            dropout_rate=gestures.dropout_rate,
+            view=view,
+        )
+        for i, x in zip(rows, batch.features, strict=True):
+            out[i] = x
+    return out
 
 
 def draw_world(
@@ -188,16 +295,24 @@ def draw_world(
     seed: int,
     offset: int = 0,
     effects: Sequence[str] = EFFECTS,
+    world: World | None = None,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """The object, effects and words of episodes with the given actions, and what the robot perceives.
 
     Returns ``(world, perceived)``: node → int array of shape (n,), every node's true value; and the
     object nodes and ``effects`` as perceived (each effect replaced by a uniformly random value with
-    probability ``ambiguity.perception_noise``).
+    probability ``ambiguity.perception_noise``). In a ``world`` whose effects depend on the gesture
+    (:attr:`World.effects`), the effects of objects that can move are redrawn from the speed of each
+    episode's gesture (:func:`glu.studies.episodes.effects_given_gesture`, the speed read from the
+    episode's own generator, :func:`glu.studies.episodes.gesture_speed`), and the taps that fail are the
+    slowest ones.
     """
     n = len(actions)
     schema = engine.bn.schema
     rng = _rng(seed, WORLD_KEY, offset)
+    tilt = (world or WORLDS["easy"]).effects
+    if tilt.active and ambiguity.failed_taps:
+        tilt = replace(tilt, failed_taps=max(tilt.failed_taps, ambiguity.failed_taps))
     fixed = {"Action": np.asarray(actions, dtype=np.intp)}
     for node in OBSERVED_OBJECT:
         p = ambiguity.objects.probabilities(node)
@@ -205,9 +320,9 @@ def draw_world(
     slow = schema.values_of("ObjVel").index("slow")
     tap = schema.values_of("Action").index("tap")
     stays = np.full(n, ambiguity.still)
-    if ambiguity.failed_taps:
+    if ambiguity.failed_taps and not tilt.active:
         stays |= (fixed["Action"] == tap) & (rng.random(n) < ambiguity.failed_taps)
-    world: dict[str, np.ndarray] = {}
+    drawn: dict[str, np.ndarray] = {}
     for mask in (stays, ~stays):  # the objects that stay put: ObjVel fixed slow, the rest drawn given it
         rows = np.flatnonzero(mask)
         if len(rows) == 0:
@@ -215,18 +330,20 @@ def draw_world(
         part = {k: v[rows] for k, v in fixed.items()}
         if mask is stays:
             part["ObjVel"] = np.full(len(rows), slow, dtype=np.intp)
-        drawn = sample(engine, part, rng)
-        for node, v in drawn.items():
-            world.setdefault(node, np.zeros(n, dtype=np.intp))[rows] = v
+        for node, v in sample(engine, part, rng).items():
+            drawn.setdefault(node, np.zeros(n, dtype=np.intp))[rows] = v
+    if tilt.active and not ambiguity.still:
+        speed = gesture_speed([_rng(seed, GESTURE_KEY, offset + i) for i in range(n)])
+        drawn = effects_given_gesture(engine, drawn, speed.quantile, tilt, rng)
     noise_rng = _rng(seed, PERCEPTION_KEY, offset)
-    perceived = {node: world[node].copy() for node in OBSERVED_OBJECT}
+    perceived = {node: drawn[node].copy() for node in OBSERVED_OBJECT}
     for node in effects:
         k = schema.cardinality(node)
-        v = world[node].copy()
+        v = drawn[node].copy()
         flip = noise_rng.random(n) < ambiguity.perception_noise
         v[flip] = noise_rng.integers(0, k, size=int(flip.sum()))
         perceived[node] = v
-    return world, perceived
+    return drawn, perceived
 
 
 def simulate_episodes(
@@ -236,15 +353,17 @@ def simulate_episodes(
     seed: int,
     offset: int = 0,
     effects: Sequence[str] = EFFECTS,
-    noise: float = 0.02,
+    noise: float | None = None,
     balanced: bool = False,
+    world: World | None = None,
 ) -> Episodes:
-    """``n`` episodes of seed ``seed`` numbered from ``offset`` (:class:`Episodes`); ``noise`` is the
-    sensor noise on the joints (m); ``balanced`` cycles through the actions (for held-out sets)."""
+    """``n`` episodes of seed ``seed`` numbered from ``offset`` (:class:`Episodes`) in ``world`` (default
+    ``easy``); ``noise``, if given, replaces the world's sensor noise on the joints (m); ``balanced`` cycles
+    through the actions (for held-out sets)."""
     actions = draw_actions(engine, n, seed, offset, balanced)
-    features = draw_gestures(engine, actions, seed, offset, noise)
-    world, perceived = draw_world(engine, actions, ambiguity, seed, offset, effects)
-    return Episodes(np.arange(offset, offset + n), actions, features, world, perceived)
+    features = draw_gestures(engine, actions, seed, offset, noise, world=world)
+    drawn, perceived = draw_world(engine, actions, ambiguity, seed, offset, effects, world)
+    return Episodes(np.arange(offset, offset + n), actions, features, drawn, perceived)
 
 
 def network_posteriors(
@@ -329,6 +448,34 @@ def label_weights(
             raise DataError("label_weights: the 'true' baseline needs the true actions")
         return one_hot(np.asarray(true), k)
     raise DataError(f"unknown labelling scheme {scheme!r}; allowed: {', '.join(SCHEMES + ('true',))}")
+
+
+def matched_random_labels(true: np.ndarray, accuracy: float, k: int, rng: np.random.Generator) -> np.ndarray:
+    """Random labels as accurate as another labeller: each episode's true action with probability
+    ``accuracy``, otherwise one of the other ``k − 1`` actions uniformly; one-hot rows, shape (n, k).
+
+    The errors depend on nothing (neither the gesture nor the action), so HMMs that learn as well from
+    these as from the network's labels owe nothing to what the network knows beyond its accuracy.
+    """
+    if not (isinstance(accuracy, int | float) and 0 <= accuracy <= 1):
+        raise DataError(f"matched_random_labels: accuracy={accuracy!r} must be a probability")
+    true = np.asarray(true, dtype=np.intp)
+    right = rng.random(len(true)) < accuracy
+    other = (true + rng.integers(1, k, size=len(true))) % k
+    return one_hot(np.where(right, true, other), k)
+
+
+def first_labels(true: np.ndarray, per_action: int, k: int) -> np.ndarray:
+    """The true labels of the first ``per_action`` episodes of each action, zero rows for the rest, shape
+    (n, k): the labels of the ``supervised`` learners.
+
+    >>> first_labels(np.array([0, 1, 0, 0, 1]), 2, 2).tolist()
+    [[1.0, 0.0], [0.0, 1.0], [1.0, 0.0], [0.0, 0.0], [0.0, 1.0]]
+    """
+    true = np.asarray(true, dtype=np.intp)
+    w = one_hot(true, k)
+    seen = np.cumsum(w, axis=0) * w  # the how-many-th of its action each episode is
+    return w * (seen <= per_action)
 
 
 def best_matching(counts: np.ndarray) -> np.ndarray:

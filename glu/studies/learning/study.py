@@ -1,116 +1,159 @@
-"""The study of learning from effects: learning curves of every labelling scheme and baseline, with intervals.
+"""The study of learning from effects: every labelling scheme and control, online, over seeds and worlds.
 
-For each training seed (:func:`run_seed`): one stream of episodes (actions and gestures shared by every
-ambiguity), the world of each ambiguity (:data:`~glu.studies.learning.self_supervised.AMBIGUITIES`), the
-network's posteriors with and without words, and every learner — each labelling scheme in each ambiguity
-with and without words, and the baselines (true labels, unsupervised clusters) — run online over the same
-episodes (:func:`glu.studies.learning.online.run_online`), measured at the checkpoints on the same
-held-out gestures. The network alone (no gestures) is measured on the held-out episodes of each ambiguity.
+For each training seed (:func:`run_seed`) and each world
+(:data:`~glu.studies.learning.self_supervised.WORLDS`): one stream of episodes (actions and gestures shared
+by every ambiguity), the objects and effects of each ambiguity
+(:data:`~glu.studies.learning.self_supervised.AMBIGUITIES`), the network's posteriors with and without
+words, random labels as accurate as the network's, and every learner run online over the same episodes
+(:func:`glu.studies.learning.online.run_online`), measured at the checkpoints on the same held-out gestures:
+in each ambiguity, with and without words, each labelling scheme
+(:data:`~glu.studies.learning.self_supervised.SCHEMES`) and each control
+(:data:`~glu.studies.learning.self_supervised.CONTROLS`); once per world, the true labels, clusters named by
+the true actions, and 1 and 5 true labels per action. The network alone (no gesture) is measured on the
+held-out episodes of each ambiguity.
 
 :func:`learning_study` runs the seeds (in this process, or as Dask tasks on a LocalCluster or an existing
-scheduler, as ``glu evaluate`` does) and returns the tidy tables:
-
-* :func:`curves_table` — accuracy against episodes seen, with two-level intervals (seeds × held-out episodes,
-  :mod:`glu.stats`), and the paired gap to the true-label HMMs;
-* :func:`match_table` — how many episodes each learner needs to match the true-label HMMs within the
-  interval (the gap's interval reaches 0 at that checkpoint and at every later one), or none;
-* :func:`labels_table` — how good the network's labels are in each ambiguity.
+scheduler, as ``glu evaluate`` does); :mod:`glu.studies.learning.tables` turns the results into tables, and
+:mod:`glu.studies.learning.saved` saves and reads them (``glu learning-curves``).
 """
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
-import pandas as pd
 
 from glu.bn.inference import InferenceEngine
 from glu.errors import DataError
 from glu.machine import close_cluster, ctrl_c_held, kill_local_workers, quiet_dask_logs
-from glu.stats import interval, replicate_means, two_level_weights
 from glu.studies.learning.online import Learner, OnlineSettings, run_online
 from glu.studies.learning.self_supervised import (
     AMBIGUITIES,
     BASELINES,
+    CONTROLS,
     EFFECTS,
     SCHEMES,
+    SUPERVISED,
     TEST_OFFSET,
+    WORLDS,
     draw_actions,
     draw_gestures,
     draw_world,
+    matched_random_labels,
     network_posteriors,
 )
-from glu.tidy import tidy
 
 CHECKPOINTS: tuple[int, ...] = (10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000)
-"""Where the curves are measured (those up to the number of episodes, and that number itself)."""
-BOOT_KEY = 5
-"""Spawn key of the bootstrap's random numbers."""
+"""Where the curves are measured (those up to the number of episodes, the budgets, and that number)."""
+BUDGETS: tuple[int, ...] = (100, 1000, 10000)
+"""The fixed budgets (episodes seen) of the main table."""
+MARGIN = 0.02
+"""The equivalence margin on accuracy, declared before the data: a learner *matches* the true-label HMMs when
+its gap to them lies within ± this (TOST, :func:`glu.stats.tost_p_value`)."""
+BOOT_KEY, RANDOM_KEY = 5, 7
+"""Spawn keys of the bootstrap's random numbers and of the random labels."""
 
 
 @dataclass(frozen=True)
 class StudySettings:
-    """The study's size and conditions (the defaults are the notebook's).
+    """The study's size and conditions (the defaults are the saved study's, ``glu learning-curves``).
 
     Attributes
     ----------
     episodes : episodes each learner sees (per seed)
-    seeds : training seeds (each: its own episodes, held-out gestures and EM starts)
+    seeds : training seeds (each: its own episodes, held-out gestures, random labels and EM starts)
+    worlds : names of :data:`~glu.studies.learning.self_supervised.WORLDS`
     ambiguities : names of :data:`~glu.studies.learning.self_supervised.AMBIGUITIES`
     words : with words, without, or both
-    schemes : labelling schemes; baselines : HMM baselines (the network alone is always measured)
+    schemes : labelling schemes; controls : the controls run beside them in every condition
+    baselines : HMM baselines once per world (the network alone is always measured)
+    supervised : the ``supervised`` learners' true labels per action
     test_per_action : held-out gestures per action and seed
-    noise : sensor noise of the gestures (m)
     effects : the effect nodes the robot perceives
     online : how the learners learn (:class:`~glu.studies.learning.online.OnlineSettings`)
+    budgets : the main table's budgets (those up to ``episodes``)
+    margin : the equivalence margin on accuracy (:data:`MARGIN`)
     bootstrap : two-level bootstrap replicates
     """
 
-    episodes: int = 300
-    seeds: tuple[int, ...] = (0, 1, 2)
+    episodes: int = 10_000
+    seeds: tuple[int, ...] = tuple(range(10))
+    worlds: tuple[str, ...] = tuple(WORLDS)
     ambiguities: tuple[str, ...] = tuple(AMBIGUITIES)
     words: tuple[bool, ...] = (False, True)
     schemes: tuple[str, ...] = SCHEMES
+    controls: tuple[str, ...] = CONTROLS
     baselines: tuple[str, ...] = BASELINES
-    test_per_action: int = 15
-    noise: float = 0.02
+    supervised: tuple[int, ...] = SUPERVISED
+    test_per_action: int = 30
     effects: tuple[str, ...] = EFFECTS
     online: OnlineSettings = field(default_factory=OnlineSettings)
-    bootstrap: int = 1000
+    budgets: tuple[int, ...] = BUDGETS
+    margin: float = MARGIN
+    bootstrap: int = 2000
 
     def __post_init__(self) -> None:
         if not (isinstance(self.episodes, int) and 10 <= self.episodes <= 1_000_000):
             raise DataError(f"episodes={self.episodes!r}: a whole number from 10 to 1,000,000")
         if not self.seeds or len(set(self.seeds)) != len(self.seeds):
             raise DataError(f"seeds {list(self.seeds)}: give at least one, each once")
-        bad = [a for a in self.ambiguities if a not in AMBIGUITIES]
-        if bad or not self.ambiguities:
-            raise DataError(f"unknown ambiguity {bad[:1] or '(none)'}; allowed: {', '.join(AMBIGUITIES)}")
-        bad = [s for s in self.schemes if s not in SCHEMES] + [
-            b for b in self.baselines if b not in BASELINES
-        ]
+        for name, allowed in (("world", WORLDS), ("ambiguity", AMBIGUITIES)):
+            given = getattr(self, "worlds" if name == "world" else "ambiguities")
+            bad = [a for a in given if a not in allowed]
+            if bad or not given:
+                raise DataError(f"unknown {name} {bad[:1] or '(none)'}; allowed: {', '.join(allowed)}")
+        bad = (
+            [s for s in self.schemes if s not in SCHEMES]
+            + [c for c in self.controls if c not in CONTROLS]
+            + [b for b in self.baselines if b not in BASELINES]
+        )
         if bad:
-            raise DataError(f"unknown learner {bad[0]!r}; allowed: {', '.join(SCHEMES + BASELINES)}")
+            raise DataError(
+                f"unknown learner {bad[0]!r}; allowed: {', '.join(SCHEMES + CONTROLS + BASELINES)}"
+            )
+        if "true" not in self.baselines:
+            raise DataError(
+                "the study measures every learner against the true labels: keep the 'true' baseline"
+            )
+        if any(isinstance(k, bool) or not isinstance(k, int) or k < 1 for k in self.supervised):
+            raise DataError(f"supervised={list(self.supervised)!r}: labels per action, whole numbers ≥ 1")
         if not self.words or any(not isinstance(w, bool) for w in self.words):
             raise DataError(f"words={list(self.words)!r}: True, False or both")
         if not (isinstance(self.test_per_action, int) and self.test_per_action >= 1):
             raise DataError(f"test_per_action={self.test_per_action!r}: a whole number ≥ 1")
         if not (isinstance(self.bootstrap, int) and 0 <= self.bootstrap <= 100_000):
             raise DataError(f"bootstrap={self.bootstrap!r}: a whole number of replicates")
+        if not (isinstance(self.margin, int | float) and 0 < self.margin < 1):
+            raise DataError(f"margin={self.margin!r}: the equivalence margin, an accuracy in (0, 1)")
+        if not self.budgets or any(
+            isinstance(b, bool) or not isinstance(b, int) or b < 1 for b in self.budgets
+        ):
+            raise DataError(f"budgets={list(self.budgets)!r}: episodes, whole numbers ≥ 1")
 
     @property
     def checkpoints(self) -> tuple[int, ...]:
-        """:data:`CHECKPOINTS` up to ``episodes``, and ``episodes``."""
-        return tuple(sorted({c for c in CHECKPOINTS if c <= self.episodes} | {self.episodes}))
+        """:data:`CHECKPOINTS` and the budgets up to ``episodes``, and ``episodes``."""
+        marks = set(CHECKPOINTS) | set(self.budgets)
+        return tuple(sorted({c for c in marks if c <= self.episodes} | {self.episodes}))
 
-    def learners(self) -> list[tuple[str, str, bool | None]]:
-        """Every learner as (learner, ambiguity, words); baselines have ambiguity ``""`` and words None."""
+    @property
+    def main_budgets(self) -> tuple[int, ...]:
+        """The budgets the episodes reach (the main table's)."""
+        return tuple(b for b in sorted(self.budgets) if b <= self.episodes)
+
+    def world_learners(self) -> list[tuple[str, str, bool | None]]:
+        """The learners of one world as (learner, ambiguity, words): the baselines (ambiguity ``""``, words
+        None; ``supervised_K`` for K labels per action), then every scheme and control per condition."""
         out: list[tuple[str, str, bool | None]] = [(b, "", None) for b in self.baselines]
-        out += [(s, a, w) for a in self.ambiguities for w in self.words for s in self.schemes]
+        out += [(f"supervised_{k}", "", None) for k in self.supervised]
+        out += [(s, a, w) for a in self.ambiguities for w in self.words for s in self.schemes + self.controls]
         return out
+
+    def learners(self) -> list[tuple[str, str, str, bool | None]]:
+        """Every learner as (world, learner, ambiguity, words)."""
+        return [(wd, *lr) for wd in self.worlds for lr in self.world_learners()]
 
     def as_dict(self) -> dict[str, Any]:
         """The settings as plain data (the tables' parameters)."""
@@ -125,64 +168,83 @@ class SeedResult(NamedTuple):
     Attributes
     ----------
     seed : the seed
-    learners : (learner, ambiguity, words) of each learner, the order of ``correct``'s L axis
+    learners : (world, learner, ambiguity, words) of each learner, the order of ``correct``'s L axis
     checkpoints : episodes seen at each measurement, shape (C,)
-    correct : bool array, shape (C, L, J) — held-out gestures recognised right
-    groups : (ambiguity, words) of each row of ``network_correct`` and ``labels``
+    correct : bool array, shape (C, L, J) — held-out gestures recognised right (J per world, the same
+        actions in every world)
+    groups : (world, ambiguity, words) of each row of ``network_correct`` and ``labels``
     network_correct : bool array, shape (G, J) — the network alone on the held-out episodes
     labels : per group: the training labels' arg-max accuracy, the fraction above the ``confident``
-        threshold, the accuracy of those, the mean ``p_BN`` of the true action; shape (G, 4)
+        threshold, the accuracy of those, the mean ``p_BN`` of the true action, the random labels'
+        accuracy; shape (G, 5)
     update_seconds : the lockstep update of every learner after each episode, shape (episodes,)
     """
 
     seed: int
-    learners: list[tuple[str, str, bool | None]]
+    learners: list[tuple[str, str, str, bool | None]]
     checkpoints: np.ndarray
     correct: np.ndarray
-    groups: list[tuple[str, bool]]
+    groups: list[tuple[str, str, bool]]
     network_correct: np.ndarray
     labels: np.ndarray
     update_seconds: np.ndarray
 
 
-def run_seed(engine: InferenceEngine, seed: int, settings: StudySettings = StudySettings()) -> SeedResult:
-    """Simulate one seed's episodes and held-out gestures and run every learner on them (a Dask task)."""
-    s = settings
+def _spec(learner: str, ambiguity: str, words: bool | None) -> Learner:
+    if learner.startswith("supervised_"):
+        return Learner("supervised", int(learner.split("_")[1]))
+    if learner in BASELINES:
+        return Learner(learner)
+    return Learner(learner, ("random" if learner == "random" else "network", ambiguity, words))
+
+
+def _label_quality(p: np.ndarray, random: np.ndarray, actions: np.ndarray, threshold: float) -> list[float]:
+    top = p.max(axis=1)
+    right = p.argmax(axis=1) == actions
+    sure = top >= threshold
+    return [
+        right.mean(),
+        sure.mean(),
+        right[sure].mean() if sure.any() else np.nan,
+        p[np.arange(len(p)), actions].mean(),
+        (random.argmax(axis=1) == actions).mean(),
+    ]
+
+
+def run_world(engine: InferenceEngine, seed: int, world: str, settings: StudySettings):
+    """One seed in one world: every learner run online, the network alone, the labels' quality.
+
+    Returns ``(run, groups, network_correct, labels)`` (see :class:`SeedResult`; ``run`` is the
+    :class:`~glu.studies.learning.online.OnlineRun` of :meth:`StudySettings.world_learners`)."""
+    s, wd = settings, WORLDS[world]
     actions = engine.bn.schema.values_of("Action")
     n_test = s.test_per_action * len(actions)
     train_actions = draw_actions(engine, s.episodes, seed)
-    features = draw_gestures(engine, train_actions, seed, 0, s.noise)
+    features = draw_gestures(engine, train_actions, seed, 0, world=wd)
     test_actions = draw_actions(engine, n_test, seed, TEST_OFFSET, balanced=True)
-    test_features = draw_gestures(engine, test_actions, seed, TEST_OFFSET, s.noise)
-    p_bn, groups, network, labels = {}, [], [], []
+    test_features = draw_gestures(engine, test_actions, seed, TEST_OFFSET, world=wd)
+    sources, groups, network, labels = {}, [], [], []
     for name in s.ambiguities:
         amb = AMBIGUITIES[name]
-        world, seen = draw_world(engine, train_actions, amb, seed, 0, s.effects)
-        test_world, test_seen = draw_world(engine, test_actions, amb, seed, TEST_OFFSET, s.effects)
+        drawn, seen = draw_world(engine, train_actions, amb, seed, 0, s.effects, wd)
+        test_drawn, test_seen = draw_world(engine, test_actions, amb, seed, TEST_OFFSET, s.effects, wd)
         for words in s.words:
-            p = network_posteriors(engine, seen, world, words)
-            p_bn[name, words] = p
-            groups.append((name, words))
-            top = p.max(axis=1)
-            right = p.argmax(axis=1) == train_actions
-            sure = top >= s.online.threshold
-            labels.append(
-                [
-                    right.mean(),
-                    sure.mean(),
-                    right[sure].mean() if sure.any() else np.nan,
-                    p[np.arange(len(p)), train_actions].mean(),
-                ]
-            )
-            pt = network_posteriors(engine, test_seen, test_world, words)
+            p = network_posteriors(engine, seen, drawn, words)
+            key = (list(WORLDS).index(world), list(AMBIGUITIES).index(name), int(words))
+            rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(RANDOM_KEY, *key)))
+            accuracy = float((p.argmax(axis=1) == train_actions).mean())
+            random = matched_random_labels(train_actions, accuracy, len(actions), rng)
+            sources["network", name, words], sources["random", name, words] = p, random
+            groups.append((world, name, words))
+            labels.append(_label_quality(p, random, train_actions, s.online.threshold))
+            pt = network_posteriors(engine, test_seen, test_drawn, words)
             network.append(pt.argmax(axis=1) == test_actions)
-    learners = s.learners()
-    specs = [Learner(lr, None if lr in BASELINES else (a, w)) for lr, a, w in learners]
+    specs = [_spec(*lr) for lr in s.world_learners()]
     run = run_online(
         features,
         train_actions,
         specs,
-        p_bn,
+        sources,
         test_features,
         test_actions,
         s.checkpoints,
@@ -190,15 +252,29 @@ def run_seed(engine: InferenceEngine, seed: int, settings: StudySettings = Study
         s.online,
         seed,
     )
+    return run, groups, np.array(network), np.array(labels)
+
+
+def run_seed(engine: InferenceEngine, seed: int, settings: StudySettings = StudySettings()) -> SeedResult:
+    """Simulate one seed's episodes and held-out gestures in every world and run every learner on them (a Dask
+    task)."""
+    correct, groups, network, labels, seconds = [], [], [], [], np.zeros(settings.episodes)
+    for world in settings.worlds:
+        run, g, net, lab = run_world(engine, seed, world, settings)
+        correct.append(run.correct)
+        groups += g
+        network.append(net)
+        labels.append(lab)
+        seconds += run.update_seconds
     return SeedResult(
         seed,
-        learners,
-        run.checkpoints,
-        run.correct,
+        settings.learners(),
+        np.array(settings.checkpoints),
+        np.concatenate(correct, axis=1),
         groups,
-        np.array(network),
-        np.array(labels),
-        run.update_seconds,
+        np.concatenate(network),
+        np.concatenate(labels),
+        seconds,
     )
 
 
@@ -221,10 +297,14 @@ def learning_study(
                 progress(sd)
         return out
     with quiet_dask_logs():
-        return _on_dask(engine, settings, workers, scheduler, progress)
+        return on_dask(run_seed, engine, settings, settings.seeds, workers, scheduler, progress)
 
 
-def _on_dask(engine, settings, workers, scheduler, progress) -> list[SeedResult]:
+def on_dask(
+    task: Callable, engine: InferenceEngine, settings: Any, units: Sequence[Any], workers, scheduler, progress
+) -> list[Any]:
+    """``[task(engine, unit, settings) for unit in units]`` as Dask tasks, on a LocalCluster of ``workers``
+    processes or an existing ``scheduler``; ``progress(unit)`` after each; Ctrl-C kills the local workers."""
     from dask.distributed import Client, LocalCluster, as_completed
 
     cluster = None
@@ -239,13 +319,13 @@ def _on_dask(engine, settings, workers, scheduler, progress) -> list[SeedResult]
         close_cluster(cluster, e)
         raise
     try:
-        futures = {client.submit(run_seed, engine, sd, settings, pure=False): sd for sd in settings.seeds}
+        futures = {client.submit(task, engine, u, settings, pure=False): i for i, u in enumerate(units)}
         results = {}
         for fut in as_completed(futures):
             results[futures[fut]] = fut.result()
             if progress is not None:
-                progress(futures[fut])
-        return [results[sd] for sd in settings.seeds]
+                progress(units[futures[fut]])
+        return [results[i] for i in range(len(units))]
     except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers are killed, not asked to finish
         kill_local_workers(cluster)
         raise
@@ -253,165 +333,6 @@ def _on_dask(engine, settings, workers, scheduler, progress) -> list[SeedResult]
         client.close()
         if cluster is not None:
             cluster.close()
-
-
-def _stack(results: Sequence[SeedResult]) -> tuple[np.ndarray, np.ndarray]:
-    """Per-(seed, held-out episode) correctness: learners (S, J, C, L) and the network (S, J, G)."""
-    correct = np.stack([np.moveaxis(r.correct, 2, 0) for r in results])  # (S, J, C, L)
-    network = np.stack([r.network_correct.T for r in results])  # (S, J, G)
-    return correct.astype(float), network.astype(float)
-
-
-def curves_table(
-    results: Sequence[SeedResult], settings: StudySettings = StudySettings(), data_source: str = ""
-) -> pd.DataFrame:
-    """Accuracy against episodes seen, per learner, ambiguity and words, with two-level intervals.
-
-    Columns: learner (a scheme, ``true``, ``unsupervised``, or ``network``), ambiguity and words (empty and
-    None for the HMM baselines, the same in every condition), episodes, accuracy, ci_low, ci_high, gap
-    (accuracy − the true-label HMMs' on the same seeds and episodes), gap_low, gap_high, seeds,
-    test_gestures. The network's rows repeat its (episode-free) accuracy at every checkpoint.
-    """
-    first = results[0]
-    correct, network = _stack(results)
-    S, J, C, L = correct.shape
-    rng = np.random.default_rng(np.random.SeedSequence(list(settings.seeds), spawn_key=(BOOT_KEY,)))
-    W = two_level_weights(S, J, settings.bootstrap, rng)
-    reps = replicate_means(correct, W)  # (B + 1, C, L)
-    lo, hi = interval(reps)
-    names = [lr for lr, _, _ in first.learners]
-    if "true" in names:
-        t = names.index("true")
-        gap_reps = reps - reps[:, :, t : t + 1]
-        gap_lo, gap_hi = interval(gap_reps)
-        gap = gap_reps[0]
-    else:
-        gap = gap_lo = gap_hi = np.full((C, L), np.nan)
-    rows = []
-    for c, n in enumerate(first.checkpoints):
-        for k, (lr, amb, words) in enumerate(first.learners):
-            rows.append(
-                dict(
-                    learner=lr,
-                    ambiguity=amb,
-                    words=words,
-                    episodes=int(n),
-                    accuracy=reps[0, c, k],
-                    ci_low=lo[c, k],
-                    ci_high=hi[c, k],
-                    gap=gap[c, k],
-                    gap_low=gap_lo[c, k],
-                    gap_high=gap_hi[c, k],
-                )
-            )
-    net = replicate_means(network, W)  # (B + 1, G)
-    net_lo, net_hi = interval(net)
-    net_gap = net - reps[:, -1:, names.index("true")] if "true" in names else None
-    for g, (amb, words) in enumerate(first.groups):
-        glo, ghi = interval(net_gap[:, g]) if net_gap is not None else (np.nan, np.nan)
-        for n in first.checkpoints:
-            rows.append(
-                dict(
-                    learner="network",
-                    ambiguity=amb,
-                    words=words,
-                    episodes=int(n),
-                    accuracy=net[0, g],
-                    ci_low=net_lo[g],
-                    ci_high=net_hi[g],
-                    gap=net_gap[0, g] if net_gap is not None else np.nan,
-                    gap_low=glo,
-                    gap_high=ghi,
-                )
-            )
-    df = pd.DataFrame(rows)
-    df["seeds"], df["test_gestures"] = S, J
-    return tidy(df, "learning_curves", data_source, **settings.as_dict())
-
-
-def match_table(curves: pd.DataFrame) -> pd.DataFrame:
-    """For every learner, ambiguity and words: the episodes after which the learned HMMs match the
-    true-label HMMs within the interval (the gap's interval reaches 0 there and at every later checkpoint;
-    NaN if not by the last), and the accuracies and gap at the last checkpoint."""
-    rows = []
-    hmm = curves[~curves["learner"].isin(["true", "network"])]
-    for (lr, amb, words), g in hmm.groupby(["learner", "ambiguity", "words"], sort=False, dropna=False):
-        g = g.sort_values("episodes")
-        ok = (g["gap_high"] >= 0).to_numpy()
-        tail = np.flatnonzero(~ok)
-        at = g["episodes"].iloc[tail[-1] + 1] if len(tail) and tail[-1] + 1 < len(g) else None
-        if not len(tail):
-            at = g["episodes"].iloc[0]
-        last = g.iloc[-1]
-        rows.append(
-            dict(
-                learner=lr,
-                ambiguity=amb,
-                words=words,
-                episodes_to_match=np.nan if at is None else float(at),
-                last_episodes=int(last["episodes"]),
-                accuracy=last["accuracy"],
-                true_accuracy=last["accuracy"] - last["gap"],
-                gap=last["gap"],
-                gap_low=last["gap_low"],
-                gap_high=last["gap_high"],
-            )
-        )
-    return tidy(
-        pd.DataFrame(rows),
-        "learning_match",
-        curves.attrs.get("data_source", ""),
-        **curves.attrs.get("parameters", {}),
-    )
-
-
-def match_lines(match: pd.DataFrame) -> list[str]:
-    """One line per condition (ambiguity × words) saying, from :func:`match_table`, which schemes match the
-    true-label HMMs and after how many episodes, and the best scheme's accuracy at the last checkpoint; then
-    a line counting the conditions where some scheme matches."""
-    lines, hit = [], 0
-    schemes = match[match["learner"].isin(SCHEMES)]
-    for (amb, words), g in schemes.groupby(["ambiguity", "words"], sort=False):
-        reached = g[g["episodes_to_match"].notna()]
-        hit += len(reached) > 0
-        said = (
-            ", ".join(f"{r.learner} after {r.episodes_to_match:,.0f}" for r in reached.itertuples()) or "none"
-        )
-        best = g.loc[g["accuracy"].idxmax()]
-        lines.append(
-            f"{amb}, {'with' if words else 'without'} words: matched by {said}; at "
-            f"{int(best['last_episodes']):,} episodes, best {best['learner']} {best['accuracy']:.3f} "
-            f"against {best['true_accuracy']:.3f} with true labels"
-        )
-    n = schemes.groupby(["ambiguity", "words"]).ngroups
-    lines.append(f"some labelling scheme matches the true-label HMMs in {hit} of {n} conditions")
-    return lines
-
-
-def labels_table(
-    results: Sequence[SeedResult], settings: StudySettings = StudySettings(), data_source: str = ""
-) -> pd.DataFrame:
-    """How good the network's labels of the training episodes are, per ambiguity and words (mean over
-    seeds): label_accuracy (its arg-max), confident_fraction and confident_accuracy (above the ``confident``
-    threshold), mean_p_true (its probability of the true action)."""
-    first = results[0]
-    stacked = np.stack([r.labels for r in results])
-    with warnings.catch_warnings():  # a group without confident labels in any seed stays NaN
-        warnings.simplefilter("ignore", RuntimeWarning)
-        labels = np.nanmean(stacked, axis=0)
-    rows = [
-        dict(
-            ambiguity=amb,
-            words=words,
-            description=AMBIGUITIES[amb].description,
-            label_accuracy=v[0],
-            confident_fraction=v[1],
-            confident_accuracy=v[2],
-            mean_p_true=v[3],
-        )
-        for (amb, words), v in zip(first.groups, labels, strict=True)
-    ]
-    return tidy(pd.DataFrame(rows), "learning_labels", data_source, **settings.as_dict())
 
 
 def update_times(results: Sequence[SeedResult]) -> dict[str, float]:

@@ -1,0 +1,272 @@
+"""The long runs of learning from effects, saved: what ``glu learning-curves`` writes and notebook 12 reads.
+
+A run of 10 seeds × 10,000 episodes takes tens of CPU minutes, so the notebook does not redo it: ``glu
+learning-curves`` (on Dask) writes every seed's raw measurements — which held-out gesture each learner
+recognised at each checkpoint, the network alone, the labels' quality — with its settings and provenance
+(:func:`save_study`), and the notebook reads them (:func:`load_study`), takes the seeds, learners and
+budgets it asks for (:func:`select`), and computes every table from them as it would from its own run
+(:mod:`glu.studies.learning.tables`). It first recomputes a few learners of a few seeds here and checks that
+they recognise the same gestures (:func:`check_against`): a saved run that the code no longer reproduces
+is refused.
+
+glu ships such runs for the real data and for its synthetic data (:data:`SAVED_DIR`, chosen by
+:func:`default_folder` from the data source, which must be the one they were made from); they hold numbers
+glu computed, not the data. Another data folder or other settings: run ``glu learning-curves … -o DIR`` and
+give the notebook ``saved=DIR``. The folder:
+
+* ``learning_study.json`` — the settings, the data source, the learners, groups, checkpoints and seeds, the
+  time of one update, and how it was made (the command, glu's version, the commit, the date);
+* ``learning_results.npz`` — the measurements (bits: a learner recognised a held-out gesture or not);
+* ``learning_curves.csv``, ``learning_budgets.csv``, ``learning_claims.csv``, ``learning_labels.csv`` —
+  the tables, for reading (the notebook recomputes them).
+"""
+
+from __future__ import annotations
+
+import datetime
+import io
+import json
+import os
+import subprocess
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from glu.errors import DataError
+from glu.files import atomic_write_bytes, atomic_write_json
+from glu.hmm import TrainingConfig
+from glu.paths import RESOURCES_DIR
+from glu.studies.learning.online import OnlineSettings
+from glu.studies.learning.study import SeedResult, StudySettings
+
+SAVED_DIR: Path = RESOURCES_DIR / "saved" / "learning"
+"""The runs shipped with glu: ``real/`` (the published data) and ``synthetic/`` (glu's synthetic data)."""
+STUDY_FILE, RESULTS_FILE = "learning_study.json", "learning_results.npz"
+FORMAT = 1
+"""The version of the saved layout."""
+SAME: tuple[str, ...] = ("test_per_action", "effects", "online")
+"""Settings a saved run must share with the study that reads it (the others it may hold more of)."""
+
+
+def default_folder(real: bool) -> Path:
+    """The saved run shipped for the real data or for glu's synthetic data."""
+    return SAVED_DIR / ("real" if real else "synthetic")
+
+
+def settings_from_dict(d: dict[str, Any]) -> StudySettings:
+    """:class:`StudySettings` from :meth:`StudySettings.as_dict` (read back from JSON)."""
+    d = dict(d)
+    online = dict(d.pop("online"))
+    online["config"] = TrainingConfig(**online["config"])
+    tuples = {k: tuple(v) for k, v in d.items() if isinstance(v, list)}
+    return StudySettings(**{**d, **tuples, "online": OnlineSettings(**online)})
+
+
+def _commit() -> str:
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"],
+            cwd=Path(__file__).parent,
+            capture_output=True,
+            text=True,
+            timeout=10,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return ""
+    return out.stdout.strip() if out.returncode == 0 else ""
+
+
+def save_study(
+    folder: str | os.PathLike,
+    results: Sequence[SeedResult],
+    settings: StudySettings,
+    data_source: str,
+    command: str,
+    update_seconds: dict[str, float] | None = None,
+) -> Path:
+    """Write a run's measurements and provenance into ``folder`` (see the module docstring); returns the
+    study file."""
+    from glu import __version__
+
+    folder = Path(folder)
+    first = results[0]
+    correct = np.stack([r.correct for r in results])  # (S, C, L, J)
+    network = np.stack([r.network_correct for r in results])  # (S, G, J)
+    buf = io.BytesIO()
+    np.savez_compressed(
+        buf,
+        correct=np.packbits(correct, axis=-1),
+        network=np.packbits(network, axis=-1),
+        labels=np.stack([r.labels for r in results]),
+        tests=np.array(correct.shape[-1]),
+    )
+    atomic_write_bytes(folder / RESULTS_FILE, buf.getvalue())
+    return atomic_write_json(
+        folder / STUDY_FILE,
+        {
+            "format": FORMAT,
+            "settings": json.loads(json.dumps(settings.as_dict(), default=str)),
+            "data_source": data_source,
+            "seeds": [int(r.seed) for r in results],
+            "learners": [list(lr) for lr in first.learners],
+            "groups": [list(g) for g in first.groups],
+            "checkpoints": [int(c) for c in first.checkpoints],
+            "update_seconds": update_seconds or {},
+            "made_by": {
+                "command": command,
+                "glu": __version__,
+                "commit": _commit(),
+                "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+            },
+        },
+    )
+
+
+def load_study(folder: str | os.PathLike) -> tuple[StudySettings, list[SeedResult], dict[str, Any]]:
+    """A saved run: its settings, every seed's measurements and its provenance (the study file's content)."""
+    folder = Path(folder)
+    try:
+        meta = json.loads((folder / STUDY_FILE).read_text(encoding="utf-8"))
+        with np.load(folder / RESULTS_FILE) as npz:
+            arrays = {k: npz[k] for k in npz.files}
+    except FileNotFoundError as e:
+        raise DataError(
+            f"{folder}: no saved run of learning from effects ({Path(e.filename).name} missing); "
+            "`glu learning-curves -o DIR` writes one"
+        ) from None
+    except (OSError, ValueError) as e:
+        raise DataError(f"{folder}: not a readable saved run of learning from effects ({e})") from None
+    if meta.get("format") != FORMAT:
+        raise DataError(f"{folder}: saved in format {meta.get('format')!r}, glu reads {FORMAT}; run it again")
+    J = int(arrays["tests"])
+    correct = np.unpackbits(arrays["correct"], axis=-1, count=J).astype(bool)
+    network = np.unpackbits(arrays["network"], axis=-1, count=J).astype(bool)
+    learners = [(w, lr, a, None if words is None else bool(words)) for w, lr, a, words in meta["learners"]]
+    groups = [(w, a, bool(words)) for w, a, words in meta["groups"]]
+    results = [
+        SeedResult(
+            seed,
+            learners,
+            np.array(meta["checkpoints"]),
+            correct[s],
+            groups,
+            network[s],
+            arrays["labels"][s],
+            np.zeros(0),
+        )
+        for s, seed in enumerate(meta["seeds"])
+    ]
+    return settings_from_dict(meta["settings"]), results, meta
+
+
+def regenerate_command(settings: StudySettings, data: str = "DATA") -> str:
+    """The ``glu learning-curves`` command that makes a saved run of these settings."""
+    seeds = settings.seeds
+    span = (
+        f"{seeds[0]}..{seeds[-1]}"
+        if list(seeds) == list(range(seeds[0], seeds[-1] + 1))
+        else ",".join(map(str, seeds))
+    )
+    return (
+        f"glu learning-curves --episodes {max(settings.main_budgets or (settings.episodes,))} --seeds {span} "
+        f"--worlds {','.join(settings.worlds)} --ambiguities {','.join(settings.ambiguities)} "
+        f"--test-per-action {settings.test_per_action} --data {data} -o DIR"
+    )
+
+
+def select(
+    results: Sequence[SeedResult], saved: StudySettings, wanted: StudySettings, data_source: str, meta: dict
+) -> list[SeedResult]:
+    """The seeds, learners, groups and checkpoints of ``wanted`` out of a saved run; :class:`DataError`
+    (with the command that makes the right run) when the saved run lacks some, or was made from other data
+    or with other settings of :data:`SAME`."""
+    fix = f"run `{regenerate_command(wanted)}` and give the notebook saved=DIR"
+    if meta.get("data_source") != data_source:
+        raise DataError(
+            f"the saved run was made from {meta.get('data_source')!r}, not {data_source!r}: {fix}"
+        )
+    a, b = saved.as_dict(), wanted.as_dict()
+    differ = [k for k in SAME if a[k] != b[k]]
+    if differ:
+        raise DataError(f"the saved run has other {', '.join(differ)} than asked: {fix}")
+    by_seed = {r.seed: r for r in results}
+    missing_seeds = [s for s in wanted.seeds if s not in by_seed]
+    have_l = {tuple(lr): k for k, lr in enumerate(results[0].learners)}
+    have_g = {tuple(g): k for k, g in enumerate(results[0].groups)}
+    have_c = {int(c): k for k, c in enumerate(results[0].checkpoints)}
+    lack = (
+        [f"seed {s}" for s in missing_seeds]
+        + [f"learner {lr}" for lr in wanted.learners() if tuple(lr) not in have_l]
+        + [f"{c} episodes" for c in wanted.checkpoints if c not in have_c]
+    )
+    if lack:
+        raise DataError(f"the saved run lacks {', '.join(lack[:3])}{' …' if len(lack) > 3 else ''}: {fix}")
+    li = [have_l[tuple(lr)] for lr in wanted.learners()]
+    gi = [have_g[(w, a, words)] for w in wanted.worlds for a in wanted.ambiguities for words in wanted.words]
+    ci = [have_c[c] for c in wanted.checkpoints]
+    out = []
+    for s in wanted.seeds:
+        r = by_seed[s]
+        out.append(
+            r._replace(
+                learners=wanted.learners(),
+                checkpoints=np.array(wanted.checkpoints),
+                correct=r.correct[np.ix_(ci, li)],
+                groups=[r.groups[g] for g in gi],
+                network_correct=r.network_correct[gi],
+                labels=r.labels[gi],
+            )
+        )
+    return out
+
+
+def check_against(
+    engine, results: Sequence[SeedResult], settings: StudySettings, seeds: Sequence[int], episodes: int
+) -> dict[str, Any]:
+    """Recompute, here, the learners of the ``mixed`` ambiguity without words and the baselines of ``seeds``
+    up to ``episodes`` and compare which held-out gestures they recognise with the saved run's.
+
+    Returns ``{"seeds", "episodes", "learners", "decisions", "differ"}``: how many held-out decisions were
+    compared and how many differ. Raises :class:`DataError` when more than 1 % differ (the saved run is not
+    what this code computes: run it again)."""
+    from glu.studies.learning.study import run_world
+
+    ambiguity = "mixed" if "mixed" in settings.ambiguities else settings.ambiguities[0]
+    small = replace(
+        settings,
+        episodes=episodes,
+        seeds=tuple(seeds),
+        ambiguities=(ambiguity,),
+        words=(False,) if False in settings.words else settings.words[:1],
+        budgets=(episodes,),
+    )
+    by_seed = {r.seed: r for r in results}
+    compared = differ = 0
+    for s in seeds:
+        saved = by_seed[s]
+        c_saved = list(saved.checkpoints).index(episodes)
+        for world in small.worlds:
+            run, *_ = run_world(engine, s, world, small)
+            names = [(world, *lr) for lr in small.world_learners()]
+            for k, name in enumerate(names):
+                j = saved.learners.index(name)
+                here, there = run.correct[-1, k], saved.correct[c_saved, j]
+                compared += here.size
+                differ += int((here != there).sum())
+    out = {
+        "seeds": list(seeds),
+        "episodes": episodes,
+        "learners": len(names),
+        "decisions": compared,
+        "differ": differ,
+    }
+    if differ > 0.01 * compared:
+        raise DataError(
+            f"the saved run is not what this code computes: {differ} of {compared} held-out decisions of "
+            f"seeds {list(seeds)} after {episodes} episodes differ; "
+            f"run `{regenerate_command(settings)}` again"
+        )
+    return out
