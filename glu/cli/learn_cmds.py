@@ -27,12 +27,6 @@ from glu.cli.common import (
 )
 
 
-def _ambiguities() -> tuple[str, ...]:
-    from glu.studies.learning.self_supervised import AMBIGUITIES
-
-    return tuple(AMBIGUITIES)
-
-
 def _seeds(text: str) -> tuple[int, ...]:
     parts = [p.strip() for p in text.split(",") if p.strip()]
     try:
@@ -50,9 +44,10 @@ def _seeds(text: str) -> tuple[int, ...]:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``learn-gestures`` and ``learning-curves`` commands."""
-    from glu.studies.learning.self_supervised import AMBIGUITIES, LEARNERS
+    from glu.studies.learning.self_supervised import AMBIGUITIES, LEARNERS, WORLDS
 
     ambiguity_help = "; ".join(f"{k}: {a.description}" for k, a in AMBIGUITIES.items()).replace("%", "%%")
+    world_help = "; ".join(f"{k}: {w.description}" for k, w in WORLDS.items()).replace("%", "%%")
     p = sub.add_parser(
         "learn-gestures",
         help="learn gesture HMMs from unlabelled episodes, labelled by the affordance network",
@@ -101,30 +96,59 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     c = sub.add_parser(
         "learning-curves",
-        help="the study of learning from effects: learning curves of every scheme (Dask, one task per seed)",
-        description="Run the study of notebook 12: every labelling scheme and baseline, every ambiguity, "
-        "with and without words, one Dask task per training seed, and write its tables "
-        "(learning_curves.csv, learning_match.csv, learning_labels.csv, learning_study.json) to -o DIR.",
+        help="the long runs of learning from effects (Dask, one task per seed): what notebook 12 reads",
+        description="Run the study of notebook 12 at the budgets the notebook does not run itself: every "
+        "labelling scheme and control, every world and ambiguity, with and without words, one Dask task per "
+        "training seed (--part curves); and the real person, learned from a generator fitted to their "
+        "repetitions and recognised leave-one-segment-out, one task per draw (--part real-person, real data "
+        "only). Writes the measurements and their provenance (learning_study.json, learning_results.npz, "
+        "learning_real_person.csv.gz) and the tables to -o DIR; give the notebook saved=DIR.",
+    )
+    c.add_argument(
+        "--part",
+        choices=("curves", "real-person", "all"),
+        default="curves",
+        help="the learning curves over seeds, the real person over draws, or both (default curves)",
     )
     c.add_argument(
         "--episodes", type=positive_int, default=10_000, metavar="N", help="per seed (default 10000)"
     )
     c.add_argument("--seeds", type=_seeds, default=tuple(range(10)), help="training seeds (default 0..9)")
     c.add_argument(
+        "--worlds",
+        type=_names,
+        default=tuple(WORLDS),
+        metavar="LIST",
+        help=f"the worlds, comma-separated (default all): {world_help}",
+    )
+    c.add_argument(
         "--ambiguities",
-        type=lambda s: tuple(x.strip() for x in s.split(",") if x.strip()),
+        type=_names,
         default=tuple(AMBIGUITIES),
         metavar="LIST",
-        help=f"the worlds to study, comma-separated (default all): {ambiguity_help}",
+        help=f"the ambiguities, comma-separated (default all): {ambiguity_help}",
     )
     c.add_argument("--test-per-action", type=positive_int, default=30, metavar="N", help="held-out gestures")
-    add_cluster_args(c, "seed")
+    c.add_argument(
+        "--margin",
+        type=positive_float,
+        default=0.02,
+        help="equivalence margin on accuracy, declared before the data (default 0.02)",
+    )
+    c.add_argument(
+        "--draws", type=_seeds, default=tuple(range(50)), help="--part real-person: draws (default 0..49)"
+    )
+    add_cluster_args(c, "seed or draw")
     add_deprecated_alias(c, "--synchronous", "--scheduler", const="synchronous")
     add_data_option(c, "the network is learned from its experiments")
     c.add_argument(
         "-o", "--out", type=output_folder, required=True, metavar="DIR", help="folder for the tables"
     )
     c.set_defaults(func=_curves)
+
+
+def _names(text: str) -> tuple[str, ...]:
+    return tuple(x.strip() for x in text.split(",") if x.strip())
 
 
 def _engine(data: str | None):
@@ -170,53 +194,117 @@ def _learn(args: argparse.Namespace) -> int:
 
 
 def _curves(args: argparse.Namespace) -> int:
-    import json
-
     from glu.errors import DataError
-    from glu.files import atomic_write_json, atomic_write_text
     from glu.machine import SYNCHRONOUS
     from glu.studies.learning import study as lc
 
-    bad = [a for a in args.ambiguities if a not in _ambiguities()]
-    if bad:
-        raise DataError(f"--ambiguities: unknown {bad[0]!r}; allowed: {', '.join(_ambiguities())}")
-    engine, label = _engine(args.data)
+    for flag, given, allowed in (
+        ("--worlds", args.worlds, _choices("WORLDS")),
+        ("--ambiguities", args.ambiguities, _choices("AMBIGUITIES")),
+    ):
+        bad = [a for a in given if a not in allowed]
+        if bad or not given:
+            raise DataError(f"{flag}: unknown {(bad or ['(none)'])[0]!r}; allowed: {', '.join(allowed)}")
+    if args.margin >= 1:
+        raise DataError(f"--margin {args.margin}: an accuracy in (0, 1)")
     settings = lc.StudySettings(
         episodes=args.episodes,
         seeds=args.seeds,
+        worlds=args.worlds,
         ambiguities=args.ambiguities,
         test_per_action=args.test_per_action,
+        margin=args.margin,
     )
+    from glu.data.source import resolve_data
+
+    source = resolve_data(args.data)
+    if args.part != "curves" and not (source.is_real and source.has_gestures):
+        raise DataError(
+            f"--part {args.part}: the real person is in the real data only, not {source.describe()}"
+        )
+    engine, label = _engine(args.data)
     here = args.scheduler == SYNCHRONOUS
-    scheduler = None if here else args.scheduler
-    workers = 0 if here else (args.workers or _cores())
-    print(
-        f"network: {label}; {len(args.seeds)} seeds × {args.episodes} episodes, "
-        f"{len(settings.learners())} learners"
+    where = dict(
+        scheduler=None if here else args.scheduler,
+        workers=0 if here or args.scheduler else (args.workers or _cores()),
     )
+    out = Path(args.out)
+    if args.part in ("curves", "all"):
+        _run_curves(engine, label, settings, where, out)
+    if args.part in ("real-person", "all"):
+        _run_real_person(engine, source, label, args.draws, where, out)
+    return 0
+
+
+def _choices(name: str) -> tuple[str, ...]:
+    from glu.studies.learning import self_supervised
+
+    return tuple(getattr(self_supervised, name))
+
+
+def _command() -> str:
+    import shlex
+    import sys
+
+    return "glu " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+
+
+def _run_curves(engine, label: str, settings, where: dict, out: Path) -> None:
+    from glu.files import atomic_write_text
+    from glu.studies.learning import saved, tables
+    from glu.studies.learning import study as lc
+
+    n = len(settings.seeds)
+    print(
+        f"network: {label}; {n} seeds × {settings.episodes:,} episodes, {len(settings.learners())} learners "
+        f"({', '.join(settings.worlds)} worlds)",
+        flush=True,
+    )
+    done = []
     results = lc.learning_study(
         engine,
         settings,
-        workers=0 if scheduler else workers,
-        scheduler=scheduler,
-        progress=lambda s: print(f"  seed {s} done", flush=True),
+        **where,
+        progress=lambda s: done.append(s) or print(f"  seed {s} done ({len(done)} of {n})", flush=True),
     )
-    out = Path(args.out)
-    curves = lc.curves_table(results, settings, label)
-    match = lc.match_table(curves)
-    labels = lc.labels_table(results, settings, label)
-    for name, df in (("learning_curves", curves), ("learning_match", match), ("learning_labels", labels)):
+    rep = tables.replicates(results, settings)
+    budgets = tables.budgets_table(rep, settings, label)
+    frames = {
+        "learning_curves": tables.curves_table(rep, settings, label),
+        "learning_budgets": budgets,
+        "learning_claims": tables.claims_table(budgets),
+        "learning_labels": tables.labels_table(results, settings, label),
+    }
+    for name, df in frames.items():
         atomic_write_text(out / f"{name}.csv", df.to_csv(index=False))
-    atomic_write_json(
-        out / "learning_study.json",
-        {
-            "settings": json.loads(json.dumps(settings.as_dict(), default=str)),
-            "data_source": label,
-            "update_seconds": lc.update_times(results),
-        },
+    saved.save_study(out, results, settings, label, _command(), lc.update_times(results))
+    print(f"wrote {out}/{saved.STUDY_FILE}, {saved.RESULTS_FILE}, {', '.join(f'{k}.csv' for k in frames)}")
+
+
+def _run_real_person(engine, source, label: str, draws, where: dict, out: Path) -> None:
+    from glu.files import atomic_write_text
+    from glu.gestures.corpus import gesture_sequences
+    from glu.studies.learning import real_person as rp
+    from glu.studies.learning import saved
+
+    settings = rp.RealPersonSettings(draws=draws)
+    standing = gesture_sequences(source, include_test=False)
+    print(f"the real person: {len(standing)} standing segments × {len(draws)} draws", flush=True)
+    done = []
+    rows = rp.real_person_study(
+        engine,
+        standing,
+        settings,
+        **where,
+        progress=lambda d: (
+            done.append(d) or print(f"  draw {d} done ({len(done)} of {len(draws)})", flush=True)
+        ),
+        data_source=label,
     )
-    print(f"wrote {out}/learning_curves.csv, learning_match.csv, learning_labels.csv, learning_study.json")
-    return 0
+    saved.save_real_person(out, rows, settings, label, _command())
+    summary = rp.real_person_summary(rows, settings.bootstrap)
+    atomic_write_text(out / "learning_real_person_summary.csv", summary.to_csv(index=False))
+    print(f"wrote {out}/{saved.PERSON_FILE}, {saved.PERSON_STUDY_FILE}, learning_real_person_summary.csv")
 
 
 def _cores() -> int:

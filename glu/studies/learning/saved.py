@@ -18,12 +18,16 @@ give the notebook ``saved=DIR``. The folder:
   time of one update, and how it was made (the command, glu's version, the commit, the date);
 * ``learning_results.npz`` — the measurements (bits: a learner recognised a held-out gesture or not);
 * ``learning_curves.csv``, ``learning_budgets.csv``, ``learning_claims.csv``, ``learning_labels.csv`` —
-  the tables, for reading (the notebook recomputes them).
+  the tables, for reading (the notebook recomputes them);
+* for the real data, ``learning_real_person.csv.gz`` and ``learning_real_person.json`` — every draw's
+  predictions of the real-person study (:mod:`glu.studies.learning.real_person`) and their provenance
+  (:func:`save_real_person`, :func:`load_real_person`), and ``learning_real_person_summary.csv``.
 """
 
 from __future__ import annotations
 
 import datetime
+import gzip
 import io
 import json
 import os
@@ -34,17 +38,21 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from glu.errors import DataError
 from glu.files import atomic_write_bytes, atomic_write_json
 from glu.hmm import TrainingConfig
 from glu.paths import RESOURCES_DIR
 from glu.studies.learning.online import OnlineSettings
+from glu.studies.learning.real_person import RealPersonSettings
 from glu.studies.learning.study import SeedResult, StudySettings
+from glu.tidy import tidy
 
 SAVED_DIR: Path = RESOURCES_DIR / "saved" / "learning"
 """The runs shipped with glu: ``real/`` (the published data) and ``synthetic/`` (glu's synthetic data)."""
 STUDY_FILE, RESULTS_FILE = "learning_study.json", "learning_results.npz"
+PERSON_FILE, PERSON_STUDY_FILE = "learning_real_person.csv.gz", "learning_real_person.json"
 FORMAT = 1
 """The version of the saved layout."""
 SAME: tuple[str, ...] = ("test_per_action", "effects", "online")
@@ -56,13 +64,24 @@ def default_folder(real: bool) -> Path:
     return SAVED_DIR / ("real" if real else "synthetic")
 
 
-def settings_from_dict(d: dict[str, Any]) -> StudySettings:
-    """:class:`StudySettings` from :meth:`StudySettings.as_dict` (read back from JSON)."""
+def settings_from_dict(d: dict[str, Any], kind: type = StudySettings) -> Any:
+    """:class:`StudySettings` (or ``kind``) from its ``as_dict()`` (read back from JSON)."""
     d = dict(d)
     online = dict(d.pop("online"))
     online["config"] = TrainingConfig(**online["config"])
     tuples = {k: tuple(v) for k, v in d.items() if isinstance(v, list)}
-    return StudySettings(**{**d, **tuples, "online": OnlineSettings(**online)})
+    return kind(**{**d, **tuples, "online": OnlineSettings(**online)})
+
+
+def _made_by(command: str) -> dict[str, str]:
+    from glu import __version__
+
+    return {
+        "command": command,
+        "glu": __version__,
+        "commit": _commit(),
+        "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+    }
 
 
 def _commit() -> str:
@@ -89,8 +108,6 @@ def save_study(
 ) -> Path:
     """Write a run's measurements and provenance into ``folder`` (see the module docstring); returns the
     study file."""
-    from glu import __version__
-
     folder = Path(folder)
     first = results[0]
     correct = np.stack([r.correct for r in results])  # (S, C, L, J)
@@ -115,12 +132,7 @@ def save_study(
             "groups": [list(g) for g in first.groups],
             "checkpoints": [int(c) for c in first.checkpoints],
             "update_seconds": update_seconds or {},
-            "made_by": {
-                "command": command,
-                "glu": __version__,
-                "commit": _commit(),
-                "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
-            },
+            "made_by": _made_by(command),
         },
     )
 
@@ -270,3 +282,51 @@ def check_against(
             f"run `{regenerate_command(settings)}` again"
         )
     return out
+
+
+def save_real_person(
+    folder: str | os.PathLike,
+    rows: pd.DataFrame,
+    settings: RealPersonSettings,
+    data_source: str,
+    command: str,
+) -> Path:
+    """Write the real-person study's rows (gzip, byte for byte the same for the same rows) and their
+    provenance into ``folder``; returns the provenance file."""
+    folder = Path(folder)
+    text = rows.to_csv(index=False).encode("utf-8")
+    atomic_write_bytes(folder / PERSON_FILE, gzip.compress(text, mtime=0))
+    return atomic_write_json(
+        folder / PERSON_STUDY_FILE,
+        {
+            "format": FORMAT,
+            "settings": json.loads(json.dumps(settings.as_dict(), default=str)),
+            "data_source": data_source,
+            "made_by": _made_by(command),
+        },
+    )
+
+
+def load_real_person(folder: str | os.PathLike, data_source: str) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """The real-person study's rows saved in ``folder`` (stamped as :func:`~glu.studies.learning.real_person
+    .real_person_study` stamps them) and their provenance; :class:`DataError` when they are missing or were
+    made from other data."""
+    folder = Path(folder)
+    try:
+        meta = json.loads((folder / PERSON_STUDY_FILE).read_text(encoding="utf-8"))
+        rows = pd.read_csv(folder / PERSON_FILE, keep_default_na=False, na_values=[""])
+    except FileNotFoundError as e:
+        raise DataError(
+            f"{folder}: no saved real-person study ({Path(e.filename).name} missing); "
+            "`glu learning-curves --part real-person -o DIR` writes one"
+        ) from None
+    except (OSError, ValueError) as e:
+        raise DataError(f"{folder}: not a readable saved real-person study ({e})") from None
+    if meta.get("data_source") != data_source:
+        raise DataError(
+            f"the saved real-person study was made from {meta.get('data_source')!r}, not {data_source!r}: "
+            "run `glu learning-curves --part real-person --data DATA -o DIR` and give the notebook saved=DIR"
+        )
+    rows["predicted"] = rows["predicted"].astype(object).where(rows["predicted"].notna(), None)
+    settings = settings_from_dict(meta["settings"], RealPersonSettings)
+    return tidy(rows, "learning_real_person", data_source, **settings.as_dict()), meta

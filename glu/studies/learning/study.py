@@ -135,13 +135,13 @@ class StudySettings:
     @property
     def checkpoints(self) -> tuple[int, ...]:
         """:data:`CHECKPOINTS` and the budgets up to ``episodes``, and ``episodes``."""
-        marks = set(CHECKPOINTS) | set(self.budgets)
+        marks = set(CHECKPOINTS) | set(self.main_budgets)
         return tuple(sorted({c for c in marks if c <= self.episodes} | {self.episodes}))
 
     @property
     def main_budgets(self) -> tuple[int, ...]:
-        """The budgets the episodes reach (the main table's)."""
-        return tuple(b for b in sorted(self.budgets) if b <= self.episodes)
+        """The budgets the episodes reach (the main table's); ``episodes`` itself when they reach none."""
+        return tuple(b for b in sorted(self.budgets) if b <= self.episodes) or (self.episodes,)
 
     def world_learners(self) -> list[tuple[str, str, bool | None]]:
         """The learners of one world as (learner, ambiguity, words): the baselines (ambiguity ``""``, words
