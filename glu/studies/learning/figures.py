@@ -1,8 +1,7 @@
-"""Figures of learning gestures from effects: learning curves with intervals, episodes to match, real
-gestures.
+"""Figures of learning gestures from effects: learning curves, gaps to the true labels, the real person.
 
-Each function draws a table of :mod:`glu.studies.learning.study` or
-:mod:`glu.studies.learning.self_supervised` on the axes it is given and returns them.
+Each function draws a table of :mod:`glu.studies.learning.tables` or
+:mod:`glu.studies.learning.real_person` and returns the figure (or the axes it was given).
 """
 
 from __future__ import annotations
@@ -14,125 +13,91 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 
-LEARNER_COLORS = {
-    "hard": "#C44E52",
-    "soft": "#4C72B0",
-    "confident": "#8172B3",
-    "iterative": "#DD8452",
-    "true": "#222222",
-    "unsupervised": "#8C8C8C",
-    "network": "#937860",
+from glu.studies.learning.tables import LEARNER_NAMES
+
+LEARNER_STYLE: dict[str, dict] = {
+    "true": dict(color="#222222", ls="-", marker="o"),
+    "hard": dict(color="#C44E52", ls="-", marker="s"),
+    "soft": dict(color="#4C72B0", ls="--", marker="^"),
+    "confident": dict(color="#8172B3", ls="-.", marker="v"),
+    "iterative": dict(color="#DD8452", ls=":", marker="D"),
+    "random": dict(color="#8C8C8C", ls="-", marker="X"),
+    "clustering": dict(color="#55A868", ls="--", marker="P"),
+    "em": dict(color="#64B5CD", ls="-.", marker="*"),
+    "unsupervised": dict(color="#A0A0A0", ls=":", marker="h"),
+    "supervised_1": dict(color="#937860", ls=":", marker="<"),
+    "supervised_5": dict(color="#937860", ls="--", marker=">"),
+    "network": dict(color="#DA8BC3", ls=(0, (5, 2, 1, 2)), marker=""),
+    "always_tap": dict(color="#BBBBBB", ls="-", marker=""),
 }
-LEARNER_STYLE = {"true": ":", "unsupervised": "--", "network": "-."}
-LEARNER_LABEL = {
-    "true": "true labels",
-    "unsupervised": "unsupervised",
-    "network": "network alone (no gesture)",
-}
+"""Each learner's colour, line and marker: told apart by more than their hue."""
+CURVE_LEARNERS: tuple[str, ...] = ("true", "hard", "soft", "random", "clustering", "supervised_5", "network")
+"""The learners of the learning-curve panels (every learner is in the tables and in the gaps figure)."""
+CHANCE = "chance (1 in 3)"
 
 
-def _rows(curves: pd.DataFrame, learner: str, ambiguity: str, words: bool) -> pd.DataFrame:
-    if learner in ("true", "unsupervised"):
-        sel = curves["learner"] == learner
-    else:
-        sel = (curves["learner"] == learner) & (curves["ambiguity"] == ambiguity) & (curves["words"] == words)
-    return curves[sel].sort_values("episodes")
+def _label(learner: str) -> str:
+    return LEARNER_NAMES.get(learner, learner)
+
+
+def _episodes_axis(ax: Axes, ticks: Sequence[int]) -> None:
+    """A log axis of episodes labelled at every checkpoint that fits (10, 100, 1,000 …, with 20 and 50
+    between when there is room)."""
+    ax.set_xscale("log")
+    ticks = sorted(int(t) for t in ticks)
+    decades = [t for t in ticks if np.log10(t).is_integer()]
+    shown = ticks if len(ticks) <= 6 else decades or ticks
+    ax.xaxis.set_major_locator(FixedLocator(shown))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}"))
+    ax.xaxis.set_minor_locator(FixedLocator([t for t in ticks if t not in shown]))
+    ax.xaxis.set_minor_formatter(FuncFormatter(lambda v, _: ""))
+
+
+def _where(ambiguity: str, words: bool | None) -> str:
+    amb = ambiguity.replace("_", " ")
+    return f"{amb}, {'with' if words else 'without'} words"
 
 
 def plot_learning_curves(
     ax: Axes,
     curves: pd.DataFrame,
+    world: str,
     ambiguity: str,
     words: bool,
-    learners: Sequence[str] = ("hard", "soft", "confident", "iterative", "true", "unsupervised", "network"),
+    learners: Sequence[str] = CURVE_LEARNERS,
 ) -> Axes:
-    """Held-out accuracy against episodes seen (log scale) of each learner in one ambiguity, with or
-    without words, with its interval as a band; the network alone as a flat line."""
-    for lr in learners:
-        g = _rows(curves, lr, ambiguity, words)
+    """Held-out accuracy against episodes seen (log scale) of each learner in one world, ambiguity and
+    words; each checkpoint's 95 % interval as a vertical line (learners nudged apart sideways)."""
+    c = curves[curves["world"] == world]
+    shown = [lr for lr in learners if (c["learner"] == lr).any()]
+    for j, lr in enumerate(shown):
+        sel = c["learner"] == lr
+        if lr not in ("true", "unsupervised") and not lr.startswith("supervised_"):
+            sel &= (c["ambiguity"] == ambiguity) & (c["words"].astype(object) == words)
+        g = c[sel].sort_values("episodes")
         if g.empty:
             continue
-        c = LEARNER_COLORS.get(lr, "black")
-        x = g["episodes"].to_numpy(dtype=float)
+        st = LEARNER_STYLE.get(lr, dict(color="black", ls="-", marker="o"))
+        x = g["episodes"].to_numpy(dtype=float) * 1.06 ** (j - (len(shown) - 1) / 2)
         ax.plot(
             x,
             g["accuracy"],
-            color=c,
-            ls=LEARNER_STYLE.get(lr, "-"),
-            marker="" if lr == "network" else "o",
-            ms=3,
+            color=st["color"],
+            ls=st["ls"],
+            marker=st["marker"],
+            ms=4,
             lw=1.3,
-            label=LEARNER_LABEL.get(lr, lr),
+            label=_label(lr),
         )
-        ax.fill_between(x, g["ci_low"], g["ci_high"], color=c, alpha=0.12 if lr != "network" else 0.06, lw=0)
-    ax.set_xscale("log")
+        ax.vlines(x, g["ci_low"], g["ci_high"], color=st["color"], lw=0.8, alpha=0.7)
+    ax.axhline(1 / 3, color="0.55", lw=0.8, ls=":", label=CHANCE)
+    _episodes_axis(ax, sorted(c["episodes"].unique()))
     ax.set_ylim(-0.02, 1.02)
-    ax.axhline(1 / 3, color="0.7", lw=0.6, ls=":")
-    ax.set_xlabel("episodes seen")
     ax.set_ylabel("held-out accuracy")
-    ax.set_title(f"{ambiguity}, {'with' if words else 'without'} words", fontsize=9)
+    ax.set_title(f"{world} world: {_where(ambiguity, words)}", fontsize=9)
     ax.grid(alpha=0.3)
-    return ax
-
-
-def plot_episodes_to_match(ax: Axes, match: pd.DataFrame, schemes: Sequence[str] | None = None) -> Axes:
-    """For each scheme (colour) and condition (ambiguity × words, rows): how many episodes until the
-    learned HMMs match the true-label HMMs within the interval; a cross at the right edge where they never
-    do by the last checkpoint."""
-    m = match[match["learner"] != "unsupervised"]
-    schemes = list(schemes or dict.fromkeys(m["learner"]))
-    conditions = list(dict.fromkeys(zip(m["ambiguity"], m["words"], strict=True)))
-    last = float(m["last_episodes"].max())
-    for lr in schemes:  # the legend: one entry per scheme, matched or not
-        ax.plot([], [], marker="o", color=LEARNER_COLORS.get(lr, "black"), ms=4, ls="none", label=lr)
-    for i, (amb, words) in enumerate(conditions):
-        for j, lr in enumerate(schemes):
-            row = m[(m["learner"] == lr) & (m["ambiguity"] == amb) & (m["words"] == words)]
-            if row.empty:
-                continue
-            y = i + (j - (len(schemes) - 1) / 2) * 0.15
-            n = row["episodes_to_match"].iloc[0]
-            c = LEARNER_COLORS.get(lr, "black")
-            if np.isnan(n):
-                ax.plot([last * 1.6], [y], marker="x", color=c, ms=5, ls="none")
-            else:
-                ax.plot([n], [y], marker="o", color=c, ms=4, ls="none")
-    ax.set_xscale("log")
-    ax.set_yticks(range(len(conditions)))
-    ax.set_yticklabels([f"{a}, {'words' if w else 'no words'}" for a, w in conditions], fontsize=7)
-    ax.axvline(last, color="0.6", lw=0.8, ls=":")
-    ax.set_xlabel("episodes until the learned HMMs match the true-label ones (× : not by the last)")
-    ax.invert_yaxis()
-    ax.grid(alpha=0.3, axis="x")
-    return ax
-
-
-def plot_real_gestures(ax: Axes, summary: pd.DataFrame, test: str = "loso") -> Axes:
-    """Accuracy on the real gestures of each learner (bars: mean over draws; lines: min–max over draws),
-    and the network's label accuracy (marks)."""
-    s = summary[summary["test"] == test].reset_index(drop=True)
-    x = np.arange(len(s))
-    colors = [LEARNER_COLORS.get(lr, "black") for lr in s["learner"]]
-    ax.bar(x, s["accuracy"], color=colors, edgecolor="0.2", linewidth=0.6)
-    ax.vlines(x, s["accuracy_min"], s["accuracy_max"], color="0.15", lw=1.2)
-    labelled = ~s["learner"].isin(["true", "unsupervised"])
-    ax.plot(
-        x[labelled],
-        s["label_accuracy"][labelled],
-        marker="_",
-        color="black",
-        ms=14,
-        mew=2,
-        ls="none",
-        label="the network's labels",
-    )
-    ax.set_xticks(x)
-    ax.set_xticklabels(s["learner"], rotation=30, fontsize=8)
-    ax.set_ylim(0, 1.05)
-    ax.axhline(1 / 3, color="0.7", lw=0.6, ls=":")
-    ax.set_ylabel("accuracy")
-    ax.set_title("leave-one-segment-out, standing" if test == "loso" else "the two seated taps", fontsize=9)
     return ax
 
 
@@ -142,34 +107,141 @@ def _legend_above(fig: Figure, ax: Axes, ncols: int = 4) -> None:
     fig.legend(handles, labels, loc="outside upper center", ncols=ncols, fontsize=7, frameon=False)
 
 
-def learning_curves_figure(curves: pd.DataFrame, ambiguities: Sequence[str]) -> Figure:
-    """The learning curves: one row per ambiguity, without and with words, one legend above."""
-    size = (8, 2.3 * len(ambiguities) + 0.6)
+def learning_curves_figure(curves: pd.DataFrame, ambiguity: str = "mixed") -> Figure:
+    """The learning curves in one ambiguity: a row per world, without and with words, one legend above."""
+    worlds = list(dict.fromkeys(curves["world"]))
     fig, axes = plt.subplots(
-        len(ambiguities), 2, figsize=size, squeeze=False, sharex=True, layout="constrained"
+        len(worlds), 2, figsize=(9, 2.8 * len(worlds) + 0.9), squeeze=False, sharex=True, layout="constrained"
     )
-    for i, amb in enumerate(ambiguities):
+    for i, world in enumerate(worlds):
         for j, words in enumerate((False, True)):
-            plot_learning_curves(axes[i, j], curves, amb, words)
-            axes[i, j].set_xlabel("episodes seen" if i == len(ambiguities) - 1 else "")
-    _legend_above(fig, axes[0, 0])
+            plot_learning_curves(axes[i, j], curves, world, ambiguity, words)
+            axes[i, j].set_xlabel("episodes seen" if i == len(worlds) - 1 else "")
+            if j:
+                axes[i, j].set_ylabel("")
+    _legend_above(fig, axes[0, 0], ncols=4)
     return fig
 
 
-def episodes_to_match_figure(match: pd.DataFrame) -> Figure:
-    """Episodes until each scheme matches the true labels, per condition, one legend above."""
-    m = match[match["learner"] != "unsupervised"]
-    n = len(set(zip(m["ambiguity"], m["words"], strict=True)))
-    fig, ax = plt.subplots(figsize=(8, 0.35 * n + 1.6), layout="constrained")
-    plot_episodes_to_match(ax, match)
-    _legend_above(fig, ax, ncols=5)
+GAP_LEARNERS: tuple[str, ...] = ("hard", "soft", "confident", "iterative", "random", "clustering", "em")
+
+
+def plot_gaps(ax: Axes, budgets: pd.DataFrame, world: str, words: bool, budget: int, margin: float) -> Axes:
+    """Each learner's gap to the true labels in each ambiguity (one row each), with its 90 % interval, the
+    equivalence margin shaded: a filled marker where the learner matches the true labels (equivalent),
+    hollow where it does not."""
+    b = budgets[(budgets["world"] == world) & (budgets["budget"] == budget)]
+    rows = b[b["words"].astype(object).eq(words) & b["learner"].isin(GAP_LEARNERS)]
+    ambs = list(dict.fromkeys(rows["ambiguity"]))
+    base = b[b["learner"].isin(["supervised_1", "supervised_5", "unsupervised"])]
+    groups = [("baselines", base)] + [(a, rows[rows["ambiguity"] == a]) for a in ambs]
+    y, ticks, labels = 0.0, [], []
+    for name, g in groups:
+        n = len(g)
+        for k, r in enumerate(g.itertuples()):
+            yy = y + k / max(n, 1)
+            st = LEARNER_STYLE.get(r.learner, dict(color="black", marker="o"))
+            ax.hlines(yy, r.gap_low90, r.gap_high90, color=st["color"], lw=1.2)
+            ax.plot(
+                [r.gap],
+                [yy],
+                ls="none",
+                marker=st["marker"] or "o",
+                ms=5,
+                color=st["color"],
+                mfc=st["color"] if r.equivalent else "white",
+            )
+        ticks.append(y + 0.5 * (n - 1) / max(n, 1))
+        labels.append(name.replace("_", " "))
+        y += 1.4
+    ax.axvspan(-margin, margin, color="0.85", lw=0, zorder=0)
+    ax.axvline(0, color="0.4", lw=0.8)
+    ax.yaxis.set_major_locator(FixedLocator(ticks))
+    ax.set_yticklabels(labels, fontsize=7)
+    ax.yaxis.set_minor_locator(NullLocator())
+    ax.invert_yaxis()
+    ax.set_xlabel("accuracy − the true labels' (90 % interval)")
+    ax.set_title(f"{world} world, {'with' if words else 'without'} words, {budget:,} episodes", fontsize=9)
+    ax.grid(alpha=0.3, axis="x")
+    return ax
+
+
+def gaps_figure(budgets: pd.DataFrame, budget: int | None = None) -> Figure:
+    """The gaps to the true labels at one budget (default: the largest): a row per world, without and with
+    words, one legend above."""
+    budget = int(budget or budgets["budget"].max())
+    margin = float(budgets["margin"].iloc[0])
+    worlds = list(dict.fromkeys(budgets["world"]))
+    fig, axes = plt.subplots(
+        len(worlds), 2, figsize=(10, 4.2 * len(worlds) + 0.9), squeeze=False, layout="constrained"
+    )
+    for i, world in enumerate(worlds):
+        for j, words in enumerate((False, True)):
+            plot_gaps(axes[i, j], budgets, world, words, budget, margin)
+    ax = axes[0, 0]
+    for lr in GAP_LEARNERS + ("supervised_1", "supervised_5", "unsupervised"):
+        st = LEARNER_STYLE[lr]
+        ax.plot([], [], ls="none", marker=st["marker"], color=st["color"], label=_label(lr))
+    ax.plot([], [], ls="none", marker="o", color="0.3", mfc="white", label="hollow: not shown equivalent")
+    ax.fill_between([], [], color="0.85", label=f"equivalence margin ±{margin:g}")
+    _legend_above(fig, ax, ncols=4)
     return fig
 
 
-def real_gestures_figure(summary: pd.DataFrame) -> Figure:
-    """The real gestures, labels hidden: leave-one-segment-out (left) and the seated taps (right)."""
-    fig, axes = plt.subplots(1, 2, figsize=(9.2, 3.6), layout="constrained")
-    plot_real_gestures(axes[0], summary, "loso")
-    plot_real_gestures(axes[1], summary, "seated")
-    _legend_above(fig, axes[0], ncols=2)
+def plot_real_person(ax: Axes, summary: pd.DataFrame, study: str, features: str) -> Axes:
+    """Each learner's accuracy on the person's held-out segments: a bar (hatched: with words; a mark on the
+    axis where it is 0) with its 95 % interval (draws and segments resampled)."""
+    s = summary[(summary["study"] == study) & (summary["features"] == features)].reset_index(drop=True)
+    for i, r in s.iterrows():
+        st = LEARNER_STYLE.get(r["learner"], dict(color="black"))
+        hatch = "///" if r["words"] is True else None
+        ax.bar(i, r["accuracy"], color=st["color"], edgecolor="0.2", linewidth=0.6, alpha=0.85, hatch=hatch)
+        if r["accuracy"] == 0:
+            ax.plot([i], [0.005], marker="_", ms=14, mew=2, color=st["color"])
+        ax.vlines(i, r["ci_low"], r["ci_high"], color="0.1", lw=1.2)
+    names = [
+        SHORT.get(lr, _label(lr)) + (" + words" if w is True else "")
+        for lr, w in zip(s["learner"], s["words"])
+    ]
+    ax.set_xticks(np.arange(len(s)))
+    ax.set_xticklabels(names, rotation=40, ha="right", fontsize=7)
+    ax.set_ylim(0, 1.05)
+    ax.axhline(1 / 3, color="0.55", lw=0.8, ls=":", label=CHANCE)
+    ax.set_ylabel("accuracy on the real segments")
+    where = (
+        "generator fitted to the person,\nleave-one-segment-out,"
+        if study == "fitted"
+        else "glu's generator,\n"
+    )
+    ax.set_title(f"{where} {features} features", fontsize=9)
+    return ax
+
+
+SHORT = {"random": "random labels", "clustering": "clusters named by network"}
+
+
+def real_person_figure(summary: pd.DataFrame) -> Figure:
+    """The real person: the fitted generator (leave-one-segment-out) and glu's standard generator (raw and
+    study features); bars are accuracies over the segments and draws, lines their 95 % intervals."""
+    panels = list(dict.fromkeys(zip(summary["study"], summary["features"], strict=True)))
+    widths = [int(((summary["study"] == st) & (summary["features"] == f)).sum()) for st, f in panels]
+    fig, axes = plt.subplots(
+        1,
+        len(panels),
+        figsize=(2.2 + 0.42 * sum(widths), 4.4),
+        squeeze=False,
+        layout="constrained",
+        width_ratios=widths,
+        sharey=True,
+    )
+    for ax, (study, features) in zip(axes[0], panels, strict=True):
+        plot_real_person(ax, summary, study, features)
+    for ax in axes[0, 1:]:
+        ax.set_ylabel("")
+    draws, segs = int(summary["draws"].iloc[0]), int(summary["segments"].iloc[0])
+    ax = axes[0, 0]
+    ax.plot(
+        [], [], color="0.1", lw=1.2, label=f"95 % interval ({segs} segments × {draws} draws, both resampled)"
+    )
+    _legend_above(fig, ax, ncols=2)
     return fig

@@ -59,6 +59,7 @@ LEARNER_NAMES: dict[str, str] = {
     "supervised_1": "1 true label per action",
     "supervised_5": "5 true labels per action",
     "network": "the network alone",
+    "always_tap": "always answering tap",
 }
 """How tables and sentences name each learner."""
 
