@@ -201,7 +201,7 @@ def plot_real_person(ax: Axes, summary: pd.DataFrame, study: str, features: str)
         ax.vlines(i, r["ci_low"], r["ci_high"], color="0.1", lw=1.2)
     names = [
         SHORT.get(lr, _label(lr)) + (" + words" if w is True else "")
-        for lr, w in zip(s["learner"], s["words"])
+        for lr, w in zip(s["learner"], s["words"], strict=True)
     ]
     ax.set_xticks(np.arange(len(s)))
     ax.set_xticklabels(names, rotation=40, ha="right", fontsize=7)

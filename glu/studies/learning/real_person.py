@@ -337,7 +337,8 @@ def real_person_summary(rows: pd.DataFrame, replicates: int = 2000) -> pd.DataFr
     to always answering tap (verdicts adjusted by Benjamini–Hochberg over the table).
 
     Columns: study, features, learner, words, accuracy, ci_low, ci_high, gap, gap_low, gap_high,
-    vs_tap, vs_tap_low, vs_tap_high, q_vs_tap, vs_tap_verdict, label_accuracy, draws, segments."""
+    vs_tap, vs_tap_low, vs_tap_high, q_vs_tap, vs_tap_verdict, label_accuracy, draws, segments,
+    recordings."""
     keys = ["study", "features", "learner", "words"]
     rows = rows.assign(
         words=rows["words"].astype(object), segment=rows["recording"] + ":" + rows["start"].astype(str)
@@ -378,6 +379,7 @@ def real_person_summary(rows: pd.DataFrame, replicates: int = 2000) -> pd.DataFr
             )
             | dict(p_vs_tap=float(bootstrap_p_value(vs)) if np.isfinite(vs[0]) else np.nan)
             | dict(label_accuracy=g["label_accuracy"].mean(), draws=len(draws), segments=len(segs))
+            | dict(recordings=rows["recording"].nunique())
         )
     df = pd.DataFrame(out)
     df["q_vs_tap"] = adjust(df["p_vs_tap"].to_numpy(), "bh")
@@ -391,3 +393,25 @@ def real_person_summary(rows: pd.DataFrame, replicates: int = 2000) -> pd.DataFr
         rows.attrs.get("data_source", ""),
         **rows.attrs.get("parameters", {}),
     )
+
+
+def real_person_lines(summary: pd.DataFrame) -> list[str]:
+    """One sentence per study and features, from :func:`real_person_summary`: each learner's accuracy with
+    its interval, and always answering tap."""
+    from glu.studies.learning.tables import LEARNER_NAMES
+
+    out = []
+    for (study, features), g in summary.groupby(["study", "features"], sort=False):
+        where = (
+            "Learned from a generator fitted to the person's other repetitions (leave-one-segment-out)"
+            if study == "fitted"
+            else "Learned from glu's standard gesture generator"
+        )
+        parts = [
+            f"{LEARNER_NAMES.get(r.learner, r.learner)}{' with words' if r.words is True else ''} "
+            f"{r.accuracy:.2f} [{r.ci_low:.2f}, {r.ci_high:.2f}]"
+            for r in g.itertuples()
+        ]
+        n, d = int(g["segments"].iloc[0]), int(g["draws"].iloc[0])
+        out.append(f"{where}, {features} features, on {n} segments × {d} draws: " + "; ".join(parts) + ".")
+    return out

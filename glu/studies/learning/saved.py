@@ -330,3 +330,79 @@ def load_real_person(folder: str | os.PathLike, data_source: str) -> tuple[pd.Da
     rows["predicted"] = rows["predicted"].astype(object).where(rows["predicted"].notna(), None)
     settings = settings_from_dict(meta["settings"], RealPersonSettings)
     return tidy(rows, "learning_real_person", data_source, **settings.as_dict()), meta
+
+
+SHIPPED, HERE = "shipped", "none"
+"""The notebook's ``saved`` values: glu's run for this data, or no saved run (everything computed here)."""
+
+
+def study_results(
+    engine,
+    settings: StudySettings,
+    saved: str | os.PathLike,
+    data_source: str,
+    real: bool,
+    check_seeds: Sequence[int] = (0,),
+) -> tuple[list[SeedResult], dict[str, Any]]:
+    """The seeds' results the notebook's tables are computed from, and where they come from.
+
+    ``saved``: :data:`HERE` runs the study here (:func:`~glu.studies.learning.study.learning_study`);
+    :data:`SHIPPED` reads glu's saved run for this data (:func:`default_folder`), any other value the
+    folder of a ``glu learning-curves`` run. A saved run is narrowed to ``settings`` (:func:`select`) and
+    checked against this code on ``check_seeds`` up to the first budget (:func:`check_against`). The second
+    value says where the results come from: ``{"folder", "made_by", "check"}`` (folder None: computed here).
+    """
+    from glu.studies.learning.study import learning_study
+
+    if str(saved) == HERE:
+        return learning_study(engine, settings), {"folder": None, "made_by": None, "check": None}
+    folder = default_folder(real) if str(saved) == SHIPPED else Path(saved)
+    stored, results, meta = load_study(folder)
+    chosen = select(results, stored, settings, data_source, meta)
+    check = None
+    if check_seeds:
+        check = check_against(engine, chosen, settings, check_seeds, settings.main_budgets[0])
+    where = f"glu's saved run for this data ({folder.name})" if str(saved) == SHIPPED else str(folder)
+    return chosen, {"folder": where, "made_by": meta.get("made_by"), "check": check}
+
+
+def provenance_line(where: dict[str, Any]) -> str:
+    """One sentence saying where the results come from and how they were checked (:func:`study_results`)."""
+    if where["folder"] is None:
+        return "Every budget was computed here."
+    m = where["made_by"] or {}
+    text = (
+        f"The budgets come from {where['folder']}, made by `{m.get('command', '?')}` on {m.get('date', '?')} "
+        f"(glu {m.get('glu', '?')}{', commit ' + m['commit'] if m.get('commit') else ''})."
+    )
+    c = where["check"]
+    if c:
+        text += (
+            f" Recomputed here: seeds {', '.join(map(str, c['seeds']))}, {c['learners']} learners of each "
+            f"world after {c['episodes']:,} episodes recognise the held-out gestures as saved in "
+            f"{c['decisions'] - c['differ']:,} of {c['decisions']:,} decisions."
+        )
+    return text
+
+
+def real_person_rows(
+    engine, source, settings: RealPersonSettings, saved: str | os.PathLike, data_source: str
+) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """The real-person study's rows: run here (``saved`` :data:`HERE`) or read from glu's saved run
+    (:data:`SHIPPED`) or a folder, which must hold the same settings; and where they come from."""
+    from glu.gestures.corpus import gesture_sequences
+    from glu.studies.learning.real_person import real_person_study
+
+    if str(saved) == HERE:
+        standing = gesture_sequences(source, include_test=False)
+        rows = real_person_study(engine, standing, settings, data_source=data_source)
+        return rows, {"folder": None, "made_by": None, "check": None}
+    folder = default_folder(True) if str(saved) == SHIPPED else Path(saved)
+    rows, meta = load_real_person(folder, data_source)
+    if meta["settings"] != json.loads(json.dumps(settings.as_dict(), default=str)):
+        raise DataError(
+            f"{folder}: the saved real-person study has other settings than asked; run `glu learning-curves "
+            "--part real-person --data DATA -o DIR` with them and give the notebook saved=DIR"
+        )
+    where = f"glu's saved run for this data ({folder.name})" if str(saved) == SHIPPED else str(folder)
+    return rows, {"folder": where, "made_by": meta.get("made_by"), "check": None}

@@ -332,7 +332,41 @@ def claim_lines(claims: pd.DataFrame, margin: float) -> list[str]:
                 f"in {r.beats_random}"
             )
         out.append(
-            f"{CLAIMS[claim][1].capitalize()}, {world} world (matching = equivalent to the true labels "
+            f"{CLAIMS[claim][1]}, {world} world (matching = equivalent to the true labels "
             f"within ±{margin:g}, TOST, Benjamini–Hochberg over the table): " + "; ".join(parts) + "."
         )
     return out
+
+
+def main_table(budgets: pd.DataFrame, words: bool) -> pd.DataFrame:
+    """The main table of one claim, for reading: a row per world, ambiguity (``baselines`` for the learners
+    measured once per world) and learner; a column per budget, each cell the accuracy, the gap to the true
+    labels with its 95 % interval and the verdict (and, where the difference is significant, how the learner
+    fares against random labels as accurate as the network's)."""
+    b = budgets[budgets["words"].astype(object).eq(words) | budgets["ambiguity"].eq("")]
+
+    def cell(r) -> str:
+        if r.learner == "true":
+            return f"{r.accuracy:.3f}"
+        text = f"{r.accuracy:.3f}  {r.gap:+.3f} [{r.gap_low:+.3f}, {r.gap_high:+.3f}] {r.verdict}"
+        if r.vs_random_verdict == "better":
+            text += "; beats random labels"
+        elif r.vs_random_verdict == "worse":
+            text += "; below random labels"
+        return text
+
+    rows = [
+        dict(
+            world=r.world,
+            ambiguity=r.ambiguity or "baselines",
+            learner=LEARNER_NAMES.get(r.learner, r.learner),
+        )
+        | dict(budget=f"{r.budget:,} episodes", cell=cell(r))
+        for r in b.itertuples()
+    ]
+    df = pd.DataFrame(rows)
+    order = list(dict.fromkeys(df["budget"]))
+    out = df.pivot_table(
+        index=["world", "ambiguity", "learner"], columns="budget", values="cell", aggfunc="first", sort=False
+    )
+    return out[order]
