@@ -23,6 +23,7 @@ from glu.cli.common import (
     output_folder,
     positive_float,
     positive_int,
+    progress_bar,
     seed,
 )
 
@@ -164,25 +165,36 @@ def _learn(args: argparse.Namespace) -> int:
     from glu.hmm import TrainingConfig
     from glu.studies.learning.learned_recognizers import learn_gestures
 
-    engine, label = _engine(args.data)
-    print(f"network: learned from {label}")
-    config = TrainingConfig(n_states=args.states, n_mix=args.mix, n_iter=args.iter)
     if args.threshold > 1:
         from glu.errors import DataError
 
         raise DataError(f"--threshold {args.threshold}: a probability in (0, 1]")
-    rec, info = learn_gestures(
-        engine,
-        args.episodes,
-        args.labels,
-        seed=args.seed,
-        words=args.with_words,
-        ambiguity=args.ambiguity,
-        online=args.online,
-        config=config,
-        threshold=args.threshold,
-        data_source=label,
+    engine, label = _engine(args.data)
+    print(f"network: learned from {label}", flush=True)
+    config = TrainingConfig(n_states=args.states, n_mix=args.mix, n_iter=args.iter)
+    bar = (
+        progress_bar(args.episodes, "learn", "episode")
+        if args.online
+        else progress_bar(None, "learn", "model")
     )
+    try:
+        rec, info = learn_gestures(
+            engine,
+            args.episodes,
+            args.labels,
+            seed=args.seed,
+            words=args.with_words,
+            ambiguity=args.ambiguity,
+            online=args.online,
+            config=config,
+            noise=args.noise,
+            threshold=args.threshold,
+            data_source=label,
+            progress=(lambda _: bar.update(1)) if bar is not None else None,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
     print(f"episodes: {info['data']}")
     print(
         f"labels: arg-max of p_BN right for {info['label_accuracy']:.3f} of the episodes; "
@@ -230,9 +242,9 @@ def _curves(args: argparse.Namespace) -> int:
     )
     out = Path(args.out)
     if args.part in ("curves", "all"):
-        _run_curves(engine, label, settings, where, out)
+        _run_curves(engine, label, settings, where, out, _command(args, "curves"))
     if args.part in ("real-person", "all"):
-        _run_real_person(engine, source, label, args.draws, where, out)
+        _run_real_person(engine, source, label, args.draws, where, out, _command(args, "real-person"))
     return 0
 
 
@@ -242,14 +254,20 @@ def _choices(name: str) -> tuple[str, ...]:
     return tuple(getattr(self_supervised, name))
 
 
-def _command() -> str:
-    import shlex
-    import sys
+def _command(args: argparse.Namespace, part: str) -> str:
+    """The command that makes this part again (the data folder, a machine path, as DATA)."""
+    seeds = ",".join(map(str, args.seeds if part == "curves" else args.draws))
+    common = f" --data {'synthetic' if args.data == 'synthetic' else 'DATA'} -o DIR"
+    if part == "real-person":
+        return f"glu learning-curves --part real-person --draws {seeds}" + common
+    return (
+        f"glu learning-curves --episodes {args.episodes} --seeds {seeds} --worlds {','.join(args.worlds)} "
+        f"--ambiguities {','.join(args.ambiguities)} --test-per-action {args.test_per_action} "
+        f"--margin {args.margin:g}" + common
+    )
 
-    return "glu " + " ".join(shlex.quote(a) for a in sys.argv[1:])
 
-
-def _run_curves(engine, label: str, settings, where: dict, out: Path) -> None:
+def _run_curves(engine, label: str, settings, where: dict, out: Path, command: str) -> None:
     from glu.files import atomic_write_text
     from glu.studies.learning import saved, tables
     from glu.studies.learning import study as lc
@@ -277,11 +295,11 @@ def _run_curves(engine, label: str, settings, where: dict, out: Path) -> None:
     }
     for name, df in frames.items():
         atomic_write_text(out / f"{name}.csv", df.to_csv(index=False))
-    saved.save_study(out, results, settings, label, _command(), lc.update_times(results))
+    saved.save_study(out, results, settings, label, command, lc.update_times(results))
     print(f"wrote {out}/{saved.STUDY_FILE}, {saved.RESULTS_FILE}, {', '.join(f'{k}.csv' for k in frames)}")
 
 
-def _run_real_person(engine, source, label: str, draws, where: dict, out: Path) -> None:
+def _run_real_person(engine, source, label: str, draws, where: dict, out: Path, command: str) -> None:
     from glu.files import atomic_write_text
     from glu.gestures.corpus import gesture_sequences
     from glu.studies.learning import real_person as rp
@@ -301,7 +319,7 @@ def _run_real_person(engine, source, label: str, draws, where: dict, out: Path) 
         ),
         data_source=label,
     )
-    saved.save_real_person(out, rows, settings, label, _command())
+    saved.save_real_person(out, rows, settings, label, command)
     summary = rp.real_person_summary(rows, settings.bootstrap)
     atomic_write_text(out / "learning_real_person_summary.csv", summary.to_csv(index=False))
     print(f"wrote {out}/{saved.PERSON_FILE}, {saved.PERSON_STUDY_FILE}, learning_real_person_summary.csv")

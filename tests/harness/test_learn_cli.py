@@ -106,8 +106,9 @@ def test_online_and_true_labels(capsys, tmp_path):
         "synthetic",
         *SMALL,
     ]
-    status, text, _ = run(capsys, *argv, "-o", str(out))
+    status, text, err = run(capsys, *argv, "-o", str(out))
     assert status == 0 and "online" in text
+    assert "episode/s" not in err and "\r" not in err  # no progress bar when stderr is not a terminal
     assert Recognizer.load(out).meta["learning"] == "online"
 
 
@@ -152,6 +153,10 @@ def test_bad_input_is_one_line(capsys, tmp_path):
         capsys, "learning-curves", "--ambiguities", "foggy", "--data", "synthetic", "-o", str(tmp_path)
     )
     assert_one_line_error(status, err, "unknown 'foggy'")
+    status, _, err = run(
+        capsys, "learning-curves", "--worlds", "moon", "--data", "synthetic", "-o", str(tmp_path)
+    )
+    assert_one_line_error(status, err, "--worlds: unknown 'moon'")
     status, _, err = run(capsys, "learning-curves", "--seeds", "1,1", "-o", str(tmp_path))
     assert status == 2 and "distinct seeds" in err
 
@@ -174,11 +179,19 @@ def test_learning_curves_writes_the_study_tables(capsys, tmp_path):
     assert status == 0, out
     curves = pd.read_csv(tmp_path / "learning_curves.csv")
     assert set(curves["episodes"]) == {10, 12} and set(curves["seeds"]) == {2}
-    assert {"learning_match.csv", "learning_labels.csv", "learning_study.json"} <= {
-        p.name for p in tmp_path.iterdir()
-    }
+    written = {p.name for p in tmp_path.iterdir()}
+    assert {
+        "learning_budgets.csv",
+        "learning_claims.csv",
+        "learning_labels.csv",
+        "learning_results.npz",
+    } <= written
     study = json.loads((tmp_path / "learning_study.json").read_text())
     assert study["settings"]["episodes"] == 12 and study["update_seconds"]["median"] > 0
+    assert study["made_by"]["command"].startswith("glu learning-curves --episodes 12")
+    assert "seed 1 done (2 of 2)" in out
+    status, _, err = run(capsys, *argv, "--part", "real-person", "--data", "synthetic", "-o", str(tmp_path))
+    assert_one_line_error(status, err, "real person is in the real data only")
 
 
 @pytest.mark.slow  # a LocalCluster (3 s); tests/studies/test_sweep.py runs a real scheduler and worker
@@ -189,5 +202,10 @@ def test_learning_curves_on_a_local_dask_cluster_equal_the_run_here(capsys, tmp_
     assert run(capsys, *common, "--scheduler", "synchronous", "-o", str(here))[0] == 0
     status, out, err = run(capsys, *common, "--workers", "1", "-o", str(there))
     assert status == 0, err
-    for name in ("learning_curves.csv", "learning_match.csv", "learning_labels.csv"):
+    for name in (
+        "learning_curves.csv",
+        "learning_budgets.csv",
+        "learning_labels.csv",
+        "learning_results.npz",
+    ):
         assert (here / name).read_bytes() == (there / name).read_bytes(), name

@@ -1,15 +1,14 @@
-"""Learning gestures from effects (glu.studies.learning.self_supervised, online_learning, learning_curves,
-two_level).
+"""Learning gestures from effects: the world, the labels and the learners
+(glu.studies.learning.self_supervised, online, learned_recognizers).
 
-References: the network's own single queries, the unweighted recogniser training, a hand-written online
-loop over the readable E- and M-steps, learners run alone against learners run together, and closed forms
-for the bootstrap.
+References: the network's own single queries, the gesture generator's own draws, the unweighted recogniser
+training, a hand-written online loop over the readable E- and M-steps, learners run alone against learners
+run together, learners that must coincide (clusters named by certain labels and by the truth), counting.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 import pytest
 
 from glu.bn import InferenceEngine, learn_bn
@@ -17,11 +16,9 @@ from glu.data import load_experiments
 from glu.errors import DataError
 from glu.gestures.recognizer import train_recognizer
 from glu.hmm import GMMHMMParams, TrainingConfig, expected_stats, maximise, train
-from glu.stats import interval, replicate_means, two_level_weights
 from glu.studies.learning import learned_recognizers as lr_
 from glu.studies.learning import online as ol
 from glu.studies.learning import self_supervised as ss
-from glu.studies.learning import study as lc
 
 SMALL = TrainingConfig(n_states=3, n_mix=1, n_iter=20, tol=1e-3)
 
@@ -73,6 +70,81 @@ def test_perception_noise_replaces_the_effect_by_a_uniform_value(engine):
     world, seen = ss.draw_world(engine, actions, ss.Ambiguity("some", perception_noise=0.3), seed=1)
     changed = np.mean(seen["ObjVel"] != world["ObjVel"])
     assert abs(changed - 0.3 * 2 / 3) < 0.03  # a uniform redraw keeps the value one time in three
+
+
+def test_the_easy_world_is_the_generator_as_it_was(engine):
+    """The easy world draws exactly the generator's default gestures, from each episode's own generator."""
+    from glu.gestures.synthetic import synthesize_gesture
+
+    ep = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], 5, seed=7, world=ss.WORLDS["easy"])
+    names = engine.bn.schema.values_of("Action")
+    for i, (a, x) in enumerate(zip(ep.actions, ep.features, strict=True)):
+        rng = np.random.default_rng(np.random.SeedSequence(7, spawn_key=(ss.GESTURE_KEY, i)))
+        np.testing.assert_array_equal(x, synthesize_gesture(names[a], rng, noise=0.02).features())
+
+
+def test_the_hard_world_turns_varies_and_frames_each_person(engine):
+    from glu.gestures.synthetic import View, synthesize_gesture
+
+    hard = ss.WORLDS["hard"]
+    views = hard.views(200, seed=3)
+    yaws = np.array([v.yaw_deg for v in views])
+    assert set(yaws) <= set(np.arange(-60, 61, 5.0)) and len(set(yaws)) > 10
+    assert all(v.variety == hard.variety and v.body_frame for v in views)
+    assert [v.yaw_deg for v in hard.views(200, seed=3)] == list(yaws)  # seeded
+    ep = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], 6, seed=3, world=hard)
+    names = engine.bn.schema.values_of("Action")
+    for i, (a, x) in enumerate(zip(ep.actions, ep.features, strict=True)):
+        rng = np.random.default_rng(np.random.SeedSequence(3, spawn_key=(ss.GESTURE_KEY, i)))
+        view = View(yaw_deg=yaws[i], variety=hard.variety, body_frame=True)
+        np.testing.assert_allclose(
+            x, synthesize_gesture(names[a], rng, noise=hard.noise, view=view).features()
+        )
+
+
+def test_in_the_hard_world_the_slowest_taps_fail(engine):
+    """Effects follow the gesture: the failing taps are those whose gesture is slowest (the generator's own
+    duration and amplitude), not random ones; in the easy world failures ignore the gesture."""
+    from glu.studies.episodes import gesture_speed
+
+    schema = engine.bn.schema
+    slow, tap = schema.values_of("ObjVel").index("slow"), schema.values_of("Action").index("tap")
+    actions = np.arange(900) % 3
+    q = gesture_speed(
+        [np.random.default_rng(np.random.SeedSequence(2, spawn_key=(ss.GESTURE_KEY, i))) for i in range(900)]
+    ).quantile
+    taps = actions == tap
+    world, _ = ss.draw_world(engine, actions, ss.AMBIGUITIES["failed_taps"], 2, world=ss.WORLDS["hard"])
+    assert np.all(world["ObjVel"][taps & (q < 0.5)] == slow)
+    fast = taps & (q >= 0.5)
+    assert np.mean(world["ObjVel"][fast] == slow) < 0.5
+    world, _ = ss.draw_world(engine, actions, ss.AMBIGUITIES["failed_taps"], 2, world=ss.WORLDS["easy"])
+    stays = world["ObjVel"] == slow
+    assert abs(stays[taps & (q < 0.5)].mean() - stays[fast].mean()) < 0.15  # speed makes no difference
+    # still objects never move, whatever the gesture
+    world, _ = ss.draw_world(engine, actions, ss.AMBIGUITIES["still"], 2, world=ss.WORLDS["hard"])
+    assert np.all(world["ObjVel"] == slow)
+
+
+def test_random_labels_are_right_as_often_and_wrong_uniformly():
+    """Binomial bounds: right with the given probability, each wrong action equally likely."""
+    n, k, acc = 30000, 3, 0.55
+    true = np.arange(n) % k
+    lab = ss.matched_random_labels(true, acc, k, np.random.default_rng(0)).argmax(axis=1)
+    right = lab == true
+    assert abs(right.mean() - acc) < 4 * np.sqrt(acc * (1 - acc) / n)
+    wrong = (lab[~right] - true[~right]) % k  # 1 or 2: which other action
+    assert abs(np.mean(wrong == 1) - 0.5) < 4 * np.sqrt(0.25 / (~right).sum())
+    with pytest.raises(DataError, match="probability"):
+        ss.matched_random_labels(true, 1.5, k, np.random.default_rng(0))
+
+
+def test_first_labels_by_counting():
+    true = np.array([2, 0, 2, 2, 1, 0, 0, 2])
+    w = ss.first_labels(true, 2, 3)
+    for i in range(len(true)):
+        earlier = int(np.sum(true[:i] == true[i]))
+        assert w[i].tolist() == (ss.one_hot(true[i : i + 1], 3)[0] * (earlier < 2)).tolist()
 
 
 def test_bad_ambiguities_are_refused():
@@ -209,16 +281,21 @@ def test_learners_in_lockstep_learn_what_each_learns_alone(engine):
     ep, held, p = _stream(engine, 40)
     actions = engine.bn.schema.values_of("Action")
     settings = ol.OnlineSettings(config=SMALL, cluster_episodes=9)
+    rnd = ss.matched_random_labels(ep.actions, 0.6, 3, np.random.default_rng(1))
     learners = [
         ol.Learner("soft", "n"),
         ol.Learner("iterative", "n"),
         ol.Learner("true"),
         ol.Learner("unsupervised"),
+        ol.Learner("random", "r"),
+        ol.Learner("clustering", "n"),
+        ol.Learner("em", "n"),
+        ol.Learner("supervised", 2),
     ]
     args = (held.features, held.actions, [20, 40], actions, settings, 0)
-    together = ol.run_online(ep.features, ep.actions, learners, {"n": p}, *args)
+    together = ol.run_online(ep.features, ep.actions, learners, {"n": p, "r": rnd}, *args)
     for k, lr in enumerate(learners):
-        alone = ol.run_online(ep.features, ep.actions, [lr], {"n": p}, *args)
+        alone = ol.run_online(ep.features, ep.actions, [lr], {"n": p, "r": rnd}, *args)
         np.testing.assert_array_equal(together.correct[:, k], alone.correct[:, 0])
         np.testing.assert_allclose(together.params.means[k], alone.params.means[0], rtol=1e-10)
         np.testing.assert_allclose(together.weights[:, k], alone.weights[:, 0], rtol=1e-10)
@@ -257,128 +334,79 @@ def test_the_first_episodes_are_labelled_by_the_network_alone(engine):
     assert not np.allclose(run.weights[-10:, 0], p[-10:])  # later: the product with its HMMs
 
 
+def test_learners_that_must_coincide(engine):
+    """Clusters named by certain labels are the clusters named by the truth; random labels that are one-hot
+    are hard labels of the same matrix; semi-supervised EM with certain labels is the true-label learner."""
+    ep, held, _ = _stream(engine, 36)
+    actions = engine.bn.schema.values_of("Action")
+    certain = ss.one_hot(ep.actions, 3)
+    learners = [
+        ol.Learner("clustering", "c"),
+        ol.Learner("unsupervised"),
+        ol.Learner("random", "c"),
+        ol.Learner("hard", "c"),
+        ol.Learner("em", "c"),
+        ol.Learner("true"),
+    ]
+    settings = ol.OnlineSettings(config=SMALL, cluster_episodes=9)
+    run = ol.run_online(
+        ep.features,
+        ep.actions,
+        learners,
+        {"c": certain},
+        held.features,
+        held.actions,
+        [36],
+        actions,
+        settings,
+    )
+    for a, b in ((0, 1), (2, 3), (4, 5)):
+        np.testing.assert_array_equal(run.matching[:, a], run.matching[:, b])
+        np.testing.assert_allclose(run.params.means[a], run.params.means[b], rtol=1e-10)
+        np.testing.assert_array_equal(run.correct[:, a], run.correct[:, b])
+
+
+def test_supervision_by_one_label_per_action_is_one_training(engine):
+    """``supervised`` with 1 label per action: each model trained on its action's first episode alone, then
+    never updated."""
+    ep, held, _ = _stream(engine, 30)
+    actions = engine.bn.schema.values_of("Action")
+    settings = ol.OnlineSettings(config=SMALL, init_iter=5)
+    run = ol.run_online(
+        ep.features,
+        ep.actions,
+        [ol.Learner("supervised", 1)],
+        {},
+        held.features,
+        held.actions,
+        [30],
+        actions,
+        settings,
+        seed=4,
+    )
+    for a in range(3):
+        first = ep.features[int(np.flatnonzero(ep.actions == a)[0])]
+        m = train([first], SMALL.replace(n_iter=5), weights=np.ones(1), seed=4, warn=False).model
+        np.testing.assert_allclose(run.params.means[0, a], m.means, rtol=1e-8, atol=1e-10)
+    assert np.count_nonzero(run.weights[:, 0]) == 3
+    with pytest.raises(DataError, match="labels per action"):
+        ol.run_online(
+            ep.features,
+            ep.actions,
+            [ol.Learner("supervised", 0)],
+            {},
+            held.features,
+            held.actions,
+            [30],
+            actions,
+        )
+
+
 def test_online_settings_are_checked():
     with pytest.raises(DataError, match="step"):
         ol.OnlineSettings(step=0.3)
     with pytest.raises(DataError, match="posterior"):
         ol.OnlineSettings(posterior="vote")
-
-
-# ------------------------------------------------------------------ intervals and tables
-
-
-def test_two_level_bootstrap_weights_and_means():
-    rng = np.random.default_rng(0)
-    W = two_level_weights(4, 10, 200, rng)
-    assert W.shape == (201, 4, 10) and np.all(W[0] == 1)
-    np.testing.assert_array_equal(W[1:].sum(axis=(1, 2)), 40)  # 4 seeds drawn, 10 units each
-    values = rng.random((4, 10, 2))
-    reps = replicate_means(values, W)
-    np.testing.assert_allclose(reps[0], values.mean(axis=(0, 1)))
-    b = 5
-    np.testing.assert_allclose(reps[b], np.einsum("sj,sjk->k", W[b], values) / W[b].sum())
-
-
-def test_two_level_intervals_see_the_spread_between_seeds():
-    """Seeds that differ and episodes that agree within a seed: the interval is the seeds' bootstrap."""
-    rng = np.random.default_rng(1)
-    values = np.repeat(np.array([0.2, 0.4, 0.6, 0.8])[:, None], 50, axis=1)[..., None]
-    reps = replicate_means(values, two_level_weights(4, 50, 4000, rng))
-    lo, hi = interval(reps)
-    # the mean of 4 seeds resampled: its replicates have variance σ²/4 with σ² the seeds' (biased) variance
-    assert np.std(reps[1:, 0]) == pytest.approx(np.sqrt(values[:, 0, 0].var() / 4), rel=0.05)
-    assert lo[0] < 0.4 and hi[0] > 0.6
-
-
-def _fake_results(correct_by_seed):
-    learners = [("true", "", None), ("soft", "mixed", False)]
-    out = []
-    for s, c in enumerate(correct_by_seed):
-        out.append(
-            lc.SeedResult(
-                s,
-                learners,
-                np.array([10, 20]),
-                np.asarray(c, bool),
-                [("mixed", False)],
-                np.ones((1, c.shape[2]), bool),
-                np.array([[0.5, 0.1, 0.9, 0.4]]),
-                np.zeros(20),
-            )
-        )
-    return out
-
-
-def test_curves_and_episodes_to_match():
-    J = 6
-    seed0 = np.zeros((2, 2, J), bool)
-    seed0[:, 0] = True  # true labels: all right
-    seed0[0, 1, :2] = True  # soft: 2 of 6 after 10 episodes …
-    seed0[1, 1] = True  # … all after 20
-    results = _fake_results([seed0, seed0.copy()])
-    settings = lc.StudySettings(
-        episodes=20, seeds=(0, 1), ambiguities=("mixed",), words=(False,), bootstrap=200
-    )
-    curves = lc.curves_table(results, settings)
-    soft = curves[(curves.learner == "soft")].set_index("episodes")
-    assert soft.loc[10, "accuracy"] == pytest.approx(2 / 6) and soft.loc[20, "accuracy"] == 1.0
-    assert soft.loc[10, "gap_high"] < 0 and soft.loc[20, "gap_low"] == soft.loc[20, "gap_high"] == 0
-    net = curves[curves.learner == "network"]
-    assert len(net) == 2 and np.all(net["accuracy"] == 1.0)
-    match = lc.match_table(curves)
-    assert lc.match_lines(match) == [
-        "mixed, without words: matched by soft after 20; at 20 episodes, best soft 1.000 against 1.000 with "
-        "true labels",
-        "some labelling scheme matches the true-label HMMs in 1 of 1 conditions",
-    ]
-    match = match.set_index("learner")
-    assert match.loc["soft", "episodes_to_match"] == 20 and match.loc["soft", "true_accuracy"] == 1.0
-    worse = seed0.copy()
-    worse[1, 1, :3] = False
-    match = lc.match_table(lc.curves_table(_fake_results([worse, worse]), settings)).set_index("learner")
-    assert np.isnan(match.loc["soft", "episodes_to_match"])
-
-
-def test_the_study_runs_end_to_end(engine):
-    settings = lc.StudySettings(
-        episodes=20,
-        seeds=(0, 1),
-        ambiguities=("mixed", "still"),
-        test_per_action=3,
-        bootstrap=30,
-        online=ol.OnlineSettings(config=SMALL, cluster_episodes=9),
-    )
-    results = lc.learning_study(engine, settings)
-    curves = lc.curves_table(results, settings, "synthetic")
-    assert set(curves.learner) == {"true", "unsupervised", "network", *ss.SCHEMES}
-    assert curves.attrs["experiment"] == "learning_curves" and curves["seeds"].iloc[0] == 2
-    assert curves["accuracy"].between(0, 1).all()
-    labels = lc.labels_table(results, settings)
-    still = labels[(labels.ambiguity == "still") & ~labels.words.astype(bool)].iloc[0]
-    mixed = labels[(labels.ambiguity == "mixed") & labels.words.astype(bool)].iloc[0]
-    assert still.label_accuracy < mixed.label_accuracy
-    assert set(lc.update_times(results)) == {"median", "p95", "max"}
-
-
-def test_study_settings_are_checked():
-    with pytest.raises(DataError, match="ambiguity"):
-        lc.StudySettings(ambiguities=("foggy",))
-    with pytest.raises(DataError, match="learner"):
-        lc.StudySettings(schemes=("guess",))
-    assert lc.StudySettings(episodes=300).checkpoints == (10, 20, 50, 100, 200, 300)
-
-
-def test_real_gesture_study_on_labelled_sequences(engine):
-    from glu.gestures.corpus import synthetic_corpus
-
-    corpus = synthetic_corpus(3, seed=4)
-    df = lr_.real_gesture_study(
-        engine, corpus, corpus[:2], learners=("hard", "true"), draws=(0,), config=SMALL
-    )
-    assert set(df.test) == {"loso", "seated"} and len(df) == 2 * (9 + 2)
-    summary = lr_.real_gesture_summary(df)
-    assert set(summary.columns) >= {"learner", "test", "accuracy", "label_accuracy"}
-    assert isinstance(summary, pd.DataFrame) and summary["accuracy"].between(0, 1).all()
 
 
 def test_the_recording_of_an_online_learner_reads_back(engine, tmp_path):

@@ -1,4 +1,4 @@
-"""Recognisers learned from effects, all episodes at once: from simulated episodes, on the real gestures.
+"""Recognisers learned from effects, all episodes at once, and what the robot then anticipates with them.
 
 * :func:`learn_recognizer` — one HMM per action trained on unlabelled gestures labelled by a scheme of
   :mod:`glu.studies.learning.self_supervised` (weighted EM, :func:`glu.hmm.train` with ``weights``);
@@ -6,16 +6,13 @@
   gesture stop changing;
 * :func:`learn_gestures` — watch simulated episodes and learn a recogniser from them, batch or online
   (:mod:`glu.studies.learning.online`): what ``glu learn-gestures`` writes;
-* :func:`real_gesture_study` — the real standing segments with their labels hidden, each paired with an object
-  and an effect drawn from the network given its true action: leave-one-segment-out accuracy and the seated
-  taps, for each scheme against the true labels;
 * :func:`anticipation_after_learning` — what the robot anticipates and says with learned HMMs (the TCDS
   Fig. 5 cases).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -24,7 +21,6 @@ import pandas as pd
 from glu.bn.inference import InferenceEngine
 from glu.data.source import DataSource
 from glu.errors import DataError, ModelError
-from glu.gestures.corpus import LabelledSequence
 from glu.gestures.invariants import Invariants
 from glu.gestures.recognizer import Recognizer
 from glu.gestures.typicality import META_KEY, ranges_to_meta, training_range
@@ -34,13 +30,10 @@ from glu.studies.anticipation.experiment import AnticipationRun
 from glu.studies.learning.online import OnlineSettings
 from glu.studies.learning.self_supervised import (
     AMBIGUITIES,
-    BASELINES,
     EFFECTS,
     LEARNERS,
     STUDY_TRAINING,
-    Ambiguity,
     best_matching,
-    draw_world,
     label_weights,
     network_posteriors,
     one_hot,
@@ -72,8 +65,10 @@ def _fit_all(
     config: TrainingConfig,
     seed: int,
     start: Mapping[str, GestureHMM] | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> dict[str, GestureHMM]:
-    """One model per action with enough label weight: weighted training (from ``start`` when given)."""
+    """One model per action with enough label weight: weighted training (from ``start`` when given);
+    ``progress(action)`` after each."""
     lengths = np.array([len(x) for x in features])
     models = {}
     for a, name in enumerate(actions):
@@ -84,6 +79,8 @@ def _fit_all(
         models[name] = train(
             list(features), config, weights=w, seed=seed, name=name, warn=False, start=first
         ).model
+        if progress is not None:
+            progress(name)
     if not models:
         raise ModelError("no action has enough label weight to train its model")
     return models
@@ -103,6 +100,7 @@ def learn_recognizer(
     max_rounds: int = 10,
     invariants: Invariants | str | None = None,
     meta: Mapping[str, Any] | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> Learned:
     """Train one HMM per action on unlabelled gestures, labelled by ``scheme`` (batch: all at once).
 
@@ -119,6 +117,7 @@ def learn_recognizer(
     max_rounds : most relabelling rounds (``iterative``, ``unsupervised``: until the arg-max labels of every
         gesture stop changing)
     invariants : the features the models are trained on (computed by the recogniser, as for any)
+    progress : called with the action's name after each model is trained (every relabelling round)
     """
     if scheme not in LEARNERS:
         raise DataError(f"unknown labelling scheme {scheme!r}; allowed: {', '.join(LEARNERS)}")
@@ -134,7 +133,7 @@ def learn_recognizer(
         if p_bn is None or np.shape(p_bn) != (n, k):
             raise DataError(f"scheme {scheme!r} needs p_bn of shape ({n}, {k})")
         W = label_weights(scheme, p_bn, threshold)
-    models = _fit_all(seen, W, actions, config, seed)
+    models = _fit_all(seen, W, actions, config, seed, progress=progress)
     rounds = 1
     if scheme in ("iterative", "unsupervised"):
         labels = W.argmax(axis=1)
@@ -142,7 +141,7 @@ def learn_recognizer(
             ll = _loglik(models, actions, seen)
             p_hmm = p_hmm_reading(ll, lengths, posterior)
             W = label_weights("iterative", p_bn, p_hmm=p_hmm) if scheme == "iterative" else p_hmm
-            models = _fit_all(seen, W, actions, config, seed, start=models)
+            models = _fit_all(seen, W, actions, config, seed, start=models, progress=progress)
             new = W.argmax(axis=1)
             if np.array_equal(new, labels):
                 break
@@ -211,137 +210,6 @@ def classify(recognizer: Recognizer, actions: Sequence[str], seqs: Sequence[np.n
     return names[ll.argmax(axis=1)]
 
 
-# ------------------------------------------------------------------ the real gestures
-
-
-def real_gesture_study(
-    engine: InferenceEngine,
-    standing: Sequence[LabelledSequence],
-    seated: Sequence[LabelledSequence] = (),
-    *,
-    learners: Sequence[str] = LEARNERS,
-    ambiguity: Ambiguity | None = None,
-    words: bool = False,
-    draws: Sequence[int] = (0, 1),
-    config: TrainingConfig = STUDY_TRAINING,
-    invariants: Invariants | str | None = None,
-    threshold: float = 0.9,
-    posterior: str = "per-frame",
-    data_source: str = "",
-) -> pd.DataFrame:
-    """The real gestures with their labels hidden: leave-one-segment-out and the seated taps, per learner.
-
-    For each draw, every standing segment is paired with an object, an effect and words drawn from the
-    network given its true action (the robot's own experience standing in for what it would have seen), and
-    labelled by ``p_BN(A | object, perceived effect[, words])``. For each held-out segment, HMMs learned from
-    the other segments by each learner recognise it; HMMs learned from every standing segment recognise
-    the seated taps. The ``true`` learner does not depend on the draw (it is run for each, for the pairing).
-
-    Returns
-    -------
-    DataFrame, one row per draw, learner and test gesture: draw, learner, test (``loso`` or ``seated``),
-    recording, start, end, action, predicted (None when the learned models lack every action), correct,
-    label_accuracy (the training labels' arg-max accuracy of that draw, over all standing segments).
-    """
-    ambiguity = ambiguity or AMBIGUITIES["mixed"]
-    actions = engine.bn.schema.values_of("Action")
-    stand = [s for s in standing if s.action in actions]
-    true = np.array([actions.index(s.action) for s in stand])
-    feats = [s.xyz for s in stand]
-    rows = []
-    fixed: dict[str, list[tuple[str, LabelledSequence, str | None]]] = {}  # learners that ignore the draw
-    for d in draws:
-        world, perceived = draw_world(engine, true, ambiguity, d, 0)
-        p_bn = network_posteriors(engine, perceived, world, words)
-        label_acc = float((p_bn.argmax(axis=1) == true).mean())
-        for learner in learners:
-            if learner in fixed:
-                rows += [_row(d, learner, test, s, pred, label_acc) for test, s, pred in fixed[learner]]
-                continue
-            common = dict(
-                true=true,
-                actions=actions,
-                config=config,
-                seed=draws[0] if learner in BASELINES else d,
-                threshold=threshold,
-                posterior=posterior,
-                invariants=invariants,
-            )
-            outcome = []
-            for i, held in enumerate(stand):
-                rest = [j for j in range(len(stand)) if j != i]
-                try:
-                    rec = learn_recognizer(
-                        [feats[j] for j in rest], learner, p_bn[rest], **{**common, "true": true[rest]}
-                    ).recognizer
-                    predicted = actions[classify(rec, actions, [held.xyz])[0]]
-                except ModelError:
-                    predicted = None
-                outcome.append(("loso", held, predicted))
-            if seated:
-                rec = learn_recognizer(feats, learner, p_bn, **common).recognizer
-                for s, p in zip(seated, classify(rec, actions, [s.xyz for s in seated]), strict=True):
-                    outcome.append(("seated", s, actions[p]))
-            if learner in BASELINES:  # true labels and clusters: the same whatever the objects and effects
-                fixed[learner] = outcome
-            rows += [_row(d, learner, test, s, pred, label_acc) for test, s, pred in outcome]
-    return tidy(
-        pd.DataFrame(rows),
-        "learning_real_gestures",
-        data_source,
-        ambiguity=ambiguity.name,
-        words=words,
-        draws=list(draws),
-        threshold=threshold,
-        posterior=posterior,
-        features=Invariants.parse(invariants).name,
-        n_states=config.n_states,
-        n_mix=config.n_mix,
-    )
-
-
-def _row(
-    draw: int, learner: str, test: str, s: LabelledSequence, predicted: str | None, label_acc: float
-) -> dict:
-    return {
-        "draw": draw,
-        "learner": learner,
-        "test": test,
-        "recording": s.recording,
-        "start": s.start,
-        "end": s.end,
-        "action": s.action,
-        "predicted": predicted,
-        "correct": predicted == s.action,
-        "label_accuracy": label_acc,
-    }
-
-
-def real_gesture_summary(results: pd.DataFrame) -> pd.DataFrame:
-    """Per learner and test: accuracy over draws and gestures, its range over draws, the labels' accuracy."""
-    g = results.groupby(["learner", "test", "draw"], sort=False).agg(
-        accuracy=("correct", "mean"), label_accuracy=("label_accuracy", "first"), n=("correct", "size")
-    )
-    out = (
-        g.groupby(["learner", "test"], sort=False)
-        .agg(
-            accuracy=("accuracy", "mean"),
-            accuracy_min=("accuracy", "min"),
-            accuracy_max=("accuracy", "max"),
-            label_accuracy=("label_accuracy", "mean"),
-            gestures=("n", "first"),
-            draws=("n", "size"),
-        )
-        .reset_index()
-    )
-    return tidy(
-        out,
-        "learning_real_gestures_summary",
-        results.attrs.get("data_source", ""),
-        **results.attrs.get("parameters", {}),
-    )
-
-
 def learn_gestures(
     engine: InferenceEngine,
     episodes: int,
@@ -354,20 +222,22 @@ def learn_gestures(
     config: TrainingConfig | None = None,
     settings: OnlineSettings | None = None,
     effects: Sequence[str] = EFFECTS,
-    noise: float = 0.02,
+    noise: float | None = None,
     threshold: float = 0.9,
     data_source: str = "",
+    progress: Callable[[str], None] | None = None,
 ) -> tuple[Recognizer, dict[str, Any]]:
     """Watch ``episodes`` simulated episodes and learn gesture HMMs from them, labelled by ``labels``.
 
     The episodes are those of :func:`~glu.studies.learning.self_supervised.simulate_episodes` (seed ``seed``,
-    the given ambiguity); their labels come from the network (``engine``) by the scheme ``labels`` (or a
-    baseline: ``true``, ``unsupervised``). Batch
-    (:func:`~glu.studies.learning.self_supervised.learn_recognizer`, EM on all episodes, ``iterative``
-    relabelling until the labels stop changing) or ``online``
-    (:func:`~glu.studies.learning.online.learn_online`, one episode at a time). Returns the recogniser (its
-    ``meta`` says how it was learned) and a summary: the labels' arg-max accuracy, the relabelling rounds, the
-    episodes' data.
+    the given ambiguity, the ``easy`` world, whose features ``glu recognize`` computes too; ``noise``, if
+    given, replaces its sensor noise of 2 cm); their labels come
+    from the network (``engine``) by the scheme ``labels`` (or a baseline: ``true``, ``unsupervised``).
+    Batch (:func:`learn_recognizer`, EM on all episodes, ``iterative`` relabelling until the labels stop
+    changing) or ``online`` (:func:`~glu.studies.learning.online.learn_online`, one episode at a time).
+    ``progress`` is called with ``"episode"`` after each episode learned online, with an action's name after
+    each model trained in batch. Returns the recogniser (its ``meta`` says how it was learned) and a
+    summary: the labels' arg-max accuracy, the relabelling rounds, the episodes' data.
     """
     from glu.studies.learning.online import learn_online
     from glu.studies.learning.self_supervised import simulate_episodes
@@ -375,13 +245,13 @@ def learn_gestures(
     if ambiguity not in AMBIGUITIES:
         raise DataError(f"unknown ambiguity {ambiguity!r}; allowed: {', '.join(AMBIGUITIES)}")
     actions = engine.bn.schema.values_of("Action")
-    ep = simulate_episodes(engine, AMBIGUITIES[ambiguity], episodes, seed, effects=effects, noise=noise)
+    amb = AMBIGUITIES[ambiguity]
+    ep = simulate_episodes(engine, amb, episodes, seed, effects=effects, noise=noise)
     p_bn = network_posteriors(engine, ep.perceived, ep.world, words)
     how = "online" if online else "batch"
     info: dict[str, Any] = {
-        "data": f"{episodes} simulated episodes (seed {seed}, {ambiguity}: "
-        f"{AMBIGUITIES[ambiguity].description}); labels {labels}{' with words' if words else ''}, "
-        f"{how}; network: {data_source or 'unknown data'}",
+        "data": f"{episodes} simulated episodes (seed {seed}, {ambiguity}: {amb.description}); labels "
+        f"{labels}{' with words' if words else ''}, {how}; network: {data_source or 'unknown data'}",
         "data_source": data_source,
         "labels": labels,
         "learning": how,
@@ -392,15 +262,16 @@ def learn_gestures(
         "label_accuracy": float((p_bn.argmax(axis=1) == ep.actions).mean()),
         "threshold": threshold,
     }
+    features = ep.features
     if online:
         s = settings or OnlineSettings(config=config or OnlineSettings().config, threshold=threshold)
-        run = learn_online(ep.features, ep.actions, labels, p_bn, actions, s, seed)
+        run = learn_online(features, ep.actions, labels, p_bn, actions, s, seed, progress=progress)
         by_action = run.weights[:, 0][:, np.argsort(run.matching[-1, 0])]  # clusters named as actions
-        rec = with_ranges(run.recognizer(0, meta=info), ep.features, by_action, actions)
+        rec = with_ranges(run.recognizer(0, meta=info), features, by_action, actions)
         info["rounds"] = 1
     else:
         learned = learn_recognizer(
-            ep.features,
+            features,
             labels,
             p_bn,
             true=ep.actions,
@@ -409,6 +280,7 @@ def learn_gestures(
             seed=seed,
             threshold=threshold,
             meta=info,
+            progress=progress,
         )
         rec, info["rounds"] = learned.recognizer, learned.rounds
     rec.meta.update(seed=seed, rounds=info["rounds"])

@@ -26,7 +26,7 @@ checkpoints.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -281,6 +281,7 @@ def run_online(
     actions: Sequence[str],
     settings: OnlineSettings = OnlineSettings(),
     seed: int = 0,
+    progress: Callable[[str], None] | None = None,
 ) -> OnlineRun:
     """Run every learner over the episodes in order, measuring all of them at the checkpoints.
 
@@ -297,6 +298,7 @@ def run_online(
     actions : the action names (the columns of ``p_bn``)
     settings : how the learners learn (:class:`OnlineSettings`)
     seed : seeds the first models' initial mixtures and the clustering
+    progress : called with ``"episode"`` after each episode
     """
     N, A, L = len(features), len(actions), len(learners)
     _check_learners(learners, p_bn)
@@ -336,6 +338,8 @@ def run_online(
         if clusters and i + 1 == settings.cluster_episodes:
             _cluster(state, clusters, features[: i + 1], settings, seed, cluster_counts, labels.naming)
         seconds[i] = time.thread_time() - t0
+        if progress is not None:
+            progress("episode")
         while c < C and checkpoints[c] == i + 1:
             for k in clusters:
                 matching[c, k] = best_matching(cluster_counts[k])
@@ -488,6 +492,7 @@ def learn_online(
     test_features: Sequence[np.ndarray] = (),
     test_actions: np.ndarray | None = None,
     checkpoints: Sequence[int] | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> OnlineRun:
     """One learner over the episodes (:func:`run_online` with one :class:`Learner`); measured on the held-out
     gestures, if given, at the checkpoints (default: after the last episode only)."""
@@ -504,4 +509,5 @@ def learn_online(
         actions,
         settings,
         seed,
+        progress,
     )

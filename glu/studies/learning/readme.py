@@ -143,7 +143,7 @@ def values(tables: Tables) -> dict[str, Any]:
         "real_recordings": int(real["recordings"].iloc[0]),
         "learn_supervised": " or ".join(str(k) for k in params["supervised"]),
         "real_fitted": "learned leave-one-segment-out from a generator fitted to their other repetitions, "
-        f"accuracy over the segments and {int(real['draws'].iloc[0])} draws "
+        f"accuracy over the segments and {int(real['draws'].iloc[0])} draws: "
         + ", ".join(f"{names.get(k, k)} {v}" for k, v in fitted.items() if k != "always_tap"),
         "real_tap": fitted["always_tap"],
         "real_generator": "Learned from glu's standard generator instead (as `glu learn-gestures --online` "

@@ -41,9 +41,9 @@ from glu.tidy import tidy
 CLAIMS: dict[str, tuple[bool, str]] = {
     "effects": (
         False,
-        "effects without words (the robot is never told the action: TCDS's 'beyond the self')",
+        "Effects without words (the robot is never told the action: TCDS's 'beyond the self')",
     ),
-    "words": (True, "effects and words (supervision by the spoken verb)"),
+    "words": (True, "Effects and words (supervision by the spoken verb)"),
 }
 """The two claims, reported apart: whether the robot hears words, and what that makes the study."""
 LEARNER_NAMES: dict[str, str] = {

@@ -1,0 +1,248 @@
+"""The study's tables and saved runs (glu.studies.learning.study, tables, saved).
+
+References: learners built to be equal to, or a fixed amount below, the true labels (so every replicate of
+their gap is known), closed forms of the two-level bootstrap, counting, and a saved run read back equal.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from glu.bn import InferenceEngine, learn_bn
+from glu.data import load_experiments
+from glu.errors import DataError
+from glu.hmm import TrainingConfig
+from glu.stats import interval, replicate_means, two_level_weights
+from glu.studies.learning import online as ol
+from glu.studies.learning import saved, tables
+from glu.studies.learning import study as lc
+
+SMALL = TrainingConfig(n_states=3, n_mix=1, n_iter=20, tol=1e-3)
+
+
+@pytest.fixture(scope="module")
+def engine():
+    return InferenceEngine(learn_bn(load_experiments("synthetic")))
+
+
+def test_two_level_bootstrap_weights_and_means():
+    rng = np.random.default_rng(0)
+    W = two_level_weights(4, 10, 200, rng)
+    assert W.shape == (201, 4, 10) and np.all(W[0] == 1)
+    np.testing.assert_array_equal(W[1:].sum(axis=(1, 2)), 40)  # 4 seeds drawn, 10 units each
+    values = rng.random((4, 10, 2))
+    reps = replicate_means(values, W)
+    np.testing.assert_allclose(reps[0], values.mean(axis=(0, 1)))
+    b = 5
+    np.testing.assert_allclose(reps[b], np.einsum("sj,sjk->k", W[b], values) / W[b].sum())
+
+
+def test_two_level_intervals_see_the_spread_between_seeds():
+    """Seeds that differ and episodes that agree within a seed: the interval is the seeds' bootstrap."""
+    rng = np.random.default_rng(1)
+    values = np.repeat(np.array([0.2, 0.4, 0.6, 0.8])[:, None], 50, axis=1)[..., None]
+    reps = replicate_means(values, two_level_weights(4, 50, 4000, rng))
+    lo, hi = interval(reps)
+    # the mean of 4 seeds resampled: its replicates have variance σ²/4 with σ² the seeds' (biased) variance
+    assert np.std(reps[1:, 0]) == pytest.approx(np.sqrt(values[:, 0, 0].var() / 4), rel=0.05)
+    assert lo[0] < 0.4 and hi[0] > 0.6
+
+
+SETTINGS = lc.StudySettings(
+    episodes=20,
+    seeds=tuple(range(10)),
+    worlds=("easy",),
+    ambiguities=("mixed",),
+    words=(False,),
+    schemes=("hard", "soft"),
+    controls=("random",),
+    baselines=("true",),
+    supervised=(),
+    budgets=(10, 20),
+    bootstrap=400,
+)
+
+
+def _results(J: int = 40) -> list[lc.SeedResult]:
+    """10 seeds of fake measurements: every learner wrong on 5 of 40 gestures in the even seeds; ``hard``
+    like the true labels (so every replicate of its gap is 0); ``soft`` wrong on 10 more gestures of every
+    seed (its gap is −0.25, and below −0.02 in every replicate); ``random`` also wrong on half the gestures
+    after 10 episodes, like the true labels after 20."""
+    learners = SETTINGS.learners()
+    names = [lr[1] for lr in learners]
+    out = []
+    for s in SETTINGS.seeds:
+        c = np.ones((2, len(learners), J), bool)
+        c[:, :, 30:35] = s % 2 == 1
+        c[:, names.index("soft"), :10] = False
+        c[0, names.index("random"), ::2] = False
+        out.append(
+            lc.SeedResult(
+                s,
+                learners,
+                np.array([10, 20]),
+                c,
+                [("easy", "mixed", False)],
+                c[0, names.index("true")][None],
+                np.array([[0.5, 0.1, 0.9, 0.4, 0.5]]),
+                np.zeros(20),
+            )
+        )
+    return out
+
+
+def test_the_main_table_verdicts_on_known_gaps():
+    rep = tables.replicates(_results(), SETTINGS)
+    main = tables.budgets_table(rep, SETTINGS, "synthetic").set_index(["budget", "learner"])
+    assert main.loc[(20, "hard"), "gap"] == 0 and main.loc[(20, "hard"), "gap_low90"] == 0
+    # every replicate of the gap is 0: the TOST p-value is its floor 1 / (B + 1), equivalent after BH
+    assert main.loc[(20, "hard"), "p_equivalent"] == pytest.approx(1 / 401)
+    assert main.loc[(20, "hard"), "verdict"] == "equivalent"
+    # a gap of −0.25 in every replicate: not equivalent (p = 1), a difference (p floor), worse
+    assert main.loc[(20, "soft"), "gap"] == pytest.approx(-0.25)
+    assert main.loc[(20, "soft"), "p_equivalent"] == 1.0 and main.loc[(20, "soft"), "verdict"] == "worse"
+    assert main.loc[(20, "soft"), "vs_random_verdict"] == "worse"  # random labels are all right at 20
+    assert main.loc[(10, "hard"), "vs_random_verdict"] == "better"  # and half wrong at 10
+    assert main.loc[(20, "true"), "verdict"] == "" and np.isnan(main.loc[(20, "true"), "p_equivalent"])
+    assert main.loc[(20, "network"), "verdict"] == "equivalent"
+    claims = tables.claims_table(tables.budgets_table(rep, SETTINGS, "synthetic"), schemes=("hard", "soft"))
+    row = claims.set_index(["claim", "budget"]).loc[("effects", 20)]
+    assert row["matched"] == 1 and row["matched_where"] == "mixed: hard"
+    assert row["random_matched"] == 1 and row["beats_random"] == 0
+    row10 = claims.set_index(["claim", "budget"]).loc[("effects", 10)]
+    assert row10["random_matched"] == 0 and row10["beats_random"] == 1
+    lines = tables.claim_lines(claims, 0.02)
+    assert (
+        lines[0].startswith("Effects without words")
+        and "a scheme matches them in 1 of 1 (mixed: hard)" in lines[0]
+    )
+    view = tables.main_table(tables.budgets_table(rep, SETTINGS, "synthetic"), words=False)
+    assert list(view.columns) == ["10 episodes", "20 episodes"]
+    assert view.loc[("easy", "mixed", "hard labels"), "20 episodes"].endswith("equivalent")
+
+
+def test_curves_table_gaps_are_paired():
+    rep = tables.replicates(_results(), SETTINGS)
+    curves = tables.curves_table(rep, SETTINGS, "synthetic")
+    soft = curves[curves.learner == "soft"].set_index("episodes")
+    assert soft.loc[20, "accuracy"] == pytest.approx(1 - 0.5 * 5 / 40 - 10 / 40)
+    assert soft.loc[20, "gap"] == pytest.approx(-0.25) and soft.loc[20, "gap_high"] < -0.02
+    hard = curves[curves.learner == "hard"].set_index("episodes")
+    assert hard.loc[20, "ci_low"] < hard.loc[20, "ci_high"]  # the accuracy varies over the replicates …
+    assert hard.loc[20, "gap_low"] == hard.loc[20, "gap_high"] == 0  # … its paired gap does not
+    assert set(curves.learner) == {"true", "hard", "soft", "random", "network"}
+
+
+def test_study_settings_are_checked():
+    with pytest.raises(DataError, match="ambiguity"):
+        lc.StudySettings(ambiguities=("foggy",))
+    with pytest.raises(DataError, match="world"):
+        lc.StudySettings(worlds=("moon",))
+    with pytest.raises(DataError, match="learner"):
+        lc.StudySettings(schemes=("guess",))
+    with pytest.raises(DataError, match="true"):
+        lc.StudySettings(baselines=("unsupervised",))
+    with pytest.raises(DataError, match="margin"):
+        lc.StudySettings(margin=0)
+    s = lc.StudySettings(episodes=300, budgets=(100, 1000))
+    assert s.checkpoints == (10, 20, 50, 100, 200, 300) and s.main_budgets == (100,)
+    assert lc.StudySettings(episodes=30, budgets=(100,)).main_budgets == (30,)
+
+
+@pytest.fixture(scope="module")
+def small_run(engine):
+    settings = lc.StudySettings(
+        episodes=20,
+        seeds=(0, 1),
+        ambiguities=("mixed", "still"),
+        test_per_action=3,
+        bootstrap=30,
+        budgets=(20,),
+        online=ol.OnlineSettings(config=SMALL, cluster_episodes=9),
+    )
+    return settings, lc.learning_study(engine, settings)
+
+
+def test_the_study_runs_end_to_end(small_run):
+    settings, results = small_run
+    rep = tables.replicates(results, settings)
+    curves = tables.curves_table(rep, settings, "synthetic")
+    expected = {
+        "true",
+        "unsupervised",
+        "supervised_1",
+        "supervised_5",
+        "network",
+        "random",
+        "clustering",
+        "em",
+    }
+    assert set(curves.learner) == expected | {"hard", "soft", "confident", "iterative"}
+    assert set(curves.world) == {"easy", "hard"}
+    assert curves.attrs["experiment"] == "learning_curves" and curves["seeds"].iloc[0] == 2
+    assert curves["accuracy"].between(0, 1).all()
+    labels = tables.labels_table(results, settings)
+    easy = labels[labels.world == "easy"]
+    still = easy[(easy.ambiguity == "still") & ~easy.words.astype(bool)].iloc[0]
+    mixed = easy[(easy.ambiguity == "mixed") & easy.words.astype(bool)].iloc[0]
+    assert still.label_accuracy < mixed.label_accuracy
+    assert set(lc.update_times(results)) == {"median", "p95", "max"}
+
+
+def test_a_saved_run_reads_back_and_is_checked(engine, small_run, tmp_path):
+    settings, results = small_run
+    saved.save_study(tmp_path, results, settings, "synthetic data (seed 0, 1270 experiments)", "glu test")
+    stored, back, meta = saved.load_study(tmp_path)
+    assert stored == settings and meta["made_by"]["command"] == "glu test"
+    for a, b in zip(results, back, strict=True):
+        np.testing.assert_array_equal(a.correct, b.correct)
+        np.testing.assert_array_equal(a.network_correct, b.network_correct)
+        np.testing.assert_allclose(a.labels, b.labels)
+        assert a.learners == b.learners and a.groups == b.groups
+    fewer = lc.StudySettings(**{**settings.__dict__, "seeds": (1,), "ambiguities": ("still",)})
+    chosen = saved.select(back, stored, fewer, "synthetic data (seed 0, 1270 experiments)", meta)
+    k = results[1].learners.index(("hard", "iterative", "still", True))
+    j = chosen[0].learners.index(("hard", "iterative", "still", True))
+    np.testing.assert_array_equal(chosen[0].correct[:, j], results[1].correct[:, k])
+    check = saved.check_against(engine, chosen, fewer, [1], 20)
+    assert check["differ"] == 0 and check["decisions"] == 2 * 11 * 9
+    with pytest.raises(DataError, match="made from"):
+        saved.select(back, stored, fewer, "real data: elsewhere", meta)
+    more = lc.StudySettings(**{**settings.__dict__, "seeds": (0, 5)})
+    with pytest.raises(DataError, match="lacks seed 5.*glu learning-curves"):
+        saved.select(back, stored, more, "synthetic data (seed 0, 1270 experiments)", meta)
+    with pytest.raises(DataError, match="no saved run"):
+        saved.load_study(tmp_path / "nowhere")
+
+
+def test_a_saved_run_that_the_code_no_longer_computes_is_refused(engine, small_run):
+    settings, results = small_run
+    flipped = [r._replace(correct=~r.correct) for r in results]
+    with pytest.raises(DataError, match="not what this code computes"):
+        saved.check_against(engine, flipped, settings, [0], 20)
+
+
+def test_the_shipped_runs_match_the_notebook_defaults():
+    """The runs glu ships cover what notebook 12 asks by default (its parameters cell)."""
+    from glu.run.parameters import read_spec
+    from glu.run.reproduce import list_notebooks
+
+    nb = next(p for p in list_notebooks() if p.stem == "12_learning_from_effects")
+    spec = {k: p.default for k, p in read_spec(nb).items()}
+    wanted = lc.StudySettings(
+        episodes=max(spec["budgets"]),
+        seeds=tuple(spec["seeds"]),
+        worlds=tuple(spec["worlds"]),
+        ambiguities=tuple(spec["ambiguities"]),
+        test_per_action=spec["test_per_action"],
+        budgets=tuple(spec["budgets"]),
+        margin=spec["margin"],
+        bootstrap=spec["bootstrap"],
+    )
+    for real, source in ((True, None), (False, "synthetic data (seed 0, 1270 experiments)")):
+        folder = saved.default_folder(real)
+        stored, results, meta = saved.load_study(folder)
+        saved.select(results, stored, wanted, source or meta["data_source"], meta)
+        assert pd.notna(meta["made_by"]["date"])

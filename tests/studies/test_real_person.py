@@ -1,0 +1,102 @@
+"""The real person (glu.studies.learning.real_person): a generator fitted to a person's repetitions, the
+leave-one-segment-out loop, the crossed bootstrap.
+
+References: repetitions whose resampled paths the fit recovers exactly (so its draws have the repetitions'
+own mean and covariance in closed form), brute-force resampling, counting.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from glu.bn import InferenceEngine, learn_bn
+from glu.data import load_experiments
+from glu.errors import DataError
+from glu.gestures.corpus import synthetic_corpus
+from glu.hmm import TrainingConfig
+from glu.studies.learning import online as ol
+from glu.studies.learning import real_person as rp
+from glu.studies.learning.self_supervised import resampled
+
+
+def _knotted(rng, n_rep=4, knots=5, frames=41):
+    """Repetitions linear between ``knots`` points at frames 0, 10, …, 40: the fit's ``knots``-point paths
+    are them exactly."""
+    out = []
+    base = rng.normal(size=(knots, 3))
+    for _ in range(n_rep):
+        k = base + 0.3 * rng.normal(size=(knots, 3))
+        t = np.linspace(0, 1, knots)
+        u = np.linspace(0, 1, frames)
+        out.append(np.stack([np.interp(u, t, k[:, d]) for d in range(3)], axis=1))
+    return out
+
+
+def test_the_fitted_generator_draws_with_the_repetitions_mean_and_covariance():
+    """A draw is the mean plus a standard normal combination of the deviations over √(n − 1): its
+    covariance is the repetitions' sample covariance (closed form), its jitter 0 for exact paths."""
+    rng = np.random.default_rng(0)
+    reps = _knotted(rng)
+    gen = rp.fit_person([("tap", x) for x in reps], ["tap"], points=5, min_log_sd=1e-9)
+    np.testing.assert_allclose(gen.jitter, 0, atol=1e-12)
+    assert gen.log_frames[0, 0] == pytest.approx(np.log(41)) and gen.log_frames[0, 1] == 1e-9
+    draws = rp.draw_person(gen, np.zeros(6000, int), np.random.default_rng(1))
+    assert {len(x) for x in draws} == {41}
+    paths = resampled(draws, 5)
+    ref = resampled(reps, 5)
+    np.testing.assert_allclose(paths.mean(axis=0), ref.mean(axis=0), atol=0.03)
+    np.testing.assert_allclose(np.cov(paths.T), np.cov(ref.T), atol=0.03)
+
+
+def test_one_repetition_is_drawn_as_it_is_and_none_is_refused():
+    rng = np.random.default_rng(2)
+    (x,) = _knotted(rng, n_rep=1)
+    gen = rp.fit_person([("grasp", x)], ["grasp"], points=5, min_log_sd=1e-9)
+    (y,) = rp.draw_person(gen, np.zeros(1, int), rng)
+    np.testing.assert_allclose(y, x, atol=1e-9)
+    with pytest.raises(DataError, match="no repetition of 'tap'"):
+        rp.fit_person([("grasp", x)], ["grasp", "tap"])
+
+
+def test_the_crossed_bootstrap_by_brute_force():
+    values = np.random.default_rng(3).random((6, 5, 2))
+    reps = rp._crossed(values, 20, np.random.default_rng(4))
+    np.testing.assert_allclose(reps[0], values.mean(axis=(0, 1)))
+    rng = np.random.default_rng(4)  # the same draws: the draws' counts first, then the segments'
+    v = rng.multinomial(6, np.full(6, 1 / 6), size=20)
+    w = rng.multinomial(5, np.full(5, 1 / 5), size=20)
+    for b in (0, 7, 19):
+        picked = [values[r, s] for r in range(6) for s in range(5) for _ in range(v[b, r] * w[b, s])]
+        np.testing.assert_allclose(reps[b + 1], np.mean(picked, axis=0))
+
+
+@pytest.fixture(scope="module")
+def engine():
+    return InferenceEngine(learn_bn(load_experiments("synthetic")))
+
+
+def test_the_study_on_a_small_corpus(engine):
+    corpus = synthetic_corpus(3, seed=4)  # 3 repetitions of each action
+    small = ol.OnlineSettings(config=TrainingConfig(n_states=3, n_mix=1, n_iter=10), cluster_episodes=9)
+    settings = rp.RealPersonSettings(
+        draws=(0,), episodes=15, generator_episodes=15, online=small, bootstrap=50
+    )
+    rows = rp.real_person_study(engine, corpus, settings, data_source="synthetic")
+    actions = engine.bn.schema.values_of("Action")
+    n = sum(s.action in actions for s in corpus)
+    fitted = rows[rows.study == "fitted"]
+    assert len(fitted) == n * (len(rp.LEARNERS) + 1)
+    assert set(rows[rows.study == "generator"].features) == {"raw", "centred"}
+    tap = rows[rows.learner == "always_tap"]
+    assert (tap.correct == (tap.action == "tap")).all()
+    summary = rp.real_person_summary(rows, 50)
+    s = summary.set_index(["study", "features", "learner", "words"])
+    taps = sum(x.action == "tap" for x in corpus) / n
+    assert s.loc[("fitted", "centred", "always_tap", False), "accuracy"] == pytest.approx(taps)
+    assert s.loc[("fitted", "centred", "true", False), "gap"] == 0
+    assert summary["accuracy"].between(0, 1).all() and set(summary["segments"]) == {n}
+    lines = rp.real_person_lines(summary)
+    assert len(lines) == 3 and "always answering tap" in lines[0]
+    with pytest.raises(DataError, match="two repetitions"):
+        rp.real_person_study(engine, [c for c in corpus if c.action != "grasp"], settings)
