@@ -4,8 +4,9 @@ actions did.
 ``glu learn-gestures`` simulates episodes — a person's gesture on an object, the effect, the words — labels
 each with the Affordance–Words network learned from the robot's own experiments, trains gesture HMMs from
 those labels and writes a recogniser that ``glu recognize`` and ``glu anticipate`` take (``--models FILE``).
-``glu learning-curves`` runs the study of notebook 12 — every labelling scheme and baseline, every ambiguity,
-with and without words, one Dask task per training seed — and writes its tables.
+``glu learning-curves`` runs the long runs notebook 12 reads — every labelling scheme and control in every
+world and ambiguity, with and without words, one Dask task per training seed; and the real person, one task
+per draw — and saves them with their provenance (:mod:`glu.studies.learning.saved`).
 """
 
 from __future__ import annotations
