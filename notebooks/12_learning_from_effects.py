@@ -115,6 +115,7 @@ from glu.bn import InferenceEngine, learn_bn
 from glu.data import load_experiments
 from glu.language import candidate_sentences
 from glu.run import start
+from glu.stats import ALPHA, LEVEL
 from glu.studies.anticipation import experiment as anticipation
 from glu.studies.anticipation.figures import plot_anticipation
 from glu.studies.learning import (
@@ -159,7 +160,7 @@ labels.drop(columns="description").round(3)
 # %% [markdown]
 # ## The main table: every scheme and control against the true labels, per world and budget
 # Each cell: held-out accuracy, the gap to the true-label HMMs of the same world, seeds and gestures with its
-# 95 % two-level interval, and the verdict — `equivalent` (within the margin, adjusted), `worse` or `better`
+# two-level interval, and the verdict — `equivalent` (within the margin, adjusted), `worse` or `better`
 # (a gap, adjusted), or `inconclusive`; and, where it is significant, the learner against random labels as
 # accurate as the network's. First the effects without words, then with words.
 
@@ -169,6 +170,10 @@ main = tables.budgets_table(rep, settings, source)
 claims = tables.claims_table(main)
 out.table(main, "learning_budgets")
 out.table(claims, "learning_claims")
+print(
+    f"Intervals: {LEVEL:.0%} two-level bootstrap ({bootstrap:,} replicates over {len(seeds)} seeds and "
+    f"{3 * test_per_action} held-out gestures each); equivalence reads the {1 - 2 * ALPHA:.0%} interval.\n"
+)
 print("\n\n".join(tables.claim_lines(claims, margin)))
 with pd.option_context("display.max_rows", 400, "display.max_colwidth", 80):
     display(tables.main_table(main, words=False))  # noqa: F821 - IPython's display
@@ -179,9 +184,9 @@ with pd.option_context("display.max_rows", 400, "display.max_colwidth", 80):
 
 # %% [markdown]
 # ## Learning curves and gaps
-# Held-out accuracy against episodes seen in one ambiguity (`curves_ambiguity`), each checkpoint's 95 %
-# interval as a vertical line; then every learner's gap to the true labels at the largest budget with the
-# 90 % interval the equivalence test reads, the margin shaded (filled markers: equivalent).
+# Held-out accuracy against episodes seen in one ambiguity (`curves_ambiguity`), each checkpoint's interval
+# as a vertical line; then every learner's gap to the true labels at the largest budget with the interval
+# the equivalence test reads, the margin shaded (filled markers: equivalent).
 
 # %%
 curves = tables.curves_table(rep, settings, source)
