@@ -1,16 +1,16 @@
 """Many synthetic gestures' repaired features at once: the corpus's fast path, bit for bit the same.
 
-A simulated corpus (:mod:`glu.studies.corpus_evaluation.corpus`) needs, for each of a million episodes, only
-the repaired features of one synthetic gesture (:meth:`glu.gestures.synthetic.SyntheticGesture.features`).
-:func:`gesture_features` computes them for a whole chunk of episodes: each episode's generator draws exactly
-the numbers :func:`~glu.gestures.synthetic.synthesize_gesture` draws, in the same order, and then the work is
-shared across the episodes — the minimum-jerk hand paths of all episodes in a few array operations
-(:func:`glu.gestures._pchip.pchip_many`), the sway of all frames at once, the running repair of all episodes
-at once (:func:`glu.gestures._repair_many.repaired_many`), and only the joints the features use. Every number
-is computed by the same IEEE operations as the one-gesture path (elementwise operations do not depend on how
-the arrays are batched; the rotation of each skeleton is the same matrix product; reductions run per episode,
-on the same arrays), so the features are identical, bit for bit, to ``synthesize_gesture(...).features()``
-(tested).
+A simulated corpus (:mod:`glu.studies.corpus_evaluation.corpus`) needs, for each of a million episodes, only the
+repaired features of one synthetic gesture (:meth:`glu.gestures.synthetic.SyntheticGesture.features`).
+:func:`gesture_features` computes them for a whole chunk of episodes: each episode's generator draws
+exactly the numbers :func:`~glu.gestures.synthetic.synthesize_gesture` draws, in the same order, and
+then the work is shared across the episodes — the minimum-jerk hand paths of all episodes in a few
+array operations (:func:`glu.gestures.synthetic.pchip_many`), the sway of all frames at once, the running
+repair of all episodes at once (:func:`glu.gestures.trajectories.repaired_many`),
+and only the joints the features use. Every number is computed by the same IEEE operations as the
+one-gesture path (elementwise operations do not depend on how the arrays are batched; the rotation of
+each skeleton is the same matrix product; reductions run per episode, on the same arrays), so the
+features are identical, bit for bit, to ``synthesize_gesture(...).features()`` (tested).
 
 Example
 -------
@@ -31,29 +31,29 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.gestures._pchip import pchip_many
-from glu.gestures._repair_many import repaired_many
+from glu.gestures.trajectories import repaired_many
 from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle_frames, to_body_frame
 from glu.gestures.synthetic import (
-    _BODY,
-    _KEYS,
-    _OBJECT,
-    _SEATED_OBJECT_SHIFT,
+    pchip_many,
+    BODY,
+    KEYS,
+    OBJECT,
+    SEATED_OBJECT_SHIFT,
     DEFAULT_VIEW,
     FRAME_RATE,
     OPENNI_JOINTS,
     SYNTHETIC_POLICY,
     View,
-    _check_action,
-    _person_style,
-    _rest_pose,
+    check_action,
+    person_style,
+    rest_pose,
     synthesize_gesture,
 )
 from glu.gestures.trajectories import RepairPolicy
 
 _IH, _IT = OPENNI_JOINTS.index("right_hand"), OPENNI_JOINTS.index("torso")
 _ILS, _IRS, _IN = (OPENNI_JOINTS.index(j) for j in ("left_shoulder", "right_shoulder", "neck"))
-_BODY_ARRAY = np.array([_BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS])
+_BODY_ARRAY = np.array([BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS])
 # _person's draws (size, origin x y z, yaw in degrees, sway phase, sway amplitude) then _hand_path's first
 # ones (duration, amplitude, object offset x y z): all uniform, drawn in this order by one call.
 _LOW = np.array([0.85, -0.4, -0.15, -2.6, -10, 0, 0.0, 2.5, 0.85, -0.05, -0.05, -0.05])
@@ -128,8 +128,8 @@ def gesture_features(
             np.array([g.size for g in gs], dtype=float).reshape(n),
         )
     for a in set(actions):
-        _check_action(a, view)
-    rest0 = _rest_pose(view)
+        check_action(a, view)
+    rest0 = rest_pose(view)
     seated = view.posture == "seated"
     draws, key_times, key_points = [], [], []
     for action, rng in zip(actions, rngs, strict=True):
@@ -139,11 +139,11 @@ def gesture_features(
         yaw = float(np.deg2rad(v[4])) if view.yaw_deg is None else float(np.deg2rad(view.yaw_deg))
         m = max(int(round(v[7] * FRAME_RATE)), 12)
         amp = v[8]
-        obj = _OBJECT + v[9:12] * np.array([1.0, 0.4, 1.0])
+        obj = OBJECT + v[9:12] * np.array([1.0, 0.4, 1.0])
         rest = rest0 + rng.normal(0, 0.015, size=3)
         if seated:
-            obj = obj + _SEATED_OBJECT_SHIFT
-        spec = _KEYS[action]
+            obj = obj + SEATED_OBJECT_SHIFT
+        spec = KEYS[action]
         jitter = rng.uniform(-0.02, 0.02, size=len(spec) - 2)
         keys = []
         for j, (tf, off) in enumerate(spec):
@@ -152,7 +152,7 @@ def gesture_features(
             p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
             keys.append((tf, p * size))
         if view.variety > 0:
-            keys = _person_style(keys, spec, rng, size, view.variety)
+            keys = person_style(keys, spec, rng, size, view.variety)
         keys.sort(key=lambda k: k[0])
         key_times.append(np.array([k[0] for k in keys]))
         key_points.append(np.stack([k[1] for k in keys]))
