@@ -1,16 +1,16 @@
 """Many synthetic gestures' repaired features at once: the corpus's fast path, bit for bit the same.
 
-A simulated corpus (:mod:`glu.studies.corpus_evaluation.corpus`) needs, for each of a million episodes, only the
-repaired features of one synthetic gesture (:meth:`glu.gestures.synthetic.SyntheticGesture.features`).
-:func:`gesture_features` computes them for a whole chunk of episodes: each episode's generator draws
-exactly the numbers :func:`~glu.gestures.synthetic.synthesize_gesture` draws, in the same order, and
-then the work is shared across the episodes — the minimum-jerk hand paths of all episodes in a few
-array operations (:func:`glu.gestures.synthetic.pchip_many`), the sway of all frames at once, the running
-repair of all episodes at once (:func:`glu.gestures.trajectories.repaired_many`),
-and only the joints the features use. Every number is computed by the same IEEE operations as the
-one-gesture path (elementwise operations do not depend on how the arrays are batched; the rotation of
-each skeleton is the same matrix product; reductions run per episode, on the same arrays), so the
-features are identical, bit for bit, to ``synthesize_gesture(...).features()`` (tested).
+A simulated corpus (:mod:`glu.studies.corpus_evaluation.corpus`) needs, for each of a million episodes, only
+the repaired features of one synthetic gesture (:meth:`glu.gestures.synthetic.SyntheticGesture.features`).
+:func:`gesture_features` computes them for a whole chunk of episodes: each episode's generator draws exactly
+the numbers :func:`~glu.gestures.synthetic.synthesize_gesture` draws, in the same order, and then the work is
+shared across the episodes — the minimum-jerk hand paths of all episodes in a few array operations
+(:func:`glu.gestures.synthetic.pchip_many`), the sway of all frames at once, the running repair of all
+episodes at once (:func:`glu.gestures.trajectories.repaired_many`), and only the joints the features use.
+Every number is computed by the same IEEE operations as the one-gesture path (elementwise operations do not
+depend on how the arrays are batched; the rotation of each skeleton is the same matrix product; reductions
+run per episode, on the same arrays), so the features are identical, bit for bit, to
+``synthesize_gesture(...).features()`` (tested).
 
 Example
 -------
@@ -31,25 +31,24 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.gestures.trajectories import repaired_many
 from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle_frames, to_body_frame
 from glu.gestures.synthetic import (
-    pchip_many,
     BODY,
-    KEYS,
-    OBJECT,
-    SEATED_OBJECT_SHIFT,
     DEFAULT_VIEW,
     FRAME_RATE,
+    KEYS,
+    OBJECT,
     OPENNI_JOINTS,
+    SEATED_OBJECT_SHIFT,
     SYNTHETIC_POLICY,
     View,
     check_action,
+    pchip_many,
     person_style,
     rest_pose,
     synthesize_gesture,
 )
-from glu.gestures.trajectories import RepairPolicy
+from glu.gestures.trajectories import RepairPolicy, repaired_many
 
 _IH, _IT = OPENNI_JOINTS.index("right_hand"), OPENNI_JOINTS.index("torso")
 _ILS, _IRS, _IN = (OPENNI_JOINTS.index(j) for j in ("left_shoulder", "right_shoulder", "neck"))
