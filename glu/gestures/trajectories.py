@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
@@ -362,23 +362,11 @@ def _repair_spans(
 
     # 1. spikes, on the observed frames
     if math.isfinite(policy.spike_threshold):
-        dev = spike_deviation(xyz, policy.spike_window) if deviation is None else deviation
-        spikes = dev > policy.spike_threshold
-        if spikes.any():
-            action = {"interpolate": "replaced", "drop": "dropped", "keep": "kept"}[policy.spikes]
-            for i in np.flatnonzero(spikes):
-                ev("spike", int(i), dev[i], action)
-            if policy.spikes == "interpolate" and (~spikes).sum() >= 2:
-                good = ~spikes
-                xyz = xyz.copy()
-                for k in range(3):
-                    xyz[spikes, k] = np.interp(t[spikes], t[good], xyz[good, k])
-                observed = observed & good
-            elif policy.spikes == "drop":
-                keep = ~spikes
-                xyz, t, frame, observed = xyz[keep], t[keep], frame[keep], observed[keep]
-                dt_all = np.diff(t)
-                median_dt = np.median(dt_all) if len(dt_all) else None
+        n_before = len(t)
+        xyz, t, frame, observed = _repair_spikes(xyz, t, frame, observed, policy, deviation, ev)
+        if len(t) != n_before:  # spikes dropped
+            dt_all = np.diff(t)
+            median_dt = np.median(dt_all) if len(dt_all) else None
 
     # 2. jumps (reported only)
     if events is not None:
@@ -388,12 +376,54 @@ def _repair_spans(
 
     # 3. gaps: interpolate the short ones, split at (or keep) the long ones
     gaps = np.flatnonzero(dt_all > policy.gap_factor * median_dt) if len(dt_all) else dt_all.astype(int)
+    return _gap_spans((xyz, t, frame, observed), gaps, period, policy, ev)
+
+
+def _repair_spikes(
+    xyz: np.ndarray,
+    t: np.ndarray,
+    frame: np.ndarray,
+    observed: np.ndarray,
+    policy: RepairPolicy,
+    deviation: np.ndarray | None,
+    ev: Callable[[str, int, float, str], None],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Step 1 of :func:`_repair_spans`: the spikes reported, and interpolated, dropped or kept."""
+    dev = spike_deviation(xyz, policy.spike_window) if deviation is None else deviation
+    spikes = dev > policy.spike_threshold
+    if not spikes.any():
+        return xyz, t, frame, observed
+    action = {"interpolate": "replaced", "drop": "dropped", "keep": "kept"}[policy.spikes]
+    for i in np.flatnonzero(spikes):
+        ev("spike", int(i), dev[i], action)
+    if policy.spikes == "interpolate" and (~spikes).sum() >= 2:
+        good = ~spikes
+        xyz = xyz.copy()
+        for k in range(3):
+            xyz[spikes, k] = np.interp(t[spikes], t[good], xyz[good, k])
+        observed = observed & good
+    elif policy.spikes == "drop":
+        keep = ~spikes
+        xyz, t, frame, observed = xyz[keep], t[keep], frame[keep], observed[keep]
+    return xyz, t, frame, observed
+
+
+def _gap_spans(
+    arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    gaps: np.ndarray,
+    period: float,
+    policy: RepairPolicy,
+    ev: Callable[[str, int, float, str], None],
+) -> list[list[np.ndarray]]:
+    """Step 3 of :func:`_repair_spans`: the pieces ``[xyz, t, frame, observed]`` after the gaps (the frames
+    before each of ``gaps``) are interpolated, split at or kept."""
+    xyz, t, frame, _ = arrays
     spans: list[tuple[list[np.ndarray], ...]] = []  # per piece: its parts of xyz, t, frame, observed
     parts: tuple[list[np.ndarray], ...] = ([], [], [], [])
     start = 0
 
     def add(lo: int, hi: int) -> None:
-        for part, arr in zip(parts, (xyz, t, frame, observed), strict=True):
+        for part, arr in zip(parts, arrays, strict=True):
             part.append(arr[lo:hi])
 
     for g in gaps:

@@ -27,6 +27,7 @@ process compiles and later ones load it (both times measured in ``docs/speed.md`
 
 from __future__ import annotations
 
+import types
 from functools import cache
 from typing import Any
 
@@ -223,7 +224,15 @@ def _jit() -> Any:
 @cache
 def compiled(fn: Any) -> Any:
     """``fn`` (a module-level function of plain loops) compiled by numba, once per process; its machine
-    code comes from the cache after the first process."""
+    code comes from the cache after the first process.
+
+    The functions of ``fn``'s own module that it calls by name (helpers of plain loops, such as the E- and
+    M-steps of :func:`glu.hmm._engine.gmm.gmm_em`'s loop) are compiled first and their module names bound
+    to the compiled ones, so that compiled code calls compiled code."""
+    for name in fn.__code__.co_names:
+        helper = fn.__globals__.get(name)
+        if isinstance(helper, types.FunctionType) and helper.__module__ == fn.__module__ and helper is not fn:
+            fn.__globals__[name] = compiled(helper)
     return _jit()(fn)
 
 
