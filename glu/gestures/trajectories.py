@@ -1,9 +1,8 @@
 """Hand trajectories: a 3-D path with its timing, tracking gaps and outliers, and their repair.
 
-A :class:`Trajectory` is read from a YARP hand log (:mod:`glu.data.hand_logs` owns the format: one frame
-a line, ``index timestamp x y z``, the hand features as logged, 1000 × the units of the original models;
-:mod:`glu.gestures.features` converts them). Frames are numbered 1, 2, … in file order, the numbering of
-the papers' segment ranges.
+A :class:`Trajectory` holds a recording's arrays (:func:`glu.gestures.recordings.read_recording` makes one
+from a YARP hand log or a table; this module reads no file). Frames are numbered 1, 2, … in file order, the
+numbering of the papers' segment ranges.
 
 Real tracking drops out and jumps. :func:`repair` detects, reports and (by a :class:`RepairPolicy`) repairs:
 
@@ -26,14 +25,12 @@ segments are always reported in the numbering of the original log.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
 
-from glu.data import hand_logs
 from glu.errors import DataError
 
 
@@ -154,26 +151,6 @@ class Trajectory:
                 f"{self.source}: frames {first}:{last} are out of range; allowed: {lo} ≤ first ≤ last ≤ {hi}"
             )
         return self.take((self.frame >= first) & (self.frame <= last))
-
-
-def read_hand_log(path: str | os.PathLike) -> Trajectory:
-    """Read a YARP hand log (a ``data.log`` file or a recording folder holding one), as logged (no repair).
-
-    The format and its errors are :mod:`glu.data.hand_logs`'; frames are numbered 1, 2, … in file order.
-    """
-    return _as_trajectory(hand_logs.read_hand_log(path))
-
-
-def parse_hand_log(data: bytes | str, source: str = "<string>") -> Trajectory:
-    """Parse the text of a YARP hand log (see :func:`read_hand_log`); ``source`` names it in errors."""
-    return _as_trajectory(hand_logs.parse_hand_log(data, source))
-
-
-def _as_trajectory(log: hand_logs.HandLog) -> Trajectory:
-    n = len(log.t)
-    return Trajectory(
-        xyz=log.xyz, t=log.t, frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool), source=log.source
-    )
 
 
 @dataclass(frozen=True)
