@@ -83,7 +83,7 @@ class TrainingConfig:
         return dataclasses.replace(self, **changes)
 
     def as_dict(self) -> dict[str, Any]:
-        """The settings as a plain dict (what a recogniser records in its ``meta``)."""
+        """The settings as a plain dict (a recogniser file's ``config``)."""
         return dataclasses.asdict(self)
 
 
