@@ -196,3 +196,19 @@ def test_mixture_posteriors_are_scipys_logsumexp_and_softmax():
     np.testing.assert_allclose(log_b, logsumexp(lc, axis=3), rtol=1e-13)
     np.testing.assert_allclose(post, softmax(lc, axis=3), rtol=1e-12, atol=1e-300)
     assert (post[0, :, 2, 1] == 0).all()
+
+
+def test_training_reports_progress_while_the_models_train(corpus):
+    """train(progress=…) is told how many models finished after each EM iteration: every model once."""
+    from glu.hmm import TrainingConfig, train
+
+    sets = {a: [s.xyz for s in corpus if s.action == a] for a in ("grasp", "tap", "touch")}
+    for recipe in ("glu", "mixsplit"):
+        calls: list[int] = []
+        train(
+            sets,
+            TrainingConfig(n_states=3, n_mix=2, n_iter=30, recipe=recipe),
+            warn=False,
+            progress=calls.append,
+        )
+        assert sum(calls) == 3 and all(c > 0 for c in calls)

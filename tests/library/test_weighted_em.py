@@ -19,6 +19,7 @@ from glu.hmm._engine.em_batch import fit_many
 from glu.hmm.em import GMMHMMParams, SufficientStats, expected_stats, fit, maximise
 from glu.hmm.inference import forward_backward, left_to_right_transmat
 from glu.hmm.initialisation import init_left_to_right
+from glu.hmm.model import GestureHMM
 from glu.hmm.online import batch_stats, episode_stats
 
 FIELDS = ("start", "trans", "counts", "first", "second", "loglik", "weight", "frames")
@@ -320,3 +321,39 @@ def test_the_many_model_scores_equal_the_recognisers_scores():
         np.testing.assert_allclose(
             loglik_many(params_bank(stack), seqs), loglik_many(stack_models(same), seqs), rtol=1e-10
         )
+
+
+# ------------------------------------------------------------------ online stepwise EM (glu.hmm.online)
+
+
+def test_online_stepwise_em_equals_the_formula_on_the_reference_e_step():
+    """OnlineModels: η = w / W^α, s ← (1 − η) s + η s_episode, then the M-step of W · s — written out here
+    with the reference E-step (glu.hmm.em.expected_stats) and maximise."""
+    from glu.hmm.online import OnlineModels, first_model
+
+    rng = np.random.default_rng(11)
+    first, episodes = walks(rng, 3), walks(rng, 4)
+    config = TrainingConfig(n_states=3, n_mix=2, n_iter=4)
+    models = OnlineModels.empty((2, 2), config, n_features=3, step=0.7)
+    params, stats = first_model(first, np.array([1.0, 0.5, 1.0]), config, seed=2)
+    assert_stats_close(stats, expected_stats(first, params, [1.0, 0.5, 1.0]))
+    models.start((1, 0), params, stats)
+    assert models.exists.tolist() == [[False, False], [True, False]] and models.total[1, 0] == 2.5
+    mean, total, p = stats.scaled(1 / 2.5), 2.5, params
+    for X, w in zip(episodes, (0.3, 1.0, 0.8, 2.0), strict=True):
+        unit, loglik = models.estep(X, (np.array([1]), np.array([0])))
+        ref = expected_stats([X], p)
+        assert_stats_close(unit.take(0), ref)
+        assert loglik[0] == pytest.approx(float(ref.loglik), rel=1e-12)
+        models.update((np.array([1]), np.array([0])), unit, np.array([w]), 0.03)
+        total += w
+        eta = min(1.0, w / total**0.7)
+        mean = mean.scaled(1 - eta) + ref.scaled(eta)
+        p = maximise(mean.scaled(total), p, 0.03, "map")
+        assert_params_close(models.models((1, 0)), p)
+    assert models.total[1, 0] == pytest.approx(total)
+    np.testing.assert_allclose(
+        models.loglik(episodes, (np.array([1]), np.array([0])))[:, 0],
+        [GestureHMM(*p).loglik(X) for X in episodes],
+        rtol=1e-10,
+    )
