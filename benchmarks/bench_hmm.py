@@ -40,8 +40,8 @@ from hmm_reference import to_hmmlearn, train_hmmlearn  # noqa: E402
 
 def _setup(data: str | None):
     from glu.data.source import DataSource, resolve_data
-    from glu.gestures.features import load_features
     from glu.gestures.recognizer import load_original_models
+    from glu.gestures.recordings import load_features
     from glu.paths import shared_data_dir
 
     source = None
