@@ -20,7 +20,7 @@ label weight ``w`` the statistics move by
   :func:`glu.hmm.em.expected_stats` to rounding (``tests/test_weighted_em.py``).
 
 Which episodes a model learns from, and with what weight, is the study's business
-(:mod:`glu.experiments.online_learning`: labelling schemes, buffers, clustering, checkpoints).
+(:mod:`glu.studies.learning.online`: labelling schemes, buffers, clustering, checkpoints).
 
 Example
 -------
