@@ -15,6 +15,7 @@ import logging
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from glu.hmm.em import FitResult, GMMHMMParams, expected_stats, maximise, scatter
 from glu.hmm.model import GestureHMM
@@ -78,8 +79,9 @@ def train_hmmlearn(
     hmm_log = logging.getLogger("hmmlearn.base")
     level = hmm_log.level
     hmm_log.setLevel(logging.ERROR)  # the tests read convergence from the history
-    try:
-        model.fit(np.concatenate(sequences), [len(X) for X in sequences])
+    try:  # one BLAS thread: hmmlearn's many tiny products are several times slower with thread hand-offs
+        with threadpool_limits(1):
+            model.fit(np.concatenate(sequences), [len(X) for X in sequences])
     finally:
         hmm_log.setLevel(level)
     params = GMMHMMParams(model.startprob_, model.transmat_, model.weights_, model.means_, model.covars_)

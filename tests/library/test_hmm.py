@@ -230,7 +230,9 @@ def test_a_recogniser_keeps_its_training_config_and_reads_version_2_files(tmp_pa
 
     corpus = synthetic_corpus(3, seed=2, actions=("tap", "grasp"))
     config = TrainingConfig(n_states=3, n_mix=1, n_iter=5, tol=1e-3, covar_reg=0.05)
-    rec = train_recognizer({a: [s.xyz for s in corpus if s.action == a] for a in ("tap", "grasp")}, config)
+    rec = train_recognizer(
+        {a: [s.xyz for s in corpus if s.action == a] for a in ("tap", "grasp")}, config, warn=False
+    )
     assert rec.config == config and "n_states" not in rec.meta
     again = Recognizer.load(rec.save(tmp_path / "r.json"))
     assert again.config == config
