@@ -125,13 +125,21 @@ class Layout:
                 self.frame_w[k, offset : offset + len(x)] = w
                 model.append(k), first.append(k * N + offset), length.append(len(x)), weight.append(w)
                 offset += len(x)
-        self.model, self.lengths, self.weight = np.array(model), np.array(length), np.array(weight)
+        # the sequences longest first (the compiled recursions run a little faster so); position[i] is where
+        # the i-th sequence given (model after model) stands
+        order = np.lexsort((np.arange(len(length)), -np.array(length)))
+        self.position = np.empty(len(order), dtype=int)
+        self.position[order] = np.arange(len(order))
+        self.model, self.lengths = np.array(model)[order], np.array(length)[order]
+        self.weight = np.array(weight)[order]
+        self.unit_weights = bool(np.all(self.weight == 1.0))
+        self.members = (self.model[None, :] == np.arange(K)[:, None]).astype(float)  # (K, S): sums per model
         alive = np.arange(N)[None, :] < self.n_frames[:, None]
         self.phi = quadratic_features(X, 0.0) * alive[..., None]  # (K, N, F); padding frames are zero
         T = int(self.lengths.max())
         self.alive = np.arange(T)[None, :] < self.lengths[:, None]  # (S, T)
         # flat index into (K·N) of frame t of sequence s (padding points at frame 0 of the batch: ignored)
-        self.index = np.where(self.alive, np.array(first)[:, None] + np.arange(T)[None, :], 0)
+        self.index = np.where(self.alive, np.array(first)[order][:, None] + np.arange(T)[None, :], 0)
 
     @property
     def n_models(self) -> int:
@@ -153,7 +161,8 @@ def estep(layout: Layout, params: GMMHMMParams) -> tuple[SufficientStats, np.nda
     ``params`` are stacked (leading axis K, the layout's models) with means *centred*
     (:meth:`Layout.centred`). Returns the weighted :class:`~glu.hmm.em.SufficientStats` of each model,
     batch shape (K,), with moments about the model's centre (``first`` and ``second`` of the centred
-    frames), and ``log L`` of each sequence of the layout, shape (S,) (unweighted). Raises
+    frames), and ``log L`` of each sequence of positive weight (unweighted), shape (S,), model after model
+    in the order given to the layout. Raises
     ``numpy.linalg.LinAlgError`` if a used covariance is not positive definite.
     """
     startprob, transmat, weights, means, covars = params
@@ -173,7 +182,9 @@ def estep(layout: Layout, params: GMMHMMParams) -> tuple[SufficientStats, np.nda
         gamma[s, :T_s], xi[s], loglik[s] = g[0], x, ll[0]
     gamma_frames = np.zeros((K * N, Q))  # padding frames: zero responsibility
     gamma_frames[layout.index[layout.alive]] = gamma[layout.alive]
-    gamma_frames = gamma_frames.reshape(K, N, Q) * layout.frame_w[..., None]
+    gamma_frames = gamma_frames.reshape(K, N, Q)
+    if not layout.unit_weights:
+        gamma_frames *= layout.frame_w[..., None]
     pcm = gamma_frames[..., None] if post_mix is None else gamma_frames[..., None] * post_mix
     # every moment at once: Σ p·x_i x_j, Σ p·x_i, Σ p per component (K, Q, M, F)
     moments = (np.swapaxes(pcm.reshape(K, N, Q * M), 1, 2) @ layout.phi).reshape(K, Q, M, F)
@@ -182,10 +193,8 @@ def estep(layout: Layout, params: GMMHMMParams) -> tuple[SufficientStats, np.nda
     for f, (i, j) in enumerate(pairs):
         second[..., i, j] = second[..., j, i] = moments[..., f]
 
-    def per_model(values: np.ndarray) -> np.ndarray:
-        out = np.zeros((K,) + values.shape[1:])
-        np.add.at(out, seq_model, values)
-        return out
+    def per_model(values: np.ndarray) -> np.ndarray:  # Σ over each model's sequences
+        return (layout.members @ values.reshape(len(values), -1)).reshape((K,) + values.shape[1:])
 
     stats = SufficientStats(
         start=per_model(w[:, None] * gamma[:, 0]),
@@ -197,7 +206,7 @@ def estep(layout: Layout, params: GMMHMMParams) -> tuple[SufficientStats, np.nda
         weight=per_model(w),
         frames=per_model(w * lengths),
     )
-    return stats, loglik
+    return stats, loglik[layout.position]
 
 
 def about_origin(stats: SufficientStats, centre: np.ndarray) -> SufficientStats:
