@@ -27,8 +27,8 @@ from glu.data.published import published
 from glu.data.source import DataSource
 from glu.errors import DataError, ModelError
 from glu.fusion import fuse
-from glu.gestures.features import load_features
 from glu.gestures.recognizer import Recognizer
+from glu.gestures.recordings import load_features
 from glu.gestures.synthetic import synthesize_gesture
 from glu.gestures.trajectories import RepairPolicy, Trajectory
 from glu.hmm import p_hmm_from_loglik
