@@ -2,7 +2,7 @@
 
 For each episode of a chunk (:mod:`glu.studies.corpus_evaluation.corpus`) and each observed fraction ``f`` of
 its gesture, the gesture HMMs of the episode's recogniser seed (a :class:`Replication`) give ``log L(G_1^t |
-A)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass, :class:`~glu.hmm._engine.batch.BatchScorer`). Each
+A)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass, :class:`~glu.hmm.scoring.BatchScorer`). Each
 :class:`Reading` turns them into ``p_HMM`` (as the originals, per frame, or calibrated:
 :mod:`glu.gestures.calibration`) and infers with one network: the one the episodes were drawn from
 (``generating``), or one glu learned from a simulated experiment table (``learned``). Under each reading each
@@ -208,7 +208,7 @@ class Replication:
 
     Attributes
     ----------
-    scorer : the gesture recogniser as a :class:`~glu.hmm._engine.batch.BatchScorer` (models in the order of
+    scorer : the gesture recogniser as a :class:`~glu.hmm.scoring.BatchScorer` (models in the order of
         :data:`glu.schema.ACTIONS`)
     calibration : the calibrated reading's β per observed fraction (None: no ``calibrated`` reading)
     tables : network label (:attr:`Reading.network`) → target → :class:`NetworkTables`
