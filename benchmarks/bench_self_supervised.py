@@ -12,8 +12,9 @@ Run on demand (not a test)::
    after one episode, once it has a model of every action: labels, the E-step of the episode under its
    three models, the stepwise-EM step and the M-step; median, 95th percentile and maximum over 300
    episodes, in CPU time of the update; goal: at most 10 ms;
-3. **study** — the study's seeds in this process (``glu.studies.learning.study.learning_study`` at the
-   notebook's default size), CPU time, and the lockstep update of all its learners after one episode;
+3. **study** — one seed of the study's first budget (100 episodes, every world, ambiguity, claim, scheme
+   and control: what ``glu learning-curves`` runs per seed) in this process, CPU time, and the lockstep
+   update of all its learners after one episode (CPU time of a 10,000-episode seed grows about linearly);
 4. **cli** — ``glu learn-gestures --episodes 2000 --labels soft`` (batch weighted EM, Q = 6, M = 3).
 
 Prints a table and writes ``benchmarks/results/self_supervised.json`` in the schema of ``timing.py`` (with
@@ -128,7 +129,7 @@ def bench_study(data: str | None) -> list[dict]:
     from glu.studies.learning import study as lc
 
     engine, _ = _engine(data)
-    settings = lc.StudySettings()
+    settings = lc.StudySettings(episodes=100, seeds=(0,), budgets=(100,))
     lc.run_seed(engine, 99, lc.StudySettings(episodes=10, seeds=(99,)))  # compiled kernels loaded
     c0, t0 = time.process_time(), time.perf_counter()
     results = lc.learning_study(engine, settings)
@@ -136,12 +137,12 @@ def bench_study(data: str | None) -> list[dict]:
     lockstep = lc.update_times(results)
     n = len(settings.learners())
     print(
-        f"study, default size ({len(settings.seeds)} seeds × {settings.episodes} episodes, {n} learners): "
+        f"study, one seed ({len(settings.seeds)} seeds × {settings.episodes} episodes, {n} learners): "
         f"{cpu:.1f} s CPU, {wall:.1f} s wall (load {_load()}); lockstep update of all learners: median "
         f"{1e3 * lockstep['median']:.1f} ms"
     )
     return [
-        {"what": "the study's seeds in one process, default size (CPU, s)", "seconds": cpu, "goal": None},
+        {"what": "one seed of the study, 100 episodes (CPU, s)", "seconds": cpu, "goal": None},
         {
             "what": f"lockstep update of all {n} learners after one episode, median (s)",
             "seconds": lockstep["median"],
