@@ -96,6 +96,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.set_defaults(func=_learn)
 
+    _register_curves(sub, ambiguity_help, world_help)
+
+
+def _register_curves(sub: argparse._SubParsersAction, ambiguity_help: str, world_help: str) -> None:
+    from glu.studies.learning.self_supervised import AMBIGUITIES, WORLDS
+
     c = sub.add_parser(
         "learning-curves",
         help="the long runs of learning from effects (Dask, one task per seed): what notebook 12 reads",
@@ -116,20 +122,17 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--episodes", type=positive_int, default=10_000, metavar="N", help="per seed (default 10000)"
     )
     c.add_argument("--seeds", type=_seeds, default=tuple(range(10)), help="training seeds (default 0..9)")
-    c.add_argument(
-        "--worlds",
-        type=_names,
-        default=tuple(WORLDS),
-        metavar="LIST",
-        help=f"the worlds, comma-separated (default all): {world_help}",
-    )
-    c.add_argument(
-        "--ambiguities",
-        type=_names,
-        default=tuple(AMBIGUITIES),
-        metavar="LIST",
-        help=f"the ambiguities, comma-separated (default all): {ambiguity_help}",
-    )
+    for flag, names, text in (
+        ("--worlds", WORLDS, world_help),
+        ("--ambiguities", AMBIGUITIES, ambiguity_help),
+    ):
+        c.add_argument(
+            flag,
+            type=_names,
+            default=tuple(names),
+            metavar="LIST",
+            help=f"comma-separated (default all): {text}",
+        )
     c.add_argument("--test-per-action", type=positive_int, default=30, metavar="N", help="held-out gestures")
     c.add_argument(
         "--margin",

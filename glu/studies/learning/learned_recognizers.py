@@ -114,9 +114,8 @@ def learn_recognizer(
     actions, config, seed : the models' names (the columns of ``p_bn``), training settings and seed
     threshold : the ``confident`` scheme's
     posterior : how ``iterative`` and ``unsupervised`` read ``p_HMM`` (:data:`POSTERIOR_READINGS`)
-    max_rounds : most relabelling rounds (``iterative``, ``unsupervised``: until the arg-max labels of every
-        gesture stop changing)
-    invariants : the features the models are trained on (computed by the recogniser, as for any)
+    max_rounds : most relabelling rounds (``iterative``, ``unsupervised``: until the labels stop changing)
+    invariants : the features the models are trained on (computed by the recogniser, as for any);
     progress : called with the action's name after each model is trained (every relabelling round)
     """
     if scheme not in LEARNERS:
@@ -235,9 +234,8 @@ def learn_gestures(
     from the network (``engine``) by the scheme ``labels`` (or a baseline: ``true``, ``unsupervised``).
     Batch (:func:`learn_recognizer`, EM on all episodes, ``iterative`` relabelling until the labels stop
     changing) or ``online`` (:func:`~glu.studies.learning.online.learn_online`, one episode at a time).
-    ``progress`` is called with ``"episode"`` after each episode learned online, with an action's name after
-    each model trained in batch. Returns the recogniser (its ``meta`` says how it was learned) and a
-    summary: the labels' arg-max accuracy, the relabelling rounds, the episodes' data.
+    ``progress`` is called after each episode learned online, after each model trained in batch. Returns
+    the recogniser (its ``meta`` says how it was learned) and a summary: the labels' accuracy, the rounds.
     """
     from glu.studies.learning.online import learn_online
     from glu.studies.learning.self_supervised import simulate_episodes

@@ -324,19 +324,9 @@ def run_online(
             correct[c], means[c] = _measure(state, matching[c], test_features, test_actions)
             c += 1
     return OnlineRun(
-        list(learners),
-        tuple(actions),
-        checkpoints,
-        correct,
-        all_weights,
-        np.asarray(episode_actions),
-        np.asarray(test_actions),
-        means,
-        state.params,
-        state.exists.copy(),
-        matching,
-        seconds,
-    )
+        list(learners), tuple(actions), checkpoints, correct, all_weights, np.asarray(episode_actions),
+        np.asarray(test_actions), means, state.params, state.exists.copy(), matching, seconds,
+    )  # fmt: skip
 
 
 def _update(

@@ -26,7 +26,7 @@ support a general claim: the study says what happens for this person.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -48,7 +48,7 @@ from glu.studies.learning.self_supervised import (
     resampled,
     simulate_episodes,
 )
-from glu.studies.learning.study import on_dask
+from glu.studies.learning.study import run_units, settings_dict
 from glu.tidy import tidy
 
 REAL_KEY, REAL_RANDOM_KEY, REAL_BOOT_KEY = 8, 9, 10
@@ -112,9 +112,7 @@ class RealPersonSettings:
         Invariants.parse(self.features)
 
     def as_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        d["online"] = {**d["online"], "config": self.online.config.as_dict()}
-        return d
+        return settings_dict(self)
 
 
 class PersonGenerator(NamedTuple):
@@ -305,14 +303,7 @@ def real_person_study(
             f"the real-person study needs two repetitions of each action at least: {', '.join(missing)}"
         )
     job = RealPersonJob(settings, stand)
-    if scheduler is None and not workers:
-        parts = []
-        for d in settings.draws:
-            parts.append(real_person_draw(engine, d, job))
-            if progress is not None:
-                progress(d)
-    else:
-        parts = on_dask(real_person_draw, engine, job, settings.draws, workers, scheduler, progress)
+    parts = run_units(real_person_draw, engine, job, settings.draws, workers, scheduler, progress)
     df = pd.DataFrame([r for p in parts for r in p])
     return tidy(df, "learning_real_person", data_source, **settings.as_dict())
 

@@ -137,20 +137,30 @@ def save_study(
     )
 
 
+def _read(folder: Path, what: str, part: str, read) -> Any:
+    """``read()``, its missing or unreadable files said in one line (:class:`DataError`)."""
+    try:
+        return read()
+    except FileNotFoundError as e:
+        raise DataError(
+            f"{folder}: no saved {what} ({Path(e.filename).name} missing); "
+            f"`glu learning-curves {part}-o DIR` writes one"
+        ) from None
+    except (OSError, ValueError, KeyError) as e:
+        raise DataError(f"{folder}: not a readable saved {what} ({e})") from None
+
+
 def load_study(folder: str | os.PathLike) -> tuple[StudySettings, list[SeedResult], dict[str, Any]]:
     """A saved run: its settings, every seed's measurements and its provenance (the study file's content)."""
     folder = Path(folder)
-    try:
-        meta = json.loads((folder / STUDY_FILE).read_text(encoding="utf-8"))
+
+    def read():
         with np.load(folder / RESULTS_FILE) as npz:
-            arrays = {k: npz[k] for k in npz.files}
-    except FileNotFoundError as e:
-        raise DataError(
-            f"{folder}: no saved run of learning from effects ({Path(e.filename).name} missing); "
-            "`glu learning-curves -o DIR` writes one"
-        ) from None
-    except (OSError, ValueError) as e:
-        raise DataError(f"{folder}: not a readable saved run of learning from effects ({e})") from None
+            return json.loads((folder / STUDY_FILE).read_text(encoding="utf-8")), {
+                k: npz[k] for k in npz.files
+            }
+
+    meta, arrays = _read(folder, "run of learning from effects", "", read)
     if meta.get("format") != FORMAT:
         raise DataError(f"{folder}: saved in format {meta.get('format')!r}, glu reads {FORMAT}; run it again")
     J = int(arrays["tests"])
@@ -312,16 +322,12 @@ def load_real_person(folder: str | os.PathLike, data_source: str) -> tuple[pd.Da
     .real_person_study` stamps them) and their provenance; :class:`DataError` when they are missing or were
     made from other data."""
     folder = Path(folder)
-    try:
+
+    def read():
         meta = json.loads((folder / PERSON_STUDY_FILE).read_text(encoding="utf-8"))
-        rows = pd.read_csv(folder / PERSON_FILE, keep_default_na=False, na_values=[""])
-    except FileNotFoundError as e:
-        raise DataError(
-            f"{folder}: no saved real-person study ({Path(e.filename).name} missing); "
-            "`glu learning-curves --part real-person -o DIR` writes one"
-        ) from None
-    except (OSError, ValueError) as e:
-        raise DataError(f"{folder}: not a readable saved real-person study ({e})") from None
+        return meta, pd.read_csv(folder / PERSON_FILE, keep_default_na=False, na_values=[""])
+
+    meta, rows = _read(folder, "real-person study", "--part real-person ", read)
     if meta.get("data_source") != data_source:
         raise DataError(
             f"the saved real-person study was made from {meta.get('data_source')!r}, not {data_source!r}: "

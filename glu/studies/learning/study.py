@@ -157,9 +157,15 @@ class StudySettings:
 
     def as_dict(self) -> dict[str, Any]:
         """The settings as plain data (the tables' parameters)."""
-        d = asdict(self)
-        d["online"] = {**d["online"], "config": self.online.config.as_dict()}
-        return d
+        return settings_dict(self)
+
+
+def settings_dict(settings: Any) -> dict[str, Any]:
+    """Settings (a dataclass with an :class:`~glu.studies.learning.online.OnlineSettings` ``online``) as
+    plain data."""
+    d = asdict(settings)
+    d["online"] = {**d["online"], "config": settings.online.config.as_dict()}
+    return d
 
 
 class SeedResult(NamedTuple):
@@ -289,22 +295,27 @@ def learning_study(
     """Run every seed of the study: in this process (``workers=0``, no scheduler), on a Dask LocalCluster of
     ``workers`` single-threaded processes, or on an existing Dask scheduler (``tcp://host:port``); one task
     per seed. ``progress`` is called with each finished seed. Results are in the order of the seeds."""
-    if scheduler is None and not workers:
-        out = []
-        for sd in settings.seeds:
-            out.append(run_seed(engine, sd, settings))
-            if progress is not None:
-                progress(sd)
-        return out
-    with quiet_dask_logs():
-        return on_dask(run_seed, engine, settings, settings.seeds, workers, scheduler, progress)
+    return run_units(run_seed, engine, settings, settings.seeds, workers, scheduler, progress)
 
 
-def on_dask(
+def run_units(
     task: Callable, engine: InferenceEngine, settings: Any, units: Sequence[Any], workers, scheduler, progress
 ) -> list[Any]:
-    """``[task(engine, unit, settings) for unit in units]`` as Dask tasks, on a LocalCluster of ``workers``
-    processes or an existing ``scheduler``; ``progress(unit)`` after each; Ctrl-C kills the local workers."""
+    """``[task(engine, unit, settings) for unit in units]``: here (``workers=0``, no scheduler), or as Dask
+    tasks on a LocalCluster of ``workers`` processes or an existing ``scheduler``; ``progress(unit)`` after
+    each (if given); Ctrl-C kills the local workers."""
+    if scheduler is None and not workers:
+        out = []
+        for u in units:
+            out.append(task(engine, u, settings))
+            if progress is not None:
+                progress(u)
+        return out
+    with quiet_dask_logs():
+        return _on_dask(task, engine, settings, units, workers, scheduler, progress)
+
+
+def _on_dask(task, engine, settings, units, workers, scheduler, progress) -> list[Any]:
     from dask.distributed import Client, LocalCluster, as_completed
 
     cluster = None
