@@ -4,18 +4,20 @@ Each **learner** (a labelling scheme of :mod:`glu.studies.learning.self_supervis
 without words) keeps, per action, the sufficient statistics of what it has seen
 (:class:`glu.hmm.SufficientStats`) and its current HMM. After each episode it
 
-1. labels the episode: from its network alone (``hard``, ``soft``, ``confident``), from the product rule of
-   its current HMMs and its network once it has a model of every action (``iterative``; before that the
-   network alone), from the true action (``true``), or from its HMMs alone (``unsupervised``: the clusters
-   are named after the fact by the best matching with the true actions seen so far);
+1. labels the episode: from its network alone (``hard``, ``soft``, ``confident``), from random labels given
+   to it (``random``), from the product rule of its current HMMs and its network once it has a model of every
+   action (``iterative``, p_HMM read per frame; ``em``, the likelihood itself; before that the network
+   alone), from the true action (``true``; ``supervised``: the first K episodes of each action only), or
+   from its HMMs alone (``unsupervised`` and ``clustering``: the clusters are named after the fact by the
+   best matching with the true actions seen so far, or with the network's posteriors);
 2. runs the E-step of the episode under each of its models, and for each action with a label weight ``w > 0``
    makes a stepwise-EM step (:class:`glu.hmm.online.OnlineModels`: the running weighted mean of the
    statistics ``s ← (1 − η) s + η s_episode`` with ``η = w / W^α``, ``W`` the action's label weight so far,
    then the M-step of ``W · s``). With ``α = 1`` (the default) this is the plain accumulation
    ``Σ w s_episode``; ``α < 1`` forgets the early episodes faster;
 3. an action without a model buffers its labelled episodes until their weight reaches ``init_weight``, then
-   trains its first model on them (weighted EM, a few iterations). The unsupervised learner first clusters
-   its first ``cluster_episodes`` episodes (k-means on the resampled trajectories).
+   trains its first model on them (weighted EM, a few iterations). The clustering learners first cluster
+   their first ``cluster_episodes`` episodes (k-means on the resampled trajectories).
 
 Many learners watch the same episodes (the gestures are the same in every ambiguity): :func:`run_online` runs
 them in lockstep, the E-step of every learner's every model on each episode in one call

@@ -25,17 +25,18 @@ and trains its gesture HMMs from those labels (weighted EM, :func:`glu.hmm.train
 * :func:`label_weights` — the labelling schemes (:data:`SCHEMES`): ``hard`` (the arg-max), ``soft`` (the
   posterior as weights), ``confident`` (the arg-max, only above a threshold), ``iterative`` (the product
   rule of the robot's current HMMs and the network, relabelled until the labels stop changing); and the
-  baselines' labels (:data:`BASELINES`: the ``true`` action; ``unsupervised`` clusters).
-* the learners themselves: all episodes at once in :mod:`glu.studies.learning.learned_recognizers` (which also
-  runs the real gestures with their labels hidden), one episode at a time in
-  :mod:`glu.studies.learning.online`; the study's learning curves in
-  :mod:`glu.studies.learning.study`.
+  baselines' labels (:data:`BASELINES`: the ``true`` action; ``unsupervised`` clusters); the controls
+  (:data:`CONTROLS`: :func:`matched_random_labels`, clusters named by the network, semi-supervised EM; and
+  :data:`SUPERVISED`, :func:`first_labels`).
+* the learners themselves: all episodes at once in :mod:`glu.studies.learning.learned_recognizers`, one
+  episode at a time in :mod:`glu.studies.learning.online`; the study in :mod:`glu.studies.learning.study`,
+  the real person in :mod:`glu.studies.learning.real_person`.
 
 Seeds: episode ``i`` of seed ``s`` has the same action and gesture in every ambiguity (the actions of a
 stream numbered from ``offset`` come from ``(s, ACTION_KEY, offset)``, episode ``i``'s gesture from
 ``(s, GESTURE_KEY, i)``); the world (objects, effects, words) comes from ``(s, WORLD_KEY, offset)`` and the
-perception noise from ``(s, PERCEPTION_KEY, offset)``. Held-out episodes use ``offset`` =
-:data:`TEST_OFFSET`, never seen in training.
+perception noise from ``(s, PERCEPTION_KEY, offset)``, each person's turn in a turned world from ``(s,
+VIEW_KEY, offset)``. Held-out episodes use ``offset`` = :data:`TEST_OFFSET`, never seen in training.
 """
 
 from __future__ import annotations
