@@ -201,11 +201,6 @@ class _Labels:
                 self.static[k] = first_labels(true, int(lr.source), A)
         self.dynamic = np.array([lr.scheme in DYNAMIC for lr in learners], dtype=bool).reshape(L)
         self.clusters = [k for k, lr in enumerate(learners) if lr.scheme in ("unsupervised", "clustering")]
-        # what names the clusters after the fact: the true actions, or the network's posteriors
-        self.naming = {
-            k: (one_hot(true, A) if learners[k].scheme == "unsupervised" else p_bn[learners[k].source])
-            for k in self.clusters
-        }
         # the first model of an action is trained once its buffer weighs this much and holds this many
         self.init_weight = np.array(
             [min(settings.init_weight, lr.source) if lr.scheme == "supervised" else settings.init_weight
@@ -286,9 +281,12 @@ def run_online(
     if len(checkpoints) == 0 or checkpoints[0] < 1 or checkpoints[-1] > N:
         raise DataError(f"checkpoints must lie in 1 … {N} (the episodes), got {checkpoints.tolist()}")
     config, D = settings.config, features[0].shape[1]
-    state = _empty_state(L, A, settings, D)
-    labels = _Labels(learners, episode_actions, p_bn, A, settings)
-    clusters = labels.clusters
+    row, owners = _model_rows(learners)  # learner k learns the models of row row[k]
+    R = len(owners)
+    state = _empty_state(R, A, settings, D)
+    labels = _Labels([learners[k] for k in owners], episode_actions, p_bn, A, settings)
+    clusters = [k for k, lr in enumerate(learners) if lr.scheme in CLUSTERS]  # learners
+    naming = _naming(learners, clusters, episode_actions, p_bn, A)
     cluster_counts = np.zeros((L, A, A))
     C = len(checkpoints)
     correct = np.zeros((C, L, len(test_features)), dtype=bool)
@@ -300,35 +298,67 @@ def run_online(
     c = 0
     for i, X in enumerate(features):
         t0 = time.thread_time()
-        W = labels.static_weights(i, L, A)
+        W = labels.static_weights(i, R, A)
         # the E-step of every model that learns from this episode, or whose likelihood labels it
         pairs = np.nonzero(state.exists & ((W > 0) | labels.dynamic[:, None]))
-        loglik = np.full((L, A), -np.inf)
+        loglik = np.full((R, A), -np.inf)
         unit = None
         if len(pairs[0]):
             unit, ll = state.models.estep(X, pairs)
             loglik[pairs] = ll
         labels.dynamic_weights(W, i, loglik, len(X), state.exists)
-        all_weights[i] = W
+        all_weights[i] = W[row]
         if unit is not None:
             _update(state, pairs, unit, W, settings)
         for k in clusters:
-            cluster_counts[k] += np.outer(W[k], labels.naming[k][i])
-        _initialise(state, W, features, i, labels, seed, clusters, first_models)
+            cluster_counts[k] += np.outer(W[row[k]], naming[k][i])
+        _initialise(state, W, features, i, labels, seed, labels.clusters, first_models)
         if clusters and i + 1 == settings.cluster_episodes:
-            _cluster(state, clusters, features[: i + 1], settings, seed, cluster_counts, labels.naming)
+            _cluster(state, labels.clusters, features[: i + 1], settings, seed, cluster_counts, naming)
         seconds[i] = time.thread_time() - t0
         if progress is not None:
             progress("episode")
         while c < C and checkpoints[c] == i + 1:
             for k in clusters:
                 matching[c, k] = best_matching(cluster_counts[k])
-            correct[c], means[c] = _measure(state, matching[c], test_features, test_actions)
+            correct[c], means[c] = _measure(state, row, matching[c], test_features, test_actions)
             c += 1
+    params = GMMHMMParams(*(p[row] for p in state.params))
     return OnlineRun(
         list(learners), tuple(actions), checkpoints, correct, all_weights, np.asarray(episode_actions),
-        np.asarray(test_actions), means, state.params, state.exists.copy(), matching, seconds,
+        np.asarray(test_actions), means, params, state.exists[row].copy(), matching, seconds,
     )  # fmt: skip
+
+
+CLUSTERS: tuple[str, ...] = ("unsupervised", "clustering")
+"""The learners that cluster the gestures without labels and name the clusters after the fact: they learn the
+same models (named differently), which :func:`run_online` keeps once."""
+
+
+def _model_rows(learners: Sequence[Learner]) -> tuple[np.ndarray, list[int]]:
+    """Which row of models each learner learns, and the learner that owns each row: one row per learner, but
+    one row for all the clustering learners (their models do not depend on how the clusters are named)."""
+    row, owners, shared = np.zeros(len(learners), dtype=int), [], None
+    for k, lr in enumerate(learners):
+        if lr.scheme in CLUSTERS and shared is not None:
+            row[k] = shared
+            continue
+        row[k] = len(owners)
+        owners.append(k)
+        if lr.scheme in CLUSTERS:
+            shared = row[k]
+    return row, owners
+
+
+def _naming(learners, clusters, episode_actions, p_bn, A: int) -> dict[int, np.ndarray]:
+    """What names each clustering learner's clusters after the fact: the true actions (``unsupervised``) or
+    the network's posteriors (``clustering``), shape (N, A)."""
+    return {
+        k: one_hot(np.asarray(episode_actions), A)
+        if learners[k].scheme == "unsupervised"
+        else p_bn[learners[k].source]
+        for k in clusters
+    }
 
 
 def _update(
@@ -393,43 +423,48 @@ def _initialise(
 
 def _cluster(
     state: _State,
-    learners: Sequence[int],
+    rows: Sequence[int],
     seen: Sequence[np.ndarray],
     settings: OnlineSettings,
     seed: int,
     cluster_counts: np.ndarray,
     naming: Mapping[int, np.ndarray],
 ) -> None:
-    """The clustering learners' first models: k-means of the episodes seen so far, one model per cluster;
-    each cluster's counts against what names it (the true actions, or the network's posteriors)."""
+    """The clustering learners' first models (``rows``): k-means of the episodes seen so far, one model per
+    cluster; each clustering learner's counts of its clusters against what names them (``naming``)."""
     A = state.exists.shape[1]
     labels = kmeans_labels(resampled(seen), A, seed)
-    for k in learners:
+    for k in rows:
         for a in range(A):
             members = np.flatnonzero(labels == a)
             _first_model([seen[j] for j in members], np.ones(len(members)), settings, seed, state, k, a)
-        cluster_counts[k] = one_hot(labels, A).T @ naming[k][: len(seen)]
+    for k, names in naming.items():
+        cluster_counts[k] = one_hot(labels, A).T @ names[: len(seen)]
 
 
 def _measure(
-    state: _State, matching: np.ndarray, test_features: Sequence[np.ndarray], test_actions: np.ndarray
+    state: _State,
+    row: np.ndarray,
+    matching: np.ndarray,
+    test_features: Sequence[np.ndarray],
+    test_actions: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Which held-out gestures every learner recognises right (L, J), and its models' state means (L, A, Q,
-    D)."""
-    L, A = state.exists.shape
+    D): the models of row ``row[k]`` (R rows), their clusters named by ``matching[k]`` (L, A)."""
+    R, A = state.exists.shape
     Q, D = state.params.means.shape[2], state.params.means.shape[-1]
     pairs = np.nonzero(state.exists)
-    means = np.full((L, A, Q, D), np.nan)
-    ll = np.full((len(test_features), L, A), -np.inf)
+    means = np.full((R, A, Q, D), np.nan)
+    ll = np.full((len(test_features), R, A), -np.inf)
     if len(pairs[0]):
         means[pairs] = state.params.means[pairs][:, :, 0]
     if len(pairs[0]) and len(test_features):
         ll[:, pairs[0], pairs[1]] = state.models.loglik(test_features, pairs)
-    cluster = ll.argmax(axis=2)  # (J, L)
-    predicted = matching[np.arange(L)[None, :], cluster]  # (J, L): each cluster's action
-    none = ~np.isfinite(ll.max(axis=2))
+    cluster = ll.argmax(axis=2)[:, row]  # (J, L)
+    predicted = matching[np.arange(len(row))[None, :], cluster]  # (J, L): each cluster's action
+    none = ~np.isfinite(ll.max(axis=2))[:, row]
     ok = (predicted == np.asarray(test_actions)[:, None]) & ~none
-    return ok.T, means
+    return ok.T, means[row]
 
 
 def learn_online(
