@@ -183,24 +183,39 @@ def _empty_state(L: int, A: int, settings: OnlineSettings, D: int) -> _State:
 
 class _Labels:
     """How each learner labels each episode: the static labels, computed once, and the rules of those that
-    read their own HMMs (:func:`run_online`)."""
+    read their own HMMs (:func:`run_online`); every learner's labels of one episode in a few array
+    operations."""
 
     def __init__(self, learners, episode_actions, p_bn, A: int, settings: OnlineSettings) -> None:
         L = len(learners)
         true = np.asarray(episode_actions)
-        self.learners, self.p_bn, self.settings = list(learners), p_bn, settings
-        self.static: dict[int, np.ndarray] = {}
+        self.learners, self.settings = list(learners), settings
+        static: dict[int, np.ndarray] = {}
         for k, lr in enumerate(learners):
             if lr.scheme in ("hard", "soft", "confident"):
-                self.static[k] = label_weights(lr.scheme, p_bn[lr.source], settings.threshold)
+                static[k] = label_weights(lr.scheme, p_bn[lr.source], settings.threshold)
             elif lr.scheme == "random":  # one-hot labels drawn by the caller
-                self.static[k] = label_weights("hard", p_bn[lr.source])
+                static[k] = label_weights("hard", p_bn[lr.source])
             elif lr.scheme == "true":
-                self.static[k] = one_hot(true, A)
+                static[k] = one_hot(true, A)
             elif lr.scheme == "supervised":
-                self.static[k] = first_labels(true, int(lr.source), A)
+                static[k] = first_labels(true, int(lr.source), A)
+        self.static_rows = np.array(list(static), dtype=int)
+        self.static = np.stack(list(static.values()), axis=1) if static else np.zeros((len(true), 0, A))
         self.dynamic = np.array([lr.scheme in DYNAMIC for lr in learners], dtype=bool).reshape(L)
         self.clusters = [k for k, lr in enumerate(learners) if lr.scheme in ("unsupervised", "clustering")]
+        # the learners that read their HMMs, by reading; those of them that multiply by the network
+        self.readings = {
+            r: np.array(
+                [k for k, lr in enumerate(learners) if lr.scheme in DYNAMIC and _reading(lr, settings) == r]
+            )
+            for r in dict.fromkeys(_reading(lr, settings) for lr in learners if lr.scheme in DYNAMIC)
+        }
+        self.product = np.array([lr.scheme in ("iterative", "em") for lr in learners], dtype=bool).reshape(L)
+        prod = np.flatnonzero(self.product)
+        self.network = np.stack([p_bn[learners[k].source] for k in prod], axis=1) if len(prod) else None
+        self.network_row = np.full(L, -1)
+        self.network_row[prod] = np.arange(len(prod))
         # the first model of an action is trained once its buffer weighs this much and holds this many
         self.init_weight = np.array(
             [min(settings.init_weight, lr.source) if lr.scheme == "supervised" else settings.init_weight
@@ -210,24 +225,33 @@ class _Labels:
 
     def static_weights(self, i: int, L: int, A: int) -> np.ndarray:
         W = np.zeros((L, A))
-        for k, w in self.static.items():
-            W[k] = w[i]
+        W[self.static_rows] = self.static[i]
         return W
 
     def dynamic_weights(self, W: np.ndarray, i: int, loglik: np.ndarray, n_frames: int, exists) -> None:
         """The labels of the learners that read their HMMs, into ``W`` (L, A): the product rule with the
         network (``iterative``: p_HMM read as ``settings.posterior``; ``em``: the likelihood itself), or
         p_HMM alone (the clusters); the network alone while some action has no model."""
-        for k in np.flatnonzero(self.dynamic):
-            lr = self.learners[k]
-            product = lr.scheme in ("iterative", "em")
-            if exists[k].all():
-                reading = "likelihood" if lr.scheme == "em" else self.settings.posterior
-                p_hmm = p_hmm_reading(loglik[k : k + 1], np.array([n_frames]), reading)
-                src = self.p_bn[lr.source][i : i + 1] if product else None
-                W[k] = label_weights("iterative", src, p_hmm=p_hmm)[0] if product else p_hmm[0]
-            elif product:
-                W[k] = self.p_bn[lr.source][i]
+        ready = exists.all(axis=1)
+        waiting = np.flatnonzero(self.product & ~ready)
+        if len(waiting):
+            W[waiting] = self.network[i, self.network_row[waiting]]
+        for reading, rows in self.readings.items():
+            rows = rows[ready[rows]]
+            if not len(rows):
+                continue
+            p_hmm = p_hmm_reading(loglik[rows], np.full(len(rows), n_frames), reading)
+            both = self.product[rows]
+            if both.any():
+                net = self.network[i, self.network_row[rows[both]]]
+                W[rows[both]] = label_weights("iterative", net, p_hmm=p_hmm[both])
+            W[rows[~both]] = p_hmm[~both]
+
+
+def _reading(learner: Learner, settings: OnlineSettings) -> str:
+    """How a learner that reads its HMMs reads p_HMM: ``em`` the likelihood itself, the others per
+    ``settings.posterior``."""
+    return "likelihood" if learner.scheme == "em" else settings.posterior
 
 
 DYNAMIC: tuple[str, ...] = ("iterative", "em", "unsupervised", "clustering")
