@@ -203,8 +203,11 @@ def _spec(learner: str, words: bool) -> Learner:
 
 
 def _predict(run, k: int, seqs: Sequence[np.ndarray]) -> list[str | None]:
+    """Learner ``k``'s answer for each sequence; None while it has no model at all."""
+    if not run.exists[k].any():
+        return [None] * len(seqs)
     rec = run.recognizer(k)
-    return [rec.classify(x) if rec.actions else None for x in seqs]
+    return [rec.classify(x) for x in seqs]
 
 
 class RealPersonJob(NamedTuple):
