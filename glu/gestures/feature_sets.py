@@ -34,7 +34,8 @@ frame."""
 
 
 class FeatureSet(NamedTuple):
-    """Where the hand is measured (``body``: the shoulder line's frame, else the torso's) and its invariances."""
+    """Where the hand is measured (``body``: the shoulder line's frame, else the torso's), and its
+    invariances."""
 
     body: bool
     invariants: Invariants

@@ -139,7 +139,7 @@ FINDINGS: tuple[Finding, ...] = (
 """The claims followed through the design (each with its interval in every cell and condition)."""
 
 
-def _bare(df: pd.DataFrame) -> pd.DataFrame:
+def bare(df: pd.DataFrame) -> pd.DataFrame:
     """``df`` without its ``attrs`` (a view of the same data): pandas deep-copies a stamped table's attrs
     on every row or group it hands out, the bulk of the time of a loop over rows."""
     out = df.copy(deep=False)
@@ -161,7 +161,7 @@ def select(frame: pd.DataFrame, where: Mapping[str, Any]) -> pd.DataFrame:
     return frame[keep]
 
 
-def _pooled(frame: pd.DataFrame, viewpoint: str = "all") -> pd.DataFrame:
+def pooled(frame: pd.DataFrame, viewpoint: str = "all") -> pd.DataFrame:
     return frame[(frame.viewpoint == viewpoint) & frame.noise.isna()]
 
 
@@ -175,19 +175,19 @@ def winners(
     adjusted difference from it (``verdict_adjusted``: no difference), best included; ``beats``, those it is
     better than; and the best estimate with its interval. Where the sweep lacks ``viewpoint``, its first.
     """
-    table, diffs = _bare(table), _bare(diffs)
+    table, diffs = bare(table), bare(diffs)
     views = [v for v in dict.fromkeys(table.viewpoint) if v != "all"]
     if viewpoint not in views:
         viewpoint = views[0] if views else "all"
     full = table["fraction"].max() if fraction is None else fraction
-    sel = _pooled(table, viewpoint)
+    sel = pooled(table, viewpoint)
     sel = sel[np.isclose(sel.fraction, full) & ~sel.strategy.isin(REFERENCES)].copy()
     keys = [*DESIGN, "target", "metric"]
     up = sel.metric.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
     sel["_rank"] = np.where(up, -sel.estimate.to_numpy(dtype=float), sel.estimate.to_numpy(dtype=float))
     best = sel.sort_values([*keys, "_rank"], kind="stable").drop_duplicates(keys, keep="first")
     best = best[[*keys, "strategy", "estimate", "ci_low", "ci_high"]].rename(columns={"strategy": "best"})
-    d = _pooled(diffs, viewpoint)
+    d = pooled(diffs, viewpoint)
     d = d[np.isclose(d.fraction, full)][[*keys, "strategy", "baseline", "verdict_adjusted"]]
     m = d.merge(best[[*keys, "best"]], on=keys, how="inner")
     m = m[(m.strategy == m.best) | (m.baseline == m.best)]
@@ -244,7 +244,7 @@ def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS
     (Benjamini–Hochberg over every row of the table: one family) and verdict_adjusted (a verdict only where
     p_adjusted ≤ α). Findings whose strategies the sweep lacks are left out.
     """
-    diffs = _bare(diffs)
+    diffs = bare(diffs)
     fractions = sorted(diffs["fraction"].dropna().unique())
     cols = ["finding", *DESIGN, "viewpoint", "noise", "fraction", *VERDICT_COLUMNS]
     parts = []
@@ -272,7 +272,7 @@ def verdict_counts(verdicts: pd.DataFrame) -> pd.DataFrame:
     One row per (finding, effects, features, viewpoint, noise): cells, better, no_difference, worse (from
     ``verdict_adjusted``), and better_unadjusted (from the unadjusted ``verdict``).
     """
-    v = _bare(verdicts)
+    v = bare(verdicts)
     keys = ["finding", "effects", "features", "viewpoint", "noise"]
     rows = []
     for key, g in v.groupby(keys, sort=False, dropna=False):
@@ -399,7 +399,7 @@ def finding_sentences(
     ``brief``: without naming the reference cell (the caller names it once) and without the counts per
     factor level (the README's form; the notebook gives them).
     """
-    v = _bare(verdicts)
+    v = bare(verdicts)
     out = []
     for label, g in v.groupby("finding", sort=False):
         front = select(g, {**FRONT, "noise": math.nan})
@@ -412,7 +412,7 @@ def finding_sentences(
             head += (
                 f": on the front view, in the reference cell ({cell}) it {SAID[r.verdict_adjusted]} "
                 f"(difference {r.difference:+.3f} [{r.ci_low:+.3f}, {r.ci_high:+.3f}], adjusted "
-                f"p {_p(r.p_adjusted)})"
+                f"p {p_text(r.p_adjusted)})"
             )
         n, better, none, worse = _counts(front)
         body = (
@@ -434,7 +434,7 @@ def finding_sentences(
     return out
 
 
-def _p(p: float) -> str:
+def p_text(p: float) -> str:
     """An adjusted p-value as the sentences write it: ``0.012``, ``< 0.001``, ``≤ α`` context-free."""
     if not np.isfinite(p):
         return "n/a"
@@ -520,14 +520,14 @@ def front_view(table: pd.DataFrame) -> str:
 def _cell_rows(
     table: pd.DataFrame, cell: Mapping[str, Any], target: str, metric: str, fraction: float, viewpoint: str
 ) -> pd.DataFrame:
-    sel = select(_pooled(table, viewpoint), cell)
+    sel = select(pooled(table, viewpoint), cell)
     return sel[(sel.target == target) & (sel.metric == metric) & np.isclose(sel.fraction, fraction)]
 
 
 def network_alone_sentences(table: pd.DataFrame) -> list[str]:
     """For the contrasted cells on the front view (noise pooled), early and at the full gesture: the effect's
     log-loss and ECE of the network alone beside every fusion rule and the true action (an oracle)."""
-    table = _bare(table)
+    table = bare(table)
     out = []
     fractions = sorted(table.fraction.dropna().unique())
     view = front_view(table)
@@ -565,9 +565,9 @@ def p_hmm_table(
     """p_HMM alone (strategy ``gesture``) at the full gesture under each reading: accuracy, log-loss, ECE,
     in one cell of effects, actions, network and features (default the reference cell's), at one viewpoint
     (default the front view) pooled over the noise levels."""
-    table = _bare(table)
+    table = bare(table)
     cell = {k: v for k, v in (cell or REFERENCE_CELL).items() if k != "p_hmm"}
-    sel = select(_pooled(table, viewpoint or front_view(table)), cell)
+    sel = select(pooled(table, viewpoint or front_view(table)), cell)
     sel = sel[
         (sel.target == "action") & (sel.strategy == "gesture") & np.isclose(sel.fraction, sel.fraction.max())
     ]
@@ -590,7 +590,7 @@ def p_hmm_sentences(
     """What the tables say of p_HMM as a probability: its accuracy and ECE under each reading on held-out
     synthetic gestures, per viewpoint; the fitted inverse temperatures and how many sit at a bound; (with
     the real data) the held-out real segments."""
-    table = _bare(table)
+    table = bare(table)
     out = []
     views = [v for v in dict.fromkeys(table.viewpoint) if v != "all"]
     for view in views:
@@ -607,7 +607,7 @@ def p_hmm_sentences(
             + "."
         )
     if len(calibration):
-        cal = _bare(calibration)
+        cal = bare(calibration)
         full = cal[np.isclose(cal.fraction, cal.fraction.max())]
         raw = full[full.features == REFERENCE_CELL["features"]] if "features" in full else full
         parts = []

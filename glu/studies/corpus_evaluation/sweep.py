@@ -149,7 +149,10 @@ def export_saved(folder: str | os.PathLike, dest: str | os.PathLike, command: st
         df = df.copy()
         df.attrs = {}
         df.to_parquet(dest / f"{name}.parquet", index=False, compression="zstd")
-    atomic_write_json(dest / "summary.json", tables.summary)
+    # the per-cell summary ("overall", "best") is the sweep's own report: the notebook computes its own
+    atomic_write_json(
+        dest / "summary.json", {k: v for k, v in tables.summary.items() if k not in ("overall", "best")}
+    )
     atomic_write_json(dest / "sweep.json", provenance)
     key = _key(provenance["settings"], provenance["data_source"])
     write_key(dest, key, command, computed_by=provenance.get("made_with"))
