@@ -277,3 +277,36 @@ def test_the_invariances_effects_are_one_adjusted_family():
     np.testing.assert_allclose(effects.p_adjusted, benjamini_hochberg(effects.p_value.to_numpy()))
     first = effects[effects.level == "0"].iloc[0]
     assert first.verdict == "worse" and first.verdict_adjusted == "no difference" and not first.costs
+
+
+def test_the_study_grid_is_saved_found_and_read_back(tmp_path, monkeypatch):
+    """The study's tables computed per seed (as on Dask) are written with their key, found by it, and read
+    back equal; other settings are computed into the cache; notebook 10's defaults are the saved key."""
+    import dataclasses
+
+    from glu import saved
+    from glu.cli.correspondence_cmds import notebook_settings
+    from glu.studies.correspondence import grid
+
+    here = dataclasses.replace(saved.HERE, saved=tmp_path / "sweeps", sweeps=tmp_path / "cache")
+    monkeypatch.setattr(saved, "HERE", here)
+    settings = grid.StudySettings(
+        seeds=(0, 1), n_train=2, n_test=1, feature_sets=("raw", "centred"), yaws=(0, 90), n_states=2,
+        n_iter=3, bootstrap=20, levels=("0°", "90°"),
+    )  # fmt: skip
+    tables = grid.run_study(settings)
+    assert set(tables[0]["seed"]) == {0, 1} and set(tables[0]["factor"]) == {"viewpoint", corr.OCCLUDED}
+    folder = grid.write_tables(tmp_path / "sweeps" / grid.NOTEBOOK / "study", tables, settings.key(), "test")
+    found = grid.study_tables(settings)
+    assert found.folder == folder
+    for a, b in zip(tables, found[:3], strict=True):
+        pd.testing.assert_frame_equal(a.reset_index(drop=True), b, check_dtype=False)
+        assert b.attrs["experiment"] == a.attrs["experiment"]
+    assert found.summary.attrs["parameters"]["interval"] == tables[1].attrs["parameters"]["interval"]
+    other = dataclasses.replace(settings, seeds=(1,))
+    computed = grid.study_tables(other)
+    assert computed.folder.parent == tmp_path / "cache" / grid.NOTEBOOK and set(computed.results["seed"]) == {
+        1
+    }
+    defaults = notebook_settings()
+    assert defaults.bootstrap == 1000 and defaults.levels is None and len(defaults.seeds) == 10

@@ -103,9 +103,9 @@ def test_sentences_lead_with_the_front_view_and_say_where_it_changes():
     reference = {**fd.REFERENCE_CELL, **CELLS[1]}  # uniform, generating, per-frame
     text = fd.finding_sentences(v, reference)[0]
     assert text.startswith(
-        "Jeffrey beats the network: on the front view, in the reference cell (uniform actions, generating "
-        "network, p_HMM per-frame; 100% of the gesture seen) it holds (difference -0.050 [-0.070, -0.030], "
-        "adjusted p "
+        "Jeffrey beats the network: on the front view (noise levels pooled), in the reference cell (uniform "
+        "actions, generating network, p_HMM per-frame; 100% of the gesture seen) it holds (difference -0.050 "
+        "[-0.070, -0.030], adjusted p "
     )
     assert "over the front view's 8 cells it holds in 4, with no difference in 4 and the reverse in 0" in text
     assert "uniform actions 4/4, actions from the network's prior 0/4" in text
@@ -191,7 +191,9 @@ def test_network_alone_p_hmm_and_condition_sentences():
     assert cells[0] == fd.REFERENCE_CELL and cells[1]["action_prior"] == "network"
     assert (cells[1]["inference_network"], cells[1]["learn_experiments"]) == ("learned", 100)
     lines = fd.network_alone_sentences(table)
-    assert lines[0].startswith("The effect with 100% of the gesture seen, front view (uniform actions")
+    assert lines[0].startswith(
+        "The effect with 100% of the gesture seen, front view, noise levels pooled (uniform actions"
+    )
     assert (
         "log-loss 0.900 [0.890, 0.910] for the network alone, hard 1.200, virtual 0.950, jeffrey 0.880"
         in (lines[0])

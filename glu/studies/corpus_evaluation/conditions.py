@@ -181,4 +181,4 @@ def lead_sentence(table: pd.DataFrame, verdicts: pd.DataFrame, best: str | None 
         if best:
             parts.append(f"{best} (gesture {accuracy(other, best)}): " + "; ".join(diff(other, best)))
         text += f". Seen {other}, the difference is " + " — with ".join(parts)
-    return text + " (negative: Jeffrey's rule better; reference cell otherwise)."
+    return text + " (negative: Jeffrey's rule better; reference cell otherwise, noise levels pooled)."

@@ -410,7 +410,8 @@ def finding_sentences(
             where = f"{r.fraction:.0%} of the gesture seen"
             cell = where if brief else f"{cell_label(r, features=False)}; {where}"
             head += (
-                f": on the front view, in the reference cell ({cell}) it {SAID[r.verdict_adjusted]} "
+                f": on the front view (noise levels pooled), in the reference cell ({cell}) it "
+                f"{SAID[r.verdict_adjusted]} "
                 f"(difference {r.difference:+.3f} [{r.ci_low:+.3f}, {r.ci_high:+.3f}], adjusted "
                 f"p {p_text(r.p_adjusted)})"
             )
@@ -552,9 +553,8 @@ def network_alone_sentences(table: pd.DataFrame) -> list[str]:
                 )
             if parts:
                 out.append(
-                    f"The effect with {f:.0%} of the gesture seen, {view} view ({cell_label(cell)}): "
-                    + "; ".join(parts)
-                    + "."
+                    f"The effect with {f:.0%} of the gesture seen, {view} view, noise levels pooled "
+                    f"({cell_label(cell)}): " + "; ".join(parts) + "."
                 )
     return out
 
@@ -571,9 +571,8 @@ def p_hmm_table(
     sel = sel[
         (sel.target == "action") & (sel.strategy == "gesture") & np.isclose(sel.fraction, sel.fraction.max())
     ]
-    return sel.pivot_table(index="p_hmm", columns="metric", values="estimate", sort=False)[
-        ["accuracy", "log_loss", "ece"]
-    ]
+    wide = sel.pivot_table(index="p_hmm", columns="metric", values="estimate", sort=False)
+    return wide.reindex(columns=["accuracy", "log_loss", "ece"])
 
 
 READING_WORDS = {
@@ -594,7 +593,7 @@ def p_hmm_sentences(
     out = []
     views = [v for v in dict.fromkeys(table.viewpoint) if v != "all"]
     for view in views:
-        t = p_hmm_table(table, viewpoint=view)
+        t = p_hmm_table(table, viewpoint=view).dropna(subset=["accuracy", "ece"])
         if t.empty:
             continue
         out.append(
