@@ -174,81 +174,15 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
         raise DataError(f"asr_noise={asr_noise!r} is out of range; allowed: 0 to 0.5")
     rng = np.random.default_rng(seed)
     n = int(n)
-    world = WORLD
-    codes: dict[str, np.ndarray] = {}
-    for node, parents in world.parents.items():
-        cpt = world.cpts[node]
-        if parents:
-            rows = cpt[tuple(codes[p] for p in parents)]
-        else:
-            rows = np.broadcast_to(cpt, (n, cpt.shape[-1]))
-        codes[node] = _sample(rng, rows)
+    codes = _draw_world(rng, n)
     words = {w: np.zeros(n, dtype=bool) for w in WORDS}
     action, color, shape, size, objvel = (codes[k] for k in ("Action", "Color", "Shape", "Size", "ObjVel"))
-
-    # agent: the robot | he | baltazar
-    agent = _choice(rng, n, [0.5, 0.25, 0.25])
-    words["robot"] |= agent == 0
-    words["the"] |= True  # "the robot" or "the <object>": every description has it
-    words["he"] |= agent == 1
-    words["baltazar"] |= agent == 2
-    # verb: a synonym of the action, in one of four forms
-    synonym = _choice(rng, n, [0.6, 0.4])
-    form = _choice(rng, n, [0.3, 0.3, 0.2, 0.2])  # taps | is tapping | has just tapped | tapped
-    for a, pair in _VERBS.items():
-        for s, base in enumerate(pair):
-            third, ing, past = _FORMS[base]
-            sel = (action == a) & (synonym == s)
-            words[third] |= sel & (form == 0)
-            words[ing] |= sel & (form == 1)
-            words[past] |= sel & (form >= 2)
-    words["is"] |= form == 1
-    words["has"] |= form == 2
-    words["just"] |= (form == 2) & (rng.random(n) < 0.5)
-    # object: the [size] [color] shape
-    says_size = rng.random(n) < 0.6
-    words["small"] |= says_size & (size == 0)
-    words["big"] |= says_size & (size == 2)
-    says_color = rng.random(n) < 0.5
-    words["green"] |= says_color & (color <= 1)
-    words["yellow"] |= says_color & (color == 2)
-    words["blue"] |= says_color & (color == 3)
-    noun = _choice(rng, n, [0.5, 0.3, 0.2])
-    words["ball"] |= (shape == 0) & (noun != 0)
-    words["sphere"] |= (shape == 0) & (noun == 0)
-    words["box"] |= (shape == 1) & (noun == 0)
-    words["square"] |= (shape == 1) & (noun == 1)
-    words["cube"] |= (shape == 1) & (noun == 2)
-    # conjunction: "but" when the action did not have its usual outcome
-    failed = ((action == 0) & (objvel == 0)) | ((action == 1) & (objvel == 0))
+    _say_agent_and_verb(rng, n, action, words)
+    _say_object(rng, n, color, shape, size, words)
+    failed = ((action == 0) & (objvel == 0)) | ((action == 1) & (objvel == 0))  # not the usual outcome
     words["but"] |= failed
     words["and"] |= ~failed
-    # effect phrase
-    progressive = rng.random(n) < 0.5
-    still = objvel == 0
-    which = rng.random(n) < 0.5
-    words["still"] |= still & which
-    words["inert"] |= still & ~which
-    words["is"] |= still
-    lifted = (action == 0) & (objvel == 1)
-    falls = lifted & (rng.random(n) < np.where(size == 2, 0.4, 0.1))
-    rises = lifted & ~falls
-    for mask, third, ing in ((rises, "rises", "rising"), (falls, "falls", "falling")):
-        words[third] |= mask & ~progressive
-        words[ing] |= mask & progressive
-        words["is"] |= mask & progressive
-    moving = (objvel >= 1) & ~lifted
-    rolls = moving & (shape == 0) & (objvel == 2)
-    slides = moving & (shape == 1) & (objvel == 2)
-    moves = moving & ~rolls & ~slides
-    for mask, third, ing in (
-        (rolls, "rolls", "rolling"),
-        (slides, "slides", "sliding"),
-        (moves, "moves", "moving"),
-    ):
-        words[third] |= mask & ~progressive
-        words[ing] |= mask & progressive
-        words["is"] |= mask & progressive
+    _say_effect(rng, n, action, shape, size, objvel, words)
     if asr_noise > 0:
         for w in WORDS:
             present = words[w]
@@ -266,6 +200,84 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
         f", asr_noise {asr_noise})" if asr_noise else ")"
     )
     return df
+
+
+def _draw_world(rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+    """The affordance nodes of ``n`` experiments, drawn from :data:`WORLD` in its node order (value codes)."""
+    codes: dict[str, np.ndarray] = {}
+    for node, parents in WORLD.parents.items():
+        cpt = WORLD.cpts[node]
+        if parents:
+            rows = cpt[tuple(codes[p] for p in parents)]
+        else:
+            rows = np.broadcast_to(cpt, (n, cpt.shape[-1]))
+        codes[node] = _sample(rng, rows)
+    return codes
+
+
+def _say_agent_and_verb(rng: np.random.Generator, n: int, action: np.ndarray, words: dict) -> None:
+    """ "the robot | he | baltazar", then a synonym of the action in one of four forms."""
+    agent = _choice(rng, n, [0.5, 0.25, 0.25])
+    words["robot"] |= agent == 0
+    words["the"] |= True  # "the robot" or "the <object>": every description has it
+    words["he"] |= agent == 1
+    words["baltazar"] |= agent == 2
+    synonym = _choice(rng, n, [0.6, 0.4])
+    form = _choice(rng, n, [0.3, 0.3, 0.2, 0.2])  # taps | is tapping | has just tapped | tapped
+    for a, pair in _VERBS.items():
+        for s, base in enumerate(pair):
+            third, ing, past = _FORMS[base]
+            sel = (action == a) & (synonym == s)
+            words[third] |= sel & (form == 0)
+            words[ing] |= sel & (form == 1)
+            words[past] |= sel & (form >= 2)
+    words["is"] |= form == 1
+    words["has"] |= form == 2
+    words["just"] |= (form == 2) & (rng.random(n) < 0.5)
+
+
+def _say_object(rng, n: int, color: np.ndarray, shape: np.ndarray, size: np.ndarray, words: dict) -> None:
+    """ "the [size] [colour] shape"."""
+    says_size = rng.random(n) < 0.6
+    words["small"] |= says_size & (size == 0)
+    words["big"] |= says_size & (size == 2)
+    says_color = rng.random(n) < 0.5
+    words["green"] |= says_color & (color <= 1)
+    words["yellow"] |= says_color & (color == 2)
+    words["blue"] |= says_color & (color == 3)
+    noun = _choice(rng, n, [0.5, 0.3, 0.2])
+    words["ball"] |= (shape == 0) & (noun != 0)
+    words["sphere"] |= (shape == 0) & (noun == 0)
+    words["box"] |= (shape == 1) & (noun == 0)
+    words["square"] |= (shape == 1) & (noun == 1)
+    words["cube"] |= (shape == 1) & (noun == 2)
+
+
+def _say_effect(rng, n: int, action, shape, size, objvel, words: dict) -> None:
+    """What the object did: still or inert, rises or falls after a grasp, rolls, slides or moves."""
+    progressive = rng.random(n) < 0.5
+    still = objvel == 0
+    which = rng.random(n) < 0.5
+    words["still"] |= still & which
+    words["inert"] |= still & ~which
+    words["is"] |= still
+    lifted = (action == 0) & (objvel == 1)
+    falls = lifted & (rng.random(n) < np.where(size == 2, 0.4, 0.1))
+    rises = lifted & ~falls
+    moving = (objvel >= 1) & ~lifted
+    rolls = moving & (shape == 0) & (objvel == 2)
+    slides = moving & (shape == 1) & (objvel == 2)
+    moves = moving & ~rolls & ~slides
+    for mask, third, ing in (
+        (rises, "rises", "rising"),
+        (falls, "falls", "falling"),
+        (rolls, "rolls", "rolling"),
+        (slides, "slides", "sliding"),
+        (moves, "moves", "moving"),
+    ):
+        words[third] |= mask & ~progressive
+        words[ing] |= mask & progressive
+        words["is"] |= mask & progressive
 
 
 def write_synthetic_folder(

@@ -1,8 +1,8 @@
 """The corpus's fast paths equal the straightforward ones bit for bit: gestures, PCHIP, spike check, repair.
 
 The corpus (:mod:`glu.studies.corpus_evaluation.corpus`) simulates a chunk of episodes at once
-(:mod:`glu.gestures._synthetic_batch`, :mod:`glu.gestures._repair_many`,
-:func:`glu.gestures._pchip.pchip_many`); its results must be those of one gesture at a time
+(:mod:`glu.gestures.synthetic_batch`, :func:`glu.gestures.trajectories.repaired_many`,
+:func:`glu.gestures.synthetic.pchip_many`); its results must be those of one gesture at a time
 (``synthesize_gesture(...).features()``, SciPy's ``PchipInterpolator`` and ``median_filter``,
 :func:`glu.gestures.trajectories.repair`), exactly.
 """
@@ -17,11 +17,17 @@ from scipy.ndimage import median_filter
 from glu.bn import InferenceEngine, learn_bn
 from glu.data import load_experiments
 from glu.errors import DataError
-from glu.gestures._pchip import pchip_many
-from glu.gestures._repair_many import repaired_many, spike_deviations
-from glu.gestures._synthetic_batch import gesture_features
-from glu.gestures.synthetic import GESTURES, SYNTHETIC_POLICY, View, synthesize_gesture
-from glu.gestures.trajectories import DEFAULT_POLICY, DETECT_ONLY, RepairPolicy, Trajectory, repair
+from glu.gestures.synthetic import GESTURES, SYNTHETIC_POLICY, View, pchip_many, synthesize_gesture
+from glu.gestures.synthetic_batch import gesture_features
+from glu.gestures.trajectories import (
+    DEFAULT_POLICY,
+    DETECT_ONLY,
+    RepairPolicy,
+    Trajectory,
+    repair,
+    repaired_many,
+    spike_deviations,
+)
 from glu.studies.corpus_evaluation.corpus import simulate_chunk
 from glu.studies.episodes import GESTURE_KEY, VIEWPOINTS, Condition, GestureSettings
 

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from glu.errors import DataError
-from glu.gestures._synthetic_batch import gesture_features
 from glu.gestures.features import OPENNI_JOINTS, to_body_frame
 from glu.gestures.synthetic import View, synthesize_gesture
+from glu.gestures.synthetic_batch import gesture_features
 from glu.gestures.views import track, tracker_state
 
 J = {j: i for i, j in enumerate(OPENNI_JOINTS)}

@@ -12,7 +12,7 @@ from glu.errors import DataError, ModelError
 from glu.fusion import fuse
 from glu.gestures.calibration import Calibration
 from glu.hmm import TrainingConfig
-from glu.hmm._engine.batch import BatchScorer
+from glu.hmm.scoring import BatchScorer
 from glu.schema import ACTIONS
 from glu.studies.corpus_evaluation.evaluation import (
     EvaluationSettings,

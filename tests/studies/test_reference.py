@@ -25,7 +25,8 @@ from glu.data.recordings import ORIGINAL_SEGMENTS, TRAINING_RECORDINGS
 from glu.errors import ImpossibleEvidenceError
 from glu.gestures.corpus import segment_recording_of
 from glu.gestures.recognizer import load_original_models
-from glu.gestures.trajectories import read_hand_log, repair
+from glu.gestures.recordings import read_hand_log
+from glu.gestures.trajectories import repair
 from glu.language import compile_network, count_by_length, load_grammar, parse_grammar, same_language
 from glu.language.sampling import sample_sentences
 from glu.run.reproduce import reproduce

@@ -65,8 +65,8 @@ from glu.bn.inference import InferenceEngine
 from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.files import atomic_path
-from glu.gestures._synthetic_batch import gesture_features
 from glu.gestures.synthetic import View
+from glu.gestures.synthetic_batch import gesture_features
 from glu.schema import ROOT_NODES
 from glu.studies.episodes import (
     EFFECTS_KEY,

@@ -2,7 +2,7 @@
 
 For each episode of a chunk (:mod:`glu.studies.corpus_evaluation.corpus`) and each observed fraction ``f`` of
 its gesture, the gesture HMMs of the episode's recogniser seed (a :class:`Replication`) give ``log L(G_1^t |
-A)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass, :class:`~glu.hmm._engine.batch.BatchScorer`), on the
+A)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass, :class:`~glu.hmm.scoring.BatchScorer`), on the
 features of the recogniser's feature set (:class:`~glu.gestures.feature_sets.FeatureSet`: the torso's or the
 shoulder line's frame, and its invariances). Each :class:`Reading` names the feature set, turns the
 log-likelihoods into ``p_HMM`` (as the originals, per frame, or calibrated on clean front-view gestures or on
@@ -226,7 +226,7 @@ class Replication:
 
     Attributes
     ----------
-    scorers : feature set → the gesture recogniser as a :class:`~glu.hmm._engine.batch.BatchScorer` (models
+    scorers : feature set → the gesture recogniser as a :class:`~glu.hmm.scoring.BatchScorer` (models
         in the order of :data:`glu.schema.ACTIONS`), trained on that feature set
     calibrations : feature set → calibrated reading (``calibrated``, ``calibrated-matched``) → its β per
         observed fraction (a reading the sweep does not use may be left out)

@@ -105,7 +105,7 @@ def matched_gestures(config: SweepConfig, k: int, body: bool) -> tuple[list[np.n
     ``body``. Returns the features and the actions' indices."""
     from dataclasses import replace
 
-    from glu.gestures._synthetic_batch import gesture_features
+    from glu.gestures.synthetic_batch import gesture_features
 
     n = config.recognizer.calibration_per_action * len(ACTIONS)
     actions = np.arange(n) % len(ACTIONS)

@@ -6,7 +6,7 @@ velocity, the robot will be able to infer that the action is most probably a tap
 be used to train our statistical gesture recognition system." Here the robot watches **episodes** — a
 person's hand trajectory, the object, the effect and, optionally, the words someone said — without the
 action's name, labels each with its Affordance–Words network, ``p_BN(Action | object, effect[, words])``,
-and trains its gesture HMMs from those labels (weighted EM, :func:`glu.hmm.em.fit_weighted`).
+and trains its gesture HMMs from those labels (weighted EM, :func:`glu.hmm.train` with ``weights``).
 
 * :class:`Ambiguity` — how well the effects tell the actions apart: the objects people act on, objects
   that never move, taps that fail (the object stays put, as after a touch), noisy perception of the effect.
@@ -46,8 +46,8 @@ from glu.bn.inference import InferenceEngine
 from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.gestures import calibration
-from glu.gestures._synthetic_batch import gesture_features
 from glu.gestures.synthetic import View
+from glu.gestures.synthetic_batch import gesture_features
 from glu.hmm import (
     TrainingConfig,
 )

@@ -166,21 +166,6 @@ def _conjunction(sentence: str) -> str:
     return found[0] if found else ""
 
 
-def best_with_colour(
-    engine: Any, evidence: Mapping[str, str], grammar: Grammar | WordNetwork | None = None, n: int = 1
-) -> pd.DataFrame:
-    """The exact ``n`` best descriptions that name a colour (contain green, yellow or blue).
-
-    Returns
-    -------
-    DataFrame with columns rank, sentence, score, length.
-    """
-    net = word_network(grammar)
-    colours = [w for w in COLOUR_WORDS if w in net.words]
-    df = nbest(net, word_probabilities(engine, evidence), n, must_contain=colours)
-    return tidy(df, "verbal_best_with_colour", model_source(engine.bn), evidence=evidence, n=n)
-
-
 def fig8_descriptions(engine: Any, grammar: Grammar | WordNetwork | None = None) -> pd.DataFrame:
     """The single best description of each TCDS Fig. 8 situation, and the best one that names a colour.
 
