@@ -263,8 +263,8 @@ def saved_subset(tables: SweepTables) -> SweepTables:
     """What notebook 11 reads of a sweep's tables, and so what ``sweeps/`` keeps of it: the metrics of
     :data:`SAVED_METRICS` per viewpoint, per noise level and pooled (not both at once); the paired
     differences of the findings' pairs (:data:`~glu.studies.corpus_evaluation.findings.FINDINGS`) at
-    every pooling, and of every pair on the front view at the full gesture (each cell's winner); the
-    reliability diagrams, the seeds' estimates and the calibrations whole."""
+    every pooling, and of every pair on the front view at the full gesture (each cell's winner); the seeds'
+    estimates at the full gesture; the reliability diagrams and the calibrations whole."""
     from glu.studies.corpus_evaluation.findings import FINDINGS
 
     m = tables.metrics
@@ -278,7 +278,8 @@ def saved_subset(tables: SweepTables) -> SweepTables:
             wanted |= (same & (d.strategy == a) & (d.baseline == b)).to_numpy()
     full = np.isclose(d.fraction, d.fraction.max())
     winners = (full & (d.viewpoint == "front") & d.noise.isna()).to_numpy()
-    return tables._replace(metrics=m[keep], differences=d[wanted | winners])
+    seeds = tables.seeds[np.isclose(tables.seeds.fraction, tables.seeds.fraction.max())]
+    return tables._replace(metrics=m[keep], differences=d[wanted | winners], seeds=seeds)
 
 
 class SweepTables(NamedTuple):
