@@ -104,9 +104,19 @@ def _evaluate(args: argparse.Namespace) -> int:
 
             from glu.studies.corpus_evaluation.sweep import export_saved
 
-            command = "glu " + " ".join(shlex.quote(a) for a in sys.argv[1:] if a)
+            command = "glu " + " ".join(shlex.quote(a) for a in public_argv(sys.argv[1:]))
             print(f"saved tables → {export_saved(args.out, args.save, command)}")
     return 0
+
+
+def public_argv(argv: list[str]) -> list[str]:
+    """The arguments with the data folder named ``DATA`` (a path of this machine is no one else's), unless
+    it is ``synthetic``."""
+    out = list(argv)
+    for i, a in enumerate(out[:-1]):
+        if a == "--data" and out[i + 1] != "synthetic":
+            out[i + 1] = "DATA"
+    return [a for a in out if a]
 
 
 def overall_text(summary: dict) -> str:
