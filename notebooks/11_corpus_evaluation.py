@@ -194,8 +194,8 @@ out.say(findings.design_text(summary))
 # the reference cell's difference on the front view and the counts elsewhere.
 
 # %%
-out.say(conditions.lead_sentence(table, verdicts, best))
-shown = [("action", v, f) for v in dict.fromkeys(table.viewpoint) if v != "all" for f in feature_sets]
+out.say(conditions.lead_sentence(table, verdicts, best, feature_sets))
+shown = [("action", v, f) for v in findings.viewpoints(table) for f in feature_sets]
 shown += [(e, findings.front_view(table), "raw") for e in effects if e != "action"]
 out.figure(figures.findings_figure(counts, shown), "corpus_findings", source=source)
 for sentence in findings.finding_sentences(verdicts):

@@ -400,11 +400,11 @@ def test_the_section_reads_every_number_from_the_summary(summary):
         "72,000 episodes over 10 recogniser seeds",
         "95 % two-level intervals from 1,000 bootstrap replicates",
         "learned from 100 or 1,270 simulated experiments",
-        "On the front view, where the recogniser works (the gesture alone names 0.88 [0.86, 0.90] of the "
-        "actions with raw features), Jeffrey's rule anticipates the effect with a log-loss lower than the "
-        "network alone's by -0.225 [-0.267, -0.184] with uniform actions (holds, adjusted p 0.008).",
-        "Seen side-on, the difference is raw features (gesture 0.35 [0.33, 0.37]): +0.490",
-        "with centred+rotated (gesture 0.71 [0.69, 0.73]): -0.010 [-0.050, +0.030]",
+        "On the front view, where the recogniser works (the gesture alone names 0.88 of the actions with raw "
+        "features), Jeffrey's rule anticipates the effect better than the network alone: the difference of "
+        "log-loss is -0.225 [-0.267, -0.184] (holds, adjusted p 0.008) with uniform actions.",
+        "Seen side-on, uniform actions: raw (the gesture 0.35) +0.490 [+0.400, +0.600] (reversed, adjusted p "
+        "0.008); centred+rotated (the gesture 0.71) -0.010 [-0.050, +0.030] (not supported, adjusted p 1.000).",
         "the best invariant feature set is centred+rotated",
         "effects that depend on the gesture: network 0.950 [0.930, 0.970], jeffrey 0.930",
         "followed through the 2 cells of the robot's models",

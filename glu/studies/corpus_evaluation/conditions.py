@@ -25,6 +25,7 @@ from glu.studies.corpus_evaluation.findings import (
     p_text,
     pooled,
     select,
+    viewpoints,
 )
 
 
@@ -76,7 +77,7 @@ def viewpoint_sentences(table: pd.DataFrame, features: Sequence[str]) -> list[st
     full = t.fraction.max()
     cell = {k: v for k, v in REFERENCE_CELL.items() if k != "features"}
     out = []
-    for view in [v for v in dict.fromkeys(t.viewpoint) if v != "all"]:
+    for view in viewpoints(t):
         sel = select(pooled(t, view), cell)
         sel = sel[np.isclose(sel.fraction, full)]
 
@@ -133,52 +134,50 @@ LEAD = "Jeffrey's rule anticipates the effect better than the network alone"
 """The finding the README and the notebook lead with (one of :data:`FINDINGS`)."""
 
 
-def lead_sentence(table: pd.DataFrame, verdicts: pd.DataFrame, best: str | None = None) -> str:
+def lead_sentence(
+    table: pd.DataFrame, verdicts: pd.DataFrame, best: str | None = None, features: Sequence[str] = ()
+) -> str:
     """The result read first: on the front view (raw features, effects from the action alone, the generating
     network, p_HMM per frame, noise pooled, full gesture), the gesture's accuracy and Jeffrey's rule against
-    the network alone for each action prior, with adjusted verdicts; then the same side-on (or the last
-    viewpoint), with raw features and with ``best`` (the best invariant feature set)."""
+    the network alone for each action prior, with adjusted verdicts; then, at every other viewpoint, the
+    same in the reference cell for raw features, ``best`` (the best invariant feature set) and the other
+    ``features``."""
     t, v = bare(table), bare(verdicts)
     v = v[v.finding.str.lower() == LEAD.lower()]
     full = t.fraction.max()
-    views = [x for x in dict.fromkeys(t.viewpoint) if x != "all"]
     front = front_view(t)
     cell = {k: x for k, x in REFERENCE_CELL.items() if k != "action_prior"}
 
-    def diff(view: str, features: str) -> list[str]:
-        out = []
-        for prior in dict.fromkeys(v.action_prior):
-            r = select(
-                v, {**cell, "action_prior": prior, "features": features, "viewpoint": view, "noise": math.nan}
-            )
-            if len(r):
-                r = r.iloc[0]
-                said = SAID[r.verdict_adjusted].replace("is ", "")
-                out.append(
-                    f"{r.difference:+.3f} [{r.ci_low:+.3f}, {r.ci_high:+.3f}] with "
-                    f"{ACTION_WORDS.get(prior, prior)} ({said}, adjusted p {p_text(r.p_adjusted)})"
-                )
-        return out
+    def diff(view: str, feature_set: str, prior: str) -> str | None:
+        where = {**cell, "action_prior": prior, "features": feature_set, "viewpoint": view, "noise": math.nan}
+        r = select(v, where)
+        if r.empty:
+            return None
+        r = r.iloc[0]
+        said = SAID[r.verdict_adjusted].replace("is ", "")
+        interval = f"[{r.ci_low:+.3f}, {r.ci_high:+.3f}]"
+        return f"{r.difference:+.3f} {interval} ({said}, adjusted p {p_text(r.p_adjusted)})"
 
-    def accuracy(view: str, features: str) -> str:
-        sel = select(pooled(t, view), {**REFERENCE_CELL, "features": features})
+    def accuracy(view: str, feature_set: str) -> str:
+        sel = select(pooled(t, view), {**REFERENCE_CELL, "features": feature_set})
         sel = sel[(sel.target == "action") & (sel.strategy == "gesture") & (sel.metric == "accuracy")]
         sel = sel[np.isclose(sel.fraction, full)]
-        return (
-            f"{sel.iloc[0].estimate:.2f} [{sel.iloc[0].ci_low:.2f}, {sel.iloc[0].ci_high:.2f}]"
-            if len(sel)
-            else "?"
-        )
+        return f"{sel.iloc[0].estimate:.2f}" if len(sel) else "?"
 
+    priors = [p for p in ("uniform", "network", "scenario") if p in set(v.action_prior)]
+    lead = [f"{diff(front, 'raw', p)} with {ACTION_WORDS.get(p, p)}" for p in priors if diff(front, "raw", p)]
     text = (
         f"On the {front} view, where the recogniser works (the gesture alone names "
         f"{accuracy(front, 'raw')} of the actions with raw features), Jeffrey's rule anticipates the effect "
-        f"with a log-loss lower than the network alone's by " + "; ".join(diff(front, "raw"))
+        "better than the network alone: the difference of log-loss is " + "; ".join(lead) + "."
     )
-    other = views[-1] if views and views[-1] != front else None
-    if other is not None:
-        parts = [f"raw features (gesture {accuracy(other, 'raw')}): " + "; ".join(diff(other, "raw"))]
-        if best:
-            parts.append(f"{best} (gesture {accuracy(other, best)}): " + "; ".join(diff(other, best)))
-        text += f". Seen {other}, the difference is " + " — with ".join(parts)
-    return text + " (negative: Jeffrey's rule better; reference cell otherwise, noise levels pooled)."
+    sets = list(dict.fromkeys(["raw", *([best] if best else []), *features]))
+    for view in [x for x in viewpoints(t) if x != front]:
+        parts = [
+            f"{f} (the gesture {accuracy(view, f)}) {d}"
+            for f in sets
+            if (d := diff(view, f, REFERENCE_CELL["action_prior"])) is not None
+        ]
+        if parts:
+            text += f" Seen {view}, uniform actions: " + "; ".join(parts) + "."
+    return text + " (Negative: Jeffrey's rule better; the reference cell otherwise, noise levels pooled.)"

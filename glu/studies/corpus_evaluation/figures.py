@@ -29,7 +29,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from glu.plots.style import RULE_LABELS
-from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label
+from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label, viewpoints
 
 STRATEGY_COLORS = {
     "gesture": "#8C8C8C",
@@ -326,7 +326,7 @@ def plot_by_viewpoint(
         & results.noise.isna()
         & (results.viewpoint != "all")
     ]
-    views = list(dict.fromkeys(sel.viewpoint))
+    views = viewpoints(sel)
     strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
     width = 0.8 / max(len(strats), 1)
     for k, strategy in enumerate(strats):
@@ -529,7 +529,7 @@ def plot_by_viewpoint_and_features(
         & sel.noise.isna()
         & (sel.viewpoint != "all")
     ]
-    views = list(dict.fromkeys(sel.viewpoint))
+    views = viewpoints(sel)
     x = np.arange(len(views))
     for k, strategy in enumerate(s for s in strategies if s in set(sel.strategy)):
         g = sel[sel.strategy == strategy].set_index("viewpoint").loc[views]
@@ -627,9 +627,11 @@ def findings_figure(counts: pd.DataFrame, columns: Sequence[tuple[str, str, str]
                 continue
             r = r.iloc[0]
             share = (r.better - r.worse) / max(r.cells, 1)
-            ax.add_patch(plt_rectangle_colour(j, i, cmap(0.5 + 0.5 * share)))
+            face = cmap(0.5 + 0.5 * share)
+            ax.add_patch(plt_rectangle_colour(j, i, face))
             text = f"{int(r.better)}/{int(r.cells)}" + (f" ↓{int(r.worse)}" if r.worse else "")
-            ax.text(j, i, text, ha="center", va="center", fontsize=7)
+            dark = 0.299 * face[0] + 0.587 * face[1] + 0.114 * face[2] < 0.5  # white text on dark cells
+            ax.text(j, i, text, ha="center", va="center", fontsize=7, color="white" if dark else "black")
     ax.set_xlim(-0.5, len(columns) - 0.5)
     ax.set_ylim(len(findings) - 0.5, -0.5)
     labels = [

@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from glu.stats import HIGHER_IS_BETTER, adjust, adjusted_verdict, verdict
+from glu.studies.episodes import VIEWPOINTS
 
 DESIGN: tuple[str, ...] = (
     "effects",
@@ -176,7 +177,7 @@ def winners(
     better than; and the best estimate with its interval. Where the sweep lacks ``viewpoint``, its first.
     """
     table, diffs = bare(table), bare(diffs)
-    views = [v for v in dict.fromkeys(table.viewpoint) if v != "all"]
+    views = viewpoints(table)
     if viewpoint not in views:
         viewpoint = views[0] if views else "all"
     full = table["fraction"].max() if fraction is None else fraction
@@ -356,7 +357,7 @@ def _elsewhere(g: pd.DataFrame) -> str:
     """Where a finding's count of cells changes from the front view's: per turned viewpoint and feature set,
     with effects that depend on the gesture, and per noise level (viewpoints pooled), raw features."""
     parts = []
-    views = [v for v in dict.fromkeys(g.viewpoint) if v not in ("all", FRONT["viewpoint"])]
+    views = [v for v in viewpoints(g) if v != FRONT["viewpoint"]]
     features = list(dict.fromkeys(g.features))
     base = g[(g.effects == FRONT["effects"]) & g.noise.isna()]
     for view in views:
@@ -512,9 +513,17 @@ def contrast_cells(table: pd.DataFrame) -> list[dict[str, Any]]:
     return [ref, other]
 
 
+def viewpoints(table: pd.DataFrame) -> list[str]:
+    """The viewpoints of a table (not ``all``), in the order of :data:`glu.studies.episodes.VIEWPOINTS`
+    (others after, by name)."""
+    order = list(VIEWPOINTS)
+    views = {v for v in table.viewpoint.unique() if v != "all"}
+    return sorted(views, key=lambda v: (order.index(v) if v in order else len(order), v))
+
+
 def front_view(table: pd.DataFrame) -> str:
     """The viewpoint the findings are read on first (:data:`FRONT`), or the sweep's first."""
-    views = [v for v in dict.fromkeys(table.viewpoint) if v != "all"]
+    views = viewpoints(table)
     return FRONT["viewpoint"] if FRONT["viewpoint"] in views else (views[0] if views else "all")
 
 
@@ -591,8 +600,7 @@ def p_hmm_sentences(
     the real data) the held-out real segments."""
     table = bare(table)
     out = []
-    views = [v for v in dict.fromkeys(table.viewpoint) if v != "all"]
-    for view in views:
+    for view in viewpoints(table):
         t = p_hmm_table(table, viewpoint=view).dropna(subset=["accuracy", "ece"])
         if t.empty:
             continue

@@ -78,7 +78,7 @@ def values(tables: Tables) -> dict[str, Any]:
         "corpus_learned": " or ".join(learned) or "no",
         "corpus_cells": len(cells),
         "reference_cell": fd.cell_label(fd.REFERENCE_CELL),
-        "lead_text": cd.lead_sentence(metrics, verdicts, best),
+        "lead_text": cd.lead_sentence(metrics, verdicts, best, grid.get("features", ())),
         "viewpoint_text": _bullets(cd.viewpoint_sentences(metrics, features)),
         "validation_text": cd.validation_sentence(calibration),
         "world_text": cd.gesture_world_sentence(metrics),
