@@ -457,7 +457,7 @@ def plot_p_hmm_reliability(
     ax.set_xlabel("p_HMM of the top action")
     ax.set_ylabel("how often it was right")
     views = "all viewpoints" if viewpoint == "all" else f"seen {viewpoint}"
-    ax.set_title(f"p_HMM on held-out synthetic gestures, {views} ({fraction:.0%} seen)", fontsize=9)
+    ax.set_title(f"p_HMM on held-out synthetic gestures\n{views} ({fraction:.0%} seen)", fontsize=9)
     return ax
 
 
@@ -595,6 +595,10 @@ def viewpoints_figure(
         plot_by_viewpoint_and_features(
             axes[len(features) + k], results, "effect", "log_loss", f, effect, fraction, where
         )
+    for row in (axes[: len(features)], axes[len(features) :]):  # one scale per row: feature sets compared
+        lows, highs = zip(*(ax.get_ylim() for ax in row), strict=True)
+        for ax in row:
+            ax.set_ylim(min(lows), max(highs))
     cell = where_label({**(where or {}), "features": "raw"}).rsplit(", ", 1)[0]
     _marked_legend(
         fig,
