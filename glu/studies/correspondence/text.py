@@ -164,9 +164,10 @@ def nested_sentences(summary: pd.DataFrame, seated: pd.DataFrame, candidates: pd
     if "recordings" in summary:
         out.append(
             f"The segments come from {int(summary['recordings'].iloc[0])} recordings, one per action: the "
-            "action is confounded with the recording session (its day, lighting, the person's position), so "
-            "a recogniser may tell the sessions apart rather than the actions, and the exact interval, which "
-            "treats the segments as independent, is too narrow by an amount these data cannot measure."
+            "action is confounded with the recording session (whatever else differs between the recordings "
+            "differs between the actions too), so a recogniser may tell the sessions apart rather than the "
+            "actions, and the exact interval, which treats the segments as independent, is too narrow by an "
+            "amount these data cannot measure."
         )
     raw = candidates[candidates["features"] == "raw"]
     cen = candidates[candidates["features"] != "raw"]
