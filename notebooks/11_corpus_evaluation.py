@@ -169,21 +169,33 @@ if sweep_dir is None:
     out.say(provenance_text(folder))
 else:
     folder = sweep_dir
-table, diffs, rel, seeds, calibration, summary = read_tables(folder)
+stamped = read_tables(folder)
+table, diffs, rel, seeds, calibration = (findings.bare(t) for t in stamped[:5])  # computed on, unstamped
+summary = stamped.summary
 source = summary["data_source"]
 verdicts = findings.finding_verdicts(diffs)
 counts = findings.verdict_counts(verdicts)
 best = conditions.best_invariant(calibration)
 full = table.fraction.max()
-out.table(
-    table[(table.viewpoint == "all") | table.noise.isna()], "corpus_metrics", episodes=summary["episodes"]
-)
-out.table(diffs, "corpus_differences")
-out.table(verdicts, "corpus_findings")
-out.table(counts, "corpus_finding_counts")
-out.table(rel, "corpus_reliability")
-out.table(seeds[seeds.fraction == seeds.fraction.max()], "corpus_seeds")
-out.table(calibration, "corpus_calibration")
+# results/: the findings whole; the metrics and differences of the reference cell and the contrasted one
+# (every reading, feature set, world and viewpoint, noise pooled), their reliability diagrams (effects from
+# the action alone), the reference cell's seeds; the rest in `folder`
+for frame, stamp, name in (
+    (findings.in_contrast_cells(table[table.viewpoint != "all"], table), stamped.metrics, "corpus_metrics"),
+    (findings.in_contrast_cells(diffs, table), stamped.differences, "corpus_differences"),
+    (verdicts, stamped.differences, "corpus_findings"),
+    (counts, stamped.differences, "corpus_finding_counts"),
+    (
+        findings.in_contrast_cells(rel[rel.effects == "action"], table),
+        stamped.reliability,
+        "corpus_reliability",
+    ),
+    (findings.select(seeds, findings.REFERENCE_CELL), stamped.seeds, "corpus_seeds"),
+    (calibration, stamped.calibration, "corpus_calibration"),
+):
+    frame.attrs = dict(stamp.attrs)
+    out.table(frame, name, **({"episodes": summary["episodes"]} if name == "corpus_metrics" else {}))
+    frame.attrs = {}
 out.say(findings.design_text(summary))
 
 # %% [markdown]

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from glu.stats import HIGHER_IS_BETTER, adjust, adjusted_verdict, verdict
+from glu.stats import ALPHA, HIGHER_IS_BETTER, adjust, verdict
 from glu.studies.episodes import VIEWPOINTS
 
 DESIGN: tuple[str, ...] = (
@@ -227,9 +227,7 @@ def pair(diffs: pd.DataFrame, target: str, metric: str, strategy: str, baseline:
     up = HIGHER_IS_BETTER.get(metric, True)
     ba["verdict"] = [verdict(lo, hi, up) for lo, hi in zip(ba.ci_low, ba.ci_high, strict=True)]
     if "verdict_adjusted" in ba:
-        ba["verdict_adjusted"] = [
-            adjusted_verdict(x, p, up) for x, p in zip(ba.difference, ba.p_adjusted, strict=True)
-        ]
+        ba["verdict_adjusted"] = adjusted_verdicts(ba.difference.to_numpy(), ba.p_adjusted.to_numpy(), up)
     return ba
 
 
@@ -260,11 +258,19 @@ def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS
         return pd.DataFrame(columns=cols)
     out = pd.concat(parts, ignore_index=True)
     out["p_adjusted"] = adjust(out["p_value"].to_numpy(dtype=float), ADJUSTMENT)
-    up = np.array([HIGHER_IS_BETTER.get(m, True) for m in out["metric"]])
-    out["verdict_adjusted"] = [
-        adjusted_verdict(d, p, u) for d, p, u in zip(out["difference"], out["p_adjusted"], up, strict=True)
-    ]
+    up = out["metric"].map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    out["verdict_adjusted"] = adjusted_verdicts(
+        out["difference"].to_numpy(), out["p_adjusted"].to_numpy(), up
+    )
     return out[cols]
+
+
+def adjusted_verdicts(difference: np.ndarray, p_adjusted: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """:func:`glu.stats.adjusted_verdict` of many differences at once."""
+    d, p = np.asarray(difference, dtype=float), np.asarray(p_adjusted, dtype=float)
+    sure = np.isfinite(d) & np.isfinite(p) & (p <= ALPHA) & (d != 0)
+    better = (d > 0) == np.asarray(up, dtype=bool)
+    return np.where(sure, np.where(better, "better", "worse"), "no difference").astype(object)
 
 
 def verdict_counts(verdicts: pd.DataFrame) -> pd.DataFrame:
@@ -519,6 +525,21 @@ def viewpoints(table: pd.DataFrame) -> list[str]:
     order = list(VIEWPOINTS)
     views = {v for v in table.viewpoint.unique() if v != "all"}
     return sorted(views, key=lambda v: (order.index(v) if v in order else len(order), v))
+
+
+def in_contrast_cells(frame: pd.DataFrame, table: pd.DataFrame) -> pd.DataFrame:
+    """The rows of ``frame`` in the action priors and networks of :func:`contrast_cells` (every reading of
+    p_HMM, feature set and world), pooled over the noise levels: what notebook 11 writes to ``results/``
+    beside the findings (the full tables stay in the sweep's folder)."""
+    frame = bare(frame)
+    keep = np.zeros(len(frame), dtype=bool)
+    for cell in contrast_cells(table):
+        keep |= (
+            (frame.action_prior == cell["action_prior"])
+            & (frame.inference_network == cell["inference_network"])
+            & (frame.learn_experiments == cell["learn_experiments"])
+        ).to_numpy()
+    return frame[keep & frame.noise.isna().to_numpy()]
 
 
 def front_view(table: pd.DataFrame) -> str:

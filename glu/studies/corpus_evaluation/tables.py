@@ -17,7 +17,7 @@ from glu.errors import DataError
 from glu.files import atomic_path, atomic_write_json, atomic_write_text
 from glu.studies.corpus_evaluation.config import SweepConfig
 from glu.studies.corpus_evaluation.evaluation import Evaluator
-from glu.studies.corpus_evaluation.findings import DESIGN, winners
+from glu.studies.corpus_evaluation.findings import DESIGN, adjusted_verdicts, winners
 from glu.studies.corpus_evaluation.intervals import (
     block_frame,
     difference_block,
@@ -171,17 +171,17 @@ def adjust_families(diffs: pd.DataFrame, families: Sequence[str]) -> pd.DataFram
     """``diffs`` with ``p_adjusted`` (:data:`ADJUSTMENT` within each family: the rows that share the values
     of ``families``) and ``verdict_adjusted`` (a verdict only where the adjusted p-value is at most α, in the
     direction of the difference)."""
-    from glu.stats import HIGHER_IS_BETTER, adjust, adjusted_verdict
+    from glu.stats import HIGHER_IS_BETTER, adjust
 
     out = diffs.copy()
     out["p_adjusted"] = np.nan
     keys = [out[f].fillna(-1.0) if out[f].dtype.kind == "f" else out[f] for f in families]
     for _, idx in out.groupby(keys, sort=False, dropna=False).groups.items():
         out.loc[idx, "p_adjusted"] = adjust(out.loc[idx, "p_value"].to_numpy(), ADJUSTMENT)
-    up = out["metric"].map(lambda m: HIGHER_IS_BETTER.get(m, True))
-    out["verdict_adjusted"] = [
-        adjusted_verdict(d, p, u) for d, p, u in zip(out["difference"], out["p_adjusted"], up, strict=True)
-    ]
+    up = out["metric"].map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    out["verdict_adjusted"] = adjusted_verdicts(
+        out["difference"].to_numpy(), out["p_adjusted"].to_numpy(), up
+    )
     return out
 
 
