@@ -133,7 +133,7 @@ from glu.saved import provenance_text
 from glu.studies.corpus_evaluation import conditions, figures, findings, p_hmm_readings
 from glu.studies.corpus_evaluation.config import config_from_dict
 from glu.studies.corpus_evaluation.sweep import notebook_tables
-from glu.studies.corpus_evaluation.tables import read_tables
+from glu.studies.corpus_evaluation.tables import read_tables, saved_subset
 
 out = start("11_corpus_evaluation", globals())
 if sweep_dir is None:
@@ -169,7 +169,7 @@ if sweep_dir is None:
     out.say(provenance_text(folder))
 else:
     folder = sweep_dir
-stamped = read_tables(folder)
+stamped = saved_subset(read_tables(folder))  # what the saved tables hold, whichever the folder
 table, diffs, rel, seeds, calibration = (findings.bare(t) for t in stamped[:5])  # computed on, unstamped
 summary = stamped.summary
 source = summary["data_source"]
