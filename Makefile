@@ -59,7 +59,7 @@ bench-reproduce: $(STAMP)
 # The saved tables of the heavy grids of notebooks 10 and 11 (sweeps/, glu.saved): regenerate them after a change
 # of what their numbers depend on. Notebook 11's real-data tables need DATA=DIR (the real data); the rest does not.
 sweeps: $(STAMP)
-	$(BIN)/glu correspondence --save sweeps/10_correspondence/study --workers 2
+	$(BIN)/glu correspondence -o sweeps/10_correspondence/study --workers 2
 	$(BIN)/glu evaluate --config sweeps/11_corpus_evaluation/sweep.toml --data synthetic --workers 2 \
 		-o build/sweeps/11-synthetic --save sweeps/11_corpus_evaluation/synthetic
 	$(if $(DATA),$(BIN)/glu evaluate --config sweeps/11_corpus_evaluation/sweep.toml --data $(DATA) --workers 2 \

@@ -99,7 +99,7 @@
 # standing segments, and the two seated taps of effect anticipation with their typicality.
 # `docs/correspondence.md` describes the design and what the real data can and cannot show. The synthetic
 # study takes a minute: with the default parameters the notebook reads the tables `make sweeps` saved
-# (`sweeps/10_correspondence/`, `glu correspondence --save …`); with others it computes them once into
+# (`sweeps/10_correspondence/`, `glu correspondence -o …`); with others it computes them once into
 # `build/sweeps/` (`workers` > 0: on a Dask LocalCluster) and reuses them after.
 
 # %% tags=["parameters"]

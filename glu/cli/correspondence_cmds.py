@@ -2,7 +2,7 @@
 
 It runs the study with notebook 10's default parameters — every seed, training source, feature set and test
 condition, the ideal and the occluding tracker — one task per seed, and writes its three tables with their
-key and provenance (:mod:`glu.saved`) to ``--save DIR``: how ``sweeps/10_correspondence/study/`` is made
+key and provenance (:mod:`glu.saved`) to ``-o DIR``: how ``sweeps/10_correspondence/study/`` is made
 (``make sweeps``), which notebook 10 reads instead of computing the study.
 """
 
@@ -20,10 +20,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="run notebook 10's synthetic correspondence study (Dask) and save its tables",
         description="Run the synthetic study of notebook 10 with its default parameters (every seed, "
         "training source, feature set and condition; the ideal and the occluding tracker), one task per "
-        "seed on a LocalCluster, and write its tables with their key and provenance to --save DIR, where "
+        "seed on a LocalCluster, and write its tables with their key and provenance to -o DIR, where "
         "the notebook finds them (sweeps/10_correspondence/study: make sweeps).",
     )
-    p.add_argument("--save", type=output_folder, required=True, metavar="DIR", help="folder for the tables")
+    p.add_argument(
+        "-o", "--out", type=output_folder, required=True, metavar="DIR", help="folder for the tables"
+    )
     p.add_argument(
         "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: in this process)"
     )
@@ -62,6 +64,6 @@ def _run(args: argparse.Namespace) -> int:
     settings = notebook_settings()
     tables = run_study(settings, workers=args.workers or 0)
     command = "glu " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-    folder = write_tables(args.save, tables, settings.key(), command)
+    folder = write_tables(args.out, tables, settings.key(), command)
     print(f"{len(tables[0])} rows over {len(settings.seeds)} seeds → {folder}")
     return 0

@@ -403,8 +403,9 @@ def test_the_section_reads_every_number_from_the_summary(summary):
         "On the front view, where the recogniser works (the gesture alone names 0.88 of the actions with raw "
         "features), Jeffrey's rule anticipates the effect better than the network alone: the difference of "
         "log-loss is -0.225 [-0.267, -0.184] (holds, adjusted p 0.008) with uniform actions.",
-        "Seen side-on, uniform actions: raw (the gesture 0.35) +0.490 [+0.400, +0.600] (reversed, adjusted p "
-        "0.008); centred+rotated (the gesture 0.71) -0.010 [-0.050, +0.030] (not supported, adjusted p 1.000).",
+        "Seen side-on, uniform actions: raw (the gesture 0.35) +0.490 [+0.400, +0.600] (reversed, adjusted "
+        "p 0.008); centred+rotated (the gesture 0.71) -0.010 [-0.050, +0.030] (not supported, adjusted p "
+        "1.000).",
         "the best invariant feature set is centred+rotated",
         "effects that depend on the gesture: network 0.950 [0.930, 0.970], jeffrey 0.930",
         "followed through the 2 cells of the robot's models",

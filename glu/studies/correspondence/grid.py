@@ -6,7 +6,7 @@ seed, training source and feature set and recognises every condition's test gest
 the notebook's defaults. :func:`study_tables` returns its three tables — the per-seed outcomes, the summary
 with two-level intervals, the invariances' paired effects with adjusted verdicts — from the tables saved in
 ``sweeps/10_correspondence/`` when the settings are the notebook's defaults (``make sweeps`` regenerates
-them: ``glu correspondence --save sweeps/10_correspondence/study``), else computes them once, one task
+them: ``glu correspondence -o sweeps/10_correspondence/study``), else computes them once, one task
 per seed (:func:`glu.machine.map_tasks`), into the cache, and reuses them after. The study draws synthetic
 people only: its tables do not depend on the data folder.
 """
