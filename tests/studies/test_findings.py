@@ -254,3 +254,17 @@ def test_seed_spread():
         "Over 2 recogniser seeds (reference cell, full gesture, viewpoints and noise pooled), accuracy "
         "ranges gesture 0.576–0.637; network 0.500–0.520."
     )
+
+
+def test_viewpoints_keep_the_worlds_order_and_results_keep_the_contrasted_cells():
+    table = metric_rows()
+    assert fd.viewpoints(table) == ["front", "side-on"] and fd.front_view(table) == "front"
+    assert fd.viewpoints(pd.DataFrame({"viewpoint": ["side-on", "all", "left", "turned", "front"]})) == [
+        "front", "turned", "side-on", "left"
+    ]  # fmt: skip
+    kept = fd.in_contrast_cells(table, table)
+    pairs = set(zip(kept.action_prior, kept.inference_network, kept.learn_experiments, strict=True))
+    assert pairs == {("uniform", "generating", 0), ("network", "learned", 100)} and kept.noise.isna().all()
+    assert set(kept.p_hmm) == set(table.p_hmm) and set(kept.features) == set(table.features)
+    v = fd.adjusted_verdicts(np.array([0.1, -0.1, 0.1, 0.0]), np.array([0.01, 0.01, 0.2, 0.01]), [True] * 4)
+    assert list(v) == ["better", "worse", "no difference", "no difference"]
