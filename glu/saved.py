@@ -140,14 +140,14 @@ def provenance_text(folder: Path) -> str:
     doc = read_key(folder) or {}
     made = doc.get("made_with", {})
     commit = made.get("commit")
-    at = f"glu {made.get('glu', '?')}" + (
-        f", commit {commit[:10]}" + (" with uncommitted changes" if made.get("dirty") else "")
-        if commit
-        else ""
-    )
-    where = (
-        folder.relative_to(PROJECT_ROOT) if PROJECT_ROOT and folder.is_relative_to(PROJECT_ROOT) else folder
-    )
+    at = f"glu {made.get('glu', '?')}"
+    if commit:
+        at += f", commit {commit[:10]}" + (" with uncommitted changes" if made.get("dirty") else "")
+    earlier = (doc.get("computed_by") or {}).get("commit")
+    if earlier and earlier != commit:
+        at += f"; the sweep itself by commit {earlier[:10]}"
+    inside = PROJECT_ROOT is not None and Path(folder).resolve().is_relative_to(PROJECT_ROOT)
+    where = Path(folder).resolve().relative_to(PROJECT_ROOT) if inside else folder
     return (
         f"Tables read from {where} (computed {doc.get('created', '?')} by {at}); regenerate them with: "
         f"{doc.get('command', '?')}"
