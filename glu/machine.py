@@ -194,7 +194,7 @@ def map_tasks(fn: Any, items: list[Any], *args: Any, workers: int = 0) -> list[A
         try:
             with ctrl_c_held():
                 cluster = LocalCluster(
-                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
                 )
                 client = Client(cluster)
         except BaseException as e:
