@@ -70,7 +70,10 @@ def _changes(effects: pd.DataFrame, verdict: str) -> str:
     parts = []
     for (features, baseline), g in sel.groupby(["features", "baseline"], sort=False):
         added = features if baseline == "raw" else g["invariance"].iloc[0]
-        parts.append(f"`{added}` added to `{baseline}`: {', '.join(dict.fromkeys(g['level']))}")
+        factor = g["factor"] if "factor" in g else pd.Series([""] * len(g), index=g.index)
+        pairs = zip(factor, g["level"], strict=True)
+        levels = [f"{lv} (occluding tracker)" if f == OCCLUDED else lv for f, lv in pairs]
+        parts.append(f"`{added}` added to `{baseline}`: {', '.join(dict.fromkeys(levels))}")
     return "; ".join(parts)
 
 
