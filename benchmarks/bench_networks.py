@@ -70,14 +70,14 @@ def sample_sets(bn, nodes: list[str], n: int, seed: int) -> dict[str, np.ndarray
 def network_rows(name: str, folder: Path, quick: bool, tmp: Path) -> list[dict]:
     import pyagrum as gum
 
-    from glu.bn import InferenceEngine
+    from glu.bn import make_engine
     from glu.bn.exchange import import_bn, to_xmlbif
 
     bn = import_bn(folder / f"{name}.bif", renormalise=1e-4 if name == "insurance" else None)
     (tmp / f"{name}.bifxml").write_text(to_xmlbif(bn))  # pyAgrum reads glu's doubles exactly
     g = gum.loadBN(str(tmp / f"{name}.bifxml"))
     ie = gum.LazyPropagation(g)
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
     nodes = list(bn.nodes)
     rng = np.random.default_rng(0)
     observed = [nodes[i] for i in sorted(rng.choice(len(nodes), size=N_OBSERVED, replace=False))]
@@ -156,12 +156,12 @@ GLU_SCRIPT = """
 import json, statistics, sys, time
 import numpy as np
 sys.path.insert(0, sys.argv[1])
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments, resolve_data
 sys.path.insert(0, sys.argv[2])
 from bench_networks import per_call
 df = load_experiments(resolve_data(sys.argv[3] if len(sys.argv) > 3 else None), "lab")
-eng = InferenceEngine(learn_bn(df, unseen_words="uniform"))
+eng = make_engine(learn_bn(df, unseen_words="uniform"))
 words = getattr(eng, "word_probability_array", None) or eng.word_probabilities
 ev = {"Action": "tap", "Shape": "sphere", "Size": "small"}
 ev_w = {"Size": "big", "Shape": "sphere", "ObjVel": "fast"}

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from glu.bn import BayesNet, InferenceEngine
+from glu.bn import BayesNet, make_engine
 from glu.bn.exchange import from_xmlbif, import_bn, to_xmlbif
 from glu.errors import ImpossibleEvidenceError
 from glu.paths import shared_data_dir
@@ -131,7 +131,7 @@ def check_network(
 ) -> int:
     """Compare every posterior for ``n_sets`` evidence sets with pyAgrum (and the first ``n_pgmpy`` with
     pgmpy); returns how many sets were possible. Also checks one batch of all the sets against pyAgrum."""
-    engine = InferenceEngine(bn, method=method)
+    engine = make_engine(bn, method=method)
     ie = gum.LazyPropagation(pyagrum_of(bn, tmp))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
