@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from glu.bn.model import BayesNet
+from glu.bn.network import code_of
 from glu.errors import ModelError
 
 MAX_CORE_STATES = 1 << 22
@@ -35,16 +36,18 @@ MAX_CORE_STATES = 1 << 22
 
 def core_split(bn: BayesNet) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """(core, leaves): the affordance nodes and every node with children, then the other nodes."""
-    has_children = {p for n in bn.nodes for p in bn.parents[n]}
-    core = tuple(n for n in bn.nodes if n in bn.schema.affordance_nodes or n in has_children)
-    return core, tuple(n for n in bn.nodes if n not in core)
+    keep = set(bn.schema.affordance_nodes)
+    for ps in bn.parents.values():
+        keep.update(ps)
+    nodes = bn.nodes
+    return tuple(n for n in nodes if n in keep), tuple(n for n in nodes if n not in keep)
 
 
 def core_size(bn: BayesNet) -> tuple[int, int]:
     """(states of the core joint, entries of the core engine's tables) — Python ints, never overflowing."""
     core, leaves = core_split(bn)
-    states = math.prod(bn.schema.cardinality(n) for n in core)
-    return states, states * (2 + sum(bn.schema.cardinality(n) for n in leaves))
+    states = math.prod(bn.cpts[n].shape[-1] for n in core)
+    return states, states * (2 + sum(bn.cpts[n].shape[-1] for n in leaves))
 
 
 def _broadcast(table: np.ndarray, axes: Sequence[int], ndim: int) -> np.ndarray:
@@ -230,9 +233,12 @@ class CoreBackend:
     ) -> tuple[np.ndarray, np.ndarray]:
         """(the gathered joint with every factor of the row multiplied in but leaf ``skip``'s, shape
         (rows, Π kept); the observed index of each row, shape (rows,))."""
-        at = np.zeros(rows, dtype=np.intp)
-        for v, stride in plan.observed:
-            at = at + hard[v] * stride
+        if rows == 1:  # the index as a Python int: the same gather, a fifth of the NumPy calls
+            at = np.array([sum(code_of(hard[v]) * stride for v, stride in plan.observed)])
+        else:
+            at = np.zeros(rows, dtype=np.intp)
+            for v, stride in plan.observed:
+                at = at + hard[v] * stride
         p = plan.joint[at]
         for v, table in plan.leaves.items():
             if v == skip:
@@ -261,9 +267,11 @@ class CoreBackend:
         possible, shape (rows,))."""
         plan = self.plan(tuple(hard), tuple(likelihood), targets)
         p, at = self._table(plan, hard, likelihood, rows)
-        total = p.sum(axis=1)
-        possible = total > 0
-        norm = np.where(possible, total, 1.0)[:, None]  # divided, never inverted: a total may be subnormal
+        norm = p.sum(axis=1, keepdims=True)  # divided, never inverted: a total may be subnormal
+        possible = norm[:, 0] > 0
+        ok = bool(possible[0]) if rows == 1 else bool(possible.all())
+        if not ok:
+            norm = np.where(norm > 0, norm, 1.0)
         out: dict[int, np.ndarray] = {}
         if plan.core_targets:
             full = p.reshape(rows, *plan.kept_cards)
@@ -284,7 +292,7 @@ class CoreBackend:
                         out[v] = m / m.sum(axis=1, keepdims=True)
         for m in out.values():
             np.minimum(m, 1.0, out=m)
-            if not possible.all():
+            if not ok:
                 m[~possible] = np.nan
         return out, possible
 

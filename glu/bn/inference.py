@@ -22,10 +22,11 @@ Each query, in order:
 1. **relevance** (:mod:`glu.bn.relevance`, cached per evidence pattern): a target that no evidence can reach
    (d-separated from all of it) is answered from the engine's cached prior marginals; for the others, only
    the tables of the nodes the answer needs and the evidence that can change it are used — barren and
-   d-separated nodes are left out, as in pyAgrum's relevance reasoning. Hard evidence that could have
-   probability 0 (a zero in the tables above it, or all-zero rows in the network) is still checked,
-   answered or not: its probability comes from the same arithmetic, on the evidence's ancestors only, and
-   a single query remembers the answer for those values.
+   d-separated nodes are left out, as in pyAgrum's relevance reasoning. Evidence that could have
+   probability 0 (a zero in a table above it, or all-zero rows in the network) is still checked: its
+   query is answered from every table above the targets and the evidence (barren nodes left out, so the
+   same propagation gives P(evidence)); when no target needs computing, P(evidence) alone is computed
+   (on the evidence's ancestors), and a single query remembers whether those values are possible.
 2. **soft evidence** becomes likelihoods (:mod:`glu.bn.soft`, the one home of both rules);
 3. the **backend** computes the marginals of the remaining targets, for one row (a single query) or many
    (a batch: rows grouped by which nodes they observe, identical rows answered once by a one-dimensional
@@ -57,7 +58,7 @@ from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
-from glu.bn.core import CoreBackend, core_size, core_split
+from glu.bn.core import CoreBackend, core_split
 from glu.bn.junction import JunctionBackend
 from glu.bn.labels import Labels, series
 from glu.bn.model import BayesNet
@@ -87,6 +88,8 @@ BATCH_ENTRIES = 1 << 22
 
 Array = np.ndarray
 Answer = tuple[dict[int, Array], Array]
+_ONE, _NONE = np.ones(1, dtype=bool), np.zeros(1, dtype=bool)  # a single query's possible: never written to
+_ONE.flags.writeable = _NONE.flags.writeable = False
 
 
 def choose_method(bn: BayesNet, method: str = "auto") -> str:
@@ -95,8 +98,12 @@ def choose_method(bn: BayesNet, method: str = "auto") -> str:
         raise ModelError(f"unknown inference method {method!r}; allowed: {', '.join(METHODS)}")
     if method != "auto":
         return method
-    states, entries = core_size(bn)
-    small = states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES and len(core_split(bn)[0]) <= 60
+    core, leaves = core_split(bn)
+    if len(core) > 60:
+        return "junction"
+    states = math.prod(bn.cpts[n].shape[-1] for n in core)
+    entries = states * (2 + sum(bn.cpts[n].shape[-1] for n in leaves))
+    small = states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES
     return "core" if small else "junction"
 
 
@@ -216,7 +223,8 @@ class Engine(Protocol):
 class Backend(Protocol):
     """The array arithmetic under an engine: :class:`~glu.bn.core.CoreBackend` or
     :class:`~glu.bn.junction.JunctionBackend`. Variables are node indices; hard and likelihood mappings
-    come with sorted keys; a single query is a batch of one row."""
+    come with sorted keys; a single query is a batch of one row (its hard evidence Python ints, a batch's
+    arrays of codes, shape (rows,))."""
 
     method: str
 
@@ -269,7 +277,8 @@ def make_engine(bn: BayesNet, method: Method = "auto", max_table: int | None = N
 @dataclass(frozen=True)
 class Relevance:
     """What one evidence pattern needs (:meth:`ExactEngine._relevance`): targets answered from their
-    observed value, from the cached priors, or by the backend — with the evidence and tables it needs."""
+    observed value, from the cached priors, or by the backend — with the evidence and tables it needs; and
+    whether the hard evidence must be checked for probability 0 apart (``check``: no target is computed)."""
 
     observed: tuple[int, ...]
     prior: tuple[int, ...]
@@ -277,7 +286,7 @@ class Relevance:
     hard: tuple[int, ...]
     soft: tuple[int, ...]
     tables: frozenset[int]
-    risky: bool
+    check: bool
 
 
 class ExactEngine:
@@ -299,14 +308,19 @@ class ExactEngine:
         self.backend = backend
         self.method = backend.method
         self.values = Values(bn)
-        _, leaves = core_split(bn)
-        self.binary_leaves = tuple(w for w in leaves if bn.schema.cardinality(w) == 2)
+        aff = set(bn.schema.affordance_nodes)
+        self.binary_leaves = tuple(
+            n
+            for n, kids, k in zip(bn.nodes, net.children, net.cards, strict=True)
+            if not kids and k == 2 and n not in aff
+        )
+        """The word nodes: leaves (not affordance nodes, no children) with two values."""
         self.deduplicate = True
         self._relevant: dict[tuple, Relevance] = {}
         self._priors: dict[int, Array] = {}
         self._has_zero: dict[int, bool] = {}
         self._possible_memo: dict[tuple, Array] = {}
-        self.labels = Labels({n: bn.schema.values_of(n) for n in bn.nodes})
+        self.labels = Labels(bn.schema.values_of)
 
     def junction_tree(self):  # type: ignore[no-untyped-def]
         """The junction tree of the whole network (:class:`~glu.bn.plan.JunctionTreePlan`), planned once."""
@@ -324,20 +338,34 @@ class ExactEngine:
         if rel is not None:
             return rel
         net = self.net
-        hard_set = set(hard)
-        virtual = set(soft) | net.inexact
+        hard_set, soft_set = set(hard), set(soft)
+        virtual = soft_set | net.inexact
         rest = [t for t in targets if t not in hard_set]
         reach = reachable(net.parents, net.children, hard_set, virtual) if hard_set or virtual else set()
         computed = tuple(sorted({t for t in rest if t in reach}))
-        need = requisite(net.parents, net.children, hard_set, virtual, computed) if computed else None
+        # evidence that may have probability 0 (a zero in a table above it, or all-zero rows anywhere)
+        risky = bool(hard or soft) and (
+            bool(net.inexact) or any(self._zeros(v) for v in net.ancestors(hard_set | soft_set))
+        )
+        if computed and risky:  # every table above the targets and the evidence: exact, and P(evidence) too
+            tables, hard_used, soft_used = net.ancestors({*computed, *hard, *soft, *net.inexact}), hard, soft
+        elif computed:  # Bayes-ball: barren and d-separated nodes left out, and the evidence they carry
+            need = requisite(net.parents, net.children, hard_set, virtual, computed)
+            tables, hard_used, soft_used = (
+                need.tables,
+                tuple(sorted(need.hard)),
+                tuple(sorted(need.virtual & soft_set)),
+            )
+        else:
+            tables, hard_used, soft_used = set(), (), ()
         rel = Relevance(
             observed=tuple(t for t in targets if t in hard_set),
             prior=tuple(t for t in rest if t not in reach),
             targets=computed,
-            hard=tuple(sorted(need.hard)) if need else (),
-            soft=tuple(sorted(need.virtual & set(soft))) if need else (),
-            tables=need.tables if need else frozenset(),
-            risky=bool(hard) and (bool(net.inexact) or any(self._zeros(v) for v in net.ancestors(hard_set))),
+            hard=hard_used,
+            soft=soft_used,
+            tables=frozenset(tables),
+            check=risky and not computed and bool(hard),
         )
         if len(self._relevant) >= PATTERN_CACHE:
             self._relevant.clear()
@@ -355,7 +383,8 @@ class ExactEngine:
         """Whether each row's hard evidence has probability > 0, shape (rows,) (single queries remembered)."""
         if rows > 1:
             return self.backend.log_mass(hard, rows) > -np.inf
-        key = (*hard, *(int(c[0]) for c in hard.values()))
+        first = next(iter(hard.values()))
+        key = (*hard, *(hard.values() if type(first) is int else (int(c[0]) for c in hard.values())))
         ok = self._possible_memo.get(key)
         if ok is None:
             if len(self._possible_memo) >= POSSIBLE_MEMO:
@@ -382,7 +411,7 @@ class ExactEngine:
         keys), by relevance, then the backend in chunks of at most :data:`BATCH_ENTRIES` table entries."""
         rel = self._relevance(tuple(hard), tuple(lik), targets)
         out: dict[int, Array] = {}
-        possible = np.ones(rows, dtype=bool)
+        possible = _ONE if rows == 1 else np.ones(rows, dtype=bool)
         if rel.targets:
             h = {v: hard[v] for v in rel.hard}
             s = {v: lik[v] for v in rel.soft}
@@ -409,10 +438,10 @@ class ExactEngine:
             out[t] = m
         if rel.prior:
             for t, p in zip(rel.prior, self._prior(rel.prior), strict=True):
-                out[t] = np.broadcast_to(p, (rows, len(p)))
-        if rel.risky:  # hard evidence that may have probability 0, in or out of what the targets need
+                out[t] = p[None, :] if rows == 1 else np.broadcast_to(p, (rows, len(p)))
+        if rel.check:  # no target computed, and hard evidence that may have probability 0: its probability
             possible = possible & self._possible(hard, rows)
-        if not possible.all():
+        if not (possible[0] if rows == 1 else possible.all()):
             for t in targets:
                 out[t] = np.array(out[t], dtype=float)
                 out[t][~possible] = np.nan
@@ -423,7 +452,7 @@ class ExactEngine:
     ) -> tuple[dict[int, Array], Array, Array]:
         """:meth:`_solve` with soft distributions (rows, k) turned into likelihoods by ``rule``; returns
         (marginals, possible, hard_possible: rows impossible only because of the virtual evidence)."""
-        hard_possible = np.zeros(rows, dtype=bool)
+        hard_possible = _NONE if rows == 1 else np.zeros(rows, dtype=bool)
         if not soft:
             out, possible = self._solve(targets, hard, {}, rows)
             return out, possible, hard_possible
@@ -470,13 +499,12 @@ class ExactEngine:
             raise  # pragma: no cover - check_node raised
 
     def _parse(self, evidence: Mapping | None, soft: SoftEvidence | None, rule: str) -> tuple[dict, dict]:
-        """One query's evidence: (variable → codes, shape (1,); variable → q, shape (1, k)), sorted keys."""
+        """One query's evidence: (variable → code, an int; variable → q, shape (1, k)), sorted keys."""
         hard = {}
         if evidence:
             index, value = self.net.index, self.values.value
             for node, val in evidence.items():
-                code = value(node, val)
-                hard[index[node]] = np.array([code])
+                hard[index[node]] = value(node, val)
             if len(hard) > 1:
                 hard = dict(sorted(hard.items()))
         qs = {}
@@ -547,10 +575,18 @@ class ExactEngine:
         checked = {node: self.values.batch_soft(node, arr, n, evidence) for node, arr in soft.items()}
         qs = dict(sorted((self.net.index[node], q) for node, q in checked.items()))
         hard = dict(sorted((self.net.index[node], c) for node, c in codes.items()))
-        out = {v: np.full((n, self.net.cards[v]), np.nan) for v in tv}
-        possible = np.ones(n, dtype=bool)
-        hard_possible = np.zeros(n, dtype=bool)
-        for rows, group in self._groups(hard, n):
+        groups = self._groups(hard, n)
+        if len(groups) == 1 and groups[0][0] is None:  # every row observes the same nodes
+            out, possible, hard_possible = self._unique_rows(tv, hard, qs, soft_rule, n)
+            for v, m in out.items():  # the caller's own arrays: never a cached or broadcast one
+                if n == 1 or not (m.flags.writeable and m.base is None):
+                    out[v] = np.array(m)
+            groups = []
+        else:
+            out = {v: np.full((n, self.net.cards[v]), np.nan) for v in tv}
+            possible = np.ones(n, dtype=bool)
+            hard_possible = np.zeros(n, dtype=bool)
+        for rows, group in groups:
             sub = {v: hard[v] if rows is None else hard[v][rows] for v in group}
             sq = {v: q if rows is None else q[rows] for v, q in qs.items()}
             res, ok, hp = self._unique_rows(tv, sub, sq, soft_rule, n if rows is None else len(rows))
@@ -598,22 +634,36 @@ class ExactEngine:
         key is the mixed-radix number of their values, a one-dimensional integer."""
         if self.deduplicate and hard and not soft and rows > 1:
             cards = [self.net.cards[v] for v in hard]
-            if math.prod(cards) < 1 << 62:
+            space = math.prod(cards)
+            if space < 1 << 62:
                 key = np.zeros(rows, dtype=np.int64)
                 for v, k in zip(hard, cards, strict=True):
                     key *= k
                     key += hard[v]
-                _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+                if space <= max(1 << 16, 4 * rows):  # a table over every key: no sort
+                    seen = np.zeros(space, dtype=bool)
+                    seen[key] = True
+                    uniq = np.flatnonzero(seen)
+                    lookup = np.empty(space, dtype=np.intp)
+                    lookup[uniq] = np.arange(len(uniq))
+                    inverse = lookup[key]
+                else:
+                    uniq, inverse = np.unique(key, return_inverse=True)
+                codes = dict(zip(hard, np.unravel_index(uniq, cards), strict=True))
             else:  # pragma: no cover - more joint values than an int64 holds
                 _, first, inverse = np.unique(
                     np.stack(list(hard.values()), axis=1), axis=0, return_index=True, return_inverse=True
                 )
-            if len(first) < rows:
+                codes = {v: c[first] for v, c in hard.items()}
+            n = len(next(iter(codes.values())))
+            if n < rows:
                 inverse = inverse.ravel()
-                res, ok, hp = self._answer(
-                    targets, {v: c[first] for v, c in hard.items()}, {}, rule, len(first)
+                res, ok, hp = self._answer(targets, codes, {}, rule, n)
+                return (
+                    {v: np.take(m, inverse, axis=0) for v, m in res.items()},
+                    np.take(ok, inverse),
+                    np.take(hp, inverse),
                 )
-                return {v: m[inverse] for v, m in res.items()}, ok[inverse], hp[inverse]
         return self._answer(targets, hard, soft, rule, rows)
 
     # ------------------------------------------------------------------ labelled results (pandas)

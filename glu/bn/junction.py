@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from glu.bn.network import NetworkArrays
+from glu.bn.network import NetworkArrays, code_of
 from glu.bn.plan import JunctionTreePlan, plan_junction_tree
 from glu.bn.propagation import PatternPlan, make_plan, propagate
 
@@ -105,7 +105,7 @@ class JunctionBackend:
         liks = list(likelihood.values())
         signature = None
         if rows == 1:
-            signature = (*(int(c[0]) for c in codes), *(q.tobytes() for q in liks))
+            signature = (*map(code_of, codes), *(q.tobytes() for q in liks))
         out, possible, _ = propagate(plan, codes, liks, rows, signature)
         return out, possible
 
@@ -117,7 +117,7 @@ class JunctionBackend:
             return np.zeros(rows)
         plan = self.plan(tables, tuple(hard), (), ())
         codes = list(hard.values())
-        signature = tuple(int(c[0]) for c in codes) if rows == 1 else None
+        signature = tuple(map(code_of, codes)) if rows == 1 else None
         _, _, log_mass = propagate(plan, codes, [], rows, signature, mass=True)
         assert log_mass is not None
         return np.broadcast_to(log_mass, (rows,))

@@ -8,14 +8,14 @@ own block constructor when this pandas has it and it gives the same Series as ``
 ``pd.Series`` itself).
 
 >>> import numpy as np
->>> s = series(np.array([0.25, 0.75]), Labels({"Rain": ("no", "yes")}).index("Rain"), "Rain")
+>>> s = series(np.array([0.25, 0.75]), Labels({"Rain": ("no", "yes")}.get).index("Rain"), "Rain")
 >>> s.to_dict(), s.name, s.index.name
 ({'no': 0.25, 'yes': 0.75}, 'Rain', 'Rain')
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import pandas as pd
@@ -33,7 +33,7 @@ def _from_blocks() -> Callable[[np.ndarray, pd.Index, str], pd.Series] | None:
         def make(values: np.ndarray, index: pd.Index, name: str) -> pd.Series:
             mgr = SingleBlockManager.from_array(values, index)
             s = pd.Series._from_mgr(mgr, axes=mgr.axes)
-            s.name = name
+            object.__setattr__(s, "_name", name)  # what ``s.name = name`` stores, without its checks
             return s
 
         probe = np.array([0.25, 0.75])
@@ -53,9 +53,9 @@ def series(values: np.ndarray, index: pd.Index, name: str) -> pd.Series:
 
 
 class Labels:
-    """Each node's values as a pandas ``Index`` named after the node, made on first use and kept."""
+    """Each node's values (``values(node)``) as a pandas ``Index`` named after the node, made on first use."""
 
-    def __init__(self, values: Mapping[str, Sequence[str]]) -> None:
+    def __init__(self, values: Callable[[str], Sequence[str]]) -> None:
         self._values = values
         self._index: dict[str, pd.Index] = {}
 
@@ -63,7 +63,7 @@ class Labels:
         """``node``'s values as an Index named ``node``."""
         idx = self._index.get(node)
         if idx is None:
-            idx = self._index[node] = pd.Index(list(self._values[node]), name=node)
+            idx = self._index[node] = pd.Index(list(self._values(node)), name=node)
         return idx
 
     def named(self, key: str, names: Sequence[str], name: str) -> pd.Index:

@@ -76,3 +76,8 @@ class NetworkArrays:
                 out.add(v)
                 stack.extend(self.parents[v])
         return out
+
+
+def code_of(c: int | np.ndarray) -> int:
+    """A single row's value code: a query's hard evidence is a Python int, a batch row's a (1,) array."""
+    return c if type(c) is int else int(c[0])

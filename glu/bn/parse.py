@@ -32,27 +32,37 @@ class Values:
     def __init__(self, bn: BayesNet) -> None:
         self.bn = bn
         self.nodes = bn.nodes
-        self.index: dict[str, dict[str, int]] = {}
-        self.cards: dict[str, int] = {}
-        for n in bn.nodes:
-            vals = bn.schema.values_of(n)
+        self.cards: dict[str, int] = {n: c.shape[-1] for n, c in bn.cpts.items()}
+        self._index: dict[str, dict[str, int]] = {}
+
+    def index(self, node: str) -> dict[str, int] | None:
+        """``node``'s value names and aliases → value index (made on first use); None for an unknown node."""
+        d = self._index.get(node)
+        if d is None and node in self.cards:
+            vals = self.bn.schema.values_of(node)
             d = {v: i for i, v in enumerate(vals)}
-            for alias, v in bn.schema.aliases.get(n, {}).items():
+            for alias, v in self.bn.schema.aliases.get(node, {}).items():
                 if v in d:  # an alias of a value this model does not have does not apply
                     d[alias] = d[v]
-            self.index[n] = d
-            self.cards[n] = len(vals)
+            self._index[node] = d
+        return d
 
     def check_node(self, node: str) -> None:
         """:class:`UnknownNodeError` (naming the closest nodes) unless ``node`` is a node of the network."""
-        if node not in self.index:
+        if node not in self.cards:
             raise UnknownNodeError(unknown_node_message(node, self.nodes))
 
     def value(self, node: str, value: str | int) -> int:
         """The index of ``value`` (a name, an alias or an index) among ``node``'s values."""
-        idx = self.index.get(node)
-        if idx is None:
+        card = self.cards.get(node)
+        if card is None:
             raise UnknownNodeError(unknown_node_message(node, self.nodes))
+        if type(value) is int and 0 <= value < card:  # the common case first
+            return value
+        idx = self.index(node)
+        assert idx is not None
+        if type(value) is str and value in idx:
+            return idx[value]
         if isinstance(value, int | np.integer) and not isinstance(value, bool):
             if 0 <= value < self.cards[node]:
                 return int(value)
@@ -69,7 +79,9 @@ class Values:
         if isinstance(values, np.ndarray) and values.dtype.kind in "iu" and values.ndim == 1:
             if len(values) != n:
                 raise EvidenceError(f"batch evidence on {node} has {len(values)} rows, expected {n}")
-            out = np.where(values < 0, -1, values).astype(np.intp)
+            out = values.astype(np.intp, copy=False)
+            if out.min(initial=0) < 0:
+                out = np.where(out < 0, -1, out)
             bad = out >= self.cards[node]
             if bad.any():
                 self.value(node, int(out[bad][0]))  # raises UnknownValueError, naming the value

@@ -126,7 +126,7 @@ def _key(
 ) -> tuple[float, float, int]:
     """The greedy key of eliminating ``v`` now (smaller first; ties: the other measure, then the index)."""
     nb = nbs[v]
-    weight = round(logc[v] + math.fsum(map(logc.__getitem__, nb)), 9)
+    weight = round(logc[v] + sum(map(logc.__getitem__, sorted(nb))), 9)
     if heuristic == "min-weight":
         return weight, len(nb), v
     if heuristic == "min-size":
@@ -150,11 +150,27 @@ def elimination_order(
     masks = list(adj)
     nbs = [set(_bits(m)) for m in masks]
     logc = [math.log(max(c, 1)) for c in cards]
-    current = [_key(v, nbs, masks, logc, heuristic) for v in range(len(adj))]
-    heap = list(current)
-    heapq.heapify(heap)
     alive = [True] * len(adj)
     order, cliques = [], []
+    # nodes with at most one neighbour are simplicial whatever comes next: eliminated first, no keys needed
+    peel = [v for v in range(len(adj)) if len(nbs[v]) <= 1]
+    peel.reverse()
+    while peel:
+        v = peel.pop()
+        if not alive[v] or len(nbs[v]) > 1:
+            continue
+        alive[v] = False
+        order.append(v)
+        cliques.append(masks[v] | 1 << v)
+        for a in nbs[v]:
+            nbs[a].discard(v)
+            masks[a] &= ~(1 << v)
+            if len(nbs[a]) <= 1:
+                peel.append(a)
+        nbs[v], masks[v] = set(), 0
+    current = [_key(v, nbs, masks, logc, heuristic) if alive[v] else None for v in range(len(adj))]
+    heap = [k for k in current if k is not None]
+    heapq.heapify(heap)
     while heap:
         key = heapq.heappop(heap)
         v = key[2]

@@ -31,9 +31,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from glu.bn.network import NetworkArrays
+from glu.bn.network import NetworkArrays, code_of
 from glu.bn.plan import plan_from_scopes
 
+_ALL = {1: np.ones(1, dtype=bool)}
+_ALL[1].flags.writeable = False  # a single row's "possible", shared: never written to
 TINY = 1e-250
 """A root mass below this may have lost digits to underflow: the plan runs again with normalised messages."""
 
@@ -54,6 +56,7 @@ class PatternPlan:
     base : clique → the product of its tables that no evidence touches, shape (*cardinalities, 1)
     factors : clique → its tables sliced per row (:data:`Factor`)
     constants : the sliced tables left with no free variable (a number per row: part of P(evidence))
+    const_slots : bit mask of the slots the constants read
     likelihoods : clique → (slot, shape in the clique with the rows last)
     local : clique → bit mask of the slots that enter it
     below : clique → bit mask of the slots in its subtree (towards its root)
@@ -61,8 +64,9 @@ class PatternPlan:
     collect : (clique, parent, summed axes), children first — one message each
     roots : the root of each tree
     distribute : (parent, clique, summed axes, shape in the clique) — parents first, on the paths to targets
-    targets : (variable, clique, summed axes)
     size : entries of all clique tables (the memory one row costs)
+    last : clique → the last step of ``distribute`` that reads its table (after it, the table is let go)
+    homes : clique → the targets read from it, (variable, summed axes)
     """
 
     cliques: tuple[tuple[int, ...], ...]
@@ -78,20 +82,22 @@ class PatternPlan:
     collect: tuple[tuple[int, int, tuple[int, ...]], ...]
     roots: tuple[int, ...]
     distribute: tuple[tuple[int, int, tuple[int, ...], tuple[int, ...]], ...]
-    targets: tuple[tuple[int, int, tuple[int, ...]], ...]
     size: int
+    last: dict[int, int] = field(default_factory=dict)
+    homes: dict[int, list[tuple[int, tuple[int, ...]]]] = field(default_factory=dict)
+    const_slots: int = 0
     state: _State | None = field(default=None, repr=False)
 
 
 @dataclass(eq=False)
 class _State:
-    """What the last single query left: its evidence signature, tables and messages, and its answer."""
+    """What the last single query left: its evidence signature, its messages and masses, and its answer."""
 
     signature: tuple
-    pots: list[np.ndarray | None]
-    tables: list[np.ndarray | None]
     ups: list[np.ndarray | None]
+    z: list[np.ndarray | None]
     mass: bool = False
+    const: np.ndarray | None = None
     answer: tuple[dict[int, np.ndarray], np.ndarray, np.ndarray | None] | None = None
 
 
@@ -232,14 +238,29 @@ def _schedule(cliques, edges, cards, obs, soft, base, factors, constants, likeli
         collect=tuple(collect),
         roots=tuple(order[0] for order in trees),
         distribute=tuple(distribute),
-        targets=tuple((v, h, _summed(cliques[h], [v])) for v, h in sorted(home.items())),
+        last={p: k for k, (p, _, _, _) in enumerate(distribute)},
+        homes=_by_clique(home, cliques),
         size=sum(math.prod(cards[v] for v in c) for c in cliques),
+        const_slots=sum({1 << s for entry in constants for s in entry[1]}),
     )
 
 
-def _pick(entry: Factor, codes: Sequence[np.ndarray]) -> np.ndarray:
-    """A sliced table's rows: ``table[..., Σ code · stride]``, shape (*rest, rows)."""
+def _by_clique(home: dict[int, int], cliques: Sequence[Sequence[int]]) -> dict[int, list]:
+    out: dict[int, list] = {}
+    for v, h in sorted(home.items()):
+        out.setdefault(h, []).append((v, _summed(cliques[h], [v])))
+    return out
+
+
+def _pick(entry: Factor, codes: Sequence[np.ndarray], ints: Sequence[int] | None) -> np.ndarray:
+    """A sliced table's rows: ``table[..., Σ code · stride]``, shape (*rest, rows). ``ints``: a single row's
+    codes as Python ints, when there is one row (then the slice is a view: no copy, no index arithmetic)."""
     table, slots, strides, _ = entry
+    if ints is not None:
+        i = 0
+        for s, st in zip(slots, strides, strict=True):
+            i += ints[s] * st
+        return table[..., i : i + 1]
     flat = codes[slots[0]] * strides[0] if strides[0] != 1 else codes[slots[0]]
     for s, st in zip(slots[1:], strides[1:], strict=True):
         flat = flat + codes[s] * st
@@ -258,7 +279,7 @@ def propagate(
 
     Parameters
     ----------
-    codes : per observed slot, value indices, shape (rows,), all ≥ 0
+    codes : per observed slot, value indices, shape (rows,), all ≥ 0 (one row: a Python int will do)
     likelihoods : per soft slot, shape (rows, k)
     signature : for a single query, the evidence as a hashable tuple per slot: the plan then reuses the
         tables and messages of its last query that no changed slot reaches (None: compute everything)
@@ -279,11 +300,11 @@ def propagate(
             return state.answer
     n = len(plan.cliques)
     if changed == -1 or state is None:
-        state = _State(signature or (), [None] * n, [None] * n, [None] * n, mass)
+        state = _State(signature or (), [None] * n, [None] * len(plan.roots), mass)
     out = _run(plan, state, codes, likelihoods, rows, changed, False, mass)
     normalised = out is None
     if normalised:  # a root mass below TINY: again, every message normalised
-        state = _State(signature or (), [None] * n, [None] * n, [None] * n, mass)
+        state = _State(signature or (), [None] * n, [None] * len(plan.roots), mass)
         out = _run(plan, state, codes, likelihoods, rows, -1, True, mass)
         assert out is not None
     if signature is not None and not normalised:  # kept only unscaled, so that the masses stay exact
@@ -295,30 +316,51 @@ def propagate(
     return out
 
 
+def _evidence(plan, state, codes, ints, rows, changed, lowest, scales):  # type: ignore[no-untyped-def]
+    """(possible, shape (rows,); log P(evidence) when ``scales`` is given, else None) from the roots' masses
+    ``state.z`` (the smallest ``lowest``), the constants, and the scales of a normalised pass."""
+    if plan.constants and (state.const is None or plan.const_slots & changed):
+        const = _pick(plan.constants[0], codes, ints).reshape(-1)
+        for entry in plan.constants[1:]:
+            const = const * _pick(entry, codes, ints).reshape(-1)
+        state.const = const
+    const, z = state.const, state.z
+    if lowest > 0 and (const is None or (const[0] > 0 if len(const) == 1 else bool((const > 0).all()))):
+        possible = _ALL[rows] if rows in _ALL else np.ones(rows, dtype=bool)
+    else:
+        possible = np.ones(rows, dtype=bool)
+        for x in z:
+            possible &= x > 0
+        if const is not None:
+            possible &= const > 0
+    log_mass = None
+    if scales is not None:
+        with np.errstate(divide="ignore"):
+            log_mass = sum((np.log(x) for x in z + scales), np.log(const if const is not None else 1.0))
+    return possible, log_mass
+
+
 def _run(plan, state, codes, likelihoods, rows, changed, normalise, mass):  # type: ignore[no-untyped-def]
-    """One pass of :func:`propagate`; None when it must be run again normalised."""
+    """One pass of :func:`propagate`; None when it must be run again normalised.
+
+    Only messages are kept (between single queries, those below unchanged evidence): a clique's table is
+    made when it sends or is read, and let go after — the memory a pass holds is the clique tables of the
+    network (the parts no evidence touches) and one table at a time per path, not a copy of every clique.
+    """
     reduce = np.add.reduce
-    pots, tables, ups = state.pots, state.tables, state.ups
+    ups = state.ups
+    ints = [code_of(c) for c in codes] if rows == 1 else None
     scales = []
 
-    def potential(c: int) -> np.ndarray:
-        t = pots[c]
-        if t is None or plan.local[c] & changed:
-            t = plan.base[c]
-            for entry in plan.factors[c]:
-                t = t * _pick(entry, codes).reshape(entry[3])
-            for s, shape in plan.likelihoods[c]:
-                t = t * likelihoods[s - len(codes)].T.reshape(shape)
-            pots[c] = t
-        return t
-
     def table(c: int) -> np.ndarray:
-        t = tables[c]
-        if t is None or plan.below[c] & changed:
-            t = potential(c)
-            for ch, shape in plan.kids[c]:
-                t = t * ups[ch].reshape(shape)
-            tables[c] = t
+        """Clique ``c``'s table times the messages from below it."""
+        t = plan.base[c]
+        for entry in plan.factors[c]:
+            t = t * _pick(entry, codes, ints).reshape(entry[3])
+        for s, shape in plan.likelihoods[c]:
+            t = t * likelihoods[s - len(codes)].T.reshape(shape)
+        for ch, shape in plan.kids[c]:
+            t = t * ups[ch].reshape(shape)
         return t
 
     for c, _, axes in plan.collect:
@@ -330,36 +372,44 @@ def _run(plan, state, codes, likelihoods, rows, changed, normalise, mass):  # ty
                 scales.append(s)
                 m = m / s
             ups[c] = m
-    z = [reduce(table(r).reshape(-1, table(r).shape[-1]), axis=0) for r in plan.roots]
-    if not normalise and any(bool((x < TINY).any()) for x in z):
+    z, full = state.z, {}
+    for k, r in enumerate(plan.roots):
+        if z[k] is None or plan.below[r] & changed or r in plan.last or r in plan.homes:
+            t = full[r] = table(r)
+            z[k] = reduce(t.reshape(-1, t.shape[-1]), axis=0)
+    lowest = min((float(x[0]) if len(x) == 1 else float(x.min()) for x in z), default=1.0)
+    if not normalise and lowest < TINY:
         return None
-    possible = np.ones(rows, dtype=bool)
-    for x in z:
-        possible &= x > 0
-    const = np.ones(rows)
-    for entry in plan.constants:
-        const = const * _pick(entry, codes)
-    possible &= const > 0
-    log_mass = None
-    if mass:
-        with np.errstate(divide="ignore"):
-            log_mass = sum((np.log(x) for x in z + scales), np.log(const))
-    full = {r: tables[r] for r in plan.roots}
-    for p, c, axes, shape in plan.distribute:
+    possible, log_mass = _evidence(plan, state, codes, ints, rows, changed, lowest, scales if mass else None)
+    ok = bool(possible.all())
+    out: dict[int, np.ndarray] = {}
+
+    def read(c: int) -> None:
+        for v, axes in plan.homes.get(c, ()):
+            m = reduce(full[c], axis=axes).T  # (rows, k)
+            if ok:
+                m = m / reduce(m, axis=1, keepdims=True)
+            else:
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    m = m / reduce(m, axis=1, keepdims=True)
+            np.minimum(m, 1.0, out=m)  # a sum divided by the total may round to 1.0000000000000002
+            if not ok:
+                if len(m) != rows:
+                    m = np.repeat(m, rows, axis=0)
+                m[~possible] = np.nan
+            out[v] = m if len(m) == rows else np.broadcast_to(m, (rows, m.shape[1]))
+
+    for r in plan.roots:
+        if r in full:
+            read(r)
+    for k, (p, c, axes, shape) in enumerate(plan.distribute):
         m = reduce(full[p], axis=axes)
         old = ups[c]
         m = np.divide(m, old, out=np.zeros(np.broadcast_shapes(m.shape, old.shape)), where=old > 0)
-        full[c] = tables[c] * m.reshape(shape)
-    ok = bool(possible.all())
-    out = {}
-    for v, c, axes in plan.targets:
-        m = reduce(full[c], axis=axes).T  # (rows, k)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            m = m / reduce(m, axis=1).reshape(-1, 1)
-        np.minimum(m, 1.0, out=m)  # a sum divided by the total may round to 1.0000000000000002
-        if not ok:
-            if len(m) != rows:
-                m = np.repeat(m, rows, axis=0)
-            m[~possible] = np.nan
-        out[v] = m if len(m) == rows else np.broadcast_to(m, (rows, m.shape[1]))
+        if plan.last[p] == k:
+            del full[p]
+        full[c] = table(c) * m.reshape(shape)
+        read(c)
+        if c not in plan.last:
+            del full[c]
     return out, possible, log_mass

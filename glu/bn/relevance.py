@@ -53,29 +53,30 @@ def reachable(
     out: set[int] = set()
     up: set[int] = set()  # visited, arriving from a child
     down: set[int] = set()  # visited, arriving from a parent
-    todo: list[tuple[int, bool]] = []
+    rising: list[int] = [v for v in virtual if v not in hard]  # to visit, arriving from a child
+    falling: list[int] = []  # to visit, arriving from a parent
     for e in hard:
-        todo.extend((p, True) for p in parents[e])
-        todo.extend((c, False) for c in children[e])
-    todo.extend((v, True) for v in virtual if v not in hard)
-    while todo:
-        v, from_child = todo.pop()
-        seen = up if from_child else down
-        if v in seen:
-            continue
-        seen.add(v)
-        observed = v in hard
-        if not observed:
+        rising.extend(parents[e])
+        falling.extend(children[e])
+    while rising or falling:
+        while rising:
+            v = rising.pop()
+            if v in up or v in hard:  # an observed node blocks a trail arriving from below
+                continue
+            up.add(v)
             out.add(v)
-        if from_child:
-            if not observed:
-                todo.extend((p, True) for p in parents[v])
-                todo.extend((c, False) for c in children[v])
-        else:
-            if not observed:
-                todo.extend((c, False) for c in children[v])
-            if v in active:
-                todo.extend((p, True) for p in parents[v])
+            rising.extend(parents[v])
+            falling.extend(children[v])
+        while falling:
+            v = falling.pop()
+            if v in down:
+                continue
+            down.add(v)
+            if v not in hard:
+                out.add(v)
+                falling.extend(children[v])
+            if v in active:  # a collider with an observed descendant passes the trail back up
+                rising.extend(parents[v])
     return out
 
 
