@@ -421,7 +421,8 @@ class ExactEngine:
                 size = self.backend.size(rel.tables, rel.hard, rel.soft, rel.targets)
                 step = max(1, BATCH_ENTRIES // max(size, 1))
             if rows <= step:
-                out, possible = solve(rel.targets, h, s, rows, rel.tables)
+                res, possible = solve(rel.targets, h, s, rows, rel.tables)
+                out = dict(res)  # the backend may keep its answer: never written into
             else:
                 out = {t: np.empty((rows, self.net.cards[t])) for t in rel.targets}
                 for a in range(0, rows, step):
@@ -578,9 +579,10 @@ class ExactEngine:
         groups = self._groups(hard, n)
         if len(groups) == 1 and groups[0][0] is None:  # every row observes the same nodes
             out, possible, hard_possible = self._unique_rows(tv, hard, qs, soft_rule, n)
-            for v, m in out.items():  # the caller's own arrays: never a cached or broadcast one
-                if n == 1 or not (m.flags.writeable and m.base is None):
-                    out[v] = np.array(m)
+            out = {  # the caller's own arrays: never a cached or broadcast one
+                v: np.array(m) if n == 1 or not (m.flags.writeable and m.base is None) else m
+                for v, m in out.items()
+            }
             groups = []
         else:
             out = {v: np.full((n, self.net.cards[v]), np.nan) for v in tv}
