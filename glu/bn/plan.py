@@ -126,7 +126,7 @@ def _key(
 ) -> tuple[float, float, int]:
     """The greedy key of eliminating ``v`` now (smaller first; ties: the other measure, then the index)."""
     nb = nbs[v]
-    weight = round(logc[v] + sum(map(logc.__getitem__, sorted(nb))), 9)
+    weight = round(logc[v] + sum(map(logc.__getitem__, nb)), 9)  # rounded: the same whatever the set order
     if heuristic == "min-weight":
         return weight, len(nb), v
     if heuristic == "min-size":
@@ -270,11 +270,13 @@ def plan_from_scopes(
     local = {v: i for i, v in enumerate(keep)}
     adj = [0] * len(keep)
     for scope in scopes:
+        members = [local[v] for v in scope]
         mask = 0
-        for v in scope:
-            mask |= 1 << local[v]
-        for a in _bits(mask):
-            adj[a] |= mask & ~(1 << a)
+        for a in members:
+            mask |= 1 << a
+        for a in members:
+            adj[a] |= mask
+    adj = [m & ~(1 << a) for a, m in enumerate(adj)]
     lcards = [cards[v] for v in keep]
     best = None
     for heuristic in HEURISTICS:
