@@ -267,22 +267,29 @@ class CoreBackend:
         possible, shape (rows,))."""
         plan = self.plan(tuple(hard), tuple(likelihood), targets)
         p, at = self._table(plan, hard, likelihood, rows)
-        norm = p.sum(axis=1, keepdims=True)  # divided, never inverted: a total may be subnormal
+        # each marginal is divided by its own sum (never inverted: a total may be subnormal), so that no
+        # entry can round past 1; the leaves' by the joint's total, and clipped
+        out: dict[int, np.ndarray] = {}
+        full = p.reshape(rows, *plan.kept_cards)
+        norm = None
+        for v, axes in plan.core_targets:
+            m = full.sum(axis=axes) if axes else full.reshape(rows, -1)
+            norm = m.sum(axis=1, keepdims=True)
+            if rows == 1:
+                out[v] = m / norm if norm[0, 0] > 0 else np.array(m, dtype=float)
+            else:
+                out[v] = np.divide(m, norm, out=np.zeros(m.shape), where=norm > 0)
+        if norm is None or plan.stacked is not None:
+            norm = p.sum(axis=1, keepdims=True)
         possible = norm[:, 0] > 0
         ok = bool(possible[0]) if rows == 1 else bool(possible.all())
-        if not ok:
-            norm = np.where(norm > 0, norm, 1.0)
-        out: dict[int, np.ndarray] = {}
-        if plan.core_targets:
-            full = p.reshape(rows, *plan.kept_cards)
-            for v, axes in plan.core_targets:
-                out[v] = full.sum(axis=axes) / norm
         if plan.stacked is not None:
             if rows == 1:
                 probs = (plan.stacked[at[0]] @ p[0])[None, :]
             else:
                 probs = np.einsum("rf,rkf->rk", p, plan.stacked[at])
-            probs /= norm
+            probs /= norm if ok else np.where(norm > 0, norm, 1.0)
+            np.minimum(probs, 1.0, out=probs)
             for v, col, k in plan.leaf_targets:
                 out[v] = probs[:, col : col + k]
                 if v in likelihood:  # a soft leaf asked for: λ times its marginal without its own evidence
@@ -290,9 +297,8 @@ class CoreBackend:
                     m = np.einsum("rf,rkf->rk", rest, plan.stacked[at][:, col : col + k]) * likelihood[v]
                     with np.errstate(invalid="ignore", divide="ignore"):
                         out[v] = m / m.sum(axis=1, keepdims=True)
-        for m in out.values():
-            np.minimum(m, 1.0, out=m)
-            if not ok:
+        if not ok:
+            for m in out.values():
                 m[~possible] = np.nan
         return out, possible
 

@@ -386,13 +386,12 @@ def _run(plan, state, codes, likelihoods, rows, changed, normalise, mass):  # ty
 
     def read(c: int) -> None:
         for v, axes in plan.homes.get(c, ()):
-            m = reduce(full[c], axis=axes).T  # (rows, k)
+            m = reduce(full[c], axis=axes).T  # (rows, k), divided by its own sum: no entry rounds past 1
             if ok:
                 m = m / reduce(m, axis=1, keepdims=True)
             else:
                 with np.errstate(invalid="ignore", divide="ignore"):
                     m = m / reduce(m, axis=1, keepdims=True)
-            np.minimum(m, 1.0, out=m)  # a sum divided by the total may round to 1.0000000000000002
             if not ok:
                 if len(m) != rows:
                     m = np.repeat(m, rows, axis=0)
