@@ -763,8 +763,3 @@ class ExactEngine:
         cols = {c: evidence[c].tolist() for c in evidence.columns}
         res = self.query_batch([target], cols, soft, soft_rule, errors=errors)[target]  # type: ignore[arg-type]
         return pd.DataFrame(res, index=evidence.index, columns=self.labels.index(target))
-
-
-def InferenceEngine(bn: BayesNet, method: Method = "auto", max_table: int | None = None) -> Engine:  # noqa: N802
-    """The former name of :func:`make_engine`, kept while callers move to it."""
-    return make_engine(bn, method, max_table)
