@@ -295,7 +295,10 @@ class ExactEngine:
 
     Attributes
     ----------
-    bn, nodes, method, binary_leaves : as :class:`Engine`
+    bn : the network
+    nodes : its node names
+    method : ``"core"`` or ``"junction"``, the backend's
+    binary_leaves : the word nodes (leaves with two values)
     backend : the array arithmetic (:class:`~glu.bn.core.CoreBackend` — the core's joint tables, which
         :func:`glu.bn.sampling.sample` draws from — or :class:`~glu.bn.junction.JunctionBackend`)
     deduplicate : answer identical rows of a batch once (benchmarks turn it off to time every row)
