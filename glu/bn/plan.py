@@ -282,17 +282,17 @@ def plan_from_scopes(
     for heuristic in HEURISTICS:
         order_l, raw_l = elimination_order(adj, lcards, heuristic)
         cliques_l, edges = _tree(order_l, raw_l)
-        total = sum(math.prod(lcards[v] for v in _bits(c)) for c in cliques_l)
-        if best is None or total < best[0]:
-            best = (total, heuristic, order_l, raw_l, cliques_l, edges)
-        if heuristic == HEURISTICS[0] and total <= TRY_ALL_ABOVE:
+        members = [_bits(c) for c in cliques_l]
+        sizes = [math.prod(lcards[v] for v in m) for m in members]
+        if best is None or sum(sizes) < sum(best[4]):
+            best = (heuristic, order_l, members, edges, sizes)
+        if heuristic == HEURISTICS[0] and sum(sizes) <= TRY_ALL_ABOVE:
             break
     assert best is not None
-    _, heuristic, order_l, raw_l, cliques_l, edges = best
-    raw = [tuple(keep[i] for i in _bits(c)) for c in raw_l]
-    sizes = [math.prod(cards[v] for v in c) for c in raw]
+    heuristic, order_l, members, edges, sizes = best  # every elimination clique lies in one of these
+    final = tuple(tuple(keep[i] for i in m) for m in members)
     largest = max(sizes, default=1)
-    widest = max((len(c) for c in raw), default=0)
+    widest = max((len(c) for c in final), default=0)
     width = max(widest, 1) - 1
     if widest > MAX_CLIQUE_VARIABLES:
         raise ModelError(
@@ -300,14 +300,13 @@ def plan_from_scopes(
             f"{width}); NumPy arrays have at most 64 axes, so glu handles up to {MAX_CLIQUE_VARIABLES}"
         )
     if largest > limit:
-        worst = raw[sizes.index(largest)]
+        worst = final[sizes.index(largest)]
         raise ModelError(
             f"exact inference in this network needs a table of {largest:,} entries ({len(worst)} "
             f"variables: elimination width {width}); the limit is {limit:,} — raise it with "
             f"--max-table, ${MAX_TABLE_ENV} or max_table= (memory: {_bytes(largest * 8)} for that "
             "table alone)"
         )
-    final = tuple(tuple(keep[i] for i in _bits(c)) for c in cliques_l)
     return JunctionTreePlan(
         cards=cards,
         cliques=final,
@@ -315,6 +314,6 @@ def plan_from_scopes(
         order=tuple(keep[i] for i in order_l),
         width=width,
         largest=largest,
-        total=sum(math.prod(cards[v] for v in c) for c in final),
+        total=sum(sizes),
         heuristic=heuristic,
     )

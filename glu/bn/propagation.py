@@ -140,11 +140,16 @@ def make_plan(
         for v in c:
             holding.setdefault(v, []).append(k)
 
+    sizes = [math.prod(cards[v] for v in c) for c in cliques]
+
     def smallest(variables: Sequence[int]) -> int:
         if not variables:
             return -1
-        options = [k for k in holding[variables[0]] if members[k].issuperset(variables)]
-        return min(options, key=lambda k: (tree.size(cliques[k]), k))
+        best = -1
+        for k in holding[variables[0]]:  # ascending: the first of the smallest
+            if (best < 0 or sizes[k] < sizes[best]) and members[k].issuperset(variables):
+                best = k
+        return best
 
     base = [np.ones((*(cards[v] for v in c), 1)) for c in cliques]
     factors: list[list[Factor]] = [[] for _ in cliques]
