@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -73,6 +73,8 @@ class CorePlan:
     leaf_targets : (leaf, first column, k) in ``stacked``; ``stacked``: shape (Π observed, Σ k, Π kept)
     core_targets : (variable, summed axes of the kept table with the rows first)
     soft_core : soft-evidence core variable → its shape in the kept table with the rows first
+    answers : when no row brings a factor of its own (no leaf evidence, no soft evidence): the answers for
+        every combination of the observed values, made on first use (marginals, possible)
     """
 
     observed: tuple[tuple[int, int], ...]
@@ -84,6 +86,7 @@ class CorePlan:
     stacked: np.ndarray | None
     core_targets: tuple[tuple[int, tuple[int, ...]], ...]
     soft_core: dict[int, tuple[int, ...]]
+    answers: list = field(default_factory=list)
 
 
 class CoreBackend:
@@ -266,6 +269,32 @@ class CoreBackend:
         likelihoods (variable → shape (rows, k)): (target → shape (rows, k), NaN where impossible;
         possible, shape (rows,))."""
         plan = self.plan(tuple(hard), tuple(likelihood), targets)
+        if plan.leaves or plan.soft_core:
+            return self._compute(plan, hard, likelihood, rows)
+        # the answer depends on the observed core values alone: computed once for every combination of
+        # them (the same arithmetic, one row each), then gathered
+        if not plan.answers:
+            names = [v for v, _ in plan.observed]
+            every = np.arange(plan.joint.shape[0])
+            codes = np.unravel_index(every, [self.shape[self._axis_of[v]] for v in names]) if names else ()
+            plan.answers.append(self._compute(plan, dict(zip(names, codes, strict=True)), {}, len(every)))
+        table, possible = plan.answers[0]
+        if rows == 1:
+            i = sum(code_of(hard[v]) * stride for v, stride in plan.observed)
+            return {v: m[i : i + 1] for v, m in table.items()}, possible[i : i + 1]
+        at = np.zeros(rows, dtype=np.intp)
+        for v, stride in plan.observed:
+            at = at + hard[v] * stride
+        return {v: np.take(m, at, axis=0) for v, m in table.items()}, np.take(possible, at)
+
+    def _compute(
+        self,
+        plan: CorePlan,
+        hard: Mapping[int, np.ndarray],
+        likelihood: Mapping[int, np.ndarray],
+        rows: int,
+    ) -> tuple[dict[int, np.ndarray], np.ndarray]:
+        """:meth:`solve`'s arithmetic on ``rows`` rows of evidence."""
         p, at = self._table(plan, hard, likelihood, rows)
         # each marginal is divided by its own sum (never inverted: a total may be subnormal), so that no
         # entry can round past 1; the leaves' by the joint's total, and clipped
