@@ -60,6 +60,16 @@ def _broadcast(table: np.ndarray, axes: Sequence[int], ndim: int) -> np.ndarray:
     return t.reshape(shape)
 
 
+def _observed_index(plan: CorePlan, hard: Mapping[int, np.ndarray], rows: int) -> np.ndarray:
+    """Each row's index into the observed axes of ``plan``'s tables (mixed radix), shape (rows,)."""
+    if rows == 1:  # the index as a Python int first: a fifth of the NumPy calls
+        return np.array([sum(code_of(hard[v]) * stride for v, stride in plan.observed)])
+    at = np.zeros(rows, dtype=np.intp)
+    for v, stride in plan.observed:
+        at = at + hard[v] * stride
+    return at
+
+
 @dataclass(frozen=True, eq=False)
 class CorePlan:
     """One evidence pattern on the core joint (:meth:`CoreBackend.plan`).
@@ -236,12 +246,7 @@ class CoreBackend:
     ) -> tuple[np.ndarray, np.ndarray]:
         """(the gathered joint with every factor of the row multiplied in but leaf ``skip``'s, shape
         (rows, Π kept); the observed index of each row, shape (rows,))."""
-        if rows == 1:  # the index as a Python int: the same gather, a fifth of the NumPy calls
-            at = np.array([sum(code_of(hard[v]) * stride for v, stride in plan.observed)])
-        else:
-            at = np.zeros(rows, dtype=np.intp)
-            for v, stride in plan.observed:
-                at = at + hard[v] * stride
+        at = _observed_index(plan, hard, rows)
         p = plan.joint[at]
         for v, table in plan.leaves.items():
             if v == skip:
@@ -279,12 +284,10 @@ class CoreBackend:
             codes = np.unravel_index(every, [self.shape[self._axis_of[v]] for v in names]) if names else ()
             plan.answers.append(self._compute(plan, dict(zip(names, codes, strict=True)), {}, len(every)))
         table, possible = plan.answers[0]
-        if rows == 1:
-            i = sum(code_of(hard[v]) * stride for v, stride in plan.observed)
+        at = _observed_index(plan, hard, rows)
+        if rows == 1:  # views of one row (the engine copies what it hands out)
+            i = int(at[0])
             return {v: m[i : i + 1] for v, m in table.items()}, possible[i : i + 1]
-        at = np.zeros(rows, dtype=np.intp)
-        for v, stride in plan.observed:
-            at = at + hard[v] * stride
         return {v: np.take(m, at, axis=0) for v, m in table.items()}, np.take(possible, at)
 
     def _compute(
