@@ -27,7 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.gestures.synthetic import View
@@ -266,7 +266,7 @@ fast and e² times less likely slow than the network says), and the slowest quar
 
 
 def effects_given_gesture(
-    engine: InferenceEngine,
+    engine: Engine,
     codes: Mapping[str, np.ndarray],
     quantile: np.ndarray,
     effects: GestureEffects,

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.errors import DataError, ModelError
 from glu.fusion import fuse
@@ -62,8 +62,8 @@ def replication(seed, tables):
 
 @pytest.fixture(scope="module")
 def setup():
-    engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
-    learned = InferenceEngine(learn_bn(load_experiments("synthetic").iloc[:200]))
+    engine = make_engine(learn_bn(load_experiments("synthetic")))
+    learned = make_engine(learn_bn(load_experiments("synthetic").iloc[:200]))
     tables = {"generating": target_tables(engine, SETTINGS), "learned-200": target_tables(learned, SETTINGS)}
     first, recs = replication(0, tables)
     rec = recs["raw"]

@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.errors import DataError, ModelError
 from glu.fusion import STRATEGIES, fuse_action_tables, fuse_tables
 from glu.gestures.calibration import READINGS, Calibration, p_hmm_reading
@@ -247,7 +247,7 @@ class Replication:
                 )
 
 
-def target_tables(engine: InferenceEngine, settings: EvaluationSettings) -> dict[str, NetworkTables]:
+def target_tables(engine: Engine, settings: EvaluationSettings) -> dict[str, NetworkTables]:
     """The :class:`NetworkTables` of each target for one network (queried once per network)."""
     return {
         "action": network_tables(engine, settings.action_evidence, EFFECT),
@@ -271,7 +271,7 @@ class Evaluator:
     (:func:`~glu.studies.corpus_evaluation.corpus.simulate_chunk`)
     """
 
-    world: InferenceEngine
+    world: Engine
     replications: tuple[Replication, ...]
     readings: tuple[Reading, ...] = (Reading(),)
     settings: EvaluationSettings = EvaluationSettings()
@@ -419,7 +419,7 @@ class Evaluator:
         under every reading of one feature set unless a calibrated one is flat); the others carry the
         reading's index."""
         s, codes = self.settings, episodes.codes
-        shape = {n: self.world.shape[self.world.axis[n]] for n in AFFORDANCE_NODES}
+        shape = {n: self.world.bn.schema.cardinality(n) for n in AFFORDANCE_NODES}
         action = codes["Action"]
         top = np.argmax(q, axis=-1).tobytes()
 

@@ -114,10 +114,10 @@ def _experiments(config: SweepConfig) -> tuple[pd.DataFrame, str]:
 
 def prepare_world(config: SweepConfig) -> tuple[Any, str]:
     """The Affordance–Words network of a sweep (an inference engine) and a one-line label of its data."""
-    from glu.bn import InferenceEngine, learn_bn
+    from glu.bn import learn_bn, make_engine
 
     table, label = _experiments(config)
-    return InferenceEngine(learn_bn(table, unseen_words=config.network.unseen_words)), label
+    return make_engine(learn_bn(table, unseen_words=config.network.unseen_words)), label
 
 
 def saved_key(config: SweepConfig) -> dict[str, Any]:
