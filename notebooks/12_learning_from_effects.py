@@ -111,7 +111,7 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 import matplotlib.pyplot as plt
 import pandas as pd
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.language import candidate_sentences
 from glu.run import start
@@ -131,7 +131,7 @@ from glu.studies.learning import (
 from glu.studies.learning import saved as saved_runs
 
 out = start("12_learning_from_effects", globals())
-engine = InferenceEngine(learn_bn(load_experiments(out.source)))
+engine = make_engine(learn_bn(load_experiments(out.source)))
 source = out.source.describe()
 settings = study.StudySettings(
     episodes=max(budgets),

@@ -27,7 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.gestures.synthetic import View
@@ -37,13 +37,17 @@ EFFECT_NODES: tuple[str, ...] = ("ObjVel", "ObjHandVel", "HandVel", "Contact")
 """The nodes the network draws (with the words) once the scenario has set the roots."""
 VIEWPOINTS: dict[str, View] = {
     "front": View(),
-    "turned": View(yaw_deg=40.0),
+    "turned": View(yaw_deg=40.0, tracker="occluding"),
+    "side-on": View(yaw_deg=90.0, tracker="occluding"),
     "seated": View(posture="seated"),
 }
-"""Named viewpoints: as in the recordings (facing the camera, turned by a random ± 10°), turned by 40°,
-seated at a higher table (:class:`~glu.gestures.synthetic.View`)."""
-WORLD_KEY, GESTURE_KEY = 0, 1
-"""Spawn keys of the world draws (per chunk) and of each episode's gesture (per episode)."""
+"""Named viewpoints (:class:`~glu.gestures.views.View`): as in the recordings (facing the camera, turned by
+a random ± 10°), turned by 40°, side-on (turned by 90°), seated at a higher table. The turned views are seen
+through the occluding tracker (:func:`glu.gestures.views.track`), which sees both shoulders at 40° and
+loses the far one side-on."""
+WORLD_KEY, GESTURE_KEY, EFFECTS_KEY = 0, 1, 6
+"""Spawn keys of the world draws (per chunk), of each episode's gesture (per episode), and of the effects
+redrawn from the gestures (per chunk, :func:`effects_given_gesture`)."""
 ACTION_PRIORS: dict[str, str] = {
     "uniform": "every action equally often",
     "network": "as often as the network's prior p(Action) says (the robot's own experiments)",
@@ -118,11 +122,14 @@ class Condition:
     noise : standard deviation of the sensor noise on every joint, metres
     viewpoint : a name of :data:`VIEWPOINTS` (or of ``views`` given to :func:`simulate_chunk`)
     action_prior : a name of :data:`ACTION_PRIORS`
+    effects : a name of :data:`GESTURE_WORLDS`: whether the effects depend on the action alone (the fusion
+        rules' assumption) or on the gesture too
     """
 
     noise: float
     viewpoint: str
     action_prior: str = "uniform"
+    effects: str = "action"
 
     def __post_init__(self) -> None:
         if not (isinstance(self.noise, int | float) and 0 <= self.noise < math.inf):
@@ -131,6 +138,8 @@ class Condition:
             raise DataError(
                 f"unknown action prior {self.action_prior!r}; allowed: {', '.join(ACTION_PRIORS)}"
             )
+        if self.effects not in GESTURE_WORLDS:
+            raise DataError(f"unknown effects {self.effects!r}; allowed: {', '.join(GESTURE_WORLDS)}")
 
 
 @dataclass(frozen=True)
@@ -257,7 +266,7 @@ fast and e² times less likely slow than the network says), and the slowest quar
 
 
 def effects_given_gesture(
-    engine: InferenceEngine,
+    engine: Engine,
     codes: Mapping[str, np.ndarray],
     quantile: np.ndarray,
     effects: GestureEffects,

@@ -14,7 +14,7 @@ import pytest
 from scipy.interpolate import PchipInterpolator
 from scipy.ndimage import median_filter
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.errors import DataError
 from glu.gestures.synthetic import GESTURES, SYNTHETIC_POLICY, View, pchip_many, synthesize_gesture
@@ -66,7 +66,7 @@ def test_batch_gestures_equal_one_at_a_time(view, sensor):
 
 def test_chunk_equals_the_episode_by_episode_reference():
     """simulate_chunk against the loop it replaced: one synthesize_gesture per episode, then its features."""
-    engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
+    engine = make_engine(learn_bn(load_experiments("synthetic")))
     for cond, settings in [
         (Condition(0.02, "front"), GestureSettings()),
         (Condition(0.0, "seated"), GestureSettings(0.2, 1.0)),

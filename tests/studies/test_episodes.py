@@ -69,10 +69,10 @@ def test_quantile_is_uniform_over_gestures():
 
 @pytest.fixture(scope="module")
 def engine(source):
-    from glu.bn import InferenceEngine, learn_bn
+    from glu.bn import learn_bn, make_engine
     from glu.data import load_experiments
 
-    return InferenceEngine(learn_bn(load_experiments(source)))
+    return make_engine(learn_bn(load_experiments(source)))
 
 
 def _world(engine, n, action="tap", seed=0):

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.errors import DataError
 from glu.gestures.corpus import synthetic_corpus
@@ -73,7 +73,7 @@ def test_the_crossed_bootstrap_by_brute_force():
 
 @pytest.fixture(scope="module")
 def engine():
-    return InferenceEngine(learn_bn(load_experiments("synthetic")))
+    return make_engine(learn_bn(load_experiments("synthetic")))
 
 
 def test_the_study_on_a_small_corpus(engine):

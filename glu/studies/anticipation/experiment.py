@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.data.published import published
 from glu.data.source import DataSource
 from glu.errors import DataError, ModelError
@@ -272,7 +272,7 @@ def update_indices(n_frames: int, step: int = ORIGINAL_STEP, final_update: bool 
 
 def effect_anticipation(
     recognizer: Recognizer,
-    engine: InferenceEngine,
+    engine: Engine,
     trajectory: Trajectory,
     evidence: Mapping[str, str],
     *,

@@ -202,6 +202,7 @@ def nested_cv(
                 "always_tap": float(np.mean([f["action"] == "tap" for f in tested])),
                 "tuned_accuracy": plain[best],
                 "tuned_candidate": best.label,
+                "recordings": len({f["recording"] for f in tested}),
             }
         )
     params = {

@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.data.source import DataSource
 from glu.errors import DataError, ModelError
 from glu.gestures.invariants import Invariants
@@ -210,7 +210,7 @@ def classify(recognizer: Recognizer, actions: Sequence[str], seqs: Sequence[np.n
 
 
 def learn_gestures(
-    engine: InferenceEngine,
+    engine: Engine,
     episodes: int,
     labels: str,
     *,
@@ -293,7 +293,7 @@ def learn_gestures(
 
 def anticipation_after_learning(
     recognizers: Mapping[str, Recognizer],
-    engine: InferenceEngine,
+    engine: Engine,
     source: DataSource,
     *,
     seed: int = 0,

@@ -32,7 +32,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.errors import DataError
 from glu.gestures.corpus import LabelledSequence
 from glu.gestures.invariants import Invariants
@@ -217,7 +217,7 @@ class RealPersonJob(NamedTuple):
     standing: list[LabelledSequence]
 
 
-def real_person_draw(engine: InferenceEngine, draw: int, job: RealPersonJob) -> list[dict[str, Any]]:
+def real_person_draw(engine: Engine, draw: int, job: RealPersonJob) -> list[dict[str, Any]]:
     """One draw of the study (a Dask task): the leave-one-segment-out loop on the fitted generator, and the
     standard generator's recognisers on every segment; one row per learner and test segment."""
     s, stand = job.settings, job.standing
@@ -286,7 +286,7 @@ def _generator_rows(engine, draw, stand, s: RealPersonSettings, row) -> list[dic
 
 
 def real_person_study(
-    engine: InferenceEngine,
+    engine: Engine,
     standing: Sequence[LabelledSequence],
     settings: RealPersonSettings = RealPersonSettings(),
     *,

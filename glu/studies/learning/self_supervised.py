@@ -48,7 +48,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.gestures import calibration
@@ -245,9 +245,7 @@ def _rng(seed: int, *key: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=key))
 
 
-def draw_actions(
-    engine: InferenceEngine, n: int, seed: int, offset: int = 0, balanced: bool = False
-) -> np.ndarray:
+def draw_actions(engine: Engine, n: int, seed: int, offset: int = 0, balanced: bool = False) -> np.ndarray:
     """The actions of episodes ``offset … offset + n − 1`` (uniform; ``balanced``: cycling through them)."""
     k = len(engine.bn.schema.values_of("Action"))
     if balanced:
@@ -257,7 +255,7 @@ def draw_actions(
 
 
 def draw_gestures(
-    engine: InferenceEngine,
+    engine: Engine,
     actions: np.ndarray,
     seed: int,
     offset: int = 0,
@@ -290,7 +288,7 @@ def draw_gestures(
 
 
 def draw_world(
-    engine: InferenceEngine,
+    engine: Engine,
     actions: np.ndarray,
     ambiguity: Ambiguity,
     seed: int,
@@ -348,7 +346,7 @@ def draw_world(
 
 
 def simulate_episodes(
-    engine: InferenceEngine,
+    engine: Engine,
     ambiguity: Ambiguity,
     n: int,
     seed: int,
@@ -368,7 +366,7 @@ def simulate_episodes(
 
 
 def network_posteriors(
-    engine: InferenceEngine,
+    engine: Engine,
     perceived: Mapping[str, np.ndarray],
     world: Mapping[str, np.ndarray] | None = None,
     words: bool = False,

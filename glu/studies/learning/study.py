@@ -25,7 +25,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.errors import DataError
 from glu.machine import close_cluster, ctrl_c_held, kill_local_workers, quiet_dask_logs
 from glu.studies.learning.online import Learner, OnlineSettings, run_online
@@ -217,7 +217,7 @@ def _label_quality(p: np.ndarray, random: np.ndarray, actions: np.ndarray, thres
     ]
 
 
-def run_world(engine: InferenceEngine, seed: int, world: str, settings: StudySettings):
+def run_world(engine: Engine, seed: int, world: str, settings: StudySettings):
     """One seed in one world: every learner run online, the network alone, the labels' quality.
 
     Returns ``(run, groups, network_correct, labels)`` (see :class:`SeedResult`; ``run`` is the
@@ -261,7 +261,7 @@ def run_world(engine: InferenceEngine, seed: int, world: str, settings: StudySet
     return run, groups, np.array(network), np.array(labels)
 
 
-def run_seed(engine: InferenceEngine, seed: int, settings: StudySettings = StudySettings()) -> SeedResult:
+def run_seed(engine: Engine, seed: int, settings: StudySettings = StudySettings()) -> SeedResult:
     """Simulate one seed's episodes and held-out gestures in every world and run every learner on them (a Dask
     task)."""
     correct, groups, network, labels, seconds = [], [], [], [], np.zeros(settings.episodes)
@@ -285,7 +285,7 @@ def run_seed(engine: InferenceEngine, seed: int, settings: StudySettings = Study
 
 
 def learning_study(
-    engine: InferenceEngine,
+    engine: Engine,
     settings: StudySettings = StudySettings(),
     *,
     workers: int = 0,
@@ -299,7 +299,7 @@ def learning_study(
 
 
 def run_units(
-    task: Callable, engine: InferenceEngine, settings: Any, units: Sequence[Any], workers, scheduler, progress
+    task: Callable, engine: Engine, settings: Any, units: Sequence[Any], workers, scheduler, progress
 ) -> list[Any]:
     """``[task(engine, unit, settings) for unit in units]``: here (``workers=0``, no scheduler), or as Dask
     tasks on a LocalCluster of ``workers`` processes or an existing ``scheduler``; ``progress(unit)`` after
