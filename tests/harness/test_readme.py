@@ -446,7 +446,8 @@ def test_the_section_reads_every_number_from_the_summary(summary):
         "Random labels as accurate as the network's, after 10,000 episodes: easy world without words: they "
         "match in 1 of 5, a scheme beats them in 0; hard world without words: they match in 1 of 5, a scheme "
         "beats them in 1 (failed taps: hard)",
-        "The real person (one person, 11 standing segments from 3 recordings: no general claim",
+        "The real person (11 standing segments from 3 recordings)",
+        "One person and three recordings cannot support a general claim.",
         "accuracy over the segments and 50 draws: true labels 0.91 [0.81, 1.00], soft labels 0.73 [0.63, "
         "0.83]",
         "always answering tap 0.27 [0.17, 0.37]",

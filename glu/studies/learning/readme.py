@@ -27,9 +27,9 @@ the gesture) the true labels reach {learn_true_hard:.3f} at {learn_last:,.0f} ep
   * Effects without words (TCDS's "beyond the self"): {learn_effects}.
   * Effects and words (supervision by the spoken verb): {learn_words}.
   * {learn_random}.
-  * The real person (one person, {real_segments:.0f} standing segments from {real_recordings:.0f} \
-recordings: no general claim can rest on it): {real_fitted}; always answering tap {real_tap}. \
-{real_generator}."""
+  * The real person ({real_segments:.0f} standing segments from {real_recordings:.0f} recordings): \
+{real_fitted}; always answering tap {real_tap}. {real_generator}. One person and {real_recordings_words} \
+recordings cannot support a general claim."""
 """The bullet, with ``{name:format}`` slots filled by :func:`values`."""
 
 REQUIRED: tuple[str, ...] = (
@@ -89,6 +89,12 @@ def _person(summary: pd.DataFrame, study: str, features: str) -> dict[str, str]:
     return {lr: one(lr) for lr in dict.fromkeys(s["learner"])}
 
 
+def _number_word(n: int) -> str:
+    """A small count in words (as a sentence reads it), digits beyond ten."""
+    words = ("no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten")
+    return words[n] if 0 <= n < len(words) else f"{n:,}"
+
+
 def values(tables: Tables) -> dict[str, Any]:
     """The slots of the learning-from-effects bullet (notebook 12): the claims per world and budget
     (:func:`glu.studies.learning.tables.claims_table`), the labels, and the real person."""
@@ -141,6 +147,7 @@ def values(tables: Tables) -> dict[str, Any]:
         "learn_random": _random(claims),
         "real_segments": int(real["segments"].iloc[0]),
         "real_recordings": int(real["recordings"].iloc[0]),
+        "real_recordings_words": _number_word(int(real["recordings"].iloc[0])),
         "learn_supervised": " or ".join(str(k) for k in params["supervised"]),
         "real_fitted": "learned leave-one-segment-out from a generator fitted to their other repetitions, "
         f"accuracy over the segments and {int(real['draws'].iloc[0])} draws: "
