@@ -19,10 +19,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "reproduce",
         help="run every notebook: figures, recordings, results summary, documentation site",
-        description="Run every notebook headless, in parallel kernels; publish their figures, recordings, "
-        "results, models and executed notebooks only when all succeed (a failed or interrupted run leaves "
-        "the outputs of the last run as they were), then write the results summary and the documentation "
-        "site (build/site/).",
+        description="Run every notebook headless, in parallel kernels, then write the results summary and "
+        "the documentation site; publish the whole run (figures, recordings, results, models, executed "
+        "notebooks, summary, site) at once, only when every notebook succeeded: a failed or interrupted run "
+        "leaves the last published run as it was. Nothing glu did not write is replaced.",
     )
     add_data_option(p)
     p.add_argument("--quick", action="store_true", help="small, fast runs (as the tests do)")
@@ -40,6 +40,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=seed, default=0, help="seed passed to every notebook (default 0)")
     p.add_argument("--no-site", action="store_true", help="skip the documentation site (build/site/)")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="where -o DIR holds a folder or file glu did not write (figures/, site/, …), leave it untouched "
+        "and publish that part in DIR/.glu-runs/current/ only (default: refuse, naming it)",
+    )
     _add_notebooks_option(p)
     p.set_defaults(func=_reproduce)
 
@@ -114,6 +120,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         seed=args.seed,
         site=not args.no_site,
         notebooks_dir=folder,
+        force=args.force,
     )
     print(
         f"ran {len(summary['ran'])} notebooks in {summary['wall_time_s']:.1f} s ({summary['data_source']}); "
