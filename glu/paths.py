@@ -5,7 +5,8 @@ The one owner of paths. glu runs in two settings, and :func:`locate` tells them 
 * **a source checkout** (``git clone`` + ``pip install -e .``): the package sits beside ``pyproject.toml``
   and ``notebooks/``. Data fetched goes to ``data/real/``, notebook scratch runs to ``build/scratch/``, and
   ``glu reproduce`` publishes into the project's ``results/``, ``recordings/``, ``models/`` and
-  ``build/figures/`` (the tracked ``figures/`` only from the real data); the machine code of the compiled HMM loops is cached in ``build/compiled/``.
+  ``build/figures/`` (the tracked ``figures/`` only from the real data); the machine code of the compiled
+  HMM loops is cached in ``build/compiled/``.
 * **an installed package** (a wheel in any environment): nothing is ever written inside the package
   (``site-packages``). Data lives in the user's data folder (platformdirs: ``~/.local/share/glu/real`` on
   Linux, ``~/Library/Application Support/glu/real`` on macOS, ``%LOCALAPPDATA%\\glu\\real`` on Windows),

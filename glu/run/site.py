@@ -477,9 +477,8 @@ def build_site(
     os.replace(staged, layout.site)
     index = layout.site / "index.html"
     pages = len(list(layout.site.rglob("*.html")))
-    log(
-        f"glu site: {pages} pages in {time.perf_counter() - t0:.1f} s: {(published or layout).site / index.name}"
-    )
+    shown = (published or layout).site / index.name
+    log(f"glu site: {pages} pages in {time.perf_counter() - t0:.1f} s: {shown}")
     return index
 
 
