@@ -16,20 +16,12 @@ import traceback
 from collections.abc import Sequence
 
 from glu import __version__
+from glu.cli.commands import COMMANDS
 from glu.cli.guard import guarded_run
+from glu.cli.terminal import safe_streams
 from glu.errors import GluError, Terminated
 
-COMMAND_MODULES: tuple[str, ...] = (
-    "glu.cli.data_cmds",
-    "glu.cli.bn_cmds",
-    "glu.cli.gesture_cmds",
-    "glu.cli.reproduce_cmds",
-    "glu.cli.language_cmds",
-    "glu.cli.anticipate_cmds",
-    "glu.cli.readme_cmds",
-    "glu.cli.eval_cmds",
-    "glu.cli.learn_cmds",
-)
+COMMAND_MODULES: tuple[str, ...] = tuple(dict.fromkeys(c.module for c in COMMANDS.values()))
 """Each module defines ``register(subparsers)``; handlers import heavy libraries lazily."""
 
 EXIT_BAD_INPUT = 2
@@ -42,8 +34,10 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The full argument parser of ``glu``."""
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The argument parser of ``glu``: every command's in full (``argv`` None), or, for the arguments
+    ``argv`` of one run, only the module of the command they name (:mod:`glu.cli.commands`); the other
+    commands are listed by name and help line only, so that ``glu --help`` imports no command at all."""
     parser = OneLineParser(
         prog="glu",
         description="Gestures, language and affordances: reproduce Saponaro et al. (GLU 2017, TCDS 2020).",
@@ -52,8 +46,16 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
     sub.required = True
-    for name in COMMAND_MODULES:
+    if argv is None:
+        modules = list(COMMAND_MODULES)
+    else:
+        named = next((a for a in argv if not a.startswith("-")), None)
+        modules = [COMMANDS[named].module] if named in COMMANDS else []
+    for name in modules:
         importlib.import_module(name).register(sub)
+    for command, (_, line) in COMMANDS.items():
+        if command not in sub.choices:
+            sub.add_parser(command, help=line)
     return parser
 
 
@@ -95,7 +97,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError:  # not the main thread (a test calling main() from a thread): keep the default
         pass
     try:
-        return _main(argv)
+        with safe_streams():  # nothing read from a file reaches the terminal as a control code
+            return _main(argv)
     except KeyboardInterrupt as e:  # before the command started: building the parser, reading arguments
         return _stopped("glu", e)
     finally:
@@ -122,8 +125,8 @@ def _stopped(name: str, e: KeyboardInterrupt) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(argv)
     nul = next((a for a in argv if "\x00" in a), None)
     if nul is not None:  # no file name or value can hold one; the OS would refuse it deep inside
         print(f"glu: error: argument {nul!r} contains a NUL byte", file=sys.stderr)

@@ -16,6 +16,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from glu.cli.terminal import one_line
 from glu.data.source import SYNTHETIC_KEYWORD, WORD_FILES
 from glu.errors import EvidenceError, MissingDependencyError
 from glu.evidence import check_disjoint, parse_evidence, parse_soft
@@ -210,13 +211,43 @@ def add_data_args(p: argparse.ArgumentParser) -> None:
 
 
 def add_model_args(p: argparse.ArgumentParser) -> None:
-    """``--model`` or the data options of :func:`add_data_args` (read by :func:`load_model`)."""
+    """``--model`` (with ``--renormalise``) or the data options of :func:`add_data_args` (read by
+    :func:`load_model`)."""
     p.add_argument(
         "--model",
         type=Path,
         help="model file (.json, the original .mat, or .bif/.xmlbif/.uai); default: learn from --data",
     )
+    add_renormalise_option(p)
     add_data_args(p)
+
+
+def tolerance(text: str) -> float:
+    """--renormalise TOL: a number in [0, 1)."""
+    try:
+        tol = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
+    if not 0 <= tol < 1:
+        raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
+    return tol
+
+
+def add_renormalise_option(p: argparse.ArgumentParser) -> None:
+    """``--renormalise [TOL]``: how far from 1 a CPT row of a BIF, XMLBIF or UAI file may sum."""
+    from glu.bn.exchange import IMPORT_TOL
+    from glu.bn.rows import RENORMALISE_DEFAULT
+
+    p.add_argument(
+        "--renormalise",
+        type=tolerance,
+        nargs="?",
+        const=RENORMALISE_DEFAULT,
+        metavar="TOL",
+        help=f"a BIF, XMLBIF or UAI model: rescale CPT rows whose sum is within TOL of 1 (default without "
+        f"the option: {IMPORT_TOL:g}; --renormalise alone: {RENORMALISE_DEFAULT:g}); the rows rescaled are "
+        "reported",
+    )
 
 
 def add_engine_args(p: argparse.ArgumentParser) -> None:
@@ -331,10 +362,13 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
             raise EvidenceError("give either --model or --data, not both")
         if getattr(args, "schema", None) or getattr(args, "experiments", None):
             raise EvidenceError("give either --model or --schema/--experiments, not both")
-        bn = read_model_file(model)
+        renormalise = getattr(args, "renormalise", None)
+        if renormalise is not None and model.suffix.lower() in (".mat", ".json"):
+            raise EvidenceError("--renormalise applies to BIF, XMLBIF and UAI files")
+        bn = read_model_file(model, renormalise=renormalise)
         r = bn.meta.get("renormalised")
         rescaled = f"; {r['rows']} CPT row(s) rescaled to sum to 1 on import" if r else ""
-        return bn, f"model {model} ({bn.meta.get('data_source', 'unknown data')}{rescaled})"
+        return bn, one_line(f"model {model} ({bn.meta.get('data_source', 'unknown data')}{rescaled})")
     from glu.bn.learning import learn_bn
     from glu.data.source import load_experiments, resolve_data
 
@@ -350,11 +384,11 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
         schema = read_schema_file(schema_file)
         df = read_experiment_table(table, schema)
         bn = learn_bn(df, schema, unseen_words=args.unseen_words)
-        return bn, f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}"
+        return bn, one_line(f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}")
     source = resolve_data(args.data)
     df = load_experiments(source, args.words)
     bn = learn_bn(df, unseen_words=args.unseen_words)
-    return bn, f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}"
+    return bn, one_line(f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}")
 
 
 # ------------------------------------------------------------------ progress and optional dependencies

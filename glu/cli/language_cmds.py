@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+from glu.cli.commands import help_of
 from glu.cli.common import (
     add_description_args,
     add_engine_args,
@@ -24,6 +25,7 @@ from glu.cli.common import (
     read_evidence,
     seed,
 )
+from glu.cli.terminal import one_line
 from glu.errors import EvidenceError
 from glu.evidence import format_evidence
 from glu.language.sampling import MAX_SAMPLES
@@ -43,7 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add ``describe``."""
     p = sub.add_parser(
         "describe",
-        help="the N best sentences describing a situation (grammar + word probabilities)",
+        help=help_of("describe"),
         description=DESCRIPTION,
     )
     add_model_args(p)
@@ -182,7 +184,7 @@ def _describe(args: argparse.Namespace) -> int:
         return 0
     print(f"{'rank':>4}  {'score':>10}  sentence")
     for r in result.itertuples():
-        print(f"{r.rank:>4}  {_score_text(r.score)}  {r.sentence}")
+        print(f"{r.rank:>4}  {_score_text(r.score)}  {one_line(r.sentence)}")
     if not all(math.isfinite(x) for x in result["score"]):
         say(f"# {IMPOSSIBLE}: a word of the sentence has probability 0 under this evidence (score −∞)")
     return 0

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from glu.cli.commands import help_of
 from glu.cli.common import (
     add_cluster_args,
     add_data_option,
@@ -55,7 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     ambiguity_help = "; ".join(f"{k}: {a.description}" for k, a in AMBIGUITIES.items()).replace("%", "%%")
     p = sub.add_parser(
         "learn-gestures",
-        help="learn gesture HMMs from unlabelled episodes, labelled by the affordance network",
+        help=help_of("learn-gestures"),
         description="Simulate episodes (a person's gesture on an object, the effect, the words), label each "
         "with the Affordance–Words network learned from the robot's own experiments, train gesture HMMs from "
         "those labels and write a recogniser that glu recognize and glu anticipate take (--models FILE).",
@@ -101,7 +102,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     c = sub.add_parser(
         "learning-curves",
-        help="the study of learning from effects: learning curves of every scheme (Dask, one task per seed)",
+        help=help_of("learning-curves"),
         description="Run the study of notebook 12: every labelling scheme and baseline, every ambiguity, "
         "with and without words, one Dask task per training seed, and write its tables "
         "(learning_curves.csv, learning_match.csv, learning_labels.csv, learning_study.json) to -o DIR.",

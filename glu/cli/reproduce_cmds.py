@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from glu.cli.commands import help_of
 from glu.cli.common import add_data_option, add_json_option, json_text, positive_int, require_extra, seed
 
 NOTEBOOK_MODULES = ("papermill", "jupytext", "ipykernel", "nbconvert", "rerun")
@@ -18,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``reproduce`` and ``run`` commands."""
     p = sub.add_parser(
         "reproduce",
-        help="run every notebook: figures, recordings, results summary, documentation site",
+        help=help_of("reproduce"),
         description="Run every notebook headless, in parallel kernels, then write the results summary and "
         "the documentation site; publish the whole run (figures, recordings, results, models, executed "
         "notebooks, summary, site) at once, only when every notebook succeeded: a failed or interrupted run "
@@ -51,7 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     r = sub.add_parser(
         "run",
-        help="run one notebook headless with other parameters (into its scratch folder)",
+        help=help_of("run"),
         description=(
             "Run one notebook headless, showing each cell as it starts on stderr (--quiet: nothing). "
             "Parameters are checked against the notebook's parameters cell before anything executes. "
