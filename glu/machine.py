@@ -170,7 +170,10 @@ def check_scheduler(address: str | None) -> str | None:
 
 
 def check_reachable(address: str, timeout: float = 10.0) -> None:
-    """DataError unless something accepts TCP connections at the scheduler's host and port."""
+    """DataError, in one line naming ``address``, unless a Dask scheduler answers there within ``timeout``
+    seconds: something accepts TCP connections at its host and port, completes Dask's handshake, and says it
+    is a scheduler (its ``identity``). A server that accepts and never answers, answers with anything else,
+    or closes the connection is refused here, before any work (and before any output folder is made)."""
     import socket
 
     host, _, port = address.split("://", 1)[1].rstrip("/").rpartition(":")
@@ -179,3 +182,66 @@ def check_reachable(address: str, timeout: float = 10.0) -> None:
             pass
     except OSError as e:
         raise DataError(f"cannot reach the Dask scheduler at {address}: {e.strerror or e}") from None
+    try:
+        import distributed.comm  # noqa: F401
+    except ImportError:  # the command that needs it says so (glu[dask]); the port at least answers
+        return
+    reply = _ask_identity(address, timeout)
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        raise DataError(
+            f"{address} answered, but not as a Dask scheduler (its identity: {_short(reply)}); is it the "
+            "scheduler's address (tcp://host:8786 by default)?"
+        )
+
+
+def _short(value: Any, limit: int = 80) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def _ask_identity(address: str, timeout: float) -> Any:
+    """The scheduler's answer to Dask's ``identity`` request, within ``timeout`` seconds; DataError otherwise.
+
+    Asked from a daemon thread with an event loop of its own, so that a caller inside an event loop (a
+    notebook) can ask too, and a server that never answers can hold up neither the caller nor the exit."""
+    import asyncio
+    import threading
+
+    async def identity() -> Any:
+        from distributed.comm import connect
+
+        comm = await connect(address, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    outcome: dict[str, Any] = {}
+
+    def ask() -> None:
+        try:
+            outcome["reply"] = asyncio.run(asyncio.wait_for(identity(), timeout + 2))
+        except BaseException as e:  # reported by the caller's thread
+            outcome["error"] = e
+
+    silent = DataError(
+        f"the Dask scheduler at {address} accepted the connection but did not answer within {timeout:g} s"
+    )
+    with quiet_dask_logs():
+        thread = threading.Thread(target=ask, name="glu-scheduler-probe", daemon=True)
+        thread.start()
+        thread.join(timeout + 7)
+    if thread.is_alive() or isinstance(outcome.get("error"), TimeoutError):
+        raise silent
+    error = outcome.get("error")
+    if error is None:
+        return outcome.get("reply")
+    cause = error.__cause__ or error  # Dask's "Timed out trying to connect" names the last attempt's error
+    why = str(cause).splitlines()[0][:120] if str(cause).strip() else type(cause).__name__
+    if isinstance(cause, OSError) and ("closed" in why.lower() or "reset" in why.lower()):
+        raise DataError(f"{address} accepted the connection and closed it: not a Dask scheduler that answers")
+    if isinstance(cause, TimeoutError) or "Timed out" in why:
+        raise silent
+    # an answer that is not Dask's (garbage decodes as anything)
+    raise DataError(f"{address} is not a Dask scheduler that answers ({why})")

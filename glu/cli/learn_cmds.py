@@ -175,12 +175,14 @@ def _curves(args: argparse.Namespace) -> int:
 
     from glu.errors import DataError
     from glu.files import atomic_write_json, atomic_write_text
-    from glu.machine import SYNCHRONOUS
+    from glu.machine import SYNCHRONOUS, check_reachable
     from glu.studies.learning import study as lc
 
     bad = [a for a in args.ambiguities if a not in _ambiguities()]
     if bad:
         raise DataError(f"--ambiguities: unknown {bad[0]!r}; allowed: {', '.join(_ambiguities())}")
+    if args.scheduler not in (None, SYNCHRONOUS):  # before any work: a scheduler that does not answer
+        check_reachable(args.scheduler)
     engine, label = _engine(args.data)
     settings = lc.StudySettings(
         episodes=args.episodes,
