@@ -80,6 +80,61 @@ def thread_env(threads: int | None, environ: dict[str, str] | None = None) -> di
     return {name: str(int(threads)) for name in THREAD_ENV if name not in environ}
 
 
+def _meminfo(field: str, path: str = "/proc/meminfo") -> int | None:
+    """A ``kB`` field of a ``/proc`` status file, in bytes (None where there is no such file or field)."""
+    try:
+        with open(path) as f:
+            for line in f:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def available_memory() -> int | None:
+    """Bytes this process may still allocate: the system's available memory, and below the address-space
+    limit (``ulimit -v``) what this process does not use yet; None where neither can be read."""
+    import resource
+
+    limits = []
+    system = _meminfo("MemAvailable")
+    if system is not None:
+        limits.append(system)
+    try:
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ValueError, OSError):
+        soft = resource.RLIM_INFINITY
+    if soft != resource.RLIM_INFINITY:
+        used = _meminfo("VmSize", "/proc/self/status") or 0
+        limits.append(max(soft - used, 0))
+    return min(limits) if limits else None
+
+
+def human_bytes(n: float) -> str:
+    """``n`` bytes as people read them.
+
+    >>> human_bytes(8_000_000_000_000), human_bytes(1536), human_bytes(12)
+    ('7.28 TiB', '1.50 KiB', '12 B')
+    """
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.0f} B" if unit == "B" else f"{n:.3g} {unit}" if n >= 1024 else f"{n:.2f} {unit}"
+        n /= 1024
+    raise AssertionError  # pragma: no cover
+
+
+def check_memory(need: float, what: str) -> None:
+    """DataError in one line when ``need`` bytes (what ``what`` declares) exceed what this process may still
+    allocate (:func:`available_memory`); checked before anything is allocated."""
+    free = available_memory()
+    if free is not None and need > free:
+        raise DataError(
+            f"{what} needs about {human_bytes(need)} of memory; this process may use {human_bytes(free)} "
+            "(the machine's available memory, or its ulimit)"
+        )
+
+
 VIEWER_ASSETS_ENV = "RERUN_NOTEBOOK_ASSET"
 VIEWER_ASSETS = "serve-local"
 """Where the inline Rerun viewer's files come from: ``serve-local``, the installed ``rerun-notebook``'s,

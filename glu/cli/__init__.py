@@ -152,6 +152,17 @@ def _main(argv: Sequence[str] | None) -> int:
     except OSError as e:
         print(f"{name}: error: {_os_error_text(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except MemoryError:  # a size no check foresaw: one line, not a traceback
+        from glu.machine import available_memory, human_bytes
+
+        free = available_memory()
+        print(
+            f"{name}: error: out of memory: the input needs more than this process may use"
+            + (f" ({human_bytes(free)} free now)" if free is not None else "")
+            + "; give a smaller input, or run where more memory is available",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     except RecursionError:  # JSON or YAML nested deeper than Python reads (a model, a schema, a query line)
         print(
             f"{name}: error: an input file is nested too deeply to read; is it the right file?",

@@ -27,6 +27,10 @@ from glu.cli.common import (
     seed,
 )
 
+EPISODE_BYTES = 120_000
+"""Memory an episode of ``learn-gestures`` holds at the peak of the simulation (about 110 kB measured:
+``tests/harness/test_fuzz_hostile.py``), for the check of ``--episodes`` before anything is allocated."""
+
 
 def _ambiguities() -> tuple[str, ...]:
     from glu.studies.learning.self_supervised import AMBIGUITIES
@@ -138,15 +142,22 @@ def _engine(data: str | None):
 
 
 def _learn(args: argparse.Namespace) -> int:
+    from glu.errors import DataError
     from glu.hmm import TrainingConfig
+    from glu.machine import check_memory
     from glu.studies.learning.learned_recognizers import learn_gestures
 
+    check_memory(args.episodes * EPISODE_BYTES, f"--episodes {args.episodes:,}")
     engine, label = _engine(args.data)
+    actions = engine.bn.schema.values_of("Action")
+    if args.episodes < len(actions):
+        raise DataError(
+            f"--episodes {args.episodes}: at least one episode per action ({len(actions)}: "
+            f"{', '.join(actions)}) to learn a model of each"
+        )
     print(f"network: learned from {label}")
     config = TrainingConfig(n_states=args.states, n_mix=args.mix, n_iter=args.iter)
     if args.threshold > 1:
-        from glu.errors import DataError
-
         raise DataError(f"--threshold {args.threshold}: a probability in (0, 1]")
     rec, info = learn_gestures(
         engine,
