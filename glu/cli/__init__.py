@@ -13,7 +13,9 @@ import os
 import signal
 import sys
 import traceback
+import warnings
 from collections.abc import Sequence
+from typing import Any
 
 from glu import __version__
 from glu.cli.commands import COMMANDS
@@ -124,6 +126,23 @@ def _stopped(name: str, e: KeyboardInterrupt) -> int:
     return 130
 
 
+def _say_data_warnings(name: str) -> Any:
+    """Print a :class:`glu.data.source.DataWarning` (a data folder that is the published data modified) as
+    one line on stderr, once per folder; other warnings as Python shows them."""
+    shown = warnings.showwarning
+    seen: set[str] = set()
+
+    def show(message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
+        if category.__name__ == "DataWarning":
+            if str(message) not in seen:
+                seen.add(str(message))
+                print(f"{name}: warning: {message}; results say so", file=sys.stderr)
+            return
+        shown(message, category, filename, lineno, file, line)
+
+    return show
+
+
 def _main(argv: Sequence[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser(argv)
@@ -140,7 +159,8 @@ def _main(argv: Sequence[str] | None) -> int:
     name = f"glu {args.command}" + (f" {sub}" if sub else "")
     debug = getattr(args, "debug", False) or os.environ.get(DEBUG_ENV, "") not in ("", "0")
     try:
-        with guarded_run(args):
+        with warnings.catch_warnings(), guarded_run(args):
+            warnings.showwarning = _say_data_warnings(name)
             status = args.func(args)
     except GluError as e:
         print(f"{name}: error: {e}", file=sys.stderr)

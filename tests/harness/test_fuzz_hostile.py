@@ -271,3 +271,52 @@ def test_an_unforeseen_memory_error_is_one_line(capsys, monkeypatch):
     monkeypatch.setattr(bn_cmds, "_edges", exhausted)
     status, _, err = run(capsys, "bn", "edges", "model.json")
     assert status == 2 and err.startswith("glu bn edges: error: out of memory") and err.count("\n") == 1
+
+
+# ------------------------------------------------------------------ data folders, verified
+def _copy_of_the_data(shared_data, dest):
+    import shutil
+
+    shutil.copytree(shared_data / "affordance-words", dest / "affordance-words")
+    return dest / "affordance-words" / "sent-1-5_lab_aff_bag.txt"
+
+
+@pytest.mark.parametrize(
+    ("damage", "said"),
+    [
+        (lambda b: b[: len(b) // 7], "columns, expected 57"),  # cut in the middle of a line
+        (lambda b: b[:5000] + bytes(range(128, 256)) + b[5256:], "not UTF-8 text"),  # binary garbage
+        (lambda b: b"", ""),  # empty
+    ],
+)
+def test_a_truncated_or_corrupted_data_file_is_refused_in_one_line(
+    capsys, tmp_path, shared_data, damage, said
+):
+    table = _copy_of_the_data(shared_data, tmp_path / "data")
+    table.write_bytes(damage(table.read_bytes()))
+    out = tmp_path / "r.json"
+    argv = ["learn-gestures", "--labels", "hard", "--episodes", "30", "--data", str(tmp_path / "data")]
+    status, _, err = run(capsys, *argv, "-o", str(out))
+    assert status == 2 and said in err and "sent-1-5_lab_aff_bag.txt" in err, err
+    assert err.count("glu learn-gestures: error:") == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_the_published_data_modified_is_said_as_such_and_never_named_as_published(
+    capsys, tmp_path, shared_data
+):
+    table = _copy_of_the_data(shared_data, tmp_path / "data")
+    lines = table.read_text().splitlines(keepends=True)
+    table.write_text("".join(lines[:200]))  # cut at a line: it still reads, as 199 experiments
+    out = tmp_path / "r.json"
+    argv = ["learn-gestures", "--labels", "hard", "--episodes", "30", "--data", str(tmp_path / "data")]
+    status, stdout, err = run(capsys, *argv, "-o", str(out))
+    assert status == 0, err
+    warning = [line for line in err.splitlines() if "warning" in line]
+    assert (
+        len(warning) == 1
+        and "the published data modified: affordance-words/sent-1-5_lab_aff_bag.txt" in warning[0]
+    )
+    assert "real data:" not in stdout and "the published data modified" in stdout
+    meta = json.loads(out.read_text())["meta"]
+    assert "the published data modified" in json.dumps(meta) and "real data:" not in json.dumps(meta)
