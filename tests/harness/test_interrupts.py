@@ -429,3 +429,29 @@ def test_an_interrupt_wrapped_by_compiled_code_is_still_an_interrupt(monkeypatch
     monkeypatch.setattr(bn_cmds, "_edges", handler)
     assert main(["bn", "edges", "model.json"]) == status
     assert capsys.readouterr().err == f"glu bn edges: {word}\n"
+
+
+def test_a_full_disk_during_the_site_build_publishes_nothing_and_leaves_no_staging(tmp_path, monkeypatch):
+    """The site is built inside the staged run: a disk that fills up there leaves the previous run published
+    and nothing of the new one behind (no site.new beside the old site)."""
+    import errno
+
+    import glu.run.reproduce as reproduce_module
+    import glu.run.site as site_module
+
+    monkeypatch.setattr(reproduce_module, "run_notebook", _fake_kernel)
+    monkeypatch.setattr(site_module, "build_site", _fake_site)
+    nbs, out = _notebooks(tmp_path / "nbs"), tmp_path / "out"
+    _reproduce_in_process(out, nbs, seed=1)
+    old = _published(out)
+
+    def full(layout, *args, **kwargs):
+        layout.site.mkdir()
+        (layout.site / "index.html").write_text("half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(site_module, "build_site", full)
+    with pytest.raises(OSError, match="No space left"):
+        _reproduce_in_process(out, nbs, seed=2)
+    assert _published(out) == old and len(_runs(out)) == 1
+    assert sorted(p.name for p in out.iterdir()) == sorted([".glu-runs", *OUTPUT_KINDS])

@@ -158,6 +158,19 @@ def test_an_earlier_glus_folders_in_the_checkout_are_recognised_and_anything_els
         "notebooks": "legacy",
         "site": "legacy",
     }
+    store = Store(layout)
+    store.survey(legacy)
+    run_folder = store.begin()
+    (run_folder / "results").mkdir()
+    (run_folder / "results" / "summary.json").write_text("{}")
+    store.record(run_folder, {})
+    store.publish(run_folder)  # the earlier glu's folders moved aside, then removed with the earlier runs
+    assert all(layout.folder(kind).is_symlink() for kind in OUTPUT_KINDS)
+    assert (layout.results / "summary.json").read_text() == "{}"
+    assert [d.name for d in (root / ".glu-runs").iterdir() if d.name.startswith("r")] == [run_folder.name]
+    (layout.results.parent / "results2").mkdir()
+    layout.results.unlink()
+    (layout.results.parent / "results2").rename(layout.results)
     (layout.results / "my_notes.txt").write_text("the user's own")
     with pytest.raises(PublishError, match="my_notes.txt"):
         Store(layout).survey(legacy)
