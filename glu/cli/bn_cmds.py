@@ -40,7 +40,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     bsub = p.add_subparsers(dest="bn_command", metavar="SUBCOMMAND")
     bsub.required = True
+    _register_learn_and_inspect(bsub)
+    _register_exchange(bsub)
+    _register_query(sub)
 
+
+def _register_learn_and_inspect(bsub: argparse._SubParsersAction) -> None:
+    """Add ``bn learn``, ``bn edges`` and ``bn nodes``."""
     lp = bsub.add_parser(
         "learn",
         help="learn structure (K2 + BIC) and parameters from the experiments",
@@ -75,6 +81,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_option(np_, "[{name, kind, values, parents}, …]")
     np_.set_defaults(func=_nodes)
 
+
+def _register_exchange(bsub: argparse._SubParsersAction) -> None:
+    """Add ``bn import`` and ``bn export``."""
     ip = bsub.add_parser(
         "import",
         help="convert a model from another tool (BIF, XMLBIF, UAI) or the original BNT .mat to a glu "
@@ -120,6 +129,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_renormalise_option(xp)
     xp.set_defaults(func=_export)
 
+
+def _register_query(sub: argparse._SubParsersAction) -> None:
+    """Add ``query``."""
     q = sub.add_parser(
         "query",
         help=help_of("query"),

@@ -48,6 +48,13 @@ SYNTHETIC_NOISE = 0.01
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``gestures`` and ``hmm`` command groups and ``recognize``."""
+    _register_gestures(sub)
+    _register_hmm(sub)
+    _register_recognize(sub)
+
+
+def _register_gestures(sub: argparse._SubParsersAction) -> None:
+    """Add ``gestures segment``."""
     g = sub.add_parser(
         "gestures",
         help=help_of("gestures"),
@@ -72,6 +79,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_option(s, "the segments and tracking events")
     s.set_defaults(func=_segment)
 
+
+def _register_hmm(sub: argparse._SubParsersAction) -> None:
+    """Add ``hmm train``."""
     h = sub.add_parser(
         "hmm",
         help=help_of("hmm"),
@@ -92,6 +102,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         + "; ".join(f"{k} = {v}" for k, v in INVARIANCE_MEANING.items())
         + " (formulas: glu.gestures.invariants)",
     )
+    _add_training_data(t)
+    _add_training_settings(t)
+    t.set_defaults(func=_train)
+
+
+def _add_training_data(t: argparse.ArgumentParser) -> None:
+    """``hmm train``'s data (``--data``, ``--synthetic``, ``--recordings``) and output."""
     src = t.add_mutually_exclusive_group()
     add_data_option(src)
     src.add_argument(
@@ -108,6 +125,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument(
         "-o", "--out", type=output_file, required=True, metavar="RECOGNISER", help="file to write (JSON)"
     )
+
+
+def _add_training_settings(t: argparse.ArgumentParser) -> None:
+    """``hmm train``'s actions, model sizes, EM settings, recipe and features."""
     t.add_argument(
         "--actions",
         type=_actions,
@@ -161,8 +182,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="real data: also train on the originals' hand-cut segments of the two seated taps (the "
         "effect-anticipation test gestures; default: the standing recordings only)",
     )
-    t.set_defaults(func=_train)
 
+
+def _register_recognize(sub: argparse._SubParsersAction) -> None:
+    """Add ``recognize``."""
     r = sub.add_parser(
         "recognize",
         help=help_of("recognize"),

@@ -172,8 +172,33 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
         )
     if not 0.0 <= asr_noise <= 0.5:
         raise DataError(f"asr_noise={asr_noise!r} is out of range; allowed: 0 to 0.5")
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(seed)  # every step below draws from it in a fixed order
     n = int(n)
+    codes = _sample_affordances(rng, n)
+    words = {w: np.zeros(n, dtype=bool) for w in WORDS}
+    _subject_and_verb(rng, n, words, codes["Action"])
+    _object_phrase(rng, n, words, codes)
+    _effect_phrase(rng, n, words, codes)
+    if asr_noise > 0:
+        for w in WORDS:
+            present = words[w]
+            flip = rng.random(n) < np.where(present, asr_noise, asr_noise / 10)
+            words[w] = present ^ flip
+    schema = default_schema()
+    data: dict[str, pd.Categorical] = {}
+    for node in AFFORDANCE_VALUES:
+        data[node] = pd.Categorical.from_codes(codes[node], categories=list(schema.values_of(node)))
+    for w in WORDS:
+        data[w] = pd.Categorical.from_codes(words[w].astype(np.int8), categories=list(WORD_VALUES))
+    df = pd.DataFrame(data)
+    df.attrs["data_source"] = f"synthetic data (seed {seed}, {n} experiments" + (
+        f", asr_noise {asr_noise})" if asr_noise else ")"
+    )
+    return df
+
+
+def _sample_affordances(rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+    """The affordance nodes of ``n`` experiments, drawn from the simulated world's network in its order."""
     world = WORLD
     codes: dict[str, np.ndarray] = {}
     for node, parents in world.parents.items():
@@ -183,16 +208,18 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
         else:
             rows = np.broadcast_to(cpt, (n, cpt.shape[-1]))
         codes[node] = _sample(rng, rows)
-    words = {w: np.zeros(n, dtype=bool) for w in WORDS}
-    action, color, shape, size, objvel = (codes[k] for k in ("Action", "Color", "Shape", "Size", "ObjVel"))
+    return codes
 
-    # agent: the robot | he | baltazar
+
+def _subject_and_verb(
+    rng: np.random.Generator, n: int, words: dict[str, np.ndarray], action: np.ndarray
+) -> None:
+    """Who acts (the robot | he | baltazar) and a synonym of the action in one of four forms."""
     agent = _choice(rng, n, [0.5, 0.25, 0.25])
     words["robot"] |= agent == 0
     words["the"] |= True  # "the robot" or "the <object>": every description has it
     words["he"] |= agent == 1
     words["baltazar"] |= agent == 2
-    # verb: a synonym of the action, in one of four forms
     synonym = _choice(rng, n, [0.6, 0.4])
     form = _choice(rng, n, [0.3, 0.3, 0.2, 0.2])  # taps | is tapping | has just tapped | tapped
     for a, pair in _VERBS.items():
@@ -205,7 +232,13 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
     words["is"] |= form == 1
     words["has"] |= form == 2
     words["just"] |= (form == 2) & (rng.random(n) < 0.5)
-    # object: the [size] [color] shape
+
+
+def _object_phrase(
+    rng: np.random.Generator, n: int, words: dict[str, np.ndarray], codes: dict[str, np.ndarray]
+) -> None:
+    """The object: the [size] [color] shape."""
+    color, shape, size = codes["Color"], codes["Shape"], codes["Size"]
     says_size = rng.random(n) < 0.6
     words["small"] |= says_size & (size == 0)
     words["big"] |= says_size & (size == 2)
@@ -219,11 +252,16 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
     words["box"] |= (shape == 1) & (noun == 0)
     words["square"] |= (shape == 1) & (noun == 1)
     words["cube"] |= (shape == 1) & (noun == 2)
-    # conjunction: "but" when the action did not have its usual outcome
+
+
+def _effect_phrase(
+    rng: np.random.Generator, n: int, words: dict[str, np.ndarray], codes: dict[str, np.ndarray]
+) -> None:
+    """The conjunction ("but" when the action did not have its usual outcome) and the effect phrase."""
+    action, shape, size, objvel = codes["Action"], codes["Shape"], codes["Size"], codes["ObjVel"]
     failed = ((action == 0) & (objvel == 0)) | ((action == 1) & (objvel == 0))
     words["but"] |= failed
     words["and"] |= ~failed
-    # effect phrase
     progressive = rng.random(n) < 0.5
     still = objvel == 0
     which = rng.random(n) < 0.5
@@ -233,15 +271,13 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
     lifted = (action == 0) & (objvel == 1)
     falls = lifted & (rng.random(n) < np.where(size == 2, 0.4, 0.1))
     rises = lifted & ~falls
-    for mask, third, ing in ((rises, "rises", "rising"), (falls, "falls", "falling")):
-        words[third] |= mask & ~progressive
-        words[ing] |= mask & progressive
-        words["is"] |= mask & progressive
     moving = (objvel >= 1) & ~lifted
     rolls = moving & (shape == 0) & (objvel == 2)
     slides = moving & (shape == 1) & (objvel == 2)
     moves = moving & ~rolls & ~slides
     for mask, third, ing in (
+        (rises, "rises", "rising"),
+        (falls, "falls", "falling"),
         (rolls, "rolls", "rolling"),
         (slides, "slides", "sliding"),
         (moves, "moves", "moving"),
@@ -249,23 +285,6 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
         words[third] |= mask & ~progressive
         words[ing] |= mask & progressive
         words["is"] |= mask & progressive
-    if asr_noise > 0:
-        for w in WORDS:
-            present = words[w]
-            flip = rng.random(n) < np.where(present, asr_noise, asr_noise / 10)
-            words[w] = present ^ flip
-
-    schema = default_schema()
-    data: dict[str, pd.Categorical] = {}
-    for node in AFFORDANCE_VALUES:
-        data[node] = pd.Categorical.from_codes(codes[node], categories=list(schema.values_of(node)))
-    for w in WORDS:
-        data[w] = pd.Categorical.from_codes(words[w].astype(np.int8), categories=list(WORD_VALUES))
-    df = pd.DataFrame(data)
-    df.attrs["data_source"] = f"synthetic data (seed {seed}, {n} experiments" + (
-        f", asr_noise {asr_noise})" if asr_noise else ")"
-    )
-    return df
 
 
 def write_synthetic_folder(
