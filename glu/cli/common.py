@@ -266,15 +266,15 @@ def add_engine_args(p: argparse.ArgumentParser) -> None:
 
 
 def make_engine(bn: Any, args: argparse.Namespace) -> Any:
-    """The :class:`~glu.bn.inference.InferenceEngine` of ``bn`` with the command's ``--max-table``, which is
-    first checked against the memory this process may use (a table of N entries takes 8 N bytes)."""
-    from glu.bn.inference import InferenceEngine
+    """The :class:`~glu.bn.inference.Engine` of ``bn`` with the command's ``--max-table``, which is first
+    checked against the memory this process may use (a table of N entries takes 8 N bytes)."""
+    from glu.bn import inference
     from glu.machine import check_memory
 
     max_table = getattr(args, "max_table", None)
     if max_table is not None:
         check_memory(8 * max_table, f"--max-table {max_table:,} (a table of that many entries)")
-    return InferenceEngine(bn, max_table=max_table)
+    return inference.make_engine(bn, max_table=max_table)
 
 
 def add_evidence_args(p: argparse.ArgumentParser) -> None:

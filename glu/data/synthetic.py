@@ -172,18 +172,23 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
         )
     if not 0.0 <= asr_noise <= 0.5:
         raise DataError(f"asr_noise={asr_noise!r} is out of range; allowed: 0 to 0.5")
-    rng = np.random.default_rng(seed)  # every step below draws from it in a fixed order
+    rng = np.random.default_rng(seed)
     n = int(n)
-    codes = _sample_affordances(rng, n)
+    codes = _draw_world(rng, n)
     words = {w: np.zeros(n, dtype=bool) for w in WORDS}
-    _subject_and_verb(rng, n, words, codes["Action"])
-    _object_phrase(rng, n, words, codes)
-    _effect_phrase(rng, n, words, codes)
+    action, color, shape, size, objvel = (codes[k] for k in ("Action", "Color", "Shape", "Size", "ObjVel"))
+    _say_agent_and_verb(rng, n, action, words)
+    _say_object(rng, n, color, shape, size, words)
+    failed = ((action == 0) & (objvel == 0)) | ((action == 1) & (objvel == 0))  # not the usual outcome
+    words["but"] |= failed
+    words["and"] |= ~failed
+    _say_effect(rng, n, action, shape, size, objvel, words)
     if asr_noise > 0:
         for w in WORDS:
             present = words[w]
             flip = rng.random(n) < np.where(present, asr_noise, asr_noise / 10)
             words[w] = present ^ flip
+
     schema = default_schema()
     data: dict[str, pd.Categorical] = {}
     for node in AFFORDANCE_VALUES:
@@ -197,12 +202,11 @@ def synthesize_experiments(n: int = 1270, seed: int = 0, asr_noise: float = 0.0)
     return df
 
 
-def _sample_affordances(rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-    """The affordance nodes of ``n`` experiments, drawn from the simulated world's network in its order."""
-    world = WORLD
+def _draw_world(rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+    """The affordance nodes of ``n`` experiments, drawn from :data:`WORLD` in its node order (value codes)."""
     codes: dict[str, np.ndarray] = {}
-    for node, parents in world.parents.items():
-        cpt = world.cpts[node]
+    for node, parents in WORLD.parents.items():
+        cpt = WORLD.cpts[node]
         if parents:
             rows = cpt[tuple(codes[p] for p in parents)]
         else:
@@ -211,10 +215,8 @@ def _sample_affordances(rng: np.random.Generator, n: int) -> dict[str, np.ndarra
     return codes
 
 
-def _subject_and_verb(
-    rng: np.random.Generator, n: int, words: dict[str, np.ndarray], action: np.ndarray
-) -> None:
-    """Who acts (the robot | he | baltazar) and a synonym of the action in one of four forms."""
+def _say_agent_and_verb(rng: np.random.Generator, n: int, action: np.ndarray, words: dict) -> None:
+    """ "the robot | he | baltazar", then a synonym of the action in one of four forms."""
     agent = _choice(rng, n, [0.5, 0.25, 0.25])
     words["robot"] |= agent == 0
     words["the"] |= True  # "the robot" or "the <object>": every description has it
@@ -234,11 +236,8 @@ def _subject_and_verb(
     words["just"] |= (form == 2) & (rng.random(n) < 0.5)
 
 
-def _object_phrase(
-    rng: np.random.Generator, n: int, words: dict[str, np.ndarray], codes: dict[str, np.ndarray]
-) -> None:
-    """The object: the [size] [color] shape."""
-    color, shape, size = codes["Color"], codes["Shape"], codes["Size"]
+def _say_object(rng, n: int, color: np.ndarray, shape: np.ndarray, size: np.ndarray, words: dict) -> None:
+    """ "the [size] [colour] shape"."""
     says_size = rng.random(n) < 0.6
     words["small"] |= says_size & (size == 0)
     words["big"] |= says_size & (size == 2)
@@ -254,14 +253,8 @@ def _object_phrase(
     words["cube"] |= (shape == 1) & (noun == 2)
 
 
-def _effect_phrase(
-    rng: np.random.Generator, n: int, words: dict[str, np.ndarray], codes: dict[str, np.ndarray]
-) -> None:
-    """The conjunction ("but" when the action did not have its usual outcome) and the effect phrase."""
-    action, shape, size, objvel = codes["Action"], codes["Shape"], codes["Size"], codes["ObjVel"]
-    failed = ((action == 0) & (objvel == 0)) | ((action == 1) & (objvel == 0))
-    words["but"] |= failed
-    words["and"] |= ~failed
+def _say_effect(rng, n: int, action, shape, size, objvel, words: dict) -> None:
+    """What the object did: still or inert, rises or falls after a grasp, rolls, slides or moves."""
     progressive = rng.random(n) < 0.5
     still = objvel == 0
     which = rng.random(n) < 0.5

@@ -151,11 +151,6 @@ class WordNetwork:
             s = nxt
         return self.final[s]
 
-    @property
-    def used_words(self) -> tuple[str, ...]:
-        """The words that occur on some arc, sorted."""
-        return tuple(sorted({self.words[w] for arcs in self.arcs for w, _ in arcs}))
-
 
 # ---------------------------------------------------------------------------------------- construction
 def _expanded_size(grammar: Grammar) -> int:
@@ -191,9 +186,13 @@ def compile_network(grammar: Grammar) -> WordNetwork:
             grammar.source,
         )
     vocab = grammar.vocabulary
-    index = {w: i for i, w in enumerate(vocab)}
+    eps, trans, s0, t0 = _thompson(grammar, {w: i for i, w in enumerate(vocab)})
+    dfa_arcs, final = _subsets(eps, trans, s0, t0, grammar.source)
+    return _trim(vocab, dfa_arcs, final, 0, grammar.source)
 
-    # Thompson construction: word arcs and epsilon arcs between integer states.
+
+def _thompson(grammar: Grammar, index: dict[str, int]) -> tuple[list, list, int, int]:
+    """Thompson's construction: (epsilon arcs, word arcs (word, target) per state, start, end)."""
     eps: list[list[int]] = []
     trans: list[list[tuple[int, int]]] = []
 
@@ -233,6 +232,14 @@ def compile_network(grammar: Grammar) -> WordNetwork:
         build(grammar.sentence, s0, t0)
     except RecursionError:
         raise GrammarError("the grammar nests too deeply to compile", grammar.source) from None
+    return eps, trans, s0, t0
+
+
+def _subsets(
+    eps: list, trans: list, s0: int, t0: int, source: str
+) -> tuple[list[dict[int, int]], list[bool]]:
+    """The subset construction: the deterministic arcs from state 0 (the start's closure), and which states
+    are final; GrammarError past :data:`MAX_DFA_STATES`."""
 
     def closure(states: Iterable[int]) -> frozenset[int]:
         seen = set(states)
@@ -244,7 +251,6 @@ def compile_network(grammar: Grammar) -> WordNetwork:
                     stack.append(t)
         return frozenset(seen)
 
-    # subset construction
     start = closure([s0])
     ids: dict[frozenset[int], int] = {start: 0}
     subsets = [start]
@@ -261,15 +267,14 @@ def compile_network(grammar: Grammar) -> WordNetwork:
             if c not in ids:
                 if len(subsets) >= MAX_DFA_STATES:
                     raise GrammarError(
-                        f"the grammar's word network needs more than {MAX_DFA_STATES} states", grammar.source
+                        f"the grammar's word network needs more than {MAX_DFA_STATES} states", source
                     )
                 ids[c] = len(subsets)
                 subsets.append(c)
             out[w] = ids[c]
         dfa_arcs.append(out)
         k += 1
-    final = [t0 in sub for sub in subsets]
-    return _trim(vocab, dfa_arcs, final, 0, grammar.source)
+    return dfa_arcs, [t0 in sub for sub in subsets]
 
 
 def _trim(
@@ -398,8 +403,3 @@ def enumerate_sentences(grammar: Grammar | WordNetwork, max_length: int | None =
         for w, t in reversed(net.arcs[s]):
             if len(words) + 1 + rem[t] <= limit:
                 stack.append((t, (*words, net.words[w])))
-
-
-def sentence_text(sentence: Iterable[str]) -> str:
-    """The words of a sentence joined by single spaces."""
-    return " ".join(sentence)

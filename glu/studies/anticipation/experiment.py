@@ -22,13 +22,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.data.published import published
 from glu.data.source import DataSource
 from glu.errors import DataError, ModelError
 from glu.fusion import fuse
-from glu.gestures.features import load_features
 from glu.gestures.recognizer import Recognizer
+from glu.gestures.recordings import load_features
 from glu.gestures.synthetic import synthesize_gesture
 from glu.gestures.trajectories import RepairPolicy, Trajectory
 from glu.hmm import p_hmm_from_loglik
@@ -272,7 +272,7 @@ def update_indices(n_frames: int, step: int = ORIGINAL_STEP, final_update: bool 
 
 def effect_anticipation(
     recognizer: Recognizer,
-    engine: InferenceEngine,
+    engine: Engine,
     trajectory: Trajectory,
     evidence: Mapping[str, str],
     *,
@@ -308,11 +308,9 @@ def effect_anticipation(
     X = np.asarray(trajectory.xyz, dtype=float)
     loglik = recognizer.loglik_curve(X)[:, order]
     p_hmm = p_hmm_from_loglik(loglik)
-    T = len(X)
-    idx = update_indices(T, step, final_update)
+    idx = update_indices(len(X), step, final_update)
     extra = np.zeros(len(idx), dtype=bool)
-    if final_update and (T % step):
-        extra[-1] = True
+    extra[-1] = final_update and bool(len(X) % step)
     fused = fuse(engine, list(targets), evidence, p_hmm[idx], rule)
     cands = None if candidates is None else SentenceSet.of(candidates)
     run = AnticipationRun(
@@ -341,17 +339,16 @@ def effect_anticipation(
     )
     if describe:
         for i in idx if describe is True else idx[-1:]:
-            best = best_sentences(
-                engine,
-                evidence,
-                soft={"Action": p_hmm[i]},
-                soft_rule=rule,
-                n=1,
-                score=score,
-                candidates=cands,
-            )
-            run.descriptions.append(str(best["sentence"].iloc[0]))
+            run.descriptions.append(_best_description(engine, evidence, p_hmm[i], rule, score, cands))
     return run
+
+
+def _best_description(engine, evidence, p_hmm: np.ndarray, rule: str, score: str, cands) -> str:
+    """The best verbal description given the object and p_HMM as soft evidence on Action."""
+    best = best_sentences(
+        engine, evidence, soft={"Action": p_hmm}, soft_rule=rule, n=1, score=score, candidates=cands
+    )
+    return str(best["sentence"].iloc[0])
 
 
 def published_comparison(run: AnticipationRun) -> pd.DataFrame:

@@ -1,7 +1,7 @@
 """The verbal-description experiments of TCDS 2020 (docs/method.md §7.5), each a function returning a tidy
 DataFrame.
 
-Every function takes an :class:`~glu.bn.InferenceEngine` (word probabilities given evidence) and
+Every function takes an :class:`~glu.bn.Engine` (word probabilities given evidence) and
 optionally a grammar (default: glu's, the originals' language). Two ways to choose a description:
 
 * as the originals did: rank their 9,941 sampled sentences with their score ``(1 + Σ log p)/L``.
@@ -164,21 +164,6 @@ def and_but_nbest(
 def _conjunction(sentence: str) -> str:
     found = [w for w in sentence.split() if w in CONJUNCTIONS]
     return found[0] if found else ""
-
-
-def best_with_colour(
-    engine: Any, evidence: Mapping[str, str], grammar: Grammar | WordNetwork | None = None, n: int = 1
-) -> pd.DataFrame:
-    """The exact ``n`` best descriptions that name a colour (contain green, yellow or blue).
-
-    Returns
-    -------
-    DataFrame with columns rank, sentence, score, length.
-    """
-    net = word_network(grammar)
-    colours = [w for w in COLOUR_WORDS if w in net.words]
-    df = nbest(net, word_probabilities(engine, evidence), n, must_contain=colours)
-    return tidy(df, "verbal_best_with_colour", model_source(engine.bn), evidence=evidence, n=n)
 
 
 def fig8_descriptions(engine: Any, grammar: Grammar | WordNetwork | None = None) -> pd.DataFrame:
