@@ -56,7 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=(
             "Run one notebook headless, showing each cell as it starts on stderr (--quiet: nothing). "
             "Parameters are checked against the notebook's parameters cell before anything executes. "
-            "Outputs go to build/scratch/NOTEBOOK/ unless -o DIR is given; only glu reproduce publishes into "
+            "Outputs go to a new folder build/scratch/NOTEBOOK/DATE-TIME/ unless -o DIR is given (a folder "
+            "glu reproduce published into is refused); only glu reproduce publishes into "
             'figures/, results/, recordings/, models/. --json prints {"notebook", "executed", "outputs"} '
             "(with --list: the parameters)."
         ),
@@ -73,7 +74,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_data_option(r)
     r.add_argument(
-        "-o", "--out", type=Path, metavar="DIR", help="output folder (default: build/scratch/NOTEBOOK/)"
+        "-o",
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="output folder (default: a new build/scratch/NOTEBOOK/DATE-TIME/)",
     )
     r.add_argument(
         "--quick", action="store_true", help="the quick preset of the notebook's manifest (-p values win)"

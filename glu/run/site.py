@@ -16,10 +16,13 @@ MyST-NB (the stack of Jupyter Book 1) and the PyData theme. It holds
   napoleon);
 * search (Sphinx's own, offline). A click on any figure opens it at its natural size with its caption.
 
-The sources are assembled in the layout's ``site-source/`` folder (kept, with Sphinx's doctrees, so that the
-next build only reads again what changed); the HTML is written there afresh and then replaces ``site/``, so a
-failed build leaves the previous site as it was. Any Sphinx warning fails the build (:class:`SiteError`).
-Nothing is fetched from the web: the theme's files are installed with it.
+The sources are assembled in the store's ``site-source/`` folder (kept, with Sphinx's doctrees, so that the
+next build only reads again what changed); the HTML is written there afresh and then copied into the run
+being staged, which :mod:`glu.run.publish` publishes whole, so a failed build publishes nothing. Any Sphinx
+warning fails the build (:class:`SiteError`). What the site reads of a run is checked first: a malformed
+``summary.json``, a name in it that is not a plain file name, or an executed notebook that is truncated or
+empty is refused in one line (:func:`read_summary`, :func:`assemble`). Nothing is fetched from the web: the
+theme's files are installed with it.
 """
 
 from __future__ import annotations
