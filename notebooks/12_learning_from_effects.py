@@ -146,9 +146,7 @@ print("\n".join(study.match_lines(match)))
 # %%
 amb = self_supervised.AMBIGUITIES[recorded_ambiguity]
 seen = self_supervised.simulate_episodes(engine, amb, recorded_episodes, seed)
-test = self_supervised.simulate_episodes(
-    engine, amb, 3 * test_per_action, seed, offset=self_supervised.TEST_OFFSET, balanced=True
-)
+test = self_supervised.simulate_episodes(engine, amb, 3 * test_per_action, seed, offset=self_supervised.TEST_OFFSET, balanced=True)
 p_bn = self_supervised.network_posteriors(engine, seen.perceived, seen.world)
 every = [n for n in range(10, recorded_episodes + 1, 10)] or [recorded_episodes]
 life = online.run_online(
