@@ -77,6 +77,43 @@ def _changes(effects: pd.DataFrame, verdict: str) -> str:
     return "; ".join(parts)
 
 
+def _condition_sentences(h: pd.DataFrame) -> list[str]:
+    """The mirror image, the seated posture, everything at once and each sensor noise level."""
+    out = []
+    for factor, level, feats, what in (
+        ("mirror", "mirrored", ("raw", "centred+mirrored", "body"), "A mirror image"),
+        ("posture", "seated", ("raw", "centred", "body+centred"), "Seated"),
+        ("combined", None, ("raw", ALL_FOUR, "body+centred"), "Seated, mirrored, turned and bigger at once"),
+    ):
+        text = _named(h, factor, feats, level)
+        if text:
+            out.append(f"{what}: {text}.")
+    noise = h[h["factor"] == "sensor noise"]
+    for level in dict.fromkeys(noise["level"]):
+        out.append(
+            f"With {level} of sensor noise: "
+            + _named(h, "sensor noise", ("raw", "centred", "centred+rotated", "body", "body+centred"), level)
+            + "."
+        )
+    return out
+
+
+def _robot_sentences(summary: pd.DataFrame) -> list[str]:
+    """Recognisers trained on the robot's own movements: the best on people beside the robot's own."""
+    r = summary[summary["train"] == "robot"]
+    own, people = r[r["factor"] == "performer"], r[r["factor"] != "performer"]
+    if not (len(own) and len(people)):
+        return []
+    best = people.loc[people["accuracy"].idxmax()]
+    return [
+        "Trained on the robot's own movements — drawn by a hand-written generator of an iCub-like arm "
+        "(waypoints, timings and proportions chosen for this study, not measured on a robot) — no "
+        f"feature set recognises people better than {best.accuracy:.2f} "
+        f"[{best.ci_low:.2f}, {best.ci_high:.2f}] ({best.features}, {best.factor}: {best.level}), "
+        f"while the robot recognises its own at {_span(own['accuracy'])}."
+    ]
+
+
 def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame, brief: bool = False) -> list[str]:
     """What the synthetic study shows, one sentence per finding (accuracy with its two-level interval; the
     invariances' paired changes by their adjusted verdicts).
@@ -109,30 +146,8 @@ def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame, brief: bool = 
             f"and right beyond {SWAP_DEG:.0f}° (as a depth camera's does): {occluded}. The body frame needs "
             "the shoulder line, and from behind the tracker follows the resting hand."
         )
-    for factor, level, feats, what in (
-        ()
-        if brief
-        else (
-            ("mirror", "mirrored", ("raw", "centred+mirrored", "body"), "A mirror image"),
-            ("posture", "seated", ("raw", "centred", "body+centred"), "Seated"),
-            (
-                "combined",
-                None,
-                ("raw", ALL_FOUR, "body+centred"),
-                "Seated, mirrored, turned and bigger at once",
-            ),
-        )
-    ):
-        text = _named(h, factor, feats, level)
-        if text:
-            out.append(f"{what}: {text}.")
-    noise = h[h["factor"] == "sensor noise"]
-    for level in () if brief else dict.fromkeys(noise["level"]):
-        out.append(
-            f"With {level} of sensor noise: "
-            + _named(h, "sensor noise", ("raw", "centred", "centred+rotated", "body", "body+centred"), level)
-            + "."
-        )
+    if not brief:
+        out += _condition_sentences(h)
     human = effects[effects["train"] == "human"]
     if len(human):
         n = len(human)
@@ -142,17 +157,7 @@ def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame, brief: bool = 
             f"{n - 1} by Benjamini–Hochberg): " + (costs or "nowhere") + "."
         )
         out.append("Where it buys accuracy, adjusted alike: " + (helps or "nowhere") + ".")
-    r = summary[summary["train"] == "robot"]
-    own, people = r[r["factor"] == "performer"], r[r["factor"] != "performer"]
-    if len(own) and len(people):
-        best = people.loc[people["accuracy"].idxmax()]
-        out.append(
-            "Trained on the robot's own movements — drawn by a hand-written generator of an iCub-like arm "
-            "(waypoints, timings and proportions chosen for this study, not measured on a robot) — no "
-            f"feature set recognises people better than {best.accuracy:.2f} "
-            f"[{best.ci_low:.2f}, {best.ci_high:.2f}] ({best.features}, {best.factor}: {best.level}), "
-            f"while the robot recognises its own at {_span(own['accuracy'])}."
-        )
+    out += _robot_sentences(summary)
     if brief:
         return out
     zero = int((summary["ci_high"] - summary["ci_low"] == 0).sum())
