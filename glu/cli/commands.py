@@ -47,6 +47,10 @@ COMMANDS: dict[str, Command] = {
         "glu.cli.eval_cmds", "measure every fusion strategy on a simulated corpus (Dask sweep)"
     ),
     "corpus": Command("glu.cli.eval_cmds", "write a simulated corpus of episodes to Parquet"),
+    "correspondence": Command(
+        "glu.cli.correspondence_cmds",
+        "run notebook 10's synthetic correspondence study (Dask) and save its tables",
+    ),
     "learn-gestures": Command(
         "glu.cli.learn_cmds",
         "learn gesture HMMs from unlabelled episodes, labelled by the affordance network",
