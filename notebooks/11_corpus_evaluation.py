@@ -131,40 +131,13 @@ from glu.gestures.corpus import gesture_sequences
 from glu.run import start
 from glu.saved import provenance_text
 from glu.studies.corpus_evaluation import conditions, figures, findings, p_hmm_readings
-from glu.studies.corpus_evaluation.config import config_from_dict
+from glu.studies.corpus_evaluation.config import config_from_parameters
 from glu.studies.corpus_evaluation.sweep import notebook_tables
 from glu.studies.corpus_evaluation.tables import read_tables, saved_subset
 
 out = start("11_corpus_evaluation", globals())
 if sweep_dir is None:
-    config = config_from_dict(
-        {
-            "episodes": episodes,
-            "seed": seed,
-            "chunk_size": chunk_size,
-            "recognizer_seeds": recognizer_seeds,
-            "grid": {
-                "effects": effects,
-                "action_prior": action_prior,
-                "inference_network": inference_network,
-                "learn_experiments": learn_experiments,
-                "p_hmm": p_hmm,
-                "features": feature_sets,
-                "noise": noise_levels,
-                "viewpoints": viewpoints,
-                "fractions": fractions,
-            },
-            "network": {"data": "synthetic" if out.source.root is None else str(out.source.root)},
-            "evaluation": {"bootstrap": bootstrap},
-            "recognizer": {
-                "n_per_action": n_per_action,
-                "n_states": n_states,
-                "n_mix": n_mix,
-                "n_iter": n_iter,
-                "calibration_per_action": calibration_per_action,
-            },
-        }
-    )
+    config = config_from_parameters(globals(), out.source.root)
     folder = notebook_tables(config, workers=workers or None)
     out.say(provenance_text(folder))
 else:

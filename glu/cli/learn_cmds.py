@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from glu.cli.commands import help_of
 from glu.cli.common import (
     add_cluster_args,
     add_data_option,
@@ -27,6 +28,10 @@ from glu.cli.common import (
     progress_bar,
     seed,
 )
+
+EPISODE_BYTES = 120_000
+"""Memory an episode of ``learn-gestures`` holds at the peak of the simulation (about 110 kB measured:
+``tests/harness/test_fuzz_hostile.py``), for the check of ``--episodes`` before anything is allocated."""
 
 
 def _seeds(text: str) -> tuple[int, ...]:
@@ -52,7 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     world_help = "; ".join(f"{k}: {w.description}" for k, w in WORLDS.items()).replace("%", "%%")
     p = sub.add_parser(
         "learn-gestures",
-        help="learn gesture HMMs from unlabelled episodes, labelled by the affordance network",
+        help=help_of("learn-gestures"),
         description="Simulate episodes (a person's gesture on an object, the effect, the words), label each "
         "with the Affordance–Words network learned from the robot's own experiments, train gesture HMMs from "
         "those labels and write a recogniser that glu recognize and glu anticipate take (--models FILE).",
@@ -104,7 +109,7 @@ def _register_curves(sub: argparse._SubParsersAction, ambiguity_help: str, world
 
     c = sub.add_parser(
         "learning-curves",
-        help="the long runs of learning from effects (Dask, one task per seed): what notebook 12 reads",
+        help=help_of("learning-curves"),
         description="Run the study of notebook 12 at the budgets the notebook does not run itself: every "
         "labelling scheme and control, every world and ambiguity, with and without words, one Dask task per "
         "training seed (--part curves); and the real person, learned from a generator fitted to their "
@@ -166,14 +171,21 @@ def _engine(data: str | None):
 
 
 def _learn(args: argparse.Namespace) -> int:
+    from glu.errors import DataError
     from glu.hmm import TrainingConfig
+    from glu.machine import check_memory
     from glu.studies.learning.learned_recognizers import learn_gestures
 
-    if args.threshold > 1:
-        from glu.errors import DataError
-
-        raise DataError(f"--threshold {args.threshold}: a probability in (0, 1]")
+    check_memory(args.episodes * EPISODE_BYTES, f"--episodes {args.episodes:,}")
     engine, label = _engine(args.data)
+    actions = engine.bn.schema.values_of("Action")
+    if args.episodes < len(actions):
+        raise DataError(
+            f"--episodes {args.episodes}: at least one episode per action ({len(actions)}: "
+            f"{', '.join(actions)}) to learn a model of each"
+        )
+    if args.threshold > 1:
+        raise DataError(f"--threshold {args.threshold}: a probability in (0, 1]")
     print(f"network: learned from {label}", flush=True)
     config = TrainingConfig(n_states=args.states, n_mix=args.mix, n_iter=args.iter)
     bar = (
@@ -211,7 +223,7 @@ def _learn(args: argparse.Namespace) -> int:
 
 def _curves(args: argparse.Namespace) -> int:
     from glu.errors import DataError
-    from glu.machine import SYNCHRONOUS
+    from glu.machine import SYNCHRONOUS, check_reachable
     from glu.studies.learning import study as lc
 
     for flag, given, allowed in (
@@ -223,6 +235,8 @@ def _curves(args: argparse.Namespace) -> int:
             raise DataError(f"{flag}: unknown {(bad or ['(none)'])[0]!r}; allowed: {', '.join(allowed)}")
     if args.margin >= 1:
         raise DataError(f"--margin {args.margin}: an accuracy in (0, 1)")
+    if args.scheduler not in (None, SYNCHRONOUS):  # before any work: a scheduler that does not answer
+        check_reachable(args.scheduler)
     settings = lc.StudySettings(
         episodes=args.episodes,
         seeds=args.seeds,

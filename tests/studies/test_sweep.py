@@ -16,7 +16,7 @@ import pytest
 from cli_run import run
 
 from glu.errors import DataError
-from glu.studies.corpus_evaluation.config import config_from_dict, load_config
+from glu.studies.corpus_evaluation.config import config_from_dict, config_from_parameters, load_config
 from glu.studies.corpus_evaluation.sweep import run_sweep
 
 SMALL = """\
@@ -363,21 +363,25 @@ def test_the_notebooks_defaults_are_the_saved_sweep_file():
         k: p.default for k, p in read_spec(PROJECT_ROOT / "notebooks" / "11_corpus_evaluation.py").items()
     }
     saved = load_config(PROJECT_ROOT / "sweeps" / "11_corpus_evaluation" / "sweep.toml")
-    grid = {
-        "effects": spec["effects"], "action_prior": spec["action_prior"],
-        "inference_network": spec["inference_network"], "learn_experiments": spec["learn_experiments"],
-        "p_hmm": spec["p_hmm"], "features": spec["feature_sets"], "noise": spec["noise_levels"],
-        "viewpoints": spec["viewpoints"], "fractions": spec["fractions"],
-    }  # fmt: skip
-    recognizer = {
-        k: spec[k] for k in ("n_per_action", "n_states", "n_mix", "n_iter", "calibration_per_action")
-    }
-    notebook = config_from_dict(
-        {"episodes": spec["episodes"], "seed": spec["seed"], "chunk_size": spec["chunk_size"],
-         "recognizer_seeds": spec["recognizer_seeds"], "grid": grid,
-         "evaluation": {"bootstrap": spec["bootstrap"]}, "recognizer": recognizer}
-    )  # fmt: skip
-    assert notebook.as_dict() == saved.as_dict()
+    notebook = config_from_parameters(spec, "DATA").as_dict()
+    assert notebook.pop("network")["data"] == "DATA"
+    expected = saved.as_dict()
+    expected.pop("network")
+    assert notebook == expected
+
+
+def test_the_sweep_settings_hold_one_training_config():
+    """The recogniser's [recognizer] training keys become one TrainingConfig; a field left at glu's default
+    stays out of the settings' plain data (saved sweeps keep their fingerprints), a changed one is in it."""
+    from glu.hmm import TrainingConfig
+
+    config = config_from_parameters({"n_states": 4, "tol": 1e-3, "feature_sets": ["body"], "x": 1}, None)
+    assert config.recognizer.training == TrainingConfig(n_states=4, tol=1e-3)
+    assert config.features == ("body",)
+    plain = config.as_dict()["recognizer"]
+    assert (plain["n_states"], plain["tol"]) == (4, 1e-3) and "covar_reg" not in plain
+    with pytest.raises(DataError, match="recognizer: unknown training recipe 'nope'"):
+        config_from_parameters({"recipe": "nope"}, None)
 
 
 def test_saved_tables_are_found_by_their_key(synchronous, tmp_path, monkeypatch):

@@ -67,7 +67,7 @@ from typing import Any
 
 from glu.bn.learning import UNSEEN_MODES
 from glu.data.source import WORD_FILES
-from glu.errors import DataError
+from glu.errors import DataError, ModelError
 from glu.files import read_text
 from glu.gestures.feature_sets import FEATURE_SET_NAMES
 from glu.gestures.views import POSTURES, TRACKERS, View
@@ -97,19 +97,26 @@ class RecognizerSettings:
     noise ``noise``) with :class:`~glu.hmm.TrainingConfig`'s recipe, one recogniser per feature set, or read
     from ``file``; the calibrated reading of p_HMM is fitted on ``calibration_per_action`` more gestures of
     the same kind, the ``calibrated-matched`` one on as many drawn like the test conditions (the sweep's
-    viewpoints and noise levels in equal shares)."""
+    viewpoints and noise levels in equal shares).
+
+    A sweep file gives ``training``'s fields flat in its ``[recognizer]`` table (``n_states = 6``, …).
+    """
 
     n_per_action: int = 20
-    n_states: int = TrainingConfig.n_states
-    n_mix: int = TrainingConfig.n_mix
-    n_iter: int = TrainingConfig.n_iter
+    training: TrainingConfig = TrainingConfig()
     noise: float = 0.01
     calibration_per_action: int = 20
     file: str | None = None
 
-    def training(self) -> TrainingConfig:
-        """The HMMs' training settings (the others keep glu's defaults)."""
-        return TrainingConfig(n_states=self.n_states, n_mix=self.n_mix, n_iter=self.n_iter)
+    def as_dict(self) -> dict[str, Any]:
+        """Plain data, ``training`` flat: Q, M and the iterations always, its other fields where they differ
+        from glu's defaults (so that sweeps saved before they could be set keep their fingerprints)."""
+        d = {k: v for k, v in asdict(self).items() if k != "training"}
+        default = TrainingConfig().as_dict()
+        for k, v in self.training.as_dict().items():
+            if k in ("n_states", "n_mix", "n_iter") or v != default[k]:
+                d[k] = v
+        return d
 
 
 @dataclass(frozen=True)
@@ -196,14 +203,10 @@ class SweepConfig:
                 "(define more in [views.NAME])"
             )
         r = self.recognizer
-        for name, lo in (
-            ("n_per_action", 2),
-            ("n_states", 1),
-            ("n_mix", 1),
-            ("n_iter", 1),
-            ("calibration_per_action", 1),
-        ):
+        for name, lo in (("n_per_action", 2), ("calibration_per_action", 1)):
             _whole(f"recognizer.{name}", getattr(r, name), lo, 100_000)
+        for name in ("n_states", "n_mix", "n_iter"):
+            _whole(f"recognizer.{name}", getattr(r.training, name), 1, 100_000)
         if not _number(r.noise) or r.noise < 0:
             raise DataError(f"recognizer.noise={r.noise!r}: the training noise must be a number ≥ 0 (metres)")
         if r.file is not None and self.recognizer_seeds != 1:
@@ -277,7 +280,7 @@ class SweepConfig:
             "views": {k: asdict(v) for k, v in self.views.items() if k in self.viewpoints},
             "scenario": self.scenario.as_dict(),
             "gestures": asdict(self.gestures),
-            "recognizer": asdict(self.recognizer),
+            "recognizer": self.recognizer.as_dict(),
             "network": asdict(self.network),
             "evaluation": {
                 k: v for k, v in asdict(self.evaluation).items() if k not in ("fractions", "strategies")
@@ -331,7 +334,8 @@ SECTIONS: dict[str, tuple[str, ...]] = {
         "strategies",
     ),
     "gestures": tuple(f.name for f in fields(GestureSettings)),
-    "recognizer": tuple(f.name for f in fields(RecognizerSettings)),
+    "recognizer": tuple(f.name for f in fields(RecognizerSettings) if f.name != "training")
+    + tuple(f.name for f in fields(TrainingConfig)),
     "network": tuple(f.name for f in fields(NetworkSettings)),
     "evaluation": (
         "action_evidence",
@@ -421,10 +425,43 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
         views=views,
         scenario=scenario,
         gestures=gestures,
-        recognizer=RecognizerSettings(**rec),
+        recognizer=_recognizer(rec),
         network=NetworkSettings(**net),
         evaluation=EvaluationSettings(**ev),
     )
+
+
+NOTEBOOK_NAMES: dict[str, str] = {"feature_sets": "features", "noise_levels": "noise"}
+"""Notebook 11's parameters whose names differ from the sweep file's (notebook name → grid key)."""
+
+
+def config_from_parameters(params: Mapping[str, Any], data: str | os.PathLike | None) -> SweepConfig:
+    """The sweep of notebook 11's parameters (its cell's names; others in ``params`` are ignored), with
+    the network learned from ``data`` (None: synthetic): one call instead of a sweep file."""
+    grid_keys = set(SECTIONS["grid"])
+    top = ("episodes", "seed", "chunk_size", "recognizer_seeds")
+    doc: dict[str, Any] = {k: params[k] for k in top if k in params}
+    doc["grid"] = {
+        NOTEBOOK_NAMES.get(k, k): v for k, v in params.items() if NOTEBOOK_NAMES.get(k, k) in grid_keys
+    }
+    doc["recognizer"] = {k: v for k, v in params.items() if k in SECTIONS["recognizer"] and k != "file"}
+    doc["evaluation"] = {k: v for k, v in params.items() if k in SECTIONS["evaluation"]}
+    doc["network"] = {"data": "synthetic" if data is None else str(data)}
+    return config_from_dict(doc)
+
+
+def _recognizer(rec: dict[str, Any]) -> RecognizerSettings:
+    """The ``[recognizer]`` table: its training fields gathered into one :class:`TrainingConfig`."""
+    names = {f.name for f in fields(TrainingConfig)}
+    train = {k: rec.pop(k) for k in list(rec) if k in names}
+    for k in ("n_states", "n_mix", "n_iter"):
+        if k in train:
+            _whole(f"recognizer.{k}", train[k], 1, 100_000)
+    try:
+        training = TrainingConfig(**train)
+    except (ModelError, TypeError) as e:
+        raise DataError(f"recognizer: {e}") from None
+    return RecognizerSettings(training=training, **rec)
 
 
 def _resolve(p: str, base: Path | None) -> Path:

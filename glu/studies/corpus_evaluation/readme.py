@@ -23,7 +23,7 @@ TEMPLATE = """\
 * **Every fusion strategy on a simulated corpus** (`11_corpus_evaluation`: {corpus_episodes:,.0f} episodes \
 over {corpus_seeds:.0f} recogniser seeds, each with its own recognisers, learned networks and episodes; \
 {ci_percent:.0f} % two-level intervals from {corpus_bootstrap:,.0f} bootstrap replicates; every family of \
-verdicts adjusted for its size by Benjamini–Hochberg, and the counts below use the adjusted verdicts). \
+verdicts adjusted for its size by Benjamini–Hochberg, and each verdict below is the adjusted one). \
 {lead_text}
   * The effects and words are drawn from a network and the gestures from the generator the HMMs are trained \
 on, so the design crosses the ways the robot's models can be wrong — actions drawn uniformly or from the \
@@ -36,21 +36,16 @@ object further, the slowest taps fail), and a skeleton tracker that loses the fa
 {viewpoint_text}
   * {validation_text}
   * {world_text}
-  * The earlier findings, each followed through the {corpus_cells:.0f} cells of the robot's models \
-(actions × network × p_HMM) on the front view first, then where the count of cells changes (the reference \
-cell: {reference_cell}; notebook 11 gives every cell):
-{findings_text}
-{network_text}
-{p_hmm_text}
-  * {seed_text}"""
+  * Notebook 11 follows each earlier finding of this study (the product rule against the gesture alone, \
+Jeffrey's rule against virtual evidence, a hard decision and the network alone, early and at the full \
+gesture) through the {corpus_cells:.0f} cells of the robot's models (actions × network × p_HMM), every \
+viewpoint, feature set and noise level, with the p_HMM readings' calibration and the spread over seeds."""
 """The bullet, with ``{name:format}`` slots filled by :func:`values`."""
 
 REQUIRED: tuple[str, ...] = (
     "corpus_metrics",
     "corpus_findings",
-    "corpus_seeds",
     "corpus_calibration",
-    "p_hmm_real_calibration",
 )
 """The result tables the bullet is written from."""
 
@@ -77,15 +72,9 @@ def values(tables: Tables) -> dict[str, Any]:
         "ci_percent": 100 * LEVEL,
         "corpus_learned": " or ".join(learned) or "no",
         "corpus_cells": len(cells),
-        "reference_cell": fd.cell_label(fd.REFERENCE_CELL),
         "lead_text": cd.lead_sentence(metrics, verdicts, best, grid.get("features", ())),
         "viewpoint_text": _bullets(cd.viewpoint_sentences(metrics, features)),
         "validation_text": cd.validation_sentence(calibration),
         "world_text": cd.gesture_world_sentence(metrics),
-        "findings_text": _bullets(fd.finding_sentences(verdicts, brief=True), "    "),
-        "network_text": _bullets(fd.network_alone_sentences(metrics)),
     }
-    segments = tables["p_hmm_real_calibration"][0]
-    v["p_hmm_text"] = _bullets(fd.p_hmm_sentences(metrics, calibration, segments if len(segments) else None))
-    v["seed_text"] = fd.seed_sentence(fd.seed_spread(tables["corpus_seeds"][0]))
     return v

@@ -77,7 +77,8 @@ def recognizers(config: SweepConfig, out: Path, log: Callable[[str], None]) -> l
     if todo:
         log(
             f"training {len(todo)} gesture recognisers ({len(config.features)} feature sets per seed) on "
-            f"{r.n_per_action} synthetic gestures per action each (Q={r.n_states}, M={r.n_mix})"
+            f"{r.n_per_action} synthetic gestures per action each "
+            f"(Q={r.training.n_states}, M={r.training.n_mix})"
         )
         sets, seeds, specs, metas = [], [], [], []
         for k, features, recipe, _ in todo:
@@ -90,7 +91,7 @@ def recognizers(config: SweepConfig, out: Path, log: Callable[[str], None]) -> l
             seeds.append(s)
             specs.append(FeatureSet.parse(features).invariants)
             metas.append({"sweep_recipe": recipe, "data_source": corpus.description})
-        trained = train_recognizer(sets, r.training(), seed=seeds, features=specs, warn=False)
+        trained = train_recognizer(sets, r.training, seed=seeds, features=specs, warn=False)
         for (k, features, _, saved), rec, meta in zip(todo, trained, metas, strict=True):
             rec.meta.update(meta)
             rec.save(saved)

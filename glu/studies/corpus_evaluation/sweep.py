@@ -304,27 +304,7 @@ def run_sweep(
     if scheduler not in (None, SYNCHRONOUS):
         check_reachable(scheduler)  # before any work: an unreachable cluster is bad input, said at once
     out = Path(out)
-    created = not out.exists()
-    out.mkdir(parents=True, exist_ok=True)
-    try:  # bad settings or data found while preparing leave no new folder behind
-        evaluator, provenance = prepare(config, out, log)
-        sweep_file = out / "sweep.json"
-        if sweep_file.is_file():
-            try:
-                old = json.loads(sweep_file.read_text())
-            except (OSError, ValueError):
-                old = {}
-            if not isinstance(old, dict) or old.get("fingerprint") != provenance["fingerprint"]:
-                raise DataError(
-                    f"{out} holds a sweep with other settings or data (sweep.json); "
-                    "use another output folder or delete that one"
-                )
-        else:
-            atomic_write_json(sweep_file, provenance)
-    except BaseException:
-        if created:
-            shutil.rmtree(out, ignore_errors=True)
-        raise
+    evaluator, provenance = _open_folder(config, out, log)
     for stale in (out / "chunks").glob(".c*.npz*"):  # a write cut short by a hard kill (never a whole chunk)
         stale.unlink(missing_ok=True)
     conditions = config.conditions
@@ -358,6 +338,33 @@ def run_sweep(
         )
     tables = merge(out, config, evaluator, provenance)
     return SweepResult(out, *tables, computed, reused, time.perf_counter() - t0, cpu)
+
+
+def _open_folder(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple[Any, dict]:
+    """The sweep's evaluator and provenance, with ``out`` created for it or checked to hold the same sweep
+    (``sweep.json``'s fingerprint); bad settings or data found while preparing leave no new folder behind."""
+    created = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        evaluator, provenance = prepare(config, out, log)
+        sweep_file = out / "sweep.json"
+        if sweep_file.is_file():
+            try:
+                old = json.loads(sweep_file.read_text())
+            except (OSError, ValueError):
+                old = {}
+            if not isinstance(old, dict) or old.get("fingerprint") != provenance["fingerprint"]:
+                raise DataError(
+                    f"{out} holds a sweep with other settings or data (sweep.json); "
+                    "use another output folder or delete that one"
+                )
+        else:
+            atomic_write_json(sweep_file, provenance)
+    except BaseException:
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
+    return evaluator, provenance
 
 
 def _save(out: Path, fingerprint: str, result: tuple, bar: Any) -> float:

@@ -263,30 +263,9 @@ def correspondence_study(
     settings = dict(invariant_settings or {})
     specs = [FeatureSet.parse(f) for f in feature_sets]
     specs = [(body, Invariants.parse(inv, **settings)) for body, inv in specs]
-    runs, sets = [], []  # (seed, source, body, invariants) of every recogniser, and its training set
-    tests: dict[tuple[int, bool], list[Corpus]] = {}
     frames = sorted({body for body, _ in specs})
-    for seed in seeds:
-        for body in frames:  # the same people in every condition: only the view or the sensor differs
-            tests[seed, body] = [
-                gestures(
-                    n_test,
-                    _test_seed(seed),
-                    replace(c.view, body_frame=body),
-                    c.noise,
-                    c.spike_rate,
-                    c.dropout_rate,
-                )
-                for c in conditions
-            ]
-        for source in train_sources:
-            for body in frames:
-                corpus = training_corpus(source, n_train, seed, normalise_body, body)
-                by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
-                for b, inv in specs:
-                    if b == body:
-                        runs.append((seed, source, body, inv))
-                        sets.append(by_action)
+    tests = {(seed, body): _test_sets(conditions, n_test, seed, body) for seed in seeds for body in frames}
+    runs, sets = _training_runs(train_sources, specs, seeds, n_train, normalise_body)
     # every model of every recogniser in one batch (each as train_recognizer would train it)
     recs = train_recognizer(
         sets, config, seed=[r[0] for r in runs], features=[r[3] for r in runs], warn=False
@@ -295,26 +274,7 @@ def correspondence_study(
     for (seed, source, body, inv), rec in zip(runs, recs, strict=True):
         test = tests[seed, body]
         for c, corpus, hits in zip(conditions, test, _outcomes(rec, test), strict=True):
-            actions = np.array([s.action for s in corpus])
-            rows.append(
-                {
-                    "seed": seed,
-                    "train": source,
-                    "features": FeatureSet(body, inv).name,
-                    "factor": c.factor,
-                    "level": c.level,
-                    "yaw_deg": c.view.yaw_deg,
-                    "tracker": c.view.tracker,
-                    "mirror": c.view.mirror,
-                    "posture": c.view.posture,
-                    "size": c.view.size,
-                    "noise_m": c.noise,
-                    "n_test": len(corpus),
-                    "accuracy": float(hits.mean()),
-                    **{f"accuracy_{a}": float(hits[actions == a].mean()) for a in dict.fromkeys(actions)},
-                    "outcomes": "".join("1" if h else "0" for h in hits),
-                }
-            )
+            rows.append(_row(seed, source, FeatureSet(body, inv).name, c, corpus, hits))
     order = {name: k for k, name in enumerate(FeatureSet(b, i).name for b, i in specs)}
     frame = pd.DataFrame(rows)
     frame = frame.sort_values(
@@ -341,6 +301,60 @@ def correspondence_study(
         variety=sorted({c.view.variety for c in conditions}),
         invariant_settings=settings,
     )
+
+
+def _test_sets(conditions: Sequence[Condition], n_test: int, seed: int, body: bool) -> list[Corpus]:
+    """One seed's test gestures under every condition: the same people in each, only the view or the
+    sensor differs."""
+    return [
+        gestures(
+            n_test, _test_seed(seed), replace(c.view, body_frame=body), c.noise, c.spike_rate, c.dropout_rate
+        )
+        for c in conditions
+    ]
+
+
+def _training_runs(
+    train_sources: Sequence[str],
+    specs: Sequence[tuple[bool, Invariants]],
+    seeds: Sequence[int],
+    n_train: int,
+    normalise_body: bool,
+) -> tuple[list[tuple[int, str, bool, Invariants]], list[dict[str, list[np.ndarray]]]]:
+    """(seed, source, body, invariants) of every recogniser, and its training set (action → sequences)."""
+    runs, sets = [], []
+    for seed in seeds:
+        for source in train_sources:
+            for body in sorted({b for b, _ in specs}):
+                corpus = training_corpus(source, n_train, seed, normalise_body, body)
+                by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
+                for b, inv in specs:
+                    if b == body:
+                        runs.append((seed, source, body, inv))
+                        sets.append(by_action)
+    return runs, sets
+
+
+def _row(seed: int, source: str, features: str, c: Condition, corpus: Corpus, hits: np.ndarray) -> dict:
+    """One (seed, train, features, condition) row of :func:`correspondence_study`."""
+    actions = np.array([s.action for s in corpus])
+    return {
+        "seed": seed,
+        "train": source,
+        "features": features,
+        "factor": c.factor,
+        "level": c.level,
+        "yaw_deg": c.view.yaw_deg,
+        "tracker": c.view.tracker,
+        "mirror": c.view.mirror,
+        "posture": c.view.posture,
+        "size": c.view.size,
+        "noise_m": c.noise,
+        "n_test": len(corpus),
+        "accuracy": float(hits.mean()),
+        **{f"accuracy_{a}": float(hits[actions == a].mean()) for a in dict.fromkeys(actions)},
+        "outcomes": "".join("1" if h else "0" for h in hits),
+    }
 
 
 def _outcome_matrix(text: pd.Series) -> list[np.ndarray]:

@@ -32,7 +32,8 @@ will move (p(ObjVel = slow) {glu_sphere_slow:.3f}), the box will not ({glu_box_s
 * **Invariant features and the body frame, on synthetic people** (`10_correspondence`; HMMs trained on \
 standard people facing the camera, tested on other people, {study_seeds:.0f} seeds, {ci_percent:.0f} % \
 two-level intervals over the seeds and the test gestures from {study_bootstrap:,.0f} replicates; the \
-invariances' paired effects adjusted for their number by Benjamini–Hochberg).
+invariances' paired effects adjusted for their number by Benjamini–Hochberg; notebook 10 adds a mirror \
+image, seated people, sensor noise and all at once).
 {study_text}"""
 """The bullets, with ``{name:format}`` slots filled by :func:`values`."""
 
@@ -75,6 +76,7 @@ def values(tables: Tables) -> dict[str, Any]:
             tables["correspondence_nested_cv"][0],
             tables["seated_typicality"][0],
             tables["correspondence_candidates"][0],
+            brief=True,
         )
     )
     for case in ("sphere", "box"):
@@ -85,7 +87,9 @@ def values(tables: Tables) -> dict[str, Any]:
     v["study_seeds"] = len(meta["parameters"]["seeds"])
     v["study_bootstrap"] = _replicates(meta)
     v["ci_percent"] = 100 * LEVEL
-    v["study_text"] = bullets(study_sentences(study, tables["correspondence_invariance_effects"][0]))
+    v["study_text"] = bullets(
+        study_sentences(study, tables["correspondence_invariance_effects"][0], brief=True)
+    )
     return v
 
 

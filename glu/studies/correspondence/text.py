@@ -77,9 +77,50 @@ def _changes(effects: pd.DataFrame, verdict: str) -> str:
     return "; ".join(parts)
 
 
-def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame) -> list[str]:
+def _condition_sentences(h: pd.DataFrame) -> list[str]:
+    """The mirror image, the seated posture, everything at once and each sensor noise level."""
+    out = []
+    for factor, level, feats, what in (
+        ("mirror", "mirrored", ("raw", "centred+mirrored", "body"), "A mirror image"),
+        ("posture", "seated", ("raw", "centred", "body+centred"), "Seated"),
+        ("combined", None, ("raw", ALL_FOUR, "body+centred"), "Seated, mirrored, turned and bigger at once"),
+    ):
+        text = _named(h, factor, feats, level)
+        if text:
+            out.append(f"{what}: {text}.")
+    noise = h[h["factor"] == "sensor noise"]
+    for level in dict.fromkeys(noise["level"]):
+        out.append(
+            f"With {level} of sensor noise: "
+            + _named(h, "sensor noise", ("raw", "centred", "centred+rotated", "body", "body+centred"), level)
+            + "."
+        )
+    return out
+
+
+def _robot_sentences(summary: pd.DataFrame) -> list[str]:
+    """Recognisers trained on the robot's own movements: the best on people beside the robot's own."""
+    r = summary[summary["train"] == "robot"]
+    own, people = r[r["factor"] == "performer"], r[r["factor"] != "performer"]
+    if not (len(own) and len(people)):
+        return []
+    best = people.loc[people["accuracy"].idxmax()]
+    return [
+        "Trained on the robot's own movements — drawn by a hand-written generator of an iCub-like arm "
+        "(waypoints, timings and proportions chosen for this study, not measured on a robot) — no "
+        f"feature set recognises people better than {best.accuracy:.2f} "
+        f"[{best.ci_low:.2f}, {best.ci_high:.2f}] ({best.features}, {best.factor}: {best.level}), "
+        f"while the robot recognises its own at {_span(own['accuracy'])}."
+    ]
+
+
+def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame, brief: bool = False) -> list[str]:
     """What the synthetic study shows, one sentence per finding (accuracy with its two-level interval; the
-    invariances' paired changes by their adjusted verdicts)."""
+    invariances' paired changes by their adjusted verdicts).
+
+    ``brief`` (the README's) keeps the views, the occluding tracker, the invariances' adjusted verdicts and
+    the robot's own movements, and leaves the mirror, seated, combined and noisy conditions to the notebook.
+    """
     h = summary[summary["train"] == "human"]
     out = []
     front = _cell(h, "raw", "viewpoint", "0°")
@@ -105,21 +146,8 @@ def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame) -> list[str]:
             f"and right beyond {SWAP_DEG:.0f}° (as a depth camera's does): {occluded}. The body frame needs "
             "the shoulder line, and from behind the tracker follows the resting hand."
         )
-    for factor, level, feats, what in (
-        ("mirror", "mirrored", ("raw", "centred+mirrored", "body"), "A mirror image"),
-        ("posture", "seated", ("raw", "centred", "body+centred"), "Seated"),
-        ("combined", None, ("raw", ALL_FOUR, "body+centred"), "Seated, mirrored, turned and bigger at once"),
-    ):
-        text = _named(h, factor, feats, level)
-        if text:
-            out.append(f"{what}: {text}.")
-    noise = h[h["factor"] == "sensor noise"]
-    for level in dict.fromkeys(noise["level"]):
-        out.append(
-            f"With {level} of sensor noise: "
-            + _named(h, "sensor noise", ("raw", "centred", "centred+rotated", "body", "body+centred"), level)
-            + "."
-        )
+    if not brief:
+        out += _condition_sentences(h)
     human = effects[effects["train"] == "human"]
     if len(human):
         n = len(human)
@@ -129,17 +157,9 @@ def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame) -> list[str]:
             f"{n - 1} by Benjamini–Hochberg): " + (costs or "nowhere") + "."
         )
         out.append("Where it buys accuracy, adjusted alike: " + (helps or "nowhere") + ".")
-    r = summary[summary["train"] == "robot"]
-    own, people = r[r["factor"] == "performer"], r[r["factor"] != "performer"]
-    if len(own) and len(people):
-        best = people.loc[people["accuracy"].idxmax()]
-        out.append(
-            "Trained on the robot's own movements — drawn by a hand-written generator of an iCub-like arm "
-            "(waypoints, timings and proportions chosen for this study, not measured on a robot) — no "
-            f"feature set recognises people better than {best.accuracy:.2f} "
-            f"[{best.ci_low:.2f}, {best.ci_high:.2f}] ({best.features}, {best.factor}: {best.level}), "
-            f"while the robot recognises its own at {_span(own['accuracy'])}."
-        )
+    out += _robot_sentences(summary)
+    if brief:
+        return out
     zero = int((summary["ci_high"] - summary["ci_low"] == 0).sum())
     out.append(
         f"{zero} of {len(summary)} intervals have zero width (every test gesture of every seed "
@@ -148,8 +168,13 @@ def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame) -> list[str]:
     return out
 
 
-def nested_sentences(summary: pd.DataFrame, seated: pd.DataFrame, candidates: pd.DataFrame) -> list[str]:
-    """What the real data show under nested cross-validation, and how the seated taps are recognised."""
+def nested_sentences(
+    summary: pd.DataFrame, seated: pd.DataFrame, candidates: pd.DataFrame, brief: bool = False
+) -> list[str]:
+    """What the real data show under nested cross-validation, and how the seated taps are recognised.
+
+    ``brief`` (the README's) leaves out the plain leave-one-segment-out spans and each seated tap's frames.
+    """
     out = []
     per = "; ".join(
         f"seed {r.seed}: {r.correct} of {r.testable} ({r.accuracy:.2f}, exact 95 % interval "
@@ -174,13 +199,13 @@ def nested_sentences(summary: pd.DataFrame, seated: pd.DataFrame, candidates: pd
         )
     raw = candidates[candidates["features"] == "raw"]
     cen = candidates[candidates["features"] != "raw"]
-    if len(raw) and len(cen):
+    if len(raw) and len(cen) and not brief:
         out.append(
             "Plain leave-one-segment-out over candidates and seeds: raw features "
             f"{_span(raw['loso_accuracy'])}, {', '.join(dict.fromkeys(cen['features']))} "
             f"{_span(cen['loso_accuracy'])}."
         )
-    for rec, g in seated.groupby("recording", sort=False):
+    for rec, g in () if brief else seated.groupby("recording", sort=False):
         taps = int((g["predicted"] == "tap").sum())
         out.append(
             f"Seated tap {rec}: recognised as tap by {taps} of {len(g)} seeds' models (p(tap) "
