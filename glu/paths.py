@@ -123,6 +123,7 @@ NOTEBOOKS_DIR: Path = HERE.notebooks
 
 DATA_DIR: Path = HERE.data
 REAL_DATA_DIR: Path = HERE.real_data
+"""Where ``glu data fetch`` puts the real data (``data/real/`` in a checkout, else the user's data folder)."""
 DATA_ENV_VAR = "GLU_DATA_DIR"
 """Environment variable naming the data folder (or ``synthetic``)."""
 SHARED_DATA_ENV_VAR = "GLU_SHARED_DATA"

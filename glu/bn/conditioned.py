@@ -39,7 +39,7 @@ class NetworkArrays:
     ----------
     cards : cardinality of each variable
     family : each node's CPT axes as variable indices: its parents, then itself
-    cpts : each node's CPT, shape (*parent cardinalities, cardinality)
+    cpts : each node's CPT, shape ``(*parent cardinalities, cardinality)``
     ancestors : each node's ancestors and itself, as a bit mask (bit v = variable v)
     exact : whether every row of the node's CPT sums to 1 (a barren node can then be left out)
     """
@@ -86,7 +86,7 @@ class ConditionedPlan:
     plan : the propagation plan over the variables left
     observed : the observed variables, in order
     row_factors : (clique or -1, table, observed positions, strides, shape): a CPT sliced per row —
-        ``table`` has the observed axes flattened last, shape (*rest, Π observed cardinalities); the row's
+        ``table`` has the observed axes flattened last, shape ``(*rest, Π observed cardinalities)``; the row's
         slice is ``table[..., Σ code · stride]``, reshaped to ``shape`` in the clique (-1: a constant per row)
     soft : (variable, clique, shape) — where each soft likelihood enters
     """

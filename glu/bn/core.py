@@ -131,7 +131,7 @@ class CoreEngine(BatchQueries, InferenceEngine, method="core"):
         zero)."""
         self.base_mass = float(base.sum())
         self.leaf_table = np.ascontiguousarray(np.array(rows)) if rows else np.zeros((0, *self.shape))
-        """Stacked R_L[v] over the full core, shape (Σ_L r_L, *core shape)."""
+        """Stacked R_L[v] over the full core, shape ``(Σ_L r_L, *core shape)``."""
         binary = [w for w in self.leaves if bn.schema.cardinality(w) == 2]
         self.binary_leaves = tuple(binary)
         self._present_rows = np.array([self.leaf_row[w] + 1 for w in binary], dtype=np.intp)

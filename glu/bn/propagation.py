@@ -33,7 +33,7 @@ class QueryPlan:
 
     Attributes
     ----------
-    base : clique → its starting table, shape (*cardinalities of its variables, 1)
+    base : clique → its starting table, shape ``(*cardinalities of its variables, 1)``
     collect : (child, parent, summed axes, shape in the parent) — new messages, children first (a shape
         ends with -1, the rows)
     distribute : (parent, child, summed axes, shape in the child, fresh) — messages towards the targets,

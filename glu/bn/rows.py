@@ -1,6 +1,6 @@
 """Rows of conditional probability tables: naming a row, checking that rows are distributions, rescaling.
 
-A CPT of shape (*parent cardinalities, cardinality) has one row per parent configuration; a row is named
+A CPT of shape ``(*parent cardinalities, cardinality)`` has one row per parent configuration; a row is named
 ``P(node | parent=value, …)`` in every message, so that a user can find it in the file.
 
 >>> values = {"A": ("a0", "a1"), "B": ("b0", "b1")}

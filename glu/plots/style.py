@@ -30,6 +30,7 @@ DPI = 150
 ACTION_COLORS = {"grasp": "#4C72B0", "tap": "#DD8452", "touch": "#55A868", "push": "#8172B3"}
 VALUE_COLORS = {"slow": "#8DA0CB", "medium": "#FC8D62", "fast": "#66C2A5"}
 ORIGINAL_MARK = {"marker": "_", "color": "black", "markersize": 14, "markeredgewidth": 2, "linestyle": "none"}
+"""How the original model's values are marked on a figure of ours: a short black bar."""
 ORIGINAL_LABEL = "original model (BN_lab.mat)"
 """Legend entry of the original model's values, drawn with :data:`ORIGINAL_MARK`."""
 WORD_COLORS = {"and": "#4C72B0", "but": "#DD8452"}

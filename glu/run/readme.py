@@ -34,7 +34,9 @@ BEGIN = (
     "<!-- BEGIN results: written by `glu readme` from results/summary.json; edit each study's readme.py, "
     "not here -->"
 )
+"""The marker that opens the README's results section."""
 END = "<!-- END results -->"
+"""The marker that closes it."""
 
 INTRO = """\
 Every number below comes from `make reproduce` on the real data (the tables of its {notebooks} notebooks): \

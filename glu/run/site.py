@@ -12,8 +12,8 @@ MyST-NB (the stack of Jupyter Book 1) and the PyData theme. It holds
   ``nb_execution_mode = "off"``: nothing runs again), each figure with its caption
   (:func:`glu.run.captions.caption_figures`);
 * the **docs pages** of the checkout (``docs/*.md``);
-* the **API reference**, generated from the numpydoc docstrings of :data:`API_MODULES` (autodoc, autosummary,
-  napoleon);
+* the **API reference**: a page for every public module, found by walking the package, its cross-references
+  linked (:mod:`glu.run.site_api`; autodoc, autosummary, napoleon);
 * search (Sphinx's own, offline). A click on any figure opens it at its natural size with its caption.
 
 The sources are assembled in the layout's ``site-source/`` folder (kept, with Sphinx's doctrees, so that the
@@ -41,38 +41,13 @@ from glu.paths import OutputLayout
 from glu.run.captions import caption_figures
 from glu.run.manifest import ManifestError, read_manifest
 from glu.run.outputs import parameters_text
+from glu.run.site_api import api_modules, api_pages
 
 CONF_DIR: Path = paths.RESOURCES_DIR / "site"
 """Sphinx's configuration, static files and templates of the site (shipped with the package)."""
 
 DOCS_DIR: Path | None = paths.PROJECT_ROOT / "docs" if paths.PROJECT_ROOT is not None else None
 """The checkout's docs pages (``docs/*.md``), or None for an installed package."""
-
-API_MODULES: tuple[str, ...] = (
-    "glu.schema",
-    "glu.data.source",
-    "glu.data.tables",
-    "glu.data.trajectory_files",
-    "glu.data.fetch",
-    "glu.bn.model",
-    "glu.bn.learning",
-    "glu.bn.inference",
-    "glu.bn.exchange",
-    "glu.evidence",
-    "glu.fusion",
-    "glu.gestures.features",
-    "glu.gestures.recognizer",
-    "glu.gestures.typicality",
-    "glu.hmm.config",
-    "glu.hmm.training",
-    "glu.language.grammar",
-    "glu.language.descriptions",
-    "glu.studies.replication.fusion",
-    "glu.recording",
-    "glu.run.manifest",
-    "glu.paths",
-)
-"""The modules of the API reference, in reading order."""
 
 
 class SiteError(GluError):
@@ -274,28 +249,12 @@ docs/*
 """
 
 
-def _api_page(modules: tuple[str, ...]) -> str:
-    """The API page, in reStructuredText: autosummary generates its module pages only from ``.rst`` files."""
-    body = "\n".join(f"   {m}" for m in modules)
-    return f"""API reference
-=============
-
-glu's public modules, generated from their docstrings (numpydoc style). The command line (``glu --help``)
-and the notebooks are built on these.
-
-.. autosummary::
-   :toctree: api
-
-{body}
-"""
-
-
 def assemble(
     layout: OutputLayout,
     summary: Mapping[str, Any],
     source: Path,
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
-    modules: tuple[str, ...] = API_MODULES,
+    modules: tuple[str, ...] | None = None,
 ) -> dict[str, str]:
     """Write the site's sources into ``source``: the index, the executed notebooks of ``summary`` (their
     figures captioned), the docs pages, the API page, the figures of the gallery. Files that did not change
@@ -329,7 +288,7 @@ def assemble(
     pages = {
         "index.md": _index(layout, summary, captions, notebooks_dir),
         "notebooks.md": _NOTEBOOKS_PAGE,
-        "api.rst": _api_page(modules),
+        **api_pages(api_modules() if modules is None else modules),
     }
     if _docs_pages():
         pages["docs.md"] = _DOCS_PAGE
@@ -338,7 +297,7 @@ def assemble(
         keep.add(source / page)
     for stale in ("api.md",):
         (source / stale).unlink(missing_ok=True)
-    for folder in ("notebooks", "docs", "_figures"):  # pages and figures of an earlier run, gone
+    for folder in ("notebooks", "docs", "_figures", "api"):  # pages and figures of an earlier run, gone
         for f in (source / folder).glob("*") if (source / folder).is_dir() else []:
             if f not in keep:
                 f.unlink()
@@ -346,9 +305,12 @@ def assemble(
 
 
 # ------------------------------------------------------------------------------------------ build
-def _sphinx(source: Path, html: Path, doctrees: Path) -> tuple[int, str]:
+def _sphinx(
+    source: Path, html: Path, doctrees: Path, modules: tuple[str, ...] | None = None
+) -> tuple[int, str]:
     """Build ``source`` into ``html`` with Sphinx (every warning an error); (status, warnings).
-    MyST-NB keeps its copies of the notebooks beside ``html`` (``jupyter_execute/``)."""
+    MyST-NB keeps its copies of the notebooks beside ``html`` (``jupyter_execute/``). ``modules``: the
+    modules of the API reference when it holds only some (references to the others then need no page)."""
     from sphinx.application import Sphinx
     from sphinx.util.console import nocolor
     from sphinx.util.docutils import docutils_namespace, patch_docutils
@@ -366,6 +328,7 @@ def _sphinx(source: Path, html: Path, doctrees: Path) -> tuple[int, str]:
             warning=warnings,
             warningiserror=True,
             keep_going=True,
+            confoverrides={"glu_api_modules": modules} if modules is not None else {},
         )
         app.build()
     return app.statuscode, warnings.getvalue()
@@ -376,7 +339,7 @@ def build_site(
     summary: Mapping[str, Any] | None = None,
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
-    modules: tuple[str, ...] = API_MODULES,
+    modules: tuple[str, ...] | None = None,
 ) -> Path:
     """Build the site of the run in ``layout`` (its ``summary``; default: its ``results/summary.json``) into
     ``layout.site``; returns its ``index.html``. Raises :class:`SiteError` on any Sphinx warning, leaving the
@@ -394,11 +357,12 @@ def build_site(
     work = layout.site_source
     source, html = work / "src", work / "html"
     source.mkdir(parents=True, exist_ok=True)
+    modules = api_modules() if modules is None else modules
     assemble(layout, summary, source, notebooks_dir, modules)
     shutil.rmtree(
         html, ignore_errors=True
     )  # every page written afresh (from the doctrees kept): no stale page
-    status, warnings = _sphinx(source, html, work / "doctrees")
+    status, warnings = _sphinx(source, html, work / "doctrees", modules)
     problems = [line for line in warnings.splitlines() if "WARNING" in line or "ERROR" in line]
     if status or problems:
         shown = "\n".join(_strip_paths(line, work) for line in problems[:20])

@@ -31,7 +31,9 @@ PAGE: Path | None = _ROOT / "docs" / "speed.md" if _ROOT is not None else None
 BEGIN = (
     "<!-- BEGIN benchmarks: written by `glu readme` from benchmarks/results/*.json; edit glu/run/speed.py -->"
 )
+"""The marker that opens the speed page's tables."""
 END = "<!-- END benchmarks -->"
+"""The marker that closes them."""
 SCHEMA = 1
 ORDER = (
     "reproduce",

@@ -144,9 +144,9 @@ class BatchScorer:
 
     Parameters
     ----------
-    models : the models, in the order of the output's last axis (e.g. ``[rec.models[a] for a in
-        rec.actions]``), or a :class:`~glu.gestures.recognizer.Recognizer`, whose invariant features are then
-        computed from each sequence as the recogniser itself does
+    models : the models, in the order of the output's last axis
+        (e.g. ``[rec.models[a] for a in rec.actions]``), or a :class:`~glu.gestures.recognizer.Recognizer`,
+        whose invariant features are then computed from each sequence as the recogniser itself does
     batch_size : sequences scored together
     """
 
@@ -299,15 +299,15 @@ def forward_curves_batch(
 def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     """``log L(G | model)`` of many sequences under every model of a bank, shape (S, n_models), in one batch.
 
-    Parameters
-    ----------
-    bank : the stacked models (:func:`stack_models`)
-    sequences : the feature sequences the models see, each of shape (T_i, D)
-
     The emissions and the forward recursion run compiled, frame by frame
     (:func:`glu.hmm._engine.kernels.loglik_banked`), each step :func:`~glu.hmm.inference.forward_step`'s
     (including its log-domain fallback where the scaled mass underflows): the last entry of
     ``forward_curve`` for each sequence, to rounding (1e-12 relative, tests/test_batched_experiments.py).
+
+    Parameters
+    ----------
+    bank : the stacked models (:func:`stack_models`)
+    sequences : the feature sequences the models see, each of shape (T_i, D)
     """
     seqs = list(sequences)
     if not seqs:

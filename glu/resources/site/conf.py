@@ -1,8 +1,8 @@
 """Sphinx configuration of glu's documentation site (built by glu.run.site, never by hand).
 
-The sources (the index, the executed notebooks, the docs pages, the API page) are assembled by
-:func:`glu.run.site.build_site` in a folder of their own; this configuration, its static files and its
-templates ship with the package. The notebooks are shown as ``glu reproduce`` executed them: never run again.
+The sources (the index, the executed notebooks, the docs pages, the API pages) are assembled by
+:func:`glu.run.site.build_site` in a folder of their own; this configuration and its static files ship with
+the package. The notebooks are shown as ``glu reproduce`` executed them: never run again.
 """
 
 project = "glu"
@@ -14,9 +14,9 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
+    "glu.run.site_api",  # references to re-exported and short glu names linked; a broken one warns
 ]
 exclude_patterns = ["_build", ".doctrees", "**.ipynb_checkpoints"]
-templates_path = ["_templates"]
 
 # the notebooks: their outputs as executed by `glu reproduce`; figures with their captions (glu.run.site)
 nb_execution_mode = "off"
@@ -30,7 +30,7 @@ suppress_warnings = ["mystnb.unknown_mime_type"]  # widget views: a live kernel'
 # the API reference, from the numpydoc docstrings
 autosummary_generate = True
 autosummary_imported_members = False
-autodoc_default_options = {"members": True, "member-order": "bysource"}
+autodoc_default_options = {"members": True, "undoc-members": True, "member-order": "bysource"}
 autodoc_typehints = "description"
 autodoc_typehints_description_target = "documented_params"
 autodoc_preserve_defaults = True

@@ -191,9 +191,9 @@ def pair(diffs: pd.DataFrame, target: str, metric: str, strategy: str, baseline:
 def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS) -> pd.DataFrame:
     """Every finding in every cell of the design: its paired difference, interval and verdict.
 
-    Columns: finding (its label), *DESIGN, viewpoint, fraction, difference, ci_low, ci_high, verdict
-    (``better``: the strategy is better than the baseline; ``worse``; ``no difference``). Findings whose
-    viewpoint or strategies the sweep lacks are left out.
+    Columns: finding (its label), the columns of ``DESIGN``, viewpoint, fraction, difference, ci_low,
+    ci_high, verdict (``better``: the strategy is better than the baseline; ``worse``; ``no difference``).
+    Findings whose viewpoint or strategies the sweep lacks are left out.
     """
     fractions = sorted(diffs["fraction"].dropna().unique())
     parts = []

@@ -81,8 +81,7 @@ def metric_values(sums: np.ndarray, columns: pd.DataFrame | Cells) -> np.ndarray
     ----------
     sums : array, shape (B + 1, K) — merged sums (row 0 the estimate)
     columns : the statistics' description
-    (:func:`glu.studies.corpus_evaluation.evaluation.statistic_columns`), or
-        its :func:`metric_cells`
+        (:func:`glu.studies.corpus_evaluation.evaluation.statistic_columns`), or its :func:`metric_cells`
     """
     cells = columns if isinstance(columns, Cells) else metric_cells(columns)
     K = int(max(cells.mean.max(initial=0), cells.conf.max(initial=0), cells.correct.max(initial=0))) + 1
@@ -112,7 +111,8 @@ def metrics(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.
 
     Returns
     -------
-    tidy DataFrame: *by, target, strategy, fraction, metric, estimate, ci_low, ci_high, n_episodes
+    tidy DataFrame: the columns of ``by``, target, strategy, fraction, metric, estimate, ci_low, ci_high,
+    n_episodes
     """
     cells = metric_cells(columns)
     parts = []
@@ -139,10 +139,10 @@ def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[s
 
     Returns
     -------
-    tidy DataFrame: *by, target, fraction, metric, strategy, baseline, difference (strategy − baseline),
-    ci_low, ci_high, better (the interval excludes 0 on the side where the metric improves), verdict
-    (``better``, ``worse`` or ``no difference``: :func:`verdict`), for every
-    pair of strategies predicting the same target (strategy after baseline in the settings' order)
+    tidy DataFrame: the columns of ``by``, target, fraction, metric, strategy, baseline, difference
+    (strategy − baseline), ci_low, ci_high, better (the interval excludes 0 on the side where the metric
+    improves), verdict (``better``, ``worse`` or ``no difference``: :func:`verdict`), for every pair of
+    strategies predicting the same target (strategy after baseline in the settings' order)
     """
     cells = metric_cells(columns)
     k = cells.keys
@@ -196,9 +196,9 @@ def reliability(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) ->
 
     Returns
     -------
-    tidy DataFrame: *by, target, strategy, fraction, bin, lower, upper (the bin's confidence range), n
-    (episodes in the bin), confidence (their mean top-label confidence), accuracy (how often that label
-    was right)
+    tidy DataFrame: the columns of ``by``, target, strategy, fraction, bin, lower, upper (the bin's
+    confidence range), n (episodes in the bin), confidence (their mean top-label confidence), accuracy
+    (how often that label was right)
     """
     cols = [*by, "target", "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
     binned = columns[columns["bin"] >= 0]

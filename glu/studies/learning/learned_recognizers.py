@@ -363,7 +363,7 @@ def learn_gestures(
     The episodes are those of :func:`~glu.studies.learning.self_supervised.simulate_episodes` (seed ``seed``,
     the given ambiguity); their labels come from the network (``engine``) by the scheme ``labels`` (or a
     baseline: ``true``, ``unsupervised``). Batch
-    (:func:`~glu.studies.learning.self_supervised.learn_recognizer`, EM on all episodes, ``iterative``
+    (:func:`learn_recognizer`, EM on all episodes, ``iterative``
     relabelling until the labels stop changing) or ``online``
     (:func:`~glu.studies.learning.online.learn_online`, one episode at a time). Returns the recogniser (its
     ``meta`` says how it was learned) and a summary: the labels' arg-max accuracy, the relabelling rounds, the

@@ -60,6 +60,7 @@ BASELINES: tuple[str, ...] = ("true", "unsupervised")
 lower bound). The third baseline, the network alone, recognises no gesture: its accuracy is that of its
 labels."""
 LEARNERS: tuple[str, ...] = SCHEMES + BASELINES
+"""Every learner a study compares: the labelling schemes, then the baselines."""
 POSTERIOR_READINGS: tuple[str, ...] = ("likelihood", "per-frame")
 """How ``p_HMM`` is read from the likelihoods when the robot relabels (two
 of :data:`glu.gestures.calibration.READINGS`)."""
@@ -83,7 +84,7 @@ class Ambiguity:
     name : a short name
     description : one line, for tables and figures
     objects : the distribution of actions and objects
-    (:class:`~glu.studies.corpus_evaluation.corpus.Scenario`)
+        (:class:`~glu.studies.corpus_evaluation.corpus.Scenario`)
     still : the objects never move (ObjVel is slow whatever the action)
     failed_taps : the fraction of taps whose object does not move (ObjVel slow, as after a touch)
     perception_noise : the probability that the robot perceives an effect's value as a uniformly random one

@@ -28,7 +28,8 @@ from glu.plots.style import (
 ORIGINAL_BAR = {"edgecolor": "black", "lw": 0.8, "hatch": "////"}
 """The original model's stacked bar, drawn narrow beside ours."""
 SAME_DELTA = 1e-9
-"""Two Δp(w) lists this close (max |difference|) are one list: the figure says so instead of drawing both."""
+"""Two Δp(w) lists this close (max ``|difference|``) are one list: the figure says so instead of drawing
+both."""
 
 
 def _hmm_rows(cases: Sequence[str]) -> list[str]:
