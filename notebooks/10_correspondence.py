@@ -140,7 +140,7 @@ study = correspondence.STUDY_TRAINING.replace(n_states=n_states, n_mix=n_mix, n_
 
 # %% [markdown]
 # ## Recognising other people's gestures seen otherwise
-# Accuracy pooled over seeds with its two-level interval (shaded); chance is one in three.
+# Accuracy pooled over seeds with its two-level interval (error bars); chance is one in three.
 
 # %%
 results = correspondence.correspondence_study(
@@ -158,11 +158,21 @@ out.table(summary, "correspondence_summary")
 fig, axes = plots.new_figure(2, width=5.2, height=3.6)
 for ax, train in zip(axes, correspondence.TRAIN_SOURCES, strict=True):
     figures.plot_accuracy_vs_viewpoint(ax, summary, train, legend=ax is axes[-1])
-out.figure(fig, "correspondence_viewpoint", source=results.attrs["data_source"])
+out.figure(
+    fig,
+    "correspondence_viewpoint",
+    source=results.attrs["data_source"],
+    caption="Accuracy against the person's turn, trained on the robot (left) and on one human view (right).",
+)
 fig, axes = plots.new_figure(1, width=11, height=3.4)
 figures.plot_accuracy_by_condition(axes[0], summary, "human")
 axes[0].set_title("trained on one human view", fontsize=9)
-out.figure(fig, "correspondence_conditions", source=results.attrs["data_source"])
+out.figure(
+    fig,
+    "correspondence_conditions",
+    source=results.attrs["data_source"],
+    caption="Accuracy in every test condition, trained on one human view, one bar per feature set.",
+)
 correspondence.main_table(summary, "human")
 
 # %%

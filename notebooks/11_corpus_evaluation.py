@@ -199,14 +199,34 @@ for sentence in findings.finding_sentences(verdicts):
 # %%
 cells = findings.contrast_cells(table)
 full = table.fraction.max()
-out.figure(figures.strategies_vs_noise_figure(table, cells, full), "corpus_strategies_vs_noise", source=source)
-out.figure(figures.early_recognition_figure(table, cells), "corpus_early_recognition", source=source)
-out.figure(figures.calibration_figure(rel, table, cells, full), "corpus_calibration", source=source)
+out.figure(
+    figures.strategies_vs_noise_figure(table, cells, full),
+    "corpus_strategies_vs_noise",
+    source=source,
+    caption="Action accuracy (top) and the effect's log-loss (bottom) against the sensor noise, one column "
+    "per cell.",
+)
+out.figure(
+    figures.early_recognition_figure(table, cells),
+    "corpus_early_recognition",
+    source=source,
+    caption="The same against the fraction of the gesture seen: how early each strategy knows.",
+)
+out.figure(
+    figures.calibration_figure(rel, table, cells, full),
+    "corpus_calibration",
+    source=source,
+    caption="Reliability of the predicted effect in both cells (top; a marker's size is its bin's share of "
+    "the episodes); the effect's calibration error against the noise (bands) and the action accuracy per "
+    "viewpoint (error bars) in the reference cell (bottom).",
+)
 for line in findings.network_alone_sentences(table):
     out.say("* " + line)
 
 # %% [markdown]
 # ## Paired differences, in the reference cell and the most mismatched one
+# Each finding as the paired difference between a strategy and its baseline on the same episodes, with its
+# paired bootstrap interval; a filled marker where the interval excludes zero on the better side.
 
 # %%
 pairs = [

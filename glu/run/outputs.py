@@ -88,13 +88,17 @@ class Outputs:
         text = source or self.data_label  # names its origin ("real data: …", "synthetic data …")
         return text + (f" · {self.notebook} with {self.parameters_label}" if self.parameters else "")
 
-    def figure(self, fig: Any, name: str, source: str | None = None) -> None:
+    def figure(self, fig: Any, name: str, source: str | None = None, caption: str = "") -> None:
         """Stamp ``fig`` with :meth:`footer`, save ``figures/<name>.png`` and ``.svg``, and show the PNG.
 
         In a running kernel the saved PNG itself is displayed (tagged with its file name in the output's
         metadata, ``{"glu": {"figure": "<name>.png"}}``), so the executed notebook shows exactly the file
         that was written; the figure is then closed. Returns None, so that a cell ending with it shows no
         path (the files are in :attr:`written`).
+
+        ``caption``: what this figure shows, when its cell draws several (one sentence, Markdown; no number
+        of the results). The site's caption of a figure is the title of its section, then this sentence,
+        or else the prose that follows the cell (:func:`glu.run.captions.figure_captions`).
         """
         from glu.plots.style import save_figure, stamp
 
@@ -104,7 +108,7 @@ class Outputs:
         import matplotlib.pyplot as plt
 
         plt.close(fig)
-        _show_png(files[0])
+        _show_png(files[0], caption)
 
     def table(self, df: pd.DataFrame, name: str | None = None, **extra: Any) -> None:
         """Save the numbers behind a figure as ``results/<name>.csv`` and ``.json`` (with provenance).
@@ -163,8 +167,9 @@ class Outputs:
         return p
 
 
-def _show_png(path: Path) -> None:
-    """Display a saved PNG in the running kernel, at the size it has at 100 dpi (nothing outside a kernel)."""
+def _show_png(path: Path, caption: str = "") -> None:
+    """Display a saved PNG in the running kernel, at the size it has at 100 dpi (nothing outside a kernel),
+    tagged with its file name and its own caption, if any."""
     if not in_kernel():
         return
     from IPython.display import Image, display
@@ -174,4 +179,4 @@ def _show_png(path: Path) -> None:
     data = path.read_bytes()
     width_px = int.from_bytes(data[16:20], "big")  # the PNG header's IHDR width
     image = Image(data=data, format="png", width=width_px * 100 // DPI)
-    display(image, metadata={"glu": {"figure": path.name}})
+    display(image, metadata={"glu": {"figure": path.name, **({"caption": caption} if caption else {})}})

@@ -15,7 +15,11 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
     "glu.run.site_api",  # references to re-exported and short glu names linked; a broken one warns
+    "glu.run.site_math",  # formulas as MathML, written at build time (MathJax would come from the web)
 ]
+html_math_renderer = "mathml"
+# quotes and ellipses typeset, dashes left alone: `--data` stays two hyphens wherever it is written
+smartquotes_action = "qe"
 exclude_patterns = ["_build", ".doctrees", "**.ipynb_checkpoints"]
 
 # the notebooks: their outputs as executed by `glu reproduce`; figures with their captions (glu.run.site)
@@ -23,7 +27,7 @@ nb_execution_mode = "off"
 nb_render_plugin = "glu"
 nb_output_stderr = "show"
 myst_heading_anchors = 3
-myst_enable_extensions = ["colon_fence", "dollarmath", "html_image"]
+myst_enable_extensions = ["attrs_inline", "colon_fence", "dollarmath", "html_image"]
 myst_dmath_double_inline = True
 suppress_warnings = ["mystnb.unknown_mime_type"]  # widget views: a live kernel's, shown as text here
 
