@@ -89,7 +89,8 @@ class Outputs:
         return text + (f" · {self.notebook} with {self.parameters_label}" if self.parameters else "")
 
     def figure(self, fig: Any, name: str, source: str | None = None, caption: str = "") -> None:
-        """Stamp ``fig`` with :meth:`footer`, save ``figures/<name>.png`` and ``.svg``, and show the PNG.
+        """Stamp ``fig`` with :meth:`footer` and the glu that made it (its version and commit,
+        :func:`glu.run.provenance.made_by`), save ``figures/<name>.png`` and ``.svg``, and show the PNG.
 
         In a running kernel the saved PNG itself is displayed (tagged with its file name in the output's
         metadata, ``{"glu": {"figure": "<name>.png"}}``), so the executed notebook shows exactly the file
@@ -101,8 +102,9 @@ class Outputs:
         or else the prose that follows the cell (:func:`glu.run.captions.figure_captions`).
         """
         from glu.plots.style import save_figure, stamp
+        from glu.run.provenance import made_by
 
-        stamp(fig, self.footer(source))
+        stamp(fig, self.footer(source), made_by())
         files = save_figure(fig, self.layout.figures / name)
         self.written.extend(files)
         import matplotlib.pyplot as plt

@@ -30,8 +30,9 @@ import shutil
 import sys
 import time
 import uuid
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -53,6 +54,8 @@ from glu.run.manifest import ManifestError, check_outputs, read_manifest, writte
 from glu.run.outputs import parameters_text
 from glu.run.parameters import check, non_defaults, parse_value, read_spec
 from glu.run.progress import CellProgress
+from glu.run.provenance import ENV as PROVENANCE_ENV
+from glu.run.provenance import Provenance, read_provenance
 from glu.run.summary import (
     NotebookResult,
     collect_summary,
@@ -210,9 +213,25 @@ def reproduce(
     **kwargs: Any,
 ) -> dict[str, Any]:
     """:func:`_reproduce` holding the lock of the output folder (:func:`glu.run.lock.run_lock`): a second
-    run on the same project or ``--out`` folder is refused in one line naming the first's process id."""
-    with run_lock(OutputLayout.at(out).root):
-        return _reproduce(data, quick, out, **kwargs)
+    run on the same project or ``--out`` folder is refused in one line naming the first's process id. The
+    glu that runs (its version and commit, :mod:`glu.run.provenance`) is read once, before any notebook,
+    and every output of the run names it."""
+    with run_lock(OutputLayout.at(out).root), _made_by(read_provenance()) as made:
+        return _reproduce(data, quick, out, made=made, **kwargs)
+
+
+@contextmanager
+def _made_by(made: Provenance) -> Iterator[Provenance]:
+    """Hand the run's provenance to the notebooks' kernels (:data:`glu.run.provenance.ENV`) while it runs."""
+    before = os.environ.get(PROVENANCE_ENV)
+    os.environ[PROVENANCE_ENV] = made.label()
+    try:
+        yield made
+    finally:
+        if before is None:
+            os.environ.pop(PROVENANCE_ENV, None)
+        else:
+            os.environ[PROVENANCE_ENV] = before
 
 
 def _reproduce(
@@ -226,6 +245,7 @@ def _reproduce(
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
     progress: bool | None = None,
     site: bool = True,
+    made: Provenance | None = None,
 ) -> dict[str, Any]:
     """Run the notebooks and publish their outputs if all succeed; returns the summary (also in results/).
 
@@ -243,6 +263,7 @@ def _reproduce(
     notebooks_dir : the folder of jupytext notebooks ``NN_name.py``
     progress : live progress bar; None = when stderr is a terminal
     site : also build the documentation site of the run (:func:`glu.run.site.build_site`)
+    made : the glu that runs (:func:`glu.run.provenance.read_provenance`, read by :func:`reproduce`)
 
     Raises
     ------
@@ -374,9 +395,11 @@ def _reproduce(
             pass
 
     results.sort(key=lambda r: r.name)
+    made = made or read_provenance()
     summary = collect_summary(final["results"], results, source.describe(), quick)
+    summary.update(made_by=made.label(), provenance=made.as_dict())
     csv = summary_csv(summary)
-    write_rendering_record(final["figures"], source.describe(), quick)
+    write_rendering_record(final["figures"], source.describe(), quick, made.label())
     summary["wall_time_s"] = round(time.perf_counter() - t_start, 3)
     summary_file = save_summary(final["results"], summary, csv)
     log(f"glu reproduce: done in {summary['wall_time_s']:.1f} s; summary in {summary_file}")
