@@ -81,3 +81,25 @@ def test_a_figure_names_its_glu_under_its_footer_and_is_the_same_for_the_same_co
     svg = files[0][1].read_text()
     assert "<!-- synthetic data (seed 0) -->" in svg and "<!-- glu 0.1.0, commit 0123456789ab -->" in svg
     assert files[0][0].read_bytes() == files[1][0].read_bytes()
+
+
+def test_the_version_the_citation_and_the_changelog_agree():
+    import re
+    import tomllib
+    from pathlib import Path
+
+    import yaml
+
+    root = Path(__file__).resolve().parents[2]
+    version = tomllib.loads((root / "pyproject.toml").read_text())["project"]["version"]
+    cff = yaml.safe_load((root / "CITATION.cff").read_text())
+    assert version == glu.__version__ == cff["version"] == cff["preferred-citation"]["version"]
+    latest = re.search(
+        r"(?m)^## \[(\d+\.\d+\.\d+)\] - (\d{4}-\d\d-\d\d)$", (root / "CHANGELOG.md").read_text()
+    )
+    assert latest and latest.groups() == (version, str(cff["date-released"]))
+    bibtex = (root / "README.md").read_text().split("## How to cite", 1)[1].split("```bibtex", 1)[1]
+    fields = dict(re.findall(r"(?m)^\s*(\w+)\s*=\s*\{(.*)\},?$", bibtex.split("```", 1)[0]))
+    assert fields["version"] == version and fields["year"] == str(cff["preferred-citation"]["year"])
+    assert fields["url"] == cff["repository-code"] == cff["preferred-citation"]["url"]
+    assert fields["year"] == str(cff["date-released"])[:4]
