@@ -43,7 +43,7 @@ def main() -> None:
     )
     args = ap.parse_args()
 
-    from glu.bn import InferenceEngine, learn_bn
+    from glu.bn import learn_bn, make_engine
     from glu.data import load_experiments, resolve_data
     from glu.schema import WORDS
 
@@ -58,7 +58,7 @@ def main() -> None:
 
     t_learn = timeit(lambda: learn_bn(df), repeat=5, number=1)
     bn = learn_bn(df, unseen_words="uniform")  # pgmpy rejects all-zero rows: compare on the uniform model
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -5,7 +5,7 @@ Run on demand (not a test)::
     python benchmarks/bench_corpus.py [--data DIR] [--only forward episodes scaling million] [--episodes N]
 
 1. **forward** — many sequences scored against all three models in one vectorised pass
-   (:class:`glu.hmm._engine.batch.BatchScorer`; Q = 6, M = 3, full covariance, 3-D): frame·model evaluations
+   (:class:`glu.hmm.scoring.BatchScorer`; Q = 6, M = 3, full covariance, 3-D): frame·model evaluations
    per second of CPU time on one core (goal ≥ 5 M), against glu's per-sequence forward and hmmlearn's
    ``score`` per sequence (goal ≥ 50×), with the largest difference to both;
 2. **episodes** — one chunk of 2000 episodes end to end on one core: simulation (world, gestures),
@@ -35,6 +35,9 @@ from pathlib import Path
 
 import numpy as np
 from timing import RESULTS, report, row
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # tests/hmm_reference.py
+from hmm_reference import to_hmmlearn  # noqa: E402
 
 ROWS: list[dict] = []
 NOTES: list[str] = []
@@ -78,7 +81,7 @@ def bench_forward(evaluator, repeats: int) -> None:
     t = time.process_time()
     ref = [np.stack([m.loglik_curve(x) for m in scorer.models], axis=1) for x in sub]
     per_seq = (time.process_time() - t) / len(sub)
-    hl = [m.to_hmmlearn() for m in scorer.models]
+    hl = [to_hmmlearn(m) for m in scorer.models]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         t = time.process_time()

@@ -12,8 +12,8 @@ Measures, for a 150-frame sequence:
 2. the log-likelihood of the whole sequence under one model (one ``score`` call);
 3. one new frame for all four models of a bank: glu's :class:`~glu.gestures.recognizer.GestureStream` step
    (target ≤ 100 µs) against rescoring the grown prefix with hmmlearn (four ``score`` calls);
-4. training one model (Q = 6, M = 3, 20 EM iterations, 20 synthetic gestures): glu's vectorised
-   Baum–Welch (:mod:`glu.hmm.em`) against hmmlearn's ``GMMHMM.fit`` from the same start;
+4. training one model (Q = 6, M = 3, 20 EM iterations, 20 synthetic gestures): :func:`glu.hmm.train` (its
+   initial model, then its compiled Baum–Welch) against hmmlearn's ``GMMHMM.fit`` from the same start;
 5. the same streaming step when the recogniser computes invariant features (all four invariances,
    :mod:`glu.gestures.invariants`) from each frame: target at most 20 % more than the raw step.
 
@@ -27,15 +27,21 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
+from pathlib import Path
 
 import numpy as np
 from timing import median_time, report, row
 
+sys.path.insert(
+    0, str(Path(__file__).resolve().parents[1] / "tests")
+)  # the reference: tests/hmm_reference.py
+from hmm_reference import to_hmmlearn, train_hmmlearn  # noqa: E402
+
 
 def _setup(data: str | None):
     from glu.data.source import DataSource, resolve_data
-    from glu.gestures.features import load_features
     from glu.gestures.recognizer import load_original_models
+    from glu.gestures.recordings import load_features
     from glu.paths import shared_data_dir
 
     source = None
@@ -73,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
         rec, X, what = _setup(args.data)
         T = len(X)
         models = [rec.models[a] for a in rec.actions]
-        hl = [m.to_hmmlearn() for m in models]
+        hl = [to_hmmlearn(m) for m in models]
         m0, h0 = models[0], hl[0]
 
         # correctness first: the fast paths must agree with hmmlearn
@@ -126,12 +132,18 @@ def main(argv: list[str] | None = None) -> int:
         sequences = [s.xyz for s in synthetic_corpus(20, seed=1, actions=("tap",))]
         n_train = sum(len(x) for x in sequences)
 
-        def em(engine: str):
-            config = TrainingConfig(n_iter=20, tol=1e-12)
-            return lambda: train(sequences, config, warn=False, engine=engine)
+        from glu.hmm.em import GMMHMMParams
+        from glu.hmm.initialisation import init_left_to_right
 
-        glu_em = median_time(em("glu"), max(1, args.repeats // 2))
-        hl_em = median_time(em("hmmlearn"), max(1, args.repeats // 3))
+        config = TrainingConfig(n_iter=20, tol=1e-12)
+        init = init_left_to_right(sequences, config.n_states, config.n_mix, config.covar_reg, 0)
+        start = GMMHMMParams(init.startprob, init.transmat, init.weights, init.means, init.covars)
+
+        def hmmlearn_em():  # the same start and iterations (train's initialisation included in glu's time)
+            return train_hmmlearn(sequences, start, 20, 1e-12 * n_train, config.covar_reg)
+
+        glu_em = median_time(lambda: train(sequences, config, warn=False), max(1, args.repeats // 2))
+        hl_em = median_time(hmmlearn_em, max(1, args.repeats // 3))
         rows.append(
             (
                 f"EM, 20 iterations, {len(sequences)} sequences ({n_train} frames)",

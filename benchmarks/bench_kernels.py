@@ -9,9 +9,9 @@ compiled (kept here as the reference, as ``bench_fast_paths.py`` keeps its "befo
 checked to agree first. Last, the cost of compiling from an empty cache (what the first run on a fresh
 machine pays once) and of loading the cached code, each in a fresh process.
 
-1. **scoring** (:func:`glu.hmm._engine.batch.loglik_many`): synthetic gestures under 3 trained HMMs (Q = 6,
+1. **scoring** (:func:`glu.hmm.scoring.loglik_many`): synthetic gestures under 3 trained HMMs (Q = 6,
    M = 1 and 3), 30 and 450 sequences;
-2. **forward–backward** of batched Baum–Welch (:func:`glu.hmm._engine.em_batch.forward_backward_many`):
+2. **forward–backward** of batched Baum–Welch (:func:`glu.hmm._engine.kernels.forward_backward_scaled`):
    30, 300 and 2,000 sequences of 120–180 frames, Q = 6;
 3. **the mixture log-sum-exp of EM** (:func:`glu.hmm._engine.kernels.mixture_posteriors`): 5 and 40 models'
    frames, Q = 6, M = 3.
@@ -70,7 +70,7 @@ def loglik_many_array(bank, seqs):
 
 
 def forward_backward_array(log_b, lengths, startprob, transmat):
-    """``forward_backward_many`` as array code: one batched step per frame over the live sequences."""
+    """``kernels.forward_backward_scaled`` as array code: one batched step per frame over live sequences."""
     S, T, Q = log_b.shape
     n_live = (lengths[None, :] > np.arange(T)[:, None]).sum(axis=1)
     alive = np.arange(T)[None, :] < lengths[:, None]
@@ -165,10 +165,9 @@ def main(argv: list[str] | None = None) -> int:
 
     from glu.gestures.corpus import synthetic_corpus
     from glu.hmm import TrainingConfig, train
-    from glu.hmm._engine import em_batch as baum_welch_batch
     from glu.hmm._engine import kernels
-    from glu.hmm._engine.batch import loglik_many, stack_models
     from glu.hmm.inference import left_to_right_transmat
+    from glu.hmm.scoring import loglik_many, stack_models
 
     r = args.repeats
     with threadpool_limits(1):
@@ -201,13 +200,13 @@ def main(argv: list[str] | None = None) -> int:
                 np.tile(left_to_right_transmat(Q, 0.9), (S, 1, 1)),
             )
             for a, b in zip(
-                baum_welch_batch.forward_backward_many(*args_), forward_backward_array(*args_), strict=True
+                kernels.forward_backward_scaled(*args_), forward_backward_array(*args_), strict=True
             ):
                 np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
             _row(
                 f"{S} sequences",
                 best_time(lambda x=args_: forward_backward_array(*x), r),
-                best_time(lambda x=args_: baum_welch_batch.forward_backward_many(*x), r),
+                best_time(lambda x=args_: kernels.forward_backward_scaled(*x), r),
             )
         _GROUP[0] = "the mixture log-sum-exp of EM (Q = 6, M = 3)"
         for K, N in ((5, 2000), (40, 2500)):

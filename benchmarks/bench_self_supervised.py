@@ -43,11 +43,11 @@ def _load() -> str:
 
 
 def _engine(data: str | None):
-    from glu.bn import InferenceEngine, learn_bn
+    from glu.bn import learn_bn, make_engine
     from glu.data import load_experiments, resolve_data
 
     source = resolve_data(data)
-    return InferenceEngine(learn_bn(load_experiments(source))), source
+    return make_engine(learn_bn(load_experiments(source))), source
 
 
 def bench_notebook(data: str | None) -> list[dict]:

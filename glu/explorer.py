@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.bn.soft import SOFT_RULES
 from glu.errors import GluError
 from glu.fusion import ACTION, fuse
@@ -46,7 +46,7 @@ class Exploration:
 
 
 def explore(
-    engine: InferenceEngine,
+    engine: Engine,
     targets: Sequence[str] = ("ObjVel", ACTION),
     evidence: Mapping[str, str] | None = None,
     p_hmm: Sequence[float] | None = None,
@@ -88,7 +88,7 @@ def explore(
 
 
 def evidence_explorer(
-    engine: InferenceEngine,
+    engine: Engine,
     targets: Sequence[str] = ("ObjVel", ACTION),
     evidence: Mapping[str, str] | None = None,
     p_hmm: Sequence[float] | None = None,

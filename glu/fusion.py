@@ -30,9 +30,9 @@ fuses millions of gesture posteriors with array arithmetic. They are tested agai
 
 Example
 -------
->>> from glu.bn import InferenceEngine, learn_bn
+>>> from glu.bn import learn_bn, make_engine
 >>> from glu.data import load_experiments
->>> engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
+>>> engine = make_engine(learn_bn(load_experiments("synthetic")))
 >>> p = fuse(engine, ["ObjVel"], {"Shape": "sphere"}, [0.1, 0.8, 0.1], "virtual")["ObjVel"]
 >>> p.shape, round(float(p.sum()), 12)
 ((3,), 1.0)
@@ -48,8 +48,8 @@ from typing import Literal
 
 import numpy as np
 
-from glu.bn.inference import InferenceEngine
-from glu.bn.soft import SOFT_RULES
+from glu.bn.inference import Engine
+from glu.bn.soft import SOFT_RULES, soft_posterior
 from glu.errors import EvidenceError
 from glu.schema import ACTIONS, action_node
 
@@ -70,7 +70,7 @@ def check_strategy(strategy: str, allowed: Sequence[str] = STRATEGIES) -> str:
 
 
 def fuse(
-    engine: InferenceEngine,
+    engine: Engine,
     targets: Sequence[str] | str,
     evidence: Mapping[str, str] | None,
     p_hmm: Mapping[str, float] | Sequence[float] | np.ndarray | None,
@@ -118,17 +118,13 @@ def fuse(
     if strategy == "hard":
         best = int(np.argmax(q))
         return engine.query(targets, {**evidence, a: best})
-    if strategy == "product":
-        p_bn = engine.query([a], evidence)[a]
-        p = p_bn * q
-        if p.sum() <= 0:
-            raise engine._impossible(evidence, {a: q})
-        return {a: p / p.sum()}
+    if strategy == "product":  # p_hmm · p_BN(A | X_obs), normalised: virtual evidence with A the target
+        return engine.query([a], evidence, soft={a: q}, soft_rule="virtual")
     return engine.query(targets, evidence, soft={a: q}, soft_rule=strategy)
 
 
 def _fuse_rows(
-    engine: InferenceEngine,
+    engine: Engine,
     targets: list[str],
     evidence: dict[str, str],
     q: np.ndarray,
@@ -177,10 +173,7 @@ def fuse_action_tables(p_a: np.ndarray, p_hmm: np.ndarray, strategy: str) -> np.
         out = np.zeros(q.shape)
         np.put_along_axis(out, np.argmax(q, axis=-1)[..., None], 1.0, axis=-1)
         return out
-    joint = np.where(p_a > 0, q, 0.0) if strategy == "jeffrey" else p_a * q
-    total = joint.sum(axis=-1, keepdims=True)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(total > 0, joint / np.where(total > 0, total, 1.0), np.nan)
+    return soft_posterior(p_a, q, "jeffrey" if strategy == "jeffrey" else "virtual")
 
 
 def fuse_tables(p_x_given_a: np.ndarray, p_a: np.ndarray, p_hmm: np.ndarray, strategy: str) -> np.ndarray:

@@ -104,7 +104,7 @@ comparison.loc[comparison.uniform_minus_zero.abs().sort_values(ascending=False).
 # the words it would use (interactive when run live in JupyterLab, `make lab`; a table here otherwise).
 
 # %%
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 from glu.explorer import evidence_explorer
 
-evidence_explorer(InferenceEngine(bn), evidence={"Action": "tap", "Shape": "sphere"})
+evidence_explorer(make_engine(bn), evidence={"Action": "tap", "Shape": "sphere"})

@@ -91,7 +91,7 @@ pivot.iloc[:: max(1, len(pivot) // 5)]
 # (`make lab`) it is interactive; in the executed notebook it shows the starting point below.
 
 # %%
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 from glu.explorer import evidence_explorer
 
-evidence_explorer(InferenceEngine(bn), evidence={"Shape": "sphere", "Size": "small"}, p_hmm=[0.2, 0.6, 0.2])
+evidence_explorer(make_engine(bn), evidence={"Shape": "sphere", "Size": "small"}, p_hmm=[0.2, 0.6, 0.2])

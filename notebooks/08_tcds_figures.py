@@ -93,7 +93,7 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 
 # %%
 from glu import plots
-from glu.bn import BayesNet, InferenceEngine, learn_bn
+from glu.bn import BayesNet, learn_bn, make_engine
 from glu.data import load_experiments
 from glu.gestures import gesture_sequences, load_original_models
 from glu.hmm import TrainingConfig
@@ -139,7 +139,7 @@ out.figure(fig, "tcds_effect_vs_soft_evidence")
 # features by default (`features`; `glu.gestures.invariants`).
 
 # %%
-engine = InferenceEngine(bn)
+engine = make_engine(bn)
 if candidates is None:
     candidates = "samples" if out.source.sentence_samples() is not None else "grammar"
 sentences = candidate_sentences(candidates, out.source)

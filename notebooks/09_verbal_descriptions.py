@@ -58,7 +58,7 @@ import time
 import numpy as np
 
 from glu import plots
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.language import (
     all_scores,
@@ -76,7 +76,7 @@ from glu.studies.replication import verbal, verbal_figures
 from glu.studies.replication.text import verbal_sentences
 
 out = start("09_verbal_descriptions", globals())
-engine = InferenceEngine(learn_bn(load_experiments(out.source, words), unseen_words=unseen_words))
+engine = make_engine(learn_bn(load_experiments(out.source, words), unseen_words=unseen_words))
 grammar, net = load_grammar(), default_network()
 has_samples = out.source.sentence_samples() is not None
 samples_label = "the originals' samples" if has_samples else "a stand-in sample"

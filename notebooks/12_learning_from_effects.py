@@ -83,7 +83,7 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 # %%
 import matplotlib.pyplot as plt
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.gestures.corpus import gesture_sequences, original_test_segments
 from glu.language import candidate_sentences
@@ -93,7 +93,7 @@ from glu.studies.anticipation.figures import plot_anticipation
 from glu.studies.learning import figures, learned_recognizers, online, recordings, self_supervised, study
 
 out = start("12_learning_from_effects", globals())
-engine = InferenceEngine(learn_bn(load_experiments(out.source)))
+engine = make_engine(learn_bn(load_experiments(out.source)))
 source = out.source.describe()
 settings = study.StudySettings(
     episodes=episodes,

@@ -1,17 +1,14 @@
 """Bayesian networks, GLU's or any other: the model, its learning, exact inference (pgmpy-free)."""
 
-from glu.bn.core import CoreEngine
-from glu.bn.inference import InferenceEngine
-from glu.bn.junction import JunctionTreeEngine
+from glu.bn.inference import Engine, make_engine
 from glu.bn.learning import learn_bn, learn_parameters, learn_structure
 from glu.bn.model import BayesNet
 
 __all__ = [
     "BayesNet",
-    "CoreEngine",
-    "InferenceEngine",
-    "JunctionTreeEngine",
+    "Engine",
     "learn_bn",
     "learn_parameters",
     "learn_structure",
+    "make_engine",
 ]

@@ -1,22 +1,36 @@
-"""Exact inference in any discrete Bayesian network: one interface, two engines.
+"""Exact inference in any discrete Bayesian network: one query interface, declared once.
 
-``InferenceEngine(bn)`` answers queries about a :class:`~glu.bn.model.BayesNet` — GLU's Affordance–Words
-network, a network learned from a lab's own schema, or one imported from BIF, XMLBIF or UAI — and picks
-the engine that suits its shape:
+``make_engine(bn)`` answers queries about a :class:`~glu.bn.model.BayesNet` — GLU's Affordance–Words
+network, a network learned from a lab's own schema, or one imported from BIF, XMLBIF or UAI. Every engine
+is an :class:`Engine` (the interface, a :class:`typing.Protocol`) made of one :class:`ExactEngine` — the
+evidence, relevance, soft rules, batches, caches and labelled results, written once — over the array
+arithmetic that suits the network's shape (its *backend*):
 
-:class:`~glu.bn.core.CoreEngine`
+:class:`~glu.bn.core.CoreBackend` (``method="core"``)
     for networks shaped like GLU's: a small *core* (the affordance nodes and every node with children)
-    whose joint table fits in memory, and *leaves* (the words) hanging off it. It multiplies the core into
-    one table once and answers a query by slicing it: microseconds a query.
-:class:`~glu.bn.junction.JunctionTreeEngine`
-    for any other network: exact inference on a junction tree planned from the structure
-    (:mod:`glu.bn.plan`), with messages vectorised over a batch of evidence sets. The size of its largest
-    table is known before it is built; past a limit (``max_table``, ``$GLU_MAX_TABLE``) the engine is
-    refused in one line with that size and the elimination width.
+    whose joint table fits in memory, and *leaves* (the words) hanging off it — microseconds a query.
+:class:`~glu.bn.junction.JunctionBackend` (``method="junction"``)
+    for any other network: junction trees planned per evidence pattern from the tables the query needs,
+    with the observed nodes conditioned out; a plan keeps its messages between single queries.
 
-``method="auto"`` (the default) takes the core engine when its tables are small (:data:`CORE_MAX_STATES`,
-:data:`CORE_MAX_ENTRIES`), else the junction tree; ``method="core"`` or ``"junction"`` forces one. Both
-give the same posteriors (the tests compare them with each other, with pgmpy and with pyAgrum).
+``method="auto"`` (the default) takes the core when its tables are small (:data:`CORE_MAX_STATES`,
+:data:`CORE_MAX_ENTRIES`), else the junction tree. Both give the same posteriors (the tests compare them
+with each other, with pgmpy, with pyAgrum and with brute-force enumeration).
+
+Each query, in order:
+
+1. **relevance** (:mod:`glu.bn.relevance`, cached per evidence pattern): a target that no evidence can reach
+   (d-separated from all of it) is answered from the engine's cached prior marginals; for the others, only
+   the tables of the nodes the answer needs and the evidence that can change it are used — barren and
+   d-separated nodes are left out, as in pyAgrum's relevance reasoning. Evidence that could have
+   probability 0 (a zero in a table above it, or all-zero rows in the network) is still checked: its
+   query is answered from every table above the targets and the evidence (barren nodes left out, so the
+   same propagation gives P(evidence)); when no target needs computing, P(evidence) alone is computed
+   (on the evidence's ancestors), and a single query remembers whether those values are possible.
+2. **soft evidence** becomes likelihoods (:mod:`glu.bn.soft`, the one home of both rules);
+3. the **backend** computes the marginals of the remaining targets, for one row (a single query) or many
+   (a batch: rows grouped by which nodes they observe, identical rows answered once by a one-dimensional
+   mixed-radix key of their values).
 
 Evidence, for every engine:
 
@@ -26,58 +40,56 @@ Evidence, for every engine:
   *Jeffrey's rule*, which makes the node's posterior marginal equal to ``q``:
   ``p(X | e) = Σ_a p(X | e, A=a) q(a)`` (several Jeffrey nodes: iterative proportional fitting);
 * evidence of probability 0 raises :class:`~glu.errors.ImpossibleEvidenceError` naming it;
-* many evidence sets at once: :meth:`InferenceEngine.query_batch` (arrays) and
-  :meth:`InferenceEngine.posterior_table` (a DataFrame).
+* many evidence sets at once: :meth:`Engine.query_batch` (arrays) and :meth:`Engine.posterior_table`.
 
-Results come in two forms: the numeric ones (:meth:`~InferenceEngine.query`,
-:meth:`~InferenceEngine.query_batch`, :meth:`~InferenceEngine.word_probability_array`: NumPy arrays in the
-nodes' value order, the fast path of every experiment) and the labelled ones
-(:meth:`~InferenceEngine.posterior`, :meth:`~InferenceEngine.posteriors`,
-:meth:`~InferenceEngine.marginals`, :meth:`~InferenceEngine.posterior_table`,
-:meth:`~InferenceEngine.word_probabilities`: pandas objects indexed by value and word names).
+Results come in two forms: the numeric ones (:meth:`~Engine.query`, :meth:`~Engine.query_batch`,
+:meth:`~Engine.word_probability_array`: NumPy arrays in the nodes' value order) and the labelled ones
+(:meth:`~Engine.posterior`, :meth:`~Engine.posteriors`, :meth:`~Engine.marginals`,
+:meth:`~Engine.posterior_table`, :meth:`~Engine.word_probabilities`: pandas objects indexed by value and
+word names, each node's index made once).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any, Literal
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
+from glu.bn.core import CoreBackend, core_split
+from glu.bn.junction import JunctionBackend
+from glu.bn.labels import Labels, series
 from glu.bn.model import BayesNet
-from glu.bn.soft import SUM_TOL, SoftRule
-from glu.errors import EvidenceError, ImpossibleEvidenceError, ModelError, UnknownNodeError
-from glu.schema import unknown_node_message
+from glu.bn.network import NetworkArrays
+from glu.bn.parse import SoftEvidence, Values, batch_length
+from glu.bn.relevance import reachable, requisite
+from glu.bn.soft import SoftRule, check_soft_rule, fit_jeffrey, virtual_likelihood
+from glu.errors import EvidenceError, ModelError
 
 if TYPE_CHECKING:
     import pandas as pd
 
-SoftEvidence = Mapping[str, Mapping[str, float] | Sequence[float] | np.ndarray]
 Method = Literal["auto", "core", "junction"]
 METHODS: tuple[str, ...] = ("auto", "core", "junction")
-ENGINES: dict[str, type] = {}
-"""The engine of each method, as the subclasses register themselves (``class CoreEngine(…, method="core")``);
-:mod:`glu.bn` imports both, so they are registered before any engine is made."""
 CORE_MAX_STATES = 1 << 16
 """``method="auto"`` takes the core engine only if the core's joint table has at most this many states …"""
 CORE_MAX_ENTRIES = 1 << 22
 """… and its leaf tables over the core (states × (leaf values + 2)) at most this many entries."""
-IPFP_TOL, IPFP_MAX_ITER = 1e-13, 10_000
+PATTERN_CACHE = 4096
+"""Evidence patterns whose relevance an engine keeps (then it starts again)."""
+SUBNORMAL_RISK = 1e-200
+"""A virtual likelihood with a positive entry below this (after scaling) is rescaled on the allowed values."""
+POSSIBLE_MEMO = 1 << 16
+"""Single evidence sets whose probability (0 or not) an engine remembers (then it starts again)."""
+BATCH_ENTRIES = 1 << 22
+"""A batch is answered in chunks of rows whose tables hold at most this many entries together (32 MiB)."""
 
-
-def core_split(bn: BayesNet) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """(core, leaves): the affordance nodes and every node with children, then the other nodes."""
-    has_children = {p for n in bn.nodes for p in bn.parents[n]}
-    core = tuple(n for n in bn.nodes if n in bn.schema.affordance_nodes or n in has_children)
-    return core, tuple(n for n in bn.nodes if n not in core)
-
-
-def core_size(bn: BayesNet) -> tuple[int, int]:
-    """(states of the core joint, entries of the core engine's tables) — Python ints, never overflowing."""
-    core, leaves = core_split(bn)
-    states = math.prod(bn.schema.cardinality(n) for n in core)
-    return states, states * (2 + sum(bn.schema.cardinality(n) for n in leaves))
+Array = np.ndarray
+Answer = tuple[dict[int, Array], Array]
+_ONE, _NONE = np.ones(1, dtype=bool), np.zeros(1, dtype=bool)  # a single query's possible: never written to
+_ONE.flags.writeable = _NONE.flags.writeable = False
 
 
 def choose_method(bn: BayesNet, method: str = "auto") -> str:
@@ -86,237 +98,28 @@ def choose_method(bn: BayesNet, method: str = "auto") -> str:
         raise ModelError(f"unknown inference method {method!r}; allowed: {', '.join(METHODS)}")
     if method != "auto":
         return method
-    states, entries = core_size(bn)
-    small = states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES and len(core_split(bn)[0]) <= 60
+    core, leaves = core_split(bn)
+    if len(core) > 60:
+        return "junction"
+    states = math.prod(bn.cpts[n].shape[-1] for n in core)
+    entries = states * (2 + sum(bn.cpts[n].shape[-1] for n in leaves))
+    small = states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES
     return "core" if small else "junction"
 
 
-class InferenceEngine:
-    """Exact posterior marginals of a :class:`BayesNet` of any shape.
+@runtime_checkable
+class Engine(Protocol):
+    """The query interface of every engine (made by :func:`make_engine`).
 
-    ``InferenceEngine(bn)`` returns an instance of the chosen subclass (:class:`~glu.bn.core.CoreEngine` or
-    :class:`~glu.bn.junction.JunctionTreeEngine`); both are ``InferenceEngine`` instances with this
-    interface.
-
-    Parameters
-    ----------
-    bn : the network
-    method : ``"auto"`` (default: the core engine for GLU-shaped networks, else the junction tree),
-        ``"core"`` or ``"junction"``
-    max_table : the largest table the junction tree may build (entries); None: ``$GLU_MAX_TABLE`` or
-        :data:`glu.bn.plan.MAX_TABLE_DEFAULT`
-
-    Raises
-    ------
-    ModelError
-        a junction tree past the size limit (one line: the largest table and the elimination width), or a
-        core engine forced on a network whose core does not fit
-
-    Examples
-    --------
-    On glu's synthetic data (the real data gives the GLU 2017 bars):
-
-    >>> from glu.bn import learn_bn
-    >>> from glu.data import load_experiments
-    >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
-    >>> p = eng.query(["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"})["ObjVel"]
-    >>> p.round(3)                                                      # slow, medium, fast
-    array([0.015, 0.121, 0.863])
-    >>> type(eng).__name__, isinstance(eng, InferenceEngine)
-    ('CoreEngine', True)
+    Attributes: ``bn`` (the network), ``nodes`` (its node names), ``method`` (``"core"`` or
+    ``"junction"``), ``binary_leaves`` (the word nodes: leaves with two values).
     """
 
     bn: BayesNet
     nodes: tuple[str, ...]
     method: str
     binary_leaves: tuple[str, ...]
-    _value_index: dict[str, dict[str, int]]
 
-    def __new__(
-        cls, bn: BayesNet | None = None, method: Method = "auto", max_table: int | None = None
-    ) -> Any:
-        if cls is InferenceEngine and bn is not None:  # (unpickling calls __new__ without arguments)
-            kind = choose_method(bn, method)
-            if kind not in ENGINES:  # pragma: no cover - glu.bn imports both engines
-                raise ModelError(f"no {kind} engine is loaded (import glu.bn, which loads them)")
-            cls = ENGINES[kind]
-        return super().__new__(cls)
-
-    def __init_subclass__(cls, method: str = "", **kwargs: Any) -> None:
-        """A subclass given ``method=`` is the engine :meth:`__new__` returns for that method."""
-        super().__init_subclass__(**kwargs)
-        if method:
-            ENGINES[method] = cls
-
-    def _setup(self, bn: BayesNet, method: str) -> None:
-        """What every engine shares: the network, its nodes, value look-up (aliases included), word nodes."""
-        self.bn = bn
-        self.nodes = bn.nodes
-        self.method = method
-        self._value_index = {}
-        for n in bn.nodes:
-            vals = bn.schema.values_of(n)
-            d = {v: i for i, v in enumerate(vals)}
-            for alias, v in bn.schema.aliases.get(n, {}).items():
-                if v in d:  # an alias of a value this model does not have does not apply
-                    d[alias] = d[v]
-            self._value_index[n] = d
-        _, leaves = core_split(bn)
-        self.binary_leaves = tuple(w for w in leaves if bn.schema.cardinality(w) == 2)
-
-    # ------------------------------------------------------------------ parsing evidence
-    def _value(self, node: str, value: str | int) -> int:
-        idx = self._value_index.get(node)
-        if idx is None:
-            raise UnknownNodeError(unknown_node_message(node, self.nodes))
-        if isinstance(value, int | np.integer) and not isinstance(value, bool):
-            if 0 <= value < len(self.bn.schema.values_of(node)):
-                return int(value)
-        else:
-            i = idx.get(value)
-            if i is not None:
-                return i
-        return self.bn.schema.value_index(node, str(value))  # raises UnknownValueError
-
-    def _check_node(self, node: str) -> None:
-        if node not in self._value_index:
-            raise UnknownNodeError(unknown_node_message(node, self.nodes))
-
-    def _codes(self, node: str, values: Sequence, n: int) -> np.ndarray:
-        """A batch column as value indices, shape (n,): -1 where not observed (None, NaN, a negative
-        index)."""
-        self._check_node(node)
-        if isinstance(values, np.ndarray) and values.dtype.kind in "iu" and values.ndim == 1:
-            if len(values) != n:
-                raise EvidenceError(f"batch evidence on {node} has {len(values)} rows, expected {n}")
-            out = np.where(values < 0, -1, values).astype(np.intp)
-            bad = out >= self.bn.schema.cardinality(node)
-            if bad.any():
-                self._value(node, int(out[bad][0]))  # raises UnknownValueError, naming the value
-            return out
-        vals = list(values)
-        if len(vals) != n:
-            raise EvidenceError(f"batch evidence on {node} has {len(vals)} rows, expected {n}")
-        out = np.empty(n, dtype=np.intp)
-        for i, v in enumerate(vals):
-            if (
-                v is None
-                or (isinstance(v, float) and np.isnan(v))
-                or (isinstance(v, int | np.integer) and v < 0)
-            ):
-                out[i] = -1
-            else:
-                out[i] = self._value(node, v)
-        return out
-
-    def _targets(self, targets: Sequence[str] | str) -> list[str]:
-        """The target nodes as a list, each checked to be a node of the network."""
-        targets = [targets] if isinstance(targets, str) else list(targets)
-        for t in targets:
-            self._check_node(t)
-        return targets
-
-    def _batch_soft(self, node: str, arr: np.ndarray, n: int, evidence: Mapping[str, Sequence]) -> np.ndarray:
-        """Batch soft evidence on ``node`` checked (shape (n, n_values), every row a distribution, the node
-        not also in the hard ``evidence``) and normalised to sum 1 per row."""
-        self._check_node(node)
-        if node in evidence:
-            raise EvidenceError(f"{node} is given twice: as hard evidence and as soft evidence")
-        arr = np.asarray(arr, dtype=float)
-        if arr.ndim != 2 or arr.shape[0] != n:
-            raise EvidenceError(f"batch soft evidence on {node} must have shape (n={n}, n_values)")
-        for row in arr[: min(n, 1)]:
-            self.soft_vector(node, row)
-        sums = arr.sum(axis=1)
-        if (arr < 0).any() or not np.all(np.abs(sums - 1) <= SUM_TOL):
-            bad = int(np.flatnonzero((np.abs(sums - 1) > SUM_TOL) | (arr < 0).any(axis=1))[0])
-            self.soft_vector(node, arr[bad])
-        return arr / sums[:, None]
-
-    def soft_vector(self, node: str, dist: Mapping[str, float] | Sequence[float] | np.ndarray) -> np.ndarray:
-        """Validate soft evidence on ``node`` and return it as a vector over the node's values, shape (k,)."""
-        self._check_node(node)
-        values = self.bn.schema.values_of(node)
-        if isinstance(dist, Mapping):
-            q = np.zeros(len(values))
-            for k, p in dist.items():
-                if isinstance(p, bool) or not isinstance(p, int | float | np.integer | np.floating):
-                    raise EvidenceError(
-                        f"soft evidence on {node}: the probability of {k!r} must be a number, got {p!r}"
-                    )
-                q[self._value(node, k)] = p
-        else:
-            try:
-                q = np.asarray(dist, dtype=float)
-            except (TypeError, ValueError):
-                raise EvidenceError(
-                    f"soft evidence on {node} must be a list of {len(values)} numbers ({', '.join(values)}) "
-                    f"or {{value: probability}}, got {dist!r}"
-                ) from None
-            if q.ndim != 1:
-                raise EvidenceError(
-                    f"soft evidence on {node} must be a flat list of {len(values)} numbers "
-                    f"({', '.join(values)})"
-                )
-            if q.shape != (len(values),):
-                raise EvidenceError(
-                    f"soft evidence on {node} has {q.size} entries; expected {len(values)} "
-                    f"({', '.join(values)})"
-                )
-        # an entry above 1 is refused before the sum, which could overflow (1e308 + 1e308)
-        if (
-            not np.all(np.isfinite(q))
-            or (q < 0).any()
-            or (q > 1.0 + SUM_TOL).any()
-            or abs(q.sum() - 1.0) > SUM_TOL
-        ):
-            shown = ", ".join(f"{v}:{p:g}" for v, p in zip(values, q, strict=True))
-            raise EvidenceError(
-                f"soft evidence on {node} is not a distribution over its values ({shown}): "
-                "entries must be non-negative and sum to 1"
-            )
-        return q / q.sum()
-
-    def _describe(self, evidence: Mapping | None, soft: Mapping | None) -> str:
-        parts = [f"{k}={v}" for k, v in (evidence or {}).items()] + [f"soft({k})" for k in (soft or {})]
-        return ", ".join(parts) if parts else "no evidence"
-
-    def _impossible(
-        self, evidence: Mapping | None, soft: Mapping | None, hard_possible: bool = False
-    ) -> ImpossibleEvidenceError:
-        hint = ""
-        zr = self.bn.zero_rows()
-        if hard_possible:
-            hint = (
-                " (the hard evidence alone is possible: the soft evidence gives probability 0 to every "
-                "value it allows)"
-            )
-        elif zr:
-            hint = (
-                f" (the model has all-zero CPT rows for {', '.join(zr)}, which exclude some affordance "
-                "configurations; learn with unseen_words='uniform' to keep them)"
-            )
-        return ImpossibleEvidenceError(
-            f"impossible evidence: {self._describe(evidence, soft)} has probability 0 under the model{hint}"
-        )
-
-    def _impossible_row(
-        self,
-        i: int,
-        codes: Mapping[str, np.ndarray],
-        soft: Sequence[str],
-        n_bad: int,
-        hard_possible: bool = False,
-    ) -> ImpossibleEvidenceError:
-        """The error for row ``i`` of a batch (node → value codes, -1 = not observed; the soft nodes), the
-        first of ``n_bad`` impossible rows."""
-        ev = {node: self.bn.schema.values_of(node)[c[i]] for node, c in codes.items() if c[i] >= 0}
-        return ImpossibleEvidenceError(
-            f"row {i}: {self._impossible(ev, dict.fromkeys(soft), hard_possible)}"
-            + (f" ({n_bad} impossible rows in all)" if n_bad > 1 else "")
-        )
-
-    # ------------------------------------------------------------------ numeric results (each engine)
     def query(
         self,
         targets: Sequence[str] | str,
@@ -324,25 +127,14 @@ class InferenceEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> dict[str, np.ndarray]:
-        """Posterior marginal of each target node given hard and soft evidence (the numeric form).
+        """Posterior marginal of each target, target → array, shape (n_values,), in the node's value order.
 
-        Parameters
-        ----------
-        targets : node names
-        evidence : hard evidence, node → value (a value name, an alias such as ``circle``, or an index)
-        soft : soft evidence, node → {value: probability} or a vector over its values
-        soft_rule : ``"virtual"`` (likelihood evidence, the originals' choice) or ``"jeffrey"``
-
-        Returns
-        -------
-        dict target → array, shape (n_values,), the posterior in the node's value order
-        (:meth:`posteriors` gives the same as labelled Series).
-
-        Raises
-        ------
-        UnknownNodeError, UnknownValueError, EvidenceError, ImpossibleEvidenceError (all ValueError)
+        ``evidence``: node → value (a name, an alias such as ``circle``, or an index); ``soft``: node →
+        {value: probability} or a vector over its values; ``soft_rule``: ``"virtual"`` (likelihood evidence,
+        the originals' choice) or ``"jeffrey"``. Raises UnknownNodeError, UnknownValueError, EvidenceError,
+        ImpossibleEvidenceError (all ValueError).
         """
-        raise NotImplementedError  # pragma: no cover - each engine defines it
+        ...
 
     def query_batch(
         self,
@@ -352,23 +144,13 @@ class InferenceEngine:
         soft_rule: SoftRule = "virtual",
         errors: Literal["raise", "nan"] = "raise",
     ) -> dict[str, np.ndarray]:
-        """Posterior marginals for many evidence sets at once, vectorised over the rows.
+        """Posterior marginals for many evidence sets at once: target → array, shape (n, n_values).
 
-        Parameters
-        ----------
-        targets : node names
-        evidence : node → sequence of n values (names or indices; None, NaN or -1 = not observed), e.g. the
-            columns of a DataFrame
-        soft : node → array, shape (n, n_values): one soft-evidence distribution per row
-        soft_rule : ``"virtual"`` or ``"jeffrey"``
-        errors : ``"raise"`` an :class:`ImpossibleEvidenceError` naming the first impossible row, or give
-            that row ``nan``
-
-        Returns
-        -------
-        dict target → array, shape (n, n_values).
+        ``evidence``: node → n values (names or indices; None, NaN or -1 = not observed), e.g. the columns
+        of a DataFrame; ``soft``: node → array, shape (n, n_values); ``errors``: ``"raise"`` an
+        ImpossibleEvidenceError naming the first impossible row, or give that row ``nan``.
         """
-        raise NotImplementedError  # pragma: no cover - each engine defines it
+        ...
 
     def word_probability_array(
         self,
@@ -376,18 +158,18 @@ class InferenceEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> np.ndarray:
-        """P(word = present | evidence) for every binary leaf, shape (n_words,), in ``binary_leaves``
-        order."""
-        if not self.binary_leaves:
-            return np.zeros(0)
-        res = self.query(list(self.binary_leaves), evidence, soft, soft_rule)
-        return np.array([res[w][1] for w in self.binary_leaves])
+        """P(word = present | evidence) for every binary leaf, shape (n_words,), ``binary_leaves`` order."""
+        ...
 
     def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
-        """P(hard evidence) under the model (0 for impossible evidence)."""
-        raise NotImplementedError  # pragma: no cover - each engine defines it
+        """P(hard evidence) under the model (0 for impossible evidence; with all-zero rows, the probability
+        that the evidence holds and no excluded configuration occurs)."""
+        ...
 
-    # ------------------------------------------------------------------ labelled results (pandas)
+    def soft_vector(self, node: str, dist: Mapping[str, float] | Sequence[float] | np.ndarray) -> np.ndarray:
+        """Soft evidence on ``node`` checked and returned as a vector over its values, shape (k,)."""
+        ...
+
     def posterior(
         self,
         target: str,
@@ -395,21 +177,8 @@ class InferenceEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> pd.Series:
-        """``p(target | evidence)`` as a Series indexed by the target's values, named after the target.
-
-        The labelled form of :meth:`query` (same arguments, same errors).
-
-        >>> from glu.bn import learn_bn
-        >>> from glu.data import load_experiments
-        >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
-        >>> eng.posterior("ObjVel", {"Action": "tap", "Shape": "sphere", "Size": "small"}).round(3)
-        ObjVel
-        slow      0.015
-        medium    0.121
-        fast      0.863
-        Name: ObjVel, dtype: float64
-        """
-        return self.posteriors([target], evidence, soft, soft_rule)[target]
+        """``p(target | evidence)``: a Series indexed by the target's values, named after the target."""
+        ...
 
     def posteriors(
         self,
@@ -419,13 +188,7 @@ class InferenceEngine:
         soft_rule: SoftRule = "virtual",
     ) -> dict[str, pd.Series]:
         """:meth:`posterior` of several targets from one computation: target → Series."""
-        import pandas as pd
-
-        res = self.query(list(targets), evidence, soft, soft_rule)
-        return {
-            t: pd.Series(p, index=pd.Index(self.bn.schema.values_of(t), name=t), name=t)
-            for t, p in res.items()
-        }
+        ...
 
     def marginals(
         self,
@@ -433,16 +196,8 @@ class InferenceEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> dict[str, pd.Series]:
-        """The posterior of every node: node → Series indexed by its values (:meth:`posteriors` of all nodes).
-
-        >>> from glu.bn import learn_bn
-        >>> from glu.data import load_experiments
-        >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
-        >>> m = eng.marginals({"Action": "tap"})
-        >>> len(m), m["Action"].to_dict()
-        (57, {'grasp': 0.0, 'tap': 1.0, 'touch': 0.0})
-        """
-        return self.posteriors(list(self.nodes), evidence, soft, soft_rule)
+        """The posterior of every node: node → Series indexed by its values."""
+        ...
 
     def word_probabilities(
         self,
@@ -450,20 +205,8 @@ class InferenceEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> pd.Series:
-        """P(word = present | evidence) for every word node, a Series indexed by word (``binary_leaves``).
-
-        The labelled form of :meth:`word_probability_array`.
-
-        >>> from glu.bn import learn_bn
-        >>> from glu.data import load_experiments
-        >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
-        >>> eng.word_probabilities({"Action": "tap"})[["tapping", "grasping"]].round(3).to_dict()
-        {'tapping': 0.192, 'grasping': 0.0}
-        """
-        import pandas as pd
-
-        probs = self.word_probability_array(evidence, soft, soft_rule)
-        return pd.Series(probs, index=pd.Index(self.binary_leaves, name="word"), name="p(present)")
+        """P(word = present | evidence) for every word node: a Series indexed by word."""
+        ...
 
     def posterior_table(
         self,
@@ -473,15 +216,545 @@ class InferenceEngine:
         soft_rule: SoftRule = "virtual",
         errors: str = "raise",
     ) -> pd.DataFrame:
-        """``p(target | row)`` for every row of ``evidence`` at once: a DataFrame, one column per value.
+        """``p(target | row)`` for every row of ``evidence``: a DataFrame, one column per value."""
+        ...
 
-        ``evidence`` has one column per observed node (value names; NaN or None = not observed in that row);
-        the result keeps its index. ``soft`` and ``errors`` are as in :meth:`query_batch`.
+
+class Backend(Protocol):
+    """The array arithmetic under an engine: :class:`~glu.bn.core.CoreBackend` or
+    :class:`~glu.bn.junction.JunctionBackend`. Variables are node indices; hard and likelihood mappings
+    come with sorted keys; a single query is a batch of one row (its hard evidence Python ints, a batch's
+    arrays of codes, shape (rows,))."""
+
+    method: str
+
+    def solve(
+        self, targets: Sequence[int], hard: Mapping[int, Array], likelihood: Mapping[int, Array], rows: int,
+        tables: frozenset[int],
+    ) -> Answer: ...  # fmt: skip
+
+    def size(self, tables: frozenset[int], observed: Sequence[int], soft: Sequence[int], targets: Sequence[int]) -> int: ...  # fmt: skip # noqa: E501
+
+    def log_mass(self, hard: Mapping[int, Array], rows: int) -> Array: ...
+
+
+def make_engine(bn: BayesNet, method: Method = "auto", max_table: int | None = None) -> Engine:
+    """The exact inference engine of ``bn``.
+
+    Parameters
+    ----------
+    bn : the network
+    method : ``"auto"`` (default: the core for GLU-shaped networks, else the junction tree), ``"core"`` or
+        ``"junction"``
+    max_table : the largest table the junction tree may build (entries); None: ``$GLU_MAX_TABLE`` or
+        :data:`glu.bn.plan.MAX_TABLE_DEFAULT`. A query whose tables would pass it is refused in one line
+        (the largest table and the elimination width).
+
+    Raises
+    ------
+    ModelError
+        an unknown method, or a core engine forced on a network whose core does not fit
+
+    Examples
+    --------
+    On glu's synthetic data (the real data gives the GLU 2017 bars):
+
+    >>> from glu.bn import learn_bn
+    >>> from glu.data import load_experiments
+    >>> eng = make_engine(learn_bn(load_experiments("synthetic")))
+    >>> p = eng.query(["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"})["ObjVel"]
+    >>> p.round(3)                                                      # slow, medium, fast
+    array([0.015, 0.121, 0.863])
+    >>> eng.method, isinstance(eng, Engine)
+    ('core', True)
+    """
+    kind = choose_method(bn, method)
+    net = NetworkArrays.of(bn)
+    backend: Backend = CoreBackend(bn) if kind == "core" else JunctionBackend(net, max_table)
+    return ExactEngine(bn, net, backend)
+
+
+@dataclass(frozen=True)
+class Relevance:
+    """What one evidence pattern needs (:meth:`ExactEngine._relevance`): targets answered from their
+    observed value, from the cached priors, or by the backend — with the evidence and tables it needs; and
+    whether the hard evidence must be checked for probability 0 apart (``check``: no target is computed)."""
+
+    observed: tuple[int, ...]
+    prior: tuple[int, ...]
+    targets: tuple[int, ...]
+    hard: tuple[int, ...]
+    soft: tuple[int, ...]
+    tables: frozenset[int]
+    check: bool
+
+
+class ExactEngine:
+    """The one implementation of :class:`Engine`: evidence, relevance, soft rules, batches and caches over
+    a backend's arithmetic (see the module docstring). Made by :func:`make_engine`.
+
+    Attributes
+    ----------
+    bn : the network
+    nodes : its node names
+    method : ``"core"`` or ``"junction"``, the backend's
+    binary_leaves : the word nodes (leaves with two values)
+    backend : the array arithmetic (:class:`~glu.bn.core.CoreBackend` — the core's joint tables, which
+        :func:`glu.bn.sampling.sample` draws from — or :class:`~glu.bn.junction.JunctionBackend`)
+    deduplicate : answer identical rows of a batch once (benchmarks turn it off to time every row)
+    """
+
+    def __init__(self, bn: BayesNet, net: NetworkArrays, backend: Backend) -> None:
+        self.bn = bn
+        self.nodes = bn.nodes
+        self.net = net
+        self.backend = backend
+        self.method = backend.method
+        self.values = Values(bn)
+        aff = set(bn.schema.affordance_nodes)
+        self.binary_leaves = tuple(
+            n
+            for n, kids, k in zip(bn.nodes, net.children, net.cards, strict=True)
+            if not kids and k == 2 and n not in aff
+        )
+        """The word nodes: leaves (not affordance nodes, no children) with two values."""
+        self.deduplicate = True
+        self._relevant: dict[tuple, Relevance] = {}
+        self._priors: dict[int, Array] = {}
+        self._has_zero: dict[int, bool] = {}
+        self._possible_memo: dict[tuple, Array] = {}
+        self.labels = Labels(bn.schema.values_of)
+
+    def junction_tree(self):  # type: ignore[no-untyped-def]
+        """The junction tree of the whole network (:class:`~glu.bn.plan.JunctionTreePlan`), planned once."""
+        backend = self.backend if isinstance(self.backend, JunctionBackend) else JunctionBackend(self.net)
+        return backend.junction_tree()
+
+    def soft_vector(self, node: str, dist: Mapping[str, float] | Sequence[float] | np.ndarray) -> np.ndarray:
+        """Soft evidence on ``node`` checked and returned as a vector over its values, shape (k,)."""
+        return self.values.soft_vector(node, dist)
+
+    # ------------------------------------------------------------------ relevance and priors
+    def _relevance(self, hard: tuple[int, ...], soft: tuple[int, ...], targets: tuple[int, ...]) -> Relevance:
+        key = (hard, soft, targets)
+        rel = self._relevant.get(key)
+        if rel is not None:
+            return rel
+        net = self.net
+        hard_set, soft_set = set(hard), set(soft)
+        virtual = soft_set | net.inexact
+        rest = [t for t in targets if t not in hard_set]
+        reach = reachable(net.parents, net.children, hard_set, virtual) if hard_set or virtual else set()
+        computed = tuple(sorted({t for t in rest if t in reach}))
+        # evidence that may have probability 0 (a zero in a table above it, or all-zero rows anywhere)
+        risky = bool(hard or soft) and (
+            bool(net.inexact) or any(self._zeros(v) for v in net.ancestors(hard_set | soft_set))
+        )
+        if computed and risky:  # every table above the targets and the evidence: exact, and P(evidence) too
+            tables, hard_used, soft_used = net.ancestors({*computed, *hard, *soft, *net.inexact}), hard, soft
+        elif computed:  # Bayes-ball: barren and d-separated nodes left out, and the evidence they carry
+            need = requisite(net.parents, net.children, hard_set, virtual, computed)
+            tables, hard_used, soft_used = (
+                need.tables,
+                tuple(sorted(need.hard)),
+                tuple(sorted(need.virtual & soft_set)),
+            )
+        else:
+            tables, hard_used, soft_used = set(), (), ()
+        rel = Relevance(
+            observed=tuple(t for t in targets if t in hard_set),
+            prior=tuple(t for t in rest if t not in reach),
+            targets=computed,
+            hard=hard_used,
+            soft=soft_used,
+            tables=frozenset(tables),
+            check=risky and not computed and bool(hard),
+        )
+        if len(self._relevant) >= PATTERN_CACHE:
+            self._relevant.clear()
+        self._relevant[key] = rel
+        return rel
+
+    def _zeros(self, v: int) -> bool:
+        """Whether node ``v``'s table has a zero entry (evidence below it may then have probability 0)."""
+        z = self._has_zero.get(v)
+        if z is None:
+            z = self._has_zero[v] = not bool(self.net.cpts[v].all())
+        return z
+
+    def _possible(self, hard: dict[int, Array], rows: int) -> Array:
+        """Whether each row's hard evidence has probability > 0, shape (rows,) (single queries remembered)."""
+        if rows > 1:
+            return self.backend.log_mass(hard, rows) > -np.inf
+        first = next(iter(hard.values()))
+        key = (*hard, *(hard.values() if type(first) is int else (int(c[0]) for c in hard.values())))
+        ok = self._possible_memo.get(key)
+        if ok is None:
+            if len(self._possible_memo) >= POSSIBLE_MEMO:
+                self._possible_memo.clear()
+            ok = self._possible_memo[key] = self.backend.log_mass(hard, 1) > -np.inf
+        return ok
+
+    def _prior(self, targets: Sequence[int]) -> list[Array]:
+        """Prior marginals (given only the all-zero rows, if any), computed once per node."""
+        missing = tuple(sorted({t for t in targets if t not in self._priors}))
+        if missing:
+            net = self.net
+            need = requisite(net.parents, net.children, (), net.inexact, missing)
+            out, _ = self.backend.solve(missing, {}, {}, 1, need.tables)
+            for t in missing:
+                self._priors[t] = np.array(out[t][0])
+        return [self._priors[t] for t in targets]
+
+    # ------------------------------------------------------------------ the arithmetic, once
+    def _solve(
+        self, targets: tuple[int, ...], hard: dict[int, Array], lik: dict[int, Array], rows: int
+    ) -> Answer:
+        """Marginals of ``targets`` (rows, k) and possible (rows,), given hard codes and likelihoods (sorted
+        keys), by relevance, then the backend in chunks of at most :data:`BATCH_ENTRIES` table entries."""
+        rel = self._relevance(tuple(hard), tuple(lik), targets)
+        out: dict[int, Array] = {}
+        possible = _ONE if rows == 1 else np.ones(rows, dtype=bool)
+        if rel.targets:
+            h = {v: hard[v] for v in rel.hard}
+            s = {v: lik[v] for v in rel.soft}
+            solve = self.backend.solve
+            step = rows
+            if rows > 1:
+                size = self.backend.size(rel.tables, rel.hard, rel.soft, rel.targets)
+                step = max(1, BATCH_ENTRIES // max(size, 1))
+            if rows <= step:
+                res, possible = solve(rel.targets, h, s, rows, rel.tables)
+                out = dict(res)  # the backend may keep its answer: never written into
+            else:
+                out = {t: np.empty((rows, self.net.cards[t])) for t in rel.targets}
+                for a in range(0, rows, step):
+                    b = min(rows, a + step)
+                    res, possible[a:b] = solve(
+                        rel.targets, {v: c[a:b] for v, c in h.items()}, {v: q[a:b] for v, q in s.items()},
+                        b - a, rel.tables,
+                    )  # fmt: skip
+                    for t in rel.targets:
+                        out[t][a:b] = res[t]
+        for t in rel.observed:
+            m = np.zeros((rows, self.net.cards[t]))
+            m[np.arange(rows), hard[t]] = 1.0
+            out[t] = m
+        if rel.prior:
+            for t, p in zip(rel.prior, self._prior(rel.prior), strict=True):
+                out[t] = p[None, :] if rows == 1 else np.broadcast_to(p, (rows, len(p)))
+        if rel.check:  # no target computed, and hard evidence that may have probability 0: its probability
+            possible = possible & self._possible(hard, rows)
+        if not (possible[0] if rows == 1 else possible.all()):
+            for t in targets:
+                out[t] = np.array(out[t], dtype=float)
+                out[t][~possible] = np.nan
+        return out, possible
+
+    def _answer(
+        self, targets: tuple[int, ...], hard: dict[int, Array], soft: dict[int, Array], rule: str, rows: int
+    ) -> tuple[dict[int, Array], Array, Array]:
+        """:meth:`_solve` with soft distributions (rows, k) turned into likelihoods by ``rule``; returns
+        (marginals, possible, hard_possible: rows impossible only because of the virtual evidence)."""
+        hard_possible = _NONE if rows == 1 else np.zeros(rows, dtype=bool)
+        if not soft:
+            out, possible = self._solve(targets, hard, {}, rows)
+            return out, possible, hard_possible
+        if rule == "jeffrey":
+            lik, fit_ok = fit_jeffrey(
+                soft, lambda v, lam: self._solve((v,), hard, dict(sorted(lam.items())), rows)[0][v]
+            )
+            out, possible = self._solve(targets, hard, lik, rows)
+            if not fit_ok.all():
+                possible = possible & fit_ok
+                out = {t: np.array(m, dtype=float) for t, m in out.items()}
+                for m in out.values():
+                    m[~possible] = np.nan
+            return out, possible, hard_possible
+        lik = {v: virtual_likelihood(q) for v, q in soft.items()}
+        if any(((lam > 0) & (lam < SUBNORMAL_RISK)).any() for lam in lik.values()):
+            # a likelihood this small may end in subnormal numbers: scale it on the values the hard evidence
+            # allows, so that its largest allowed entry is 1
+            alone, _ = self._solve(tuple(soft), hard, {}, rows)
+            lik = {v: virtual_likelihood(q, alone[v] > 0) for v, q in soft.items()}
+        out, possible = self._solve(targets, hard, lik, rows)
+        if not possible.all():
+            # the soft evidence left nothing: is the hard evidence alone possible? If so, rescale each
+            # likelihood on the values it allows (a likelihood of 1e-320 is not zero) and answer again
+            alone, hp = self._solve(tuple(soft), hard, {}, rows)
+            bad = ~possible & hp
+            if bad.any():
+                for v, q in soft.items():
+                    lik[v] = np.where(bad[:, None], virtual_likelihood(q, alone[v] > 0), lik[v])
+                out, possible = self._solve(targets, hard, lik, rows)
+            hard_possible = ~possible & hp
+        return out, possible, hard_possible
+
+    # ------------------------------------------------------------------ single queries
+    def _variables(self, targets: Sequence[str] | str) -> tuple[int, ...]:
+        if isinstance(targets, str):
+            targets = [targets]
+        index = self.net.index
+        try:
+            return tuple(index[t] for t in targets)
+        except (KeyError, TypeError):
+            for t in targets:
+                self.values.check_node(t)
+            raise  # pragma: no cover - check_node raised
+
+    def _parse(self, evidence: Mapping | None, soft: SoftEvidence | None, rule: str) -> tuple[dict, dict]:
+        """One query's evidence: (variable → code, an int; variable → q, shape (1, k)), sorted keys."""
+        hard = {}
+        if evidence:
+            index, value = self.net.index, self.values.value
+            for node, val in evidence.items():
+                hard[index[node]] = value(node, val)
+            if len(hard) > 1:
+                hard = dict(sorted(hard.items()))
+        qs = {}
+        if soft:
+            check_soft_rule(rule)
+            for node, dist in soft.items():
+                q = self.values.soft_vector(node, dist)
+                if evidence and node in evidence:
+                    raise EvidenceError(f"{node} is given twice: as hard evidence and as soft evidence")
+                qs[self.net.index[node]] = q[None, :]
+            qs = dict(sorted(qs.items()))
+        return hard, qs
+
+    def query(
+        self,
+        targets: Sequence[str] | str,
+        evidence: Mapping[str, str | int] | None = None,
+        soft: SoftEvidence | None = None,
+        soft_rule: SoftRule = "virtual",
+    ) -> dict[str, np.ndarray]:
+        """See :meth:`Engine.query`."""
+        names = [targets] if isinstance(targets, str) else list(targets)
+        tv = self._variables(names)
+        hard, qs = self._parse(evidence, soft, soft_rule)
+        out, possible, hard_possible = self._answer(tv, hard, qs, soft_rule, 1)
+        if not possible[0]:
+            raise self.values.impossible(evidence, soft, bool(hard_possible[0]))
+        return {t: out[v][0].copy() for t, v in zip(names, tv, strict=True)}
+
+    def word_probability_array(
+        self,
+        evidence: Mapping[str, str | int] | None = None,
+        soft: SoftEvidence | None = None,
+        soft_rule: SoftRule = "virtual",
+    ) -> np.ndarray:
+        """See :meth:`Engine.word_probability_array`."""
+        if not self.binary_leaves:
+            return np.zeros(0)
+        res = self.query(self.binary_leaves, evidence, soft, soft_rule)
+        return np.array([res[w][1] for w in self.binary_leaves])
+
+    def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
+        """See :meth:`Engine.probability_of_evidence`."""
+        hard, _ = self._parse(evidence, None, "virtual")
+        return float(np.exp(self.backend.log_mass(hard, 1)[0]))
+
+    # ------------------------------------------------------------------ batches
+    def query_batch(
+        self,
+        targets: Sequence[str] | str,
+        evidence: Mapping[str, Sequence] | None = None,
+        soft: Mapping[str, np.ndarray] | None = None,
+        soft_rule: SoftRule = "virtual",
+        errors: Literal["raise", "nan"] = "raise",
+    ) -> dict[str, np.ndarray]:
+        """See :meth:`Engine.query_batch`.
+
+        Rows are grouped by which nodes they observe (a row without a value for a node does not observe
+        it); within a group, rows with the same hard evidence and no soft evidence are answered once.
+        """
+        names = [targets] if isinstance(targets, str) else list(targets)
+        tv = self._variables(names)
+        evidence = dict(evidence or {})
+        soft = dict(soft or {})
+        n = batch_length(evidence, soft)
+        check_soft_rule(soft_rule)
+        codes = {node: self.values.codes(node, vals, n) for node, vals in evidence.items()}
+        checked = {node: self.values.batch_soft(node, arr, n, evidence) for node, arr in soft.items()}
+        qs = dict(sorted((self.net.index[node], q) for node, q in checked.items()))
+        hard = dict(sorted((self.net.index[node], c) for node, c in codes.items()))
+        groups = self._groups(hard, n)
+        if len(groups) == 1 and groups[0][0] is None:  # every row observes the same nodes
+            out, possible, hard_possible = self._unique_rows(tv, hard, qs, soft_rule, n)
+            out = {  # the caller's own arrays: never a cached or broadcast one
+                v: np.array(m) if n == 1 or not (m.flags.writeable and m.base is None) else m
+                for v, m in out.items()
+            }
+            groups = []
+        else:
+            out = {v: np.full((n, self.net.cards[v]), np.nan) for v in tv}
+            possible = np.ones(n, dtype=bool)
+            hard_possible = np.zeros(n, dtype=bool)
+        for rows, group in groups:
+            sub = {v: hard[v] if rows is None else hard[v][rows] for v in group}
+            sq = {v: q if rows is None else q[rows] for v, q in qs.items()}
+            res, ok, hp = self._unique_rows(tv, sub, sq, soft_rule, n if rows is None else len(rows))
+            sel = slice(None) if rows is None else rows
+            for v in set(tv):
+                out[v][sel] = res[v]
+            possible[sel], hard_possible[sel] = ok, hp
+        if errors == "raise" and not possible.all():
+            k = int(np.flatnonzero(~possible)[0])
+            raise self.values.impossible_row(
+                k, codes, list(soft), int((~possible).sum()), bool(hard_possible[k])
+            )
+        return {t: out[v] for t, v in zip(names, tv, strict=True)}
+
+    @staticmethod
+    def _groups(hard: dict[int, Array], n: int) -> list[tuple[Array | None, tuple[int, ...]]]:
+        """(rows or None for all, observed variables): the rows of each pattern of observed nodes."""
+        seen = {v: c >= 0 for v, c in hard.items()}
+        partial = [v for v, s in seen.items() if not s.all()]
+        if not partial:
+            return [(None, tuple(hard))]
+        if len(partial) < 63:
+            key = np.zeros(n, dtype=np.int64)
+            for i, v in enumerate(partial):
+                key |= seen[v].astype(np.int64) << i
+            patterns, inverse = np.unique(key, return_inverse=True)
+            bits = [[bool(p >> i & 1) for i in range(len(partial))] for p in patterns.tolist()]
+        else:  # pragma: no cover - 63 or more partly observed columns
+            patterns, inverse = np.unique(
+                np.stack([seen[v] for v in partial], axis=1), axis=0, return_inverse=True
+            )
+            bits = patterns.tolist()
+        inverse = inverse.ravel()
+        always = [v for v in hard if v not in partial]
+        out = []
+        for k, on in enumerate(bits):
+            group = tuple(sorted(always + [v for v, b in zip(partial, on, strict=True) if b]))
+            out.append((np.flatnonzero(inverse == k), group))
+        return out
+
+    def _unique_rows(
+        self, targets: tuple[int, ...], hard: dict[int, Array], soft: dict[int, Array], rule: str, rows: int
+    ) -> tuple[dict[int, Array], Array, Array]:
+        """:meth:`_answer`, with rows of the same hard evidence (and no soft evidence) answered once: their
+        key is the mixed-radix number of their values, a one-dimensional integer."""
+        if self.deduplicate and hard and not soft and rows > 1:
+            cards = [self.net.cards[v] for v in hard]
+            space = math.prod(cards)
+            if space < 1 << 62:
+                key = np.zeros(rows, dtype=np.int64)
+                for v, k in zip(hard, cards, strict=True):
+                    key *= k
+                    key += hard[v]
+                if space <= max(1 << 16, 4 * rows):  # a table over every key: no sort
+                    seen = np.zeros(space, dtype=bool)
+                    seen[key] = True
+                    uniq = np.flatnonzero(seen)
+                    lookup = np.empty(space, dtype=np.intp)
+                    lookup[uniq] = np.arange(len(uniq))
+                    inverse = lookup[key]
+                else:
+                    uniq, inverse = np.unique(key, return_inverse=True)
+                codes = dict(zip(hard, np.unravel_index(uniq, cards), strict=True))
+            else:  # pragma: no cover - more joint values than an int64 holds
+                _, first, inverse = np.unique(
+                    np.stack(list(hard.values()), axis=1), axis=0, return_index=True, return_inverse=True
+                )
+                codes = {v: c[first] for v, c in hard.items()}
+            n = len(next(iter(codes.values())))
+            if n < rows:
+                inverse = inverse.ravel()
+                res, ok, hp = self._answer(targets, codes, {}, rule, n)
+                return (
+                    {v: np.take(m, inverse, axis=0) for v, m in res.items()},
+                    np.take(ok, inverse),
+                    np.take(hp, inverse),
+                )
+        return self._answer(targets, hard, soft, rule, rows)
+
+    # ------------------------------------------------------------------ labelled results (pandas)
+    def posterior(
+        self,
+        target: str,
+        evidence: Mapping[str, str | int] | None = None,
+        soft: SoftEvidence | None = None,
+        soft_rule: SoftRule = "virtual",
+    ) -> pd.Series:
+        """See :meth:`Engine.posterior` (the labelled form of :meth:`query`: same arguments, same errors).
+
+        >>> from glu.bn import learn_bn
+        >>> from glu.data import load_experiments
+        >>> eng = make_engine(learn_bn(load_experiments("synthetic")))
+        >>> eng.posterior("ObjVel", {"Action": "tap", "Shape": "sphere", "Size": "small"}).round(3)
+        ObjVel
+        slow      0.015
+        medium    0.121
+        fast      0.863
+        Name: ObjVel, dtype: float64
+        """
+        return series(
+            self.query(target, evidence, soft, soft_rule)[target], self.labels.index(target), target
+        )
+
+    def posteriors(
+        self,
+        targets: Sequence[str],
+        evidence: Mapping[str, str | int] | None = None,
+        soft: SoftEvidence | None = None,
+        soft_rule: SoftRule = "virtual",
+    ) -> dict[str, pd.Series]:
+        """See :meth:`Engine.posteriors`."""
+        res = self.query(list(targets), evidence, soft, soft_rule)
+        return {t: series(p, self.labels.index(t), t) for t, p in res.items()}
+
+    def marginals(
+        self,
+        evidence: Mapping[str, str | int] | None = None,
+        soft: SoftEvidence | None = None,
+        soft_rule: SoftRule = "virtual",
+    ) -> dict[str, pd.Series]:
+        """See :meth:`Engine.marginals`.
+
+        >>> from glu.bn import learn_bn
+        >>> from glu.data import load_experiments
+        >>> eng = make_engine(learn_bn(load_experiments("synthetic")))
+        >>> m = eng.marginals({"Action": "tap"})
+        >>> len(m), m["Action"].to_dict()
+        (57, {'grasp': 0.0, 'tap': 1.0, 'touch': 0.0})
+        """
+        return self.posteriors(self.nodes, evidence, soft, soft_rule)
+
+    def word_probabilities(
+        self,
+        evidence: Mapping[str, str | int] | None = None,
+        soft: SoftEvidence | None = None,
+        soft_rule: SoftRule = "virtual",
+    ) -> pd.Series:
+        """See :meth:`Engine.word_probabilities` (the labelled form of :meth:`word_probability_array`).
+
+        >>> from glu.bn import learn_bn
+        >>> from glu.data import load_experiments
+        >>> eng = make_engine(learn_bn(load_experiments("synthetic")))
+        >>> eng.word_probabilities({"Action": "tap"})[["tapping", "grasping"]].round(3).to_dict()
+        {'tapping': 0.192, 'grasping': 0.0}
+        """
+        probs = self.word_probability_array(evidence, soft, soft_rule)
+        return series(probs, self.labels.named("\0words", self.binary_leaves, "word"), "p(present)")
+
+    def posterior_table(
+        self,
+        target: str,
+        evidence: pd.DataFrame,
+        soft: Mapping[str, np.ndarray] | None = None,
+        soft_rule: SoftRule = "virtual",
+        errors: str = "raise",
+    ) -> pd.DataFrame:
+        """See :meth:`Engine.posterior_table`: ``evidence`` has one column per observed node (value names;
+        NaN or None = not observed in that row); the result keeps its index.
 
         >>> import pandas as pd
         >>> from glu.bn import learn_bn
         >>> from glu.data import load_experiments
-        >>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
+        >>> eng = make_engine(learn_bn(load_experiments("synthetic")))
         >>> rows = pd.DataFrame({"Action": ["tap", "tap"], "Shape": ["sphere", "box"]}, index=["ball", "box"])
         >>> eng.posterior_table("ObjVel", rows).round(2)
         ObjVel  slow  medium  fast
@@ -492,6 +765,4 @@ class InferenceEngine:
 
         cols = {c: evidence[c].tolist() for c in evidence.columns}
         res = self.query_batch([target], cols, soft, soft_rule, errors=errors)[target]  # type: ignore[arg-type]
-        return pd.DataFrame(
-            res, index=evidence.index, columns=pd.Index(self.bn.schema.values_of(target), name=target)
-        )
+        return pd.DataFrame(res, index=evidence.index, columns=self.labels.index(target))

@@ -6,9 +6,11 @@ known before any memory is spent:
 
 1. the moral graph: each node joined to its parents, and the parents of each node to one another (for a set
    of factors, :func:`plan_from_scopes`: the variables of each factor joined to one another);
-2. an elimination order, greedy: at each step the node whose elimination adds the fewest fill-in edges,
-   ties broken by the smallest table it creates (the product of the cardinalities of the node and its
-   remaining neighbours), then by node order — deterministic;
+2. an elimination order, greedy: at each step the node whose elimination adds the fewest fill-in edges
+   (min-fill), ties broken by the smallest table it creates (the product of the cardinalities of the node
+   and its remaining neighbours), then by node order — deterministic. When the tables are large
+   (:data:`TRY_ALL_ABOVE`), the orders that take the smallest table first (min-weight) and the fewest
+   neighbours first (min-size) are tried too, and the one with the smallest total table size is kept;
 3. the cliques: when a node is eliminated, it and its remaining neighbours form one; the elimination tree
    (each clique joined to the clique of its first-eliminated neighbour) is a junction tree, and a clique
    contained in a neighbouring one is merged into it until every clique is maximal.
@@ -84,6 +86,7 @@ class JunctionTreePlan:
     width : elimination width (variables of the largest clique − 1)
     largest : entries of the largest clique table
     total : entries of all clique tables together
+    heuristic : the elimination heuristic kept (:data:`HEURISTICS`)
     """
 
     cards: tuple[int, ...]
@@ -93,58 +96,135 @@ class JunctionTreePlan:
     width: int
     largest: int
     total: int
+    heuristic: str = "min-fill"
 
     def size(self, clique: Sequence[int]) -> int:
         """Entries of the table over ``clique`` (variable indices)."""
         return math.prod(self.cards[v] for v in clique)
 
 
-def _cost(v: int, adj: list[set[int]], logc: Sequence[float]) -> tuple[int, float, int]:
-    nb = list(adj[v])
-    fill = 0
-    for i, a in enumerate(nb):
-        na = adj[a]
-        fill += sum(1 for b in nb[i + 1 :] if b not in na)
-    return fill, round(logc[v] + sum(logc[u] for u in nb), 9), v
+HEURISTICS: tuple[str, ...] = ("fill-weight", "min-fill", "min-weight", "min-size")
+"""The greedy elimination heuristics, tried in this order: simplicial nodes first, then the fewest fill-in
+edges times the log size of the table made (close to pyAgrum's default); the fewest fill-in edges; the
+smallest table; the fewest neighbours."""
+TRY_ALL_ABOVE = 1 << 20
+"""When the first heuristic's tables hold more entries than this together, the others are tried too and the
+smallest total kept (below it, planning four times costs more than the tables)."""
 
 
-def elimination_order(adj: list[set[int]], cards: Sequence[int]) -> tuple[list[int], list[tuple[int, ...]]]:
-    """A greedy min-fill elimination order (ties: smallest table, then index) and the clique of each step.
+def _bits(mask: int) -> list[int]:
+    out = []
+    while mask:
+        low = mask & -mask
+        out.append(low.bit_length() - 1)
+        mask ^= low
+    return out
 
-    ``adj`` is consumed (fill-in edges are added, eliminated nodes removed). Returns (order, cliques): the
-    clique of step k is the k-th eliminated node with its neighbours at that time, sorted.
+
+def _key(
+    v: int, nbs: list[set[int]], masks: list[int], logc: Sequence[float], heuristic: str
+) -> tuple[float, float, int]:
+    """The greedy key of eliminating ``v`` now (smaller first; ties: the other measure, then the index)."""
+    nb = nbs[v]
+    weight = round(logc[v] + sum(map(logc.__getitem__, nb)), 9)  # rounded: the same whatever the set order
+    if heuristic == "min-weight":
+        return weight, len(nb), v
+    if heuristic == "min-size":
+        return len(nb), weight, v
+    m = masks[v]
+    fill = (sum((m & ~masks[a]).bit_count() for a in nb) - len(nb)) // 2  # a is in m, never in masks[a]
+    if heuristic == "min-fill":
+        return fill, weight, v
+    return (1.0 if fill else 0.0), (fill * weight if fill else weight), v
+
+
+def elimination_order(
+    adj: Sequence[int], cards: Sequence[int], heuristic: str = HEURISTICS[0]
+) -> tuple[list[int], list[int]]:
+    """A greedy elimination order by ``heuristic`` (one of :data:`HEURISTICS`) and the clique of each step.
+
+    ``adj`` holds each node's neighbours as a bit mask (bit u = node u; it is not changed). Returns (order,
+    cliques): the clique of step k is the k-th eliminated node with its neighbours at that time, as a bit
+    mask. Deterministic (ties go to the smaller index).
     """
+    masks = list(adj)
+    nbs = [set(_bits(m)) for m in masks]
     logc = [math.log(max(c, 1)) for c in cards]
-    heap = [_cost(v, adj, logc) for v in range(len(adj))]
-    heapq.heapify(heap)
-    current = {key[2]: key for key in heap}
     alive = [True] * len(adj)
     order, cliques = [], []
+    # nodes with at most one neighbour are simplicial whatever comes next: eliminated first, no keys needed
+    peel = [v for v in range(len(adj)) if len(nbs[v]) <= 1]
+    peel.reverse()
+    while peel:
+        v = peel.pop()
+        if not alive[v] or len(nbs[v]) > 1:
+            continue
+        alive[v] = False
+        order.append(v)
+        cliques.append(masks[v] | 1 << v)
+        for a in nbs[v]:
+            nbs[a].discard(v)
+            masks[a] &= ~(1 << v)
+            if len(nbs[a]) <= 1:
+                peel.append(a)
+        nbs[v], masks[v] = set(), 0
+    current = [_key(v, nbs, masks, logc, heuristic) if alive[v] else None for v in range(len(adj))]
+    heap = [k for k in current if k is not None]
+    heapq.heapify(heap)
     while heap:
         key = heapq.heappop(heap)
         v = key[2]
         if not alive[v] or current[v] != key:
             continue
-        nb = adj[v]
+        nb, m, bit = nbs[v], masks[v], 1 << v
         order.append(v)
-        cliques.append(tuple(sorted(nb | {v})))
+        cliques.append(m | bit)
         alive[v] = False
         touched = set(nb)
         for a in nb:
-            adj[a].discard(v)
-            new = nb - adj[a] - {a}
-            if new:
-                adj[a] |= new
-        for a in nb:
-            touched |= adj[a]
-        adj[v] = set()
+            na = nbs[a]
+            na.discard(v)
+            add = nb - na
+            add.discard(a)
+            if add:
+                if heuristic in ("min-fill", "fill-weight"):  # a's neighbours see one more edge among theirs
+                    touched |= na
+                na |= add
+            masks[a] = (masks[a] | m) & ~(1 << a) & ~bit
+        nbs[v] = set()
         for u in touched:
             if alive[u]:
-                k = _cost(u, adj, logc)
+                k = _key(u, nbs, masks, logc, heuristic)
                 if k != current[u]:
                     current[u] = k
                     heapq.heappush(heap, k)
     return order, cliques
+
+
+def _tree(order: list[int], raw: list[int]) -> tuple[list[int], list[tuple[int, int]]]:
+    """Maximal cliques and the edges joining them, from the elimination cliques (bit masks).
+
+    The elimination tree joins step k to the step of its clique's first-eliminated other node; a clique
+    inside another one is inside one of its children there (running intersection), and is merged into it.
+    """
+    step = {v: k for k, v in enumerate(order)}
+    parent = []
+    for k, c in enumerate(raw):
+        later = [step[u] for u in _bits(c & ~(1 << order[k]))]
+        parent.append(min(later) if later else -1)
+    kids: list[list[int]] = [[] for _ in raw]
+    for k, p in enumerate(parent):
+        if p >= 0:
+            kids[p].append(k)
+    rep = list(range(len(raw)))
+    for k, c in enumerate(raw):
+        for ch in kids[k]:
+            if c & ~raw[rep[ch]] == 0:
+                rep[k] = rep[ch]
+                break
+    keep = sorted({rep[k] for k in range(len(raw))})
+    edges = {tuple(sorted((rep[k], rep[p]))) for k, p in enumerate(parent) if p >= 0 and rep[k] != rep[p]}
+    return [raw[k] for k in keep], [(keep.index(a), keep.index(b)) for a, b in sorted(edges)]  # type: ignore[misc]
 
 
 def plan_junction_tree(
@@ -188,69 +268,52 @@ def plan_from_scopes(
     cards = tuple(int(c) for c in cards)
     keep = sorted(set(variables))
     local = {v: i for i, v in enumerate(keep)}
-    adj: list[set[int]] = [set() for _ in keep]
+    adj = [0] * len(keep)
     for scope in scopes:
-        sc = [local[v] for v in set(scope)]
-        for i, a in enumerate(sc):
-            for b in sc[i + 1 :]:
-                adj[a].add(b)
-                adj[b].add(a)
-    order_l, raw_l = elimination_order(adj, [cards[v] for v in keep])
-    order = [keep[i] for i in order_l]
-    raw = [tuple(keep[i] for i in c) for c in raw_l]
-    sizes = [math.prod(cards[v] for v in c) for c in raw]
+        members = [local[v] for v in scope]
+        mask = 0
+        for a in members:
+            mask |= 1 << a
+        for a in members:
+            adj[a] |= mask
+    adj = [m & ~(1 << a) for a, m in enumerate(adj)]
+    lcards = [cards[v] for v in keep]
+    best = None
+    for heuristic in HEURISTICS:
+        order_l, raw_l = elimination_order(adj, lcards, heuristic)
+        cliques_l, edges = _tree(order_l, raw_l)
+        members = [_bits(c) for c in cliques_l]
+        sizes = [math.prod(lcards[v] for v in m) for m in members]
+        if best is None or sum(sizes) < sum(best[4]):
+            best = (heuristic, order_l, members, edges, sizes)
+        if heuristic == HEURISTICS[0] and sum(sizes) <= TRY_ALL_ABOVE:
+            break
+    assert best is not None
+    heuristic, order_l, members, edges, sizes = best  # every elimination clique lies in one of these
+    final = tuple(tuple(keep[i] for i in m) for m in members)
     largest = max(sizes, default=1)
-    width = max((len(c) for c in raw), default=1) - 1
-    widest = max((len(c) for c in raw), default=0)
+    widest = max((len(c) for c in final), default=0)
+    width = max(widest, 1) - 1
     if widest > MAX_CLIQUE_VARIABLES:
         raise ModelError(
             f"exact inference in this network needs a table over {widest} variables (elimination width "
             f"{width}); NumPy arrays have at most 64 axes, so glu handles up to {MAX_CLIQUE_VARIABLES}"
         )
     if largest > limit:
-        worst = raw[sizes.index(largest)]
+        worst = final[sizes.index(largest)]
         raise ModelError(
             f"exact inference in this network needs a table of {largest:,} entries ({len(worst)} "
             f"variables: elimination width {width}); the limit is {limit:,} — raise it with "
             f"--max-table, ${MAX_TABLE_ENV} or max_table= (memory: {_bytes(largest * 8)} for that "
             "table alone)"
         )
-    # the elimination tree: clique k joined to the clique of its first-eliminated neighbour
-    step = {v: k for k, v in enumerate(order)}
-    link: dict[int, set[int]] = {k: set() for k in range(len(raw))}
-    for k, (v, c) in enumerate(zip(order, raw, strict=True)):
-        later = [step[u] for u in c if u != v]
-        if later:
-            j = min(later)
-            link[k].add(j)
-            link[j].add(k)
-    cliques = {k: set(c) for k, c in enumerate(raw)}
-    merged = True
-    while merged:  # a clique inside a neighbouring one joins it (keeps the running intersection)
-        merged = False
-        for a in sorted(cliques):
-            if a not in cliques:
-                continue
-            sup = next((b for b in sorted(link[a]) if cliques[a] <= cliques[b]), None)
-            if sup is None:
-                continue
-            for c in link[a] - {sup}:
-                link[c].discard(a)
-                link[c].add(sup)
-                link[sup].add(c)
-            link[sup].discard(a)
-            del cliques[a], link[a]
-            merged = True
-    keep = sorted(cliques, key=lambda k: (min(cliques[k]), k))
-    renum = {k: i for i, k in enumerate(keep)}
-    final = tuple(tuple(sorted(cliques[k])) for k in keep)
-    edges = tuple(sorted({tuple(sorted((renum[a], renum[b]))) for a in keep for b in link[a]}))
     return JunctionTreePlan(
         cards=cards,
         cliques=final,
-        edges=edges,  # type: ignore[arg-type]
-        order=tuple(order),
+        edges=tuple(edges),
+        order=tuple(keep[i] for i in order_l),
         width=width,
         largest=largest,
-        total=sum(math.prod(cards[v] for v in c) for c in final),
+        total=sum(sizes),
+        heuristic=heuristic,
     )

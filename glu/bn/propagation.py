@@ -1,182 +1,419 @@
-"""Hugin propagation on a junction tree, vectorised over rows of evidence: the arithmetic of both plans.
+"""Junction-tree propagation for one evidence pattern, over rows of evidence, keeping what did not change.
 
-A :class:`QueryPlan` says, for one evidence pattern, which tables to start from, which messages to send
-and where to read each target's marginal; :func:`propagate` runs it on tables whose *last* axis is the
-rows (size 1 for a table that is the same in every row: NumPy broadcasting keeps the work of the parts of
-the tree that no evidence reaches at one row). With the rows last, every product and sum runs its inner
-loop over a contiguous run of rows, whatever the clique's shape. The junction tree engine
-(:mod:`glu.bn.junction`) builds two kinds of plan: on the network's one junction tree, with the messages of
-the network without evidence computed in advance; and on the junction tree of the network conditioned on an
-evidence pattern (:mod:`glu.bn.conditioned`), whose smaller tables pay off over a batch of rows.
+A :class:`PatternPlan` is made once per *evidence pattern* — which nodes carry hard evidence, which carry soft
+evidence, which nodes are asked for — from the tables the query needs (:mod:`glu.bn.relevance`: barren and
+d-separated nodes are left out) with the hard-evidence nodes *conditioned out*: each table that involves
+one is sliced at the observed values, so those nodes leave the domain graph and the fill-in they caused.
+What is left is triangulated (:mod:`glu.bn.plan`) and its junction tree oriented towards the targets.
 
-Messages are not rescaled, unless a root's mass falls below :data:`TINY` (or to 0, which could be an
-underflow): then the plan runs again with every new message normalised to sum 1 per row, so that evidence
-of very small probability is answered, and only evidence of probability exactly 0 is called impossible.
+:func:`propagate` runs a plan on tables whose *last* axis is the rows (a single query is a batch of one
+row; a table the same in every row keeps a row axis of 1, and NumPy broadcasting does the rest): the
+evidence enters as row slices of the tables and likelihood vectors, messages flow from the leaves of the
+tree to the root (a clique of a target), and — when several cliques hold targets — out again along the paths
+to them (Hugin: the message back divides out the one that came up). Each target's marginal is summed out of
+its smallest clique.
+
+**Incremental evidence.** For single queries the plan keeps the last query's clique tables and messages. A
+message depends only on the evidence below it, so the next query recomputes just the tables whose evidence
+changed and the messages on the way from them to the root: changing one evidence value of five costs a
+fraction of the first query, and asking the same again costs nothing.
+
+Messages are not rescaled unless a root's mass falls below :data:`TINY` (or to 0, which could be an
+underflow): then the plan runs again with every message normalised to sum 1 per row, so that evidence of
+very small probability is answered and only evidence of probability exactly 0 is called impossible.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from glu.bn.network import NetworkArrays, code_of
+from glu.bn.plan import plan_from_scopes
+
+_ALL = {1: np.ones(1, dtype=bool)}
+_ALL[1].flags.writeable = False  # a single row's "possible", shared: never written to
 TINY = 1e-250
 """A root mass below this may have lost digits to underflow: the plan runs again with normalised messages."""
 
-Edge = tuple[int, int, tuple[int, ...], tuple[int, ...]]
+Factor = tuple[np.ndarray, tuple[int, ...], tuple[int, ...], tuple[int, ...]]
+"""A table sliced per row: (table with the observed axes flattened last, observed slots, strides, shape in
+its clique with the rows last)."""
 
 
-@dataclass(frozen=True, eq=False)
-class QueryPlan:
-    """How one evidence pattern is propagated; built by the junction tree engine, run by :func:`propagate`.
+@dataclass(eq=False)
+class PatternPlan:
+    """How one evidence pattern is propagated (see the module docstring); made by :func:`make_plan`.
 
     Attributes
     ----------
-    base : clique → its starting table, shape ``(*cardinalities of its variables, 1)``
-    collect : (child, parent, summed axes, shape in the parent) — new messages, children first (a shape
-        ends with -1, the rows)
-    distribute : (parent, child, summed axes, shape in the child, fresh) — messages towards the targets,
-        parents first; ``fresh`` False: the message ``messages[parent, child]`` computed in advance
-    roots : the root of each tree with evidence; its mass is the probability of the evidence (up to scale)
-    targets : (variable, clique, summed axes) — marginals read from the clique's table
-    prior : variable → marginal without evidence (targets in trees that no evidence reaches), shape (k,)
-    messages : (from, to) → message computed in advance, for ``fresh`` False and for the collect messages
-        a plan does not send (their product is in ``base``)
-    entries : (variable, clique, shape) — where each evidence node's likelihood enters (the static plan)
-    size : entries of all tables in ``base`` (the memory a row costs)
+    cliques : each clique's variables, sorted
+    observed, soft : the conditioned (hard-evidence) variables and the likelihood variables — the evidence
+        *slots*, in this order (slot i is bit i of the masks below)
+    base : clique → the product of its tables that no evidence touches, shape ``(*cardinalities, 1)``
+    factors : clique → its tables sliced per row (:data:`Factor`)
+    constants : the sliced tables left with no free variable (a number per row: part of P(evidence))
+    const_slots : bit mask of the slots the constants read
+    likelihoods : clique → (slot, shape in the clique with the rows last)
+    local : clique → bit mask of the slots that enter it
+    below : clique → bit mask of the slots in its subtree (towards its root)
+    kids : clique → (child, shape of the child's message in the clique)
+    collect : (clique, parent, summed axes), children first — one message each
+    roots : the root of each tree
+    distribute : (parent, clique, summed axes, shape in the clique) — parents first, on the paths to targets
+    size : entries of all clique tables (the memory one row costs)
+    last : clique → the last step of ``distribute`` that reads its table (after it, the table is let go)
+    homes : clique → the targets read from it, (variable, summed axes)
     """
 
-    base: dict[int, np.ndarray]
-    collect: tuple[Edge, ...]
-    distribute: tuple[tuple[int, int, tuple[int, ...], tuple[int, ...], bool], ...]
+    cliques: tuple[tuple[int, ...], ...]
+    observed: tuple[int, ...]
+    soft: tuple[int, ...]
+    base: list[np.ndarray]
+    factors: list[list[Factor]]
+    constants: list[Factor]
+    likelihoods: list[list[tuple[int, tuple[int, ...]]]]
+    local: list[int]
+    below: list[int]
+    kids: list[list[tuple[int, tuple[int, ...]]]]
+    collect: tuple[tuple[int, int, tuple[int, ...]], ...]
     roots: tuple[int, ...]
-    targets: tuple[tuple[int, int, tuple[int, ...]], ...]
-    prior: dict[int, np.ndarray] = field(default_factory=dict)
-    messages: dict[tuple[int, int], np.ndarray] = field(default_factory=dict)
-    entries: tuple[tuple[int, int, tuple[int, ...]], ...] = ()
-
-    @property
-    def size(self) -> int:
-        """Entries of all tables in ``base``."""
-        return sum(t.size for t in self.base.values())
+    distribute: tuple[tuple[int, int, tuple[int, ...], tuple[int, ...]], ...]
+    size: int
+    last: dict[int, int] = field(default_factory=dict)
+    homes: dict[int, list[tuple[int, tuple[int, ...]]]] = field(default_factory=dict)
+    const_slots: int = 0
+    state: _State | None = field(default=None, repr=False)
 
 
-def propagate(
-    plan: QueryPlan,
-    entries: Sequence[tuple[int, np.ndarray]],
-    rows: int,
-    normalise: bool = False,
-    mass: bool = False,
-) -> tuple[dict[int, np.ndarray], np.ndarray, np.ndarray | None]:
-    """Run ``plan`` with ``entries``: (clique, array broadcastable over its table, rows last) multiplied in.
+@dataclass(eq=False)
+class _State:
+    """What the last single query left: its evidence signature, its messages and masses, and its answer."""
 
-    Returns (marginals, possible, log mass): variable → normalised marginal, shape (rows, k) (NaN in
-    impossible rows); whether each row's evidence has probability > 0, shape (rows,); with ``mass``, the
-    log of the probability of the evidence in the trees it reaches (up to the plan's constant factors),
-    shape (rows,), else None.
-    """
-    reduce = np.add.reduce
-    table = dict(plan.base)
-    for c, arr in entries:
-        table[c] = table[c] * arr
-    up: dict[int, np.ndarray] = {}
-    scales = []
-    for c, p, axes, shape in plan.collect:
-        m = reduce(table[c], axis=axes)
-        if normalise:
-            s = reduce(m.reshape(-1, m.shape[-1]), axis=0)
-            s = np.where(s > 0, s, 1.0)
-            scales.append(s)
-            m = m / s
-        up[c] = m
-        table[p] = table[p] * m.reshape(shape)
-    z = [reduce(table[r].reshape(-1, table[r].shape[-1]), axis=0) for r in plan.roots]
-    if not normalise and any(bool((x < TINY).any()) for x in z):
-        return propagate(plan, entries, rows, normalise=True, mass=mass)
-    possible = np.ones(rows, dtype=bool)
-    for x in z:
-        possible &= x > 0
-    log_mass = None
-    if mass:
-        with np.errstate(divide="ignore"):
-            log_mass = sum((np.log(x) for x in z + scales), np.zeros(rows))
-    for p, c, axes, shape, fresh in plan.distribute:
-        if fresh:
-            m = reduce(table[p], axis=axes)
-            old = up.get(c)
-            if old is None:
-                old = plan.messages[c, p]
-            m = np.divide(m, old, out=np.zeros(m.shape), where=old > 0)
-        else:
-            m = plan.messages[p, c]
-        table[c] = table[c] * m.reshape(shape)
-    out = {}
-    ok = bool(possible.all())
-    for v, c, axes in plan.targets:
-        m = reduce(table[c], axis=axes).T  # (rows, k)
-        if ok:
-            m = m / reduce(m, axis=1).reshape(-1, 1)
-        else:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                m = m / reduce(m, axis=1).reshape(-1, 1)
-            m[~possible] = np.nan
-        out[v] = m if len(m) == rows else np.broadcast_to(m, (rows, m.shape[1]))
-    for v, marginal in plan.prior.items():
-        out[v] = np.broadcast_to(marginal, (rows, len(marginal)))
-    return out, possible, log_mass
+    signature: tuple
+    ups: list[np.ndarray | None]
+    z: list[np.ndarray | None]
+    mass: bool = False
+    const: np.ndarray | None = None
+    answer: tuple[dict[int, np.ndarray], np.ndarray, np.ndarray | None] | None = None
 
 
-def components(n: int, neighbours: Sequence[Sequence[int]]) -> list[int]:
-    """The tree (connected component) of each clique, named by its smallest clique."""
-    comp = [-1] * n
-    for start in range(n):
-        if comp[start] >= 0:
-            continue
-        stack = [start]
-        comp[start] = start
-        while stack:
-            c = stack.pop()
-            for nb in neighbours[c]:
-                if comp[nb] < 0:
-                    comp[nb] = start
-                    stack.append(nb)
-    return comp
-
-
-def orient(root: int, neighbours: Sequence[Sequence[int]]) -> tuple[list[int], dict[int, int | None]]:
-    """The cliques of ``root``'s tree, parents before children, and each clique's parent (root: None)."""
-    order = [root]
-    parent: dict[int, int | None] = {root: None}
-    k = 0
-    while k < len(order):
-        c = order[k]
-        k += 1
-        for nb in neighbours[c]:
-            if nb not in parent:
-                parent[nb] = c
-                order.append(nb)
-    return order, parent
-
-
-def sum_axes(clique: Sequence[int], keep: Sequence[int]) -> tuple[int, ...]:
-    """Axes of a clique's table (rows last) to sum out to keep the variables ``keep``."""
-    k = set(keep)
-    return tuple(i for i, v in enumerate(clique) if v not in k)
-
-
-def shape_in(variables: Sequence[int], clique: Sequence[int], cards: Sequence[int]) -> tuple[int, ...]:
-    """The shape, rows last (-1), of a table over ``variables`` (sorted) broadcast over ``clique``."""
+def _shape_in(variables: Sequence[int], clique: Sequence[int], cards: Sequence[int]) -> tuple[int, ...]:
+    """The shape, rows last (-1), of a table over ``variables`` broadcast over ``clique``'s table."""
     s = set(variables)
     return (*(cards[v] if v in s else 1 for v in clique), -1)
 
 
-def paths_to(root_order: Sequence[int], parent: dict[int, int | None], homes: Sequence[int]) -> set[int]:
-    """The cliques on the paths from the root to each of ``homes`` (the root included when any)."""
-    needed: set[int] = set()
-    for h in homes:
+def _summed(clique: Sequence[int], keep: Sequence[int] | set[int]) -> tuple[int, ...]:
+    k = set(keep)
+    return tuple(i for i, v in enumerate(clique) if v not in k)
+
+
+def make_plan(
+    net: NetworkArrays,
+    tables: Sequence[int],
+    observed: Sequence[int],
+    soft: Sequence[int],
+    targets: Sequence[int],
+    max_table: int | None = None,
+) -> PatternPlan:
+    """The plan for hard evidence on ``observed``, likelihoods on ``soft`` and the marginals of ``targets``.
+
+    ``tables`` are the nodes whose tables the answer needs (:func:`glu.bn.relevance.requisite`). Raises
+    :class:`~glu.errors.ModelError` (one line) when a table would pass ``max_table``.
+    """
+    cards = net.cards
+    obs = tuple(sorted(observed))
+    slot = {v: i for i, v in enumerate(obs)}
+    soft = tuple(sorted(soft))
+    scopes = {v: tuple(u for u in (*net.parents[v], v) if u not in slot) for v in sorted(tables)}
+    free = sorted({u for sc in scopes.values() for u in sc} | set(soft) | set(targets))
+    tree = plan_from_scopes(cards, [*scopes.values(), *((v,) for v in soft)], free, max_table)
+    cliques = tree.cliques
+    n = len(cliques)
+    members = [set(c) for c in cliques]
+    holding: dict[int, list[int]] = {}
+    for k, c in enumerate(cliques):
+        for v in c:
+            holding.setdefault(v, []).append(k)
+
+    sizes = [math.prod(cards[v] for v in c) for c in cliques]
+
+    def smallest(variables: Sequence[int]) -> int:
+        if not variables:
+            return -1
+        best = -1
+        for k in holding[variables[0]]:  # ascending: the first of the smallest
+            if (best < 0 or sizes[k] < sizes[best]) and members[k].issuperset(variables):
+                best = k
+        return best
+
+    base = [np.ones((*(cards[v] for v in c), 1)) for c in cliques]
+    factors: list[list[Factor]] = [[] for _ in cliques]
+    constants: list[Factor] = []
+    local = [0] * n
+    for v, rest in scopes.items():
+        fam = (*net.parents[v], v)
+        seen = [u for u in fam if u in slot]
+        rest_sorted = sorted(rest)
+        c = smallest(rest_sorted)
+        table = np.transpose(net.cpts[v], [fam.index(u) for u in rest_sorted] + [fam.index(u) for u in seen])
+        if not seen:
+            base[c] = base[c] * table.reshape(_shape_in(rest_sorted, cliques[c], cards))
+            continue
+        flat = np.ascontiguousarray(table.reshape(*(cards[u] for u in rest_sorted), -1))
+        strides = tuple(math.prod(cards[u] for u in seen[i + 1 :]) for i in range(len(seen)))
+        entry = (flat, tuple(slot[u] for u in seen), strides, ())
+        if c < 0:
+            constants.append(entry)
+        else:
+            factors[c].append((flat, entry[1], strides, _shape_in(rest_sorted, cliques[c], cards)))
+            for u in seen:
+                local[c] |= 1 << slot[u]
+    likelihoods: list[list[tuple[int, tuple[int, ...]]]] = [[] for _ in cliques]
+    for i, v in enumerate(soft):
+        c = smallest([v])
+        likelihoods[c].append((len(obs) + i, _shape_in([v], cliques[c], cards)))
+        local[c] |= 1 << (len(obs) + i)
+    home = {v: smallest([v]) for v in targets}
+    return _schedule(
+        cliques, tree.edges, cards, obs, soft, base, factors, constants, likelihoods, local, home
+    )
+
+
+def _schedule(cliques, edges, cards, obs, soft, base, factors, constants, likelihoods, local, home):  # type: ignore[no-untyped-def]
+    """The messages of a plan: each tree rooted at a target's clique, collected, distributed to targets."""
+    n = len(cliques)
+    neighbours: list[list[int]] = [[] for _ in range(n)]
+    for a, b in edges:
+        neighbours[a].append(b)
+        neighbours[b].append(a)
+    parent: list[int | None] = [None] * n
+    placed = [False] * n
+    trees: list[list[int]] = []
+    for r in [*sorted(set(home.values())), *range(n)]:
+        if placed[r]:
+            continue
+        order, placed[r] = [r], True
+        for c in order:  # breadth first: parents before children
+            for nb in neighbours[c]:
+                if not placed[nb]:
+                    placed[nb], parent[nb] = True, c
+                    order.append(nb)
+        trees.append(order)
+    below = list(local)
+    kids: list[list[tuple[int, tuple[int, ...]]]] = [[] for _ in range(n)]
+    collect = []
+    for order in trees:
+        for c in reversed(order[1:]):
+            p = parent[c]
+            assert p is not None
+            sep = [u for u in cliques[c] if u in set(cliques[p])]
+            below[p] |= below[c]
+            kids[p].append((c, _shape_in(sep, cliques[p], cards)))
+            collect.append((c, p, _summed(cliques[c], sep)))
+    on_path: set[int] = set()
+    for h in home.values():
         c: int | None = h
-        while c is not None and c not in needed:
-            needed.add(c)
+        while c is not None and c not in on_path:
+            on_path.add(c)
             c = parent[c]
-    return needed
+    distribute = []
+    for order in trees:
+        for c in order[1:]:
+            if c in on_path:
+                p = parent[c]
+                assert p is not None
+                sep = [u for u in cliques[p] if u in set(cliques[c])]
+                distribute.append((p, c, _summed(cliques[p], sep), _shape_in(sep, cliques[c], cards)))
+    return PatternPlan(
+        cliques=cliques,
+        observed=obs,
+        soft=soft,
+        base=base,
+        factors=factors,
+        constants=constants,
+        likelihoods=likelihoods,
+        local=local,
+        below=below,
+        kids=kids,
+        collect=tuple(collect),
+        roots=tuple(order[0] for order in trees),
+        distribute=tuple(distribute),
+        last={p: k for k, (p, _, _, _) in enumerate(distribute)},
+        homes=_by_clique(home, cliques),
+        size=sum(math.prod(cards[v] for v in c) for c in cliques),
+        const_slots=sum({1 << s for entry in constants for s in entry[1]}),
+    )
+
+
+def _by_clique(home: dict[int, int], cliques: Sequence[Sequence[int]]) -> dict[int, list]:
+    out: dict[int, list] = {}
+    for v, h in sorted(home.items()):
+        out.setdefault(h, []).append((v, _summed(cliques[h], [v])))
+    return out
+
+
+def _pick(entry: Factor, codes: Sequence[np.ndarray], ints: Sequence[int] | None) -> np.ndarray:
+    """A sliced table's rows: ``table[..., Σ code · stride]``, shape (*rest, rows). ``ints``: a single row's
+    codes as Python ints, when there is one row (then the slice is a view: no copy, no index arithmetic)."""
+    table, slots, strides, _ = entry
+    if ints is not None:
+        i = 0
+        for s, st in zip(slots, strides, strict=True):
+            i += ints[s] * st
+        return table[..., i : i + 1]
+    flat = codes[slots[0]] * strides[0] if strides[0] != 1 else codes[slots[0]]
+    for s, st in zip(slots[1:], strides[1:], strict=True):
+        flat = flat + codes[s] * st
+    return table[..., flat]
+
+
+def propagate(
+    plan: PatternPlan,
+    codes: Sequence[np.ndarray],
+    likelihoods: Sequence[np.ndarray],
+    rows: int,
+    signature: tuple | None = None,
+    mass: bool = False,
+) -> tuple[dict[int, np.ndarray], np.ndarray, np.ndarray | None]:
+    """Run ``plan`` for ``rows`` evidence sets.
+
+    Parameters
+    ----------
+    codes : per observed slot, value indices, shape (rows,), all ≥ 0 (one row: a Python int will do)
+    likelihoods : per soft slot, shape (rows, k)
+    signature : for a single query, the evidence as a hashable tuple per slot: the plan then reuses the
+        tables and messages of its last query that no changed slot reaches (None: compute everything)
+    mass : also return the log of each row's probability of the evidence
+
+    Returns
+    -------
+    (target → marginal, shape (rows, k) — NaN in impossible rows; possible, shape (rows,); log mass or None)
+    """
+    state = plan.state
+    changed = -1
+    if signature is not None and state is not None and state.mass == mass:
+        changed = 0
+        for i, (a, b) in enumerate(zip(signature, state.signature, strict=True)):
+            if a is not b and a != b:
+                changed |= 1 << i
+        if changed == 0 and state.answer is not None:
+            return state.answer
+    n = len(plan.cliques)
+    if changed == -1 or state is None:
+        state = _State(signature or (), [None] * n, [None] * len(plan.roots), mass)
+    out = _run(plan, state, codes, likelihoods, rows, changed, False, mass)
+    normalised = out is None
+    if normalised:  # a root mass below TINY: again, every message normalised
+        state = _State(signature or (), [None] * n, [None] * len(plan.roots), mass)
+        out = _run(plan, state, codes, likelihoods, rows, -1, True, mass)
+        assert out is not None
+    if signature is not None and not normalised:  # kept only unscaled, so that the masses stay exact
+        state.signature = signature
+        state.answer = out
+        plan.state = state
+    else:
+        plan.state = None
+    return out
+
+
+def _evidence(plan, state, codes, ints, rows, changed, lowest, scales):  # type: ignore[no-untyped-def]
+    """(possible, shape (rows,); log P(evidence) when ``scales`` is given, else None) from the roots' masses
+    ``state.z`` (the smallest ``lowest``), the constants, and the scales of a normalised pass."""
+    if plan.constants and (state.const is None or plan.const_slots & changed):
+        const = _pick(plan.constants[0], codes, ints).reshape(-1)
+        for entry in plan.constants[1:]:
+            const = const * _pick(entry, codes, ints).reshape(-1)
+        state.const = const
+    const, z = state.const, state.z
+    if lowest > 0 and (const is None or (const[0] > 0 if len(const) == 1 else bool((const > 0).all()))):
+        possible = _ALL[rows] if rows in _ALL else np.ones(rows, dtype=bool)
+    else:
+        possible = np.ones(rows, dtype=bool)
+        for x in z:
+            possible &= x > 0
+        if const is not None:
+            possible &= const > 0
+    log_mass = None
+    if scales is not None:
+        with np.errstate(divide="ignore"):
+            log_mass = sum((np.log(x) for x in z + scales), np.log(const if const is not None else 1.0))
+    return possible, log_mass
+
+
+def _run(plan, state, codes, likelihoods, rows, changed, normalise, mass):  # type: ignore[no-untyped-def]
+    """One pass of :func:`propagate`; None when it must be run again normalised.
+
+    Only messages are kept (between single queries, those below unchanged evidence): a clique's table is
+    made when it sends or is read, and let go after — the memory a pass holds is the clique tables of the
+    network (the parts no evidence touches) and one table at a time per path, not a copy of every clique.
+    """
+    reduce = np.add.reduce
+    ups = state.ups
+    ints = [code_of(c) for c in codes] if rows == 1 else None
+    scales = []
+
+    def table(c: int) -> np.ndarray:
+        """Clique ``c``'s table times the messages from below it."""
+        t = plan.base[c]
+        for entry in plan.factors[c]:
+            t = t * _pick(entry, codes, ints).reshape(entry[3])
+        for s, shape in plan.likelihoods[c]:
+            t = t * likelihoods[s - len(codes)].T.reshape(shape)
+        for ch, shape in plan.kids[c]:
+            t = t * ups[ch].reshape(shape)
+        return t
+
+    for c, _, axes in plan.collect:
+        if ups[c] is None or plan.below[c] & changed:
+            m = reduce(table(c), axis=axes)
+            if normalise:
+                s = reduce(m.reshape(-1, m.shape[-1]), axis=0)
+                s = np.where(s > 0, s, 1.0)
+                scales.append(s)
+                m = m / s
+            ups[c] = m
+    z, full = state.z, {}
+    for k, r in enumerate(plan.roots):
+        if z[k] is None or plan.below[r] & changed or r in plan.last or r in plan.homes:
+            t = full[r] = table(r)
+            z[k] = reduce(t.reshape(-1, t.shape[-1]), axis=0)
+    lowest = min((float(x[0]) if len(x) == 1 else float(x.min()) for x in z), default=1.0)
+    if not normalise and lowest < TINY:
+        return None
+    possible, log_mass = _evidence(plan, state, codes, ints, rows, changed, lowest, scales if mass else None)
+    ok = bool(possible.all())
+    out: dict[int, np.ndarray] = {}
+
+    def read(c: int) -> None:
+        for v, axes in plan.homes.get(c, ()):
+            m = reduce(full[c], axis=axes).T  # (rows, k), divided by its own sum: no entry rounds past 1
+            if ok:
+                m = m / reduce(m, axis=1, keepdims=True)
+            else:
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    m = m / reduce(m, axis=1, keepdims=True)
+            if not ok:
+                if len(m) != rows:
+                    m = np.repeat(m, rows, axis=0)
+                m[~possible] = np.nan
+            out[v] = m if len(m) == rows else np.broadcast_to(m, (rows, m.shape[1]))
+
+    for r in plan.roots:
+        if r in full:
+            read(r)
+    for k, (p, c, axes, shape) in enumerate(plan.distribute):
+        m = reduce(full[p], axis=axes)
+        old = ups[c]
+        m = np.divide(m, old, out=np.zeros(np.broadcast_shapes(m.shape, old.shape)), where=old > 0)
+        if plan.last[p] == k:
+            del full[p]
+        full[c] = table(c) * m.reshape(shape)
+        read(c)
+        if c not in plan.last:
+            del full[c]
+    return out, possible, log_mass

@@ -1,6 +1,6 @@
 """Drawing experiments from the Affordance–Words network: the world of a simulated corpus.
 
-:func:`sample` draws values of every node of an :class:`~glu.bn.inference.InferenceEngine`'s network, with
+:func:`sample` draws values of every node of an :class:`~glu.bn.inference.Engine`'s network, with
 some core nodes fixed per row (e.g. the action and the object, chosen by a scenario, as the experimenter
 chose them on the robot). It draws from exactly the distribution the engine answers queries with:
 
@@ -15,9 +15,9 @@ the root nodes Action, Color, Shape and Size is the same as conditioning.
 Example
 -------
 >>> import numpy as np
->>> from glu.bn import InferenceEngine, learn_bn
+>>> from glu.bn import learn_bn, make_engine
 >>> from glu.data import load_experiments
->>> engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
+>>> engine = make_engine(learn_bn(load_experiments("synthetic")))
 >>> rng = np.random.default_rng(0)
 >>> codes = sample(engine, {"Action": np.full(4000, 1), "Shape": np.zeros(4000, int)}, rng)  # taps on spheres
 >>> sorted(codes)[:3], codes["ObjVel"].shape
@@ -33,7 +33,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.core import CoreBackend
+from glu.bn.inference import Engine
 from glu.errors import EvidenceError, ImpossibleEvidenceError, ModelError, UnknownNodeError
 from glu.schema import unknown_node_message
 
@@ -50,7 +51,7 @@ def categorical(probs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 
 def sample(
-    engine: InferenceEngine, fixed: Mapping[str, np.ndarray], rng: np.random.Generator
+    engine: Engine, fixed: Mapping[str, np.ndarray], rng: np.random.Generator
 ) -> dict[str, np.ndarray]:
     """Draw every node's value for ``n`` rows given fixed values of some core nodes.
 
@@ -70,19 +71,20 @@ def sample(
     """
     if not fixed:
         raise EvidenceError("sample needs at least one fixed node (it gives the number of rows)")
-    if not hasattr(engine, "base"):
+    core = getattr(engine, "backend", None)
+    if not isinstance(core, CoreBackend):
         raise ModelError(
             "sampling draws from the core engine's joint table, and this network is answered by the junction "
             "tree (its core is too large): sample a network shaped like GLU's"
         )
     codes = {}
     for node, v in fixed.items():
-        if node not in engine.axis:
+        if node not in core.axis:
             if node in engine.nodes:
                 raise EvidenceError(f"only core (affordance) nodes can be fixed, not the word {node!r}")
             raise UnknownNodeError(unknown_node_message(node, engine.nodes))
         v = np.asarray(v, dtype=np.intp)
-        k = engine.shape[engine.axis[node]]
+        k = core.shape[core.axis[node]]
         if v.ndim != 1 or (v < 0).any() or (v >= k).any():
             raise EvidenceError(f"fixed values of {node} must be a column of value indices 0…{k - 1}")
         codes[node] = v
@@ -90,21 +92,21 @@ def sample(
     if len(lengths) != 1:
         raise EvidenceError(f"fixed columns have different lengths: {sorted(lengths)}")
     n = lengths.pop()
-    fixed_axes = {engine.axis[k]: v for k, v in codes.items()}
-    free = [a for a in range(len(engine.shape)) if a not in fixed_axes]
-    table = _gather(engine.base, fixed_axes, n).reshape(n, -1)
+    fixed_axes = {core.axis[k]: v for k, v in codes.items()}
+    free = [a for a in range(len(core.shape)) if a not in fixed_axes]
+    table = _gather(core.base, fixed_axes, n).reshape(n, -1)
     mass = table.sum(axis=1)
     if not (mass > 0).all():
         i = int(np.flatnonzero(~(mass > 0))[0])
         values = ", ".join(f"{k}={engine.bn.schema.values_of(k)[v[i]]}" for k, v in codes.items())
         raise ImpossibleEvidenceError(f"row {i}: {values} has probability 0 under the model")
     drawn = categorical(table, rng) if free else np.zeros(n, dtype=np.intp)
-    free_codes = np.unravel_index(drawn, tuple(engine.shape[a] for a in free))
+    free_codes = np.unravel_index(drawn, tuple(core.shape[a] for a in free))
     for a, c in zip(free, free_codes, strict=True):
-        codes[engine.core[a]] = c.astype(np.intp)
-    for leaf in engine.leaves:
-        ratio = engine.leaf_ratio[leaf]  # (r, *parent cardinalities)
-        parents = tuple(codes[engine.core[a]] for a in engine.leaf_axes[leaf])
+        codes[core.core[a]] = c.astype(np.intp)
+    for leaf in core.leaves:
+        ratio = core.leaf_ratio[leaf]  # (r, *parent cardinalities)
+        parents = tuple(codes[core.core[a]] for a in core.leaf_axes[leaf])
         probs = ratio[(slice(None), *parents)].T if parents else np.broadcast_to(ratio, (n, len(ratio)))
         codes[leaf] = categorical(np.asarray(probs).reshape(n, -1), rng)
     return {node: codes[node] for node in engine.nodes}

@@ -90,7 +90,7 @@ def _load_recognizer(spec: str, source: Any) -> tuple[Any, str]:
 
 
 def _anticipate(args: argparse.Namespace) -> int:
-    from glu.bn.inference import InferenceEngine
+    from glu.bn.inference import make_engine
     from glu.bn.learning import learn_bn
     from glu.data.source import load_experiments, resolve_data
     from glu.studies.anticipation.experiment import CASES, case_trajectory, effect_anticipation
@@ -105,7 +105,7 @@ def _anticipate(args: argparse.Namespace) -> int:
     recognizer, models = _load_recognizer(args.models, source)
     candidates = read_candidates(args, source)
     df = load_experiments(source, args.words)
-    engine = InferenceEngine(learn_bn(df, unseen_words=args.unseen_words))
+    engine = make_engine(learn_bn(df, unseen_words=args.unseen_words))
     trajectory = case_trajectory(source, args.case)
     run = effect_anticipation(
         recognizer,

@@ -234,10 +234,10 @@ def add_engine_args(p: argparse.ArgumentParser) -> None:
 
 
 def make_engine(bn: Any, args: argparse.Namespace) -> Any:
-    """The :class:`~glu.bn.inference.InferenceEngine` of ``bn`` with the command's ``--max-table``."""
-    from glu.bn.inference import InferenceEngine
+    """The :class:`~glu.bn.inference.Engine` of ``bn`` with the command's ``--max-table``."""
+    from glu.bn import inference
 
-    return InferenceEngine(bn, max_table=getattr(args, "max_table", None))
+    return inference.make_engine(bn, max_table=getattr(args, "max_table", None))
 
 
 def add_evidence_args(p: argparse.ArgumentParser) -> None:

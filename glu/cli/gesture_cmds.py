@@ -262,7 +262,7 @@ def _say(msg: str, quiet: bool) -> None:
 
 def _segment(args: argparse.Namespace) -> int:
     from glu.gestures.corpus import RECORDING_ACTION, original_segments
-    from glu.gestures.segmentation import segment_recording
+    from glu.gestures.recordings import segment_recording
 
     if args.label is not None and args.label not in ACTIONS:
         raise DataError(
@@ -369,7 +369,7 @@ def _train(args: argparse.Namespace) -> int:
         raise DataError(f"no training segments for {', '.join(empty)}")
     for a, v in by_action.items():
         print(f"  {a}: {len(v)} sequences, {sum(len(x) for x in v)} frames")
-    bar = progress_bar(len(by_action), "train", "model")
+    bar = progress_bar(len(by_action), "train", "model")  # ticks while EM runs, as each model converges
     try:
         config = TrainingConfig(
             n_states=args.states,
@@ -386,7 +386,7 @@ def _train(args: argparse.Namespace) -> int:
             warn=False,
             meta=meta,
             features=args.features,
-            progress=(lambda a: bar.update(1)) if bar is not None else None,
+            progress=bar.update if bar is not None else None,
         )
     finally:
         if bar is not None:
@@ -419,7 +419,7 @@ def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
 def _recognize(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from glu.gestures.features import load_features
+    from glu.gestures.recordings import load_features
 
     rec = _load_models(args.models, args.data, args.json)
     path, source = _resolve_log(args.log, args.data)

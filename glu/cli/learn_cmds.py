@@ -128,12 +128,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _engine(data: str | None):
-    from glu.bn.inference import InferenceEngine
+    from glu.bn.inference import make_engine
     from glu.bn.learning import learn_bn
     from glu.data.source import load_experiments, resolve_data
 
     source = resolve_data(data)
-    return InferenceEngine(learn_bn(load_experiments(source))), source.describe()
+    return make_engine(learn_bn(load_experiments(source))), source.describe()
 
 
 def _learn(args: argparse.Namespace) -> int:

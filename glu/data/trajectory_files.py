@@ -29,6 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from glu.data.skeleton import OPENNI_JOINTS, SKELETON_JOINTS
 from glu.errors import DataError
 from glu.files import read_text
 
@@ -36,26 +37,6 @@ TABLE_SUFFIXES: dict[str, str] = {".csv": ",", ".tsv": "\t"}
 """Table files and their separators."""
 ARRAY_SUFFIXES: tuple[str, ...] = (".npy",)
 HAND_COLUMNS: tuple[str, ...] = ("t", "x", "y", "z")
-SKELETON_JOINTS: tuple[str, ...] = ("torso", "right_hand", "left_shoulder", "right_shoulder", "neck")
-"""The joints glu uses from a skeleton table (torso and right_hand are required)."""
-OPENNI_JOINTS: tuple[str, ...] = (
-    "head",
-    "neck",
-    "left_shoulder",
-    "right_shoulder",
-    "left_elbow",
-    "right_elbow",
-    "left_hand",
-    "right_hand",
-    "torso",
-    "left_hip",
-    "right_hip",
-    "left_knee",
-    "right_knee",
-    "left_foot",
-    "right_foot",
-)
-"""The 15 joints of the OpenNI skeleton, in the order of the YARP OpenNI2 driver."""
 NPY_FRAME_RATE = 30.0
 """Frames a second assumed for ``.npy`` arrays without timestamps."""
 

@@ -24,15 +24,15 @@ from glu.data.recordings import ORIGINAL_SEGMENTS, RECORDING_ACTION, TRAINING_RE
 from glu.data.source import DataSource
 from glu.data.trajectory_files import is_trajectory_file
 from glu.errors import DataError
-from glu.gestures.features import LOG_SCALE, load_features
+from glu.gestures.features import LOG_SCALE
 from glu.gestures.recognizer import Recognizer, load_original_models
+from glu.gestures.recordings import load_features, segment_recording
 from glu.gestures.segmentation import (
     DEFAULT_PARAMS,
     RecordingSegmentation,
     Segment,
     SegmentationParams,
     extract,
-    segment_recording,
     segment_repetitions,
 )
 from glu.gestures.synthetic import SyntheticGesture, View, synthesize_gestures, synthesize_recording
@@ -332,7 +332,7 @@ def labelled_recordings(path: str | os.PathLike, body: tuple[float, float] | Non
     Returns
     -------
     a :class:`Corpus` of one :class:`LabelledSequence` per recording (the features as
-    :func:`~glu.gestures.features.load_features` reads them, unrepaired: a frame that is not finite is an
+    :func:`~glu.gestures.recordings.load_features` reads them, unrepaired: a frame that is not finite is an
     error naming the file), described by the folder or manifest's name.
     """
     path = Path(path)

@@ -31,26 +31,16 @@ constants, i.e. 1000 × the units of the 2013 models; the original scripts divid
 from __future__ import annotations
 
 import math
-import os
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from glu.data.trajectory_files import (
-    OPENNI_JOINTS,
-    SKELETON_JOINTS,
-    is_trajectory_file,
-    read_trajectory_table,
-)
+from glu.data.skeleton import OPENNI_JOINTS, SKELETON_JOINTS
 from glu.errors import DataError
-from glu.gestures.trajectories import (
-    DEFAULT_POLICY,
-    Repaired,
-    RepairPolicy,
-    Trajectory,
-    read_hand_log,
-    repair,
-)
+from glu.gestures.trajectories import Trajectory
+
+if TYPE_CHECKING:  # the arrays of a table, as the data module reads it
+    from glu.data.trajectory_files import TrajectoryTable
 
 AXES: tuple[str, str, str] = ("x", "y", "z")
 AXIS_MEANING: dict[str, str] = {
@@ -236,13 +226,13 @@ BODY_SIZE_RANGE = (0.01, 10.0)
 """A body size (horizontal or vertical, metres) glu accepts: smaller ones turn coordinates into infinities."""
 
 
-def table_features(path: str | os.PathLike, body: tuple[float, float] | None = None) -> Trajectory:
-    """The features of a CSV/TSV/NPY recording (:mod:`glu.data.trajectory_files`), as a trajectory.
+def table_features(table: TrajectoryTable, body: tuple[float, float] | None = None) -> Trajectory:
+    """The features of a recording read from a CSV/TSV/NPY table (:mod:`glu.data.trajectory_files`), as a
+    trajectory (its arrays only: no file is read here).
 
     A hand table (``t, x, y, z`` in metres) is divided by ``body`` = (horizontal, vertical) body size in
     metres (default: the originals' fallback constants); a skeleton table gets :func:`skeleton_features`.
     """
-    table = read_trajectory_table(path)
     if table.kind == "hand":
         h, v = body or (HORIZONTAL_FALLBACK, VERTICAL_FALLBACK)
         if not (
@@ -254,7 +244,9 @@ def table_features(path: str | os.PathLike, body: tuple[float, float] | None = N
             )
         xyz = table.hand / np.array([h, v, h])
         if not np.isfinite(xyz[np.isfinite(table.hand)]).all():
-            raise DataError(f"{path}: coordinates too large for the body size ({h:g}, {v:g}) m: not finite")
+            raise DataError(
+                f"{table.source}: coordinates too large for the body size ({h:g}, {v:g}) m: not finite"
+            )
     else:
         names = SKELETON_JOINTS
         skeleton = np.stack([table.joints.get(j, np.full((len(table.t), 3), np.nan)) for j in names], axis=1)
@@ -263,23 +255,3 @@ def table_features(path: str | os.PathLike, body: tuple[float, float] | None = N
     return Trajectory(
         xyz=xyz, t=table.t, frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool), source=table.source
     )
-
-
-def load_features(
-    path: str | os.PathLike,
-    policy: RepairPolicy | None = DEFAULT_POLICY,
-    body: tuple[float, float] | None = None,
-) -> Repaired:
-    """Read a recording — a YARP hand log, or a CSV/TSV/NPY table — as model features, repaired.
-
-    YARP logs are converted by :func:`log_features`, tables by :func:`table_features` (``body``: the
-    body size of a hand table). ``policy=None``: no repair. Returns the pieces and events of
-    :func:`glu.gestures.trajectories.repair` (one piece, no events if ``None``).
-    """
-    if is_trajectory_file(path):
-        traj = table_features(path, body)
-    else:
-        traj = trajectory_features(read_hand_log(path))
-    if policy is None:
-        return Repaired([traj], ())
-    return repair(traj, policy)

@@ -12,7 +12,7 @@ recognize``, effect anticipation, the notebooks) feeds it the same hand features
 
 Recogniser files (:meth:`Recognizer.save`) are JSON, not pickle::
 
-    {"format": "glu-gesture-recognizer", "version": 2,
+    {"format": "glu-gesture-recognizer", "version": 3,
      "features": "<what the models expect>",
      "invariants": {"names": ["centred", …], "lock_radius": ρ, "min_scale": s},
      "actions": ["grasp", "tap", "touch"],
@@ -20,10 +20,14 @@ Recogniser files (:meth:`Recognizer.save`) are JSON, not pickle::
                           "startprob": [Q], "transmat": [Q][Q], "weights": [Q][M],
                           "means": [Q][M][D], "covars": [Q][M][D][D]}, …},
      "training": {"grasp": {<TrainingReport fields>}, …},
-     "meta": {<free-form: data source, seed, parameters>}}
+     "config": {<TrainingConfig fields>},
+     "meta": {<free-form: data source, seed, …>}}
 
 Floats are written with ``repr`` precision, so a saved recogniser scores exactly as the one in memory.
-Version 1 files (before invariant features) are read as raw-feature recognisers.
+``config`` is the :class:`~glu.hmm.TrainingConfig` the models were trained with (absent for models glu did
+not train, such as the originals'). Version 2 files kept those settings in ``meta`` (``recipe``,
+``n_states``, ``n_mix``, ``n_iter``, ``tol``, ``covar_reg``): they are read into :attr:`Recognizer.config`
+too. Version 1 files (before invariant features) are read as raw-feature recognisers.
 """
 
 from __future__ import annotations
@@ -73,10 +77,10 @@ from glu.hmm import (
 from glu.schema import ACTIONS
 
 FORMAT = "glu-gesture-recognizer"
-FORMAT_VERSION = 2
-READABLE_VERSIONS = (1, 2)
-_PAD = -1e300
-"""log-normaliser of the padding components of a stacked bank (never the most likely)."""
+FORMAT_VERSION = 3
+READABLE_VERSIONS = (1, 2, 3)
+LEGACY_CONFIG_KEYS = ("recipe", "n_states", "n_mix", "n_iter", "tol", "covar_reg")
+"""The training settings version-2 files kept in ``meta``."""
 
 
 class StreamStep(NamedTuple):
@@ -155,9 +159,10 @@ class Recognizer:
     ----------
     models : action → :class:`GestureHMM` (the order is the order of every output vector)
     reports : action → :class:`TrainingReport`, if trained by glu
-    meta : free-form information saved with the recogniser (data source, seed, parameters)
+    meta : free-form information saved with the recogniser (data source, seed, …)
     features : the invariant features the models were trained on
         (:class:`~glu.gestures.invariants.Invariants`, or its name such as ``"centred"``); default raw
+    config : the :class:`~glu.hmm.TrainingConfig` the models were trained with (None: not trained by glu)
     """
 
     def __init__(
@@ -166,6 +171,7 @@ class Recognizer:
         reports: Mapping[str, TrainingReport] | None = None,
         meta: Mapping[str, Any] | None = None,
         features: Invariants | str | None = None,
+        config: TrainingConfig | None = None,
     ) -> None:
         if not models:
             raise ModelError("a recogniser needs at least one model")
@@ -178,13 +184,14 @@ class Recognizer:
         self.meta: dict[str, Any] = dict(meta or {})
         self.n_features: int = dims.pop()
         self.features: Invariants = Invariants.parse(features)
+        self.config: TrainingConfig | None = config
         if not self.features.is_raw and self.n_features != 3:
             raise ModelError(f"invariant features need 3-D models, these have {self.n_features} features")
         self._bank: Bank | None = None
 
     @property
     def bank(self) -> Bank:
-        """The models stacked for scoring them together (:func:`glu.hmm._engine.batch.stack_models`, built
+        """The models stacked for scoring them together (:func:`glu.hmm.scoring.stack_models`, built
         once)."""
         if self._bank is None:
             self._bank = stack_models([self.models[a] for a in self.actions])
@@ -206,7 +213,7 @@ class Recognizer:
 
     def loglik_many(self, sequences: Sequence[np.ndarray]) -> np.ndarray:
         """:meth:`loglik` of many sequences (each of shape (T_i, D)), shape (S, n_actions), in one batch
-        (:func:`glu.hmm._engine.batch.loglik_many` on the recogniser's features): the same numbers as
+        (:func:`glu.hmm.scoring.loglik_many` on the recogniser's features): the same numbers as
         :meth:`loglik` of each sequence (tested)."""
         return loglik_many(self.bank, [self.transform(X) for X in sequences])
 
@@ -288,6 +295,7 @@ class Recognizer:
             "actions": list(self.actions),
             "models": {a: self.models[a].to_dict() for a in self.actions},
             "training": {a: asdict(r) for a, r in self.reports.items()},
+            **({} if self.config is None else {"config": self.config.as_dict()}),
             "meta": self.meta,
         }
 
@@ -327,9 +335,10 @@ class Recognizer:
         try:
             ranges_from_meta(meta)  # the typicality ranges: checked now, not when a gesture is scored
             FeatureRanges.from_meta(meta)
+            config = _config_from(d, meta)
         except ModelError as e:
             raise ModelError(f"{source}: {e}") from None
-        return cls(hmms, reports, meta, features)
+        return cls(hmms, reports, meta, features, config)
 
     def save(self, path: str | os.PathLike) -> Path:
         """Write the recogniser as JSON (atomically); returns the path."""
@@ -350,6 +359,23 @@ class Recognizer:
         return cls.from_dict(d, str(path))
 
 
+def _config_from(d: Mapping[str, Any], meta: Mapping[str, Any]) -> TrainingConfig | None:
+    """The training settings of a recogniser file: its ``config`` (version 3), else those a version-2 file
+    kept in ``meta`` (:data:`LEGACY_CONFIG_KEYS`), else None."""
+    settings = d.get("config")
+    if settings is None and all(k in meta for k in ("n_states", "n_mix")):
+        settings = {k: meta[k] for k in LEGACY_CONFIG_KEYS if k in meta}
+    if settings is None:
+        return None
+    known = set(TrainingConfig.__dataclass_fields__)
+    if not isinstance(settings, dict) or not set(settings) <= known:
+        raise ModelError(f"'config' must be a JSON object with some of {', '.join(sorted(known))}")
+    try:
+        return TrainingConfig(**settings)
+    except (ModelError, TypeError) as e:
+        raise ModelError(f"'config': {e}") from None
+
+
 def train_recognizer(
     sequences: Mapping[str, Sequence[np.ndarray]] | Sequence[Mapping[str, Sequence[np.ndarray]]],
     config: TrainingConfig | None = None,
@@ -358,13 +384,14 @@ def train_recognizer(
     features: Invariants | str | None | Sequence[Invariants | str | None] = None,
     meta: Mapping[str, Any] | None = None,
     warn: bool = True,
-    progress: Callable[[str], None] | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> Recognizer | list[Recognizer]:
     """Train one left-to-right GMM-HMM per action (:func:`glu.hmm.train`), as a recogniser; or many
     recognisers.
 
-    The recogniser's meta records the settings and the per-frame log-likelihood range of each action's
-    training sequences (:mod:`glu.gestures.typicality`).
+    The recogniser keeps the settings (:attr:`Recognizer.config`); its meta records the seed, the features
+    and the per-frame log-likelihood range of each action's training sequences
+    (:mod:`glu.gestures.typicality`).
 
     Parameters
     ----------
@@ -378,7 +405,8 @@ def train_recognizer(
         it scores. With a list of sets, one for all or one per set
     meta : free-form information kept with each recogniser (data source, …)
     warn : warn when EM does not converge
-    progress : called with each action once its model is trained (for a progress bar; one recogniser)
+    progress : called with the number of models that have just finished training, while they train (for a
+        progress bar over every model of every recogniser)
     """
     config = config or TrainingConfig()
     many = not isinstance(sequences, Mapping)
@@ -398,7 +426,7 @@ def train_recognizer(
         for s, f in zip(sets, specs, strict=True)
     ]
     jobs = {(i, a): seqs for i, sn in enumerate(seen) for a, seqs in sn.items()}
-    trained = train(jobs, config, seed={(i, a): seeds[i] for i, a in jobs}, warn=warn)
+    trained = train(jobs, config, seed={(i, a): seeds[i] for i, a in jobs}, warn=warn, progress=progress)
     out = []
     for i, (sn, spec) in enumerate(zip(seen, specs, strict=True)):
         models = {a: trained[i, a].model for a in sn}
@@ -408,22 +436,11 @@ def train_recognizer(
         info = {
             META_KEY: ranges_to_meta(ranges),
             FRAMES_KEY: hand.to_meta(),
-            "recipe": config.recipe,
-            "n_states": config.n_states,
-            "n_mix": config.n_mix,
-            "n_iter": config.n_iter,
-            "tol": config.tol,
-            "covar_reg": config.covar_reg,
             "seed": seeds[i],
             "features": spec.name,
         }
-        out.append(Recognizer(models, reports, {**info, **(meta or {})}, spec))
-    if many:
-        return out
-    if progress is not None:
-        for action in out[0].actions:
-            progress(action)
-    return out[0]
+        out.append(Recognizer(models, reports, {**info, **(meta or {})}, spec, config))
+    return out if many else out[0]
 
 
 def load_original_models(

@@ -26,17 +26,13 @@ log, as in the papers.
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
 from glu.errors import DataError
 from glu.gestures.trajectories import (
-    DEFAULT_POLICY,
-    RepairPolicy,
     TrackingEvent,
     Trajectory,
     summarize_events,
@@ -284,25 +280,3 @@ class RecordingSegmentation:
             "segments": [s.as_dict() for s in self.segments],
             "left_out": [{**s.as_dict(), "reason": why} for s, why in self.rejected],
         }
-
-
-def segment_recording(
-    path: str | os.PathLike,
-    label: str | None = None,
-    policy: RepairPolicy = DEFAULT_POLICY,
-    params: SegmentationParams = DEFAULT_PARAMS,
-) -> RecordingSegmentation:
-    """Read a YARP hand log (file or recording folder), repair it and segment each piece.
-
-    ``label`` is the action performed, if known (:func:`glu.gestures.corpus.segment_recording_of`
-    fills it in for the recordings of a data folder).
-    """
-    from glu.gestures.features import load_features
-
-    p = Path(path)
-    name = p.name if p.is_dir() else p.parent.name if p.name == "data.log" else p.stem
-    repaired = load_features(path, policy)
-    pieces = [
-        segment_repetitions(tr, label, params, recording=name) for tr in repaired.pieces if len(tr) >= 2
-    ]
-    return RecordingSegmentation(name, pieces, repaired.events)

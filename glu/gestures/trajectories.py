@@ -1,9 +1,8 @@
 """Hand trajectories: a 3-D path with its timing, tracking gaps and outliers, and their repair.
 
-A :class:`Trajectory` is read from a YARP hand log (:mod:`glu.data.hand_logs` owns the format: one frame
-a line, ``index timestamp x y z``, the hand features as logged, 1000 × the units of the original models;
-:mod:`glu.gestures.features` converts them). Frames are numbered 1, 2, … in file order, the numbering of
-the papers' segment ranges.
+A :class:`Trajectory` holds a recording's arrays (:func:`glu.gestures.recordings.read_recording` makes one
+from a YARP hand log or a table; this module reads no file). Frames are numbered 1, 2, … in file order, the
+numbering of the papers' segment ranges.
 
 Real tracking drops out and jumps. :func:`repair` detects, reports and (by a :class:`RepairPolicy`) repairs:
 
@@ -26,13 +25,12 @@ segments are always reported in the numbering of the original log.
 from __future__ import annotations
 
 import math
-import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
 
-from glu.data import hand_logs
 from glu.errors import DataError
 
 
@@ -153,26 +151,6 @@ class Trajectory:
                 f"{self.source}: frames {first}:{last} are out of range; allowed: {lo} ≤ first ≤ last ≤ {hi}"
             )
         return self.take((self.frame >= first) & (self.frame <= last))
-
-
-def read_hand_log(path: str | os.PathLike) -> Trajectory:
-    """Read a YARP hand log (a ``data.log`` file or a recording folder holding one), as logged (no repair).
-
-    The format and its errors are :mod:`glu.data.hand_logs`'; frames are numbered 1, 2, … in file order.
-    """
-    return _as_trajectory(hand_logs.read_hand_log(path))
-
-
-def parse_hand_log(data: bytes | str, source: str = "<string>") -> Trajectory:
-    """Parse the text of a YARP hand log (see :func:`read_hand_log`); ``source`` names it in errors."""
-    return _as_trajectory(hand_logs.parse_hand_log(data, source))
-
-
-def _as_trajectory(log: hand_logs.HandLog) -> Trajectory:
-    n = len(log.t)
-    return Trajectory(
-        xyz=log.xyz, t=log.t, frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool), source=log.source
-    )
 
 
 @dataclass(frozen=True)
@@ -309,7 +287,7 @@ def repaired_xyz(
     xyz : array, shape (n_frames, 3); t : array, shape (n_frames,), strictly increasing (seconds)
     policy : the repair
     deviation : optional, shape (n_frames,): :func:`spike_deviation` of ``xyz`` if already computed
-        (e.g. by :func:`glu.gestures._repair_many.spike_deviations` for many trajectories)
+        (e.g. by :func:`spike_deviations` for many trajectories)
     source : names the trajectory in errors
 
     Returns
@@ -361,23 +339,11 @@ def _repair_spans(
 
     # 1. spikes, on the observed frames
     if math.isfinite(policy.spike_threshold):
-        dev = spike_deviation(xyz, policy.spike_window) if deviation is None else deviation
-        spikes = dev > policy.spike_threshold
-        if spikes.any():
-            action = {"interpolate": "replaced", "drop": "dropped", "keep": "kept"}[policy.spikes]
-            for i in np.flatnonzero(spikes):
-                ev("spike", int(i), dev[i], action)
-            if policy.spikes == "interpolate" and (~spikes).sum() >= 2:
-                good = ~spikes
-                xyz = xyz.copy()
-                for k in range(3):
-                    xyz[spikes, k] = np.interp(t[spikes], t[good], xyz[good, k])
-                observed = observed & good
-            elif policy.spikes == "drop":
-                keep = ~spikes
-                xyz, t, frame, observed = xyz[keep], t[keep], frame[keep], observed[keep]
-                dt_all = np.diff(t)
-                median_dt = np.median(dt_all) if len(dt_all) else None
+        n_before = len(t)
+        xyz, t, frame, observed = _repair_spikes(xyz, t, frame, observed, policy, deviation, ev)
+        if len(t) != n_before:  # spikes dropped
+            dt_all = np.diff(t)
+            median_dt = np.median(dt_all) if len(dt_all) else None
 
     # 2. jumps (reported only)
     if events is not None:
@@ -387,12 +353,54 @@ def _repair_spans(
 
     # 3. gaps: interpolate the short ones, split at (or keep) the long ones
     gaps = np.flatnonzero(dt_all > policy.gap_factor * median_dt) if len(dt_all) else dt_all.astype(int)
+    return _gap_spans((xyz, t, frame, observed), gaps, period, policy, ev)
+
+
+def _repair_spikes(
+    xyz: np.ndarray,
+    t: np.ndarray,
+    frame: np.ndarray,
+    observed: np.ndarray,
+    policy: RepairPolicy,
+    deviation: np.ndarray | None,
+    ev: Callable[[str, int, float, str], None],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Step 1 of :func:`_repair_spans`: the spikes reported, and interpolated, dropped or kept."""
+    dev = spike_deviation(xyz, policy.spike_window) if deviation is None else deviation
+    spikes = dev > policy.spike_threshold
+    if not spikes.any():
+        return xyz, t, frame, observed
+    action = {"interpolate": "replaced", "drop": "dropped", "keep": "kept"}[policy.spikes]
+    for i in np.flatnonzero(spikes):
+        ev("spike", int(i), dev[i], action)
+    if policy.spikes == "interpolate" and (~spikes).sum() >= 2:
+        good = ~spikes
+        xyz = xyz.copy()
+        for k in range(3):
+            xyz[spikes, k] = np.interp(t[spikes], t[good], xyz[good, k])
+        observed = observed & good
+    elif policy.spikes == "drop":
+        keep = ~spikes
+        xyz, t, frame, observed = xyz[keep], t[keep], frame[keep], observed[keep]
+    return xyz, t, frame, observed
+
+
+def _gap_spans(
+    arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    gaps: np.ndarray,
+    period: float,
+    policy: RepairPolicy,
+    ev: Callable[[str, int, float, str], None],
+) -> list[list[np.ndarray]]:
+    """Step 3 of :func:`_repair_spans`: the pieces ``[xyz, t, frame, observed]`` after the gaps (the frames
+    before each of ``gaps``) are interpolated, split at or kept."""
+    xyz, t, frame, _ = arrays
     spans: list[tuple[list[np.ndarray], ...]] = []  # per piece: its parts of xyz, t, frame, observed
     parts: tuple[list[np.ndarray], ...] = ([], [], [], [])
     start = 0
 
     def add(lo: int, hi: int) -> None:
-        for part, arr in zip(parts, (xyz, t, frame, observed), strict=True):
+        for part, arr in zip(parts, arrays, strict=True):
             part.append(arr[lo:hi])
 
     for g in gaps:
@@ -437,3 +445,151 @@ def summarize_events(events: tuple[TrackingEvent, ...] | list[TrackingEvent]) ->
         detail = ", ".join(f"{n} {a}" for a, n in actions.items())
         parts.append(f"{len(sel)} {kind}{'s' if len(sel) != 1 else ''} ({detail})")
     return ", ".join(parts)
+
+
+# ------------------------------------------------------------------ many trajectories at once
+# The repair of many trajectories at once (:func:`glu.gestures.trajectories.repair`), bit for bit.
+#
+# A simulated corpus repairs every one of a million synthetic gestures, most of which need nothing done:
+# no spike, no gap. :func:`repaired_many` finds those for all trajectories together — the running
+# medians of the spike check in one pass over all frames (:func:`spike_deviations`), every frame period
+# by one sort — returns their coordinates untouched, and repairs the others one by one with
+# :func:`repaired_xyz` (the same code as :func:`repair`).
+
+
+def spike_deviations(xyzs: Sequence[np.ndarray], window: int = 7) -> list[np.ndarray]:
+    """:func:`~glu.gestures.trajectories.spike_deviation` of many trajectories, their medians in one pass.
+
+    Parameters
+    ----------
+    xyzs : arrays of shape (n_i, 3), finite
+    window : frames in the running median (odd)
+
+    Returns
+    -------
+    one array of shape (n_i,) per trajectory, equal to ``spike_deviation(xyzs[i], window)`` (a median of
+    an odd number of values is one of them, whatever finds it; here a sorting network over the windows
+    of all frames, edges repeated as the median filter's ``"nearest"`` mode)
+    """
+    lengths = np.array([len(x) for x in xyzs], dtype=np.int64)
+    out = [np.zeros(n) for n in lengths]
+    idx = np.flatnonzero(lengths >= window)
+    if len(idx) == 0:
+        return out
+    xyz = np.concatenate([np.asarray(xyzs[i], dtype=float) for i in idx])
+    n = lengths[idx]
+    half = window // 2
+    # every trajectory padded by `half` repeated edge frames on each side, one after the other
+    padded_n = n + 2 * half
+    start = np.repeat(np.cumsum(n) - n, padded_n)
+    local = np.arange(padded_n.sum()) - np.repeat(np.cumsum(padded_n) - padded_n, padded_n) - half
+    padded = xyz[start + np.clip(local, 0, np.repeat(n - 1, padded_n))]
+    width = len(padded) - window + 1
+    v = [padded[j : j + width] for j in range(window)]  # v[j][p]: frame p + j of the padded frames
+    for r in range(window):  # odd-even transposition sort: `window` rounds sort every window
+        for j in range(r % 2, window - 1, 2):
+            v[j], v[j + 1] = np.minimum(v[j], v[j + 1]), np.maximum(v[j], v[j + 1])
+    centre = np.arange(len(xyz)) + np.repeat(np.arange(len(n)) * 2 * half, n)  # each frame's own window
+    dev = np.linalg.norm(xyz - v[half][centre], axis=1)
+    for i, piece in zip(idx, np.split(dev, np.cumsum(n)[:-1]), strict=True):
+        out[i] = piece
+    return out
+
+
+def repaired_many(
+    xyzs: Sequence[np.ndarray],
+    ts: Sequence[np.ndarray],
+    policy: RepairPolicy = DEFAULT_POLICY,
+    **changes: float | int | str,
+) -> list[np.ndarray]:
+    """:func:`~glu.gestures.trajectories.repaired_xyz` of many trajectories.
+
+    Parameters
+    ----------
+    xyzs : arrays of shape (n_i, 3)
+    ts : arrays of shape (n_i,), strictly increasing timestamps (seconds)
+    policy : the repair; ``changes`` replace some of its fields (e.g. ``min_piece=1``)
+
+    Returns
+    -------
+    one array of shape (m_i, 3) per trajectory: its repaired pieces one after the other
+    """
+    if changes:
+        policy = RepairPolicy(**{**policy.__dict__, **changes})
+    if len(xyzs) != len(ts):
+        raise DataError(f"{len(xyzs)} coordinate arrays but {len(ts)} timestamp arrays")
+    xyzs = [np.asarray(x, dtype=float) for x in xyzs]
+    ts = [np.asarray(t, dtype=float) for t in ts]
+    if not xyzs:
+        return []
+    n = np.array([len(t) for t in ts])
+    if any(x.shape != (len(t), 3) for x, t in zip(xyzs, ts, strict=True)) or (n < 2).any():
+        return [repaired_xyz(x, t, policy) for x, t in zip(xyzs, ts, strict=True)]
+    xyz, t = np.concatenate(xyzs), np.concatenate(ts)
+    ends = np.cumsum(n)
+    starts = ends - n
+    finite = np.isfinite(xyz).all(axis=1)
+    # done here: finite, no time step above gap_factor × the median step, long enough, spikes interpolated
+    # or kept; the others go through repaired_xyz
+    simple = np.logical_and.reduceat(finite, starts) & (n >= policy.min_piece)
+    dev = None
+    fixed = xyz
+    if math.isfinite(policy.spike_threshold):
+        if not finite.all() or policy.spikes == "drop":
+            simple[:] = False
+        else:
+            dev = spike_deviations(xyzs, policy.spike_window)
+            if policy.spikes == "interpolate":
+                fixed = _interpolate_spikes(
+                    xyz, t, np.concatenate(dev) > policy.spike_threshold, starts, ends
+                )
+    dt = np.diff(t)
+    inner = np.ones(len(dt), dtype=bool)
+    inner[ends[:-1] - 1] = False  # the steps between trajectories
+    table = np.full((len(n), int(n.max()) - 1), np.inf)
+    table[np.arange(len(n)).repeat(n - 1), np.concatenate([np.arange(k - 1) for k in n])] = dt[inner]
+    table.sort(axis=1)
+    lo, hi = (n - 2) // 2, (n - 1) // 2  # np.median: the middle value, or the mean of the middle two
+    rows = np.arange(len(n))
+    median = np.where(lo == hi, table[rows, lo], (table[rows, lo] + table[rows, hi]) / 2)
+    largest = table[rows, n - 2]
+    simple &= ~(largest > policy.gap_factor * median) & (table[:, 0] > 0) & np.isfinite(largest)
+    return [
+        fixed[starts[i] : ends[i]]
+        if simple[i]
+        else repaired_xyz(xyzs[i], ts[i], policy, None if dev is None else dev[i])
+        for i in range(len(n))
+    ]
+
+
+def _interpolate_spikes(
+    xyz: np.ndarray, t: np.ndarray, spikes: np.ndarray, starts: np.ndarray, ends: np.ndarray
+) -> np.ndarray:
+    """The spikes of each trajectory replaced by linear interpolation in time from its other frames.
+
+    What ``np.interp(t[spikes], t[good], xyz[good, k])`` gives, trajectory by trajectory (a trajectory
+    with fewer than two other frames keeps its spikes, as :func:`~glu.gestures.trajectories.repair`):
+    between two good frames ``slope · (t − t_j) + y_j`` with ``slope = (y_{j+1} − y_j) / (t_{j+1} − t_j)``,
+    before the first good frame its value, after the last its value.
+    """
+    good = ~spikes
+    n_good = np.add.reduceat(good.astype(np.int64), starts)
+    owner = np.repeat(np.arange(len(starts)), ends - starts)
+    todo = spikes & (n_good >= 2)[owner]
+    if not todo.any():
+        return xyz
+    i = np.arange(len(t))
+    prev = np.maximum.accumulate(np.where(good, i, -1))
+    nxt = np.minimum.accumulate(np.where(good, i, len(t))[::-1])[::-1]
+    s = np.flatnonzero(todo)
+    own = owner[s]
+    p, q = prev[s], nxt[s]
+    has_p, has_q = p >= starts[own], q < ends[own]
+    p, q = np.where(has_p, p, q), np.where(has_q, q, p)
+    both = has_p & has_q
+    with np.errstate(divide="ignore", invalid="ignore"):  # p == q where one side has no good frame
+        slope = (xyz[q] - xyz[p]) / (t[q] - t[p])[:, None]
+        value = slope * (t[s] - t[p])[:, None] + xyz[p]
+    out = xyz.copy()
+    out[s] = np.where(both[:, None], value, xyz[p])
+    return out

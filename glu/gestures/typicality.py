@@ -274,6 +274,5 @@ def check(
 
 def sampled_sequences(model: GestureHMM, n: int = 30, length: int = 60, seed: int = 0) -> list[np.ndarray]:
     """``n`` sequences of ``length`` frames sampled from the model itself (seeded), shape (length, D) each."""
-    hmm = model.to_hmmlearn()
     rng = np.random.default_rng(seed)
-    return [hmm.sample(length, random_state=int(rng.integers(2**31 - 1)))[0] for _ in range(n)]
+    return [model.sample(length, seed=int(rng.integers(2**31 - 1))) for _ in range(n)]

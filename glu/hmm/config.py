@@ -26,9 +26,6 @@ from glu.hmm.model import as_sequence
 RECIPES: tuple[str, ...] = ("glu", "mixsplit")
 """How gesture HMMs can be trained: ``glu`` (:mod:`glu.hmm.glu_recipe`) or ``mixsplit`` (the originals',
 :mod:`glu.hmm.mixsplit`)."""
-ENGINES: tuple[str, ...] = ("glu", "hmmlearn")
-"""Who runs EM in glu's recipe: glu's Baum–Welch (the default; the covariance is the MAP estimate about the
-updated mean) or hmmlearn's ``GMMHMM.fit`` (which takes the scatter about the mean before the update)."""
 COVAR_FLOOR = 0.01
 """The mixsplit recipe adds this to every re-estimated covariance (times the identity), as the originals'
 toolbox did (in the units of the original models: the logged coordinates / 1000)."""
@@ -86,7 +83,7 @@ class TrainingConfig:
         return dataclasses.replace(self, **changes)
 
     def as_dict(self) -> dict[str, Any]:
-        """The settings as a plain dict (what a recogniser records in its ``meta``)."""
+        """The settings as a plain dict (a recogniser file's ``config``)."""
         return dataclasses.asdict(self)
 
 
@@ -164,12 +161,14 @@ def make_report(
     tol: float,
     max_iter: int,
     warn: bool,
+    weighted_frames: float | None = None,
 ) -> TrainingReport:
     """The :class:`TrainingReport` of a fitted model (converged: the last change of the total
-    log-likelihood below ``tol`` per frame); warns with :class:`HMMConvergenceWarning` when it did not."""
+    log-likelihood below ``tol`` per frame, or per weighted frame with sequence weights,
+    ``weighted_frames``); warns with :class:`HMMConvergenceWarning` when it did not."""
     n_frames = sum(len(X) for X in seqs)
     delta = history[-1] - history[-2] if len(history) >= 2 else math.inf
-    converged = bool(abs(delta) < tol * n_frames)
+    converged = bool(abs(delta) < tol * (n_frames if weighted_frames is None else weighted_frames))
     report = TrainingReport(
         name, len(seqs), n_frames, n_iter_run, converged, history, final_loglik, tol, max_iter
     )

@@ -1,54 +1,46 @@
-"""Baum–Welch for GMM-HMMs with full covariances, all training sequences in one vectorised pass.
+"""Baum–Welch for GMM-HMMs with full covariances and weighted sequences: the readable reference.
 
-hmmlearn's ``GMMHMM.fit`` loops in Python over the sequences and, inside each, over the states and their
-Gaussians; here the sequences are padded to a common length and pass through one forward and one
-backward recursion together, and the emissions of every frame under every Gaussian are one array
-operation — several times faster on the gesture corpora (``benchmarks/bench_hmm.py``).
+This module is the reference of EM in pure NumPy, the one to read and edit first and the oracle of the
+tests; the fast implementation that every trainer runs, many models at once, is
+:func:`glu.hmm._engine.em_batch.fit_many` (equal to this to rounding, tested). EM here is written from
+its sufficient statistics, with a weight per sequence (a sequence labelled ``a`` with probability ``p``
+counts ``p`` times in ``a``'s model; unweighted EM is every weight 1):
 
-The E-step is the usual one. The M-step re-estimates every parameter with flat Dirichlet priors on the
-initial, transition and mixture probabilities (zeros stay zero, so a left-to-right model stays
-left-to-right) and no prior on the means; the covariance of a component with soft count ``N`` and
-responsibility-weighted scatter ``S`` about its *updated* mean is, by :data:`COVARIANCES`:
+* :func:`expected_stats` — the E-step: :class:`SufficientStats` (expected state, transition and component
+  counts, first and second moments of the frames), each sequence's contribution times its weight; the
+  sequences are padded to a common length and pass through one forward and one backward recursion
+  together (:func:`glu.hmm.inference.forward_backward`). Statistics of disjoint sets of sequences add up
+  (``a + b``), so they can be accumulated episode by episode (online learning, :mod:`glu.hmm.online`);
+* :func:`maximise` — the M-step from statistics (any leading batch axes: many models at once);
+* :func:`fit` — the two in a loop until the weighted log-likelihood ``Σ_s w_s log L(G_s)`` converges.
+
+The M-step re-estimates every parameter with flat Dirichlet priors on the initial, transition and mixture
+probabilities (zeros stay zero, so a left-to-right model stays left-to-right) and no prior on the means;
+the covariance of a component with soft count ``N`` and responsibility-weighted scatter ``S`` about its
+*updated* mean is, by :data:`COVARIANCES`:
 
 ``map``
     ``(S + r·I) / (N + 1)``: the posterior mode under a weak inverse-Wishart prior (glu's recipe);
 ``ml``
     ``S / N + f·I``: maximum likelihood plus a floor ``f`` (the originals' mixsplit recipe, ``f = 0.01``);
-    a component that lost its frames keeps its covariance;
-``hmmlearn``
-    ``(S_old + r·I) / (N + 1)`` with the scatter about the mean *before* the update, which is what
-    hmmlearn 0.3's ``GMMHMM`` computes (a generalised EM step, not the maximiser). Kept to test this
-    implementation against hmmlearn (``tests/test_hmm.py``: the same parameters and log-likelihood
-    history).
+    a component that lost its frames keeps its covariance.
 
-**Weighted EM and sufficient statistics.** :func:`fit` is the plain Baum–Welch above. Its two halves are
-also offered apart, with a weight per sequence, for learning from uncertain labels (a sequence labelled
-``a`` with probability ``p`` counts ``p`` times in ``a``'s model) and for online learning:
-
-* :func:`expected_stats` — the E-step: :class:`SufficientStats` (expected state, transition and component
-  counts, first and second moments of the frames), each sequence's contribution times its weight;
-  statistics of disjoint sets of sequences add up (``a + b``), so they can be accumulated episode by episode;
-* :func:`maximise` — the M-step from statistics, with the same priors and covariance updates as :func:`fit`;
-* :func:`fit_weighted` — the two in a loop: EM for the weighted log-likelihood ``Σ_s w_s log L(G_s)``.
-
-A weight of 2 is the sequence twice, a weight of 0 leaves it out; with every weight 1, :func:`fit_weighted`
-equals :func:`fit` to rounding (its moments are raw sums, not centred ones; ``tests/test_weighted_em.py``).
-:func:`fit` itself is unchanged. :func:`maximise` and :class:`SufficientStats` accept leading batch axes
-(many models at once); the E-step of one sequence under many models is
-:func:`glu.hmm._engine.online.expected_stats_bank`.
+A weight of 2 is the sequence twice, a weight of 0 leaves it out. hmmlearn's ``GMMHMM`` takes the scatter
+about the means *before* the update (a generalised EM step); the tests train with hmmlearn as an
+independent reference and check this E-step against it (``tests/hmm_reference.py``).
 
 Shapes: ``S`` sequences, ``T`` frames (padded), ``Q`` states, ``M`` Gaussians per state, ``D`` features.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from glu.hmm.inference import _logsumexp, forward_backward, gaussian_factors, log_component_densities
+from glu.hmm.inference import forward_backward, gaussian_factors, log_component_densities, logsumexp
 
 
 class GMMHMMParams(NamedTuple):
@@ -77,78 +69,10 @@ def _pad(sequences: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.nd
     return lengths, alive, np.concatenate(sequences)
 
 
-COVARIANCES: tuple[str, ...] = ("map", "ml", "hmmlearn")
+COVARIANCES: tuple[str, ...] = ("map", "ml")
 """The covariance updates :func:`fit` knows (see the module docstring)."""
 EMPTY = 1e-10
 """A component with less soft count than this has lost its frames (``ml`` keeps its covariance)."""
-
-
-def fit(
-    sequences: Sequence[np.ndarray],
-    init: GMMHMMParams,
-    n_iter: int,
-    tol: float,
-    covar_reg: float = 0.0,
-    covariance: str = "map",
-    covar_floor: float = 0.0,
-) -> FitResult:
-    """Fit a GMM-HMM to ``sequences`` (arrays of shape (T_i, D)) by Baum–Welch from ``init``.
-
-    ``tol`` is on the total log-likelihood (hmmlearn's ``tol``): EM stops after ``n_iter`` iterations or
-    when an iteration gains less than ``tol``. ``covariance`` is one of :data:`COVARIANCES`, with the
-    prior ``covar_reg`` (``map``, ``hmmlearn``) or the floor ``covar_floor`` (``ml``). Raises
-    ``numpy.linalg.LinAlgError`` when a covariance stops being positive definite.
-    """
-    if covariance not in COVARIANCES:
-        raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
-    lengths, alive, X = _pad(sequences)
-    S, T = alive.shape
-    D = X.shape[1]
-    startprob, transmat, weights, means, covars = (np.array(a, dtype=float) for a in init)
-    Q, M = weights.shape
-    history: list[float] = []
-    for _ in range(n_iter):
-        chol_inv, log_norm = gaussian_factors(weights, covars)
-        lc = log_component_densities(X, means, chol_inv, log_norm)  # (N, Q, M), log w + log N
-        log_b_flat = _logsumexp(lc, axis=2)  # (N, Q)
-        log_b = np.full((S, T, Q), -np.inf)
-        log_b[alive] = log_b_flat
-        gamma_padded, xi_sum, loglik = forward_backward(log_b, lengths, startprob, transmat)
-        history.append(float(loglik.sum()))
-        gamma = gamma_padded[alive]  # (N, Q)
-        with np.errstate(under="ignore"):
-            if M == 1:
-                post_mix = np.ones_like(lc)
-            else:
-                post_mix = np.exp(lc - log_b_flat[..., None])
-            pcm = gamma[:, :, None] * post_mix  # (N, Q, M)
-        start = gamma_padded[:, 0].sum(axis=0)
-        post_mix_sum = pcm.sum(axis=0)
-        post_sum = gamma.sum(axis=0)
-        m_n = np.einsum("nqm,nd->qmd", pcm, X)
-        old_means, old_covars = means, covars
-        # M-step, as hmmlearn's GMMHMM._do_mstep with its default priors and ours on the covariances
-        startprob = np.where(startprob == 0, 0.0, np.maximum(start, 0.0))
-        startprob = startprob / startprob.sum()
-        transmat = np.where(transmat == 0, 0.0, np.maximum(xi_sum, 0.0))
-        row = transmat.sum(axis=1, keepdims=True)
-        transmat = transmat / np.where(row == 0, 1.0, row)
-        weights = post_mix_sum / post_sum[:, None]
-        m_d = post_mix_sum.copy()
-        m_d[(weights == 0) & (m_n == 0).all(axis=-1)] = 1.0
-        means = m_n / m_d[:, :, None]
-        centered = X[:, None, None, :] - (old_means if covariance == "hmmlearn" else means)[None]
-        c_n = np.einsum("nqmi,nqmj->qmij", pcm[..., None] * centered, centered, optimize=True)
-        if covariance == "ml":
-            n = post_mix_sum[:, :, None, None]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                covars = c_n / n + covar_floor * np.eye(D)
-            covars = np.where(n > EMPTY, covars, old_covars)
-        else:
-            covars = (covar_reg * np.eye(D) + c_n) / (post_mix_sum + 1.0)[:, :, None, None]
-        if len(history) >= 2 and history[-1] - history[-2] < tol:
-            break
-    return FitResult(GMMHMMParams(startprob, transmat, weights, means, covars), np.array(history))
 
 
 # ------------------------------------------------------------------ weighted EM, sufficient statistics
@@ -184,6 +108,15 @@ class SufficientStats:
     def __add__(self, other: SufficientStats) -> SufficientStats:
         """The statistics of both sets of sequences (field by field)."""
         return SufficientStats(*(getattr(self, f.name) + getattr(other, f.name) for f in fields(self)))
+
+    def take(self, idx: Any) -> SufficientStats:
+        """The statistics of the models at ``idx`` (a numpy index into the batch axes)."""
+        return SufficientStats(*(getattr(self, f.name)[idx] for f in fields(self)))
+
+    def put(self, idx: Any, new: SufficientStats) -> None:
+        """Set the statistics of the models at ``idx`` to ``new`` (in place)."""
+        for f in fields(self):
+            getattr(self, f.name)[idx] = getattr(new, f.name)
 
     def scaled(self, factor: float | np.ndarray) -> SufficientStats:
         """Every field times ``factor`` (a number, or an array of the batch shape ``...``)."""
@@ -260,7 +193,7 @@ def expected_stats(
     S, T = alive.shape
     chol_inv, log_norm = gaussian_factors(params.weights, params.covars)
     lc = log_component_densities(X, params.means, chol_inv, log_norm)  # (N, Q, M)
-    log_b_flat = _logsumexp(lc, axis=2)  # (N, Q)
+    log_b_flat = logsumexp(lc, axis=2)  # (N, Q)
     log_b = np.full((S, T, Q), -np.inf)
     log_b[alive] = log_b_flat
     gamma_padded, xi_sum, loglik = forward_backward(log_b, lengths, params.startprob, params.transmat, w)
@@ -290,9 +223,9 @@ def maximise(
     """The M-step of :func:`fit` from sufficient statistics (any leading batch axes, the same in both).
 
     ``params`` is the model of the E-step: its zero start and transition probabilities stay zero (a
-    left-to-right model stays left-to-right), ``covariance="hmmlearn"`` takes the scatter about its means,
-    ``"ml"`` keeps the covariance of a component that lost its frames. A state without any frame keeps its
-    mixture weights, means and covariances (only possible with weighted or empty statistics).
+    left-to-right model stays left-to-right), ``"ml"`` keeps the covariance of a component that lost its
+    frames. A state without any frame keeps its mixture weights, means and covariances (only possible with
+    weighted or empty statistics).
     """
     if covariance not in COVARIANCES:
         raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
@@ -310,68 +243,63 @@ def maximise(
     m_d = np.where((weights == 0) & (stats.first == 0).all(axis=-1), 1.0, counts)
     with np.errstate(divide="ignore", invalid="ignore"):
         means = np.where(seen[..., None], stats.first / m_d[..., None], params.means)
-    about = params.means if covariance == "hmmlearn" else means
-    # Σ p (x − m)(x − m)ᵀ from the raw moments: second − first mᵀ − m firstᵀ + N m mᵀ
-    outer_fm = stats.first[..., :, None] * about[..., None, :]
-    scatter = (
-        stats.second
-        - outer_fm
-        - np.swapaxes(outer_fm, -1, -2)
-        + counts[..., None, None] * about[..., :, None] * about[..., None, :]
-    )
+    S = scatter(stats, means)
     n = counts[..., None, None]
     if covariance == "ml":
         with np.errstate(divide="ignore", invalid="ignore"):
-            covars = scatter / n + covar_floor * np.eye(D)
+            covars = S / n + covar_floor * np.eye(D)
         covars = np.where(n > EMPTY, covars, params.covars)
     else:
-        covars = (covar_reg * np.eye(D) + scatter) / (n + 1.0)
+        covars = (covar_reg * np.eye(D) + S) / (n + 1.0)
         covars = np.where(seen[..., None, None], covars, params.covars)
     covars = 0.5 * (covars + np.swapaxes(covars, -1, -2))
     return GMMHMMParams(startprob, transmat, weights, means, covars)
 
 
-def fit_weighted(
+def scatter(stats: SufficientStats, about: np.ndarray) -> np.ndarray:
+    """``Σ p (x − m)(x − m)ᵀ`` of every component about ``m = about`` (shape (..., Q, M, D)) from the raw
+    moments: ``second − first mᵀ − m firstᵀ + N m mᵀ``, shape (..., Q, M, D, D)."""
+    outer_fm = stats.first[..., :, None] * about[..., None, :]
+    return (
+        stats.second
+        - outer_fm
+        - np.swapaxes(outer_fm, -1, -2)
+        + stats.counts[..., None, None] * about[..., :, None] * about[..., None, :]
+    )
+
+
+def fit(
     sequences: Sequence[np.ndarray],
-    weights: Sequence[float] | np.ndarray | None,
     init: GMMHMMParams,
     n_iter: int,
     tol: float,
     covar_reg: float = 0.0,
     covariance: str = "map",
     covar_floor: float = 0.0,
+    weights: Sequence[float] | np.ndarray | None = None,
 ) -> FitResult:
-    """Weighted Baum–Welch: :func:`expected_stats` and :func:`maximise` from ``init`` until converged.
+    """Baum–Welch from ``init``: :func:`expected_stats` and :func:`maximise` until converged.
 
-    As :func:`fit` (``history[i]`` is the weighted log-likelihood ``Σ_s w_s log L(G_s)`` of the model of
-    iteration ``i``; stops after ``n_iter`` iterations or when one gains less than ``tol``), with each
-    sequence (shape (T_i, D)) counted ``weights[i]`` times (default all 1). The weighted log-likelihood
-    never decreases with ``covariance="ml"`` and ``covar_floor=0`` (exact EM); with ``"map"`` its sum with
-    the covariance prior's log-density never decreases (``tests/test_weighted_em.py``).
+    ``sequences`` are arrays of shape (T_i, D), each counted ``weights[i]`` times (default all 1): EM for
+    the weighted log-likelihood ``Σ_s w_s log L(G_s)``. ``history[i]`` is that log-likelihood under the
+    model of iteration ``i``; EM stops after ``n_iter`` iterations or when an iteration gains less than
+    ``tol`` (on the total, hmmlearn's ``tol``). ``covariance`` is one of :data:`COVARIANCES`, with the prior
+    ``covar_reg`` (``map``) or the floor ``covar_floor`` (``ml``). The weighted log-likelihood never
+    decreases with ``covariance="ml"`` and ``covar_floor=0`` (exact EM); with ``"map"`` its sum with the
+    covariance prior's log-density never decreases (``tests/test_weighted_em.py``). Raises
+    ``numpy.linalg.LinAlgError`` when a covariance stops being positive definite.
     """
+    if covariance not in COVARIANCES:
+        raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
     w = sequence_weights(sequences, weights)
     if not np.any(w > 0):
         raise ValueError("weighted EM needs at least one sequence of positive weight")
-    options = {"covar_reg": covar_reg, "covariance": covariance, "covar_floor": covar_floor}
-    return iterate(lambda p: expected_stats(sequences, p, w), init, n_iter, tol, **options)
-
-
-def iterate(
-    estep: Callable[[GMMHMMParams], SufficientStats],
-    init: GMMHMMParams,
-    n_iter: int,
-    tol: float,
-    **mstep: Any,
-) -> FitResult:
-    """The EM loop of :func:`fit_weighted`: ``estep`` (the model → its expected statistics) and
-    :func:`maximise` (with the options ``mstep``) from ``init``, at most ``n_iter`` times, until an
-    iteration gains less than ``tol``."""
     params = GMMHMMParams(*(np.array(a, dtype=float) for a in init))
     history: list[float] = []
     for _ in range(n_iter):
-        stats = estep(params)
+        stats = expected_stats(sequences, params, w)
         history.append(float(stats.loglik))
-        params = maximise(stats, params, **mstep)
+        params = maximise(stats, params, covar_reg, covariance, covar_floor)
         if len(history) >= 2 and history[-1] - history[-2] < tol:
             break
     return FitResult(params, np.array(history))

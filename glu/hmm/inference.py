@@ -246,7 +246,8 @@ def left_to_right_transmat(n_states: int, stay: float) -> np.ndarray:
     return A
 
 
-def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
+def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
+    """``log Σ exp(a)`` along ``axis`` (−∞ where every term is −∞), scaled by the largest term."""
     m = a.max(axis=axis, keepdims=True)
     m = np.where(np.isfinite(m), m, 0.0)
     with np.errstate(divide="ignore", under="ignore"):
@@ -334,17 +335,17 @@ def forward_backward_log(
     fwd = np.full((S, T, Q), -np.inf)
     fwd[:, 0] = log_pi + log_b[:, 0]
     for t in range(1, T):
-        fwd[:, t] = _logsumexp(fwd[:, t - 1, :, None] + log_a, axis=1) + log_b[:, t]
+        fwd[:, t] = logsumexp(fwd[:, t - 1, :, None] + log_a, axis=1) + log_b[:, t]
     last = lengths - 1
-    loglik = _logsumexp(fwd[np.arange(S), last], axis=1)
+    loglik = logsumexp(fwd[np.arange(S), last], axis=1)
     bwd = np.zeros((S, T, Q))
     alive = np.arange(T)[None, :] < lengths[:, None]  # (S, T)
     for t in range(T - 2, -1, -1):
-        step = _logsumexp(log_a + (log_b[:, t + 1] + bwd[:, t + 1])[:, None, :], axis=2)
+        step = logsumexp(log_a + (log_b[:, t + 1] + bwd[:, t + 1])[:, None, :], axis=2)
         bwd[:, t] = np.where(alive[:, t + 1, None], step, 0.0)  # the last frame of a sequence has β = 1
     log_gamma = fwd + bwd - loglik[:, None, None]
     log_gamma = np.where(alive[..., None], log_gamma, -np.inf)
-    log_gamma -= np.where(alive, _logsumexp(log_gamma, axis=2), 0.0)[..., None]  # as hmmlearn: renormalise
+    log_gamma -= np.where(alive, logsumexp(log_gamma, axis=2), 0.0)[..., None]  # as hmmlearn: renormalise
     if T > 1:
         pair = alive[:, 1:]  # transitions t → t+1 inside each sequence
         log_xi = (

@@ -23,8 +23,8 @@ covariance.
 glu's own recipe (:mod:`glu.hmm.glu_recipe`) starts instead from equal time slices of each sequence,
 fits all M components of a slice at once (scikit-learn ``GaussianMixture``) and regularises covariances
 with a weak inverse-Wishart prior; :data:`~glu.hmm.config.RECIPES` names both, ``TrainingConfig.recipe`` and
-``glu hmm train --recipe`` choose. Baum–Welch is :func:`glu.hmm.em.fit` in both (``ml`` covariances here,
-``map`` in glu's).
+``glu hmm train --recipe`` choose. Baum–Welch is the same batched EM in both
+(:func:`glu.hmm._engine.em_batch.fit_many`: ``ml`` covariances here, ``map`` in glu's).
 
 Example
 -------
@@ -40,7 +40,7 @@ Example
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -55,8 +55,6 @@ SPLIT_OFFSET = 0.2
 """A split moves the two new means this many standard deviations (per coordinate) apart from the old one."""
 FLAT_STAY = 0.5
 """Self-transition probability of the flat start."""
-_EMPTY = 1e-10
-"""A component with less soft count than this has lost its frames: its covariance is kept."""
 
 
 def flat_start(sequences: Sequence[np.ndarray], n_states: int, name: str = "") -> GestureHMM:
@@ -102,41 +100,6 @@ def split_heaviest(hmm: GestureHMM, offset: float = SPLIT_OFFSET) -> GestureHMM:
     return GestureHMM(hmm.startprob, hmm.transmat, weights, means, covars, name=hmm.name)
 
 
-def baum_welch(
-    hmm: GestureHMM,
-    sequences: Sequence[np.ndarray],
-    n_iter: int,
-    tol: float,
-    covar_floor: float = COVAR_FLOOR,
-) -> tuple[GestureHMM, tuple[float, ...]]:
-    """Baum–Welch from ``hmm``, every parameter re-estimated (:func:`glu.hmm.em.fit`).
-
-    Covariances are the maximum-likelihood ones (about the updated means, as the originals' toolbox
-    computed them) plus ``covar_floor·I``; a component that lost its frames keeps its covariance. Stops
-    after ``n_iter`` iterations or when the total log-likelihood gains less than ``tol`` × the number of
-    frames. Returns the model and the total log-likelihood before each M-step.
-    """
-    from threadpoolctl import threadpool_limits
-
-    n_frames = sum(len(X) for X in sequences)
-    start = em.GMMHMMParams(hmm.startprob, hmm.transmat, hmm.weights, hmm.means, hmm.covars)
-    try:
-        with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
-            warnings.simplefilter("ignore", RuntimeWarning)
-            result = em.fit(
-                sequences, start, n_iter, tol * n_frames, covariance="ml", covar_floor=covar_floor
-            )
-    except (ValueError, np.linalg.LinAlgError) as e:
-        raise ModelError(f"Baum–Welch failed for {hmm.name or 'the model'} at M = {hmm.n_mix}: {e}") from None
-    try:
-        fitted = GestureHMM(*result.params, name=hmm.name)
-    except ModelError as e:
-        raise ModelError(
-            f"Baum–Welch diverged for {hmm.name or 'the model'} at M = {hmm.n_mix} ({e}); try covar_floor > 0"
-        ) from None
-    return fitted, tuple(float(h) for h in result.history)
-
-
 def train_one(
     sequences: Sequence[np.ndarray], config: TrainingConfig, name: str = "", warn: bool = True
 ) -> tuple[GestureHMM, TrainingReport, list[tuple[float, ...]]]:
@@ -155,19 +118,11 @@ def train_one(
     Returns
     -------
     the model, a :class:`~glu.hmm.config.TrainingReport` of the last stage (``n_iter`` counts every
-    stage's iterations), and the log-likelihood history of each stage (M = 1 first). Call it through
-    :func:`glu.hmm.train` (with ``TrainingConfig(recipe="mixsplit")``) unless you need the stages.
+    stage's iterations), and the log-likelihood history of each stage (M = 1 first): :func:`train_batch`
+    of one model. Call it through :func:`glu.hmm.train` (with ``TrainingConfig(recipe="mixsplit")``) unless
+    you need the stages.
     """
-    seqs, _ = checked_sequences(sequences, config, name)
-    hmm = flat_start(seqs, config.n_states, name)
-    stages: list[tuple[float, ...]] = []
-    while True:
-        hmm, history = baum_welch(hmm, seqs, config.n_iter, config.tol, config.covar_floor)
-        stages.append(history)
-        if hmm.n_mix >= config.n_mix:
-            break
-        hmm = split_heaviest(hmm)
-    return (*_finish(hmm, seqs, stages, config, name, warn), stages)
+    return train_batch([sequences], config, [name], warn)[0]
 
 
 def _finish(
@@ -189,41 +144,98 @@ def train_batch(
     config: TrainingConfig,
     names: Sequence[str],
     warn: bool = True,
+    progress: Callable[[int], None] | None = None,
 ) -> list[tuple[GestureHMM, TrainingReport, list[tuple[float, ...]]]]:
-    """:func:`train_one` for many independent models, each stage's Baum–Welch batched.
+    """The originals' recipe (see :func:`train_one`) for many independent models, each stage's Baum–Welch
+    batched: the one training path of this recipe.
 
     ``sequences``: one list of training sequences (T_i, D) per model; ``names`` one per model. Every model
     goes through the same stages (M = 1 … n_mix), and each stage is one
-    :func:`glu.hmm._engine.em_batch.fit_many` over all models, equal to :func:`baum_welch` per model to
-    rounding (tested). When Baum–Welch fails for some model, every model is retrained alone so the error
-    names it.
+    :func:`glu.hmm._engine.em_batch.fit_many` over all models (``ml`` covariances plus the floor), equal to
+    :func:`glu.hmm.em.fit` per model to rounding (tested). When Baum–Welch fails for some model, every
+    model is trained again alone so that the error names it. ``progress`` is called with the number of
+    models that have just finished their last stage.
     """
-    from threadpoolctl import threadpool_limits
-
     checked = [checked_sequences(s, config, nm) for s, nm in zip(sequences, names, strict=True)]
     hmms = [flat_start(seqs, config.n_states, nm) for (seqs, _), nm in zip(checked, names, strict=True)]
     stages: list[list[tuple[float, ...]]] = [[] for _ in hmms]
     try:
         while True:
-            problems = [
-                (seqs, em.GMMHMMParams(h.startprob, h.transmat, h.weights, h.means, h.covars))
-                for (seqs, _), h in zip(checked, hmms, strict=True)
-            ]
-            with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
-                warnings.simplefilter("ignore", RuntimeWarning)
-                tols = [config.tol * f for _, f in checked]
-                results = fit_many(
-                    problems, config.n_iter, tols, covariance="ml", covar_floor=config.covar_floor
-                )
-            hmms = [GestureHMM(*r.params, name=nm) for r, nm in zip(results, names, strict=True)]
-            for st, r in zip(stages, results, strict=True):
-                st.append(tuple(float(h) for h in r.history))
-            if hmms[0].n_mix >= config.n_mix:
+            last = hmms[0].n_mix >= config.n_mix
+            hmms = _stage(
+                hmms,
+                [seqs for seqs, _ in checked],
+                (config.n_iter, config.tol, config.covar_floor),
+                stages,
+                progress if last else None,
+            )
+            if last:
                 break
             hmms = [split_heaviest(h) for h in hmms]
-    except (ValueError, np.linalg.LinAlgError, ModelError):  # say which model failed, as train_one does
-        return [train_one(seqs, config, nm, warn) for (seqs, _), nm in zip(checked, names, strict=True)]
+    except ModelError:
+        if len(hmms) == 1:
+            raise
+        return [
+            train_batch([seqs], config, [nm], warn)[0] for (seqs, _), nm in zip(checked, names, strict=True)
+        ]
     return [
         (*_finish(h, seqs, st, config, nm, warn), st)
         for h, (seqs, _), st, nm in zip(hmms, checked, stages, names, strict=True)
     ]
+
+
+def baum_welch(
+    hmm: GestureHMM,
+    sequences: Sequence[np.ndarray],
+    n_iter: int,
+    tol: float,
+    covar_floor: float = COVAR_FLOOR,
+) -> tuple[GestureHMM, tuple[float, ...]]:
+    """One stage of the recipe for one model: Baum–Welch from ``hmm``, every parameter re-estimated.
+
+    Covariances are the maximum-likelihood ones (about the updated means, as the originals' toolbox
+    computed them) plus ``covar_floor·I``; a component that lost its frames keeps its covariance. Stops
+    after ``n_iter`` iterations or when the total log-likelihood gains less than ``tol`` × the number of
+    frames. Returns the model and the total log-likelihood before each M-step.
+    """
+    stages: list[list[tuple[float, ...]]] = [[]]
+    fitted = _stage([hmm], [list(sequences)], (n_iter, tol, covar_floor), stages, None)[0]
+    return fitted, stages[0][0]
+
+
+def _stage(
+    hmms: list[GestureHMM],
+    sequences: list[list[np.ndarray]],
+    limits: tuple[int, float, float],
+    stages: list[list[tuple[float, ...]]],
+    progress: Callable[[int], None] | None,
+) -> list[GestureHMM]:
+    """:func:`baum_welch` of every model in one batch (:func:`~glu.hmm._engine.em_batch.fit_many`), with
+    ``limits = (n_iter, tol, covar_floor)``; appends each model's history to ``stages``."""
+    from threadpoolctl import threadpool_limits
+
+    n_iter, tol, covar_floor = limits
+    problems = [
+        (seqs, em.GMMHMMParams(h.startprob, h.transmat, h.weights, h.means, h.covars))
+        for seqs, h in zip(sequences, hmms, strict=True)
+    ]
+    tols = [tol * sum(len(X) for X in seqs) for seqs in sequences]
+    who = hmms[0].name if len(hmms) == 1 else "one of the models"
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"), threadpool_limits(1):
+            warnings.simplefilter("ignore", RuntimeWarning)
+            results = fit_many(
+                problems, n_iter, tols, covariance="ml", covar_floor=covar_floor, progress=progress
+            )
+    except (ValueError, np.linalg.LinAlgError) as e:
+        raise ModelError(f"Baum–Welch failed for {who or 'the model'} at M = {hmms[0].n_mix}: {e}") from None
+    out = []
+    for h, r, st in zip(hmms, results, stages, strict=True):
+        try:
+            out.append(GestureHMM(*r.params, name=h.name))
+        except ModelError as e:
+            raise ModelError(
+                f"Baum–Welch diverged for {h.name or 'the model'} at M = {h.n_mix} ({e}); try covar_floor > 0"
+            ) from None
+        st.append(tuple(float(x) for x in r.history))
+    return out

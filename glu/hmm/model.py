@@ -70,6 +70,9 @@ class GestureHMM:
     means : array, shape (Q, M, D)
     covars : array, shape (Q, M, D, D), full covariances (positive definite where the weight is > 0)
     name : the action it models
+    chol_inv : array, shape (Q, M, D, D) — the inverse Cholesky factors of the covariances (derived)
+    log_norm : array, shape (Q, M) — ``log w − (D/2) log 2π − log |L|`` of each component (derived; −∞ for
+        weight 0): with ``chol_inv``, what :func:`~glu.hmm.inference.log_emissions` takes
     """
 
     startprob: np.ndarray
@@ -78,8 +81,8 @@ class GestureHMM:
     means: np.ndarray
     covars: np.ndarray
     name: str = ""
-    _chol_inv: np.ndarray = field(init=False, repr=False)
-    _log_norm: np.ndarray = field(init=False, repr=False)
+    chol_inv: np.ndarray = field(init=False, repr=False)
+    log_norm: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         who = f"HMM {self.name!r}" if self.name else "HMM"
@@ -123,8 +126,8 @@ class GestureHMM:
         for k, a in arrs.items():
             a.flags.writeable = False
             object.__setattr__(self, k, a)
-        object.__setattr__(self, "_chol_inv", chol_inv)
-        object.__setattr__(self, "_log_norm", log_norm)
+        object.__setattr__(self, "chol_inv", chol_inv)
+        object.__setattr__(self, "log_norm", log_norm)
 
     @property
     def n_states(self) -> int:
@@ -148,7 +151,7 @@ class GestureHMM:
 
     def log_emission(self, X: np.ndarray) -> np.ndarray:
         """Emission log-densities ``log p(x_t | q)``, shape (T, Q), for a sequence of shape (T, D)."""
-        return log_emissions(as_sequence(X, self.n_features), self.means, self._chol_inv, self._log_norm)
+        return log_emissions(as_sequence(X, self.n_features), self.means, self.chol_inv, self.log_norm)
 
     def loglik_curve(self, X: np.ndarray) -> np.ndarray:
         """``log L(G_1^t | model)`` for every prefix t = 1 … T, shape (T,), of a sequence of shape (T, D)."""
@@ -179,17 +182,21 @@ class GestureHMM:
         except (KeyError, TypeError) as e:
             raise ModelError(f"HMM {name!r}: missing or malformed field {e}") from None
 
-    def to_hmmlearn(self) -> Any:
-        """An equivalent ``hmmlearn.hmm.GMMHMM`` (for cross-checks)."""
-        from hmmlearn.hmm import GMMHMM
+    def sample(self, n_frames: int, seed: int) -> np.ndarray:
+        """A sequence of ``n_frames`` frames drawn from the model, shape (n_frames, D).
 
-        m = GMMHMM(n_components=self.n_states, n_mix=self.n_mix, covariance_type="full", init_params="")
-        m.n_features = self.n_features
-        m.startprob_, m.transmat_ = self.startprob.copy(), self.transmat.copy()
-        m.weights_, m.means_, m.covars_ = self.weights.copy(), self.means.copy(), self.covars.copy()
-        return m
-
-    @classmethod
-    def from_hmmlearn(cls, model: Any, name: str = "") -> GestureHMM:
-        """The parameters of a fitted full-covariance ``GMMHMM``."""
-        return cls(model.startprob_, model.transmat_, model.weights_, model.means_, model.covars_, name=name)
+        The draws are hmmlearn's ``GMMHMM.sample(n_frames, random_state=seed)``'s, in its order (a
+        ``RandomState(seed)``: the first state by the start distribution's cumulative sum, then per frame a
+        component by its weight and a multivariate normal, then the next state), so the same seed gives the
+        same sequence (``tests/test_hmm.py``).
+        """
+        rs = np.random.RandomState(seed)
+        start_cdf, trans_cdf = np.cumsum(self.startprob), np.cumsum(self.transmat, axis=1)
+        state = int((start_cdf > rs.rand()).argmax())
+        frames = []
+        for t in range(n_frames):
+            if t:
+                state = int((trans_cdf[state] > rs.rand()).argmax())
+            m = rs.choice(self.n_mix, p=self.weights[state])
+            frames.append(rs.multivariate_normal(self.means[state, m], self.covars[state, m]))
+        return np.atleast_2d(frames)

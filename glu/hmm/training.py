@@ -8,8 +8,8 @@ the same keys. The recipe is the config's (:class:`~glu.hmm.config.TrainingConfi
 * ``"glu"`` (:mod:`glu.hmm.glu_recipe`): time slices, a mixture per slice, MAP EM;
 * ``"mixsplit"`` (:mod:`glu.hmm.mixsplit`): the originals' flat start and mixture splitting.
 
-One model is trained by the readable EM of :mod:`glu.hmm.em`; many by the batched EM of
-:mod:`glu.hmm._engine.em_batch`, each model equal to its one-model result to rounding (tested).
+Every model is trained by the one batched EM (:func:`glu.hmm._engine.em_batch.fit_many`, weighted; one model
+is a batch of one), each equal to the readable EM of :mod:`glu.hmm.em` to rounding (tested).
 
 Example
 -------
@@ -27,7 +27,7 @@ Example
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -62,9 +62,9 @@ def train(
     seed: int | Mapping[Hashable, int] = 0,
     name: str = "",
     warn: bool = True,
-    engine: str = "glu",
     weights: Sequence[float] | Mapping[Hashable, Sequence[float]] | None = None,
     start: GestureHMM | Mapping[Hashable, GestureHMM] | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> Trained | dict[Hashable, Trained]:
     """Train one gesture HMM, or many at once.
 
@@ -78,76 +78,59 @@ def train(
         one seed for every model or a mapping of the same keys
     name : the model's name, for one model (the keys name them otherwise)
     warn : emit an :class:`~glu.hmm.config.HMMConvergenceWarning` when EM does not converge
-    engine : glu's recipe, one model: ``"glu"`` (:func:`glu.hmm.em.fit`) or ``"hmmlearn"`` (its
-        ``GMMHMM``); many models always use glu's batched EM
     weights : one weight ≥ 0 per training sequence (with a mapping: a mapping of the same keys to such
-        lists): weighted EM, each sequence counted ``weight`` times
-        (:func:`glu.hmm.glu_recipe.train_weighted`; glu's recipe only, one model at a time). None (the
-        default): the unweighted training above
+        lists): weighted EM, each sequence counted ``weight`` times (glu's recipe only). None (the
+        default): every weight 1
     start : with ``weights``, the model(s) EM goes on from (a mapping: for some keys) instead of a fresh
         initial model
+    progress : called with the number of models that have just finished training (for a progress bar)
 
     Returns
     -------
-    :class:`Trained` for one model; ``{key: Trained}`` for a mapping, in its order.
+    :class:`Trained` for one model; ``{key: Trained}`` for a mapping, in its order. Every model is trained
+    by the one batched EM (:func:`glu.hmm._engine.em_batch.fit_many`), each equal to what it would be
+    alone, to rounding.
     """
     config = config or TrainingConfig()
-    if weights is not None:
-        return _train_weighted(sequences, weights, config, seed, name, warn, engine, start)
-    if start is not None:
+    if start is not None and weights is None:
         raise ModelError("start= continues weighted training; give weights= too")
-    if not isinstance(sequences, Mapping):
-        if not isinstance(seed, int | np.integer):
-            raise ModelError(f"one model takes one seed, got {seed!r}")
-        if config.recipe == "mixsplit":
-            model, report, _ = mixsplit.train_one(sequences, config, name, warn)
-            return Trained(model, report)
-        return Trained(*glu_recipe.train_one(sequences, config, int(seed), name, warn, engine))
-    keys = list(sequences)
-    if isinstance(seed, Mapping):
-        missing = [k for k in keys if k not in seed]
-        if missing:
-            raise ModelError(f"no seed for {', '.join(map(str, missing))}")
-        seeds = [int(seed[k]) for k in keys]
-    else:
-        seeds = [int(seed)] * len(keys)
-    if engine != "glu":
-        raise ModelError(f"many models are trained by glu's batched EM; engine={engine!r} trains one model")
-    names = [model_name(k) for k in keys]
-    data = [sequences[k] for k in keys]
-    if config.recipe == "mixsplit":
-        results = [(m, r) for m, r, _ in mixsplit.train_batch(data, config, names, warn)]
-    else:
-        results = glu_recipe.train_batch(data, config, seeds, names, warn)
-    return {k: Trained(m, r) for k, (m, r) in zip(keys, results, strict=True)}
-
-
-def _train_weighted(
-    sequences: Sequence[Any] | Mapping[Hashable, Sequence[Any]],
-    weights: Sequence[float] | Mapping[Hashable, Sequence[float]],
-    config: TrainingConfig,
-    seed: int | Mapping[Hashable, int],
-    name: str,
-    warn: bool,
-    engine: str,
-    start: GestureHMM | Mapping[Hashable, GestureHMM] | None,
-) -> Trained | dict[Hashable, Trained]:
-    """:func:`train` with sequence weights: glu's recipe, weighted EM, one model after another."""
-    if config.recipe != "glu" or engine != "glu":
-        raise ModelError("weighted training uses glu's recipe and EM (recipe='glu', engine='glu')")
-    if not isinstance(sequences, Mapping):
+    if weights is not None and config.recipe != "glu":
+        raise ModelError("weighted training uses glu's recipe (recipe='glu')")
+    one = not isinstance(sequences, Mapping)
+    if one:
         if (
             isinstance(weights, Mapping)
             or isinstance(start, Mapping)
             or not isinstance(seed, int | np.integer)
         ):
             raise ModelError("one model takes one list of weights, one seed and one start")
-        return Trained(*glu_recipe.train_weighted(sequences, weights, config, int(seed), name, warn, start))
-    if not isinstance(weights, Mapping) or set(weights) != set(sequences):
-        raise ModelError("with a mapping of training sets, give a mapping of weights with the same keys")
-    out = {}
-    for k, seqs in sequences.items():
-        sd = int(seed[k]) if isinstance(seed, Mapping) else int(seed)
-        first = start.get(k) if isinstance(start, Mapping) else None
-        out[k] = Trained(*glu_recipe.train_weighted(seqs, weights[k], config, sd, model_name(k), warn, first))
-    return out
+        jobs: dict[Hashable, Sequence[Any]] = {name: sequences}
+        seed, names = {name: int(seed)}, [name]
+        weights = None if weights is None else {name: weights}
+        start = None if start is None else {name: start}
+    else:
+        jobs = dict(sequences)
+        names = [model_name(k) for k in jobs]
+        if weights is not None and (not isinstance(weights, Mapping) or set(weights) != set(jobs)):
+            raise ModelError("with a mapping of training sets, give a mapping of weights with the same keys")
+    keys = list(jobs)
+    seeds = _seeds(keys, seed)
+    data = [jobs[k] for k in keys]
+    if config.recipe == "mixsplit":
+        results = [(m, r) for m, r, _ in mixsplit.train_batch(data, config, names, warn, progress)]
+    else:
+        ws = None if weights is None else [weights[k] for k in keys]
+        firsts = None if start is None else [start.get(k) for k in keys]
+        results = glu_recipe.train_batch(data, config, seeds, names, warn, ws, firsts, progress)
+    trained = {k: Trained(m, r) for k, (m, r) in zip(keys, results, strict=True)}
+    return trained[name] if one else trained
+
+
+def _seeds(keys: list[Hashable], seed: int | Mapping[Hashable, int]) -> list[int]:
+    """One seed per key: the same for all, or each key's from a mapping."""
+    if not isinstance(seed, Mapping):
+        return [int(seed)] * len(keys)
+    missing = [k for k in keys if k not in seed]
+    if missing:
+        raise ModelError(f"no seed for {', '.join(map(str, missing))}")
+    return [int(seed[k]) for k in keys]

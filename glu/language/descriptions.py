@@ -40,9 +40,9 @@ Example
 -------
 On glu's synthetic data:
 
->>> from glu.bn import InferenceEngine, learn_bn
+>>> from glu.bn import learn_bn, make_engine
 >>> from glu.data import load_experiments
->>> eng = InferenceEngine(learn_bn(load_experiments("synthetic")))
+>>> eng = make_engine(learn_bn(load_experiments("synthetic")))
 >>> best = describe(eng, {"Action": "grasp", "ObjVel": "slow"}, n=2)
 >>> for row in best.itertuples():
 ...     print(f"{row.score:.4f}  {row.sentence}")

@@ -50,12 +50,12 @@ def word_probabilities(
     soft_rule: str = "virtual",
     vocabulary: Grammar | WordNetwork | Iterable[str] | None = None,
 ) -> pd.Series:
-    """P(word = present | evidence) from an :class:`~glu.bn.InferenceEngine`: a Series indexed by word.
+    """P(word = present | evidence) from an :class:`~glu.bn.Engine`: a Series indexed by word.
 
     Parameters
     ----------
     engine : the network's inference engine (its word nodes: ``engine.binary_leaves``)
-    evidence, soft, soft_rule : as :meth:`~glu.bn.InferenceEngine.query`; a gesture posterior ``p_hmm``
+    evidence, soft, soft_rule : as :meth:`~glu.bn.Engine.query`; a gesture posterior ``p_hmm``
         enters as ``soft={action node: p_hmm}`` (fusion, docs/method.md §2.2)
     vocabulary : the grammar (or its words) the sentences come from: its words that are not network
         nodes are added with probability :data:`NOT_IN_NETWORK_PROBABILITY` and listed in

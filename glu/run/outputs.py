@@ -26,7 +26,7 @@ from glu.files import atomic_write_text
 from glu.machine import in_kernel
 from glu.paths import OutputLayout
 
-PACKAGES = ("glu", "numpy", "scipy", "pandas", "pgmpy", "hmmlearn", "matplotlib", "rerun-sdk", "papermill")
+PACKAGES = ("glu", "numpy", "scipy", "pandas", "numba", "pgmpy", "matplotlib", "rerun-sdk", "papermill")
 
 
 def parameters_text(params: Mapping[str, Any]) -> str:

@@ -4,7 +4,7 @@ On a terminal it is one tqdm bar, redrawn every second so that the clock moves d
 log or a pipe it is one plain line per code cell, and one more every :data:`HEARTBEAT` seconds that a cell
 keeps running, so nothing there holds bar characters and no minute passes in silence::
 
-    08_tcds_figures: cell 6/7 at 11.6 s: engine = InferenceEngine(bn)
+    08_tcds_figures: cell 6/7 at 11.6 s: engine = make_engine(bn)
     08_tcds_figures: cell 6/7 still running at 41.6 s
     08_tcds_figures: cell 7/7 at 42.1 s: case, name = next(iter(runs))
     08_tcds_figures: 7 cells in 42.4 s

@@ -12,7 +12,7 @@ import scipy.io as sio
 from cli_run import run
 from test_model_io import write_bnt_mat
 
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 
 SPHERE = ["--target", "ObjVel", "--evidence", "Action=tap", "Shape=sphere", "Size=small"]
 
@@ -22,7 +22,7 @@ def test_query_json_prints_exactly_the_posterior(source, zero_bn, capsys):
     assert status == 0
     answer = json.loads(out)
     assert list(answer) == ["ObjVel"] and list(answer["ObjVel"]) == ["slow", "medium", "fast"]
-    ref = InferenceEngine(zero_bn).query(["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"})
+    ref = make_engine(zero_bn).query(["ObjVel"], {"Action": "tap", "Shape": "sphere", "Size": "small"})
     assert list(answer["ObjVel"].values()) == ref["ObjVel"].tolist()  # JSON floats are exact
     assert f"{source.kind} data" in err  # the source is named, on stderr so stdout stays JSON
 
@@ -85,8 +85,8 @@ def test_unseen_words_option_changes_the_answer(source, zero_bn, uniform_bn, cap
     args = ["query", "--data", str(source.root), "--target", "ObjVel", "--json"]
     zero = list(json.loads(run(capsys, *args)[1])["ObjVel"].values())
     uniform = list(json.loads(run(capsys, *args, "--unseen-words", "uniform")[1])["ObjVel"].values())
-    assert zero == InferenceEngine(zero_bn).query(["ObjVel"])["ObjVel"].tolist()
-    assert uniform == InferenceEngine(uniform_bn).query(["ObjVel"])["ObjVel"].tolist()
+    assert zero == make_engine(zero_bn).query(["ObjVel"])["ObjVel"].tolist()
+    assert uniform == make_engine(uniform_bn).query(["ObjVel"])["ObjVel"].tolist()
     assert max(abs(a - b) for a, b in zip(zero, uniform, strict=True)) > 1e-9
 
 
@@ -127,7 +127,7 @@ def test_batch_answers_line_by_line_with_errors_in_place(tmp_path, capsys, zero_
     assert status == 0
     answers = [json.loads(line) for line in out.splitlines()]
     assert len(answers) == 6
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     np.testing.assert_allclose(
         list(answers[0]["ObjVel"].values()),
         eng.query(["ObjVel"], queries[0]["evidence"])["ObjVel"],

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 from cli_run import run
+from hmm_reference import to_hmmlearn
 
 from glu.gestures.corpus import synthetic_corpus
 from glu.gestures.features import LOG_SCALE
@@ -225,7 +226,7 @@ def test_train_with_invariant_features_and_recognize(capsys, tmp_path, synthetic
     )
     assert status == 0 and "features: centred+rotated" in out
     rec = Recognizer.load(model)
-    assert rec.features.name == "centred+rotated" and rec.meta["covar_reg"] == 0.01
+    assert rec.features.name == "centred+rotated" and rec.config.covar_reg == 0.01
     path, g = synthetic_log
     a, b = g.segments[0]
     args = ["recognize", str(path), "--frames", f"{a}:{b}", "--models", str(model), "--json"]
@@ -233,7 +234,7 @@ def test_train_with_invariant_features_and_recognize(capsys, tmp_path, synthetic
     assert status == 0 and "features centred+rotated" in err
     X = np.loadtxt(path)[a - 1 : b, 2:] / 1000
     Z = Invariants.parse("centred,rotated").transform(X)  # what the models must see
-    reference = [rec.models[x].to_hmmlearn().score(Z) for x in rec.actions]
+    reference = [to_hmmlearn(rec.models[x]).score(Z) for x in rec.actions]
     np.testing.assert_allclose(list(json.loads(out)["loglik"].values()), reference, rtol=1e-9)
     status, out, _ = run(capsys, *args, "--stream")
     last = json.loads(out.splitlines()[-1])

@@ -231,7 +231,6 @@ def test_the_private_checker_sees_a_private_name_taken_from_another_module(tmp_p
     assert private_imports(g, "glu.studies.m") == [(1, "glu.hmm._engine")]
 
 
-@pytest.mark.xfail(strict=True, reason="issue 29: the library's last private imports are being made public")
 def test_no_private_name_crosses_modules():
     bad = [
         f"{path.relative_to(PACKAGE.parent)}:{line}: {what}"

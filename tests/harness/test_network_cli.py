@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from glu.bn import BayesNet, InferenceEngine
+from glu.bn import BayesNet, make_engine
 from glu.bn.exchange import from_bif, import_bn, to_xmlbif
 from glu.cli import main
 from glu.errors import ModelError
@@ -125,7 +125,7 @@ def test_bn_nodes_lists_kinds_values_and_parents(zero_bn, tmp_path, capsys):
 def test_query_target_words_gives_every_words_probability(zero_bn, tmp_path, capsys):
     model = tmp_path / "glu.json"
     zero_bn.save(model)
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     assert (
         main(["query", "--model", str(model), "--target", "words", "--evidence", "Action=tap", "--json"]) == 0
     )
@@ -144,7 +144,7 @@ def test_query_target_words_gives_every_words_probability(zero_bn, tmp_path, cap
 def test_the_api_gives_labelled_pandas_results(zero_bn):
     from glu.bn.exchange import from_xmlbif
 
-    for eng in (InferenceEngine(zero_bn), InferenceEngine(zero_bn, method="junction")):
+    for eng in (make_engine(zero_bn), make_engine(zero_bn, method="junction")):
         m = eng.marginals({"Action": "tap"})
         assert set(m) == set(zero_bn.nodes)
         assert isinstance(m["ObjVel"], pd.Series) and list(m["ObjVel"].index) == ["slow", "medium", "fast"]
@@ -155,4 +155,4 @@ def test_the_api_gives_labelled_pandas_results(zero_bn):
         table = eng.posterior_table("ObjVel", pd.DataFrame({"Action": ["tap", "grasp"]}, index=["x", "y"]))
         assert list(table.index) == ["x", "y"] and list(table.columns) == ["slow", "medium", "fast"]
     net = from_xmlbif(to_xmlbif(zero_bn, zero_rows="seen"), "x")  # indicators folded back: same model
-    assert InferenceEngine(net).posterior("Action", {"rolls": "present"}).name == "Action"
+    assert make_engine(net).posterior("Action", {"rolls": "present"}).name == "Action"

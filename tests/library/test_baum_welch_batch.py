@@ -1,5 +1,5 @@
-"""Batched Baum–Welch (glu.hmm._engine.em_batch) against fitting each model alone (baum_welch.fit,
-itself tested against hmmlearn and brute force in test_hmm.py)."""
+"""The one fast EM (glu.hmm._engine.em_batch) against the readable reference for each model alone
+(glu.hmm.em.fit, itself tested against hmmlearn and brute force in test_hmm.py)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ import pytest
 
 from glu.hmm import em as bw
 from glu.hmm import inference
-from glu.hmm._engine.em_batch import fit_many, forward_backward_many
+from glu.hmm._engine.em_batch import fit_many
+from glu.hmm._engine.kernels import forward_backward_scaled
 from glu.hmm.initialisation import init_left_to_right
 
 
@@ -80,12 +81,14 @@ def _underflowing_problem():
     return seqs, init
 
 
-def test_fit_many_redoes_only_the_underflowing_model_in_the_log_domain(monkeypatch):
+def test_fit_many_redoes_only_the_underflowing_sequences_in_the_log_domain(monkeypatch):
     from glu.hmm._engine import em_batch as baum_welch_batch
 
     seqs, init = _underflowing_problem()
     log_b = np.array([[[-1800.0, 0.0], [0.0, -5.0]]])
-    gamma, xi, ll, ok = forward_backward_many(log_b, np.array([2]), init.startprob[None], init.transmat[None])
+    gamma, xi, ll, ok = forward_backward_scaled(
+        log_b, np.array([2]), init.startprob[None], init.transmat[None]
+    )
     assert not ok[0]  # the scaled pass reports the underflow; the log domain has it finite
     assert np.isfinite(
         inference.forward_backward_log(log_b, np.array([2]), init.startprob, init.transmat)[2]
@@ -104,10 +107,11 @@ def test_fit_many_redoes_only_the_underflowing_model_in_the_log_domain(monkeypat
 
     monkeypatch.setattr(baum_welch_batch, "forward_backward_log", log_domain)
     _assert_same(fit_many(problems, 6, 1e-300, 1e-2), ref)
-    assert redone and all(r == sorted(len(x) for x in seqs) for r in redone)  # that model, all its sequences
+    lengths = {len(x) + 0 for x in seqs}
+    assert redone and all(len(r) == 1 and r[0] in lengths for r in redone)  # that model's sequences, alone
 
 
-def test_forward_backward_many_equals_one_model_at_a_time():
+def test_the_compiled_forward_backward_equals_one_model_at_a_time():
     """Per-sequence parameters: each sequence as forward_backward (brute-force-tested) gives it alone."""
     rng = np.random.default_rng(7)
     S, T, Q = 5, 9, 3
@@ -115,7 +119,7 @@ def test_forward_backward_many_equals_one_model_at_a_time():
     log_b = rng.normal(size=(S, T, Q)) * 3
     pi = rng.dirichlet(np.ones(Q), size=S)
     A = rng.dirichlet(np.ones(Q), size=(S, Q))
-    gamma, xi, ll, ok = forward_backward_many(log_b, lengths, pi, A)
+    gamma, xi, ll, ok = forward_backward_scaled(log_b, lengths, pi, A)
     assert ok.all()
     for s in range(S):
         g, x, lls = inference.forward_backward(
@@ -125,8 +129,6 @@ def test_forward_backward_many_equals_one_model_at_a_time():
         np.testing.assert_allclose(gamma[s, : lengths[s]], g[0], atol=1e-12)
         np.testing.assert_allclose(xi[s], x, atol=1e-12)
         assert (gamma[s, lengths[s] :] == 0).all()
-    with pytest.raises(ValueError, match="decreasing"):
-        forward_backward_many(log_b, lengths[::-1].copy(), pi, A)
 
 
 # --- training several models at once, against the one-model path -----------------------------------
@@ -194,3 +196,19 @@ def test_mixture_posteriors_are_scipys_logsumexp_and_softmax():
     np.testing.assert_allclose(log_b, logsumexp(lc, axis=3), rtol=1e-13)
     np.testing.assert_allclose(post, softmax(lc, axis=3), rtol=1e-12, atol=1e-300)
     assert (post[0, :, 2, 1] == 0).all()
+
+
+def test_training_reports_progress_while_the_models_train(corpus):
+    """train(progress=…) is told how many models finished after each EM iteration: every model once."""
+    from glu.hmm import TrainingConfig, train
+
+    sets = {a: [s.xyz for s in corpus if s.action == a] for a in ("grasp", "tap", "touch")}
+    for recipe in ("glu", "mixsplit"):
+        calls: list[int] = []
+        train(
+            sets,
+            TrainingConfig(n_states=3, n_mix=2, n_iter=30, recipe=recipe),
+            warn=False,
+            progress=calls.append,
+        )
+        assert sum(calls) == 3 and all(c > 0 for c in calls)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 from glu.bn.sampling import categorical, sample
 from glu.errors import EvidenceError, UnknownNodeError
 
@@ -14,7 +14,7 @@ N = 60_000
 
 @pytest.fixture(scope="module")
 def engine(zero_bn):
-    return InferenceEngine(zero_bn)
+    return make_engine(zero_bn)
 
 
 @pytest.fixture(scope="module")
@@ -53,9 +53,9 @@ def test_effects_follow_the_conditional_distribution(engine, draws):
 def test_configurations_excluded_by_zero_rows_are_never_drawn(engine, draws):
     """With the original's all-zero word rows, some affordance configurations have probability 0 in every
     query although the affordance CPTs give them mass: they are never drawn."""
-    masked = (engine.base == 0) & (engine.prior_joint > 0)
+    masked = (engine.backend.base == 0) & (engine.backend.prior_joint > 0)
     assert masked.any() == bool(engine.bn.zero_rows())
-    drawn = engine.base[tuple(draws[n] for n in engine.core)]
+    drawn = engine.backend.base[tuple(draws[n] for n in engine.backend.core)]
     assert (drawn > 0).all()
 
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from glu.errors import DataError
-from glu.gestures._synthetic_batch import gesture_features
 from glu.gestures.features import OPENNI_JOINTS, skeleton_features, to_body_frame
 from glu.gestures.synthetic import View, synthesize_gesture
+from glu.gestures.synthetic_batch import gesture_features
 
 
 def yaw(psi):

@@ -355,9 +355,9 @@ def test_compiled_network_and_grammar_give_the_same_nbest():
 # ---------------------------------------------------------------- the BN: word probabilities given evidence
 @pytest.fixture(scope="module")
 def engine(zero_bn):
-    from glu.bn import InferenceEngine
+    from glu.bn import make_engine
 
-    return InferenceEngine(zero_bn)
+    return make_engine(zero_bn)
 
 
 def test_and_but_follow_the_objects_velocity(engine):
@@ -500,7 +500,7 @@ def test_cli_json_and_sampling(capsys):
 
 
 def test_cli_scores_and_candidate_files(tmp_path, capsys):
-    from glu.bn import InferenceEngine, learn_bn
+    from glu.bn import learn_bn, make_engine
     from glu.data import load_experiments
     from glu.language import word_probabilities
 
@@ -517,7 +517,7 @@ def test_cli_scores_and_candidate_files(tmp_path, capsys):
         assert main(argv) == 0
         got = json.loads(capsys.readouterr().out)
         probs = word_probabilities(
-            InferenceEngine(learn_bn(load_experiments("synthetic"))), {"Action": "touch", "Shape": "box"}
+            make_engine(learn_bn(load_experiments("synthetic"))), {"Action": "touch", "Shape": "box"}
         ).to_dict()
         expected = brute_force_nbest([tuple(s.split()) for s in sentences], probs, 10, start)
         assert [r["sentence"] for r in got] == [" ".join(s) for s, _ in expected]

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pytest
 
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 from glu.bn.exchange import (
     export_bn,
     from_bif,
@@ -79,7 +79,7 @@ def _agrum_posterior(path, target, evidence):
 def _check(bn, path, names, states, tool, tol=TOL):
     """Every query answered by ``tool`` on ``path`` equals glu's answer on ``bn`` (names/states map glu →
     file)."""
-    engine = InferenceEngine(bn)
+    engine = make_engine(bn)
     extra = {names(k): states(k, v) for k, v in seen_evidence(bn).items()}
     model = _pgmpy(path) if tool == "pgmpy" else None
     for targets, evidence in QUERIES:
@@ -208,7 +208,7 @@ def test_uai_follows_the_format(tmp_path):
     ie = gum.LazyPropagation(gum.loadBN(str(path)))
     ie.makeInference()
     np.testing.assert_allclose(
-        ie.posterior("1").tolist(), InferenceEngine(chain).query(["var_1"])["var_1"], atol=TOL
+        ie.posterior("1").tolist(), make_engine(chain).query(["var_1"])["var_1"], atol=TOL
     )
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 from glu.explorer import NOT_OBSERVED, evidence_explorer, explore
 
 ACTIONS = ("grasp", "tap", "touch")
@@ -14,7 +14,7 @@ ACTIONS = ("grasp", "tap", "touch")
 
 @pytest.fixture(scope="module")
 def engine(zero_bn):
-    return InferenceEngine(zero_bn)
+    return make_engine(zero_bn)
 
 
 def _p(exploration, node):

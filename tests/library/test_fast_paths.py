@@ -1,8 +1,8 @@
 """The corpus's fast paths equal the straightforward ones bit for bit: gestures, PCHIP, spike check, repair.
 
 The corpus (:mod:`glu.studies.corpus_evaluation.corpus`) simulates a chunk of episodes at once
-(:mod:`glu.gestures._synthetic_batch`, :mod:`glu.gestures._repair_many`,
-:func:`glu.gestures._pchip.pchip_many`); its results must be those of one gesture at a time
+(:mod:`glu.gestures.synthetic_batch`, :func:`glu.gestures.trajectories.repaired_many`,
+:func:`glu.gestures.synthetic.pchip_many`); its results must be those of one gesture at a time
 (``synthesize_gesture(...).features()``, SciPy's ``PchipInterpolator`` and ``median_filter``,
 :func:`glu.gestures.trajectories.repair`), exactly.
 """
@@ -14,14 +14,20 @@ import pytest
 from scipy.interpolate import PchipInterpolator
 from scipy.ndimage import median_filter
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.errors import DataError
-from glu.gestures._pchip import pchip_many
-from glu.gestures._repair_many import repaired_many, spike_deviations
-from glu.gestures._synthetic_batch import gesture_features
-from glu.gestures.synthetic import GESTURES, SYNTHETIC_POLICY, View, synthesize_gesture
-from glu.gestures.trajectories import DEFAULT_POLICY, DETECT_ONLY, RepairPolicy, Trajectory, repair
+from glu.gestures.synthetic import GESTURES, SYNTHETIC_POLICY, View, pchip_many, synthesize_gesture
+from glu.gestures.synthetic_batch import gesture_features
+from glu.gestures.trajectories import (
+    DEFAULT_POLICY,
+    DETECT_ONLY,
+    RepairPolicy,
+    Trajectory,
+    repair,
+    repaired_many,
+    spike_deviations,
+)
 from glu.studies.corpus_evaluation.corpus import simulate_chunk
 from glu.studies.episodes import GESTURE_KEY, VIEWPOINTS, Condition, GestureSettings
 
@@ -60,7 +66,7 @@ def test_batch_gestures_equal_one_at_a_time(view, sensor):
 
 def test_chunk_equals_the_episode_by_episode_reference():
     """simulate_chunk against the loop it replaced: one synthesize_gesture per episode, then its features."""
-    engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
+    engine = make_engine(learn_bn(load_experiments("synthetic")))
     for cond, settings in [
         (Condition(0.02, "front"), GestureSettings()),
         (Condition(0.0, "seated"), GestureSettings(0.2, 1.0)),

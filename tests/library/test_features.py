@@ -13,12 +13,12 @@ from glu.gestures.features import (
     HORIZONTAL_FALLBACK,
     OPENNI_JOINTS,
     VERTICAL_FALLBACK,
-    load_features,
     log_features,
     middle_frames,
     normalisation_factors,
     skeleton_features,
 )
+from glu.gestures.recordings import load_features
 
 J = {name: i for i, name in enumerate(OPENNI_JOINTS)}
 

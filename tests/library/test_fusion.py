@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 from glu.errors import EvidenceError
 from glu.fusion import fuse, hmm_rows
 
@@ -34,7 +34,7 @@ def ref(zero_bn):
 
 @pytest.fixture(scope="module")
 def engine(zero_bn):
-    return InferenceEngine(zero_bn)
+    return make_engine(zero_bn)
 
 
 CASES = [

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 from glu.errors import EvidenceError
 from glu.fusion import STRATEGIES, fuse, fuse_action_tables, fuse_tables
 
@@ -15,7 +15,7 @@ EVIDENCE = [{"Shape": "sphere", "Size": "small"}, {"Shape": "box", "ObjVel": "me
 
 @pytest.fixture(scope="module")
 def engine(zero_bn):
-    return InferenceEngine(zero_bn)
+    return make_engine(zero_bn)
 
 
 def tables(engine, evidence, target):

@@ -8,6 +8,7 @@ import warnings
 
 import numpy as np
 import pytest
+from hmm_reference import fit_hmmlearn_update, to_hmmlearn, train_hmmlearn
 from scipy.io import loadmat
 from scipy.special import logsumexp
 from scipy.stats import multivariate_normal
@@ -99,7 +100,7 @@ def test_prefix_curve_equals_log_domain_reference_and_hmmlearn():
     X = rng.normal(size=(30, 3))
     curve = m.loglik_curve(X)
     np.testing.assert_allclose(curve, ref_forward(X, *params(m)), rtol=1e-10, atol=1e-8)
-    h = m.to_hmmlearn()
+    h = to_hmmlearn(m)
     for t in (1, 7, 30):
         assert curve[t - 1] == pytest.approx(h.score(X[:t]), abs=1e-8)
 
@@ -149,7 +150,7 @@ def test_streaming_equals_rescoring_every_prefix(bank):
     X[20] = [50.0, 0.0, -50.0]  # an outlier frame in the middle of the stream
     stream = bank.stream()
     steps = [stream.push(x) for x in X]
-    hmmlearn_models = {a: m.to_hmmlearn() for a, m in bank.models.items()}
+    hmmlearn_models = {a: to_hmmlearn(m) for a, m in bank.models.items()}
     for t in (1, 2, 20, 21, 22, 40):
         ref = np.array([hmmlearn_models[a].score(X[:t]) for a in bank.actions])
         np.testing.assert_allclose(steps[t - 1].loglik, ref, rtol=1e-9)
@@ -187,7 +188,7 @@ def test_recognizer_outputs(bank):
 def test_save_load_round_trip_scores_identically(bank, tmp_path):
     path = bank.save(tmp_path / "rec.json")
     d = json.loads(path.read_text())
-    assert d["format"] == "glu-gesture-recognizer" and d["version"] == 2
+    assert d["format"] == "glu-gesture-recognizer" and d["version"] == 3
     assert d["actions"] == ["grasp", "tap", "touch", "push"]
     assert np.array(d["models"]["grasp"]["covars"]).shape == (6, 3, 3, 3)
     again = Recognizer.load(path)
@@ -209,6 +210,8 @@ def test_save_load_round_trip_scores_identically(bank, tmp_path):
             "positive definite",
         ),
         (lambda d: d["models"]["tap"].update(weights=[[1.0]] * 3), "shape"),
+        (lambda d: d.update(config={"n_states": 0, "n_mix": 1}), "'config'.*n_states=0"),
+        (lambda d: d.update(config={"states": 6}), "'config' must be a JSON object"),
     ],
 )
 def test_malformed_recogniser_files(bank, tmp_path, mutate, message):
@@ -218,6 +221,30 @@ def test_malformed_recogniser_files(bank, tmp_path, mutate, message):
     path.write_text(json.dumps(d))
     with pytest.raises(ModelError, match=message):
         Recognizer.load(path)
+
+
+def test_a_recogniser_keeps_its_training_config_and_reads_version_2_files(tmp_path):
+    """The settings travel whole (TrainingConfig, the file's "config"); a version-2 file, which kept them in
+    its meta, is read into the same TrainingConfig."""
+    from glu.gestures.corpus import synthetic_corpus
+
+    corpus = synthetic_corpus(3, seed=2, actions=("tap", "grasp"))
+    config = TrainingConfig(n_states=3, n_mix=1, n_iter=5, tol=1e-3, covar_reg=0.05)
+    rec = train_recognizer(
+        {a: [s.xyz for s in corpus if s.action == a] for a in ("tap", "grasp")}, config, warn=False
+    )
+    assert rec.config == config and "n_states" not in rec.meta
+    again = Recognizer.load(rec.save(tmp_path / "r.json"))
+    assert again.config == config
+    old = rec.to_dict()  # as glu wrote it before the config had a key of its own
+    del old["config"]
+    old["version"] = 2
+    old["meta"].update(recipe="glu", n_states=3, n_mix=1, n_iter=5, tol=1e-3, covar_reg=0.05, seed=0)
+    (tmp_path / "v2.json").write_text(json.dumps(old))
+    v2 = Recognizer.load(tmp_path / "v2.json")
+    assert v2.config == config and v2.meta["n_states"] == 3
+    np.testing.assert_array_equal(v2.loglik(corpus[0].xyz), rec.loglik(corpus[0].xyz))
+    assert Recognizer(rec.models).config is None
 
 
 def test_unreadable_recogniser_files(tmp_path):
@@ -268,20 +295,19 @@ def test_training_keeps_the_left_to_right_structure(corpus):
 
 @pytest.mark.parametrize(("action", "n_states", "n_mix"), [("grasp", 6, 3), ("tap", 4, 1), ("touch", 3, 2)])
 def test_vectorised_em_with_hmmlearns_covariance_step_equals_hmmlearns_fit(corpus, action, n_states, n_mix):
-    """covariance='hmmlearn' is hmmlearn's GMMHMM update: the same history and parameters after 12
-    iterations."""
+    """glu's reference E-step with hmmlearn's covariance step is hmmlearn's GMMHMM update: the same history
+    and parameters after 12 iterations."""
     from glu.hmm import em as bw
     from glu.hmm.initialisation import init_left_to_right
 
     seqs = [s.xyz for s in corpus if s.action == action]
-    config = TrainingConfig(n_states=n_states, n_mix=n_mix, n_iter=12, tol=1e-9, covar_reg=1e-3)
-    ref, r_ref = train(seqs, config, warn=False, engine="hmmlearn")
     init = init_left_to_right(seqs, n_states, n_mix, 1e-3, 0)
     start = bw.GMMHMMParams(init.startprob, init.transmat, init.weights, init.means, init.covars)
-    ours = bw.fit(seqs, start, 12, 1e-300, 1e-3, "hmmlearn")
-    np.testing.assert_allclose(ours.history, r_ref.history, rtol=1e-10)
-    for a, got in zip(("startprob", "transmat", "weights", "means", "covars"), ours.params, strict=True):
-        np.testing.assert_allclose(got, getattr(ref, a), rtol=1e-7, atol=1e-9, err_msg=a)
+    ref = train_hmmlearn(seqs, start, 12, 1e-9 * sum(len(X) for X in seqs), 1e-3)
+    ours = fit_hmmlearn_update(seqs, start, 12, 1e-300, 1e-3)
+    np.testing.assert_allclose(ours.history, ref.history, rtol=1e-10)
+    for name, got, want in zip(bw.GMMHMMParams._fields, ours.params, ref.params, strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-7, atol=1e-9, err_msg=name)
 
 
 def test_one_map_em_step_equals_the_textbook_update(corpus):
@@ -349,10 +375,17 @@ def test_one_map_em_step_equals_the_textbook_update(corpus):
 def test_glu_em_stops_like_hmmlearn_and_gains_at_least_as_much(corpus):
     seqs = [s.xyz for s in corpus if s.action == "tap"]
     weak = TrainingConfig(n_states=4, n_mix=2, n_iter=200, tol=1e-3, covar_reg=1e-3)  # nearly the likelihood
-    _, r_ours = train(seqs, weak, engine="glu", warn=False)
-    _, r_ref = train(seqs, weak, engine="hmmlearn", warn=False)
-    assert r_ours.converged and r_ref.converged
-    assert r_ours.final_loglik >= r_ref.final_loglik - 1e-6 * abs(r_ref.final_loglik)
+    from glu.hmm.em import GMMHMMParams
+    from glu.hmm.initialisation import init_left_to_right
+
+    _, r_ours = train(seqs, weak, warn=False)
+    init = init_left_to_right(seqs, 4, 2, 1e-3, 0)
+    start = GMMHMMParams(init.startprob, init.transmat, init.weights, init.means, init.covars)
+    n_frames = sum(len(X) for X in seqs)
+    ref = train_hmmlearn(seqs, start, 200, 1e-3 * n_frames, 1e-3)
+    assert r_ours.converged and len(ref.history) < 200 and ref.history[-1] - ref.history[-2] < 1e-3 * n_frames
+    final_ref = sum(GestureHMM(*ref.params).loglik(X) for X in seqs)
+    assert r_ours.final_loglik >= final_ref - 1e-6 * abs(final_ref)
 
 
 def test_non_convergence_is_reported(corpus):
@@ -541,3 +574,10 @@ def test_batched_forward_backward_falls_back_to_the_log_domain_on_underflow():
     np.testing.assert_allclose(ll, ll_ref, rtol=1e-12)
     np.testing.assert_allclose(g, g_ref, atol=1e-12)
     np.testing.assert_allclose(xi, xi_ref, atol=1e-12)
+
+
+def test_sampling_draws_what_hmmlearn_draws(bank):
+    """GestureHMM.sample makes hmmlearn's draws in hmmlearn's order: the same sequence for the same seed."""
+    for m in bank.models.values():
+        for seed in (0, 7):
+            np.testing.assert_array_equal(m.sample(25, seed), to_hmmlearn(m).sample(25, random_state=seed)[0])

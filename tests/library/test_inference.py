@@ -9,7 +9,7 @@ import warnings
 import numpy as np
 import pytest
 
-from glu.bn import BayesNet, InferenceEngine
+from glu.bn import BayesNet, make_engine
 from glu.errors import EvidenceError, ImpossibleEvidenceError, UnknownNodeError, UnknownValueError
 from glu.schema import AFFORDANCE_NODES, WORDS, Schema
 
@@ -46,7 +46,7 @@ def _pgmpy_marginal(ve, target, evidence, virtual=None):
 
 
 def test_hard_evidence_agrees_with_pgmpy(uniform_bn):
-    eng = InferenceEngine(uniform_bn)
+    eng = make_engine(uniform_bn)
     ve = VariableElimination(to_pgmpy(uniform_bn))
     rng = np.random.default_rng(0)
     checked = 0
@@ -65,7 +65,7 @@ def test_hard_evidence_agrees_with_pgmpy(uniform_bn):
 def test_zero_rows_agree_with_pgmpy_and_an_explicit_indicator(zero_bn):
     """The original's all-zero rows: pgmpy with an observed 'seen' indicator per word is the reference."""
     assert zero_bn.zero_rows(), "the faithful model has all-zero rows on this data"
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     model, seen = to_pgmpy_with_zero_rows(zero_bn)
     ve = VariableElimination(model)
     rng = np.random.default_rng(1)
@@ -88,11 +88,11 @@ def test_zero_rows_agree_with_pgmpy_and_an_explicit_indicator(zero_bn):
         joint = ve_uniform.query(list(parents), joint=True, show_progress=False)
         rows = zero_bn.cpts[word].sum(axis=-1) == 0
         excluded = max(excluded, float(sum(joint.values[tuple(i)] for i in np.argwhere(rows))))
-    assert 1 - eng.base_mass >= excluded - 1e-12
+    assert 1 - eng.probability_of_evidence() >= excluded - 1e-12
 
 
 def test_virtual_evidence_agrees_with_pgmpy(uniform_bn):
-    eng = InferenceEngine(uniform_bn)
+    eng = make_engine(uniform_bn)
     ve = VariableElimination(to_pgmpy(uniform_bn))
     rng = np.random.default_rng(2)
     for _ in range(60):
@@ -119,7 +119,7 @@ def test_virtual_evidence_agrees_with_pgmpy(uniform_bn):
 def test_jeffrey_rule_is_the_mixture_of_hard_posteriors(uniform_bn):
     """Jeffrey: p(X | e, q) = Σ_a p(X | e, A=a) q(a), each term from pgmpy; and the Action marginal becomes
     q."""
-    eng = InferenceEngine(uniform_bn)
+    eng = make_engine(uniform_bn)
     ve = VariableElimination(to_pgmpy(uniform_bn))
     q = np.array([0.15, 0.7, 0.15])
     for evidence in (
@@ -139,7 +139,7 @@ def test_jeffrey_rule_is_the_mixture_of_hard_posteriors(uniform_bn):
 
 
 def test_jeffrey_on_two_nodes_fits_both_marginals(uniform_bn):
-    eng = InferenceEngine(uniform_bn)
+    eng = make_engine(uniform_bn)
     qa, qs = np.array([0.2, 0.5, 0.3]), np.array([0.6, 0.4])
     post = eng.query(
         ["Action", "Shape"], {"Size": "big"}, soft={"Action": qa, "Shape": qs}, soft_rule="jeffrey"
@@ -149,7 +149,7 @@ def test_jeffrey_on_two_nodes_fits_both_marginals(uniform_bn):
 
 
 def test_soft_evidence_certain_equals_hard_evidence(zero_bn):
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     hard = eng.query(["ObjVel", "rolls"], {"Action": "tap", "Shape": "sphere"})
     for rule in ("virtual", "jeffrey"):
         soft = eng.query(
@@ -162,7 +162,7 @@ def test_soft_evidence_certain_equals_hard_evidence(zero_bn):
 def test_virtual_evidence_on_a_word_agrees_with_pgmpy(uniform_bn):
     """Soft evidence on a leaf (a word) goes to the junction tree; pgmpy's virtual evidence is the
     reference."""
-    eng = InferenceEngine(uniform_bn)
+    eng = make_engine(uniform_bn)
     ve = VariableElimination(to_pgmpy(uniform_bn))
     q = np.array([0.3, 0.7])
     virtual = [TabularCPD("rolls", 2, q.reshape(-1, 1), state_names={"rolls": ["absent", "present"]})]
@@ -224,7 +224,7 @@ def test_brute_force_on_tiny_networks(zero_rows):
     rng = np.random.default_rng(3)
     for seed in range(4):
         bn = _tiny_bn(seed, zero_rows)
-        eng = InferenceEngine(bn)
+        eng = make_engine(bn)
         for _ in range(40):
             k = int(rng.integers(0, 4))
             ev_nodes = list(rng.choice(bn.nodes, size=k, replace=False))
@@ -250,7 +250,7 @@ def test_a_tiny_likelihood_on_the_only_possible_value_is_not_called_impossible()
     safe)."""
     bn = _tiny_bn(0, zero_rows=False)
     bn.cpts["B"][:] = [[1.0, 0.0], [1.0, 0.0], [0.0, 1.0]]  # B=b1 ⇔ A=a2: only a2 is possible given B=b1
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
     ref = _brute_force(bn, "C", {"B": "b1"})
     for tiny in (1e-300, 1e-320, 1e-322):
         got = eng.query(["C"], {"B": "b1"}, soft={"A": [0.5, 0.5 - tiny, tiny]})["C"]
@@ -272,14 +272,14 @@ def test_a_tiny_likelihood_on_the_only_possible_value_is_not_called_impossible()
     ],
 )
 def test_malformed_soft_evidence_is_one_clear_error(soft, message):
-    eng = InferenceEngine(_tiny_bn(1, zero_rows=False))
+    eng = make_engine(_tiny_bn(1, zero_rows=False))
     with pytest.raises(EvidenceError, match=re.escape(message)):
         eng.query(["C"], soft={"A": soft})
 
 
 # ---------------------------------------------------------------- batch and word fast paths
 def test_word_probabilities_equal_single_queries(zero_bn):
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     for evidence in (
         {},
         {"Size": "big", "Shape": "sphere", "ObjVel": "fast"},
@@ -292,7 +292,7 @@ def test_word_probabilities_equal_single_queries(zero_bn):
 
 
 def test_batch_equals_single_queries(zero_bn):
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     rng = np.random.default_rng(4)
     n = 300
     evidence = {
@@ -318,7 +318,7 @@ def test_batch_equals_single_queries(zero_bn):
 
 @pytest.mark.parametrize("rule", ["virtual", "jeffrey"])
 def test_batch_soft_evidence_equals_single_queries(zero_bn, rule):
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     rng = np.random.default_rng(5)
     n = 50
     q = rng.dirichlet(np.ones(3), size=n)
@@ -331,7 +331,7 @@ def test_batch_soft_evidence_equals_single_queries(zero_bn, rule):
 
 
 def test_batch_raises_on_impossible_rows_by_default(zero_bn):
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     word, parents, row = _a_zero_row(zero_bn)
     possible = _a_possible_row(zero_bn, parents)
     ev = {p: [possible[i], row[i]] for i, p in enumerate(parents)}
@@ -343,7 +343,7 @@ def test_batch_raises_on_impossible_rows_by_default(zero_bn):
 
 @pytest.mark.parametrize("method", ["core", "junction"])
 def test_bad_batch_soft_evidence_is_one_clear_error_on_both_engines(zero_bn, method):
-    eng = InferenceEngine(zero_bn, method=method)
+    eng = make_engine(zero_bn, method=method)
     shapes = {"Shape": ["sphere", "box"]}
     with pytest.raises(UnknownNodeError, match=r"unknown node 'Colour'"):
         eng.query_batch(["ObjVel"], shapes, soft={"Colour": np.full((2, 2), 0.5)})
@@ -357,7 +357,7 @@ def test_bad_batch_soft_evidence_is_one_clear_error_on_both_engines(zero_bn, met
 
 # ---------------------------------------------------------------- errors
 def test_errors_are_clear_value_errors(zero_bn):
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     with pytest.raises(UnknownNodeError, match=r"unknown node 'Colour' \(did you mean Color\?\)"):
         eng.query(["Colour"])
     with pytest.raises(UnknownValueError, match=r"Shape has no value 'ball'; allowed: sphere, box"):
@@ -398,7 +398,7 @@ def _a_zero_row(bn: BayesNet) -> tuple[str, tuple[str, ...], tuple[str, ...]]:
 
 def _a_possible_row(bn: BayesNet, parents: tuple[str, ...]) -> tuple[str, ...]:
     """Values of ``parents`` that no zero row excludes and that have prior probability > 0."""
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
     for combo in itertools.product(*[bn.schema.values_of(p) for p in parents]):
         if eng.probability_of_evidence(dict(zip(parents, combo, strict=True))) > 0:
             return combo

@@ -30,9 +30,9 @@ def test_equals_nbest_on_random_probabilities(words):
 
 
 def test_equals_nbest_with_the_networks_word_probabilities(zero_bn):
-    from glu.bn import InferenceEngine
+    from glu.bn import make_engine
 
-    engine = InferenceEngine(zero_bn)
+    engine = make_engine(zero_bn)
     cases = [
         {"Action": "grasp", "ObjVel": "slow"},
         {"Shape": "sphere", "ObjVel": "fast"},

@@ -173,7 +173,7 @@ def test_recognizer_and_command_line(tmp_path, capsys, taps):
         TrainingConfig(n_states=3, n_mix=2, recipe="mixsplit", n_iter=20),
         warn=False,
     )
-    assert rec.meta["recipe"] == "mixsplit" and rec.models["tap"].n_mix == 2
+    assert rec.config.recipe == "mixsplit" and rec.models["tap"].n_mix == 2
     out = tmp_path / "ms.json"
     argv = [
         "hmm",
@@ -194,7 +194,7 @@ def test_recognizer_and_command_line(tmp_path, capsys, taps):
     assert main(argv) == 0
     assert "wrote" in capsys.readouterr().out
     saved = Recognizer.load(out)
-    assert saved.meta["recipe"] == "mixsplit" and json.loads(out.read_text())["meta"]["n_mix"] == 2
+    assert saved.config.recipe == "mixsplit" and json.loads(out.read_text())["config"]["n_mix"] == 2
     with pytest.raises(SystemExit) as e:
         main(["hmm", "train", "--synthetic", "4", "--recipe", "htk", "-o", str(out)])
     assert e.value.code == 2 and "invalid choice: 'htk'" in capsys.readouterr().err

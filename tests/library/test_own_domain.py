@@ -15,7 +15,7 @@ import json
 import numpy as np
 import pytest
 
-from glu.bn import BayesNet, InferenceEngine, learn_bn
+from glu.bn import BayesNet, learn_bn, make_engine
 from glu.cli import main
 from glu.data.tables import read_experiment_table
 from glu.errors import DataError
@@ -74,7 +74,7 @@ def test_fusion_uses_the_schemas_action_node(domain, tmp_path):
     bn.save(path)
     back = BayesNet.load(path)  # the role survives the model file
     assert action_node(back.schema) == "Motion" and back.schema.root_nodes == ("Motion", "Thing")
-    eng = InferenceEngine(back)
+    eng = make_engine(back)
     q = np.array([0.1, 0.1, 0.8])  # the gesture HMMs think: push
     fused = fuse(eng, ["Outcome"], {"Thing": "ball"}, q, "virtual")["Outcome"]
     # virtual evidence by hand: Σ_m p(Outcome, m | ball) q(m), normalised
@@ -101,13 +101,13 @@ def test_a_network_without_an_action_node_says_so():
         cpts={"A": np.array([0.5, 0.5]), "B": np.array([[0.9, 0.1], [0.2, 0.8]])},
     )
     with pytest.raises(DataError, match="the network has no action node: give one node `role: action`"):
-        fuse(InferenceEngine(bn), ["B"], {}, [0.5, 0.5])
-    np.testing.assert_allclose(fuse(InferenceEngine(bn), ["B"], {}, [0.0, 1.0], action="A")["B"], [0.2, 0.8])
+        fuse(make_engine(bn), ["B"], {}, [0.5, 0.5])
+    np.testing.assert_allclose(fuse(make_engine(bn), ["B"], {}, [0.0, 1.0], action="A")["B"], [0.2, 0.8])
 
 
 def test_describe_with_function_words_that_are_no_nodes(domain):
     schema = read_schema_file(domain / "schema.yaml")
-    eng = InferenceEngine(learn_bn(read_experiment_table(domain / "experiments.csv", schema), schema))
+    eng = make_engine(learn_bn(read_experiment_table(domain / "experiments.csv", schema), schema))
     grammar = load_grammar(domain / "grammar.grm")
     best = describe(eng, {"Motion": "push", "Thing": "ball"}, n=2, grammar=grammar)
     assert best["sentence"].iloc[0] == "the person pushes the ball and it falls"
@@ -187,7 +187,7 @@ def test_the_whole_chain_with_the_labs_own_recordings(domain, tmp_path, capsys):
     assert main([*query, "--json"]) == 0
     fused = json.loads(capsys.readouterr().out)["Outcome"]
     # the reference: the same virtual evidence by hand in the Python API
-    eng = InferenceEngine(BayesNet.load(model))
+    eng = make_engine(BayesNet.load(model))
     by_hand = fuse(eng, ["Outcome"], {"Thing": "ball"}, [posterior[m] for m in MOTIONS], "virtual")["Outcome"]
     assert [fused["still"], fused["falls"]] == pytest.approx(by_hand.tolist(), abs=1e-9)
     assert fused["falls"] > 0.5  # a push at a ball: it falls

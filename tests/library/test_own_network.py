@@ -13,7 +13,7 @@ import json
 import numpy as np
 import pytest
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.cli import main
 from glu.data.tables import read_experiment_table
 from glu.errors import DataError
@@ -103,7 +103,7 @@ def test_learn_query_fuse_describe_on_the_tool_use_network(tool_use):
     bn = learn_bn(df, schema)
     assert bn.parents["Tool"] == () and bn.parents["ObjShape"] == ()  # set by the experimenter
     assert "Tool" in bn.parents["Direction"] and "ObjShape" in bn.parents["Distance"]
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
     # query: the generator's physics, recovered
     p = eng.query(["Direction"], {"Tool": "hook"})["Direction"]
     assert bn.schema.values_of("Direction")[int(np.argmax(p))] == "closer" and p[0] > 0.8

@@ -20,7 +20,8 @@ from glu.gestures.corpus import (  # noqa: E402
     real_segments,
     segment_recording_of,
 )
-from glu.gestures.segmentation import Segment, extract, segment_recording, segment_repetitions  # noqa: E402
+from glu.gestures.recordings import segment_recording  # noqa: E402
+from glu.gestures.segmentation import Segment, extract, segment_repetitions  # noqa: E402
 from glu.gestures.synthetic import GESTURES, synthesize_recording  # noqa: E402
 from glu.gestures.trajectories import Trajectory, repair  # noqa: E402
 from glu.studies.replication.gesture_figures import plot_segmentation  # noqa: E402

@@ -11,12 +11,11 @@ from hypothesis import strategies as st
 
 from glu.data.recordings import RECORDING_ACTION
 from glu.errors import DataError
+from glu.gestures.recordings import parse_hand_log, read_hand_log
 from glu.gestures.trajectories import (
     DETECT_ONLY,
     RepairPolicy,
     Trajectory,
-    parse_hand_log,
-    read_hand_log,
     repair,
     summarize_events,
 )

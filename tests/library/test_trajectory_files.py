@@ -15,9 +15,9 @@ from glu.gestures.features import (
     HORIZONTAL_FALLBACK,
     OPENNI_JOINTS,
     VERTICAL_FALLBACK,
-    load_features,
     skeleton_features,
 )
+from glu.gestures.recordings import load_features
 from glu.gestures.synthetic import synthesize_gesture
 from glu.hmm import TrainingConfig
 

@@ -1,7 +1,7 @@
-"""Weighted EM from sufficient statistics (glu.hmm.em) and its many-model E-step (glu.hmm._engine.online).
+"""Weighted EM from sufficient statistics (glu.hmm.em), its compiled E-step (glu.hmm.online, glu.hmm._engine).
 
 The references are independent: brute-force enumeration of every state and component path on a tiny model,
-duplicated sequences for integer weights, sequences left out for weight 0, and the unweighted ``fit``
+duplicated sequences for integer weights, sequences left out for weight 0, and the unweighted reference
 (tested against hmmlearn in test_hmm.py) for weights of one.
 """
 
@@ -14,11 +14,13 @@ import numpy as np
 import pytest
 
 from glu.errors import ModelError
-from glu.hmm import TrainingConfig, loglik_many, stack_models, train
-from glu.hmm._engine.online import episode_stats, expected_stats_bank, loglik_bank
-from glu.hmm.em import GMMHMMParams, SufficientStats, expected_stats, fit, fit_weighted, maximise
+from glu.hmm import TrainingConfig, loglik_many, params_bank, stack_models, train
+from glu.hmm._engine.em_batch import fit_many
+from glu.hmm.em import GMMHMMParams, SufficientStats, expected_stats, fit, maximise
 from glu.hmm.inference import forward_backward, left_to_right_transmat
 from glu.hmm.initialisation import init_left_to_right
+from glu.hmm.model import GestureHMM
+from glu.hmm.online import batch_stats, episode_stats
 
 FIELDS = ("start", "trans", "counts", "first", "second", "loglik", "weight", "frames")
 
@@ -127,7 +129,7 @@ def test_integer_weights_equal_duplicated_sequences(problem):
     k = [1, 2, 0, 3, 1, 2]
     dup = [x for x, n in zip(seqs, k, strict=True) for _ in range(n)]
     assert_stats_close(expected_stats(seqs, p0, k), expected_stats(dup, p0))
-    a, b = fit_weighted(seqs, k, p0, 15, 1e-9, 0.03), fit(dup, p0, 15, 1e-9, 0.03)
+    a, b = fit(seqs, p0, 15, 1e-9, 0.03, weights=k), fit(dup, p0, 15, 1e-9, 0.03)
     assert len(a.history) == len(b.history)
     np.testing.assert_allclose(a.history, b.history, rtol=1e-11)
     assert_params_close(a.params, b.params)
@@ -140,8 +142,8 @@ def test_weight_zero_equals_leaving_the_sequence_out(problem):
     assert_stats_close(expected_stats(seqs, p0, w), expected_stats(kept, p0, [wi for wi in w if wi]))
     impossible = seqs[:2] + [np.full((10, 3), 1e6)]  # a sequence of weight 0 may even be impossible
     assert_stats_close(expected_stats(impossible, p0, [1, 1, 0]), expected_stats(seqs[:2], p0))
-    a = fit_weighted(seqs, w, p0, 10, 1e-9, 0.03)
-    b = fit_weighted(kept, [wi for wi in w if wi], p0, 10, 1e-9, 0.03)
+    a = fit(seqs, p0, 10, 1e-9, 0.03, weights=w)
+    b = fit(kept, p0, 10, 1e-9, 0.03, weights=[wi for wi in w if wi])
     assert_params_close(a.params, b.params, rtol=1e-12)
 
 
@@ -159,14 +161,16 @@ def test_statistics_accumulated_in_pieces_equal_those_of_the_whole(problem):
     assert_params_close(maximise(pieces, p0, 0.03), maximise(whole, p0, 0.03), rtol=1e-10)
 
 
-def test_weights_of_one_equal_plain_baum_welch_for_every_covariance_update(problem):
+def test_the_fast_weighted_em_equals_the_reference_for_every_covariance_update(problem):
+    """The one fast EM (a batch of one, and the same model twice in a batch) against glu.hmm.em.fit."""
     seqs, p0 = problem
-    for cov in ("map", "ml", "hmmlearn"):
-        a = fit(seqs, p0, 25, 1e-7, 0.03, cov, 0.01)
-        b = fit_weighted(seqs, None, p0, 25, 1e-7, 0.03, cov, 0.01)
-        assert len(a.history) == len(b.history), cov
-        np.testing.assert_allclose(a.history, b.history, rtol=1e-11, err_msg=cov)
-        assert_params_close(a.params, b.params)
+    w = np.array([0.3, 1.0, 0.0, 2.0, 1.0, 0.5])
+    for cov in ("map", "ml"):
+        a = fit(seqs, p0, 25, 1e-7, 0.03, cov, 0.01, weights=w)
+        for b in fit_many([(seqs, p0), (seqs[::-1], p0)], 25, 1e-7, 0.03, cov, 0.01, weights=[w, w[::-1]]):
+            assert len(a.history) == len(b.history), cov
+            np.testing.assert_allclose(a.history, b.history, rtol=1e-10, err_msg=cov)
+            assert_params_close(a.params, b.params)
 
 
 def test_weighted_em_never_decreases_its_objective():
@@ -174,7 +178,7 @@ def test_weighted_em_never_decreases_its_objective():
     seqs = walks(rng, 8)
     w = rng.uniform(0.05, 2.0, size=8)
     p0 = params_of(init_left_to_right(seqs[:3], 4, 2, 0.01, seed=1))  # a poor start: many EM steps
-    ml = fit_weighted(seqs, w, p0, 40, -np.inf, covariance="ml", covar_floor=0.0)  # exact EM
+    ml = fit(seqs, p0, 40, -np.inf, covariance="ml", covar_floor=0.0, weights=w)  # exact EM
     assert np.all(np.diff(ml.history) >= -1e-8 * np.abs(ml.history[:-1]))
     assert ml.history[-1] > ml.history[0]
 
@@ -210,7 +214,9 @@ def test_bad_weights_are_refused_in_one_line(problem):
     with pytest.raises(ValueError, match="finite and ≥ 0"):
         expected_stats(seqs, p0, [1, 1, 1, -1, 1, 1])
     with pytest.raises(ValueError, match="positive weight"):
-        fit_weighted(seqs, np.zeros(6), p0, 5, 1e-3)
+        fit(seqs, p0, 5, 1e-3, weights=np.zeros(6))
+    with pytest.raises(ValueError, match="positive weight"):
+        fit_many([(seqs, p0)], 5, 1e-3, weights=[np.zeros(6)])
 
 
 # ------------------------------------------------------------------ many models, one sequence
@@ -222,7 +228,7 @@ def test_the_many_model_e_step_equals_the_reference_for_each_model():
     stack = GMMHMMParams(*(np.stack(a) for a in zip(*models, strict=True)))
     X = walks(rng, 1, 45, 46)[0]
     w = np.array([1.0, 0.4, 0.0, 2.5])
-    bank = expected_stats_bank(X, stack, w)
+    bank, _ = episode_stats(X, stack, w)
     for k, m in enumerate(models):
         ref = expected_stats([X], m, [w[k]])
         for f in FIELDS:
@@ -245,7 +251,7 @@ def test_the_many_model_e_step_survives_underflow_in_the_log_domain():
         0, 0.01, (15, D)
     )
     stack = GMMHMMParams(*(np.stack([a, a]) for a in tight))
-    bank = expected_stats_bank(X, stack, np.array([1.0, 0.0]))
+    bank, _ = episode_stats(X, stack, np.array([1.0, 0.0]))
     ref = expected_stats([X], tight)
     np.testing.assert_allclose(bank.counts[0], ref.counts, rtol=1e-9, atol=1e-12)
     assert np.all(bank.counts[1] == 0) and bank.loglik[1] == 0
@@ -285,16 +291,11 @@ def test_train_with_weights_refuses_what_it_cannot_do(problem):
         train(seqs, TrainingConfig(n_states=2, n_mix=1), weights=[1, 1, 1, 1, 1, np.nan])
 
 
-def test_the_compiled_weighted_e_step_and_em_equal_the_reference(problem):
-    from glu.hmm._engine.online import expected_stats_fast, fit_weighted_fast
-
+def test_the_compiled_weighted_e_step_equals_the_reference(problem):
     seqs, p0 = problem
     w = np.array([0.3, 1.0, 0.0, 2.0, 1.0, 0.5])
-    assert_stats_close(expected_stats_fast(seqs, p0, w), expected_stats(seqs, p0, w))
-    a, b = fit_weighted_fast(seqs, w, p0, 20, 1e-9, 0.03), fit_weighted(seqs, w, p0, 20, 1e-9, 0.03)
-    assert len(a.history) == len(b.history)
-    np.testing.assert_allclose(a.history, b.history, rtol=1e-10)
-    assert_params_close(a.params, b.params)
+    assert_stats_close(batch_stats(seqs, p0, w), expected_stats(seqs, p0, w))
+    assert_stats_close(batch_stats(seqs, p0, np.zeros(6)), SufficientStats.zeros(4, 2, 3))
 
 
 def test_weighted_training_goes_on_from_a_given_model():
@@ -304,7 +305,7 @@ def test_weighted_training_goes_on_from_a_given_model():
     w = np.linspace(0.2, 1.0, 6)
     first, _ = train(seqs, config, weights=w, warn=False)
     more, report = train(seqs, config, weights=w, warn=False, start=first)
-    ref = fit_weighted(seqs, w, params_of(first), 3, -np.inf, 0.03)  # three more iterations by hand
+    ref = fit(seqs, params_of(first), 3, -np.inf, 0.03, weights=w)  # three more iterations by hand
     np.testing.assert_allclose(more.means, ref.params.means, rtol=1e-9)
     assert report.history[0] == pytest.approx(float(expected_stats(seqs, params_of(first), w).loglik))
     with pytest.raises(ModelError, match="weights="):
@@ -318,5 +319,41 @@ def test_the_many_model_scores_equal_the_recognisers_scores():
         stack = GMMHMMParams(*(np.stack([getattr(m, f) for m in same]) for f in GMMHMMParams._fields))
         seqs = walks(rng, 5, 10, 50)
         np.testing.assert_allclose(
-            loglik_bank(seqs, stack), loglik_many(stack_models(same), seqs), rtol=1e-10
+            loglik_many(params_bank(stack), seqs), loglik_many(stack_models(same), seqs), rtol=1e-10
         )
+
+
+# ------------------------------------------------------------------ online stepwise EM (glu.hmm.online)
+
+
+def test_online_stepwise_em_equals_the_formula_on_the_reference_e_step():
+    """OnlineModels: η = w / W^α, s ← (1 − η) s + η s_episode, then the M-step of W · s — written out here
+    with the reference E-step (glu.hmm.em.expected_stats) and maximise."""
+    from glu.hmm.online import OnlineModels, first_model
+
+    rng = np.random.default_rng(11)
+    first, episodes = walks(rng, 3), walks(rng, 4)
+    config = TrainingConfig(n_states=3, n_mix=2, n_iter=4)
+    models = OnlineModels.empty((2, 2), config, n_features=3, step=0.7)
+    params, stats = first_model(first, np.array([1.0, 0.5, 1.0]), config, seed=2)
+    assert_stats_close(stats, expected_stats(first, params, [1.0, 0.5, 1.0]))
+    models.start((1, 0), params, stats)
+    assert models.exists.tolist() == [[False, False], [True, False]] and models.total[1, 0] == 2.5
+    mean, total, p = stats.scaled(1 / 2.5), 2.5, params
+    for X, w in zip(episodes, (0.3, 1.0, 0.8, 2.0), strict=True):
+        unit, loglik = models.estep(X, (np.array([1]), np.array([0])))
+        ref = expected_stats([X], p)
+        assert_stats_close(unit.take(0), ref)
+        assert loglik[0] == pytest.approx(float(ref.loglik), rel=1e-12)
+        models.update((np.array([1]), np.array([0])), unit, np.array([w]), 0.03)
+        total += w
+        eta = min(1.0, w / total**0.7)
+        mean = mean.scaled(1 - eta) + ref.scaled(eta)
+        p = maximise(mean.scaled(total), p, 0.03, "map")
+        assert_params_close(models.models((1, 0)), p)
+    assert models.total[1, 0] == pytest.approx(total)
+    np.testing.assert_allclose(
+        models.loglik(episodes, (np.array([1]), np.array([0])))[:, 0],
+        [GestureHMM(*p).loglik(X) for X in episodes],
+        rtol=1e-10,
+    )

@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 from glu.cli import main
 from glu.data import resolve_data
 from glu.errors import DataError, ModelError
@@ -21,7 +21,7 @@ from glu.studies.anticipation import recordings
 
 @pytest.fixture(scope="module")
 def setup(source, recognizer, zero_bn):
-    return source, recognizer, InferenceEngine(zero_bn)
+    return source, recognizer, make_engine(zero_bn)
 
 
 def test_case_trajectory_is_the_logged_segment_in_model_units(setup):

@@ -7,7 +7,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.errors import DataError
 from glu.studies.corpus_evaluation.corpus import chunk_ranges, simulate_chunk, write_corpus
@@ -16,7 +16,7 @@ from glu.studies.episodes import Condition, Scenario
 
 @pytest.fixture(scope="module")
 def engine():
-    return InferenceEngine(learn_bn(load_experiments("synthetic")))
+    return make_engine(learn_bn(load_experiments("synthetic")))
 
 
 WORLD = ["Action", "Color", "Shape", "Size", "ObjVel", "ObjHandVel", "HandVel", "Contact", "words"]

@@ -72,12 +72,12 @@ def _raw_hmms_trained_standing_do_not(shared_data, tmp_path):
 
 
 def _effect_anticipation_with_centred_glu_hmms(real_source, learned_bn, centred_models):
-    from glu.bn.inference import InferenceEngine
+    from glu.bn.inference import make_engine
     from glu.gestures.recognizer import Recognizer
     from glu.studies.anticipation.experiment import CASES as ANTICIPATION
     from glu.studies.anticipation.experiment import case_trajectory, effect_anticipation
 
-    rec, engine = Recognizer.load(centred_models), InferenceEngine(learned_bn)
+    rec, engine = Recognizer.load(centred_models), make_engine(learned_bn)
     final = {}
     for case, c in ANTICIPATION.items():
         run = effect_anticipation(rec, engine, case_trajectory(real_source, case), c.evidence)

@@ -6,13 +6,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.errors import DataError, ModelError
 from glu.fusion import fuse
 from glu.gestures.calibration import Calibration
 from glu.hmm import TrainingConfig
-from glu.hmm._engine.batch import BatchScorer
+from glu.hmm.scoring import BatchScorer
 from glu.language.batch import agreement, best_sentences
 from glu.language.descriptions import nbest
 from glu.schema import ACTIONS
@@ -50,8 +50,8 @@ READINGS = (
 
 @pytest.fixture(scope="module")
 def setup():
-    engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
-    learned = InferenceEngine(learn_bn(load_experiments("synthetic").iloc[:200]))
+    engine = make_engine(learn_bn(load_experiments("synthetic")))
+    learned = make_engine(learn_bn(load_experiments("synthetic").iloc[:200]))
     rec = small_recognizer()
     tables = {"generating": target_tables(engine, SETTINGS), "learned-200": target_tables(learned, SETTINGS)}
     replications = (

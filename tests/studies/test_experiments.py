@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from glu.bn import InferenceEngine
+from glu.bn import make_engine
 from glu.fusion import fuse
 from glu.studies.replication import fusion as experiments
 
@@ -15,7 +15,7 @@ from glu.studies.replication import fusion as experiments
 )
 def test_tap_threshold_by_bisection_agrees_with_a_fine_grid(zero_bn, evidence):
     t = experiments.tap_threshold(zero_bn, evidence)
-    eng = InferenceEngine(zero_bn)
+    eng = make_engine(zero_bn)
     ev = evidence
 
     def tap_wins(x):

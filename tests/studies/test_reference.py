@@ -18,14 +18,15 @@ import scipy.io as sio
 from cli_run import run
 from test_hmm import mat_params, ref_forward
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.bn.model import encode
 from glu.data.fetch import manifest, sha256_of
 from glu.data.recordings import ORIGINAL_SEGMENTS, TRAINING_RECORDINGS
 from glu.errors import ImpossibleEvidenceError
 from glu.gestures.corpus import segment_recording_of
 from glu.gestures.recognizer import load_original_models
-from glu.gestures.trajectories import read_hand_log, repair
+from glu.gestures.recordings import read_hand_log
+from glu.gestures.trajectories import repair
 from glu.language import compile_network, count_by_length, load_grammar, parse_grammar, same_language
 from glu.language.sampling import sample_sentences
 from glu.run.reproduce import reproduce
@@ -99,10 +100,12 @@ def _learning_reproduces_the_original_network(lab_table, learned_bn, original_bn
     assert sorted(vals) == sorted(
         [("medium", "slow", "long"), ("fast", "slow", "long"), ("fast", "fast", "short")]
     )
-    eng = InferenceEngine(learned_bn)
+    eng = make_engine(learned_bn)
     with pytest.raises(ImpossibleEvidenceError, match="ObjVel=fast, HandVel=fast, Contact=short"):
         eng.query(["Action"], {"ObjVel": "fast", "HandVel": "fast", "Contact": "short"})
-    assert 1 - eng.base_mass == pytest.approx(0.0165, abs=5e-5)  # 1.65 % of the prior mass disappears
+    assert 1 - eng.probability_of_evidence() == pytest.approx(
+        0.0165, abs=5e-5
+    )  # 1.65 % of the prior mass disappears
     # log-likelihood of the training data: −19692.2025 for all 57 nodes; the struct's L leaves out the roots
     codes = encode(lab_table, learned_bn.schema)
     assert learned_bn.log_likelihood(codes) == pytest.approx(-19692.2025, abs=1e-4)

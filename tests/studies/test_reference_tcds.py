@@ -56,19 +56,19 @@ def _describe_prints_the_four_fig8_sentences(shared_data, capsys):
 
 
 def _published_descriptions_with_the_learned_and_the_original_network(real_source, learned_bn, original_bn):
-    from glu.bn import InferenceEngine
+    from glu.bn import make_engine
     from glu.language import candidate_sentences
 
     samples = candidate_sentences("samples", real_source)
     assert len(samples) == len(set(samples)) == 9941
     for bn in (learned_bn, original_bn):
-        rep = ex.published_descriptions(InferenceEngine(bn), samples, score="original")
+        rep = ex.published_descriptions(make_engine(bn), samples, score="original")
         assert rep["same_sentence"].all() and rep["same_score"].dropna().astype(bool).all()
         assert len(rep) == 34 and rep["same_score"].notna().sum() == 30
     # every printed score is the paper's formula plus 1/L, to the printed precision (docs/method.md §6.2)
     from glu.language import score_sentence, word_probabilities
 
-    engine = InferenceEngine(learned_bn)
+    engine = make_engine(learned_bn)
     for key in ex.PUBLISHED_LISTS:
         probs = word_probabilities(engine, PUB["sentences"][key]["evidence"])
         for r in PUB["sentences"][key]["rows"]:
@@ -77,19 +77,19 @@ def _published_descriptions_with_the_learned_and_the_original_network(real_sourc
 
 
 def _conjunction_bars_of_fig7(learned_bn):
-    from glu.bn import InferenceEngine
+    from glu.bn import make_engine
 
-    df = ex.and_but_probabilities(InferenceEngine(learned_bn), compare=True)
+    df = ex.and_but_probabilities(make_engine(learned_bn), compare=True)
     assert (df["difference"].abs() <= df["resolution"]).all(), df
 
 
 def _exact_search_under_each_score(real_source, learned_bn):
     """The issue's example: under {grasp, medium} the original score's best of the grammar is 9th under the
     paper's."""
-    from glu.bn import InferenceEngine
+    from glu.bn import make_engine
     from glu.language import candidate_sentences
 
-    vs = ex.exact_vs_samples(InferenceEngine(learned_bn), candidate_sentences("samples", real_source))
+    vs = ex.exact_vs_samples(make_engine(learned_bn), candidate_sentences("samples", real_source))
     row = vs[(vs["figure"] == "fig7a") & (vs["score_name"] == "original")].iloc[0]
     assert row["exact_best"] == "the robot grasps the sphere and the sphere is moving"
     assert num2str(row["exact_score"]) == "-0.59324" and row["rank_under_other"] == 9
@@ -128,14 +128,14 @@ def _anticipate_matches_the_published_curves_bars_and_caption(shared_data, capsy
 
 
 def _published_comparison_of_an_anticipation_run(real_source, learned_bn, case):
-    from glu.bn import InferenceEngine
+    from glu.bn import make_engine
     from glu.gestures.recognizer import load_original_models
     from glu.language import candidate_sentences
     from glu.studies.anticipation import experiment as anticipation
 
     run = anticipation.effect_anticipation(
         load_original_models(real_source.original_hmms()),
-        InferenceEngine(learned_bn),
+        make_engine(learned_bn),
         anticipation.case_trajectory(real_source, case),
         anticipation.CASES[case].evidence,
         case=case,
@@ -153,13 +153,13 @@ def _published_comparison_of_an_anticipation_run(real_source, learned_bn, case):
 def _anticipation_with_the_original_models(real_source, original_bn):
     import numpy as np
 
-    from glu.bn import InferenceEngine
+    from glu.bn import make_engine
     from glu.data.recordings import RECORDING_ACTION
     from glu.gestures.recognizer import load_original_models
     from glu.studies.anticipation import experiment as anticipation
 
     rec = load_original_models(real_source.original_hmms())
-    eng = InferenceEngine(original_bn)
+    eng = make_engine(original_bn)
     traj = anticipation.case_trajectory(real_source, "sphere")
     raw = np.loadtxt(real_source.hand_log("tap_notable_seated_1"))
     assert traj.frame.tolist() == list(range(121, 215))

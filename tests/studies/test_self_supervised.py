@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from glu.bn import InferenceEngine, learn_bn
+from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.errors import DataError
 from glu.gestures.recognizer import train_recognizer
@@ -28,7 +28,7 @@ SMALL = TrainingConfig(n_states=3, n_mix=1, n_iter=20, tol=1e-3)
 
 @pytest.fixture(scope="module")
 def engine():
-    return InferenceEngine(learn_bn(load_experiments("synthetic")))
+    return make_engine(learn_bn(load_experiments("synthetic")))
 
 
 # ------------------------------------------------------------------ the world

@@ -1,30 +1,31 @@
-"""Baum–Welch for many independent GMM-HMMs at once: one padded batch of every model's sequences.
+"""The fast EM: weighted Baum–Welch for a batch of GMM-HMMs, each model with its own weighted sequences.
 
-Experiments train many small models (leave-one-segment-out folds, k-fold cross-validation, one model per
-action and feature set and seed); :func:`glu.hmm.em.fit` trains one. :func:`fit_many` runs
-the models side by side:
+This is the one fast implementation of the E-step and of EM (:mod:`glu.hmm.em` is its readable
+reference, the tests' oracle). Every trainer runs on it: one model is a batch of one, unweighted EM has
+every weight 1.
 
-* the sequences of every model form one batch, sorted by length (longest first), each with its model's
-  transition matrix; the forward and backward recursions run compiled, one sequence at a time
-  (:func:`glu.hmm._engine.kernels.forward_backward_scaled`, via :func:`forward_backward_many`), since as
-  array code their cost was per-frame dispatch that hardly depended on the number of sequences;
-* the emission densities and the M-step are array operations over a (model, frame) layout, frames
-  padded to the model with most frames (padding has zero responsibility). Each frame is centred on its
-  model's mean frame and expanded into its monomials ``φ(x) = (x_i x_j for i ≤ j, x_i, 1)`` once; every
-  component's ``log w + log N(x; μ, Σ)`` is then ``φ(x) · c`` (one matrix product per model), and the
-  M-step's sufficient statistics (soft counts, first and second moments) are one product of the
-  responsibilities with ``φ``; the scatter about a mean ``m`` is ``Σ p x xᵀ − m sᵀ − s mᵀ + N m mᵀ``
-  (s the first moment, N the count), which the centring keeps far from cancellation;
-* each model stops exactly as :func:`~glu.hmm.em.fit` would (same ``tol`` rule, same
-  ``n_iter`` cap): once converged its parameters freeze and its sequences leave the batch;
-* the scaled recursion is checked for underflow once per pass; a model with a sequence whose scaled mass
-  underflowed is redone alone in the log domain (:func:`~glu.hmm.em.forward_backward_log`),
-  exactly as ``fit`` redoes its batch, while the other models keep their scaled results.
+* :class:`Layout` lays the sequences of every model out once, whatever the model's parameters: each
+  model's frames in order (padded to the model with most frames), centred on that model's mean frame and
+  expanded into the monomials ``φ(x) = (x_i x_j for i ≤ j, x_i, 1)`` (:func:`quadratic_features`);
+  sequences of weight 0 are left out;
+* :func:`estep` is the E-step of every model at once: every component's ``log w + log N(x; μ, Σ)`` is
+  ``φ(x) · c`` (:func:`quadratic_coefficients`, one matrix product per model); the forward–backward
+  recursions run compiled, one sequence at a time (:func:`glu.hmm._engine.kernels.forward_backward_scaled`);
+  a sequence whose scaled mass underflows is redone alone in the log domain
+  (:func:`glu.hmm.inference.forward_backward_log`); the sufficient statistics (soft counts, first and
+  second moments, each frame times its sequence's weight) are one product of the responsibilities with
+  ``φ``, about each model's centre, which keeps the scatter ``Σ p x xᵀ − m sᵀ − s mᵀ + N m mᵀ`` far from
+  cancellation;
+* :func:`fit_many` is EM: :func:`estep`, then :func:`glu.hmm.em.maximise` (the M-step, run in the centred
+  coordinates) until each model converges (the same ``tol`` rule and ``n_iter`` cap as
+  :func:`glu.hmm.em.fit`); a converged model's parameters freeze and its sequences leave the batch;
+* :func:`expected_stats_many` gives :func:`estep`'s statistics about the origin (raw moments, which add up
+  across sequences and episodes): the E-step of online learning.
 
-The results equal ``[fit(seqs, init, …) for seqs, init in problems]`` to rounding (summation order):
-the same number of iterations, log-likelihood histories to 1e-10 and parameters to 1e-8 relative
-(``tests/test_baum_welch_batch.py``). Models of different shapes (Q, M, D) are grouped and each group runs
-as one batch.
+Results equal :func:`glu.hmm.em.fit` and :func:`glu.hmm.em.expected_stats` for each model to rounding
+(summation order): the same number of iterations, log-likelihood histories to 1e-10 and parameters to
+1e-8 relative (``tests/test_baum_welch_batch.py``, ``tests/test_weighted_em.py``). Models of different
+shapes (Q, M, D) are grouped and each group runs as one batch.
 
 Example
 -------
@@ -48,12 +49,12 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from glu.hmm._engine.kernels import forward_backward_scaled, mixture_posteriors
-from glu.hmm.em import COVARIANCES, EMPTY, FitResult, GMMHMMParams
+from glu.hmm.em import COVARIANCES, FitResult, GMMHMMParams, SufficientStats, maximise, sequence_weights
 from glu.hmm.inference import forward_backward_log, gaussian_factors
 
 MAX_BATCH_FLOATS = 4_000_000
@@ -61,78 +62,182 @@ MAX_BATCH_FLOATS = 4_000_000
 (32 MB each): more models per batch gain little once a chunk has a few dozen."""
 
 
-def forward_backward_many(
-    log_b: np.ndarray, lengths: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Scaled forward–backward over a padded batch whose sequences each have their own parameters.
-
-    Parameters
-    ----------
-    log_b : array, shape (S, T, Q) — emission log-densities; entries past a sequence's length are ignored
-    lengths : array, shape (S,) — sequence lengths, sorted in decreasing order (≥ 1)
-    startprob : array, shape (S, Q) — each sequence's initial distribution
-    transmat : array, shape (S, Q, Q) — each sequence's transition matrix
-
-    Returns
-    -------
-    gamma : array, shape (S, T, Q) — ``P(q_t | G)`` (0 past a sequence's end)
-    xi : array, shape (S, Q, Q) — each sequence's expected transition counts
-    loglik : array, shape (S,) — ``log L(G)``
-    ok : array of bool, shape (S,) — False where the scaled mass underflowed at some frame (those
-        sequences' other outputs are meaningless: redo them in the log domain)
-
-    The recursions run compiled, one sequence at a time
-    (:func:`glu.hmm._engine.kernels.forward_backward_scaled`); a sequence stops at its first underflow.
-    """
-    if np.any(np.diff(lengths) > 0):
-        raise ValueError("forward_backward_many: lengths must be sorted in decreasing order")
-    return forward_backward_scaled(log_b, lengths, startprob, transmat)
-
-
-def _pairs(D: int) -> list[tuple[int, int]]:
+def monomial_pairs(D: int) -> list[tuple[int, int]]:
+    """The index pairs ``(i, j), i ≤ j`` of the quadratic monomials, in :func:`quadratic_features`' order."""
     return [(i, j) for i in range(D) for j in range(i, D)]
 
 
-class _Batch:
-    """The live models' data laid out for one EM iteration (rebuilt when a model leaves)."""
+def quadratic_features(X: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """``φ(x − centre)``: the monomials ``x_i x_j`` (i ≤ j), ``x_i`` and 1 of each frame, shape (..., N, F)
+    with ``F = D(D+1)/2 + D + 1``, for frames ``X`` of shape (..., N, D)."""
+    Z = np.asarray(X, dtype=float) - centre
+    D = Z.shape[-1]
+    cols = [Z[..., i] * Z[..., j] for i, j in monomial_pairs(D)] + [Z[..., i] for i in range(D)]
+    return np.stack(cols + [np.ones(Z.shape[:-1])], axis=-1)
 
-    def __init__(self, problems: list[tuple[list[np.ndarray], GMMHMMParams]], live: list[int]) -> None:
-        self.live = live
-        K = len(live)
-        seqs = [problems[k][0] for k in live]
-        self.n_frames = np.array([sum(len(x) for x in s) for s in seqs])
-        N = int(self.n_frames.max())
-        D = seqs[0][0].shape[1]
-        self.X = np.zeros((K, N, D))  # (model, frame): each model's frames in order, zero-padded
-        self.frame_alive = np.arange(N)[None, :] < self.n_frames[:, None]
-        model, first, length = [], [], []
+
+def quadratic_coefficients(means: np.ndarray, chol_inv: np.ndarray, log_norm: np.ndarray) -> np.ndarray:
+    """Every component's ``log w + log N(x; μ, Σ)`` as coefficients on :func:`quadratic_features`.
+
+    ``means`` (..., D) already centred (μ − centre), ``chol_inv`` (..., D, D) and ``log_norm`` (...) from
+    :func:`glu.hmm.inference.gaussian_factors`; returns shape (..., F): ``φ(x − centre) · coef`` is
+    ``log w − ½ (x − μ)ᵀ Σ⁻¹ (x − μ) − (D/2) log 2π − ½ log |Σ|``.
+    """
+    prec = np.swapaxes(chol_inv, -1, -2) @ chol_inv  # Σ⁻¹ = L⁻ᵀ L⁻¹
+    lin = np.einsum("...ij,...j->...i", prec, means)
+    with np.errstate(invalid="ignore"):
+        const = log_norm - 0.5 * np.einsum("...i,...i->...", means, lin)
+    D = means.shape[-1]
+    rows = [(-0.5 if i == j else -1.0) * prec[..., i, j] for i, j in monomial_pairs(D)]
+    return np.stack(rows + [lin[..., i] for i in range(D)] + [const], axis=-1)
+
+
+class Layout:
+    """The weighted sequences of a batch of models laid out once for many E-steps.
+
+    Parameters
+    ----------
+    sequences : per model, its sequences (arrays of shape (T_i, D), the same D for all)
+    weights : per model, one weight ≥ 0 per sequence; sequences of weight 0 are left out, and every model
+        needs one of positive weight (ValueError otherwise)
+    """
+
+    def __init__(self, sequences: Sequence[Sequence[np.ndarray]], weights: Sequence[np.ndarray]) -> None:
+        kept = []
+        for seqs, w in zip(sequences, weights, strict=True):
+            pairs = [(np.asarray(x, dtype=float), float(v)) for x, v in zip(seqs, w, strict=True) if v > 0]
+            if not pairs:
+                raise ValueError("weighted EM needs at least one sequence of positive weight")
+            kept.append(pairs)
+        K = len(kept)
+        self.n_frames = np.array([sum(len(x) for x, _ in p) for p in kept])
+        N, D = int(self.n_frames.max()), kept[0][0][0].shape[1]
+        X = np.zeros((K, N, D))  # (model, frame): each model's frames in order, zero-padded
         self.centre = np.zeros((K, D))  # each model's mean frame: the moments are taken about it
-        for i, s in enumerate(seqs):
-            frames = np.concatenate(s)
-            self.centre[i] = frames.mean(axis=0)
-            self.X[i, : self.n_frames[i]] = frames - self.centre[i]
-            offsets = np.concatenate([[0], np.cumsum([len(x) for x in s])[:-1]])
-            for j, x in enumerate(s):
-                model.append(i), first.append(i * N + offsets[j]), length.append(len(x))
-        order = np.lexsort((np.arange(len(length)), -np.array(length)))  # longest first, stable
-        self.model = np.array(model)[order]  # (S,) index into the live models
-        self.lengths = np.array(length)[order]
-        first = np.array(first)[order]
-        # the monomials x_i x_j (i ≤ j), x_i, 1 of each centred frame (0 for padding), shape (K, N, F)
-        pairs = _pairs(D)
-        cols = [self.X[..., i] * self.X[..., j] for i, j in pairs] + [self.X[..., i] for i in range(D)]
-        self.phi = np.stack(cols + [self.frame_alive.astype(float)], axis=-1)
+        self.frame_w = np.zeros((K, N))  # each frame's sequence weight (0 for padding)
+        model, first, length, weight = [], [], [], []
+        for k, pairs in enumerate(kept):
+            frames = np.concatenate([x for x, _ in pairs])
+            self.centre[k] = frames.mean(axis=0)
+            X[k, : self.n_frames[k]] = frames - self.centre[k]
+            offset = 0
+            for x, w in pairs:
+                self.frame_w[k, offset : offset + len(x)] = w
+                model.append(k), first.append(k * N + offset), length.append(len(x)), weight.append(w)
+                offset += len(x)
+        # the sequences longest first (the compiled recursions run a little faster so); position[i] is where
+        # the i-th sequence given (model after model) stands
+        order = np.lexsort((np.arange(len(length)), -np.array(length)))
+        self.position = np.empty(len(order), dtype=int)
+        self.position[order] = np.arange(len(order))
+        self.model, self.lengths = np.array(model)[order], np.array(length)[order]
+        self.weight = np.array(weight)[order]
+        self.unit_weights = bool(np.all(self.weight == 1.0))
+        self.members = (self.model[None, :] == np.arange(K)[:, None]).astype(float)  # (K, S): sums per model
+        alive = np.arange(N)[None, :] < self.n_frames[:, None]
+        self.phi = quadratic_features(X, 0.0) * alive[..., None]  # (K, N, F); padding frames are zero
         T = int(self.lengths.max())
         self.alive = np.arange(T)[None, :] < self.lengths[:, None]  # (S, T)
         # flat index into (K·N) of frame t of sequence s (padding points at frame 0 of the batch: ignored)
-        self.index = np.where(self.alive, first[:, None] + np.arange(T)[None, :], 0)
-        # each model's sequences, in the caller's order (for the log-domain redo and the history)
-        seq_pos = np.empty(len(order), dtype=int)
-        seq_pos[order] = np.arange(len(order))
-        self.seqs_of = [[] for _ in range(K)]
-        for pos_orig, i in enumerate(model):
-            self.seqs_of[i].append(seq_pos[pos_orig])
-        self.seqs_of = [np.array(ix) for ix in self.seqs_of]
+        self.index = np.where(self.alive, np.array(first)[order][:, None] + np.arange(T)[None, :], 0)
+
+    @property
+    def n_models(self) -> int:
+        """K."""
+        return len(self.centre)
+
+    def centred(self, params: GMMHMMParams) -> GMMHMMParams:
+        """Stacked parameters (leading axis K) with each model's means moved to its centre."""
+        return params._replace(means=params.means - self.centre[:, None, None, :])
+
+    def uncentred(self, params: GMMHMMParams) -> GMMHMMParams:
+        """:meth:`centred` undone."""
+        return params._replace(means=params.means + self.centre[:, None, None, :])
+
+
+def estep(layout: Layout, params: GMMHMMParams) -> tuple[SufficientStats, np.ndarray]:
+    """The E-step of every model of ``layout`` under its parameters, in one pass.
+
+    ``params`` are stacked (leading axis K, the layout's models) with means *centred*
+    (:meth:`Layout.centred`). Returns the weighted :class:`~glu.hmm.em.SufficientStats` of each model,
+    batch shape (K,), with moments about the model's centre (``first`` and ``second`` of the centred
+    frames), and ``log L`` of each sequence of positive weight (unweighted), shape (S,), model after model
+    in the order given to the layout. Raises
+    ``numpy.linalg.LinAlgError`` if a used covariance is not positive definite.
+    """
+    startprob, transmat, weights, means, covars = params
+    K, N, F = layout.phi.shape
+    Q, M = weights.shape[1:]
+    D = means.shape[-1]
+    chol_inv, log_norm = gaussian_factors(weights, covars)  # (K, Q, M, D, D), (K, Q, M)
+    coef = quadratic_coefficients(means, chol_inv, log_norm).reshape(K, Q * M, F)
+    lc = (layout.phi @ np.swapaxes(coef, 1, 2)).reshape(K, N, Q, M)
+    log_b_frames, post_mix = (lc[..., 0], None) if M == 1 else mixture_posteriors(lc)
+    log_b = log_b_frames.reshape(K * N, Q)[layout.index]  # (S, T, Q)
+    seq_model, lengths, w = layout.model, layout.lengths, layout.weight
+    gamma, xi, loglik, ok = forward_backward_scaled(log_b, lengths, startprob[seq_model], transmat[seq_model])
+    for s in np.flatnonzero(~ok):  # the scaled mass underflowed: this sequence alone, in the log domain
+        k, T_s = seq_model[s], lengths[s]
+        g, x, ll = forward_backward_log(log_b[s : s + 1, :T_s], lengths[s : s + 1], startprob[k], transmat[k])
+        gamma[s, :T_s], xi[s], loglik[s] = g[0], x, ll[0]
+    gamma_frames = np.zeros((K * N, Q))  # padding frames: zero responsibility
+    gamma_frames[layout.index[layout.alive]] = gamma[layout.alive]
+    gamma_frames = gamma_frames.reshape(K, N, Q)
+    if not layout.unit_weights:
+        gamma_frames *= layout.frame_w[..., None]
+    pcm = gamma_frames[..., None] if post_mix is None else gamma_frames[..., None] * post_mix
+    # every moment at once: Σ p·x_i x_j, Σ p·x_i, Σ p per component (K, Q, M, F)
+    moments = (np.swapaxes(pcm.reshape(K, N, Q * M), 1, 2) @ layout.phi).reshape(K, Q, M, F)
+    pairs = monomial_pairs(D)
+    second = np.empty((K, Q, M, D, D))
+    for f, (i, j) in enumerate(pairs):
+        second[..., i, j] = second[..., j, i] = moments[..., f]
+
+    def per_model(values: np.ndarray) -> np.ndarray:  # Σ over each model's sequences
+        return (layout.members @ values.reshape(len(values), -1)).reshape((K,) + values.shape[1:])
+
+    stats = SufficientStats(
+        start=per_model(w[:, None] * gamma[:, 0]),
+        trans=per_model(w[:, None, None] * xi),
+        counts=moments[..., -1],
+        first=moments[..., len(pairs) : len(pairs) + D],
+        second=second,
+        loglik=per_model(w * loglik),
+        weight=per_model(w),
+        frames=per_model(w * lengths),
+    )
+    return stats, loglik[layout.position]
+
+
+def about_origin(stats: SufficientStats, centre: np.ndarray) -> SufficientStats:
+    """Statistics with moments about ``centre`` (shape (K, D), one per model) moved to the origin: the raw
+    moments ``Σ p x`` and ``Σ p x xᵀ`` of :mod:`glu.hmm.em`."""
+    c = centre[:, None, None, :]  # (K, 1, 1, D)
+    first = stats.first + stats.counts[..., None] * c
+    cross = stats.first[..., :, None] * c[..., None, :]
+    second = (
+        stats.second
+        + cross
+        + np.swapaxes(cross, -1, -2)
+        + stats.counts[..., None, None] * (c[..., :, None] * c[..., None, :])
+    )
+    return SufficientStats(
+        stats.start, stats.trans, stats.counts, first, second, stats.loglik, stats.weight, stats.frames
+    )
+
+
+def expected_stats_many(
+    sequences: Sequence[Sequence[np.ndarray]], params: GMMHMMParams, weights: Sequence[np.ndarray]
+) -> tuple[SufficientStats, np.ndarray]:
+    """:func:`glu.hmm.em.expected_stats` of many models at once, each over its own weighted sequences.
+
+    ``params`` stacked (leading axis K, the models, means about the origin); ``sequences[k]`` and
+    ``weights[k]`` are model k's. Returns the statistics (batch shape (K,), raw moments) and ``log L`` of
+    each sequence of positive weight, model after model in the given order, shape (S,).
+    """
+    layout = Layout(sequences, weights)
+    stats, loglik = estep(layout, layout.centred(params))
+    return about_origin(stats, layout.centre), loglik
 
 
 def fit_many(
@@ -142,158 +247,102 @@ def fit_many(
     covar_reg: float = 0.0,
     covariance: str = "map",
     covar_floor: float = 0.0,
+    weights: Sequence[Sequence[float] | None] | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> list[FitResult]:
-    """Fit many GMM-HMMs, each to its own sequences, by Baum–Welch in one batch.
+    """Fit many GMM-HMMs, each to its own weighted sequences, by Baum–Welch in one batch.
 
     Parameters
     ----------
     problems : (sequences, init) per model: arrays of shape (T_i, D) and the starting
-        :class:`~glu.hmm.em.GMMHMMParams`; models of different (Q, M, D) run in separate
-        batches
+        :class:`~glu.hmm.em.GMMHMMParams`; models of different (Q, M, D) run in separate batches
     n_iter : most EM iterations, per model
-    tol : the stopping tolerance on each model's total log-likelihood (one for all, or one per model)
+    tol : the stopping tolerance on each model's total (weighted) log-likelihood (one for all, or one per
+        model)
     covar_reg, covariance, covar_floor : as :func:`~glu.hmm.em.fit`
+    weights : per model, one weight ≥ 0 per sequence (None: all 1; sequences of weight 0 are left out)
+    progress : called with the number of models that have just stopped, after each iteration
 
     Returns
     -------
-    one :class:`~glu.hmm.em.FitResult` per problem, in order, equal to what
-    :func:`~glu.hmm.em.fit` returns for it (to rounding). Raises
-    ``numpy.linalg.LinAlgError`` when a covariance stops being positive definite.
+    one :class:`~glu.hmm.em.FitResult` per problem, in order, equal to what :func:`~glu.hmm.em.fit` returns
+    for it (to rounding). Raises ``numpy.linalg.LinAlgError`` when a covariance stops being positive
+    definite, ValueError for bad weights.
     """
     if covariance not in COVARIANCES:
         raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
     tols = np.broadcast_to(np.asarray(tol, dtype=float), (len(problems),))
+    ws = [None] * len(problems) if weights is None else list(weights)
     items = [
-        ([np.asarray(x, dtype=float) for x in seqs], GMMHMMParams(*(np.array(a, dtype=float) for a in init)))
-        for seqs, init in problems
+        (
+            [np.asarray(x, dtype=float) for x in seqs],
+            GMMHMMParams(*(np.array(a, dtype=float) for a in init)),
+            sequence_weights(seqs, w),
+        )
+        for (seqs, init), w in zip(problems, ws, strict=True)
     ]
     groups: dict[tuple[int, ...], list[int]] = {}
-    for k, (seqs, init) in enumerate(items):
+    for k, (seqs, init, _) in enumerate(items):
         groups.setdefault((*init.weights.shape, seqs[0].shape[1]), []).append(k)
     out: list[FitResult | None] = [None] * len(items)
+    mstep = {"covar_reg": covar_reg, "covariance": covariance, "covar_floor": covar_floor}
     for (Q, M, D), ks in groups.items():
-        chunks: list[list[int]] = [[]]
-        widest = 0
-        for k in ks:  # bound the (model, component, frame) arrays: about MAX_BATCH_FLOATS floats each
-            n = sum(len(x) for x in items[k][0])
-            if chunks[-1] and (len(chunks[-1]) + 1) * max(widest, n) * Q * M * D > MAX_BATCH_FLOATS:
-                chunks.append([])
-                widest = 0
-            chunks[-1].append(k)
-            widest = max(widest, n)
-        for chunk in chunks:
-            results = _fit_group(
-                [items[k] for k in chunk], n_iter, tols[chunk], covar_reg, covariance, covar_floor
-            )
+        for chunk in _chunks(ks, [sum(len(x) for x in items[k][0]) for k in ks], Q * M * D):
+            results = _fit_group([items[k] for k in chunk], n_iter, tols[chunk], mstep, progress)
             for k, r in zip(chunk, results, strict=True):
                 out[k] = r
     return out  # type: ignore[return-value]
 
 
+def _chunks(keys: list[int], frames: list[int], width: int) -> list[list[int]]:
+    """``keys`` in chunks whose (model, component, frame, feature) arrays hold about
+    :data:`MAX_BATCH_FLOATS` floats."""
+    chunks: list[list[int]] = [[]]
+    widest = 0
+    for k, n in zip(keys, frames, strict=True):
+        if chunks[-1] and (len(chunks[-1]) + 1) * max(widest, n) * width > MAX_BATCH_FLOATS:
+            chunks.append([])
+            widest = 0
+        chunks[-1].append(k)
+        widest = max(widest, n)
+    return chunks
+
+
 def _fit_group(
-    problems: list[tuple[list[np.ndarray], GMMHMMParams]],
+    problems: list[tuple[list[np.ndarray], GMMHMMParams, np.ndarray]],
     n_iter: int,
     tols: np.ndarray,
-    covar_reg: float,
-    covariance: str,
-    covar_floor: float,
+    mstep: dict,
+    progress: Callable[[int], None] | None,
 ) -> list[FitResult]:
-    """:func:`fit_many` for models of one shape."""
+    """:func:`fit_many` for models of one shape: every model's parameters stacked, centred on its frames."""
     P = len(problems)
-    # every model's current parameters, stacked: (P, Q), (P, Q, Q), (P, Q, M), (P, Q, M, D), (P, Q, M, D, D)
-    params = [np.stack([p[1][i] for p in problems]) for i in range(5)]
-    Q, M = params[2].shape[1:]
-    D = params[3].shape[-1]
-    pairs = _pairs(D)
+    everything = Layout([p[0] for p in problems], [p[2] for p in problems])
+    params = everything.centred(
+        GMMHMMParams(*(np.stack(a) for a in zip(*(p[1] for p in problems), strict=True)))
+    )
     histories: list[list[float]] = [[] for _ in range(P)]
     live = list(range(P))
-    batch = _Batch(problems, live)
+    layout = everything
     for _ in range(n_iter):
-        if batch.live != live:
-            batch = _Batch(problems, live)
         ix = np.array(live)
-        startprob, transmat, weights, means, covars = (a[ix] for a in params)
-        K, N = batch.X.shape[:2]
-        chol_inv, log_norm = gaussian_factors(weights, covars)  # (K, Q, M, D, D), (K, Q, M)
-        # log w + log N(x; μ, Σ) of every frame and component as one product with the frames' monomials:
-        # −½ xᵀPx + (Pμ)ᵀx − ½ μᵀPμ + log-normaliser, P = Σ⁻¹, in coordinates centred on each model's frames
-        prec = np.swapaxes(chol_inv, -1, -2) @ chol_inv
-        mu = means - batch.centre[:, None, None, :]
-        lin = (prec @ mu[..., None])[..., 0]  # (K, Q, M, D)
-        with np.errstate(invalid="ignore"):
-            const = log_norm - 0.5 * (mu * lin).sum(axis=-1)
-        coef = np.stack(
-            [(-0.5 if i == j else -1.0) * prec[..., i, j] for i, j in pairs]
-            + [lin[..., i] for i in range(D)]
-            + [const],
-            axis=-1,
-        )  # (K, Q, M, F)
-        lc = (batch.phi @ np.swapaxes(coef.reshape(K, Q * M, -1), 1, 2)).reshape(K, N, Q, M)
-        # each state's emission log-density (K, N, Q) and its mixture's responsibilities, in one pass
-        if M == 1:
-            log_b_frames, post_mix = lc[..., 0], None
-        else:
-            log_b_frames, post_mix = mixture_posteriors(lc)
-        log_b = log_b_frames.reshape(K * N, Q)[batch.index]  # (S, T, Q)
-        seq_model = batch.model
-        gamma, xi, loglik, ok = forward_backward_many(
-            log_b, batch.lengths, startprob[seq_model], transmat[seq_model]
-        )
-        xi_sum = np.zeros((K, Q, Q))
-        np.add.at(xi_sum, seq_model, xi)
-        for i in np.unique(seq_model[~ok]):  # underflow: this model's batch again, in the log domain
-            s = batch.seqs_of[i]
-            T_i = int(batch.lengths[s].max())
-            g, xs, ll = forward_backward_log(log_b[s, :T_i], batch.lengths[s], startprob[i], transmat[i])
-            gamma[s, :T_i], xi_sum[i], loglik[s] = g, xs, ll
+        if len(live) != layout.n_models:  # a model stopped: lay out the others again
+            layout = Layout([problems[k][0] for k in live], [problems[k][2] for k in live])
+        current = GMMHMMParams(*(a[ix] for a in params))
+        stats, _ = estep(layout, current)
         for i, k in enumerate(live):
-            histories[k].append(float(loglik[batch.seqs_of[i]].sum()))
-        gamma_frames = np.zeros((K * N, Q))  # padding frames: zero responsibility
-        gamma_frames[batch.index[batch.alive]] = gamma[batch.alive]
-        gamma_frames = gamma_frames.reshape(K, N, Q)
-        # the components' responsibilities (0 on padding frames, whose gamma is 0 and whose lc is 0)
-        pcm = gamma_frames[..., None] if post_mix is None else gamma_frames[..., None] * post_mix
-        # every sufficient statistic at once: Σ pcm·x_i x_j, Σ pcm·x_i, Σ pcm per component
-        moments = (np.swapaxes(pcm.reshape(K, N, Q * M), 1, 2) @ batch.phi).reshape(K, Q, M, -1)
-        second = np.empty((K, Q, M, D, D))
-        for f, (i, j) in enumerate(pairs):
-            second[..., i, j] = second[..., j, i] = moments[..., f]
-        m_n = moments[..., len(pairs) : len(pairs) + D]  # (K, Q, M, D), centred
-        post_mix_sum = moments[..., -1]  # (K, Q, M)
-        start = np.zeros((K, Q))
-        np.add.at(start, seq_model, gamma[:, 0])
-        post_sum = gamma_frames.sum(axis=1)  # (K, Q)
-        # M-step, as fit's
-        new_start = np.where(startprob == 0, 0.0, np.maximum(start, 0.0))
-        new_start = new_start / new_start.sum(axis=1, keepdims=True)
-        new_trans = np.where(transmat == 0, 0.0, np.maximum(xi_sum, 0.0))
-        row = new_trans.sum(axis=2, keepdims=True)
-        new_trans = new_trans / np.where(row == 0, 1.0, row)
-        new_weights = post_mix_sum / post_sum[..., None]
-        m_d = post_mix_sum.copy()
-        m_d[(new_weights == 0) & (m_n == 0).all(axis=-1)] = 1.0
-        new_mu = m_n / m_d[..., None]
-        new_means = new_mu + batch.centre[:, None, None, :]
-        c = mu if covariance == "hmmlearn" else new_mu  # the scatter is about c: Σ pcm (x − c)(x − c)ᵀ
-        cm = c[..., :, None] * m_n[..., None, :]
-        c_n = (
-            second
-            - cm
-            - np.swapaxes(cm, -1, -2)
-            + post_mix_sum[..., None, None] * (c[..., :, None] * c[..., None, :])
-        )
-        if covariance == "ml":
-            n = post_mix_sum[..., None, None]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                new_covars = c_n / n + covar_floor * np.eye(D)
-            new_covars = np.where(n > EMPTY, new_covars, covars)
-        else:
-            new_covars = (covar_reg * np.eye(D) + c_n) / (post_mix_sum + 1.0)[..., None, None]
-        for a, new in zip(params, (new_start, new_trans, new_weights, new_means, new_covars), strict=True):
+            histories[k].append(float(stats.loglik[i]))
+        for a, new in zip(params, maximise(stats, current, **mstep), strict=True):
             a[ix] = new
-        live = [
-            k for k in live if not (len(histories[k]) >= 2 and histories[k][-1] - histories[k][-2] < tols[k])
+        stopped = [
+            k for k in live if len(histories[k]) >= 2 and histories[k][-1] - histories[k][-2] < tols[k]
         ]
+        live = [k for k in live if k not in stopped]
+        if progress is not None and stopped:
+            progress(len(stopped))
         if not live:
             break
-    return [FitResult(GMMHMMParams(*(a[k] for a in params)), np.array(histories[k])) for k in range(P)]
+    if progress is not None and live:
+        progress(len(live))  # stopped at n_iter
+    final = everything.uncentred(params)
+    return [FitResult(GMMHMMParams(*(a[k] for a in final)), np.array(histories[k])) for k in range(P)]

@@ -17,99 +17,123 @@ def _gmm_em(X, resp, reg_covar, tol, max_iter):
     """
     n, D = X.shape
     M = resp.shape[1]
-    eps10 = 10.0 * np.finfo(np.float64).eps
     weights = np.empty(M)
     means = np.empty((M, D))
     covs = np.empty((M, D, D))
     prec = np.zeros((M, D, D))  # the precisions' Cholesky factors, L⁻ᵀ
-    L = np.zeros((D, D))
-    inv = np.zeros((D, D))
     log_det = np.empty(M)
-    lp = np.empty(M)
-    log_2pi = np.log(2.0 * np.pi)
     lower = -np.inf
     n_iter = 0
     converged = False
     for it in range(max_iter + 1):
         if it > 0:  # E-step: the mean log-likelihood and the responsibilities
             previous = lower
-            s = 0.0
-            for i in range(n):
-                top = -np.inf
-                for k in range(M):
-                    sq = 0.0
-                    for c in range(D):
-                        y = 0.0
-                        for r in range(D):
-                            y += (X[i, r] - means[k, r]) * prec[k, r, c]
-                        sq += y * y
-                    lp[k] = -0.5 * (D * log_2pi + sq) + log_det[k] + np.log(weights[k])
-                    if lp[k] > top:
-                        top = lp[k]
-                acc = 0.0
-                for k in range(M):
-                    acc += np.exp(lp[k] - top)
-                norm = top + np.log(acc)
-                s += norm
-                for k in range(M):
-                    resp[i, k] = np.exp(lp[k] - norm)
-            lower = s / n
+            lower = _gmm_estep(X, weights, means, prec, log_det, resp)
             n_iter = it
             converged = abs(lower - previous) < tol
-        # M-step: nk = Σ resp + 10 eps, means, covariances about the new means + reg_covar·I
-        total = 0.0
-        for k in range(M):
-            nk = 0.0
-            for i in range(n):
-                nk += resp[i, k]
-            nk += eps10
-            weights[k] = nk
-            total += nk
-            for d in range(D):
-                acc = 0.0
-                for i in range(n):
-                    acc += resp[i, k] * X[i, d]
-                means[k, d] = acc / nk
-            for r in range(D):
-                for c in range(r, D):
-                    acc = 0.0
-                    for i in range(n):
-                        acc += resp[i, k] * (X[i, r] - means[k, r]) * (X[i, c] - means[k, c])
-                    covs[k, r, c] = acc / nk
-                    covs[k, c, r] = covs[k, r, c]
-                covs[k, r, r] += reg_covar
-        for k in range(M):
-            weights[k] /= n if it == 0 else total
-        # the precisions' Cholesky factors: cov = L Lᵀ, prec = (L⁻¹)ᵀ
-        for k in range(M):
-            for r in range(D):
-                for c in range(r + 1):
-                    acc = covs[k, r, c]
-                    for j in range(c):
-                        acc -= L[r, j] * L[c, j]
-                    if r == c:
-                        if not acc > 0.0:
-                            return weights, means, covs, -1
-                        L[r, r] = np.sqrt(acc)
-                    else:
-                        L[r, c] = acc / L[c, c]
-            for c in range(D):  # L⁻¹ column by column, by forward substitution
-                for r in range(D):
-                    inv[r, c] = 0.0
-                for r in range(c, D):
-                    acc = 1.0 if r == c else 0.0
-                    for j in range(c, r):
-                        acc -= L[r, j] * inv[j, c]
-                    inv[r, c] = acc / L[r, r]
-            ld = 0.0
-            for r in range(D):
-                for c in range(D):
-                    prec[k, r, c] = inv[c, r]
-                ld += np.log(prec[k, r, r])
-            log_det[k] = ld
+        _gmm_mstep(X, resp, reg_covar, it == 0, weights, means, covs)
+        if not _gmm_precisions(covs, prec, log_det):
+            return weights, means, covs, -1
         if converged:
             break
     return weights, means, covs, n_iter
+
+
+def _gmm_estep(X, weights, means, prec, log_det, resp):
+    """The E-step of :func:`_gmm_em`: each frame's responsibilities (into ``resp``) and the mean
+    log-likelihood."""
+    n, D = X.shape
+    M = weights.shape[0]
+    lp = np.empty(M)
+    log_2pi = np.log(2.0 * np.pi)
+    s = 0.0
+    for i in range(n):
+        top = -np.inf
+        for k in range(M):
+            sq = 0.0
+            for c in range(D):
+                y = 0.0
+                for r in range(D):
+                    y += (X[i, r] - means[k, r]) * prec[k, r, c]
+                sq += y * y
+            lp[k] = -0.5 * (D * log_2pi + sq) + log_det[k] + np.log(weights[k])
+            if lp[k] > top:
+                top = lp[k]
+        acc = 0.0
+        for k in range(M):
+            acc += np.exp(lp[k] - top)
+        norm = top + np.log(acc)
+        s += norm
+        for k in range(M):
+            resp[i, k] = np.exp(lp[k] - norm)
+    return s / n
+
+
+def _gmm_mstep(X, resp, reg_covar, first, weights, means, covs):
+    """The M-step of :func:`_gmm_em`: nk = Σ resp + 10 eps, means, covariances about the new means +
+    reg_covar·I; the weights divided by n in the first round (as scikit-learn's initialisation), by Σ nk
+    after."""
+    n, D = X.shape
+    M = resp.shape[1]
+    eps10 = 10.0 * np.finfo(np.float64).eps
+    total = 0.0
+    for k in range(M):
+        nk = 0.0
+        for i in range(n):
+            nk += resp[i, k]
+        nk += eps10
+        weights[k] = nk
+        total += nk
+        for d in range(D):
+            acc = 0.0
+            for i in range(n):
+                acc += resp[i, k] * X[i, d]
+            means[k, d] = acc / nk
+        for r in range(D):
+            for c in range(r, D):
+                acc = 0.0
+                for i in range(n):
+                    acc += resp[i, k] * (X[i, r] - means[k, r]) * (X[i, c] - means[k, c])
+                covs[k, r, c] = acc / nk
+                covs[k, c, r] = covs[k, r, c]
+            covs[k, r, r] += reg_covar
+    for k in range(M):
+        weights[k] /= n if first else total
+
+
+def _gmm_precisions(covs, prec, log_det):
+    """The precisions' Cholesky factors (cov = L Lᵀ, prec = (L⁻¹)ᵀ) and their log-determinants, into
+    ``prec`` and ``log_det``; False if a covariance is not positive definite."""
+    M, D = covs.shape[0], covs.shape[1]
+    L = np.zeros((D, D))
+    inv = np.zeros((D, D))
+    for k in range(M):
+        for r in range(D):
+            for c in range(r + 1):
+                acc = covs[k, r, c]
+                for j in range(c):
+                    acc -= L[r, j] * L[c, j]
+                if r == c:
+                    if not acc > 0.0:
+                        return False
+                    L[r, r] = np.sqrt(acc)
+                else:
+                    L[r, c] = acc / L[c, c]
+        for c in range(D):  # L⁻¹ column by column, by forward substitution
+            for r in range(D):
+                inv[r, c] = 0.0
+            for r in range(c, D):
+                acc = 1.0 if r == c else 0.0
+                for j in range(c, r):
+                    acc -= L[r, j] * inv[j, c]
+                inv[r, c] = acc / L[r, r]
+        ld = 0.0
+        for r in range(D):
+            for c in range(D):
+                prec[k, r, c] = inv[c, r]
+            ld += np.log(prec[k, r, r])
+        log_det[k] = ld
+    return True
 
 
 def _kmeans_step(X, old, csq, new, weight, labels, update):

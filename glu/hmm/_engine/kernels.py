@@ -1,15 +1,17 @@
 """Compiled loops (numba): the HMM recursions here, and :func:`compiled` for the other modules' loops.
 
-The batched forward–backward of Baum–Welch and the recogniser's scoring (``loglik_many``) were array
-code whose cost on the project's models (Q = 6 states, a few dozen sequences of 100–200 frames) was almost all
-per-step dispatch: about 20 µs a frame for a few hundred multiplications. Here the same recursions run as
-compiled loops, one sequence at a time, with the same scaling, the same underflow checks and the same
-log-domain fallback; the callers (:func:`glu.hmm._engine.em_batch.forward_backward_many`,
-:func:`glu.hmm._engine.batch.loglik_many`) keep their signatures and their numpy set-up. The mixture
-log-sum-exp of EM (:func:`mixture_posteriors`) is here too: numpy's reductions over an axis of three
-Gaussians cost more than the arithmetic. :mod:`glu.hmm.initialisation` compiles its k-means and EM loops
-with :func:`compiled`. The corpus scorer (:class:`glu.hmm._engine.batch.BatchScorer`) stays array code: on
-its batches of hundreds of sequences numpy's vectorised ``exp`` made it twice as fast as a compiled loop
+The two recursions of the gesture HMMs, compiled: the scaled forward–backward of the E-step
+(:func:`forward_backward_scaled`, the fast twin of :func:`glu.hmm.inference.forward_backward`, run by the one
+E-step :func:`glu.hmm._engine.em_batch.estep`) and the forward recursion of scoring with its emissions
+(:func:`loglik_banked`, the fast twin of :func:`glu.hmm.inference.forward_step`, run by
+:func:`glu.hmm.scoring.loglik_many`). As array code their cost on the project's models (Q = 6 states, a few
+dozen sequences of 100–200 frames) was almost all per-step dispatch: about 20 µs a frame for a few hundred
+multiplications. Here they run as compiled loops, one sequence at a time, with the same scaling, the same
+underflow checks and the same log-domain fallback. The mixture log-sum-exp of EM
+(:func:`mixture_posteriors`) is here too: numpy's reductions over an axis of three Gaussians cost more than
+the arithmetic. :mod:`glu.hmm.initialisation` compiles its k-means and EM loops with :func:`compiled`. The
+prefix scorer of corpora (:class:`glu.hmm.scoring.BatchScorer`) stays array code: on its batches of
+hundreds of sequences numpy's vectorised ``exp`` made it twice as fast as a compiled loop
 (``benchmarks/bench_corpus.py``).
 
 What differs from the array code is only the order of some sums (a sum over states runs from the first
@@ -25,6 +27,7 @@ process compiles and later ones load it (both times measured in ``docs/speed.md`
 
 from __future__ import annotations
 
+import types
 from functools import cache
 from typing import Any
 
@@ -221,7 +224,15 @@ def _jit() -> Any:
 @cache
 def compiled(fn: Any) -> Any:
     """``fn`` (a module-level function of plain loops) compiled by numba, once per process; its machine
-    code comes from the cache after the first process."""
+    code comes from the cache after the first process.
+
+    The functions of ``fn``'s own module that it calls by name (helpers of plain loops, such as the E- and
+    M-steps of :func:`glu.hmm._engine.gmm.gmm_em`'s loop) are compiled first and their module names bound
+    to the compiled ones, so that compiled code calls compiled code."""
+    for name in fn.__code__.co_names:
+        helper = fn.__globals__.get(name)
+        if isinstance(helper, types.FunctionType) and helper.__module__ == fn.__module__ and helper is not fn:
+            fn.__globals__[name] = compiled(helper)
     return _jit()(fn)
 
 
@@ -266,7 +277,7 @@ def loglik_banked(
     The emissions are :func:`glu.hmm.inference.log_emissions` and the recursion is
     :func:`glu.hmm.inference.forward_step` (scaled, each underflowing frame redone in the log domain),
     frame by frame; the log-likelihood is the sum of the steps in frame order, as
-    :func:`glu.hmm.inference.forward_curve` accumulates it. Shapes as :class:`glu.hmm._engine.batch.Bank`.
+    :func:`glu.hmm.inference.forward_curve` accumulates it. Shapes as :class:`glu.hmm.scoring.Bank`.
     """
     lengths = np.array([len(x) for x in sequences], dtype=np.int64)
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)

@@ -22,13 +22,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.data.published import published
 from glu.data.source import DataSource
 from glu.errors import DataError, ModelError
 from glu.fusion import fuse
-from glu.gestures.features import load_features
 from glu.gestures.recognizer import Recognizer
+from glu.gestures.recordings import load_features
 from glu.gestures.synthetic import synthesize_gesture
 from glu.gestures.trajectories import RepairPolicy, Trajectory
 from glu.hmm import p_hmm_from_loglik
@@ -271,7 +271,7 @@ def update_indices(n_frames: int, step: int = ORIGINAL_STEP, final_update: bool 
 
 def effect_anticipation(
     recognizer: Recognizer,
-    engine: InferenceEngine,
+    engine: Engine,
     trajectory: Trajectory,
     evidence: Mapping[str, str],
     *,

@@ -31,9 +31,9 @@ episodes; the action prior changes the actions drawn, and with them the rest of 
 
 Example
 -------
->>> from glu.bn import InferenceEngine, learn_bn
+>>> from glu.bn import learn_bn, make_engine
 >>> from glu.data import load_experiments
->>> engine = InferenceEngine(learn_bn(load_experiments("synthetic")))
+>>> engine = make_engine(learn_bn(load_experiments("synthetic")))
 >>> chunk = simulate_chunk(engine, Condition(0.02, "front", "network"), seed=0, chunk=0, n=4, chunk_size=4)
 >>> list(chunk.episodes.columns[:6])
 ['episode', 'Action', 'Color', 'Shape', 'Size', 'ObjVel']
@@ -53,12 +53,12 @@ from typing import Any, NamedTuple
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.files import atomic_path
-from glu.gestures._synthetic_batch import gesture_features
 from glu.gestures.synthetic import View
+from glu.gestures.synthetic_batch import gesture_features
 from glu.schema import ROOT_NODES
 from glu.studies.episodes import GESTURE_KEY, VIEWPOINTS, WORLD_KEY, Condition, GestureSettings, Scenario
 
@@ -90,7 +90,7 @@ def chunk_ranges(n_episodes: int, chunk_size: int) -> list[tuple[int, int]]:
 
 
 def simulate_chunk(
-    engine: InferenceEngine,
+    engine: Engine,
     condition: Condition,
     seed: int,
     chunk: int,
@@ -160,7 +160,7 @@ def simulate_chunk(
 
 
 def iter_corpus(
-    engine: InferenceEngine,
+    engine: Engine,
     conditions: Sequence[Condition],
     n_per_condition: int,
     seed: int,
@@ -181,7 +181,7 @@ def iter_corpus(
 
 def write_corpus(
     path: str | os.PathLike,
-    engine: InferenceEngine,
+    engine: Engine,
     conditions: Sequence[Condition],
     n_per_condition: int,
     seed: int = 0,

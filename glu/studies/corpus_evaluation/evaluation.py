@@ -2,7 +2,7 @@
 
 For each episode of a chunk (:mod:`glu.studies.corpus_evaluation.corpus`) and each observed fraction ``f`` of
 its gesture, the gesture HMMs of the episode's recogniser seed (a :class:`Replication`) give ``log L(G_1^t |
-A)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass, :class:`~glu.hmm._engine.batch.BatchScorer`). Each
+A)`` with ``t = ⌈f·T⌉`` (one vectorised forward pass, :class:`~glu.hmm.scoring.BatchScorer`). Each
 :class:`Reading` turns them into ``p_HMM`` (as the originals, per frame, or calibrated:
 :mod:`glu.gestures.calibration`) and infers with one network: the one the episodes were drawn from
 (``generating``), or one glu learned from a simulated experiment table (``learned``). Under each reading each
@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.errors import DataError, ModelError
 from glu.fusion import STRATEGIES, fuse_action_tables, fuse_tables
 from glu.gestures.calibration import READINGS, Calibration, p_hmm_reading
@@ -209,7 +209,7 @@ class Replication:
 
     Attributes
     ----------
-    scorer : the gesture recogniser as a :class:`~glu.hmm._engine.batch.BatchScorer` (models in the order of
+    scorer : the gesture recogniser as a :class:`~glu.hmm.scoring.BatchScorer` (models in the order of
         :data:`glu.schema.ACTIONS`)
     calibration : the calibrated reading's β per observed fraction (None: no ``calibrated`` reading)
     tables : network label (:attr:`Reading.network`) → target → :class:`NetworkTables`
@@ -227,7 +227,7 @@ class Replication:
             )
 
 
-def target_tables(engine: InferenceEngine, settings: EvaluationSettings) -> dict[str, NetworkTables]:
+def target_tables(engine: Engine, settings: EvaluationSettings) -> dict[str, NetworkTables]:
     """The :class:`NetworkTables` of each target for one network (queried once per network)."""
     return {
         "action": network_tables(engine, settings.action_evidence, EFFECT),
@@ -251,7 +251,7 @@ class Evaluator:
         (:func:`~glu.studies.corpus_evaluation.corpus.simulate_chunk`)
     """
 
-    world: InferenceEngine
+    world: Engine
     replications: tuple[Replication, ...]
     readings: tuple[Reading, ...] = (Reading(),)
     settings: EvaluationSettings = EvaluationSettings()
@@ -391,7 +391,7 @@ class Evaluator:
         on p_HMM only through its top action (the same under every reading unless the calibrated one is
         flat); the others carry the reading's index."""
         s, codes = self.settings, episodes.codes
-        shape = {n: self.world.shape[self.world.axis[n]] for n in AFFORDANCE_NODES}
+        shape = {n: self.world.bn.schema.cardinality(n) for n in AFFORDANCE_NODES}
         n, F, K = q.shape
         action = codes["Action"]
         top = np.argmax(q, axis=-1).tobytes()

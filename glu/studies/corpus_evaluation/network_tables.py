@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.errors import ImpossibleEvidenceError
 
 EFFECT = "ObjVel"
@@ -40,7 +40,7 @@ class NetworkTables(NamedTuple):
         return np.ravel_multi_index(tuple(codes[n] for n in self.nodes), tuple(shape))
 
 
-def network_tables(engine: InferenceEngine, nodes: Sequence[str], target: str) -> NetworkTables:
+def network_tables(engine: Engine, nodes: Sequence[str], target: str) -> NetworkTables:
     """:class:`NetworkTables` for observed ``nodes``; ``target`` is a node (e.g. ObjVel) or ``"words"``."""
     schema = engine.bn.schema
     values = [schema.values_of(n) for n in nodes]

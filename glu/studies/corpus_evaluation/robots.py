@@ -110,7 +110,7 @@ def calibrations(config: SweepConfig, recognizers: list[Any]) -> list[Any]:
 
 def learned_networks(config: SweepConfig, engine: Any) -> list[dict[int, Any]]:
     """Per recogniser seed, the networks glu learns (K2 + BIC) from experiment tables drawn from the world."""
-    from glu.bn import InferenceEngine, learn_bn
+    from glu.bn import learn_bn, make_engine
     from glu.bn.sampling import categorical, sample
 
     if "learned" not in config.inference_network:
@@ -130,6 +130,6 @@ def learned_networks(config: SweepConfig, engine: Any) -> list[dict[int, Any]]:
                 }
             )
             table.attrs["data_source"] = f"{n} experiments drawn from the generating network (seed {k})"
-            nets[n] = InferenceEngine(learn_bn(table, schema, unseen_words=config.network.unseen_words))
+            nets[n] = make_engine(learn_bn(table, schema, unseen_words=config.network.unseen_words))
         out.append(nets)
     return out

@@ -96,7 +96,7 @@ class SweepResult:
 # ------------------------------------------------------------------------------------------ preparing
 def prepare_world(config: SweepConfig) -> tuple[Any, str]:
     """The Affordance–Words network of a sweep (an inference engine) and a one-line label of its data."""
-    from glu.bn import InferenceEngine, learn_bn
+    from glu.bn import learn_bn, make_engine
     from glu.data import load_experiments, resolve_data
 
     net = config.network
@@ -107,7 +107,7 @@ def prepare_world(config: SweepConfig) -> tuple[Any, str]:
         f"{source.describe()}: network learned from {len(table)} experiments (words={net.words}, "
         f"unseen word rows {net.unseen_words}); gestures from glu's synthetic generator"
     )
-    return InferenceEngine(bn), label
+    return make_engine(bn), label
 
 
 def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple[Evaluator, dict[str, Any]]:

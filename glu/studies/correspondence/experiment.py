@@ -33,12 +33,12 @@ import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
-from glu.gestures._synthetic_batch import gesture_features
 from glu.gestures.corpus import Corpus, LabelledSequence
 from glu.gestures.invariants import FEATURE_NAMES, Invariants
 from glu.gestures.recognizer import Recognizer, train_recognizer
 from glu.gestures.robot import ROBOT_NOISE
 from glu.gestures.synthetic import View
+from glu.gestures.synthetic_batch import gesture_features
 from glu.hmm import TrainingConfig
 from glu.schema import ACTIONS
 from glu.stats import HIGHER_IS_BETTER, LEVEL, percentile_interval, two_level_sums, verdict

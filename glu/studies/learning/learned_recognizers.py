@@ -21,7 +21,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.data.source import DataSource
 from glu.errors import DataError, ModelError
 from glu.gestures.corpus import LabelledSequence
@@ -215,7 +215,7 @@ def classify(recognizer: Recognizer, actions: Sequence[str], seqs: Sequence[np.n
 
 
 def real_gesture_study(
-    engine: InferenceEngine,
+    engine: Engine,
     standing: Sequence[LabelledSequence],
     seated: Sequence[LabelledSequence] = (),
     *,
@@ -343,7 +343,7 @@ def real_gesture_summary(results: pd.DataFrame) -> pd.DataFrame:
 
 
 def learn_gestures(
-    engine: InferenceEngine,
+    engine: Engine,
     episodes: int,
     labels: str,
     *,
@@ -423,7 +423,7 @@ def learn_gestures(
 
 def anticipation_after_learning(
     recognizers: Mapping[str, Recognizer],
-    engine: InferenceEngine,
+    engine: Engine,
     source: DataSource,
     *,
     seed: int = 0,

@@ -9,18 +9,19 @@ without words) keeps, per action, the sufficient statistics of what it has seen
    network alone), from the true action (``true``), or from its HMMs alone (``unsupervised``: the clusters
    are named after the fact by the best matching with the true actions seen so far);
 2. runs the E-step of the episode under each of its models, and for each action with a label weight ``w > 0``
-   updates the statistics by a stepwise-EM step (Cappé & Moulines 2009; Liang & Klein 2009) — the running
-   weighted mean ``s ← (1 − η) s + η s_episode`` with ``η = w / W^α``, ``W`` the action's label weight so
-   far — and re-estimates the model from ``W · s`` (:func:`glu.hmm.maximise`). With ``α = 1`` (the default)
-   this is the plain accumulation ``Σ w s_episode``; ``α < 1`` forgets the early episodes faster;
+   makes a stepwise-EM step (:class:`glu.hmm.online.OnlineModels`: the running weighted mean of the
+   statistics ``s ← (1 − η) s + η s_episode`` with ``η = w / W^α``, ``W`` the action's label weight so far,
+   then the M-step of ``W · s``). With ``α = 1`` (the default) this is the plain accumulation
+   ``Σ w s_episode``; ``α < 1`` forgets the early episodes faster;
 3. an action without a model buffers its labelled episodes until their weight reaches ``init_weight``, then
    trains its first model on them (weighted EM, a few iterations). The unsupervised learner first clusters
    its first ``cluster_episodes`` episodes (k-means on the resampled trajectories).
 
 Many learners watch the same episodes (the gestures are the same in every ambiguity): :func:`run_online` runs
 them in lockstep, the E-step of every learner's every model on each episode in one call
-(:func:`glu.hmm.episode_stats`), and measures them all on the same held-out gestures at the
-checkpoints.
+(:meth:`glu.hmm.online.OnlineModels.estep`), and measures them all on the same held-out gestures at the
+checkpoints. The model arithmetic (statistics, steps, M-steps, first models) is :mod:`glu.hmm.online`'s;
+this module is the study: the learners, their labels and buffers, the clustering, the checkpoints.
 """
 
 from __future__ import annotations
@@ -37,14 +38,11 @@ from glu.gestures.recognizer import Recognizer
 from glu.hmm import (
     GestureHMM,
     GMMHMMParams,
+    OnlineModels,
     SufficientStats,
     TrainingConfig,
-    episode_stats,
-    expected_stats_fast,
+    first_model,
     kmeans_labels,
-    loglik_bank,
-    maximise,
-    train,
 )
 from glu.studies.learning.self_supervised import (
     LEARNERS,
@@ -158,46 +156,26 @@ class OnlineRun(NamedTuple):
 
 @dataclass
 class _State:
-    """The learners' models and statistics, stacked over (learner, action)."""
+    """The learners' models over (learner, action) and the episodes each action without a model has
+    buffered."""
 
-    params: GMMHMMParams
-    mean: SufficientStats
-    total: np.ndarray
-    exists: np.ndarray
+    models: OnlineModels
     buffers: list[list[list[tuple[int, float]]]] = field(default_factory=list)
 
+    @property
+    def exists(self) -> np.ndarray:
+        """Which (learner, action) has a model, shape (L, A)."""
+        return self.models.exists
 
-def _empty_state(L: int, A: int, config: TrainingConfig, D: int) -> _State:
-    Q, M = config.n_states, config.n_mix
-    eye = np.broadcast_to(np.eye(D), (L, A, Q, M, D, D)).copy()
-    params = GMMHMMParams(
-        np.zeros((L, A, Q)),
-        np.zeros((L, A, Q, Q)),
-        np.full((L, A, Q, M), 1.0 / M),
-        np.zeros((L, A, Q, M, D)),
-        eye,
-    )
-    return _State(
-        params,
-        SufficientStats.zeros(Q, M, D, (L, A)),
-        np.zeros((L, A)),
-        np.zeros((L, A), dtype=bool),
-        [[[] for _ in range(A)] for _ in range(L)],
-    )
+    @property
+    def params(self) -> GMMHMMParams:
+        """The models' parameters, stacked over (learner, action)."""
+        return self.models.params
 
 
-def _set(params: GMMHMMParams, idx: tuple, new: GMMHMMParams) -> None:
-    for a, b in zip(params, new, strict=True):
-        a[idx] = b
-
-
-def _take(stats: SufficientStats, idx: tuple) -> SufficientStats:
-    return SufficientStats(*(getattr(stats, f)[idx] for f in SufficientStats.__dataclass_fields__))
-
-
-def _put(stats: SufficientStats, idx: tuple, new: SufficientStats) -> None:
-    for f in SufficientStats.__dataclass_fields__:
-        getattr(stats, f)[idx] = getattr(new, f)
+def _empty_state(L: int, A: int, settings: OnlineSettings, D: int) -> _State:
+    models = OnlineModels.empty((L, A), settings.config, D, settings.step)
+    return _State(models, [[[] for _ in range(A)] for _ in range(L)])
 
 
 def run_online(
@@ -238,7 +216,7 @@ def run_online(
         raise DataError(f"checkpoints must lie in 1 … {N} (the episodes), got {checkpoints.tolist()}")
     config, D = settings.config, features[0].shape[1]
     Q = config.n_states
-    state = _empty_state(L, A, config, D)
+    state = _empty_state(L, A, settings, D)
     unsup = [k for k, lr in enumerate(learners) if lr.scheme == "unsupervised"]
     cluster_counts = np.zeros((L, A, A))
     C = len(checkpoints)
@@ -268,7 +246,7 @@ def run_online(
         loglik = np.full((L, A), -np.inf)
         unit = None
         if len(pairs[0]):
-            unit, ll = episode_stats(X, GMMHMMParams(*(p[pairs] for p in state.params)))
+            unit, ll = state.models.estep(X, pairs)
             loglik[pairs] = ll
         for k in np.flatnonzero(dynamic):
             lr = learners[k]
@@ -314,20 +292,9 @@ def _update(
     """The stepwise-EM step and the M-step of every model with a positive label weight."""
     w = W[pairs]
     keep = w > 0
-    if not keep.any():
-        return
-    idx = tuple(p[keep] for p in pairs)
-    w = w[keep]
-    total = state.total[idx] + w
-    eta = np.minimum(1.0, w / total**settings.step)
-    old = _take(state.mean, idx)
-    new = _take(unit, (np.flatnonzero(keep),))
-    mean = old.scaled(1.0 - eta) + new.scaled(eta)
-    _put(state.mean, idx, mean)
-    state.total[idx] = total
-    cfg = settings.config
-    params = maximise(mean.scaled(total), GMMHMMParams(*(p[idx] for p in state.params)), cfg.covar_reg, "map")
-    _set(state.params, idx, params)
+    if keep.any():
+        idx = tuple(p[keep] for p in pairs)
+        state.models.update(idx, unit.take(np.flatnonzero(keep)), w[keep], settings.config.covar_reg)
 
 
 def _first_model(
@@ -348,16 +315,10 @@ def _first_model(
     if cache is not None and key in cache:
         p, stats = cache[key]
     else:
-        cfg = settings.config.replace(n_iter=settings.init_iter)
-        model = train(seqs, cfg, weights=w, seed=seed, warn=False).model
-        p = GMMHMMParams(model.startprob, model.transmat, model.weights, model.means, model.covars)
-        stats = expected_stats_fast(seqs, p, w)
+        p, stats = first_model(seqs, w, settings.config.replace(n_iter=settings.init_iter), seed)
         if cache is not None:
             cache[key] = p, stats
-    _set(state.params, (k, a), p)
-    _put(state.mean, (k, a), stats.scaled(1.0 / float(stats.weight)))
-    state.total[k, a] = float(stats.weight)
-    state.exists[k, a] = True
+    state.models.start((k, a), p, stats)
 
 
 def _initialise(
@@ -416,9 +377,7 @@ def _measure(
     if len(pairs[0]):
         means[pairs] = state.params.means[pairs][:, :, 0]
     if len(pairs[0]) and len(test_features):
-        ll[:, pairs[0], pairs[1]] = loglik_bank(
-            test_features, GMMHMMParams(*(p[pairs] for p in state.params))
-        )
+        ll[:, pairs[0], pairs[1]] = state.models.loglik(test_features, pairs)
     cluster = ll.argmax(axis=2)  # (J, L)
     predicted = matching[np.arange(L)[None, :], cluster]  # (J, L): each cluster's action
     none = ~np.isfinite(ll.max(axis=2))

@@ -6,7 +6,7 @@ velocity, the robot will be able to infer that the action is most probably a tap
 be used to train our statistical gesture recognition system." Here the robot watches **episodes** — a
 person's hand trajectory, the object, the effect and, optionally, the words someone said — without the
 action's name, labels each with its Affordance–Words network, ``p_BN(Action | object, effect[, words])``,
-and trains its gesture HMMs from those labels (weighted EM, :func:`glu.hmm.em.fit_weighted`).
+and trains its gesture HMMs from those labels (weighted EM, :func:`glu.hmm.train` with ``weights``).
 
 * :class:`Ambiguity` — how well the effects tell the actions apart: the objects people act on, objects
   that never move, taps that fail (the object stays put, as after a touch), noisy perception of the effect.
@@ -42,12 +42,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.gestures import calibration
-from glu.gestures._synthetic_batch import gesture_features
 from glu.gestures.synthetic import View
+from glu.gestures.synthetic_batch import gesture_features
 from glu.hmm import (
     TrainingConfig,
 )
@@ -146,9 +146,7 @@ def _rng(seed: int, *key: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=key))
 
 
-def draw_actions(
-    engine: InferenceEngine, n: int, seed: int, offset: int = 0, balanced: bool = False
-) -> np.ndarray:
+def draw_actions(engine: Engine, n: int, seed: int, offset: int = 0, balanced: bool = False) -> np.ndarray:
     """The actions of episodes ``offset … offset + n − 1`` (uniform; ``balanced``: cycling through them)."""
     k = len(engine.bn.schema.values_of("Action"))
     if balanced:
@@ -158,7 +156,7 @@ def draw_actions(
 
 
 def draw_gestures(
-    engine: InferenceEngine,
+    engine: Engine,
     actions: np.ndarray,
     seed: int,
     offset: int = 0,
@@ -183,7 +181,7 @@ def draw_gestures(
 
 
 def draw_world(
-    engine: InferenceEngine,
+    engine: Engine,
     actions: np.ndarray,
     ambiguity: Ambiguity,
     seed: int,
@@ -231,7 +229,7 @@ def draw_world(
 
 
 def simulate_episodes(
-    engine: InferenceEngine,
+    engine: Engine,
     ambiguity: Ambiguity,
     n: int,
     seed: int,
@@ -249,7 +247,7 @@ def simulate_episodes(
 
 
 def network_posteriors(
-    engine: InferenceEngine,
+    engine: Engine,
     perceived: Mapping[str, np.ndarray],
     world: Mapping[str, np.ndarray] | None = None,
     words: bool = False,

@@ -27,7 +27,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import Engine
 from glu.errors import DataError
 from glu.machine import close_cluster, ctrl_c_held, kill_local_workers, quiet_dask_logs
 from glu.stats import interval, replicate_means, two_level_weights
@@ -145,7 +145,7 @@ class SeedResult(NamedTuple):
     update_seconds: np.ndarray
 
 
-def run_seed(engine: InferenceEngine, seed: int, settings: StudySettings = StudySettings()) -> SeedResult:
+def run_seed(engine: Engine, seed: int, settings: StudySettings = StudySettings()) -> SeedResult:
     """Simulate one seed's episodes and held-out gestures and run every learner on them (a Dask task)."""
     s = settings
     actions = engine.bn.schema.values_of("Action")
@@ -203,7 +203,7 @@ def run_seed(engine: InferenceEngine, seed: int, settings: StudySettings = Study
 
 
 def learning_study(
-    engine: InferenceEngine,
+    engine: Engine,
     settings: StudySettings = StudySettings(),
     *,
     workers: int = 0,

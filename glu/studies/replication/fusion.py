@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import InferenceEngine
+from glu.bn.inference import make_engine
 from glu.bn.model import BayesNet
 from glu.fusion import SOFT_STRATEGIES, Strategy, check_strategy, fuse, hmm_rows
 from glu.gestures.corpus import LabelledSequence
@@ -85,7 +85,7 @@ def effect_prediction(bn: BayesNet, reference: BayesNet | None = None) -> pd.Dat
     Returns columns ``case, ObjVel, p`` (+ ``p_original, difference`` with a reference model).
     """
     rows, ref = [], []
-    engines = [InferenceEngine(bn)] + ([InferenceEngine(reference)] if reference else [])
+    engines = [make_engine(bn)] + ([make_engine(reference)] if reference else [])
     for case, ev in EFFECT_CASES.items():
         posts = [e.query(["ObjVel"], ev)["ObjVel"] for e in engines]
         for i, v in enumerate(bn.schema.values_of("ObjVel")):
@@ -111,7 +111,7 @@ def word_probability_change(
     word order (+ ``delta_original, difference`` with a reference model).
     """
     ev = dict(WORD_EVIDENCE[evidence] if isinstance(evidence, str) else evidence)
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
     without = eng.word_probability_array(ev)
     with_tap = eng.word_probability_array({**ev, "Action": "tap"})
     df = pd.DataFrame({"word": list(eng.binary_leaves), "p_without": without, "p_with": with_tap})
@@ -119,7 +119,7 @@ def word_probability_change(
     df["shown"] = df["delta"].abs() > threshold
     df.insert(0, "evidence", evidence_text(ev))
     if reference:
-        r = InferenceEngine(reference)
+        r = make_engine(reference)
         df["delta_original"] = r.word_probability_array({**ev, "Action": "tap"}) - r.word_probability_array(
             ev
         )
@@ -146,8 +146,8 @@ def action_vs_soft_evidence(
     Returns columns ``case, p_hmm_tap, Action, p`` (+ ``p_original, difference``).
     """
     actions = bn.schema.values_of("Action")
-    eng = InferenceEngine(bn)
-    ref_eng = InferenceEngine(reference) if reference else None
+    eng = make_engine(bn)
+    ref_eng = make_engine(reference) if reference else None
     out, ref = [], []
     for q in rows:
         post = fuse(eng, ["Action"], evidence, q, strategy)["Action"]
@@ -182,7 +182,7 @@ def tap_threshold(
     The search runs over p_hmm(tap) in [0, 1] (below 1/3 the HMMs favour the other actions), where tap's
     margin grows monotonically; returns ``nan`` if tap never wins (p_BN(tap | evidence) = 0).
     """
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
     actions = bn.schema.values_of("Action")
     i_tap = actions.index("tap")
 
@@ -216,8 +216,8 @@ def effect_vs_soft_evidence(
     ``rules``: soft-fusion strategies to compare (``virtual`` is the originals'). Returns columns
     ``Shape, rule, case, ObjVel, p`` (+ ``p_original, difference``).
     """
-    eng = InferenceEngine(bn)
-    ref_eng = InferenceEngine(reference) if reference else None
+    eng = make_engine(bn)
+    ref_eng = make_engine(reference) if reference else None
     out, ref = [], []
     for shape in shapes:
         for rule in rules:
@@ -251,7 +251,7 @@ def soft_evidence_sweep(
     One batch query per rule (:func:`glu.fusion.fuse` over a (n_points, 3) array of posteriors). Returns
     columns ``evidence, rule, p_hmm_tap, <target>, p``.
     """
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
     t = np.linspace(0.0, 1.0, n_points)
     q = hmm_rows(t)
     values = bn.schema.values_of(target)
@@ -280,7 +280,7 @@ def tap_thresholds(bn: BayesNet, nodes: Sequence[str] = ("Shape", "Size", "ObjVe
     """
     import itertools
 
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
     rows = []
     for combo in itertools.product(*[bn.schema.values_of(n) for n in nodes]):
         ev = dict(zip(nodes, combo, strict=True))
@@ -340,8 +340,8 @@ def network_summary(bn: BayesNet, table: pd.DataFrame, original: BayesNet | None
         ),
         (
             "lost_prior_mass",
-            1 - InferenceEngine(bn).base_mass,
-            1 - InferenceEngine(original).base_mass if original else np.nan,
+            1 - make_engine(bn).probability_of_evidence(),
+            1 - make_engine(original).probability_of_evidence() if original else np.nan,
         ),
     ]
     if original is not None:
@@ -415,7 +415,7 @@ def fusion_on_gestures(
     :class:`glu.gestures.corpus.LabelledSequence`); ``evidence``: the object the gestures are applied to.
     Returns columns ``recording, start, end, true_action, hmm_top, p_hmm_<a>…, strategy, <target>, p``.
     """
-    eng = InferenceEngine(bn)
+    eng = make_engine(bn)
     actions = bn.schema.values_of("Action")
     order = [list(recognizer.actions).index(a) for a in actions]
     rows = []

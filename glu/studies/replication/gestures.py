@@ -372,6 +372,9 @@ def training_table(recognizer: Recognizer) -> pd.DataFrame:
 
 
 def recognizer_settings(recognizer: Recognizer) -> dict[str, Any]:
-    """The training settings recorded in a recogniser's ``meta`` (recipe, Q, M, EM limits, seed, features)."""
-    keys = ("recipe", "n_states", "n_mix", "n_iter", "tol", "covar_reg", "seed", "features")
-    return {k: recognizer.meta[k] for k in keys if k in recognizer.meta}
+    """The training settings of a recogniser (recipe, Q, M, EM limits: its ``config``), with the seed and
+    features its ``meta`` records."""
+    config = recognizer.config
+    keys = ("recipe", "n_states", "n_mix", "n_iter", "tol", "covar_reg")
+    settings = {} if config is None else {k: getattr(config, k) for k in keys}
+    return {**settings, **{k: recognizer.meta[k] for k in ("seed", "features") if k in recognizer.meta}}

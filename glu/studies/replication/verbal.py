@@ -1,7 +1,7 @@
 """The verbal-description experiments of TCDS 2020 (docs/method.md §7.5), each a function returning a tidy
 DataFrame.
 
-Every function takes an :class:`~glu.bn.InferenceEngine` (word probabilities given evidence) and
+Every function takes an :class:`~glu.bn.Engine` (word probabilities given evidence) and
 optionally a grammar (default: glu's, the originals' language). Two ways to choose a description:
 
 * as the originals did: rank their 9,941 sampled sentences with their score ``(1 + Σ log p)/L``.

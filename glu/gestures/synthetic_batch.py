@@ -5,12 +5,12 @@ the repaired features of one synthetic gesture (:meth:`glu.gestures.synthetic.Sy
 :func:`gesture_features` computes them for a whole chunk of episodes: each episode's generator draws exactly
 the numbers :func:`~glu.gestures.synthetic.synthesize_gesture` draws, in the same order, and then the work is
 shared across the episodes — the minimum-jerk hand paths of all episodes in a few array operations
-(:func:`glu.gestures._pchip.pchip_many`), the sway of all frames at once, the running repair of all episodes
-at once (:func:`glu.gestures._repair_many.repaired_many`), and only the joints the features use. Every number
-is computed by the same IEEE operations as the one-gesture path (elementwise operations do not depend on how
-the arrays are batched; the rotation of each skeleton is the same matrix product; reductions run per episode,
-on the same arrays), so the features are identical, bit for bit, to ``synthesize_gesture(...).features()``
-(tested).
+(:func:`glu.gestures.synthetic.pchip_many`), the sway of all frames at once, the running repair of all
+episodes at once (:func:`glu.gestures.trajectories.repaired_many`), and only the joints the features use.
+Every number is computed by the same IEEE operations as the one-gesture path (elementwise operations do not
+depend on how the arrays are batched; the rotation of each skeleton is the same matrix product; reductions
+run per episode, on the same arrays), so the features are identical, bit for bit, to
+``synthesize_gesture(...).features()`` (tested).
 
 Example
 -------
@@ -31,29 +31,28 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.gestures._pchip import pchip_many
-from glu.gestures._repair_many import repaired_many
 from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle_frames, to_body_frame
 from glu.gestures.synthetic import (
-    _BODY,
-    _KEYS,
-    _OBJECT,
-    _SEATED_OBJECT_SHIFT,
+    BODY,
     DEFAULT_VIEW,
     FRAME_RATE,
+    KEYS,
+    OBJECT,
     OPENNI_JOINTS,
+    SEATED_OBJECT_SHIFT,
     SYNTHETIC_POLICY,
     View,
-    _check_action,
-    _person_style,
-    _rest_pose,
+    check_action,
+    pchip_many,
+    person_style,
+    rest_pose,
     synthesize_gesture,
 )
-from glu.gestures.trajectories import RepairPolicy
+from glu.gestures.trajectories import RepairPolicy, repaired_many
 
 _IH, _IT = OPENNI_JOINTS.index("right_hand"), OPENNI_JOINTS.index("torso")
 _ILS, _IRS, _IN = (OPENNI_JOINTS.index(j) for j in ("left_shoulder", "right_shoulder", "neck"))
-_BODY_ARRAY = np.array([_BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS])
+_BODY_ARRAY = np.array([BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS])
 # _person's draws (size, origin x y z, yaw in degrees, sway phase, sway amplitude) then _hand_path's first
 # ones (duration, amplitude, object offset x y z): all uniform, drawn in this order by one call.
 _LOW = np.array([0.85, -0.4, -0.15, -2.6, -10, 0, 0.0, 2.5, 0.85, -0.05, -0.05, -0.05])
@@ -108,79 +107,31 @@ def gesture_features(
     policy : the repair (:meth:`~glu.gestures.synthetic.SyntheticGesture.features`)
     """
     view = view or DEFAULT_VIEW
-    n = len(actions)
+    sensor = {
+        "noise": noise,
+        "spike_rate": spike_rate,
+        "dropout_rate": dropout_rate,
+        "rest_frames": rest_frames,
+    }
     if view.performer == "robot":  # the robot's own movements: one at a time
-        gs = [
-            synthesize_gesture(
-                a,
-                r,
-                noise=noise,
-                spike_rate=spike_rate,
-                dropout_rate=dropout_rate,
-                rest_frames=rest_frames,
-                view=view,
-            )
-            for a, r in zip(actions, rngs, strict=True)
-        ]
+        gs = [synthesize_gesture(a, r, **sensor, view=view) for a, r in zip(actions, rngs, strict=True)]
         return GestureBatch(
             [g.features(policy) for g in gs],
-            np.array([g.t[-1] - g.t[0] for g in gs], dtype=float).reshape(n),
-            np.array([g.size for g in gs], dtype=float).reshape(n),
+            np.array([g.t[-1] - g.t[0] for g in gs], dtype=float).reshape(len(gs)),
+            np.array([g.size for g in gs], dtype=float).reshape(len(gs)),
         )
     for a in set(actions):
-        _check_action(a, view)
-    rest0 = _rest_pose(view)
-    seated = view.posture == "seated"
-    draws, key_times, key_points = [], [], []
-    for action, rng in zip(actions, rngs, strict=True):
-        # _person, then _hand_path: the same draws in the same order as synthesize_gesture
-        v = rng.uniform(_LOW, _HIGH)
-        size = float(v[0]) if view.size is None else float(view.size)
-        yaw = float(np.deg2rad(v[4])) if view.yaw_deg is None else float(np.deg2rad(view.yaw_deg))
-        m = max(int(round(v[7] * FRAME_RATE)), 12)
-        amp = v[8]
-        obj = _OBJECT + v[9:12] * np.array([1.0, 0.4, 1.0])
-        rest = rest0 + rng.normal(0, 0.015, size=3)
-        if seated:
-            obj = obj + _SEATED_OBJECT_SHIFT
-        spec = _KEYS[action]
-        jitter = rng.uniform(-0.02, 0.02, size=len(spec) - 2)
-        keys = []
-        for j, (tf, off) in enumerate(spec):
-            if 0 < j < len(spec) - 1:
-                tf = tf + jitter[j - 1]
-            p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
-            keys.append((tf, p * size))
-        if view.variety > 0:
-            keys = _person_style(keys, spec, rng, size, view.variety)
-        keys.sort(key=lambda k: k[0])
-        key_times.append(np.array([k[0] for k in keys]))
-        key_points.append(np.stack([k[1] for k in keys]))
-        pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
-        # _sensor's draws
-        nf = pre + m + post
-        eps = rng.normal(0.0, noise, size=(nf, len(OPENNI_JOINTS), 3)) if noise > 0 else None
-        spikes = rng.random(nf) < spike_rate
-        k = int(spikes.sum())
-        d = None
-        if k:
-            d = rng.normal(size=(k, 3))
-            d *= (rng.uniform(0.15, 0.4, size=k) / np.linalg.norm(d, axis=1))[:, None]
-        jit = rng.normal(0.0, 0.002, size=nf)
-        keep = None
-        if nf > 30 and rng.random() < dropout_rate:
-            length = int(rng.integers(3, 21))
-            start = int(rng.integers(5, nf - length - 5))
-            keep = np.ones(nf, dtype=bool)
-            keep[start : start + length] = False
-        draws.append((size, v[1:4].copy(), yaw, v[5], v[6], m, pre, post, eps, spikes, d, jit, keep))
-    moves = _hand_paths(key_times, key_points, [w[5] for w in draws])
+        check_action(a, view)
+    rest0 = rest_pose(view)
+    episodes = [_draws(a, rng, rest0, view, **sensor) for a, rng in zip(actions, rngs, strict=True)]
+    draws = [e[0] for e in episodes]
+    moves = _hand_paths([e[1] for e in episodes], [e[2] for e in episodes], [w[5] for w in draws])
     # the sway of every frame of every episode, in one call
     phase = np.concatenate([np.full(w[5] + w[6] + w[7], w[3]) for w in draws])
     amps = np.concatenate([np.full(w[5] + w[6] + w[7], w[4]) for w in draws])
     tt = np.concatenate([_timing(w[5] + w[6] + w[7])[1] for w in draws])
     sway_all = amps * np.sin(2 * np.pi * 0.25 * tt + phase)
-    xyzs, ts, duration, sizes = [], [], np.empty(n), np.empty(n)
+    xyzs, ts, duration, sizes = [], [], np.empty(len(draws)), np.empty(len(draws))
     at = 0
     for i, (w, move) in enumerate(zip(draws, moves, strict=True)):
         size, origin, yaw, _, _, m, pre, post, eps, spikes, d, jit, keep = w
@@ -200,6 +151,59 @@ def gesture_features(
         ts.append(t)
         duration[i], sizes[i] = t[-1] - t[0], size
     return GestureBatch(repaired_many(xyzs, ts, policy), duration, sizes)
+
+
+def _draws(
+    action: str,
+    rng: np.random.Generator,
+    rest0: np.ndarray,
+    view: View,
+    *,
+    noise: float,
+    spike_rate: float,
+    dropout_rate: float,
+    rest_frames: tuple[int, int],
+) -> tuple[tuple, np.ndarray, np.ndarray]:
+    """One episode's random draws, the same in the same order as ``synthesize_gesture``'s (its ``_person``,
+    ``_hand_path`` and ``_sensor``): the drawn values, and the key times and points of its hand path."""
+    v = rng.uniform(_LOW, _HIGH)
+    size = float(v[0]) if view.size is None else float(view.size)
+    yaw = float(np.deg2rad(v[4])) if view.yaw_deg is None else float(np.deg2rad(view.yaw_deg))
+    m = max(int(round(v[7] * FRAME_RATE)), 12)
+    amp = v[8]
+    obj = OBJECT + v[9:12] * np.array([1.0, 0.4, 1.0])
+    rest = rest0 + rng.normal(0, 0.015, size=3)
+    if view.posture == "seated":
+        obj = obj + SEATED_OBJECT_SHIFT
+    spec = KEYS[action]
+    jitter = rng.uniform(-0.02, 0.02, size=len(spec) - 2)
+    keys = []
+    for j, (tf, off) in enumerate(spec):
+        if 0 < j < len(spec) - 1:
+            tf = tf + jitter[j - 1]
+        p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
+        keys.append((tf, p * size))
+    if view.variety > 0:
+        keys = person_style(keys, spec, rng, size, view.variety)
+    keys.sort(key=lambda k: k[0])
+    pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
+    nf = pre + m + post
+    eps = rng.normal(0.0, noise, size=(nf, len(OPENNI_JOINTS), 3)) if noise > 0 else None
+    spikes = rng.random(nf) < spike_rate
+    k = int(spikes.sum())
+    d = None
+    if k:
+        d = rng.normal(size=(k, 3))
+        d *= (rng.uniform(0.15, 0.4, size=k) / np.linalg.norm(d, axis=1))[:, None]
+    jit = rng.normal(0.0, 0.002, size=nf)
+    keep = None
+    if nf > 30 and rng.random() < dropout_rate:
+        length = int(rng.integers(3, 21))
+        start = int(rng.integers(5, nf - length - 5))
+        keep = np.ones(nf, dtype=bool)
+        keep[start : start + length] = False
+    drawn = (size, v[1:4].copy(), yaw, v[5], v[6], m, pre, post, eps, spikes, d, jit, keep)
+    return drawn, np.array([k[0] for k in keys]), np.stack([k[1] for k in keys])
 
 
 _JOINTS = np.array([_IH, _IT, _ILS, _IRS, _IN])

@@ -1,7 +1,15 @@
-"""Scoring many gesture sequences against every model of a bank in one vectorised forward pass.
+"""Scoring many gesture sequences against every model of a bank: the fast forward passes.
 
-A corpus evaluation scores thousands of sequences, each at several observed prefixes, against every
-action's HMM. :class:`BatchScorer` does it for a whole batch at once:
+:class:`~glu.hmm.model.GestureHMM` scores one sequence with the readable recursion of
+:mod:`glu.hmm.inference`; studies score thousands. Here:
+
+* :func:`stack_models` stacks a bank of models (padded to a common Q and M) into a :class:`Bank`
+  (:func:`params_bank` from stacked parameters);
+* :func:`loglik_many` gives ``log L(G | model)`` of many sequences under every model of a bank: the
+  emissions and the forward recursion run compiled, frame by frame
+  (:func:`glu.hmm._engine.kernels.loglik_banked`), each step :func:`~glu.hmm.inference.forward_step`'s;
+* :class:`BatchScorer` gives the prefix log-likelihoods ``log L(G_1^t | model)`` of every prefix of many
+  sequences (a corpus evaluation scores each at several observed prefixes), vectorised:
 
 1. **Emissions by one matrix product.** Each Gaussian's log-density is a quadratic form in the frame,
    ``log w − ½ (x − μ)ᵀ Σ⁻¹ (x − μ) + const``; expanded over the monomials of the (centred) frame,
@@ -9,7 +17,7 @@ action's HMM. :class:`BatchScorer` does it for a whole batch at once:
    vector ``c_k`` per component. All frames of all sequences times all components of all models
    (A · Q · M columns) is then one matrix product, followed by one exponential per component.
 2. **The forward recursion batched** over sequences and models
-   (:func:`~glu.hmm.inference.forward_curves_batch`): one batched ``(S, Q) @ (Q, Q)`` product per frame
+   (:func:`forward_curves_batch`): one batched ``(S, Q) @ (Q, Q)`` product per frame
    and model, sequences sorted by length so that finished ones drop out.
 3. **Exactness kept.** A (model, sequence) pair whose scaled forward mass underflows is recomputed by the
    per-sequence path (:func:`~glu.hmm.inference.forward_curve` with its log-domain fallback), so the
@@ -44,8 +52,11 @@ from typing import NamedTuple
 import numpy as np
 
 from glu.errors import DataError, ModelError
+from glu.hmm._engine.em_batch import quadratic_coefficients as component_coefficients
+from glu.hmm._engine.em_batch import quadratic_features
 from glu.hmm._engine.kernels import loglik_banked
-from glu.hmm.inference import TINY, forward_curve, log_emissions
+from glu.hmm.em import GMMHMMParams
+from glu.hmm.inference import TINY, forward_curve, gaussian_factors, log_emissions
 from glu.hmm.model import GestureHMM, as_sequence
 
 PAD_LOG_NORM = -1e300
@@ -97,26 +108,22 @@ def stack_models(models: Sequence[GestureHMM]) -> Bank:
     for i, m in enumerate(models):
         q, k = m.n_states, m.n_mix
         mu[i, :q, :k] = m.means
-        cinv[i, :q, :k] = m._chol_inv
-        lnorm[i, :q, :k] = np.where(np.isfinite(m._log_norm), m._log_norm, PAD_LOG_NORM)
+        cinv[i, :q, :k] = m.chol_inv
+        lnorm[i, :q, :k] = np.where(np.isfinite(m.log_norm), m.log_norm, PAD_LOG_NORM)
         pi[i, :q] = m.startprob
         trans[i, :q, :q] = m.transmat
     return Bank(mu, cinv, lnorm, pi, trans)
 
 
-def _monomials(D: int) -> list[tuple[int, int]]:
-    return [(i, j) for i in range(D) for j in range(i, D)]
+def params_bank(params: GMMHMMParams) -> Bank:
+    """A :class:`Bank` of models given as stacked parameters (:class:`~glu.hmm.em.GMMHMMParams` with one
+    leading axis, the models; all of one shape), e.g. the models of online learning."""
+    chol_inv, log_norm = gaussian_factors(params.weights, params.covars)
+    log_norm = np.where(np.isfinite(log_norm), log_norm, PAD_LOG_NORM)
+    return Bank(params.means, chol_inv, log_norm, params.startprob, params.transmat)
 
 
-def quadratic_features(X: np.ndarray, center: np.ndarray) -> np.ndarray:
-    """``φ(x − center)``: the monomials ``x_i x_j`` (i ≤ j), ``x_i`` and 1, shape (N, D(D+1)/2 + D + 1)."""
-    Z = np.asarray(X, dtype=float) - center
-    D = Z.shape[1]
-    cols = [Z[:, i] * Z[:, j] for i, j in _monomials(D)] + [Z[:, i] for i in range(D)] + [np.ones(len(Z))]
-    return np.stack(cols, axis=1)
-
-
-def quadratic_coefficients(bank: Bank) -> tuple[np.ndarray, np.ndarray]:
+def bank_coefficients(bank: Bank) -> tuple[np.ndarray, np.ndarray]:
     """The emission log-densities of every component as coefficients on :func:`quadratic_features`.
 
     Returns
@@ -127,14 +134,8 @@ def quadratic_coefficients(bank: Bank) -> tuple[np.ndarray, np.ndarray]:
     """
     used = bank.log_norm > PAD_LOG_NORM
     center = bank.means[used].mean(axis=0)
-    mu = bank.means - center  # (A, Q, M, D)
-    P = np.swapaxes(bank.chol_inv, -1, -2) @ bank.chol_inv  # Σ⁻¹ = L⁻ᵀ L⁻¹
-    b = np.einsum("...ij,...j->...i", P, mu)
-    const = bank.log_norm - 0.5 * np.einsum("...i,...i->...", mu, b)
-    D = mu.shape[-1]
-    rows = [(-0.5 if i == j else -1.0) * P[..., i, j] for i, j in _monomials(D)]
-    rows += [b[..., i] for i in range(D)] + [const]
-    coef = np.stack([r.reshape(-1) for r in rows], axis=0)
+    coef = component_coefficients(bank.means - center, bank.chol_inv, bank.log_norm)  # (A, Q, M, F)
+    coef = np.ascontiguousarray(coef.reshape(-1, coef.shape[-1]).T)
     coef[-1] = np.maximum(coef[-1], PAD_LOG_NORM)  # padding components stay hugely negative
     return center, coef
 
@@ -161,7 +162,7 @@ class BatchScorer:
         self.models: tuple[GestureHMM, ...] = tuple(models)
         self.bank = stack_models(self.models)
         self.n_features = self.bank.means.shape[-1]
-        self.center, self.coef = quadratic_coefficients(self.bank)
+        self.center, self.coef = bank_coefficients(self.bank)
         self._coef_t = np.ascontiguousarray(self.coef.T)
         self._trans_t = np.ascontiguousarray(np.swapaxes(self.bank.transmat, -1, -2))
         self.batch_size = int(batch_size)
@@ -224,7 +225,7 @@ class BatchScorer:
         curves = curves.transpose(2, 0, 1)  # (S, T, A)
         for a, s in zip(*np.nonzero(bad), strict=True):  # underflow: the exact per-sequence path
             m = self.models[a]
-            lb = log_emissions(seqs[s], m.means, m._chol_inv, m._log_norm)
+            lb = log_emissions(seqs[s], m.means, m.chol_inv, m.log_norm)
             curves[s, : lengths[s], a] = forward_curve(lb, m.startprob, m.transmat)
         return curves
 
@@ -250,7 +251,7 @@ def forward_curves_batch(
     ----------
     phi : array, shape (T, F, S) — :func:`quadratic_features` of frame t of sequence s (any values beyond
         a sequence's end)
-    coef_t : array, shape (A·Q·M, F) — the transpose of :func:`quadratic_coefficients`' ``coef``
+    coef_t : array, shape (A·Q·M, F) — the transpose of :func:`bank_coefficients`' ``coef``
     lengths : int array, shape (S,) — non-increasing, each between 1 and T
     startprob : array, shape (A, Q)
     trans_t : array, shape (A, Q, Q) — transition matrices transposed, ``trans_t[a, j, i] = P(i → j)``
@@ -299,15 +300,22 @@ def forward_curves_batch(
 def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     """``log L(G | model)`` of many sequences under every model of a bank, shape (S, n_models), in one batch.
 
+    Parameters
+    ----------
+    bank : the stacked models (:func:`stack_models`)
+    sequences : the feature sequences the models see, each of shape (T_i, D)
+
     The emissions and the forward recursion run compiled, frame by frame
     (:func:`glu.hmm._engine.kernels.loglik_banked`), each step :func:`~glu.hmm.inference.forward_step`'s
     (including its log-domain fallback where the scaled mass underflows): the last entry of
     ``forward_curve`` for each sequence, to rounding (1e-12 relative, tests/test_batched_experiments.py).
 
-    Parameters
-    ----------
-    bank : the stacked models (:func:`stack_models`)
-    sequences : the feature sequences the models see, each of shape (T_i, D)
+    >>> from glu.hmm.inference import left_to_right_transmat
+    >>> hmm = GestureHMM([1.0, 0.0], left_to_right_transmat(2, 0.9), [[1.0], [1.0]],
+    ...                  [[[0.0] * 3], [[1.0] * 3]], np.tile(np.eye(3), (2, 1, 1, 1)))
+    >>> X = np.linspace(0, 1, 10)[:, None].repeat(3, axis=1)
+    >>> bool(np.isclose(loglik_many(stack_models([hmm, hmm]), [X])[0, 1], hmm.loglik(X)))
+    True
     """
     seqs = list(sequences)
     if not seqs:

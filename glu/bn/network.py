@@ -1,0 +1,83 @@
+"""A network as the engines see it: variable indices, cardinalities, families, tables.
+
+:class:`NetworkArrays` is made once per engine from a :class:`~glu.bn.model.BayesNet` in time linear in the
+network (no table is copied: a table that is already float64 is used as it is). A :class:`BayesNet` has
+rows that sum to 1 (within :data:`glu.bn.model.ROW_TOL`) except the all-zero rows that only word nodes may
+have, so only the word nodes' tables are looked at to find the *inexact* nodes (tables with such rows).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from glu.bn.model import BayesNet
+
+
+@dataclass(eq=False)
+class NetworkArrays:
+    """A network as variable indices (the network's node order).
+
+    Attributes
+    ----------
+    names : node names
+    index : node name → variable index
+    cards : cardinality of each variable
+    parents, children : each variable's parents (CPT axis order) and children, as indices
+    cpts : each node's table, shape ``(*parent cardinalities, cardinality)``, float64
+    inexact : the nodes whose tables have all-zero rows (parent configurations a word never saw): each acts
+        as an observed child of the node (relevance), and such a node is never barren
+    """
+
+    names: tuple[str, ...]
+    index: dict[str, int]
+    cards: tuple[int, ...]
+    parents: tuple[tuple[int, ...], ...]
+    children: tuple[tuple[int, ...], ...]
+    cpts: tuple[np.ndarray, ...]
+    inexact: frozenset[int]
+
+    @classmethod
+    def of(cls, bn: BayesNet) -> NetworkArrays:
+        """The arrays of ``bn``."""
+        names = bn.nodes
+        index = {n: i for i, n in enumerate(names)}
+        bparents = bn.parents
+        parents = tuple(tuple(index[p] for p in bparents[n]) for n in names)
+        kids: list[list[int]] = [[] for _ in names]
+        for v, ps in enumerate(parents):
+            for p in ps:
+                kids[p].append(v)
+        cpts = tuple(np.asarray(bn.cpts[n], dtype=np.float64) for n in names)
+        return cls(
+            names=names,
+            index=index,
+            cards=tuple(c.shape[-1] for c in cpts),
+            parents=parents,
+            children=tuple(tuple(k) for k in kids),
+            cpts=cpts,
+            inexact=frozenset(
+                index[w] for w in bn.schema.word_nodes if not cpts[index[w]].sum(axis=-1).all()
+            ),
+        )
+
+    def family(self, v: int) -> tuple[int, ...]:
+        """The axes of ``v``'s table as variables: its parents, then itself."""
+        return (*self.parents[v], v)
+
+    def ancestors(self, nodes: set[int] | frozenset[int]) -> set[int]:
+        """``nodes`` and all their ancestors."""
+        out: set[int] = set()
+        stack = list(nodes)
+        while stack:
+            v = stack.pop()
+            if v not in out:
+                out.add(v)
+                stack.extend(self.parents[v])
+        return out
+
+
+def code_of(c: int | np.ndarray) -> int:
+    """A single row's value code: a query's hard evidence is a Python int, a batch row's a (1,) array."""
+    return c if type(c) is int else int(c[0])
