@@ -280,6 +280,22 @@ def test_every_executed_notebook_shows_every_figure_it_wrote(quick_runs):
             assert png == (out / "figures" / fname).read_bytes(), f"{name}: {fname} shown is not the file"
 
 
+def test_every_table_a_notebook_shows_is_formatted_for_reading(quick_runs):
+    """A cell that ends with a DataFrame shows glu.tidy.html_table's form of it (tests/library/
+    test_tidy_display.py checks that form): no pandas default table in any executed notebook."""
+    out, _ = quick_runs[0]
+    shown = 0
+    for name in NOTEBOOKS:
+        nb = json.loads((out / "notebooks" / f"{name}.ipynb").read_text())
+        for cell in nb["cells"]:
+            for o in cell.get("outputs", []):
+                html = "".join(o.get("data", {}).get("text/html", ""))
+                if "<table" in html:
+                    shown += 1
+                    assert 'class="dataframe glu-table"' in html, f"{name}: a table not formatted for reading"
+    assert shown >= 5
+
+
 def test_every_executed_notebook_names_its_data_first(quick_runs):
     out, _ = quick_runs[0]
     for name in NOTEBOOKS:
