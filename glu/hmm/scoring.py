@@ -300,15 +300,15 @@ def forward_curves_batch(
 def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     """``log L(G | model)`` of many sequences under every model of a bank, shape (S, n_models), in one batch.
 
-    Parameters
-    ----------
-    bank : the stacked models (:func:`stack_models`)
-    sequences : the feature sequences the models see, each of shape (T_i, D)
-
     The emissions and the forward recursion run compiled, frame by frame
     (:func:`glu.hmm._engine.kernels.loglik_banked`), each step :func:`~glu.hmm.inference.forward_step`'s
     (including its log-domain fallback where the scaled mass underflows): the last entry of
     ``forward_curve`` for each sequence, to rounding (1e-12 relative, tests/test_batched_experiments.py).
+
+    Parameters
+    ----------
+    bank : the stacked models (:func:`stack_models`)
+    sequences : the feature sequences the models see, each of shape (T_i, D)
 
     >>> from glu.hmm.inference import left_to_right_transmat
     >>> hmm = GestureHMM([1.0, 0.0], left_to_right_transmat(2, 0.9), [[1.0], [1.0]],
