@@ -310,6 +310,8 @@ def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     bank : the stacked models (:func:`stack_models`)
     sequences : the feature sequences the models see, each of shape (T_i, D)
 
+    Examples
+    --------
     >>> from glu.hmm.inference import left_to_right_transmat
     >>> hmm = GestureHMM([1.0, 0.0], left_to_right_transmat(2, 0.9), [[1.0], [1.0]],
     ...                  [[[0.0] * 3], [[1.0] * 3]], np.tile(np.eye(3), (2, 1, 1, 1)))
