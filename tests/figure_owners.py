@@ -1,8 +1,7 @@
 """Figures the colour-alone check (glu.plots.overlap) flags that their studies' own branches are redrawing.
 
-Issue 33 (item 9) added the check; the correspondence figures are being redrawn on branch ``i30-studies``
-(which also gives the corpus figures a marker per strategy) and the learning figures on ``i31-learning``.
-Until those land, their "colour alone" lines are reported by name here and not counted as failures; every
+Issue 33 (item 9) added the check; the learning figures are being redrawn on branch ``i31-learning``.
+Until it lands, their "colour alone" lines are reported by name here and not counted as failures; every
 other problem of these figures, and every problem of any other figure, still fails. Remove an entry when its
 figure passes.
 """
@@ -10,11 +9,6 @@ figure passes.
 from __future__ import annotations
 
 REDRAWN_ELSEWHERE: dict[str, str] = {
-    "correspondence_viewpoint": "i30-studies",
-    "correspondence_conditions": "i30-studies",
-    "corpus_strategies_vs_noise": "i30-studies",
-    "corpus_early_recognition": "i30-studies",
-    "corpus_calibration": "i30-studies",
     "learning_curves": "i31-learning",
     "learning_match": "i31-learning",
 }

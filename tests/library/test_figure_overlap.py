@@ -290,8 +290,8 @@ def test_five_lines_told_apart_by_colour_alone_are_caught_and_four_pass(fig):
 
 def test_five_lines_each_with_its_own_marker_or_line_style_pass(fig):
     f, ax = fig
-    _lines(ax, 5, [("o", "-"), ("s", "-"), ("^", "-"), ("o", "--"), ("", ":")])
-    ax.axhline(0.5, color="grey", linestyle=":")  # a reference line drawn like a series: its own colour
+    _lines(ax, 5, [("o", "-"), ("s", "-"), ("^", "-"), ("o", "--"), ("", "-.")])
+    ax.axhline(0.5, color="grey", linestyle=":")  # a reference line is a series too: a look of its own
     assert [p for p in figure_problems(f) if p.startswith("colour alone")] == []
 
 
