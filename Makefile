@@ -10,7 +10,6 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.glu-installed
-LAB_STAMP := $(VENV)/.glu-lab-installed
 DATA ?=
 ARGS ?=
 
@@ -38,12 +37,8 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/python -m pytest $(ARGS)
 
-# JupyterLab's extra, installed again only when pyproject.toml (or the venv) changed
-$(LAB_STAMP): $(STAMP) pyproject.toml
-	$(BIN)/python -m pip install --quiet -e '.[lab]'
-	touch $(LAB_STAMP)
-
-lab: $(LAB_STAMP)
+# JupyterLab comes with the one install (the test extra includes the lab extra)
+lab: $(STAMP)
 	$(if $(DATA),GLU_DATA_DIR=$(abspath $(DATA))) $(BIN)/jupyter lab --config=jupyter_lab_config.py $(ARGS)
 
 bench: $(STAMP)
