@@ -1,5 +1,6 @@
 # glu: the two entry points of the README, and a few more.
-#   make reproduce   set up .venv, then run every notebook (figures/, recordings/, results/, models/, build/site/)
+#   make reproduce   set up .venv, then run every notebook (figures/, recordings/, results/, models/, build/site/;
+#                    on synthetic data all of it under build/synthetic/)
 #   make docs        the documentation site (build/site/index.html) again, from the last `make reproduce`
 #   make test        set up .venv, then lint (ruff) and run the test suite
 #   make lab         JupyterLab on the repository, the notebooks open as notebooks

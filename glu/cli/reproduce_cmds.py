@@ -22,7 +22,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Run every notebook headless, in parallel kernels; publish their figures, recordings, "
         "results, models and executed notebooks only when all succeed (a failed or interrupted run leaves "
         "the outputs of the last run as they were), then write the results summary and the documentation "
-        "site (build/site/).",
+        "site (build/site/; a synthetic or quick run writes all of it under build/synthetic/ or "
+        "build/quick/, never over the published figures).",
     )
     add_data_option(p)
     p.add_argument("--quick", action="store_true", help="small, fast runs (as the tests do)")
@@ -32,7 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=Path,
         metavar="DIR",
         help="write figures/, recordings/, results/, models/, notebooks/, site/ here "
-        "(default: the project's folders in a source checkout; required when glu is installed)",
+        "(default in a source checkout: the project's folders for a full run on the real data, "
+        "build/synthetic/ on synthetic data, build/quick/ with --quick; required when glu is installed)",
     )
     p.add_argument("-j", "--jobs", type=positive_int, default=2, help="notebooks run in parallel (default 2)")
     p.add_argument(

@@ -216,8 +216,21 @@ def reproduce(
     run on the same project or ``--out`` folder is refused in one line naming the first's process id. The
     glu that runs (its version and commit, :mod:`glu.run.provenance`) is read once, before any notebook,
     and every output of the run names it."""
+    if out is None:
+        out = default_out(resolve_data(data), quick)
     with run_lock(OutputLayout.at(out).root), _made_by(read_provenance()) as made:
         return _reproduce(data, quick, out, made=made, **kwargs)
+
+
+def default_out(source: Any, quick: bool) -> Path | None:
+    """Where a run without ``--out`` publishes: the project's own folders (None) only for a full run on
+    the real data, whose figures are the ones tracked in git; a run on synthetic data, or a quick one,
+    writes under ``build/synthetic/`` or ``build/quick/`` instead (the same layout: ``figures/``, …,
+    ``site/``), so that it never overwrites a published figure. None too when glu is installed (then
+    :meth:`glu.paths.OutputLayout.project` asks for ``-o DIR``)."""
+    if paths.PROJECT_ROOT is None or (source.is_real and not quick):
+        return None
+    return paths.PROJECT_ROOT / "build" / ("quick" if quick else "synthetic")
 
 
 @contextmanager
@@ -255,7 +268,8 @@ def _reproduce(
     quick : small, fast runs (for tests): each notebook with the quick preset of its manifest
         (:mod:`glu.run.manifest`); every figure is still made
     out : root for ``figures/``, ``recordings/``, ``results/``, ``models/``, ``notebooks/``, ``site/``;
-        None = the project's folders (:meth:`glu.paths.OutputLayout.at`)
+        None = the project's folders (:meth:`glu.paths.OutputLayout.at`; :func:`reproduce` gives
+        :func:`default_out` instead)
     jobs : notebooks run at the same time (each in its own kernel)
     only : run only these notebooks (names or numbers)
     seed : the seed passed to every notebook

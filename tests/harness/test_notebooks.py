@@ -374,3 +374,29 @@ def test_no_executed_notebook_and_no_page_of_the_site_shows_a_machine_path(quick
                 ("staging", ".glu-staging"),
             ):
                 assert needle not in text, f"{f.relative_to(out)} shows the {what} folder"
+
+
+def test_a_synthetic_run_leaves_the_tracked_figures_and_git_status_alone(tmp_path, monkeypatch):
+    """Without --out, only a full run on the real data publishes into the project's figures/: a synthetic
+    run writes under build/synthetic/, and git finds the checkout as it was."""
+    from glu import paths
+
+    project = tmp_path / "project"
+    (project / "figures").mkdir(parents=True)
+    (project / "figures" / "new.txt").write_text("published from the real data")
+    (project / ".gitignore").write_text("build/\n")
+
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=project, capture_output=True, text=True, check=True).stdout
+
+    git("init", "-q")
+    git("add", "-A")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "published")
+    nbs = tmp_path / "nbs"
+    nbs.mkdir()
+    (nbs / "01_ok.py").write_text(_OK)
+    monkeypatch.setattr(paths, "PROJECT_ROOT", project)
+    reproduce(data="synthetic", jobs=1, log=_silent, notebooks_dir=nbs, site=False)
+    assert git("status", "--porcelain", "--untracked-files=all") == ""
+    assert (project / "figures" / "new.txt").read_text() == "published from the real data"
+    assert (project / "build" / "synthetic" / "figures" / "new.txt").read_text() == "new"
