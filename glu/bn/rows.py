@@ -73,7 +73,7 @@ def check_rows(
     hint = ""
     if abs(sums[k] - 1) < 0.1:
         suggest = float(f"{10 ** np.ceil(np.log10(abs(sums[k] - 1))):.0e}")
-        hint = f"; to rescale such rows, import with --renormalise {suggest:g} (renormalise={suggest:g})"
+        hint = f"; to rescale such rows, give --renormalise {suggest:g} (in Python: renormalise={suggest:g})"
     more = int(bad.sum()) - 1
     raise ModelError(
         f"{where}: the row {row} sums to {sums[k]:.10g}, not 1 (|1 − sum| = {abs(sums[k] - 1):.2g}, "

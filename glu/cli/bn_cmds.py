@@ -9,14 +9,14 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.bn.exchange import FORMATS, IMPORT_TOL, ZERO_ROW_MODES
-from glu.bn.rows import RENORMALISE_DEFAULT
+from glu.bn.exchange import FORMATS, ZERO_ROW_MODES
 from glu.cli.common import (
     add_data_args,
     add_engine_args,
     add_evidence_args,
     add_json_option,
     add_model_args,
+    add_renormalise_arg,
     json_text,
     load_model,
     make_engine,
@@ -86,15 +86,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "-o", "--out", type=output_file, required=True, metavar="MODEL", help="model file to write (JSON)"
     )
     ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
-    ip.add_argument(
-        "--renormalise",
-        type=_tolerance,
-        nargs="?",
-        const=RENORMALISE_DEFAULT,
-        metavar="TOL",
-        help=f"rescale CPT rows whose sum is within TOL of 1 (default without the option: {IMPORT_TOL:g}; "
-        f"--renormalise alone: {RENORMALISE_DEFAULT:g}); the rows rescaled are reported",
-    )
+    add_renormalise_arg(ip)
     ip.set_defaults(func=_import)
 
     xp = bsub.add_parser(
@@ -201,17 +193,6 @@ def _nodes(args: argparse.Namespace) -> int:
     for r, v in zip(rows, values, strict=True):
         print(f"{r['name']:<{w_name}}  {r['kind']:<{w_kind}}  {v:<{w_val}}  {', '.join(r['parents']) or '—'}")
     return 0
-
-
-def _tolerance(text: str) -> float:
-    """--renormalise TOL: a number in [0, 1)."""
-    try:
-        tol = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
-    if not 0 <= tol < 1:
-        raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
-    return tol
 
 
 def renormalised_text(meta: dict) -> str:

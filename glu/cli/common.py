@@ -210,13 +210,42 @@ def add_data_args(p: argparse.ArgumentParser) -> None:
 
 
 def add_model_args(p: argparse.ArgumentParser) -> None:
-    """``--model`` or the data options of :func:`add_data_args` (read by :func:`load_model`)."""
+    """``--model`` (with ``--renormalise``) or the data options of :func:`add_data_args` (read by
+    :func:`load_model`)."""
     p.add_argument(
         "--model",
         type=Path,
         help="model file (.json, the original .mat, or .bif/.xmlbif/.uai); default: learn from --data",
     )
+    add_renormalise_arg(p, "of a --model in BIF, XMLBIF or UAI ")
     add_data_args(p)
+
+
+def add_renormalise_arg(p: argparse.ArgumentParser, which: str = "") -> None:
+    """``--renormalise [TOL]``: the tolerance of an imported network's rows (:func:`read_model_file`)."""
+    from glu.bn.exchange import IMPORT_TOL
+    from glu.bn.rows import RENORMALISE_DEFAULT
+
+    p.add_argument(
+        "--renormalise",
+        type=_tolerance,
+        nargs="?",
+        const=RENORMALISE_DEFAULT,
+        metavar="TOL",
+        help=f"rescale CPT rows {which}whose sum is within TOL of 1 (default without the option: "
+        f"{IMPORT_TOL:g}; --renormalise alone: {RENORMALISE_DEFAULT:g}); the rows rescaled are reported",
+    )
+
+
+def _tolerance(text: str) -> float:
+    """--renormalise TOL: a number in [0, 1)."""
+    try:
+        tol = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
+    if not 0 <= tol < 1:
+        raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
+    return tol
 
 
 def add_engine_args(p: argparse.ArgumentParser) -> None:
@@ -331,7 +360,10 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
             raise EvidenceError("give either --model or --data, not both")
         if getattr(args, "schema", None) or getattr(args, "experiments", None):
             raise EvidenceError("give either --model or --schema/--experiments, not both")
-        bn = read_model_file(model)
+        renormalise = getattr(args, "renormalise", None)
+        if renormalise is not None and model.suffix.lower() in (".mat", ".json"):
+            raise EvidenceError("--renormalise applies to BIF, XMLBIF and UAI files")
+        bn = read_model_file(model, renormalise=renormalise)
         r = bn.meta.get("renormalised")
         rescaled = f"; {r['rows']} CPT row(s) rescaled to sum to 1 on import" if r else ""
         return bn, f"model {model} ({bn.meta.get('data_source', 'unknown data')}{rescaled})"

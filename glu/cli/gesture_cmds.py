@@ -245,12 +245,15 @@ def _resolve_log(log: str, data: str | None) -> tuple[Path, Any]:
         p = p / HAND_LOG
     if p.exists():
         return p, None
-    if "/" not in log and not log.endswith(".log"):
+    if "/" not in log and not p.suffix:  # a bare name: a recording of the data folder
         from glu.data.source import resolve_data
 
         source = resolve_data(data)
         return source.hand_log(log), source
-    raise DataError(f"{log}: no such file (expected a YARP hand log `index timestamp x y z`)")
+    raise DataError(
+        f"{log}: file not found (a YARP hand log, a recording folder, or a .csv/.tsv/.npy trajectory; "
+        "a bare name is a recording of the data folder)"
+    )
 
 
 def _say(msg: str, quiet: bool) -> None:
@@ -421,8 +424,8 @@ def _recognize(args: argparse.Namespace) -> int:
 
     from glu.gestures.recordings import load_features
 
+    path, source = _resolve_log(args.log, args.data)  # a missing file is said before the models load
     rec = _load_models(args.models, args.data, args.json)
-    path, source = _resolve_log(args.log, args.data)
     if source is not None and args.models != "original":
         _say(f"data: {source.describe()}", args.json)
     pieces = load_features(path, policy=None, body=tuple(args.body_size) if args.body_size else None).pieces
