@@ -187,15 +187,34 @@ class Typicality:
         """One line for the person at the keyboard."""
         r = self.range
         where = f"the {r.reference} range {r.low:.2f} … {r.high:.2f}"
+        allowed = f"within {r.margin:.2f} of it is typical: the range's width, at least {MIN_MARGIN:g}"
         if not self.atypical:
-            return f"per-frame log L {self.per_frame:.2f} under {self.action} is within reach of {where}"
+            return (
+                f"per-frame log L {self.per_frame:.2f} under {self.action} is {self.distance_text()} "
+                f"{where} ({allowed})"
+            )
         what = list(self.problems)
         if self.outside:
-            what.insert(0, f"per-frame log L {self.per_frame:.2f} under {self.action} is far outside {where}")
+            what.insert(
+                0,
+                f"per-frame log L {self.per_frame:.2f} under {self.action} is {self.distance_text()} {where} "
+                f"(more than the {r.margin:.2f} allowed)",
+            )
         return (
             f"warning: {'; '.join(what)}: the gesture looks like nothing the models were trained on (units, "
             "frame of reference, sensor?); the posterior is not meaningful"
         )
+
+    def distance_text(self) -> str:
+        """Where the per-frame log-likelihood lies against the range: "inside", or "D below"/"D above"."""
+        r, x = self.range, self.per_frame
+        if not np.isfinite(x):
+            return "not finite, outside"
+        if x < r.low:
+            return f"{r.low - x:.2f} below"
+        if x > r.high:
+            return f"{x - r.high:.2f} above"
+        return "inside"
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready fields (finite numbers only)."""

@@ -160,8 +160,11 @@ class _Progress:
         return h
 
     def finished(self, name: str, line: str) -> None:
+        """Report one notebook done: ``line`` after ``[k/n]``, k counting the notebooks finished (they
+        finish in any order, so k only goes up)."""
         self.running.pop(name, None)
         self.done += 1
+        line = f"[{self.done}/{self.n}] {line}"
         if self.bar is not None:
             self.bar.write(line, file=sys.stderr)
             self.bar.update(1)
@@ -319,7 +322,7 @@ def _reproduce(
     live = sys.stderr.isatty() if progress is None else progress
     bar = _Progress(notebooks, log, live)
 
-    def one(i: int, nb: Path, handle: RunHandle) -> NotebookResult:
+    def one(nb: Path, handle: RunHandle) -> NotebookResult:
         pm = load_papermill()
         name = nb.stem
         stage = staging / name
@@ -333,7 +336,7 @@ def _reproduce(
             if out_ipynb.exists():
                 os.replace(out_ipynb, kept)
             dt = time.perf_counter() - t0
-            bar.finished(name, f"[{i}/{len(notebooks)}] {name}: FAILED after {dt:.1f} s — {why}")
+            bar.finished(name, f"{name}: FAILED after {dt:.1f} s — {why}")
             return NotebookResult(name, "failed", dt, kept, msg)
 
         try:
@@ -352,7 +355,7 @@ def _reproduce(
         except ManifestError as e:
             return failed(f"notebook {name} ran, but {e}", str(e))
         present_executed(out_ipynb, shown, shown_path(nb), shown_path(executed_dir / f"{name}.ipynb"))
-        bar.finished(name, f"[{i}/{len(notebooks)}] {name}: ok in {dt:.1f} s")
+        bar.finished(name, f"{name}: ok in {dt:.1f} s")
         return NotebookResult(name, "ok", dt, out_ipynb, parameters=non_default[name])
 
     results: list[NotebookResult] = []
@@ -361,10 +364,10 @@ def _reproduce(
         futures: dict[Future, str] = {}
         try:
             threads = max(1, available_cores() // jobs)  # each kernel's share of the cores for BLAS/OpenMP
-            for i, nb in run_order(notebooks, jobs, expected_seconds(layout, notebooks, quick)):
+            for _, nb in run_order(notebooks, jobs, expected_seconds(layout, notebooks, quick)):
                 handle = bar.handle(nb.stem)
                 handle.threads = threads
-                futures[pool.submit(one, i, nb, handle)] = nb.stem
+                futures[pool.submit(one, nb, handle)] = nb.stem
             pending = set(futures)
             failed: NotebookResult | None = None
             while pending:

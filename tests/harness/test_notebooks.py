@@ -395,8 +395,12 @@ def test_a_synthetic_run_leaves_the_tracked_figures_and_git_status_alone(tmp_pat
     nbs = tmp_path / "nbs"
     nbs.mkdir()
     (nbs / "01_ok.py").write_text(_OK)
+    (nbs / "02_ok.py").write_text(_OK)
     monkeypatch.setattr(paths, "PROJECT_ROOT", project)
-    reproduce(data="synthetic", jobs=1, log=_silent, notebooks_dir=nbs, site=False)
+    lines: list[str] = []
+    reproduce(data="synthetic", jobs=2, log=lines.append, notebooks_dir=nbs, site=False, progress=False)
+    counted = [line.split(" ")[0] for line in lines if line.startswith("[")]
+    assert counted == ["[1/2]", "[2/2]"], lines  # notebooks finished, in any order: the count only goes up
     assert git("status", "--porcelain", "--untracked-files=all") == ""
     assert (project / "figures" / "new.txt").read_text() == "published from the real data"
     assert (project / "build" / "synthetic" / "figures" / "new.txt").read_text() == "new"
