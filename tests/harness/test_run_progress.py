@@ -115,4 +115,3 @@ def test_glu_run_shows_progress_on_stderr_and_nothing_with_quiet(tmp_path, capsy
         "executed": str(tmp_path / "b" / "notebooks" / "01_tiny.ipynb"),
         "outputs": str(tmp_path / "b"),
     }
-
