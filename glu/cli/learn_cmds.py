@@ -11,6 +11,11 @@ with and without words, one Dask task per training seed — and writes its table
 from __future__ import annotations
 
 import argparse
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from glu.cli.common import (
@@ -136,6 +141,35 @@ def _engine(data: str | None):
     return make_engine(learn_bn(load_experiments(source))), source.describe()
 
 
+HEARTBEAT_S = 10.0
+"""How often ``glu learn-gestures`` says it is still learning (seconds)."""
+
+
+@contextmanager
+def heartbeat(what: str, every: float, enabled: bool | None = None) -> Iterator[None]:
+    """While the block runs, a line on stderr every ``every`` seconds: ``what``, still running, the seconds
+    so far; when it ends without an error, the time it took. ``enabled``: None = when stderr is a terminal
+    (a person waiting; an error stays one line)."""
+    if not (sys.stderr.isatty() if enabled is None else enabled):
+        yield
+        return
+    stop = threading.Event()
+    t0 = time.perf_counter()
+
+    def beat() -> None:
+        while not stop.wait(every):
+            print(f"  {what}: {time.perf_counter() - t0:.0f} s so far", file=sys.stderr, flush=True)
+
+    thread = threading.Thread(target=beat, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+    print(f"  {what}: done in {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
+
+
 def _learn(args: argparse.Namespace) -> int:
     from glu.hmm import TrainingConfig
     from glu.studies.learning.learned_recognizers import learn_gestures
@@ -147,18 +181,25 @@ def _learn(args: argparse.Namespace) -> int:
         from glu.errors import DataError
 
         raise DataError(f"--threshold {args.threshold}: a probability in (0, 1]")
-    rec, info = learn_gestures(
-        engine,
-        args.episodes,
-        args.labels,
-        seed=args.seed,
-        words=args.with_words,
-        ambiguity=args.ambiguity,
-        online=args.online,
-        config=config,
-        threshold=args.threshold,
-        data_source=label,
+    how = "one episode at a time" if args.online else "EM on all of them, relabelled until the labels settle"
+    print(
+        f"learning: {args.episodes} episodes simulated, labelled by the network ({args.labels}), then the "
+        f"HMMs trained ({how})",
+        flush=True,
     )
+    with heartbeat("learning", HEARTBEAT_S):
+        rec, info = learn_gestures(
+            engine,
+            args.episodes,
+            args.labels,
+            seed=args.seed,
+            words=args.with_words,
+            ambiguity=args.ambiguity,
+            online=args.online,
+            config=config,
+            threshold=args.threshold,
+            data_source=label,
+        )
     print(f"episodes: {info['data']}")
     print(
         f"labels: arg-max of p_BN right for {info['label_accuracy']:.3f} of the episodes; "

@@ -191,3 +191,20 @@ def test_learning_curves_on_a_local_dask_cluster_equal_the_run_here(capsys, tmp_
     assert status == 0, err
     for name in ("learning_curves.csv", "learning_match.csv", "learning_labels.csv"):
         assert (here / name).read_bytes() == (there / name).read_bytes(), name
+
+
+def test_a_long_learning_says_it_is_still_running(capsys):
+    """glu learn-gestures' heartbeat: a line on stderr while the block runs, the time it took at the end."""
+    import time
+
+    from glu.cli.learn_cmds import heartbeat
+
+    seen = ""
+    with heartbeat("learning", 0.01, enabled=True):
+        for _ in range(1000):  # until the first beat (a wait for an event, not a timed assertion)
+            seen += capsys.readouterr().err
+            if "learning:" in seen and "s so far" in seen:
+                break
+            time.sleep(0.01)
+    seen += capsys.readouterr().err
+    assert "s so far" in seen and seen.rstrip().splitlines()[-1].startswith("  learning: done in")
