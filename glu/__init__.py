@@ -3,7 +3,7 @@
 The package is built in layers (:data:`LAYERS`), each importing only from those below it:
 
 * the library — the ground (:mod:`glu.errors`, :mod:`glu.paths`, :mod:`glu.files`, :mod:`glu.matfile`,
-  :mod:`glu.machine`), the model's variables (:mod:`glu.schema`, :mod:`glu.evidence`), the data
+  :mod:`glu.machine`, :mod:`glu.jit`), the model's variables (:mod:`glu.schema`, :mod:`glu.evidence`), the data
   (:mod:`glu.data`), the gesture HMMs (:mod:`glu.hmm`), then side by side the Affordance–Words network
   (:mod:`glu.bn`), the gesture chain (:mod:`glu.gestures`) and the language (:mod:`glu.language`), then
   fusion (:mod:`glu.fusion`), intervals (:mod:`glu.stats`), tidy result frames (:mod:`glu.tidy`), the look
@@ -19,7 +19,7 @@ __version__ = "0.1.0"
 
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("glu", "glu.errors"),
-    ("glu.paths", "glu.files", "glu.matfile", "glu.machine"),
+    ("glu.paths", "glu.files", "glu.matfile", "glu.machine", "glu.jit"),
     ("glu.schema",),
     ("glu.evidence",),
     ("glu.data",),

@@ -45,7 +45,7 @@ class Locations:
     notebooks : the jupytext notebooks ``NN_name.py``
     data : the folder of fetched data (``real/`` under it)
     scratch : where notebooks run by hand write their outputs
-    compiled : numba's cache of the compiled HMM loops (:mod:`glu.hmm._engine.kernels`)
+    compiled : numba's cache of the compiled loops (:mod:`glu.jit`)
     """
 
     package: Path

@@ -1,4 +1,4 @@
-"""Compiled loops (numba): the HMM recursions here, and :func:`compiled` for the other modules' loops.
+"""Compiled loops (numba): the HMM recursions, compiled by :func:`glu.jit.compiled`.
 
 The two recursions of the gesture HMMs, compiled: the scaled forward–backward of the E-step
 (:func:`forward_backward_scaled`, the fast twin of :func:`glu.hmm.inference.forward_backward`, run by the one
@@ -9,7 +9,7 @@ dozen sequences of 100–200 frames) was almost all per-step dispatch: about 20 
 multiplications. Here they run as compiled loops, one sequence at a time, with the same scaling, the same
 underflow checks and the same log-domain fallback. The mixture log-sum-exp of EM
 (:func:`mixture_posteriors`) is here too: numpy's reductions over an axis of three Gaussians cost more than
-the arithmetic. :mod:`glu.hmm.initialisation` compiles its k-means and EM loops with :func:`compiled`. The
+the arithmetic. :mod:`glu.hmm.initialisation` compiles its k-means and EM loops the same way. The
 prefix scorer of corpora (:class:`glu.hmm.scoring.BatchScorer`) stays array code: on its batches of
 hundreds of sequences numpy's vectorised ``exp`` made it twice as fast as a compiled loop
 (``benchmarks/bench_corpus.py``).
@@ -27,13 +27,10 @@ process compiles and later ones load it (both times measured in ``docs/speed.md`
 
 from __future__ import annotations
 
-import types
-from functools import cache
-from typing import Any
-
 import numpy as np
 
 from glu.hmm.inference import TINY
+from glu.jit import compiled
 
 
 def _forward_backward_scaled(log_b, lengths, startprob, transmat):
@@ -205,35 +202,6 @@ def _mixture_posteriors(lc, log_b, post):
                 log_b[k, n, q] = np.log(mass) + top
                 for m in range(M):
                     post[k, n, q, m] /= mass
-
-
-@cache
-def _jit() -> Any:
-    """numba's ``njit`` as glu compiles with it: machine code cached on disk
-    (:attr:`glu.paths.Locations.compiled`, never inside an installed package; ``$NUMBA_CACHE_DIR`` wins), no
-    GIL, numpy's error model (a division by zero gives inf or nan, as the array code did)."""
-    import numba
-
-    from glu.paths import HERE
-
-    if not numba.config.CACHE_DIR:
-        numba.config.CACHE_DIR = str(HERE.compiled)
-    return numba.njit(cache=True, nogil=True, error_model="numpy")
-
-
-@cache
-def compiled(fn: Any) -> Any:
-    """``fn`` (a module-level function of plain loops) compiled by numba, once per process; its machine
-    code comes from the cache after the first process.
-
-    The functions of ``fn``'s own module that it calls by name (helpers of plain loops, such as the E- and
-    M-steps of :func:`glu.hmm._engine.gmm.gmm_em`'s loop) are compiled first and their module names bound
-    to the compiled ones, so that compiled code calls compiled code."""
-    for name in fn.__code__.co_names:
-        helper = fn.__globals__.get(name)
-        if isinstance(helper, types.FunctionType) and helper.__module__ == fn.__module__ and helper is not fn:
-            fn.__globals__[name] = compiled(helper)
-    return _jit()(fn)
 
 
 def forward_backward_scaled(
