@@ -174,7 +174,7 @@ def bench_scaling(cfg, tmp: Path, episodes: int) -> None:
     )
     same = all(
         (tmp / "w1" / f).read_bytes() == (tmp / "w2" / f).read_bytes()
-        for f in ("results.parquet", "sums.parquet")
+        for f in ("results.parquet", "differences.parquet")
     )
     NOTES.append(f"scaling: identical tables from 1 and 2 workers: {same}")
 

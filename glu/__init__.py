@@ -7,8 +7,8 @@ The package is built in layers (:data:`LAYERS`), each importing only from those 
   (:mod:`glu.data`), the gesture HMMs (:mod:`glu.hmm`), then side by side the Affordance–Words network
   (:mod:`glu.bn`), the gesture chain (:mod:`glu.gestures`) and the language (:mod:`glu.language`), then
   fusion (:mod:`glu.fusion`), intervals (:mod:`glu.stats`), tidy result frames (:mod:`glu.tidy`), the look
-  of figures (:mod:`glu.plots`), Rerun recordings (:mod:`glu.recording`) and the notebooks' evidence
-  explorer (:mod:`glu.explorer`);
+  of figures (:mod:`glu.plots`), Rerun recordings (:mod:`glu.recording`), the saved tables of heavy grids
+  (:mod:`glu.saved`) and the notebooks' evidence explorer (:mod:`glu.explorer`);
 * the studies (:mod:`glu.studies`), one package per story, above the two they share;
 * the notebook runner (:mod:`glu.run`) and the command line (:mod:`glu.cli`).
 
@@ -25,7 +25,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("glu.data",),
     ("glu.hmm",),
     ("glu.bn", "glu.gestures", "glu.language"),
-    ("glu.fusion", "glu.stats", "glu.tidy", "glu.plots", "glu.recording"),
+    ("glu.fusion", "glu.stats", "glu.tidy", "glu.plots", "glu.recording", "glu.saved"),
     ("glu.explorer",),
     ("glu.studies.episodes", "glu.studies.anticipation"),
     (

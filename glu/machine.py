@@ -179,3 +179,34 @@ def check_reachable(address: str, timeout: float = 10.0) -> None:
             pass
     except OSError as e:
         raise DataError(f"cannot reach the Dask scheduler at {address}: {e.strerror or e}") from None
+
+
+def map_tasks(fn: Any, items: list[Any], *args: Any, workers: int = 0) -> list[Any]:
+    """``[fn(item, *args) for item in items]``: in this process (``workers=0``), or one Dask task per item on
+    a LocalCluster of ``workers`` single-threaded processes, started as :func:`ctrl_c_held` says and stopped
+    at once on an interrupt. Results keep the order of ``items``."""
+    if not workers:
+        return [fn(item, *args) for item in items]
+    from distributed import Client, LocalCluster, as_completed
+
+    with quiet_dask_logs():
+        cluster = None
+        try:
+            with ctrl_c_held():
+                cluster = LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
+                )
+                client = Client(cluster)
+        except BaseException as e:
+            close_cluster(cluster, e)
+            raise
+        try:
+            futures = {client.submit(fn, item, *args, pure=False): k for k, item in enumerate(items)}
+            done = {futures[f]: f.result() for f in as_completed(futures)}
+            return [done[k] for k in range(len(items))]
+        except KeyboardInterrupt:
+            kill_local_workers(cluster)
+            raise
+        finally:
+            client.close()
+            cluster.close()

@@ -5,7 +5,9 @@ The one owner of paths. glu runs in two settings, and :func:`locate` tells them 
 * **a source checkout** (``git clone`` + ``pip install -e .``): the package sits beside ``pyproject.toml``
   and ``notebooks/``. Data fetched goes to ``data/real/``, notebook scratch runs to ``build/scratch/``, and
   ``glu reproduce`` publishes into the project's ``figures/``, ``results/``, ``recordings/``, ``models/``;
-  the machine code of the compiled HMM loops is cached in ``build/compiled/``.
+  the machine code of the compiled HMM loops is cached in ``build/compiled/``, and the tables of heavy grids
+  computed for a notebook in ``build/sweeps/``; the saved tables of the notebooks' full grids are
+  committed in ``sweeps/`` (:mod:`glu.saved`).
 * **an installed package** (a wheel in any environment): nothing is ever written inside the package
   (``site-packages``). Data lives in the user's data folder (platformdirs: ``~/.local/share/glu/real`` on
   Linux, ``~/Library/Application Support/glu/real`` on macOS, ``%LOCALAPPDATA%\\glu\\real`` on Windows),
@@ -46,6 +48,8 @@ class Locations:
     data : the folder of fetched data (``real/`` under it)
     scratch : where notebooks run by hand write their outputs
     compiled : numba's cache of the compiled loops (:mod:`glu.jit`)
+    sweeps : where the tables of heavy grids computed for a notebook are kept (:mod:`glu.saved`)
+    saved : the saved tables of the notebooks' full grids (``sweeps/`` of a checkout; None installed)
     """
 
     package: Path
@@ -54,6 +58,8 @@ class Locations:
     data: Path
     scratch: Path
     compiled: Path
+    sweeps: Path | None = None
+    saved: Path | None = None
 
     @property
     def real_data(self) -> Path:
@@ -90,7 +96,14 @@ def locate(package_dir: Path, user_data: Path | None = None, user_cache: Path | 
     if is_checkout(root):
         build = root / "build"
         return Locations(
-            package_dir, root, root / "notebooks", root / "data", build / "scratch", build / "compiled"
+            package_dir,
+            root,
+            root / "notebooks",
+            root / "data",
+            build / "scratch",
+            build / "compiled",
+            build / "sweeps",
+            root / "sweeps",
         )
     if user_data is None or user_cache is None:
         import platformdirs
@@ -104,6 +117,7 @@ def locate(package_dir: Path, user_data: Path | None = None, user_cache: Path | 
         user_data,
         user_cache / "scratch",
         user_cache / "compiled",
+        user_cache / "sweeps",
     )
 
 

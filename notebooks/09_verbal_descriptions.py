@@ -157,7 +157,9 @@ versus.drop(columns=["evidence"])
 # original score. `p_draw_best` is the exact probability that such a sample contains the grammar's best.
 
 # %%
-trials = verbal.sampling_trials(engine, seeds, verbal.PUBLISHED_LISTS, n_samples, nbest, grammar, score="original")
+trials = verbal.sampling_trials(
+    engine, seeds, verbal.PUBLISHED_LISTS, n_samples, nbest, grammar, score="original"
+)
 out.table(trials, "verbal_sampling_vs_exact", n_trials=len(trials), n_found=int(trials["found_best"].sum()))
 ev = verbal.PUBLISHED_LISTS["fig7a"]
 probs = word_probabilities(engine, ev)

@@ -2,21 +2,28 @@
 # jupyter:
 #   glu:
 #     about: 'every fusion strategy on simulated episodes, a factorial design built to
-#       fail: action prior × inference network (generating or learned) × p_HMM reading,
-#       over recogniser seeds, with two-level intervals; the network alone and the true
-#       action beside the rules; p_HMM''s own calibration, synthetic and real'
-#     expected_seconds: 30
+#       fail, read on the front view first: effects × action prior × inference network
+#       × p_HMM reading × the recogniser''s features, per viewpoint and noise level, over
+#       recogniser seeds, two-level intervals and adjusted verdicts; effects that depend
+#       on the gesture, an occluding tracker side-on, calibration on test-like gestures;
+#       p_HMM''s own calibration, synthetic and real (saved tables of the full grid)'
+#     expected_seconds: 12
 #     figures:
 #     - corpus_calibration
 #     - corpus_differences
 #     - corpus_early_recognition
+#     - corpus_findings
 #     - corpus_p_hmm_calibration
-#     - corpus_strategies_vs_noise
+#     - corpus_viewpoints
 #     - corpus_winners
 #     quick:
 #       bootstrap: 40
 #       calibration_per_action: 3
-#       episodes: 240
+#       chunk_size: 2000
+#       episodes: 288
+#       feature_sets:
+#       - raw
+#       - centred+rotated
 #       fractions:
 #       - 0.4
 #       - 1.0
@@ -28,16 +35,21 @@
 #       noise_levels:
 #       - 0.0
 #       - 0.05
+#       p_hmm:
+#       - per-frame
+#       - calibrated
+#       - calibrated-matched
 #       recognizer_seeds: 2
 #       viewpoints:
 #       - front
-#       - turned
+#       - side-on
 #     real_only:
 #     - p_hmm_real_calibration
 #     - p_hmm_real_segments
 #     tables:
 #     - corpus_calibration
 #     - corpus_differences
+#     - corpus_finding_counts
 #     - corpus_findings
 #     - corpus_metrics
 #     - corpus_reliability
@@ -64,160 +76,170 @@
 # larger corpora. Here glu simulates episodes — an object and a person's action, the effect and the words
 # drawn from an Affordance–Words network, the hand from the gesture generator under sensor noise and from
 # several viewpoints — and measures what each strategy gets right: the action (after seeing the effect),
-# the effect before it happens (anticipation), the best verbal description.
+# the effect before it happens (anticipation), the words a person would use.
 #
-# **What the simulation assumes.** The effects and words are drawn from a network, and the gestures from
-# the very generator the HMMs are trained on. If the robot infers with that same network, the comparison
-# only says how the rules behave under a correct model. So the design crosses three ways of being wrong:
-# how often each action is performed (`action_prior`: uniformly, or as the network's prior says), which
-# network the robot infers with (`inference_network`: the generating one, or one glu learned by K2 + BIC
-# from a simulated experiment table of `learn_experiments` rows — the robot's own limited experience),
-# and how it reads p_HMM (`p_hmm`: from the likelihoods as the originals, per frame, or calibrated by a
-# temperature fitted on held-out training gestures). Every recogniser seed is a replication with its own
-# recogniser, learned networks and episodes; every interval is a two-level bootstrap over the seeds and the
-# episodes within each, and a paired difference whose interval contains 0 counts as no difference. The
-# network alone and the true action (an oracle) stand beside the fusion rules. `docs/corpus-evaluation.md`
-# describes the design; the full grid runs with `glu evaluate --config` on Dask, and `sweep_dir` reads its
-# tables here.
+# **What the simulation assumes, and where it is broken on purpose.** The effects and words are drawn from a
+# network, and the gestures from the very generator the HMMs are trained on. If the robot infers with that
+# same network, the comparison only says how the rules behave under a correct model. So the design crosses
+# the ways of being wrong: how often each action is performed (`action_prior`), which network the robot
+# infers with (`inference_network`: the generating one, or one glu learned by K2 + BIC from
+# `learn_experiments` simulated rows), how it reads p_HMM (`p_hmm`: from the likelihoods, per frame, or
+# calibrated — on clean front-view gestures, or on held-out gestures drawn like the test conditions), and
+# which features its recogniser sees (`feature_sets`: raw, an invariant set, the body frame). Two of the
+# simulator's own assumptions are broken: the fusion rules assume that the gesture says nothing about the
+# effect beyond the action, and `effects = gesture` makes a fast tap send the object further and the slowest
+# taps fail; and the turned views are seen through a skeleton tracker that loses the far shoulder side-on
+# (`side-on`). Every recogniser seed is a replication with its own recognisers, learned networks and
+# episodes; every interval is a two-level bootstrap over the seeds and the episodes within each; every paired
+# difference has a bootstrap p-value, adjusted with the others of its family (Benjamini–Hochberg), and the
+# counts below use the adjusted verdicts. The results are read first on the front view, where the recogniser
+# works, and then where they change. `docs/corpus-evaluation.md` describes the design.
+#
+# The full grid takes minutes: with the default parameters the notebook reads the tables `make sweeps` saved
+# (`sweeps/11_corpus_evaluation/`, regenerated by `glu evaluate --config … --save`); with other parameters it
+# runs the sweep once into `build/sweeps/` (`workers` > 0: on a Dask LocalCluster) and reuses it after.
 
 # %% tags=["parameters"]
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
-sweep_dir: str = None  # a finished `glu evaluate -o DIR` folder: show its tables instead of running a sweep
-episodes: int = 7200  # simulated episodes in all, shared by the conditions and the recogniser seeds
-recognizer_seeds: int = 10  # replications: each its own recogniser, learned networks and episodes
+sweep_dir: str = None  # a finished `glu evaluate -o DIR` folder: show its tables instead
+episodes: int = 72000  # simulated episodes in all, shared by the conditions and the recogniser seeds
+recognizer_seeds: int = 10  # replications: each its own recognisers, learned networks and episodes
+effects: list[str] = ["action", "gesture"]  # the effects depend on the action alone, or on the gesture too
 action_prior: list[str] = ["uniform", "network"]  # how often each action is performed
 inference_network: list[str] = ["generating", "learned"]  # the network the robot infers with
 learn_experiments: list[int] = [100, 1270]  # rows of the experiment tables the learned networks see
-p_hmm: list[str] = ["likelihood", "per-frame", "calibrated"]  # how p_HMM is read from the HMMs
+p_hmm: list[str] = ["likelihood", "per-frame", "calibrated", "calibrated-matched"]  # how p_HMM is read
+feature_sets: list[str] = ["raw", "centred+rotated", "body"]  # the recognisers' features, one each
 noise_levels: list[float] = [0.0, 0.05]  # sensor noise on every joint (m)
-viewpoints: list[str] = ["front", "turned"]  # how the robot sees the person (corpus.VIEWPOINTS)
+viewpoints: list[str] = ["front", "turned", "side-on"]  # how the robot sees the person (episodes.VIEWPOINTS)
 fractions: list[float] = [0.2, 0.6, 1.0]  # observed fractions of each gesture
-bootstrap: int = 200  # two-level bootstrap replicates for the 95 % intervals
-chunk_size: int = 2000  # episodes per recogniser seed in one task
+bootstrap: int = 1000  # two-level bootstrap replicates for the 95 % intervals
+chunk_size: int = 300  # episodes per recogniser seed in one task
 n_per_action: int = 10  # recogniser: synthetic training gestures per action
-calibration_per_action: int = 10  # recogniser: held-out gestures the calibrated reading is fitted on
+calibration_per_action: int = 10  # recogniser: held-out gestures each calibrated reading is fitted on
 n_states: int = 6  # recogniser: HMM states per action
 n_mix: int = 1  # recogniser: Gaussians per state
 n_iter: int = 50  # recogniser: most EM iterations
-workers: int = 0  # 0: run the chunks in this process; N: on a Dask LocalCluster of N workers
+workers: int = 0  # a sweep not saved: 0 runs it in this process, N on a Dask LocalCluster of N workers
 seed: int = 0  # seed of the corpus, the recognisers, their calibration and the learned networks
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-import tempfile
-
 import matplotlib.pyplot as plt
 
 from glu.gestures.corpus import gesture_sequences
 from glu.run import start
-from glu.studies.corpus_evaluation import figures, findings, p_hmm_readings
-from glu.studies.corpus_evaluation.config import config_from_dict
-from glu.studies.corpus_evaluation.sweep import run_sweep
-from glu.studies.corpus_evaluation.tables import read_tables
+from glu.saved import provenance_text
+from glu.studies.corpus_evaluation import conditions, figures, findings, p_hmm_readings
+from glu.studies.corpus_evaluation.config import config_from_parameters
+from glu.studies.corpus_evaluation.sweep import notebook_tables
+from glu.studies.corpus_evaluation.tables import read_tables, saved_subset
 
 out = start("11_corpus_evaluation", globals())
 if sweep_dir is None:
-    config = config_from_dict(
-        {
-            "episodes": episodes,
-            "seed": seed,
-            "chunk_size": chunk_size,
-            "recognizer_seeds": recognizer_seeds,
-            "grid": {
-                "action_prior": action_prior,
-                "inference_network": inference_network,
-                "learn_experiments": learn_experiments,
-                "p_hmm": p_hmm,
-                "noise": noise_levels,
-                "viewpoints": viewpoints,
-                "fractions": fractions,
-            },
-            "network": {"data": "synthetic" if out.source.root is None else str(out.source.root)},
-            "evaluation": {"bootstrap": bootstrap},
-            "recognizer": {
-                "n_per_action": n_per_action,
-                "n_states": n_states,
-                "n_mix": n_mix,
-                "n_iter": n_iter,
-                "calibration_per_action": calibration_per_action,
-            },
-        }
-    )
-    with tempfile.TemporaryDirectory() as folder:
-        run_sweep(
-            config,
-            folder,
-            scheduler=None if workers else "synchronous",
-            workers=workers or None,
-            progress=False,
-        )
-        table, diffs, rel, seeds, calibration, summary = read_tables(folder)
+    config = config_from_parameters(globals(), out.source.root)
+    folder = notebook_tables(config, workers=workers or None)
+    out.say(provenance_text(folder))
 else:
-    table, diffs, rel, seeds, calibration, summary = read_tables(sweep_dir)
+    folder = sweep_dir
+stamped = saved_subset(read_tables(folder))  # what the saved tables hold, whichever the folder
+table, diffs, rel, seeds, calibration = (findings.bare(t) for t in stamped[:5])  # computed on, unstamped
+summary = stamped.summary
 source = summary["data_source"]
-pooled = table[(table.viewpoint == "all") | table.noise.isna()]
-out.table(pooled, "corpus_metrics", episodes=summary["episodes"])
-out.table(diffs[diffs.noise.isna() & (diffs.viewpoint == "all")], "corpus_differences")
-out.table(rel[rel.noise.isna()], "corpus_reliability")
-out.table(seeds[seeds.fraction == seeds.fraction.max()], "corpus_seeds")
-out.table(calibration, "corpus_calibration")
+verdicts = findings.finding_verdicts(diffs)
+counts = findings.verdict_counts(verdicts)
+best = conditions.best_invariant(calibration)
+full = table.fraction.max()
+# results/: the findings whole; the metrics and differences of the reference cell and the contrasted one
+# (every reading, feature set, world and viewpoint, noise pooled), their reliability diagrams (effects from
+# the action alone), the reference cell's seeds; the rest in `folder`
+for frame, stamp, name in (
+    (findings.in_contrast_cells(table[table.viewpoint != "all"], table), stamped.metrics, "corpus_metrics"),
+    (findings.in_contrast_cells(diffs, table), stamped.differences, "corpus_differences"),
+    (verdicts, stamped.differences, "corpus_findings"),
+    (counts, stamped.differences, "corpus_finding_counts"),
+    (
+        findings.in_contrast_cells(rel[rel.effects == "action"], table),
+        stamped.reliability,
+        "corpus_reliability",
+    ),
+    (findings.select(seeds, findings.REFERENCE_CELL), stamped.seeds, "corpus_seeds"),
+    (calibration, stamped.calibration, "corpus_calibration"),
+):
+    frame.attrs = dict(stamp.attrs)
+    out.table(frame, name, **({"episodes": summary["episodes"]} if name == "corpus_metrics" else {}))
+    frame.attrs = {}
 out.say(findings.design_text(summary))
 
 # %% [markdown]
-# ## Which strategy wins in which cell
-# Each cell names the best strategy at the full gesture (pooled over noise levels and viewpoints) and, after
-# `=`, the initials of those with no difference from it (G gesture, N network, H hard, V virtual, J Jeffrey,
-# P product; the true action, an oracle, left out).
+# ## The front view first, then where the conclusion changes
+# Each earlier claim is a paired difference between two strategies, followed through every cell of the
+# robot's models (actions × network × p_HMM reading) for every condition (effects, viewpoint, features, noise
+# level). The figure counts the cells where each holds after the multiplicity adjustment; the sentences give
+# the reference cell's difference on the front view and the counts elsewhere.
 
 # %%
-win = findings.winners(table, diffs)
-out.table(win, "corpus_winners")
-shown = [("action", "accuracy"), ("effect", "log_loss"), ("effect", "ece"), ("description", "all")]
-rows = win.groupby(list(findings.DESIGN[:3])).ngroups
-fig, axes = plt.subplots(2, 2, figsize=(10, 0.9 * rows + 2.5))
-for ax, (target, metric) in zip(axes.ravel(), shown, strict=True):
-    figures.plot_winners(ax, win, target, metric)
-out.figure(fig, "corpus_winners", source=source)
-findings.winners_table(win, shown)
-
-# %% [markdown]
-# ## The earlier findings, followed through the design
-# Each claim is a paired difference between two strategies; its verdict in every cell, and a sentence per
-# claim written from them.
-
-# %%
-verdicts = findings.finding_verdicts(diffs)
-out.table(verdicts, "corpus_findings")
+out.say(conditions.lead_sentence(table, verdicts, best, feature_sets))
+shown = [("action", v, f) for v in findings.viewpoints(table) for f in feature_sets]
+shown += [(e, findings.front_view(table), "raw") for e in effects if e != "action"]
+out.figure(figures.findings_figure(counts, shown), "corpus_findings", source=source)
 for sentence in findings.finding_sentences(verdicts):
     out.say("* " + sentence)
 
 # %% [markdown]
-# ## Against the sensor noise, early in the gesture, and how well calibrated
-# The reference cell (uniform actions, the generating network, p_HMM per frame) beside the most mismatched
-# one; bands are two-level intervals.
+# ## Viewpoints and features
+# The gesture's accuracy and the effect's log-loss per viewpoint, a column per feature set of the recogniser
+# (reference cell; bars are two-level intervals). The invariant feature set compared with the raw one is
+# chosen on held-out gestures drawn like the test conditions, never on the test episodes.
+
+# %%
+out.figure(figures.viewpoints_figure(table, feature_sets, full), "corpus_viewpoints", source=source)
+out.say(conditions.validation_sentence(calibration))
+for sentence in conditions.viewpoint_sentences(
+    table, list(dict.fromkeys(["raw", best or "raw", *feature_sets]))
+):
+    out.say("* " + sentence)
+out.say(conditions.gesture_world_sentence(table))
+
+# %% [markdown]
+# ## Which strategy wins in which cell, on the front view
+# Each cell names the best strategy at the full gesture (front view, raw features, effects from the action
+# alone, noise pooled) and, after `=`, the initials of those with no adjusted difference from it (G gesture,
+# N network, H hard, V virtual, J Jeffrey, P product; the true action, an oracle, left out).
+
+# %%
+win = findings.winners(table, diffs)
+out.table(win, "corpus_winners")
+front = win[(win.effects == "action") & (win.features == "raw")]
+shown = [("action", "accuracy"), ("effect", "log_loss"), ("effect", "ece"), ("words", "log_loss")]
+rows = front.groupby(list(findings.CELL[:3])).ngroups
+fig, axes = plt.subplots(2, 2, figsize=(10, 0.9 * rows + 2.5))
+for ax, (target, metric) in zip(axes.ravel(), shown, strict=True):
+    figures.plot_winners(ax, front, target, metric)
+out.figure(fig, "corpus_winners", source=source)
+findings.winners_table(front, shown)
+
+# %% [markdown]
+# ## On the front view: early in the gesture, paired differences, calibration
+# The reference cell beside the most mismatched one (the network's action prior, the network learned from
+# the fewest experiments); bands are two-level intervals.
 
 # %%
 cells = findings.contrast_cells(table)
-full = table.fraction.max()
-out.figure(figures.strategies_vs_noise_figure(table, cells, full), "corpus_strategies_vs_noise", source=source)
-out.figure(figures.early_recognition_figure(table, cells), "corpus_early_recognition", source=source)
-out.figure(figures.calibration_figure(rel, table, cells, full), "corpus_calibration", source=source)
+view = findings.front_view(table)
+out.figure(figures.early_recognition_figure(table, cells, view), "corpus_early_recognition", source=source)
+pairs = [(f.target, f.metric, f.strategy, f.baseline) for f in findings.FINDINGS if not f.early]
+out.figure(figures.differences_figure(diffs, pairs, cells, full, view), "corpus_differences", source=source)
+out.figure(
+    figures.calibration_figure(rel, table, cells, full, viewpoint=view), "corpus_calibration", source=source
+)
 for line in findings.network_alone_sentences(table):
     out.say("* " + line)
 
 # %% [markdown]
-# ## Paired differences, in the reference cell and the most mismatched one
-
-# %%
-pairs = [
-    (f.target, f.metric, f.strategy, f.baseline) for f in findings.FINDINGS if f.viewpoint == "all" and not f.early
-]
-out.figure(figures.differences_figure(diffs, pairs, cells, full), "corpus_differences", source=source)
-
-# %% [markdown]
 # ## Is p_HMM a probability?
-# Left: p_HMM's own reliability on the corpus's held-out synthetic gestures, under each reading (the
-# reference cell's actions and network). Right, with the real data: each real standing segment left out,
+# p_HMM's own reliability on the corpus's held-out synthetic gestures under each reading, per viewpoint (the
+# reference cell's actions, network and features). With the real data: each real standing segment left out,
 # recognised by HMMs trained on the others; the calibrated reading's temperature is fitted on the other
 # segments only, each scored by models that saw neither.
 
@@ -230,7 +252,8 @@ if real:
     segment_summary = p_hmm_readings.segment_calibration(segments)
     out.table(segment_summary, "p_hmm_real_calibration")
 cell = {k: v for k, v in findings.REFERENCE_CELL.items() if k != "p_hmm"}
-fig = figures.p_hmm_calibration_figure(rel, full, where=cell, segments=segments)
+views = [v for v in (view, "side-on") if v in set(rel.viewpoint)]
+fig = figures.p_hmm_calibration_figure(rel, full, where=cell, segments=segments, viewpoints=views)
 out.figure(fig, "corpus_p_hmm_calibration", source=source)
 for line in findings.p_hmm_sentences(table, calibration, segment_summary if real else None):
     out.say("* " + line)
@@ -238,8 +261,8 @@ segment_summary if real else findings.p_hmm_table(table)
 
 # %% [markdown]
 # ## How much the recogniser's seed moves the result
-# Each seed's own accuracy at the full gesture (reference cell); the seed level of every interval above
-# carries this spread.
+# Each seed's own accuracy at the full gesture (reference cell, viewpoints and noise pooled); the seed level
+# of every interval above carries this spread.
 
 # %%
 spread = findings.seed_spread(seeds)

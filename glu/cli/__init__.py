@@ -28,6 +28,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "glu.cli.anticipate_cmds",
     "glu.cli.readme_cmds",
     "glu.cli.eval_cmds",
+    "glu.cli.correspondence_cmds",
     "glu.cli.learn_cmds",
 )
 """Each module defines ``register(subparsers)``; handlers import heavy libraries lazily."""

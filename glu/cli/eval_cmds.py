@@ -1,11 +1,12 @@
 """``glu evaluate`` and ``glu corpus``: measure every fusion strategy on a simulated corpus, on Dask.
 
-``glu evaluate`` runs the sweep of :mod:`glu.studies.corpus_evaluation.sweep` (the factorial design action
-prior × inference network × p_HMM reading × noise × viewpoint, over recogniser seeds, every strategy at every
-observed fraction; see docs/corpus-evaluation.md) on a LocalCluster sized to the machine, or on an existing
-Dask cluster (``--scheduler tcp://host:8786``), and writes the merged tables to ``-o DIR``; run it again on
-the same folder to finish an interrupted sweep. ``glu corpus`` writes the simulated episodes themselves to
-Parquet.
+``glu evaluate`` runs the sweep of :mod:`glu.studies.corpus_evaluation.sweep` (the factorial design effects ×
+action prior × inference network × p_HMM reading × feature set × noise × viewpoint, over recogniser seeds,
+every strategy at every observed fraction; see docs/corpus-evaluation.md) on a LocalCluster sized to the
+machine, or on an existing Dask cluster (``--scheduler tcp://host:8786``), and writes the merged tables to
+``-o DIR``; run it again on the same folder to finish an interrupted sweep (``--save DIR`` also writes the
+small subset notebook 11 reads, as ``sweeps/`` keeps it). ``glu corpus`` writes the simulated episodes
+themselves to Parquet.
 """
 
 from __future__ import annotations
@@ -34,11 +35,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "evaluate",
         help="measure every fusion strategy on a simulated corpus (Dask sweep)",
         description="Measure every fusion strategy (gesture only, network only, hard, virtual, Jeffrey, "
-        "product) on simulated episodes: the factorial design action prior × inference network × p_HMM "
-        "reading × noise × viewpoint, over recogniser seeds, every strategy at every observed fraction of "
-        "the gesture (docs/corpus-evaluation.md). Runs on a LocalCluster sized to the machine or on an "
-        "existing Dask cluster (--scheduler), and writes the merged tables to -o DIR; run it again on the "
-        "same folder to finish an interrupted sweep.",
+        "product) on simulated episodes: the factorial design effects × action prior × inference network × "
+        "p_HMM reading × feature set × noise × viewpoint, over recogniser seeds, every strategy at every "
+        "observed fraction of the gesture (docs/corpus-evaluation.md). Runs on a LocalCluster sized to the "
+        "machine or on an existing Dask cluster (--scheduler), and writes the merged tables to -o DIR; run "
+        "it again on the same folder to finish an interrupted sweep.",
     )
     _shared(e)
     add_cluster_args(e, "chunk")
@@ -50,6 +51,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     e.add_argument(
         "-o", "--out", type=output_folder, required=True, metavar="DIR", help="output folder (resumable)"
+    )
+    e.add_argument(
+        "--save",
+        type=output_folder,
+        metavar="DIR",
+        help="once finished, also write the tables notebook 11 reads (a small subset) to DIR, with their key "
+        "and provenance (glu.saved): how sweeps/11_corpus_evaluation/ is made",
     )
     e.set_defaults(func=_evaluate)
 
@@ -90,7 +98,25 @@ def _evaluate(args: argparse.Namespace) -> int:
     )
     if result.summary:
         print(overall_text(result.summary))
+        if args.save:
+            import shlex
+            import sys
+
+            from glu.studies.corpus_evaluation.sweep import export_saved
+
+            command = "glu " + " ".join(shlex.quote(a) for a in public_argv(sys.argv[1:]))
+            print(f"saved tables → {export_saved(args.out, args.save, command)}")
     return 0
+
+
+def public_argv(argv: list[str]) -> list[str]:
+    """The arguments with the data folder named ``DATA`` (a path of this machine is no one else's), unless
+    it is ``synthetic``."""
+    out = list(argv)
+    for i, a in enumerate(out[:-1]):
+        if a == "--data" and out[i + 1] != "synthetic":
+            out[i + 1] = "DATA"
+    return [a for a in out if a]
 
 
 def overall_text(summary: dict) -> str:
@@ -99,13 +125,18 @@ def overall_text(summary: dict) -> str:
     import pandas as pd
 
     best = pd.DataFrame(summary["best"])
-    lines = [f"{summary['episodes']} episodes; {summary['data_source']}"]
+    view = best.viewpoint.iloc[0] if len(best) and "viewpoint" in best else "all"
+    lines = [
+        f"{summary['episodes']} episodes; {summary['data_source']}",
+        f"the best strategy of each cell, {view} view, noise pooled (ties: no adjusted difference); an ECE "
+        "is bias-corrected, with its basic bootstrap interval",
+    ]
     for r in best.itertuples():
         net = r.inference_network + (f"-{r.learn_experiments}" if r.learn_experiments else "")
         tied = [s for s in r.tied.split(", ") if s and s != r.best]
         lines.append(
-            f"  {r.action_prior:8s} {net:14s} {r.p_hmm:10s} {r.target:11s} {r.metric:9s} "
-            f"{r.best} {r.estimate:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]"
+            f"  {r.effects:7s} {r.action_prior:8s} {net:14s} {r.p_hmm:18s} {r.features:16s} {r.target:7s} "
+            f"{r.metric:9s} {r.best} {r.estimate:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]"
             + (f" (no difference: {', '.join(tied)})" if tied else "")
         )
     return "\n".join(lines)

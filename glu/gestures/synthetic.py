@@ -65,7 +65,7 @@ from glu.errors import DataError
 from glu.gestures.features import OPENNI_JOINTS, skeleton_features
 from glu.gestures.robot import ROBOT_ACTIONS, ROBOT_BODY, robot_hand_path
 from glu.gestures.trajectories import RepairPolicy, Trajectory, repair
-from glu.gestures.views import DEFAULT_VIEW, View
+from glu.gestures.views import DEFAULT_VIEW, View, track
 from glu.schema import ACTIONS
 
 GESTURES: tuple[str, ...] = (*ACTIONS, "push")
@@ -333,7 +333,7 @@ def synthesize_gesture(
     pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
     hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
     t = np.arange(len(hand)) / FRAME_RATE
-    skel = _skeletons(hand, person, t, rng, view)
+    skel = track(_skeletons(hand, person, t, rng, view), person.yaw, view)  # what the tracker reports
     true = ((pre + 1, pre + len(move)),)
     skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, dropout_rate)
     return SyntheticGesture(action, skel, t_obs, person.size, true, view)

@@ -49,6 +49,7 @@ from glu.gestures.synthetic import (
     synthesize_gesture,
 )
 from glu.gestures.trajectories import RepairPolicy, repaired_many
+from glu.gestures.views import track
 
 _IH, _IT = OPENNI_JOINTS.index("right_hand"), OPENNI_JOINTS.index("torso")
 _ILS, _IRS, _IN = (OPENNI_JOINTS.index(j) for j in ("left_shoulder", "right_shoulder", "neck"))
@@ -242,6 +243,10 @@ def _skeleton(
     rel[:, _IH] = hand
     c, si = np.cos(yaw), np.sin(yaw)
     rot = np.array([[c, 0.0, si], [0.0, 1.0, 0.0], [-si, 0.0, c]])
+    if view.tracker != "ideal":  # the tracker needs every joint (glu.gestures.views.track)
+        world = rel @ rot.T + origin
+        world[:, :, 0] += sway[:, None]
+        return track(world, yaw, view)[:, _JOINTS]
     world = (rel @ rot.T)[:, _JOINTS] + origin
     world[:, :, 0] += sway[:, None]
     return world

@@ -2,7 +2,23 @@
 
 The synthetic generator (:mod:`glu.gestures.synthetic`) draws each person in full and then applies the
 view: their turn about the vertical, a mirror image, the posture, the body size, how far their arm length
-and movement style differ from the standard ones, and how the features are computed from the skeleton.
+and movement style differ from the standard ones, how the features are computed from the skeleton, and the
+skeleton tracker that reports the joints.
+
+**The tracker.** The ``ideal`` tracker reports every joint where it is, whichever way the person faces the
+camera. A real skeleton tracker (a depth camera's, fitted to a body it assumes faces it) does not:
+:func:`track` gives the ``occluding`` tracker's report of a skeleton,
+
+* turned by more than :data:`OCCLUSION_DEG` (side-on), the far shoulder is hidden behind the body: the
+  tracker infers it as if the person faced the camera, mirroring the near shoulder across the torso in the
+  camera's frame (so the shoulder line it reports runs across the image, shortened by the cosine of the
+  turn, and says nothing of the turn);
+* turned by more than :data:`SWAP_DEG` (seen from behind), it takes the back for the front: every left
+  joint is reported as the right one and vice versa, so the "right hand" it follows is the person's left.
+
+Everything else (the near shoulder, the hands, the torso) it reports where it is. The turn is the
+person's own (the view's ``yaw_deg``, or the random ± 10° of the recordings); the robot's own movements are
+sensed by its joints, never by a tracker.
 """
 
 from __future__ import annotations
@@ -12,10 +28,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from glu.errors import DataError
+from glu.gestures.features import OPENNI_JOINTS
 
 POSTURES: tuple[str, ...] = ("standing", "seated")
 PERFORMERS: tuple[str, ...] = ("human", "robot")
 """Who moves: a person seen by the robot's camera, or the robot itself (its end effector, its body frame)."""
+TRACKERS: tuple[str, ...] = ("ideal", "occluding")
+"""How the skeleton tracker reports a person turned away from the camera (module docstring, :func:`track`)."""
+OCCLUSION_DEG = 60.0
+"""Turned further than this (degrees, either way), the occluding tracker loses the far shoulder."""
+SWAP_DEG = 120.0
+"""Turned further than this (seen from behind), the occluding tracker swaps left and right."""
 
 
 @dataclass(frozen=True)
@@ -40,6 +63,7 @@ class View:
     variety : how far each person's arm length and movement style differ from the generator's standard
         ones (0: not at all; see the module docstring)
     body_frame : features in the shoulder line's frame instead of the torso's
+    tracker : the skeleton tracker, ``"ideal"`` or ``"occluding"`` (:data:`TRACKERS`, :func:`track`)
     """
 
     yaw_deg: float | None = None
@@ -50,6 +74,7 @@ class View:
     performer: str = "human"
     variety: float = 0.0
     body_frame: bool = False
+    tracker: str = "ideal"
 
     def __post_init__(self) -> None:
         if self.yaw_deg is not None and not np.isfinite(self.yaw_deg):
@@ -64,6 +89,10 @@ class View:
             raise DataError("the robot has one posture: give posture only for a human performer")
         if not (isinstance(self.variety, int | float) and 0 <= self.variety <= 3):
             raise DataError(f"view variety={self.variety!r}: a number from 0 (the standard people) to 3")
+        if self.tracker not in TRACKERS:
+            raise DataError(f"unknown tracker {self.tracker!r}; allowed: {', '.join(TRACKERS)}")
+        if self.performer == "robot" and self.tracker != "ideal":
+            raise DataError("the robot senses its own joints: give a tracker only for a human performer")
 
     def describe(self) -> str:
         """One line, e.g. ``human, standing, yaw 90°, mirrored, size 1.2``."""
@@ -77,8 +106,62 @@ class View:
             "fixed scale" * (not self.normalise_body),
             f"people varied ×{self.variety:g}" if self.variety else "",
             "body frame" * self.body_frame,
+            "occluding tracker" * (self.tracker == "occluding"),
         ]
         return ", ".join(p for p in parts if p)
 
 
 DEFAULT_VIEW = View()
+
+
+_PAIRS = [
+    (OPENNI_JOINTS.index(j), OPENNI_JOINTS.index("right_" + j.removeprefix("left_")))
+    for j in OPENNI_JOINTS
+    if j.startswith("left_")
+]
+_LS, _RS, _TORSO = (OPENNI_JOINTS.index(j) for j in ("left_shoulder", "right_shoulder", "torso"))
+
+
+def tracker_state(yaw_deg: float) -> str:
+    """What the occluding tracker makes of a person turned by ``yaw_deg``: ``"sees all"``, ``"far shoulder
+    lost"`` (beyond :data:`OCCLUSION_DEG`) or ``"left and right swapped"`` (beyond :data:`SWAP_DEG`)."""
+    turn = abs((float(yaw_deg) + 180.0) % 360.0 - 180.0)
+    if turn > SWAP_DEG:
+        return "left and right swapped"
+    if turn > OCCLUSION_DEG:
+        return "far shoulder lost"
+    return "sees all"
+
+
+def track(skeleton: np.ndarray, yaw_rad: float, view: View) -> np.ndarray:
+    """The joints ``view``'s tracker reports for a skeleton, shape (n_frames, 15, 3) → the same.
+
+    Parameters
+    ----------
+    skeleton : the true joints in the camera's frame (:data:`~glu.gestures.features.OPENNI_JOINTS` order;
+        the camera at the origin)
+    yaw_rad : the person's turn relative to the camera, radians
+    view : the view (its ``tracker``; an ``ideal`` tracker returns ``skeleton`` itself)
+
+    See the module docstring: beyond :data:`OCCLUSION_DEG` the far shoulder (the one further from the
+    camera, frame by frame) is reported at the near one mirrored across the torso in the camera's x; beyond
+    :data:`SWAP_DEG` every left and right joint trade places.
+    """
+    if view.tracker == "ideal":
+        return skeleton
+    state = tracker_state(np.rad2deg(yaw_rad))
+    if state == "sees all":
+        return skeleton
+    out = np.array(skeleton, dtype=float, copy=True)
+    if state == "left and right swapped":
+        for left, right in _PAIRS:
+            out[:, [left, right]] = skeleton[:, [right, left]]
+        return out
+    far_left = np.linalg.norm(skeleton[:, _LS], axis=1) > np.linalg.norm(skeleton[:, _RS], axis=1)
+    near = np.where(far_left[:, None], skeleton[:, _RS], skeleton[:, _LS])
+    torso = skeleton[:, _TORSO]
+    inferred = near.copy()
+    inferred[:, 0] = 2 * torso[:, 0] - near[:, 0]
+    out[far_left, _LS] = inferred[far_left]
+    out[~far_left, _RS] = inferred[~far_left]
+    return out

@@ -7,16 +7,28 @@ simulators agree on: which objects people act on and how often each action is pe
 that make an episode's draws the same whatever machine simulates it. The corpus evaluation simulates its
 episodes in :mod:`glu.studies.corpus_evaluation.corpus`, learning from effects in
 :mod:`glu.studies.learning.self_supervised`.
+
+**Effects that depend on the gesture.** The fusion rules assume that the gesture tells nothing about the
+effect beyond the action (G ⟂ effects | action). By default the world obeys it: the effects are drawn from
+the network given the action and the object alone. :class:`GestureEffects` breaks it on purpose, in the
+way a real table does: a fast tap sends the object further, and the taps that fail to move it are the
+slow ones. :func:`gesture_speed` reads how fast each episode's gesture is (its amplitude over its
+duration, as the gesture generator drew them, and the quantile of that speed among all the generator's
+gestures); :func:`effects_given_gesture` redraws the effects of the episodes it concerns, and everything
+the network draws below them (the other effects given them, the words), from those speeds.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
+from glu.bn.inference import Engine
+from glu.bn.sampling import categorical, sample
 from glu.errors import DataError
 from glu.gestures.synthetic import View
 from glu.schema import AFFORDANCE_VALUES, ROOT_NODES
@@ -25,13 +37,17 @@ EFFECT_NODES: tuple[str, ...] = ("ObjVel", "ObjHandVel", "HandVel", "Contact")
 """The nodes the network draws (with the words) once the scenario has set the roots."""
 VIEWPOINTS: dict[str, View] = {
     "front": View(),
-    "turned": View(yaw_deg=40.0),
+    "turned": View(yaw_deg=40.0, tracker="occluding"),
+    "side-on": View(yaw_deg=90.0, tracker="occluding"),
     "seated": View(posture="seated"),
 }
-"""Named viewpoints: as in the recordings (facing the camera, turned by a random ± 10°), turned by 40°,
-seated at a higher table (:class:`~glu.gestures.synthetic.View`)."""
-WORLD_KEY, GESTURE_KEY = 0, 1
-"""Spawn keys of the world draws (per chunk) and of each episode's gesture (per episode)."""
+"""Named viewpoints (:class:`~glu.gestures.views.View`): as in the recordings (facing the camera, turned by
+a random ± 10°), turned by 40°, side-on (turned by 90°), seated at a higher table. The turned views are seen
+through the occluding tracker (:func:`glu.gestures.views.track`), which sees both shoulders at 40° and
+loses the far one side-on."""
+WORLD_KEY, GESTURE_KEY, EFFECTS_KEY = 0, 1, 6
+"""Spawn keys of the world draws (per chunk), of each episode's gesture (per episode), and of the effects
+redrawn from the gestures (per chunk, :func:`effects_given_gesture`)."""
 ACTION_PRIORS: dict[str, str] = {
     "uniform": "every action equally often",
     "network": "as often as the network's prior p(Action) says (the robot's own experiments)",
@@ -106,11 +122,14 @@ class Condition:
     noise : standard deviation of the sensor noise on every joint, metres
     viewpoint : a name of :data:`VIEWPOINTS` (or of ``views`` given to :func:`simulate_chunk`)
     action_prior : a name of :data:`ACTION_PRIORS`
+    effects : a name of :data:`GESTURE_WORLDS`: whether the effects depend on the action alone (the fusion
+        rules' assumption) or on the gesture too
     """
 
     noise: float
     viewpoint: str
     action_prior: str = "uniform"
+    effects: str = "action"
 
     def __post_init__(self) -> None:
         if not (isinstance(self.noise, int | float) and 0 <= self.noise < math.inf):
@@ -119,6 +138,8 @@ class Condition:
             raise DataError(
                 f"unknown action prior {self.action_prior!r}; allowed: {', '.join(ACTION_PRIORS)}"
             )
+        if self.effects not in GESTURE_WORLDS:
+            raise DataError(f"unknown effects {self.effects!r}; allowed: {', '.join(GESTURE_WORLDS)}")
 
 
 @dataclass(frozen=True)
@@ -139,3 +160,166 @@ class GestureSettings:
             v = getattr(self, name)
             if not (isinstance(v, int | float) and 0 <= v <= 1):
                 raise DataError(f"{name}={v!r}: must be a probability in [0, 1]")
+
+
+DURATION_S: tuple[float, float] = (2.5, 5.0)
+AMPLITUDE: tuple[float, float] = (0.85, 1.15)
+"""The ranges the gesture generator draws a person's movement duration (seconds) and amplitude (the
+excursion from rest, scaled) from, uniformly (:mod:`glu.gestures.synthetic`)."""
+_PERSON_DRAWS = 7
+"""Numbers the generator draws for the person (size, position x y z, turn, sway phase and amplitude) before
+the movement's duration and amplitude."""
+
+
+class GestureSpeed(NamedTuple):
+    """How fast each episode's gesture is, as the generator drew it (the same in every noise level and view).
+
+    Attributes
+    ----------
+    duration : array, shape (n,), the movement's duration, seconds (without the rest before and after)
+    amplitude : array, shape (n,), the movement's amplitude factor
+    speed : array, shape (n,), ``amplitude / duration`` (per second)
+    quantile : array, shape (n,), the fraction of the generator's gestures that are slower: uniform on
+        [0, 1] over episodes, 0.5 a typical gesture, 0.9 one faster than nine in ten
+    """
+
+    duration: np.ndarray
+    amplitude: np.ndarray
+    speed: np.ndarray
+    quantile: np.ndarray
+
+
+def speed_quantile(speed: np.ndarray) -> np.ndarray:
+    """P(A / D ≤ s) for A uniform on :data:`AMPLITUDE` and D on :data:`DURATION_S`, in closed form:
+    ``(1 / |D|) ∫ clip((s d − a0) / (a1 − a0), 0, 1) dd``."""
+    (d0, d1), (a0, a1) = DURATION_S, AMPLITUDE
+    s = np.maximum(np.asarray(speed, dtype=float), 1e-12)
+    lo, hi = np.clip(a0 / s, d0, d1), np.clip(a1 / s, d0, d1)
+    ramp = (s * (hi**2 - lo**2) / 2 - a0 * (hi - lo)) / (a1 - a0)
+    return np.clip((ramp + (d1 - hi)) / (d1 - d0), 0.0, 1.0)
+
+
+def gesture_speed(rngs: Sequence[np.random.Generator]) -> GestureSpeed:
+    """How fast each gesture is, from fresh copies of the generators its gesture is drawn with.
+
+    ``rngs[i]`` must be a generator in the state the gesture generator
+    (:func:`glu.gestures.synthetic.synthesize_gesture`, or the corpus's batch of them) receives it for a
+    person's gesture: the duration and amplitude are its 8th and 9th uniform numbers, after the person's
+    (tested against the generator). The generators are advanced.
+    """
+    u = np.array([rng.random(_PERSON_DRAWS + 2)[_PERSON_DRAWS:] for rng in rngs]).reshape(-1, 2)
+    (d0, d1), (a0, a1) = DURATION_S, AMPLITUDE
+    duration = d0 + (d1 - d0) * u[:, 0]
+    amplitude = a0 + (a1 - a0) * u[:, 1]
+    speed = amplitude / duration
+    return GestureSpeed(duration, amplitude, speed, speed_quantile(speed))
+
+
+@dataclass(frozen=True)
+class GestureEffects:
+    """How the effects depend on the gesture as well as on the action (the fusion rules assume they do not).
+
+    Attributes
+    ----------
+    speed_effect : how strongly the gesture's speed moves the effects of ``actions``: each node of
+        ``nodes`` is redrawn from ``p(node | object, action) · exp(λ z r)``, where ``z = 2 q − 1`` is the
+        gesture's speed quantile ``q`` put on [−1, 1] and ``r`` the value's rank put on [−1, 1] (slow −1,
+        fast +1): a fast gesture makes the faster values likelier, a slow one the slower. 0: no effect
+    failed_taps : the fraction of taps, the slowest, whose object does not move (ObjVel slow, as after a
+        touch): a tap fails when its speed quantile is below this
+    actions : the actions whose effects the speed changes
+    nodes : the effect nodes the speed changes (ordered values, slowest first)
+    """
+
+    speed_effect: float = 0.0
+    failed_taps: float = 0.0
+    actions: tuple[str, ...] = ("tap",)
+    nodes: tuple[str, ...] = ("ObjVel",)
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.speed_effect, int | float) and 0 <= self.speed_effect < math.inf):
+            raise DataError(f"speed_effect={self.speed_effect!r}: must be a number ≥ 0")
+        if not (isinstance(self.failed_taps, int | float) and 0 <= self.failed_taps <= 1):
+            raise DataError(f"failed_taps={self.failed_taps!r}: must be a fraction in [0, 1]")
+        for a in self.actions:
+            if a not in AFFORDANCE_VALUES["Action"]:
+                allowed = ", ".join(AFFORDANCE_VALUES["Action"])
+                raise DataError(f"gesture effects: unknown action {a!r}; allowed: {allowed}")
+        for node in self.nodes:
+            if node not in EFFECT_NODES:
+                allowed = ", ".join(EFFECT_NODES)
+                raise DataError(f"gesture effects: {node!r} is not an effect node; allowed: {allowed}")
+
+    @property
+    def active(self) -> bool:
+        """Whether the effects depend on the gesture at all."""
+        return self.speed_effect > 0 or self.failed_taps > 0
+
+
+GESTURE_WORLDS: dict[str, GestureEffects] = {
+    "action": GestureEffects(),
+    "gesture": GestureEffects(speed_effect=2.0, failed_taps=0.25),
+}
+"""Named worlds: the effects depend on the action alone (the fusion rules' assumption), or also on the
+gesture — a fast tap sends the object further (λ = 2: the fastest taps' ObjVel is about e² times likelier
+fast and e² times less likely slow than the network says), and the slowest quarter of the taps fail."""
+
+
+def effects_given_gesture(
+    engine: Engine,
+    codes: Mapping[str, np.ndarray],
+    quantile: np.ndarray,
+    effects: GestureEffects,
+    rng: np.random.Generator,
+) -> dict[str, np.ndarray]:
+    """The episodes' values with the effects redrawn from their gestures' speeds, where ``effects`` says.
+
+    Parameters
+    ----------
+    engine : the network the episodes were drawn from
+    codes : node → int array, shape (n,), every node's value index (as :func:`glu.bn.sampling.sample`
+        returns them)
+    quantile : array, shape (n,), each gesture's speed quantile (:attr:`GestureSpeed.quantile`)
+    effects : how the effects depend on the gesture; inactive: ``codes`` returned unchanged, ``rng``
+        untouched
+    rng : the generator of the new draws
+
+    Each node of ``effects.nodes`` of the episodes of ``effects.actions`` is drawn from the tilted
+    ``p(node | object, action[, the nodes before it])`` (:class:`GestureEffects`); then the slowest taps'
+    ObjVel is set slow. Episodes whose effect nodes changed get the rest of the network (the other effects,
+    the words) drawn again given their roots and new effects (:func:`glu.bn.sampling.sample`, which
+    conditions on them); the others keep every value.
+    """
+    out = {k: np.asarray(v, dtype=np.intp).copy() for k, v in codes.items()}
+    if not effects.active:
+        return out
+    schema = engine.bn.schema
+    quantile = np.asarray(quantile, dtype=float)
+    n = len(quantile)
+    acts = [schema.values_of("Action").index(a) for a in effects.actions]
+    moved = np.isin(out["Action"], acts)
+    roots = list(schema.root_nodes)
+    evidence = {r: out[r] for r in roots}
+    if effects.speed_effect > 0 and moved.any():
+        rows = np.flatnonzero(moved)
+        z = 2 * quantile[rows] - 1
+        for node in effects.nodes:
+            p = engine.query_batch([node], {k: v[rows] for k, v in evidence.items()})[node]
+            k = p.shape[1]
+            rank = np.linspace(-1.0, 1.0, k) if k > 1 else np.zeros(1)
+            tilted = p * np.exp(effects.speed_effect * z[:, None] * rank[None, :])
+            out[node][rows] = categorical(tilted, rng)
+            evidence = {**evidence, node: out[node]}
+    if effects.failed_taps > 0 and "tap" in schema.values_of("Action"):
+        fails = (out["Action"] == schema.values_of("Action").index("tap")) & (quantile < effects.failed_taps)
+        out["ObjVel"][fails] = schema.values_of("ObjVel").index("slow")
+    changed = np.zeros(n, dtype=bool)
+    for node in set(effects.nodes) | {"ObjVel"}:
+        changed |= out[node] != np.asarray(codes[node])
+    rows = np.flatnonzero(changed)
+    if len(rows):
+        fixed = {r: out[r][rows] for r in roots}
+        fixed.update({node: out[node][rows] for node in set(effects.nodes) | {"ObjVel"}})
+        for node, v in sample(engine, fixed, rng).items():
+            out[node][rows] = v
+    return out

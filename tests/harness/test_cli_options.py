@@ -53,6 +53,8 @@ OUTPUT_TYPES = (output_file, output_folder, output_image)
 OUTPUT_EXCEPTIONS = {
     ("gestures segment", "--plot"): "an extra image beside the segments printed on stdout, not the command's "
     "output; -o would suggest the printed result goes to the file",
+    ("evaluate", "--save"): "a second, small copy of the tables notebook 11 reads, beside the sweep's own "
+    "folder -o",
 }
 """Options that write a file but are not the command's output (so not -o/--out)."""
 
@@ -69,6 +71,7 @@ NO_JSON = {
     "evaluate": "writes its tables to -o DIR; DIR/summary.json holds the overall results it prints",
     "corpus": "writes the episodes to a Parquet file; prints one line saying what it wrote",
     "learning-curves": "writes its tables to -o DIR; prints which files it wrote",
+    "correspondence": "writes its tables to -o DIR with their key; prints one line saying what it wrote",
 }
 """Commands without --json: their result is a file, and what they print is a receipt."""
 

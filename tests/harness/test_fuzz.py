@@ -164,6 +164,7 @@ COMMANDS: dict[str, tuple[list[str], bool]] = {
     "anticipate": (["--case", "sphere", "--models", "{recogniser}", "--data", "{data}"], False),
     "readme": (["--summary", "{tmp}/none.json", "--readme", "{tmp}/README.md"], True),
     "evaluate": (["-o", "{tmp}/out/eval", "--episodes", "12"], False),
+    "correspondence": (["-o", "{tmp}/out/corr"], False),
     "corpus": (["-o", "{tmp}/out/c.parquet", "--episodes", "12"], False),
     "learn-gestures": (
         [
@@ -196,6 +197,7 @@ CERTAINLY_BAD = {  # one value each heavy command refuses before any work
     "run": ["--parameter", "rulez", "jeffrey"],
     "anticipate": ["--step", "0"],
     "evaluate": ["--episodes", "0"],
+    "correspondence": ["--workers", "0"],
     "corpus": ["--episodes", "0"],
     "learn-gestures": ["--episodes", "0"],
     "learning-curves": ["--episodes", "0"],

@@ -554,6 +554,11 @@ def _cases() -> dict[str, tuple[list[str], list[tuple[str, object]], bool]]:
             ],
             True,
         ),
+        "correspondence": (
+            ["correspondence", "-o", f"{OUT}/corr"],
+            [("--workers", "pos_int"), ("-o", "outdir")],
+            True,
+        ),
         "corpus": (
             ["corpus", "-o", f"{OUT}/c.parquet", "--episodes", "20"],
             [

@@ -43,7 +43,11 @@ def study():
 
 
 def test_the_study_is_tidy_and_stamped(study):
-    assert len(study) == 2 * 2 * 5 * 3  # seeds × training sources × feature sets × conditions
+    # seeds × training sources × feature sets × conditions (0°, 90° ideal and occluding, the robot)
+    assert len(study) == 2 * 2 * 5 * 4
+    occluded = study[study["factor"] == corr.OCCLUDED]
+    assert set(occluded["level"]) == {"90°"} and set(occluded["tracker"]) == {"occluding"}
+    assert set(study[study["factor"] == "viewpoint"]["tracker"]) == {"ideal"}
     assert set(study["train"]) == {"robot", "human"}
     assert list(dict.fromkeys(study["features"])) == list(FEATURES)
     assert study["accuracy"].between(0, 1).all() and (study["n_test"] == 3).all()
@@ -64,6 +68,7 @@ def test_summary_pools_the_seeds_with_two_level_intervals(study):
         g = study[
             (study["train"] == row.train)
             & (study["features"] == row.features)
+            & (study["factor"] == row.factor)
             & (study["level"] == row.level)
         ]
         hits = np.array([c == "1" for o in g["outcomes"] for c in o])
@@ -80,11 +85,27 @@ def test_summary_pools_the_seeds_with_two_level_intervals(study):
 
 
 def test_feature_set_names():
-    assert corr.parse_feature_set("body+centred") == (True, corr.Invariants.parse("centred"))
-    assert corr.parse_feature_set("all")[0] is False and corr.parse_feature_set("body")[1].is_raw
+    from glu.gestures.feature_sets import FeatureSet
+
+    assert FeatureSet.parse("body+centred") == (True, corr.Invariants.parse("centred"))
+    assert FeatureSet.parse("all").body is False and FeatureSet.parse("body").invariants.is_raw
     for name in ("raw", "body", "body+centred+rotated", "centred+mirrored"):
-        assert corr.feature_set_name(*corr.parse_feature_set(name)) == name
+        assert FeatureSet.parse(name).name == name
     assert set(FEATURES) <= set(corr.STUDY_FEATURE_NAMES)
+
+
+def test_every_turn_is_seen_by_both_trackers():
+    conds = corr.default_conditions(yaws=(0, 45, 180))
+    ideal = [c for c in conds if c.factor == "viewpoint"]
+    occluding = [c for c in conds if c.factor == corr.OCCLUDED]
+    assert [c.level for c in ideal] == ["0°", "45°", "180°"] and [c.level for c in occluding] == [
+        "45°",
+        "180°",
+    ]
+    assert all(c.view.tracker == "occluding" for c in occluding)
+    assert not [
+        c for c in corr.default_conditions(yaws=(0, 90), occluding=False) if c.factor == corr.OCCLUDED
+    ]
 
 
 def outcome_rows(features_outcomes):
@@ -113,6 +134,7 @@ def test_invariance_effects_are_paired_differences():
     assert (e.invariance, e.baseline) == ("centred", "raw")
     assert e.delta == pytest.approx((10 / 20) - (18 / 20))
     assert e.ci_high < 0 and e.costs and not e.helps and e.verdict == "worse"
+    assert e.p_value < 0.05 and e.p_adjusted == e.p_value and e.verdict_adjusted == "worse"  # a family of one
     same = corr.invariance_effects(outcome_rows({"raw": ["1010", "0110"], "centred": ["1010", "0110"]}), 200)
     assert same.iloc[0].delta == 0 and same.iloc[0].ci_low == 0 == same.iloc[0].ci_high
     assert same.iloc[0].verdict == "no difference"
@@ -128,9 +150,13 @@ def test_body_frame_pairs_with_body_frame():
 
 def test_plots_draw_the_study(study):
     s = corr.summarise(study)
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3))
+    fig, axes = plt.subplots(1, 4, figsize=(16, 3))
     assert cplots.plot_accuracy_vs_viewpoint(axes[0], s, "human") is axes[0]
     assert len(axes[0].lines) == 5 + 1  # one line per feature set, and chance
+    markers = {line.get_marker() for line in axes[0].lines[:-1]}
+    assert len(markers) == 5  # told apart by more than their colour
+    cplots.plot_accuracy_vs_viewpoint(axes[3], s, "human", factor=corr.OCCLUDED)
+    assert "occluding" in axes[3].get_title()
     cplots.plot_accuracy_by_condition(axes[1], s, "robot")
     assert len(axes[1].patches) == 5 * 2  # the reference and the robot itself, per feature set
     cplots.plot_invariance_effects(axes[2], corr.invariance_effects(study), "human")
@@ -229,3 +255,58 @@ def test_posture_offsets_of_synthetic_standing_and_seated_gestures():
     mean = off.groupby("posture")[["y", "z"]].mean()
     assert mean.loc["seated", "y"] > mean.loc["standing", "y"]  # seated: the hand works higher, further out
     assert mean.loc["seated", "z"] < mean.loc["standing", "z"]
+
+
+def test_the_invariances_effects_are_one_adjusted_family():
+    """Twelve conditions where centring changes nothing and one where it costs: alone its interval excludes 0
+    (p at the floor of 400 replicates, 2/401), adjusted with the twelve others (13 · 2/401 > 0.05) it is no
+    difference (Benjamini–Hochberg, tested against statsmodels in tests/library/test_multiplicity.py)."""
+    from glu.stats import benjamini_hochberg
+
+    rows = []
+    for k in range(13):
+        a, b = ("1111111111", "1111111111") if k else ("1111111111", "1001001000")
+        for seed in range(2):
+            rows += [
+                {"seed": seed, "train": "human", "features": "raw", "factor": "noise", "level": f"{k}",
+                 "outcomes": a},
+                {"seed": seed, "train": "human", "features": "centred", "factor": "noise", "level": f"{k}",
+                 "outcomes": b},
+            ]  # fmt: skip
+    effects = corr.invariance_effects(pd.DataFrame(rows), 400)
+    np.testing.assert_allclose(effects.p_adjusted, benjamini_hochberg(effects.p_value.to_numpy()))
+    first = effects[effects.level == "0"].iloc[0]
+    assert first.verdict == "worse" and first.verdict_adjusted == "no difference" and not first.costs
+
+
+def test_the_study_grid_is_saved_found_and_read_back(tmp_path, monkeypatch):
+    """The study's tables computed per seed (as on Dask) are written with their key, found by it, and read
+    back equal; other settings are computed into the cache; notebook 10's defaults are the saved key."""
+    import dataclasses
+
+    from glu import saved
+    from glu.cli.correspondence_cmds import notebook_settings
+    from glu.studies.correspondence import grid
+
+    here = dataclasses.replace(saved.HERE, saved=tmp_path / "sweeps", sweeps=tmp_path / "cache")
+    monkeypatch.setattr(saved, "HERE", here)
+    settings = grid.StudySettings(
+        seeds=(0, 1), n_train=2, n_test=1, feature_sets=("raw", "centred"), yaws=(0, 90), n_states=2,
+        n_iter=3, bootstrap=20, levels=("0°", "90°"),
+    )  # fmt: skip
+    tables = grid.run_study(settings)
+    assert set(tables[0]["seed"]) == {0, 1} and set(tables[0]["factor"]) == {"viewpoint", corr.OCCLUDED}
+    folder = grid.write_tables(tmp_path / "sweeps" / grid.NOTEBOOK / "study", tables, settings.key(), "test")
+    found = grid.study_tables(settings)
+    assert found.folder == folder
+    for a, b in zip(tables, found[:3], strict=True):
+        pd.testing.assert_frame_equal(a.reset_index(drop=True), b, check_dtype=False)
+        assert b.attrs["experiment"] == a.attrs["experiment"]
+    assert found.summary.attrs["parameters"]["interval"] == tables[1].attrs["parameters"]["interval"]
+    other = dataclasses.replace(settings, seeds=(1,))
+    computed = grid.study_tables(other)
+    assert computed.folder.parent == tmp_path / "cache" / grid.NOTEBOOK and set(computed.results["seed"]) == {
+        1
+    }
+    defaults = notebook_settings()
+    assert defaults.bootstrap == 1000 and defaults.levels is None and len(defaults.seeds) == 10

@@ -13,8 +13,6 @@ from glu.fusion import fuse
 from glu.gestures.calibration import Calibration
 from glu.hmm import TrainingConfig
 from glu.hmm.scoring import BatchScorer
-from glu.language.batch import agreement, best_sentences
-from glu.language.descriptions import nbest
 from glu.schema import ACTIONS
 from glu.studies.corpus_evaluation.evaluation import (
     EvaluationSettings,
@@ -29,38 +27,50 @@ from glu.studies.episodes import Condition
 SETTINGS = EvaluationSettings(fractions=(0.3, 1.0), bootstrap=25)
 
 
-def small_recognizer(seed=0):
+def small_recognizer(seed=0, features="raw"):
     """Gesture HMMs trained in a second on a few synthetic gestures (good enough to be informative)."""
     from glu.gestures.corpus import synthetic_corpus
+    from glu.gestures.feature_sets import FeatureSet
     from glu.gestures.recognizer import train_recognizer
+    from glu.gestures.views import View
 
-    corpus = synthetic_corpus(6, seed)
+    spec = FeatureSet.parse(features)
+    corpus = synthetic_corpus(6, seed, view=View(body_frame=spec.body))
     by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
-    return train_recognizer(by_action, TrainingConfig(n_states=3, n_mix=1, n_iter=10), seed=seed, warn=False)
+    config = TrainingConfig(n_states=3, n_mix=1, n_iter=10)
+    return train_recognizer(by_action, config, seed=seed, warn=False, features=spec.invariants)
 
 
 CALIBRATION = Calibration(np.array(SETTINGS.fractions), np.array([0.05, 0.02]), 30)
+MATCHED = Calibration(np.array(SETTINGS.fractions), np.array([0.03, 0.01]), 30)
 READINGS = (
     Reading("generating", 0, "likelihood"),
     Reading("generating", 0, "per-frame"),
     Reading("generating", 0, "calibrated"),
     Reading("learned", 200, "likelihood"),
+    Reading("generating", 0, "calibrated-matched", "centred+rotated"),
+    Reading("generating", 0, "per-frame", "body"),
 )
+FEATURES = ("raw", "centred+rotated", "body")
+
+
+def replication(seed, tables):
+    recs = {f: small_recognizer(seed, f) for f in FEATURES}
+    cals = {f: {"calibrated": CALIBRATION, "calibrated-matched": MATCHED} for f in FEATURES}
+    return Replication({f: BatchScorer(r) for f, r in recs.items()}, cals, tables), recs
 
 
 @pytest.fixture(scope="module")
 def setup():
     engine = make_engine(learn_bn(load_experiments("synthetic")))
     learned = make_engine(learn_bn(load_experiments("synthetic").iloc[:200]))
-    rec = small_recognizer()
     tables = {"generating": target_tables(engine, SETTINGS), "learned-200": target_tables(learned, SETTINGS)}
-    replications = (
-        Replication(BatchScorer(rec), CALIBRATION, tables),
-        Replication(BatchScorer(small_recognizer(1)), CALIBRATION, tables),
-    )
+    first, recs = replication(0, tables)
+    rec = recs["raw"]
+    replications = (first, replication(1, tables)[0])
     ev = Evaluator(engine, replications, READINGS, SETTINGS, seed=5, chunk_size=12)
-    chunk = ev.simulate(Condition(0.03, "front"), 0, 12)
-    return engine, rec, ev, chunk, ev.episode_statistics(chunk)[0], learned
+    chunk = ev.simulate(Condition(0.03, "turned"), 0, 12)
+    return engine, rec, ev, chunk, ev.episode_statistics(chunk)[0], learned, recs
 
 
 def column_values(ev, blocks):
@@ -75,7 +85,7 @@ def cell(frame, target, strategy, fraction, stat, b=-1):
 
 
 def test_statistics_equal_a_direct_computation(setup):
-    engine, rec, ev, chunk, blocks, _ = setup
+    engine, rec, ev, chunk, blocks, *_ = setup
     frame = column_values(ev, blocks)
     assert frame.shape[1] == len(ev.columns)
     schema = engine.bn.schema
@@ -112,21 +122,18 @@ def test_statistics_equal_a_direct_computation(setup):
                 assert cell(frame, "action", "gesture", f, "bin_correct", b)[i] == float(
                     np.argmax(q) == a_true
                 )
-            # description: Jeffrey's rule, the exact 1-best, read by agreement()
-            obs = {k: row[k] for k in SETTINGS.description_evidence}
+            # words: Jeffrey's rule's probability of each word, against the words said (Bernoulli)
+            obs = {k: row[k] for k in SETTINGS.words_evidence}
             allowed = engine.query("Action", obs)["Action"] > 0  # Jeffrey's rule on the actions obs allows
             wp = engine.word_probability_array(obs, {"Action": q * allowed / (q * allowed).sum()}, "jeffrey")
-            sentence = nbest(None, pd.Series(wp, index=engine.binary_leaves), n=1).sentence[0]
-            one = best_sentences(wp[None], engine.binary_leaves)
-            assert one.sentence(0).split() == sentence.split() or sorted(one.sentence(0).split()) == sorted(
-                sentence.split()
+            said = np.array([chunk.codes[w][i] == 1 for w in engine.binary_leaves])
+            p_said = np.where(said, wp, 1 - wp)
+            assert cell(frame, "words", "jeffrey", f, "log_loss")[i] == pytest.approx(
+                -np.log(np.maximum(p_said, 1e-6)).mean(), rel=1e-9
             )
-            ok = agreement(
-                one,
-                {k: np.array([schema.values_of(k).index(v)]) for k, v in row.items()},
-                {k: schema.values_of(k) for k in row},
+            assert cell(frame, "words", "jeffrey", f, "brier")[i] == pytest.approx(
+                ((wp - said) ** 2).mean(), rel=1e-9
             )
-            assert cell(frame, "description", "jeffrey", f, "verb")[i] == float(ok["verb"][0])
 
 
 def test_the_readings_of_p_hmm(setup):
@@ -135,11 +142,16 @@ def test_the_readings_of_p_hmm(setup):
     _, rec, ev, chunk, *_ = setup
     per_frame = ev.p_hmm(chunk.features, "per-frame")
     calibrated = ev.p_hmm(chunk.features, "calibrated")
+    matched = ev.p_hmm(chunk.features, "calibrated-matched")
     for i, x in enumerate(chunk.features[:5]):
         for j, f in enumerate(SETTINGS.fractions):
             t = max(int(np.ceil(round(f * len(x), 9))), 1)
             ll = rec.loglik(x[:t])
-            for q, scaled in ((per_frame, ll / t), (calibrated, ll * CALIBRATION.beta[j])):
+            for q, scaled in (
+                (per_frame, ll / t),
+                (calibrated, ll * CALIBRATION.beta[j]),
+                (matched, ll * MATCHED.beta[j]),
+            ):
                 e = np.exp(scaled - scaled.max())
                 np.testing.assert_allclose(q[i, j], e / e.sum(), rtol=1e-9)
     with pytest.raises(DataError, match="unknown reading"):
@@ -149,7 +161,7 @@ def test_the_readings_of_p_hmm(setup):
 def test_a_learned_network_is_the_robots_model(setup):
     """Under a learned network the effect is predicted by that network (fused with p_HMM), the episodes
     still come from the generating one."""
-    engine, rec, ev, chunk, _, learned = setup
+    engine, rec, ev, chunk, _, learned, _ = setup
     stats = ev.episode_statistics(chunk)[READINGS.index(Reading("learned", 200, "likelihood"))]
     frame = column_values(ev, stats)
     schema = engine.bn.schema
@@ -183,7 +195,7 @@ def test_shared_blocks_equal_a_reading_alone(setup):
 
 
 def test_identities_between_strategies(setup):
-    _, _, ev, _, blocks, _ = setup
+    _, _, ev, _, blocks, *_ = setup
     frame = column_values(ev, blocks)
     for f in SETTINGS.fractions:
         for stat in ("correct", "log_loss", "brier"):
@@ -202,12 +214,14 @@ def test_identities_between_strategies(setup):
             np.testing.assert_array_equal(
                 cell(frame, "effect", strat, f, "brier"), cell(frame, "effect", strat, 1.0, "brier")
             )
-    assert (cell(frame, "description", "true_action", 1.0, "verb") == 1).all()
+    assert (
+        cell(frame, "words", "network", 1.0, "log_loss") == cell(frame, "words", "network", 0.3, "log_loss")
+    ).all()
 
 
 def test_run_chunk_sums_with_two_level_bootstrap_weights(setup):
-    _, _, ev, chunk, blocks, _ = setup
-    sums = ev.run_chunk(Condition(0.03, "front"), 0, 0, 12)
+    _, _, ev, chunk, blocks, *_ = setup
+    sums = ev.run_chunk(Condition(0.03, "turned"), 0, 0, 12)
     assert sums.shape == (len(READINGS), SETTINGS.bootstrap + 1, len(ev.columns))
     np.testing.assert_allclose(sums[0, 0], np.concatenate(blocks, axis=1).sum(axis=0), rtol=1e-12)
     assert sums[0, 0, 0] == 12 and (sums[0, 1:, 0] != 12).any()  # replicates count episodes with weights
@@ -217,14 +231,14 @@ def test_run_chunk_sums_with_two_level_bootstrap_weights(setup):
     w = ev.weights(0, 0, 12)
     assert (w[:, counts == 0] == 0).all() and (w[:, 0] == 1).all()
     np.testing.assert_array_equal(sums[:, 1:, 0], np.broadcast_to(w[:, 1:].sum(axis=0), (len(READINGS), 25)))
-    other = ev.run_chunk(Condition(0.03, "front"), 1, 0, 12)  # the second seed: its own episodes
+    other = ev.run_chunk(Condition(0.03, "turned"), 1, 0, 12)  # the second seed: its own episodes
     assert not np.array_equal(other[0, 0], sums[0, 0])
 
 
 def test_columns_and_settings():
     cols = statistic_columns(EvaluationSettings(fractions=(1.0,), strategies=("gesture", "hard"), bins=2))
     assert cols.iloc[0].stat == "n"
-    assert set(cols.target) == {"episodes", "action", "effect", "description"}
+    assert set(cols.target) == {"episodes", "action", "effect", "words"}
     assert set(cols[cols.target == "action"].strategy) == {"gesture", "hard"}
     assert len(cols[(cols.target == "effect")]) == 3 + 2 * 3
     two = statistic_columns(EvaluationSettings(fractions=(1.0, 0.5), strategies=("gesture",), bins=2))
@@ -245,10 +259,37 @@ def test_the_recogniser_must_know_the_networks_actions(setup):
     engine, rec, ev, *_ = setup
     tables = ev.replications[0].tables
     with pytest.raises(ModelError, match="grasp, tap, touch"):
-        Replication(BatchScorer([rec.models[a] for a in ("tap", "grasp", "touch")]), None, tables)
+        Replication({"raw": BatchScorer([rec.models[a] for a in ("tap", "grasp", "touch")])}, {}, tables)
     with pytest.raises(DataError, match="no learned-100 network"):
         Evaluator(engine, ev.replications, (Reading("learned", 100, "likelihood"),))
     with pytest.raises(DataError, match="needs every replication's calibration"):
-        Evaluator(engine, (Replication(BatchScorer(rec), None, tables),), (Reading(p_hmm="calibrated"),))
+        Evaluator(
+            engine, (Replication({"raw": BatchScorer(rec)}, {}, tables),), (Reading(p_hmm="calibrated"),)
+        )
+    with pytest.raises(DataError, match="feature set 'body'"):
+        Evaluator(engine, (Replication({"raw": BatchScorer(rec)}, {}, tables),), (Reading(features="body"),))
     with pytest.raises(DataError, match="learn_experiments"):
         Reading("learned", 0)
+    with pytest.raises(DataError, match="unknown feature set 'bodily'"):
+        Reading(features="bodily")
+
+
+def test_each_feature_set_sees_its_own_features(setup):
+    """A reading of the feature set ``body`` scores the episodes in the shoulder line's frame with the body
+    recogniser; ``centred+rotated`` applies its invariances online; each equals the per-sequence path."""
+    _, _, ev, chunk, _, _, recs = setup
+    assert chunk.body_features is not None
+    for features in ("centred+rotated", "body"):
+        r = READINGS.index(next(x for x in READINGS if x.features == features))
+        frame = column_values(ev, ev.episode_statistics(chunk)[r])
+        xs = chunk.body_features if features == "body" else chunk.features
+        for i, x in enumerate(xs[:4]):
+            ll = recs[features].loglik(x)  # the recogniser applies its own invariances
+            reading = READINGS[r].p_hmm
+            scaled = ll * MATCHED.beta[1] if reading == "calibrated-matched" else ll / len(x)
+            q = np.exp(scaled - scaled.max())
+            q /= q.sum()
+            a = ACTIONS.index(ev.world.bn.schema.values_of("Action")[chunk.codes["Action"][i]])
+            assert cell(frame, "action", "gesture", 1.0, "log_loss")[i] == pytest.approx(
+                -np.log(max(q[a], 1e-6)), rel=1e-9
+            )

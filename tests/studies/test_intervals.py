@@ -23,8 +23,8 @@ def fake_statistics(rng, n):
     X[:, 0] = 1.0
     truth = {}
     for (target, strategy), g in cols.iloc[1:].groupby(["target", "strategy"], sort=False):
-        if target == "description":
-            X[:, g.index] = rng.random((n, len(g))) < 0.6
+        if target == "words":
+            X[:, g.index] = rng.random((n, len(g)))
             continue
         p = rng.dirichlet(np.ones(3) * (3.0 if strategy == "virtual" else 1.0), size=n)
         y = rng.integers(0, 3, n)
@@ -70,8 +70,29 @@ def test_estimates_are_the_direct_means_and_ece(data):
             ece = (
                 sum(abs(vals["correct"][b == k].sum() - conf[b == k].sum()) for k in range(SETTINGS.bins)) / n
             )
-            assert m.loc[(target, strategy, "ece"), "estimate"] == pytest.approx(ece, rel=1e-12)
+            assert m.loc[(target, strategy, "ece"), "ece_plugin"] == pytest.approx(ece, rel=1e-12)
     assert (m.n_episodes == n).all()
+
+
+def test_the_ece_is_bias_corrected_and_inside_its_interval(data):
+    """The ECE's replicates, recomputed here from the bootstrap sums, give Efron's correction 2θ̂ − mean(θ*)
+    and the basic interval [2θ̂ − q97.5, 2θ̂ − q2.5]; for a well-calibrated predictor the plug-in estimate
+    may lie below its replicates' percentile interval, the corrected one lies inside its own."""
+    cols, X, truth, frame, n = data
+    m = metrics(frame, cols, []).set_index(["target", "strategy", "metric"])
+    S = frame.sort_values("replicate")[[f"s{j}" for j in range(len(cols))]].to_numpy()
+    for (target, strategy), _ in truth.items():
+        if target != "effect":
+            continue
+        g = cols[(cols.target == target) & (cols.strategy == strategy) & (cols["bin"] >= 0)]
+        conf = S[:, g.index[g.stat == "bin_confidence"]]
+        corr = S[:, g.index[g.stat == "bin_correct"]]
+        ece = np.abs(corr - conf).sum(axis=1) / S[:, 0]
+        lo, hi = np.percentile(ece[1:], [2.5, 97.5])
+        row = m.loc[(target, strategy, "ece")]
+        assert row.estimate == pytest.approx(max(0.0, 2 * ece[0] - ece[1:].mean()), rel=1e-9)
+        assert (row.ci_low, row.ci_high) == pytest.approx((max(0, 2 * ece[0] - hi), max(0, 2 * ece[0] - lo)))
+        assert row.ci_low <= row.estimate <= row.ci_high
 
 
 def test_interval_width_matches_the_normal_approximation(data):
@@ -103,7 +124,7 @@ def test_a_strategy_against_itself_differs_by_nothing():
     )
     rng = np.random.default_rng(2)
     X = rng.random((200, len(cols)))
-    for target in ("action", "effect", "description"):
+    for target in ("action", "effect", "words"):
         a = cols.index[(cols.target == target) & (cols.strategy == "hard")]
         b = cols.index[(cols.target == target) & (cols.strategy == "virtual")]
         X[:, b] = X[:, a]

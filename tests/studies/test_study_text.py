@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from glu.studies.correspondence.experiment import OCCLUDED
 from glu.studies.correspondence.text import nested_sentences, study_sentences
 from glu.studies.replication.text import (
     effect_sentence,
@@ -68,24 +69,47 @@ def summary_rows():
 def test_study_sentences():
     effects = pd.DataFrame(
         [
-            {"train": "human", "invariance": "rotated", "level": "0°", "verdict": "worse"},
-            {"train": "human", "invariance": "mirrored", "level": "90°", "verdict": "no difference"},
+            {"train": "human", "invariance": "rotated", "features": "centred+rotated", "baseline": "centred",
+             "level": "0°", "verdict": "worse", "verdict_adjusted": "worse"},
+            {"train": "human", "invariance": "centred", "features": "body+centred", "baseline": "body",
+             "level": "6 cm", "verdict": "worse", "verdict_adjusted": "worse"},
+            {"train": "human", "invariance": "mirrored", "features": "centred+mirrored",
+             "baseline": "centred", "level": "90°", "verdict": "worse", "verdict_adjusted": "no difference"},
+            {"train": "human", "invariance": "centred", "features": "centred", "baseline": "raw",
+             "level": "seated", "verdict": "better", "verdict_adjusted": "better"},
         ]
-    )
-    text = study_sentences(summary_rows(), effects)
+    )  # fmt: skip
+    rows = summary_rows()
+    occluded = rows[(rows.factor == "viewpoint") & (rows.yaw_deg > 0) & (rows.train == "human")].copy()
+    occluded["factor"] = OCCLUDED
+    occluded["accuracy"] = occluded["ci_low"] = occluded["ci_high"] = 0.33
+    text = study_sentences(pd.concat([rows, occluded], ignore_index=True), effects)
     assert (
         "facing the camera: raw 0.80 [0.75, 0.85], `centred+rotated` 0.70 [0.65, 0.75], `body` 0.82"
         in text[0]
     )
-    assert "Turned by 90–180°: raw 0.35–0.37, `centred+rotated` 0.74–0.76, `body` 0.81–0.83." in text[0]
     assert (
-        text[1] == "A mirror image: raw 0.33 [0.28, 0.38], `centred+mirrored` 0.81 [0.76, 0.86], `body` 0.34 "
+        "Turned by 90–180° and seen by an ideal tracker (both shoulders wherever the person faces): raw "
+        "0.35–0.37, `centred+rotated` 0.74–0.76, `body` 0.81–0.83." in text[0]
+    )
+    assert text[1].startswith("Seen through a tracker that loses the far shoulder beyond 60° and swaps left")
+    assert "`body` 90° 0.33 [0.33, 0.33], 180° 0.33 [0.33, 0.33]" in text[1]
+    assert (
+        text[2] == "A mirror image: raw 0.33 [0.28, 0.38], `centred+mirrored` 0.81 [0.76, 0.86], `body` 0.34 "
         "[0.29, 0.39]."
     )
-    assert "`rotated` at 0°." in text[2] and "mirrored" not in text[2]
-    assert "better than 0.40 [0.30, 0.50] (raw, 0°), while the robot recognises its own at 0.97." in text[3]
+    assert text[3] == (
+        "Where adding an invariance costs accuracy (its paired difference adjusted with the other 3 by "
+        "Benjamini–Hochberg): `rotated` added to `centred`: 0°; `centred` added to `body`: 6 cm."
+    )
+    assert text[4] == "Where it buys accuracy, adjusted alike: `centred` added to `raw`: seated."
+    assert "hand-written generator of an iCub-like arm" in text[5] and "not measured on a robot" in text[5]
     assert (
-        text[-1] == "1 of 18 intervals have zero width (every test gesture of every seed recognised alike)."
+        "better than 0.40 [0.30, 0.50] (raw, viewpoint: 0°), while the robot recognises its own at 0.97."
+        in (text[5])
+    )
+    assert (
+        text[-1] == "9 of 26 intervals have zero width (every test gesture of every seed recognised alike)."
     )
 
 
@@ -101,6 +125,7 @@ def test_nested_sentences():
             "always_tap": [3 / 11, 3 / 11],
             "tuned_accuracy": [1.0, 1.0],
             "tuned_candidate": ["centred, reg0.03"] * 2,
+            "recordings": [3, 3],
         }
     )
     seated = pd.DataFrame(
@@ -123,14 +148,16 @@ def test_nested_sentences():
     text = nested_sentences(summary, seated, cands)
     assert "seed 0: 11 of 11 (1.00, exact 95 % interval [0.72, 1.00]); seed 1: 10 of 11 (0.91" in text[0]
     assert "best candidate scores 1.00 (centred, reg0.03)" in text[0] and '"tap" scores 0.27' in text[0]
+    assert text[1].startswith("The segments come from 3 recordings, one per action: the action is confounded")
+    assert "treats the segments as independent" in text[1]
     assert (
-        text[1]
+        text[2]
         == "Plain leave-one-segment-out over candidates and seeds: raw features 0.64–0.82, centred 1.00."
     )
-    assert "lies 38.00–38.30 nats below every training sequence (theirs: 2.98 to 3.37" in text[2]
-    assert "tap first leads at frame 1, the hand starts to move at frame 10 of 94" in text[2]
-    assert "from frame 27–28." in text[2]
-    assert "also gets 1 of 1 seated taps right" in text[3]
+    assert "lies 38.00–38.30 nats below every training sequence (theirs: 2.98 to 3.37" in text[3]
+    assert "tap first leads at frame 1, the hand starts to move at frame 10 of 94" in text[3]
+    assert "from frame 27–28." in text[3]
+    assert "also gets 1 of 1 seated taps right" in text[4]
 
 
 def test_replication_sentences():

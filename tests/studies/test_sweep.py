@@ -16,7 +16,7 @@ import pytest
 from cli_run import run
 
 from glu.errors import DataError
-from glu.studies.corpus_evaluation.config import config_from_dict, load_config
+from glu.studies.corpus_evaluation.config import config_from_dict, config_from_parameters, load_config
 from glu.studies.corpus_evaluation.sweep import run_sweep
 
 SMALL = """\
@@ -33,6 +33,8 @@ action_prior = ["network"]
 inference_network = ["generating", "learned"]
 learn_experiments = [150]
 p_hmm = ["likelihood", "calibrated"]
+effects = ["action"]
+features = ["raw"]
 
 [recognizer]
 n_per_action = 6
@@ -53,7 +55,6 @@ TABLES = (
     "reliability.parquet",
     "seeds.parquet",
     "calibration.parquet",
-    "sums.parquet",
     "summary.json",
 )
 
@@ -111,18 +112,28 @@ def test_the_tables(synchronous):
     full = table[(table.viewpoint == "all") & table.noise.isna()]
     assert (full.n_episodes == 64).all()  # 4 conditions × 2 seeds × 8 episodes
     assert (full.ci_low <= full.estimate + 1e-12).all() and (full.estimate <= full.ci_high + 1e-12).all()
-    assert set(full.metric) == {"accuracy", "log_loss", "brier", "ece", "verb", "object", "effect", "all"}
+    assert set(full.metric) == {"accuracy", "log_loss", "brier", "ece"}
+    assert set(full[full.target == "words"].metric) == {"log_loss", "brier"}
+    ece = full[full.metric == "ece"]
+    assert ece.ece_plugin.notna().all() and full[full.metric != "ece"].ece_plugin.isna().all()
     assert result.metrics.attrs["experiment"] == "corpus_evaluation"
     assert "synthetic data" in result.summary["data_source"] and "/" not in result.summary["data_source"]
     diffs = pd.read_parquet(out / "differences.parquet")
     assert set(diffs.verdict) <= {"better", "worse", "no difference"}
+    assert set(diffs.verdict_adjusted) <= {"better", "worse", "no difference"}
+    assert (diffs.p_adjusted >= diffs.p_value - 1e-12).all() and diffs.p_value.between(0, 1).all()
+    # three families: per viewpoint, per noise level, pooled over both
+    assert set(zip(diffs.viewpoint, diffs.noise.fillna(-1), strict=True)) == {
+        ("front", -1), ("seated", -1), ("all", 0.0), ("all", 0.05), ("all", -1)
+    }  # fmt: skip
     seeds = pd.read_parquet(out / "seeds.parquet")
     assert set(seeds.recognizer_seed) == {0, 1} and seeds.estimate.notna().any()
     cal = pd.read_parquet(out / "calibration.parquet")
     assert len(cal) == 4 and cal.beta.between(0, 1).all()  # 2 seeds × 2 fractions
+    assert set(cal.reading) == {"calibrated"} and cal.at_bound.dtype == bool
     rel = pd.read_parquet(out / "reliability.parquet")
     assert {"gesture"} <= set(rel[rel.target == "action"].strategy)  # p_HMM's own reliability
-    assert (out / "recognizers" / "seed-001.json").is_file()
+    assert (out / "recognizers" / "seed-001-raw.json").is_file()
 
 
 def test_the_seeds_make_the_pooled_estimate(synchronous):
@@ -131,6 +142,7 @@ def test_the_seeds_make_the_pooled_estimate(synchronous):
     table = pd.read_parquet(out / "results.parquet")
     seeds = pd.read_parquet(out / "seeds.parquet")
     keys = ["inference_network", "learn_experiments", "p_hmm", "target", "strategy", "fraction", "metric"]
+    keys.append("features")
     pooled = table[(table.viewpoint == "all") & table.noise.isna() & (table.metric == "accuracy")]
     mean = seeds[seeds.metric == "accuracy"].groupby(keys).estimate.mean()
     merged = pooled.set_index(keys).estimate
@@ -296,6 +308,9 @@ def test_an_unreachable_scheduler_is_one_line(config_file, tmp_path, capsys):
         ("[scenario.Action]\nkick = 1\n", "no value 'kick'"),
         ("[scenario.Action]\ntap = 1\n", "applies only with grid.action_prior"),
         ("[grid]\np_hmm = ['raw']\n", "grid.p_hmm: unknown value 'raw'; allowed: likelihood, per-frame"),
+        ("[grid]\nfeatures = ['bodily']\n", "grid.features: unknown value 'bodily'; allowed: raw, centred"),
+        ("[grid]\neffects = ['magic']\n", "grid.effects: unknown value 'magic'; allowed: action, gesture"),
+        ("[views.left]\ntracker = 'kinect'\n", "views.left.tracker='kinect'; allowed: ideal, occluding"),
         ("[grid]\naction_prior = ['empirical']\n", "grid.action_prior: unknown value 'empirical'"),
         ("[grid]\ninference_network = ['oracle']\n", "allowed: generating, learned"),
         ("[grid]\nlearn_experiments = [5]\n", "grid.learn_experiments=5: a whole number from 10"),
@@ -333,9 +348,72 @@ def test_bad_arguments_are_one_line(tmp_path, capsys, argv, message):
 
 def test_the_defaults_are_valid_and_overridable():
     c = config_from_dict({})
-    assert len(c.conditions) == 24 and c.recognizer_seeds == 10 and c.per_condition == 500
-    assert len(c.readings) == 12  # (generating + 3 learned) × 3 readings of p_HMM
-    assert c.with_overrides(episodes=480, seed=None).per_condition == 2
+    # 2 worlds × 2 action priors × 4 noise levels × 4 viewpoints
+    assert len(c.conditions) == 64 and c.recognizer_seeds == 10 and c.per_condition == 188
+    assert len(c.readings) == 48  # (generating + 3 learned) × 4 readings of p_HMM × 3 feature sets
+    assert c.with_overrides(episodes=1280, seed=None).per_condition == 2
+
+
+def test_the_notebooks_defaults_are_the_saved_sweep_file():
+    """sweeps/11_corpus_evaluation/sweep.toml is notebook 11's default grid (the saved tables' key)."""
+    from glu.paths import PROJECT_ROOT
+    from glu.run.parameters import read_spec
+
+    spec = {
+        k: p.default for k, p in read_spec(PROJECT_ROOT / "notebooks" / "11_corpus_evaluation.py").items()
+    }
+    saved = load_config(PROJECT_ROOT / "sweeps" / "11_corpus_evaluation" / "sweep.toml")
+    notebook = config_from_parameters(spec, "DATA").as_dict()
+    assert notebook.pop("network")["data"] == "DATA"
+    expected = saved.as_dict()
+    expected.pop("network")
+    assert notebook == expected
+
+
+def test_the_sweep_settings_hold_one_training_config():
+    """The recogniser's [recognizer] training keys become one TrainingConfig; a field left at glu's default
+    stays out of the settings' plain data (saved sweeps keep their fingerprints), a changed one is in it."""
+    from glu.hmm import TrainingConfig
+
+    config = config_from_parameters({"n_states": 4, "tol": 1e-3, "feature_sets": ["body"], "x": 1}, None)
+    assert config.recognizer.training == TrainingConfig(n_states=4, tol=1e-3)
+    assert config.features == ("body",)
+    plain = config.as_dict()["recognizer"]
+    assert (plain["n_states"], plain["tol"]) == (4, 1e-3) and "covar_reg" not in plain
+    with pytest.raises(DataError, match="recognizer: unknown training recipe 'nope'"):
+        config_from_parameters({"recipe": "nope"}, None)
+
+
+def test_saved_tables_are_found_by_their_key(synchronous, tmp_path, monkeypatch):
+    """glu evaluate --save writes the subset the notebook reads with its key; the key finds it, other
+    settings do not; a computation of other settings lands in the cache with the code's digest."""
+    from glu import saved
+    from glu.studies.corpus_evaluation.sweep import NOTEBOOK, export_saved, saved_key
+    from glu.studies.corpus_evaluation.tables import read_tables
+
+    ref, result = synchronous
+    dest = export_saved(ref, tmp_path / "sweeps" / NOTEBOOK / "synthetic", "glu evaluate --save …")
+    doc = saved.read_key(dest)
+    assert doc["command"] == "glu evaluate --save …" and doc["made_with"]["glu"]
+    tables = read_tables(dest)
+    assert len(tables.metrics) < len(result.metrics) and set(tables.metrics.metric) == {
+        "accuracy",
+        "log_loss",
+        "ece",
+    }
+    assert "overall" not in tables.summary and tables.summary["data_source"] == result.summary["data_source"]
+    cfg = load_config_text(SMALL)
+    assert saved.find(NOTEBOOK, saved_key(cfg), [tmp_path / "sweeps" / NOTEBOOK]) == dest
+    other = cfg.with_overrides(seed=4)
+    assert saved.find(NOTEBOOK, saved_key(other), [tmp_path / "sweeps" / NOTEBOOK]) is None
+    assert saved.cache_folder(NOTEBOOK, saved_key(other)) != saved.cache_folder(NOTEBOOK, saved_key(cfg))
+    assert saved.digest(saved.cache_key(saved_key(cfg))) != saved.digest(saved_key(cfg))
+
+
+def load_config_text(text: str):
+    import tomllib
+
+    return config_from_dict(tomllib.loads(text))
 
 
 def test_glu_corpus_writes_parquet(config_file, tmp_path, capsys):

@@ -9,17 +9,19 @@ default shown (``docs/corpus-evaluation.md`` explains the design)::
     recognizer_seeds = 10     # K replications: each its own recogniser, learned networks and episodes
 
     [grid]                    # the factors; every episode is scored at every fraction by every strategy
+    effects = ["action", "gesture"]              # effects drawn from the action alone, or the gesture too
     action_prior = ["uniform", "network"]        # how often each action is performed (also "scenario")
     inference_network = ["generating", "learned"]  # the robot's network: the world's, or learned
     learn_experiments = [100, 1270, 10000]       # rows of the experiment tables the learned ones see
-    p_hmm = ["likelihood", "per-frame", "calibrated"]  # how p_HMM is read (glu.gestures.calibration)
+    p_hmm = ["likelihood", "per-frame", "calibrated", "calibrated-matched"]  # how p_HMM is read
+    features = ["raw", "centred+rotated", "body"]  # the recognisers' feature sets (one recogniser each)
     noise = [0.0, 0.02, 0.05, 0.1]
-    viewpoints = ["front", "turned", "seated"]
+    viewpoints = ["front", "turned", "side-on", "seated"]
     fractions = [0.2, 0.4, 0.6, 0.8, 1.0]
     strategies = ["gesture", "network", "hard", "virtual", "jeffrey", "product", "true_action"]
 
     [views.left]              # more viewpoints (or new definitions of the named ones)
-    yaw_deg = -40.0           # also: mirror = true, posture = "seated", size = 1.1
+    yaw_deg = -40.0           # also: mirror = true, posture = "seated", size = 1.1, tracker = "occluding"
 
     [scenario.Shape]          # weights of a root node's values (Color, Shape, Size; Action with the
     sphere = 2.0              # action prior "scenario"); default uniform
@@ -34,7 +36,7 @@ default shown (``docs/corpus-evaluation.md`` explains the design)::
     n_mix = 3
     n_iter = 200
     noise = 0.01
-    calibration_per_action = 20   # held-out training gestures the calibrated reading is fitted on
+    calibration_per_action = 20   # held-out gestures each calibrated reading is fitted on
     # file = "recognizer.json"    (then recognizer_seeds = 1)
 
     [network]                 # the Affordance–Words network that draws the episodes: learned from this data
@@ -45,9 +47,9 @@ default shown (``docs/corpus-evaluation.md`` explains the design)::
     [evaluation]
     action_evidence = ["Color", "Shape", "Size", "ObjVel"]
     effect_evidence = ["Color", "Shape", "Size"]
-    description_evidence = ["Color", "Shape", "Size", "ObjVel"]
+    words_evidence = ["Color", "Shape", "Size", "ObjVel"]
     bins = 10
-    bootstrap = 200
+    bootstrap = 1000
 
 Relative paths in a file are relative to the file. Every error names the file, the key and what is
 allowed (:class:`glu.errors.DataError`, which the command line prints as one line, exit status 2).
@@ -65,13 +67,25 @@ from typing import Any
 
 from glu.bn.learning import UNSEEN_MODES
 from glu.data.source import WORD_FILES
-from glu.errors import DataError
+from glu.errors import DataError, ModelError
 from glu.files import read_text
-from glu.gestures.calibration import READINGS
-from glu.gestures.views import POSTURES, View
+from glu.gestures.feature_sets import FEATURE_SET_NAMES
+from glu.gestures.views import POSTURES, TRACKERS, View
 from glu.hmm import TrainingConfig
-from glu.studies.corpus_evaluation.evaluation import INFERENCE_NETWORKS, EvaluationSettings, Reading
-from glu.studies.episodes import ACTION_PRIORS, VIEWPOINTS, Condition, GestureSettings, Scenario
+from glu.studies.corpus_evaluation.evaluation import (
+    INFERENCE_NETWORKS,
+    P_HMM_READINGS,
+    EvaluationSettings,
+    Reading,
+)
+from glu.studies.episodes import (
+    ACTION_PRIORS,
+    GESTURE_WORLDS,
+    VIEWPOINTS,
+    Condition,
+    GestureSettings,
+    Scenario,
+)
 
 MAX_EPISODES = 100_000_000
 MAX_SEEDS = 1000
@@ -80,20 +94,29 @@ MAX_SEEDS = 1000
 @dataclass(frozen=True)
 class RecognizerSettings:
     """The gesture HMMs: trained on ``n_per_action`` synthetic gestures per action (front view, sensor
-    noise ``noise``) with :class:`~glu.hmm.TrainingConfig`'s recipe, or read from ``file``; the calibrated
-    reading of p_HMM is fitted on ``calibration_per_action`` more gestures of the same kind."""
+    noise ``noise``) with :class:`~glu.hmm.TrainingConfig`'s recipe, one recogniser per feature set, or read
+    from ``file``; the calibrated reading of p_HMM is fitted on ``calibration_per_action`` more gestures of
+    the same kind, the ``calibrated-matched`` one on as many drawn like the test conditions (the sweep's
+    viewpoints and noise levels in equal shares).
+
+    A sweep file gives ``training``'s fields flat in its ``[recognizer]`` table (``n_states = 6``, …).
+    """
 
     n_per_action: int = 20
-    n_states: int = TrainingConfig.n_states
-    n_mix: int = TrainingConfig.n_mix
-    n_iter: int = TrainingConfig.n_iter
+    training: TrainingConfig = TrainingConfig()
     noise: float = 0.01
     calibration_per_action: int = 20
     file: str | None = None
 
-    def training(self) -> TrainingConfig:
-        """The HMMs' training settings (the others keep glu's defaults)."""
-        return TrainingConfig(n_states=self.n_states, n_mix=self.n_mix, n_iter=self.n_iter)
+    def as_dict(self) -> dict[str, Any]:
+        """Plain data, ``training`` flat: Q, M and the iterations always, its other fields where they differ
+        from glu's defaults (so that sweeps saved before they could be set keep their fingerprints)."""
+        d = {k: v for k, v in asdict(self).items() if k != "training"}
+        default = TrainingConfig().as_dict()
+        for k, v in self.training.as_dict().items():
+            if k in ("n_states", "n_mix", "n_iter") or v != default[k]:
+                d[k] = v
+        return d
 
 
 @dataclass(frozen=True)
@@ -113,12 +136,14 @@ class SweepConfig:
     seed: int = 0
     chunk_size: int = 2000
     recognizer_seeds: int = 10
+    effects: tuple[str, ...] = tuple(GESTURE_WORLDS)
     action_prior: tuple[str, ...] = ("uniform", "network")
     inference_network: tuple[str, ...] = ("generating", "learned")
     learn_experiments: tuple[int, ...] = (100, 1270, 10000)
-    p_hmm: tuple[str, ...] = tuple(READINGS)
+    p_hmm: tuple[str, ...] = tuple(P_HMM_READINGS)
+    features: tuple[str, ...] = ("raw", "centred+rotated", "body")
     noise: tuple[float, ...] = (0.0, 0.02, 0.05, 0.1)
-    viewpoints: tuple[str, ...] = ("front", "turned", "seated")
+    viewpoints: tuple[str, ...] = ("front", "turned", "side-on", "seated")
     views: Mapping[str, View] = field(default_factory=lambda: dict(VIEWPOINTS))
     scenario: Scenario = Scenario()
     gestures: GestureSettings = GestureSettings()
@@ -134,9 +159,11 @@ class SweepConfig:
             raise DataError(f"grid.noise {list(self.noise)}: give one or more noise levels ≥ 0 (metres)")
         _whole("recognizer_seeds", self.recognizer_seeds, 1, MAX_SEEDS)
         factors = {
+            "effects": (self.effects, GESTURE_WORLDS),
             "action_prior": (self.action_prior, ACTION_PRIORS),
             "inference_network": (self.inference_network, INFERENCE_NETWORKS),
-            "p_hmm": (self.p_hmm, READINGS),
+            "p_hmm": (self.p_hmm, P_HMM_READINGS),
+            "features": (self.features, FEATURE_SET_NAMES),
         }
         for name, (given, allowed) in factors.items():
             bad = [v for v in given if v not in allowed]
@@ -148,9 +175,11 @@ class SweepConfig:
         for name in (
             "noise",
             "viewpoints",
+            "effects",
             "action_prior",
             "inference_network",
             "p_hmm",
+            "features",
             "learn_experiments",
         ):
             v = getattr(self, name)
@@ -174,18 +203,16 @@ class SweepConfig:
                 "(define more in [views.NAME])"
             )
         r = self.recognizer
-        for name, lo in (
-            ("n_per_action", 2),
-            ("n_states", 1),
-            ("n_mix", 1),
-            ("n_iter", 1),
-            ("calibration_per_action", 1),
-        ):
+        for name, lo in (("n_per_action", 2), ("calibration_per_action", 1)):
             _whole(f"recognizer.{name}", getattr(r, name), lo, 100_000)
+        for name in ("n_states", "n_mix", "n_iter"):
+            _whole(f"recognizer.{name}", getattr(r.training, name), 1, 100_000)
         if not _number(r.noise) or r.noise < 0:
             raise DataError(f"recognizer.noise={r.noise!r}: the training noise must be a number ≥ 0 (metres)")
         if r.file is not None and self.recognizer_seeds != 1:
             raise DataError("recognizer.file: one recogniser from a file needs recognizer_seeds = 1")
+        if r.file is not None and len(self.features) != 1:
+            raise DataError("recognizer.file: one recogniser from a file has one feature set (grid.features)")
         if self.network.words not in WORD_FILES:
             raise DataError(f"network.words={self.network.words!r}; allowed: {', '.join(WORD_FILES)}")
         if self.network.unseen_words not in UNSEEN_MODES:
@@ -195,20 +222,26 @@ class SweepConfig:
 
     @property
     def conditions(self) -> list[Condition]:
-        """The simulated conditions, action-prior-major: (noise, viewpoint, action prior) for every triple."""
+        """The simulated conditions, effects-major, then action prior: (noise, viewpoint, action prior,
+        effects) for every combination."""
         return [
-            Condition(float(n), v, a) for a in self.action_prior for n in self.noise for v in self.viewpoints
+            Condition(float(n), v, a, e)
+            for e in self.effects
+            for a in self.action_prior
+            for n in self.noise
+            for v in self.viewpoints
         ]
 
     @property
     def readings(self) -> list[Reading]:
-        """How every episode is read: each inference network (one per table size if learned) × p_HMM."""
+        """How every episode is read: each inference network (one per table size if learned) × p_HMM ×
+        feature set."""
         nets = [
             (name, n)
             for name in self.inference_network
             for n in (self.learn_experiments if name == "learned" else (0,))
         ]
-        return [Reading(name, n, p) for name, n in nets for p in self.p_hmm]
+        return [Reading(name, n, p, f) for name, n in nets for p in self.p_hmm for f in self.features]
 
     @property
     def per_condition(self) -> int:
@@ -233,10 +266,12 @@ class SweepConfig:
             "chunk_size": self.chunk_size,
             "recognizer_seeds": self.recognizer_seeds,
             "grid": {
+                "effects": list(self.effects),
                 "action_prior": list(self.action_prior),
                 "inference_network": list(self.inference_network),
                 "learn_experiments": list(self.learn_experiments),
                 "p_hmm": list(self.p_hmm),
+                "features": list(self.features),
                 "noise": list(self.noise),
                 "viewpoints": list(self.viewpoints),
                 "fractions": list(self.evaluation.fractions),
@@ -245,7 +280,7 @@ class SweepConfig:
             "views": {k: asdict(v) for k, v in self.views.items() if k in self.viewpoints},
             "scenario": self.scenario.as_dict(),
             "gestures": asdict(self.gestures),
-            "recognizer": asdict(self.recognizer),
+            "recognizer": self.recognizer.as_dict(),
             "network": asdict(self.network),
             "evaluation": {
                 k: v for k, v in asdict(self.evaluation).items() if k not in ("fractions", "strategies")
@@ -287,27 +322,30 @@ SECTIONS: dict[str, tuple[str, ...]] = {
         "evaluation",
     ),
     "grid": (
+        "effects",
         "action_prior",
         "inference_network",
         "learn_experiments",
         "p_hmm",
+        "features",
         "noise",
         "viewpoints",
         "fractions",
         "strategies",
     ),
     "gestures": tuple(f.name for f in fields(GestureSettings)),
-    "recognizer": tuple(f.name for f in fields(RecognizerSettings)),
+    "recognizer": tuple(f.name for f in fields(RecognizerSettings) if f.name != "training")
+    + tuple(f.name for f in fields(TrainingConfig)),
     "network": tuple(f.name for f in fields(NetworkSettings)),
     "evaluation": (
         "action_evidence",
         "effect_evidence",
-        "description_evidence",
+        "words_evidence",
         "bins",
         "bootstrap",
         "log_floor",
     ),
-    "views.*": ("yaw_deg", "mirror", "posture", "size"),
+    "views.*": ("yaw_deg", "mirror", "posture", "size", "tracker"),
 }
 """The keys each table of a sweep file may have."""
 
@@ -344,7 +382,12 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
                 raise DataError(f"views.{name}.{k}={spec[k]!r}: must be a number")
         if "mirror" in spec and not isinstance(spec["mirror"], bool):
             raise DataError(f"views.{name}.mirror={spec['mirror']!r}: must be true or false")
-        views[name] = View(spec.get("yaw_deg"), spec.get("mirror", False), posture, spec.get("size"))
+        tracker = spec.get("tracker", "ideal")
+        if tracker not in TRACKERS:
+            raise DataError(f"views.{name}.tracker={tracker!r}; allowed: {', '.join(TRACKERS)}")
+        views[name] = View(
+            spec.get("yaw_deg"), spec.get("mirror", False), posture, spec.get("size"), tracker=tracker
+        )
     scenario = Scenario.from_mapping(_table(doc, "scenario"))
     gestures = GestureSettings(**_section(doc, "gestures"))
     rec = _section(doc, "recognizer")
@@ -373,7 +416,7 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
         extra["noise"] = _list("grid.noise", grid["noise"])
     if "viewpoints" in grid:
         extra["viewpoints"] = _list("grid.viewpoints", grid["viewpoints"])
-    for name in ("action_prior", "inference_network", "learn_experiments", "p_hmm"):
+    for name in ("effects", "action_prior", "inference_network", "learn_experiments", "p_hmm", "features"):
         if name in grid:
             extra[name] = _list(f"grid.{name}", grid[name])
     return SweepConfig(
@@ -382,10 +425,43 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
         views=views,
         scenario=scenario,
         gestures=gestures,
-        recognizer=RecognizerSettings(**rec),
+        recognizer=_recognizer(rec),
         network=NetworkSettings(**net),
         evaluation=EvaluationSettings(**ev),
     )
+
+
+NOTEBOOK_NAMES: dict[str, str] = {"feature_sets": "features", "noise_levels": "noise"}
+"""Notebook 11's parameters whose names differ from the sweep file's (notebook name → grid key)."""
+
+
+def config_from_parameters(params: Mapping[str, Any], data: str | os.PathLike | None) -> SweepConfig:
+    """The sweep of notebook 11's parameters (its cell's names; others in ``params`` are ignored), with
+    the network learned from ``data`` (None: synthetic): one call instead of a sweep file."""
+    grid_keys = set(SECTIONS["grid"])
+    top = ("episodes", "seed", "chunk_size", "recognizer_seeds")
+    doc: dict[str, Any] = {k: params[k] for k in top if k in params}
+    doc["grid"] = {
+        NOTEBOOK_NAMES.get(k, k): v for k, v in params.items() if NOTEBOOK_NAMES.get(k, k) in grid_keys
+    }
+    doc["recognizer"] = {k: v for k, v in params.items() if k in SECTIONS["recognizer"] and k != "file"}
+    doc["evaluation"] = {k: v for k, v in params.items() if k in SECTIONS["evaluation"]}
+    doc["network"] = {"data": "synthetic" if data is None else str(data)}
+    return config_from_dict(doc)
+
+
+def _recognizer(rec: dict[str, Any]) -> RecognizerSettings:
+    """The ``[recognizer]`` table: its training fields gathered into one :class:`TrainingConfig`."""
+    names = {f.name for f in fields(TrainingConfig)}
+    train = {k: rec.pop(k) for k in list(rec) if k in names}
+    for k in ("n_states", "n_mix", "n_iter"):
+        if k in train:
+            _whole(f"recognizer.{k}", train[k], 1, 100_000)
+    try:
+        training = TrainingConfig(**train)
+    except (ModelError, TypeError) as e:
+        raise DataError(f"recognizer: {e}") from None
+    return RecognizerSettings(training=training, **rec)
 
 
 def _resolve(p: str, base: Path | None) -> Path:

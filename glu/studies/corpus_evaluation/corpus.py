@@ -8,16 +8,22 @@ An **episode** is one person acting on one object in front of the robot:
    drawn from the Affordance–Words network given them (:func:`glu.bn.sampling.sample`) — the network
    learned from the robot's own experiments (the real data, or glu's synthetic generator without it);
 3. the person's hand trajectory comes from the gesture generator (:mod:`glu.gestures.synthetic`): its
-   own speed, amplitude and body size, the sensor noise and the viewpoint of a :class:`Condition`,
-   tracking gaps and spikes, repaired as the recogniser's training data are;
-4. the robot sees growing prefixes of it (the observed fractions of
+   own speed, amplitude and body size, the sensor noise and the viewpoint of a :class:`Condition` (and
+   its skeleton tracker), tracking gaps and spikes, repaired as the recogniser's training data are; in the
+   torso's frame, and (``body=True``) in the shoulder line's frame as well;
+4. in the condition's ``effects`` world ``gesture`` (:data:`~glu.studies.episodes.GESTURE_WORLDS`), the
+   effects of the taps are drawn again from the gesture's speed: a fast tap sends the object further, the
+   slowest taps fail (:func:`glu.studies.episodes.effects_given_gesture`);
+5. the robot sees growing prefixes of it (the observed fractions of
    :mod:`glu.studies.corpus_evaluation.evaluation`).
 
 **What this world assumes.** The effects and words come from a Bayesian network of the same family as
 the robot's (by default the very network the robot uses, unless the evaluation learns its own from
 independent simulated experiments), and the gestures from the generator the recognisers are trained on.
-Measured here is how fusion rules behave when the robot's models are right, or learned from limited
-experience of the same world; not how they fare on people, objects and effects outside that family.
+By default (``effects="action"``) the gesture is drawn independently of the object and the effects given
+the action, as the fusion rules assume; ``effects="gesture"`` breaks that. Measured here is how fusion
+rules behave when the robot's models are right, or learned from limited experience of the same world; not
+how they fare on people, objects and effects outside that family.
 
 Episodes are generated in chunks (:func:`simulate_chunk`), so a corpus of any size never sits in memory,
 and :func:`write_corpus` streams one to Parquet, one row group per chunk.
@@ -47,11 +53,13 @@ import json
 import math
 import os
 from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
+from numpy.random import SeedSequence
 
 from glu.bn.inference import Engine
 from glu.bn.sampling import categorical, sample
@@ -60,7 +68,18 @@ from glu.files import atomic_path
 from glu.gestures.synthetic import View
 from glu.gestures.synthetic_batch import gesture_features
 from glu.schema import ROOT_NODES
-from glu.studies.episodes import GESTURE_KEY, VIEWPOINTS, WORLD_KEY, Condition, GestureSettings, Scenario
+from glu.studies.episodes import (
+    EFFECTS_KEY,
+    GESTURE_KEY,
+    GESTURE_WORLDS,
+    VIEWPOINTS,
+    WORLD_KEY,
+    Condition,
+    GestureSettings,
+    Scenario,
+    effects_given_gesture,
+    gesture_speed,
+)
 
 
 class Chunk(NamedTuple):
@@ -70,14 +89,17 @@ class Chunk(NamedTuple):
     ----------
     episodes : one row per episode: episode (its index in the corpus), the 8 affordance nodes (value
         names), words (the words drawn, space-separated, in vocabulary order), n_frames, duration_s,
-        body_size, noise, viewpoint, action_prior, replication
+        body_size, speed (the gesture's speed quantile, :func:`~glu.studies.episodes.gesture_speed`), noise,
+        viewpoint, action_prior, effects, replication
     codes : node → int array, shape (n,), value indices of every node (affordance nodes and words)
-    features : n arrays of shape (T_i, 3), the repaired gesture features the robot sees
+    features : n arrays of shape (T_i, 3), the repaired gesture features the robot sees (torso frame)
+    body_features : the same in the shoulder line's frame (None unless asked for)
     """
 
     episodes: pd.DataFrame
     codes: dict[str, np.ndarray]
     features: list[np.ndarray]
+    body_features: list[np.ndarray] | None = None
 
 
 def chunk_ranges(n_episodes: int, chunk_size: int) -> list[tuple[int, int]]:
@@ -100,6 +122,7 @@ def simulate_chunk(
     gestures: GestureSettings = GestureSettings(),
     views: Mapping[str, View] = VIEWPOINTS,
     replication: int = 0,
+    body: bool = False,
 ) -> Chunk:
     """Episodes ``chunk · chunk_size`` … ``+ n − 1`` of replication ``replication`` of the corpus with
     ``seed``.
@@ -114,6 +137,7 @@ def simulate_chunk(
     gestures : the generator's tracking problems
     views : viewpoint names → :class:`~glu.gestures.synthetic.View`
     replication : which replication (recogniser seed) the episodes belong to; each has its own
+    body : also give the features in the shoulder line's frame (:attr:`Chunk.body_features`)
     """
     if condition.viewpoint not in views:
         raise DataError(f"unknown viewpoint {condition.viewpoint!r}; allowed: {', '.join(views)}")
@@ -133,18 +157,22 @@ def simulate_chunk(
     codes = sample(engine, roots, rng)
     schema = engine.bn.schema
     actions = schema.values_of("Action")
-    rngs = [
-        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(GESTURE_KEY, replication, first + i)))
-        for i in range(n)
-    ]
-    batch = gesture_features(
-        [actions[a] for a in codes["Action"][:n]],
-        rngs,
-        noise=float(condition.noise),
-        spike_rate=gestures.spike_rate,
-        dropout_rate=gestures.dropout_rate,
-        view=view,
-    )
+
+    def rngs() -> list[np.random.Generator]:
+        keys = [SeedSequence(seed, spawn_key=(GESTURE_KEY, replication, first + i)) for i in range(n)]
+        return [np.random.default_rng(k) for k in keys]
+
+    speed = gesture_speed(rngs()).quantile
+    world = GESTURE_WORLDS[condition.effects]
+    if world.active:
+        again = np.random.default_rng(SeedSequence(seed, spawn_key=(EFFECTS_KEY, replication, chunk)))
+        codes = effects_given_gesture(engine, codes, speed, world, again)
+    frames = (False, True) if body else (False,)
+    sensor = {"noise": float(condition.noise), "spike_rate": gestures.spike_rate}
+    sensor["dropout_rate"] = gestures.dropout_rate
+    names = [actions[a] for a in codes["Action"][:n]]
+    seen = [gesture_features(names, rngs(), **sensor, view=replace(view, body_frame=b)) for b in frames]
+    batch = seen[0]
     features, duration, size = batch.features, batch.duration, batch.size
     n_frames = np.array([len(x) for x in features], dtype=int)
     table: dict[str, Any] = {"episode": np.arange(first, first + n)}
@@ -153,10 +181,11 @@ def simulate_chunk(
     words = list(schema.word_nodes)
     present = np.stack([codes[w] for w in words], axis=1) == 1 if words else np.zeros((n, 0), bool)
     table["words"] = [" ".join(w for w, on in zip(words, row, strict=True) if on) for row in present]
-    table.update(n_frames=n_frames, duration_s=duration, body_size=size)
+    table.update(n_frames=n_frames, duration_s=duration, body_size=size, speed=speed)
     table.update(noise=np.full(n, float(condition.noise)), viewpoint=[condition.viewpoint] * n)
-    table.update(action_prior=[condition.action_prior] * n, replication=np.full(n, replication))
-    return Chunk(pd.DataFrame(table), codes, features)
+    table.update(action_prior=[condition.action_prior] * n, effects=[condition.effects] * n)
+    table.update(replication=np.full(n, replication))
+    return Chunk(pd.DataFrame(table), codes, features, seen[1].features if body else None)
 
 
 def iter_corpus(
@@ -207,7 +236,7 @@ def write_corpus(
                 "chunk_size": chunk_size,
                 "n_per_condition": n_per_condition,
                 "replications": replications,
-                "conditions": [[c.noise, c.viewpoint, c.action_prior] for c in conditions],
+                "conditions": [[c.noise, c.viewpoint, c.action_prior, c.effects] for c in conditions],
                 "data_source": data_source,
             }
         )

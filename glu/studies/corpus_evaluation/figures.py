@@ -29,7 +29,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from glu.plots.style import RULE_LABELS
-from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label
+from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label, viewpoints
 
 STRATEGY_COLORS = {
     "gesture": "#8C8C8C",
@@ -52,18 +52,15 @@ rule)."""
 POSTERIOR_LABELS = {
     "likelihood": r"$p_{HMM}$ from the likelihoods",
     "per-frame": r"$p_{HMM}$ per frame",
-    "calibrated": r"$p_{HMM}$ calibrated",
+    "calibrated": r"$p_{HMM}$ calibrated (clean gestures)",
+    "calibrated-matched": r"$p_{HMM}$ calibrated (like the tests)",
 }
 """How figures name the readings of p_HMM (:data:`glu.gestures.calibration.READINGS`)."""
 METRIC_LABEL = {
     "accuracy": "accuracy",
     "log_loss": "log-loss (nats)",
     "brier": "Brier score",
-    "ece": "ECE",
-    "verb": "verb right",
-    "object": "object right",
-    "effect": "effect right",
-    "all": "sentence right",
+    "ece": "ECE (bias-corrected)",
 }
 COINCIDE = 0.01
 """Lines closer than this fraction of the axis' range at every point coincide (and the title says so)."""
@@ -329,7 +326,7 @@ def plot_by_viewpoint(
         & results.noise.isna()
         & (results.viewpoint != "all")
     ]
-    views = list(dict.fromkeys(sel.viewpoint))
+    views = viewpoints(sel)
     strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
     width = 0.8 / max(len(strats), 1)
     for k, strategy in enumerate(strats):
@@ -377,7 +374,7 @@ def plot_winners(ax: Axes, winners: pd.DataFrame, target: str, metric: str) -> A
             ax.text(j, i + 0.32, "= " + " ".join(tied), ha="center", va="center", fontsize=6.5)
     ax.set_xticks(range(len(cols)), cols, fontsize=7)
     ax.set_yticks(range(len(rows)), [f"{a} actions, {n}" for a, n in rows], fontsize=7)
-    ax.set_title(f"{target}: {METRIC_LABEL.get(metric, metric)}, best (= no difference)", fontsize=9)
+    ax.set_title(f"{target}: {METRIC_LABEL.get(metric, metric)}, best (= no adjusted difference)", fontsize=9)
     ax.set_xlabel("p_HMM reading", fontsize=7)
     ax.tick_params(length=0)
     return ax
@@ -424,20 +421,25 @@ READING_STYLE = {
     "likelihood": ("#C44E52", "-"),
     "per-frame": ("#4C72B0", "--"),
     "calibrated": ("#55A868", "-."),
+    "calibrated-matched": ("#8172B3", ":"),
 }
 
 
 def plot_p_hmm_reliability(
-    ax: Axes, reliability: pd.DataFrame, fraction: float = 1.0, where: Mapping[str, Any] | None = None
+    ax: Axes,
+    reliability: pd.DataFrame,
+    fraction: float = 1.0,
+    where: Mapping[str, Any] | None = None,
+    viewpoint: str = "all",
 ) -> Axes:
     """Reliability diagram of p_HMM itself (target action, strategy gesture), one line per reading of p_HMM
     in the sweep (through the bins that hold at least 2 % of the gestures; marker area ∝ the bin's share);
-    ``where`` picks the action prior and network (not the reading)."""
+    ``where`` picks the effects, action prior, network and features (not the reading)."""
     sel = reliability[
         (reliability.target == "action")
         & (reliability.strategy == "gesture")
         & reliability.noise.isna()
-        & (reliability.viewpoint == "all")
+        & (reliability.viewpoint == viewpoint)
         & np.isclose(reliability.fraction, fraction)
         & (reliability.n > 0)
     ]
@@ -454,7 +456,8 @@ def plot_p_hmm_reliability(
     ax.set_ylim(0.0, 1.0)
     ax.set_xlabel("p_HMM of the top action")
     ax.set_ylabel("how often it was right")
-    ax.set_title(f"p_HMM on held-out synthetic gestures ({fraction:.0%} seen)", fontsize=9)
+    views = "all viewpoints" if viewpoint == "all" else f"seen {viewpoint}"
+    ax.set_title(f"p_HMM on held-out synthetic gestures\n{views} ({fraction:.0%} seen)", fontsize=9)
     return ax
 
 
@@ -493,22 +496,178 @@ def _drawn(table: pd.DataFrame, targets: Sequence[str]) -> list[str]:
 Cells = Sequence[Mapping[str, Any]]
 
 
-def strategies_vs_noise_figure(results: pd.DataFrame, cells: Cells, fraction: float = 1.0) -> Figure:
-    """Action accuracy (top) and effect log-loss (bottom) against the sensor noise, per cell of the design."""
-    fig, axes = _grid(2, len(cells))
-    for k, cell in enumerate(cells):
-        plot_metric_vs_noise(axes[k], results, "action", "accuracy", fraction, where=cell)
-        plot_metric_vs_noise(axes[len(cells) + k], results, "effect", "log_loss", fraction, where=cell)
-    strategy_legend(fig, _drawn(results, ("action", "effect")))
+STRATEGY_MARKERS = {
+    "gesture": "s",
+    "network": "D",
+    "hard": "v",
+    "virtual": "^",
+    "jeffrey": "o",
+    "product": "P",
+    "true_action": "X",
+}
+"""A marker per strategy, so that no line is told from another by its colour alone."""
+
+
+def plot_by_viewpoint_and_features(
+    ax: Axes,
+    results: pd.DataFrame,
+    target: str,
+    metric: str,
+    features: str,
+    strategies: Sequence[str],
+    fraction: float = 1.0,
+    where: Mapping[str, Any] | None = None,
+) -> Axes:
+    """One metric per viewpoint (noise pooled) for one feature set of the recogniser: a line with markers
+    and 95 % error bars per strategy (each strategy its colour, line style and marker)."""
+    cell = {**REFERENCE_CELL, **(where or {}), "features": features}
+    sel = _cell(results, cell)
+    sel = sel[
+        (sel.target == target)
+        & (sel.metric == metric)
+        & np.isclose(sel.fraction, fraction)
+        & sel.noise.isna()
+        & (sel.viewpoint != "all")
+    ]
+    views = viewpoints(sel)
+    x = np.arange(len(views))
+    for k, strategy in enumerate(s for s in strategies if s in set(sel.strategy)):
+        g = sel[sel.strategy == strategy].set_index("viewpoint").loc[views]
+        dx = (k - (len(strategies) - 1) / 2) * 0.06  # a small offset: error bars side by side
+        ax.errorbar(
+            x + dx,
+            g.estimate,
+            yerr=[g.estimate - g.ci_low, g.ci_high - g.estimate],
+            color=STRATEGY_COLORS.get(strategy, "black"),
+            ls=STRATEGY_STYLE.get(strategy, "-"),
+            marker=STRATEGY_MARKERS.get(strategy, "o"),
+            ms=4,
+            lw=1.2,
+            capsize=2,
+            label=strategy_label(strategy),
+        )
+    ax.set_xticks(x, views)
+    ax.set_xlim(-0.4, len(views) - 0.6)
+    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
+    ax.set_title(f"{target} {METRIC_LABEL.get(metric, metric)}, {features} features", fontsize=9)
+    return ax
+
+
+def _marked_legend(
+    fig: Figure, strategies: Sequence[str], extra: Sequence = (), ncols: int = 4, title: str | None = None
+) -> None:
+    handles = [
+        Line2D(
+            [],
+            [],
+            color=STRATEGY_COLORS.get(s, "black"),
+            ls=STRATEGY_STYLE.get(s, "-"),
+            marker=STRATEGY_MARKERS.get(s, "o"),
+            ms=4,
+            label=strategy_label(s),
+        )
+        for s in strategies
+    ]
+    fig.legend(
+        handles=[*handles, *extra],
+        loc="outside upper center",
+        ncols=ncols,
+        fontsize=8,
+        frameon=False,
+        title=title,
+        title_fontsize=8,
+    )
+
+
+def viewpoints_figure(
+    results: pd.DataFrame,
+    features: Sequence[str],
+    fraction: float = 1.0,
+    where: Mapping[str, Any] | None = None,
+) -> Figure:
+    """Where the conclusion changes: the action's accuracy (top) and the effect's log-loss (bottom) per
+    viewpoint, one column per feature set of the recogniser, in one cell (default the reference cell)."""
+    action = ("gesture", "network", "product", "hard")
+    effect = ("network", "hard", "virtual", "jeffrey", "true_action")
+    fig, axes = _grid(2, len(features), height=2.9)
+    for k, f in enumerate(features):
+        plot_by_viewpoint_and_features(axes[k], results, "action", "accuracy", f, action, fraction, where)
+        plot_by_viewpoint_and_features(
+            axes[len(features) + k], results, "effect", "log_loss", f, effect, fraction, where
+        )
+    for row in (axes[: len(features)], axes[len(features) :]):  # one scale per row: feature sets compared
+        lows, highs = zip(*(ax.get_ylim() for ax in row), strict=True)
+        for ax in row:
+            ax.set_ylim(min(lows), max(highs))
+    cell = where_label({**(where or {}), "features": "raw"}).rsplit(", ", 1)[0]
+    _marked_legend(
+        fig,
+        list(dict.fromkeys([*action, *effect])),
+        ncols=4,
+        title=f"{cell}; {fraction:.0%} of the gesture seen, noise pooled",
+    )
     return fig
 
 
-def early_recognition_figure(results: pd.DataFrame, cells: Cells) -> Figure:
-    """Action accuracy (top) and effect log-loss (bottom) against the fraction of the gesture seen."""
+def findings_figure(counts: pd.DataFrame, columns: Sequence[tuple[str, str, str]]) -> Figure:
+    """Where each finding holds: one row per finding, one column per condition ``(effects, viewpoint,
+    features)`` (noise pooled); each cell writes ``holds/cells`` (adjusted verdicts; ``↓k``: reversed in k)
+    and is shaded by the share of the cells where the finding holds (the reverse shaded below white)."""
+    c = counts[counts.noise.isna()]
+    findings = list(dict.fromkeys(c.finding))
+    fig, ax = plt.subplots(
+        figsize=(1.05 * len(columns) + 4.6, 0.42 * len(findings) + 1.6), layout="constrained"
+    )
+    cmap = plt.get_cmap("PuOr")
+    for j, (effects, view, features) in enumerate(columns):
+        for i, finding in enumerate(findings):
+            r = c[
+                (c.finding == finding)
+                & (c.effects == effects)
+                & (c.viewpoint == view)
+                & (c.features == features)
+            ]
+            if r.empty:
+                continue
+            r = r.iloc[0]
+            share = (r.better - r.worse) / max(r.cells, 1)
+            face = cmap(0.5 + 0.5 * share)
+            ax.add_patch(plt_rectangle_colour(j, i, face))
+            text = f"{int(r.better)}/{int(r.cells)}" + (f" ↓{int(r.worse)}" if r.worse else "")
+            dark = 0.299 * face[0] + 0.587 * face[1] + 0.114 * face[2] < 0.5  # white text on dark cells
+            ax.text(j, i, text, ha="center", va="center", fontsize=7, color="white" if dark else "black")
+    ax.set_xlim(-0.5, len(columns) - 0.5)
+    ax.set_ylim(len(findings) - 0.5, -0.5)
+    labels = [
+        f"{view}\n{features}" + ("" if effects == "action" else "\neffects ← gesture")
+        for effects, view, features in columns
+    ]
+    ax.set_xticks(range(len(columns)), labels, fontsize=7)
+    ax.set_yticks(range(len(findings)), [textwrap.fill(f, 55) for f in findings], fontsize=7)
+    ax.tick_params(length=0)
+    ax.set_title(
+        "cells of the design where each finding holds (adjusted verdicts, noise pooled; ↓k: reversed in k)",
+        fontsize=9,
+    )
+    return fig
+
+
+def plt_rectangle_colour(x: float, y: float, color: Any) -> Any:
+    """A cell of :func:`findings_figure`: a unit square centred on (x, y)."""
+    from matplotlib.patches import Rectangle
+
+    return Rectangle((x - 0.5, y - 0.5), 1, 1, facecolor=color, edgecolor="white", lw=1.5)
+
+
+def early_recognition_figure(results: pd.DataFrame, cells: Cells, viewpoint: str = "front") -> Figure:
+    """Action accuracy (top) and effect log-loss (bottom) against the fraction of the gesture seen, at one
+    viewpoint (noise pooled)."""
     fig, axes = _grid(2, len(cells))
     for k, cell in enumerate(cells):
-        plot_early_recognition(axes[k], results, "action", "accuracy", where=cell)
-        plot_early_recognition(axes[len(cells) + k], results, "effect", "log_loss", where=cell)
+        plot_early_recognition(axes[k], results, "action", "accuracy", viewpoint=viewpoint, where=cell)
+        plot_early_recognition(
+            axes[len(cells) + k], results, "effect", "log_loss", viewpoint=viewpoint, where=cell
+        )
     strategy_legend(fig, _drawn(results, ("action", "effect")))
     return fig
 
@@ -520,13 +679,14 @@ def calibration_figure(
     fraction: float = 1.0,
     strategies: Sequence[str] = ("network", "hard", "virtual", "jeffrey", "true_action"),
     by_viewpoint: Sequence[str] = ("gesture", "network", "hard", "product"),
+    viewpoint: str = "front",
 ) -> Figure:
-    """Reliability diagrams of the effect in the first two cells (top); the effect's ECE against noise and
-    the action accuracy per viewpoint in the first cell (bottom). A key gives the marker sizes."""
+    """Reliability diagrams of the effect in the first two cells at one viewpoint (top); the effect's ECE
+    and the action's accuracy per viewpoint in the first cell (bottom). A key gives the marker sizes."""
     fig, axes = _grid(2, 2, height=3.2)
     for ax, cell in zip(axes[:2], cells[:2], strict=False):
-        plot_reliability(ax, reliability, fraction, strategies=strategies, where=cell)
-    plot_metric_vs_noise(axes[2], results, "effect", "ece", fraction, strategies=strategies, where=cells[0])
+        plot_reliability(ax, reliability, fraction, strategies=strategies, viewpoint=viewpoint, where=cell)
+    plot_by_viewpoint(axes[2], results, "effect", "ece", fraction, strategies=strategies, where=cells[0])
     plot_by_viewpoint(
         axes[3], results, "action", "accuracy", fraction, strategies=by_viewpoint, where=cells[0]
     )
@@ -553,12 +713,14 @@ def differences_figure(
     pairs: Sequence[tuple[str, str, str, str]],
     cells: Cells,
     fraction: float = 1.0,
+    viewpoint: str = "front",
 ) -> Figure:
-    """Paired differences, one panel per cell of the design (stacked), with a key to colours and markers."""
+    """Paired differences at one viewpoint (noise pooled), one panel per cell of the design (stacked), with
+    a key to colours and markers."""
     fig, axes = _grid(len(cells), 1, height=2.9)
     fig.set_figwidth(9.0)
     for ax, cell in zip(axes, cells, strict=True):
-        plot_differences(ax, differences, pairs, fraction, where=cell)
+        plot_differences(ax, differences, pairs, fraction, viewpoint=viewpoint, where=cell)
     marks = [
         Line2D(
             [],
@@ -579,17 +741,22 @@ def p_hmm_calibration_figure(
     fraction: float = 1.0,
     where: Mapping[str, Any] | None = None,
     segments: pd.DataFrame | None = None,
+    viewpoints: Sequence[str] = ("front",),
 ) -> Figure:
-    """p_HMM's own reliability on the corpus's held-out synthetic gestures, one line per reading (left), and,
-    given the real segments' readings, p_HMM on each segment left out (right); one legend above."""
-    fig, axes = _grid(1, 1 if segments is None else 2, height=3.4)
-    plot_p_hmm_reliability(axes[0], reliability, fraction, where=where)
+    """p_HMM's own reliability on the corpus's held-out synthetic gestures, one line per reading, a panel per
+    viewpoint, and, given the real segments' readings, p_HMM on each segment left out; one legend above."""
+    views = [v for v in viewpoints if v in set(reliability.viewpoint)] or ["all"]
+    fig, axes = _grid(1, len(views) + (segments is not None), height=3.4)
+    for ax, view in zip(axes, views, strict=False):
+        plot_p_hmm_reliability(ax, reliability, fraction, where=where, viewpoint=view)
+    drawn = set(reliability.p_hmm)
     handles = [
         Line2D([], [], color=c, ls=ls, marker="o", ms=3, label=f"p_HMM {reading}")
         for reading, (c, ls) in READING_STYLE.items()
+        if reading in drawn
     ]
     if segments is not None:
-        plot_segment_readings(axes[1], segments)
-        handles += axes[1].get_legend_handles_labels()[0]
-    fig.legend(handles=handles, loc="outside upper center", ncols=3, fontsize=8, frameon=False)
+        plot_segment_readings(axes[len(views)], segments)
+        handles += axes[len(views)].get_legend_handles_labels()[0]
+    fig.legend(handles=handles, loc="outside upper center", ncols=4, fontsize=8, frameon=False)
     return fig

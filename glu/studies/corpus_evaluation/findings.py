@@ -1,16 +1,22 @@
-"""What the corpus evaluation finds, cell by cell of its design, written from its tables.
+"""What the corpus evaluation finds, condition by condition and cell by cell of its design, written from its
+tables.
 
-The design (:mod:`glu.studies.corpus_evaluation.config`) crosses how often each action is performed
-(``action_prior``), which network the robot infers with (``inference_network``, ``learn_experiments``) and how
-it reads p_HMM (``p_hmm``). :func:`winners` names the best strategy of each cell and those tied with it
-(paired difference whose interval contains 0: no difference); :func:`finding_verdicts` follows each claim of
-:data:`FINDINGS` (a paired difference between two strategies) through every cell, and
-:func:`finding_sentences` writes each as a sentence — what it is in the reference cell, and in how many cells,
-at which levels of each factor, it holds — so that no sentence about these results is typed by hand.
+The design (:mod:`glu.studies.corpus_evaluation.config`) crosses whether the effects depend on the gesture
+(``effects``), how often each action is performed (``action_prior``), which network the robot infers with
+(``inference_network``, ``learn_experiments``), how it reads p_HMM (``p_hmm``) and which features its
+recogniser sees (``features``); each is measured per viewpoint and noise level and pooled over them.
+:func:`finding_verdicts` follows each claim of :data:`FINDINGS` (a paired difference between two strategies)
+through every cell, viewpoint and noise level, with its bootstrap p-value adjusted for the whole family of
+verdicts (Benjamini–Hochberg); :func:`verdict_counts` counts, per condition, the cells where each holds;
+:func:`finding_sentences` writes each claim as a sentence that starts where the recogniser works — the front
+view, raw features, effects drawn from the action alone (:data:`FRONT`) — and then says where the conclusion
+changes. :func:`winners` names the best strategy of each cell and those tied with it. No sentence about
+these results is typed by hand.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -18,20 +24,38 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from glu.stats import HIGHER_IS_BETTER, verdict
+from glu.stats import ALPHA, HIGHER_IS_BETTER, adjust, verdict
+from glu.studies.episodes import VIEWPOINTS
 
-DESIGN: tuple[str, ...] = ("action_prior", "inference_network", "learn_experiments", "p_hmm")
+DESIGN: tuple[str, ...] = (
+    "effects",
+    "action_prior",
+    "inference_network",
+    "learn_experiments",
+    "p_hmm",
+    "features",
+)
 """The factors of the design every table keeps apart (never pooled)."""
+CELL: tuple[str, ...] = ("action_prior", "inference_network", "learn_experiments", "p_hmm")
+"""The factors of the robot's models: a finding is counted over these cells within each condition."""
 REFERENCES: tuple[str, ...] = ("true_action",)
 """Strategies that are references (a ceiling), never a cell's winner."""
 REFERENCE_CELL: dict[str, Any] = {
+    "effects": "action",
     "action_prior": "uniform",
     "inference_network": "generating",
     "learn_experiments": 0,
     "p_hmm": "per-frame",
+    "features": "raw",
 }
-"""The cell of the earlier results: actions drawn uniformly, the robot's network the one that drew the
-episodes, p_HMM read per frame."""
+"""The cell of the earlier results: effects drawn from the action alone, actions drawn uniformly, the robot's
+network the one that drew the episodes, p_HMM read per frame from a recogniser of raw features."""
+FRONT: dict[str, Any] = {"effects": "action", "features": "raw", "viewpoint": "front"}
+"""Where the findings are read first: the front view, where the recogniser works, with the originals' raw
+features, in the world the fusion rules assume (pooled over the noise levels)."""
+ADJUSTMENT = "bh"
+"""The findings' multiplicity adjustment (:func:`glu.stats.adjust`): the verdicts of the findings table are
+one family."""
 
 
 @dataclass(frozen=True)
@@ -43,7 +67,6 @@ class Finding:
     label : the claim in words (no numbers: those come from the tables)
     target, metric, strategy, baseline : the paired difference it rests on
     early : at the smallest observed fraction of the gesture (else the largest)
-    viewpoint : a viewpoint of the sweep, or ``"all"`` (pooled)
     """
 
     label: str
@@ -52,7 +75,6 @@ class Finding:
     strategy: str
     baseline: str
     early: bool = False
-    viewpoint: str = "all"
 
 
 FINDINGS: tuple[Finding, ...] = (
@@ -108,22 +130,17 @@ FINDINGS: tuple[Finding, ...] = (
         "network",
     ),
     Finding(
-        "seen from a turned viewpoint, the gesture names the action better than the network alone",
+        "the gesture names the action better than the network alone",
         "action",
         "accuracy",
         "gesture",
         "network",
-        viewpoint="turned",
     ),
 )
-"""The claims followed through the design (each with its interval in every cell)."""
+"""The claims followed through the design (each with its interval in every cell and condition)."""
 
 
-def _pooled(frame: pd.DataFrame, viewpoint: str = "all") -> pd.DataFrame:
-    return frame[(frame.viewpoint == viewpoint) & frame.noise.isna()]
-
-
-def _bare(df: pd.DataFrame) -> pd.DataFrame:
+def bare(df: pd.DataFrame) -> pd.DataFrame:
     """``df`` without its ``attrs`` (a view of the same data): pandas deep-copies a stamped table's attrs
     on every row or group it hands out, the bulk of the time of a loop over rows."""
     out = df.copy(deep=False)
@@ -131,44 +148,68 @@ def _bare(df: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def winners(table: pd.DataFrame, diffs: pd.DataFrame, fraction: float | None = None) -> pd.DataFrame:
-    """Which strategy wins each cell of the design (pooled over noise levels and viewpoints).
+def select(frame: pd.DataFrame, where: Mapping[str, Any]) -> pd.DataFrame:
+    """The rows of ``frame`` matching ``where`` (column → value; a NaN value matches NaN: pooled noise)."""
+    keep = np.ones(len(frame), dtype=bool)
+    for k, v in where.items():
+        col = frame[k]
+        if isinstance(v, float) and math.isnan(v):
+            keep &= col.isna().to_numpy()
+        elif isinstance(v, float):
+            keep &= np.isclose(col.to_numpy(dtype=float), v)
+        else:
+            keep &= (col == v).to_numpy()
+    return frame[keep]
 
-    For each (action prior, inference network, learn_experiments, p_HMM, target, metric) at ``fraction``
-    (default the largest): ``best``, the strategy with the best estimate (the reference ``true_action``
-    left out); ``tied``, every strategy whose paired difference with it has an interval containing 0 (no
-    difference), best included; ``beats``, those it is better than with confidence; and the best
-    estimate with its interval.
+
+def pooled(frame: pd.DataFrame, viewpoint: str = "all") -> pd.DataFrame:
+    return frame[(frame.viewpoint == viewpoint) & frame.noise.isna()]
+
+
+def winners(
+    table: pd.DataFrame, diffs: pd.DataFrame, fraction: float | None = None, viewpoint: str = "front"
+) -> pd.DataFrame:
+    """Which strategy wins each cell of the design at one viewpoint (pooled over the noise levels).
+
+    For each (design cell, target, metric) at ``fraction`` (default the largest): ``best``, the strategy
+    with the best estimate (the reference ``true_action`` left out); ``tied``, every strategy without an
+    adjusted difference from it (``verdict_adjusted``: no difference), best included; ``beats``, those it is
+    better than; and the best estimate with its interval. Where the sweep lacks ``viewpoint``, its first.
     """
-    table, diffs = _bare(table), _bare(diffs)
+    table, diffs = bare(table), bare(diffs)
+    views = viewpoints(table)
+    if viewpoint not in views:
+        viewpoint = views[0] if views else "all"
     full = table["fraction"].max() if fraction is None else fraction
-    sel = _pooled(table)
-    sel = sel[np.isclose(sel.fraction, full) & ~sel.strategy.isin(REFERENCES)]
-    d = _pooled(diffs)
-    d = d[np.isclose(d.fraction, full)]
+    sel = pooled(table, viewpoint)
+    sel = sel[np.isclose(sel.fraction, full) & ~sel.strategy.isin(REFERENCES)].copy()
     keys = [*DESIGN, "target", "metric"]
-    d_groups = dict(iter(d.groupby(keys, sort=False, dropna=False)))
+    up = sel.metric.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    sel["_rank"] = np.where(up, -sel.estimate.to_numpy(dtype=float), sel.estimate.to_numpy(dtype=float))
+    best = sel.sort_values([*keys, "_rank"], kind="stable").drop_duplicates(keys, keep="first")
+    best = best[[*keys, "strategy", "estimate", "ci_low", "ci_high"]].rename(columns={"strategy": "best"})
+    d = pooled(diffs, viewpoint)
+    d = d[np.isclose(d.fraction, full)][[*keys, "strategy", "baseline", "verdict_adjusted"]]
+    m = d.merge(best[[*keys, "best"]], on=keys, how="inner")
+    m = m[(m.strategy == m.best) | (m.baseline == m.best)]
+    m["other"] = np.where(m.strategy == m.best, m.baseline, m.strategy)
+    m = m[~m.other.isin(REFERENCES)]
+    tied = m[m.verdict_adjusted == "no difference"].groupby(keys, dropna=False).other.agg(list)
+    beats = m[m.verdict_adjusted != "no difference"].groupby(keys, dropna=False).other.agg(list)
     rows = []
-    for key, g in sel.groupby(keys, sort=False, dropna=False):
-        up = HIGHER_IS_BETTER.get(key[-1], True)
-        top = g.sort_values("estimate", ascending=not up, kind="stable").iloc[0]
-        tied, beats = [top.strategy], []
-        for p in d_groups.get(key, d.iloc[:0]).itertuples():
-            if top.strategy not in (p.strategy, p.baseline):
-                continue
-            other = p.baseline if p.strategy == top.strategy else p.strategy
-            if other not in REFERENCES:
-                (tied if p.verdict == "no difference" else beats).append(other)
+    for r in best.itertuples(index=False):
+        key = tuple(getattr(r, k) for k in keys)
         rows.append(
             {
                 **dict(zip(keys, key, strict=True)),
+                "viewpoint": viewpoint,
                 "fraction": full,
-                "best": top.strategy,
-                "tied": ", ".join(sorted(tied)),
-                "beats": ", ".join(sorted(beats)),
-                "estimate": float(top.estimate),
-                "ci_low": float(top.ci_low),
-                "ci_high": float(top.ci_high),
+                "best": r.best,
+                "tied": ", ".join(sorted([r.best, *tied.get(key, [])])),
+                "beats": ", ".join(sorted(beats.get(key, []))),
+                "estimate": float(r.estimate),
+                "ci_low": float(r.ci_low),
+                "ci_high": float(r.ci_high),
             }
         )
     return pd.DataFrame(rows)
@@ -185,32 +226,77 @@ def pair(diffs: pd.DataFrame, target: str, metric: str, strategy: str, baseline:
     ba["strategy"], ba["baseline"] = strategy, baseline
     up = HIGHER_IS_BETTER.get(metric, True)
     ba["verdict"] = [verdict(lo, hi, up) for lo, hi in zip(ba.ci_low, ba.ci_high, strict=True)]
+    if "verdict_adjusted" in ba:
+        ba["verdict_adjusted"] = adjusted_verdicts(ba.difference.to_numpy(), ba.p_adjusted.to_numpy(), up)
     return ba
 
 
-def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS) -> pd.DataFrame:
-    """Every finding in every cell of the design: its paired difference, interval and verdict.
+VERDICT_COLUMNS = ["difference", "ci_low", "ci_high", "p_value", "verdict", "p_adjusted", "verdict_adjusted"]
 
-    Columns: finding (its label), *DESIGN, viewpoint, fraction, difference, ci_low, ci_high, verdict
-    (``better``: the strategy is better than the baseline; ``worse``; ``no difference``). Findings whose
-    viewpoint or strategies the sweep lacks are left out.
+
+def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS) -> pd.DataFrame:
+    """Every finding in every cell of the design, per viewpoint, per noise level and pooled: its paired
+    difference, interval and verdict, unadjusted and adjusted.
+
+    Columns: finding (its label), *DESIGN, viewpoint, noise, fraction, difference, ci_low, ci_high, p_value,
+    verdict (``better``: the strategy is better than the baseline; ``worse``; ``no difference``), p_adjusted
+    (Benjamini–Hochberg over every row of the table: one family) and verdict_adjusted (a verdict only where
+    p_adjusted ≤ α). Findings whose strategies the sweep lacks are left out.
     """
+    diffs = bare(diffs)
     fractions = sorted(diffs["fraction"].dropna().unique())
+    cols = ["finding", *DESIGN, "viewpoint", "noise", "fraction", *VERDICT_COLUMNS]
     parts = []
     for f in findings:
         sel = pair(diffs, f.target, f.metric, f.strategy, f.baseline)
-        sel = _pooled(sel, f.viewpoint)
         if sel.empty or not fractions:
             continue
         at = fractions[0] if f.early else fractions[-1]
         sel = sel[np.isclose(sel.fraction, at)]
-        parts.append(
-            sel[[*DESIGN, "viewpoint", "fraction", "difference", "ci_low", "ci_high", "verdict"]].assign(
-                finding=f.label
-            )
+        parts.append(sel.assign(finding=f.label))
+    if not parts:
+        return pd.DataFrame(columns=cols)
+    out = pd.concat(parts, ignore_index=True)
+    out["p_adjusted"] = adjust(out["p_value"].to_numpy(dtype=float), ADJUSTMENT)
+    up = out["metric"].map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    out["verdict_adjusted"] = adjusted_verdicts(
+        out["difference"].to_numpy(), out["p_adjusted"].to_numpy(), up
+    )
+    return out[cols]
+
+
+def adjusted_verdicts(difference: np.ndarray, p_adjusted: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """:func:`glu.stats.adjusted_verdict` of many differences at once."""
+    d, p = np.asarray(difference, dtype=float), np.asarray(p_adjusted, dtype=float)
+    sure = np.isfinite(d) & np.isfinite(p) & (p <= ALPHA) & (d != 0)
+    better = (d > 0) == np.asarray(up, dtype=bool)
+    return np.where(sure, np.where(better, "better", "worse"), "no difference").astype(object)
+
+
+def verdict_counts(verdicts: pd.DataFrame) -> pd.DataFrame:
+    """How many cells of the robot's models (:data:`CELL`) each finding holds in, per condition.
+
+    One row per (finding, effects, features, viewpoint, noise): cells, better, no_difference, worse (from
+    ``verdict_adjusted``), and better_unadjusted (from the unadjusted ``verdict``).
+    """
+    v = bare(verdicts)
+    keys = ["finding", "effects", "features", "viewpoint", "noise"]
+    rows = []
+    for key, g in v.groupby(keys, sort=False, dropna=False):
+        c = g.verdict_adjusted.value_counts()
+        rows.append(
+            {
+                **dict(zip(keys, key, strict=True)),
+                "cells": len(g),
+                "better": int(c.get("better", 0)),
+                "no_difference": int(c.get("no difference", 0)),
+                "worse": int(c.get("worse", 0)),
+                "better_unadjusted": int((g.verdict == "better").sum()),
+            }
         )
-    cols = ["finding", *DESIGN, "viewpoint", "fraction", "difference", "ci_low", "ci_high", "verdict"]
-    return pd.concat(parts, ignore_index=True)[cols] if parts else pd.DataFrame(columns=cols)
+    return pd.DataFrame(
+        rows, columns=[*keys, "cells", "better", "no_difference", "worse", "better_unadjusted"]
+    )
 
 
 ACTION_WORDS = {
@@ -218,19 +304,32 @@ ACTION_WORDS = {
     "network": "actions from the network's prior",
     "scenario": "scenario actions",
 }
+EFFECT_WORDS = {
+    "action": "effects drawn from the action alone",
+    "gesture": "effects that depend on the gesture",
+}
 
 
-def cell_label(row: Mapping[str, Any]) -> str:
-    """``"actions from the network's prior, learned (100) network, p_HMM calibrated"``: a cell in words."""
+def network_name(row: Mapping[str, Any]) -> str:
+    """``generating`` or ``learned (100)``."""
     net = row["inference_network"]
-    if net == "learned":
-        net = f"learned ({int(row['learn_experiments'])})"
+    return net if net == "generating" else f"learned ({int(row['learn_experiments'])})"
+
+
+def cell_label(row: Mapping[str, Any], features: bool = True) -> str:
+    """``"actions from the network's prior, learned (100) network, p_HMM calibrated, raw features"``: a cell
+    in words (the world named too when its effects depend on the gesture)."""
     prior = ACTION_WORDS.get(row["action_prior"], f"{row['action_prior']} actions")
-    return f"{prior}, {net} network, p_HMM {row['p_hmm']}"
+    out = f"{prior}, {network_name(row)} network, p_HMM {row['p_hmm']}"
+    if features and "features" in row:
+        out += f", {row['features']} features"
+    if row.get("effects", "action") != "action":
+        out += f", {EFFECT_WORDS.get(row['effects'], row['effects'])}"
+    return out
 
 
 def factor_levels(verdicts: pd.DataFrame) -> dict[str, list[str]]:
-    """Each factor's levels as the sentences name them (learned networks by their table size)."""
+    """Each factor of the cells' levels as the sentences name them (learned networks by their table size)."""
     net = [
         "generating" if n == "generating" else f"learned ({int(k)})"
         for n, k in dict.fromkeys(zip(verdicts.inference_network, verdicts.learn_experiments, strict=True))
@@ -247,54 +346,107 @@ def _level(row: Any, factor: str) -> str:
         return ACTION_WORDS.get(row.action_prior, row.action_prior)
     if factor == "p_HMM":
         return row.p_hmm
-    return (
-        "generating" if row.inference_network == "generating" else f"learned ({int(row.learn_experiments)})"
+    return network_name(
+        {"inference_network": row.inference_network, "learn_experiments": row.learn_experiments}
     )
+
+
+SAID = {"better": "holds", "worse": "is reversed", "no difference": "is not supported"}
+
+
+def _counts(g: pd.DataFrame) -> tuple[int, int, int, int]:
+    c = g.verdict_adjusted.value_counts()
+    return len(g), int(c.get("better", 0)), int(c.get("no difference", 0)), int(c.get("worse", 0))
+
+
+def _elsewhere(g: pd.DataFrame) -> str:
+    """Where a finding's count of cells changes from the front view's: per turned viewpoint and feature set,
+    with effects that depend on the gesture, and per noise level (viewpoints pooled), raw features."""
+    parts = []
+    views = [v for v in viewpoints(g) if v != FRONT["viewpoint"]]
+    features = list(dict.fromkeys(g.features))
+    base = g[(g.effects == FRONT["effects"]) & g.noise.isna()]
+    for view in views:
+        per = []
+        for f in features:
+            h = base[(base.viewpoint == view) & (base.features == f)]
+            if len(h):
+                n, better, _, worse = _counts(h)
+                per.append(f"{f} {better}/{n}" + (f" (reversed in {worse})" if worse else ""))
+        if per:
+            parts.append(f"{view}: " + ", ".join(per))
+    other = g[(g.effects != FRONT["effects"]) & g.noise.isna() & (g.viewpoint == FRONT["viewpoint"])]
+    for effects, h in other.groupby("effects", sort=False):
+        per = []
+        for f in features:
+            k = h[h.features == f]
+            if len(k):
+                n, better, _, worse = _counts(k)
+                per.append(f"{f} {better}/{n}" + (f" (reversed in {worse})" if worse else ""))
+        parts.append(f"front view with {EFFECT_WORDS.get(effects, effects)}: " + ", ".join(per))
+    noisy = g[(g.effects == FRONT["effects"]) & g.noise.notna() & (g.viewpoint == "all")]
+    noisy = noisy[noisy.features == FRONT["features"]]
+    per = []
+    for noise, h in noisy.groupby("noise", sort=True):
+        n, better, _, worse = _counts(h)
+        per.append(f"{noise * 100:g} cm {better}/{n}" + (f" (reversed in {worse})" if worse else ""))
+    if len(per) > 1:
+        parts.append("raw features, all viewpoints, by sensor noise: " + ", ".join(per))
+    return "; ".join(parts)
 
 
 def finding_sentences(
     verdicts: pd.DataFrame, reference: Mapping[str, Any] = REFERENCE_CELL, brief: bool = False
 ) -> list[str]:
-    """One sentence per finding of :func:`finding_verdicts`: its verdict and difference in the reference
-    cell, then in how many cells it holds (the strategy better), and how often at each factor level.
+    """One sentence per finding of :func:`finding_verdicts`, adjusted verdicts throughout: first on the front
+    view (:data:`FRONT`) — its verdict and difference in the reference cell, then in how many of the front
+    view's cells it holds — and then where the count changes: per turned viewpoint and feature set, with
+    effects that depend on the gesture, and per noise level.
 
     ``brief``: without naming the reference cell (the caller names it once) and without the counts per
     factor level (the README's form; the notebook gives them).
     """
+    v = bare(verdicts)
     out = []
-    for label, g in verdicts.groupby("finding", sort=False):
-        ref = g
-        for k, v in reference.items():
-            ref = ref[ref[k] == v]
+    for label, g in v.groupby("finding", sort=False):
+        front = select(g, {**FRONT, "noise": math.nan})
+        ref = select(front, {k: x for k, x in reference.items() if k in CELL})
         r = ref.iloc[0] if len(ref) else None
         head = label[0].upper() + label[1:]
         if r is not None:
-            where = f"{r.fraction:.0%} of the gesture seen" + (
-                "" if r.viewpoint == "all" else f", viewpoint {r.viewpoint}"
-            )
-            said = {"better": "holds", "worse": "is reversed", "no difference": "is not supported"}[r.verdict]
-            cell = where if brief else f"{cell_label(r)}; {where}"
+            where = f"{r.fraction:.0%} of the gesture seen"
+            cell = where if brief else f"{cell_label(r, features=False)}; {where}"
             head += (
-                f": in the reference cell ({cell}) it {said} "
-                f"(difference {r.difference:+.3f} [{r.ci_low:+.3f}, {r.ci_high:+.3f}])"
+                f": on the front view (noise levels pooled), in the reference cell ({cell}) it "
+                f"{SAID[r.verdict_adjusted]} "
+                f"(difference {r.difference:+.3f} [{r.ci_low:+.3f}, {r.ci_high:+.3f}], adjusted "
+                f"p {p_text(r.p_adjusted)})"
             )
-        n = len(g)
-        counts = g.verdict.value_counts()
+        n, better, none, worse = _counts(front)
         body = (
-            f"across the design it holds in {counts.get('better', 0)} of {n} cells, with no difference in "
-            f"{counts.get('no difference', 0)} and the reverse in {counts.get('worse', 0)}"
+            f"over the front view's {n} cells it holds in {better}, with no difference in {none} and the "
+            f"reverse in {worse}"
         )
         levels = []
-        for factor, values in factor_levels(g).items():
+        for factor, values in factor_levels(front).items():
             if brief or len(values) < 2:
                 continue
             per = []
-            for v in values:
-                h = g[[_level(row, factor) == v for row in g.itertuples()]]
-                per.append(f"{v} {int((h.verdict == 'better').sum())}/{len(h)}")
+            for value in values:
+                h = front[[_level(row, factor) == value for row in front.itertuples()]]
+                per.append(f"{value} {int((h.verdict_adjusted == 'better').sum())}/{len(h)}")
             levels.append(", ".join(per) if factor == "actions" else f"{factor}: {', '.join(per)}")
-        out.append(f"{head}; {body}" + (f" (where it holds: {'; '.join(levels)})." if levels else "."))
+        text = f"{head}; {body}" + (f" (where it holds: {'; '.join(levels)})" if levels else "")
+        elsewhere = _elsewhere(g)
+        out.append(text + (f". Cells where it holds elsewhere: {elsewhere}." if elsewhere else "."))
     return out
+
+
+def p_text(p: float) -> str:
+    """An adjusted p-value as the sentences write it: ``0.012``, ``< 0.001``, ``≤ α`` context-free."""
+    if not np.isfinite(p):
+        return "n/a"
+    return "< 0.001" if p < 0.001 else f"{p:.3f}"
 
 
 def seed_spread(seeds: pd.DataFrame, cell: Mapping[str, Any] = REFERENCE_CELL) -> pd.DataFrame:
@@ -316,11 +468,13 @@ def design_text(summary: Mapping[str, Any]) -> str:
         n if n == "generating" else f"learned from {', '.join(map(str, g['learn_experiments']))} experiments"
         for n in g["inference_network"]
     ]
+    effects = " / ".join(EFFECT_WORDS.get(e, e) for e in g.get("effects", ["action"]))
     return (
-        f"{summary['episodes']:,} episodes over {p['recognizer_seeds']} recogniser seeds; action prior "
-        f"{' / '.join(g['action_prior'])} × inference network {' / '.join(nets)} × p_HMM "
-        f"{' / '.join(g['p_hmm'])}; noise {', '.join(f'{x:g}' for x in g['noise'])} m × viewpoints "
-        f"{', '.join(g['viewpoints'])}; {p['evaluation']['bootstrap']} two-level bootstrap replicates."
+        f"{summary['episodes']:,} episodes over {p['recognizer_seeds']} recogniser seeds; {effects} × action "
+        f"prior {' / '.join(g['action_prior'])} × inference network {' / '.join(nets)} × p_HMM "
+        f"{' / '.join(g['p_hmm'])} × features {' / '.join(g.get('features', ['raw']))}; noise "
+        f"{', '.join(f'{x:g}' for x in g['noise'])} m × viewpoints {', '.join(g['viewpoints'])}; "
+        f"{p['evaluation']['bootstrap']:,} two-level bootstrap replicates."
     )
 
 
@@ -348,7 +502,7 @@ def winners_table(win: pd.DataFrame, shown: Sequence[tuple[str, str]]) -> pd.Dat
 
 def contrast_cells(table: pd.DataFrame) -> list[dict[str, Any]]:
     """The reference cell and the one furthest from it that the sweep has: the network's action prior and
-    the network learned from the fewest experiments, p_HMM read as in the reference cell."""
+    the network learned from the fewest experiments, p_HMM read and features as in the reference cell."""
     have = table.drop_duplicates(list(DESIGN))[list(DESIGN)]
     ref = dict(REFERENCE_CELL)
     if not ((have[list(ref)] == pd.Series(ref)).all(axis=1)).any():
@@ -365,30 +519,59 @@ def contrast_cells(table: pd.DataFrame) -> list[dict[str, Any]]:
     return [ref, other]
 
 
+def viewpoints(table: pd.DataFrame) -> list[str]:
+    """The viewpoints of a table (not ``all``), in the order of :data:`glu.studies.episodes.VIEWPOINTS`
+    (others after, by name)."""
+    order = list(VIEWPOINTS)
+    views = {v for v in table.viewpoint.unique() if v != "all"}
+    return sorted(views, key=lambda v: (order.index(v) if v in order else len(order), v))
+
+
+def in_contrast_cells(frame: pd.DataFrame, table: pd.DataFrame) -> pd.DataFrame:
+    """The rows of ``frame`` in the action priors and networks of :func:`contrast_cells` (every reading of
+    p_HMM, feature set and world), pooled over the noise levels: what notebook 11 writes to ``results/``
+    beside the findings (the full tables stay in the sweep's folder)."""
+    frame = bare(frame)
+    keep = np.zeros(len(frame), dtype=bool)
+    for cell in contrast_cells(table):
+        keep |= (
+            (frame.action_prior == cell["action_prior"])
+            & (frame.inference_network == cell["inference_network"])
+            & (frame.learn_experiments == cell["learn_experiments"])
+        ).to_numpy()
+    return frame[keep & frame.noise.isna().to_numpy()]
+
+
+def front_view(table: pd.DataFrame) -> str:
+    """The viewpoint the findings are read on first (:data:`FRONT`), or the sweep's first."""
+    views = viewpoints(table)
+    return FRONT["viewpoint"] if FRONT["viewpoint"] in views else (views[0] if views else "all")
+
+
 def _cell_rows(
-    table: pd.DataFrame, cell: Mapping[str, Any], target: str, metric: str, fraction: float
+    table: pd.DataFrame, cell: Mapping[str, Any], target: str, metric: str, fraction: float, viewpoint: str
 ) -> pd.DataFrame:
-    sel = _pooled(table)
-    for k, v in cell.items():
-        sel = sel[sel[k] == v]
+    sel = select(pooled(table, viewpoint), cell)
     return sel[(sel.target == target) & (sel.metric == metric) & np.isclose(sel.fraction, fraction)]
 
 
 def network_alone_sentences(table: pd.DataFrame) -> list[str]:
-    """For the contrasted cells, early and at the full gesture: the effect's log-loss and ECE of the network
-    alone beside every fusion rule and the true action (an oracle)."""
+    """For the contrasted cells on the front view (noise pooled), early and at the full gesture: the effect's
+    log-loss and ECE of the network alone beside every fusion rule and the true action (an oracle)."""
+    table = bare(table)
     out = []
     fractions = sorted(table.fraction.dropna().unique())
+    view = front_view(table)
     for cell in contrast_cells(table):
         for f in (fractions[0], fractions[-1]):
             parts = []
             for metric in ("log_loss", "ece"):
-                g = _cell_rows(table, cell, "effect", metric, f).set_index("strategy")
+                g = _cell_rows(table, cell, "effect", metric, f, view).set_index("strategy")
                 if "network" not in g.index:
                     continue
                 net = g.loc["network"]
                 rules = [s for s in g.index if s not in ("network", *REFERENCES)]
-                name = "log-loss" if metric == "log_loss" else "ECE"
+                name = "log-loss" if metric == "log_loss" else "ECE (bias-corrected)"
                 parts.append(
                     f"{name} {net.estimate:.3f} [{net.ci_low:.3f}, {net.ci_high:.3f}] for the network alone, "
                     + ", ".join(f"{s} {g.loc[s].estimate:.3f}" for s in rules)
@@ -400,48 +583,73 @@ def network_alone_sentences(table: pd.DataFrame) -> list[str]:
                 )
             if parts:
                 out.append(
-                    f"The effect with {f:.0%} of the gesture seen ({cell_label(cell)}): "
-                    + "; ".join(parts)
-                    + "."
+                    f"The effect with {f:.0%} of the gesture seen, {view} view, noise levels pooled "
+                    f"({cell_label(cell)}): " + "; ".join(parts) + "."
                 )
     return out
 
 
-def p_hmm_table(table: pd.DataFrame, cell: Mapping[str, Any] | None = None) -> pd.DataFrame:
-    """p_HMM alone (strategy ``gesture``) at the full gesture under each reading: accuracy, log-loss, ECE
-    with intervals, in one cell of actions and network (default the reference cell's)."""
+def p_hmm_table(
+    table: pd.DataFrame, cell: Mapping[str, Any] | None = None, viewpoint: str | None = None
+) -> pd.DataFrame:
+    """p_HMM alone (strategy ``gesture``) at the full gesture under each reading: accuracy, log-loss, ECE,
+    in one cell of effects, actions, network and features (default the reference cell's), at one viewpoint
+    (default the front view) pooled over the noise levels."""
+    table = bare(table)
     cell = {k: v for k, v in (cell or REFERENCE_CELL).items() if k != "p_hmm"}
-    sel = _pooled(table)
-    for k, v in cell.items():
-        sel = sel[sel[k] == v]
+    sel = select(pooled(table, viewpoint or front_view(table)), cell)
     sel = sel[
         (sel.target == "action") & (sel.strategy == "gesture") & np.isclose(sel.fraction, sel.fraction.max())
     ]
-    return sel.pivot_table(index="p_hmm", columns="metric", values="estimate", sort=False)[
-        ["accuracy", "log_loss", "ece"]
-    ]
+    wide = sel.pivot_table(index="p_hmm", columns="metric", values="estimate", sort=False)
+    return wide.reindex(columns=["accuracy", "log_loss", "ece"])
+
+
+READING_WORDS = {
+    "likelihood": "read from the likelihoods",
+    "per-frame": "read per frame",
+    "calibrated": "calibrated on clean front-view gestures",
+    "calibrated-matched": "calibrated on gestures drawn like the test conditions",
+}
 
 
 def p_hmm_sentences(
     table: pd.DataFrame, calibration: pd.DataFrame, segments: pd.DataFrame | None = None
 ) -> list[str]:
-    """What the tables say of p_HMM as a probability: its ECE under each reading on held-out synthetic
-    gestures, the fitted inverse temperatures, and (with the real data) the held-out real segments."""
-    t = p_hmm_table(table)
-    out = [
-        "On the corpus's held-out synthetic gestures (reference cell, full gesture), p_HMM alone names "
-        + "; ".join(
-            f"{r} {t.loc[r, 'accuracy']:.3f} of the actions with an ECE of {t.loc[r, 'ece']:.3f}"
-            for r in t.index
-        )
-        + "."
-    ]
-    if len(calibration):
-        full = calibration[np.isclose(calibration.fraction, calibration.fraction.max())]
+    """What the tables say of p_HMM as a probability: its accuracy and ECE under each reading on held-out
+    synthetic gestures, per viewpoint; the fitted inverse temperatures and how many sit at a bound; (with
+    the real data) the held-out real segments."""
+    table = bare(table)
+    out = []
+    for view in viewpoints(table):
+        t = p_hmm_table(table, viewpoint=view).dropna(subset=["accuracy", "ece"])
+        if t.empty:
+            continue
         out.append(
-            "The calibrated reading's inverse temperature at the full gesture, fitted per seed on "
-            f"held-out training gestures: β = {full.beta.min():.3g} to {full.beta.max():.3g} (the "
-            "likelihood reading is β = 1)."
+            f"On the corpus's held-out synthetic gestures seen {view} (reference cell, full gesture, noise "
+            "pooled), p_HMM alone names the action right "
+            + "; ".join(
+                f"{READING_WORDS.get(r, r)} {t.loc[r, 'accuracy']:.3f} of the time, ECE {t.loc[r, 'ece']:.3f}"
+                for r in t.index
+            )
+            + "."
+        )
+    if len(calibration):
+        cal = bare(calibration)
+        full = cal[np.isclose(cal.fraction, cal.fraction.max())]
+        raw = full[full.features == REFERENCE_CELL["features"]] if "features" in full else full
+        parts = []
+        for reading, g in raw.groupby("reading", sort=False) if "reading" in raw else [("calibrated", raw)]:
+            hits = int(g.at_bound.sum()) if "at_bound" in g else 0
+            parts.append(
+                f"{READING_WORDS.get(reading, reading)} β = {g.beta.min():.3g} to {g.beta.max():.3g} "
+                f"(at a bound of [0, 1] in {hits} of {len(g)} seeds)"
+            )
+        allhits = int(cal.at_bound.sum()) if "at_bound" in cal else 0
+        out.append(
+            "The calibrated readings' inverse temperature at the full gesture, fitted per seed on held-out "
+            f"gestures (raw features): {'; '.join(parts)}; the likelihood reading is β = 1. Over every "
+            f"feature set and fraction, {allhits} of {len(cal)} fits sit at a bound."
         )
     if segments is not None and len(segments):
         s = segments.set_index("reading")
@@ -464,7 +672,8 @@ def seed_sentence(spread: pd.DataFrame) -> str:
         return "No seed-level estimates in this cell."
     k = int(spread.seeds.max())
     return (
-        f"Over {k} recogniser seeds (reference cell, full gesture), accuracy ranges "
+        f"Over {k} recogniser seeds (reference cell, full gesture, viewpoints and noise pooled), accuracy "
+        "ranges "
         + "; ".join(f"{r.strategy} {r['min']:.3f}–{r['max']:.3f}" for _, r in spread.iterrows())
         + "."
     )

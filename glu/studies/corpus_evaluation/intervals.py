@@ -6,15 +6,26 @@ weight in replicate ``b`` is Poisson(``c_{b,k}``), ``c_{b,k}`` the number of cop
 every metric of replicate ``b`` is computed from the merged sums ``S_b`` exactly as the estimate is from
 ``S_0``:
 
-* a mean (accuracy, log-loss, Brier, description correctness) is ``S_b[stat] / S_b[n]``;
-* the expected calibration error (top label, equal-width bins) is ``Σ_bins |S_b[correct_bin] −
+* a mean (accuracy, log-loss, Brier, the words' mean log-loss and Brier) is ``S_b[stat] / S_b[n]``;
+* the expected calibration error (top label, equal-width bins), binned: ``Σ_bins |S_b[correct_bin] −
   S_b[confidence_bin]| / S_b[n]``.
 
-The ECE is biased upwards by sampling noise, its replicates more so: for a well-calibrated predictor the
-interval can sit mostly above the estimate. Because the weights belong to episodes (the same for every
-strategy, fraction and reading of an episode), the difference of two strategies is resampled *paired*:
-:func:`paired_differences` takes the percentiles of the replicates' differences
-(:func:`glu.stats.verdict`).
+A mean's interval is the percentile interval of its replicates. **The ECE is corrected for its bias.** The
+binned ECE is biased upwards by sampling noise (an absolute value of a noisy difference), and a bootstrap
+replicate, a resample of the sample, is biased upwards once more: for a well-calibrated predictor the
+replicates sit mostly above the plug-in estimate, and their percentile interval can leave the estimate out
+(8 of 288 lines of a sweep's summary did before). So an ECE, and a difference of two ECEs, is reported
+with Efron's bootstrap bias correction, ``θ̃ = 2 θ̂ − mean(θ*)``, and the basic bootstrap interval
+``[2 θ̂ − q_97.5, 2 θ̂ − q_2.5]`` (Davison & Hinkley 1997, §2.4 and §5.2), which is the percentile interval
+with the bias removed; an ECE and its interval are clipped at 0. The corrected estimate lies inside its
+interval unless the replicates' mean lies outside their own 2.5–97.5 % range (tested). The plug-in value is
+kept as ``ece_plugin``.
+
+Because the weights belong to episodes (the same for every strategy, fraction and reading of an episode),
+the difference of two strategies is resampled *paired*: :func:`paired_differences` takes the interval of
+the replicates' differences (:func:`glu.stats.verdict`) and their two-sided bootstrap p-value
+(:func:`glu.stats.bootstrap_p_value`, against 0; for an ECE difference, against ``2 d̂`` as the basic
+interval implies), which a family's multiplicity adjustment takes.
 
 :func:`metrics`, :func:`paired_differences` and :func:`reliability` turn merged sums (one row per
 condition and replicate) into tidy tables.
@@ -22,6 +33,7 @@ condition and replicate) into tidy tables.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -29,7 +41,7 @@ import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
-from glu.stats import HIGHER_IS_BETTER, percentile_interval, verdict
+from glu.stats import HIGHER_IS_BETTER, bootstrap_p_value, percentile_interval, verdict
 
 BOOT_KEY = 2
 """Spawn key of a chunk's bootstrap weights."""
@@ -100,6 +112,103 @@ def metric_values(sums: np.ndarray, columns: pd.DataFrame | Cells) -> np.ndarray
     return out
 
 
+def estimates_and_intervals(
+    vals: np.ndarray, corrected: np.ndarray, clip: bool = True
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Estimates and 95 % intervals of the columns of ``vals`` (shape (B + 1, n), row 0 the estimate): the
+    plug-in estimate and the percentile interval, or where ``corrected`` the bias-corrected estimate and the
+    basic interval (module docstring), clipped at 0 with ``clip``."""
+    est = vals[0].copy()
+    lo, hi = percentile_interval(vals[1:])
+    if corrected.any() and len(vals) > 1:
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mean = np.nanmean(vals[1:, corrected], axis=0)
+        e, a, b = vals[0, corrected], lo[corrected], hi[corrected]
+        est[corrected], lo[corrected], hi[corrected] = 2 * e - mean, 2 * e - b, 2 * e - a
+        if clip:
+            for x in (est, lo, hi):
+                x[corrected] = np.maximum(x[corrected], 0.0)
+    return est, lo, hi
+
+
+class Pairs(NamedTuple):
+    """Every pair of strategies predicting the same target, fraction and metric (strategy after baseline in
+    the settings' order): their description and the cells they compare."""
+
+    keys: pd.DataFrame
+    first: np.ndarray
+    second: np.ndarray
+    up: np.ndarray
+    ece: np.ndarray
+
+
+def difference_pairs(cells: Cells) -> Pairs:
+    """The :class:`Pairs` of a set of metric cells (columns target, fraction, metric, strategy, baseline)."""
+    k = cells.keys
+    first, second = [], []
+    for _, g in k.groupby(["target", "fraction", "metric"], sort=False):
+        idx = list(g.index)
+        for i, a in enumerate(idx):
+            first += [a] * (len(idx) - i - 1)
+            second += idx[i + 1 :]
+    a, b = np.array(first, dtype=np.intp), np.array(second, dtype=np.intp)
+    keys = pd.DataFrame(
+        {
+            "target": k.target.to_numpy()[a],
+            "fraction": k.fraction.to_numpy()[a],
+            "metric": k.metric.to_numpy()[a],
+            "strategy": k.strategy.to_numpy()[b],
+            "baseline": k.strategy.to_numpy()[a],
+        }
+    )
+    up = keys.metric.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    return Pairs(keys, a, b, up, (keys.metric == "ece").to_numpy())
+
+
+def metric_block(S: np.ndarray, cells: Cells) -> dict[str, np.ndarray]:
+    """Every metric's estimate and interval from one group's summed statistics ``S`` (shape (B + 1, K)):
+    columns estimate, ci_low, ci_high, ece_plugin, n_episodes (one value per cell)."""
+    vals = metric_values(S, cells)
+    ece = cells.mean < 0
+    est, lo, hi = estimates_and_intervals(vals, ece)
+    n = np.full(len(est), float(S[0, 0]))
+    return {"estimate": est, "ci_low": lo, "ci_high": hi, "ece_plugin": np.where(ece, vals[0], np.nan),
+            "n_episodes": n}  # fmt: skip
+
+
+def difference_block(S: np.ndarray, cells: Cells, pairs: Pairs) -> dict[str, np.ndarray]:
+    """Every pair's paired difference from one group's summed statistics: columns difference, ci_low,
+    ci_high, p_value, better, verdict (one value per pair)."""
+    vals = metric_values(S, cells)
+    d = vals[:, pairs.second] - vals[:, pairs.first]
+    est, lo, hi = estimates_and_intervals(d, pairs.ece, clip=False)
+    null = np.where(pairs.ece, 2 * d[0], 0.0)  # the basic interval excludes 0 ⇔ the replicates exclude 2 d̂
+    p = bootstrap_p_value(d - null[None, :])
+    better = np.where(pairs.up, lo > 0, hi < 0)
+    verdicts = np.array([verdict(a, b, u) for a, b, u in zip(lo, hi, pairs.up, strict=True)], dtype=object)
+    return {"difference": est, "ci_low": lo, "ci_high": hi, "p_value": p, "better": better,
+            "verdict": verdicts}  # fmt: skip
+
+
+Blocks = list[tuple[tuple, dict[str, np.ndarray]]]
+"""Each group's key (its ``by`` values) and block of columns."""
+
+
+def block_frame(keys: pd.DataFrame, by: Sequence[str], groups: Blocks) -> pd.DataFrame:
+    """One frame of the blocks of many groups (:func:`metric_block`, :func:`difference_block`,
+    :func:`reliability_block`): each group's ``by`` values, the ``keys`` of its rows, the blocks' columns."""
+    if not groups:
+        return pd.DataFrame(columns=[*by, *keys.columns])
+    n = len(keys)
+    out = {name: np.repeat(np.array([g[0][j] for g in groups]), n) for j, name in enumerate(by)}
+    for c in keys.columns:
+        out[c] = np.tile(keys[c].to_numpy(), len(groups))
+    for c in groups[0][1]:
+        out[c] = np.concatenate([g[1][c] for g in groups])
+    return pd.DataFrame(out)
+
+
 def metrics(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
     """Estimates and 95 % intervals of every metric, per group of conditions.
 
@@ -112,26 +221,14 @@ def metrics(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.
 
     Returns
     -------
-    tidy DataFrame: *by, target, strategy, fraction, metric, estimate, ci_low, ci_high, n_episodes
+    tidy DataFrame: *by, target, strategy, fraction, metric, estimate, ci_low, ci_high (for the ECE the
+    bias-corrected estimate and basic interval), ece_plugin (the ECE's plug-in estimate; NaN for other
+    metrics), n_episodes
     """
     cells = metric_cells(columns)
-    parts = []
-    for key, g in _groups(sums, by):
-        S = _stat_matrix(g, len(columns))
-        vals = metric_values(S, cells)
-        lo, hi = percentile_interval(vals[1:])
-        part = cells.keys.copy()
-        for name, v in zip(by, key, strict=True):
-            part.insert(len(part.columns) - 4, name, v)
-        part["estimate"], part["ci_low"], part["ci_high"], part["n_episodes"] = (
-            vals[0],
-            lo,
-            hi,
-            float(S[0, 0]),
-        )
-        parts.append(part)
-    cols = [*by, "target", "strategy", "fraction", "metric", "estimate", "ci_low", "ci_high", "n_episodes"]
-    return pd.concat(parts, ignore_index=True)[cols] if parts else pd.DataFrame(columns=cols)
+    groups = [(key, metric_block(_stat_matrix(g, len(columns)), cells)) for key, g in _groups(sums, by)]
+    cols = [*by, "target", "strategy", "fraction", "metric", "estimate", "ci_low", "ci_high", "ece_plugin"]
+    return block_frame(cells.keys, list(by), groups).reindex(columns=[*cols, "n_episodes"])
 
 
 def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
@@ -139,56 +236,47 @@ def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[s
 
     Returns
     -------
-    tidy DataFrame: *by, target, fraction, metric, strategy, baseline, difference (strategy − baseline),
-    ci_low, ci_high, better (the interval excludes 0 on the side where the metric improves), verdict
-    (``better``, ``worse`` or ``no difference``: :func:`verdict`), for every
-    pair of strategies predicting the same target (strategy after baseline in the settings' order)
+    tidy DataFrame: *by, target, fraction, metric, strategy, baseline, difference (strategy − baseline;
+    for the ECE bias-corrected), ci_low, ci_high, p_value (two-sided bootstrap, unadjusted), better (the
+    interval excludes 0 on the side where the metric improves), verdict (``better``, ``worse`` or ``no
+    difference``: :func:`verdict`, unadjusted), for every pair of strategies predicting the same target
+    (strategy after baseline in the settings' order)
     """
     cells = metric_cells(columns)
-    k = cells.keys
-    first, second = [], []
-    for _, g in k.groupby(["target", "fraction", "metric"], sort=False):
-        idx = list(g.index)
-        for i, a in enumerate(idx):
-            first += [a] * (len(idx) - i - 1)
-            second += idx[i + 1 :]
-    first, second = np.array(first, dtype=np.intp), np.array(second, dtype=np.intp)
-    pairs = pd.DataFrame(
-        {
-            "target": k.target.to_numpy()[first],
-            "fraction": k.fraction.to_numpy()[first],
-            "metric": k.metric.to_numpy()[first],
-            "strategy": k.strategy.to_numpy()[second],
-            "baseline": k.strategy.to_numpy()[first],
-        }
-    )
-    up = pairs.metric.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
-    parts = []
-    for key, g in _groups(sums, by):
-        vals = metric_values(_stat_matrix(g, len(columns)), cells)
-        d = vals[:, second] - vals[:, first]
-        lo, hi = percentile_interval(d[1:])
-        part = pairs.copy()
-        for j, (name, v) in enumerate(zip(by, key, strict=True)):
-            part.insert(j, name, v)
-        part["difference"], part["ci_low"], part["ci_high"] = d[0], lo, hi
-        part["better"] = np.where(up, lo > 0, hi < 0)
-        part["verdict"] = [verdict(a, b, u) for a, b, u in zip(lo, hi, up, strict=True)]
-        parts.append(part)
-    cols = [
-        *by,
-        "target",
-        "fraction",
-        "metric",
-        "strategy",
-        "baseline",
-        "difference",
-        "ci_low",
-        "ci_high",
-        "better",
-        "verdict",
+    pairs = difference_pairs(cells)
+    groups = [
+        (key, difference_block(_stat_matrix(g, len(columns)), cells, pairs)) for key, g in _groups(sums, by)
     ]
-    return pd.concat(parts, ignore_index=True)[cols] if parts else pd.DataFrame(columns=cols)
+    cols = [*by, "target", "fraction", "metric", "strategy", "baseline", "difference", "ci_low", "ci_high"]
+    return block_frame(pairs.keys, list(by), groups).reindex(columns=[*cols, "p_value", "better", "verdict"])
+
+
+def reliability_block(s0: np.ndarray, columns: pd.DataFrame | dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """One group's reliability diagrams from its plain sums ``s0`` (shape (K,)): n, confidence, accuracy per
+    (target, strategy, fraction, bin) of :func:`reliability_keys` (``columns``: the statistics' description,
+    or its :func:`reliability_index`)."""
+    idx = columns if isinstance(columns, dict) else reliability_index(columns)
+    cnt = s0[idx["bin_n"]]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        conf, right = s0[idx["bin_confidence"]] / cnt, s0[idx["bin_correct"]] / cnt
+    return {"n": cnt, "confidence": conf, "accuracy": right}
+
+
+def reliability_index(columns: pd.DataFrame) -> dict[str, np.ndarray]:
+    """Where each bin statistic sits among the statistics (for :func:`reliability_block`)."""
+    binned = columns[columns["bin"] >= 0]
+    return {
+        st: binned.index[binned.stat == st].to_numpy() for st in ("bin_n", "bin_confidence", "bin_correct")
+    }
+
+
+def reliability_keys(columns: pd.DataFrame) -> pd.DataFrame:
+    """The rows of a reliability diagram: target, strategy, fraction, bin, lower, upper."""
+    binned = columns[columns["bin"] >= 0]
+    base = binned[binned.stat == "bin_n"][["target", "strategy", "fraction", "bin"]].reset_index(drop=True)
+    n_bins = int(binned["bin"].max()) + 1 if len(binned) else 1
+    base["lower"], base["upper"] = base["bin"] / n_bins, (base["bin"] + 1) / n_bins
+    return base
 
 
 def reliability(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
@@ -201,26 +289,13 @@ def reliability(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) ->
     was right)
     """
     cols = [*by, "target", "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
-    binned = columns[columns["bin"] >= 0]
-    if binned.empty:
+    if columns[columns["bin"] >= 0].empty:
         return pd.DataFrame(columns=cols)
-    n_bins = int(binned["bin"].max()) + 1
-    stats = {st: binned[binned.stat == st] for st in ("bin_n", "bin_confidence", "bin_correct")}
-    base = stats["bin_n"][["target", "strategy", "fraction", "bin"]].reset_index(drop=True)
-    base["lower"], base["upper"] = base["bin"] / n_bins, (base["bin"] + 1) / n_bins
-    parts = []
-    for key, g in _groups(sums, by):
-        s0 = _stat_matrix(g, len(columns))[0]
-        part = base.copy()
-        for j, (name, v) in enumerate(zip(by, key, strict=True)):
-            part.insert(j, name, v)
-        cnt = s0[stats["bin_n"].index]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            part["n"] = cnt
-            part["confidence"] = s0[stats["bin_confidence"].index] / cnt
-            part["accuracy"] = s0[stats["bin_correct"].index] / cnt
-        parts.append(part)
-    return pd.concat(parts, ignore_index=True)[cols]
+    keys = reliability_keys(columns)
+    groups = [
+        (key, reliability_block(_stat_matrix(g, len(columns))[0], columns)) for key, g in _groups(sums, by)
+    ]
+    return block_frame(keys, list(by), groups).reindex(columns=cols)
 
 
 def _stat_matrix(g: pd.DataFrame, k: int) -> np.ndarray:

@@ -19,8 +19,9 @@ from glu.errors import ModelError
 from glu.schema import ACTIONS
 from glu.studies.corpus_evaluation.config import SweepConfig
 
-RECOGNIZER_KEY, CALIBRATION_KEY, LEARN_KEY = 5000, 5001, 5002
-"""Seed keys of each replication's training gestures (and EM), calibration gestures and experiment tables."""
+RECOGNIZER_KEY, CALIBRATION_KEY, LEARN_KEY, MATCHED_KEY = 5000, 5001, 5002, 5003
+"""Seed keys of each replication's training gestures (and EM), calibration gestures, experiment tables and
+calibration gestures drawn like the test conditions."""
 
 
 def replication_seed(seed: int, key: int, replication: int) -> int:
@@ -39,73 +40,162 @@ def scorer(recognizer: Any) -> Any:
     return BatchScorer([recognizer.models[a] for a in ACTIONS])
 
 
-def recognizers(config: SweepConfig, out: Path, log: Callable[[str], None]) -> list[Any]:
-    """One recogniser per seed: trained on its own synthetic gestures (and EM start), or the file's."""
+def _training_view(features: str) -> Any:
+    from glu.gestures.feature_sets import FeatureSet
+    from glu.gestures.views import View
+
+    return View(body_frame=FeatureSet.parse(features).body)
+
+
+def recognizers(config: SweepConfig, out: Path, log: Callable[[str], None]) -> list[dict[str, Any]]:
+    """Per recogniser seed, one recogniser per feature set (``grid.features``), all trained on the seed's own
+    synthetic gestures (and EM start), the body-frame ones on the same gestures in the shoulder line's frame;
+    or the file's. Trained once: a folder's ``recognizers/seed-NNN-FEATURES.json`` are reused."""
     from glu.gestures.corpus import synthetic_corpus
+    from glu.gestures.feature_sets import FeatureSet
     from glu.gestures.recognizer import Recognizer, train_recognizer
 
     r = config.recognizer
     if r.file:
-        return [Recognizer.load(r.file)]
+        return [{config.features[0]: Recognizer.load(r.file)}]
     folder = out / "recognizers"
-    recognizers: list[Any] = [None] * config.recognizer_seeds
+    found: list[dict[str, Any]] = [{} for _ in range(config.recognizer_seeds)]
     todo = []
     for k in range(config.recognizer_seeds):
-        saved = folder / f"seed-{k:03d}.json"
-        recipe = {**asdict(r), "seed": config.seed, "recognizer_seed": k}
-        if saved.is_file():
-            try:
-                rec = Recognizer.load(saved)
-                if rec.meta.get("sweep_recipe") == recipe:
-                    recognizers[k] = rec
-                    continue
-            except ModelError:
-                pass
-        todo.append((k, recipe, saved))
+        for features in config.features:
+            saved = folder / f"seed-{k:03d}-{features}.json"
+            recipe = {**asdict(r), "seed": config.seed, "recognizer_seed": k, "features": features}
+            if saved.is_file():
+                try:
+                    rec = Recognizer.load(saved)
+                    if rec.meta.get("sweep_recipe") == recipe:
+                        found[k][features] = rec
+                        continue
+                except ModelError:
+                    pass
+            todo.append((k, features, recipe, saved))
     if todo:
         log(
-            f"training {len(todo)} gesture recognisers on {r.n_per_action} synthetic gestures per action "
-            f"each (Q={r.n_states}, M={r.n_mix})"
+            f"training {len(todo)} gesture recognisers ({len(config.features)} feature sets per seed) on "
+            f"{r.n_per_action} synthetic gestures per action each "
+            f"(Q={r.training.n_states}, M={r.training.n_mix})"
         )
-        sets, seeds, metas = [], [], []
-        for k, recipe, _ in todo:
+        sets, seeds, specs, metas = [], [], [], []
+        for k, features, recipe, _ in todo:
             s = replication_seed(config.seed, RECOGNIZER_KEY, k)
-            corpus = synthetic_corpus(r.n_per_action, s, noise=r.noise)
+            corpus = synthetic_corpus(r.n_per_action, s, noise=r.noise, view=_training_view(features))
             by_action: dict[str, list[np.ndarray]] = {}
             for seq in corpus:
                 by_action.setdefault(seq.action, []).append(seq.xyz)
             sets.append(by_action)
             seeds.append(s)
+            specs.append(FeatureSet.parse(features).invariants)
             metas.append({"sweep_recipe": recipe, "data_source": corpus.description})
-        trained = train_recognizer(sets, r.training(), seed=seeds, warn=False)
-        for (k, _, saved), rec, meta in zip(todo, trained, metas, strict=True):
+        trained = train_recognizer(sets, r.training, seed=seeds, features=specs, warn=False)
+        for (k, features, _, saved), rec, meta in zip(todo, trained, metas, strict=True):
             rec.meta.update(meta)
             rec.save(saved)
-            recognizers[k] = rec
-    return recognizers
+            found[k][features] = rec
+    return found
 
 
-def calibrations(config: SweepConfig, recognizers: list[Any]) -> list[Any]:
-    """Each recogniser's calibrated reading: β per fraction, fitted on its own held-out training gestures."""
-    from glu.gestures.calibration import fit_calibration
+def matched_gestures(config: SweepConfig, k: int, body: bool) -> tuple[list[np.ndarray], np.ndarray]:
+    """The held-out gestures of recogniser seed ``k`` drawn like the test conditions:
+    ``calibration_per_action`` per action, each seen from one of the sweep's (viewpoint, noise level) pairs
+    in turn, with the episodes' tracking problems, repaired as they are; in the shoulder line's frame with
+    ``body``. Returns the features and the actions' indices."""
+    from dataclasses import replace
+
+    from glu.gestures.synthetic_batch import gesture_features
+
+    n = config.recognizer.calibration_per_action * len(ACTIONS)
+    actions = np.arange(n) % len(ACTIONS)
+    pairs = [(v, x) for v in config.viewpoints for x in config.noise]
+    xs: list[np.ndarray] = [np.empty((0, 3))] * n
+    for j, (view, noise) in enumerate(pairs):
+        idx = np.arange(j, n, len(pairs))
+        if len(idx) == 0:
+            continue
+        rngs = [np.random.default_rng([config.seed, MATCHED_KEY, k, int(i)]) for i in idx]
+        batch = gesture_features(
+            [ACTIONS[a] for a in actions[idx]],
+            rngs,
+            noise=float(noise),
+            spike_rate=config.gestures.spike_rate,
+            dropout_rate=config.gestures.dropout_rate,
+            view=replace(config.views[view], body_frame=body),
+        )
+        for i, x in zip(idx, batch.features, strict=True):
+            xs[i] = x
+    return xs, actions
+
+
+def calibrations(config: SweepConfig, recognizers: list[dict[str, Any]]) -> tuple[list[dict], pd.DataFrame]:
+    """Each recogniser's calibrated readings, β per fraction: ``calibrated`` fitted on its own clean
+    front-view held-out gestures, ``calibrated-matched`` on held-out gestures drawn like the test conditions
+    (:func:`matched_gestures`), as the sweep's ``p_hmm`` asks.
+
+    Returns, per seed, feature set → reading → :class:`~glu.gestures.calibration.Calibration`; and the table
+    of every fit: recognizer_seed, features, reading, fraction, beta, at_bound (β at an end of
+    :data:`~glu.gestures.calibration.BETA_BOUNDS`: the fit wanted to go further), n_gestures, accuracy (the
+    recogniser's on those gestures at that fraction: for the matched set, a validation accuracy the sweep
+    never saw as a test episode).
+    """
+    from glu.gestures.calibration import BETA_BOUNDS, fit_calibration
     from glu.gestures.corpus import synthetic_corpus
+    from glu.gestures.feature_sets import FeatureSet
 
-    if "calibrated" not in config.p_hmm:
-        return [None] * len(recognizers)
+    kinds = [p for p in ("calibrated", "calibrated-matched") if p in config.p_hmm]
     r = config.recognizer
     fractions = np.asarray(config.evaluation.fractions)
-    out = []
-    for k, rec in enumerate(recognizers):
-        held = synthetic_corpus(
-            r.calibration_per_action, replication_seed(config.seed, CALIBRATION_KEY, k), noise=r.noise
-        )
-        xs = [s.xyz for s in held]
-        lengths = np.array([len(x) for x in xs])
-        ends = np.maximum(np.ceil(np.round(fractions[None, :] * lengths[:, None], 9)).astype(int), 1)
-        loglik = scorer(rec).loglik_at(xs, ends)
-        labels = np.array([ACTIONS.index(s.action) for s in held])
-        out.append(fit_calibration(loglik, labels, fractions))
-    return out
+    out, rows = [], []
+    for k, recs in enumerate(recognizers):
+        per: dict[str, dict[str, Any]] = {}
+        for features, rec in recs.items():
+            spec = FeatureSet.parse(features)
+            per[features] = {}
+            for kind in kinds:
+                if kind == "calibrated":
+                    seed = replication_seed(config.seed, CALIBRATION_KEY, k)
+                    held = synthetic_corpus(
+                        r.calibration_per_action, seed, noise=r.noise, view=_training_view(features)
+                    )
+                    xs, labels = [s.xyz for s in held], np.array([ACTIONS.index(s.action) for s in held])
+                else:
+                    xs, labels = matched_gestures(config, k, spec.body)
+                if not spec.invariants.is_raw:
+                    xs = [spec.invariants.transform(x) for x in xs]
+                lengths = np.array([len(x) for x in xs])
+                ends = np.maximum(np.ceil(np.round(fractions[None, :] * lengths[:, None], 9)).astype(int), 1)
+                loglik = scorer(rec).loglik_at(xs, ends)
+                cal = fit_calibration(loglik, labels, fractions)
+                per[features][kind] = cal
+                right = np.argmax(loglik, axis=-1) == labels[:, None]
+                for j, f in enumerate(fractions):
+                    rows.append(
+                        {
+                            "recognizer_seed": k,
+                            "features": features,
+                            "reading": kind,
+                            "fraction": float(f),
+                            "beta": float(cal.beta[j]),
+                            "at_bound": bool(cal.beta[j] in BETA_BOUNDS),
+                            "n_gestures": cal.n_gestures,
+                            "accuracy": float(right[:, j].mean()),
+                        }
+                    )
+        out.append(per)
+    cols = [
+        "recognizer_seed",
+        "features",
+        "reading",
+        "fraction",
+        "beta",
+        "at_bound",
+        "n_gestures",
+        "accuracy",
+    ]
+    return out, pd.DataFrame(rows, columns=cols)
 
 
 def learned_networks(config: SweepConfig, engine: Any) -> list[dict[int, Any]]:

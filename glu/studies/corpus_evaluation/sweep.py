@@ -21,18 +21,22 @@ are merged in index order, so the same settings give the same tables on any clus
 The output folder::
 
     OUT/sweep.json          the settings, the data source and a fingerprint of everything behind the numbers
-    OUT/recognizers/seed-NNN.json   the gesture HMMs of each recogniser seed (trained once, reused on resume)
+    OUT/recognizers/seed-NNN-FEATURES.json   the gesture HMMs of each recogniser seed and feature set
+                            (trained once, reused on resume)
     OUT/chunks/*.npz        the summed statistics of each chunk (estimate, bootstrap replicates, and each
                             seed's own estimate)
-    OUT/sums.parquet        the chunks merged: one row per condition, reading and replicate
-    OUT/results.parquet     THE table: every metric with its 95 % two-level interval, per action prior,
-                            inference network, p_HMM reading, noise and viewpoint, pooled over the
-                            viewpoints (viewpoint "all"), over the noise levels (noise NaN), and both
-    OUT/differences.parquet paired differences between strategies, with intervals and verdicts
+    OUT/results.parquet     THE table: every metric with its 95 % two-level interval, per cell of the design
+                            (effects, action prior, inference network, p_HMM reading, feature set), noise
+                            and viewpoint, pooled over the viewpoints (viewpoint "all"), over the noise
+                            levels (noise NaN), and both
+    OUT/differences.parquet paired differences between strategies, with intervals, bootstrap p-values and
+                            verdicts, unadjusted and adjusted (Benjamini–Hochberg) within each family: per
+                            viewpoint, per noise level, and pooled
     OUT/reliability.parquet reliability diagrams of p_HMM (target action, strategy gesture) and of every
                             strategy's action and effect
     OUT/seeds.parquet       each recogniser seed's own estimates (pooled over noise and viewpoints)
-    OUT/calibration.parquet the calibrated reading's β per seed and observed fraction
+    OUT/calibration.parquet the calibrated readings' β per seed, feature set and observed fraction, whether
+                            it sits at a bound, and the recogniser's accuracy on the gestures it was fitted on
     OUT/summary.json, OUT/summary.csv   the tidy summary: the overall metrics at the full gesture, and
                             which strategy wins each cell of the design
 """
@@ -66,6 +70,7 @@ from glu.machine import (
     kill_local_workers,
     quiet_dask_logs,
 )
+from glu.saved import made_with
 from glu.studies.corpus_evaluation import robots
 from glu.studies.corpus_evaluation.config import SweepConfig
 from glu.studies.corpus_evaluation.evaluation import Evaluator
@@ -73,7 +78,7 @@ from glu.studies.corpus_evaluation.tables import chunk_path, merge, write_chunk
 from glu.studies.episodes import Condition
 
 FORMAT = "glu-sweep"
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 
 
 @dataclass
@@ -94,20 +99,89 @@ class SweepResult:
 
 
 # ------------------------------------------------------------------------------------------ preparing
-def prepare_world(config: SweepConfig) -> tuple[Any, str]:
-    """The Affordance–Words network of a sweep (an inference engine) and a one-line label of its data."""
-    from glu.bn import learn_bn, make_engine
+def _experiments(config: SweepConfig) -> tuple[pd.DataFrame, str]:
     from glu.data import load_experiments, resolve_data
 
     net = config.network
     source = resolve_data(net.data)
     table = load_experiments(source, net.words)
-    bn = learn_bn(table, unseen_words=net.unseen_words)
     label = (
         f"{source.describe()}: network learned from {len(table)} experiments (words={net.words}, "
         f"unseen word rows {net.unseen_words}); gestures from glu's synthetic generator"
     )
-    return make_engine(bn), label
+    return table, label
+
+
+def prepare_world(config: SweepConfig) -> tuple[Any, str]:
+    """The Affordance–Words network of a sweep (an inference engine) and a one-line label of its data."""
+    from glu.bn import learn_bn, make_engine
+
+    table, label = _experiments(config)
+    return make_engine(learn_bn(table, unseen_words=config.network.unseen_words)), label
+
+
+def saved_key(config: SweepConfig) -> dict[str, Any]:
+    """What a sweep's tables depend on that can be named without computing anything (:mod:`glu.saved`): the
+    format, the settings (the data folder by its contents, not its path) and the data's identity."""
+    return _key(config.as_dict(), _experiments(config)[1])
+
+
+def _key(settings: dict[str, Any], data_source: str) -> dict[str, Any]:
+    settings = json.loads(json.dumps(settings))
+    settings["network"]["data"] = settings["recognizer"]["file"] = None
+    return {"format": [FORMAT, FORMAT_VERSION], "settings": settings, "data_source": data_source}
+
+
+def export_saved(folder: str | os.PathLike, dest: str | os.PathLike, command: str) -> Path:
+    """Write what notebook 11 reads of the finished sweep in ``folder``
+    (:func:`~glu.studies.corpus_evaluation.tables.saved_subset`, Parquet with zstd) to ``dest``, with the
+    sweep's ``sweep.json`` and ``summary.json`` and a :mod:`glu.saved` key file (``command``: how to
+    regenerate it). Returns ``dest``."""
+    from glu.saved import write_key
+    from glu.studies.corpus_evaluation.tables import read_tables, saved_subset
+
+    folder, dest = Path(folder), Path(dest)
+    provenance = json.loads((folder / "sweep.json").read_text(encoding="utf-8"))
+    tables = saved_subset(read_tables(folder))
+    dest.mkdir(parents=True, exist_ok=True)
+    names = ("results", "differences", "reliability", "seeds", "calibration")
+    for name, df in zip(names, tables[:5], strict=True):
+        df = df.copy()
+        df.attrs = {}
+        df.to_parquet(dest / f"{name}.parquet", index=False, compression="zstd")
+    # the per-cell summary ("overall", "best") is the sweep's own report: the notebook computes its own
+    atomic_write_json(
+        dest / "summary.json", {k: v for k, v in tables.summary.items() if k not in ("overall", "best")}
+    )
+    atomic_write_json(dest / "sweep.json", provenance)
+    key = _key(provenance["settings"], provenance["data_source"])
+    write_key(dest, key, command, computed_by=provenance.get("made_with"))
+    return dest
+
+
+NOTEBOOK = "11_corpus_evaluation"
+"""The notebook whose saved tables live in ``sweeps/11_corpus_evaluation/`` (:mod:`glu.saved`)."""
+
+
+def notebook_tables(
+    config: SweepConfig, workers: int | None = None, log: Callable[[str], None] = lambda s: None
+) -> Path:
+    """The folder of the tables of ``config``: saved ones with the same key (:func:`saved_key`), else a sweep
+    run now into the cache (on a LocalCluster of ``workers``, or in this process for None) and kept there.
+    :func:`glu.studies.corpus_evaluation.tables.read_tables` reads either."""
+    from glu.saved import cache_folder, find, write_key
+
+    key = saved_key(config)
+    found = find(NOTEBOOK, key)
+    if found is not None:
+        return found
+    out = cache_folder(NOTEBOOK, key)
+    log(f"no saved tables for these settings and data: running the sweep into {out}")
+    run_sweep(
+        config, out, scheduler=None if workers else SYNCHRONOUS, workers=workers, progress=False, log=log
+    )
+    write_key(out, key, f"glu run {NOTEBOOK} (these parameters)")
+    return out
 
 
 def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple[Evaluator, dict[str, Any]]:
@@ -118,15 +192,16 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
     engine, label = prepare_world(config)
     bn = engine.bn
     recognizers = robots.recognizers(config, out, log)
-    calibrations = robots.calibrations(config, recognizers)
+    calibrations, fits = robots.calibrations(config, recognizers)
     learned = robots.learned_networks(config, engine)
     generating = target_tables(engine, config.evaluation)
     replications = []
-    for k, rec in enumerate(recognizers):
+    for k, recs in enumerate(recognizers):
         tables = {"generating": generating}
         for n, net in learned[k].items():
             tables[f"learned-{n}"] = target_tables(net, config.evaluation)
-        replications.append(Replication(robots.scorer(rec), calibrations[k], tables))
+        scorers = {f: robots.scorer(rec) for f, rec in recs.items()}
+        replications.append(Replication(scorers, calibrations[k], tables))
     evaluator = Evaluator(
         engine,
         tuple(replications),
@@ -147,7 +222,7 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
         json.dumps(settings, sort_keys=True),
         label,
         json.dumps(bn.to_dict()),
-        *(json.dumps(rec.to_dict()["models"]) for rec in recognizers),
+        *(json.dumps(rec.to_dict()["models"]) for recs in recognizers for rec in recs.values()),
         __version__,
     ):
         digest.update(part.encode())
@@ -163,12 +238,8 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
         "episodes_per_condition_and_seed": config.per_condition,
         "episodes": config.n_episodes,
         "statistics": len(evaluator.columns),
-        "calibration": [
-            {"recognizer_seed": k, "fraction": float(f), "beta": float(b), "n_gestures": c.n_gestures}
-            for k, c in enumerate(calibrations)
-            if c is not None
-            for f, b in zip(c.fractions, c.beta, strict=True)
-        ],
+        "calibration": fits.to_dict("records"),
+        "made_with": made_with(),
     }
     return evaluator, provenance
 
@@ -195,11 +266,13 @@ def compute_chunk(evaluator: Evaluator, index: int, condition: Condition, chunk:
     from threadpoolctl import threadpool_limits
 
     t0 = time.process_time()
+    total, own = None, []
     with threadpool_limits(1):
-        per_seed = [evaluator.run_chunk(condition, k, chunk, n) for k in range(len(evaluator.replications))]
-    total = np.sum(per_seed, axis=0)
-    own = np.stack([s[:, 0] for s in per_seed])
-    return index, chunk, n, total, own, time.process_time() - t0
+        for k in range(len(evaluator.replications)):  # one seed's sums in memory at a time
+            sums = evaluator.run_chunk(condition, k, chunk, n)
+            total = sums if total is None else total + sums
+            own.append(sums[:, 0].copy())
+    return index, chunk, n, total, np.stack(own), time.process_time() - t0
 
 
 # ------------------------------------------------------------------------------------------ the sweep
@@ -231,27 +304,7 @@ def run_sweep(
     if scheduler not in (None, SYNCHRONOUS):
         check_reachable(scheduler)  # before any work: an unreachable cluster is bad input, said at once
     out = Path(out)
-    created = not out.exists()
-    out.mkdir(parents=True, exist_ok=True)
-    try:  # bad settings or data found while preparing leave no new folder behind
-        evaluator, provenance = prepare(config, out, log)
-        sweep_file = out / "sweep.json"
-        if sweep_file.is_file():
-            try:
-                old = json.loads(sweep_file.read_text())
-            except (OSError, ValueError):
-                old = {}
-            if not isinstance(old, dict) or old.get("fingerprint") != provenance["fingerprint"]:
-                raise DataError(
-                    f"{out} holds a sweep with other settings or data (sweep.json); "
-                    "use another output folder or delete that one"
-                )
-        else:
-            atomic_write_json(sweep_file, provenance)
-    except BaseException:
-        if created:
-            shutil.rmtree(out, ignore_errors=True)
-        raise
+    evaluator, provenance = _open_folder(config, out, log)
     for stale in (out / "chunks").glob(".c*.npz*"):  # a write cut short by a hard kill (never a whole chunk)
         stale.unlink(missing_ok=True)
     conditions = config.conditions
@@ -285,6 +338,33 @@ def run_sweep(
         )
     tables = merge(out, config, evaluator, provenance)
     return SweepResult(out, *tables, computed, reused, time.perf_counter() - t0, cpu)
+
+
+def _open_folder(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple[Any, dict]:
+    """The sweep's evaluator and provenance, with ``out`` created for it or checked to hold the same sweep
+    (``sweep.json``'s fingerprint); bad settings or data found while preparing leave no new folder behind."""
+    created = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        evaluator, provenance = prepare(config, out, log)
+        sweep_file = out / "sweep.json"
+        if sweep_file.is_file():
+            try:
+                old = json.loads(sweep_file.read_text())
+            except (OSError, ValueError):
+                old = {}
+            if not isinstance(old, dict) or old.get("fingerprint") != provenance["fingerprint"]:
+                raise DataError(
+                    f"{out} holds a sweep with other settings or data (sweep.json); "
+                    "use another output folder or delete that one"
+                )
+        else:
+            atomic_write_json(sweep_file, provenance)
+    except BaseException:
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
+    return evaluator, provenance
 
 
 def _save(out: Path, fingerprint: str, result: tuple, bar: Any) -> float:

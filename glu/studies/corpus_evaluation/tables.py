@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import zipfile
+from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -16,19 +17,22 @@ from glu.errors import DataError
 from glu.files import atomic_path, atomic_write_json, atomic_write_text
 from glu.studies.corpus_evaluation.config import SweepConfig
 from glu.studies.corpus_evaluation.evaluation import Evaluator
-from glu.studies.corpus_evaluation.findings import DESIGN, winners
+from glu.studies.corpus_evaluation.findings import DESIGN, adjusted_verdicts, winners
 from glu.studies.corpus_evaluation.intervals import (
+    block_frame,
+    difference_block,
+    difference_pairs,
+    metric_block,
     metric_cells,
     metric_values,
-    metrics,
-    paired_differences,
-    reliability,
+    reliability_block,
+    reliability_index,
+    reliability_keys,
 )
 from glu.tidy import tidy
 
 EXPERIMENT = "corpus_evaluation"
 FILES = (
-    "sums.parquet",
     "results.parquet",
     "differences.parquet",
     "reliability.parquet",
@@ -37,6 +41,13 @@ FILES = (
     "summary.json",
     "summary.csv",
 )
+CONDITION_FACTORS: tuple[str, ...] = ("effects", "action_prior")
+"""The simulated conditions' factors that every table keeps apart (the noise and the viewpoint are also
+pooled)."""
+ADJUSTMENT = "bh"
+"""How each family of verdicts is adjusted for its size (:func:`glu.stats.adjust`): Benjamini–Hochberg,
+since the smallest bootstrap p-value, 2 / (B + 1), puts Holm's first threshold out of reach of a family of
+more than α (B + 1) / 2 differences (:mod:`glu.stats`)."""
 
 
 def chunk_path(out: Path, index: int, chunk: int) -> Path:
@@ -47,26 +58,39 @@ def write_chunk(
     out: Path, fingerprint: str, index: int, chunk: int, n: int, sums: np.ndarray, own: np.ndarray
 ) -> None:
     """One task's sums: ``sums`` shape (R, B + 1, K) (row 0 the estimate), ``own`` each seed's plain sums
-    (n_seeds, R, K)."""
+    (n_seeds, R, K). Each reading's replicates are stored apart, so the merge reads one reading at a time."""
     path = chunk_path(out, index, chunk)
+    reps = {f"replicates{r}": sums[r, 1:].astype(np.float32) for r in range(len(sums))}
     with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as f:
         np.savez(
             f,
             estimate=sums[:, 0],
-            replicates=sums[:, 1:].astype(np.float32),
             seeds=own,
             meta=np.array(
-                json.dumps({"fingerprint": fingerprint, "condition": index, "chunk": chunk, "n": n})
+                json.dumps(
+                    {
+                        "fingerprint": fingerprint,
+                        "condition": index,
+                        "chunk": chunk,
+                        "n": n,
+                        "readings": len(sums),
+                    }
+                )
             ),
+            **reps,
         )
 
 
-def read_chunk(path: Path, fingerprint: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The estimate (R, K), the replicates (R, B, K) and each seed's sums (n_seeds, R, K) of a chunk file."""
+def read_chunk(
+    path: Path, fingerprint: str, reading: int | None = None
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """The estimate (R, K), the replicates of one reading (B, K) (None without ``reading``) and each seed's
+    sums (n_seeds, R, K) of a chunk file."""
     try:
         with np.load(path) as z:
             meta = json.loads(str(z["meta"]))
-            estimate, replicates, seeds = z["estimate"], z["replicates"], z["seeds"]
+            estimate, seeds = z["estimate"], z["seeds"]
+            replicates = None if reading is None else z[f"replicates{reading}"]
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as e:  # a truncated file: BadZipFile
         raise DataError(f"{path}: unreadable chunk ({e}); delete it and run the sweep again") from None
     if meta.get("fingerprint") != fingerprint:
@@ -83,7 +107,82 @@ GROUPS: dict[tuple[str, ...], dict[str, Any]] = {
     (): {"noise": np.nan, "viewpoint": "all"},
 }
 """How the noise levels and viewpoints are pooled (every pooling keeps the design's factors)."""
+DIFFERENCE_GROUPS: tuple[tuple[str, ...], ...] = (("viewpoint",), ("noise",), ())
+"""The poolings the paired differences are computed at: per viewpoint, per noise level, and pooled over
+both; each is a family of its own for the multiplicity adjustment."""
 ORDER = [*DESIGN, "noise", "viewpoint"]
+
+
+def _condition_sums(
+    out: Path, config: SweepConfig, provenance: dict[str, Any], reading: int, K: int, B: int
+) -> list[np.ndarray]:
+    """One reading's summed statistics of each condition, arrays of shape (B + 1, K)."""
+    from glu.studies.corpus_evaluation.corpus import chunk_ranges
+
+    sums = []
+    for i in range(len(config.conditions)):
+        total = np.zeros((B + 1, K))
+        for k, _ in chunk_ranges(config.per_condition, config.chunk_size):
+            est, reps, _ = read_chunk(chunk_path(out, i, k), provenance["fingerprint"], reading)
+            total[0] += est[reading]
+            total[1:] += reps.astype(np.float64)
+        sums.append(total)
+    return sums
+
+
+def _pooled_groups(conditions: Sequence[Any], by: Sequence[str]) -> list[tuple[tuple, list[int]]]:
+    """The conditions of each group that keeps :data:`CONDITION_FACTORS` and ``by`` (the rest pooled), in
+    sorted order of the group's values."""
+    groups: dict[tuple, list[int]] = {}
+    for i, c in enumerate(conditions):
+        groups.setdefault(tuple(getattr(c, f) for f in (*CONDITION_FACTORS, *by)), []).append(i)
+    return sorted(groups.items(), key=lambda kv: tuple(str(x) if isinstance(x, str) else x for x in kv[0]))
+
+
+def _reading_tables(
+    sums: list[np.ndarray], config: SweepConfig, cols: pd.DataFrame, cells: Any, pairs: Any
+) -> dict[str, list[pd.DataFrame]]:
+    """One reading's results, differences and reliability rows at every pooling, from its conditions'
+    sums."""
+    conditions = config.conditions
+    out: dict[str, list[pd.DataFrame]] = {"results": [], "differences": [], "reliability": []}
+    rel_keys, rel_index = reliability_keys(cols), reliability_index(cols)
+    for name, groups, keys in (
+        ("results", GROUPS, cells.keys),
+        ("differences", {k: GROUPS[k] for k in DIFFERENCE_GROUPS}, pairs.keys),
+        ("reliability", {k: GROUPS[k] for k in (("viewpoint",), ())}, rel_keys),
+    ):
+        for by, fill in groups.items():
+            blocks = []
+            for key, idx in _pooled_groups(conditions, by):
+                S = np.sum([sums[i] for i in idx], axis=0)
+                if name == "results":
+                    blocks.append((key, metric_block(S, cells)))
+                elif name == "differences":
+                    blocks.append((key, difference_block(S, cells, pairs)))
+                else:
+                    blocks.append((key, reliability_block(S[0], rel_index)))
+            part = block_frame(keys, [*CONDITION_FACTORS, *by], blocks)
+            out[name].append(part.assign(**fill))
+    return out
+
+
+def adjust_families(diffs: pd.DataFrame, families: Sequence[str]) -> pd.DataFrame:
+    """``diffs`` with ``p_adjusted`` (:data:`ADJUSTMENT` within each family: the rows that share the values
+    of ``families``) and ``verdict_adjusted`` (a verdict only where the adjusted p-value is at most α, in the
+    direction of the difference)."""
+    from glu.stats import HIGHER_IS_BETTER, adjust
+
+    out = diffs.copy()
+    out["p_adjusted"] = np.nan
+    keys = [out[f].fillna(-1.0) if out[f].dtype.kind == "f" else out[f] for f in families]
+    for _, idx in out.groupby(keys, sort=False, dropna=False).groups.items():
+        out.loc[idx, "p_adjusted"] = adjust(out.loc[idx, "p_value"].to_numpy(), ADJUSTMENT)
+    up = out["metric"].map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    out["verdict_adjusted"] = adjusted_verdicts(
+        out["difference"].to_numpy(), out["p_adjusted"].to_numpy(), up
+    )
+    return out
 
 
 def merge(
@@ -99,56 +198,39 @@ def merge(
     K, B = len(cols), evaluator.settings.bootstrap
     readings, conditions = config.readings, config.conditions
     n_seeds = len(evaluator.replications)
-    totals = np.zeros((len(conditions), len(readings), B + 1, K))
     own = np.zeros((len(conditions), n_seeds, len(readings), K))
     for i in range(len(conditions)):
         for k, _ in chunk_ranges(config.per_condition, config.chunk_size):
-            est, reps, seeds = read_chunk(chunk_path(out, i, k), provenance["fingerprint"])
-            totals[i, :, 0] += est
-            totals[i, :, 1:] += reps.astype(np.float64)
-            own[i] += seeds
+            own[i] += read_chunk(chunk_path(out, i, k), provenance["fingerprint"])[2]
     tables: dict[str, list[pd.DataFrame]] = {"results": [], "differences": [], "reliability": [], "seeds": []}
-    sums_parts = []
     cells = metric_cells(cols)
+    pairs = difference_pairs(cells)
     for r, reading in enumerate(readings):
         design = asdict(reading)
-        frames = []
-        for i, c in enumerate(conditions):
-            f = pd.DataFrame(totals[i, r], columns=[f"s{j}" for j in range(K)])
-            f.insert(0, "replicate", np.arange(B + 1))
-            f.insert(0, "viewpoint", c.viewpoint)
-            f.insert(0, "noise", c.noise)
-            f.insert(0, "action_prior", c.action_prior)
-            frames.append(f)
-        sums = pd.concat(frames, ignore_index=True)
-        sums_parts.append(sums.assign(**design))
-        for name, fn, groups in (
-            ("results", metrics, GROUPS),
-            (
-                "differences",
-                paired_differences,
-                {k: GROUPS[k] for k in (("noise", "viewpoint"), ("viewpoint",), ())},
-            ),
-            ("reliability", reliability, {k: GROUPS[k] for k in (("noise", "viewpoint"), ())}),
-        ):
-            for by, fill in groups.items():
-                part = fn(sums, cols, ["action_prior", *by]).assign(**fill, **design)
+        sums = _condition_sums(out, config, provenance, r, K, B)
+        for name, parts in _reading_tables(sums, config, cols, cells, pairs).items():
+            for part in parts:
+                part = part.assign(**design)
                 tables[name].append(part[ORDER + [c for c in part.columns if c not in ORDER]])
-        for prior in config.action_prior:  # each seed's estimates, pooled over noise and views
-            idx = [i for i, c in enumerate(conditions) if c.action_prior == prior]
-            for k in range(n_seeds):
-                vals = metric_values(own[idx, k, r].sum(axis=0)[None, :], cells)[0]
-                tables["seeds"].append(
-                    cells.keys.assign(action_prior=prior, recognizer_seed=k, estimate=vals, **design)
-                )
+        for effects in config.effects:  # each seed's estimates, pooled over noise and views
+            for prior in config.action_prior:
+                idx = [
+                    i for i, c in enumerate(conditions) if c.action_prior == prior and c.effects == effects
+                ]
+                for k in range(n_seeds):
+                    vals = metric_values(own[idx, k, r].sum(axis=0)[None, :], cells)[0]
+                    tables["seeds"].append(
+                        cells.keys.assign(
+                            effects=effects, action_prior=prior, recognizer_seed=k, estimate=vals, **design
+                        )
+                    )
     table, diffs, rel = (
         pd.concat(tables[n], ignore_index=True) for n in ("results", "differences", "reliability")
     )
+    diffs = adjust_families(diffs, ["noise", "viewpoint"])
     seeds = pd.concat(tables["seeds"], ignore_index=True)
     seeds = seeds[[*DESIGN, "recognizer_seed", "target", "strategy", "fraction", "metric", "estimate"]]
-    calibration = pd.DataFrame(
-        provenance.get("calibration", []), columns=["recognizer_seed", "fraction", "beta", "n_gestures"]
-    )
+    calibration = pd.DataFrame(provenance.get("calibration", []))
     params = provenance["settings"]
     source = provenance["data_source"]
     # summarised before the tables are stamped: pandas deep-copies a frame's attrs (here every setting of the
@@ -162,7 +244,6 @@ def merge(
         (calibration, "corpus_calibration"),
     ):
         tidy(df, name, source, **params)
-    _write_parquet(out / "sums.parquet", pd.concat(sums_parts, ignore_index=True))
     _write_parquet(out / "results.parquet", table)
     _write_parquet(out / "differences.parquet", diffs)
     _write_parquet(out / "reliability.parquet", rel)
@@ -172,6 +253,33 @@ def merge(
     head = pd.DataFrame(summary["overall"])
     atomic_write_text(out / "summary.csv", head.to_csv(index=False, float_format="%.6g", lineterminator="\n"))
     return table, diffs, rel, seeds, summary
+
+
+SAVED_METRICS: tuple[str, ...] = ("accuracy", "log_loss", "ece")
+"""The metrics the saved tables keep (the notebook shows no Brier score)."""
+
+
+def saved_subset(tables: SweepTables) -> SweepTables:
+    """What notebook 11 reads of a sweep's tables, and so what ``sweeps/`` keeps of it: the metrics of
+    :data:`SAVED_METRICS` per viewpoint, per noise level and pooled (not both at once); the paired
+    differences of the findings' pairs (:data:`~glu.studies.corpus_evaluation.findings.FINDINGS`) at
+    every pooling, and of every pair on the front view at the full gesture (each cell's winner); the seeds'
+    estimates at the full gesture; the reliability diagrams and the calibrations whole."""
+    from glu.studies.corpus_evaluation.findings import FINDINGS
+
+    m = tables.metrics
+    keep = m.metric.isin(SAVED_METRICS) & ~((m.viewpoint != "all") & m.noise.notna())
+    d = tables.differences
+    d = d[d.metric.isin(SAVED_METRICS)]
+    wanted = np.zeros(len(d), dtype=bool)
+    for f in FINDINGS:
+        for a, b in ((f.strategy, f.baseline), (f.baseline, f.strategy)):
+            same = (d.target == f.target) & (d.metric == f.metric)
+            wanted |= (same & (d.strategy == a) & (d.baseline == b)).to_numpy()
+    full = np.isclose(d.fraction, d.fraction.max())
+    winners = (full & (d.viewpoint == "front") & d.noise.isna()).to_numpy()
+    seeds = tables.seeds[np.isclose(tables.seeds.fraction, tables.seeds.fraction.max())]
+    return tables._replace(metrics=m[keep], differences=d[wanted | winners], seeds=seeds)
 
 
 class SweepTables(NamedTuple):

@@ -29,6 +29,28 @@ FEATURE_COLORS = {
     "body+centred": "#DA8BC3",
 }
 """Colour of each default feature set (others get grey)."""
+FEATURE_MARKERS = {
+    "raw": "o",
+    "centred": "s",
+    "centred+scaled": "^",
+    "centred+rotated": "v",
+    "centred+mirrored": "D",
+    ALL: "P",
+    "body": "X",
+    "body+centred": "*",
+}
+FEATURE_LINES = {"raw": "-", "centred": "--", "centred+scaled": "-.", "centred+rotated": ":", "body": "-"}
+FEATURE_HATCHES = {
+    "centred": "//",
+    "centred+scaled": "\\\\",
+    "centred+rotated": "xx",
+    "centred+mirrored": "..",
+    ALL: "++",
+    "body": "oo",
+    "body+centred": "--",
+}
+"""Each feature set's marker, line style and hatching: seven series on one axis are told apart by more than
+their hue (colour-blind readers, grey prints)."""
 RECOGNISER_LABELS = {"raw": "raw features", "aligned": f"invariant features ({ALL})"}
 """How :func:`plot_two_views` names the two recognisers of :meth:`ViewRun.curves`."""
 
@@ -42,6 +64,14 @@ def _color(features: str) -> str:
     return FEATURE_COLORS.get(feature_label(features), "0.55")
 
 
+def _marker(features: str) -> str:
+    return FEATURE_MARKERS.get(feature_label(features), "o")
+
+
+def _line(features: str) -> str:
+    return FEATURE_LINES.get(feature_label(features), "-")
+
+
 def condition_label(factor: str, level: str, width: int = 14) -> str:
     """A condition as a short multi-line label: ``"body size\\n0.8"``, ``"sensor noise\\n3 cm"``."""
     if factor in ("combined", "performer"):
@@ -52,15 +82,25 @@ def condition_label(factor: str, level: str, width: int = 14) -> str:
 
 
 def plot_accuracy_vs_viewpoint(
-    ax: Axes, summary: pd.DataFrame, train: str, chance: float = 1 / 3, legend: bool = False
+    ax: Axes,
+    summary: pd.DataFrame,
+    train: str,
+    chance: float = 1 / 3,
+    legend: bool = False,
+    factor: str = "viewpoint",
 ) -> Axes:
-    """Accuracy (mean over seeds, 95 % interval as an error bar) against the person's turn, per feature set.
+    """Accuracy (mean over seeds, 95 % interval as an error bar) against the person's turn, per feature set
+    (each its colour, marker and line style).
 
     ``summary`` as :func:`glu.studies.correspondence.experiment.summarise` returns it; ``train`` picks the
-    recognisers (``"robot"`` or ``"human"``). The feature sets are set a few degrees apart so that their
-    intervals can be told apart. ``legend``: a legend right of the axes.
+    recognisers (``"robot"`` or ``"human"``); ``factor`` the turns seen by the ideal tracker
+    (``"viewpoint"``) or by the occluding one (:data:`~glu.studies.correspondence.experiment.OCCLUDED`, with
+    the front view of the ideal tracker, which sees the same). The feature sets are set a few degrees apart
+    so that their intervals can be told apart. ``legend``: a legend right of the axes.
     """
-    s = summary[(summary["train"] == train) & (summary["factor"] == "viewpoint")]
+    s = summary[(summary["train"] == train)]
+    front = s[(s["factor"] == "viewpoint") & (s["yaw_deg"] == 0)]
+    s = pd.concat([front, s[s["factor"] == factor]]) if factor != "viewpoint" else s[s["factor"] == factor]
     groups = list(s.groupby("features", sort=False))
     yaws = sorted(s["yaw_deg"].dropna().unique())
     step = float(np.min(np.diff(yaws))) if len(yaws) > 1 else 30.0
@@ -74,10 +114,11 @@ def plot_accuracy_vs_viewpoint(
             x,
             g["accuracy"],
             yerr=None if np.isnan(err).all() else err,
-            fmt="o-",
+            marker=_marker(features),
+            ls=_line(features),
             color=c,
             lw=1.2,
-            ms=3.5,
+            ms=4,
             elinewidth=0.8,
             capsize=0,
             label=feature_label(features),
@@ -87,7 +128,8 @@ def plot_accuracy_vs_viewpoint(
     ax.set_ylabel("accuracy (mean over seeds, 95 % interval)")
     ax.set_xticks(yaws)
     ax.set_ylim(0, 1.02)
-    ax.set_title(f"trained on {'the robot' if train == 'robot' else 'one human view'}", fontsize=9)
+    tracker = "" if factor == "viewpoint" else ", occluding tracker"
+    ax.set_title(f"trained on {'the robot' if train == 'robot' else 'one human view'}{tracker}", fontsize=9)
     if legend:
         _features_legend(ax)
     return ax
@@ -102,7 +144,7 @@ def plot_accuracy_by_condition(
 ) -> Axes:
     """Grouped bars: accuracy per condition other than the viewpoint sweep (and the reference), per feature
     set, with the 95 % interval as error bars. ``legend``: a legend right of the axes."""
-    s = summary[(summary["train"] == train)]
+    s = summary[(summary["train"] == train) & ~summary["factor"].str.startswith("viewpoint,")]
     s = s[(s["factor"] != "viewpoint") | ((s["factor"] == reference[0]) & (s["level"] == reference[1]))]
     conditions = list(dict.fromkeys(zip(s["factor"], s["level"], strict=True)))
     features = list(dict.fromkeys(s["features"]))
@@ -116,6 +158,9 @@ def plot_accuracy_by_condition(
             g["accuracy"],
             width=w,
             color=_color(f),
+            hatch=FEATURE_HATCHES.get(feature_label(f)),
+            edgecolor="white",
+            lw=0,
             label=feature_label(f),
             yerr=None if np.isnan(err).all() else err,
             error_kw={"lw": 0.7, "capsize": 1.5},
@@ -132,8 +177,8 @@ def plot_accuracy_by_condition(
 def plot_invariance_effects(ax: Axes, effects: pd.DataFrame, train: str) -> Axes:
     """A map of what adding each invariance changes (mean paired Δ accuracy; red: it costs, blue: it helps).
 
-    Rows: feature set vs its baseline; columns: conditions. Cells whose 95 % interval excludes 0 are
-    marked with the value in bold.
+    Rows: feature set vs its baseline; columns: conditions. Cells whose adjusted verdict is a difference
+    (Benjamini–Hochberg over the table) are marked with the value in bold.
     """
     e = effects[effects["train"] == train].copy()
     e["row"] = e["features"].map(feature_label) + "  vs  " + e["baseline"].map(feature_label)
@@ -154,7 +199,8 @@ def plot_invariance_effects(ax: Axes, effects: pd.DataFrame, train: str) -> Axes
     ax.set_xticks(range(len(cols)), [condition_label(*c.split("\t"), width=10) for c in cols], fontsize=7)
     ax.set_yticks(range(len(rows)), rows, fontsize=7.5)
     ax.set_title(
-        f"Δ accuracy when an invariance is added (trained on {train}; bold: 95 % interval excludes 0)",
+        f"Δ accuracy when an invariance is added (trained on {train}; bold: a difference after the "
+        "multiplicity adjustment)",
         fontsize=8.5,
     )
     return ax

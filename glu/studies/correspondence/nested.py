@@ -30,6 +30,7 @@ few dozen small models per candidate, trained in one batch (:func:`glu.hmm.train
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from itertools import combinations
 from typing import Any, NamedTuple
 
@@ -143,38 +144,26 @@ def nested_cv(
     actions = tuple(dict.fromkeys(s.action for s in standing))
     by_action = {a: [i for i, s in enumerate(standing) if s.action == a] for a in actions}
     xs = {c.features: [Invariants.parse(c.features).transform(s.xyz) for s in standing] for c in cands}
-    models = _models(xs, by_action, cands, seeds, config)
-    labels = [s.action for s in standing]
-
-    def predict(c: Candidate, seed: int, i: int, without: set[int]) -> str | None:
-        bank = [models.get((c, seed, a, frozenset(without & set(by_action[a])))) for a in actions]
-        if any(m is None for m in bank):
-            return None  # an action has no segment left to train on
-        return actions[int(np.argmax(loglik_many(stack_models(bank), [xs[c.features][i]])[0]))]
-
-    def loso(c: Candidate, seed: int, pool: Sequence[int], also_without: set[int]) -> float:
-        hits = [predict(c, seed, j, {j} | also_without) for j in pool]
-        ok = [h == labels[j] for h, j in zip(hits, pool, strict=True) if h is not None]
-        return float(np.mean(ok)) if ok else float("nan")
-
+    score = _Scorer(
+        _models(xs, by_action, cands, seeds, config), xs, by_action, actions, [s.action for s in standing]
+    )
     folds, summary, cand_rows = [], [], []
     everyone = list(range(len(standing)))
     for seed in seeds:
-        plain = {c: loso(c, seed, everyone, set()) for c in cands}
+        plain = {c: score.loso(c, seed, everyone, set()) for c in cands}
         cand_rows += [
             {"seed": seed, "features": c.features, "setting": c.setting, "loso_accuracy": plain[c]}
             for c in cands
         ]
-        hits = []
+        tested = []
         for i, s in enumerate(standing):
-            if predict(cands[0], seed, i, {i}) is None:
+            if score.predict(cands[0], seed, i, {i}) is None:
                 continue  # its action has no other segment: not testable
             rest = [j for j in everyone if j != i]
-            inner = {c: loso(c, seed, rest, {i}) for c in cands}
-            chosen = max(cands, key=lambda c: (np.nan_to_num(inner[c], nan=-1.0), -cands.index(c)))
-            predicted = predict(chosen, seed, i, {i})
-            hits.append(predicted == s.action)
-            folds.append(
+            inner = {c: score.loso(c, seed, rest, {i}) for c in cands}
+            chosen = _best(cands, inner)
+            predicted = score.predict(chosen, seed, i, {i})
+            tested.append(
                 {
                     "seed": seed,
                     "recording": s.recording,
@@ -187,23 +176,8 @@ def nested_cv(
                     "correct": predicted == s.action,
                 }
             )
-        k, n = int(sum(hits)), len(hits)
-        lo, hi = clopper_pearson(k, n)
-        tested = [f for f in folds if f["seed"] == seed]
-        best = max(cands, key=lambda c: (np.nan_to_num(plain[c], nan=-1.0), -cands.index(c)))
-        summary.append(
-            {
-                "seed": seed,
-                "correct": k,
-                "testable": n,
-                "accuracy": k / n,
-                "ci_low": lo,
-                "ci_high": hi,
-                "always_tap": float(np.mean([f["action"] == "tap" for f in tested])),
-                "tuned_accuracy": plain[best],
-                "tuned_candidate": best.label,
-            }
-        )
+        folds += tested
+        summary.append(_seed_summary(seed, tested, plain, _best(cands, plain)))
     params = {
         "features": list(features),
         "settings": list(settings),
@@ -216,6 +190,56 @@ def nested_cv(
         tidy(pd.DataFrame(summary), "correspondence_nested_cv", source, **params),
         tidy(pd.DataFrame(cand_rows), "correspondence_candidates", source, **params),
     )
+
+
+def _best(cands: Sequence[Candidate], accuracy: Mapping[Candidate, float]) -> Candidate:
+    """The candidate of highest accuracy (NaN lowest; ties go to the first)."""
+    return max(cands, key=lambda c: (np.nan_to_num(accuracy[c], nan=-1.0), -cands.index(c)))
+
+
+def _seed_summary(seed: int, tested: list[dict], plain: Mapping[Candidate, float], best: Candidate) -> dict:
+    """One seed's nested accuracy with its exact interval, beside always-tap and the tuned-on-test best."""
+    k, n = sum(bool(f["correct"]) for f in tested), len(tested)
+    lo, hi = clopper_pearson(k, n)
+    return {
+        "seed": seed,
+        "correct": k,
+        "testable": n,
+        "accuracy": k / n,
+        "ci_low": lo,
+        "ci_high": hi,
+        "always_tap": float(np.mean([f["action"] == "tap" for f in tested])),
+        "tuned_accuracy": plain[best],
+        "tuned_candidate": best.label,
+        "recordings": len({f["recording"] for f in tested}),
+    }
+
+
+@dataclass(frozen=True)
+class _Scorer:
+    """Predictions of each candidate's recogniser trained without some segments (the models trained once)."""
+
+    models: Mapping
+    xs: Mapping[str, list[np.ndarray]]
+    by_action: Mapping[str, list[int]]
+    actions: tuple[str, ...]
+    labels: list[str]
+
+    def predict(self, c: Candidate, seed: int, i: int, without: set[int]) -> str | None:
+        """Segment ``i``'s action by ``c``'s recogniser trained without ``without`` (None: an action has no
+        segment left to train on)."""
+        bank = [
+            self.models.get((c, seed, a, frozenset(without & set(self.by_action[a])))) for a in self.actions
+        ]
+        if any(m is None for m in bank):
+            return None
+        return self.actions[int(np.argmax(loglik_many(stack_models(bank), [self.xs[c.features][i]])[0]))]
+
+    def loso(self, c: Candidate, seed: int, pool: Sequence[int], also_without: set[int]) -> float:
+        """Leave-one-segment-out accuracy of ``c`` over ``pool``, each also without ``also_without``."""
+        hits = [self.predict(c, seed, j, {j} | also_without) for j in pool]
+        ok = [h == self.labels[j] for h, j in zip(hits, pool, strict=True) if h is not None]
+        return float(np.mean(ok)) if ok else float("nan")
 
 
 def onset_frame(xyz: np.ndarray, share: float = ONSET_SHARE) -> int:

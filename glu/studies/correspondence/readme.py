@@ -21,7 +21,8 @@ TEMPLATE = """\
 * **The correspondence problem, on the real data** (`10_correspondence`). The seated hand works elsewhere in \
 the torso frame: mean height y of the two seated taps {seated_y_lo:.2f} and {seated_y_hi:.2f}, at most \
 {standing_y_max:.2f} for every standing repetition; depth z {seated_z_lo:.2f} and {seated_z_hi:.2f}, at \
-least {standing_z_min:.2f} standing.
+least {standing_z_min:.2f} standing; across, x {seated_x_lo:.2f} and {seated_x_hi:.2f} (left of the \
+torso), at least {standing_x_min:.2f} (right of it) for every standing repetition.
   * On the {loso_n:.0f} real segments of the three standing recordings (one person), leave-one-segment-out \
 on raw features gives {raw_loso_span} over {raw_loso_runs:.0f} covariance priors and seeds; with one segment \
 worth {segment_points:.0f} points, single accuracies are fragile.
@@ -30,7 +31,9 @@ worth {segment_points:.0f} points, single accuracies are fragile.
 will move (p(ObjVel = slow) {glu_sphere_slow:.3f}), the box will not ({glu_box_slow:.3f}).
 * **Invariant features and the body frame, on synthetic people** (`10_correspondence`; HMMs trained on \
 standard people facing the camera, tested on other people, {study_seeds:.0f} seeds, {ci_percent:.0f} % \
-two-level intervals over the seeds and the test gestures).
+two-level intervals over the seeds and the test gestures from {study_bootstrap:,.0f} replicates; the \
+invariances' paired effects adjusted for their number by Benjamini–Hochberg; notebook 10 adds a mirror \
+image, seated people, sensor noise and all at once).
 {study_text}"""
 """The bullets, with ``{name:format}`` slots filled by :func:`values`."""
 
@@ -64,12 +67,16 @@ def values(tables: Tables) -> dict[str, Any]:
         seated_z_lo=sat["z"].min(),
         seated_z_hi=sat["z"].max(),
         standing_z_min=stand["z"].min(),
+        seated_x_lo=sat["x"].min(),
+        seated_x_hi=sat["x"].max(),
+        standing_x_min=stand["x"].min(),
     )
     v["nested_text"] = bullets(
         nested_sentences(
             tables["correspondence_nested_cv"][0],
             tables["seated_typicality"][0],
             tables["correspondence_candidates"][0],
+            brief=True,
         )
     )
     for case in ("sphere", "box"):
@@ -78,8 +85,11 @@ def values(tables: Tables) -> dict[str, Any]:
         v[f"glu_{case}_slow"] = last.set_index("value")["p"]["slow"]
     study, meta = tables["correspondence_summary"]
     v["study_seeds"] = len(meta["parameters"]["seeds"])
+    v["study_bootstrap"] = _replicates(meta)
     v["ci_percent"] = 100 * LEVEL
-    v["study_text"] = bullets(study_sentences(study, tables["correspondence_invariance_effects"][0]))
+    v["study_text"] = bullets(
+        study_sentences(study, tables["correspondence_invariance_effects"][0], brief=True)
+    )
     return v
 
 
@@ -97,3 +107,13 @@ def _loso(tables: Tables) -> dict[str, Any]:
         "raw_loso_span": lo if lo == hi else f"{lo}–{hi}",
         "raw_loso_runs": len(raw),
     }
+
+
+def _replicates(meta: dict[str, Any]) -> int:
+    """The bootstrap replicates a summary's intervals were drawn with (its ``interval`` stamp)."""
+    import re
+
+    m = re.search(r"\((\d+) replicates\)", str(meta.get("parameters", {}).get("interval", "")))
+    if m is None:
+        raise DataError("the summary's correspondence_summary does not say how many replicates it drew")
+    return int(m.group(1))

@@ -1,0 +1,69 @@
+"""``glu correspondence``: the synthetic study of notebook 10 (the correspondence problem), as a grid on Dask.
+
+It runs the study with notebook 10's default parameters — every seed, training source, feature set and test
+condition, the ideal and the occluding tracker — one task per seed, and writes its three tables with their
+key and provenance (:mod:`glu.saved`) to ``-o DIR``: how ``sweeps/10_correspondence/study/`` is made
+(``make sweeps``), which notebook 10 reads instead of computing the study.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from glu.cli.common import output_folder, positive_int
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``correspondence`` command."""
+    p = sub.add_parser(
+        "correspondence",
+        help="run notebook 10's synthetic correspondence study (Dask) and save its tables",
+        description="Run the synthetic study of notebook 10 with its default parameters (every seed, "
+        "training source, feature set and condition; the ideal and the occluding tracker), one task per "
+        "seed on a LocalCluster, and write its tables with their key and provenance to -o DIR, where "
+        "the notebook finds them (sweeps/10_correspondence/study: make sweeps).",
+    )
+    p.add_argument(
+        "-o", "--out", type=output_folder, required=True, metavar="DIR", help="folder for the tables"
+    )
+    p.add_argument(
+        "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: in this process)"
+    )
+    p.set_defaults(func=_run)
+
+
+def notebook_settings():
+    """The study's settings from notebook 10's parameters cell (its defaults)."""
+    from glu.paths import NOTEBOOKS_DIR
+    from glu.run.parameters import read_spec
+    from glu.studies.correspondence.grid import StudySettings
+
+    spec = {k: p.default for k, p in read_spec(NOTEBOOKS_DIR / "10_correspondence.py").items()}
+    return StudySettings(
+        seeds=tuple(spec["seeds"]),
+        n_train=spec["n_train"],
+        n_test=spec["n_test"],
+        feature_sets=tuple(spec["feature_sets"]),
+        yaws=tuple(spec["yaws"]),
+        variety=spec["variety"],
+        n_states=spec["n_states"],
+        n_mix=spec["n_mix"],
+        n_iter=spec["n_iter"],
+        bootstrap=spec["bootstrap"],
+        levels=None if spec["levels"] is None else tuple(spec["levels"]),
+        normalise_body=spec["normalise_body"],
+    )
+
+
+def _run(args: argparse.Namespace) -> int:
+    import shlex
+    import sys
+
+    from glu.studies.correspondence.grid import run_study, write_tables
+
+    settings = notebook_settings()
+    tables = run_study(settings, workers=args.workers or 0)
+    command = "glu " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    folder = write_tables(args.out, tables, settings.key(), command)
+    print(f"{len(tables[0])} rows over {len(settings.seeds)} seeds → {folder}")
+    return 0
