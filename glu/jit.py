@@ -5,7 +5,7 @@ is cached (``build/compiled/`` in a checkout, the user's cache folder for an ins
 :attr:`glu.paths.Locations.compiled`; ``$NUMBA_CACHE_DIR`` wins), so only the first process on a machine
 compiles it and later ones load it. numba itself is imported when the first such function is called, so
 code that never needs one never pays for the import. The compiled loops: the HMM recursions
-(:mod:`glu.hmm._engine`) and the network's planning (:mod:`glu.bn._kernels`).
+(:mod:`glu.hmm._engine`) and the network's planning (:mod:`glu.bn.kernels`).
 """
 
 from __future__ import annotations
@@ -36,7 +36,10 @@ def compiled(fn: Any) -> Any:
 
     The functions of ``fn``'s own module that it calls by name (helpers of plain loops, such as the E- and
     M-steps of :func:`glu.hmm._engine.gmm.gmm_em`'s loop) are compiled first and their module names bound
-    to the compiled ones, so that compiled code calls compiled code."""
+    to the compiled ones, so that compiled code calls compiled code (a helper asked for after that is
+    already compiled, and comes back as it is)."""
+    if not isinstance(fn, types.FunctionType):
+        return fn
     for name in fn.__code__.co_names:
         helper = fn.__globals__.get(name)
         if isinstance(helper, types.FunctionType) and helper.__module__ == fn.__module__ and helper is not fn:

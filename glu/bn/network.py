@@ -66,6 +66,24 @@ class NetworkArrays:
         """The axes of ``v``'s table as variables: its parents, then itself."""
         return (*self.parents[v], v)
 
+    def sorted_family(self, v: int) -> tuple[int, ...]:
+        """``v`` and its parents in ascending order (the axes of :meth:`sorted_cpt`)."""
+        fams = self.__dict__.get("_sorted_families")
+        if fams is None:
+            fams = self.__dict__["_sorted_families"] = [
+                tuple(sorted((*ps, u))) for u, ps in enumerate(self.parents)
+            ]
+        return fams[v]
+
+    def sorted_cpt(self, v: int) -> np.ndarray:
+        """``v``'s table with its axes in the order of :meth:`sorted_family` (a view, made on first use)."""
+        tables = self.__dict__.setdefault("_sorted_cpts", {})
+        t = tables.get(v)
+        if t is None:
+            fam = self.family(v)
+            t = tables[v] = np.transpose(self.cpts[v], [fam.index(u) for u in self.sorted_family(v)])
+        return t
+
     def ancestors(self, nodes: set[int] | frozenset[int]) -> set[int]:
         """``nodes`` and all their ancestors."""
         out: set[int] = set()
