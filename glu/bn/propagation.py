@@ -35,6 +35,8 @@ import numpy as np
 from glu.bn.network import NetworkArrays, code_of
 from glu.bn.plan import check_size, max_table_setting, triangulate
 
+_ONE_ENTRY = np.ones((1,))
+_ONE_ENTRY.flags.writeable = False  # the table of a clique no table without evidence falls in: broadcast
 _ALL = {1: np.ones(1, dtype=bool)}
 _ALL[1].flags.writeable = False  # a single row's "possible", shared: never written to
 TINY = 1e-250
@@ -153,13 +155,17 @@ def make_plan(
             shape[axis[u]] = cards[u]
         return shape
 
-    base = [np.ones((*(cards[v] for v in c), 1)) for c in cliques]
+    # each clique's product of the tables of no observed variable: a view of the table when there is one
+    # (no copy), broadcast to the clique's shape when it misses some of its variables
+    base: list[np.ndarray | None] = [None] * len(cliques)
     factors: list[list[Factor]] = [[] for _ in cliques]
     constants: list[Factor] = []
     local_slots = [0] * len(cliques)
     for v, rest, c in zip(tables, scopes, where, strict=False):
         if len(rest) == len(net.parents[v]) + 1:  # no observed variable in its family
-            np.multiply(base[c], net.sorted_cpt(v).reshape(shape_in(rest, c)), out=base[c])
+            x = net.sorted_cpt(v).reshape(shape_in(rest, c))
+            b = base[c]
+            base[c] = x if b is None else b * x
             continue
         fam = net.family(v)
         seen = [u for u in fam if u in slot]
@@ -173,6 +179,12 @@ def make_plan(
             factors[c].append((flat, entry[1], strides, tuple(shape_in(rest, c))))
             for u in seen:
                 local_slots[c] |= 1 << slot[u]
+    for c, b in enumerate(base):
+        full = (*(cards[u] for u in cliques[c]), 1)
+        if b is None:
+            base[c] = np.broadcast_to(_ONE_ENTRY, full)
+        elif b.shape != full:
+            base[c] = np.broadcast_to(b, full)
     likelihoods: list[list[tuple[int, tuple[int, ...]]]] = [[] for _ in cliques]
     for i, v in enumerate(soft):
         c = where[len(scopes) + i]
