@@ -103,6 +103,70 @@ def _forward_backward_scaled(log_b, lengths, startprob, transmat):
     return gamma, xi, loglik, ok
 
 
+def _advance(x, a, first, alpha, means, chol_inv, log_norm, startprob, transmat, diff, lc, log_b, pred, new):
+    """Model ``a``'s forward variable ``alpha`` (shape (Q,), updated in place) after frame ``x`` (the first
+    frame when ``first``); returns the frame's log-likelihood increment. Scratch arrays: diff (D,), lc (M,),
+    log_b, pred, new (Q,)."""
+    Q, M, D = means.shape[1], means.shape[2], means.shape[3]
+    # emissions: log Σ_m w_m N(x; μ_qm, Σ_qm), as glu.hmm.inference.log_emissions
+    for q in range(Q):
+        top = -np.inf
+        for m in range(M):
+            for d in range(D):
+                diff[d] = x[d] - means[a, q, m, d]
+            sq = 0.0
+            for i in range(D):
+                z = 0.0
+                for j in range(D):
+                    z += chol_inv[a, q, m, i, j] * diff[j]
+                sq += z * z
+            lc[m] = log_norm[a, q, m] - 0.5 * sq
+            if lc[m] > top:
+                top = lc[m]
+        acc = 0.0
+        for m in range(M):
+            acc += np.exp(lc[m] - top)
+        log_b[q] = np.log(acc) + top
+    # the predicted state, then glu.hmm.inference.scaled_step
+    if first:
+        for q in range(Q):
+            pred[q] = startprob[a, q]
+    else:
+        for j in range(Q):
+            acc = 0.0
+            for i in range(Q):
+                acc += alpha[i] * transmat[a, i, j]
+            pred[j] = acc
+    mx = -np.inf
+    for q in range(Q):
+        if log_b[q] > mx:
+            mx = log_b[q]
+    csum = 0.0
+    for q in range(Q):
+        new[q] = pred[q] * np.exp(log_b[q] - mx)
+        csum += new[q]
+    if csum > TINY:
+        for q in range(Q):
+            alpha[q] = new[q] / csum
+        return np.log(csum) + mx
+    top = -np.inf  # the scaled mass underflowed: this frame in the log domain
+    for q in range(Q):
+        new[q] = np.log(pred[q]) + log_b[q]
+        if new[q] > top:
+            top = new[q]
+    if not np.isfinite(top):
+        for q in range(Q):
+            alpha[q] = 0.0
+        return -np.inf
+    csum = 0.0
+    for q in range(Q):
+        new[q] = np.exp(new[q] - top)
+        csum += new[q]
+    for q in range(Q):
+        alpha[q] = new[q] / csum
+    return top + np.log(csum)
+
+
 def _loglik_banked(X, starts, lengths, means, chol_inv, log_norm, startprob, transmat):
     A, Q, M, D = means.shape
     S = lengths.shape[0]
@@ -118,67 +182,38 @@ def _loglik_banked(X, starts, lengths, means, chol_inv, log_norm, startprob, tra
             total = 0.0
             for t in range(lengths[s]):
                 x = X[starts[s] + t]
-                # emissions: log Σ_m w_m N(x; μ_qm, Σ_qm), as glu.hmm.inference.log_emissions
-                for q in range(Q):
-                    top = -np.inf
-                    for m in range(M):
-                        for d in range(D):
-                            diff[d] = x[d] - means[a, q, m, d]
-                        sq = 0.0
-                        for i in range(D):
-                            z = 0.0
-                            for j in range(D):
-                                z += chol_inv[a, q, m, i, j] * diff[j]
-                            sq += z * z
-                        lc[m] = log_norm[a, q, m] - 0.5 * sq
-                        if lc[m] > top:
-                            top = lc[m]
-                    acc = 0.0
-                    for m in range(M):
-                        acc += np.exp(lc[m] - top)
-                    log_b[q] = np.log(acc) + top
-                # the predicted state, then glu.hmm.inference.scaled_step
-                if t == 0:
-                    for q in range(Q):
-                        pred[q] = startprob[a, q]
-                else:
-                    for j in range(Q):
-                        acc = 0.0
-                        for i in range(Q):
-                            acc += alpha[i] * transmat[a, i, j]
-                        pred[j] = acc
-                mx = -np.inf
-                for q in range(Q):
-                    if log_b[q] > mx:
-                        mx = log_b[q]
-                csum = 0.0
-                for q in range(Q):
-                    new[q] = pred[q] * np.exp(log_b[q] - mx)
-                    csum += new[q]
-                if csum > TINY:
-                    for q in range(Q):
-                        alpha[q] = new[q] / csum
-                    total += np.log(csum) + mx
-                    continue
-                top = -np.inf  # the scaled mass underflowed: this frame in the log domain
-                for q in range(Q):
-                    new[q] = np.log(pred[q]) + log_b[q]
-                    if new[q] > top:
-                        top = new[q]
-                if not np.isfinite(top):
-                    for q in range(Q):
-                        alpha[q] = 0.0
-                    total += -np.inf
-                    continue
-                csum = 0.0
-                for q in range(Q):
-                    new[q] = np.exp(new[q] - top)
-                    csum += new[q]
-                for q in range(Q):
-                    alpha[q] = new[q] / csum
-                total += top + np.log(csum)
+                total += _advance(
+                    x,
+                    a,
+                    t == 0,
+                    alpha,
+                    means,
+                    chol_inv,
+                    log_norm,
+                    startprob,
+                    transmat,
+                    diff,
+                    lc,
+                    log_b,
+                    pred,
+                    new,
+                )
             out[s, a] = total
     return out
+
+
+def _stream_step(x, first, alpha, total, means, chol_inv, log_norm, startprob, transmat):
+    """Every model of a bank advanced by one frame ``x``: ``alpha`` (A, Q) and ``total`` (A,) in place."""
+    A, Q, M, D = means.shape
+    diff = np.empty(D)
+    lc = np.empty(M)
+    log_b = np.empty(Q)
+    pred = np.empty(Q)
+    new = np.empty(Q)
+    for a in range(A):
+        total[a] += _advance(
+            x, a, first, alpha[a], means, chol_inv, log_norm, startprob, transmat, diff, lc, log_b, pred, new
+        )
 
 
 def _mixture_posteriors(lc, log_b, post):
@@ -261,6 +296,23 @@ def loglik_banked(
         f(startprob, dtype=np.float64),
         f(transmat, dtype=np.float64),
     )
+
+
+def stream_step(
+    x: np.ndarray,
+    first: bool,
+    alpha: np.ndarray,
+    total: np.ndarray,
+    means: np.ndarray,
+    chol_inv: np.ndarray,
+    log_norm: np.ndarray,
+    startprob: np.ndarray,
+    transmat: np.ndarray,
+) -> None:
+    """Advance every model of a stacked bank by one frame ``x`` (D,): the scaled forward variables
+    ``alpha`` (A, Q) and the log-likelihoods ``total`` (A,), both float64 and C-ordered, are updated in
+    place — the same arithmetic, frame by frame, as :func:`loglik_banked` (the bank's arrays as there)."""
+    compiled(_stream_step)(x, first, alpha, total, means, chol_inv, log_norm, startprob, transmat)
 
 
 def mixture_posteriors(lc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
