@@ -126,11 +126,6 @@ class Trajectory:
     def __len__(self) -> int:
         return len(self.t)
 
-    @property
-    def frame_period(self) -> float:
-        """The median time between consecutive frames, in seconds (1/30 if fewer than two frames)."""
-        return float(np.median(np.diff(self.t))) if len(self.t) > 1 else 1 / 30
-
     def with_xyz(self, xyz: np.ndarray) -> Trajectory:
         """The same frames and timing with other coordinates, shape (n_frames, 3)."""
         return replace(self, xyz=np.asarray(xyz, dtype=float))
@@ -228,14 +223,6 @@ def spike_deviation(xyz: np.ndarray, window: int = 7) -> np.ndarray:
     if len(xyz) < window:
         return np.zeros(len(xyz))
     return np.linalg.norm(xyz - running_median(xyz, window), axis=1)
-
-
-def detect_gaps(t: np.ndarray, gap_factor: float = 2.5) -> np.ndarray:
-    """Indices i such that ``t[i+1] - t[i] > gap_factor × median(diff(t))``; ``t`` has shape (n_frames,)."""
-    dt = np.diff(np.asarray(t, dtype=float))
-    if len(dt) == 0:
-        return np.zeros(0, dtype=np.int64)
-    return np.flatnonzero(dt > gap_factor * np.median(dt))
 
 
 def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:

@@ -49,13 +49,6 @@ STRATEGY_LABELS = {
 }
 """How figures name the strategies of :mod:`glu.studies.corpus_evaluation.corpus` (``jeffrey`` is Jeffrey's
 rule)."""
-POSTERIOR_LABELS = {
-    "likelihood": r"$p_{HMM}$ from the likelihoods",
-    "per-frame": r"$p_{HMM}$ per frame",
-    "calibrated": r"$p_{HMM}$ calibrated (clean gestures)",
-    "calibrated-matched": r"$p_{HMM}$ calibrated (like the tests)",
-}
-"""How figures name the readings of p_HMM (:data:`glu.gestures.calibration.READINGS`)."""
 METRIC_LABEL = {
     "accuracy": "accuracy",
     "log_loss": "log-loss (nats)",
@@ -69,11 +62,6 @@ COINCIDE = 0.01
 def strategy_label(strategy: str) -> str:
     """A strategy as figures name it (:data:`STRATEGY_LABELS`)."""
     return STRATEGY_LABELS.get(strategy, strategy)
-
-
-def posterior_label(posterior: str) -> str:
-    """A way of reading p_HMM as figures name it (:data:`POSTERIOR_LABELS`)."""
-    return POSTERIOR_LABELS.get(posterior, posterior)
 
 
 def where_label(where: Mapping[str, Any] | None) -> str:
