@@ -127,14 +127,15 @@ def _machine_paths(folder: Path, data: Path, out: Path) -> dict[str, list[str]]:
         "the data folder": str(data),
         "the home folder": str(Path.home()),
         "the output folder": str(out),
-        "the staging folder": RUNS,
     }
+    staging = re.compile(re.escape(RUNS) + r"/(?!current\b|failed\b)[\w.-]+")  # a run's own folder in the store
     found: dict[str, list[str]] = {}
     for f in sorted(folder.rglob("*")):
         if not f.is_file() or f.suffix in (".png", ".svg", ".woff", ".woff2", ".ttf", ".ico", ".gif", ".jpg"):
             continue
         text = f.read_text(encoding="utf-8", errors="replace")
         hits = [what for what, needle in needles.items() if needle in text]
+        hits += ["the staging folder"] if staging.search(text) else []
         if hits:
             found[f.relative_to(folder).as_posix()] = hits
     return found
