@@ -128,7 +128,8 @@ def _machine_paths(folder: Path, data: Path, out: Path) -> dict[str, list[str]]:
         "the home folder": str(Path.home()),
         "the output folder": str(out),
     }
-    staging = re.compile(re.escape(RUNS) + r"/(?!current\b|failed\b)[\w.-]+")  # a run's own folder in the store
+    # a run's own folder in the store (the docs may name the store and its current and failed places)
+    staging = re.compile(re.escape(RUNS) + r"/(?!current\b|failed\b)[\w.-]+")
     found: dict[str, list[str]] = {}
     for f in sorted(folder.rglob("*")):
         if not f.is_file() or f.suffix in (".png", ".svg", ".woff", ".woff2", ".ttf", ".ico", ".gif", ".jpg"):
