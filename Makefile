@@ -1,5 +1,6 @@
 # glu: the two entry points of the README, and a few more.
-#   make reproduce   set up .venv, then run every notebook (figures/, recordings/, results/, models/, build/site/)
+#   make reproduce   set up .venv, then run every notebook (results/, recordings/, models/, build/figures/,
+#                    build/site/; the tracked figures/ only from a full run on the real data)
 #   make docs        the documentation site (build/site/index.html) again, from the last `make reproduce`
 #   make test        set up .venv, then lint (ruff) and run the test suite
 #   make lab         JupyterLab on the repository, the notebooks open as notebooks
@@ -10,7 +11,6 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.glu-installed
-LAB_STAMP := $(VENV)/.glu-lab-installed
 DATA ?=
 ARGS ?=
 
@@ -18,7 +18,7 @@ ARGS ?=
 
 venv: $(STAMP)
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml setup.py
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
@@ -38,12 +38,8 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/python -m pytest $(ARGS)
 
-# JupyterLab's extra, installed again only when pyproject.toml (or the venv) changed
-$(LAB_STAMP): $(STAMP) pyproject.toml
-	$(BIN)/python -m pip install --quiet -e '.[lab]'
-	touch $(LAB_STAMP)
-
-lab: $(LAB_STAMP)
+# JupyterLab comes with the test extra (glu[test] includes glu[lab]): one install serves both
+lab: $(STAMP)
 	$(if $(DATA),GLU_DATA_DIR=$(abspath $(DATA))) $(BIN)/jupyter lab --config=jupyter_lab_config.py $(ARGS)
 
 bench: $(STAMP)

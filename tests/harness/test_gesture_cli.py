@@ -156,12 +156,12 @@ def test_malformed_log_and_missing_files(capsys, tmp_path, source, models):
     status, _, err = run(capsys, "recognize", str(bad), *data)
     assert_one_line_error(status, err, f"{bad}:2:")
     status, _, err = run(capsys, "recognize", str(tmp_path / "none.log"), *data)
-    assert_one_line_error(status, err, "no such file")
+    assert_one_line_error(status, err, "none.log: file not found")
     status, _, err = run(capsys, "recognize", "no_such_recording", *data)
     assert_one_line_error(status, err, "recordings: grasp1_hand")
     notjson = tmp_path / "m.json"
     notjson.write_text("{")
-    status, _, err = run(capsys, "recognize", str(bad.with_name("x")), "--models", str(notjson))
+    status, _, err = run(capsys, "recognize", str(bad), "--models", str(notjson))
     assert_one_line_error(status, err, "not a JSON recogniser file")
 
 

@@ -186,25 +186,24 @@ raise RuntimeError("deliberate failure")
 def test_a_failing_notebook_stops_the_run_and_nothing_is_published(tmp_path):
     nbs = tmp_path / "nbs"
     nbs.mkdir()
-    (nbs / "01_ok.py").write_text(_OK)
+    (nbs / "01_ok.py").write_text(_OK.replace('"new"', 'f"new {seed}"'))
     (nbs / "02_fails.py").write_text(_FAIL.replace('"new"', '"newer"'))
     out = tmp_path / "out"
-    (out / "figures").mkdir(parents=True)
-    (out / "figures" / "earlier.png").write_bytes(b"earlier output")
-    (out / "results").mkdir()
-    (out / "results" / "summary.json").write_text("{}")
+    earlier = reproduce(
+        data="synthetic", out=out, jobs=1, log=_silent, notebooks_dir=nbs, only=["01"], seed=1, site=False
+    )
+    summary = (out / "results" / "summary.json").read_bytes()
     with pytest.raises(NotebookError) as e:
-        reproduce(data="synthetic", out=out, jobs=1, log=_silent, notebooks_dir=nbs)
+        reproduce(data="synthetic", out=out, jobs=1, log=_silent, notebooks_dir=nbs, seed=2)
     msg = str(e.value)
     assert "notebook 02_fails failed in cell" in msg and "RuntimeError: deliberate failure" in msg
-    assert (out / "notebooks" / "02_fails.failed.ipynb").is_file()
-    assert (out / "figures" / "earlier.png").read_bytes() == b"earlier output"
-    assert not (
-        out / "figures" / "new.txt"
-    ).exists()  # all or nothing: the notebook that succeeded did not land
+    assert (out / ".glu-runs" / "failed" / "02_fails.failed.ipynb").is_file()
+    assert "02_fails.failed.ipynb" in msg
+    assert (out / "figures" / "new.txt").read_text() == "new 1"  # all or nothing: the earlier run stays
     assert "nothing was published" in msg
-    assert (out / "results" / "summary.json").read_text() == "{}"  # no summary of a failed run
-    assert not (out / ".glu-staging").exists()
+    assert (out / "results" / "summary.json").read_bytes() == summary  # no summary of a failed run
+    assert earlier["ran"] == ["01_ok"]
+    assert len([d for d in (out / ".glu-runs").iterdir() if d.name.startswith("r")]) == 1  # no staging left
     with pytest.raises(NotebookError, match="no notebook matches 'nope'"):
         reproduce(data="synthetic", out=out, only=["nope"], log=_silent, notebooks_dir=nbs)
     with pytest.raises(NotebookError, match="no notebook matches ''"):
