@@ -1,6 +1,6 @@
 # glu: the two entry points of the README, and a few more.
-#   make reproduce   set up .venv, then run every notebook (figures/, recordings/, results/, models/, build/site/;
-#                    on synthetic data all of it under build/synthetic/)
+#   make reproduce   set up .venv, then run every notebook (results/, recordings/, models/, build/figures/,
+#                    build/site/; the tracked figures/ only from a full run on the real data)
 #   make docs        the documentation site (build/site/index.html) again, from the last `make reproduce`
 #   make test        set up .venv, then lint (ruff) and run the test suite
 #   make lab         JupyterLab on the repository, the notebooks open as notebooks
@@ -18,7 +18,7 @@ ARGS ?=
 
 venv: $(STAMP)
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml setup.py
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
@@ -38,7 +38,7 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/python -m pytest $(ARGS)
 
-# JupyterLab comes with the one install (the test extra includes the lab extra)
+# JupyterLab comes with the test extra (glu[test] includes glu[lab]): one install serves both
 lab: $(STAMP)
 	$(if $(DATA),GLU_DATA_DIR=$(abspath $(DATA))) $(BIN)/jupyter lab --config=jupyter_lab_config.py $(ARGS)
 

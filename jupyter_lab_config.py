@@ -3,8 +3,9 @@
 `make lab` runs `jupyter lab --config=jupyter_lab_config.py`. Double-clicking a notebook (a jupytext
 `.py` file) opens it as a notebook, by the project's own settings in `jupyterlab/settings/overrides.json`
 (nothing is written to your home folder). Saving keeps the `.py` file as it is in git: jupytext's settings
-are in `pyproject.toml`. A notebook run from Lab writes into `build/scratch/<notebook>/`; only
-`glu reproduce` publishes into `figures/`, `results/`, `recordings/` and `models/`.
+are in `pyproject.toml`. A notebook run from Lab writes into a new folder of its own,
+`build/scratch/<notebook>/<date>-<time>/`; only `glu reproduce` publishes into `results/`, `recordings/`,
+`models/` and `build/`.
 """
 
 from pathlib import Path

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import stat
 import sys
@@ -167,6 +168,19 @@ def replace_folder(complete: str | os.PathLike, dest: str | os.PathLike) -> Path
     else:
         os.replace(complete, dest)
     return dest
+
+
+_PLAIN_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+-]{0,199}")
+
+
+def plain_name(name: object) -> bool:
+    """Whether ``name`` (read from a file) can safely become a file name: letters, digits and ``_ . + -``,
+    not starting with a dot or a dash, no ``..``, at most 200 characters; never a path or a terminal code.
+
+    >>> [plain_name(n) for n in ("08_tcds_figures", "a.png", "../../victim", "a/b", ".hidden", "x\\n")]
+    [True, True, False, False, False, False]
+    """
+    return isinstance(name, str) and bool(_PLAIN_NAME.fullmatch(name)) and ".." not in name
 
 
 def read_text(

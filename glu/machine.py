@@ -80,6 +80,61 @@ def thread_env(threads: int | None, environ: dict[str, str] | None = None) -> di
     return {name: str(int(threads)) for name in THREAD_ENV if name not in environ}
 
 
+def _meminfo(field: str, path: str = "/proc/meminfo") -> int | None:
+    """A ``kB`` field of a ``/proc`` status file, in bytes (None where there is no such file or field)."""
+    try:
+        with open(path) as f:
+            for line in f:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def available_memory() -> int | None:
+    """Bytes this process may still allocate: the system's available memory, and below the address-space
+    limit (``ulimit -v``) what this process does not use yet; None where neither can be read."""
+    import resource
+
+    limits = []
+    system = _meminfo("MemAvailable")
+    if system is not None:
+        limits.append(system)
+    try:
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ValueError, OSError):
+        soft = resource.RLIM_INFINITY
+    if soft != resource.RLIM_INFINITY:
+        used = _meminfo("VmSize", "/proc/self/status") or 0
+        limits.append(max(soft - used, 0))
+    return min(limits) if limits else None
+
+
+def human_bytes(n: float) -> str:
+    """``n`` bytes as people read them.
+
+    >>> human_bytes(8_000_000_000_000), human_bytes(1536), human_bytes(12)
+    ('7.28 TiB', '1.50 KiB', '12 B')
+    """
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.0f} B" if unit == "B" else f"{n:.3g} {unit}" if n >= 1024 else f"{n:.2f} {unit}"
+        n /= 1024
+    raise AssertionError  # pragma: no cover
+
+
+def check_memory(need: float, what: str) -> None:
+    """DataError in one line when ``need`` bytes (what ``what`` declares) exceed what this process may still
+    allocate (:func:`available_memory`); checked before anything is allocated."""
+    free = available_memory()
+    if free is not None and need > free:
+        raise DataError(
+            f"{what} needs about {human_bytes(need)} of memory; this process may use {human_bytes(free)} "
+            "(the machine's available memory, or its ulimit)"
+        )
+
+
 VIEWER_ASSETS_ENV = "RERUN_NOTEBOOK_ASSET"
 VIEWER_ASSETS = "serve-local"
 """Where the inline Rerun viewer's files come from: ``serve-local``, the installed ``rerun-notebook``'s,
@@ -171,7 +226,10 @@ def check_scheduler(address: str | None) -> str | None:
 
 
 def check_reachable(address: str, timeout: float = 10.0) -> None:
-    """DataError unless something accepts TCP connections at the scheduler's host and port."""
+    """DataError, in one line naming ``address``, unless a Dask scheduler answers there within ``timeout``
+    seconds: something accepts TCP connections at its host and port, completes Dask's handshake, and says it
+    is a scheduler (its ``identity``). A server that accepts and never answers, answers with anything else,
+    or closes the connection is refused here, before any work (and before any output folder is made)."""
     import socket
 
     host, _, port = address.split("://", 1)[1].rstrip("/").rpartition(":")
@@ -180,6 +238,69 @@ def check_reachable(address: str, timeout: float = 10.0) -> None:
             pass
     except OSError as e:
         raise DataError(f"cannot reach the Dask scheduler at {address}: {e.strerror or e}") from None
+    try:
+        import distributed.comm  # noqa: F401
+    except ImportError:  # the command that needs it says so (glu[dask]); the port at least answers
+        return
+    reply = _ask_identity(address, timeout)
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        raise DataError(
+            f"{address} answered, but not as a Dask scheduler (its identity: {_short(reply)}); is it the "
+            "scheduler's address (tcp://host:8786 by default)?"
+        )
+
+
+def _short(value: Any, limit: int = 80) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def _ask_identity(address: str, timeout: float) -> Any:
+    """The scheduler's answer to Dask's ``identity`` request, within ``timeout`` seconds; DataError otherwise.
+
+    Asked from a daemon thread with an event loop of its own, so that a caller inside an event loop (a
+    notebook) can ask too, and a server that never answers can hold up neither the caller nor the exit."""
+    import asyncio
+    import threading
+
+    async def identity() -> Any:
+        from distributed.comm import connect
+
+        comm = await connect(address, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    outcome: dict[str, Any] = {}
+
+    def ask() -> None:
+        try:
+            outcome["reply"] = asyncio.run(asyncio.wait_for(identity(), timeout + 2))
+        except BaseException as e:  # reported by the caller's thread
+            outcome["error"] = e
+
+    silent = DataError(
+        f"the Dask scheduler at {address} accepted the connection but did not answer within {timeout:g} s"
+    )
+    with quiet_dask_logs():
+        thread = threading.Thread(target=ask, name="glu-scheduler-probe", daemon=True)
+        thread.start()
+        thread.join(timeout + 7)
+    if thread.is_alive() or isinstance(outcome.get("error"), TimeoutError):
+        raise silent
+    error = outcome.get("error")
+    if error is None:
+        return outcome.get("reply")
+    cause = error.__cause__ or error  # Dask's "Timed out trying to connect" names the last attempt's error
+    why = str(cause).splitlines()[0][:120] if str(cause).strip() else type(cause).__name__
+    if isinstance(cause, OSError) and ("closed" in why.lower() or "reset" in why.lower()):
+        raise DataError(f"{address} accepted the connection and closed it: not a Dask scheduler that answers")
+    if isinstance(cause, TimeoutError) or "Timed out" in why:
+        raise silent
+    # an answer that is not Dask's (garbage decodes as anything)
+    raise DataError(f"{address} is not a Dask scheduler that answers ({why})")
 
 
 def map_tasks(fn: Any, items: list[Any], *args: Any, workers: int = 0) -> list[Any]:

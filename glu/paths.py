@@ -4,24 +4,27 @@ The one owner of paths. glu runs in two settings, and :func:`locate` tells them 
 
 * **a source checkout** (``git clone`` + ``pip install -e .``): the package sits beside ``pyproject.toml``
   and ``notebooks/``. Data fetched goes to ``data/real/``, notebook scratch runs to ``build/scratch/``, and
-  ``glu reproduce`` publishes into the project's ``figures/``, ``results/``, ``recordings/``, ``models/``;
-  the machine code of the compiled HMM loops is cached in ``build/compiled/``, and the tables of heavy grids
-  computed for a notebook in ``build/sweeps/``; the saved tables of the notebooks' full grids are
-  committed in ``sweeps/`` (:mod:`glu.saved`).
+  ``glu reproduce`` publishes into the project's ``results/``, ``recordings/``, ``models/`` and
+  ``build/figures/`` (the tracked ``figures/`` only from the real data); the machine code of the compiled
+  HMM loops is cached in ``build/compiled/``, and the tables of heavy grids computed for a notebook in
+  ``build/sweeps/``; the saved tables of the notebooks' full grids are committed in ``sweeps/``
+  (:mod:`glu.saved`).
 * **an installed package** (a wheel in any environment): nothing is ever written inside the package
   (``site-packages``). Data lives in the user's data folder (platformdirs: ``~/.local/share/glu/real`` on
   Linux, ``~/Library/Application Support/glu/real`` on macOS, ``%LOCALAPPDATA%\\glu\\real`` on Windows),
   scratch runs and compiled code in the user's cache folder, and ``glu reproduce`` needs ``-o DIR``. The
-  notebooks ship inside the package as ``glu.notebooks`` (the repository's ``notebooks/`` folder, mapped by
-  ``[tool.setuptools] package-dir`` in ``pyproject.toml``), so they run from any folder.
+  notebooks ship inside the package as ``glu/notebooks/`` (the repository's ``notebooks/`` folder, copied
+  into the wheel by ``setup.py``), so they run from any folder.
 
 ``--data DIR`` and ``$GLU_DATA_DIR`` win over both. Inputs: the package's resources, the notebooks, the
 data folders (the *layout* inside a data folder belongs to :class:`glu.data.DataSource`). Outputs: an
-:class:`OutputLayout` names the folder of every kind of output, either the project's own (``figures/``,
-``results/``, ``recordings/``, ``models/`` at the top, executed notebooks and the documentation site under
-``build/``) or one root holding them all (``glu reproduce -o DIR``, a notebook's ``out_dir``). Notebooks
-(through
-:mod:`glu.run.outputs`) and ``glu reproduce`` both use it, so the two can never disagree.
+:class:`OutputLayout` names the place of every kind of output, either the project's own (``results/``,
+``recordings/``, ``models/`` at the top; the figures, the executed notebooks and the documentation site
+under ``build/``) or one root holding them all (``glu reproduce -o DIR``, a notebook's ``out_dir``).
+Notebooks (through :mod:`glu.run.outputs`) and ``glu reproduce`` both use it, so the two can never disagree.
+``glu reproduce`` keeps its runs in the root's store (:data:`RUNS`, :mod:`glu.run.publish`) and makes each
+place a symbolic link into the published run; the project's tracked ``figures/`` (:data:`FIGURES_DIR`) are
+written only from a full run on the real data.
 """
 
 from __future__ import annotations
@@ -47,7 +50,7 @@ class Locations:
     notebooks : the jupytext notebooks ``NN_name.py``
     data : the folder of fetched data (``real/`` under it)
     scratch : where notebooks run by hand write their outputs
-    compiled : numba's cache of the compiled HMM loops (:mod:`glu.hmm._engine.kernels`)
+    compiled : numba's cache of the compiled loops (:mod:`glu.jit`)
     sweeps : where the tables of heavy grids computed for a notebook are kept (:mod:`glu.saved`)
     saved : the saved tables of the notebooks' full grids (``sweeps/`` of a checkout; None installed)
     """
@@ -143,12 +146,19 @@ DATA_ENV_VAR = "GLU_DATA_DIR"
 SHARED_DATA_ENV_VAR = "GLU_SHARED_DATA"
 """Environment variable naming the shared copy of the real data that tests and CI read."""
 
+FIGURES_DIR: Path | None = PROJECT_ROOT / "figures" if PROJECT_ROOT is not None else None
+"""The project's tracked figures (the README shows them), written only from a full run on the real data.
+
+:meta hide-value:
+"""
+
 PUBLISHED_KINDS: tuple[str, ...] = ("figures", "results", "recordings", "models")
 """Outputs a notebook writes and ``glu reproduce`` publishes."""
 OUTPUT_KINDS: tuple[str, ...] = (*PUBLISHED_KINDS, "notebooks", "site")
 """Every kind of output: the published ones, the executed notebooks and the documentation site."""
-STAGING = ".glu-staging"
-"""Folder (under an output root) where a ``glu reproduce`` run stages its files until they are published.
+RUNS = ".glu-runs"
+"""Folder (under an output root) holding ``glu reproduce``'s runs: the one published, and the one being
+staged (:mod:`glu.run.publish`).
 
 :meta hide-value:
 """
@@ -164,6 +174,8 @@ class OutputLayout:
     figures, results, recordings, models : what notebooks write (PNG + SVG, CSV + JSON, ``.rrd``, JSON)
     notebooks : executed notebooks (``.ipynb``)
     site : the documentation site (:mod:`glu.run.site`)
+    tracked_figures : the project's figures under version control (written only from a full run on the real
+        data), or None outside the project
     """
 
     root: Path
@@ -173,11 +185,12 @@ class OutputLayout:
     models: Path
     notebooks: Path
     site: Path
+    tracked_figures: Path | None = None
 
     @classmethod
     def project(cls) -> OutputLayout:
-        """The project's own folders: ``figures/``, ``results/``, ``recordings/``, ``models/``,
-        ``build/…``."""
+        """The project's own places: ``results/``, ``recordings/``, ``models/``, ``build/figures/``,
+        ``build/notebooks/``, ``build/site/``; the tracked figures in ``figures/``."""
         r = PROJECT_ROOT
         if r is None:
             raise OutputError(
@@ -186,12 +199,13 @@ class OutputLayout:
             )
         return cls(
             r,
-            r / "figures",
+            r / "build" / "figures",
             r / "results",
             r / "recordings",
             r / "models",
             r / "build" / "notebooks",
             r / "build" / "site",
+            tracked_figures=r / "figures",
         )
 
     @classmethod
@@ -207,9 +221,9 @@ class OutputLayout:
 
     @classmethod
     def scratch(cls, notebook: str) -> OutputLayout:
-        """A notebook's own scratch folder, for runs that do not publish: :meth:`under`
-        ``scratch_dir(notebook)``."""
-        return cls.under(scratch_dir(notebook))
+        """A new folder of its own for one run of a notebook that does not publish: :meth:`under`
+        :func:`new_scratch_dir` (so no run overwrites an earlier one's outputs)."""
+        return cls.under(new_scratch_dir(notebook))
 
     def folder(self, kind: str) -> Path:
         """The folder of one kind of output (one of :data:`OUTPUT_KINDS`)."""
@@ -222,14 +236,9 @@ class OutputLayout:
         return {kind: self.folder(kind) for kind in PUBLISHED_KINDS}
 
     @property
-    def site_source(self) -> Path:
-        """Where the site's sources are assembled and built (beside ``site``: ``site-source/``)."""
-        return self.site.with_name(self.site.name + "-source")
-
-    @property
-    def staging(self) -> Path:
-        """Where ``glu reproduce`` stages runs before publishing them."""
-        return self.root / STAGING
+    def store(self) -> Path:
+        """Where ``glu reproduce`` keeps its runs (:data:`RUNS` under the root, :mod:`glu.run.publish`)."""
+        return self.root / RUNS
 
 
 SCRATCH_DIR: Path = HERE.scratch
@@ -241,8 +250,27 @@ SCRATCH_DIR: Path = HERE.scratch
 
 
 def scratch_dir(notebook: str) -> Path:
-    """The scratch folder of one notebook: ``build/scratch/<notebook>/`` in a checkout."""
+    """The scratch folder of one notebook: ``build/scratch/<notebook>/`` in a checkout; each run by hand
+    gets a folder of its own in it (:func:`new_scratch_dir`)."""
     return SCRATCH_DIR / notebook
+
+
+def new_scratch_dir(notebook: str) -> Path:
+    """A new, empty folder for one run of ``notebook`` by hand: ``build/scratch/<notebook>/<date>-<time>/``
+    (``-2``, ``-3``, … when runs start in the same second), made here, so that two runs never share one."""
+    import time
+
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    folder = scratch_dir(notebook)
+    folder.mkdir(parents=True, exist_ok=True)
+    for k in range(1, 10_000):
+        run = folder / (stamp if k == 1 else f"{stamp}-{k}")
+        try:
+            run.mkdir()
+            return run
+        except FileExistsError:
+            continue
+    raise OutputError(f"{folder}: no new scratch folder could be made (10,000 runs this second)")
 
 
 def notebook_file(name: str) -> Path:

@@ -2,5 +2,6 @@
 
 The notebooks are jupytext percent files (``NN_topic.py``), not modules to import: ``glu reproduce`` and
 ``glu run`` execute them with papermill. In a source checkout they stay in ``notebooks/`` at the top of the
-repository; ``pyproject.toml`` maps the package ``glu.notebooks`` to this folder, so a wheel carries them.
+repository; ``setup.py`` copies this folder into the wheel as ``glu/notebooks/``, so an installed glu carries
+them.
 """

@@ -158,13 +158,21 @@ def _prepare(bn: BayesNet, zero_rows: str) -> tuple[list[str], dict, dict, dict]
 def to_bif(bn: BayesNet, zero_rows: str = "refuse", name: str = "glu") -> str:
     """The model as BIF text (see the module docstring for ``zero_rows``)."""
     nodes, parents, cpts, values = _prepare(bn, zero_rows)
-    for n in nodes:
-        for ident in (n, *values[n]):
-            if not _IDENT.match(ident) or ident in _BIF_KEYWORDS:
-                raise ModelError(
-                    f"{ident!r} (node {n!r}) cannot be written in BIF: names and values must be identifiers "
-                    "(letters, digits, _) and not BIF keywords; use XMLBIF instead"
-                )
+    unfit = [
+        (ident, n)
+        for n in nodes
+        for ident in (n, *values[n])
+        if not _IDENT.match(ident) or ident in _BIF_KEYWORDS
+    ]
+    if unfit:
+        shown = ", ".join(
+            f"{ident!r}" + ("" if ident == n else f" (a value of {n!r})") for ident, n in unfit[:6]
+        ) + (f" and {len(unfit) - 6} more" if len(unfit) > 6 else "")
+        raise ModelError(
+            f"BIF cannot carry {shown}: BIF names and values are ASCII identifiers (letters A–Z, digits, _; "
+            "not starting with a digit; not a BIF keyword), as bnlearn and pyAgrum read them. Write XMLBIF "
+            "instead (-o FILE.xmlbif: any name, read by pgmpy, pyAgrum, GeNIe, Weka), or rename them"
+        )
     out = [f"network {name} {{", "}"]
     for n in nodes:
         out += [

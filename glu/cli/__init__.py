@@ -13,24 +13,17 @@ import os
 import signal
 import sys
 import traceback
+import warnings
 from collections.abc import Sequence
+from typing import Any
 
 from glu import __version__
+from glu.cli.commands import COMMANDS
 from glu.cli.guard import guarded_run
+from glu.cli.terminal import safe_streams
 from glu.errors import GluError, Terminated
 
-COMMAND_MODULES: tuple[str, ...] = (
-    "glu.cli.data_cmds",
-    "glu.cli.bn_cmds",
-    "glu.cli.gesture_cmds",
-    "glu.cli.reproduce_cmds",
-    "glu.cli.language_cmds",
-    "glu.cli.anticipate_cmds",
-    "glu.cli.readme_cmds",
-    "glu.cli.eval_cmds",
-    "glu.cli.correspondence_cmds",
-    "glu.cli.learn_cmds",
-)
+COMMAND_MODULES: tuple[str, ...] = tuple(dict.fromkeys(c.module for c in COMMANDS.values()))
 """Each module defines ``register(subparsers)``; handlers import heavy libraries lazily."""
 
 EXIT_BAD_INPUT = 2
@@ -43,8 +36,10 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The full argument parser of ``glu``."""
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The argument parser of ``glu``: every command's in full (``argv`` None), or, for the arguments
+    ``argv`` of one run, only the module of the command they name (:mod:`glu.cli.commands`); the other
+    commands are listed by name and help line only, so that ``glu --help`` imports no command at all."""
     parser = OneLineParser(
         prog="glu",
         description="Gestures, language and affordances: reproduce Saponaro et al. (GLU 2017, TCDS 2020).",
@@ -53,8 +48,16 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
     sub.required = True
-    for name in COMMAND_MODULES:
+    if argv is None:
+        modules = list(COMMAND_MODULES)
+    else:
+        named = next((a for a in argv if not a.startswith("-")), None)
+        modules = [COMMANDS[named].module] if named in COMMANDS else []
+    for name in modules:
         importlib.import_module(name).register(sub)
+    for command, (_, line) in COMMANDS.items():
+        if command not in sub.choices:
+            sub.add_parser(command, help=line)
     return parser
 
 
@@ -96,7 +99,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError:  # not the main thread (a test calling main() from a thread): keep the default
         pass
     try:
-        return _main(argv)
+        with safe_streams():  # nothing read from a file reaches the terminal as a control code
+            return _main(argv)
     except KeyboardInterrupt as e:  # before the command started: building the parser, reading arguments
         return _stopped("glu", e)
     finally:
@@ -122,9 +126,26 @@ def _stopped(name: str, e: KeyboardInterrupt) -> int:
     return 130
 
 
+def _say_data_warnings(name: str) -> Any:
+    """Print a :class:`glu.data.source.DataWarning` (a data folder that is the published data modified) as
+    one line on stderr, once per folder; other warnings as Python shows them."""
+    shown = warnings.showwarning
+    seen: set[str] = set()
+
+    def show(message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
+        if category.__name__ == "DataWarning":
+            if str(message) not in seen:
+                seen.add(str(message))
+                print(f"{name}: warning: {message}; results say so", file=sys.stderr)
+            return
+        shown(message, category, filename, lineno, file, line)
+
+    return show
+
+
 def _main(argv: Sequence[str] | None) -> int:
-    parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(argv)
     nul = next((a for a in argv if "\x00" in a), None)
     if nul is not None:  # no file name or value can hold one; the OS would refuse it deep inside
         print(f"glu: error: argument {nul!r} contains a NUL byte", file=sys.stderr)
@@ -138,7 +159,8 @@ def _main(argv: Sequence[str] | None) -> int:
     name = f"glu {args.command}" + (f" {sub}" if sub else "")
     debug = getattr(args, "debug", False) or os.environ.get(DEBUG_ENV, "") not in ("", "0")
     try:
-        with guarded_run(args):
+        with warnings.catch_warnings(), guarded_run(args):
+            warnings.showwarning = _say_data_warnings(name)
             status = args.func(args)
     except GluError as e:
         print(f"{name}: error: {e}", file=sys.stderr)
@@ -149,6 +171,17 @@ def _main(argv: Sequence[str] | None) -> int:
         return 0
     except OSError as e:
         print(f"{name}: error: {_os_error_text(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except MemoryError:  # a size no check foresaw: one line, not a traceback
+        from glu.machine import available_memory, human_bytes
+
+        free = available_memory()
+        print(
+            f"{name}: error: out of memory: the input needs more than this process may use"
+            + (f" ({human_bytes(free)} free now)" if free is not None else "")
+            + "; give a smaller input, or run where more memory is available",
+            file=sys.stderr,
+        )
         return EXIT_BAD_INPUT
     except RecursionError:  # JSON or YAML nested deeper than Python reads (a model, a schema, a query line)
         print(

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from glu.cli.commands import help_of
 from glu.cli.common import (
     add_data_args,
     add_deprecated_alias,
@@ -37,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "anticipate",
-        help="effect anticipation: HMM scores per frame, p_comb(ObjVel) every 5 frames, a description",
+        help=help_of("anticipate"),
         description=DESCRIPTION,
     )
     p.add_argument(

@@ -10,19 +10,21 @@ from pathlib import Path
 from typing import Any
 
 from glu.bn.exchange import FORMATS, ZERO_ROW_MODES
+from glu.cli.commands import help_of
 from glu.cli.common import (
     add_data_args,
     add_engine_args,
     add_evidence_args,
     add_json_option,
     add_model_args,
-    add_renormalise_arg,
+    add_renormalise_option,
     json_text,
     load_model,
     make_engine,
     output_file,
     read_evidence,
 )
+from glu.cli.terminal import one_line
 from glu.errors import EvidenceError, GluError
 from glu.evidence import check_disjoint, format_evidence
 
@@ -31,14 +33,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``bn`` command group and ``query``."""
     p = sub.add_parser(
         "bn",
-        help="learn, import or inspect the Affordance–Words network",
+        help=help_of("bn"),
         description="Learn the Affordance–Words network from the robot's experiments, list its edges and "
         "nodes, or convert it from and to the exchange formats of other tools (BIF, XMLBIF, UAI). "
         "Questions to a network: glu query and glu describe.",
     )
     bsub = p.add_subparsers(dest="bn_command", metavar="SUBCOMMAND")
     bsub.required = True
+    _register_learn_and_inspect(bsub)
+    _register_exchange(bsub)
+    _register_query(sub)
 
+
+def _register_learn_and_inspect(bsub: argparse._SubParsersAction) -> None:
+    """Add ``bn learn``, ``bn edges`` and ``bn nodes``."""
     lp = bsub.add_parser(
         "learn",
         help="learn structure (K2 + BIC) and parameters from the experiments",
@@ -73,6 +81,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_option(np_, "[{name, kind, values, parents}, …]")
     np_.set_defaults(func=_nodes)
 
+
+def _register_exchange(bsub: argparse._SubParsersAction) -> None:
+    """Add ``bn import`` and ``bn export``."""
     ip = bsub.add_parser(
         "import",
         help="convert a model from another tool (BIF, XMLBIF, UAI) or the original BNT .mat to a glu "
@@ -86,7 +97,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "-o", "--out", type=output_file, required=True, metavar="MODEL", help="model file to write (JSON)"
     )
     ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
-    add_renormalise_arg(ip)
+    add_renormalise_option(ip)
     ip.set_defaults(func=_import)
 
     xp = bsub.add_parser(
@@ -115,11 +126,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=ZERO_ROW_MODES[0],
         help="all-zero CPT rows: refuse (default) or write them as observed indicator nodes (seen)",
     )
+    add_renormalise_option(xp)
     xp.set_defaults(func=_export)
 
+
+def _register_query(sub: argparse._SubParsersAction) -> None:
+    """Add ``query``."""
     q = sub.add_parser(
         "query",
-        help="posterior marginals given hard and soft evidence",
+        help=help_of("query"),
         description="Posterior marginal of each target node given evidence, by exact inference.",
     )
     add_model_args(q)
@@ -157,7 +172,7 @@ def _edges(args: argparse.Namespace) -> int:
         print(json_text([list(edge) for edge in bn.edges()]))
         return 0
     for parent, child in bn.edges():
-        print(f"{parent} -> {child}")
+        print(f"{one_line(parent)} -> {one_line(child)}")
     return 0
 
 
@@ -183,6 +198,15 @@ def _nodes(args: argparse.Namespace) -> int:
     if args.json:
         print(json_text(rows))
         return 0
+    rows = [  # names read from a file, each shown on one line
+        {
+            **r,
+            "name": one_line(r["name"]),
+            "values": list(map(one_line, r["values"])),
+            "parents": list(map(one_line, r["parents"])),
+        }
+        for r in rows
+    ]
     n_words = len(bn.schema.word_nodes)
     print(f"# {desc}: {len(rows)} nodes, {n_words} of them word nodes")
     w_name = max(len("node"), *(len(r["name"]) for r in rows))
@@ -230,7 +254,9 @@ def _export(args: argparse.Namespace) -> int:
     from glu.cli.common import read_model_file
 
     fmt = format_of(args.out, args.format)
-    bn = read_model_file(args.model)
+    if args.renormalise is not None and args.model.suffix.lower() in (".mat", ".json"):
+        raise GluError("--renormalise applies to BIF, XMLBIF and UAI files")
+    bn = read_model_file(args.model, renormalise=args.renormalise)
     export_bn(bn, args.out, fmt, zero_rows=args.zero_rows)
     print(f"wrote {args.out} ({fmt}): {len(bn.nodes)} nodes, {len(bn.edges())} edges")
     seen = seen_evidence(bn) if args.zero_rows == "seen" else {}
@@ -279,6 +305,7 @@ def _query(args: argparse.Namespace) -> int:
     words = (
         answer.pop(WORDS_TARGET) if WORDS_TARGET in answer and WORDS_TARGET not in bn.schema.values else None
     )
+    answer = {one_line(t): {one_line(v): p for v, p in dist.items()} for t, dist in answer.items()}
     if answer:
         width = max(len(t) for t in answer)
         for t, dist in answer.items():
@@ -286,6 +313,7 @@ def _query(args: argparse.Namespace) -> int:
             for v, prob in dist.items():
                 print(f"{t:<{width}}  {v:<{vwidth}}  {prob:.6f}")
     if words is not None:
+        words = {one_line(w): p for w, p in words.items()}
         wwidth = max(len("word"), *(len(w) for w in words))
         print(f"{'word':<{wwidth}}  P(present)")
         for w, prob in words.items():

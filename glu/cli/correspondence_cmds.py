@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 
+from glu.cli.commands import help_of
 from glu.cli.common import output_folder, positive_int
 
 
@@ -17,7 +18,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``correspondence`` command."""
     p = sub.add_parser(
         "correspondence",
-        help="run notebook 10's synthetic correspondence study (Dask) and save its tables",
+        help=help_of("correspondence"),
         description="Run the synthetic study of notebook 10 with its default parameters (every seed, "
         "training source, feature set and condition; the ideal and the occluding tracker), one task per "
         "seed on a LocalCluster, and write its tables with their key and provenance to -o DIR, where "

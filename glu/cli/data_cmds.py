@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from glu import paths
+from glu.cli.commands import help_of
 from glu.cli.common import (
     add_data_option,
     add_deprecated_alias,
@@ -26,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``data`` command group."""
     p = sub.add_parser(
         "data",
-        help="fetch, synthesise or inspect data",
+        help=help_of("data"),
         description="Get the real data (glu data fetch), write a synthetic data folder (glu data synth), "
         "or see which data source a command would use and what it holds (glu data info).",
     )

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from glu.cli.commands import help_of
 from glu.cli.common import add_cluster_args, add_data_option, output_file, output_folder, positive_int, seed
 
 
@@ -33,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``evaluate`` and ``corpus`` commands."""
     e = sub.add_parser(
         "evaluate",
-        help="measure every fusion strategy on a simulated corpus (Dask sweep)",
+        help=help_of("evaluate"),
         description="Measure every fusion strategy (gesture only, network only, hard, virtual, Jeffrey, "
         "product) on simulated episodes: the factorial design effects × action prior × inference network × "
         "p_HMM reading × feature set × noise × viewpoint, over recogniser seeds, every strategy at every "
@@ -63,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     c = sub.add_parser(
         "corpus",
-        help="write a simulated corpus of episodes to Parquet",
+        help=help_of("corpus"),
         description="Write the simulated episodes of a sweep's design (the same settings as glu evaluate: "
         "--config, --episodes, --seed, --data) to one Parquet file, one row per episode, without scoring "
         "them.",

@@ -8,10 +8,12 @@ recording of the data folder (``tap1_hand`` → ``<data>/gestures/tap1_hand/data
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 from typing import Any
 
+from glu.cli.commands import help_of
 from glu.cli.common import (
     add_data_option,
     add_hmm_size_args,
@@ -25,6 +27,7 @@ from glu.cli.common import (
     progress_bar,
     seed,
 )
+from glu.cli.terminal import one_line
 from glu.data.source import HAND_LOG
 from glu.errors import DataError
 from glu.gestures.invariants import ALL, INVARIANCE_MEANING, INVARIANCES, RAW, Invariants
@@ -45,9 +48,16 @@ SYNTHETIC_NOISE = 0.01
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``gestures`` and ``hmm`` command groups and ``recognize``."""
+    _register_gestures(sub)
+    _register_hmm(sub)
+    _register_recognize(sub)
+
+
+def _register_gestures(sub: argparse._SubParsersAction) -> None:
+    """Add ``gestures segment``."""
     g = sub.add_parser(
         "gestures",
-        help="inspect and segment hand-trajectory logs",
+        help=help_of("gestures"),
         description="Inspect hand-trajectory logs: repair their tracking problems and find the gesture "
         "repetitions in them. " + LOG_TEXT,
     )
@@ -69,9 +79,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_option(s, "the segments and tracking events")
     s.set_defaults(func=_segment)
 
+
+def _register_hmm(sub: argparse._SubParsersAction) -> None:
+    """Add ``hmm train``."""
     h = sub.add_parser(
         "hmm",
-        help="train gesture HMMs",
+        help=help_of("hmm"),
         description="Train one left-to-right GMM-HMM per action, on the real recordings, synthetic gestures "
         "or your own labelled recordings, and save them as a recogniser file that glu recognize and glu "
         "anticipate take (--models FILE).",
@@ -89,6 +102,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         + "; ".join(f"{k} = {v}" for k, v in INVARIANCE_MEANING.items())
         + " (formulas: glu.gestures.invariants)",
     )
+    _add_training_data(t)
+    _add_training_settings(t)
+    t.set_defaults(func=_train)
+
+
+def _add_training_data(t: argparse.ArgumentParser) -> None:
+    """``hmm train``'s data (``--data``, ``--synthetic``, ``--recordings``) and output."""
     src = t.add_mutually_exclusive_group()
     add_data_option(src)
     src.add_argument(
@@ -105,6 +125,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument(
         "-o", "--out", type=output_file, required=True, metavar="RECOGNISER", help="file to write (JSON)"
     )
+
+
+def _add_training_settings(t: argparse.ArgumentParser) -> None:
+    """``hmm train``'s actions, model sizes, EM settings, recipe and features."""
     t.add_argument(
         "--actions",
         type=_actions,
@@ -158,11 +182,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="real data: also train on the originals' hand-cut segments of the two seated taps (the "
         "effect-anticipation test gestures; default: the standing recordings only)",
     )
-    t.set_defaults(func=_train)
 
+
+def _register_recognize(sub: argparse._SubParsersAction) -> None:
+    """Add ``recognize``."""
     r = sub.add_parser(
         "recognize",
-        help="posterior p_HMM(A | G) of a gesture in a hand log",
+        help=help_of("recognize"),
         description="Score a hand log (or frames A:B of it) under each action's HMM and print the "
         "log-likelihoods and the posterior with equal priors; --stream prints them after every frame. "
         + LOG_TEXT
@@ -245,14 +271,14 @@ def _resolve_log(log: str, data: str | None) -> tuple[Path, Any]:
         p = p / HAND_LOG
     if p.exists():
         return p, None
-    if "/" not in log and not p.suffix:  # a bare name: a recording of the data folder
+    if "/" not in log and os.sep not in log and not p.suffix:  # a recording's name, looked up in the data
         from glu.data.source import resolve_data
 
         source = resolve_data(data)
         return source.hand_log(log), source
     raise DataError(
-        f"{log}: file not found (a YARP hand log, a recording folder, or a .csv/.tsv/.npy trajectory; "
-        "a bare name is a recording of the data folder)"
+        f"{log}: file not found (a YARP hand log, a recording folder, a .csv/.tsv/.npy trajectory, or the "
+        "name of a recording in the data)"
     )
 
 
@@ -424,7 +450,7 @@ def _recognize(args: argparse.Namespace) -> int:
 
     from glu.gestures.recordings import load_features
 
-    path, source = _resolve_log(args.log, args.data)  # a missing file is said before the models load
+    path, source = _resolve_log(args.log, args.data)  # a missing file is said before the models are read
     rec = _load_models(args.models, args.data, args.json)
     if source is not None and args.models != "original":
         _say(f"data: {source.describe()}", args.json)
@@ -477,8 +503,8 @@ def _recognize(args: argparse.Namespace) -> int:
         return 0
     print(f"{'action':8s} {'log L(G|A)':>12s} {'p_HMM(A|G)':>11s}")
     for a, v, q in zip(acts, ll, p, strict=True):
-        print(f"{a:8s} {v:12.3f} {q:11.4f}")
-    print(f"recognised: {acts[int(np.argmax(ll))]}")
+        print(f"{one_line(a):8s} {v:12.3f} {q:11.4f}")
+    print(f"recognised: {one_line(acts[int(np.argmax(ll))])}")
     print(verdict.message(), file=sys.stderr if verdict.atypical else sys.stdout)
     return 0
 

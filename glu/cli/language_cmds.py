@@ -9,7 +9,9 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
+from glu.cli.commands import help_of
 from glu.cli.common import (
     add_description_args,
     add_engine_args,
@@ -24,6 +26,7 @@ from glu.cli.common import (
     read_evidence,
     seed,
 )
+from glu.cli.terminal import one_line
 from glu.errors import EvidenceError
 from glu.evidence import format_evidence
 from glu.language.sampling import MAX_SAMPLES
@@ -43,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add ``describe``."""
     p = sub.add_parser(
         "describe",
-        help="the N best sentences describing a situation (grammar + word probabilities)",
+        help=help_of("describe"),
         description=DESCRIPTION,
     )
     add_model_args(p)
@@ -110,15 +113,7 @@ def _describe(args: argparse.Namespace) -> int:
     from glu.language.sampling import sample_sentences
     from glu.language.sentences import compile_network, count_sentences
 
-    if args.seed is not None and args.sample is None:
-        raise EvidenceError("--seed chooses the random sentences of --sample K; give --sample too")
-    if args.sample is not None and args.max_length is not None:
-        raise EvidenceError("--max-length applies to the exact N-best; drop it with --sample")
-    if args.candidates != "grammar" and (args.sample is not None or args.max_length is not None):
-        raise EvidenceError(
-            f"--candidates {args.candidates} ranks a fixed list of sentences; "
-            "--sample and --max-length apply to --candidates grammar only"
-        )
+    _check_options(args)
     evidence, soft = read_evidence(args)
     grammar = load_grammar(args.grammar)
     net = compile_network(grammar)
@@ -173,16 +168,34 @@ def _describe(args: argparse.Namespace) -> int:
         e_sent, e_score = exact["sentence"].iloc[0], float(exact["score"].iloc[0])
         status = "among the candidates" if e_sent in {" ".join(c) for c in candidates} else "not a candidate"
         say(f"# exact best over the grammar ({status}): {_score_text(e_score).strip()}  {e_sent}")
-    if args.json:
+    _print_ranked(result, args.json, say)
+    return 0
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse the options of ``describe`` that do not go together, before any work."""
+    if args.seed is not None and args.sample is None:
+        raise EvidenceError("--seed chooses the random sentences of --sample K; give --sample too")
+    if args.sample is not None and args.max_length is not None:
+        raise EvidenceError("--max-length applies to the exact N-best; drop it with --sample")
+    if args.candidates != "grammar" and (args.sample is not None or args.max_length is not None):
+        raise EvidenceError(
+            f"--candidates {args.candidates} ranks a fixed list of sentences; "
+            "--sample and --max-length apply to --candidates grammar only"
+        )
+
+
+def _print_ranked(result: Any, as_json: bool, say: Any) -> None:
+    """The ranked sentences: a table on stdout (each sentence on one line), or JSON with −∞ as null."""
+    if as_json:
         rows = [{"sentence": r.sentence, "score": float(r.score)} for r in result.itertuples()]  # −∞ → null
         print(json_text(rows))
-        return 0
+        return
     if result.empty:
         print("# no sentence")
-        return 0
+        return
     print(f"{'rank':>4}  {'score':>10}  sentence")
     for r in result.itertuples():
-        print(f"{r.rank:>4}  {_score_text(r.score)}  {r.sentence}")
+        print(f"{r.rank:>4}  {_score_text(r.score)}  {one_line(r.sentence)}")
     if not all(math.isfinite(x) for x in result["score"]):
         say(f"# {IMPOSSIBLE}: a word of the sentence has probability 0 under this evidence (score −∞)")
-    return 0

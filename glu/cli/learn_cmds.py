@@ -18,6 +18,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from glu.cli.commands import help_of
 from glu.cli.common import (
     add_cluster_args,
     add_data_option,
@@ -30,6 +31,10 @@ from glu.cli.common import (
     positive_int,
     seed,
 )
+
+EPISODE_BYTES = 120_000
+"""Memory an episode of ``learn-gestures`` holds at the peak of the simulation (about 110 kB measured:
+``tests/harness/test_fuzz_hostile.py``), for the check of ``--episodes`` before anything is allocated."""
 
 
 def _ambiguities() -> tuple[str, ...]:
@@ -60,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     ambiguity_help = "; ".join(f"{k}: {a.description}" for k, a in AMBIGUITIES.items()).replace("%", "%%")
     p = sub.add_parser(
         "learn-gestures",
-        help="learn gesture HMMs from unlabelled episodes, labelled by the affordance network",
+        help=help_of("learn-gestures"),
         description="Simulate episodes (a person's gesture on an object, the effect, the words), label each "
         "with the Affordance–Words network learned from the robot's own experiments, train gesture HMMs from "
         "those labels and write a recogniser that glu recognize and glu anticipate take (--models FILE).",
@@ -106,7 +111,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     c = sub.add_parser(
         "learning-curves",
-        help="the study of learning from effects: learning curves of every scheme (Dask, one task per seed)",
+        help=help_of("learning-curves"),
         description="Run the study of notebook 12: every labelling scheme and baseline, every ambiguity, "
         "with and without words, one Dask task per training seed, and write its tables "
         "(learning_curves.csv, learning_match.csv, learning_labels.csv, learning_study.json) to -o DIR.",
@@ -171,15 +176,22 @@ def heartbeat(what: str, every: float, enabled: bool | None = None) -> Iterator[
 
 
 def _learn(args: argparse.Namespace) -> int:
+    from glu.errors import DataError
     from glu.hmm import TrainingConfig
+    from glu.machine import check_memory
     from glu.studies.learning.learned_recognizers import learn_gestures
 
+    check_memory(args.episodes * EPISODE_BYTES, f"--episodes {args.episodes:,}")
     engine, label = _engine(args.data)
+    actions = engine.bn.schema.values_of("Action")
+    if args.episodes < len(actions):
+        raise DataError(
+            f"--episodes {args.episodes}: at least one episode per action ({len(actions)}: "
+            f"{', '.join(actions)}) to learn a model of each"
+        )
     print(f"network: learned from {label}")
     config = TrainingConfig(n_states=args.states, n_mix=args.mix, n_iter=args.iter)
     if args.threshold > 1:
-        from glu.errors import DataError
-
         raise DataError(f"--threshold {args.threshold}: a probability in (0, 1]")
     how = "one episode at a time" if args.online else "EM on all of them, relabelled until the labels settle"
     print(
@@ -215,12 +227,14 @@ def _curves(args: argparse.Namespace) -> int:
 
     from glu.errors import DataError
     from glu.files import atomic_write_json, atomic_write_text
-    from glu.machine import SYNCHRONOUS
+    from glu.machine import SYNCHRONOUS, check_reachable
     from glu.studies.learning import study as lc
 
     bad = [a for a in args.ambiguities if a not in _ambiguities()]
     if bad:
         raise DataError(f"--ambiguities: unknown {bad[0]!r}; allowed: {', '.join(_ambiguities())}")
+    if args.scheduler not in (None, SYNCHRONOUS):  # before any work: a scheduler that does not answer
+        check_reachable(args.scheduler)
     engine, label = _engine(args.data)
     settings = lc.StudySettings(
         episodes=args.episodes,

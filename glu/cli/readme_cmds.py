@@ -13,6 +13,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from glu.cli.commands import help_of
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``readme``."""
@@ -20,7 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "readme",
-        help="write the generated sections of the README and docs/ (story table, results, commands, speed)",
+        help=help_of("readme"),
         description="Write the README's story table (from the notebooks' manifests), its results section "
         "(from the summary of a full make reproduce on the real data: every number in it comes from the "
         "summary), and the command table of docs/cli.md and the tables of docs/speed.md (from the "

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from glu.cli.commands import help_of
 from glu.cli.common import add_data_option, add_json_option, json_text, positive_int, require_extra, seed
 
 NOTEBOOK_MODULES = ("papermill", "jupytext", "ipykernel", "nbconvert", "rerun")
@@ -18,12 +19,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``reproduce`` and ``run`` commands."""
     p = sub.add_parser(
         "reproduce",
-        help="run every notebook: figures, recordings, results summary, documentation site",
-        description="Run every notebook headless, in parallel kernels; publish their figures, recordings, "
-        "results, models and executed notebooks only when all succeed (a failed or interrupted run leaves "
-        "the outputs of the last run as they were), then write the results summary and the documentation "
-        "site (build/site/; a synthetic or quick run writes all of it under build/synthetic/ or "
-        "build/quick/, never over the published figures).",
+        help=help_of("reproduce"),
+        description="Run every notebook headless, in parallel kernels, then write the results summary and "
+        "the documentation site; publish the whole run (figures, recordings, results, models, executed "
+        "notebooks, summary, site) at once, only when every notebook succeeded: a failed or interrupted run "
+        "leaves the last published run as it was. Nothing glu did not write is replaced.",
     )
     add_data_option(p)
     p.add_argument("--quick", action="store_true", help="small, fast runs (as the tests do)")
@@ -33,8 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=Path,
         metavar="DIR",
         help="write figures/, recordings/, results/, models/, notebooks/, site/ here "
-        "(default in a source checkout: the project's folders for a full run on the real data, "
-        "build/synthetic/ on synthetic data, build/quick/ with --quick; required when glu is installed)",
+        "(default: the project's folders in a source checkout; required when glu is installed)",
     )
     p.add_argument("-j", "--jobs", type=positive_int, default=2, help="notebooks run in parallel (default 2)")
     p.add_argument(
@@ -42,16 +41,23 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=seed, default=0, help="seed passed to every notebook (default 0)")
     p.add_argument("--no-site", action="store_true", help="skip the documentation site (build/site/)")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="where -o DIR holds a folder or file glu did not write (figures/, site/, …), leave it untouched "
+        "and publish that part in DIR/.glu-runs/current/ only (default: refuse, naming it)",
+    )
     _add_notebooks_option(p)
     p.set_defaults(func=_reproduce)
 
     r = sub.add_parser(
         "run",
-        help="run one notebook headless with other parameters (into its scratch folder)",
+        help=help_of("run"),
         description=(
             "Run one notebook headless, showing each cell as it starts on stderr (--quiet: nothing). "
             "Parameters are checked against the notebook's parameters cell before anything executes. "
-            "Outputs go to build/scratch/NOTEBOOK/ unless -o DIR is given; only glu reproduce publishes into "
+            "Outputs go to a new folder build/scratch/NOTEBOOK/DATE-TIME/ unless -o DIR is given (a folder "
+            "glu reproduce published into is refused); only glu reproduce publishes into "
             'figures/, results/, recordings/, models/. --json prints {"notebook", "executed", "outputs"} '
             "(with --list: the parameters)."
         ),
@@ -68,7 +74,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_data_option(r)
     r.add_argument(
-        "-o", "--out", type=Path, metavar="DIR", help="output folder (default: build/scratch/NOTEBOOK/)"
+        "-o",
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="output folder (default: a new build/scratch/NOTEBOOK/DATE-TIME/)",
     )
     r.add_argument(
         "--quick", action="store_true", help="the quick preset of the notebook's manifest (-p values win)"
@@ -116,6 +126,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         seed=args.seed,
         site=not args.no_site,
         notebooks_dir=folder,
+        force=args.force,
     )
     print(
         f"ran {len(summary['ran'])} notebooks in {summary['wall_time_s']:.1f} s ({summary['data_source']}); "

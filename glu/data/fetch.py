@@ -109,6 +109,21 @@ def published_origin(root: str | os.PathLike, manifest_path: str | os.PathLike =
     return ", ".join(f"{repos[k]['repo']}@{repos[k]['commit'][:7]}" for k in used)
 
 
+def published_check(
+    root: str | os.PathLike, manifest_path: str | os.PathLike = MANIFEST
+) -> tuple[list[str], list[str]]:
+    """The files of the manifest that the data folder ``root`` has, split by their checksum: (those that carry
+    the published sha256, those that differ), each as its place in the folder."""
+    root = Path(root)
+    spec = json.loads(Path(manifest_path).read_text(encoding="utf-8"))
+    same, differ = [], []
+    for f in spec["files"]:
+        path = root / f["local"]
+        if path.is_file():
+            (same if _cached_sha256(path) == f["sha256"] else differ).append(f["local"])
+    return same, differ
+
+
 _SHA_CACHE: dict[tuple[str, int, int], str] = {}
 
 

@@ -76,15 +76,17 @@ class DataSource:
 
         Real data is named by its public origin when its checksums are the published ones (``real data:
         giampierosalvi/AffordancesAndSpeech@421f455, gsaponaro/tcds-gestures@fd608ac``); a folder that is
-        not is ``data folder 'NAME' (not the published data: checksums differ)``; synthetic data by the
-        generator's parameters. The same data gives the same line however it was found.
+        not is named by its folder and why: ``data folder 'NAME' (the published data modified:
+        affordance-words/… differs from the published file)`` when some of its files are the published
+        ones and others differ, ``data folder 'NAME' (not the published data: …)`` otherwise; synthetic
+        data by the generator's parameters. The same data gives the same line however it was found.
         """
         if self.kind == "real":
             from glu.data.fetch import published_origin
 
             origin = published_origin(self.root) if self.root is not None else None
             if origin is None:
-                return f"data folder '{self.root.name}' (not the published data: checksums differ)"
+                return f"data folder '{self.root.name}' ({modified_text(self.root)})"
             return f"real data: {origin}"
         return f"synthetic data (seed {self.seed}, {self.n_experiments} experiments)"
 
@@ -173,6 +175,24 @@ class DataSource:
         return self.optional(SENTENCE_SAMPLES)
 
 
+class DataWarning(UserWarning):
+    """A data folder that is not the published data although it holds files of the published names."""
+
+
+def modified_text(root: Path) -> str:
+    """Why the data folder ``root`` is not the published data, naming the files that differ."""
+    from glu.data.fetch import published_check
+
+    same, differ = published_check(root)
+    if not differ:
+        return "not the published data: it lacks the published experiment table"
+    files = ", ".join(differ[:3]) + (f" and {len(differ) - 3} more" if len(differ) > 3 else "")
+    verb = "differs from the published file" if len(differ) == 1 else "differ from the published files"
+    if same:
+        return f"the published data modified: {files} {verb}"
+    return f"not the published data: {files} {verb}"
+
+
 def check_words(words: str) -> str:
     """``words`` if it names an experiment table (:data:`WORD_FILES`), else :class:`DataError`."""
     if words not in WORD_FILES:
@@ -230,7 +250,14 @@ def _folder_source(root: Path, origin: str) -> DataSource:
             )
         except (ValueError, KeyError, TypeError):
             raise DataError(f"{marker}: malformed marker file; expected JSON with 'seed' and 'n'") from None
-    return DataSource(kind="real", root=root.resolve(), origin=origin)
+    source = DataSource(kind="real", root=root.resolve(), origin=origin)
+    from glu.data.fetch import published_check
+
+    if published_check(root)[1]:  # said where the results go (describe) and once to the person (a warning)
+        import warnings
+
+        warnings.warn(DataWarning(f"{root}: {modified_text(root)}"), stacklevel=3)
+    return source
 
 
 def _is_published(root: Path) -> bool:

@@ -183,38 +183,34 @@ class Typicality:
         """True if anything does not fit: the likelihood, the motion or the frame."""
         return self.outside or bool(self.problems)
 
-    def message(self) -> str:
-        """One line for the person at the keyboard."""
+    def distance(self) -> float:
+        """How far (nats per frame) the per-frame log-likelihood lies outside its range; 0 inside it."""
         r = self.range
-        where = f"the {r.reference} range {r.low:.2f} … {r.high:.2f}"
-        allowed = f"within {r.margin:.2f} of it is typical: the range's width, at least {MIN_MARGIN:g}"
+        return max(r.low - self.per_frame, self.per_frame - r.high, 0.0)
+
+    def _where(self) -> str:
+        """Where the per-frame log-likelihood lies against its range, with the distance and the margin."""
+        r = self.range
+        span = f"the {r.reference} range {r.low:.2f} … {r.high:.2f}"
+        d = self.distance()
+        if d == 0:
+            return f"lies inside {span}"
+        side = "below" if self.per_frame < r.low else "above"
+        return f"lies {d:.2f} nats/frame {side} {span} (far means more than {r.margin:.2f})"
+
+    def message(self) -> str:
+        """One line for the person at the keyboard: the verdict, with how far outside its range the gesture
+        lies and how far counts as far."""
+        head = f"per-frame log L {self.per_frame:.2f} under {self.action} {self._where()}"
         if not self.atypical:
-            return (
-                f"per-frame log L {self.per_frame:.2f} under {self.action} is {self.distance_text()} "
-                f"{where} ({allowed})"
-            )
+            return head
         what = list(self.problems)
         if self.outside:
-            what.insert(
-                0,
-                f"per-frame log L {self.per_frame:.2f} under {self.action} is {self.distance_text()} {where} "
-                f"(more than the {r.margin:.2f} allowed)",
-            )
+            what.insert(0, head)
         return (
             f"warning: {'; '.join(what)}: the gesture looks like nothing the models were trained on (units, "
             "frame of reference, sensor?); the posterior is not meaningful"
         )
-
-    def distance_text(self) -> str:
-        """Where the per-frame log-likelihood lies against the range: "inside", or "D below"/"D above"."""
-        r, x = self.range, self.per_frame
-        if not np.isfinite(x):
-            return "not finite, outside"
-        if x < r.low:
-            return f"{r.low - x:.2f} below"
-        if x > r.high:
-            return f"{x - r.high:.2f} above"
-        return "inside"
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready fields (finite numbers only)."""

@@ -54,7 +54,7 @@ import numpy as np
 from glu.errors import DataError, ModelError
 from glu.hmm._engine.em_batch import quadratic_coefficients as component_coefficients
 from glu.hmm._engine.em_batch import quadratic_features
-from glu.hmm._engine.kernels import loglik_banked
+from glu.hmm._engine.kernels import loglik_banked, stream_step
 from glu.hmm.em import GMMHMMParams
 from glu.hmm.inference import TINY, forward_curve, gaussian_factors, log_emissions
 from glu.hmm.model import GestureHMM, as_sequence
@@ -323,3 +323,37 @@ def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     if not seqs:
         return np.empty((0, len(bank.startprob)))
     return loglik_banked(seqs, bank.means, bank.chol_inv, bank.log_norm, bank.startprob, bank.transmat)
+
+
+class BankStream:
+    """Every model of a bank advanced one frame at a time: :func:`loglik_many`'s compiled recursion with
+    its state kept between frames, so that frame t costs the same whatever came before and the
+    log-likelihoods after frame t are those of :func:`loglik_many` on the first t frames (the same
+    arithmetic in the same order).
+
+    Attributes
+    ----------
+    t : frames pushed since the last :meth:`reset`
+    loglik : ``log L(G_1^t | model)`` of each model, shape (n_models,) (updated in place by :meth:`push`)
+    """
+
+    def __init__(self, bank: Bank) -> None:
+        def f(a: np.ndarray) -> np.ndarray:
+            return np.ascontiguousarray(a, dtype=np.float64)
+
+        self._bank = (f(bank.means), f(bank.chol_inv), f(bank.log_norm), f(bank.startprob), f(bank.transmat))
+        self._alpha = np.zeros(bank.startprob.shape)
+        self.loglik = np.zeros(len(bank.startprob))
+        self.t = 0
+
+    def reset(self) -> None:
+        """Forget every frame."""
+        self._alpha[:] = 0.0
+        self.loglik[:] = 0.0
+        self.t = 0
+
+    def push(self, x: np.ndarray) -> np.ndarray:
+        """Advance by one frame ``x`` (float64, shape (D,), C-ordered); returns :attr:`loglik`."""
+        stream_step(x, self.t == 0, self._alpha, self.loglik, *self._bank)
+        self.t += 1
+        return self.loglik

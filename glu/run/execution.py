@@ -158,8 +158,10 @@ def _engine_class() -> type:
             execution_timeout=None,
             **kwargs,
         ):
-            # as papermill's NBClientEngine, with our client
-            handle = kwargs.pop("glu_handle")
+            # as papermill's NBClientEngine, with our client; from papermill's own command line
+            # (`papermill --engine glu`) there is no handle, and the kernel's own warnings stay out
+            handle = kwargs.pop("glu_handle", None) or RunHandle()
+            kwargs.setdefault("extra_arguments", ["--log-level=ERROR"])
             kwargs = remove_args(["input_path"], **kwargs)
             safe_kwargs = remove_args(["timeout", "startup_timeout"], **kwargs)
             final_kwargs = merge_kwargs(
@@ -175,6 +177,14 @@ def _engine_class() -> type:
             return Client(nb_man, handle, **final_kwargs).execute()
 
     return GluEngine
+
+
+def __getattr__(name: str) -> Any:
+    """``GluEngine``: papermill's engine entry point ``glu`` (``papermill --engine glu``), built on first use
+    so that importing this module does not import papermill."""
+    if name == "GluEngine":
+        return _engine_class()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def load_papermill() -> Any:

@@ -10,10 +10,11 @@ including names that papermill injected but the notebook does not declare — so
 papermill or by ``glu run`` fails at once, in one line, instead of after minutes of work. It resolves the
 data the same way from any working directory, shows one line naming the data (and why, when it fell
 back to synthetic data) and the non-default parameters, and returns the :class:`glu.run.outputs.Outputs` of
-the run: the staging folder ``glu reproduce`` passed as ``out_dir``, or the notebook's scratch folder
-``build/scratch/<notebook>/`` for any other run, so only ``glu reproduce`` publishes into ``figures/``,
-``results/``, ``recordings/`` and ``models/``. From then on, a cell that ends with a DataFrame shows it as
-:func:`glu.tidy.html_table` writes it: rounded for reading, whole on the page.
+the run: the staging folder ``glu reproduce`` passed as ``out_dir``, or for any other run a new folder of
+its own in the notebook's scratch folder (``build/scratch/<notebook>/<date>-<time>/``: no run overwrites
+another's outputs), so only ``glu reproduce`` publishes into ``results/``, ``recordings/``, ``models/``.
+From then on, a cell that ends with a DataFrame shows it as :func:`glu.tidy.html_table` writes it:
+rounded for reading, whole on the page.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from glu.machine import in_kernel
 from glu.paths import OutputLayout
 from glu.run.outputs import Outputs, parameters_text
 from glu.run.parameters import check, non_defaults, read_spec
+from glu.run.publish import refuse_published
 
 INJECTED_COMMENT = "# Parameters"
 """The first line of the cell papermill injects after the parameters cell."""
@@ -79,16 +81,22 @@ def start(notebook: str, namespace: Mapping[str, Any]) -> Outputs:
     values = check(spec, given, notebook)
     source = resolve_data(values.get("data"))
     out_dir = values.get("out_dir")
-    layout = OutputLayout.at(out_dir) if out_dir else OutputLayout.scratch(notebook)
+    if out_dir:
+        layout = OutputLayout.at(out_dir)
+        refuse_published(layout, "a notebook run by hand")
+    else:
+        layout = OutputLayout.scratch(notebook)
     params = non_defaults(spec, values)
     out = Outputs(notebook, source, layout, parameters=params)
     line = f"**{notebook}** · {source.describe()} ({source.reason()})"
     line += f" · parameters: {parameters_text(params)}" if params else " · default parameters"
     if not out_dir:
-        where = f"build/scratch/{notebook}/" if paths.PROJECT_ROOT is not None else str(layout.root)
+        where = str(layout.root)
+        if paths.PROJECT_ROOT is not None:
+            where = f"build/scratch/{notebook}/{layout.root.name}/"
         line += (
-            f" · outputs go to the scratch folder {where} "
-            "(only `glu reproduce` publishes to figures/, results/, recordings/, models/)"
+            f" · outputs go to a scratch folder of this run's own, {where} "
+            "(only `glu reproduce` publishes to results/, recordings/, models/)"
         )
     _say(line)
     _show_tables()

@@ -5,8 +5,9 @@ A notebook gets its :class:`Outputs` from :func:`glu.run.notebook.start`. It sav
 parameters, and shown inline when a kernel runs the notebook), result tables (CSV + JSON, with the
 experiment's provenance: data source and parameters) and gives paths for Rerun recordings and trained
 models. Where each kind goes is :class:`glu.paths.OutputLayout`'s business: ``glu reproduce`` passes a
-staging folder and publishes the files only when every notebook succeeded; any other run writes into the
-notebook's scratch folder (``build/scratch/<notebook>/``) and never touches the published ones.
+staging folder and publishes the files only when every notebook succeeded; any other run writes into a
+new folder of its own in the notebook's scratch folder (``build/scratch/<notebook>/<date>-<time>/``) and
+never touches the published ones.
 """
 
 from __future__ import annotations

@@ -1,44 +1,48 @@
 """Run every notebook headless with papermill: figures, recordings, result tables, a summary and a site.
 
-``glu reproduce`` (and ``make reproduce``) calls :func:`reproduce`. Each notebook runs in its own kernel
-(:mod:`glu.run.execution`), writing into a private staging folder. The run is all-or-nothing: only when every
-notebook succeeded are the staged files moved into the folders of the output layout
-(:class:`glu.paths.OutputLayout`: ``figures/``, ``recordings/``, ``results/``, ``models/``, the executed
-notebooks into ``build/notebooks/``; or all under ``--out``), so figures, recordings, models and
-``results/summary.json`` always belong to one run. A failing notebook stops the run with a message naming
-the notebook and the cell and keeps its executed copy (``NAME.failed.ipynb``); Ctrl-C or SIGTERM stops
-it at once (the kernels are killed). Either way nothing is published and the staging folder is removed;
-a staging folder left by a killed process is removed by the next run. At the end
-``results/summary.json`` and ``results/summary.csv`` collect every number behind every figure, the data
-source, the package versions and the comparison with the original model, and ``site/`` (by default
-``build/site/``) gets the documentation site of the run (:mod:`glu.run.site`: the executed notebooks, the
-docs pages, the API reference). The wall time recorded in the summary (``wall_time_s``) covers running
-and publishing the notebooks; the site's build time is logged after it.
+``glu reproduce`` (and ``make reproduce``) calls :func:`reproduce`. Everything is checked before anything
+runs (:func:`_plan`: the numbers, the data, each notebook's parameters and manifest, and that every place of
+the output layout is glu's to replace, :meth:`glu.run.publish.Store.survey`). Each notebook then runs in its
+own kernel (:mod:`glu.run.execution`), writing into its own folder of a run being staged in the output
+folder's store (:mod:`glu.run.publish`). A failing notebook stops the run with a message naming the notebook
+and the cell and keeps its executed copy (``.glu-runs/failed/NAME.failed.ipynb``); Ctrl-C or SIGTERM stops
+it at once (the kernels are killed). When every notebook succeeded, their outputs are moved into the staged
+run's ``figures/``, ``results/``, ``recordings/``, ``models/`` and ``notebooks/`` (:func:`_stage`), with
+``results/summary.json`` and ``summary.csv`` (every number behind every figure, the data source, the
+package versions, the comparison with the original model) and the documentation site (:mod:`glu.run.site`),
+and the whole run is published by one rename: the places of the layout (the project's ``results/``,
+``recordings/``, ``models/``, ``build/figures/``, ``build/notebooks/``, ``build/site/``; or all under
+``--out``) always show one whole run. In the project's checkout, a full run on the real data also writes its
+PNG figures into the tracked ``figures/``; no other run touches a tracked file. The wall time recorded in the
+summary (``wall_time_s``) covers running and staging the notebooks; the site's build time is logged after.
 
 The executed notebooks show no path of this machine (:func:`glu.run.execution.present_executed`): their
 injected parameters name the data relative to the project (or by its origin) and the published output
 folder, not the staging folder the kernels wrote into.
 
-:func:`run_one` runs a single notebook the same way (``glu run``), into its scratch folder by default.
+:func:`run_one` runs a single notebook the same way (``glu run``), into a scratch folder of its own by
+default.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import shutil
 import sys
 import time
-import uuid
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from glu import paths
 from glu.data.source import resolve_data
 from glu.errors import GluError
+from glu.files import atomic_write_bytes
 from glu.machine import available_cores
 from glu.paths import OutputLayout
 from glu.run.execution import (
@@ -50,13 +54,15 @@ from glu.run.execution import (
     shown_path,
 )
 from glu.run.lock import run_lock
-from glu.run.manifest import ManifestError, check_outputs, read_manifest, written_outputs
+from glu.run.manifest import Manifest, ManifestError, check_outputs, read_manifest, written_outputs
 from glu.run.outputs import parameters_text
 from glu.run.parameters import check, non_defaults, parse_value, read_spec
 from glu.run.progress import CellProgress
 from glu.run.provenance import ENV as PROVENANCE_ENV
 from glu.run.provenance import Provenance, read_provenance
+from glu.run.publish import Store, legacy_files, reached, refuse_published
 from glu.run.summary import (
+    RENDERING_RECORD,
     NotebookResult,
     collect_summary,
     expected_seconds,
@@ -65,8 +71,8 @@ from glu.run.summary import (
     write_rendering_record,
 )
 
-OWNER_FILE = "owner.pid"
-"""In each staging folder: the process id of the run that owns it."""
+WORK = "_work"
+"""In a staging run folder: each notebook's own folder while it runs (``_work/NAME/out``)."""
 
 
 class NotebookError(GluError):
@@ -96,33 +102,6 @@ def list_notebooks(only: Sequence[str] | None = None, folder: Path = paths.NOTEB
             raise NotebookError(f"no notebook matches {key!r}; notebooks are: {names}")
         chosen.extend(m for m in match if m not in chosen)
     return sorted(chosen)
-
-
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-def clean_stale_staging(staging_root: Path) -> list[Path]:
-    """Remove staging folders whose owning process is gone (a run killed with SIGKILL); return them."""
-    removed = []
-    if not staging_root.is_dir():
-        return removed
-    for d in staging_root.iterdir():
-        owner = d / OWNER_FILE
-        try:
-            pid = int(owner.read_text().strip())
-        except (OSError, ValueError):
-            pid = None
-        if pid is None or not _pid_alive(pid):
-            shutil.rmtree(d, ignore_errors=True)
-            removed.append(d)
-    return removed
 
 
 def _move_tree(staged: Path, final: Path) -> list[str]:
@@ -160,8 +139,7 @@ class _Progress:
         return h
 
     def finished(self, name: str, line: str) -> None:
-        """Report one notebook done: ``line`` after ``[k/n]``, k counting the notebooks finished (they
-        finish in any order, so k only goes up)."""
+        """Report a notebook's end: ``[k/n]`` counts the notebooks finished so far (in the order they end)."""
         self.running.pop(name, None)
         self.done += 1
         line = f"[{self.done}/{self.n}] {line}"
@@ -209,6 +187,28 @@ def run_order(notebooks: Sequence[Path], jobs: int, expected: Mapping[str, float
     return sorted(numbered, key=lambda item: (-expected.get(item[1].stem, math.inf), -item[0]))
 
 
+@dataclass
+class _Plan:
+    """What a run is about to do, checked before anything runs."""
+
+    source: Any
+    quick: bool
+    seed: int
+    jobs: int
+    notebooks: list[Path]
+    layout: OutputLayout
+    store: Store
+    manifests: dict[str, Manifest] = field(default_factory=dict)
+    params: dict[str, dict[str, Any]] = field(default_factory=dict)
+    non_default: dict[str, dict[str, Any]] = field(default_factory=dict)
+    kept: dict[str, str] = field(default_factory=dict)
+    made: Provenance | None = None
+
+    @property
+    def data_param(self) -> str:
+        return "synthetic" if self.source.root is None else str(self.source.root)
+
+
 def reproduce(
     data: str | os.PathLike | None = None,
     quick: bool = False,
@@ -219,21 +219,8 @@ def reproduce(
     run on the same project or ``--out`` folder is refused in one line naming the first's process id. The
     glu that runs (its version and commit, :mod:`glu.run.provenance`) is read once, before any notebook,
     and every output of the run names it."""
-    if out is None:
-        out = default_out(resolve_data(data), quick)
     with run_lock(OutputLayout.at(out).root), _made_by(read_provenance()) as made:
         return _reproduce(data, quick, out, made=made, **kwargs)
-
-
-def default_out(source: Any, quick: bool) -> Path | None:
-    """Where a run without ``--out`` publishes: the project's own folders (None) only for a full run on
-    the real data, whose figures are the ones tracked in git; a run on synthetic data, or a quick one,
-    writes under ``build/synthetic/`` or ``build/quick/`` instead (the same layout: ``figures/``, …,
-    ``site/``), so that it never overwrites a published figure. None too when glu is installed (then
-    :meth:`glu.paths.OutputLayout.project` asks for ``-o DIR``)."""
-    if paths.PROJECT_ROOT is None or (source.is_real and not quick):
-        return None
-    return paths.PROJECT_ROOT / "build" / ("quick" if quick else "synthetic")
 
 
 @contextmanager
@@ -261,9 +248,10 @@ def _reproduce(
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
     progress: bool | None = None,
     site: bool = True,
+    force: bool = False,
     made: Provenance | None = None,
 ) -> dict[str, Any]:
-    """Run the notebooks and publish their outputs if all succeed; returns the summary (also in results/).
+    """Run the notebooks and publish the whole run if all succeed; returns the summary (also in results/).
 
     Parameters
     ----------
@@ -271,160 +259,275 @@ def _reproduce(
     quick : small, fast runs (for tests): each notebook with the quick preset of its manifest
         (:mod:`glu.run.manifest`); every figure is still made
     out : root for ``figures/``, ``recordings/``, ``results/``, ``models/``, ``notebooks/``, ``site/``;
-        None = the project's folders (:meth:`glu.paths.OutputLayout.at`; :func:`reproduce` gives
-        :func:`default_out` instead)
+        None = the project's places (:meth:`glu.paths.OutputLayout.at`)
     jobs : notebooks run at the same time (each in its own kernel)
-    only : run only these notebooks (names or numbers)
+    only : run only these notebooks (names or numbers); the published run keeps the others' outputs
     seed : the seed passed to every notebook
     log : where progress lines go (stderr by default)
     notebooks_dir : the folder of jupytext notebooks ``NN_name.py``
     progress : live progress bar; None = when stderr is a terminal
     site : also build the documentation site of the run (:func:`glu.run.site.build_site`)
+    force : leave a place of the output layout that holds what glu did not write untouched (the run is
+        then published in the store only) instead of refusing
     made : the glu that runs (:func:`glu.run.provenance.read_provenance`, read by :func:`reproduce`)
 
     Raises
     ------
-    NotebookError : a notebook failed (nothing published); KeyboardInterrupt : interrupted (nothing
-    published, kernels killed, staging removed); :class:`glu.run.site.SiteError` : the notebooks' outputs
-    were published but the site could not be built (the previous site is kept)
+    NotebookError : a notebook failed (nothing published); :class:`glu.run.publish.PublishError` : a place
+    holds what glu did not write (nothing ran); KeyboardInterrupt : interrupted (nothing published, kernels
+    killed, staging removed); :class:`glu.run.site.SiteError` : the run was published without its site
     """
     t_start = time.perf_counter()
+    plan = _plan(data, quick, out, jobs, only, seed, notebooks_dir, force)
+    plan.made = made or read_provenance()
+    run = plan.store.begin()
+    try:
+        where = f"{plan.source.location()}, quick={quick}, jobs={jobs}"
+        log(f"glu reproduce: {len(plan.notebooks)} notebooks, {where}")
+        results = _run_all(plan, run, log, progress, notebooks_dir)
+        summary = _stage(plan, run, results)
+        summary["wall_time_s"] = round(time.perf_counter() - t_start, 3)
+        save_summary(run / "results", summary, summary_csv(summary))
+        site_error = _build_site(plan, run, summary, log, notebooks_dir) if site else None
+        reached("site")
+        plan.store.record(run, _record(plan, run, results))
+        plan.store.publish(run, log)
+    finally:
+        plan.store.discard(run)
+    _promote_figures(plan, run, log)
+    log(
+        f"glu reproduce: done in {summary['wall_time_s']:.1f} s; summary in "
+        f"{plan.layout.results / 'summary.json'}"
+    )
+    if site_error is not None:
+        raise site_error
+    return summary
+
+
+def _plan(
+    data: str | os.PathLike | None,
+    quick: bool,
+    out: str | os.PathLike | None,
+    jobs: int,
+    only: Sequence[str] | None,
+    seed: int,
+    notebooks_dir: Path,
+    force: bool,
+) -> _Plan:
+    """Check everything a run needs before anything runs: the numbers, the data, every notebook's
+    parameters and manifest, and the output layout's places (:meth:`glu.run.publish.Store.survey`)."""
     if not 1 <= jobs <= 64:
         raise NotebookError(f"-j {jobs}: the number of notebooks run at once must be between 1 and 64")
     if not 0 <= seed < 2**32:
         raise NotebookError(f"--seed {seed}: a seed must be between 0 and 2**32 - 1")
     source = resolve_data(data)
-    data_param = "synthetic" if source.root is None else str(source.root)
     notebooks = list_notebooks(only, notebooks_dir)
     if not notebooks:
         raise NotebookError(f"no notebooks found in {notebooks_dir}")
-    manifests, run_params, non_default = {}, {}, {}
+    layout = OutputLayout.at(out)
+    plan = _Plan(source, quick, seed, jobs, notebooks, layout, Store(layout, force=force))
     for nb in notebooks:  # every notebook takes these parameters: refuse before anything runs
-        manifests[nb.stem] = manifest = read_manifest(nb)
+        plan.manifests[nb.stem] = manifest = read_manifest(nb)
         spec = read_spec(nb)
         missing = {"data", "out_dir", "seed"} - set(spec)
         if missing:
             raise NotebookError(f"{nb.stem}: its parameters cell lacks {', '.join(sorted(missing))}")
-        run_params[nb.stem] = {**(manifest.quick if quick else {}), "seed": seed}
-        non_default[nb.stem] = non_defaults(spec, check(spec, run_params[nb.stem], nb.stem))
-    layout = OutputLayout.at(out)
+        plan.params[nb.stem] = {**(manifest.quick if quick else {}), "seed": seed}
+        plan.non_default[nb.stem] = non_defaults(spec, check(spec, plan.params[nb.stem], nb.stem))
+    manifests = {nb.stem: read_manifest(nb) for nb in list_notebooks(None, notebooks_dir)}
+    plan.store.survey(legacy_files(layout, manifests) if layout.tracked_figures is not None else None)
+    return plan
+
+
+def _run_all(
+    plan: _Plan, run: Path, log: Callable[[str], None], progress: bool | None, notebooks_dir: Path
+) -> list[NotebookResult]:
+    """Run every notebook of the plan, each staging into ``run/_work/NAME/``; the results when all
+    succeeded, else :class:`NotebookFailed` (the others stopped)."""
     shown = {  # what the executed notebooks show of the data and the output folder (no machine path)
-        "data": _shown_data(source),
-        "out_dir": (shown_path(layout.root), "published to figures/, results/, recordings/, models/ there"),
+        "data": _shown_data(plan.source),
+        "out_dir": (shown_path(plan.layout.root), "published to figures/, results/, recordings/, models/"),
     }
-    final = layout.published()
-    executed_dir = layout.notebooks
-    clean_stale_staging(layout.staging)
-    staging = layout.staging / uuid.uuid4().hex[:12]
-    staging.mkdir(parents=True)
-    (staging / OWNER_FILE).write_text(str(os.getpid()))
-    log(f"glu reproduce: {len(notebooks)} notebooks, {source.location()}, quick={quick}, jobs={jobs}")
     live = sys.stderr.isatty() if progress is None else progress
-    bar = _Progress(notebooks, log, live)
+    bar = _Progress(plan.notebooks, log, live)
 
     def one(nb: Path, handle: RunHandle) -> NotebookResult:
-        pm = load_papermill()
-        name = nb.stem
-        stage = staging / name
-        t0 = time.perf_counter()
-        out_ipynb = stage / f"{name}.ipynb"
-        params = {**run_params[name], "data": data_param, "out_dir": str(stage / "out")}
-
-        def failed(msg: str, why: str) -> NotebookResult:
-            kept = executed_dir / f"{name}.failed.ipynb"
-            kept.parent.mkdir(parents=True, exist_ok=True)
-            if out_ipynb.exists():
-                os.replace(out_ipynb, kept)
-            dt = time.perf_counter() - t0
-            bar.finished(name, f"{name}: FAILED after {dt:.1f} s — {why}")
-            return NotebookResult(name, "failed", dt, kept, msg)
-
-        try:
-            run_notebook(nb, out_ipynb, params, cwd=nb.parent, handle=handle)
-        except pm.PapermillExecutionError as e:
-            return failed(
-                (
-                    f"notebook {name} failed in cell {e.cell_index} (execution count {e.exec_count}): "
-                    f"{e.ename}: {e.evalue}"
-                ),
-                f"{e.ename}: {e.evalue}",
-            )
-        dt = time.perf_counter() - t0
-        try:
-            check_outputs(manifests[name], written_outputs(stage / "out"), source.is_real)
-        except ManifestError as e:
-            return failed(f"notebook {name} ran, but {e}", str(e))
-        present_executed(out_ipynb, shown, shown_path(nb), shown_path(executed_dir / f"{name}.ipynb"))
-        bar.finished(name, f"{name}: ok in {dt:.1f} s")
-        return NotebookResult(name, "ok", dt, out_ipynb, parameters=non_default[name])
+        return _run_notebook(plan, nb, run / WORK / nb.stem, handle, bar, shown)
 
     results: list[NotebookResult] = []
+    pool = ThreadPoolExecutor(max_workers=plan.jobs)
+    futures: dict[Future, str] = {}
+    failed: NotebookResult | None = None
     try:
-        pool = ThreadPoolExecutor(max_workers=jobs)
-        futures: dict[Future, str] = {}
-        try:
-            threads = max(1, available_cores() // jobs)  # each kernel's share of the cores for BLAS/OpenMP
-            for _, nb in run_order(notebooks, jobs, expected_seconds(layout, notebooks, quick)):
-                handle = bar.handle(nb.stem)
-                handle.threads = threads
-                futures[pool.submit(one, nb, handle)] = nb.stem
-            pending = set(futures)
-            failed: NotebookResult | None = None
-            while pending:
-                done, pending = wait(pending, timeout=0.25, return_when=FIRST_COMPLETED)
-                bar.tick()
-                for f in done:
-                    if f.cancelled():  # not started: cancelled when another notebook failed
-                        continue
-                    try:
-                        r = f.result()
-                    except NotebookStopped:
-                        continue
-                    results.append(r)
-                    if r.status == "failed" and failed is None:
-                        failed = r
-                        _stop_all(pending, futures, bar)
-        except BaseException:
-            _stop_all(set(futures), futures, bar)
-            raise
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
-            bar.close()
-        if failed is not None:
-            raise NotebookFailed(
-                f"{failed.error}; executed copy kept at {failed.executed}; nothing was published: "
-                "the outputs of earlier runs are as they were"
-            )
-        for r in sorted(results, key=lambda r: r.name):  # every notebook succeeded: publish them all
-            staged = OutputLayout.under(staging / r.name / "out")
-            for kind, target in final.items():
-                r.files += _move_tree(staged.folder(kind), target)
-            executed = executed_dir / f"{r.name}.ipynb"
-            executed.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(r.executed, executed)
-            r.executed = executed
-            (executed_dir / f"{r.name}.failed.ipynb").unlink(missing_ok=True)
+        threads = max(1, available_cores() // plan.jobs)  # each kernel's share of the cores for BLAS/OpenMP
+        expected = expected_seconds(plan.layout, plan.notebooks, plan.quick)
+        for _, nb in run_order(plan.notebooks, plan.jobs, expected):
+            handle = bar.handle(nb.stem)
+            handle.threads = threads
+            futures[pool.submit(one, nb, handle)] = nb.stem
+        pending = set(futures)
+        while pending:
+            done, pending = wait(pending, timeout=0.25, return_when=FIRST_COMPLETED)
+            bar.tick()
+            for f in done:
+                if f.cancelled():  # not started: cancelled when another notebook failed
+                    continue
+                try:
+                    r = f.result()
+                except NotebookStopped:
+                    continue
+                results.append(r)
+                if r.status == "failed" and failed is None:
+                    failed = r
+                    _stop_all(pending, futures, bar)
+    except BaseException:
+        _stop_all(set(futures), futures, bar)
+        raise
     finally:
-        shutil.rmtree(staging, ignore_errors=True)
-        try:
-            staging.parent.rmdir()
-        except OSError:
-            pass
+        pool.shutdown(wait=True, cancel_futures=True)
+        bar.close()
+    if failed is not None:
+        raise NotebookFailed(
+            f"{failed.error}; executed copy kept at {failed.executed}; nothing was published: "
+            "the outputs of earlier runs are as they were"
+        )
+    return sorted(results, key=lambda r: r.name)
 
-    results.sort(key=lambda r: r.name)
-    made = made or read_provenance()
-    summary = collect_summary(final["results"], results, source.describe(), quick)
-    summary.update(made_by=made.label(), provenance=made.as_dict())
-    csv = summary_csv(summary)
-    write_rendering_record(final["figures"], source.describe(), quick, made.label())
-    summary["wall_time_s"] = round(time.perf_counter() - t_start, 3)
-    summary_file = save_summary(final["results"], summary, csv)
-    log(f"glu reproduce: done in {summary['wall_time_s']:.1f} s; summary in {summary_file}")
-    if site:
-        from glu.run.site import build_site
 
-        build_site(layout, summary, log=log, notebooks_dir=notebooks_dir)
+def _run_notebook(
+    plan: _Plan, nb: Path, work: Path, handle: RunHandle, bar: _Progress, shown: dict[str, tuple[Any, str]]
+) -> NotebookResult:
+    """Run one notebook into ``work`` (its outputs in ``work/out``) and check them against its manifest."""
+    pm = load_papermill()
+    name = nb.stem
+    t0 = time.perf_counter()
+    out_ipynb = work / f"{name}.ipynb"
+    params = {**plan.params[name], "data": plan.data_param, "out_dir": str(work / "out")}
+
+    def failed(msg: str, why: str) -> NotebookResult:
+        kept = plan.store.failed / f"{name}.failed.ipynb"
+        kept.parent.mkdir(parents=True, exist_ok=True)
+        if out_ipynb.exists():
+            os.replace(out_ipynb, kept)
+        dt = time.perf_counter() - t0
+        bar.finished(name, f"{name}: FAILED after {dt:.1f} s — {why}")
+        return NotebookResult(name, "failed", dt, kept, msg)
+
+    try:
+        run_notebook(nb, out_ipynb, params, cwd=nb.parent, handle=handle)
+    except pm.PapermillExecutionError as e:
+        return failed(
+            f"notebook {name} failed in cell {e.cell_index} (execution count {e.exec_count}): "
+            f"{e.ename}: {e.evalue}",
+            f"{e.ename}: {e.evalue}",
+        )
+    dt = time.perf_counter() - t0
+    try:
+        check_outputs(plan.manifests[name], written_outputs(work / "out"), plan.source.is_real)
+    except ManifestError as e:
+        return failed(f"notebook {name} ran, but {e}", str(e))
+    executed = plan.layout.notebooks / f"{name}.ipynb"
+    present_executed(out_ipynb, shown, shown_path(nb), shown_path(executed))
+    bar.finished(name, f"{name}: ok in {dt:.1f} s")
+    return NotebookResult(name, "ok", dt, out_ipynb, parameters=plan.non_default[name])
+
+
+def _stage(plan: _Plan, run: Path, results: list[NotebookResult]) -> dict[str, Any]:
+    """Move every notebook's outputs from its work folder into the run's folders, keep the published
+    run's outputs of the notebooks not run (a partial run on the same data in the same mode), and return
+    the run's summary (its ``wall_time_s`` not yet set)."""
+    staged = OutputLayout.under(run)
+    current = plan.store.current()
+    previous = _summary_of(current)
+    same = previous.get("data_source") == plan.source.describe() and previous.get("quick") == plan.quick
+    ran = {r.name for r in results}
+    kept_notebooks = [
+        nb["name"] for nb in previous.get("notebooks", []) if same and nb.get("name") not in ran
+    ]
+    plan.kept = plan.store.carry_over(run, kept_notebooks)
+    for r in results:
+        work = run / WORK / r.name
+        out = OutputLayout.under(work / "out")
+        for kind, target in staged.published().items():
+            r.files += _move_tree(out.folder(kind), target)
+        staged.notebooks.mkdir(parents=True, exist_ok=True)
+        os.replace(r.executed, staged.notebooks / f"{r.name}.ipynb")
+        r.executed = plan.layout.notebooks / f"{r.name}.ipynb"
+        (plan.store.failed / f"{r.name}.failed.ipynb").unlink(missing_ok=True)
+    shutil.rmtree(run / WORK, ignore_errors=True)
+    for kind in (
+        *staged.published(),
+        "notebooks",
+    ):  # every place of the run resolves, even with nothing in it
+        staged.folder(kind).mkdir(parents=True, exist_ok=True)
+    summary = collect_summary(
+        staged.results, results, plan.source.describe(), plan.quick, previous=previous if same else {}
+    )
+    summary.update(made_by=plan.made.label(), provenance=plan.made.as_dict())
+    write_rendering_record(staged.figures, plan.source.describe(), plan.quick, plan.made.label())
+    reached("staged")
     return summary
+
+
+def _summary_of(run: Path | None) -> dict[str, Any]:
+    """The summary of a published run ({} for none, or one that cannot be read as a summary)."""
+    if run is None:
+        return {}
+    try:
+        doc = json.loads((run / "results" / "summary.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return doc if isinstance(doc, dict) else {}
+
+
+def _record(plan: _Plan, run: Path, results: list[NotebookResult]) -> dict[str, str]:
+    """Each notebook's files in the run folder (relative path → notebook), for a later partial run: those
+    kept from the published run, and those of the notebooks run."""
+    record = dict(plan.kept)
+    for r in results:
+        for f in r.files:
+            record[Path(f).relative_to(run).as_posix()] = r.name
+        record[f"notebooks/{r.name}.ipynb"] = r.name
+    return record
+
+
+def _build_site(
+    plan: _Plan, run: Path, summary: dict[str, Any], log: Callable[[str], None], notebooks_dir: Path
+) -> GluError | None:
+    """Build the run's site into ``run/site``; the error when it could not be built (the run is then
+    published without a site, and the error raised once it is)."""
+    from glu.run.site import SiteError, build_site
+
+    try:
+        build_site(
+            OutputLayout.under(run),
+            summary,
+            log=log,
+            notebooks_dir=notebooks_dir,
+            work=plan.store.site_work,
+            published=plan.layout,
+        )
+    except SiteError as e:
+        return SiteError(f"{e}\nthe run was published without its site (`make docs` builds it again)")
+    return None
+
+
+def _promote_figures(plan: _Plan, run: Path, log: Callable[[str], None]) -> None:
+    """In the project's checkout, after a full run on the real data with the default seed: its PNG figures
+    and their rendering record into the tracked ``figures/`` (never from synthetic data or a quick run)."""
+    tracked = plan.layout.tracked_figures
+    if tracked is None or not plan.source.is_real or plan.quick or plan.seed != 0:
+        return
+    figures = run / "figures"
+    files = sorted(figures.glob("*.png")) + [figures / RENDERING_RECORD]
+    changed = 0
+    for f in files:
+        target = tracked / f.name
+        data = f.read_bytes()
+        if not target.is_file() or target.read_bytes() != data:
+            atomic_write_bytes(target, data)
+            changed += 1
+    log(f"glu reproduce: {changed} of the tracked figures in figures/ rewritten from the real data")
 
 
 def _shown_data(source: Any) -> tuple[str, str]:
@@ -453,10 +556,6 @@ def run_one(
 ) -> tuple[Path, OutputLayout]:
     """Run one notebook headless (``glu run``): check the parameters first, then execute.
 
-    Returns the executed notebook and the layout its outputs went to. Raises
-    :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
-    of range, :class:`NotebookError` when a cell fails.
-
     Parameters
     ----------
     notebook : the notebook's name or number
@@ -465,6 +564,10 @@ def run_one(
     quick : start from the quick preset of the notebook's manifest (``values`` win over it)
     progress : report each code cell as it starts, on stderr (:class:`glu.run.progress.CellProgress`: a
         bar on a terminal, one line per cell otherwise)
+
+    Returns the executed notebook and the layout its outputs went to. Raises
+    :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
+    of range, :class:`NotebookError` when a cell fails.
     """
     pm = load_papermill()
     (src,) = list_notebooks([notebook], notebooks_dir)[:1]
@@ -479,7 +582,11 @@ def run_one(
     unknown = {name: text for name, text in values.items() if name not in spec}
     check(spec, {**parsed, **unknown}, src.stem)  # refuses unknown names, with a suggestion
     source = resolve_data(data)
-    layout = OutputLayout.at(out) if out is not None else OutputLayout.scratch(src.stem)
+    if out is not None:
+        layout = OutputLayout.at(out)
+        refuse_published(layout, "glu run")
+    else:
+        layout = OutputLayout.scratch(src.stem)
     params = {
         **parsed,
         "data": "synthetic" if source.root is None else str(source.root),

@@ -19,10 +19,13 @@ MyST-NB (the stack of Jupyter Book 1) and the PyData theme. It holds
 * search (Sphinx's own, offline), formulas as MathML (:mod:`glu.run.site_math`). A click on any figure
   opens it at its natural size with its caption.
 
-The sources are assembled in the layout's ``site-source/`` folder (kept, with Sphinx's doctrees, so that the
-next build only reads again what changed); the HTML is written there afresh and then replaces ``site/``, so a
-failed build leaves the previous site as it was. Any Sphinx warning fails the build (:class:`SiteError`).
-Nothing is fetched from the web: the theme's files are installed with it.
+The sources are assembled in the store's ``site-source/`` folder (kept, with Sphinx's doctrees, so that the
+next build only reads again what changed); the HTML is written there afresh and then copied into the run
+being staged, which :mod:`glu.run.publish` publishes whole, so a failed build publishes nothing. Any Sphinx
+warning fails the build (:class:`SiteError`). What the site reads of a run is checked first: a malformed
+``summary.json``, a name in it that is not a plain file name, or an executed notebook that is truncated or
+empty is refused in one line (:func:`read_summary`, :func:`assemble`). Nothing is fetched from the web: the
+theme's files are installed with it.
 """
 
 from __future__ import annotations
@@ -43,6 +46,7 @@ from glu.paths import OutputLayout
 from glu.run.captions import caption_figures
 from glu.run.site_api import api_modules, api_pages
 from glu.run.site_pages import NOTEBOOKS_PAGE, docs_index_page, docs_page, index_page, reading_order
+from glu.run.summary import SummaryError, check_summary
 
 CONF_DIR: Path = paths.RESOURCES_DIR / "site"
 """Sphinx's configuration, static files and templates of the site (shipped with the package)."""
@@ -67,6 +71,57 @@ def _write_if_changed(path: Path, text: str | bytes) -> None:
     os.replace(tmp, path)
 
 
+def _checked(summary: Mapping[str, Any]) -> Mapping[str, Any]:
+    """``summary`` when it is a run's summary whose every name is a plain file name; else :class:`SiteError`
+    in one line saying what is wrong."""
+    try:
+        check_summary(summary)
+    except SummaryError as e:
+        raise SiteError(f"the run's summary.json {e}; run glu reproduce again") from None
+    return summary
+
+
+def read_summary(path: Path) -> Mapping[str, Any]:
+    """The summary of the run at ``path`` (``results/summary.json``), checked; :class:`SiteError` in one
+    line when it is missing, unreadable or malformed."""
+    try:
+        summary = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SiteError(
+            f"no run to build the site from: {path.name} is missing in {path.parent.name}/ "
+            "(run `glu reproduce` first)"
+        ) from None
+    except (OSError, ValueError) as e:
+        raise SiteError(
+            f"no run to build the site from: {path.name} in {path.parent.name}/ is not JSON ({e}); run "
+            "`glu reproduce` again"
+        ) from None
+    return _checked(summary)
+
+
+_NOTEBOOK_READ_ERRORS = (OSError, ValueError, KeyError, TypeError, AttributeError, IndexError, RecursionError)
+
+
+def _read_executed(folder: Path, name: str) -> tuple[Any, dict[str, str]]:
+    """The executed notebook ``folder/NAME.ipynb`` and its figures' captions; :class:`SiteError` in one line
+    when it is missing, truncated, empty or not a valid notebook."""
+    import nbformat
+
+    ipynb = folder / f"{name}.ipynb"
+    if not ipynb.is_file():
+        raise SiteError(f"the executed notebook {name}.ipynb is missing from {folder.name}/")
+    try:
+        nb = nbformat.read(ipynb, as_version=4)
+        nbformat.validate(nb)
+        return nb, caption_figures(nb)
+    except (*_NOTEBOOK_READ_ERRORS, nbformat.ValidationError) as e:
+        why = str(e).splitlines()[0][:120] if str(e).strip() else type(e).__name__
+        raise SiteError(
+            f"the executed notebook {name}.ipynb in {folder.name}/ is not a readable notebook ({why}); "
+            "run glu reproduce again"
+        ) from None
+
+
 def _docs_pages() -> list[Path]:
     """The checkout's docs pages in reading order (:func:`glu.run.site_pages.reading_order`)."""
     if DOCS_DIR is None or not DOCS_DIR.is_dir():
@@ -83,21 +138,23 @@ def assemble(
     source: Path,
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
     modules: tuple[str, ...] | None = None,
+    published: OutputLayout | None = None,
 ) -> dict[str, str]:
     """Write the site's sources into ``source``: the index, the executed notebooks of ``summary`` (their
     figures captioned), the docs pages, the API page, the figures of the gallery. Files that did not change
-    are left untouched; files of pages no longer there are removed. Returns figure file → caption."""
+    are left untouched; files of pages no longer there are removed. Returns figure file → caption.
+
+    ``summary`` is checked first (:func:`glu.run.summary.check_summary`): every name in it is a plain file
+    name, so no page is ever written outside ``source``."""
     import nbformat
 
+    summary = _checked(summary)
     names = [nb["name"] for nb in summary.get("notebooks", [])]
     keep: set[Path] = set()
     captions: dict[str, str] = {}
     for name in names:
-        ipynb = layout.notebooks / f"{name}.ipynb"
-        if not ipynb.is_file():
-            raise SiteError(f"the executed notebook {name}.ipynb is missing from {layout.notebooks.name}/")
-        nb = nbformat.read(ipynb, as_version=4)
-        captions.update(caption_figures(nb))
+        nb, figure_captions = _read_executed(layout.notebooks, name)
+        captions.update(figure_captions)
         if not any(c.cell_type == "markdown" and c.source.lstrip().startswith("# ") for c in nb.cells):
             nb.cells.insert(0, nbformat.v4.new_markdown_cell(f"# {name}"))  # a page needs a title
         target = source / "notebooks" / f"{name}.ipynb"
@@ -115,7 +172,9 @@ def assemble(
             keep.add(target)
     docs = _docs_pages()
     pages = {
-        "index.md": index_page(layout, summary, captions, notebooks_dir, has_docs=bool(docs)),
+        "index.md": index_page(
+            layout, summary, captions, notebooks_dir, has_docs=bool(docs), published=published
+        ),
         "notebooks.md": NOTEBOOKS_PAGE,
         **api_pages(api_modules() if modules is None else modules),
     }
@@ -169,25 +228,27 @@ def build_site(
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
     modules: tuple[str, ...] | None = None,
+    work: Path | None = None,
+    published: OutputLayout | None = None,
 ) -> Path:
     """Build the site of the run in ``layout`` (its ``summary``; default: its ``results/summary.json``) into
-    ``layout.site``; returns its ``index.html``. Raises :class:`SiteError` on any Sphinx warning, leaving the
-    previous site as it was."""
+    the folder ``layout.site``, which must not exist yet (a run being staged: :mod:`glu.run.publish`
+    publishes it with the rest of the run); returns its ``index.html``. Raises :class:`SiteError` on any
+    Sphinx warning, writing nothing into ``layout``.
+
+    ``work`` keeps the sources and Sphinx's doctrees between builds (default: ``site-source/`` in the
+    store); ``published`` is the layout readers will see the run in (links between the site and the
+    recordings are relative to it; default: ``layout``)."""
     t0 = time.perf_counter()
     if summary is None:
-        path = layout.results / "summary.json"
-        try:
-            summary = json.loads(path.read_text())
-        except (OSError, ValueError):
-            raise SiteError(
-                f"no run to build the site from: {path.name} is missing or unreadable in "
-                f"{layout.results.name}/ (run `glu reproduce` first)"
-            ) from None
-    work = layout.site_source
+        summary = read_summary(layout.results / "summary.json")
+    if layout.site.exists() or layout.site.is_symlink():
+        raise SiteError(f"{layout.site} exists; the site is built into a run being staged (glu.run.publish)")
+    work = work if work is not None else layout.store / "site-source"
     source, html = work / "src", work / "html"
     source.mkdir(parents=True, exist_ok=True)
     modules = api_modules() if modules is None else modules
-    assemble(layout, summary, source, notebooks_dir, modules)
+    assemble(layout, summary, source, notebooks_dir, modules, published=published)
     shutil.rmtree(
         html, ignore_errors=True
     )  # every page written afresh (from the doctrees kept): no stale page
@@ -197,24 +258,20 @@ def build_site(
         shown = "\n".join(_strip_paths(line, work) for line in problems[:20])
         raise SiteError(
             f"the documentation site was not built: {len(problems)} Sphinx warning(s) (every warning is an "
-            f"error); the previous site is as it was:\n{shown}"
+            f"error):\n{shown}"
         )
-    staged = layout.site.with_name(layout.site.name + ".new")
+    staged = layout.site.with_name(f".{layout.site.name}.partial")
     shutil.rmtree(staged, ignore_errors=True)
     shutil.copytree(
         html,
         staged,
         ignore=shutil.ignore_patterns(".buildinfo", ".doctrees", "objects.inv", "webpack-macros.html"),
     )
-    old = layout.site.with_name(layout.site.name + ".old")
-    shutil.rmtree(old, ignore_errors=True)
-    if layout.site.exists():
-        os.replace(layout.site, old)
     os.replace(staged, layout.site)
-    shutil.rmtree(old, ignore_errors=True)
     index = layout.site / "index.html"
     pages = len(list(layout.site.rglob("*.html")))
-    log(f"glu site: {pages} pages in {time.perf_counter() - t0:.1f} s: {index}")
+    shown = (published or layout).site / index.name
+    log(f"glu site: {pages} pages in {time.perf_counter() - t0:.1f} s: {shown}")
     return index
 
 
@@ -225,8 +282,13 @@ def _strip_paths(line: str, work: Path) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m glu.run.site [--out DIR]`` (``make docs``): build the site again from the last run."""
+    """``python -m glu.run.site [--out DIR]`` (``make docs``): build the site of the published run again and
+    publish the run with it (:func:`glu.run.publish.republish`: a new run folder, the same files, one
+    rename)."""
     import argparse
+
+    from glu.run.lock import run_lock
+    from glu.run.publish import republish
 
     parser = argparse.ArgumentParser(
         prog="python -m glu.run.site",
@@ -235,7 +297,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("-o", "--out", type=Path, help="the run's output folder (default: the project's)")
     args = parser.parse_args(argv)
     try:
-        build_site(OutputLayout.at(args.out))
+        layout = OutputLayout.at(args.out)
+        with run_lock(layout.root):
+            republish(layout, "site", lambda staged, work: build_site(staged, work=work, published=layout))
     except GluError as e:
         print(f"glu site: error: {e}", file=sys.stderr)
         return 2

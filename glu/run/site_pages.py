@@ -143,7 +143,8 @@ def _gallery(layout: OutputLayout, summary: Mapping[str, Any], captions: Mapping
 
 
 def _recordings(layout: OutputLayout, summary: Mapping[str, Any]) -> list[str]:
-    """The run's Rerun recordings, each with its notebook and the command that opens it."""
+    """The run's Rerun recordings, each with its notebook and the command that opens it (``layout``: where
+    readers find the run; the links are relative to its site)."""
     recordings = summary.get("recordings", [])
     if not recordings:
         return ["## Recordings", "", "This run wrote no recordings.", ""]
@@ -197,14 +198,16 @@ def index_page(
     captions: Mapping[str, str],
     notebooks_dir: Path,
     has_docs: bool,
+    published: OutputLayout | None = None,
 ) -> str:
-    """The site's front page, from the run's summary and the figures' captions."""
+    """The site's front page, from the run's summary and the figures' captions (``published``: the layout
+    readers will see the run in, which the links to the recordings are relative to; default ``layout``)."""
     return "\n".join(
         _head(summary)
         + _comparisons(summary)
         + _notebooks(summary, notebooks_dir)
         + _gallery(layout, summary, captions)
-        + _recordings(layout, summary)
+        + _recordings(published or layout, summary)
         + _versions(summary, has_docs)
     )
 

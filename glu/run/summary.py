@@ -16,14 +16,73 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from glu.errors import OutputError
-from glu.files import atomic_write_text
+from glu.errors import GluError, OutputError
+from glu.files import atomic_write_text, plain_name
 from glu.paths import OutputLayout
+
+
+class SummaryError(GluError):
+    """A ``summary.json`` that is not a run's summary (a field missing, of the wrong type, or a name that is
+    not a plain file name)."""
+
+
+def _number(v: Any, finite: bool = True) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and (math.isfinite(v) or not finite)
+
+
+def _names_of(value: Any, where: str, mapping: bool = False) -> None:
+    if value is None:
+        return
+    if mapping and not isinstance(value, dict) or not mapping and not isinstance(value, list):
+        raise SummaryError(
+            f"{where}: expected a {'mapping' if mapping else 'list'}, got {type(value).__name__}"
+        )
+    for name in value:
+        if not plain_name(name):
+            raise SummaryError(f"{where}: {name!r} is not a plain file name")
+        if mapping and not plain_name(value[name]):
+            raise SummaryError(f"{where}[{name!r}]: {value[name]!r} is not a notebook's name")
+
+
+def check_summary(doc: Any) -> None:
+    """:class:`SummaryError` (naming the field) unless ``doc`` is a run's summary as
+    :func:`collect_summary` writes it: every notebook, figure and recording a plain file name
+    (:func:`glu.files.plain_name`), so that none can become a path outside the run's folders."""
+    if not isinstance(doc, dict):
+        raise SummaryError(f"is not a run's summary (a JSON {type(doc).__name__}, not an object)")
+    notebooks = doc.get("notebooks")
+    if not isinstance(notebooks, list):
+        raise SummaryError("has no list of notebooks")
+    for i, nb in enumerate(notebooks):
+        if not isinstance(nb, dict) or not plain_name(nb.get("name")):
+            raise SummaryError(
+                f"notebooks[{i}]: {nb.get('name') if isinstance(nb, dict) else nb!r} is not a notebook's name"
+            )
+        if not isinstance(nb.get("status", ""), str) or not isinstance(nb.get("parameters") or {}, dict):
+            raise SummaryError(f"notebooks[{i}] ({nb['name']}): status or parameters of the wrong type")
+        if "seconds" in nb and not _number(nb["seconds"]):
+            raise SummaryError(f"notebooks[{i}] ({nb['name']}): seconds is not a number")
+    _names_of(doc.get("figures"), "figures")
+    _names_of(doc.get("figures_by_notebook"), "figures_by_notebook", mapping=True)
+    _names_of(doc.get("recordings"), "recordings")
+    _names_of(doc.get("recordings_by_notebook"), "recordings_by_notebook", mapping=True)
+    for key, kind in (("data_source", str), ("quick", bool), ("versions", dict), ("tables", dict)):
+        if key in doc and not isinstance(doc[key], kind):
+            raise SummaryError(f"{key}: expected {kind.__name__}, got {type(doc[key]).__name__}")
+    if doc.get("wall_time_s") is not None and not _number(doc["wall_time_s"]):
+        raise SummaryError("wall_time_s is not a number")
+    for i, c in enumerate(doc.get("comparison_with_reference") or []):
+        ok = isinstance(c, dict) and isinstance(c.get("table"), str) and isinstance(c.get("reference"), str)
+        if not ok or not _number(c.get("rows")) or not _number(c.get("max_abs_difference"), False):
+            raise SummaryError(
+                f"comparison_with_reference[{i}] is not a comparison (table, reference, rows, "
+                "max_abs_difference)"
+            )
 
 
 @dataclass
@@ -130,15 +189,20 @@ def write_summary(
     return summary
 
 
-def collect_summary(results_dir: Path, runs: list[NotebookResult], data: str, quick: bool) -> dict[str, Any]:
+def collect_summary(
+    results_dir: Path,
+    runs: list[NotebookResult],
+    data: str,
+    quick: bool,
+    previous: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
     """The summary of a run whose result tables are in ``results_dir`` (nothing is written); its
     ``wall_time_s`` is None until the caller sets it.
 
-    A partial run (``--only``) updates the existing summary when it was made from the same data in the
-    same mode: the notebooks just run replace their earlier entries, the others are kept.
+    A partial run (``--only``) updates the ``previous`` summary (default: ``results_dir/summary.json``) when
+    it was made from the same data in the same mode: the notebooks just run replace their earlier entries,
+    the others are kept.
     """
-    import pandas as pd
-
     from glu.run.outputs import package_versions
 
     notebooks = {
@@ -150,68 +214,22 @@ def collect_summary(results_dir: Path, runs: list[NotebookResult], data: str, qu
         }
         for r in runs
     }
-    tables: dict[str, Any] = {}
-    figures: dict[str, str] = {}
-    recordings: dict[str, str] = {}
-    previous = results_dir / "summary.json"
-    if previous.is_file():
-        try:
-            old = json.loads(previous.read_text())
-        except (OSError, json.JSONDecodeError):
-            old = {}
-        if old.get("data_source") == data and old.get("quick") == quick:
-            for nb in old.get("notebooks", []):
-                if nb["name"] not in notebooks:
-                    notebooks[nb["name"]] = nb
-                    tables.update(
-                        {
-                            k: v
-                            for k, v in old.get("tables", {}).items()
-                            if v["meta"].get("notebook") == nb["name"]
-                        }
-                    )
-                    figures.update(
-                        {
-                            f: nb["name"]
-                            for f, n in old.get("figures_by_notebook", {}).items()
-                            if n == nb["name"]
-                        }
-                    )
-                    recordings.update(
-                        {
-                            f: nb["name"]
-                            for f, n in old.get("recordings_by_notebook", {}).items()
-                            if n == nb["name"]
-                        }
-                    )
+    entries: dict[str, dict[str, Any]] = {"tables": {}, "figures": {}, "recordings": {}}
+    old = _read_previous(results_dir) if previous is None else previous
+    if old.get("data_source") == data and old.get("quick") == quick:
+        _keep_previous(old, notebooks, entries)
     for run in runs:
         for f in run.files:
             p = Path(f)
             if p.suffix == ".json" and p.parent == results_dir:
                 doc = json.loads(p.read_text())
-                tables[doc["meta"]["name"]] = doc
+                entries["tables"][doc["meta"]["name"]] = doc
             elif p.parent.name == "figures":
-                figures[p.name] = run.name
+                entries["figures"][p.name] = run.name
             elif p.suffix == ".rrd":
-                recordings[p.name] = run.name
-    comparison = []
-    for name in sorted(tables):
-        df = pd.DataFrame(tables[name]["rows"])
-        meta = tables[name]["meta"]
-        reference = meta.get("reference") or (meta.get("parameters") or {}).get("reference")
-        if (
-            reference and "difference" in df.columns and len(df)
-        ):  # a comparison declares what it compares with
-            diff = pd.to_numeric(df["difference"], errors="coerce").abs()
-            comparison.append(
-                {
-                    "table": name,
-                    "reference": reference,
-                    "rows": int(diff.notna().sum()),
-                    "max_abs_difference": float(diff.max()),
-                }
-            )
-    summary = {
+                entries["recordings"][p.name] = run.name
+    tables, figures, recordings = entries["tables"], entries["figures"], entries["recordings"]
+    return {
         "ran": [r.name for r in runs],
         "data_source": data,
         "quick": quick,
@@ -222,10 +240,57 @@ def collect_summary(results_dir: Path, runs: list[NotebookResult], data: str, qu
         "figures_by_notebook": dict(sorted(figures.items())),
         "recordings": sorted(recordings),
         "recordings_by_notebook": dict(sorted(recordings.items())),
-        "comparison_with_reference": comparison,
+        "comparison_with_reference": _comparisons(tables),
         "tables": {k: tables[k] for k in sorted(tables)},
     }
-    return summary
+
+
+def _read_previous(results_dir: Path) -> dict[str, Any]:
+    try:
+        old = json.loads((results_dir / "summary.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return old if isinstance(old, dict) else {}
+
+
+def _keep_previous(
+    old: Mapping[str, Any], notebooks: dict[str, Any], entries: dict[str, dict[str, Any]]
+) -> None:
+    """Add to ``notebooks`` and ``entries`` the previous summary's notebooks that this run did not run,
+    with their tables, figures and recordings."""
+    for nb in old.get("notebooks", []):
+        name = nb["name"]
+        if name in notebooks:
+            continue
+        notebooks[name] = nb
+        entries["tables"].update(
+            {k: v for k, v in old.get("tables", {}).items() if v["meta"].get("notebook") == name}
+        )
+        for kind in ("figures", "recordings"):
+            by_notebook = old.get(f"{kind}_by_notebook", {})
+            entries[kind].update({f: name for f, n in by_notebook.items() if n == name})
+
+
+def _comparisons(tables: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """The tables that declare a reference and have a ``difference`` column: the largest |difference|."""
+    import pandas as pd
+
+    comparison = []
+    for name in sorted(tables):
+        df = pd.DataFrame(tables[name]["rows"])
+        meta = tables[name]["meta"]
+        reference = meta.get("reference") or (meta.get("parameters") or {}).get("reference")
+        if reference and "difference" in df.columns and len(df):  # a comparison names its reference
+            diff = pd.to_numeric(df["difference"], errors="coerce").abs()
+            comparison.append(
+                {
+                    "table": name,
+                    "reference": reference,
+                    "rows": int(diff.notna().sum()),
+                    "max_abs_difference": float(diff.max()),
+                }
+            )
+    return comparison
 
 
 def summary_csv(summary: dict[str, Any]) -> str:

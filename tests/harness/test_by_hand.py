@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import jupytext
 import papermill as pm
@@ -37,30 +38,42 @@ def _glu(*args: str) -> subprocess.CompletedProcess:
 
 @pytest.fixture
 def scratch():
-    """The scratch folder of 07_glu2017_figures, removed afterwards if this test made it."""
+    """The scratch folder of 07_glu2017_figures; the run folders this test made in it removed afterwards."""
     folder = paths.scratch_dir("07_glu2017_figures")
-    existed = folder.exists()
+    before = set(folder.iterdir()) if folder.is_dir() else set()
     yield folder
-    if not existed:
-        shutil.rmtree(folder, ignore_errors=True)
+    for run in set(folder.iterdir()) - before if folder.is_dir() else ():
+        shutil.rmtree(run, ignore_errors=True)
 
 
-def test_plain_papermill_in_the_notebooks_folder_writes_to_scratch_only(scratch, tmp_path):
+def _documented_papermill() -> list[str]:
+    """The papermill commands of docs/notebooks.md, as a reader copies them."""
+    text = (paths.PROJECT_ROOT / "docs" / "notebooks.md").read_text()
+    block = re.search(r"```bash\n(\.venv/bin/jupytext[^`]*)```", text).group(1)
+    return [line for line in block.splitlines() if line.strip()]
+
+
+def test_plain_papermill_as_documented_writes_to_a_new_scratch_folder_and_warns_of_nothing(scratch, tmp_path):
+    """The documented commands, run as a reader runs them (the notebook and its parameter changed to a quick
+    one): no warning, nothing published, and two runs never share a scratch folder."""
     before = _snapshot()
-    nb = jupytext.read(paths.notebook_file("07_glu2017_figures"))
     executed = tmp_path / "out.ipynb"
-    pm.execute_notebook(
-        nb,
-        str(executed),
-        parameters={"data": "synthetic", "threshold": 0.05},
-        kernel_name="python3",
-        cwd=str(paths.NOTEBOOKS_DIR),
-        progress_bar=False,
-    )
+    lines = [
+        line.replace("build/08_out.ipynb", str(executed))
+        .replace("build/08_tcds_figures.ipynb", str(tmp_path / "in.ipynb"))
+        .replace("08_tcds_figures", "07_glu2017_figures")
+        .replace("-p rule jeffrey", "-p threshold 0.05")
+        .replace(".venv/bin/", str(Path(sys.executable).parent) + "/")
+        for line in _documented_papermill()
+    ]
+    assert len(lines) == 2 and str(executed) in lines[1]
+    for line in lines:
+        r = subprocess.run(
+            line, shell=True, cwd=paths.PROJECT_ROOT, capture_output=True, text=True, timeout=300
+        )
+        assert r.returncode == 0, r.stderr
+        assert not re.search(r"warn|\d+%\|", r.stderr, re.IGNORECASE), r.stderr  # no warning, no bar
     assert _snapshot() == before, "a by-hand run changed the project's published outputs"
-    assert (scratch / "figures" / "glu2017_effect_prediction.png").is_file()
-    svg = (scratch / "figures" / "glu2017_effect_prediction.svg").read_text()
-    assert "07_glu2017_figures with threshold=0.05" in svg  # the figure names the run's parameters
     first = json.loads(executed.read_text())["cells"]
     header = next(
         "".join(o["data"]["text/markdown"])
@@ -69,7 +82,16 @@ def test_plain_papermill_in_the_notebooks_folder_writes_to_scratch_only(scratch,
         if "text/markdown" in o.get("data", {})
     )
     assert header.startswith("**07_glu2017_figures** · synthetic data")
-    assert "parameters: threshold=0.05" in header and "build/scratch/07_glu2017_figures/" in header
+    assert "parameters: threshold=0.05" in header
+    folder = re.search(r"build/scratch/07_glu2017_figures/([0-9-]+)/", header).group(1)
+    run = scratch / folder
+    assert (run / "figures" / "glu2017_effect_prediction.png").is_file()
+    svg = (run / "figures" / "glu2017_effect_prediction.svg").read_text()
+    assert "07_glu2017_figures with threshold=0.05" in svg  # the figure names the run's parameters
+    from glu.paths import new_scratch_dir
+
+    again = new_scratch_dir("07_glu2017_figures")  # a second run in the same second: a folder of its own
+    assert again != run and again.parent == scratch and not any(again.iterdir())
 
 
 def test_plain_papermill_refuses_an_unknown_parameter_in_the_first_cell(tmp_path):

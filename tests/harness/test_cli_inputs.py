@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
+from cli_run import run
 
 from glu.cli import main
 
@@ -291,3 +294,91 @@ def test_a_model_json_with_an_infinite_count_is_one_line(capsys, tmp_path):
     model.write_text(json.dumps(d))
     status, out, err = _glu(capsys, "query", "--model", model, "--target", "ObjVel", "--json")
     assert status == 2 and out == "" and "malformed model (OverflowError" in err.splitlines()[-1]
+
+
+# ------------------------------------------------------------ text from files never forges a line
+@pytest.fixture
+def model_json(tmp_path, capsys):
+    out = tmp_path / "m.json"
+    assert main(["bn", "learn", "--data", "synthetic", "-o", str(out)]) == 0
+    capsys.readouterr()
+    return out
+
+
+def _edited(model: Path, dest: Path, change) -> Path:
+    doc = json.loads(model.read_text())
+    change(doc)
+    dest.write_text(json.dumps(doc))
+    return dest
+
+
+def test_a_data_source_with_a_newline_cannot_forge_an_answer_line(capsys, tmp_path, model_json):
+    def forge(doc):
+        doc["meta"]["data_source"] = "robot data\nAction  tap  1.000000"
+
+    forged = _edited(model_json, tmp_path / "forged.json", forge)
+    status, out, _ = run(capsys, "query", "--model", str(forged), "--target", "Action")
+    assert status == 0
+    lines = out.splitlines()
+    assert lines[0] == f"# model {forged} (robot data\\nAction  tap  1.000000)"
+    assert [line.split()[1] for line in lines[2:]] == ["grasp", "tap", "touch"]  # the three answers only
+    assert not any(line.startswith("Action  tap  1.000000") for line in lines)
+
+
+@pytest.mark.parametrize("name", ["grasp\x1bc", "tap\u202eevil", "touch\nAction  tap  1.000000", "x\x07\r"])
+def test_a_value_name_reaches_the_terminal_escaped(capsys, tmp_path, model_json, name):
+    def rename(doc):
+        doc["nodes"][0]["values"][0] = name
+
+    model = _edited(model_json, tmp_path / "escape.json", rename)
+    for argv in (["query", "--model", str(model), "--target", "Action"], ["bn", "nodes", str(model)]):
+        status, out, err = run(capsys, *argv)
+        assert status == 0, err
+        for bad in ("\x1b", "\u202e", "\x07", "\r"):
+            assert bad not in out and bad not in err
+        assert len([line for line in out.splitlines() if line.startswith("Action ")]) <= 3
+
+
+def test_glu_help_imports_no_command():
+    """`glu --help` lists every command from glu.cli.commands alone: no command module, no pandas."""
+    code = (
+        "import sys, contextlib, io\n"
+        "from glu.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()) as f:\n"
+        "    try:\n"
+        "        main(['--help'])\n"
+        "    except SystemExit:\n"
+        "        pass\n"
+        "loaded = sorted(m for m in sys.modules if m.endswith('_cmds') or m.split('.')[0] in "
+        "('pandas', 'scipy', 'matplotlib', 'numba'))\n"
+        "print(loaded, 'learning-curves' in f.getvalue())\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.stdout.strip() == "[] True", r.stdout + r.stderr
+
+
+def test_the_full_parser_lists_the_commands_of_the_table_with_their_lines():
+    from glu.cli import build_parser
+    from glu.cli.commands import COMMANDS
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    assert list(sub.choices) == list(COMMANDS)
+    assert {c.dest: c.help for c in sub._choices_actions} == {k: v.help for k, v in COMMANDS.items()}
+
+
+def test_recognize_says_a_missing_file_is_not_found(capsys):
+    status, _, err = run(capsys, "recognize", "missing.csv")
+    assert status == 2 and "missing.csv: file not found" in err and len(err.splitlines()) == 1
+
+
+def test_query_offers_the_renormalise_its_advice_names(capsys, tmp_path):
+    bif = tmp_path / "net.bif"
+    bif.write_text(
+        "network n {}\nvariable A { type discrete [ 2 ] { a0, a1 }; }\n"
+        "probability ( A ) { table 0.50003, 0.5; }\n"
+    )
+    status, _, err = run(capsys, "query", "--model", str(bif), "--target", "A")
+    assert status == 2 and "--renormalise" in err
+    status, out, err = run(capsys, "query", "--model", str(bif), "--target", "A", "--renormalise")
+    assert status == 0, err
+    assert "1 CPT row(s) rescaled" in out and "A  a0" in out

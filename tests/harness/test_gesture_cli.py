@@ -157,8 +157,6 @@ def test_malformed_log_and_missing_files(capsys, tmp_path, source, models):
     assert_one_line_error(status, err, f"{bad}:2:")
     status, _, err = run(capsys, "recognize", str(tmp_path / "none.log"), *data)
     assert_one_line_error(status, err, "none.log: file not found")
-    status, _, err = run(capsys, "recognize", "missing.csv", "--data", "synthetic")  # said before the models
-    assert_one_line_error(status, err, "missing.csv: file not found")
     status, _, err = run(capsys, "recognize", "no_such_recording", *data)
     assert_one_line_error(status, err, "recordings: grasp1_hand")
     notjson = tmp_path / "m.json"

@@ -71,41 +71,12 @@ def test_the_reference_tests_find_the_real_data_where_ci_or_glu_data_fetch_put_i
     assert paths.shared_data_dir() is None
 
 
-def test_the_notebooks_ship_in_the_package_and_the_resources_are_packages():
-    """A wheel maps notebooks/ to glu.notebooks; every folder of glu/resources/ is declared (setuptools
-    warns on every install about a data folder it was not told of); an editable install maps nothing
-    (a checkout reads notebooks/ itself)."""
-    setup = (ROOT / "setup.py").read_text()
-    assert '"glu.notebooks": "notebooks"' in setup
-    code = compile(setup.replace("setup(", "dict("), "setup.py", "exec")
-    for argv, mapped in ((["setup.py", "bdist_wheel"], True), (["setup.py", "editable_wheel"], False)):
-        scope: dict = {}
-        old_argv, old_cwd = sys.argv, os.getcwd()
-        try:
-            sys.argv = argv
-            os.chdir(ROOT)
-            exec(code, scope)
-        finally:
-            sys.argv = old_argv
-            os.chdir(old_cwd)
-        packages = set(scope["PACKAGES"]) | ({"glu.notebooks"} if mapped else set())
-        folders = {
-            ".".join(d.relative_to(ROOT).parts)
-            for d in (ROOT / "glu").rglob("*")
-            if d.is_dir() and d.name != "__pycache__"
-        }
-        assert folders <= packages, sorted(folders - packages)
-        assert scope["EDITABLE"] is not mapped
+def test_the_notebooks_ship_in_the_package():
+    """In the checkout glu runs the notebooks of ``notebooks/``; a wheel carries a copy in ``glu/notebooks/``
+    (setup.py's build step; the slow wheel test runs them from an installed glu)."""
     assert paths.NOTEBOOKS_DIR == ROOT / "notebooks"
-
-
-@pytest.mark.slow
-def test_installing_prints_no_warning(tmp_path):
-    """pip builds the wheel and the editable wheel without one line on stderr or a setuptools warning."""
-    for args in (["wheel", "--no-deps", "-w", str(tmp_path / "w"), str(ROOT)],):
-        r = subprocess.run([sys.executable, "-m", "pip", *args], capture_output=True, text=True, cwd=tmp_path)
-        assert r.returncode == 0, r.stderr
-        assert "Warning" not in r.stdout + r.stderr, (r.stdout + r.stderr)[-3000:]
+    setup = (ROOT / "setup.py").read_text()
+    assert 'Path(self.build_lib, "glu", "notebooks")' in setup and 'Path("notebooks").glob("*.py")' in setup
 
 
 def test_the_base_install_has_no_jupyter_and_no_rerun():

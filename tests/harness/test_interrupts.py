@@ -11,7 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from glu.run.reproduce import OWNER_FILE, clean_stale_staging
+from glu.paths import OUTPUT_KINDS, OutputLayout
+from glu.run import publish
+from glu.run.publish import OWNER, STEPS, Store
 
 _SLOW = """# ---
 # jupyter:
@@ -92,22 +94,202 @@ def test_a_signal_stops_the_run_at_once_and_publishes_nothing(tmp_path, sig, sta
     time.sleep(0.5)
     assert not any(_alive(pid) for pid in kernels), "a kernel survived"
     assert not (out / "figures").exists() and not (out / "results").exists()  # nothing published
-    assert not (out / ".glu-staging").exists() or not any((out / ".glu-staging").iterdir())
+    assert _runs(out) == []  # the staging run removed on the way out
 
 
-def test_a_staging_folder_left_by_a_killed_run_is_removed(tmp_path):
-    root = tmp_path / ".glu-staging"
+def _runs(out: Path) -> list[str]:
+    """The run folders in the store of ``out``."""
+    store = out / ".glu-runs"
+    return (
+        sorted(d.name for d in store.iterdir() if d.is_dir() and d.name.startswith("r"))
+        if store.is_dir()
+        else []
+    )
+
+
+def test_a_staging_run_left_by_a_killed_process_is_removed_by_the_next_start(tmp_path):
+    store = Store(OutputLayout.under(tmp_path))
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    stale, live, unowned = root / "aaa", root / "bbb", root / "ccc"
-    for d in (stale, live, unowned):
-        (d / "x").mkdir(parents=True)
-    (stale / OWNER_FILE).write_text(str(dead.pid))
-    (live / OWNER_FILE).write_text(str(os.getpid()))
-    removed = clean_stale_staging(root)
-    assert sorted(removed) == sorted([stale, unowned])
-    assert live.exists() and not stale.exists() and not unowned.exists()
-    assert clean_stale_staging(Path(tmp_path / "none")) == []
+    stale, live, unowned = store.begin(), store.begin(), store.begin()
+    (stale / OWNER).write_text(str(dead.pid))  # a run killed while it staged
+    (unowned / OWNER).unlink()  # an earlier publication whose removal was stopped
+    mine = store.begin()  # a start removes what stopped runs left, and only that
+    assert not stale.exists() and not unowned.exists() and live.exists() and mine.exists()
+    assert Store(OutputLayout.under(tmp_path / "none")).clean() == []
+
+
+# ----------------------------------------------- a stop between any two steps of the publication
+_RUN = """# ---
+# jupyter:
+#   glu:
+#     about: a test notebook whose files name the run (its seed)
+#     figures:
+#     - NAME
+#     tables:
+#     - tNAME
+# ---
+
+# %% tags=["parameters"]
+data: str = None  # data folder
+seed: int = 0  # seed
+out_dir: str = None  # outputs
+
+# %%
+import json
+from pathlib import Path
+for sub, file in (("figures", "NAME.png"), ("figures", "NAME.svg"), ("results", "tNAME.csv")):
+    Path(out_dir, sub).mkdir(parents=True, exist_ok=True)
+    Path(out_dir, sub, file).write_text(f"run {seed}")
+doc = {"meta": {"name": "tNAME", "notebook": NOTEBOOK}, "rows": [{"run": seed}]}
+Path(out_dir, "results", "tNAME.json").write_text(json.dumps(doc))
+"""
+
+
+def _notebooks(folder: Path) -> Path:
+    folder.mkdir()
+    for nb, name in (("01_a", "a"), ("02_b", "b")):
+        (folder / f"{nb}.py").write_text(_RUN.replace("NAME", name).replace("NOTEBOOK", repr(nb)))
+    return folder
+
+
+def _fake_kernel(src, out_ipynb, parameters, cwd=None, handle=None):
+    """Execute a test notebook's code cells in this process (the publication, not the kernels, is tested)."""
+    import jupytext
+    import nbformat
+
+    nb = jupytext.read(src)
+    scope = dict(parameters)
+    for cell in nb.cells[1:]:
+        if cell.cell_type == "code":
+            exec(cell.source, scope)
+    out_ipynb.parent.mkdir(parents=True, exist_ok=True)
+    nbformat.write(nb, out_ipynb)
+
+
+def _fake_site(layout, summary, log, notebooks_dir, work, published):
+    """A site that names its run: the seed of its figures."""
+    layout.site.mkdir()
+    (layout.site / "index.html").write_text((layout.figures / "a.png").read_text())
+
+
+def _published(out: Path) -> dict[str, bytes]:
+    """Every file a reader sees through the places of ``out``, with its bytes."""
+    return {
+        f"{kind}/{f.relative_to(out / kind).as_posix()}": f.read_bytes()
+        for kind in OUTPUT_KINDS
+        for f in sorted((out / kind).rglob("*"))
+        if f.is_file()
+    }
+
+
+def _seeds(files: dict[str, bytes]) -> set[int]:
+    """The runs (seeds) the published files come from."""
+    import json
+
+    seeds = set()
+    for name, data in files.items():
+        if name == "results/summary.json":
+            seeds |= {t["rows"][0]["run"] for t in json.loads(data)["tables"].values()}
+        elif name.endswith((".png", ".svg", ".csv", ".html")) and data.startswith(b"run "):
+            seeds.add(int(data.split()[1]))
+        elif name == "results/summary.csv":
+            seeds |= {int(line.rsplit(",", 1)[1]) for line in data.decode().splitlines()[1:]}
+    return seeds
+
+
+def _reproduce_in_process(out: Path, nbs: Path, seed: int) -> None:
+    from glu.run.reproduce import reproduce
+
+    reproduce(data="synthetic", out=out, notebooks_dir=nbs, seed=seed, jobs=1, log=lambda _: None)
+
+
+@pytest.mark.parametrize("step", STEPS)
+def test_a_stop_between_any_two_steps_of_the_publication_leaves_one_whole_run(tmp_path, monkeypatch, step):
+    """The published set — figures, tables, executed notebooks, summary, site — is wholly the previous run
+    until the pointer is swapped, wholly the new one after; no staging is left once the next run starts."""
+    import glu.run.reproduce as reproduce_module
+    import glu.run.site as site_module
+
+    monkeypatch.setattr(reproduce_module, "run_notebook", _fake_kernel)
+    monkeypatch.setattr(site_module, "build_site", _fake_site)
+    nbs, out = _notebooks(tmp_path / "nbs"), tmp_path / "out"
+    _reproduce_in_process(out, nbs, seed=1)
+    old = _published(out)
+    assert _seeds(old) == {1} and "site/index.html" in old and "results/summary.json" in old
+
+    def stop(name: str) -> None:
+        if name == step:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(publish, "STEP_HOOK", stop)
+    with pytest.raises(KeyboardInterrupt):
+        _reproduce_in_process(out, nbs, seed=2)
+    now = _published(out)
+    assert now.keys() == old.keys()  # the same files: no mixture of a partial publication
+    if STEPS.index(step) < STEPS.index("pointer"):
+        assert now == old  # the previous run, byte for byte
+        assert len(_runs(out)) == 1  # and the staged run removed on the way out
+    else:
+        assert _seeds(now) == {2}  # wholly the new run
+    monkeypatch.setattr(publish, "STEP_HOOK", None)
+    Store(OutputLayout.under(out)).clean()  # what the next start does first
+    assert len(_runs(out)) == 1 and _published(out) == now
+
+
+_STOP_AT = """
+import os, signal, sys
+from glu.run import publish
+def hook(name):
+    if name == sys.argv[1]:
+        os.kill(os.getpid(), getattr(signal, sys.argv[2]))
+publish.STEP_HOOK = hook
+from glu.cli import main
+sys.exit(main(sys.argv[3:]))
+"""
+
+
+@pytest.mark.parametrize(
+    ("step", "sig"),
+    [("pointer", "SIGINT"), pytest.param("recorded", "SIGKILL", marks=pytest.mark.slow)]
+    + [pytest.param(s, "SIGKILL", marks=pytest.mark.slow) for s in STEPS if s != "recorded"],
+)
+def test_a_signal_between_two_steps_of_a_real_run_leaves_one_whole_run(tmp_path, step, sig):
+    """The same with real kernels and a real signal: Ctrl-C (the run ends, status 130) or SIGKILL (nothing
+    runs on the way out; the next start cleans up)."""
+    nbs, out = _notebooks(tmp_path / "nbs"), tmp_path / "out"
+    argv = [
+        "reproduce",
+        "--notebooks",
+        str(nbs),
+        "--data",
+        "synthetic",
+        "-o",
+        str(out),
+        "-j",
+        "1",
+        "--no-site",
+    ]
+    first = subprocess.run(
+        [sys.executable, "-c", _STOP_AT, "none", sig, *argv, "--seed", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert first.returncode == 0, first.stderr
+    old = _published(out)
+    second = subprocess.run(
+        [sys.executable, "-c", _STOP_AT, step, sig, *argv, "--seed", "2"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert second.returncode == (130 if sig == "SIGINT" else -9), second.stderr
+    now = _published(out)
+    assert now.keys() == old.keys()
+    assert now == old if STEPS.index(step) < STEPS.index("pointer") else _seeds(now) == {2}
+    Store(OutputLayout.under(out)).clean()
+    assert len(_runs(out)) == 1 and _published(out) == now
 
 
 # -------------------------------------------------------- signals at random moments, kernel start-up included
@@ -247,3 +429,29 @@ def test_an_interrupt_wrapped_by_compiled_code_is_still_an_interrupt(monkeypatch
     monkeypatch.setattr(bn_cmds, "_edges", handler)
     assert main(["bn", "edges", "model.json"]) == status
     assert capsys.readouterr().err == f"glu bn edges: {word}\n"
+
+
+def test_a_full_disk_during_the_site_build_publishes_nothing_and_leaves_no_staging(tmp_path, monkeypatch):
+    """The site is built inside the staged run: a disk that fills up there leaves the previous run published
+    and nothing of the new one behind (no site.new beside the old site)."""
+    import errno
+
+    import glu.run.reproduce as reproduce_module
+    import glu.run.site as site_module
+
+    monkeypatch.setattr(reproduce_module, "run_notebook", _fake_kernel)
+    monkeypatch.setattr(site_module, "build_site", _fake_site)
+    nbs, out = _notebooks(tmp_path / "nbs"), tmp_path / "out"
+    _reproduce_in_process(out, nbs, seed=1)
+    old = _published(out)
+
+    def full(layout, *args, **kwargs):
+        layout.site.mkdir()
+        (layout.site / "index.html").write_text("half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(site_module, "build_site", full)
+    with pytest.raises(OSError, match="No space left"):
+        _reproduce_in_process(out, nbs, seed=2)
+    assert _published(out) == old and len(_runs(out)) == 1
+    assert sorted(p.name for p in out.iterdir()) == sorted([".glu-runs", *OUTPUT_KINDS])

@@ -148,8 +148,8 @@ def test_the_readme_stays_a_front_page():
     assert len(lines) <= 250, f"README.md has {len(lines)} lines; move detail into docs/"
     assert lines[2:6] == [
         "```bash",
-        "make reproduce   # fresh machine: create .venv, install glu, run every notebook → figures/, "
-        "recordings/, results/",
+        "make reproduce   # fresh machine: create .venv, install glu, run every notebook → results/, "
+        "recordings/, build/",
         "make test        # fresh machine: create .venv, install glu and its test tools, lint (ruff), "
         "run the test suite",
         "```",

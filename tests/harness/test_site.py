@@ -4,13 +4,14 @@ machine paths, and a small run on a data folder on disk whose site shows none of
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import nbformat
 import pytest
 
 from glu import paths
-from glu.paths import STAGING, OutputLayout
+from glu.paths import RUNS, OutputLayout
 from glu.run import site as site_module
 from glu.run.captions import caption_figures, figure_captions
 from glu.run.execution import present_executed, shown_path
@@ -76,15 +77,15 @@ def test_the_executed_notebook_names_the_published_folders_not_the_staging_one(t
             nbformat.v4.new_code_cell("data = None  # data folder\nout_dir = None  # outputs"),
             nbformat.v4.new_code_cell(
                 f'# Parameters\nseed = 0\ndata = "{tmp_path}/data"\nout_dir = '
-                f'"{tmp_path}/{STAGING}/abc/01/out"\n',
+                f'"{tmp_path}/{RUNS}/abc/01/out"\n',
                 metadata={"tags": ["injected-parameters"]},
             ),
         ]
     )
     nb.metadata["papermill"] = {
-        "parameters": {"seed": 0, "data": f"{tmp_path}/data", "out_dir": f"{tmp_path}/{STAGING}/abc/01/out"},
+        "parameters": {"seed": 0, "data": f"{tmp_path}/data", "out_dir": f"{tmp_path}/{RUNS}/abc/01/out"},
         "input_path": {"cells": "the whole notebook"},
-        "output_path": f"{tmp_path}/{STAGING}/abc/01/01.ipynb",
+        "output_path": f"{tmp_path}/{RUNS}/abc/01/01.ipynb",
     }
     ipynb = tmp_path / "01.ipynb"
     nbformat.write(nb, ipynb)
@@ -95,7 +96,7 @@ def test_the_executed_notebook_names_the_published_folders_not_the_staging_one(t
         "build/notebooks/01.ipynb",
     )
     text = ipynb.read_text()
-    assert str(tmp_path) not in text and STAGING not in text
+    assert str(tmp_path) not in text and RUNS not in text
     done = nbformat.read(ipynb, as_version=4)
     assert done.cells[1].source.split("\n") == [
         "# Parameters",
@@ -133,14 +134,16 @@ def _machine_paths(folder: Path, data: Path, out: Path) -> dict[str, list[str]]:
         "the data folder": str(data),
         "the home folder": str(Path.home()),
         "the output folder": str(out),
-        "the staging folder": STAGING,
     }
+    # a run's own folder in the store (the docs may name the store and its current and failed places)
+    staging = re.compile(re.escape(RUNS) + r"/(?!current\b|failed\b)[\w.-]+")
     found: dict[str, list[str]] = {}
     for f in sorted(folder.rglob("*")):
         if not f.is_file() or f.suffix in (".png", ".svg", ".woff", ".woff2", ".ttf", ".ico", ".gif", ".jpg"):
             continue
         text = f.read_text(encoding="utf-8", errors="replace")
         hits = [what for what, needle in needles.items() if needle in text]
+        hits += ["the staging folder"] if staging.search(text) else []
         if hits:
             found[f.relative_to(folder).as_posix()] = hits
     return found
@@ -219,14 +222,16 @@ def test_the_api_reference_has_every_public_module_in_the_order_of_the_layers():
 
 
 def test_make_docs_builds_the_site_again_from_the_last_run_and_a_warning_fails_it(
-    site_run, monkeypatch, tmp_path
+    site_run, monkeypatch, tmp_path, capsys
 ):
     out, _ = site_run
     layout = OutputLayout.under(out)
     pages = sorted(p.relative_to(layout.site) for p in layout.site.rglob("*.html"))
     monkeypatch.setattr(site_module, "api_modules", lambda: SOME_MODULES)  # the small reference again
+    results = (layout.results / "summary.json").read_bytes()
     assert site_module.main(["--out", str(out)]) == 0  # `make docs`, from results/summary.json
     assert sorted(p.relative_to(layout.site) for p in layout.site.rglob("*.html")) == pages
+    assert (layout.results / "summary.json").read_bytes() == results  # the same run, published again
     before = (layout.site / "index.html").read_bytes()
     docs = tmp_path / "docs"
     docs.mkdir()
@@ -234,12 +239,15 @@ def test_make_docs_builds_the_site_again_from_the_last_run_and_a_warning_fails_i
         "# Broken\n\nSee {ref}`no-such-label` and {py:func}`glu.bn.model.no_such_function`.\n"
     )
     monkeypatch.setattr(site_module, "DOCS_DIR", docs)
-    with pytest.raises(SiteError, match=r"2 Sphinx warning") as e:
-        build_site(layout, log=lambda _: None)
-    assert "no-such-label" in str(e.value)
-    assert "the reference to glu.bn.model.no_such_function leads to no page" in str(e.value)
-    assert str(out) not in str(e.value) and str(paths.PROJECT_ROOT) not in str(e.value)
-    assert (layout.site / "index.html").read_bytes() == before  # the previous site is as it was
+    runs = sorted((layout.store).iterdir())
+    capsys.readouterr()
+    assert site_module.main(["--out", str(out)]) == 2  # `make docs` fails, and publishes nothing
+    err = capsys.readouterr().err
+    assert re.search(r"(?s)2 Sphinx warning.*no-such-label", err), err
+    assert "the reference to glu.bn.model.no_such_function leads to no page" in err
+    assert str(out) not in err and str(paths.PROJECT_ROOT) not in err
+    assert sorted((layout.store).iterdir()) == runs  # no staging left behind
+    assert (layout.site / "index.html").read_bytes() == before  # the published site is as it was
     assert not (layout.site / "docs" / "broken.html").exists()
 
 

@@ -289,5 +289,20 @@ def test_bif_refuses_names_that_are_not_identifiers(uniform_bn):
 
     s = Schema(values={"my node": ("a", "b")}, n_affordance=1)
     bn = BayesNet(schema=s, parents={"my node": ()}, cpts={"my node": np.array([0.5, 0.5])})
-    with pytest.raises(ModelError, match="use XMLBIF"):
+    with pytest.raises(ModelError, match="BIF cannot carry 'my node'.*Write XMLBIF"):
         to_bif(bn)
+
+
+def test_a_name_xmlbif_carries_and_bif_cannot_is_named_with_the_way_out():
+    """Äction reads from XMLBIF; BIF refuses it naming every name it cannot carry, and XMLBIF writes it."""
+    from glu.bn.exchange import from_xmlbif, to_xmlbif
+
+    text = (
+        '<?xml version="1.0"?><BIF VERSION="0.3"><NETWORK><NAME>n</NAME>'
+        '<VARIABLE TYPE="nature"><NAME>Äction</NAME><OUTCOME>grasp</OUTCOME><OUTCOME>tap me</OUTCOME>'
+        "</VARIABLE><DEFINITION><FOR>Äction</FOR><TABLE>0.4 0.6</TABLE></DEFINITION></NETWORK></BIF>"
+    )
+    bn = from_xmlbif(text, "n.xmlbif")
+    with pytest.raises(ModelError, match="BIF cannot carry 'Äction', 'tap me' \\(a value of 'Äction'\\)"):
+        to_bif(bn)
+    assert from_xmlbif(to_xmlbif(bn), "again.xmlbif").schema.values == {"Äction": ("grasp", "tap me")}

@@ -1,0 +1,68 @@
+"""The commands of ``glu``, where each is defined, and the line ``glu --help`` gives it.
+
+:func:`glu.cli.build_parser` imports only the module of the command being run (a module's imports — pandas,
+SciPy, the models — cost seconds on a busy machine); ``glu --help`` and an unknown command import none. This
+table, which imports nothing, is the one place a command's one-line help is written: each module's
+``register`` reads it from here.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+
+class Command(NamedTuple):
+    """Where a top-level command is defined, and its one line in ``glu --help``."""
+
+    module: str
+    help: str
+
+
+COMMANDS: dict[str, Command] = {
+    "data": Command("glu.cli.data_cmds", "fetch, synthesise or inspect data"),
+    "bn": Command("glu.cli.bn_cmds", "learn, import or inspect the Affordance–Words network"),
+    "query": Command("glu.cli.bn_cmds", "posterior marginals given hard and soft evidence"),
+    "gestures": Command("glu.cli.gesture_cmds", "inspect and segment hand-trajectory logs"),
+    "hmm": Command("glu.cli.gesture_cmds", "train gesture HMMs"),
+    "recognize": Command("glu.cli.gesture_cmds", "posterior p_HMM(A | G) of a gesture in a hand log"),
+    "reproduce": Command(
+        "glu.cli.reproduce_cmds",
+        "run every notebook: figures, recordings, results summary, documentation site",
+    ),
+    "run": Command(
+        "glu.cli.reproduce_cmds", "run one notebook headless with other parameters (into its scratch folder)"
+    ),
+    "describe": Command(
+        "glu.cli.language_cmds", "the N best sentences describing a situation (grammar + word probabilities)"
+    ),
+    "anticipate": Command(
+        "glu.cli.anticipate_cmds",
+        "effect anticipation: HMM scores per frame, p_comb(ObjVel) every 5 frames, a description",
+    ),
+    "readme": Command(
+        "glu.cli.readme_cmds",
+        "write the generated sections of the README and docs/ (story table, results, commands, speed)",
+    ),
+    "evaluate": Command(
+        "glu.cli.eval_cmds", "measure every fusion strategy on a simulated corpus (Dask sweep)"
+    ),
+    "corpus": Command("glu.cli.eval_cmds", "write a simulated corpus of episodes to Parquet"),
+    "correspondence": Command(
+        "glu.cli.correspondence_cmds",
+        "run notebook 10's synthetic correspondence study (Dask) and save its tables",
+    ),
+    "learn-gestures": Command(
+        "glu.cli.learn_cmds",
+        "learn gesture HMMs from unlabelled episodes, labelled by the affordance network",
+    ),
+    "learning-curves": Command(
+        "glu.cli.learn_cmds",
+        "the study of learning from effects: learning curves of every scheme (Dask, one task per seed)",
+    ),
+}
+"""Every top-level command, in the order ``glu --help`` lists them."""
+
+
+def help_of(command: str) -> str:
+    """The one line ``glu --help`` gives ``command``."""
+    return COMMANDS[command].help

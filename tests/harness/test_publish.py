@@ -1,0 +1,222 @@
+"""Publishing a run (glu.run.publish): nothing glu did not write is replaced, a synthetic run in the checkout
+leaves git's tree clean, and a run's names never become paths outside its folders."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from cli_run import run
+
+from glu import paths
+from glu.paths import OUTPUT_KINDS, OutputLayout
+from glu.run.publish import CURRENT, MARKER, PublishError, Store, legacy_files
+
+_NOTEBOOK = """# ---
+# jupyter:
+#   glu:
+#     about: a test notebook
+#     figures:
+#     - a
+# ---
+
+# %% tags=["parameters"]
+data: str = None  # data folder
+seed: int = 0  # seed
+out_dir: str = None  # outputs
+
+# %%
+from pathlib import Path
+Path(out_dir, "figures").mkdir(parents=True, exist_ok=True)
+for ext in ("png", "svg"):
+    Path(out_dir, "figures", f"a.{ext}").write_text(f"run {seed}")
+"""
+
+
+@pytest.fixture(scope="module")
+def notebooks(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("nbs")
+    (folder / "01_a.py").write_text(_NOTEBOOK)
+    return folder
+
+
+def _reproduce(capsys, notebooks: Path, out: Path, *extra: str) -> tuple[int, str, str]:
+    argv = ["reproduce", "--notebooks", str(notebooks), "--data", "synthetic", "-o", str(out), "-j", "1"]
+    return run(capsys, *argv, "--no-site", *extra)
+
+
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {
+        str(f.relative_to(folder)): f.read_bytes()
+        for f in sorted(folder.rglob("*"))
+        if f.is_file() and ".glu-runs" not in f.relative_to(folder).parts
+    }
+
+
+@pytest.mark.parametrize(
+    "mine",
+    [
+        "site/index.html",
+        "site/blog/post.html",
+        "figures/my_figure.png",
+        "results",  # a file where glu would put a folder
+        "notebooks/analysis.ipynb",
+    ],
+)
+def test_a_file_of_the_users_in_the_output_folder_is_refused_in_one_line_and_kept(
+    capsys, tmp_path, notebooks, mine
+):
+    out = tmp_path / "out"
+    (out / mine).parent.mkdir(parents=True, exist_ok=True)
+    (out / mine).write_text("the user's own")
+    for other in ("site-source/x", "site.old/x", "site.new/x", ".glu-staging/x/y"):  # never looked at
+        (out / other).parent.mkdir(parents=True, exist_ok=True)
+        (out / other).write_text("the user's own")
+    before = _tree(out)
+    status, _, err = _reproduce(capsys, notebooks, out)
+    assert status == 2 and len(err.strip().splitlines()) == 1, err
+    assert mine.split("/")[0] in err and "--force" in err
+    assert _tree(out) == before  # nothing of the user's touched, nothing ran
+    status, _, err = _reproduce(capsys, notebooks, out, "--force")
+    assert status == 0, err
+    assert _tree(out) == {**before, **{k: v for k, v in _tree(out).items() if k not in before}}
+    kind = mine.split("/")[0]
+    assert not (out / kind).is_symlink()  # left as it was: the run is in the store
+    assert (out / ".glu-runs" / CURRENT / "figures" / "a.png").read_text() == "run 0"
+    if kind != "figures":
+        assert (out / "figures" / "a.png").read_text() == "run 0"
+
+
+def test_a_store_glu_did_not_make_is_refused(capsys, tmp_path, notebooks):
+    out = tmp_path / "out"
+    (out / ".glu-runs").mkdir(parents=True)
+    (out / ".glu-runs" / "notes.txt").write_text("mine")
+    status, _, err = _reproduce(capsys, notebooks, out)
+    assert status == 2 and "notes.txt" in err and MARKER in err
+    assert (out / ".glu-runs" / "notes.txt").read_text() == "mine"
+
+
+def test_runs_replace_only_what_glu_published_and_a_stale_staging_goes(capsys, tmp_path, notebooks):
+    out = tmp_path / "out"
+    assert _reproduce(capsys, notebooks, out)[0] == 0
+    assert _reproduce(capsys, notebooks, out, "--seed", "5")[0] == 0
+    assert (out / "figures" / "a.png").read_text() == "run 5"
+    assert all((out / kind).is_symlink() for kind in OUTPUT_KINDS)
+    runs = [d for d in (out / ".glu-runs").iterdir() if d.name.startswith("r")]
+    assert len(runs) == 1 and (out / ".glu-runs" / CURRENT).resolve() == runs[0].resolve()
+
+
+def test_glu_run_refuses_to_write_into_a_published_run(capsys, tmp_path, notebooks):
+    out = tmp_path / "out"
+    assert _reproduce(capsys, notebooks, out)[0] == 0
+    before = _tree(out / ".glu-runs")
+    status, _, err = run(capsys, "run", "01_a", "--notebooks", str(notebooks), "-o", str(out), "-q")
+    assert status == 2 and "glu reproduce published" in err
+    assert _tree(out / ".glu-runs") == before
+
+
+def test_an_earlier_glus_folders_in_the_checkout_are_recognised_and_anything_else_refused(
+    tmp_path, monkeypatch
+):
+    """Before the store, glu wrote real folders at the checkout's places; their files are recognised by
+    the earlier summary and the notebooks' manifests, and a file of the user's among them is refused."""
+    from glu.run import publish
+
+    root = tmp_path / "checkout"
+    monkeypatch.setattr(publish, "PROJECT_ROOT", root)
+    layout = OutputLayout(
+        root,
+        *(root / k for k in ("build/figures", "results", "recordings", "models")),
+        root / "build" / "notebooks",
+        root / "build" / "site",
+        tracked_figures=root / "figures",
+    )
+    layout.results.mkdir(parents=True)
+    summary = {"notebooks": [{"name": "01_a"}], "tables": {"t": {}}, "recordings": ["r.rrd"]}
+    (layout.results / "summary.json").write_text(json.dumps(summary))
+    for f in (
+        "results/t.csv",
+        "results/t.json",
+        "results/summary.csv",
+        "recordings/r.rrd",
+        "build/site/index.html",
+        "build/notebooks/01_a.ipynb",
+    ):
+        (root / f).parent.mkdir(parents=True, exist_ok=True)
+        (root / f).write_text("an earlier glu's")
+    legacy = legacy_files(layout)
+    assert Store(layout).survey(legacy) == {
+        "figures": "absent",
+        "results": "legacy",
+        "recordings": "legacy",
+        "models": "absent",
+        "notebooks": "legacy",
+        "site": "legacy",
+    }
+    store = Store(layout)
+    store.survey(legacy)
+    run_folder = store.begin()
+    (run_folder / "results").mkdir()
+    (run_folder / "results" / "summary.json").write_text("{}")
+    store.record(run_folder, {})
+    store.publish(run_folder)  # the earlier glu's folders moved aside, then removed with the earlier runs
+    assert all(layout.folder(kind).is_symlink() for kind in OUTPUT_KINDS)
+    assert (layout.results / "summary.json").read_text() == "{}"
+    assert [d.name for d in (root / ".glu-runs").iterdir() if d.name.startswith("r")] == [run_folder.name]
+    (layout.results.parent / "results2").mkdir()
+    layout.results.unlink()
+    (layout.results.parent / "results2").rename(layout.results)
+    (layout.results / "my_notes.txt").write_text("the user's own")
+    with pytest.raises(PublishError, match="my_notes.txt"):
+        Store(layout).survey(legacy)
+
+
+def _copy_of_the_checkout(dest: Path) -> Path:
+    """The checkout's files as git sees them now (edits and new files included), in a new repository."""
+    root = paths.PROJECT_ROOT
+    files = subprocess.run(
+        ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
+        cwd=root,
+        capture_output=True,
+        check=True,
+    ).stdout
+    for name in files.decode().split("\0"):
+        if name and (root / name).is_file():
+            (dest / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(root / name, dest / name)
+    git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-c", "commit.gpgsign=false"]
+    subprocess.run(["git", "init", "-q"], cwd=dest, check=True)
+    subprocess.run([*git, "add", "-A"], cwd=dest, check=True)
+    subprocess.run([*git, "commit", "-q", "-m", "copy"], cwd=dest, check=True)
+    return dest
+
+
+def test_a_synthetic_make_reproduce_leaves_gits_tree_clean(tmp_path):
+    """`make reproduce` on synthetic data in a checkout (one notebook, quick, no site, for time): its figures
+    go to build/figures/, never to the tracked figures/; git status shows nothing."""
+    clone = _copy_of_the_checkout(tmp_path / "clone")
+    tracked = {f.name: f.read_bytes() for f in (clone / "figures").iterdir()}
+    venv = Path(sys.executable).parent.parent
+    stamp = venv / ".glu-installed"
+    make = ["make", "reproduce", f"VENV={venv}", "-o", str(stamp), "DATA=synthetic"]
+    env = {**os.environ, "PYTHONPATH": str(clone), "GLU_SHARED_DATA": "none"}
+    r = subprocess.run(
+        [*make, "ARGS=--quick --only 01 --no-site"],
+        cwd=clone,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "build/figures" in r.stderr or (clone / "build" / "figures" / "gesture_segmentation.png").is_file()
+    assert (clone / "build" / "figures" / "gesture_segmentation.png").is_file()
+    assert (clone / "results" / "summary.json").is_file()  # through the link into the store
+    status = subprocess.run(["git", "status", "--porcelain"], cwd=clone, capture_output=True, text=True)
+    assert status.stdout == "", status.stdout
+    assert {f.name: f.read_bytes() for f in (clone / "figures").iterdir()} == tracked
