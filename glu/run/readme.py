@@ -28,7 +28,10 @@ from glu.studies import readme_parts
 
 _ROOT = paths.PROJECT_ROOT
 README: Path | None = _ROOT / "README.md" if _ROOT is not None else None
-"""The checkout's README (None when glu is installed: then give the files explicitly)."""
+"""The checkout's README (None when glu is installed: then give the files explicitly).
+
+:meta hide-value:
+"""
 SUMMARY: Path | None = _ROOT / "results" / "summary.json" if _ROOT is not None else None
 BEGIN = (
     "<!-- BEGIN results: written by `glu readme` from results/summary.json; edit each study's readme.py, "

@@ -49,10 +49,16 @@ from glu.run.site_pages import NOTEBOOKS_PAGE, docs_index_page, docs_page, index
 from glu.run.summary import SummaryError, check_summary
 
 CONF_DIR: Path = paths.RESOURCES_DIR / "site"
-"""Sphinx's configuration, static files and templates of the site (shipped with the package)."""
+"""Sphinx's configuration, static files and templates of the site (shipped with the package).
+
+:meta hide-value:
+"""
 
 DOCS_DIR: Path | None = paths.PROJECT_ROOT / "docs" if paths.PROJECT_ROOT is not None else None
-"""The checkout's docs pages (``docs/*.md``), or None for an installed package."""
+"""The checkout's docs pages (``docs/*.md``), or None for an installed package.
+
+:meta hide-value:
+"""
 
 
 class SiteError(GluError):

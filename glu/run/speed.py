@@ -26,7 +26,10 @@ from glu.errors import DataError
 
 _ROOT = paths.PROJECT_ROOT
 RESULTS: Path | None = _ROOT / "benchmarks" / "results" if _ROOT is not None else None
-"""The benchmarks' results in a checkout (None when glu is installed)."""
+"""The benchmarks' results in a checkout (None when glu is installed).
+
+:meta hide-value:
+"""
 PAGE: Path | None = _ROOT / "docs" / "speed.md" if _ROOT is not None else None
 BEGIN = (
     "<!-- BEGIN benchmarks: written by `glu readme` from benchmarks/results/*.json; edit glu/run/speed.py -->"

@@ -16,6 +16,7 @@ from glu.run import site as site_module
 from glu.run.captions import caption_figures, figure_captions
 from glu.run.execution import present_executed, shown_path
 from glu.run.reproduce import reproduce
+from glu.run.publish import republish
 from glu.run.site import SiteError, build_site
 from glu.run.site_api import api_modules
 
@@ -123,7 +124,12 @@ def site_run(tmp_path_factory, synthetic_folder):
     summary = reproduce(
         data=synthetic_folder, quick=True, out=out, jobs=2, only=["01", "08"], log=lambda _: None, site=False
     )
-    build_site(OutputLayout.under(out), modules=SOME_MODULES, log=lambda _: None)
+    layout = OutputLayout.under(out)  # the site of the published run, with the small API reference
+    republish(
+        layout,
+        "site",
+        lambda staged, work: build_site(staged, modules=SOME_MODULES, work=work, published=layout),
+    )
     return out, summary
 
 
