@@ -15,8 +15,8 @@ from glu.paths import RUNS, OutputLayout
 from glu.run import site as site_module
 from glu.run.captions import caption_figures, figure_captions
 from glu.run.execution import present_executed, shown_path
-from glu.run.reproduce import reproduce
 from glu.run.publish import republish
+from glu.run.reproduce import reproduce
 from glu.run.site import SiteError, build_site
 from glu.run.site_api import api_modules
 
