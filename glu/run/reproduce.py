@@ -556,6 +556,10 @@ def run_one(
 ) -> tuple[Path, OutputLayout]:
     """Run one notebook headless (``glu run``): check the parameters first, then execute.
 
+    Returns the executed notebook and the layout its outputs went to. Raises
+    :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
+    of range, :class:`NotebookError` when a cell fails.
+
     Parameters
     ----------
     notebook : the notebook's name or number
@@ -564,10 +568,6 @@ def run_one(
     quick : start from the quick preset of the notebook's manifest (``values`` win over it)
     progress : report each code cell as it starts, on stderr (:class:`glu.run.progress.CellProgress`: a
         bar on a terminal, one line per cell otherwise)
-
-    Returns the executed notebook and the layout its outputs went to. Raises
-    :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
-    of range, :class:`NotebookError` when a cell fails.
     """
     pm = load_papermill()
     (src,) = list_notebooks([notebook], notebooks_dir)[:1]
