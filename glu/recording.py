@@ -102,9 +102,11 @@ def log_updates(
     ]
     for j, value in enumerate(values):
         color = VALUE_RGB.get(value) or ACTION_RGB.get(value) or (120, 120, 120)
-        rec.log(f"{entity}/{value}", rr.SeriesLines(names=value, colors=color, widths=2.0), static=True)
-        rec.log(
-            f"{entity}/{value}", rr.SeriesPoints(names=value, colors=color, marker_sizes=3.0), static=True
+        rec.log(  # one row, one chunk: two calls would be batched into chunks that differ from run to run
+            f"{entity}/{value}",
+            rr.SeriesLines(names=value, colors=color, widths=2.0),
+            rr.SeriesPoints(names=value, colors=color, marker_sizes=3.0),
+            static=True,
         )
         rec.send_columns(
             f"{entity}/{value}", indexes=indexes, columns=rr.Scalars.columns(scalars=probs[:, j])

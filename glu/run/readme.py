@@ -33,6 +33,10 @@ README: Path | None = _ROOT / "README.md" if _ROOT is not None else None
 :meta hide-value:
 """
 SUMMARY: Path | None = _ROOT / "results" / "summary.json" if _ROOT is not None else None
+"""The checkout's last run's summary (None when glu is installed).
+
+:meta hide-value:
+"""
 BEGIN = (
     "<!-- BEGIN results: written by `glu readme` from results/summary.json; edit each study's readme.py, "
     "not here -->"
