@@ -299,6 +299,7 @@ def test_a_truncated_or_corrupted_data_file_is_refused_in_one_line(
     status, _, err = run(capsys, *argv, "-o", str(out))
     assert status == 2 and said in err and "sent-1-5_lab_aff_bag.txt" in err, err
     assert err.count("glu learn-gestures: error:") == 1 and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1, err  # the refusal alone: no "published data modified" first
     assert not out.exists()
 
 
