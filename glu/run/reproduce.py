@@ -227,7 +227,7 @@ def reproduce(
 def _made_by(made: Provenance) -> Iterator[Provenance]:
     """Hand the run's provenance to the notebooks' kernels (:data:`glu.run.provenance.ENV`) while it runs."""
     before = os.environ.get(PROVENANCE_ENV)
-    os.environ[PROVENANCE_ENV] = made.label()
+    os.environ[PROVENANCE_ENV] = before or made.label()  # a caller's pinned line wins (a re-render)
     try:
         yield made
     finally:
@@ -463,8 +463,9 @@ def _stage(plan: _Plan, run: Path, results: list[NotebookResult]) -> dict[str, A
     summary = collect_summary(
         staged.results, results, plan.source.describe(), plan.quick, previous=previous if same else {}
     )
-    summary.update(made_by=plan.made.label(), provenance=plan.made.as_dict())
-    write_rendering_record(staged.figures, plan.source.describe(), plan.quick, plan.made.label())
+    label = os.environ.get(PROVENANCE_ENV) or plan.made.label()
+    summary.update(made_by=label, provenance=plan.made.as_dict())
+    write_rendering_record(staged.figures, plan.source.describe(), plan.quick, label)
     reached("staged")
     return summary
 
