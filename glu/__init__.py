@@ -3,12 +3,13 @@
 The package is built in layers (:data:`LAYERS`), each importing only from those below it:
 
 * the library — the ground (:mod:`glu.errors`, :mod:`glu.paths`, :mod:`glu.files`, :mod:`glu.matfile`,
-  :mod:`glu.machine`), the model's variables (:mod:`glu.schema`, :mod:`glu.evidence`), the data
-  (:mod:`glu.data`), the gesture HMMs (:mod:`glu.hmm`), then side by side the Affordance–Words network
-  (:mod:`glu.bn`), the gesture chain (:mod:`glu.gestures`) and the language (:mod:`glu.language`), then
-  fusion (:mod:`glu.fusion`), intervals (:mod:`glu.stats`), tidy result frames (:mod:`glu.tidy`), the look
-  of figures (:mod:`glu.plots`), Rerun recordings (:mod:`glu.recording`), the saved tables of heavy grids
-  (:mod:`glu.saved`) and the notebooks' evidence explorer (:mod:`glu.explorer`);
+  :mod:`glu.machine`; above them :mod:`glu.jit`, which finds its cache through :mod:`glu.paths`), the model's
+  variables (:mod:`glu.schema`, :mod:`glu.evidence`), the data (:mod:`glu.data`), the gesture HMMs
+  (:mod:`glu.hmm`), then side by side the Affordance–Words network (:mod:`glu.bn`), the gesture chain
+  (:mod:`glu.gestures`) and the language (:mod:`glu.language`), then fusion (:mod:`glu.fusion`), intervals
+  (:mod:`glu.stats`), tidy result frames (:mod:`glu.tidy`), the look of figures (:mod:`glu.plots`), Rerun
+  recordings (:mod:`glu.recording`), the saved tables of heavy grids (:mod:`glu.saved`) and the notebooks'
+  evidence explorer (:mod:`glu.explorer`);
 * the studies (:mod:`glu.studies`), one package per story, above the two they share;
 * the notebook runner (:mod:`glu.run`) and the command line (:mod:`glu.cli`).
 
@@ -20,6 +21,7 @@ __version__ = "0.1.0"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("glu", "glu.errors"),
     ("glu.paths", "glu.files", "glu.matfile", "glu.machine"),
+    ("glu.jit",),
     ("glu.schema",),
     ("glu.evidence",),
     ("glu.data",),

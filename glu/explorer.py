@@ -55,6 +55,8 @@ def explore(
 ) -> Exploration:
     """Posteriors of ``targets`` and the ``nbest`` descriptions, given ``evidence`` and a gesture posterior.
 
+    Raises :class:`glu.errors.GluError` for impossible or malformed evidence.
+
     Parameters
     ----------
     engine : the Affordance–Words network's inference engine
@@ -64,8 +66,6 @@ def explore(
         None for no gesture; ignored when Action itself is observed
     rule : how p_hmm enters the network, one of :data:`glu.bn.soft.SOFT_RULES`
     nbest : how many descriptions
-
-    Raises :class:`glu.errors.GluError` for impossible or malformed evidence.
     """
     evidence = dict(evidence or {})
     schema = engine.bn.schema

@@ -211,6 +211,7 @@ def quiet_dask_logs() -> Iterator[None]:
 # ------------------------------------------------------------------ Dask schedulers
 
 SYNCHRONOUS = "synchronous"
+"""The ``--scheduler`` that runs a sweep in this process, one task after another (no cluster)."""
 ADDRESS = re.compile(r"^(tcp|tls|ws|wss)://[^\s/]+:\d+/?$")
 
 

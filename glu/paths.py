@@ -50,7 +50,7 @@ class Locations:
     notebooks : the jupytext notebooks ``NN_name.py``
     data : the folder of fetched data (``real/`` under it)
     scratch : where notebooks run by hand write their outputs
-    compiled : numba's cache of the compiled HMM loops (:mod:`glu.hmm._engine.kernels`)
+    compiled : numba's cache of the compiled loops (:mod:`glu.jit`)
     sweeps : where the tables of heavy grids computed for a notebook are kept (:mod:`glu.saved`)
     saved : the saved tables of the notebooks' full grids (``sweeps/`` of a checkout; None installed)
     """
@@ -136,10 +136,26 @@ PROJECT_ROOT: Path | None = HERE.checkout
 :meta hide-value:
 """
 RESOURCES_DIR: Path = PACKAGE_DIR / "resources"
+"""The package's resources (the grammar, schemas, the site's configuration, the published numbers).
+
+:meta hide-value:
+"""
 NOTEBOOKS_DIR: Path = HERE.notebooks
+"""The jupytext notebooks (``notebooks/`` in a checkout, ``glu/notebooks/`` in a wheel).
+
+:meta hide-value:
+"""
 
 DATA_DIR: Path = HERE.data
+"""The data folder (``data/`` in a checkout, else the user's data folder).
+
+:meta hide-value:
+"""
 REAL_DATA_DIR: Path = HERE.real_data
+"""Where ``glu data fetch`` puts the real data (``data/real/`` in a checkout, else the user's data folder).
+
+:meta hide-value:
+"""
 DATA_ENV_VAR = "GLU_DATA_DIR"
 """Environment variable naming the data folder (or ``synthetic``)."""
 SHARED_DATA_ENV_VAR = "GLU_SHARED_DATA"

@@ -14,6 +14,7 @@ The studies compose these into their recordings, each with its blueprint (the vi
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -53,12 +54,6 @@ def new_recording(path: str | os.PathLike, recording_id: str, blueprint=None, ap
     return rec
 
 
-def log_scene(rec, markdown: str) -> None:
-    """The static text panel describing the scene."""
-    rr = rerun()
-    rec.log("scene", rr.TextDocument(markdown, media_type="text/markdown"), static=True)
-
-
 def log_trajectory(rec, xyz: np.ndarray, frames: np.ndarray, seconds: np.ndarray) -> None:
     """The hand position and its growing path, one row per frame (xyz: shape (n_frames, 3))."""
     rr = rerun()
@@ -90,22 +85,46 @@ def log_series(
         )
 
 
-def log_bars(
+def log_updates(
     rec, entity: str, probs: np.ndarray, values: Sequence[str], frames: np.ndarray, seconds: np.ndarray
 ) -> None:
-    """Labelled bars that change over time: ``probs`` shape (n_updates, n_values), one row per update frame.
+    """Probabilities updated every few frames: ``probs`` shape (n_updates, n_values), one row per update
+    frame, one named series per value under ``entity/<value>`` (a line through the updates, a point at
+    each), so that a time-series view names each value in its legend and labels its frame axis.
 
-    Rerun's bar charts have no category labels, so each value is its own entity ``entity/<value>`` with
-    one bar at its position: the bar-chart view then names each bar in its legend.
+    (Rerun's bar charts name a bar by its entity path only, and label no category.)
     """
     rr = rerun()
     probs = np.asarray(probs, dtype=float)
+    indexes = [
+        rr.TimeColumn("frame", sequence=np.asarray(frames, dtype=np.int64)),
+        rr.TimeColumn("time", duration=np.asarray(seconds, dtype=float)),
+    ]
     for j, value in enumerate(values):
         color = VALUE_RGB.get(value) or ACTION_RGB.get(value) or (120, 120, 120)
-        for p, f, t in zip(probs[:, j], frames, seconds, strict=True):
-            rec.set_time("frame", sequence=int(f))
-            rec.set_time("time", duration=float(t))
-            rec.log(f"{entity}/{value}", rr.BarChart([p], abscissa=[float(j)], color=color))
+        rec.log(  # one row, one chunk: two calls would be batched into chunks that differ from run to run
+            f"{entity}/{value}",
+            rr.SeriesLines(names=value, colors=color, widths=2.0),
+            rr.SeriesPoints(names=value, colors=color, marker_sizes=3.0),
+            static=True,
+        )
+        rec.send_columns(
+            f"{entity}/{value}", indexes=indexes, columns=rr.Scalars.columns(scalars=probs[:, j])
+        )
+
+
+def markdown_text(text: str) -> str:
+    """Plain text made safe for a Markdown panel: characters Markdown would read as markup are escaped
+    (Rerun's text panel renders Markdown, not HTML)."""
+    return re.sub(r"([\\`*_{}\[\]<>()#+!|~])", r"\\\1", text)
+
+
+def log_scene(rec, markdown: str, note: str = "") -> None:
+    """The static text panel describing the scene; ``note`` (plain text: the data and the run's
+    parameters) ends it, after a rule."""
+    rr = rerun()
+    text = markdown + (f"\n\n---\n\n{markdown_text(note)}" if note else "")
+    rec.log("scene", rr.TextDocument(text, media_type="text/markdown"), static=True)
 
 
 def log_texts(rec, entity: str, texts: Sequence[str], frames: np.ndarray, seconds: np.ndarray) -> None:

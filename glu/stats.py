@@ -108,15 +108,15 @@ def poisson_weights(
 def two_level_sums(stats: Sequence[np.ndarray], replicates: int, rng: np.random.Generator) -> np.ndarray:
     """Two-level bootstrap sums of per-item statistics held in memory, shape (replicates + 1, S).
 
+    Row 0 is the plain sum over every seed and item; row b weighs seed k's items by Poisson(``c_{b,k}``)
+    (see the module docstring).
+
     Parameters
     ----------
     stats : one array per seed, shape (n_k, S) — the statistics of each of its items (test gestures,
         episodes); column 0 is usually 1 (the count)
     replicates : bootstrap replicates
     rng : the generator (the seed counts first, then each seed's weights in turn)
-
-    Row 0 is the plain sum over every seed and item; row b weighs seed k's items by
-    Poisson(``c_{b,k}``) (see the module docstring).
     """
     counts = seed_counts(len(stats), replicates, rng)
     width = {np.asarray(x).shape[1] for x in stats}

@@ -206,11 +206,16 @@ for name, recognizer in banks.items():
         )
 # glu's and the originals' recipes share one y axis, to be compared by eye; the original HMMs beside the paper
 ylim = figures.shared_ylim([r.curves() for (_, name), r in runs.items() if name != "original"])
+captions = {
+    "original": "With the originals' 2013 HMMs, the published Fig. 5 drawn under ours and its bars beside.",
+    "glu": "With HMMs trained here by glu's recipe (time slices, MAP EM).",
+    "mixsplit": "With HMMs trained here by the originals' recipe (mixsplit), on the same axes as glu's.",
+}
 for name in banks:
     cases = [(runs[case, name].curves(), runs[case, name].predictions()) for case in anticipation.CASES]
     paper = [published.get(case) for case in anticipation.CASES] if name == "original" else None
     fig = figures.anticipation_figure(cases, paper, ylim=None if name == "original" else ylim)
-    out.figure(fig, f"tcds_anticipation_{name}")
+    out.figure(fig, f"tcds_anticipation_{name}", caption=captions[name])
 
 # %% [markdown]
 # The lines above say, for each run, which model leads at the updates, where the predicted effect changes,

@@ -179,11 +179,22 @@ panels = [(t, f) for t, f in panels if f in set(summary["factor"])]
 fig, axes = plots.new_figure(len(panels), width=4.6, height=3.6)
 for ax, (train, factor) in zip(axes, panels, strict=True):
     figures.plot_accuracy_vs_viewpoint(ax, summary, train, legend=ax is axes[-1], factor=factor)
-out.figure(fig, "correspondence_viewpoint", source=results.attrs["data_source"])
+out.figure(
+    fig,
+    "correspondence_viewpoint",
+    source=results.attrs["data_source"],
+    caption="Accuracy against the person's turn, trained on the robot (left) and on one human view, the "
+    "turned person seen by an ideal tracker and by an occluding one (right).",
+)
 fig, axes = plots.new_figure(1, width=11, height=3.4)
 figures.plot_accuracy_by_condition(axes[0], summary, "human")
 axes[0].set_title("trained on one human view", fontsize=9)
-out.figure(fig, "correspondence_conditions", source=results.attrs["data_source"])
+out.figure(
+    fig,
+    "correspondence_conditions",
+    source=results.attrs["data_source"],
+    caption="Accuracy in every test condition, trained on one human view, one bar per feature set.",
+)
 correspondence.main_table(summary, "human")
 
 # %%

@@ -227,11 +227,29 @@ findings.winners_table(front, shown)
 # %%
 cells = findings.contrast_cells(table)
 view = findings.front_view(table)
-out.figure(figures.early_recognition_figure(table, cells, view), "corpus_early_recognition", source=source)
-pairs = [(f.target, f.metric, f.strategy, f.baseline) for f in findings.FINDINGS if not f.early]
-out.figure(figures.differences_figure(diffs, pairs, cells, full, view), "corpus_differences", source=source)
 out.figure(
-    figures.calibration_figure(rel, table, cells, full, viewpoint=view), "corpus_calibration", source=source
+    figures.early_recognition_figure(table, cells, view),
+    "corpus_early_recognition",
+    source=source,
+    caption="Action accuracy (top) and the effect's log-loss (bottom) against the fraction of the gesture "
+    "seen, one column per cell: how early each strategy knows.",
+)
+pairs = [(f.target, f.metric, f.strategy, f.baseline) for f in findings.FINDINGS if not f.early]
+out.figure(
+    figures.differences_figure(diffs, pairs, cells, full, view),
+    "corpus_differences",
+    source=source,
+    caption="Each finding as the paired difference between a strategy and its baseline on the same episodes, "
+    "with its paired bootstrap interval (error bars), one panel per cell; a filled marker where the interval "
+    "excludes zero on the better side.",
+)
+out.figure(
+    figures.calibration_figure(rel, table, cells, full, viewpoint=view),
+    "corpus_calibration",
+    source=source,
+    caption="Reliability of the predicted effect in both cells (top; a marker's size is its bin's share of "
+    "the episodes); the effect's calibration error and the action accuracy per viewpoint in the reference "
+    "cell (bottom).",
 )
 for line in findings.network_alone_sentences(table):
     out.say("* " + line)

@@ -226,7 +226,8 @@ recordings.write_learning(
     out.recording("learning_online"),
     f"glu-learning-online-{recorded_scheme}-{seed}",
     scene=f"# Learning gestures from effects\n{recorded_scheme} labels, {amb.description}; "
-    f"{recorded_episodes} episodes.\n\n<small>{out.footer()}</small>",
+    f"{recorded_episodes} episodes.",
+    note=out.footer(),
 )
 print(
     f"after {recorded_episodes} episodes: {recorded_scheme} labels {life.accuracy()[-1, 0]:.3f}, "

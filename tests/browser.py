@@ -110,17 +110,53 @@ const out = [];
 """
 
 
-def walk_site(driver, site: Path) -> dict:
+_CLIPPED = r"""
+const article = document.querySelector(".bd-article");
+if (!article) { return []; }
+const right = article.getBoundingClientRect().right;
+const out = [];
+article.querySelectorAll("table, pre").forEach((el) => {
+  if (el.closest(".cell_input")) { return; }  // a notebook's code scrolls, as code does
+  const box = el.parentElement;
+  const r = el.getBoundingClientRect();
+  if (el.scrollWidth > el.clientWidth + 1 || box.scrollWidth > box.clientWidth + 1 || r.right > right + 1) {
+    out.push(el.tagName.toLowerCase() + " " + Math.round(el.scrollWidth) + " px: " +
+             (el.innerText || "").trim().slice(0, 50).replace(/\s+/g, " "));
+  }
+});
+return out;
+"""
+
+
+def _static_hrefs(page: Path) -> list[str]:
+    """The links of a page read from its HTML, as the browser would resolve them (file URLs)."""
+    import re
+    from urllib.parse import urljoin
+
+    hrefs = re.findall(r'<a\b[^>]*\bhref="([^"]+)"', page.read_text(encoding="utf-8"))
+    return [urljoin(page.as_uri(), h.replace("&amp;", "&")) for h in hrefs]
+
+
+def walk_site(driver, site: Path, browse=lambda name: True) -> dict:
     """Open every page of the built site ``site`` in ``driver``; return what went wrong, by kind.
 
-    For each page: its console errors; its internal links whose file (or ``#anchor``) does not exist; and
-    each figure of the page clicked open: an image that did not render, or that did not open at its
-    natural size, or a captioned figure opened without its caption. Also the pages no link reaches.
+    For each page: its console errors; its internal links whose file (or ``#anchor``) does not exist; each
+    figure of the page clicked open: an image that did not render, or that did not open at its natural
+    size, or a captioned figure opened without its caption; and every table, example and printed output
+    that does not fit the page (scrolls, or runs past the article), a notebook's code cells aside. Also
+    the pages no link reaches. A page for which ``browse(its name)`` is false is not opened: only its links
+    are checked, read from its HTML (the API reference's modules, alike and many).
     """
     import re
     from urllib.parse import unquote, urlsplit
 
-    problems: dict[str, list[str]] = {"console": [], "links": [], "images": [], "unreachable": []}
+    problems: dict[str, list[str]] = {
+        "console": [],
+        "links": [],
+        "images": [],
+        "clipped": [],
+        "unreachable": [],
+    }
     pages = sorted(p for p in site.rglob("*.html") if "_static" not in p.relative_to(site).parts)
     ids: dict[Path, set[str]] = {}
 
@@ -132,12 +168,15 @@ def walk_site(driver, site: Path) -> dict:
     linked: set[Path] = {site / "index.html"}
     n_images = 0
     for page in pages:
-        driver.get(page.as_uri())
-        wait_loaded(driver)
         name = page.relative_to(site).as_posix()
-        hrefs = driver.execute_script(
-            "return Array.from(document.querySelectorAll('a[href]')).map(a => a.href)"
-        )
+        if not browse(name):
+            hrefs = _static_hrefs(page)
+        else:
+            driver.get(page.as_uri())
+            wait_loaded(driver)
+            hrefs = driver.execute_script(
+                "return Array.from(document.querySelectorAll('a[href]')).map(a => a.href)"
+            )
         for href in hrefs:
             parts = urlsplit(href)
             if parts.scheme != "file":
@@ -151,6 +190,8 @@ def walk_site(driver, site: Path) -> dict:
                 linked.add(target)
                 if parts.fragment and unquote(parts.fragment) not in anchors(target):
                     problems["links"].append(f"{name}: {href} (no such anchor)")
+        if not browse(name):
+            continue
         figures = driver.execute_async_script(_OPEN_EACH_FIGURE)
         n_images += len(figures)
         for f in figures:
@@ -162,6 +203,7 @@ def walk_site(driver, site: Path) -> dict:
                 )
             elif f["in_figure"] and not f["caption"]:
                 problems["images"].append(f"{name}: {f['src']} opened without its caption")
+        problems["clipped"] += [f"{name}: {m}" for m in driver.execute_script(_CLIPPED)]
         problems["console"] += [f"{name}: {m}" for m in console_errors(driver)]
     problems["unreachable"] = [p.relative_to(site).as_posix() for p in pages if p not in linked]
     problems["unreachable"] = [

@@ -111,7 +111,7 @@ class CoreBackend:
     base : P(core) with every unobserved leaf summed out, shape ``shape``
     base_mass : ``base.sum()`` (below 1 when all-zero rows exclude configurations)
     leaf_axes : leaf → the core axes of its parents
-    leaf_ratio : leaf → R_L, shape (k, *parent cardinalities)
+    leaf_ratio : leaf → R_L, shape ``(k, *parent cardinalities)``
     """
 
     method = "core"

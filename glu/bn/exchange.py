@@ -72,6 +72,7 @@ FORMATS: dict[str, tuple[str, ...]] = {
 """Exchange formats and their file suffixes."""
 ZERO_ROW_MODES: tuple[str, ...] = ("refuse", "seen")
 SEEN_PREFIX = "seen__"
+"""Prefix of the node that ``zero_rows="seen"`` adds for a word's parent configurations never seen."""
 SEEN_VALUES: tuple[str, str] = ("no", "yes")
 IMPORT_TOL = 1e-5
 """Rows of an imported table may sum to 1 within this, or the readers' ``renormalise`` (other tools round to

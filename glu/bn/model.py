@@ -44,6 +44,7 @@ from glu.schema import AFFORDANCE_NODES, AFFORDANCE_ROLES, FILE_ALIASES, ROLES, 
 FORMAT = "glu-bayesnet"
 VERSION = 1
 ROW_TOL = 1e-9
+"""A CPT row is a distribution when it sums to 1 within this (word rows may also be all zeros)."""
 
 
 _MALFORMED = (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError, RecursionError)

@@ -1,13 +1,15 @@
 """A network as the engines see it: variable indices, cardinalities, families, tables.
 
-:class:`NetworkArrays` is made once per engine from a :class:`~glu.bn.model.BayesNet` in time linear in the
-network (no table is copied: a table that is already float64 is used as it is). A :class:`BayesNet` has
-rows that sum to 1 (within :data:`glu.bn.model.ROW_TOL`) except the all-zero rows that only word nodes may
-have, so only the word nodes' tables are looked at to find the *inexact* nodes (tables with such rows).
+:class:`NetworkArrays` is made once per network (and kept with it: a new engine of the same network starts
+from it) from a :class:`~glu.bn.model.BayesNet` in time linear in the network (no table is copied: a table
+that is already float64 is used as it is). A :class:`BayesNet` has rows that sum to 1 (within
+:data:`glu.bn.model.ROW_TOL`) except the all-zero rows that only word nodes may have, so only the word nodes'
+tables are looked at to find the *inexact* nodes (tables with such rows).
 """
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,7 +27,7 @@ class NetworkArrays:
     index : node name → variable index
     cards : cardinality of each variable
     parents, children : each variable's parents (CPT axis order) and children, as indices
-    cpts : each node's table, shape (*parent cardinalities, cardinality), float64
+    cpts : each node's table, shape ``(*parent cardinalities, cardinality)``, float64
     inexact : the nodes whose tables have all-zero rows (parent configurations a word never saw): each acts
         as an observed child of the node (relevance), and such a node is never barren
     """
@@ -40,7 +42,15 @@ class NetworkArrays:
 
     @classmethod
     def of(cls, bn: BayesNet) -> NetworkArrays:
-        """The arrays of ``bn``."""
+        """The arrays of ``bn``: made on the first call and kept with ``bn`` (a frozen network: its tables
+        are checked once and never changed), so a new engine of the same network starts from them."""
+        made = _ARRAYS.get(bn)
+        if made is None:
+            made = _ARRAYS[bn] = cls._make(bn)
+        return made
+
+    @classmethod
+    def _make(cls, bn: BayesNet) -> NetworkArrays:
         names = bn.nodes
         index = {n: i for i, n in enumerate(names)}
         bparents = bn.parents
@@ -66,6 +76,24 @@ class NetworkArrays:
         """The axes of ``v``'s table as variables: its parents, then itself."""
         return (*self.parents[v], v)
 
+    def sorted_family(self, v: int) -> tuple[int, ...]:
+        """``v`` and its parents in ascending order (the axes of :meth:`sorted_cpt`)."""
+        fams = self.__dict__.get("_sorted_families")
+        if fams is None:
+            fams = self.__dict__["_sorted_families"] = [
+                tuple(sorted((*ps, u))) for u, ps in enumerate(self.parents)
+            ]
+        return fams[v]
+
+    def sorted_cpt(self, v: int) -> np.ndarray:
+        """``v``'s table with its axes in the order of :meth:`sorted_family` (a view, made on first use)."""
+        tables = self.__dict__.setdefault("_sorted_cpts", {})
+        t = tables.get(v)
+        if t is None:
+            fam = self.family(v)
+            t = tables[v] = np.transpose(self.cpts[v], [fam.index(u) for u in self.sorted_family(v)])
+        return t
+
     def ancestors(self, nodes: set[int] | frozenset[int]) -> set[int]:
         """``nodes`` and all their ancestors."""
         out: set[int] = set()
@@ -76,6 +104,10 @@ class NetworkArrays:
                 out.add(v)
                 stack.extend(self.parents[v])
         return out
+
+
+_ARRAYS: weakref.WeakKeyDictionary[BayesNet, NetworkArrays] = weakref.WeakKeyDictionary()
+"""Each live network's arrays (:meth:`NetworkArrays.of`)."""
 
 
 def code_of(c: int | np.ndarray) -> int:

@@ -28,13 +28,19 @@ network whose largest table exceeds the limit (:func:`max_table_setting`) in one
 
 from __future__ import annotations
 
-import heapq
+import itertools
 import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
+import numpy as np
+
+from glu.bn import kernels
+from glu.bn.kernels import HEURISTIC_CODES
 from glu.errors import ModelError
+from glu.jit import compiled
 
 MAX_TABLE_DEFAULT = 1 << 24
 """The largest clique table the engine builds by default: 16,777,216 entries (128 MiB of float64)."""
@@ -112,30 +118,14 @@ TRY_ALL_ABOVE = 1 << 20
 smallest total kept (below it, planning four times costs more than the tables)."""
 
 
-def _bits(mask: int) -> list[int]:
-    out = []
-    while mask:
-        low = mask & -mask
-        out.append(low.bit_length() - 1)
-        mask ^= low
-    return out
+def _words(masks: Sequence[int], n: int) -> np.ndarray:
+    """Python-int bit masks as rows of 64-bit words, shape (len(masks), W)."""
+    W = max(1, (n + 63) // 64)
+    return np.array([[(m >> (64 * w)) & (2**64 - 1) for w in range(W)] for m in masks], dtype=np.uint64)
 
 
-def _key(
-    v: int, nbs: list[set[int]], masks: list[int], logc: Sequence[float], heuristic: str
-) -> tuple[float, float, int]:
-    """The greedy key of eliminating ``v`` now (smaller first; ties: the other measure, then the index)."""
-    nb = nbs[v]
-    weight = round(logc[v] + sum(map(logc.__getitem__, nb)), 9)  # rounded: the same whatever the set order
-    if heuristic == "min-weight":
-        return weight, len(nb), v
-    if heuristic == "min-size":
-        return len(nb), weight, v
-    m = masks[v]
-    fill = (sum((m & ~masks[a]).bit_count() for a in nb) - len(nb)) // 2  # a is in m, never in masks[a]
-    if heuristic == "min-fill":
-        return fill, weight, v
-    return (1.0 if fill else 0.0), (fill * weight if fill else weight), v
+def _mask(words: np.ndarray) -> int:
+    return sum(int(x) << (64 * w) for w, x in enumerate(words))
 
 
 def elimination_order(
@@ -145,86 +135,93 @@ def elimination_order(
 
     ``adj`` holds each node's neighbours as a bit mask (bit u = node u; it is not changed). Returns (order,
     cliques): the clique of step k is the k-th eliminated node with its neighbours at that time, as a bit
-    mask. Deterministic (ties go to the smaller index).
+    mask. Deterministic: nodes with at most one neighbour go first (they are simplicial whatever comes
+    next), the smallest first; then, at each step, the node of the smallest key (ties: the smaller index).
     """
-    masks = list(adj)
-    nbs = [set(_bits(m)) for m in masks]
-    logc = [math.log(max(c, 1)) for c in cards]
-    alive = [True] * len(adj)
-    order, cliques = [], []
-    # nodes with at most one neighbour are simplicial whatever comes next: eliminated first, no keys needed
-    peel = [v for v in range(len(adj)) if len(nbs[v]) <= 1]
-    peel.reverse()
-    while peel:
-        v = peel.pop()
-        if not alive[v] or len(nbs[v]) > 1:
-            continue
-        alive[v] = False
-        order.append(v)
-        cliques.append(masks[v] | 1 << v)
-        for a in nbs[v]:
-            nbs[a].discard(v)
-            masks[a] &= ~(1 << v)
-            if len(nbs[a]) <= 1:
-                peel.append(a)
-        nbs[v], masks[v] = set(), 0
-    current = [_key(v, nbs, masks, logc, heuristic) if alive[v] else None for v in range(len(adj))]
-    heap = [k for k in current if k is not None]
-    heapq.heapify(heap)
-    while heap:
-        key = heapq.heappop(heap)
-        v = key[2]
-        if not alive[v] or current[v] != key:
-            continue
-        nb, m, bit = nbs[v], masks[v], 1 << v
-        order.append(v)
-        cliques.append(m | bit)
-        alive[v] = False
-        touched = set(nb)
-        for a in nb:
-            na = nbs[a]
-            na.discard(v)
-            add = nb - na
-            add.discard(a)
-            if add:
-                if heuristic in ("min-fill", "fill-weight"):  # a's neighbours see one more edge among theirs
-                    touched |= na
-                na |= add
-            masks[a] = (masks[a] | m) & ~(1 << a) & ~bit
-        nbs[v] = set()
-        for u in touched:
-            if alive[u]:
-                k = _key(u, nbs, masks, logc, heuristic)
-                if k != current[u]:
-                    current[u] = k
-                    heapq.heappush(heap, k)
-    return order, cliques
+    logc = np.log(np.maximum(np.asarray(cards, dtype=float), 1.0))
+    order, cliques = compiled(kernels.eliminate)(_words(adj, len(adj)), logc, HEURISTIC_CODES[heuristic])
+    return order.tolist(), [_mask(c) for c in cliques]
 
 
-def _tree(order: list[int], raw: list[int]) -> tuple[list[int], list[tuple[int, int]]]:
-    """Maximal cliques and the edges joining them, from the elimination cliques (bit masks).
+class Triangulation(NamedTuple):
+    """The junction tree of a graph over local variables 0 … n-1, and where sets of them go in it
+    (:func:`triangulate`).
 
-    The elimination tree joins step k to the step of its clique's first-eliminated other node; a clique
-    inside another one is inside one of its children there (running intersection), and is merged into it.
+    Attributes
+    ----------
+    heuristic : the heuristic kept (:data:`HEURISTICS`)
+    order : its elimination order, shape (n,)
+    sets : the maximal cliques as bit sets (:mod:`glu.bn.kernels`), shape (m, W)
+    edges : the tree's edges, sorted, shape (m - 1, 2) for a connected graph (a forest has fewer)
+    sizes : entries of each clique's table (float), shape (m,)
+    counts : variables of each clique, shape (m,)
+    ptr, idx : the variables of clique c are ``idx[ptr[c]:ptr[c + 1]]``, ascending
+    where : the smallest clique holding each set (the first of the smallest; -1 for an empty set)
+    parent : each clique's parent when the trees are rooted (-1: a root), shape (m,)
+    bfs, starts : the cliques breadth first from each root (parents before children), and where each tree
+        starts in ``bfs``; the roots are the homes of the sets from ``first_home`` on (ascending), then the
+        first clique of each other tree
+    on_path : whether each clique lies on the path from a root to one of those homes, shape (m,)
     """
-    step = {v: k for k, v in enumerate(order)}
-    parent = []
-    for k, c in enumerate(raw):
-        later = [step[u] for u in _bits(c & ~(1 << order[k]))]
-        parent.append(min(later) if later else -1)
-    kids: list[list[int]] = [[] for _ in raw]
-    for k, p in enumerate(parent):
-        if p >= 0:
-            kids[p].append(k)
-    rep = list(range(len(raw)))
-    for k, c in enumerate(raw):
-        for ch in kids[k]:
-            if c & ~raw[rep[ch]] == 0:
-                rep[k] = rep[ch]
-                break
-    keep = sorted({rep[k] for k in range(len(raw))})
-    edges = {tuple(sorted((rep[k], rep[p]))) for k, p in enumerate(parent) if p >= 0 and rep[k] != rep[p]}
-    return [raw[k] for k in keep], [(keep.index(a), keep.index(b)) for a, b in sorted(edges)]  # type: ignore[misc]
+
+    heuristic: str
+    order: np.ndarray
+    sets: np.ndarray
+    edges: np.ndarray
+    sizes: np.ndarray
+    counts: np.ndarray
+    ptr: np.ndarray
+    idx: np.ndarray
+    where: np.ndarray
+    parent: np.ndarray
+    bfs: np.ndarray
+    starts: np.ndarray
+    on_path: np.ndarray
+
+
+def triangulate(
+    n: int, ptr: np.ndarray, idx: np.ndarray, cards: np.ndarray, first_home: int | None = None
+) -> Triangulation:
+    """The junction tree of the graph joining the variables of each set ``idx[ptr[s]:ptr[s + 1]]`` (local
+    variables 0 … n-1 of cardinalities ``cards``, int64 arrays): by the first of :data:`HEURISTICS`, or —
+    past :data:`TRY_ALL_ABOVE` entries — by the one of the smallest total; the trees rooted at the homes
+    of the sets from ``first_home`` on (None: no set)."""
+    home = len(ptr) - 1 if first_home is None else first_home
+    res = compiled(kernels.plan_pattern)(n, ptr, idx, cards, home, TRY_ALL_ABOVE)
+    return Triangulation(HEURISTICS[res[0]], *res[1:])
+
+
+def check_size(tri: Triangulation, limit: int, variables: Sequence[int], cards: Sequence[int]) -> None:
+    """:class:`ModelError` (one line: the largest table, the elimination width, the limit) when a clique
+    of ``tri`` has more variables than NumPy's axes allow or a table past ``limit`` entries
+    (``variables``: the global index of each local variable, for the exact size in the message)."""
+    widest = int(tri.counts.max(initial=0))
+    width = max(widest, 1) - 1
+    if widest > MAX_CLIQUE_VARIABLES:
+        raise ModelError(
+            f"exact inference in this network needs a table over {widest} variables (elimination width "
+            f"{width}); NumPy arrays have at most 64 axes, so glu handles up to {MAX_CLIQUE_VARIABLES}"
+        )
+    if tri.sizes.max(initial=1) > limit:
+        worst = int(np.argmax(tri.sizes))
+        members = _bits(_mask(tri.sets[worst]))
+        largest = math.prod(cards[variables[i]] for i in members)
+        if largest > limit:
+            raise ModelError(
+                f"exact inference in this network needs a table of {largest:,} entries ({len(members)} "
+                f"variables: elimination width {width}); the limit is {limit:,} — raise it with "
+                f"--max-table, ${MAX_TABLE_ENV} or max_table= (memory: {_bytes(largest * 8)} for that "
+                "table alone)"
+            )
+
+
+def _bits(mask: int) -> list[int]:
+    out = []
+    while mask:
+        low = mask & -mask
+        out.append(low.bit_length() - 1)
+        mask ^= low
+    return out
 
 
 def plan_junction_tree(
@@ -268,52 +265,22 @@ def plan_from_scopes(
     cards = tuple(int(c) for c in cards)
     keep = sorted(set(variables))
     local = {v: i for i, v in enumerate(keep)}
-    adj = [0] * len(keep)
-    for scope in scopes:
-        members = [local[v] for v in scope]
-        mask = 0
-        for a in members:
-            mask |= 1 << a
-        for a in members:
-            adj[a] |= mask
-    adj = [m & ~(1 << a) for a, m in enumerate(adj)]
-    lcards = [cards[v] for v in keep]
-    best = None
-    for heuristic in HEURISTICS:
-        order_l, raw_l = elimination_order(adj, lcards, heuristic)
-        cliques_l, edges = _tree(order_l, raw_l)
-        members = [_bits(c) for c in cliques_l]
-        sizes = [math.prod(lcards[v] for v in m) for m in members]
-        if best is None or sum(sizes) < sum(best[4]):
-            best = (heuristic, order_l, members, edges, sizes)
-        if heuristic == HEURISTICS[0] and sum(sizes) <= TRY_ALL_ABOVE:
-            break
-    assert best is not None
-    heuristic, order_l, members, edges, sizes = best  # every elimination clique lies in one of these
-    final = tuple(tuple(keep[i] for i in m) for m in members)
-    largest = max(sizes, default=1)
-    widest = max((len(c) for c in final), default=0)
-    width = max(widest, 1) - 1
-    if widest > MAX_CLIQUE_VARIABLES:
-        raise ModelError(
-            f"exact inference in this network needs a table over {widest} variables (elimination width "
-            f"{width}); NumPy arrays have at most 64 axes, so glu handles up to {MAX_CLIQUE_VARIABLES}"
-        )
-    if largest > limit:
-        worst = final[sizes.index(largest)]
-        raise ModelError(
-            f"exact inference in this network needs a table of {largest:,} entries ({len(worst)} "
-            f"variables: elimination width {width}); the limit is {limit:,} — raise it with "
-            f"--max-table, ${MAX_TABLE_ENV} or max_table= (memory: {_bytes(largest * 8)} for that "
-            "table alone)"
-        )
+    flat = [local[v] for scope in scopes for v in scope]
+    ptr = np.cumsum([0, *map(len, scopes)], dtype=np.int64)
+    tri = triangulate(
+        len(keep), ptr, np.array(flat, dtype=np.int64), np.array([cards[v] for v in keep], dtype=np.int64)
+    )
+    check_size(tri, limit, keep, cards)
+    members = np.array(keep, dtype=np.int64)[tri.idx].tolist()
+    cliques = tuple(tuple(members[a:b]) for a, b in itertools.pairwise(tri.ptr.tolist()))
+    sizes = [math.prod(cards[v] for v in c) for c in cliques]
     return JunctionTreePlan(
         cards=cards,
-        cliques=final,
-        edges=tuple(edges),
-        order=tuple(keep[i] for i in order_l),
-        width=width,
-        largest=largest,
+        cliques=cliques,
+        edges=tuple(map(tuple, tri.edges.tolist())),
+        order=tuple(keep[i] for i in tri.order.tolist()),
+        width=max(int(tri.counts.max(initial=0)), 1) - 1,
+        largest=max(sizes, default=1),
         total=sum(sizes),
-        heuristic=heuristic,
+        heuristic=tri.heuristic,
     )

@@ -25,6 +25,7 @@ very small probability is answered and only evidence of probability exactly 0 is
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -32,8 +33,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from glu.bn.network import NetworkArrays, code_of
-from glu.bn.plan import plan_from_scopes
+from glu.bn.plan import check_size, max_table_setting, triangulate
 
+_ONE_ENTRY = np.ones((1,))
+_ONE_ENTRY.flags.writeable = False  # the table of a clique no table without evidence falls in: broadcast
 _ALL = {1: np.ones(1, dtype=bool)}
 _ALL[1].flags.writeable = False  # a single row's "possible", shared: never written to
 TINY = 1e-250
@@ -53,7 +56,7 @@ class PatternPlan:
     cliques : each clique's variables, sorted
     observed, soft : the conditioned (hard-evidence) variables and the likelihood variables — the evidence
         *slots*, in this order (slot i is bit i of the masks below)
-    base : clique → the product of its tables that no evidence touches, shape (*cardinalities, 1)
+    base : clique → the product of its tables that no evidence touches, shape ``(*cardinalities, 1)``
     factors : clique → its tables sliced per row (:data:`Factor`)
     constants : the sliced tables left with no free variable (a number per row: part of P(evidence))
     const_slots : bit mask of the slots the constants read
@@ -101,17 +104,6 @@ class _State:
     answer: tuple[dict[int, np.ndarray], np.ndarray, np.ndarray | None] | None = None
 
 
-def _shape_in(variables: Sequence[int], clique: Sequence[int], cards: Sequence[int]) -> tuple[int, ...]:
-    """The shape, rows last (-1), of a table over ``variables`` broadcast over ``clique``'s table."""
-    s = set(variables)
-    return (*(cards[v] if v in s else 1 for v in clique), -1)
-
-
-def _summed(clique: Sequence[int], keep: Sequence[int] | set[int]) -> tuple[int, ...]:
-    k = set(keep)
-    return tuple(i for i, v in enumerate(clique) if v not in k)
-
-
 def make_plan(
     net: NetworkArrays,
     tables: Sequence[int],
@@ -123,112 +115,125 @@ def make_plan(
     """The plan for hard evidence on ``observed``, likelihoods on ``soft`` and the marginals of ``targets``.
 
     ``tables`` are the nodes whose tables the answer needs (:func:`glu.bn.relevance.requisite`). Raises
-    :class:`~glu.errors.ModelError` (one line) when a table would pass ``max_table``.
+    :class:`~glu.errors.ModelError` (one line) when a table would pass ``max_table``. The graph, its
+    triangulation, the home of each table, likelihood and target (its smallest clique) and the order of the
+    messages come from one compiled call (:func:`glu.bn.plan.triangulate`); here the tables are built.
     """
     cards = net.cards
     obs = tuple(sorted(observed))
     slot = {v: i for i, v in enumerate(obs)}
     soft = tuple(sorted(soft))
-    scopes = {v: tuple(u for u in (*net.parents[v], v) if u not in slot) for v in sorted(tables)}
-    free = sorted({u for sc in scopes.values() for u in sc} | set(soft) | set(targets))
-    tree = plan_from_scopes(cards, [*scopes.values(), *((v,) for v in soft)], free, max_table)
-    cliques = tree.cliques
-    n = len(cliques)
-    members = [set(c) for c in cliques]
-    holding: dict[int, list[int]] = {}
-    for k, c in enumerate(cliques):
-        for v in c:
-            holding.setdefault(v, []).append(k)
+    tables = sorted(tables)
+    family = net.sorted_family
+    scopes = [family(v) for v in tables]
+    if slot:
+        scopes = [
+            sc if slot.keys().isdisjoint(sc) else tuple(u for u in sc if u not in slot) for sc in scopes
+        ]
+    free = sorted({u for sc in scopes for u in sc}.union(soft, targets))
+    local = {v: i for i, v in enumerate(free)}
+    sets = [*scopes, *((v,) for v in soft), *((v,) for v in targets)]
+    ptr = np.zeros(len(sets) + 1, dtype=np.int64)
+    np.cumsum([len(sc) for sc in sets], out=ptr[1:])
+    idx = np.array([local[u] for sc in sets for u in sc], dtype=np.int64)
+    tri = triangulate(
+        len(free), ptr, idx, np.array([cards[v] for v in free], dtype=np.int64), len(scopes) + len(soft)
+    )
+    check_size(tri, max_table_setting(max_table), free, cards)
+    members = np.array(free, dtype=np.int64)[tri.idx].tolist()
+    bounds = tri.ptr.tolist()
+    cliques = tuple(tuple(members[bounds[c] : bounds[c + 1]]) for c in range(len(bounds) - 1))
+    at = [{v: i for i, v in enumerate(c)} for c in cliques]  # each clique's axis of each of its variables
+    where = tri.where.tolist()
 
-    sizes = [math.prod(cards[v] for v in c) for c in cliques]
+    def shape_in(variables: Sequence[int], c: int) -> list[int]:
+        """The shape, rows last (-1), of a table over ``variables`` broadcast over clique ``c``'s table."""
+        shape = [1] * (len(cliques[c]) + 1)
+        shape[-1] = -1
+        axis = at[c]
+        for u in variables:
+            shape[axis[u]] = cards[u]
+        return shape
 
-    def smallest(variables: Sequence[int]) -> int:
-        if not variables:
-            return -1
-        best = -1
-        for k in holding[variables[0]]:  # ascending: the first of the smallest
-            if (best < 0 or sizes[k] < sizes[best]) and members[k].issuperset(variables):
-                best = k
-        return best
-
-    base = [np.ones((*(cards[v] for v in c), 1)) for c in cliques]
+    # each clique's product of the tables of no observed variable: a view of the table when there is one
+    # (no copy), broadcast to the clique's shape when it misses some of its variables
+    base: list[np.ndarray | None] = [None] * len(cliques)
     factors: list[list[Factor]] = [[] for _ in cliques]
     constants: list[Factor] = []
-    local = [0] * n
-    for v, rest in scopes.items():
-        fam = (*net.parents[v], v)
-        seen = [u for u in fam if u in slot]
-        rest_sorted = sorted(rest)
-        c = smallest(rest_sorted)
-        table = np.transpose(net.cpts[v], [fam.index(u) for u in rest_sorted] + [fam.index(u) for u in seen])
-        if not seen:
-            base[c] = base[c] * table.reshape(_shape_in(rest_sorted, cliques[c], cards))
+    local_slots = [0] * len(cliques)
+    for v, rest, c in zip(tables, scopes, where, strict=False):
+        if len(rest) == len(net.parents[v]) + 1:  # no observed variable in its family
+            x = net.sorted_cpt(v).reshape(shape_in(rest, c))
+            b = base[c]
+            base[c] = x if b is None else b * x
             continue
-        flat = np.ascontiguousarray(table.reshape(*(cards[u] for u in rest_sorted), -1))
+        fam = net.family(v)
+        seen = [u for u in fam if u in slot]
+        table = np.transpose(net.cpts[v], [fam.index(u) for u in rest] + [fam.index(u) for u in seen])
+        flat = np.ascontiguousarray(table.reshape(*(cards[u] for u in rest), -1))
         strides = tuple(math.prod(cards[u] for u in seen[i + 1 :]) for i in range(len(seen)))
         entry = (flat, tuple(slot[u] for u in seen), strides, ())
         if c < 0:
             constants.append(entry)
         else:
-            factors[c].append((flat, entry[1], strides, _shape_in(rest_sorted, cliques[c], cards)))
+            factors[c].append((flat, entry[1], strides, tuple(shape_in(rest, c))))
             for u in seen:
-                local[c] |= 1 << slot[u]
+                local_slots[c] |= 1 << slot[u]
+    for c, b in enumerate(base):
+        full = (*(cards[u] for u in cliques[c]), 1)
+        if b is None:
+            base[c] = np.broadcast_to(_ONE_ENTRY, full)
+        elif b.shape != full:
+            base[c] = np.broadcast_to(b, full)
     likelihoods: list[list[tuple[int, tuple[int, ...]]]] = [[] for _ in cliques]
     for i, v in enumerate(soft):
-        c = smallest([v])
-        likelihoods[c].append((len(obs) + i, _shape_in([v], cliques[c], cards)))
-        local[c] |= 1 << (len(obs) + i)
-    home = {v: smallest([v]) for v in targets}
+        c = where[len(scopes) + i]
+        likelihoods[c].append((len(obs) + i, tuple(shape_in([v], c))))
+        local_slots[c] |= 1 << (len(obs) + i)
+    homes: dict[int, list[tuple[int, tuple[int, ...]]]] = {}
+    for v, h in sorted(zip(targets, where[len(scopes) + len(soft) :], strict=True)):
+        homes.setdefault(h, []).append((v, tuple(i for i, u in enumerate(cliques[h]) if u != v)))
     return _schedule(
-        cliques, tree.edges, cards, obs, soft, base, factors, constants, likelihoods, local, home
+        tri, cliques, at, cards, obs, soft, base, factors, constants, likelihoods, local_slots, homes
     )
 
 
-def _schedule(cliques, edges, cards, obs, soft, base, factors, constants, likelihoods, local, home):  # type: ignore[no-untyped-def]
+def _schedule(tri, cliques, at, cards, obs, soft, base, factors, constants, likelihoods, local, homes):  # type: ignore[no-untyped-def]
     """The messages of a plan: each tree rooted at a target's clique, collected, distributed to targets."""
     n = len(cliques)
-    neighbours: list[list[int]] = [[] for _ in range(n)]
-    for a, b in edges:
-        neighbours[a].append(b)
-        neighbours[b].append(a)
-    parent: list[int | None] = [None] * n
-    placed = [False] * n
-    trees: list[list[int]] = []
-    for r in [*sorted(set(home.values())), *range(n)]:
-        if placed[r]:
-            continue
-        order, placed[r] = [r], True
-        for c in order:  # breadth first: parents before children
-            for nb in neighbours[c]:
-                if not placed[nb]:
-                    placed[nb], parent[nb] = True, c
-                    order.append(nb)
-        trees.append(order)
+    parent, bfs, on_path = tri.parent.tolist(), tri.bfs.tolist(), tri.on_path.tolist()
+    starts = [*tri.starts.tolist(), n]
+    trees = [bfs[a:b] for a, b in itertools.pairwise(starts)]
+
+    def message(c: int, p: int) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """(the axes of ``c`` summed for the message to ``p``, the message's shape in ``p``, rows last)."""
+        into = at[p]
+        shape = [1] * (len(cliques[p]) + 1)
+        shape[-1] = -1
+        summed = []
+        for i, u in enumerate(cliques[c]):
+            j = into.get(u)
+            if j is None:
+                summed.append(i)
+            else:
+                shape[j] = cards[u]
+        return tuple(summed), tuple(shape)
+
     below = list(local)
     kids: list[list[tuple[int, tuple[int, ...]]]] = [[] for _ in range(n)]
     collect = []
+    distribute = []
     for order in trees:
         for c in reversed(order[1:]):
             p = parent[c]
-            assert p is not None
-            sep = [u for u in cliques[c] if u in set(cliques[p])]
+            summed, shape = message(c, p)
             below[p] |= below[c]
-            kids[p].append((c, _shape_in(sep, cliques[p], cards)))
-            collect.append((c, p, _summed(cliques[c], sep)))
-    on_path: set[int] = set()
-    for h in home.values():
-        c: int | None = h
-        while c is not None and c not in on_path:
-            on_path.add(c)
-            c = parent[c]
-    distribute = []
-    for order in trees:
+            kids[p].append((c, shape))
+            collect.append((c, p, summed))
         for c in order[1:]:
-            if c in on_path:
+            if on_path[c]:
                 p = parent[c]
-                assert p is not None
-                sep = [u for u in cliques[p] if u in set(cliques[c])]
-                distribute.append((p, c, _summed(cliques[p], sep), _shape_in(sep, cliques[c], cards)))
+                distribute.append((p, c, *message(p, c)))
     return PatternPlan(
         cliques=cliques,
         observed=obs,
@@ -244,17 +249,10 @@ def _schedule(cliques, edges, cards, obs, soft, base, factors, constants, likeli
         roots=tuple(order[0] for order in trees),
         distribute=tuple(distribute),
         last={p: k for k, (p, _, _, _) in enumerate(distribute)},
-        homes=_by_clique(home, cliques),
-        size=sum(math.prod(cards[v] for v in c) for c in cliques),
+        homes=homes,
+        size=int(tri.sizes.sum()),
         const_slots=sum({1 << s for entry in constants for s in entry[1]}),
     )
-
-
-def _by_clique(home: dict[int, int], cliques: Sequence[Sequence[int]]) -> dict[int, list]:
-    out: dict[int, list] = {}
-    for v, h in sorted(home.items()):
-        out.setdefault(h, []).append((v, _summed(cliques[h], [v])))
-    return out
 
 
 def _pick(entry: Factor, codes: Sequence[np.ndarray], ints: Sequence[int] | None) -> np.ndarray:

@@ -1,6 +1,6 @@
 """Rows of conditional probability tables: naming a row, checking that rows are distributions, rescaling.
 
-A CPT of shape (*parent cardinalities, cardinality) has one row per parent configuration; a row is named
+A CPT of shape ``(*parent cardinalities, cardinality)`` has one row per parent configuration; a row is named
 ``P(node | parent=value, …)`` in every message, so that a user can find it in the file.
 
 >>> values = {"A": ("a0", "a1"), "B": ("b0", "b1")}
@@ -73,7 +73,7 @@ def check_rows(
     hint = ""
     if abs(sums[k] - 1) < 0.1:
         suggest = float(f"{10 ** np.ceil(np.log10(abs(sums[k] - 1))):.0e}")
-        hint = f"; to rescale such rows, import with --renormalise {suggest:g} (renormalise={suggest:g})"
+        hint = f"; to rescale such rows, give --renormalise {suggest:g} (in Python: renormalise={suggest:g})"
     more = int(bad.sum()) - 1
     raise ModelError(
         f"{where}: the row {row} sums to {sums[k]:.10g}, not 1 (|1 − sum| = {abs(sums[k] - 1):.2g}, "

@@ -12,10 +12,10 @@ import importlib
 import os
 import signal
 import sys
+import threading
 import traceback
 import warnings
 from collections.abc import Sequence
-from typing import Any
 
 from glu import __version__
 from glu.cli.commands import COMMANDS
@@ -126,21 +126,50 @@ def _stopped(name: str, e: KeyboardInterrupt) -> int:
     return 130
 
 
-def _say_data_warnings(name: str) -> Any:
-    """Print a :class:`glu.data.source.DataWarning` (a data folder that is the published data modified) as
-    one line on stderr, once per folder; other warnings as Python shows them."""
-    shown = warnings.showwarning
-    seen: set[str] = set()
+class _DataWarnings:
+    """How a command says that its data folder is the published data modified
+    (:class:`glu.data.source.DataWarning`): one line on stderr, once per folder, held for
+    :attr:`HOLD` seconds. A command that then refuses its input (a file of that folder that does not parse)
+    says only its error, one line; one that goes on, or ends, says the warning too. Other warnings are
+    shown as Python shows them."""
 
-    def show(message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
-        if category.__name__ == "DataWarning":
-            if str(message) not in seen:
-                seen.add(str(message))
-                print(f"{name}: warning: {message}; results say so", file=sys.stderr)
+    HOLD = 3.0
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.seen: set[str] = set()
+        self.held: list[str] = []
+        self.lock = threading.Lock()
+        self.timer: threading.Timer | None = None
+        self.shown = warnings.showwarning
+
+    def show(self, message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
+        if category.__name__ != "DataWarning":
+            self.shown(message, category, filename, lineno, file, line)
             return
-        shown(message, category, filename, lineno, file, line)
+        with self.lock:
+            if str(message) in self.seen:
+                return
+            self.seen.add(str(message))
+            self.held.append(f"{self.name}: warning: {message}; results say so")
+            if self.timer is None:
+                self.timer = threading.Timer(self.HOLD, self.flush)
+                self.timer.daemon = True
+                self.timer.start()
 
-    return show
+    def flush(self) -> None:
+        """Say the held warnings now."""
+        with self.lock:
+            lines, self.held = self.held, []
+        for text in lines:
+            print(text, file=sys.stderr, flush=True)
+
+    def drop(self) -> None:
+        """Forget the held warnings: the command refuses its input, and its error says why."""
+        with self.lock:
+            self.held = []
+            if self.timer is not None:
+                self.timer.cancel()
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -158,11 +187,13 @@ def _main(argv: Sequence[str] | None) -> int:
     sub = getattr(args, f"{args.command}_command", None)
     name = f"glu {args.command}" + (f" {sub}" if sub else "")
     debug = getattr(args, "debug", False) or os.environ.get(DEBUG_ENV, "") not in ("", "0")
+    notes = _DataWarnings(name)
     try:
         with warnings.catch_warnings(), guarded_run(args):
-            warnings.showwarning = _say_data_warnings(name)
+            warnings.showwarning = notes.show
             status = args.func(args)
     except GluError as e:
+        notes.drop()
         print(f"{name}: error: {e}", file=sys.stderr)
         return getattr(e, "exit_status", EXIT_BAD_INPUT)  # 2: bad input; 1: a run that failed (a notebook)
     except KeyboardInterrupt as e:  # Ctrl-C, or SIGTERM (Terminated)
@@ -201,6 +232,8 @@ def _main(argv: Sequence[str] | None) -> int:
             file=sys.stderr,
         )
         return 1
+    finally:
+        notes.flush()  # held warnings of a command that went on (dropped if it refused its input)
     return int(status or 0)
 
 

@@ -187,6 +187,18 @@ def _learn(args: argparse.Namespace) -> int:
     if args.threshold > 1:
         raise DataError(f"--threshold {args.threshold}: a probability in (0, 1]")
     print(f"network: learned from {label}", flush=True)
+    how = (
+        "one episode at a time"
+        if args.online
+        else "EM on all of them, relabelled until the labels settle"
+        if args.labels == "iterative"
+        else "EM on all of them"
+    )
+    print(
+        f"learning: {args.episodes} episodes simulated, labelled by the network ({args.labels}), then the "
+        f"HMMs trained ({how})",
+        flush=True,
+    )
     config = TrainingConfig(n_states=args.states, n_mix=args.mix, n_iter=args.iter)
     bar = (
         progress_bar(args.episodes, "learn", "episode")

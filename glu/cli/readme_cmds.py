@@ -74,6 +74,12 @@ def _readme(args: argparse.Namespace) -> int:
     print(
         f"{args.readme}: results section {'updated' if changed else 'already up to date'} from {args.summary}"
     )
+    if (summary.get("provenance") or {}).get("modified"):  # figures no commit can make again
+        print(
+            f"note: this run was made by {summary['made_by']}: its figures name no commit that reproduces "
+            "them; commit the code, then run `make reproduce` again before committing figures/",
+            file=sys.stderr,
+        )
     return 0
 
 

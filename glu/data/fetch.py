@@ -27,6 +27,10 @@ from glu.errors import FetchError
 from glu.files import replace_folder
 
 MANIFEST = paths.RESOURCES_DIR / "sources.json"
+"""The pinned sources of the real data (origin, commit, checksum of every file).
+
+:meta hide-value:
+"""
 PARTIAL_SUFFIX = ".partial"
 DATA_SUBFOLDERS = ("affordance-words", "gestures", "reference-models", "sentence-samples")
 """The folders of a glu data folder: a destination that has files but none of these is not one."""

@@ -39,8 +39,9 @@ _INT = re.compile(rb"[+-]?\d+")
 _FLOAT = re.compile(rb"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _MAX_REPORTED_LINE = 80
 MAX_LOGGED_COORDINATE = 10_000.0
-"""Largest |x|, |y|, |z| a hand log may hold: 10 body units (about 3 m from the torso); the published logs
-reach 2,300. Beyond it a value is a tracking or writing error, and would overflow the HMMs' densities."""
+"""Largest ``|x|``, ``|y|``, ``|z|`` a hand log may hold: 10 body units (about 3 m from the torso); the
+published logs reach 2,300. Beyond it a value is a tracking or writing error, and would overflow the HMMs'
+densities."""
 
 
 class HandLog(NamedTuple):

@@ -22,6 +22,10 @@ from glu import paths
 from glu.errors import DataError
 
 PUBLISHED_DIR = paths.RESOURCES_DIR / "published"
+"""The papers' printed numbers, shipped with the package.
+
+:meta hide-value:
+"""
 TCDS2020 = "tcds2020"
 """TCDS 2020, *Beyond the Self* (the journal follow-up)."""
 

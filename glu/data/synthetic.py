@@ -43,7 +43,7 @@ class SyntheticWorld:
     Attributes
     ----------
     parents : affordance node → its parents in the generator (the DAG structure learning should find)
-    cpts : affordance node → array, shape (*parent cardinalities, cardinality), P(node | parents)
+    cpts : affordance node → array, shape ``(*parent cardinalities, cardinality)``, P(node | parents)
     word_parents : word → the affordance nodes its presence depends on, for the words whose dependence
         is clean enough to be identified from data (the others are left out)
     """
@@ -290,6 +290,11 @@ def write_synthetic_folder(
 ) -> Path:
     """Write a synthetic data folder with the layout of the real one, completely or not at all.
 
+    The folder is built beside ``out`` and moved into place when complete (:func:`glu.files.staged_folder`),
+    so an interrupted run leaves ``out`` as it was. Raises :class:`DataError` if ``out`` is a file, holds
+    the published real data (never replaced), or is a folder with other content (replaced only with
+    ``force``).
+
     Parameters
     ----------
     out : the folder; if it exists it must be empty or an earlier synthetic folder (it is then replaced)
@@ -299,11 +304,6 @@ def write_synthetic_folder(
         gestures)
     progress : called with the name of each file written (for a progress bar)
     force : replace a folder that holds something else (never the published real data)
-
-    The folder is built beside ``out`` and moved into place when complete
-    (:func:`glu.files.staged_folder`), so an interrupted run leaves ``out`` as it was. Raises
-    :class:`DataError` if ``out`` is a file, holds the published real data (never replaced), or is a
-    folder with other content (replaced only with ``force``).
     """
     from glu.data.fetch import published_origin
     from glu.data.hand_logs import write_hand_log

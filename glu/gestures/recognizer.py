@@ -60,13 +60,12 @@ from glu.gestures.typicality import (
 )
 from glu.hmm import (
     Bank,
-    ForwardState,
+    BankStream,
     GestureHMM,
     TrainingConfig,
     TrainingReport,
     as_sequence,
     forward_curve,
-    forward_step,
     load_original_hmms,
     log_emissions,
     loglik_many,
@@ -103,24 +102,23 @@ class GestureStream:
 
     Each :meth:`push` costs O(Σ_a Q_a² + Σ_a Q_a M_a D²), independent of how many frames came before;
     it computes the recogniser's invariant features of the frame
-    (:class:`~glu.gestures.invariants.InvariantStream`) and runs the
-    same :func:`~glu.hmm.inference.forward_step` as the batch scoring, with the models stacked (padded to the
-    largest Q and M), so the results equal rescoring the prefix ``G_1^t``.
+    (:class:`~glu.gestures.invariants.InvariantStream`) and advances the models stacked (padded to the
+    largest Q and M) by one compiled step (:class:`glu.hmm.BankStream`: the emissions and
+    :func:`~glu.hmm.inference.forward_step`'s recursion as the batch scoring runs them), so the results
+    equal rescoring the prefix ``G_1^t``.
     """
 
     def __init__(self, recognizer: Recognizer) -> None:
         self.actions: tuple[str, ...] = recognizer.actions
-        bank = recognizer.bank
         self._D = recognizer.n_features
         self.features: Invariants = recognizer.features
         self._invariant = None if self.features.is_raw else self.features.stream()
-        self._means, self._chol_inv, self._log_norm = bank.means, bank.chol_inv, bank.log_norm
-        self._startprob, self._transmat = bank.startprob, bank.transmat
+        self._bank = BankStream(recognizer.bank)
         self.reset()
 
     def reset(self) -> None:
         """Forget every frame: the next :meth:`push` starts a new gesture."""
-        self._state: ForwardState | None = None
+        self._bank.reset()
         self.t = 0
         if self._invariant is not None:
             self._invariant.reset()
@@ -129,14 +127,12 @@ class GestureStream:
         """Consume one frame of hand features, shape (D,); return ``log L(G_1^t | A)`` and
         ``p_HMM(A | G_1^t)``."""
         x = np.asarray(x, dtype=float)
-        if x.shape != (self._D,) or not np.all(np.isfinite(x)):
+        if x.shape != (self._D,) or not np.isfinite(x).all():
             raise DataError(f"a frame must be {self._D} finite numbers, got {x!r}")
         if self._invariant is not None:
             x = self._invariant.push(x)
-        log_b = log_emissions(x[None], self._means, self._chol_inv, self._log_norm)[0]  # (A, Q)
-        self._state = forward_step(self._state, log_b, self._startprob, self._transmat)
+        ll = self._bank.push(np.ascontiguousarray(x)).copy()
         self.t += 1
-        ll = self._state.loglik.copy()
         return StreamStep(self.t, ll, p_hmm_from_loglik(ll))
 
     def extend(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

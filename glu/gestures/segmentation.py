@@ -19,8 +19,9 @@ each; :func:`segment_repetitions` finds them automatically:
    split the trajectory, is *partial*).
 
 The parameters are a :class:`SegmentationParams`; the defaults were chosen by looking at the six real
-recordings (the figure of :func:`glu.plots.plot_segmentation`) and are checked on synthetic recordings with
-known repetitions. Segments are 1-based inclusive frame ranges of the source log, as in the papers.
+recordings (the figure of :func:`glu.studies.replication.gesture_figures.plot_segmentation`) and are checked
+on synthetic recordings with known repetitions. Segments are 1-based inclusive frame ranges of the source
+log, as in the papers.
 """
 
 from __future__ import annotations

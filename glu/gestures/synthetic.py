@@ -399,6 +399,8 @@ def synthesize_recording(
 ) -> SyntheticGesture:
     """A continuous recording of one person repeating ``action``, resting in between (no dropouts).
 
+    Returns a :class:`SyntheticGesture` whose ``segments`` are the true repetitions (1-based frames).
+
     Parameters
     ----------
     action, n_repetitions, seed : what is repeated, how often, and the seed (the same arguments give the
@@ -409,8 +411,6 @@ def synthesize_recording(
         apart; each movement is then resampled to its placement and the rests fill the frames between
         (``n_repetitions`` is ``len(placements)``)
     n_frames : with ``placements``, the length of the recording (default: 60 frames after the last)
-
-    Returns a :class:`SyntheticGesture` whose ``segments`` are the true repetitions (1-based frames).
     """
     if action not in KEYS:
         raise DataError(f"unknown action {action!r}; allowed: {', '.join(GESTURES)}")

@@ -136,16 +136,16 @@ def tracker_state(yaw_deg: float) -> str:
 def track(skeleton: np.ndarray, yaw_rad: float, view: View) -> np.ndarray:
     """The joints ``view``'s tracker reports for a skeleton, shape (n_frames, 15, 3) → the same.
 
+    See the module docstring: beyond :data:`OCCLUSION_DEG` the far shoulder (the one further from the
+    camera, frame by frame) is reported at the near one mirrored across the torso in the camera's x; beyond
+    :data:`SWAP_DEG` every left and right joint trade places.
+
     Parameters
     ----------
     skeleton : the true joints in the camera's frame (:data:`~glu.gestures.features.OPENNI_JOINTS` order;
         the camera at the origin)
     yaw_rad : the person's turn relative to the camera, radians
     view : the view (its ``tracker``; an ``ideal`` tracker returns ``skeleton`` itself)
-
-    See the module docstring: beyond :data:`OCCLUSION_DEG` the far shoulder (the one further from the
-    camera, frame by frame) is reported at the near one mirrored across the torso in the camera's x; beyond
-    :data:`SWAP_DEG` every left and right joint trade places.
     """
     if view.tracker == "ideal":
         return skeleton

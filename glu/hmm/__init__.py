@@ -9,7 +9,7 @@ Laid out the way dynamax lays out a model family, one module per concern:
   (:class:`SufficientStats`, :func:`expected_stats`, :func:`maximise`, :func:`fit`): the readable reference
   of EM;
 * :mod:`~glu.hmm.scoring` — many sequences scored against many models (:func:`stack_models`,
-  :func:`loglik_many`, :class:`BatchScorer`);
+  :func:`loglik_many`, :class:`BatchScorer`, frame by frame :class:`BankStream`);
 * :mod:`~glu.hmm.online` — online stepwise EM (:class:`OnlineModels`), the E-step of one episode under
   many models (:func:`episode_stats`) and of many sequences under one (:func:`batch_stats`);
 * :mod:`~glu.hmm.initialisation` — initial models: equal time slices and their Gaussian mixtures;
@@ -45,12 +45,13 @@ from glu.hmm.initialisation import kmeans_labels
 from glu.hmm.model import GestureHMM, as_sequence
 from glu.hmm.online import OnlineModels, batch_stats, episode_stats, first_model
 from glu.hmm.original import load_original_hmms
-from glu.hmm.scoring import Bank, BatchScorer, loglik_many, params_bank, stack_models
+from glu.hmm.scoring import Bank, BankStream, BatchScorer, loglik_many, params_bank, stack_models
 from glu.hmm.training import Trained, train
 
 __all__ = [
     "RECIPES",
     "Bank",
+    "BankStream",
     "BatchScorer",
     "ForwardState",
     "GMMHMMParams",

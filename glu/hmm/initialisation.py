@@ -1,7 +1,7 @@
 """The Gaussian mixtures that start each HMM state: scikit-learn's ``GaussianMixture`` fit, without
 scikit-learn.
 
-:func:`glu.hmm.training.init_left_to_right` fits one mixture per state to the frames of that state's
+:func:`init_left_to_right` fits one mixture per state to the frames of that state's
 time slices, as ``GaussianMixture(n_mix, covariance_type="full", reg_covar=…, random_state=seed,
 n_init=1).fit(X)`` does. The experiments train hundreds of HMMs, so thousands of these small fits run;
 scikit-learn spends most of its ~4 ms a fit in input validation and in numpy calls on arrays of a few
@@ -115,6 +115,12 @@ def fit_gaussian_mixture(
     """A full-covariance Gaussian mixture fitted by EM as scikit-learn's ``GaussianMixture`` fits it (to
     rounding).
 
+    Returns the weights, shape (M,), the means (M, D) and the covariances (M, D, D): ``gm.weights_``,
+    ``gm.means_``, ``gm.covariances_`` of
+    ``GaussianMixture(M, covariance_type="full", reg_covar=reg_covar, random_state=seed, n_init=1, tol=tol,
+    max_iter=max_iter).fit(X)``. Raises ``ValueError`` (scikit-learn's message) when a covariance is not
+    positive definite.
+
     Parameters
     ----------
     X : array, shape (n, D), float64, at least ``n_mix`` distinct rows
@@ -122,13 +128,6 @@ def fit_gaussian_mixture(
     reg_covar : added to every covariance's diagonal
     seed : ``random_state`` of the k-means initialisation
     tol, max_iter : scikit-learn's stopping rule and limit
-
-    Returns
-    -------
-    weights (M,), means (M, D), covariances (M, D, D): ``gm.weights_``, ``gm.means_``, ``gm.covariances_``
-    of ``GaussianMixture(M, covariance_type="full", reg_covar=reg_covar, random_state=seed, n_init=1,
-    tol=tol, max_iter=max_iter).fit(X)``. Raises ``ValueError`` (scikit-learn's message) when a
-    covariance is not positive definite.
     """
     X = np.ascontiguousarray(X, dtype=np.float64)
     n = X.shape[0]

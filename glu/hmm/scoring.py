@@ -54,7 +54,7 @@ import numpy as np
 from glu.errors import DataError, ModelError
 from glu.hmm._engine.em_batch import quadratic_coefficients as component_coefficients
 from glu.hmm._engine.em_batch import quadratic_features
-from glu.hmm._engine.kernels import loglik_banked
+from glu.hmm._engine.kernels import loglik_banked, stream_step
 from glu.hmm.em import GMMHMMParams
 from glu.hmm.inference import TINY, forward_curve, gaussian_factors, log_emissions
 from glu.hmm.model import GestureHMM, as_sequence
@@ -145,9 +145,9 @@ class BatchScorer:
 
     Parameters
     ----------
-    models : the models, in the order of the output's last axis (e.g. ``[rec.models[a] for a in
-        rec.actions]``), or a :class:`~glu.gestures.recognizer.Recognizer`, whose invariant features are then
-        computed from each sequence as the recogniser itself does
+    models : the models, in the order of the output's last axis
+        (e.g. ``[rec.models[a] for a in rec.actions]``), or a :class:`~glu.gestures.recognizer.Recognizer`,
+        whose invariant features are then computed from each sequence as the recogniser itself does
     batch_size : sequences scored together
     """
 
@@ -300,16 +300,18 @@ def forward_curves_batch(
 def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     """``log L(G | model)`` of many sequences under every model of a bank, shape (S, n_models), in one batch.
 
-    Parameters
-    ----------
-    bank : the stacked models (:func:`stack_models`)
-    sequences : the feature sequences the models see, each of shape (T_i, D)
-
     The emissions and the forward recursion run compiled, frame by frame
     (:func:`glu.hmm._engine.kernels.loglik_banked`), each step :func:`~glu.hmm.inference.forward_step`'s
     (including its log-domain fallback where the scaled mass underflows): the last entry of
     ``forward_curve`` for each sequence, to rounding (1e-12 relative, tests/test_batched_experiments.py).
 
+    Parameters
+    ----------
+    bank : the stacked models (:func:`stack_models`)
+    sequences : the feature sequences the models see, each of shape (T_i, D)
+
+    Examples
+    --------
     >>> from glu.hmm.inference import left_to_right_transmat
     >>> hmm = GestureHMM([1.0, 0.0], left_to_right_transmat(2, 0.9), [[1.0], [1.0]],
     ...                  [[[0.0] * 3], [[1.0] * 3]], np.tile(np.eye(3), (2, 1, 1, 1)))
@@ -321,3 +323,37 @@ def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     if not seqs:
         return np.empty((0, len(bank.startprob)))
     return loglik_banked(seqs, bank.means, bank.chol_inv, bank.log_norm, bank.startprob, bank.transmat)
+
+
+class BankStream:
+    """Every model of a bank advanced one frame at a time: :func:`loglik_many`'s compiled recursion with
+    its state kept between frames, so that frame t costs the same whatever came before and the
+    log-likelihoods after frame t are those of :func:`loglik_many` on the first t frames (the same
+    arithmetic in the same order).
+
+    Attributes
+    ----------
+    t : frames pushed since the last :meth:`reset`
+    loglik : ``log L(G_1^t | model)`` of each model, shape (n_models,) (updated in place by :meth:`push`)
+    """
+
+    def __init__(self, bank: Bank) -> None:
+        def f(a: np.ndarray) -> np.ndarray:
+            return np.ascontiguousarray(a, dtype=np.float64)
+
+        self._bank = (f(bank.means), f(bank.chol_inv), f(bank.log_norm), f(bank.startprob), f(bank.transmat))
+        self._alpha = np.zeros(bank.startprob.shape)
+        self.loglik = np.zeros(len(bank.startprob))
+        self.t = 0
+
+    def reset(self) -> None:
+        """Forget every frame."""
+        self._alpha[:] = 0.0
+        self.loglik[:] = 0.0
+        self.t = 0
+
+    def push(self, x: np.ndarray) -> np.ndarray:
+        """Advance by one frame ``x`` (float64, shape (D,), C-ordered); returns :attr:`loglik`."""
+        stream_step(x, self.t == 0, self._alpha, self.loglik, *self._bank)
+        self.t += 1
+        return self.loglik

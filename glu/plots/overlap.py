@@ -12,7 +12,10 @@
   marker, an error bar or the edge of an opaque bar of that axes (text inside a bar, on an image — the
   cells of a heat map — or on translucent shading is meant to be read there);
 * **label across the frame**: such a text that crosses the axes' frame, or that is placed at a data point
-  but drawn outside the axes (a value label run past the frame).
+  but drawn outside the axes (a value label run past the frame);
+* **colour alone**: more than :data:`MAX_BY_COLOUR` series in one axes, two of which differ by colour only
+  (the same marker, line style and hatch): a reader who does not see colours well cannot tell them apart.
+  A series is a line, a set of bars or error bars, or a scatter, with what it draws in the same colour.
 
 Only what is drawn counts (the texts the renderer is asked to draw; lines, bars and bands clipped to their
 axes). Boxes touching by less than :data:`TOLERANCE_PX` are not an overlap. With the environment variable
@@ -49,6 +52,9 @@ TOLERANCE_PX = 1.0
 """Boxes must overlap by more than this (pixels at the figure's dpi, in both directions) to count."""
 BACKGROUND_ALPHA = 0.35
 """Shading at most this opaque (bands, spans) is a background a label may sit on; a legend may not."""
+MAX_BY_COLOUR = 4
+"""Up to this many series in one axes may be told apart by colour alone; beyond it each needs its own marker,
+line style or hatch (colour-blind readers, greyscale prints)."""
 
 
 @dataclass(frozen=True)
@@ -152,7 +158,72 @@ def _problems(fig: Figure, renderer, drawn_texts: list[Text]) -> list[str]:
             if _covers(artist, on, ax, renderer, inside_ok=True):
                 problems.append(f"label on data: {t.name} covers {what}")
                 break
+    problems += [p for ax in axes for p in colour_alone(ax)]
     return list(dict.fromkeys(problems))
+
+
+# ---------------------------------------------------------------- series told apart by colour only
+def _line_signature(line: Line2D) -> tuple[str, str]:
+    marker = line.get_marker()
+    drawn_marker = marker not in (None, "None", "none", "", " ") and line.get_markersize() > 0
+    style = line.get_linestyle()
+    drawn_line = style not in ("None", "none", "", " ") and line.get_linewidth() > 0
+    return (str(marker) if drawn_marker else "", str(style) if drawn_line else "")
+
+
+def _series(ax: Axes) -> list[tuple[str, str, tuple]]:
+    """The series of ``ax``: (colour, label, signature: what tells it apart besides its colour)."""
+    from matplotlib.colors import to_hex
+
+    out: list[tuple[str, str, tuple]] = []
+    taken: set[int] = set()
+    for c in ax.containers:  # bars and error bars: the container is the series
+        label = str(c.get_label() or "")
+        if hasattr(c, "patches"):
+            patches = [p for p in c.patches if p.get_visible()]
+            taken.update(id(p) for p in c.patches)
+            if patches:
+                sig = ("bars", patches[0].get_hatch() or "", str(patches[0].get_linestyle()))
+                out.append((to_hex(patches[0].get_facecolor()), label, sig))
+        elif hasattr(c, "lines"):
+            data_line, caps, bars = c.lines
+            taken.update(id(x) for x in [data_line, *caps, *bars] if x is not None)
+            if data_line is not None and data_line.get_visible():
+                out.append((to_hex(data_line.get_color()), label, ("line", *_line_signature(data_line))))
+    for line in ax.lines:
+        if id(line) in taken or not line.get_visible() or not len(line.get_xydata()):
+            continue
+        sig = _line_signature(line)
+        if any(sig):
+            out.append((to_hex(line.get_color()), str(line.get_label() or ""), ("line", *sig)))
+    for coll in ax.collections:
+        if isinstance(coll, PathCollection) and coll.get_visible() and len(coll.get_offsets()):
+            faces = coll.get_facecolors() if len(coll.get_facecolors()) else coll.get_edgecolors()
+            paths = coll.get_paths()
+            shape = tuple(np.round(paths[0].vertices, 2).ravel()) if paths else ()
+            if len(faces):
+                out.append((to_hex(faces[0]), str(coll.get_label() or ""), ("points", shape)))
+    return out
+
+
+def colour_alone(ax: Axes) -> list[str]:
+    """The "colour alone" problems of one axes (module docstring): series, grouped by colour (a line and
+    the markers or bars of one colour are one series), of which two draw alike but for their colour."""
+    groups: dict[str, tuple[str, set[tuple]]] = {}
+    for colour, label, sig in _series(ax):
+        name, sigs = groups.get(colour, ("", set()))
+        groups[colour] = (name or ("" if label.startswith("_") else label), sigs | {sig})
+    if len(groups) <= MAX_BY_COLOUR:
+        return []
+    by_look: dict[frozenset, list[str]] = {}
+    for colour, (name, sigs) in groups.items():
+        by_look.setdefault(frozenset(sigs), []).append(repr(_short(name, 24)) if name else colour)
+    alike = [names for names in by_look.values() if len(names) > 1]
+    return [
+        f"colour alone: {len(groups)} series in {_axes_name(ax)}, and {', '.join(names)} differ only by "
+        "colour (give each a marker, line style or hatch of its own)"
+        for names in alike
+    ]
 
 
 # ---------------------------------------------------------------- what is drawn

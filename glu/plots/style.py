@@ -30,6 +30,7 @@ DPI = 150
 ACTION_COLORS = {"grasp": "#4C72B0", "tap": "#DD8452", "touch": "#55A868", "push": "#8172B3"}
 VALUE_COLORS = {"slow": "#8DA0CB", "medium": "#FC8D62", "fast": "#66C2A5"}
 ORIGINAL_MARK = {"marker": "_", "color": "black", "markersize": 14, "markeredgewidth": 2, "linestyle": "none"}
+"""How the original model's values are marked on a figure of ours: a short black bar."""
 ORIGINAL_LABEL = "original model (BN_lab.mat)"
 """Legend entry of the original model's values, drawn with :data:`ORIGINAL_MARK`."""
 WORD_COLORS = {"and": "#4C72B0", "but": "#DD8452"}
@@ -73,8 +74,9 @@ def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = (
     return out
 
 
-def stamp(fig: Figure, footer: str) -> None:
-    """Lay the figure out, then write ``footer`` (its data source, …) in small grey text below everything.
+def stamp(fig: Figure, footer: str, made_by: str = "") -> None:
+    """Lay the figure out, then write ``footer`` (its data source, …) in small grey text below everything,
+    and ``made_by`` (the glu that drew it: version and commit) on a line of its own under it.
 
     A figure made with a layout engine (``layout="constrained"``, for legends outside every panel) keeps
     it; any other is laid out once with ``tight_layout``. The footer is written below the figure's
@@ -83,8 +85,11 @@ def stamp(fig: Figure, footer: str) -> None:
     if fig.get_layout_engine() is None:
         fig.tight_layout()
     chars = int(fig.get_figwidth() * 72 / (0.56 * FOOTER_SIZE))  # about as wide as the figure
-    text = "\n".join(textwrap.wrap(footer, max(chars, 40), break_on_hyphens=False))
-    fig.text(0.005, -0.01, text, fontsize=FOOTER_SIZE, color="0.3", ha="left", va="top")
+    lines = textwrap.wrap(footer, max(chars, 40), break_on_hyphens=False)
+    fig.text(0.005, -0.01, "\n".join(lines), fontsize=FOOTER_SIZE, color="0.3", ha="left", va="top")
+    if made_by:  # one line further down: the footer's lines at matplotlib's line spacing (1.2)
+        below = -0.01 - len(lines) * 1.2 * FOOTER_SIZE / 72 / fig.get_figheight()
+        fig.text(0.005, below, made_by, fontsize=FOOTER_SIZE, color="0.45", ha="left", va="top")
 
 
 def new_figure(

@@ -1,10 +1,12 @@
 """Each figure's caption, from the notebook's own prose: the title of its section and the sentence that
-interprets it.
+interprets it, or the figure's own sentence when its cell draws several.
 
 The site (:mod:`glu.run.site`) shows every figure a notebook saved (the outputs tagged ``{"glu": {"figure":
 "NAME.png"}}`` by :meth:`glu.run.outputs.Outputs.figure`) with a caption. The caption is not written twice: it
 is read from the executed notebook (:func:`figure_captions`), and put in the metadata of the output that shows
-the figure (:func:`caption_figures`), where the site's renderer (:mod:`glu.run.site_render`) finds it.
+the figure (:func:`caption_figures`), where the site's renderer (:mod:`glu.run.site_render`) finds it. Two
+figures of one cell would share their section's prose: each then says what it shows itself
+(``out.figure(fig, name, caption=…)``, kept in the output's metadata as ``glu.caption``).
 """
 
 from __future__ import annotations
@@ -56,7 +58,8 @@ def figure_captions(nb: Any) -> dict[int, tuple[str, str]]:
 
     A figure's caption is the heading of its section, then the sentence that interprets it: the first
     paragraph of the markdown cell that follows its cell, when that cell continues the section (it does not
-    start with a heading); otherwise the paragraph under the section's heading.
+    start with a heading); otherwise the paragraph under the section's heading. (A figure that carries its
+    own sentence is captioned with it instead: :func:`caption_figures`.)
     """
     out: dict[int, tuple[str, str]] = {}
     heading, intro = None, None
@@ -84,19 +87,27 @@ def _figure_name(output: Mapping[str, Any]) -> str | None:
     return (output.get("metadata") or {}).get("glu", {}).get("figure")
 
 
+def heading(title: str) -> str:
+    """A caption's title in bold, closed by a full stop unless it ends with its own (``?``, ``!``)."""
+    return f"**{title}**" if title.endswith(("?", "!", ".")) else f"**{title}.**"
+
+
 def caption_text(title: str, text: str) -> str:
     """A caption in Markdown: the title in bold, then the text."""
-    return f"**{title}.** {text}" if title and text else (f"**{title}.**" if title else text)
+    return f"{heading(title)} {text}" if title and text else (heading(title) if title else text)
 
 
 def caption_figures(nb: Any) -> dict[str, str]:
     """Put each figure's caption (:func:`figure_captions`) in the metadata of the output that shows it
-    (``metadata.glu.title`` and ``.text``); returns figure file → caption (:func:`caption_text`)."""
+    (``metadata.glu.title``, ``.text``: the prose that interprets it, and ``.caption``: its own sentence,
+    when it has one); returns figure file → caption (:func:`caption_text`: the title, then the figure's own
+    sentence, or else the prose)."""
     captions = {}
     for i, (title, text) in figure_captions(nb).items():
         for o in nb["cells"][i].get("outputs", []):
             name = _figure_name(o)
-            if name and (title or text):
+            own = (o.get("metadata") or {}).get("glu", {}).get("caption", "")
+            if name and (title or text or own):
                 o["metadata"]["glu"].update(title=title, text=text)
-                captions[name] = caption_text(title, text)
+                captions[name] = caption_text(title, own or text)
     return captions

@@ -2,7 +2,7 @@
 
 :func:`run_notebook` runs a notebook (``notebooks/NN_name.py``) in its own kernel through papermill, with
 the parameters injected after its parameters cell, and writes the executed ``.ipynb``. It uses papermill's
-nbclient engine, extended (:class:`GluEngine`) in two ways:
+nbclient engine, extended (``GluEngine``, built on first use) in two ways:
 
 * every cell start is reported to ``handle.on_cell(index, n_cells)``, for live progress;
 * :meth:`RunHandle.stop` kills the kernel from another thread; nbclient notices the dead kernel within

@@ -13,6 +13,8 @@ back to synthetic data) and the non-default parameters, and returns the :class:`
 the run: the staging folder ``glu reproduce`` passed as ``out_dir``, or for any other run a new folder of
 its own in the notebook's scratch folder (``build/scratch/<notebook>/<date>-<time>/``: no run overwrites
 another's outputs), so only ``glu reproduce`` publishes into ``results/``, ``recordings/``, ``models/``.
+From then on, a cell that ends with a DataFrame shows it as :func:`glu.tidy.html_table` writes it:
+rounded for reading, whole on the page.
 """
 
 from __future__ import annotations
@@ -97,7 +99,23 @@ def start(notebook: str, namespace: Mapping[str, Any]) -> Outputs:
             "(only `glu reproduce` publishes to results/, recordings/, models/)"
         )
     _say(line)
+    _show_tables()
     return out
+
+
+def _show_tables() -> None:
+    """In a kernel, show every DataFrame a cell ends with as :func:`glu.tidy.html_table` does: rounded for
+    reading, no ``0 … n-1`` index, missing values as a dash (the result files keep every digit)."""
+    if not in_kernel():
+        return
+    import pandas as pd
+    from IPython import get_ipython
+
+    from glu.tidy import html_table
+
+    shell = get_ipython()
+    if shell is not None:
+        shell.display_formatter.formatters["text/html"].for_type(pd.DataFrame, html_table)
 
 
 def _say(markdown: str) -> None:

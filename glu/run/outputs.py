@@ -89,23 +89,29 @@ class Outputs:
         text = source or self.data_label  # names its origin ("real data: …", "synthetic data …")
         return text + (f" · {self.notebook} with {self.parameters_label}" if self.parameters else "")
 
-    def figure(self, fig: Any, name: str, source: str | None = None) -> None:
-        """Stamp ``fig`` with :meth:`footer`, save ``figures/<name>.png`` and ``.svg``, and show the PNG.
+    def figure(self, fig: Any, name: str, source: str | None = None, caption: str = "") -> None:
+        """Stamp ``fig`` with :meth:`footer` and the glu that made it (its version and commit,
+        :func:`glu.run.provenance.made_by`), save ``figures/<name>.png`` and ``.svg``, and show the PNG.
 
         In a running kernel the saved PNG itself is displayed (tagged with its file name in the output's
         metadata, ``{"glu": {"figure": "<name>.png"}}``), so the executed notebook shows exactly the file
         that was written; the figure is then closed. Returns None, so that a cell ending with it shows no
         path (the files are in :attr:`written`).
+
+        ``caption``: what this figure shows, when its cell draws several (one sentence, Markdown; no number
+        of the results). The site's caption of a figure is the title of its section, then this sentence,
+        or else the prose that follows the cell (:func:`glu.run.captions.figure_captions`).
         """
         from glu.plots.style import save_figure, stamp
+        from glu.run.provenance import made_by
 
-        stamp(fig, self.footer(source))
+        stamp(fig, self.footer(source), made_by())
         files = save_figure(fig, self.layout.figures / name)
         self.written.extend(files)
         import matplotlib.pyplot as plt
 
         plt.close(fig)
-        _show_png(files[0])
+        _show_png(files[0], caption)
 
     def table(self, df: pd.DataFrame, name: str | None = None, **extra: Any) -> None:
         """Save the numbers behind a figure as ``results/<name>.csv`` and ``.json`` (with provenance).
@@ -164,8 +170,9 @@ class Outputs:
         return p
 
 
-def _show_png(path: Path) -> None:
-    """Display a saved PNG in the running kernel, at the size it has at 100 dpi (nothing outside a kernel)."""
+def _show_png(path: Path, caption: str = "") -> None:
+    """Display a saved PNG in the running kernel, at the size it has at 100 dpi (nothing outside a kernel),
+    tagged with its file name and its own caption, if any."""
     if not in_kernel():
         return
     from IPython.display import Image, display
@@ -175,4 +182,4 @@ def _show_png(path: Path) -> None:
     data = path.read_bytes()
     width_px = int.from_bytes(data[16:20], "big")  # the PNG header's IHDR width
     image = Image(data=data, format="png", width=width_px * 100 // DPI)
-    display(image, metadata={"glu": {"figure": path.name}})
+    display(image, metadata={"glu": {"figure": path.name, **({"caption": caption} if caption else {})}})

@@ -102,6 +102,7 @@ PLUMBING: tuple[str, ...] = ("data", "out_dir")
 """Parameters that say where things are, not what is computed: never listed among a run's parameters."""
 
 TYPES = ("str", "int", "float", "bool", "list[float]", "list[int]", "list[str]")
+"""The types a notebook's parameter may be declared with."""
 _CELL = re.compile(r'^# %%.*tags=\["parameters"\]')
 
 

@@ -28,13 +28,22 @@ from glu.studies import readme_parts
 
 _ROOT = paths.PROJECT_ROOT
 README: Path | None = _ROOT / "README.md" if _ROOT is not None else None
-"""The checkout's README (None when glu is installed: then give the files explicitly)."""
+"""The checkout's README (None when glu is installed: then give the files explicitly).
+
+:meta hide-value:
+"""
 SUMMARY: Path | None = _ROOT / "results" / "summary.json" if _ROOT is not None else None
+"""The checkout's last run's summary (None when glu is installed).
+
+:meta hide-value:
+"""
 BEGIN = (
     "<!-- BEGIN results: written by `glu readme` from results/summary.json; edit each study's readme.py, "
     "not here -->"
 )
+"""The marker that opens the README's results section."""
 END = "<!-- END results -->"
+"""The marker that closes it."""
 
 INTRO = """\
 Every number below comes from `make reproduce` on the real data (the tables of its {notebooks} notebooks): \

@@ -32,8 +32,9 @@ import os
 import shutil
 import sys
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -57,6 +58,8 @@ from glu.run.manifest import Manifest, ManifestError, check_outputs, read_manife
 from glu.run.outputs import parameters_text
 from glu.run.parameters import check, non_defaults, parse_value, read_spec
 from glu.run.progress import CellProgress
+from glu.run.provenance import ENV as PROVENANCE_ENV
+from glu.run.provenance import Provenance, read_provenance
 from glu.run.publish import Store, legacy_files, reached, refuse_published
 from glu.run.summary import (
     RENDERING_RECORD,
@@ -199,6 +202,7 @@ class _Plan:
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
     non_default: dict[str, dict[str, Any]] = field(default_factory=dict)
     kept: dict[str, str] = field(default_factory=dict)
+    made: Provenance | None = None
 
     @property
     def data_param(self) -> str:
@@ -212,9 +216,25 @@ def reproduce(
     **kwargs: Any,
 ) -> dict[str, Any]:
     """:func:`_reproduce` holding the lock of the output folder (:func:`glu.run.lock.run_lock`): a second
-    run on the same project or ``--out`` folder is refused in one line naming the first's process id."""
-    with run_lock(OutputLayout.at(out).root):
-        return _reproduce(data, quick, out, **kwargs)
+    run on the same project or ``--out`` folder is refused in one line naming the first's process id. The
+    glu that runs (its version and commit, :mod:`glu.run.provenance`) is read once, before any notebook,
+    and every output of the run names it."""
+    with run_lock(OutputLayout.at(out).root), _made_by(read_provenance()) as made:
+        return _reproduce(data, quick, out, made=made, **kwargs)
+
+
+@contextmanager
+def _made_by(made: Provenance) -> Iterator[Provenance]:
+    """Hand the run's provenance to the notebooks' kernels (:data:`glu.run.provenance.ENV`) while it runs."""
+    before = os.environ.get(PROVENANCE_ENV)
+    os.environ[PROVENANCE_ENV] = before or made.label()  # a caller's pinned line wins (a re-render)
+    try:
+        yield made
+    finally:
+        if before is None:
+            os.environ.pop(PROVENANCE_ENV, None)
+        else:
+            os.environ[PROVENANCE_ENV] = before
 
 
 def _reproduce(
@@ -229,6 +249,7 @@ def _reproduce(
     progress: bool | None = None,
     site: bool = True,
     force: bool = False,
+    made: Provenance | None = None,
 ) -> dict[str, Any]:
     """Run the notebooks and publish the whole run if all succeed; returns the summary (also in results/).
 
@@ -248,6 +269,7 @@ def _reproduce(
     site : also build the documentation site of the run (:func:`glu.run.site.build_site`)
     force : leave a place of the output layout that holds what glu did not write untouched (the run is
         then published in the store only) instead of refusing
+    made : the glu that runs (:func:`glu.run.provenance.read_provenance`, read by :func:`reproduce`)
 
     Raises
     ------
@@ -257,6 +279,7 @@ def _reproduce(
     """
     t_start = time.perf_counter()
     plan = _plan(data, quick, out, jobs, only, seed, notebooks_dir, force)
+    plan.made = made or read_provenance()
     run = plan.store.begin()
     try:
         where = f"{plan.source.location()}, quick={quick}, jobs={jobs}"
@@ -440,7 +463,9 @@ def _stage(plan: _Plan, run: Path, results: list[NotebookResult]) -> dict[str, A
     summary = collect_summary(
         staged.results, results, plan.source.describe(), plan.quick, previous=previous if same else {}
     )
-    write_rendering_record(staged.figures, plan.source.describe(), plan.quick)
+    label = os.environ.get(PROVENANCE_ENV) or plan.made.label()
+    summary.update(made_by=label, provenance=plan.made.as_dict())
+    write_rendering_record(staged.figures, plan.source.describe(), plan.quick, label)
     reached("staged")
     return summary
 
@@ -532,6 +557,10 @@ def run_one(
 ) -> tuple[Path, OutputLayout]:
     """Run one notebook headless (``glu run``): check the parameters first, then execute.
 
+    Returns the executed notebook and the layout its outputs went to. Raises
+    :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
+    of range, :class:`NotebookError` when a cell fails.
+
     Parameters
     ----------
     notebook : the notebook's name or number
@@ -540,10 +569,6 @@ def run_one(
     quick : start from the quick preset of the notebook's manifest (``values`` win over it)
     progress : report each code cell as it starts, on stderr (:class:`glu.run.progress.CellProgress`: a
         bar on a terminal, one line per cell otherwise)
-
-    Returns the executed notebook and the layout its outputs went to. Raises
-    :class:`glu.errors.ParameterError` (nothing executed) for an unknown name, a wrong type or a value out
-    of range, :class:`NotebookError` when a cell fails.
     """
     pm = load_papermill()
     (src,) = list_notebooks([notebook], notebooks_dir)[:1]

@@ -5,16 +5,19 @@ a checkout, ``OUT/site/`` with ``--out``); ``make docs`` (``python -m glu.run.si
 last run. The site is made with the tools of the scientific Python ecosystem's notebook collections: Sphinx,
 MyST-NB (the stack of Jupyter Book 1) and the PyData theme. It holds
 
-* the **index**: the data source, the comparison of our numbers with the originals', every figure with its
-  caption and its notebook, the notebooks with their times and parameters, the Rerun recordings with the
-  command that opens them, and the package versions;
+* the **index** (:mod:`glu.run.site_pages`): the run (its data, and the commit of glu that made it), the
+  comparison of our numbers with the originals', every figure with its caption and its notebook, the
+  notebooks with their times and parameters, the Rerun recordings with the command that opens them, and the
+  package versions;
 * each **executed notebook** as a page, its outputs as ``glu reproduce`` executed them (MyST-NB's
   ``nb_execution_mode = "off"``: nothing runs again), each figure with its caption
   (:func:`glu.run.captions.caption_figures`);
-* the **docs pages** of the checkout (``docs/*.md``);
-* the **API reference**, generated from the numpydoc docstrings of :data:`API_MODULES` (autodoc, autosummary,
-  napoleon);
-* search (Sphinx's own, offline). A click on any figure opens it at its natural size with its caption.
+* the **docs pages** of the checkout (``docs/*.md``), in the reading order of the README's "Documentation"
+  section;
+* the **API reference**: a page for every public module, found by walking the package, its cross-references
+  linked (:mod:`glu.run.site_api`; autodoc, autosummary, napoleon);
+* search (Sphinx's own, offline), formulas as MathML (:mod:`glu.run.site_math`). A click on any figure
+  opens it at its natural size with its caption.
 
 The sources are assembled in the store's ``site-source/`` folder (kept, with Sphinx's doctrees, so that the
 next build only reads again what changed); the HTML is written there afresh and then copied into the run
@@ -30,7 +33,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import re
 import shutil
 import sys
 import time
@@ -42,41 +44,21 @@ from glu import paths
 from glu.errors import GluError
 from glu.paths import OutputLayout
 from glu.run.captions import caption_figures
-from glu.run.manifest import ManifestError, read_manifest
-from glu.run.outputs import parameters_text
+from glu.run.site_api import api_modules, api_pages
+from glu.run.site_pages import NOTEBOOKS_PAGE, docs_index_page, docs_page, index_page, reading_order
 from glu.run.summary import SummaryError, check_summary
 
 CONF_DIR: Path = paths.RESOURCES_DIR / "site"
-"""Sphinx's configuration, static files and templates of the site (shipped with the package)."""
+"""Sphinx's configuration, static files and templates of the site (shipped with the package).
+
+:meta hide-value:
+"""
 
 DOCS_DIR: Path | None = paths.PROJECT_ROOT / "docs" if paths.PROJECT_ROOT is not None else None
-"""The checkout's docs pages (``docs/*.md``), or None for an installed package."""
+"""The checkout's docs pages (``docs/*.md``), or None for an installed package.
 
-API_MODULES: tuple[str, ...] = (
-    "glu.schema",
-    "glu.data.source",
-    "glu.data.tables",
-    "glu.data.trajectory_files",
-    "glu.data.fetch",
-    "glu.bn.model",
-    "glu.bn.learning",
-    "glu.bn.inference",
-    "glu.bn.exchange",
-    "glu.evidence",
-    "glu.fusion",
-    "glu.gestures.features",
-    "glu.gestures.recognizer",
-    "glu.gestures.typicality",
-    "glu.hmm.config",
-    "glu.hmm.training",
-    "glu.language.grammar",
-    "glu.language.descriptions",
-    "glu.studies.replication.fusion",
-    "glu.recording",
-    "glu.run.manifest",
-    "glu.paths",
-)
-"""The modules of the API reference, in reading order."""
+:meta hide-value:
+"""
 
 
 class SiteError(GluError):
@@ -84,21 +66,6 @@ class SiteError(GluError):
 
 
 # ------------------------------------------------------------------------------------------ sources
-def _md_escape(text: Any) -> str:
-    return str(text).replace("|", "\\|").replace("\n", " ")
-
-
-def _table(rows: list[Mapping[str, Any]], columns: list[str]) -> str:
-    head = "| " + " | ".join(_md_escape(c) for c in columns) + " |\n|" + "---|" * len(columns) + "\n"
-    return head + "".join("| " + " | ".join(_md_escape(r.get(c, "")) for c in columns) + " |\n" for r in rows)
-
-
-def _html(text: Any) -> str:
-    import html
-
-    return html.escape(str(text))
-
-
 def _write_if_changed(path: Path, text: str | bytes) -> None:
     """Write only what changed, so that Sphinx reads again only the pages whose sources changed."""
     data = text.encode() if isinstance(text, str) else text
@@ -108,151 +75,6 @@ def _write_if_changed(path: Path, text: str | bytes) -> None:
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_bytes(data)
     os.replace(tmp, path)
-
-
-def _about(name: str, notebooks_dir: Path) -> str:
-    try:
-        return read_manifest(notebooks_dir / f"{name}.py").about
-    except (ManifestError, OSError):
-        return ""
-
-
-def _relative(target: Path, start: Path) -> str:
-    return Path(os.path.relpath(target, start)).as_posix()
-
-
-_NOTEBOOK_LINK = re.compile(r"\]\((\.\./)?notebooks/(\d\d_[A-Za-z0-9_]+)\.(py|ipynb)\)")
-
-
-def _docs_page(text: str) -> str:
-    """A docs page as the site shows it: links to a notebook's source go to its executed page."""
-    return _NOTEBOOK_LINK.sub(lambda m: f"](../notebooks/{m.group(2)}.ipynb)", text)
-
-
-def _index(
-    layout: OutputLayout,
-    summary: Mapping[str, Any],
-    captions: Mapping[str, str],
-    notebooks_dir: Path,
-    published: OutputLayout | None = None,
-) -> str:
-    links = published or layout  # where readers find the run: the site links to its recordings from there
-    notebooks = {nb["name"]: nb for nb in summary.get("notebooks", [])}
-    quick = summary.get("quick")
-    wall = summary.get("wall_time_s")
-    n_figures = sum(1 for f in summary.get("figures_by_notebook", {}) if f.endswith(".png"))
-    lines = [
-        "# glu: gestures, language and affordances, reproduced",
-        "",
-        "A Python reproduction of Saponaro et al., *Interactive Robot Learning of Gestures, Language "
-        "and Affordances* (GLU 2017) and its follow-up *Beyond the Self* (IEEE TCDS 2020): gesture "
-        "HMMs, the Affordance–Words Bayesian network, their fusion, and verbal descriptions. This "
-        "site is the record of one run of every notebook (`glu reproduce`): the executed notebooks, "
-        "their figures, the comparison with the originals, and the API reference.",
-        "",
-        f"**Data:** {_md_escape(summary.get('data_source', 'unknown'))} · **mode:** "
-        f"{'quick (small, fast runs)' if quick else 'full'}"
-        + (f" · **wall time:** {wall:.1f} s" if wall is not None else "")
-        + f" · {len(notebooks)} notebooks · {n_figures} figures",
-        "",
-        "## Ours against the originals",
-        "",
-    ]
-    comparisons = [
-        {**c, "max |ours − reference|": f"{c['max_abs_difference']:.3g}"}
-        for c in summary.get("comparison_with_reference", [])
-    ]
-    if comparisons:
-        lines += [
-            "Each row compares a table of ours with the originals' model or the published values; the "
-            "largest absolute difference over its numbers.",
-            "",
-            _table(comparisons, ["table", "reference", "rows", "max |ours − reference|"]),
-        ]
-    else:
-        lines += [
-            "No reference to compare with in this data (the originals' models come with the real data).",
-            "",
-        ]
-    lines += ["## The notebooks", ""]
-    rows = [
-        {
-            "notebook": f"[{name}](notebooks/{name}.ipynb)",
-            "what it shows": _about(name, notebooks_dir),
-            "status": n["status"],
-            "seconds": n.get("seconds", ""),
-            "parameters": parameters_text(n.get("parameters") or {}) or "defaults",
-        }
-        for name, n in sorted(notebooks.items())
-    ]
-    lines += [_table(rows, ["notebook", "what it shows", "status", "seconds", "parameters"]), ""]
-    lines += [
-        "## Figures",
-        "",
-        "Every figure of the run with its caption and the notebook that drew it; click one to see it at full "
-        "size. Each is also saved as SVG beside the PNG (`figures/`).",
-        "",
-    ]
-    by_notebook = summary.get("figures_by_notebook", {})
-    shown = [
-        (fname, nb)
-        for fname, nb in sorted(by_notebook.items(), key=lambda item: (item[1], item[0]))
-        if fname.endswith(".png") and (layout.figures / fname).is_file()
-    ]
-    lines += ["::::{container} glu-gallery"] if shown else ["This run drew no figures.", ""]
-    for fname, nb in shown:
-        caption = captions.get(fname, "")
-        link = f"[{nb}](notebooks/{nb}.ipynb)" if nb in notebooks else nb
-        lines += [
-            f":::{{figure}} _figures/{fname}",
-            f":alt: {fname[:-4]}",
-            "",
-            f"{caption} — `{fname[:-4]}`, {link}".strip(" —"),
-            ":::",
-        ]
-    lines += ["::::", ""] if shown else []
-    lines += ["## Recordings", ""]
-    recordings = summary.get("recordings", [])
-    if recordings:
-        lines += [
-            "Each anticipation and episode run is also a [Rerun](https://rerun.io) recording: the "
-            "hand in 3-D, the HMM scores, the fused beliefs frame by frame. Open one in the Rerun "
-            "viewer (installed with `glu[notebooks]`) from the output folder:",
-            "",
-            "```{raw} html",
-            '<table class="table glu-recordings"><thead><tr><th>recording</th><th>notebook</th>'
-            "<th>open it with</th></tr></thead><tbody>",
-        ]
-        by_nb = summary.get("recordings_by_notebook", {})
-        for rec in recordings:
-            target = _relative(links.recordings / rec, links.site)
-            lines.append(
-                f'<tr><td><a href="{_html(target)}">{_html(rec)}</a></td><td>{_html(by_nb.get(rec, ""))}</td>'
-                f"<td><code>rerun recordings/{_html(rec)}</code></td></tr>"
-            )
-        lines += ["</tbody></table>", "```", ""]
-    else:
-        lines += ["This run wrote no recordings.", ""]
-    versions = [{"package": k, "version": v} for k, v in summary.get("versions", {}).items()]
-    lines += [
-        "## Data and package versions",
-        "",
-        f"The data: {_md_escape(summary.get('data_source', 'unknown'))}. The real data is public (GPL) and "
-        "is never copied into the repository: `glu data fetch` downloads it at the pinned commits and checks "
-        "its checksums; without it the notebooks run on synthetic data of the same shape.",
-        "",
-        _table(versions, ["package", "version"]),
-        "",
-        "```{toctree}",
-        ":hidden:",
-        "",
-        "notebooks",
-        *(["docs"] if _docs_pages() else []),
-        "api",
-        "```",
-        "",
-    ]
-    return "\n".join(lines)
 
 
 def _checked(summary: Mapping[str, Any]) -> Mapping[str, Any]:
@@ -307,47 +129,13 @@ def _read_executed(folder: Path, name: str) -> tuple[Any, dict[str, str]]:
 
 
 def _docs_pages() -> list[Path]:
-    return sorted(DOCS_DIR.glob("*.md")) if DOCS_DIR is not None and DOCS_DIR.is_dir() else []
-
-
-_NOTEBOOKS_PAGE = """# Notebooks
-
-The story, one notebook at a time, as `glu reproduce` executed them (nothing here is run again). Each runs
-by hand in JupyterLab too (`make lab`), or headless with other parameters (`glu run NOTEBOOK -p NAME VALUE`).
-
-```{toctree}
-:glob:
-:maxdepth: 1
-
-notebooks/*
-```
-"""
-
-_DOCS_PAGE = """# Documentation
-
-```{toctree}
-:glob:
-:maxdepth: 1
-
-docs/*
-```
-"""
-
-
-def _api_page(modules: tuple[str, ...]) -> str:
-    """The API page, in reStructuredText: autosummary generates its module pages only from ``.rst`` files."""
-    body = "\n".join(f"   {m}" for m in modules)
-    return f"""API reference
-=============
-
-glu's public modules, generated from their docstrings (numpydoc style). The command line (``glu --help``)
-and the notebooks are built on these.
-
-.. autosummary::
-   :toctree: api
-
-{body}
-"""
+    """The checkout's docs pages in reading order (:func:`glu.run.site_pages.reading_order`)."""
+    if DOCS_DIR is None or not DOCS_DIR.is_dir():
+        return []
+    pages = {p.stem: p for p in DOCS_DIR.glob("*.md")}
+    readme = DOCS_DIR.parent / "README.md"
+    text = readme.read_text(encoding="utf-8") if readme.is_file() else ""
+    return [pages[name] for name in reading_order(list(pages), text)]
 
 
 def assemble(
@@ -355,7 +143,7 @@ def assemble(
     summary: Mapping[str, Any],
     source: Path,
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
-    modules: tuple[str, ...] = API_MODULES,
+    modules: tuple[str, ...] | None = None,
     published: OutputLayout | None = None,
 ) -> dict[str, str]:
     """Write the site's sources into ``source``: the index, the executed notebooks of ``summary`` (their
@@ -380,7 +168,7 @@ def assemble(
         keep.add(target)
     for page in _docs_pages():
         target = source / "docs" / page.name
-        _write_if_changed(target, _docs_page(page.read_text(encoding="utf-8")))
+        _write_if_changed(target, docs_page(page.read_text(encoding="utf-8")))
         keep.add(target)
     for fname, _ in summary.get("figures_by_notebook", {}).items():
         src = layout.figures / fname
@@ -388,19 +176,22 @@ def assemble(
             target = source / "_figures" / fname
             _write_if_changed(target, src.read_bytes())
             keep.add(target)
+    docs = _docs_pages()
     pages = {
-        "index.md": _index(layout, summary, captions, notebooks_dir, published),
-        "notebooks.md": _NOTEBOOKS_PAGE,
-        "api.rst": _api_page(modules),
+        "index.md": index_page(
+            layout, summary, captions, notebooks_dir, has_docs=bool(docs), published=published
+        ),
+        "notebooks.md": NOTEBOOKS_PAGE,
+        **api_pages(api_modules() if modules is None else modules),
     }
-    if _docs_pages():
-        pages["docs.md"] = _DOCS_PAGE
+    if docs:
+        pages["docs.md"] = docs_index_page([p.stem for p in docs])
     for page, text in pages.items():
         _write_if_changed(source / page, text)
         keep.add(source / page)
     for stale in ("api.md",):
         (source / stale).unlink(missing_ok=True)
-    for folder in ("notebooks", "docs", "_figures"):  # pages and figures of an earlier run, gone
+    for folder in ("notebooks", "docs", "_figures", "api"):  # pages and figures of an earlier run, gone
         for f in (source / folder).glob("*") if (source / folder).is_dir() else []:
             if f not in keep:
                 f.unlink()
@@ -408,9 +199,12 @@ def assemble(
 
 
 # ------------------------------------------------------------------------------------------ build
-def _sphinx(source: Path, html: Path, doctrees: Path) -> tuple[int, str]:
+def _sphinx(
+    source: Path, html: Path, doctrees: Path, modules: tuple[str, ...] | None = None
+) -> tuple[int, str]:
     """Build ``source`` into ``html`` with Sphinx (every warning an error); (status, warnings).
-    MyST-NB keeps its copies of the notebooks beside ``html`` (``jupyter_execute/``)."""
+    MyST-NB keeps its copies of the notebooks beside ``html`` (``jupyter_execute/``). ``modules``: the
+    modules of the API reference when it holds only some (references to the others then need no page)."""
     from sphinx.application import Sphinx
     from sphinx.util.console import nocolor
     from sphinx.util.docutils import docutils_namespace, patch_docutils
@@ -428,6 +222,7 @@ def _sphinx(source: Path, html: Path, doctrees: Path) -> tuple[int, str]:
             warning=warnings,
             warningiserror=True,
             keep_going=True,
+            confoverrides={"glu_api_modules": modules} if modules is not None else {},
         )
         app.build()
     return app.statuscode, warnings.getvalue()
@@ -438,7 +233,7 @@ def build_site(
     summary: Mapping[str, Any] | None = None,
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
     notebooks_dir: Path = paths.NOTEBOOKS_DIR,
-    modules: tuple[str, ...] = API_MODULES,
+    modules: tuple[str, ...] | None = None,
     work: Path | None = None,
     published: OutputLayout | None = None,
 ) -> Path:
@@ -458,11 +253,12 @@ def build_site(
     work = work if work is not None else layout.store / "site-source"
     source, html = work / "src", work / "html"
     source.mkdir(parents=True, exist_ok=True)
+    modules = api_modules() if modules is None else modules
     assemble(layout, summary, source, notebooks_dir, modules, published=published)
     shutil.rmtree(
         html, ignore_errors=True
     )  # every page written afresh (from the doctrees kept): no stale page
-    status, warnings = _sphinx(source, html, work / "doctrees")
+    status, warnings = _sphinx(source, html, work / "doctrees", modules)
     problems = [line for line in warnings.splitlines() if "WARNING" in line or "ERROR" in line]
     if status or problems:
         shown = "\n".join(_strip_paths(line, work) for line in problems[:20])

@@ -26,12 +26,21 @@ from glu.errors import DataError
 
 _ROOT = paths.PROJECT_ROOT
 RESULTS: Path | None = _ROOT / "benchmarks" / "results" if _ROOT is not None else None
-"""The benchmarks' results in a checkout (None when glu is installed)."""
+"""The benchmarks' results in a checkout (None when glu is installed).
+
+:meta hide-value:
+"""
 PAGE: Path | None = _ROOT / "docs" / "speed.md" if _ROOT is not None else None
+"""The checkout's speed page (None when glu is installed).
+
+:meta hide-value:
+"""
 BEGIN = (
     "<!-- BEGIN benchmarks: written by `glu readme` from benchmarks/results/*.json; edit glu/run/speed.py -->"
 )
+"""The marker that opens the speed page's tables."""
 END = "<!-- END benchmarks -->"
+"""The marker that closes them."""
 SCHEMA = 1
 ORDER = (
     "reproduce",

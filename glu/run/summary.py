@@ -166,9 +166,11 @@ def rendering_versions() -> dict[str, str]:
     return {"matplotlib": matplotlib.__version__, "freetype": ft2font.__freetype_version__}
 
 
-def write_rendering_record(figures_dir: Path, data: str, quick: bool) -> Path:
-    """Write ``figures/rendered-with.json``: which data, which mode, which renderer versions."""
-    record = {"data_source": data, "quick": quick, **rendering_versions()}
+def write_rendering_record(figures_dir: Path, data: str, quick: bool, made_by: str = "") -> Path:
+    """Write ``figures/rendered-with.json``: which data, which mode, which glu (``made_by``: version and
+    commit, :mod:`glu.run.provenance`), which renderer versions."""
+    record = {"data_source": data, "quick": quick, **({"made_by": made_by} if made_by else {})}
+    record.update(rendering_versions())
     path = figures_dir / RENDERING_RECORD
     figures_dir.mkdir(parents=True, exist_ok=True)
     atomic_write_text(path, json.dumps(record, indent=1, sort_keys=True) + "\n")

@@ -163,6 +163,7 @@ class GestureSettings:
 
 
 DURATION_S: tuple[float, float] = (2.5, 5.0)
+"""The range the gesture generator draws a person's movement duration from (seconds), uniformly."""
 AMPLITUDE: tuple[float, float] = (0.85, 1.15)
 """The ranges the gesture generator draws a person's movement duration (seconds) and amplitude (the
 excursion from rest, scaled) from, uniformly (:mod:`glu.gestures.synthetic`)."""
@@ -274,6 +275,12 @@ def effects_given_gesture(
 ) -> dict[str, np.ndarray]:
     """The episodes' values with the effects redrawn from their gestures' speeds, where ``effects`` says.
 
+    Each node of ``effects.nodes`` of the episodes of ``effects.actions`` is drawn from the tilted
+    p(node | object, action[, the nodes before it]) (:class:`GestureEffects`); then the slowest taps'
+    ObjVel is set slow. Episodes whose effect nodes changed get the rest of the network (the other effects,
+    the words) drawn again given their roots and new effects (:func:`glu.bn.sampling.sample`, which
+    conditions on them); the others keep every value.
+
     Parameters
     ----------
     engine : the network the episodes were drawn from
@@ -283,12 +290,6 @@ def effects_given_gesture(
     effects : how the effects depend on the gesture; inactive: ``codes`` returned unchanged, ``rng``
         untouched
     rng : the generator of the new draws
-
-    Each node of ``effects.nodes`` of the episodes of ``effects.actions`` is drawn from the tilted
-    ``p(node | object, action[, the nodes before it])`` (:class:`GestureEffects`); then the slowest taps'
-    ObjVel is set slow. Episodes whose effect nodes changed get the rest of the network (the other effects,
-    the words) drawn again given their roots and new effects (:func:`glu.bn.sampling.sample`, which
-    conditions on them); the others keep every value.
     """
     out = {k: np.asarray(v, dtype=np.intp).copy() for k, v in codes.items()}
     if not effects.active:

@@ -13,6 +13,7 @@ from collections.abc import Iterator
 
 import pytest
 from cli_run import run
+from tiny_notebook import TINY_NOTEBOOK
 
 from glu.errors import DataError
 from glu.machine import check_reachable
@@ -98,25 +99,6 @@ def test_evaluate_and_learning_curves_refuse_a_garbage_scheduler_and_write_nothi
 
 
 # ------------------------------------------------------------------ a run's names and files, read back
-_NOTEBOOK = """# ---
-# jupyter:
-#   glu:
-#     about: a test notebook
-#     figures:
-#     - a
-# ---
-
-# %% tags=["parameters"]
-data: str = None  # data folder
-seed: int = 0  # seed
-out_dir: str = None  # outputs
-
-# %%
-from pathlib import Path
-Path(out_dir, "figures").mkdir(parents=True, exist_ok=True)
-for ext in ("png", "svg"):
-    Path(out_dir, "figures", f"a.{ext}").write_bytes(b"run")
-"""
 
 
 @pytest.fixture(scope="module")
@@ -126,7 +108,7 @@ def published(tmp_path_factory):
 
     root = tmp_path_factory.mktemp("published")
     (root / "nbs").mkdir()
-    (root / "nbs" / "01_a.py").write_text(_NOTEBOOK)
+    (root / "nbs" / "01_a.py").write_text(TINY_NOTEBOOK)
     reproduce(data="synthetic", out=root / "out", notebooks_dir=root / "nbs", site=False, log=lambda _: None)
     return root / "out"
 
@@ -299,6 +281,7 @@ def test_a_truncated_or_corrupted_data_file_is_refused_in_one_line(
     status, _, err = run(capsys, *argv, "-o", str(out))
     assert status == 2 and said in err and "sent-1-5_lab_aff_bag.txt" in err, err
     assert err.count("glu learn-gestures: error:") == 1 and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1, err  # the refusal alone: no "published data modified" first
     assert not out.exists()
 
 

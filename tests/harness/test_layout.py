@@ -1,9 +1,9 @@
 """The package's layout stays true: imports only go downward, every module has a layer, none is too long.
 
-The layers are :data:`glu.LAYERS`, bottom first (README, "Package layout"). A module may import from a lower
-layer and from its own component; never from a higher layer, and never from a sibling component of the same
-layer (the network, the gestures and the language know nothing of each other; a study knows no other study
-but the shared ones). No module imports a private (``_``) name, or a private module, of another module.
+The layers are :data:`glu.LAYERS`, bottom first (docs/api.md, "Package layout"). A module may import from a
+lower layer and from its own component; never from a higher layer, and never from a sibling component of the
+same layer (the network, the gestures and the language know nothing of each other; a study knows no other
+study but the shared ones). No module imports a private (``_``) name, or a private module, of another module.
 """
 
 from __future__ import annotations

@@ -57,6 +57,19 @@ def test_a_row_off_by_more_than_the_tolerance_is_named_with_its_parents(tmp_path
     assert e.value.code == 2 and "a tolerance is a number in [0, 1)" in capsys.readouterr().err
 
 
+def test_query_takes_the_renormalise_its_message_advises(tmp_path, capsys):
+    path = tmp_path / "r.bif"
+    path.write_text(ROUNDED.format(last="0.50004"))
+    assert main(["query", "--model", str(path), "--target", "B"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "give --renormalise 0.0001" in err
+    assert main(["query", "--model", str(path), "--renormalise", "1e-4", "--target", "B"]) == 0
+    out = capsys.readouterr().out
+    assert "1 CPT row(s) rescaled to sum to 1 on import" in out
+    # P(B=b2) = 0.3 · 0.5 + 0.7 · 0.50004 / 1.00004, by hand
+    assert f"{0.3 * 0.5 + 0.7 * 0.50004 / 1.00004:.6f}" in out
+
+
 def test_rows_rounded_by_other_tools_are_rescaled_and_reported():
     bn = from_bif(ROUNDED.format(last="0.500001"), "r.bif")  # within the default 1e-5
     assert bn.meta["renormalised"] == {

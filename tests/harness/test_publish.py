@@ -12,36 +12,17 @@ from pathlib import Path
 
 import pytest
 from cli_run import run
+from tiny_notebook import TINY_NOTEBOOK
 
 from glu import paths
 from glu.paths import OUTPUT_KINDS, OutputLayout
 from glu.run.publish import CURRENT, MARKER, PublishError, Store, legacy_files
 
-_NOTEBOOK = """# ---
-# jupyter:
-#   glu:
-#     about: a test notebook
-#     figures:
-#     - a
-# ---
-
-# %% tags=["parameters"]
-data: str = None  # data folder
-seed: int = 0  # seed
-out_dir: str = None  # outputs
-
-# %%
-from pathlib import Path
-Path(out_dir, "figures").mkdir(parents=True, exist_ok=True)
-for ext in ("png", "svg"):
-    Path(out_dir, "figures", f"a.{ext}").write_text(f"run {seed}")
-"""
-
 
 @pytest.fixture(scope="module")
 def notebooks(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("nbs")
-    (folder / "01_a.py").write_text(_NOTEBOOK)
+    (folder / "01_a.py").write_text(TINY_NOTEBOOK)
     return folder
 
 

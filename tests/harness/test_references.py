@@ -3,7 +3,7 @@
 Every mention of a ``*.md`` file — in the package, the tests, the notebooks, the benchmarks, the pages,
 ``pyproject.toml`` and the ``Makefile`` — names a file of the repository; every link with an anchor
 (a page's name, ``#`` and a heading's anchor) and every section cited as ``docs/method.md §N.M`` names a
-heading of that page; and every module the README's package map names exists.
+heading of that page; and every module the package map (docs/api.md) names exists.
 """
 
 from __future__ import annotations
@@ -152,8 +152,8 @@ def test_the_method_sections_are_numbered_in_order():
 
 
 def package_map() -> list[tuple[list[str], list[str]]]:
-    """The rows of the README's package map: (packages, modules)."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    """The rows of the package map (docs/api.md, "Package layout"): (packages, modules)."""
+    text = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
     table = text.split("## Package layout", 1)[1].split("\n## ", 1)[0]
     rows = []
     for line in table.splitlines():

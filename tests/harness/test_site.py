@@ -15,8 +15,10 @@ from glu.paths import RUNS, OutputLayout
 from glu.run import site as site_module
 from glu.run.captions import caption_figures, figure_captions
 from glu.run.execution import present_executed, shown_path
+from glu.run.publish import republish
 from glu.run.reproduce import reproduce
-from glu.run.site import API_MODULES, SiteError, build_site
+from glu.run.site import SiteError, build_site
+from glu.run.site_api import api_modules
 
 
 def _figure_cell(name: str) -> nbformat.NotebookNode:
@@ -110,12 +112,23 @@ def test_the_executed_notebook_names_the_published_folders_not_the_staging_one(t
     assert done.metadata.papermill.output_path == "build/notebooks/01.ipynb"
 
 
+SOME_MODULES = ("glu", "glu.bn", "glu.bn.model", "glu.hmm", "glu.hmm.model", "glu.run", "glu.run.manifest")
+"""The API reference of the small site: a few packages and modules (the complete one is the quick run's,
+tests/harness/test_notebooks.py)."""
+
+
 @pytest.fixture(scope="module")
 def site_run(tmp_path_factory, synthetic_folder):
     """A quick run of two notebooks on a data folder on disk (not the project's), with its site."""
     out = tmp_path_factory.mktemp("site-run") / "out"
     summary = reproduce(
-        data=synthetic_folder, quick=True, out=out, jobs=2, only=["01", "08"], log=lambda _: None
+        data=synthetic_folder, quick=True, out=out, jobs=2, only=["01", "08"], log=lambda _: None, site=False
+    )
+    layout = OutputLayout.under(out)  # the site of the published run, with the small API reference
+    republish(
+        layout,
+        "site",
+        lambda staged, work: build_site(staged, modules=SOME_MODULES, work=work, published=layout),
     )
     return out, summary
 
@@ -127,14 +140,16 @@ def _machine_paths(folder: Path, data: Path, out: Path) -> dict[str, list[str]]:
         "the data folder": str(data),
         "the home folder": str(Path.home()),
         "the output folder": str(out),
-        "the staging folder": RUNS,
     }
+    # a run's own folder in the store (the docs may name the store and its current and failed places)
+    staging = re.compile(re.escape(RUNS) + r"/(?!current\b|failed\b)[\w.-]+")
     found: dict[str, list[str]] = {}
     for f in sorted(folder.rglob("*")):
         if not f.is_file() or f.suffix in (".png", ".svg", ".woff", ".woff2", ".ttf", ".ico", ".gif", ".jpg"):
             continue
         text = f.read_text(encoding="utf-8", errors="replace")
         hits = [what for what, needle in needles.items() if needle in text]
+        hits += ["the staging folder"] if staging.search(text) else []
         if hits:
             found[f.relative_to(folder).as_posix()] = hits
     return found
@@ -175,7 +190,7 @@ def test_the_site_has_the_notebooks_the_docs_the_api_and_the_recordings(site_run
     assert summary["recordings"] and summary["versions"]["numpy"] in index
     assert summary["data_source"] in index  # the data source, named without its path
     assert index.count("<figure") >= len([f for f in summary["figures"] if f.endswith(".png")])
-    for module in API_MODULES:
+    for module in SOME_MODULES:
         page = (site / "api" / f"{module}.html").read_text()
         assert "__dataclass_fields__" not in page and "__delattr__" not in page and "__init__" not in page
     manifest = (site / "api" / "glu.run.manifest.html").read_text()
@@ -185,12 +200,40 @@ def test_the_site_has_the_notebooks_the_docs_the_api_and_the_recordings(site_run
     assert (site / "search.html").is_file() and (site / "searchindex.js").is_file()
 
 
+def test_a_package_page_links_the_names_it_gathers_to_where_they_are_documented(site_run):
+    out, _ = site_run
+    api = OutputLayout.under(out).site / "api"
+    bn = (api / "glu.bn.html").read_text()
+    assert 'href="glu.bn.model.html#glu.bn.model.BayesNet"' in bn  # glu.bn.BayesNet, defined in glu.bn.model
+    assert 'href="glu.bn.model.html"' in bn  # its modules
+    hmm = (api / "glu.hmm.html").read_text()
+    assert 'href="glu.hmm.model.html#glu.hmm.model.GestureHMM"' in hmm
+    assert 'id="glu.hmm.model.GestureHMM"' in (api / "glu.hmm.model.html").read_text()
+    index = (OutputLayout.under(out).site / "api.html").read_text()
+    order = [index.index(f'href="api/{m}.html#module-{m}"') for m in ("glu", "glu.hmm", "glu.bn", "glu.run")]
+    assert order == sorted(order)  # layer by layer, bottom first
+
+
+def test_the_api_reference_has_every_public_module_in_the_order_of_the_layers():
+    from test_layout import LAYER, component, modules
+
+    shipped = ("glu.resources.", "glu.notebooks.")  # the site's configuration, the notebooks: not API
+    public = {
+        m for m in modules() if not any(p.startswith("_") for p in m.split(".")) and not m.startswith(shipped)
+    }
+    assert set(api_modules()) == public  # every public module, found by walking the package
+    assert {"glu", "glu.bn", "glu.hmm", "glu.bn.soft", "glu.gestures.invariants", "glu.plots"} <= public
+    layers = [LAYER[component(m)] for m in api_modules()]
+    assert layers == sorted(layers)
+
+
 def test_make_docs_builds_the_site_again_from_the_last_run_and_a_warning_fails_it(
     site_run, monkeypatch, tmp_path, capsys
 ):
     out, _ = site_run
     layout = OutputLayout.under(out)
     pages = sorted(p.relative_to(layout.site) for p in layout.site.rglob("*.html"))
+    monkeypatch.setattr(site_module, "api_modules", lambda: SOME_MODULES)  # the small reference again
     results = (layout.results / "summary.json").read_bytes()
     assert site_module.main(["--out", str(out)]) == 0  # `make docs`, from results/summary.json
     assert sorted(p.relative_to(layout.site) for p in layout.site.rglob("*.html")) == pages
@@ -198,13 +241,16 @@ def test_make_docs_builds_the_site_again_from_the_last_run_and_a_warning_fails_i
     before = (layout.site / "index.html").read_bytes()
     docs = tmp_path / "docs"
     docs.mkdir()
-    (docs / "broken.md").write_text("# Broken\n\nSee {ref}`no-such-label`.\n")
+    (docs / "broken.md").write_text(
+        "# Broken\n\nSee {ref}`no-such-label` and {py:func}`glu.bn.model.no_such_function`.\n"
+    )
     monkeypatch.setattr(site_module, "DOCS_DIR", docs)
     runs = sorted((layout.store).iterdir())
     capsys.readouterr()
     assert site_module.main(["--out", str(out)]) == 2  # `make docs` fails, and publishes nothing
     err = capsys.readouterr().err
-    assert re.search(r"(?s)1 Sphinx warning.*no-such-label", err), err
+    assert re.search(r"(?s)2 Sphinx warning.*no-such-label", err), err
+    assert "the reference to glu.bn.model.no_such_function leads to no page" in err
     assert str(out) not in err and str(paths.PROJECT_ROOT) not in err
     assert sorted((layout.store).iterdir()) == runs  # no staging left behind
     assert (layout.site / "index.html").read_bytes() == before  # the published site is as it was

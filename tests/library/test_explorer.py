@@ -100,6 +100,7 @@ def test_the_rerun_viewer_shows_only_when_live(tmp_path, monkeypatch):
         fused = {"ObjVel": np.full((2, 3), 1 / 3)}
         values = {"ObjVel": ["slow", "medium", "fast"]}
         descriptions = ["a", "b"]
+        data_source = "synthetic data"
 
         def scene(self):
             return "# test"

@@ -16,6 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+from figure_owners import counted  # noqa: E402
 
 from glu.plots.overlap import CHECK_ENV, figure_problems  # noqa: E402
 
@@ -234,7 +235,11 @@ def _checked_run(data, out, check, monkeypatch, **kwargs) -> list[str]:
     assert all(n["status"] == "ok" for n in summary["notebooks"])
     pngs = sorted((out / "figures").glob("*.png"))
     assert pngs and all((check / f"{p.stem}.txt").is_file() for p in pngs)
-    return [f"{p.stem}: {line}" for p in pngs for line in (check / f"{p.stem}.txt").read_text().splitlines()]
+    return [
+        f"{p.stem}: {line}"
+        for p in pngs
+        for line in counted(p.stem, (check / f"{p.stem}.txt").read_text().splitlines())
+    ]
 
 
 @pytest.mark.shared_data
@@ -265,3 +270,49 @@ def test_two_labels_touching_on_one_line_are_caught(fig):
     f.set_figwidth(1.8)  # narrower: the labels meet
     problems = figure_problems(f)
     assert any("'ObjVel=medium' and 'ObjVel=slow'" in p for p in problems), problems
+
+
+# ---------------------------------------------------------------- colour alone
+def _lines(ax, n, styles=None):
+    for i in range(n):
+        marker, ls = styles[i] if styles else ("o", "-")
+        ax.plot([0, 1, 2], [i, i + 0.5, i + 0.2], marker=marker, linestyle=ls, label=f"series {i}")
+
+
+def test_five_lines_told_apart_by_colour_alone_are_caught_and_four_pass(fig):
+    f, ax = fig
+    _lines(ax, 4)
+    assert figure_problems(f) == []  # up to four series may differ by colour only
+    _lines(ax, 1)
+    problems = [p for p in figure_problems(f) if p.startswith("colour alone")]
+    assert len(problems) == 1 and "5 series" in problems[0] and "'series 0'" in problems[0], problems
+
+
+def test_five_lines_each_with_its_own_marker_or_line_style_pass(fig):
+    f, ax = fig
+    _lines(ax, 5, [("o", "-"), ("s", "-"), ("^", "-"), ("o", "--"), ("", "-.")])
+    ax.axhline(0.5, color="grey", linestyle=":")  # a reference line is a series too: a look of its own
+    assert [p for p in figure_problems(f) if p.startswith("colour alone")] == []
+
+
+def test_error_bars_and_bars_count_as_one_series_each(fig):
+    f, ax = fig
+    for i in range(5):  # five bar sets, no hatch: colour alone
+        ax.bar(np.arange(3) + i * 0.15, [1, 2, 3], width=0.15, label=f"bars {i}")
+    assert any(p.startswith("colour alone: 5 series") for p in figure_problems(f))
+    f2, ax2 = plt.subplots(figsize=(4, 3))
+    for i, h in enumerate(["", "//", "..", "xx", "\\\\"]):
+        ax2.bar(np.arange(3) + i * 0.15, [1, 2, 3], width=0.15, hatch=h, label=f"bars {i}")
+    for i, m in enumerate("os^Dv"):  # error bars with caps: the caps are not series of their own
+        ax2.errorbar([0, 1], [i, i], yerr=0.1, capsize=3, marker=m, label=f"err {i}")
+    assert [p for p in figure_problems(f2) if p.startswith("colour alone")] == []
+    plt.close(f2)
+
+
+def test_a_line_and_its_band_of_one_colour_are_one_series(fig):
+    f, ax = fig
+    for i, ls in enumerate(["-", "--", ":", "-."]):
+        ax.plot([0, 1], [i, i], linestyle=ls, color=f"C{i}")
+        ax.fill_between([0, 1], [i - 0.2] * 2, [i + 0.2] * 2, color=f"C{i}", alpha=0.2)
+    ax.plot([0, 1], [5, 5], marker="o", color="C4")
+    assert [p for p in figure_problems(f) if p.startswith("colour alone")] == []

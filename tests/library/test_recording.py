@@ -48,6 +48,13 @@ def _fake_run(seed: int, n: int = 40):
     )
 
 
+def _static(path, entity, component):
+    """The static value of a component (its last row), as a Python list."""
+    stream = RrdReader(str(path)).stream().filter(content=entity, is_static=True, components=component)
+    rows = [row for c in stream for row in c.to_record_batch().column(component).to_pylist()]
+    return rows[-1]
+
+
 def _column(path, entity, component, index="frame"):
     stream = RrdReader(str(path)).stream().filter(content=entity, is_static=False, components=component)
     batches = [c.to_record_batch().select([index, component]) for c in stream]
@@ -65,18 +72,14 @@ def test_recording_content_reads_back(tmp_path):
     assert tap.column("frame").to_pylist() == run["frames"].tolist()
     got = np.array([v[0] for v in tap.column("Scalars:scalars").to_pylist()])
     np.testing.assert_allclose(got, run["p_hmm"][:, 1])
-    for j, value in enumerate(["slow", "medium", "fast"]):  # one labelled bar per value
-        bars = _column(path, f"/fusion/ObjVel/{value}", "BarChart:values")
-        assert bars.column("frame").to_pylist() == run["update_frames"].tolist()
-        heights = [v[0]["buffer"][0] for v in bars.column("BarChart:values").to_pylist()]
-        np.testing.assert_allclose(heights, run["fused"]["ObjVel"][:, j], rtol=1e-12)
-        where = _column(path, f"/fusion/ObjVel/{value}", "BarChart:abscissa")
-        assert {v[0]["buffer"][0] for v in where.column("BarChart:abscissa").to_pylist()} == {j}
-    assert not list(
-        RrdReader(str(path))
-        .stream()
-        .filter(content="/fusion/ObjVel", is_static=False, components="BarChart:values")
-    )
+    for j, value in enumerate(["slow", "medium", "fast"]):  # one named series per value, at the updates
+        series = _column(path, f"/fusion/ObjVel/{value}", "Scalars:scalars")
+        assert series.column("frame").to_pylist() == run["update_frames"].tolist()
+        got = [v[0] for v in series.column("Scalars:scalars").to_pylist()]
+        np.testing.assert_allclose(got, run["fused"]["ObjVel"][:, j], rtol=1e-12)
+        for kind in ("SeriesLines", "SeriesPoints"):  # the legend's name is the value's, not the path
+            assert _static(path, f"/fusion/ObjVel/{value}", f"{kind}:names") == [value]
+    assert not list(RrdReader(str(path)).stream().filter(content="/fusion/**", components="BarChart:values"))
     pos = _column(path, "/hand/position", "Points3D:positions")
     np.testing.assert_allclose(
         np.array(pos.column("Points3D:positions").to_pylist()[-1][0]), run["xyz"][-1], rtol=1e-6
@@ -84,6 +87,15 @@ def test_recording_content_reads_back(tmp_path):
     texts = _column(path, "/description", "TextLog:text")
     assert texts.column("TextLog:text").to_pylist()[0] == ["the robot taps the ball 0"]
     assert len(RrdReader(str(path)).blueprints()) == 1
+
+
+def test_the_scene_panel_is_markdown_and_ends_with_the_note_as_plain_text(tmp_path):
+    note = "real data: origin@1234 · 08_tcds_figures with n_iter=5 <b>"
+    path = write_anticipation_recording(tmp_path / "a.rrd", "test-note", note=note, **_fake_run(0))
+    text = _static(path, "/scene", "TextDocument:text")[0]
+    assert text.startswith("# tap on a small sphere\n\n---\n\n")
+    assert "<small>" not in text and "<b>" not in text  # the panel renders Markdown, not HTML
+    assert text.endswith(r"real data: origin@1234 · 08\_tcds\_figures with n\_iter=5 \<b\>")
 
 
 def test_same_data_compares_equal_and_different_data_does_not(tmp_path):

@@ -109,3 +109,16 @@ def test_the_originals_are_checked_against_the_published_recordings(shared_data)
     for s in standing:  # before this check both gave a confident answer and no warning
         assert rec.typicality(_still(s.xyz)).atypical
         assert rec.typicality(_swap_yz(s.xyz)).atypical
+
+
+def test_the_message_prints_the_distance_and_the_margin_allowed():
+    from glu.gestures.typicality import MIN_MARGIN, LoglikRange, Typicality
+
+    r = LoglikRange(-8.0, -3.0, "sampled")  # width 5: the margin is MIN_MARGIN
+    near = Typicality("tap", -13.0, r, r.outside(-13.0)).message()
+    assert "lies 5.00 nats/frame below the sampled range -8.00 … -3.00" in near
+    assert f"(far means more than {MIN_MARGIN:.2f})" in near
+    far_x = -8.0 - MIN_MARGIN - 1.0
+    far = Typicality("tap", far_x, r, r.outside(far_x)).message()
+    assert far.startswith("warning:") and f"lies {MIN_MARGIN + 1:.2f} nats/frame below" in far
+    assert "lies inside the sampled range" in Typicality("tap", -4.0, r, False).message()

@@ -10,6 +10,7 @@ skips only these few; ``test_reference_tcds.py`` and ``test_correspondence_refer
 from __future__ import annotations
 
 import json
+import os
 import warnings
 
 import numpy as np
@@ -18,6 +19,7 @@ import scipy.io as sio
 from cli_run import run
 from test_hmm import mat_params, ref_forward
 
+from glu import paths
 from glu.bn import learn_bn, make_engine
 from glu.bn.model import encode
 from glu.data.fetch import manifest, sha256_of
@@ -29,7 +31,9 @@ from glu.gestures.recordings import read_hand_log
 from glu.gestures.trajectories import repair
 from glu.language import compile_network, count_by_length, load_grammar, parse_grammar, same_language
 from glu.language.sampling import sample_sentences
+from glu.run.provenance import ENV as PROVENANCE_ENV
 from glu.run.reproduce import reproduce
+from glu.run.summary import RENDERING_RECORD
 from glu.schema import ROOT_NODES, default_schema
 from glu.studies.replication import fusion as experiments
 from glu.studies.replication import gestures
@@ -287,7 +291,17 @@ def _render_from_elsewhere(shared_data, tmp_path, only):
     link = tmp_path / "the-data-seen-from-elsewhere"
     link.symlink_to(shared_data)
     out = tmp_path / "out"
-    return reproduce(data=link, out=out, jobs=2, only=only, log=lambda _: None, site=False), out
+    # the committed figures' footer names the glu that drew them: this run draws the same line
+    record = json.loads((paths.PROJECT_ROOT / "figures" / RENDERING_RECORD).read_text())
+    before = os.environ.get(PROVENANCE_ENV)
+    os.environ[PROVENANCE_ENV] = record.get("made_by", "")
+    try:
+        return reproduce(data=link, out=out, jobs=2, only=only, log=lambda _: None, site=False), out
+    finally:
+        if before is None:
+            os.environ.pop(PROVENANCE_ENV, None)
+        else:
+            os.environ[PROVENANCE_ENV] = before
 
 
 def _figures_equal_the_committed_ones(summary, out):

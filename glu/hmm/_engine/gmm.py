@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from glu.hmm._engine.kernels import compiled
+from glu.jit import compiled
 
 
 def _gmm_em(X, resp, reg_covar, tol, max_iter):

@@ -1,4 +1,4 @@
-"""Compiled loops (numba): the HMM recursions here, and :func:`compiled` for the other modules' loops.
+"""Compiled loops (numba): the HMM recursions, compiled by :func:`glu.jit.compiled`.
 
 The two recursions of the gesture HMMs, compiled: the scaled forward–backward of the E-step
 (:func:`forward_backward_scaled`, the fast twin of :func:`glu.hmm.inference.forward_backward`, run by the one
@@ -9,7 +9,7 @@ dozen sequences of 100–200 frames) was almost all per-step dispatch: about 20 
 multiplications. Here they run as compiled loops, one sequence at a time, with the same scaling, the same
 underflow checks and the same log-domain fallback. The mixture log-sum-exp of EM
 (:func:`mixture_posteriors`) is here too: numpy's reductions over an axis of three Gaussians cost more than
-the arithmetic. :mod:`glu.hmm.initialisation` compiles its k-means and EM loops with :func:`compiled`. The
+the arithmetic. :mod:`glu.hmm.initialisation` compiles its k-means and EM loops the same way. The
 prefix scorer of corpora (:class:`glu.hmm.scoring.BatchScorer`) stays array code: on its batches of
 hundreds of sequences numpy's vectorised ``exp`` made it twice as fast as a compiled loop
 (``benchmarks/bench_corpus.py``).
@@ -27,13 +27,10 @@ process compiles and later ones load it (both times measured in ``docs/speed.md`
 
 from __future__ import annotations
 
-import types
-from functools import cache
-from typing import Any
-
 import numpy as np
 
 from glu.hmm.inference import TINY
+from glu.jit import compiled
 
 
 def _forward_backward_scaled(log_b, lengths, startprob, transmat):
@@ -106,6 +103,70 @@ def _forward_backward_scaled(log_b, lengths, startprob, transmat):
     return gamma, xi, loglik, ok
 
 
+def _advance(x, a, first, alpha, means, chol_inv, log_norm, startprob, transmat, diff, lc, log_b, pred, new):
+    """Model ``a``'s forward variable ``alpha`` (shape (Q,), updated in place) after frame ``x`` (the first
+    frame when ``first``); returns the frame's log-likelihood increment. Scratch arrays: diff (D,), lc (M,),
+    log_b, pred, new (Q,)."""
+    Q, M, D = means.shape[1], means.shape[2], means.shape[3]
+    # emissions: log Σ_m w_m N(x; μ_qm, Σ_qm), as glu.hmm.inference.log_emissions
+    for q in range(Q):
+        top = -np.inf
+        for m in range(M):
+            for d in range(D):
+                diff[d] = x[d] - means[a, q, m, d]
+            sq = 0.0
+            for i in range(D):
+                z = 0.0
+                for j in range(D):
+                    z += chol_inv[a, q, m, i, j] * diff[j]
+                sq += z * z
+            lc[m] = log_norm[a, q, m] - 0.5 * sq
+            if lc[m] > top:
+                top = lc[m]
+        acc = 0.0
+        for m in range(M):
+            acc += np.exp(lc[m] - top)
+        log_b[q] = np.log(acc) + top
+    # the predicted state, then glu.hmm.inference.scaled_step
+    if first:
+        for q in range(Q):
+            pred[q] = startprob[a, q]
+    else:
+        for j in range(Q):
+            acc = 0.0
+            for i in range(Q):
+                acc += alpha[i] * transmat[a, i, j]
+            pred[j] = acc
+    mx = -np.inf
+    for q in range(Q):
+        if log_b[q] > mx:
+            mx = log_b[q]
+    csum = 0.0
+    for q in range(Q):
+        new[q] = pred[q] * np.exp(log_b[q] - mx)
+        csum += new[q]
+    if csum > TINY:
+        for q in range(Q):
+            alpha[q] = new[q] / csum
+        return np.log(csum) + mx
+    top = -np.inf  # the scaled mass underflowed: this frame in the log domain
+    for q in range(Q):
+        new[q] = np.log(pred[q]) + log_b[q]
+        if new[q] > top:
+            top = new[q]
+    if not np.isfinite(top):
+        for q in range(Q):
+            alpha[q] = 0.0
+        return -np.inf
+    csum = 0.0
+    for q in range(Q):
+        new[q] = np.exp(new[q] - top)
+        csum += new[q]
+    for q in range(Q):
+        alpha[q] = new[q] / csum
+    return top + np.log(csum)
+
+
 def _loglik_banked(X, starts, lengths, means, chol_inv, log_norm, startprob, transmat):
     A, Q, M, D = means.shape
     S = lengths.shape[0]
@@ -121,67 +182,38 @@ def _loglik_banked(X, starts, lengths, means, chol_inv, log_norm, startprob, tra
             total = 0.0
             for t in range(lengths[s]):
                 x = X[starts[s] + t]
-                # emissions: log Σ_m w_m N(x; μ_qm, Σ_qm), as glu.hmm.inference.log_emissions
-                for q in range(Q):
-                    top = -np.inf
-                    for m in range(M):
-                        for d in range(D):
-                            diff[d] = x[d] - means[a, q, m, d]
-                        sq = 0.0
-                        for i in range(D):
-                            z = 0.0
-                            for j in range(D):
-                                z += chol_inv[a, q, m, i, j] * diff[j]
-                            sq += z * z
-                        lc[m] = log_norm[a, q, m] - 0.5 * sq
-                        if lc[m] > top:
-                            top = lc[m]
-                    acc = 0.0
-                    for m in range(M):
-                        acc += np.exp(lc[m] - top)
-                    log_b[q] = np.log(acc) + top
-                # the predicted state, then glu.hmm.inference.scaled_step
-                if t == 0:
-                    for q in range(Q):
-                        pred[q] = startprob[a, q]
-                else:
-                    for j in range(Q):
-                        acc = 0.0
-                        for i in range(Q):
-                            acc += alpha[i] * transmat[a, i, j]
-                        pred[j] = acc
-                mx = -np.inf
-                for q in range(Q):
-                    if log_b[q] > mx:
-                        mx = log_b[q]
-                csum = 0.0
-                for q in range(Q):
-                    new[q] = pred[q] * np.exp(log_b[q] - mx)
-                    csum += new[q]
-                if csum > TINY:
-                    for q in range(Q):
-                        alpha[q] = new[q] / csum
-                    total += np.log(csum) + mx
-                    continue
-                top = -np.inf  # the scaled mass underflowed: this frame in the log domain
-                for q in range(Q):
-                    new[q] = np.log(pred[q]) + log_b[q]
-                    if new[q] > top:
-                        top = new[q]
-                if not np.isfinite(top):
-                    for q in range(Q):
-                        alpha[q] = 0.0
-                    total += -np.inf
-                    continue
-                csum = 0.0
-                for q in range(Q):
-                    new[q] = np.exp(new[q] - top)
-                    csum += new[q]
-                for q in range(Q):
-                    alpha[q] = new[q] / csum
-                total += top + np.log(csum)
+                total += _advance(
+                    x,
+                    a,
+                    t == 0,
+                    alpha,
+                    means,
+                    chol_inv,
+                    log_norm,
+                    startprob,
+                    transmat,
+                    diff,
+                    lc,
+                    log_b,
+                    pred,
+                    new,
+                )
             out[s, a] = total
     return out
+
+
+def _stream_step(x, first, alpha, total, means, chol_inv, log_norm, startprob, transmat):
+    """Every model of a bank advanced by one frame ``x``: ``alpha`` (A, Q) and ``total`` (A,) in place."""
+    A, Q, M, D = means.shape
+    diff = np.empty(D)
+    lc = np.empty(M)
+    log_b = np.empty(Q)
+    pred = np.empty(Q)
+    new = np.empty(Q)
+    for a in range(A):
+        total[a] += _advance(
+            x, a, first, alpha[a], means, chol_inv, log_norm, startprob, transmat, diff, lc, log_b, pred, new
+        )
 
 
 def _mixture_posteriors(lc, log_b, post):
@@ -205,35 +237,6 @@ def _mixture_posteriors(lc, log_b, post):
                 log_b[k, n, q] = np.log(mass) + top
                 for m in range(M):
                     post[k, n, q, m] /= mass
-
-
-@cache
-def _jit() -> Any:
-    """numba's ``njit`` as glu compiles with it: machine code cached on disk
-    (:attr:`glu.paths.Locations.compiled`, never inside an installed package; ``$NUMBA_CACHE_DIR`` wins), no
-    GIL, numpy's error model (a division by zero gives inf or nan, as the array code did)."""
-    import numba
-
-    from glu.paths import HERE
-
-    if not numba.config.CACHE_DIR:
-        numba.config.CACHE_DIR = str(HERE.compiled)
-    return numba.njit(cache=True, nogil=True, error_model="numpy")
-
-
-@cache
-def compiled(fn: Any) -> Any:
-    """``fn`` (a module-level function of plain loops) compiled by numba, once per process; its machine
-    code comes from the cache after the first process.
-
-    The functions of ``fn``'s own module that it calls by name (helpers of plain loops, such as the E- and
-    M-steps of :func:`glu.hmm._engine.gmm.gmm_em`'s loop) are compiled first and their module names bound
-    to the compiled ones, so that compiled code calls compiled code."""
-    for name in fn.__code__.co_names:
-        helper = fn.__globals__.get(name)
-        if isinstance(helper, types.FunctionType) and helper.__module__ == fn.__module__ and helper is not fn:
-            fn.__globals__[name] = compiled(helper)
-    return _jit()(fn)
 
 
 def forward_backward_scaled(
@@ -293,6 +296,23 @@ def loglik_banked(
         f(startprob, dtype=np.float64),
         f(transmat, dtype=np.float64),
     )
+
+
+def stream_step(
+    x: np.ndarray,
+    first: bool,
+    alpha: np.ndarray,
+    total: np.ndarray,
+    means: np.ndarray,
+    chol_inv: np.ndarray,
+    log_norm: np.ndarray,
+    startprob: np.ndarray,
+    transmat: np.ndarray,
+) -> None:
+    """Advance every model of a stacked bank by one frame ``x`` (D,): the scaled forward variables
+    ``alpha`` (A, Q) and the log-likelihoods ``total`` (A,), both float64 and C-ordered, are updated in
+    place — the same arithmetic, frame by frame, as :func:`loglik_banked` (the bank's arrays as there)."""
+    compiled(_stream_step)(x, first, alpha, total, means, chol_inv, log_norm, startprob, transmat)
 
 
 def mixture_posteriors(lc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,8 +1,8 @@
 """Sphinx configuration of glu's documentation site (built by glu.run.site, never by hand).
 
-The sources (the index, the executed notebooks, the docs pages, the API page) are assembled by
-:func:`glu.run.site.build_site` in a folder of their own; this configuration, its static files and its
-templates ship with the package. The notebooks are shown as ``glu reproduce`` executed them: never run again.
+The sources (the index, the executed notebooks, the docs pages, the API pages) are assembled by
+:func:`glu.run.site.build_site` in a folder of their own; this configuration and its static files ship with
+the package. The notebooks are shown as ``glu reproduce`` executed them: never run again.
 """
 
 project = "glu"
@@ -14,23 +14,27 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
+    "glu.run.site_api",  # references to re-exported and short glu names linked; a broken one warns
+    "glu.run.site_math",  # formulas as MathML, written at build time (MathJax would come from the web)
 ]
+html_math_renderer = "mathml"
+# quotes and ellipses typeset, dashes left alone: `--data` stays two hyphens wherever it is written
+smartquotes_action = "qe"
 exclude_patterns = ["_build", ".doctrees", "**.ipynb_checkpoints"]
-templates_path = ["_templates"]
 
 # the notebooks: their outputs as executed by `glu reproduce`; figures with their captions (glu.run.site)
 nb_execution_mode = "off"
 nb_render_plugin = "glu"
 nb_output_stderr = "show"
 myst_heading_anchors = 3
-myst_enable_extensions = ["colon_fence", "dollarmath", "html_image"]
+myst_enable_extensions = ["attrs_inline", "colon_fence", "dollarmath", "html_image"]
 myst_dmath_double_inline = True
 suppress_warnings = ["mystnb.unknown_mime_type"]  # widget views: a live kernel's, shown as text here
 
 # the API reference, from the numpydoc docstrings
 autosummary_generate = True
 autosummary_imported_members = False
-autodoc_default_options = {"members": True, "member-order": "bysource"}
+autodoc_default_options = {"members": True, "undoc-members": True, "member-order": "bysource"}
 autodoc_typehints = "description"
 autodoc_typehints_description_target = "documented_params"
 autodoc_preserve_defaults = True

@@ -237,7 +237,6 @@ class AnticipationRun:
             )
         if self.descriptions:
             lines.append(f"* best description: “{self.description}”")
-        lines.append(f"\n<small>{self.data_source}</small>")
         return "\n".join(lines)
 
 

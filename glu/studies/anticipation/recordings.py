@@ -7,9 +7,9 @@ Layout of a recording written by :func:`write_anticipation_recording`::
     /hand/path                 the path so far (LineStrips3D, growing)
     /hmm/loglik_per_frame/<A>  (1/t) log L(G_1^t | A), one series per action model
     /hmm/p_hmm/<A>             p_HMM(A | G_1^t)
-    /fusion/ObjVel/<value>     p_comb(ObjVel = value | Shape, Size, G_1^t), one labelled bar per value,
-                               updated every few frames (the view's legend names slow, medium, fast)
-    /fusion/Action/<value>     p_comb(Action = value | …), one bar per action
+    /fusion/ObjVel/<value>     p_comb(ObjVel = value | Shape, Size, G_1^t), one named series per value,
+                               a point at each update (every few frames), a line between them
+    /fusion/Action/<value>     p_comb(Action = value | …), one series per action
     /description               the best verbal description so far (TextLog), if given
 """
 
@@ -23,13 +23,13 @@ from typing import Any
 import numpy as np
 
 from glu.machine import is_live, viewer_class
-from glu.recording import log_bars, log_scene, log_series, log_texts, log_trajectory, new_recording, rerun
+from glu.recording import log_scene, log_series, log_texts, log_trajectory, log_updates, new_recording, rerun
 from glu.studies.anticipation.experiment import AnticipationRun
 
 
 def anticipation_blueprint(actions: Sequence[str]):
-    """Viewer layout: the hand in 3-D and the scene text on the left; HMM series and fused bars on the
-    right."""
+    """Viewer layout: the hand in 3-D and the scene text on the left; the HMMs' series and the fused
+    beliefs at each update on the right, every probability on the same 0–1 axis."""
     import rerun.blueprint as rrb
 
     return rrb.Blueprint(
@@ -46,8 +46,16 @@ def anticipation_blueprint(actions: Sequence[str]):
                     origin="/hmm/p_hmm", name="p_HMM(A | G)", axis_y=rrb.ScalarAxis(range=(0.0, 1.0))
                 ),
                 rrb.Horizontal(
-                    rrb.BarChartView(origin="/fusion/ObjVel", name="p_comb(ObjVel)"),
-                    rrb.BarChartView(origin="/fusion/Action", name="p_comb(Action)"),
+                    rrb.TimeSeriesView(
+                        origin="/fusion/ObjVel",
+                        name="p_comb(ObjVel)",
+                        axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+                    ),
+                    rrb.TimeSeriesView(
+                        origin="/fusion/Action",
+                        name="p_comb(Action)",
+                        axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+                    ),
                 ),
             ),
             column_shares=[1, 1],
@@ -70,6 +78,7 @@ def log_anticipation(
     scene: str,
     descriptions: Sequence[str] | None = None,
     values: Mapping[str, Sequence[str]] | None = None,
+    note: str = "",
 ) -> None:
     """Log one effect-anticipation run into the stream ``rec`` (see the module docstring for the layout).
 
@@ -81,17 +90,18 @@ def log_anticipation(
     update_frames : frame numbers at which the fused posteriors were computed, shape (n_updates,)
     fused : node → array, shape (n_updates, n_values), e.g. {"ObjVel": …, "Action": …}
     scene : markdown for the scene panel
+    note : plain text that ends the scene panel (the data, the run's non-default parameters)
     descriptions : the best verbal description at each update frame, or at the last ones only (optional)
     values : node → its value names, in the column order of ``fused[node]`` (default: ``0, 1, …``)
     """
-    log_scene(rec, scene)
+    log_scene(rec, scene, note)
     log_trajectory(rec, xyz, frames, seconds)
     log_series(rec, "hmm/loglik_per_frame", loglik_per_frame, actions, frames, seconds)
     log_series(rec, "hmm/p_hmm", p_hmm, actions, frames, seconds)
     upd_seconds = np.interp(update_frames, frames, seconds)
     for node, probs in fused.items():
         names = (values or {}).get(node) or [str(i) for i in range(np.shape(probs)[1])]
-        log_bars(rec, f"fusion/{node}", probs, names, update_frames, upd_seconds)
+        log_updates(rec, f"fusion/{node}", probs, names, update_frames, upd_seconds)
     if descriptions:  # at every update, or at the last ones only
         k = len(descriptions)
         log_texts(rec, "description", descriptions, update_frames[-k:], upd_seconds[-k:])
@@ -108,7 +118,6 @@ def write_anticipation_recording(path: str | os.PathLike, recording_id: str, **r
 
 
 def _run_fields(run: AnticipationRun, note: str) -> dict[str, Any]:
-    scene = run.scene() + (f"\n\n<small>{note}</small>" if note else "")
     return dict(
         xyz=run.xyz,
         seconds=run.seconds,
@@ -118,9 +127,10 @@ def _run_fields(run: AnticipationRun, note: str) -> dict[str, Any]:
         p_hmm=run.p_hmm,
         update_frames=run.update_frames,
         fused=run.fused,
-        scene=scene,
+        scene=run.scene(),
         descriptions=run.descriptions or None,
         values=run.values,
+        note=note or run.data_source,
     )
 
 
@@ -156,6 +166,7 @@ def write_anticipation(
     """Write an effect-anticipation run (:func:`glu.studies.anticipation.experiment.effect_anticipation`) as a
     recording.
 
-    ``note`` (e.g. the notebook's data source and non-default parameters) ends the scene text.
+    ``note`` (e.g. the notebook's data source and non-default parameters; default: the run's data source)
+    ends the scene text.
     """
     return write_anticipation_recording(path, recording_id, **_run_fields(run, note))

@@ -131,8 +131,8 @@ def simulate_chunk(
     ----------
     engine : the Affordance–Words network the effects and words are drawn from
     condition : the action prior, sensor noise and viewpoint
-    seed, chunk, n, chunk_size : the corpus's seed, the chunk's index, its number of episodes (``n ≤
-        chunk_size``; only the last chunk is shorter) and the corpus's chunk size
+    seed, chunk, n, chunk_size : the corpus's seed, the chunk's index, its number of episodes
+        (``n ≤ chunk_size``; only the last chunk is shorter) and the corpus's chunk size
     scenario : the distribution of objects (and of actions for the action prior ``scenario``)
     gestures : the generator's tracking problems
     views : viewpoint names → :class:`~glu.gestures.synthetic.View`

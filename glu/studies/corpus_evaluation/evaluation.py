@@ -217,6 +217,7 @@ INFERENCE_NETWORKS: dict[str, str] = {
     "generating": "the network the episodes are drawn from (a correct model of the world)",
     "learned": "learned by K2 + BIC from learn_experiments rows drawn from that network (limited experience)",
 }
+"""The networks an episode may be read with: name → what it is."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -268,7 +269,7 @@ class Evaluator:
     settings : what is measured
     seed, chunk_size : the corpus's seed and chunk size
     scenario, gestures, views : the corpus's settings
-    (:func:`~glu.studies.corpus_evaluation.corpus.simulate_chunk`)
+        (:func:`~glu.studies.corpus_evaluation.corpus.simulate_chunk`)
     """
 
     world: Engine
@@ -329,7 +330,7 @@ class Evaluator:
 
     def weights(self, replication: int, chunk: int, n: int) -> np.ndarray:
         """The two-level bootstrap weights of a chunk's episodes, shape (n, B + 1)
-        (:func:`~glu.studies.corpus_evaluation.intervals.poisson_weights` with this replication's seed
+        (:func:`~glu.stats.poisson_weights` with this replication's seed
         counts)."""
         key = (BOOT_KEY, replication, chunk)
         rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=key))

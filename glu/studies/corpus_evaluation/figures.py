@@ -93,7 +93,7 @@ def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str) -> None:
 
 
 def coinciding(series: dict[str, tuple[np.ndarray, np.ndarray]], span: float) -> list[list[str]]:
-    """Groups (two or more) of the named ``(x, y)`` series that coincide: same x, |Δy| ≤ COINCIDE·span."""
+    """Groups (two or more) of the named ``(x, y)`` series that coincide: same x, ``|Δy| ≤ COINCIDE·span``."""
     groups: list[list[str]] = []
     for name, (x, y) in series.items():
         for grp in groups:

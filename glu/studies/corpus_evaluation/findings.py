@@ -238,10 +238,11 @@ def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS
     """Every finding in every cell of the design, per viewpoint, per noise level and pooled: its paired
     difference, interval and verdict, unadjusted and adjusted.
 
-    Columns: finding (its label), *DESIGN, viewpoint, noise, fraction, difference, ci_low, ci_high, p_value,
-    verdict (``better``: the strategy is better than the baseline; ``worse``; ``no difference``), p_adjusted
-    (Benjamini–Hochberg over every row of the table: one family) and verdict_adjusted (a verdict only where
-    p_adjusted ≤ α). Findings whose strategies the sweep lacks are left out.
+    Columns: finding (its label), the columns of ``DESIGN``, viewpoint, noise, fraction, difference, ci_low,
+    ci_high, p_value, verdict (``better``: the strategy is better than the baseline; ``worse``; ``no
+    difference``), p_adjusted (Benjamini–Hochberg over every row of the table: one family) and
+    verdict_adjusted (a verdict only where p_adjusted ≤ α). Findings whose strategies the sweep lacks are
+    left out.
     """
     diffs = bare(diffs)
     fractions = sorted(diffs["fraction"].dropna().unique())

@@ -93,8 +93,7 @@ def metric_values(sums: np.ndarray, columns: pd.DataFrame | Cells) -> np.ndarray
     ----------
     sums : array, shape (B + 1, K) — merged sums (row 0 the estimate)
     columns : the statistics' description
-    (:func:`glu.studies.corpus_evaluation.evaluation.statistic_columns`), or
-        its :func:`metric_cells`
+        (:func:`glu.studies.corpus_evaluation.evaluation.statistic_columns`), or its :func:`metric_cells`
     """
     cells = columns if isinstance(columns, Cells) else metric_cells(columns)
     K = int(max(cells.mean.max(initial=0), cells.conf.max(initial=0), cells.correct.max(initial=0))) + 1
@@ -221,9 +220,9 @@ def metrics(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) -> pd.
 
     Returns
     -------
-    tidy DataFrame: *by, target, strategy, fraction, metric, estimate, ci_low, ci_high (for the ECE the
-    bias-corrected estimate and basic interval), ece_plugin (the ECE's plug-in estimate; NaN for other
-    metrics), n_episodes
+    tidy DataFrame: the columns of ``by``, target, strategy, fraction, metric, estimate, ci_low, ci_high
+    (for the ECE the bias-corrected estimate and basic interval), ece_plugin (the ECE's plug-in estimate;
+    NaN for other metrics), n_episodes
     """
     cells = metric_cells(columns)
     groups = [(key, metric_block(_stat_matrix(g, len(columns)), cells)) for key, g in _groups(sums, by)]
@@ -236,11 +235,11 @@ def paired_differences(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[s
 
     Returns
     -------
-    tidy DataFrame: *by, target, fraction, metric, strategy, baseline, difference (strategy − baseline;
-    for the ECE bias-corrected), ci_low, ci_high, p_value (two-sided bootstrap, unadjusted), better (the
-    interval excludes 0 on the side where the metric improves), verdict (``better``, ``worse`` or ``no
-    difference``: :func:`verdict`, unadjusted), for every pair of strategies predicting the same target
-    (strategy after baseline in the settings' order)
+    tidy DataFrame: the columns of ``by``, target, fraction, metric, strategy, baseline, difference
+    (strategy − baseline; for the ECE bias-corrected), ci_low, ci_high, p_value (two-sided bootstrap,
+    unadjusted), better (the interval excludes 0 on the side where the metric improves), verdict
+    (``better``, ``worse`` or ``no difference``: :func:`verdict`, unadjusted), for every pair of strategies
+    predicting the same target (strategy after baseline in the settings' order)
     """
     cells = metric_cells(columns)
     pairs = difference_pairs(cells)
@@ -284,9 +283,9 @@ def reliability(sums: pd.DataFrame, columns: pd.DataFrame, by: Sequence[str]) ->
 
     Returns
     -------
-    tidy DataFrame: *by, target, strategy, fraction, bin, lower, upper (the bin's confidence range), n
-    (episodes in the bin), confidence (their mean top-label confidence), accuracy (how often that label
-    was right)
+    tidy DataFrame: the columns of ``by``, target, strategy, fraction, bin, lower, upper (the bin's
+    confidence range), n (episodes in the bin), confidence (their mean top-label confidence), accuracy
+    (how often that label was right)
     """
     cols = [*by, "target", "strategy", "fraction", "bin", "lower", "upper", "n", "confidence", "accuracy"]
     if columns[columns["bin"] >= 0].empty:

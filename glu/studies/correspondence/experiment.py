@@ -366,7 +366,7 @@ def summarise(results: pd.DataFrame, replicates: int = BOOTSTRAP, seed: int = 0)
     """Accuracy pooled over seeds with its two-level bootstrap interval, per (train, features, condition).
 
     The interval resamples the seeds, then each seed's test gestures
-    (:func:`glu.studies.corpus_evaluation.intervals.two_level_sums`); it has width 0 only when every gesture
+    (:func:`glu.stats.two_level_sums`); it has width 0 only when every gesture
     of every seed was recognised alike. Columns: train, features, factor, level, yaw_deg, n_seeds, accuracy,
     ci_low, ci_high, seed_min, seed_max (the seeds' own accuracies). Rows keep the order of the study.
     """

@@ -43,6 +43,8 @@ TABLES: tuple[str, ...] = (
     "correspondence_summary",
     "correspondence_invariance_effects",
 )
+"""The tables the study saves and notebook 10 shows: the per-seed outcomes, their summary, the invariances'
+effects."""
 
 
 @dataclass(frozen=True)

@@ -82,10 +82,16 @@ def log_model_means(rec, checkpoints: np.ndarray, means: np.ndarray, actions: Se
 
 
 def write_learning(
-    run: Any, features: Sequence[np.ndarray], path: str | os.PathLike, recording_id: str, scene: str
+    run: Any,
+    features: Sequence[np.ndarray],
+    path: str | os.PathLike,
+    recording_id: str,
+    scene: str,
+    note: str = "",
 ) -> Path:
     """Write one online learner's life (:class:`glu.studies.learning.online.OnlineRun` of one learner,
-    ``features`` its episodes' gestures) as a recording. Layout (timeline ``episode``)::
+    ``features`` its episodes' gestures) as a recording; ``note`` (plain text: the data, the run's
+    parameters) ends the scene panel. Layout (timeline ``episode``)::
 
         /scene                     markdown: what is shown (static)
         /space/episode             this episode's hand path (3-D), coloured by its true action
@@ -99,7 +105,7 @@ def write_learning(
     true = [actions[a] for a in run.episode_actions]
     rec = new_recording(path, recording_id, learning_blueprint(actions))
     try:
-        log_scene(rec, scene)
+        log_scene(rec, scene, note)
         rec.log("space", rr.ViewCoordinates.RUB, static=True)
         log_episode_gestures(rec, features, true)
         log_labels(rec, run.weights[:, 0], actions, true)

@@ -115,7 +115,7 @@ class Ambiguity:
     name : a short name
     description : one line, for tables and figures
     objects : the distribution of actions and objects
-    (:class:`~glu.studies.corpus_evaluation.corpus.Scenario`)
+        (:class:`~glu.studies.corpus_evaluation.corpus.Scenario`)
     still : the objects never move (ObjVel is slow whatever the action)
     failed_taps : the fraction of taps whose object does not move (ObjVel slow, as after a touch)
     perception_noise : the probability that the robot perceives an effect's value as a uniformly random one

@@ -28,7 +28,8 @@ from glu.plots.style import (
 ORIGINAL_BAR = {"edgecolor": "black", "lw": 0.8, "hatch": "////"}
 """The original model's stacked bar, drawn narrow beside ours."""
 SAME_DELTA = 1e-9
-"""Two Δp(w) lists this close (max |difference|) are one list: the figure says so instead of drawing both."""
+"""Two Δp(w) lists this close (max ``|difference|``) are one list: the figure says so instead of drawing
+both."""
 
 
 def _hmm_rows(cases: Sequence[str]) -> list[str]:
@@ -201,10 +202,13 @@ def plot_effect_vs_soft_evidence(
 
 
 def plot_unseen_rows(ax: Axes, df: pd.DataFrame, tolerance: float = 1e-3) -> Axes:
-    """The original's all-zero rows vs uniform rows: the same numbers under both models, y = x where equal."""
+    """The original's all-zero rows vs uniform rows: the same numbers under both models, y = x where equal.
+    Each experiment its colour and its marker (not told apart by colour alone)."""
     colors = ["#4C72B0", "#DD8452", "#55A868", "#C44E52", "#8172B3"]
+    markers = ["o", "s", "^", "D", "v"]
     for k, (name, g) in enumerate(df.groupby("experiment", sort=False)):
-        ax.scatter(g["p_zero"], g["p_uniform"], s=14, label=name, alpha=0.8, color=colors[k % len(colors)])
+        style = dict(color=colors[k % len(colors)], marker=markers[k % len(markers)])
+        ax.scatter(g["p_zero"], g["p_uniform"], s=14, label=name, alpha=0.8, **style)
     lo = min(df["p_zero"].min(), df["p_uniform"].min())
     ax.plot([lo, 1], [lo, 1], color="0.5", linewidth=0.8, label="y = x (no change)", zorder=0)
     ax.set_xlabel("original: all-zero rows (faithful)")

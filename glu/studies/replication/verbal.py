@@ -327,7 +327,7 @@ def sampling_vs_exact(
     best was drawn), sample_rank (rank of the sample's best in the whole grammar: 1 + the number of
     sentences scoring higher), overlap (how many of the exact ``n`` best are among the sample's ``n`` best),
     p_draw_best (the probability that ``n_samples`` random sentences contain the exact best, computed from
-    :func:`~glu.language.sentences.sample_probability`; the same on every row).
+    :func:`~glu.language.sampling.sample_probability`; the same on every row).
     """
     seeds = list(seeds)
     g = load_grammar() if grammar is None else grammar

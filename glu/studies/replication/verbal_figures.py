@@ -90,8 +90,8 @@ def plot_and_but(ax: Axes, probs: pd.DataFrame) -> Axes:
     ----------
     ax : the axes to draw on
     probs : DataFrame with columns ObjVel, word, p (as
-    :func:`glu.studies.replication.verbal.and_but_probabilities`),
-        and ``paper_p`` when compared with TCDS 2020 Fig. 7 (drawn as black marks)
+        :func:`glu.studies.replication.verbal.and_but_probabilities`), and ``paper_p`` when compared with
+        TCDS 2020 Fig. 7 (drawn as black marks)
 
     Returns
     -------

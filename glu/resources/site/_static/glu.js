@@ -13,12 +13,24 @@ document.addEventListener("DOMContentLoaded", function () {
   document.querySelectorAll(".bd-article img").forEach(function (img) {
     img.addEventListener("click", function (e) {
       e.preventDefault();
-      // the caption's text (without its "#" anchor), then the legend: the sentence that interprets it
+      // the caption's text (its title and own sentence), the legend (the prose that interprets the
+      // figure), then the file's name on a line of its own
       var fig = img.closest("figure");
-      var text = fig ? fig.querySelector("figcaption .caption-text") || fig.querySelector("figcaption") : null;
+      var text = fig ? fig.querySelector("figcaption .caption-text") : null;
       var legend = fig ? fig.querySelector("figcaption .legend") : null;
-      cap.textContent = (text ? text.textContent.trim() : (img.getAttribute("alt") || "")) +
-        (legend && !text.contains(legend) ? " " + legend.textContent.trim() : "");
+      var file = text ? text.querySelector(".glu-file") : null;
+      cap.textContent = "";
+      var head = document.createElement("span");
+      if (text) {
+        head.innerHTML = text.innerHTML;  // the site's own caption: bold title, code, links
+        head.querySelectorAll(".glu-file").forEach(function (e) { e.remove(); });
+      }
+      cap.appendChild(head);
+      if (legend) { cap.appendChild(document.createTextNode(" " + legend.textContent.trim())); }
+      var name = document.createElement("span");
+      name.className = "glu-file";
+      name.textContent = file ? file.textContent.trim() : (img.getAttribute("alt") || "");
+      cap.appendChild(name);
       big.src = img.currentSrc || img.src;
       big.alt = img.alt;
       box.classList.add("open");
