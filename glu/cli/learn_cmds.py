@@ -325,8 +325,19 @@ def _run_curves(engine, label: str, settings, where: dict, out: Path, command: s
     }
     for name, df in frames.items():
         atomic_write_text(out / f"{name}.csv", df.to_csv(index=False))
+    small = saved.check_settings(settings)
+    print(
+        f"the check run (recomputed by notebook 12): seed {small.seeds[0]}, {small.episodes:,} episodes, "
+        f"{small.ambiguities[0]} objects without words",
+        flush=True,
+    )
+    check = lc.learning_study(engine, small, **where)
+    saved.save_study(out / saved.CHECK_FOLDER, check, small, label, command)
     saved.save_study(out, results, settings, label, command, lc.update_times(results))
-    print(f"wrote {out}/{saved.STUDY_FILE}, {saved.RESULTS_FILE}, {', '.join(f'{k}.csv' for k in frames)}")
+    print(
+        f"wrote {out}/{saved.STUDY_FILE}, {saved.RESULTS_FILE}, {', '.join(f'{k}.csv' for k in frames)}, "
+        f"{saved.CHECK_FOLDER}/"
+    )
 
 
 def _run_real_person(engine, source, label: str, draws, where: dict, out: Path, command: str) -> None:

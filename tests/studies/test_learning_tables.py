@@ -6,6 +6,8 @@ their gap is known), closed forms of the two-level bootstrap, counting, and a sa
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -206,8 +208,6 @@ def test_a_saved_run_reads_back_and_is_checked(engine, small_run, tmp_path):
     k = results[1].learners.index(("hard", "iterative", "still", True))
     j = chosen[0].learners.index(("hard", "iterative", "still", True))
     np.testing.assert_array_equal(chosen[0].correct[:, j], results[1].correct[:, k])
-    check = saved.check_against(engine, chosen, fewer, [1], 20)
-    assert check["differ"] == 0 and check["decisions"] == 2 * 11 * 9
     with pytest.raises(DataError, match="made from"):
         saved.select(back, stored, fewer, "real data: elsewhere", meta)
     more = lc.StudySettings(**{**settings.__dict__, "seeds": (0, 5)})
@@ -217,11 +217,29 @@ def test_a_saved_run_reads_back_and_is_checked(engine, small_run, tmp_path):
         saved.load_study(tmp_path / "nowhere")
 
 
-def test_a_saved_run_that_the_code_no_longer_computes_is_refused(engine, small_run):
-    settings, results = small_run
-    flipped = [r._replace(correct=~r.correct) for r in results]
-    with pytest.raises(DataError, match="not what this code computes"):
-        saved.check_against(engine, flipped, settings, [0], 20)
+def test_a_saved_run_carries_a_check_run_that_this_code_recomputes(engine, small_run, tmp_path):
+    """The check run is the first seed, the first budget, mixed objects without words, every other setting
+    the long run's; recomputed here it recognises the same held-out gestures at every checkpoint."""
+    settings, _ = small_run
+    longer = replace(settings, episodes=30, budgets=(20, 30))
+    small = saved.check_settings(longer)
+    assert (small.seeds, small.episodes, small.ambiguities, small.words) == ((0,), 20, ("mixed",), (False,))
+    assert (small.worlds, small.online, small.test_per_action) == (
+        longer.worlds,
+        longer.online,
+        longer.test_per_action,
+    )
+    check = lc.learning_study(engine, small)
+    saved.save_study(tmp_path / saved.CHECK_FOLDER, check, small, "synthetic", "glu learning-curves (test)")
+    out = saved.check_against(engine, tmp_path, [0])
+    # 2 worlds × (2 baselines + 2 supervised + 7 learners of mixed without words) × checkpoints 10, 20 × 9 tests
+    assert out == {"seeds": [0], "episodes": 20, "learners": 22, "decisions": 2 * 11 * 2 * 9, "differ": 0}
+    with pytest.raises(DataError, match=r"holds seeds \[0\], not \[3\]"):
+        saved.check_against(engine, tmp_path, [3])
+    flipped = [r._replace(correct=~r.correct) for r in check]
+    saved.save_study(tmp_path / saved.CHECK_FOLDER, flipped, small, "synthetic", "glu learning-curves (test)")
+    with pytest.raises(DataError, match="not what this code computes.*glu learning-curves \\(test\\)"):
+        saved.check_against(engine, tmp_path, [0])
 
 
 def test_the_shipped_runs_match_the_notebook_defaults():

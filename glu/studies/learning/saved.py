@@ -5,20 +5,24 @@ learning-curves`` (on Dask) writes every seed's raw measurements — which held-
 recognised at each checkpoint, the network alone, the labels' quality — with its settings and provenance
 (:func:`save_study`), and the notebook reads them (:func:`load_study`), takes the seeds, learners and
 budgets it asks for (:func:`select`), and computes every table from them as it would from its own run
-(:mod:`glu.studies.learning.tables`). It first recomputes a few learners of a few seeds here and checks that
-they recognise the same gestures (:func:`check_against`): a saved run that the code no longer reproduces
-is refused.
+(:mod:`glu.studies.learning.tables`). The same command also runs a small study with the same code — one
+seed, the first budget, the ``mixed`` objects without words (:func:`check_settings`) — and saves it in
+``check/``; the notebook recomputes that one here and compares which gestures every learner recognises
+(:func:`check_against`): a saved run that the code no longer reproduces is refused. (The long run itself
+cannot be recomputed in part: a run of more episodes is not a prefix of a shorter one.)
 
-glu ships such runs for the real data and for its synthetic data (:data:`SAVED_DIR`, chosen by
-:func:`default_folder` from the data source, which must be the one they were made from); they hold numbers
-glu computed, not the data. Another data folder or other settings: run ``glu learning-curves … -o DIR`` and
-give the notebook ``saved=DIR``. The folder:
+A source checkout holds such runs for the real data and for glu's synthetic data in
+``sweeps/12_learning_from_effects/real/`` and ``synthetic/`` (:func:`default_folder`, chosen by the data
+source, which must be the one they were made from); they hold numbers glu computed — which held-out gesture
+each learner recognised —, not the data. Another data folder or other settings: run ``glu learning-curves …
+-o DIR`` and give the notebook ``saved=DIR``. The folder:
 
 * ``learning_study.json`` — the settings, the data source, the learners, groups, checkpoints and seeds, the
   time of one update, and how it was made (the command, glu's version, the commit, the date);
 * ``learning_results.npz`` — the measurements (bits: a learner recognised a held-out gesture or not);
 * ``learning_curves.csv``, ``learning_budgets.csv``, ``learning_claims.csv``, ``learning_labels.csv`` —
   the tables, for reading (the notebook recomputes them);
+* ``check/`` — the small check run, in the same two files;
 * for the real data, ``learning_real_person.csv.gz`` and ``learning_real_person.json`` — every draw's
   predictions of the real-person study (:mod:`glu.studies.learning.real_person`) and their provenance
   (:func:`save_real_person`, :func:`load_real_person`), and ``learning_real_person_summary.csv``.
@@ -31,7 +35,6 @@ import gzip
 import io
 import json
 import os
-import subprocess
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -43,14 +46,13 @@ import pandas as pd
 from glu.errors import DataError
 from glu.files import atomic_write_bytes, atomic_write_json
 from glu.hmm import TrainingConfig
-from glu.paths import RESOURCES_DIR
 from glu.studies.learning.online import OnlineSettings
 from glu.studies.learning.real_person import RealPersonSettings
 from glu.studies.learning.study import SeedResult, StudySettings
 from glu.tidy import tidy
 
-SAVED_DIR: Path = RESOURCES_DIR / "saved" / "learning"
-"""The runs shipped with glu: ``real/`` (the published data) and ``synthetic/`` (glu's synthetic data)."""
+NOTEBOOK = "12_learning_from_effects"
+"""The notebook whose saved runs these are (``sweeps/<notebook>/`` of a checkout, :mod:`glu.saved`)."""
 STUDY_FILE, RESULTS_FILE = "learning_study.json", "learning_results.npz"
 PERSON_FILE, PERSON_STUDY_FILE = "learning_real_person.csv.gz", "learning_real_person.json"
 FORMAT = 1
@@ -60,8 +62,18 @@ SAME: tuple[str, ...] = ("test_per_action", "effects", "online")
 
 
 def default_folder(real: bool) -> Path:
-    """The saved run shipped for the real data or for glu's synthetic data."""
-    return SAVED_DIR / ("real" if real else "synthetic")
+    """The saved run committed for the real data or for glu's synthetic data: ``real/`` or ``synthetic/`` in
+    ``sweeps/12_learning_from_effects/`` of a checkout (:class:`DataError` in an installed glu, which has
+    none: make a run with ``glu learning-curves -o DIR`` and give the notebook ``saved=DIR``)."""
+    from glu.saved import roots
+
+    places = roots(NOTEBOOK)
+    if not places:
+        raise DataError(
+            "the saved runs of learning from effects are in a source checkout of glu (sweeps/); make one "
+            "with `glu learning-curves … -o DIR` and give notebook 12 saved=DIR"
+        )
+    return places[0] / ("real" if real else "synthetic")
 
 
 def settings_from_dict(d: dict[str, Any], kind: type = StudySettings) -> Any:
@@ -73,29 +85,16 @@ def settings_from_dict(d: dict[str, Any], kind: type = StudySettings) -> Any:
     return kind(**{**d, **tuples, "online": OnlineSettings(**online)})
 
 
-def _made_by(command: str) -> dict[str, str]:
-    from glu import __version__
+def _made_by(command: str) -> dict[str, Any]:
+    """How a run was made: the command, glu's version, the commit and whether the tree had changes
+    (:func:`glu.saved.made_with`), the date."""
+    from glu.saved import made_with
 
     return {
         "command": command,
-        "glu": __version__,
-        "commit": _commit(),
+        **made_with(),
         "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
     }
-
-
-def _commit() -> str:
-    try:
-        out = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"],
-            cwd=Path(__file__).parent,
-            capture_output=True,
-            text=True,
-            timeout=10,
-        )
-    except (OSError, subprocess.SubprocessError):
-        return ""
-    return out.stdout.strip() if out.returncode == 0 else ""
 
 
 def save_study(
@@ -245,51 +244,73 @@ def select(
     return out
 
 
-def check_against(
-    engine, results: Sequence[SeedResult], settings: StudySettings, seeds: Sequence[int], episodes: int
-) -> dict[str, Any]:
-    """Recompute, here, the learners of the ``mixed`` ambiguity without words and the baselines of ``seeds``
-    up to ``episodes`` and compare which held-out gestures they recognise with the saved run's.
+CHECK_FOLDER = "check"
+"""The sub-folder of a saved run that holds its check run (:func:`check_settings`)."""
 
-    Returns ``{"seeds", "episodes", "learners", "decisions", "differ"}``: how many held-out decisions were
-    compared and how many differ. Raises :class:`DataError` when more than 1 % differ (the saved run is not
-    what this code computes: run it again)."""
-    from glu.studies.learning.study import run_world
 
+def check_settings(settings: StudySettings, seeds: Sequence[int] = (), episodes: int | None = None):
+    """The small run a saved run carries for its check: the learners of the ``mixed`` ambiguity without
+    words and the baselines, of ``seeds`` (default: the first seed) up to ``episodes`` (default: the first
+    budget), with every other setting of ``settings``.
+
+    A run of more episodes is not a prefix of a run of fewer (the episodes' objects and effects, and the
+    random labels matched to the network's accuracy, are drawn for the whole run at once), so the long run
+    cannot be recomputed in part: ``glu learning-curves`` runs this small study with the same code and saves
+    it beside the long run, and the notebook recomputes it (:func:`check_against`)."""
     ambiguity = "mixed" if "mixed" in settings.ambiguities else settings.ambiguities[0]
-    small = replace(
+    episodes = settings.main_budgets[0] if episodes is None else episodes
+    return replace(
         settings,
         episodes=episodes,
-        seeds=tuple(seeds),
+        seeds=tuple(seeds) or settings.seeds[:1],
         ambiguities=(ambiguity,),
         words=(False,) if False in settings.words else settings.words[:1],
         budgets=(episodes,),
     )
-    by_seed = {r.seed: r for r in results}
+
+
+def check_against(engine, folder: str | os.PathLike, seeds: Sequence[int]) -> dict[str, Any]:
+    """Recompute, here, the check run saved in ``folder`` (:func:`check_settings`) for ``seeds`` and compare
+    which held-out gestures every learner recognises at every checkpoint with the saved ones.
+
+    Returns ``{"seeds", "episodes", "learners", "decisions", "differ"}``: how many held-out decisions were
+    compared and how many differ. Raises :class:`DataError` when the folder has no check run of those seeds,
+    or when more than 1 % of the decisions differ (the saved run is not what this code computes: run it
+    again; a few may differ on another machine, where floating-point sums round otherwise)."""
+    from glu.studies.learning.study import learning_study
+
+    folder = Path(folder)
+    small, saved, meta = load_study(folder / CHECK_FOLDER)
+    again = (meta.get("made_by") or {}).get("command") or regenerate_command(small)
+    missing = [s for s in seeds if s not in small.seeds]
+    if missing:
+        raise DataError(
+            f"{folder}: its check run holds seeds {list(small.seeds)}, not {missing}; give the notebook "
+            f"check_seeds from those (or [] to skip the check)"
+        )
+    by_seed = {r.seed: r for r in saved}
+    here = learning_study(engine, replace(small, seeds=tuple(seeds)))
     compared = differ = 0
-    for s in seeds:
-        saved = by_seed[s]
-        c_saved = list(saved.checkpoints).index(episodes)
-        for world in small.worlds:
-            run, *_ = run_world(engine, s, world, small)
-            names = [(world, *lr) for lr in small.world_learners()]
-            for k, name in enumerate(names):
-                j = saved.learners.index(name)
-                here, there = run.correct[-1, k], saved.correct[c_saved, j]
-                compared += here.size
-                differ += int((here != there).sum())
+    for r in here:
+        there = by_seed[r.seed]
+        if r.learners != there.learners or list(r.checkpoints) != list(there.checkpoints):
+            raise DataError(
+                f"{folder}: the saved check run has other learners or checkpoints than this code makes; "
+                f"run `{again}` again"
+            )
+        compared += r.correct.size
+        differ += int((r.correct != there.correct).sum())
     out = {
         "seeds": list(seeds),
-        "episodes": episodes,
-        "learners": len(names),
+        "episodes": small.episodes,
+        "learners": len(small.learners()),
         "decisions": compared,
         "differ": differ,
     }
     if differ > 0.01 * compared:
         raise DataError(
             f"the saved run is not what this code computes: {differ} of {compared} held-out decisions of "
-            f"seeds {list(seeds)} after {episodes} episodes differ; "
-            f"run `{regenerate_command(settings)}` again"
+            f"seeds {list(seeds)} up to {small.episodes} episodes differ; run `{again}` again"
         )
     return out
 
@@ -365,9 +386,7 @@ def study_results(
     folder = default_folder(real) if str(saved) == SHIPPED else Path(saved)
     stored, results, meta = load_study(folder)
     chosen = select(results, stored, settings, data_source, meta)
-    check = None
-    if check_seeds:
-        check = check_against(engine, chosen, settings, check_seeds, settings.main_budgets[0])
+    check = check_against(engine, folder, check_seeds) if check_seeds else None
     where = f"glu's saved run for this data ({folder.name})" if str(saved) == SHIPPED else str(folder)
     return chosen, {"folder": where, "made_by": meta.get("made_by"), "check": check}
 
@@ -379,7 +398,8 @@ def provenance_line(where: dict[str, Any]) -> str:
     m = where["made_by"] or {}
     text = (
         f"The budgets come from {where['folder']}, made by `{m.get('command', '?')}` on {m.get('date', '?')} "
-        f"(glu {m.get('glu', '?')}{', commit ' + m['commit'] if m.get('commit') else ''})."
+        f"(glu {m.get('glu', '?')}{', commit ' + m['commit'][:12] if m.get('commit') else ''}"
+        f"{' with changes' if m.get('dirty') else ''})."
     )
     c = where["check"]
     if c:
