@@ -5,7 +5,7 @@
 #   make test        set up .venv, then lint (ruff) and run the test suite
 #   make lab         JupyterLab on the repository, the notebooks open as notebooks
 #   make bench       speed benchmarks (glu vs pgmpy, pyAgrum, hmmlearn); make bench-reproduce: the whole run
-#   make sweeps      the saved tables of the heavy grids of notebooks 10 and 11 (sweeps/), again
+#   make sweeps      the saved tables of the heavy grids of notebooks 10, 11 and 12 (sweeps/), again
 # Variables: DATA=DIR (data folder; default: GLU_DATA_DIR, data/real, else synthetic), ARGS=... (extra flags).
 PYTHON ?= python3
 VENV ?= .venv
@@ -52,14 +52,18 @@ bench: $(STAMP)
 bench-reproduce: $(STAMP)
 	$(BIN)/python benchmarks/bench_reproduce.py $(if $(DATA),--data $(DATA)) $(ARGS)
 
-# The saved tables of the heavy grids of notebooks 10 and 11 (sweeps/, glu.saved): regenerate them after a change
-# of what their numbers depend on. Notebook 11's real-data tables need DATA=DIR (the real data); the rest does not.
+# The saved tables of the heavy grids of notebooks 10, 11 and 12 (sweeps/, glu.saved): regenerate them after a
+# change of what their numbers depend on. The real-data tables need DATA=DIR (the real data); the rest does not.
+# Notebook 12's runs (10 seeds × 10,000 episodes, and the real person's 50 draws) take about an hour on 2 cores.
 sweeps: $(STAMP)
 	$(BIN)/glu correspondence -o sweeps/10_correspondence/study --workers 2
 	$(BIN)/glu evaluate --config sweeps/11_corpus_evaluation/sweep.toml --data synthetic --workers 2 \
 		-o build/sweeps/11-synthetic --save sweeps/11_corpus_evaluation/synthetic
 	$(if $(DATA),$(BIN)/glu evaluate --config sweeps/11_corpus_evaluation/sweep.toml --data $(DATA) --workers 2 \
 		-o build/sweeps/11-real --save sweeps/11_corpus_evaluation/real,@echo "make sweeps: give DATA=DIR for notebook 11's real-data tables")
+	$(BIN)/glu learning-curves --data synthetic --workers 2 -o sweeps/12_learning_from_effects/synthetic
+	$(if $(DATA),$(BIN)/glu learning-curves --part all --data $(DATA) --workers 2 \
+		-o sweeps/12_learning_from_effects/real,@echo "make sweeps: give DATA=DIR for notebook 12's real-data runs")
 
 clean:
 	rm -rf $(VENV) build *.egg-info
