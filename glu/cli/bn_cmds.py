@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from glu.bn.exchange import FORMATS, ZERO_ROW_MODES
-from glu.cli.commands import help_of
+from glu.cli.commands import add_command, add_group
 from glu.cli.common import (
     add_data_args,
     add_engine_args,
@@ -31,15 +31,13 @@ from glu.evidence import check_disjoint, format_evidence
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``bn`` command group and ``query``."""
-    p = sub.add_parser(
+    bsub = add_group(
+        sub,
         "bn",
-        help=help_of("bn"),
-        description="Learn the Affordance–Words network from the robot's experiments, list its edges and "
+        "Learn the Affordance–Words network from the robot's experiments, list its edges and "
         "nodes, or convert it from and to the exchange formats of other tools (BIF, XMLBIF, UAI). "
         "Questions to a network: glu query and glu describe.",
     )
-    bsub = p.add_subparsers(dest="bn_command", metavar="SUBCOMMAND")
-    bsub.required = True
     _register_learn_and_inspect(bsub)
     _register_exchange(bsub)
     _register_query(sub)
@@ -132,10 +130,8 @@ def _register_exchange(bsub: argparse._SubParsersAction) -> None:
 
 def _register_query(sub: argparse._SubParsersAction) -> None:
     """Add ``query``."""
-    q = sub.add_parser(
-        "query",
-        help=help_of("query"),
-        description="Posterior marginal of each target node given evidence, by exact inference.",
+    q = add_command(
+        sub, "query", "Posterior marginal of each target node given evidence, by exact inference."
     )
     add_model_args(q)
     q.add_argument(

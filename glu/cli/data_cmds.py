@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from glu import paths
-from glu.cli.commands import help_of
+from glu.cli.commands import add_group
 from glu.cli.common import (
     add_data_option,
     add_deprecated_alias,
@@ -25,14 +25,12 @@ from glu.errors import DataError, FetchError
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``data`` command group."""
-    p = sub.add_parser(
+    dsub = add_group(
+        sub,
         "data",
-        help=help_of("data"),
-        description="Get the real data (glu data fetch), write a synthetic data folder (glu data synth), "
+        "Get the real data (glu data fetch), write a synthetic data folder (glu data synth), "
         "or see which data source a command would use and what it holds (glu data info).",
     )
-    dsub = p.add_subparsers(dest="data_command", metavar="SUBCOMMAND")
-    dsub.required = True
 
     f = dsub.add_parser(
         "fetch",

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.cli.commands import help_of
+from glu.cli.commands import add_command, add_group
 from glu.cli.common import (
     add_data_option,
     add_hmm_size_args,
@@ -55,14 +55,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _register_gestures(sub: argparse._SubParsersAction) -> None:
     """Add ``gestures segment``."""
-    g = sub.add_parser(
+    gsub = add_group(
+        sub,
         "gestures",
-        help=help_of("gestures"),
-        description="Inspect hand-trajectory logs: repair their tracking problems and find the gesture "
+        "Inspect hand-trajectory logs: repair their tracking problems and find the gesture "
         "repetitions in them. " + LOG_TEXT,
     )
-    gsub = g.add_subparsers(dest="gestures_command", metavar="SUBCOMMAND")
-    gsub.required = True
     s = gsub.add_parser(
         "segment",
         help="find the gesture repetitions in a hand log and print them",
@@ -82,15 +80,13 @@ def _register_gestures(sub: argparse._SubParsersAction) -> None:
 
 def _register_hmm(sub: argparse._SubParsersAction) -> None:
     """Add ``hmm train``."""
-    h = sub.add_parser(
+    hsub = add_group(
+        sub,
         "hmm",
-        help=help_of("hmm"),
-        description="Train one left-to-right GMM-HMM per action, on the real recordings, synthetic gestures "
+        "Train one left-to-right GMM-HMM per action, on the real recordings, synthetic gestures "
         "or your own labelled recordings, and save them as a recogniser file that glu recognize and glu "
         "anticipate take (--models FILE).",
     )
-    hsub = h.add_subparsers(dest="hmm_command", metavar="SUBCOMMAND")
-    hsub.required = True
     t = hsub.add_parser(
         "train",
         help="train one left-to-right GMM-HMM per action and save the recogniser (JSON)",
@@ -186,10 +182,10 @@ def _add_training_settings(t: argparse.ArgumentParser) -> None:
 
 def _register_recognize(sub: argparse._SubParsersAction) -> None:
     """Add ``recognize``."""
-    r = sub.add_parser(
+    r = add_command(
+        sub,
         "recognize",
-        help=help_of("recognize"),
-        description="Score a hand log (or frames A:B of it) under each action's HMM and print the "
+        "Score a hand log (or frames A:B of it) under each action's HMM and print the "
         "log-likelihoods and the posterior with equal priors; --stream prints them after every frame. "
         + LOG_TEXT
         + " "
