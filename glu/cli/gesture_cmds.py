@@ -30,6 +30,7 @@ from glu.cli.common import (
 from glu.cli.terminal import one_line
 from glu.data.source import HAND_LOG
 from glu.errors import DataError
+from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK
 from glu.gestures.invariants import ALL, INVARIANCE_MEANING, INVARIANCES, RAW, Invariants
 from glu.gestures.synthetic import GESTURES
 from glu.hmm import RECIPES, TrainingConfig
@@ -164,19 +165,24 @@ def _add_training_settings(t: argparse.ArgumentParser) -> None:
         metavar="LIST",
         help=f"{RAW} (default), {ALL}, or comma-separated invariances among {','.join(INVARIANCES)}",
     )
-    t.add_argument(
-        "--body-size",
-        nargs=2,
-        type=positive_float,
-        metavar=("H", "V"),
-        help="--recordings: the body size of t,x,y,z tables, horizontal (shoulder) and vertical "
-        "(neck-torso), m (default: the originals' 0.33 0.23)",
-    )
+    _add_body_size(t, "--recordings: the body size of t,x,y,z tables")
     t.add_argument(
         "--include-test",
         action="store_true",
         help="real data: also train on the originals' hand-cut segments of the two seated taps (the "
         "effect-anticipation test gestures; default: the standing recordings only)",
+    )
+
+
+def _add_body_size(p: argparse.ArgumentParser, which: str) -> None:
+    """``--body-size H V``: what a t,x,y,z table (no skeleton) is divided by; ``which`` starts its help."""
+    p.add_argument(
+        "--body-size",
+        nargs=2,
+        type=positive_float,
+        metavar=("H", "V"),
+        help=f"{which}, horizontal (shoulder) and vertical (neck-torso), m (default: the originals' "
+        f"{HORIZONTAL_FALLBACK:g} {VERTICAL_FALLBACK:g})",
     )
 
 
@@ -210,14 +216,7 @@ def _register_recognize(sub: argparse._SubParsersAction) -> None:
     )
     add_json_option(r, '{"loglik": {…}, "posterior": {…}, "typicality": {…}} (with --stream: one a frame)')
     r.add_argument("--repair", action="store_true", help="repair the log first (default: frames as logged)")
-    r.add_argument(
-        "--body-size",
-        nargs=2,
-        type=positive_float,
-        metavar=("H", "V"),
-        help="for a t,x,y,z table: horizontal (shoulder) and vertical (neck-torso) body size in m "
-        "(default: the originals' 0.33 0.23)",
-    )
+    _add_body_size(r, "for a t,x,y,z table: the body size")
     r.set_defaults(func=_recognize)
 
 
