@@ -17,11 +17,11 @@ from glu.cli.common import (
     add_evidence_args,
     add_json_option,
     add_model_args,
+    add_out_option,
     add_renormalise_option,
     json_text,
     load_model,
     make_engine,
-    output_file,
     read_evidence,
 )
 from glu.cli.terminal import one_line
@@ -53,9 +53,7 @@ def _register_learn_and_inspect(bsub: argparse._SubParsersAction) -> None:
         "--experiments, and write it as a glu JSON model.",
     )
     add_data_args(lp)
-    lp.add_argument(
-        "-o", "--out", type=output_file, required=True, metavar="MODEL", help="model file to write (JSON)"
-    )
+    add_out_option(lp, "MODEL", "model file to write (JSON)")
     lp.set_defaults(func=_learn)
 
     ep = bsub.add_parser(
@@ -91,9 +89,7 @@ def _register_exchange(bsub: argparse._SubParsersAction) -> None:
         "seen__NODE written by glu bn export --zero-rows seen become NODE's all-zero rows again.",
     )
     ip.add_argument("model", type=Path, metavar="FILE", help="e.g. net.bif, net.xmlbif, net.uai, BN_lab.mat")
-    ip.add_argument(
-        "-o", "--out", type=output_file, required=True, metavar="MODEL", help="model file to write (JSON)"
-    )
+    add_out_option(ip, "MODEL", "model file to write (JSON)")
     ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
     add_renormalise_option(ip)
     ip.set_defaults(func=_import)
@@ -110,14 +106,7 @@ def _register_exchange(bsub: argparse._SubParsersAction) -> None:
         "model", type=Path, metavar="MODEL", help="model file (.json, the original .mat, or an exchange file)"
     )
     xp.add_argument("--format", choices=tuple(FORMATS), help="output format (default: from the suffix of -o)")
-    xp.add_argument(
-        "-o",
-        "--out",
-        type=output_file,
-        required=True,
-        metavar="FILE",
-        help="file to write (.bif, .xmlbif, .uai)",
-    )
+    add_out_option(xp, "FILE", "file to write (.bif, .xmlbif, .uai)")
     xp.add_argument(
         "--zero-rows",
         choices=ZERO_ROW_MODES,

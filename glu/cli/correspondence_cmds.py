@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 
 from glu.cli.commands import add_command
-from glu.cli.common import output_folder, positive_int
+from glu.cli.common import add_out_option, positive_int
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,9 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "seed on a LocalCluster, and write its tables with their key and provenance to -o DIR, where "
         "the notebook finds them (sweeps/10_correspondence/study: make sweeps).",
     )
-    p.add_argument(
-        "-o", "--out", type=output_folder, required=True, metavar="DIR", help="folder for the tables"
-    )
+    add_out_option(p, "DIR", "folder for the tables", folder=True)
     p.add_argument(
         "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: in this process)"
     )

@@ -12,9 +12,9 @@ from glu.cli.common import (
     add_data_option,
     add_deprecated_alias,
     add_json_option,
+    add_out_option,
     integer,
     json_text,
-    output_folder,
     progress_bar,
     seed,
 )
@@ -72,7 +72,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"experiments per table ({MIN_ROWS} to {MAX_ROWS:,}; default {DEFAULT_SYNTHETIC_N})",
     )
     s.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
-    s.add_argument("-o", "--out", type=output_folder, required=True, metavar="DIR", help="output folder")
+    add_out_option(s, "DIR", "output folder", folder=True)
     s.add_argument(
         "--force",
         action="store_true",

@@ -15,7 +15,14 @@ import argparse
 from pathlib import Path
 
 from glu.cli.commands import add_command
-from glu.cli.common import add_cluster_args, add_data_option, output_file, output_folder, positive_int, seed
+from glu.cli.common import (
+    add_cluster_args,
+    add_data_option,
+    add_out_option,
+    output_folder,
+    positive_int,
+    seed,
+)
 
 
 def _shared(p: argparse.ArgumentParser) -> None:
@@ -50,9 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="N",
         help="compute at most N chunks now; run again to continue",
     )
-    e.add_argument(
-        "-o", "--out", type=output_folder, required=True, metavar="DIR", help="output folder (resumable)"
-    )
+    add_out_option(e, "DIR", "output folder (resumable)", folder=True)
     e.add_argument(
         "--save",
         type=output_folder,
@@ -70,9 +75,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "them.",
     )
     _shared(c)
-    c.add_argument(
-        "-o", "--out", type=output_file, required=True, metavar="FILE.parquet", help="file to write"
-    )
+    add_out_option(c, "FILE.parquet", "file to write")
     c.set_defaults(func=_corpus)
 
 

@@ -18,9 +18,9 @@ from glu.cli.common import (
     add_data_option,
     add_hmm_size_args,
     add_json_option,
+    add_out_option,
     json_text,
     nonneg_float,
-    output_file,
     output_image,
     positive_float,
     positive_int,
@@ -119,9 +119,7 @@ def _add_training_data(t: argparse.ArgumentParser) -> None:
         "is the label) holding .csv/.tsv/.npy tables, .log files or recording folders; or a CSV manifest "
         "with the columns file,label[,frames A:B]",
     )
-    t.add_argument(
-        "-o", "--out", type=output_file, required=True, metavar="RECOGNISER", help="file to write (JSON)"
-    )
+    add_out_option(t, "RECOGNISER", "file to write (JSON)")
 
 
 def _add_training_settings(t: argparse.ArgumentParser) -> None:
