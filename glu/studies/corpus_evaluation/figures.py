@@ -29,7 +29,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from glu.plots.style import RULE_LABELS
-from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label, viewpoints
+from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label, metric_rows, viewpoints
 
 STRATEGY_COLORS = {
     "gesture": "#8C8C8C",
@@ -132,33 +132,6 @@ def _strategy_lines(
 
 def _title(ax: Axes, first: str, note: str) -> None:
     ax.set_title(first + ("\n" + textwrap.fill(note, 60) if note else ""), fontsize=9)
-
-
-def plot_metric_vs_noise(
-    ax: Axes,
-    results: pd.DataFrame,
-    target: str,
-    metric: str,
-    fraction: float = 1.0,
-    viewpoint: str = "all",
-    strategies: Sequence[str] | None = None,
-    where: Mapping[str, Any] | None = None,
-) -> Axes:
-    """One metric of one target against the sensor noise (m), a line and a 95 % band per strategy."""
-    results = _cell(results, where)
-    sel = results[
-        (results.target == target)
-        & (results.metric == metric)
-        & np.isclose(results.fraction, fraction)
-        & (results.viewpoint == viewpoint)
-        & results.noise.notna()
-    ]
-    note = _strategy_lines(ax, sel, "noise", metric, strategies)
-    views = "all viewpoints" if viewpoint == "all" else viewpoint
-    first = f"{target} {METRIC_LABEL.get(metric, metric)} ({views}, {fraction:.0%} of the gesture seen)"
-    _title(ax, f"{first}\n{where_label(where)}", note)
-    ax.set_xlabel("sensor noise (cm)")
-    return ax
 
 
 def plot_early_recognition(
@@ -306,14 +279,8 @@ def plot_by_viewpoint(
     where: Mapping[str, Any] | None = None,
 ) -> Axes:
     """One metric per viewpoint (pooled over noise), grouped bars with 95 % intervals per strategy."""
-    results = _cell(results, where)
-    sel = results[
-        (results.target == target)
-        & (results.metric == metric)
-        & np.isclose(results.fraction, fraction)
-        & results.noise.isna()
-        & (results.viewpoint != "all")
-    ]
+    sel = metric_rows(_cell(results, where), target, metric, fraction)
+    sel = sel[sel.noise.isna() & (sel.viewpoint != "all")]
     views = viewpoints(sel)
     strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
     width = 0.8 / max(len(strats), 1)
@@ -509,14 +476,8 @@ def plot_by_viewpoint_and_features(
     """One metric per viewpoint (noise pooled) for one feature set of the recogniser: a line with markers
     and 95 % error bars per strategy (each strategy its colour, line style and marker)."""
     cell = {**REFERENCE_CELL, **(where or {}), "features": features}
-    sel = _cell(results, cell)
-    sel = sel[
-        (sel.target == target)
-        & (sel.metric == metric)
-        & np.isclose(sel.fraction, fraction)
-        & sel.noise.isna()
-        & (sel.viewpoint != "all")
-    ]
+    sel = metric_rows(_cell(results, cell), target, metric, fraction)
+    sel = sel[sel.noise.isna() & (sel.viewpoint != "all")]
     views = viewpoints(sel)
     x = np.arange(len(views))
     for k, strategy in enumerate(s for s in strategies if s in set(sel.strategy)):
