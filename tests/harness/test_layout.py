@@ -262,7 +262,6 @@ def long_functions(path: Path) -> list[tuple[str, int]]:
     return out
 
 
-@pytest.mark.xfail(strict=True, reason="issue 29: the last long functions are being split at their seams")
 def test_no_function_is_longer_than_80_lines():
     long = {
         f"{path.relative_to(PACKAGE.parent)}::{qual}": n

@@ -301,9 +301,7 @@ def run_online(
     """
     N, A, L = len(features), len(actions), len(learners)
     _check_learners(learners, p_bn)
-    checkpoints = np.array(sorted(set(int(c) for c in checkpoints)))
-    if len(checkpoints) == 0 or checkpoints[0] < 1 or checkpoints[-1] > N:
-        raise DataError(f"checkpoints must lie in 1 … {N} (the episodes), got {checkpoints.tolist()}")
+    checkpoints = _checkpoints(checkpoints, N)
     config, D = settings.config, features[0].shape[1]
     row, owners = _model_rows(learners)  # learner k learns the models of row row[k]
     R = len(owners)
@@ -323,13 +321,7 @@ def run_online(
     for i, X in enumerate(features):
         t0 = time.thread_time()
         W = labels.static_weights(i, R, A)
-        # the E-step of every model that learns from this episode, or whose likelihood labels it
-        pairs = np.nonzero(state.exists & ((W > 0) | labels.dynamic[:, None]))
-        loglik = np.full((R, A), -np.inf)
-        unit = None
-        if len(pairs[0]):
-            unit, ll = state.models.estep(X, pairs)
-            loglik[pairs] = ll
+        pairs, unit, loglik = _estep(state, X, W, labels.dynamic)
         labels.dynamic_weights(W, i, loglik, len(X), state.exists)
         all_weights[i] = W[row]
         if unit is not None:
@@ -352,6 +344,27 @@ def run_online(
         list(learners), tuple(actions), checkpoints, correct, all_weights, np.asarray(episode_actions),
         np.asarray(test_actions), means, params, state.exists[row].copy(), matching, seconds,
     )  # fmt: skip
+
+
+def _checkpoints(checkpoints: Sequence[int], N: int) -> np.ndarray:
+    """The checkpoints sorted, each once; :class:`DataError` unless they lie in 1 … N."""
+    out = np.array(sorted(set(int(c) for c in checkpoints)))
+    if len(out) == 0 or out[0] < 1 or out[-1] > N:
+        raise DataError(f"checkpoints must lie in 1 … {N} (the episodes), got {out.tolist()}")
+    return out
+
+
+def _estep(state, X: np.ndarray, W: np.ndarray, dynamic: np.ndarray):
+    """The E-step of every model that learns from episode ``X`` (weight ``W`` > 0) or whose likelihood labels
+    it (``dynamic`` rows): the (row, action) pairs, their sufficient statistics (None without pairs) and the
+    log-likelihoods, -inf elsewhere, shape (R, A)."""
+    pairs = np.nonzero(state.exists & ((W > 0) | dynamic[:, None]))
+    loglik = np.full(W.shape, -np.inf)
+    unit = None
+    if len(pairs[0]):
+        unit, ll = state.models.estep(X, pairs)
+        loglik[pairs] = ll
+    return pairs, unit, loglik
 
 
 CLUSTERS: tuple[str, ...] = ("unsupervised", "clustering")
