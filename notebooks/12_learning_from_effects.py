@@ -86,7 +86,8 @@
 # lie within a margin declared beforehand (`margin`), by two one-sided tests on the two-level bootstrap
 # (seeds, then held-out gestures), adjusted for the number of tests in the table (Benjamini–Hochberg).
 # The long budgets run with `glu learning-curves` on Dask and are read here from its saved run (`saved`);
-# a few of its learners are recomputed here and must recognise the same held-out gestures.
+# the small check run saved with it (one seed, the first budget, mixed objects without words) is recomputed
+# here and must recognise the same held-out gestures.
 
 # %% tags=["parameters"]
 data: str = None  # data folder, "synthetic", or None: $GLU_DATA_DIR, data/real/, else synthetic
@@ -98,7 +99,7 @@ test_per_action: int = 30  # held-out gestures per action and seed
 margin: float = 0.02  # equivalence margin on accuracy, declared before the data
 bootstrap: int = 2000  # two-level bootstrap replicates (seeds × held-out gestures)
 saved: str = "shipped"  # "shipped": glu's saved run for this data; a `glu learning-curves -o DIR` folder; "none": run here
-check_seeds: list[int] = [0]  # seeds of the saved run recomputed here (a few learners, the first budget)
+check_seeds: list[int] = [0]  # seeds of the saved run's check run recomputed here ([]: no check)
 curves_ambiguity: str = "mixed"  # the ambiguity of the learning-curve figure
 recorded_scheme: str = "soft"  # the learner of the Rerun recording and of the anticipation cases
 recorded_episodes: int = 200  # the episodes it watches (easy world, mixed objects, no words)
