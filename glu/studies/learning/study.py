@@ -27,7 +27,7 @@ import numpy as np
 
 from glu.bn.inference import Engine
 from glu.errors import DataError
-from glu.machine import close_cluster, ctrl_c_held, kill_local_workers, quiet_dask_logs
+from glu.machine import dask_client
 from glu.studies.learning.online import Learner, OnlineSettings, run_online
 from glu.studies.learning.self_supervised import (
     AMBIGUITIES,
@@ -311,25 +311,9 @@ def run_units(
             if progress is not None:
                 progress(u)
         return out
-    with quiet_dask_logs():
-        return _on_dask(task, engine, settings, units, workers, scheduler, progress)
+    from distributed import as_completed
 
-
-def _on_dask(task, engine, settings, units, workers, scheduler, progress) -> list[Any]:
-    from dask.distributed import Client, LocalCluster, as_completed
-
-    cluster = None
-    try:
-        with ctrl_c_held():  # Ctrl-C reaches this process only; the workers are stopped from here
-            if scheduler is None:
-                cluster = LocalCluster(
-                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-                )
-            client = Client(cluster if cluster is not None else scheduler)
-    except BaseException as e:
-        close_cluster(cluster, e)
-        raise
-    try:
+    with dask_client(workers, scheduler, dashboard_address=None) as client:
         futures = {client.submit(task, engine, u, settings, pure=False): i for i, u in enumerate(units)}
         results = {}
         for fut in as_completed(futures):
@@ -337,13 +321,6 @@ def _on_dask(task, engine, settings, units, workers, scheduler, progress) -> lis
             if progress is not None:
                 progress(units[futures[fut]])
         return [results[i] for i in range(len(units))]
-    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers are killed, not asked to finish
-        kill_local_workers(cluster)
-        raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
 
 
 def update_times(results: Sequence[SeedResult]) -> dict[str, float]:
