@@ -192,13 +192,17 @@ def plot_real_person(ax: Axes, summary: pd.DataFrame, study: str, features: str)
     """Each learner's accuracy on the person's held-out segments: a bar (hatched: with words; a mark on the
     axis where it is 0) with its 95 % interval (draws and segments resampled)."""
     s = summary[(summary["study"] == study) & (summary["features"] == features)].reset_index(drop=True)
+    colors = [LEARNER_STYLE.get(lr, dict(color="black"))["color"] for lr in s["learner"]]
+    x = np.arange(len(s))
+    # one set of bars, each named on the axis below it (its colour only repeats the name)
+    bars = ax.bar(x, s["accuracy"], color=colors, edgecolor="0.2", linewidth=0.6, alpha=0.85)
+    for bar, words in zip(bars.patches, s["words"], strict=True):
+        if words is True:
+            bar.set_hatch("///")
     for i, r in s.iterrows():
-        st = LEARNER_STYLE.get(r["learner"], dict(color="black"))
-        hatch = "///" if r["words"] is True else None
-        ax.bar(i, r["accuracy"], color=st["color"], edgecolor="0.2", linewidth=0.6, alpha=0.85, hatch=hatch)
         if r["accuracy"] == 0:
-            ax.plot([i], [0.005], marker="_", ms=14, mew=2, color=st["color"])
-        ax.vlines(i, r["ci_low"], r["ci_high"], color="0.1", lw=1.2)
+            ax.plot([i], [0.005], marker="_", ms=14, mew=2, color=colors[i])
+    ax.vlines(x, s["ci_low"], s["ci_high"], color="0.1", lw=1.2)
     names = [
         SHORT.get(lr, _label(lr)) + (" + words" if w is True else "")
         for lr, w in zip(s["learner"], s["words"], strict=True)
