@@ -11,7 +11,8 @@ the content is complete, as any Unix tool does (so ``-o /dev/null`` discards the
 device a device). The path ``-`` (:data:`STDOUT`) writes the content to standard output.
 
 This module is the one implementation of atomic writes in glu; models, tables, figures and data folders
-all use it.
+all use it. Its readers of input files (:func:`read_text`, :func:`read_bytes`, :func:`read_json`) turn the
+system's errors into one line naming the file and what it should be.
 """
 
 from __future__ import annotations
@@ -193,9 +194,40 @@ def read_text(
     error = error or DataError
     try:
         return Path(path).read_text(encoding=encoding)
-    except FileNotFoundError:
-        raise error(f"{path}: no such {what}") from None
-    except IsADirectoryError:
-        raise error(f"{path}: is a folder, not a {what}") from None
-    except (OSError, UnicodeDecodeError) as e:
+    except OSError as e:
+        raise error(_unreadable(path, what, e)) from None
+    except UnicodeDecodeError as e:
         raise error(f"{path}: cannot read the {what} as text ({e})") from None
+
+
+def read_bytes(path: str | os.PathLike, what: str = "file", error: type | None = None) -> bytes:
+    """The bytes of an input file; ``error`` (default :class:`~glu.errors.DataError`) names the file and
+    ``what`` it should be when it is missing, a folder or unreadable."""
+    from glu.errors import DataError
+
+    try:
+        return Path(path).read_bytes()
+    except OSError as e:
+        raise (error or DataError)(_unreadable(path, what, e)) from None
+
+
+def read_json(path: str | os.PathLike, what: str = "JSON file", error: type | None = None) -> Any:
+    """The JSON document of an input file; ``error`` (default :class:`~glu.errors.DataError`) names the
+    file and ``what`` it should be when it is missing, a folder, unreadable or not JSON."""
+    from glu.errors import DataError
+
+    error = error or DataError
+    raw = read_bytes(path, what, error)
+    try:
+        return json.loads(raw)
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise error(f"{path}: not a JSON {what} ({e})") from None
+
+
+def _unreadable(path: str | os.PathLike, what: str, e: OSError) -> str:
+    """What an input file's read error says: the file, and ``what`` it should be."""
+    if isinstance(e, FileNotFoundError):
+        return f"{path}: no such {what}"
+    if isinstance(e, IsADirectoryError):
+        return f"{path}: is a folder, not a {what}"
+    return f"{path}: cannot read the {what} ({e.strerror})"

@@ -3,10 +3,10 @@
 :func:`available_cores` and :func:`thread_env` size the work: ``glu reproduce`` gives each notebook
 kernel its share of the cores for BLAS and OpenMP, the sweeps one thread per Dask worker.
 
-A Dask LocalCluster of this machine is started inside :func:`ctrl_c_held` (its workers never receive the
-terminal's Ctrl-C, so they print no tracebacks of their own: glu stops them), stopped after
-:func:`kill_local_workers` on an interrupt (at once, silently), with :func:`quiet_dask_logs` around the whole
-(glu reports what went wrong in one line).
+:func:`dask_client` runs work on Dask (the corpus sweep, :func:`map_tasks`): a LocalCluster of this
+machine is started inside :func:`ctrl_c_held` (its workers never receive the terminal's Ctrl-C, so they
+print no tracebacks of their own: glu stops them), stopped after :func:`kill_local_workers` on an interrupt
+(at once, silently), with :func:`quiet_dask_logs` around the whole (glu reports what went wrong in one line).
 
 Interactive extras (the evidence explorer's widgets, the Rerun viewer in a notebook) appear only in a
 live kernel; headless runs (``glu reproduce``, ``glu run``: their kernels have ``GLU_HEADLESS=1``) and
@@ -303,32 +303,58 @@ def _ask_identity(address: str, timeout: float) -> Any:
     raise DataError(f"{address} is not a Dask scheduler that answers ({why})")
 
 
-def map_tasks(fn: Any, items: list[Any], *args: Any, workers: int = 0) -> list[Any]:
-    """``[fn(item, *args) for item in items]``: in this process (``workers=0``), or one Dask task per item on
-    a LocalCluster of ``workers`` single-threaded processes, started as :func:`ctrl_c_held` says and stopped
-    at once on an interrupt. Results keep the order of ``items``."""
-    if not workers:
-        return [fn(item, *args) for item in items]
-    from distributed import Client, LocalCluster, as_completed
+@contextlib.contextmanager
+def dask_client(workers: int, scheduler: str | None = None, **options: Any) -> Iterator[Any]:
+    """A dask.distributed ``Client`` for the block: of the scheduler at ``scheduler``, or of a LocalCluster
+    of ``workers`` single-threaded processes (``options``: more of LocalCluster's) started as
+    :func:`ctrl_c_held` says. On leaving, the client and the cluster are closed, the workers killed first
+    after an interrupt (at once, silently); dask.distributed's logs stay quiet throughout
+    (:func:`quiet_dask_logs`: glu says what went wrong in one line)."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        from glu.errors import MissingDependencyError
 
+        raise MissingDependencyError(
+            "running on Dask needs dask.distributed, which the plain `pip install glu` leaves out; "
+            "install it with: pip install 'glu[dask]'"
+        ) from None
     with quiet_dask_logs():
         cluster = None
         try:
-            with ctrl_c_held():
-                cluster = LocalCluster(
-                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
-                )
-                client = Client(cluster)
+            if scheduler is None:
+                with ctrl_c_held():  # the workers and the cluster threads never see Ctrl-C: glu stops them
+                    options.setdefault("dashboard_address", ":0")
+                    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, **options)
+                    client = Client(cluster)
+            else:
+                try:
+                    client = Client(scheduler, timeout="30s")
+                except (OSError, TimeoutError) as e:
+                    raise DataError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
         except BaseException as e:
             close_cluster(cluster, e)
             raise
         try:
-            futures = {client.submit(fn, item, *args, pure=False): k for k, item in enumerate(items)}
-            done = {futures[f]: f.result() for f in as_completed(futures)}
-            return [done[k] for k in range(len(items))]
-        except KeyboardInterrupt:
+            yield client
+        except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers are killed, not asked to finish (or talk)
             kill_local_workers(cluster)
             raise
         finally:
             client.close()
-            cluster.close()
+            if cluster is not None:
+                cluster.close()
+
+
+def map_tasks(fn: Any, items: list[Any], *args: Any, workers: int = 0) -> list[Any]:
+    """``[fn(item, *args) for item in items]``: in this process (``workers=0``), or one Dask task per item on
+    a LocalCluster of ``workers`` single-threaded processes (:func:`dask_client`). Results keep the order of
+    ``items``."""
+    if not workers:
+        return [fn(item, *args) for item in items]
+    with dask_client(workers) as client:
+        from distributed import as_completed
+
+        futures = {client.submit(fn, item, *args, pure=False): k for k, item in enumerate(items)}
+        done = {futures[f]: f.result() for f in as_completed(futures)}
+        return [done[k] for k in range(len(items))]

@@ -87,28 +87,22 @@ def _key(v, adj, logc, heuristic, buf):
     return 0.0, weight
 
 
-def eliminate(adj0, logc, heuristic):
-    """The greedy elimination order and each step's clique (the node and its neighbours then), shape
-    (n,) and (n, W)."""
-    n, W = adj0.shape
-    adj = adj0.copy()
-    alive = np.ones(n, dtype=np.bool_)
+def _eliminate_simplicial(adj, alive, order, cliques):
+    """The first steps: nodes with at most one neighbour are simplicial whatever comes next, so they go
+    first, the smallest first, then those left with at most one neighbour by them. Returns the steps taken."""
+    n, W = adj.shape
     deg = np.zeros(n, dtype=np.int64)
     for v in range(n):
         for w in range(W):
             deg[v] += _popcount(adj[v, w])
-    order = np.empty(n, dtype=np.int64)
-    cliques = np.zeros((n, W), dtype=np.uint64)
     buf = np.empty(n, dtype=np.int64)
-    buf2 = np.empty(n, dtype=np.int64)
-    step = 0
-    # nodes with at most one neighbour are simplicial whatever comes next: eliminated first, smallest first
     stack = np.empty(2 * n + 1, dtype=np.int64)
     top = 0
     for v in range(n - 1, -1, -1):
         if deg[v] <= 1:
             stack[top] = v
             top += 1
+    step = 0
     while top > 0:
         top -= 1
         v = stack[top]
@@ -128,6 +122,28 @@ def eliminate(adj0, logc, heuristic):
                 stack[top] = a
                 top += 1
         adj[v] = 0
+    return step
+
+
+def _gains(adj, v, a):
+    """Whether eliminating ``v`` adds an edge at its neighbour ``a`` (``v`` has another neighbour ``a``
+    lacks)."""
+    for w in range(adj.shape[1]):
+        add = adj[v, w] & ~adj[a, w]
+        if w == a >> 6:
+            add &= ~_bit(a)
+        if add != 0:
+            return True
+    return False
+
+
+def _eliminate_greedy(adj, alive, order, cliques, step, logc, heuristic):
+    """The steps from ``step`` on: each eliminates the node of the smallest :func:`_key` (ties: the smaller
+    index), joins its neighbours to one another and recomputes the keys of the nodes whose neighbourhood
+    changed."""
+    n, W = adj.shape
+    buf = np.empty(n, dtype=np.int64)
+    buf2 = np.empty(n, dtype=np.int64)
     k1 = np.full(n, np.inf)
     k2 = np.full(n, np.inf)
     for v in range(n):
@@ -139,7 +155,7 @@ def eliminate(adj0, logc, heuristic):
         for u in range(n):
             if alive[u] and (v < 0 or k1[u] < k1[v] or (k1[u] == k1[v] and k2[u] < k2[v])):
                 v = u
-        alive[v] = False
+        alive[v] = False  # as in _eliminate_simplicial: a helper called per step slowed small graphs ~9 %
         order[step] = v
         cliques[step] = adj[v]
         cliques[step, v >> 6] |= _bit(v)
@@ -150,14 +166,7 @@ def eliminate(adj0, logc, heuristic):
         for i in range(d):
             a = buf[i]
             adj[a, v >> 6] &= ~_bit(v)
-            gained = False
-            for w in range(W):
-                add = adj[v, w] & ~adj[a, w]
-                if w == a >> 6:
-                    add &= ~_bit(a)
-                if add != 0:
-                    gained = True
-            if gained:
+            if _gains(adj, v, a):
                 if heuristic <= 1:  # a's neighbours see one more edge among theirs: their fill changes
                     d2 = _members(adj[a], buf2)
                     for j in range(d2):
@@ -171,6 +180,19 @@ def eliminate(adj0, logc, heuristic):
                 touched[u] = False
                 if alive[u]:
                     k1[u], k2[u] = _key(u, adj, logc, heuristic, buf)
+
+
+def eliminate(adj0, logc, heuristic):
+    """The greedy elimination order and each step's clique (the node and its neighbours then), shape
+    (n,) and (n, W): the nodes of at most one neighbour first (:func:`_eliminate_simplicial`), then the
+    greedy steps (:func:`_eliminate_greedy`)."""
+    n, W = adj0.shape
+    adj = adj0.copy()
+    alive = np.ones(n, dtype=np.bool_)
+    order = np.empty(n, dtype=np.int64)
+    cliques = np.zeros((n, W), dtype=np.uint64)
+    step = _eliminate_simplicial(adj, alive, order, cliques)
+    _eliminate_greedy(adj, alive, order, cliques, step, logc, heuristic)
     return order, cliques
 
 
@@ -280,15 +302,9 @@ def members_csr(sets):
     return ptr, idx
 
 
-def schedule(cliques, sizes, edges, ptr, idx, first_home):
-    """Where each set goes and how the tree is rooted and walked.
-
-    ``cliques`` (m, W) bit sets with table sizes ``sizes``; ``edges`` (the tree's); sets
-    ``idx[ptr[s]:ptr[s + 1]]`` (variables): returns the smallest clique holding each (the first of the
-    smallest; -1 for an empty set), shape (S,); each clique's parent (-1: a root), shape (m,); the cliques
-    in breadth-first order from each root, shape (m,), and where each tree starts in it; and whether each
-    clique lies on a path from a root to the home of a set ``first_home`` or later (the targets).
-    Roots: the targets' homes in ascending order, then the lowest clique of each other tree."""
+def _homes(cliques, sizes, ptr, idx):
+    """The smallest clique (of table sizes ``sizes``) holding each set ``idx[ptr[s]:ptr[s + 1]]``: the first
+    of the smallest, -1 for an empty set; shape (S,)."""
     m, W = cliques.shape
     S = ptr.shape[0] - 1
     where = np.full(S, -1, dtype=np.int64)
@@ -311,6 +327,20 @@ def schedule(cliques, sizes, edges, ptr, idx, first_home):
             if inside:
                 best = k
         where[s] = best
+    return where
+
+
+def schedule(cliques, sizes, edges, ptr, idx, first_home):
+    """Where each set goes and how the tree is rooted and walked.
+
+    ``cliques`` (m, W) bit sets with table sizes ``sizes``; ``edges`` (the tree's); sets
+    ``idx[ptr[s]:ptr[s + 1]]`` (variables): returns the home of each (:func:`_homes`), shape (S,); each
+    clique's parent (-1: a root), shape (m,); the cliques in breadth-first order from each root, shape
+    (m,), and where each tree starts in it; and whether each clique lies on a path from a root to the home
+    of a set ``first_home`` or later (the targets). Roots: the targets' homes in ascending order, then the
+    lowest clique of each other tree."""
+    m = cliques.shape[0]
+    where = _homes(cliques, sizes, ptr, idx)
     nptr = np.zeros(m + 1, dtype=np.int64)
     for e in range(edges.shape[0]):
         nptr[edges[e, 0] + 1] += 1

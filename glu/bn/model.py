@@ -27,7 +27,6 @@ out (GLU's roles are implied, and its model files stay as they were).
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -38,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from glu.errors import DataError, ModelError
-from glu.files import atomic_write_json
+from glu.files import atomic_write_json, read_json
 from glu.schema import AFFORDANCE_NODES, AFFORDANCE_ROLES, FILE_ALIASES, ROLES, WORD_VALUES, Schema
 
 FORMAT = "glu-bayesnet"
@@ -271,16 +270,7 @@ class BayesNet:
     @classmethod
     def load(cls, path: str | os.PathLike) -> BayesNet:
         """Read a model written by :meth:`save`."""
-        path = Path(path)
-        try:
-            d = json.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise ModelError(f"{path}: no such model file") from None
-        except (UnicodeDecodeError, json.JSONDecodeError) as e:
-            raise ModelError(f"{path}: not a JSON model file ({e})") from None
-        except OSError as e:
-            raise ModelError(f"{path}: cannot read ({e.strerror})") from None
-        return cls.from_dict(d, where=str(path))
+        return cls.from_dict(read_json(path, "model file", ModelError), where=str(path))
 
     @classmethod
     def from_bnt_mat(cls, path: str | os.PathLike, variable: str = "netobj_lab") -> BayesNet:

@@ -27,13 +27,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from glu.bn.network import NetworkArrays, code_of
-from glu.bn.plan import check_size, max_table_setting, triangulate
+from glu.bn.plan import Triangulation, check_size, max_table_setting, triangulate
 
 _ONE_ENTRY = np.ones((1,))
 _ONE_ENTRY.flags.writeable = False  # the table of a clique no table without evidence falls in: broadcast
@@ -117,19 +117,47 @@ def make_plan(
     ``tables`` are the nodes whose tables the answer needs (:func:`glu.bn.relevance.requisite`). Raises
     :class:`~glu.errors.ModelError` (one line) when a table would pass ``max_table``. The graph, its
     triangulation, the home of each table, likelihood and target (its smallest clique) and the order of the
-    messages come from one compiled call (:func:`glu.bn.plan.triangulate`); here the tables are built.
+    messages come from one compiled call (:func:`glu.bn.plan.triangulate`, in :func:`_triangulate`); here
+    the tables are built (:func:`_clique_tables`) and the messages laid out (:func:`_schedule`).
     """
     cards = net.cards
     obs = tuple(sorted(observed))
     slot = {v: i for i, v in enumerate(obs)}
     soft = tuple(sorted(soft))
     tables = sorted(tables)
-    family = net.sorted_family
-    scopes = [family(v) for v in tables]
+    scopes = [net.sorted_family(v) for v in tables]
     if slot:
         scopes = [
             sc if slot.keys().isdisjoint(sc) else tuple(u for u in sc if u not in slot) for sc in scopes
         ]
+    tri, cliques = _triangulate(net, scopes, soft, targets, max_table)
+    at = [{v: i for i, v in enumerate(c)} for c in cliques]  # each clique's axis of each of its variables
+    where = tri.where.tolist()
+    base, factors, constants, local_slots = _clique_tables(net, tables, scopes, where, slot, at)
+    likelihoods: list[list[tuple[int, tuple[int, ...]]]] = [[] for _ in cliques]
+    for i, v in enumerate(soft):
+        c = where[len(scopes) + i]
+        likelihoods[c].append((len(obs) + i, _shape_in([v], at[c], cards)))
+        local_slots[c] |= 1 << (len(obs) + i)
+    homes: dict[int, list[tuple[int, tuple[int, ...]]]] = {}
+    for v, h in sorted(zip(targets, where[len(scopes) + len(soft) :], strict=True)):
+        homes.setdefault(h, []).append((v, tuple(i for i, u in enumerate(cliques[h]) if u != v)))
+    return _schedule(
+        tri, cliques, at, cards, obs, soft, base, factors, constants, likelihoods, local_slots, homes
+    )
+
+
+def _triangulate(
+    net: NetworkArrays,
+    scopes: Sequence[tuple[int, ...]],
+    soft: Sequence[int],
+    targets: Sequence[int],
+    max_table: int | None,
+) -> tuple[Triangulation, tuple[tuple[int, ...], ...]]:
+    """The junction tree of the tables' free ``scopes``, the ``soft`` variables and the ``targets`` (those
+    are the sets whose homes it finds, in this order) and each clique's variables, sorted; checked against
+    ``max_table``."""
+    cards = net.cards
     free = sorted({u for sc in scopes for u in sc}.union(soft, targets))
     local = {v: i for i, v in enumerate(free)}
     sets = [*scopes, *((v,) for v in soft), *((v,) for v in targets)]
@@ -142,28 +170,40 @@ def make_plan(
     check_size(tri, max_table_setting(max_table), free, cards)
     members = np.array(free, dtype=np.int64)[tri.idx].tolist()
     bounds = tri.ptr.tolist()
-    cliques = tuple(tuple(members[bounds[c] : bounds[c + 1]]) for c in range(len(bounds) - 1))
-    at = [{v: i for i, v in enumerate(c)} for c in cliques]  # each clique's axis of each of its variables
-    where = tri.where.tolist()
+    return tri, tuple(tuple(members[bounds[c] : bounds[c + 1]]) for c in range(len(bounds) - 1))
 
-    def shape_in(variables: Sequence[int], c: int) -> list[int]:
-        """The shape, rows last (-1), of a table over ``variables`` broadcast over clique ``c``'s table."""
-        shape = [1] * (len(cliques[c]) + 1)
-        shape[-1] = -1
-        axis = at[c]
-        for u in variables:
-            shape[axis[u]] = cards[u]
-        return shape
 
-    # each clique's product of the tables of no observed variable: a view of the table when there is one
-    # (no copy), broadcast to the clique's shape when it misses some of its variables
-    base: list[np.ndarray | None] = [None] * len(cliques)
-    factors: list[list[Factor]] = [[] for _ in cliques]
+def _shape_in(variables: Iterable[int], axis: dict[int, int], cards: Sequence[int]) -> tuple[int, ...]:
+    """The shape, rows last (-1), of a table over ``variables`` broadcast over the table of a clique whose
+    variables sit on the axes ``axis``."""
+    shape = [1] * (len(axis) + 1)
+    shape[-1] = -1
+    for u in variables:
+        shape[axis[u]] = cards[u]
+    return tuple(shape)
+
+
+def _clique_tables(
+    net: NetworkArrays,
+    tables: Sequence[int],
+    scopes: Sequence[tuple[int, ...]],
+    where: Sequence[int],
+    slot: dict[int, int],
+    at: Sequence[dict[int, int]],
+) -> tuple[list[np.ndarray], list[list[Factor]], list[Factor], list[int]]:
+    """Each clique's tables: (base, factors, constants, local slots) of :class:`PatternPlan` — the table of
+    node ``tables[i]`` (free variables ``scopes[i]``) goes to clique ``where[i]``.
+
+    A clique's base is the product of its tables of no observed variable: a view of the table when there is
+    one (no copy), broadcast to the clique's shape when it misses some of its variables."""
+    cards = net.cards
+    base: list[np.ndarray | None] = [None] * len(at)
+    factors: list[list[Factor]] = [[] for _ in at]
     constants: list[Factor] = []
-    local_slots = [0] * len(cliques)
+    local_slots = [0] * len(at)
     for v, rest, c in zip(tables, scopes, where, strict=False):
         if len(rest) == len(net.parents[v]) + 1:  # no observed variable in its family
-            x = net.sorted_cpt(v).reshape(shape_in(rest, c))
+            x = net.sorted_cpt(v).reshape(_shape_in(rest, at[c], cards))
             b = base[c]
             base[c] = x if b is None else b * x
             continue
@@ -176,26 +216,16 @@ def make_plan(
         if c < 0:
             constants.append(entry)
         else:
-            factors[c].append((flat, entry[1], strides, tuple(shape_in(rest, c))))
+            factors[c].append((flat, entry[1], strides, _shape_in(rest, at[c], cards)))
             for u in seen:
                 local_slots[c] |= 1 << slot[u]
     for c, b in enumerate(base):
-        full = (*(cards[u] for u in cliques[c]), 1)
+        full = (*(cards[u] for u in at[c]), 1)
         if b is None:
             base[c] = np.broadcast_to(_ONE_ENTRY, full)
         elif b.shape != full:
             base[c] = np.broadcast_to(b, full)
-    likelihoods: list[list[tuple[int, tuple[int, ...]]]] = [[] for _ in cliques]
-    for i, v in enumerate(soft):
-        c = where[len(scopes) + i]
-        likelihoods[c].append((len(obs) + i, tuple(shape_in([v], c))))
-        local_slots[c] |= 1 << (len(obs) + i)
-    homes: dict[int, list[tuple[int, tuple[int, ...]]]] = {}
-    for v, h in sorted(zip(targets, where[len(scopes) + len(soft) :], strict=True)):
-        homes.setdefault(h, []).append((v, tuple(i for i, u in enumerate(cliques[h]) if u != v)))
-    return _schedule(
-        tri, cliques, at, cards, obs, soft, base, factors, constants, likelihoods, local_slots, homes
-    )
+    return base, factors, constants, local_slots  # type: ignore[return-value]
 
 
 def _schedule(tri, cliques, at, cards, obs, soft, base, factors, constants, likelihoods, local, homes):  # type: ignore[no-untyped-def]

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.cli.commands import help_of
+from glu.cli.commands import add_command
 from glu.cli.common import (
     add_data_args,
     add_deprecated_alias,
@@ -36,11 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add ``anticipate``."""
     from glu.studies.anticipation.experiment import CASES, ORIGINAL_STEP
 
-    p = sub.add_parser(
-        "anticipate",
-        help=help_of("anticipate"),
-        description=DESCRIPTION,
-    )
+    p = add_command(sub, "anticipate", DESCRIPTION)
     p.add_argument(
         "--case",
         choices=tuple(CASES),

@@ -10,18 +10,18 @@ from pathlib import Path
 from typing import Any
 
 from glu.bn.exchange import FORMATS, ZERO_ROW_MODES
-from glu.cli.commands import help_of
+from glu.cli.commands import add_command, add_group
 from glu.cli.common import (
     add_data_args,
     add_engine_args,
     add_evidence_args,
     add_json_option,
     add_model_args,
+    add_out_option,
     add_renormalise_option,
     json_text,
     load_model,
     make_engine,
-    output_file,
     read_evidence,
 )
 from glu.cli.terminal import one_line
@@ -31,15 +31,13 @@ from glu.evidence import check_disjoint, format_evidence
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``bn`` command group and ``query``."""
-    p = sub.add_parser(
+    bsub = add_group(
+        sub,
         "bn",
-        help=help_of("bn"),
-        description="Learn the Affordance–Words network from the robot's experiments, list its edges and "
+        "Learn the Affordance–Words network from the robot's experiments, list its edges and "
         "nodes, or convert it from and to the exchange formats of other tools (BIF, XMLBIF, UAI). "
         "Questions to a network: glu query and glu describe.",
     )
-    bsub = p.add_subparsers(dest="bn_command", metavar="SUBCOMMAND")
-    bsub.required = True
     _register_learn_and_inspect(bsub)
     _register_exchange(bsub)
     _register_query(sub)
@@ -55,9 +53,7 @@ def _register_learn_and_inspect(bsub: argparse._SubParsersAction) -> None:
         "--experiments, and write it as a glu JSON model.",
     )
     add_data_args(lp)
-    lp.add_argument(
-        "-o", "--out", type=output_file, required=True, metavar="MODEL", help="model file to write (JSON)"
-    )
+    add_out_option(lp, "MODEL", "model file to write (JSON)")
     lp.set_defaults(func=_learn)
 
     ep = bsub.add_parser(
@@ -93,9 +89,7 @@ def _register_exchange(bsub: argparse._SubParsersAction) -> None:
         "seen__NODE written by glu bn export --zero-rows seen become NODE's all-zero rows again.",
     )
     ip.add_argument("model", type=Path, metavar="FILE", help="e.g. net.bif, net.xmlbif, net.uai, BN_lab.mat")
-    ip.add_argument(
-        "-o", "--out", type=output_file, required=True, metavar="MODEL", help="model file to write (JSON)"
-    )
+    add_out_option(ip, "MODEL", "model file to write (JSON)")
     ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
     add_renormalise_option(ip)
     ip.set_defaults(func=_import)
@@ -112,14 +106,7 @@ def _register_exchange(bsub: argparse._SubParsersAction) -> None:
         "model", type=Path, metavar="MODEL", help="model file (.json, the original .mat, or an exchange file)"
     )
     xp.add_argument("--format", choices=tuple(FORMATS), help="output format (default: from the suffix of -o)")
-    xp.add_argument(
-        "-o",
-        "--out",
-        type=output_file,
-        required=True,
-        metavar="FILE",
-        help="file to write (.bif, .xmlbif, .uai)",
-    )
+    add_out_option(xp, "FILE", "file to write (.bif, .xmlbif, .uai)")
     xp.add_argument(
         "--zero-rows",
         choices=ZERO_ROW_MODES,
@@ -132,10 +119,8 @@ def _register_exchange(bsub: argparse._SubParsersAction) -> None:
 
 def _register_query(sub: argparse._SubParsersAction) -> None:
     """Add ``query``."""
-    q = sub.add_parser(
-        "query",
-        help=help_of("query"),
-        description="Posterior marginal of each target node given evidence, by exact inference.",
+    q = add_command(
+        sub, "query", "Posterior marginal of each target node given evidence, by exact inference."
     )
     add_model_args(q)
     q.add_argument(

@@ -8,7 +8,10 @@ table, which imports nothing, is the one place a command's one-line help is writ
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
+
+if TYPE_CHECKING:
+    import argparse
 
 
 class Command(NamedTuple):
@@ -66,3 +69,18 @@ COMMANDS: dict[str, Command] = {
 def help_of(command: str) -> str:
     """The one line ``glu --help`` gives ``command``."""
     return COMMANDS[command].help
+
+
+def add_command(sub: argparse._SubParsersAction, name: str, description: str) -> argparse.ArgumentParser:
+    """The parser of the top-level command ``name``: its one line from :data:`COMMANDS`, ``description``
+    for its ``--help``."""
+    return sub.add_parser(name, help=help_of(name), description=description)
+
+
+def add_group(sub: argparse._SubParsersAction, name: str, description: str) -> argparse._SubParsersAction:
+    """The top-level command group ``name`` (``glu NAME SUBCOMMAND``, a subcommand required), as
+    :func:`add_command`: returns what its subcommands are added to. The subcommand given is
+    ``args.NAME_command``."""
+    group = add_command(sub, name, description).add_subparsers(dest=f"{name}_command", metavar="SUBCOMMAND")
+    group.required = True
+    return group

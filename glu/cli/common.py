@@ -485,6 +485,13 @@ def add_deprecated_alias(
     )
 
 
+def add_out_option(p: argparse.ArgumentParser, metavar: str, help: str, folder: bool = False) -> None:
+    """``-o/--out``, required: the file (:func:`output_file`) or, with ``folder``, the folder
+    (:func:`output_folder`) a command writes, checked before any work."""
+    kind = output_folder if folder else output_file
+    p.add_argument("-o", "--out", type=kind, required=True, metavar=metavar, help=help)
+
+
 def add_json_option(p: argparse.ArgumentParser, what: str) -> None:
     """``--json``: ``what`` as strict JSON, alone on stdout (anything else the command says goes to
     stderr)."""

@@ -10,23 +10,21 @@ from __future__ import annotations
 
 import argparse
 
-from glu.cli.commands import help_of
-from glu.cli.common import output_folder, positive_int
+from glu.cli.commands import add_command
+from glu.cli.common import add_out_option, positive_int
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``correspondence`` command."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "correspondence",
-        help=help_of("correspondence"),
-        description="Run the synthetic study of notebook 10 with its default parameters (every seed, "
+        "Run the synthetic study of notebook 10 with its default parameters (every seed, "
         "training source, feature set and condition; the ideal and the occluding tracker), one task per "
         "seed on a LocalCluster, and write its tables with their key and provenance to -o DIR, where "
         "the notebook finds them (sweeps/10_correspondence/study: make sweeps).",
     )
-    p.add_argument(
-        "-o", "--out", type=output_folder, required=True, metavar="DIR", help="folder for the tables"
-    )
+    add_out_option(p, "DIR", "folder for the tables", folder=True)
     p.add_argument(
         "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: in this process)"
     )

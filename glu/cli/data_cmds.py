@@ -7,14 +7,14 @@ import sys
 from pathlib import Path
 
 from glu import paths
-from glu.cli.commands import help_of
+from glu.cli.commands import add_group
 from glu.cli.common import (
     add_data_option,
     add_deprecated_alias,
     add_json_option,
+    add_out_option,
     integer,
     json_text,
-    output_folder,
     progress_bar,
     seed,
 )
@@ -25,14 +25,12 @@ from glu.errors import DataError, FetchError
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``data`` command group."""
-    p = sub.add_parser(
+    dsub = add_group(
+        sub,
         "data",
-        help=help_of("data"),
-        description="Get the real data (glu data fetch), write a synthetic data folder (glu data synth), "
+        "Get the real data (glu data fetch), write a synthetic data folder (glu data synth), "
         "or see which data source a command would use and what it holds (glu data info).",
     )
-    dsub = p.add_subparsers(dest="data_command", metavar="SUBCOMMAND")
-    dsub.required = True
 
     f = dsub.add_parser(
         "fetch",
@@ -74,7 +72,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"experiments per table ({MIN_ROWS} to {MAX_ROWS:,}; default {DEFAULT_SYNTHETIC_N})",
     )
     s.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
-    s.add_argument("-o", "--out", type=output_folder, required=True, metavar="DIR", help="output folder")
+    add_out_option(s, "DIR", "output folder", folder=True)
     s.add_argument(
         "--force",
         action="store_true",

@@ -14,8 +14,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from glu.cli.commands import help_of
-from glu.cli.common import add_cluster_args, add_data_option, output_file, output_folder, positive_int, seed
+from glu.cli.commands import add_command
+from glu.cli.common import (
+    add_cluster_args,
+    add_data_option,
+    add_out_option,
+    output_folder,
+    positive_int,
+    seed,
+)
 
 
 def _shared(p: argparse.ArgumentParser) -> None:
@@ -32,10 +39,10 @@ def _shared(p: argparse.ArgumentParser) -> None:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``evaluate`` and ``corpus`` commands."""
-    e = sub.add_parser(
+    e = add_command(
+        sub,
         "evaluate",
-        help=help_of("evaluate"),
-        description="Measure every fusion strategy (gesture only, network only, hard, virtual, Jeffrey, "
+        "Measure every fusion strategy (gesture only, network only, hard, virtual, Jeffrey, "
         "product) on simulated episodes: the factorial design effects × action prior × inference network × "
         "p_HMM reading × feature set × noise × viewpoint, over recogniser seeds, every strategy at every "
         "observed fraction of the gesture (docs/corpus-evaluation.md). Runs on a LocalCluster sized to the "
@@ -50,9 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="N",
         help="compute at most N chunks now; run again to continue",
     )
-    e.add_argument(
-        "-o", "--out", type=output_folder, required=True, metavar="DIR", help="output folder (resumable)"
-    )
+    add_out_option(e, "DIR", "output folder (resumable)", folder=True)
     e.add_argument(
         "--save",
         type=output_folder,
@@ -62,17 +67,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     e.set_defaults(func=_evaluate)
 
-    c = sub.add_parser(
+    c = add_command(
+        sub,
         "corpus",
-        help=help_of("corpus"),
-        description="Write the simulated episodes of a sweep's design (the same settings as glu evaluate: "
+        "Write the simulated episodes of a sweep's design (the same settings as glu evaluate: "
         "--config, --episodes, --seed, --data) to one Parquet file, one row per episode, without scoring "
         "them.",
     )
     _shared(c)
-    c.add_argument(
-        "-o", "--out", type=output_file, required=True, metavar="FILE.parquet", help="file to write"
-    )
+    add_out_option(c, "FILE.parquet", "file to write")
     c.set_defaults(func=_corpus)
 
 

@@ -13,14 +13,14 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.cli.commands import help_of
+from glu.cli.commands import add_command, add_group
 from glu.cli.common import (
     add_data_option,
     add_hmm_size_args,
     add_json_option,
+    add_out_option,
     json_text,
     nonneg_float,
-    output_file,
     output_image,
     positive_float,
     positive_int,
@@ -30,6 +30,7 @@ from glu.cli.common import (
 from glu.cli.terminal import one_line
 from glu.data.source import HAND_LOG
 from glu.errors import DataError
+from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK
 from glu.gestures.invariants import ALL, INVARIANCE_MEANING, INVARIANCES, RAW, Invariants
 from glu.gestures.synthetic import GESTURES
 from glu.hmm import RECIPES, TrainingConfig
@@ -55,14 +56,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _register_gestures(sub: argparse._SubParsersAction) -> None:
     """Add ``gestures segment``."""
-    g = sub.add_parser(
+    gsub = add_group(
+        sub,
         "gestures",
-        help=help_of("gestures"),
-        description="Inspect hand-trajectory logs: repair their tracking problems and find the gesture "
+        "Inspect hand-trajectory logs: repair their tracking problems and find the gesture "
         "repetitions in them. " + LOG_TEXT,
     )
-    gsub = g.add_subparsers(dest="gestures_command", metavar="SUBCOMMAND")
-    gsub.required = True
     s = gsub.add_parser(
         "segment",
         help="find the gesture repetitions in a hand log and print them",
@@ -82,15 +81,13 @@ def _register_gestures(sub: argparse._SubParsersAction) -> None:
 
 def _register_hmm(sub: argparse._SubParsersAction) -> None:
     """Add ``hmm train``."""
-    h = sub.add_parser(
+    hsub = add_group(
+        sub,
         "hmm",
-        help=help_of("hmm"),
-        description="Train one left-to-right GMM-HMM per action, on the real recordings, synthetic gestures "
+        "Train one left-to-right GMM-HMM per action, on the real recordings, synthetic gestures "
         "or your own labelled recordings, and save them as a recogniser file that glu recognize and glu "
         "anticipate take (--models FILE).",
     )
-    hsub = h.add_subparsers(dest="hmm_command", metavar="SUBCOMMAND")
-    hsub.required = True
     t = hsub.add_parser(
         "train",
         help="train one left-to-right GMM-HMM per action and save the recogniser (JSON)",
@@ -122,9 +119,7 @@ def _add_training_data(t: argparse.ArgumentParser) -> None:
         "is the label) holding .csv/.tsv/.npy tables, .log files or recording folders; or a CSV manifest "
         "with the columns file,label[,frames A:B]",
     )
-    t.add_argument(
-        "-o", "--out", type=output_file, required=True, metavar="RECOGNISER", help="file to write (JSON)"
-    )
+    add_out_option(t, "RECOGNISER", "file to write (JSON)")
 
 
 def _add_training_settings(t: argparse.ArgumentParser) -> None:
@@ -168,14 +163,7 @@ def _add_training_settings(t: argparse.ArgumentParser) -> None:
         metavar="LIST",
         help=f"{RAW} (default), {ALL}, or comma-separated invariances among {','.join(INVARIANCES)}",
     )
-    t.add_argument(
-        "--body-size",
-        nargs=2,
-        type=positive_float,
-        metavar=("H", "V"),
-        help="--recordings: the body size of t,x,y,z tables, horizontal (shoulder) and vertical "
-        "(neck-torso), m (default: the originals' 0.33 0.23)",
-    )
+    _add_body_size(t, "--recordings: the body size of t,x,y,z tables")
     t.add_argument(
         "--include-test",
         action="store_true",
@@ -184,12 +172,24 @@ def _add_training_settings(t: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_body_size(p: argparse.ArgumentParser, which: str) -> None:
+    """``--body-size H V``: what a t,x,y,z table (no skeleton) is divided by; ``which`` starts its help."""
+    p.add_argument(
+        "--body-size",
+        nargs=2,
+        type=positive_float,
+        metavar=("H", "V"),
+        help=f"{which}, horizontal (shoulder) and vertical (neck-torso), m (default: the originals' "
+        f"{HORIZONTAL_FALLBACK:g} {VERTICAL_FALLBACK:g})",
+    )
+
+
 def _register_recognize(sub: argparse._SubParsersAction) -> None:
     """Add ``recognize``."""
-    r = sub.add_parser(
+    r = add_command(
+        sub,
         "recognize",
-        help=help_of("recognize"),
-        description="Score a hand log (or frames A:B of it) under each action's HMM and print the "
+        "Score a hand log (or frames A:B of it) under each action's HMM and print the "
         "log-likelihoods and the posterior with equal priors; --stream prints them after every frame. "
         + LOG_TEXT
         + " "
@@ -214,14 +214,7 @@ def _register_recognize(sub: argparse._SubParsersAction) -> None:
     )
     add_json_option(r, '{"loglik": {…}, "posterior": {…}, "typicality": {…}} (with --stream: one a frame)')
     r.add_argument("--repair", action="store_true", help="repair the log first (default: frames as logged)")
-    r.add_argument(
-        "--body-size",
-        nargs=2,
-        type=positive_float,
-        metavar=("H", "V"),
-        help="for a t,x,y,z table: horizontal (shoulder) and vertical (neck-torso) body size in m "
-        "(default: the originals' 0.33 0.23)",
-    )
+    _add_body_size(r, "for a t,x,y,z table: the body size")
     r.set_defaults(func=_recognize)
 
 

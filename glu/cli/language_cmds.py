@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from glu.cli.commands import help_of
+from glu.cli.commands import add_command
 from glu.cli.common import (
     add_description_args,
     add_engine_args,
@@ -44,11 +44,7 @@ printed for comparison. --json prints [{"sentence": …, "score": …}, …] onl
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``describe``."""
-    p = sub.add_parser(
-        "describe",
-        help=help_of("describe"),
-        description=DESCRIPTION,
-    )
+    p = add_command(sub, "describe", DESCRIPTION)
     add_model_args(p)
     add_evidence_args(p)
     add_engine_args(p)

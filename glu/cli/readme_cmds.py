@@ -13,17 +13,17 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from glu.cli.commands import help_of
+from glu.cli.commands import add_command
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``readme``."""
     from glu.run.readme import README, SUMMARY
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "readme",
-        help=help_of("readme"),
-        description="Write the README's story table (from the notebooks' manifests), its results section "
+        "Write the README's story table (from the notebooks' manifests), its results section "
         "(from the summary of a full make reproduce on the real data: every number in it comes from the "
         "summary), and the command table of docs/cli.md and the tables of docs/speed.md (from the "
         "benchmarks' results), each between its markers; --check only says whether they are up to date "

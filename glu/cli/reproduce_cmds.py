@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from glu.cli.commands import help_of
+from glu.cli.commands import add_command
 from glu.cli.common import add_data_option, add_json_option, json_text, positive_int, require_extra, seed
 
 NOTEBOOK_MODULES = ("papermill", "jupytext", "ipykernel", "nbconvert", "rerun")
@@ -17,10 +17,10 @@ SITE_MODULES = ("sphinx", "myst_nb", "pydata_sphinx_theme")
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``reproduce`` and ``run`` commands."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "reproduce",
-        help=help_of("reproduce"),
-        description="Run every notebook headless, in parallel kernels, then write the results summary and "
+        "Run every notebook headless, in parallel kernels, then write the results summary and "
         "the documentation site; publish the whole run (figures, recordings, results, models, executed "
         "notebooks, summary, site) at once, only when every notebook succeeded: a failed or interrupted run "
         "leaves the last published run as it was. Nothing glu did not write is replaced.",
@@ -50,10 +50,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_notebooks_option(p)
     p.set_defaults(func=_reproduce)
 
-    r = sub.add_parser(
+    r = add_command(
+        sub,
         "run",
-        help=help_of("run"),
-        description=(
+        (
             "Run one notebook headless, showing each cell as it starts on stderr (--quiet: nothing). "
             "Parameters are checked against the notebook's parameters cell before anything executes. "
             "Outputs go to a new folder build/scratch/NOTEBOOK/DATE-TIME/ unless -o DIR is given (a folder "

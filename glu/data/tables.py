@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
-from glu.files import atomic_write_text
+from glu.files import atomic_write_text, read_bytes
 from glu.schema import FILE_ALIASES, WORD_VALUES, Schema, default_schema
 
 ABSENT_MARK = "-"
@@ -30,14 +30,7 @@ ABSENT_MARK = "-"
 
 def _read_text(path: Path) -> str:
     """Read a whole file as UTF-8 text, with a clear error for missing files and bad encodings."""
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise DataError(f"{path}: is a directory, expected a file") from None
-    except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror})") from None
+    raw = read_bytes(path)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as e:

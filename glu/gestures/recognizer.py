@@ -32,7 +32,6 @@ too. Version 1 files (before invariant features) are read as raw-feature recogni
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict
@@ -42,7 +41,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from glu.errors import DataError, ModelError
-from glu.files import atomic_write_json
+from glu.files import atomic_write_json, read_json
 from glu.gestures.features import FEATURES_DESCRIPTION
 from glu.gestures.invariants import Invariants
 from glu.gestures.typicality import (
@@ -343,16 +342,7 @@ class Recognizer:
     @classmethod
     def load(cls, path: str | os.PathLike) -> Recognizer:
         """Read a recogniser written by :meth:`save`; :class:`ModelError` if the file is not one."""
-        path = Path(path)
-        try:
-            d = json.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise ModelError(f"{path}: no such recogniser file") from None
-        except IsADirectoryError:
-            raise ModelError(f"{path}: is a folder, not a recogniser file") from None
-        except (UnicodeDecodeError, json.JSONDecodeError) as e:
-            raise ModelError(f"{path}: not a JSON recogniser file ({e})") from None
-        return cls.from_dict(d, str(path))
+        return cls.from_dict(read_json(path, "recogniser file", ModelError), str(path))
 
 
 def _config_from(d: Mapping[str, Any], meta: Mapping[str, Any]) -> TrainingConfig | None:

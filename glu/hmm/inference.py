@@ -106,13 +106,8 @@ def log_component_densities(
 
 
 def log_emissions(X: np.ndarray, means: np.ndarray, chol_inv: np.ndarray, log_norm: np.ndarray) -> np.ndarray:
-    """Emission log-densities of Gaussian-mixture states, ``log p(x_t | q)``.
-
-    Parameters
-    ----------
-    X : array, shape (T, D) — the frames
-    means : array, shape (..., M, D)
-    chol_inv, log_norm : arrays, shapes (..., M, D, D) and (..., M), from :func:`gaussian_factors`
+    """Emission log-densities of Gaussian-mixture states, ``log p(x_t | q)``: the log-sum over the
+    components of :func:`log_component_densities` (the same parameters).
 
     Returns
     -------

@@ -19,7 +19,7 @@ Example
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -235,6 +235,18 @@ def _thompson(grammar: Grammar, index: dict[str, int]) -> tuple[list, list, int,
     return eps, trans, s0, t0
 
 
+def _reachable(states: Iterable[int], arcs: Sequence[Iterable[int]]) -> set[int]:
+    """The states reachable from ``states`` (themselves included) along ``arcs`` (state → next states)."""
+    seen = set(states)
+    stack = list(seen)
+    while stack:
+        for t in arcs[stack.pop()]:
+            if t not in seen:
+                seen.add(t)
+                stack.append(t)
+    return seen
+
+
 def _subsets(
     eps: list, trans: list, s0: int, t0: int, source: str
 ) -> tuple[list[dict[int, int]], list[bool]]:
@@ -242,14 +254,7 @@ def _subsets(
     are final; GrammarError past :data:`MAX_DFA_STATES`."""
 
     def closure(states: Iterable[int]) -> frozenset[int]:
-        seen = set(states)
-        stack = list(seen)
-        while stack:
-            for t in eps[stack.pop()]:
-                if t not in seen:
-                    seen.add(t)
-                    stack.append(t)
-        return frozenset(seen)
+        return frozenset(_reachable(states, eps))
 
     start = closure([s0])
     ids: dict[frozenset[int], int] = {start: 0}
@@ -285,13 +290,7 @@ def _trim(
     for s, out in enumerate(arcs):
         for t in out.values():
             preds[t].append(s)
-    alive = {s for s, f in enumerate(final) if f}
-    todo = list(alive)
-    while todo:
-        for p in preds[todo.pop()]:
-            if p not in alive:
-                alive.add(p)
-                todo.append(p)
+    alive = _reachable((s for s, f in enumerate(final) if f), preds)
     if start not in alive:  # the language is empty: keep one non-final state
         return WordNetwork(words, ((),), (False,), 0, source)
     new_id = {start: 0}

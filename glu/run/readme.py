@@ -86,11 +86,14 @@ def tables(summary: Mapping[str, Any]) -> dict[str, tuple[pd.DataFrame, dict[str
 
 
 def values(summary: Mapping[str, Any]) -> dict[str, Any]:
-    """Every slot of :data:`TEMPLATE`, read from the summary's tables (see :data:`REQUIRED`) by each study."""
+    """Every slot of :data:`TEMPLATE`, read from the summary's tables (see :data:`REQUIRED`) by each study;
+    a slot a study fills with a list of sentences becomes one bullet each, under the study's bullet."""
     v: dict[str, Any] = {"notebooks": len(summary["notebooks"])}
     t = tables(summary)
     for part in PARTS:
         for slot, value in part.values(t).items():
+            if isinstance(value, list):  # sentences: bullets under the study's bullet
+                value = "\n".join(f"  * {s}" for s in value)
             if slot in v and v[slot] != value:
                 raise DataError(
                     f"two studies fill the README slot {slot!r} differently ({v[slot]!r}, {value!r})"

@@ -35,7 +35,8 @@ SHARED: tuple[str, ...] = ("anticipation", "episodes")
 
 def readme_parts() -> list[ModuleType]:
     """Each study's ``readme`` module, in :data:`STUDIES` order: ``TEMPLATE`` (markdown bullets with
-    ``{name:format}`` slots), ``REQUIRED`` (the result tables it reads) and ``values(tables)``."""
+    ``{name:format}`` slots), ``REQUIRED`` (the result tables it reads) and ``values(tables)`` (a slot filled
+    with a list of sentences is written as bullets under the study's own: :func:`glu.run.readme.values`)."""
     return [importlib.import_module(f"glu.studies.{name}.readme") for name in STUDIES]
 
 

@@ -57,3 +57,23 @@ def test_read_text_names_the_file_and_what_it_should_be(tmp_path):
             read_text(path, "schema file")
     (tmp_path / "ok.yaml").write_text("name: x\n")
     assert read_text(tmp_path / "ok.yaml", "schema file") == "name: x\n"
+
+
+def test_read_json_names_the_file_and_what_it_should_be(tmp_path):
+    from glu.errors import DataError, ModelError
+    from glu.files import read_bytes, read_json
+
+    (tmp_path / "bad.json").write_text("{")
+    (tmp_path / "latin.json").write_bytes(b'{"a": "\xe9"}')
+    for path, message in (
+        (tmp_path / "none.json", "none.json: no such model file"),
+        (tmp_path, "is a folder, not a model file"),
+        (tmp_path / "bad.json", "bad.json: not a JSON model file"),
+        (tmp_path / "latin.json", "latin.json: not a JSON model file"),
+    ):
+        with pytest.raises(ModelError, match=message):
+            read_json(path, "model file", ModelError)
+    (tmp_path / "ok.json").write_text('{"a": [1, 2]}')
+    assert read_json(tmp_path / "ok.json") == {"a": [1, 2]}
+    with pytest.raises(DataError, match="none.bin: no such file"):
+        read_bytes(tmp_path / "none.bin")

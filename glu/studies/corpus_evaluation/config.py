@@ -78,6 +78,7 @@ from glu.studies.corpus_evaluation.evaluation import (
     EvaluationSettings,
     Reading,
 )
+from glu.studies.corpus_evaluation.findings import DESIGN
 from glu.studies.episodes import (
     ACTION_PRIORS,
     GESTURE_WORLDS,
@@ -321,18 +322,7 @@ SECTIONS: dict[str, tuple[str, ...]] = {
         "network",
         "evaluation",
     ),
-    "grid": (
-        "effects",
-        "action_prior",
-        "inference_network",
-        "learn_experiments",
-        "p_hmm",
-        "features",
-        "noise",
-        "viewpoints",
-        "fractions",
-        "strategies",
-    ),
+    "grid": (*DESIGN, "noise", "viewpoints", "fractions", "strategies"),
     "gestures": tuple(f.name for f in fields(GestureSettings)),
     "recognizer": tuple(f.name for f in fields(RecognizerSettings) if f.name != "training")
     + tuple(f.name for f in fields(TrainingConfig)),

@@ -35,7 +35,7 @@ from glu.plots.style import (
     strategy_label,
     strategy_style,
 )
-from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label, viewpoints
+from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label, metric_rows, viewpoints
 
 METRIC_LABEL = {
     "accuracy": "accuracy",
@@ -131,33 +131,6 @@ def _title(ax: Axes, first: str, note: str = "") -> None:
     of even length (:func:`glu.plots.style.balanced_fill`)."""
     lines = [*first.split("\n"), *note.split("\n")] if note else first.split("\n")
     ax.set_title("\n".join(balanced_fill(line, TITLE_CHARS) for line in lines), fontsize=9)
-
-
-def plot_metric_vs_noise(
-    ax: Axes,
-    results: pd.DataFrame,
-    target: str,
-    metric: str,
-    fraction: float = 1.0,
-    viewpoint: str = "all",
-    strategies: Sequence[str] | None = None,
-    where: Mapping[str, Any] | None = None,
-) -> Axes:
-    """One metric of one target against the sensor noise (m), a line and a 95 % band per strategy."""
-    results = _cell(results, where)
-    sel = results[
-        (results.target == target)
-        & (results.metric == metric)
-        & np.isclose(results.fraction, fraction)
-        & (results.viewpoint == viewpoint)
-        & results.noise.notna()
-    ]
-    note = _strategy_lines(ax, sel, "noise", metric, strategies)
-    views = "all viewpoints" if viewpoint == "all" else viewpoint
-    first = f"{target} {METRIC_LABEL.get(metric, metric)} ({views}, {fraction:.0%} of the gesture seen)"
-    _title(ax, f"{first}\n{where_label(where)}", note)
-    ax.set_xlabel("sensor noise (cm)")
-    return ax
 
 
 def plot_early_recognition(
@@ -318,14 +291,8 @@ def plot_by_viewpoint(
     cell): a line with markers and 95 % error bars per strategy, each its colour, line style and marker
     (:func:`glu.plots.style.strategy_style`), set a little apart so that the error bars do not hide each
     other."""
-    sel = _cell(results, {**REFERENCE_CELL, **(where or {})})
-    sel = sel[
-        (sel.target == target)
-        & (sel.metric == metric)
-        & np.isclose(sel.fraction, fraction)
-        & sel.noise.isna()
-        & (sel.viewpoint != "all")
-    ]
+    sel = metric_rows(_cell(results, {**REFERENCE_CELL, **(where or {})}), target, metric, fraction)
+    sel = sel[sel.noise.isna() & (sel.viewpoint != "all")]
     views = viewpoints(sel)
     x = np.arange(len(views))
     strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]

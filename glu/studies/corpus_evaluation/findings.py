@@ -549,11 +549,15 @@ def front_view(table: pd.DataFrame) -> str:
     return FRONT["viewpoint"] if FRONT["viewpoint"] in views else (views[0] if views else "all")
 
 
+def metric_rows(table: pd.DataFrame, target: str, metric: str, fraction: float) -> pd.DataFrame:
+    """The rows of ``table`` of one metric of one target at one observed fraction of the gesture."""
+    return table[(table.target == target) & (table.metric == metric) & np.isclose(table.fraction, fraction)]
+
+
 def _cell_rows(
     table: pd.DataFrame, cell: Mapping[str, Any], target: str, metric: str, fraction: float, viewpoint: str
 ) -> pd.DataFrame:
-    sel = select(pooled(table, viewpoint), cell)
-    return sel[(sel.target == target) & (sel.metric == metric) & np.isclose(sel.fraction, fraction)]
+    return metric_rows(select(pooled(table, viewpoint), cell), target, metric, fraction)
 
 
 def network_alone_sentences(table: pd.DataFrame) -> list[str]:

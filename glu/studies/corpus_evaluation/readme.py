@@ -50,10 +50,6 @@ REQUIRED: tuple[str, ...] = (
 """The result tables the bullet is written from."""
 
 
-def _bullets(sentences: list[str], indent: str = "  ") -> str:
-    return "\n".join(f"{indent}* {s}" for s in sentences)
-
-
 def values(tables: Tables) -> dict[str, Any]:
     """Every slot of :data:`TEMPLATE`, from the run's tables (name → (rows, meta))."""
     metrics, meta = tables["corpus_metrics"]
@@ -73,7 +69,7 @@ def values(tables: Tables) -> dict[str, Any]:
         "corpus_learned": " or ".join(learned) or "no",
         "corpus_cells": len(cells),
         "lead_text": cd.lead_sentence(metrics, verdicts, best, grid.get("features", ())),
-        "viewpoint_text": _bullets(cd.viewpoint_sentences(metrics, features)),
+        "viewpoint_text": cd.viewpoint_sentences(metrics, features),
         "validation_text": cd.validation_sentence(calibration),
         "world_text": cd.gesture_world_sentence(metrics),
     }

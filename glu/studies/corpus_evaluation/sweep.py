@@ -61,15 +61,7 @@ import pandas as pd
 from glu import __version__
 from glu.errors import DataError, GluError
 from glu.files import atomic_write_json
-from glu.machine import (
-    SYNCHRONOUS,
-    check_reachable,
-    check_scheduler,
-    close_cluster,
-    ctrl_c_held,
-    kill_local_workers,
-    quiet_dask_logs,
-)
+from glu.machine import SYNCHRONOUS, available_cores, check_reachable, check_scheduler, dask_client
 from glu.saved import made_with
 from glu.studies.corpus_evaluation import robots
 from glu.studies.corpus_evaluation.config import SweepConfig
@@ -415,45 +407,10 @@ def _worker_lost(e: BaseException) -> bool:
 
 
 def _run_on_dask(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
-    with quiet_dask_logs():  # glu says what went wrong in one line; the cluster's own logs stay out of it
-        return _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar)
+    n = workers or available_cores()
+    with dask_client(n, scheduler, silence_logs=logging.CRITICAL) as client:
+        from distributed import as_completed
 
-
-def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) -> float:
-    try:
-        from distributed import Client, LocalCluster, as_completed
-    except ImportError:
-        from glu.errors import MissingDependencyError
-
-        raise MissingDependencyError(
-            "running on Dask needs dask.distributed, which the plain `pip install glu` leaves out; "
-            "install it with: pip install 'glu[dask]'"
-        ) from None
-
-    cluster = None
-    try:
-        if scheduler is None:
-            from glu.machine import available_cores
-
-            n = workers or available_cores()
-            with ctrl_c_held():  # the workers and the cluster threads never see Ctrl-C: glu stops them
-                cluster = LocalCluster(
-                    n_workers=n,
-                    threads_per_worker=1,
-                    processes=True,
-                    dashboard_address=":0",
-                    silence_logs=logging.CRITICAL,
-                )
-                client = Client(cluster)
-        else:
-            try:
-                client = Client(scheduler, timeout="30s")
-            except (OSError, TimeoutError) as e:
-                raise DataError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
-    except BaseException as e:
-        close_cluster(cluster, e)
-        raise
-    try:
         cpu = 0.0
         # a task, not scattered data: a worker that dies takes its copy with it, and the cluster recomputes
         # a task's result where scattered data would be lost for good (the sweep then waited forever)
@@ -488,10 +445,3 @@ def _run_on_cluster(evaluator, todo, out, fingerprint, scheduler, workers, bar) 
                 ) from e
             cpu += _save(out, fingerprint, result, bar)
         return cpu
-    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers are killed, not asked to finish (nor to talk)
-        kill_local_workers(cluster)
-        raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()

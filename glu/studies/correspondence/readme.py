@@ -50,11 +50,6 @@ REQUIRED: tuple[str, ...] = (
 """The result tables the bullets are written from."""
 
 
-def bullets(sentences: list[str], indent: str = "  ") -> str:
-    """Sentences as markdown bullets at ``indent``."""
-    return "\n".join(f"{indent}* {s}" for s in sentences)
-
-
 def values(tables: Tables) -> dict[str, Any]:
     """Every slot of :data:`TEMPLATE`, from the run's tables (name → (rows, meta))."""
     v = _loso(tables)
@@ -71,13 +66,11 @@ def values(tables: Tables) -> dict[str, Any]:
         seated_x_hi=sat["x"].max(),
         standing_x_min=stand["x"].min(),
     )
-    v["nested_text"] = bullets(
-        nested_sentences(
-            tables["correspondence_nested_cv"][0],
-            tables["seated_typicality"][0],
-            tables["correspondence_candidates"][0],
-            brief=True,
-        )
+    v["nested_text"] = nested_sentences(
+        tables["correspondence_nested_cv"][0],
+        tables["seated_typicality"][0],
+        tables["correspondence_candidates"][0],
+        brief=True,
     )
     for case in ("sphere", "box"):
         pred = tables[f"tcds_anticipation_{case}_glu_predictions"][0]
@@ -87,9 +80,7 @@ def values(tables: Tables) -> dict[str, Any]:
     v["study_seeds"] = len(meta["parameters"]["seeds"])
     v["study_bootstrap"] = _replicates(meta)
     v["ci_percent"] = 100 * LEVEL
-    v["study_text"] = bullets(
-        study_sentences(study, tables["correspondence_invariance_effects"][0], brief=True)
-    )
+    v["study_text"] = study_sentences(study, tables["correspondence_invariance_effects"][0], brief=True)
     return v
 
 
