@@ -11,10 +11,6 @@ from __future__ import annotations
 REDRAWN_ELSEWHERE: dict[str, str] = {
     "learning_curves": "i31-learning",
     "learning_match": "i31-learning",
-    # notebook 11's figures as issue 30 left them: strategies still told apart by colour alone (to redraw)
-    "corpus_early_recognition": "not yet redrawn (issue 33, item 9)",
-    "corpus_differences": "not yet redrawn (issue 33, item 9)",
-    "corpus_calibration": "not yet redrawn (issue 33, item 9)",
 }
 
 

@@ -42,6 +42,42 @@ RULE_LABELS = {
     "product": "product rule",
 }
 """How figures name the fusion rules (``jeffrey`` is Jeffrey's rule, a proper name)."""
+STRATEGY_LABELS = {
+    "gesture": "gesture (HMMs alone)",
+    "network": "network alone",
+    **RULE_LABELS,
+    "true_action": "true action given",
+}
+"""How figures name the fusion strategies: the rules of :data:`glu.fusion.STRATEGIES` and the baselines
+they are compared with (the gesture recogniser alone, the network alone, the true action given)."""
+STRATEGY_COLORS = {
+    "gesture": "#8C8C8C",
+    "network": "#937860",
+    "hard": "#C44E52",
+    "virtual": "#4C72B0",
+    "jeffrey": "#55A868",
+    "product": "#DD8452",
+    "true_action": "#222222",
+}
+"""A colour per strategy of :data:`STRATEGY_LABELS`."""
+STRATEGY_MARKERS = {
+    "gesture": "s",
+    "network": "D",
+    "hard": "v",
+    "virtual": "^",
+    "jeffrey": "o",
+    "product": "P",
+    "true_action": "X",
+}
+"""A marker per strategy of :data:`STRATEGY_LABELS`, so that no strategy is told from another by its colour
+alone (colour-blind readers, greyscale prints)."""
+STRATEGY_LINESTYLES = {"gesture": "--", "network": "--", "true_action": ":"}
+"""Line styles of the strategies drawn as lines with markers: the baselines dashed, the true action (an
+oracle) dotted, the rules solid (:func:`strategy_style`)."""
+RULE_LINESTYLES = {"virtual": "-", "jeffrey": "--", "hard": ":", "product": "-"}
+"""Line styles of the rules where a line has no marker and its colour means something else (the sweeps of
+p_HMM, coloured by value): the rules a sweep draws together (virtual evidence and Jeffrey's rule) differ by
+line style alone; the product rule is swept on its own."""
 FOOTER_SIZE = 7.5
 """Points: the footer naming the data."""
 
@@ -49,6 +85,33 @@ FOOTER_SIZE = 7.5
 def rule_label(rule: str) -> str:
     """The fusion rule ``rule`` as figures name it (:data:`RULE_LABELS`), else ``rule`` itself."""
     return RULE_LABELS.get(rule, rule)
+
+
+def strategy_label(strategy: str) -> str:
+    """A fusion strategy as figures name it (:data:`STRATEGY_LABELS`), else ``strategy`` itself."""
+    return STRATEGY_LABELS.get(strategy, strategy)
+
+
+def strategy_style(strategy: str) -> dict[str, str]:
+    """How a strategy's line is drawn (keywords of ``Axes.plot`` and ``Axes.errorbar``): its colour
+    (:data:`STRATEGY_COLORS`), line style (:data:`STRATEGY_LINESTYLES`, else solid) and marker
+    (:data:`STRATEGY_MARKERS`); black circles for a strategy not named there."""
+    return {
+        "color": STRATEGY_COLORS.get(strategy, "black"),
+        "ls": STRATEGY_LINESTYLES.get(strategy, "-"),
+        "marker": STRATEGY_MARKERS.get(strategy, "o"),
+    }
+
+
+def balanced_fill(text: str, width: int) -> str:
+    """``text`` in lines of at most ``width`` characters (not broken at hyphens), as few as
+    :func:`textwrap.fill` makes, and as even in length as the words allow (no lone word on a last line)."""
+    lines = textwrap.wrap(text, width, break_on_hyphens=False)
+    for w in range(-(-len(text) // len(lines)) if len(lines) > 1 else width, width):
+        even = textwrap.wrap(text, w, break_on_hyphens=False)
+        if len(even) <= len(lines):
+            return "\n".join(even)
+    return "\n".join(lines)
 
 
 def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
