@@ -149,9 +149,11 @@ def stamp(fig: Figure, footer: str, made_by: str = "") -> None:
         fig.tight_layout()
     chars = int(fig.get_figwidth() * 72 / (0.56 * FOOTER_SIZE))  # about as wide as the figure
     lines = textwrap.wrap(footer, max(chars, 40), break_on_hyphens=False)
-    fig.text(0.005, -0.01, "\n".join(lines), fontsize=FOOTER_SIZE, color="0.3", ha="left", va="top")
-    if made_by:  # one line further down: the footer's lines at matplotlib's line spacing (1.2)
-        below = -0.01 - len(lines) * 1.2 * FOOTER_SIZE / 72 / fig.get_figheight()
+    text = fig.text(0.005, -0.01, "\n".join(lines), fontsize=FOOTER_SIZE, color="0.3", ha="left", va="top")
+    if made_by:  # on a line of its own under the footer as matplotlib lays it out (measured, not assumed)
+        box = text.get_window_extent(fig.canvas.get_renderer())
+        gap = 0.2 * FOOTER_SIZE / 72 * fig.dpi  # a fifth of a line, in pixels
+        below = (box.y0 - gap) / fig.bbox.height
         fig.text(0.005, below, made_by, fontsize=FOOTER_SIZE, color="0.45", ha="left", va="top")
 
 

@@ -164,6 +164,22 @@ def test_the_figure_is_checked_as_saved_tightly_cropped(fig):
     assert any("the data this figure" in p and "legend" in p for p in problems), problems
 
 
+@pytest.mark.parametrize("words", [3, 40, 120])
+@pytest.mark.parametrize("size", [(3.0, 2.0), (6.0, 3.0), (12.0, 5.0)])
+def test_the_made_by_line_lies_below_the_footer_whatever_its_lines(fig, words, size):
+    """The "glu …, commit …" line sits wholly below the footer, however many lines the footer wraps into
+    (measured by matplotlib's own text extents, multi-line text included)."""
+    from glu.plots.style import stamp
+
+    f, ax = fig
+    f.set_size_inches(*size)
+    ax.plot([0, 1], [0, 1])
+    stamp(f, " ".join(["parameter=value"] * words), "glu 0.1.0, commit 0123456789ab")
+    r = f.canvas.get_renderer()
+    footer, made_by = (t.get_window_extent(r) for t in f.texts[-2:])
+    assert made_by.y1 < footer.y0 and made_by.x0 == pytest.approx(footer.x0)
+
+
 def _anticipation_frames(case: str = "sphere", n: int = 40):
     """Made-up frames shaped like AnticipationRun.curves(), .predictions() and published_comparison()."""
     import pandas as pd
