@@ -42,6 +42,42 @@ RULE_LABELS = {
     "product": "product rule",
 }
 """How figures name the fusion rules (``jeffrey`` is Jeffrey's rule, a proper name)."""
+STRATEGY_LABELS = {
+    "gesture": "gesture (HMMs alone)",
+    "network": "network alone",
+    **RULE_LABELS,
+    "true_action": "true action given",
+}
+"""How figures name the fusion strategies: the rules of :data:`glu.fusion.STRATEGIES` and the baselines
+they are compared with (the gesture recogniser alone, the network alone, the true action given)."""
+STRATEGY_COLORS = {
+    "gesture": "#8C8C8C",
+    "network": "#937860",
+    "hard": "#C44E52",
+    "virtual": "#4C72B0",
+    "jeffrey": "#55A868",
+    "product": "#DD8452",
+    "true_action": "#222222",
+}
+"""A colour per strategy of :data:`STRATEGY_LABELS`."""
+STRATEGY_MARKERS = {
+    "gesture": "s",
+    "network": "D",
+    "hard": "v",
+    "virtual": "^",
+    "jeffrey": "o",
+    "product": "P",
+    "true_action": "X",
+}
+"""A marker per strategy of :data:`STRATEGY_LABELS`, so that no strategy is told from another by its colour
+alone (colour-blind readers, greyscale prints)."""
+STRATEGY_LINESTYLES = {"gesture": "--", "network": "--", "true_action": ":"}
+"""Line styles of the strategies drawn as lines with markers: the baselines dashed, the true action (an
+oracle) dotted, the rules solid (:func:`strategy_style`)."""
+RULE_LINESTYLES = {"virtual": "-", "jeffrey": "--", "hard": ":", "product": "-"}
+"""Line styles of the rules where a line has no marker and its colour means something else (the sweeps of
+p_HMM, coloured by value): the rules a sweep draws together (virtual evidence and Jeffrey's rule) differ by
+line style alone; the product rule is swept on its own."""
 FOOTER_SIZE = 7.5
 """Points: the footer naming the data."""
 
@@ -49,6 +85,33 @@ FOOTER_SIZE = 7.5
 def rule_label(rule: str) -> str:
     """The fusion rule ``rule`` as figures name it (:data:`RULE_LABELS`), else ``rule`` itself."""
     return RULE_LABELS.get(rule, rule)
+
+
+def strategy_label(strategy: str) -> str:
+    """A fusion strategy as figures name it (:data:`STRATEGY_LABELS`), else ``strategy`` itself."""
+    return STRATEGY_LABELS.get(strategy, strategy)
+
+
+def strategy_style(strategy: str) -> dict[str, str]:
+    """How a strategy's line is drawn (keywords of ``Axes.plot`` and ``Axes.errorbar``): its colour
+    (:data:`STRATEGY_COLORS`), line style (:data:`STRATEGY_LINESTYLES`, else solid) and marker
+    (:data:`STRATEGY_MARKERS`); black circles for a strategy not named there."""
+    return {
+        "color": STRATEGY_COLORS.get(strategy, "black"),
+        "ls": STRATEGY_LINESTYLES.get(strategy, "-"),
+        "marker": STRATEGY_MARKERS.get(strategy, "o"),
+    }
+
+
+def balanced_fill(text: str, width: int) -> str:
+    """``text`` in lines of at most ``width`` characters (not broken at hyphens), as few as
+    :func:`textwrap.fill` makes, and as even in length as the words allow (no lone word on a last line)."""
+    lines = textwrap.wrap(text, width, break_on_hyphens=False)
+    for w in range(-(-len(text) // len(lines)) if len(lines) > 1 else width, width):
+        even = textwrap.wrap(text, w, break_on_hyphens=False)
+        if len(even) <= len(lines):
+            return "\n".join(even)
+    return "\n".join(lines)
 
 
 def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
@@ -86,9 +149,11 @@ def stamp(fig: Figure, footer: str, made_by: str = "") -> None:
         fig.tight_layout()
     chars = int(fig.get_figwidth() * 72 / (0.56 * FOOTER_SIZE))  # about as wide as the figure
     lines = textwrap.wrap(footer, max(chars, 40), break_on_hyphens=False)
-    fig.text(0.005, -0.01, "\n".join(lines), fontsize=FOOTER_SIZE, color="0.3", ha="left", va="top")
-    if made_by:  # one line further down: the footer's lines at matplotlib's line spacing (1.2)
-        below = -0.01 - len(lines) * 1.2 * FOOTER_SIZE / 72 / fig.get_figheight()
+    text = fig.text(0.005, -0.01, "\n".join(lines), fontsize=FOOTER_SIZE, color="0.3", ha="left", va="top")
+    if made_by:  # on a line of its own under the footer as matplotlib lays it out (measured, not assumed)
+        box = text.get_window_extent(fig.canvas.get_renderer())
+        gap = 0.2 * FOOTER_SIZE / 72 * fig.dpi  # a fifth of a line, in pixels
+        below = (box.y0 - gap) / fig.bbox.height
         fig.text(0.005, below, made_by, fontsize=FOOTER_SIZE, color="0.45", ha="left", va="top")
 
 

@@ -13,7 +13,6 @@ import jupytext
 import papermill as pm
 import pytest
 from browser import browser, needs_browser, search, walk_site
-from figure_owners import counted
 
 from glu.plots.overlap import CHECK_ENV
 from glu.run.manifest import read_manifest
@@ -103,8 +102,7 @@ def test_notebook_quick_run_writes_its_figures(quick_runs, name):
 
 def test_no_figure_has_overlapping_text_or_a_legend_on_data(quick_runs):
     """Every figure of the quick run passes glu.plots.overlap: no text on text or on data, no series told
-    apart by colour alone (tests/library/test_figure_overlap.py tests the check; tests/figure_owners.py
-    names the figures being redrawn on other branches)."""
+    apart by colour alone (tests/library/test_figure_overlap.py tests the check)."""
     out, _ = quick_runs[0]
     pngs = sorted((out / "figures").glob("*.png"))
     expected = {f for m in MANIFESTS.values() for f in m.figures if f not in m.real_only}
@@ -113,8 +111,8 @@ def test_no_figure_has_overlapping_text_or_a_legend_on_data(quick_runs):
     for png in pngs:
         report = FIGURE_CHECKS[out] / f"{png.stem}.txt"
         assert report.is_file(), f"{png.name} was not checked"
-        if counted(png.stem, report.read_text().splitlines()):
-            problems[png.stem] = counted(png.stem, report.read_text().splitlines())
+        if report.read_text().splitlines():
+            problems[png.stem] = report.read_text().splitlines()
     assert not problems, "\n".join(f"{name}: {p}" for name, ps in problems.items() for p in ps)
 
 

@@ -16,7 +16,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-from figure_owners import counted  # noqa: E402
 
 from glu.plots.overlap import CHECK_ENV, figure_problems  # noqa: E402
 
@@ -164,6 +163,22 @@ def test_the_figure_is_checked_as_saved_tightly_cropped(fig):
     assert any("the data this figure" in p and "legend" in p for p in problems), problems
 
 
+@pytest.mark.parametrize("words", [3, 40, 120])
+@pytest.mark.parametrize("size", [(3.0, 2.0), (6.0, 3.0), (12.0, 5.0)])
+def test_the_made_by_line_lies_below_the_footer_whatever_its_lines(fig, words, size):
+    """The "glu …, commit …" line sits wholly below the footer, however many lines the footer wraps into
+    (measured by matplotlib's own text extents, multi-line text included)."""
+    from glu.plots.style import stamp
+
+    f, ax = fig
+    f.set_size_inches(*size)
+    ax.plot([0, 1], [0, 1])
+    stamp(f, " ".join(["parameter=value"] * words), "glu 0.1.0, commit 0123456789ab")
+    r = f.canvas.get_renderer()
+    footer, made_by = (t.get_window_extent(r) for t in f.texts[-2:])
+    assert made_by.y1 < footer.y0 and made_by.x0 == pytest.approx(footer.x0)
+
+
 def _anticipation_frames(case: str = "sphere", n: int = 40):
     """Made-up frames shaped like AnticipationRun.curves(), .predictions() and published_comparison()."""
     import pandas as pd
@@ -238,7 +253,7 @@ def _checked_run(data, out, check, monkeypatch, **kwargs) -> list[str]:
     return [
         f"{p.stem}: {line}"
         for p in pngs
-        for line in counted(p.stem, (check / f"{p.stem}.txt").read_text().splitlines())
+        for line in (check / f"{p.stem}.txt").read_text().splitlines()
     ]
 
 
@@ -316,3 +331,45 @@ def test_a_line_and_its_band_of_one_colour_are_one_series(fig):
         ax.fill_between([0, 1], [i - 0.2] * 2, [i + 0.2] * 2, color=f"C{i}", alpha=0.2)
     ax.plot([0, 1], [5, 5], marker="o", color="C4")
     assert [p for p in figure_problems(f) if p.startswith("colour alone")] == []
+
+
+def test_every_fusion_strategy_has_a_look_of_its_own_besides_its_colour(fig):
+    """The shared strategy look (glu.plots.style): seven strategies in one axes, as lines or as markers
+    alone (the calibration bins), are never told apart by colour alone, and no two share a marker."""
+    from glu.plots.style import STRATEGY_LABELS, STRATEGY_MARKERS, strategy_style
+
+    assert set(STRATEGY_MARKERS) == set(STRATEGY_LABELS)
+    assert len(set(STRATEGY_MARKERS.values())) == len(STRATEGY_MARKERS)
+    f, ax = fig
+    f2, ax2 = plt.subplots(figsize=(4, 3))
+    for i, strategy in enumerate(STRATEGY_LABELS):
+        ax.plot([0, 1, 2], [i, i + 0.3, i + 0.1], **strategy_style(strategy), label=strategy)
+        style = strategy_style(strategy)
+        ax2.scatter([0, 1, 2], [i, i, i], color=style["color"], marker=style["marker"], s=30)
+    assert [p for p in figure_problems(f) if p.startswith("colour alone")] == []
+    assert [p for p in figure_problems(f2) if p.startswith("colour alone")] == []
+    plt.close(f2)
+
+
+@pytest.mark.parametrize(
+    "text, width",
+    [
+        ("uniform actions, generating network, p_HMM per-frame, raw features", 52),
+        ("gesture (HMMs alone) = hard decision = Jeffrey's rule;", 52),
+        ("a b c d e f g h i j k", 10),
+        ("short", 52),
+        ("", 52),
+    ],
+)
+def test_a_balanced_title_keeps_every_word_within_the_width_in_as_few_lines_as_textwrap(text, width):
+    import textwrap
+
+    from glu.plots.style import balanced_fill
+
+    plain = textwrap.wrap(text, width, break_on_hyphens=False)
+    lines = balanced_fill(text, width).split("\n") if text else []
+    assert " ".join(lines).split() == text.split()
+    assert len(lines) == len(plain) and all(len(line) <= width for line in lines)
+    if len(plain) > 1:  # as even as the words allow: the longest line no longer than textwrap's
+        assert max(map(len, lines)) <= max(map(len, plain))
+        assert min(map(len, lines)) >= min(map(len, plain))

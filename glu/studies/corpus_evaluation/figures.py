@@ -28,27 +28,15 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
-from glu.plots.style import RULE_LABELS
+from glu.plots.style import (
+    STRATEGY_COLORS,
+    STRATEGY_MARKERS,
+    balanced_fill,
+    strategy_label,
+    strategy_style,
+)
 from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label, metric_rows, viewpoints
 
-STRATEGY_COLORS = {
-    "gesture": "#8C8C8C",
-    "network": "#937860",
-    "hard": "#C44E52",
-    "virtual": "#4C72B0",
-    "jeffrey": "#55A868",
-    "product": "#DD8452",
-    "true_action": "#222222",
-}
-STRATEGY_STYLE = {"true_action": ":", "network": "--", "gesture": "--"}
-STRATEGY_LABELS = {
-    "gesture": "gesture (HMMs alone)",
-    "network": "network alone",
-    **RULE_LABELS,
-    "true_action": "true action given",
-}
-"""How figures name the strategies of :mod:`glu.studies.corpus_evaluation.corpus` (``jeffrey`` is Jeffrey's
-rule)."""
 METRIC_LABEL = {
     "accuracy": "accuracy",
     "log_loss": "log-loss (nats)",
@@ -57,11 +45,12 @@ METRIC_LABEL = {
 }
 COINCIDE = 0.01
 """Lines closer than this fraction of the axis' range at every point coincide (and the title says so)."""
-
-
-def strategy_label(strategy: str) -> str:
-    """A strategy as figures name it (:data:`STRATEGY_LABELS`)."""
-    return STRATEGY_LABELS.get(strategy, strategy)
+MARKER_SIZE = 4.5
+"""Points: the strategies' markers on lines, large enough that their shapes tell them apart."""
+LINE_WIDTH = 1.3
+"""Points: a strategy's line."""
+TITLE_CHARS = 52
+"""A panel's title is wrapped at this many characters, so that titles of panels side by side keep apart."""
 
 
 def where_label(where: Mapping[str, Any] | None) -> str:
@@ -85,11 +74,10 @@ def _pooled(
     return frame[sel & (frame.noise.isna() if noise is None else np.isclose(frame.noise, noise))]
 
 
-def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str) -> None:
-    c = STRATEGY_COLORS.get(strategy, "black")
-    ls = STRATEGY_STYLE.get(strategy, "-")
-    ax.plot(x, g.estimate, color=c, ls=ls, marker="o", ms=3, lw=1.3, label=strategy_label(strategy))
-    ax.fill_between(x, g.ci_low, g.ci_high, color=c, alpha=0.15, lw=0)
+def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str) -> Line2D:
+    style = strategy_style(strategy)
+    ax.fill_between(x, g.ci_low, g.ci_high, color=style["color"], alpha=0.15, lw=0)
+    return ax.plot(x, g.estimate, **style, ms=MARKER_SIZE, lw=LINE_WIDTH, label=strategy_label(strategy))[0]
 
 
 def coinciding(series: dict[str, tuple[np.ndarray, np.ndarray]], span: float) -> list[list[str]]:
@@ -107,7 +95,8 @@ def coinciding(series: dict[str, tuple[np.ndarray, np.ndarray]], span: float) ->
 
 
 def _coincide_note(groups: list[list[str]]) -> str:
-    return "; ".join(" = ".join(strategy_label(s) for s in g) for g in groups) + (
+    """The strategies whose lines coincide, a line per group ("" if none)."""
+    return ";\n".join(" = ".join(strategy_label(s) for s in g) for g in groups) + (
         " (lines coincide)" if groups else ""
     )
 
@@ -115,23 +104,33 @@ def _coincide_note(groups: list[list[str]]) -> str:
 def _strategy_lines(
     ax: Axes, sel: pd.DataFrame, x: str, metric: str, strategies: Sequence[str] | None
 ) -> str:
-    """A line and a 95 % band per strategy of ``sel`` against column ``x`` (a fraction, drawn in %).
+    """A line and a 95 % band per strategy of ``sel`` against column ``x`` (a fraction, drawn in %), each
+    strategy its colour, line style and marker (:func:`glu.plots.style.strategy_style`). Of lines that
+    coincide, the earlier drawn are wider with larger markers, so that each shows around the next.
 
     Returns the note naming the strategies whose lines coincide ("" if none).
     """
-    series = {}
+    series, lines = {}, {}
     for strategy, g in sel.groupby("strategy", sort=False):
         if strategies is None or strategy in strategies:
             g = g.sort_values(x)
-            _line(ax, g[x].to_numpy() * 100, g, strategy)
+            lines[strategy] = _line(ax, g[x].to_numpy() * 100, g, strategy)
             series[strategy] = (g[x].to_numpy(dtype=float), g.estimate.to_numpy(dtype=float))
     ax.set_ylabel(METRIC_LABEL.get(metric, metric))
     lo, hi = ax.get_ylim()
-    return _coincide_note(coinciding(series, hi - lo))
+    groups = coinciding(series, hi - lo)
+    for group in groups:
+        for k, strategy in enumerate(reversed(group)):  # k: how many lines lie on this one
+            lines[strategy].set_linewidth(LINE_WIDTH + 1.0 * k)
+            lines[strategy].set_markersize(MARKER_SIZE + 1.8 * k)
+    return _coincide_note(groups)
 
 
-def _title(ax: Axes, first: str, note: str) -> None:
-    ax.set_title(first + ("\n" + textwrap.fill(note, 60) if note else ""), fontsize=9)
+def _title(ax: Axes, first: str, note: str = "") -> None:
+    """A panel's title: the lines of ``first``, then ``note``, each wrapped at :data:`TITLE_CHARS` into lines
+    of even length (:func:`glu.plots.style.balanced_fill`)."""
+    lines = [*first.split("\n"), *note.split("\n")] if note else first.split("\n")
+    ax.set_title("\n".join(balanced_fill(line, TITLE_CHARS) for line in lines), fontsize=9)
 
 
 def plot_early_recognition(
@@ -165,9 +164,10 @@ def plot_reliability(
     target: str = "effect",
 ) -> Axes:
     """Reliability diagram of a target (the effect ObjVel, or the action): how often the top value was
-    right, against its probability, per calibration bin; marker area ∝ the share of the strategy's episodes in
-    the bin (:func:`size_of_share` for a key). Lines drawn first are wider, so that one lying on another shows
-    as a border around it."""
+    right, against its probability, per calibration bin; each strategy its colour, line style and marker
+    (:func:`glu.plots.style.strategy_style`), the marker's area growing with the share of the strategy's
+    episodes in the bin (:func:`size_of_share` for a key). Lines drawn first are wider, so that one lying on
+    another shows as a border around it."""
     sel = _pooled(reliability, noise, viewpoint, where)
     sel = sel[np.isclose(sel.fraction, fraction) & (sel.n > 0) & (sel.target == target)]
     ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
@@ -176,13 +176,21 @@ def plot_reliability(
     drawn = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
     for strategy, g in sel.assign(share=sel.n / total).groupby("strategy", sort=False):
         if strategy in drawn:
-            c = STRATEGY_COLORS.get(strategy, "black")
-            ls = STRATEGY_STYLE.get(strategy, "-")
+            style = strategy_style(strategy)
+            marker = style.pop("marker")
             lw = 1.0 + 0.8 * (
                 len(drawn) - 1 - drawn.index(strategy)
             )  # the first widest: overlaps stay visible
-            ax.plot(g.confidence, g.accuracy, color=c, lw=lw, ls=ls, label=strategy_label(strategy))
-            ax.scatter(g.confidence, g.accuracy, s=size_of_share(g.share), color=c, alpha=0.7, lw=0)
+            ax.plot(g.confidence, g.accuracy, **style, lw=lw, label=strategy_label(strategy))
+            ax.scatter(
+                g.confidence,
+                g.accuracy,
+                s=size_of_share(g.share),
+                color=style["color"],
+                marker=marker,
+                alpha=0.7,
+                lw=0,
+            )
             series[strategy] = (g.confidence.to_numpy(dtype=float), g.accuracy.to_numpy(dtype=float))
     ax.set_xlim(0.3, 1.0)
     ax.set_ylim(0.0, 1.0)
@@ -198,8 +206,9 @@ def plot_reliability(
 
 
 def size_of_share(share):
-    """Marker area (points²) of a calibration bin holding ``share`` of a strategy's episodes."""
-    return 4 + 200 * np.asarray(share, dtype=float)
+    """Marker area (points²) of a calibration bin holding ``share`` of a strategy's episodes (at least 12,
+    so that the smallest marker still shows its shape)."""
+    return 12 + 200 * np.asarray(share, dtype=float)
 
 
 def plot_differences(
@@ -213,9 +222,10 @@ def plot_differences(
 ) -> Axes:
     """Paired differences with 95 % intervals, one row per ``(target, metric, strategy, baseline)``.
 
-    The colour is the strategy's; a filled marker: the interval excludes 0 on the side where the metric
-    improves (hollow: it does not). Each row's difference and interval are written in a column right of
-    the axes, since the metrics (accuracy, nats, ECE) share one axis.
+    The colour and marker are the strategy's (:func:`glu.plots.style.strategy_style`); a filled marker: the
+    interval excludes 0 on the side where the metric improves (hollow: it does not). Each row's difference
+    and interval are written in a column right of the axes, since the metrics (accuracy, nats, ECE) share one
+    axis.
     """
     sel = _pooled(differences, noise, viewpoint, where)
     sel = sel[np.isclose(sel.fraction, fraction)]
@@ -240,11 +250,10 @@ def plot_differences(
             continue
         r = row.iloc[0]
         lo, hi = sorted((sign * r.ci_low, sign * r.ci_high))
-        c = STRATEGY_COLORS.get(strategy, "black")
+        c, marker = STRATEGY_COLORS.get(strategy, "black"), STRATEGY_MARKERS.get(strategy, "o")
         ax.plot([lo, hi], [i, i], color=c, lw=2)
-        ax.plot(
-            [sign * r.difference], [i], marker="o", color=c, mfc=c if _better(metric, lo, hi) else "white"
-        )
+        filled = c if _better(metric, lo, hi) else "white"
+        ax.plot([sign * r.difference], [i], marker=marker, ms=7, color=c, mfc=filled, ls="none")
         value = f"{sign * r.difference:+.3f} [{lo:+.3f}, {hi:+.3f}]".replace("-", "−")
         ax.text(1.02, i, value, va="center", fontsize=7, color="0.2", transform=ax.get_yaxis_transform())
         better = "higher" if _higher(metric) else "lower"
@@ -278,29 +287,34 @@ def plot_by_viewpoint(
     strategies: Sequence[str] | None = None,
     where: Mapping[str, Any] | None = None,
 ) -> Axes:
-    """One metric per viewpoint (pooled over noise), grouped bars with 95 % intervals per strategy."""
-    sel = metric_rows(_cell(results, where), target, metric, fraction)
+    """One metric per viewpoint (pooled over noise) in one cell of the design (``where`` over the reference
+    cell): a line with markers and 95 % error bars per strategy, each its colour, line style and marker
+    (:func:`glu.plots.style.strategy_style`), set a little apart so that the error bars do not hide each
+    other."""
+    sel = metric_rows(_cell(results, {**REFERENCE_CELL, **(where or {})}), target, metric, fraction)
     sel = sel[sel.noise.isna() & (sel.viewpoint != "all")]
     views = viewpoints(sel)
+    x = np.arange(len(views))
     strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
-    width = 0.8 / max(len(strats), 1)
+    if strategies is not None:  # in the order asked for
+        strats = [s for s in strategies if s in strats]
     for k, strategy in enumerate(strats):
         g = sel[sel.strategy == strategy].set_index("viewpoint").loc[views]
-        x = np.arange(len(views)) + (k - (len(strats) - 1) / 2) * width
-        ax.bar(
-            x,
+        dx = (k - (len(strats) - 1) / 2) * 0.06
+        ax.errorbar(
+            x + dx,
             g.estimate,
-            width,
-            color=STRATEGY_COLORS.get(strategy, "black"),
-            label=strategy_label(strategy),
             yerr=[g.estimate - g.ci_low, g.ci_high - g.estimate],
-            error_kw={"lw": 0.8},
+            **strategy_style(strategy),
+            ms=MARKER_SIZE,
+            lw=1.2,
+            capsize=2,
+            label=strategy_label(strategy),
         )
-    ax.set_xticks(np.arange(len(views)), views)
+    ax.set_xticks(x, views)
+    ax.set_xlim(-0.4, len(views) - 0.6)
     ax.set_ylabel(METRIC_LABEL.get(metric, metric))
-    ax.set_title(
-        f"{target} {METRIC_LABEL.get(metric, metric)} by viewpoint\n{where_label(where)}", fontsize=9
-    )
+    _title(ax, f"{target} {METRIC_LABEL.get(metric, metric)} by viewpoint\n{where_label(where)}")
     ax.set_xlabel(f"viewpoint (all noise levels, {fraction:.0%} seen)")
     return ax
 
@@ -427,21 +441,30 @@ def _grid(nrows: int, ncols: int, height: float = PANEL[1]) -> tuple[Figure, lis
     return fig, list(axes.flat)
 
 
-def strategy_legend(fig: Figure, strategies: Sequence[str], extra: Sequence = (), ncols: int = 4) -> None:
-    """One legend above the panels: a line per strategy (and ``extra`` handles)."""
+def strategy_legend(
+    fig: Figure,
+    strategies: Sequence[str],
+    extra: Sequence = (),
+    ncols: int = 4,
+    title: str | None = None,
+    **look: Any,
+) -> None:
+    """One legend above the panels: a line with its marker per strategy, drawn as the panels draw it
+    (:func:`glu.plots.style.strategy_style`; ``look`` overrides it, e.g. ``ls="-"``), then ``extra``
+    handles; ``title`` above the entries."""
     handles = [
-        Line2D(
-            [],
-            [],
-            color=STRATEGY_COLORS.get(s, "black"),
-            ls=STRATEGY_STYLE.get(s, "-"),
-            marker="o",
-            ms=3,
-            label=strategy_label(s),
-        )
+        Line2D([], [], **{**strategy_style(s), "ms": MARKER_SIZE, **look}, label=strategy_label(s))
         for s in strategies
     ]
-    fig.legend(handles=[*handles, *extra], loc="outside upper center", ncols=ncols, fontsize=8, frameon=False)
+    fig.legend(
+        handles=[*handles, *extra],
+        loc="outside upper center",
+        ncols=ncols,
+        fontsize=8,
+        frameon=False,
+        title=title,
+        title_fontsize=8,
+    )
 
 
 def _drawn(table: pd.DataFrame, targets: Sequence[str]) -> list[str]:
@@ -449,18 +472,6 @@ def _drawn(table: pd.DataFrame, targets: Sequence[str]) -> list[str]:
 
 
 Cells = Sequence[Mapping[str, Any]]
-
-
-STRATEGY_MARKERS = {
-    "gesture": "s",
-    "network": "D",
-    "hard": "v",
-    "virtual": "^",
-    "jeffrey": "o",
-    "product": "P",
-    "true_action": "X",
-}
-"""A marker per strategy, so that no line is told from another by its colour alone."""
 
 
 def plot_by_viewpoint_and_features(
@@ -473,59 +484,14 @@ def plot_by_viewpoint_and_features(
     fraction: float = 1.0,
     where: Mapping[str, Any] | None = None,
 ) -> Axes:
-    """One metric per viewpoint (noise pooled) for one feature set of the recogniser: a line with markers
-    and 95 % error bars per strategy (each strategy its colour, line style and marker)."""
-    cell = {**REFERENCE_CELL, **(where or {}), "features": features}
-    sel = metric_rows(_cell(results, cell), target, metric, fraction)
-    sel = sel[sel.noise.isna() & (sel.viewpoint != "all")]
-    views = viewpoints(sel)
-    x = np.arange(len(views))
-    for k, strategy in enumerate(s for s in strategies if s in set(sel.strategy)):
-        g = sel[sel.strategy == strategy].set_index("viewpoint").loc[views]
-        dx = (k - (len(strategies) - 1) / 2) * 0.06  # a small offset: error bars side by side
-        ax.errorbar(
-            x + dx,
-            g.estimate,
-            yerr=[g.estimate - g.ci_low, g.ci_high - g.estimate],
-            color=STRATEGY_COLORS.get(strategy, "black"),
-            ls=STRATEGY_STYLE.get(strategy, "-"),
-            marker=STRATEGY_MARKERS.get(strategy, "o"),
-            ms=4,
-            lw=1.2,
-            capsize=2,
-            label=strategy_label(strategy),
-        )
-    ax.set_xticks(x, views)
-    ax.set_xlim(-0.4, len(views) - 0.6)
-    ax.set_ylabel(METRIC_LABEL.get(metric, metric))
-    ax.set_title(f"{target} {METRIC_LABEL.get(metric, metric)}, {features} features", fontsize=9)
-    return ax
-
-
-def _marked_legend(
-    fig: Figure, strategies: Sequence[str], extra: Sequence = (), ncols: int = 4, title: str | None = None
-) -> None:
-    handles = [
-        Line2D(
-            [],
-            [],
-            color=STRATEGY_COLORS.get(s, "black"),
-            ls=STRATEGY_STYLE.get(s, "-"),
-            marker=STRATEGY_MARKERS.get(s, "o"),
-            ms=4,
-            label=strategy_label(s),
-        )
-        for s in strategies
-    ]
-    fig.legend(
-        handles=[*handles, *extra],
-        loc="outside upper center",
-        ncols=ncols,
-        fontsize=8,
-        frameon=False,
-        title=title,
-        title_fontsize=8,
+    """One metric per viewpoint (noise pooled) for one feature set of the recogniser
+    (:func:`plot_by_viewpoint`), titled by the feature set alone: the figure names the rest of the cell."""
+    plot_by_viewpoint(
+        ax, results, target, metric, fraction, strategies, {**(where or {}), "features": features}
     )
+    ax.set_title(f"{target} {METRIC_LABEL.get(metric, metric)}, {features} features", fontsize=9)
+    ax.set_xlabel("")
+    return ax
 
 
 def viewpoints_figure(
@@ -549,7 +515,7 @@ def viewpoints_figure(
         for ax in row:
             ax.set_ylim(min(lows), max(highs))
     cell = where_label({**(where or {}), "features": "raw"}).rsplit(", ", 1)[0]
-    _marked_legend(
+    strategy_legend(
         fig,
         list(dict.fromkeys([*action, *effect])),
         ncols=4,
@@ -665,7 +631,7 @@ def differences_figure(
     viewpoint: str = "front",
 ) -> Figure:
     """Paired differences at one viewpoint (noise pooled), one panel per cell of the design (stacked), with
-    a key to colours and markers."""
+    a key to the strategies' markers and to filled and hollow ones."""
     fig, axes = _grid(len(cells), 1, height=2.9)
     fig.set_figwidth(9.0)
     for ax, cell in zip(axes, cells, strict=True):
@@ -681,7 +647,7 @@ def differences_figure(
         ),
         Line2D([], [], marker="o", color="0.3", mfc="white", ls="none", label="hollow: it does not"),
     ]
-    strategy_legend(fig, list(dict.fromkeys(p[2] for p in pairs)), marks, ncols=3)
+    strategy_legend(fig, list(dict.fromkeys(p[2] for p in pairs)), marks, ncols=3, ls="-", ms=6)
     return fig
 
 

@@ -13,10 +13,8 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 
-from glu.plots.style import ACTION_COLORS, VALUE_COLORS, rule_label
+from glu.plots.style import ACTION_COLORS, RULE_LINESTYLES, VALUE_COLORS, rule_label
 
-RULE_STYLES = {"virtual": "-", "jeffrey": "--", "hard": ":", "product": "-"}
-"""Line style of each fusion rule in the sweeps."""
 NEAR_ZERO = 0.02
 """A sweep line that never rises above this lies on the axis; the title says which."""
 SAME_P = 1e-6
@@ -32,7 +30,7 @@ def plot_soft_sweep(ax: Axes, df: pd.DataFrame, legend: bool = True) -> Axes:
     target = [c for c in df.columns if c not in ("evidence", "rule", "p_hmm_tap", "p")][0]
     for (rule, value), g in df.groupby(["rule", target], sort=False):
         color = VALUE_COLORS.get(value, ACTION_COLORS.get(value, "0.4"))
-        ax.plot(g["p_hmm_tap"], g["p"], RULE_STYLES.get(rule, "-"), color=color, lw=1.4)
+        ax.plot(g["p_hmm_tap"], g["p"], RULE_LINESTYLES.get(rule, "-"), color=color, lw=1.4)
     ax.set_xlabel(r"$p_{HMM}(tap)$ (rest split equally)")
     ax.set_ylabel(rf"$p_{{comb}}({target})$")
     ax.set_ylim(-0.02, 1.02)
@@ -54,7 +52,7 @@ def plot_soft_sweep(ax: Axes, df: pd.DataFrame, legend: bool = True) -> Axes:
             for v in values
         ]
         handles += [
-            Line2D([], [], color="0.3", ls=RULE_STYLES.get(r, "-"), label=rule_label(r)) for r in rules
+            Line2D([], [], color="0.3", ls=RULE_LINESTYLES.get(r, "-"), label=rule_label(r)) for r in rules
         ]
         ax.legend(handles=handles, fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return ax
