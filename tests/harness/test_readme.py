@@ -429,11 +429,11 @@ def test_the_section_reads_every_number_from_the_summary(summary):
         "the true labels reach 0.996 after 10,000 episodes in the easy world, 0.771 in the hard one",
         'Effects without words (TCDS\'s "beyond the self"), after 10,000 episodes: a scheme matches the true '
         "labels in easy world 1 of 5 (spheres); hard world 1 of 5 (spheres) ambiguities.",
-        "Effects and words (supervision by the spoken verb), after 10,000 episodes: a scheme matches the true "
-        "labels in easy world 2 of 5 (spheres, still); hard world 2 of 5 (spheres, still) ambiguities.",
-        "Random labels as accurate as the network's: easy world without words: they match in 1 of 5, a scheme "
-        "beats them in 0; hard world without words: they match in 1 of 5, a scheme beats them in 1 (failed "
-        "taps); easy world with words: they match in 2 of 5",
+        "Effects and words (supervision by the spoken verb), after 10,000 episodes: a scheme matches the "
+        "true labels in easy world 2 of 5 (spheres, still); hard world 2 of 5 (spheres, still) ambiguities.",
+        "Random labels as accurate as the network's: easy world without words: they match in 1 of 5, a "
+        "scheme beats them in 0; hard world without words: they match in 1 of 5, a scheme beats them in 1 "
+        "(failed taps); easy world with words: they match in 2 of 5",
         "The real person (11 standing segments from 3 recordings, learned leave-one-segment-out from a "
         "generator fitted to their other repetitions, 50 draws): true labels 0.91 [0.81, 1.00], soft labels "
         "0.73 [0.63, 0.83]; always answering tap 0.27 [0.17, 0.37].",

@@ -250,11 +250,7 @@ def _checked_run(data, out, check, monkeypatch, **kwargs) -> list[str]:
     assert all(n["status"] == "ok" for n in summary["notebooks"])
     pngs = sorted((out / "figures").glob("*.png"))
     assert pngs and all((check / f"{p.stem}.txt").is_file() for p in pngs)
-    return [
-        f"{p.stem}: {line}"
-        for p in pngs
-        for line in (check / f"{p.stem}.txt").read_text().splitlines()
-    ]
+    return [f"{p.stem}: {line}" for p in pngs for line in (check / f"{p.stem}.txt").read_text().splitlines()]
 
 
 @pytest.mark.shared_data

@@ -232,7 +232,8 @@ def test_a_saved_run_carries_a_check_run_that_this_code_recomputes(engine, small
     check = lc.learning_study(engine, small)
     saved.save_study(tmp_path / saved.CHECK_FOLDER, check, small, "synthetic", "glu learning-curves (test)")
     out = saved.check_against(engine, tmp_path, [0])
-    # 2 worlds × (2 baselines + 2 supervised + 7 learners of mixed without words) × checkpoints 10, 20 × 9 tests
+    # 2 worlds × (2 baselines + 2 supervised + 7 learners of mixed without words) × checkpoints 10, 20
+    # × 9 held-out gestures
     assert out == {"seeds": [0], "episodes": 20, "learners": 22, "decisions": 2 * 11 * 2 * 9, "differ": 0}
     with pytest.raises(DataError, match=r"holds seeds \[0\], not \[3\]"):
         saved.check_against(engine, tmp_path, [3])
