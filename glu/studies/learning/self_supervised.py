@@ -76,8 +76,9 @@ BASELINES: tuple[str, ...] = ("true", "unsupervised")
 lower bound). The third baseline, the network alone, recognises no gesture: its accuracy is that of its
 labels."""
 LEARNERS: tuple[str, ...] = SCHEMES + BASELINES
-"""The learners that learn all episodes at once (:func:`glu.studies.learning.learned_recognizers
-.learn_recognizer`, ``glu learn-gestures``) as well as online."""
+"""The learners that learn all episodes at once
+(:func:`glu.studies.learning.learned_recognizers.learn_recognizer`, ``glu learn-gestures``) as well as
+online."""
 CONTROLS: tuple[str, ...] = ("random", "clustering", "em")
 """Controls that could explain learning from effects away, each beside the schemes in every condition
 (online, :mod:`glu.studies.learning.online`): ``random`` — labels drawn at random, right as often as the
