@@ -33,7 +33,6 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.artist import Artist
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import RendererAgg
 from matplotlib.collections import Collection, PathCollection
 from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
@@ -229,20 +228,20 @@ def colour_alone(ax: Axes) -> list[str]:
 # ---------------------------------------------------------------- what is drawn
 @contextmanager
 def _recording_texts(drawn: list[Text]) -> Iterator[list[Text]]:
-    """Append to ``drawn`` every Text the Agg renderer is asked to draw meanwhile."""
-    cls = RendererAgg
-    original = cls.draw_text
+    """Append to ``drawn`` every Text drawn meanwhile (at :meth:`Text.draw`, so that multi-line texts count:
+    the renderer's ``draw_text`` receives those line by line, without the Text they belong to)."""
+    original = Text.draw
 
-    def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
-        if mtext is not None and str(s).strip():
-            drawn.append(mtext)
-        return original(self, gc, x, y, s, prop, angle, ismath=ismath, mtext=mtext)
+    def draw(self, renderer):
+        if self.get_visible() and self.get_text().strip():
+            drawn.append(self)
+        return original(self, renderer)
 
-    cls.draw_text = draw_text
+    Text.draw = draw
     try:
         yield drawn
     finally:
-        cls.draw_text = original
+        Text.draw = original
 
 
 def _drawn(t: Text, renderer) -> _Drawn | None:

@@ -34,6 +34,15 @@ def test_two_tick_labels_on_each_other_are_caught(fig):
     assert any("text on text" in p and "a long tick label" in p for p in problems), problems
 
 
+def test_multi_line_texts_on_each_other_are_caught(fig):
+    """Texts of several lines count too (matplotlib draws them line by line, without their Text)."""
+    f, ax = fig
+    f.text(0.3, 0.5, "a first text\nof two lines")
+    f.text(0.32, 0.47, "a second\nalso of two")
+    problems = figure_problems(f)
+    assert any("text on text" in p and "a first text" in p for p in problems), problems
+
+
 def test_tick_labels_apart_pass(fig):
     f, ax = fig
     ax.set_xticks([0, 1], ["a label", "another"])

@@ -11,7 +11,6 @@ case on the axes it is given; :func:`shared_ylim` gives several figures the same
 
 from __future__ import annotations
 
-import textwrap
 from collections.abc import Sequence
 
 import matplotlib.pyplot as plt
@@ -23,7 +22,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 
-from glu.plots.style import ACTION_COLORS, VALUE_COLORS
+from glu.plots.style import ACTION_COLORS, VALUE_COLORS, balanced_fill
 from glu.studies.anticipation.experiment import CASES
 
 PUBLISHED_LABEL = "TCDS 2020 Fig. 5 (read from the authors' EPS)"
@@ -102,7 +101,9 @@ def plot_anticipation(
     bottom.set_ylim(0, 1)
     bottom.set_ylabel(rf"$p_{{comb}}({node})$")
     bottom.set_xlabel("frame of the recording (updates every 5 frames)")
-    bottom.set_title(textwrap.fill(prediction_summary(curves, predictions, node), 85), fontsize=8)
+    inches = bottom.get_position().width * bottom.figure.get_figwidth()
+    chars = max(40, int(inches * 72 / (0.55 * 8)))  # about as wide as the panel, at 8 pt
+    bottom.set_title(balanced_fill(prediction_summary(curves, predictions, node), chars), fontsize=8)
     if published is not None and len(axes) > 2:
         _final_bars(axes[2], d, published, node)
     return axes

@@ -340,8 +340,8 @@ def save_real_person(
 
 def load_real_person(folder: str | os.PathLike, data_source: str) -> tuple[pd.DataFrame, dict[str, Any]]:
     """The real-person study's rows saved in ``folder`` (stamped as
-    :func:`~glu.studies.learning.real_person.real_person_study` stamps them) and their provenance; :class:`DataError` when they are missing or were
-    made from other data."""
+    :func:`~glu.studies.learning.real_person.real_person_study` stamps them) and their provenance;
+    :class:`DataError` when they are missing or were made from other data."""
     folder = Path(folder)
 
     def read():
