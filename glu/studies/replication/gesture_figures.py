@@ -33,12 +33,15 @@ def plot_segmentation(
     """
     pieces = segmentation.pieces if isinstance(segmentation, RecordingSegmentation) else [segmentation]
     colors = {"x": "tab:red", "y": "tab:green", "z": "tab:blue"}
+    styles = {"x": "-", "y": "--", "z": ":"}  # told apart without colour too (the activity: dash-dot)
     for k, piece in enumerate(pieces):
         tr = piece.trajectory
         f = tr.frame + np.where(tr.observed, 0.0, 0.5)
         for i, axis in enumerate("xyz"):
-            ax.plot(f, tr.xyz[:, i], color=colors[axis], lw=0.8, label=axis if k == 0 else None)
-        ax.plot(f, piece.activity, color="black", lw=1.2, label="activity" if k == 0 else None)
+            ax.plot(
+                f, tr.xyz[:, i], color=colors[axis], ls=styles[axis], lw=0.8, label=axis if k == 0 else None
+            )
+        ax.plot(f, piece.activity, color="black", ls="-.", lw=1.2, label="activity" if k == 0 else None)
     lo, hi = ax.get_ylim()
     ax.set_ylim(lo - 0.14 * (hi - lo), hi + 0.24 * (hi - lo))  # strips: tracking events below, segments above
     segs = [s for p in pieces for s in p.segments]
@@ -67,7 +70,7 @@ def plot_segmentation(
         )
     for e in events:
         if e.kind == "jump":
-            ax.axvline(e.frame - 0.5, color="purple", lw=0.6, ls=":")
+            ax.axvline(e.frame - 0.5, color="purple", lw=0.6, ls=":", marker="d", ms=3)  # ends marked
     for s in reference:
         ax.plot([s.start, s.end], [0.87, 0.87], color="black", lw=3, transform=ax.get_xaxis_transform())
     ax.set_xlabel("frame")
@@ -81,7 +84,7 @@ def plot_segmentation(
     if reference:
         handles += [Line2D([], [], color="black", lw=3, label="originals' segment")]
     if any(e.kind == "jump" for e in events):
-        handles += [Line2D([], [], color="purple", lw=0.6, ls=":", label="tracking jump")]
+        handles += [Line2D([], [], color="purple", lw=0.6, ls=":", marker="d", ms=3, label="tracking jump")]
     ax.legend(
         handles=handles, loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize="x-small", frameon=False
     )
