@@ -40,7 +40,7 @@ default shown (``docs/corpus-evaluation.md`` explains the design)::
     # file = "recognizer.json"    (then recognizer_seeds = 1)
 
     [network]                 # the Affordance–Words network that draws the episodes: learned from this data
-    # data = "../shared/data"   (default: $GLU_DATA_DIR, data/real, else synthetic)
+    # data = "/path/to/data"    (default: $GLU_DATA_DIR, data/real, else synthetic)
     words = "lab"
     unseen_words = "zero"
 
