@@ -23,10 +23,13 @@ Each query, in order:
    (d-separated from all of it) is answered from the engine's cached prior marginals; for the others, only
    the tables of the nodes the answer needs and the evidence that can change it are used — barren and
    d-separated nodes are left out, as in pyAgrum's relevance reasoning. Evidence that could have
-   probability 0 (a zero in a table above it, or all-zero rows in the network) is still checked: its
-   query is answered from every table above the targets and the evidence (barren nodes left out, so the
-   same propagation gives P(evidence)); when no target needs computing, P(evidence) alone is computed
-   (on the evidence's ancestors), and a single query remembers whether those values are possible.
+   probability 0 (a zero in a table above it, or all-zero rows in the network) is still checked: a single
+   query's hard evidence is first shown possible, where it can be, by a configuration of positive
+   probability that agrees with it (:func:`~glu.bn.relevance.surely_possible`, a compiled search of a few
+   microseconds) and then uses the relevance above; otherwise its query is answered from every table
+   above the targets and the evidence (barren nodes left out, so the same propagation gives
+   P(evidence)); when no target needs computing, P(evidence) alone is computed (on the evidence's
+   ancestors), and a single query remembers whether those values are possible.
 2. **soft evidence** becomes likelihoods (:mod:`glu.bn.soft`, the one home of both rules);
 3. the **backend** computes the marginals of the remaining targets, for one row (a single query) or many
    (a batch: rows grouped by which nodes they observe, identical rows answered once by a one-dimensional
@@ -52,6 +55,7 @@ word names, each node's index made once).
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
@@ -62,9 +66,9 @@ from glu.bn.core import CoreBackend, core_split
 from glu.bn.junction import JunctionBackend
 from glu.bn.labels import Labels, series
 from glu.bn.model import BayesNet
-from glu.bn.network import NetworkArrays
+from glu.bn.network import NetworkArrays, code_of
 from glu.bn.parse import SoftEvidence, Values, batch_length
-from glu.bn.relevance import reachable, requisite
+from glu.bn.relevance import reachable, requisite, surely_possible
 from glu.bn.soft import SoftRule, check_soft_rule, fit_jeffrey, virtual_likelihood
 from glu.errors import EvidenceError, ModelError
 
@@ -90,6 +94,11 @@ Array = np.ndarray
 Answer = tuple[dict[int, Array], Array]
 _ONE, _NONE = np.ones(1, dtype=bool), np.zeros(1, dtype=bool)  # a single query's possible: never written to
 _ONE.flags.writeable = _NONE.flags.writeable = False
+_AUTO: weakref.WeakKeyDictionary[BayesNet, str] = weakref.WeakKeyDictionary()
+"""The engine that suits each live network (a frozen network: chosen once, :func:`choose_method`)."""
+_PARTS: weakref.WeakKeyDictionary[BayesNet, tuple[Values, Labels, tuple[str, ...]]]
+_PARTS = weakref.WeakKeyDictionary()
+"""What every engine of a live network shares (:func:`_network_parts`)."""
 
 
 def choose_method(bn: BayesNet, method: str = "auto") -> str:
@@ -98,6 +107,13 @@ def choose_method(bn: BayesNet, method: str = "auto") -> str:
         raise ModelError(f"unknown inference method {method!r}; allowed: {', '.join(METHODS)}")
     if method != "auto":
         return method
+    chosen = _AUTO.get(bn)
+    if chosen is None:
+        chosen = _AUTO[bn] = _auto_method(bn)
+    return chosen
+
+
+def _auto_method(bn: BayesNet) -> str:
     core, leaves = core_split(bn)
     if len(core) > 60:
         return "junction"
@@ -274,6 +290,21 @@ def make_engine(bn: BayesNet, method: Method = "auto", max_table: int | None = N
     return ExactEngine(bn, net, backend)
 
 
+def _network_parts(bn: BayesNet, net: NetworkArrays) -> tuple[Values, Labels, tuple[str, ...]]:
+    """What every engine of ``bn`` shares, made once per live network: the value look-up, the labels, and
+    the word nodes (leaves that are not affordance nodes, with two values)."""
+    parts = _PARTS.get(bn)
+    if parts is None:
+        aff = set(bn.schema.affordance_nodes)
+        leaves = tuple(
+            n
+            for n, kids, k in zip(bn.nodes, net.children, net.cards, strict=True)
+            if not kids and k == 2 and n not in aff
+        )
+        parts = _PARTS[bn] = (Values(bn), Labels(bn.schema.values_of), leaves)
+    return parts
+
+
 @dataclass(frozen=True)
 class Relevance:
     """What one evidence pattern needs (:meth:`ExactEngine._relevance`): targets answered from their
@@ -310,20 +341,12 @@ class ExactEngine:
         self.net = net
         self.backend = backend
         self.method = backend.method
-        self.values = Values(bn)
-        aff = set(bn.schema.affordance_nodes)
-        self.binary_leaves = tuple(
-            n
-            for n, kids, k in zip(bn.nodes, net.children, net.cards, strict=True)
-            if not kids and k == 2 and n not in aff
-        )
-        """The word nodes: leaves (not affordance nodes, no children) with two values."""
+        self.values, self.labels, self.binary_leaves = _network_parts(bn, net)
+        """``binary_leaves``: the word nodes: leaves (not affordance nodes, no children) with two values."""
         self.deduplicate = True
         self._relevant: dict[tuple, Relevance] = {}
         self._priors: dict[int, Array] = {}
-        self._has_zero: dict[int, bool] = {}
         self._possible_memo: dict[tuple, Array] = {}
-        self.labels = Labels(bn.schema.values_of)
 
     def junction_tree(self):  # type: ignore[no-untyped-def]
         """The junction tree of the whole network (:class:`~glu.bn.plan.JunctionTreePlan`), planned once."""
@@ -335,8 +358,12 @@ class ExactEngine:
         return self.values.soft_vector(node, dist)
 
     # ------------------------------------------------------------------ relevance and priors
-    def _relevance(self, hard: tuple[int, ...], soft: tuple[int, ...], targets: tuple[int, ...]) -> Relevance:
-        key = (hard, soft, targets)
+    def _relevance(
+        self, hard: tuple[int, ...], soft: tuple[int, ...], targets: tuple[int, ...], sure: bool = False
+    ) -> Relevance:
+        """What the pattern needs; ``sure``: its evidence is known to be possible (:func:`surely_possible`),
+        so that tables with zeros do not keep the evidence that cannot reach the targets."""
+        key = (hard, soft, targets, sure)
         rel = self._relevant.get(key)
         if rel is not None:
             return rel
@@ -344,16 +371,19 @@ class ExactEngine:
         hard_set, soft_set = set(hard), set(soft)
         virtual = soft_set | net.inexact
         rest = [t for t in targets if t not in hard_set]
-        reach = reachable(net.parents, net.children, hard_set, virtual) if hard_set or virtual else set()
+        need = None
+        if len(rest) == 1 and (hard_set or virtual):  # one target: its ball tells whether evidence reaches it
+            need = requisite(net.parents, net.children, hard_set, virtual, rest)
+            reach = set(rest) if need.hard or need.virtual else set()
+        else:
+            reach = reachable(net.parents, net.children, hard_set, virtual) if hard_set or virtual else set()
         computed = tuple(sorted({t for t in rest if t in reach}))
-        # evidence that may have probability 0 (a zero in a table above it, or all-zero rows anywhere)
-        risky = bool(hard or soft) and (
-            bool(net.inexact) or any(self._zeros(v) for v in net.ancestors(hard_set | soft_set))
-        )
+        risky = not sure and self._risky(hard, soft)
         if computed and risky:  # every table above the targets and the evidence: exact, and P(evidence) too
             tables, hard_used, soft_used = net.ancestors({*computed, *hard, *soft, *net.inexact}), hard, soft
         elif computed:  # Bayes-ball: barren and d-separated nodes left out, and the evidence they carry
-            need = requisite(net.parents, net.children, hard_set, virtual, computed)
+            if need is None:
+                need = requisite(net.parents, net.children, hard_set, virtual, computed)
             tables, hard_used, soft_used = (
                 need.tables,
                 tuple(sorted(need.hard)),
@@ -375,12 +405,11 @@ class ExactEngine:
         self._relevant[key] = rel
         return rel
 
-    def _zeros(self, v: int) -> bool:
-        """Whether node ``v``'s table has a zero entry (evidence below it may then have probability 0)."""
-        z = self._has_zero.get(v)
-        if z is None:
-            z = self._has_zero[v] = not bool(self.net.cpts[v].all())
-        return z
+    def _risky(self, hard: tuple[int, ...], soft: tuple[int, ...]) -> bool:
+        """Whether evidence on these nodes may have probability 0: a zero in a table above it, or all-zero
+        rows anywhere (then its probability is checked)."""
+        net, zero = self.net, self.net.zero_above
+        return bool(hard or soft) and (bool(net.inexact) or any(zero[v] for v in (*hard, *soft)))
 
     def _possible(self, hard: dict[int, Array], rows: int) -> Array:
         """Whether each row's hard evidence has probability > 0, shape (rows,) (single queries remembered)."""
@@ -394,6 +423,22 @@ class ExactEngine:
                 self._possible_memo.clear()
             ok = self._possible_memo[key] = self.backend.log_mass(hard, 1) > -np.inf
         return ok
+
+    def _shown_possible(self, hard: dict[int, Array]) -> bool:
+        """Whether one row's hard evidence is known to have probability > 0: remembered, or shown by
+        :func:`surely_possible` (then remembered); False: not known (it may still be possible)."""
+        if self.net.inexact:  # all-zero rows: a configuration of positive terms is not a positive mass
+            return False
+        key = (*hard, *map(code_of, hard.values()))
+        ok = self._possible_memo.get(key)
+        if ok is not None:
+            return bool(ok[0])
+        if not surely_possible(self.net, hard):
+            return False
+        if len(self._possible_memo) >= POSSIBLE_MEMO:
+            self._possible_memo.clear()
+        self._possible_memo[key] = _ONE
+        return True
 
     def _prior(self, targets: Sequence[int]) -> list[Array]:
         """Prior marginals (given only the all-zero rows, if any), computed once per node."""
@@ -412,7 +457,10 @@ class ExactEngine:
     ) -> Answer:
         """Marginals of ``targets`` (rows, k) and possible (rows,), given hard codes and likelihoods (sorted
         keys), by relevance, then the backend in chunks of at most :data:`BATCH_ENTRIES` table entries."""
-        rel = self._relevance(tuple(hard), tuple(lik), targets)
+        keys = tuple(hard)
+        # one row of hard evidence shown possible needs no table kept to check it (tables with zeros)
+        sure = rows == 1 and not lik and self._risky(keys, ()) and self._shown_possible(hard)
+        rel = self._relevance(keys, tuple(lik), targets, sure)
         out: dict[int, Array] = {}
         possible = _ONE if rows == 1 else np.ones(rows, dtype=bool)
         if rel.targets:

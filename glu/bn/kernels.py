@@ -408,3 +408,108 @@ def plan_pattern(n, ptr, idx, cards, first_home, try_all_above):
     cptr, cidx = members_csr(sets)
     where, parent, bfs, starts, on_path = schedule(sets, sizes, edges, ptr, idx, first_home)
     return best, order, sets, edges, sizes, counts, cptr, cidx, where, parent, bfs, starts, on_path
+
+
+def support_witness(observed, order, cards, par_ptr, par_idx, cpt_off, flat, max_configs, max_steps):
+    """Whether a configuration of positive probability agrees with the hard evidence ``observed`` (a value
+    per variable, -1 where unobserved) — found, not proven impossible: False means *not found*.
+
+    Over the evidence's ancestors only (the rest sums to 1): first each variable's allowed values are
+    narrowed from the evidence upwards (reverse topological ``order``): a parent keeps the values that some
+    parent configuration of positive probability for an allowed value of the child uses (families of more
+    than ``max_configs`` parent configurations are not narrowed); then a configuration is searched for
+    downwards, depth first (each variable's allowed values of positive probability given its parents', in
+    order; an observed variable's only allowed value is its own), for at most ``max_steps`` steps. A table
+    is ``flat[cpt_off[v]:]`` in the layout (parents…, variable), last parent fastest."""
+    n = cards.shape[0]
+    maxk = 1
+    for v in range(n):
+        maxk = max(maxk, cards[v])
+    need = np.zeros(n, dtype=np.bool_)
+    for v in range(n):
+        if observed[v] >= 0:
+            need[v] = True
+    for k in range(n - 1, -1, -1):
+        v = order[k]
+        if need[v]:
+            for i in range(par_ptr[v], par_ptr[v + 1]):
+                need[par_idx[i]] = True
+    allowed = np.zeros((n, maxk), dtype=np.bool_)
+    for v in range(n):
+        if need[v]:
+            if observed[v] >= 0:
+                allowed[v, observed[v]] = True
+            else:
+                allowed[v, : cards[v]] = True
+    seen = np.zeros((n, maxk), dtype=np.bool_)
+    vals = np.zeros(n, dtype=np.int64)
+    for k in range(n - 1, -1, -1):
+        v = order[k]
+        a, b = par_ptr[v], par_ptr[v + 1]
+        if not need[v] or a == b:
+            continue
+        configs = 1
+        for i in range(a, b):
+            configs *= cards[par_idx[i]]
+        if configs > max_configs:
+            continue
+        for i in range(a, b):
+            seen[par_idx[i], :] = False
+        for cfg in range(configs):
+            rest = cfg
+            ok = True
+            for i in range(b - 1, a - 1, -1):
+                p = par_idx[i]
+                vals[i - a] = rest % cards[p]
+                rest //= cards[p]
+                if not allowed[p, vals[i - a]]:
+                    ok = False
+            if not ok:
+                continue
+            base = cpt_off[v] + cfg * cards[v]
+            for x in range(cards[v]):
+                if allowed[v, x] and flat[base + x] > 0:
+                    for i in range(a, b):
+                        seen[par_idx[i], vals[i - a]] = True
+                    break
+        for i in range(a, b):
+            p = par_idx[i]
+            for x in range(cards[p]):
+                allowed[p, x] = allowed[p, x] and seen[p, x]
+    seq = np.empty(n, dtype=np.int64)
+    m = 0
+    for k in range(n):
+        if need[order[k]]:
+            seq[m] = order[k]
+            m += 1
+    chosen = np.full(n, -1, dtype=np.int64)
+    tried = np.zeros(m, dtype=np.int64)  # the next value to try at each place of seq
+    pos = 0
+    steps = 0
+    while pos < m:
+        steps += 1
+        if steps > max_steps:
+            return False
+        v = seq[pos]
+        cfg = 0
+        for i in range(par_ptr[v], par_ptr[v + 1]):
+            p = par_idx[i]
+            cfg = cfg * cards[p] + chosen[p]
+        base = cpt_off[v] + cfg * cards[v]
+        found = -1
+        for x in range(tried[pos], cards[v]):
+            if allowed[v, x] and flat[base + x] > 0:
+                found = x
+                break
+        if found >= 0:
+            chosen[v] = found
+            tried[pos] = found + 1
+            pos += 1
+            if pos < m:
+                tried[pos] = 0
+        else:
+            chosen[v] = -1
+            pos -= 1
+            if pos < 0:
+                return False
+    return True

@@ -94,6 +94,43 @@ class NetworkArrays:
             t = tables[v] = np.transpose(self.cpts[v], [fam.index(u) for u in self.sorted_family(v)])
         return t
 
+    @property
+    def zero_above(self) -> tuple[bool, ...]:
+        """Whether each node's table, or a table of one of its ancestors, holds a zero (evidence on the node
+        may then have probability 0), made on first use."""
+        made = self.__dict__.get("_zero_above")
+        if made is None:
+            zero = [not bool(t.all()) for t in self.cpts]
+            for v in self.support_arrays()[0].tolist():  # parents first
+                zero[v] = zero[v] or any(zero[p] for p in self.parents[v])
+            made = self.__dict__["_zero_above"] = tuple(zero)
+        return made
+
+    def support_arrays(self) -> tuple[np.ndarray, ...]:
+        """The network as :func:`glu.bn.kernels.support_witness` reads it, made on first use: (a topological
+        order, cards, parents as (ptr, idx), each table's offset in ``flat``, every table flattened, and -1
+        for each variable: the observed values of no evidence, to copy)."""
+        made = self.__dict__.get("_support")
+        if made is None:
+            pending = [len(ps) for ps in self.parents]
+            order = [v for v, k in enumerate(pending) if k == 0]
+            for v in order:  # Kahn's order: a node after all its parents
+                for c in self.children[v]:
+                    pending[c] -= 1
+                    if pending[c] == 0:
+                        order.append(c)
+            sizes = [t.size for t in self.cpts]
+            made = self.__dict__["_support"] = (
+                np.array(order, dtype=np.int64),
+                np.array(self.cards, dtype=np.int64),
+                np.cumsum([0, *map(len, self.parents)], dtype=np.int64),
+                np.array([p for ps in self.parents for p in ps], dtype=np.int64),
+                np.cumsum([0, *sizes[:-1]], dtype=np.int64),
+                np.concatenate([t.ravel() for t in self.cpts]),
+                np.full(len(self.cards), -1, dtype=np.int64),  # no variable observed: a template
+            )
+        return made
+
     def ancestors(self, nodes: set[int] | frozenset[int]) -> set[int]:
         """``nodes`` and all their ancestors."""
         out: set[int] = set()

@@ -195,14 +195,14 @@ def check_size(tri: Triangulation, limit: int, variables: Sequence[int], cards: 
     """:class:`ModelError` (one line: the largest table, the elimination width, the limit) when a clique
     of ``tri`` has more variables than NumPy's axes allow or a table past ``limit`` entries
     (``variables``: the global index of each local variable, for the exact size in the message)."""
-    widest = int(tri.counts.max(initial=0))
+    widest = max(tri.counts.tolist(), default=0)
     width = max(widest, 1) - 1
     if widest > MAX_CLIQUE_VARIABLES:
         raise ModelError(
             f"exact inference in this network needs a table over {widest} variables (elimination width "
             f"{width}); NumPy arrays have at most 64 axes, so glu handles up to {MAX_CLIQUE_VARIABLES}"
         )
-    if tri.sizes.max(initial=1) > limit:
+    if max(tri.sizes.tolist(), default=1) > limit:
         worst = int(np.argmax(tri.sizes))
         members = _bits(_mask(tri.sets[worst]))
         largest = math.prod(cards[variables[i]] for i in members)

@@ -26,7 +26,6 @@ very small probability is answered and only evidence of probability exactly 0 is
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
@@ -161,8 +160,7 @@ def _triangulate(
     free = sorted({u for sc in scopes for u in sc}.union(soft, targets))
     local = {v: i for i, v in enumerate(free)}
     sets = [*scopes, *((v,) for v in soft), *((v,) for v in targets)]
-    ptr = np.zeros(len(sets) + 1, dtype=np.int64)
-    np.cumsum([len(sc) for sc in sets], out=ptr[1:])
+    ptr = np.array([0, *itertools.accumulate(map(len, sets))], dtype=np.int64)
     idx = np.array([local[u] for sc in sets for u in sc], dtype=np.int64)
     tri = triangulate(
         len(free), ptr, idx, np.array([cards[v] for v in free], dtype=np.int64), len(scopes) + len(soft)
@@ -209,9 +207,14 @@ def _clique_tables(
             continue
         fam = net.family(v)
         seen = [u for u in fam if u in slot]
-        table = np.transpose(net.cpts[v], [fam.index(u) for u in rest] + [fam.index(u) for u in seen])
+        axes = tuple(fam.index(u) for u in (*rest, *seen))
+        table = net.cpts[v] if axes == tuple(range(len(fam))) else net.cpts[v].transpose(axes)
         flat = np.ascontiguousarray(table.reshape(*(cards[u] for u in rest), -1))
-        strides = tuple(math.prod(cards[u] for u in seen[i + 1 :]) for i in range(len(seen)))
+        stride, strides = 1, []
+        for u in reversed(seen):  # the last observed variable varies fastest
+            strides.append(stride)
+            stride *= cards[u]
+        strides = tuple(reversed(strides))
         entry = (flat, tuple(slot[u] for u in seen), strides, ())
         if c < 0:
             constants.append(entry)

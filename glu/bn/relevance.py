@@ -24,8 +24,20 @@ are never barren. Nodes are variable indices; ``parents`` and ``children`` index
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
+
+import numpy as np
+
+from glu.bn import kernels
+from glu.bn.network import NetworkArrays, code_of
+from glu.jit import compiled
+
+WITNESS_CONFIGS = 1 << 16
+"""A family with more parent configurations than this is not narrowed by :func:`surely_possible`."""
+WITNESS_STEPS = 1 << 12
+"""The steps :func:`surely_possible`'s search may take before it gives up (and the query keeps the tables
+that check the evidence's probability)."""
 
 
 def reachable(
@@ -127,3 +139,18 @@ def requisite(
                 seen_virtual.add(v)
                 todo.append((v, True))
     return Requisite(frozenset(top), frozenset(seen_hard), frozenset(seen_virtual))
+
+
+def surely_possible(net: NetworkArrays, hard: Mapping[int, int | np.ndarray]) -> bool:
+    """Whether one row of hard evidence is shown to have probability > 0 by a configuration of positive
+    probability that agrees with it (:func:`glu.bn.kernels.support_witness`); False: not shown (it may still
+    be possible). Only for tables whose rows sum to 1 (no inexact node): then such a configuration of the
+    evidence's ancestors is a positive term of P(evidence).
+
+    When it holds, a query may leave out the evidence that cannot reach its targets without losing the
+    check that the evidence is possible — the relevance that tables with zeros otherwise forbid."""
+    arrays = net.support_arrays()
+    observed = arrays[-1].copy()
+    for v, c in hard.items():
+        observed[v] = code_of(c)
+    return bool(compiled(kernels.support_witness)(observed, *arrays[:-1], WITNESS_CONFIGS, WITNESS_STEPS))

@@ -207,3 +207,80 @@ def test_every_heuristic_gives_a_junction_tree_of_maximal_cliques(seed):
     assert not any(a < b for a, b in itertools.permutations(cliques, 2))  # maximal: none inside another
     for sc in scopes:  # every scope inside some clique
         assert any(set(map(int, sc)) <= c for c in cliques)
+
+
+# -------------------------------------------------------------- tables with zeros: evidence of probability 0
+def _zeroed_network(seed: int) -> BayesNet:
+    """Six nodes of 2–3 values, a random DAG, tables with many zero entries (rows still sum to 1): the
+    deterministic relations that make evidence impossible in networks such as hailfinder."""
+    from glu.schema import Schema
+
+    rng = np.random.default_rng(seed)
+    names = [f"N{i}" for i in range(6)]
+    values = {n: tuple(f"{n}v{j}" for j in range(int(rng.integers(2, 4)))) for n in names}
+    parents = {n: tuple(p for p in names[:i] if rng.random() < 0.45)[-2:] for i, n in enumerate(names)}
+    cpts = {}
+    for n, ps in parents.items():
+        shape = (*(len(values[p]) for p in ps), len(values[n]))
+        t = rng.dirichlet(np.ones(shape[-1]), size=shape[:-1]).reshape(shape)
+        t = np.where(rng.random(shape) < 0.4, 0.0, t)
+        keep = rng.integers(0, shape[-1], size=shape[:-1])[..., None]  # one positive entry per row at least
+        t = np.where(np.arange(shape[-1]) == keep, t + 0.05, t)
+        cpts[n] = t / t.sum(axis=-1, keepdims=True)
+    return BayesNet(schema=Schema(values=values, n_affordance=6), parents=parents, cpts=cpts)
+
+
+def _evidence_sets(bn: BayesNet, rng, n: int):
+    for _ in range(n):
+        k = int(rng.integers(1, 4))
+        nodes = [str(v) for v in rng.choice(bn.nodes, size=k, replace=False)]
+        yield {v: int(rng.integers(bn.schema.cardinality(v))) for v in nodes}
+
+
+@pytest.mark.parametrize("method", ["junction", "auto"])
+def test_evidence_of_probability_0_is_refused_even_where_it_cannot_reach_the_target(method):
+    """Against brute-force enumeration: every target's posterior, or ImpossibleEvidenceError when the
+    evidence has probability 0 — also when the impossible part is d-separated from the target (relevance
+    may leave it out of the answer only where the evidence is shown possible)."""
+    from glu.errors import ImpossibleEvidenceError
+
+    rng = np.random.default_rng(7)
+    seen = {"possible": 0, "impossible": 0}
+    for seed in range(8):
+        bn = _zeroed_network(seed)
+        joint, nodes = _joint(bn)
+        for ev in _evidence_sets(bn, rng, 25):
+            sub = joint[tuple(ev[n] if n in ev else slice(None) for n in nodes)]
+            free = [n for n in nodes if n not in ev]
+            for t in free:
+                eng = make_engine(bn, method=method)  # a new engine: the first query of its pattern
+                if sub.sum() == 0:
+                    with pytest.raises(ImpossibleEvidenceError):
+                        eng.query([t], ev)
+                    seen["impossible"] += 1
+                    continue
+                axes = tuple(i for i, n in enumerate(free) if n != t)
+                ref = sub.sum(axis=axes) / sub.sum()
+                np.testing.assert_allclose(eng.query([t], ev)[t], ref, atol=1e-12)
+                seen["possible"] += 1
+    assert seen["possible"] > 200 and seen["impossible"] > 50, seen
+
+
+def test_a_witness_of_possible_evidence_is_found_exactly_when_the_evidence_is_possible():
+    """glu.bn.relevance.surely_possible against brute force: never True for evidence of probability 0, and
+    on networks this small (its search runs to the end) True for every possible evidence set."""
+    from glu.bn.network import NetworkArrays
+    from glu.bn.relevance import surely_possible
+
+    rng = np.random.default_rng(11)
+    counts = {True: 0, False: 0}
+    for seed in range(10):
+        bn = _zeroed_network(seed)
+        joint, nodes = _joint(bn)
+        net = NetworkArrays.of(bn)
+        for ev in _evidence_sets(bn, rng, 30):
+            p = joint[tuple(ev[n] if n in ev else slice(None) for n in nodes)].sum()
+            found = surely_possible(net, {net.index[v]: c for v, c in ev.items()})
+            assert found == (p > 0), (seed, ev, p)
+            counts[bool(p > 0)] += 1
+    assert counts[True] > 100 and counts[False] > 30, counts
