@@ -415,12 +415,10 @@ def support_witness(observed, order, cards, par_ptr, par_idx, cpt_off, flat, max
     per variable, -1 where unobserved) — found, not proven impossible: False means *not found*.
 
     Over the evidence's ancestors only (the rest sums to 1): first each variable's allowed values are
-    narrowed from the evidence upwards (reverse topological ``order``): a parent keeps the values that some
-    parent configuration of positive probability for an allowed value of the child uses (families of more
-    than ``max_configs`` parent configurations are not narrowed); then a configuration is searched for
-    downwards, depth first (each variable's allowed values of positive probability given its parents', in
-    order; an observed variable's only allowed value is its own), for at most ``max_steps`` steps. A table
-    is ``flat[cpt_off[v]:]`` in the layout (parents…, variable), last parent fastest."""
+    narrowed from the evidence upwards (:func:`_narrow`, families of more than ``max_configs`` parent
+    configurations left as they are), then a configuration is searched for downwards (:func:`_search`, at
+    most ``max_steps`` steps). A table is ``flat[cpt_off[v]:]`` in the layout (parents…, variable), last
+    parent fastest; ``order`` is topological."""
     n = cards.shape[0]
     maxk = 1
     for v in range(n):
@@ -441,6 +439,14 @@ def support_witness(observed, order, cards, par_ptr, par_idx, cpt_off, flat, max
                 allowed[v, observed[v]] = True
             else:
                 allowed[v, : cards[v]] = True
+    _narrow(need, allowed, order, cards, par_ptr, par_idx, cpt_off, flat, max_configs)
+    return _search(need, allowed, order, cards, par_ptr, par_idx, cpt_off, flat, max_steps)
+
+
+def _narrow(need, allowed, order, cards, par_ptr, par_idx, cpt_off, flat, max_configs):
+    """Each needed variable's ``allowed`` values narrowed, children before parents: a parent keeps the values
+    that some parent configuration of positive probability for an allowed value of the child uses."""
+    n, maxk = allowed.shape
     seen = np.zeros((n, maxk), dtype=np.bool_)
     vals = np.zeros(n, dtype=np.int64)
     for k in range(n - 1, -1, -1):
@@ -476,6 +482,13 @@ def support_witness(observed, order, cards, par_ptr, par_idx, cpt_off, flat, max
             p = par_idx[i]
             for x in range(cards[p]):
                 allowed[p, x] = allowed[p, x] and seen[p, x]
+
+
+def _search(need, allowed, order, cards, par_ptr, par_idx, cpt_off, flat, max_steps):
+    """Depth first over the needed variables in topological order: each takes its allowed values of
+    positive probability given its parents', in order (an observed variable's only allowed value is its
+    own); True when every variable has one, False when the search ends or passes ``max_steps``."""
+    n = cards.shape[0]
     seq = np.empty(n, dtype=np.int64)
     m = 0
     for k in range(n):
