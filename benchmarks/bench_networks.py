@@ -382,8 +382,9 @@ print(json.dumps({"bytes": peak() - before, "entries": entries}))
 """
 
 
-def grid_memory(tmp: Path, size: int = 14) -> dict:
-    """Bytes per clique entry of one marginals() on a size×size grid, glu and pyAgrum (fresh processes)."""
+def grid_memory(tmp: Path, size: int = 14, repeats: int = 5) -> dict:
+    """Bytes per clique entry of one marginals() on a size×size grid, glu and pyAgrum: the median of
+    ``repeats`` fresh processes each."""
     from glu.bn import BayesNet
     from glu.bn.exchange import to_xmlbif
     from glu.schema import Schema
@@ -407,12 +408,15 @@ def grid_memory(tmp: Path, size: int = 14) -> dict:
     here = Path(__file__).resolve().parent
     out = {}
     for which in ("glu", "pyagrum"):
-        r = subprocess.run(
-            [sys.executable, "-c", GRID_SCRIPT, which, str(size), str(path)],
-            capture_output=True, text=True, check=True, cwd=here.parent,
-        )  # fmt: skip
-        d = json.loads(r.stdout.strip().splitlines()[-1])
-        out[which] = (d["bytes"] / d["entries"], d["entries"])
+        per_entry = []
+        for _ in range(repeats):  # fresh processes; the median (a process's peak varies from run to run)
+            r = subprocess.run(
+                [sys.executable, "-c", GRID_SCRIPT, which, str(size), str(path)],
+                capture_output=True, text=True, check=True, cwd=here.parent,
+            )  # fmt: skip
+            d = json.loads(r.stdout.strip().splitlines()[-1])
+            per_entry.append(d["bytes"] / d["entries"])
+        out[which] = (statistics.median(per_entry), d["entries"])
     return out
 
 
@@ -552,7 +556,8 @@ def main() -> None:
     fresh = fresh_process(folder)
     (g, ge), (p, pe) = mem["glu"], mem["pyagrum"]
     notes = [
-        f"memory per clique entry, one marginals() on a 14×14 grid of binary nodes: glu {g:.1f} bytes "
+        "memory per clique entry, one marginals() on a 14×14 grid of binary nodes (median of 5 fresh "
+        f"processes each): glu {g:.1f} bytes "
         f"({ge:,} entries), pyAgrum {p:.1f} bytes ({pe:,} entries) — the peak resident memory of a fresh "
         "process over its resident memory once its code is loaded (pyAgrum's library; glu's compiled loops, "
         "by a first small query), while it loads the network and answers, divided by the entries of the "
