@@ -18,11 +18,12 @@ import pandas as pd
 
 from glu.bn.inference import Engine, make_engine
 from glu.bn.model import BayesNet
+from glu.evidence import format_evidence
 from glu.fusion import SOFT_STRATEGIES, Strategy, check_strategy, fuse, hmm_rows
 from glu.gestures.corpus import LabelledSequence
 from glu.gestures.recognizer import Recognizer
 from glu.hmm import p_hmm_from_loglik
-from glu.tidy import evidence_text, model_source, tidy
+from glu.tidy import model_source, tidy
 
 EFFECT_CASES: dict[str, dict[str, str]] = {
     "small sphere": {"Action": "tap", "Shape": "sphere", "Size": "small"},
@@ -100,7 +101,7 @@ def effect_prediction(bn: BayesNet, reference: BayesNet | None = None) -> pd.Dat
 
     def rows_of(eng: Engine) -> list[dict[str, Any]]:
         return [
-            {"case": case, "evidence": evidence_text(ev), "ObjVel": v, "p": p}
+            {"case": case, "evidence": format_evidence(ev), "ObjVel": v, "p": p}
             for case, ev in EFFECT_CASES.items()
             for v, p in zip(values, eng.query(["ObjVel"], ev)["ObjVel"], strict=True)
         ]
@@ -128,7 +129,7 @@ def word_probability_change(
     df = pd.DataFrame({"word": list(eng.binary_leaves), "p_without": without, "p_with": with_tap})
     df["delta"] = df["p_with"] - df["p_without"]
     df["shown"] = df["delta"].abs() > threshold
-    df.insert(0, "evidence", evidence_text(ev))
+    df.insert(0, "evidence", format_evidence(ev))
     if reference:
         r = make_engine(reference)
         df["delta_original"] = r.word_probability_array({**ev, "Action": "tap"}) - r.word_probability_array(
@@ -159,7 +160,7 @@ def action_vs_soft_evidence(
         ]
 
     df = _against_reference(rows_of, bn, reference)
-    df.insert(0, "evidence", evidence_text(evidence))
+    df.insert(0, "evidence", format_evidence(evidence))
     df.insert(1, "strategy", strategy)
     return _stamped(df, "tcds_action_vs_soft_evidence", bn, reference, evidence=evidence, strategy=strategy)
 
@@ -248,7 +249,7 @@ def soft_evidence_sweep(
         for i, v in enumerate(values):
             frames.append(pd.DataFrame({"rule": rule, "p_hmm_tap": t, target: v, "p": post[:, i]}))
     df = pd.concat(frames, ignore_index=True)
-    df.insert(0, "evidence", evidence_text(evidence))
+    df.insert(0, "evidence", format_evidence(evidence))
     return tidy(
         df,
         f"soft_evidence_sweep_{target}",
@@ -420,7 +421,7 @@ def fusion_on_gestures(
             for v, p in zip(bn.schema.values_of(target), post, strict=True):
                 rows.append({**base, "strategy": strategy, target: v, "p": float(p)})
     df = pd.DataFrame(rows)
-    df.insert(0, "evidence", evidence_text(evidence))
+    df.insert(0, "evidence", format_evidence(evidence))
     return tidy(
         df, "fusion_on_gestures", model_source(bn), evidence=evidence, strategies=strategies, target=target
     )
