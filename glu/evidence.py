@@ -19,8 +19,6 @@ from typing import Any
 
 from glu.errors import EvidenceError
 
-Evidence = Mapping[str, str]
-"""Hard evidence: node → value name."""
 SoftEvidence = Mapping[str, Mapping[str, float]]
 """Soft evidence: node → {value: probability}."""
 

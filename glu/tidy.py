@@ -30,7 +30,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from glu.evidence import format_evidence
 from glu.hmm import TrainingConfig
 
 UNKNOWN_SOURCE = "unknown data"
@@ -53,11 +52,6 @@ def model_source(model: Any) -> str:
 def corpus_source(sequences: Sequence[Any]) -> str:
     """The description of a gesture corpus (:class:`glu.gestures.corpus.Corpus`), if it has one."""
     return str(getattr(sequences, "description", "") or UNKNOWN_SOURCE)
-
-
-def evidence_text(evidence: Mapping[str, Any]) -> str:
-    """``{"Action": "grasp", "ObjVel": "slow"}`` → ``"Action=grasp, ObjVel=slow"``."""
-    return format_evidence(evidence)
 
 
 def training_parameters(config: TrainingConfig | None, features: Any = None) -> dict[str, Any]:

@@ -109,7 +109,6 @@ class CoreBackend:
     shape : the joint's shape, one axis per core node
     prior_joint : P(core), shape ``shape``
     base : P(core) with every unobserved leaf summed out, shape ``shape``
-    base_mass : ``base.sum()`` (below 1 when all-zero rows exclude configurations)
     leaf_axes : leaf → the core axes of its parents
     leaf_ratio : leaf → R_L, shape ``(k, *parent cardinalities)``
     """
@@ -153,7 +152,6 @@ class CoreBackend:
             if not np.all(m == 1.0):
                 base = base * _broadcast(m, axes, ndim)
         self.base = base
-        self.base_mass = float(base.sum())
         self._plans: dict[tuple, CorePlan] = {}
 
     def __getstate__(self) -> dict[str, Any]:

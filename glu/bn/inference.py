@@ -2,9 +2,9 @@
 
 ``make_engine(bn)`` answers queries about a :class:`~glu.bn.model.BayesNet` — GLU's Affordance–Words
 network, a network learned from a lab's own schema, or one imported from BIF, XMLBIF or UAI. Every engine
-is an :class:`Engine` (the interface, a :class:`typing.Protocol`) made of one :class:`ExactEngine` — the
-evidence, relevance, soft rules, batches, caches and labelled results, written once — over the array
-arithmetic that suits the network's shape (its *backend*):
+is one :class:`Engine` — the evidence, relevance, soft rules, batches, caches and labelled results,
+written once — over the array arithmetic that suits the network's shape (its *backend*, a
+:class:`typing.Protocol`):
 
 :class:`~glu.bn.core.CoreBackend` (``method="core"``)
     for networks shaped like GLU's: a small *core* (the affordance nodes and every node with children)
@@ -58,7 +58,7 @@ import math
 import weakref
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Literal, Protocol
 
 import numpy as np
 
@@ -123,119 +123,6 @@ def _auto_method(bn: BayesNet) -> str:
     return "core" if small else "junction"
 
 
-@runtime_checkable
-class Engine(Protocol):
-    """The query interface of every engine (made by :func:`make_engine`).
-
-    Attributes: ``bn`` (the network), ``nodes`` (its node names), ``method`` (``"core"`` or
-    ``"junction"``), ``binary_leaves`` (the word nodes: leaves with two values).
-    """
-
-    bn: BayesNet
-    nodes: tuple[str, ...]
-    method: str
-    binary_leaves: tuple[str, ...]
-
-    def query(
-        self,
-        targets: Sequence[str] | str,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> dict[str, np.ndarray]:
-        """Posterior marginal of each target, target → array, shape (n_values,), in the node's value order.
-
-        ``evidence``: node → value (a name, an alias such as ``circle``, or an index); ``soft``: node →
-        {value: probability} or a vector over its values; ``soft_rule``: ``"virtual"`` (likelihood evidence,
-        the originals' choice) or ``"jeffrey"``. Raises UnknownNodeError, UnknownValueError, EvidenceError,
-        ImpossibleEvidenceError (all ValueError).
-        """
-        ...
-
-    def query_batch(
-        self,
-        targets: Sequence[str] | str,
-        evidence: Mapping[str, Sequence] | None = None,
-        soft: Mapping[str, np.ndarray] | None = None,
-        soft_rule: SoftRule = "virtual",
-        errors: Literal["raise", "nan"] = "raise",
-    ) -> dict[str, np.ndarray]:
-        """Posterior marginals for many evidence sets at once: target → array, shape (n, n_values).
-
-        ``evidence``: node → n values (names or indices; None, NaN or -1 = not observed), e.g. the columns
-        of a DataFrame; ``soft``: node → array, shape (n, n_values); ``errors``: ``"raise"`` an
-        ImpossibleEvidenceError naming the first impossible row, or give that row ``nan``.
-        """
-        ...
-
-    def word_probability_array(
-        self,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> np.ndarray:
-        """P(word = present | evidence) for every binary leaf, shape (n_words,), ``binary_leaves`` order."""
-        ...
-
-    def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
-        """P(hard evidence) under the model (0 for impossible evidence; with all-zero rows, the probability
-        that the evidence holds and no excluded configuration occurs)."""
-        ...
-
-    def soft_vector(self, node: str, dist: Mapping[str, float] | Sequence[float] | np.ndarray) -> np.ndarray:
-        """Soft evidence on ``node`` checked and returned as a vector over its values, shape (k,)."""
-        ...
-
-    def posterior(
-        self,
-        target: str,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> pd.Series:
-        """``p(target | evidence)``: a Series indexed by the target's values, named after the target."""
-        ...
-
-    def posteriors(
-        self,
-        targets: Sequence[str],
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> dict[str, pd.Series]:
-        """:meth:`posterior` of several targets from one computation: target → Series."""
-        ...
-
-    def marginals(
-        self,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> dict[str, pd.Series]:
-        """The posterior of every node: node → Series indexed by its values."""
-        ...
-
-    def word_probabilities(
-        self,
-        evidence: Mapping[str, str | int] | None = None,
-        soft: SoftEvidence | None = None,
-        soft_rule: SoftRule = "virtual",
-    ) -> pd.Series:
-        """P(word = present | evidence) for every word node: a Series indexed by word."""
-        ...
-
-    def posterior_table(
-        self,
-        target: str,
-        evidence: pd.DataFrame,
-        soft: Mapping[str, np.ndarray] | None = None,
-        soft_rule: SoftRule = "virtual",
-        errors: str = "raise",
-    ) -> pd.DataFrame:
-        """``p(target | row)`` for every row of ``evidence``: a DataFrame, one column per value."""
-        ...
-
-
 class Backend(Protocol):
     """The array arithmetic under an engine: :class:`~glu.bn.core.CoreBackend` or
     :class:`~glu.bn.junction.JunctionBackend`. Variables are node indices; hard and likelihood mappings
@@ -287,7 +174,7 @@ def make_engine(bn: BayesNet, method: Method = "auto", max_table: int | None = N
     kind = choose_method(bn, method)
     net = NetworkArrays.of(bn)
     backend: Backend = CoreBackend(bn) if kind == "core" else JunctionBackend(net, max_table)
-    return ExactEngine(bn, net, backend)
+    return Engine(bn, net, backend)
 
 
 def _network_parts(bn: BayesNet, net: NetworkArrays) -> tuple[Values, Labels, tuple[str, ...]]:
@@ -307,7 +194,7 @@ def _network_parts(bn: BayesNet, net: NetworkArrays) -> tuple[Values, Labels, tu
 
 @dataclass(frozen=True)
 class Relevance:
-    """What one evidence pattern needs (:meth:`ExactEngine._relevance`): targets answered from their
+    """What one evidence pattern needs (:meth:`Engine._relevance`): targets answered from their
     observed value, from the cached priors, or by the backend — with the evidence and tables it needs; and
     whether the hard evidence must be checked for probability 0 apart (``check``: no target is computed)."""
 
@@ -320,16 +207,16 @@ class Relevance:
     check: bool
 
 
-class ExactEngine:
-    """The one implementation of :class:`Engine`: evidence, relevance, soft rules, batches and caches over
-    a backend's arithmetic (see the module docstring). Made by :func:`make_engine`.
+class Engine:
+    """The query interface of every network: evidence, relevance, soft rules, batches and caches over a
+    backend's arithmetic (see the module docstring). Made by :func:`make_engine`.
 
     Attributes
     ----------
     bn : the network
     nodes : its node names
     method : ``"core"`` or ``"junction"``, the backend's
-    binary_leaves : the word nodes (leaves with two values)
+    binary_leaves : the word nodes: leaves with two values that are not affordance nodes
     backend : the array arithmetic (:class:`~glu.bn.core.CoreBackend` — the core's joint tables, which
         :func:`glu.bn.sampling.sample` draws from — or :class:`~glu.bn.junction.JunctionBackend`)
     deduplicate : answer identical rows of a batch once (benchmarks turn it off to time every row)
@@ -577,7 +464,13 @@ class ExactEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> dict[str, np.ndarray]:
-        """See :meth:`Engine.query`."""
+        """Posterior marginal of each target, target → array, shape (n_values,), in the node's value order.
+
+        ``evidence``: node → value (a name, an alias such as ``circle``, or an index); ``soft``: node →
+        {value: probability} or a vector over its values; ``soft_rule``: ``"virtual"`` (likelihood evidence,
+        the originals' choice) or ``"jeffrey"``. Raises UnknownNodeError, UnknownValueError, EvidenceError,
+        ImpossibleEvidenceError (all ValueError).
+        """
         names = [targets] if isinstance(targets, str) else list(targets)
         tv = self._variables(names)
         hard, qs = self._parse(evidence, soft, soft_rule)
@@ -592,14 +485,15 @@ class ExactEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> np.ndarray:
-        """See :meth:`Engine.word_probability_array`."""
+        """P(word = present | evidence) for every binary leaf, shape (n_words,), ``binary_leaves`` order."""
         if not self.binary_leaves:
             return np.zeros(0)
         res = self.query(self.binary_leaves, evidence, soft, soft_rule)
         return np.array([res[w][1] for w in self.binary_leaves])
 
     def probability_of_evidence(self, evidence: Mapping[str, str | int] | None = None) -> float:
-        """See :meth:`Engine.probability_of_evidence`."""
+        """P(hard evidence) under the model (0 for impossible evidence; with all-zero rows, the probability
+        that the evidence holds and no excluded configuration occurs)."""
         hard, _ = self._parse(evidence, None, "virtual")
         return float(np.exp(self.backend.log_mass(hard, 1)[0]))
 
@@ -612,7 +506,11 @@ class ExactEngine:
         soft_rule: SoftRule = "virtual",
         errors: Literal["raise", "nan"] = "raise",
     ) -> dict[str, np.ndarray]:
-        """See :meth:`Engine.query_batch`.
+        """Posterior marginals for many evidence sets at once: target → array, shape (n, n_values).
+
+        ``evidence``: node → n values (names or indices; None, NaN or -1 = not observed), e.g. the columns
+        of a DataFrame; ``soft``: node → array, shape (n, n_values); ``errors``: ``"raise"`` an
+        ImpossibleEvidenceError naming the first impossible row, or give that row ``nan``.
 
         Rows are grouped by which nodes they observe (a row without a value for a node does not observe
         it); within a group, rows with the same hard evidence and no soft evidence are answered once.
@@ -727,7 +625,8 @@ class ExactEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> pd.Series:
-        """See :meth:`Engine.posterior` (the labelled form of :meth:`query`: same arguments, same errors).
+        """``p(target | evidence)``: a Series indexed by the target's values, named after the target (the
+        labelled form of :meth:`query`: same arguments, same errors).
 
         >>> from glu.bn import learn_bn
         >>> from glu.data import load_experiments
@@ -750,7 +649,7 @@ class ExactEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> dict[str, pd.Series]:
-        """See :meth:`Engine.posteriors`."""
+        """:meth:`posterior` of several targets from one computation: target → Series."""
         res = self.query(list(targets), evidence, soft, soft_rule)
         return {t: series(p, self.labels.index(t), t) for t, p in res.items()}
 
@@ -760,7 +659,7 @@ class ExactEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> dict[str, pd.Series]:
-        """See :meth:`Engine.marginals`.
+        """The posterior of every node: node → Series indexed by its values.
 
         >>> from glu.bn import learn_bn
         >>> from glu.data import load_experiments
@@ -777,7 +676,8 @@ class ExactEngine:
         soft: SoftEvidence | None = None,
         soft_rule: SoftRule = "virtual",
     ) -> pd.Series:
-        """See :meth:`Engine.word_probabilities` (the labelled form of :meth:`word_probability_array`).
+        """P(word = present | evidence) for every word node: a Series indexed by word (the labelled form
+        of :meth:`word_probability_array`).
 
         >>> from glu.bn import learn_bn
         >>> from glu.data import load_experiments
@@ -796,8 +696,10 @@ class ExactEngine:
         soft_rule: SoftRule = "virtual",
         errors: str = "raise",
     ) -> pd.DataFrame:
-        """See :meth:`Engine.posterior_table`: ``evidence`` has one column per observed node (value names;
-        NaN or None = not observed in that row); the result keeps its index.
+        """``p(target | row)`` for every row of ``evidence``: a DataFrame, one column per value.
+
+        ``evidence`` has one column per observed node (value names; NaN or None = not observed in that
+        row); the result keeps its index.
 
         >>> import pandas as pd
         >>> from glu.bn import learn_bn

@@ -36,7 +36,6 @@ from glu.files import read_text
 TABLE_SUFFIXES: dict[str, str] = {".csv": ",", ".tsv": "\t"}
 """Table files and their separators."""
 ARRAY_SUFFIXES: tuple[str, ...] = (".npy",)
-HAND_COLUMNS: tuple[str, ...] = ("t", "x", "y", "z")
 NPY_FRAME_RATE = 30.0
 """Frames a second assumed for ``.npy`` arrays without timestamps."""
 

@@ -43,11 +43,6 @@ if TYPE_CHECKING:  # the arrays of a table, as the data module reads it
     from glu.data.trajectory_files import TrajectoryTable
 
 AXES: tuple[str, str, str] = ("x", "y", "z")
-AXIS_MEANING: dict[str, str] = {
-    "x": "horizontal, positive to the person's right",
-    "y": "vertical, positive upwards",
-    "z": "orthogonal to the torso, positive towards the person's back",
-}
 FEATURES_DESCRIPTION = (
     "right hand minus torso; x (right) and z (back) / mean shoulder distance, y (up) / mean neck-torso "
     "distance (docs/method.md §4.2); YARP hand logs / 1000"
@@ -215,11 +210,6 @@ def log_features(xyz_logged: np.ndarray) -> np.ndarray:
     ``xyz_logged`` has shape (n_frames, 3); so has the result.
     """
     return np.asarray(xyz_logged, dtype=float) / LOG_SCALE
-
-
-def trajectory_features(traj: Trajectory) -> Trajectory:
-    """A logged trajectory with its coordinates converted by :func:`log_features` (timing unchanged)."""
-    return traj.with_xyz(log_features(traj.xyz))
 
 
 BODY_SIZE_RANGE = (0.01, 10.0)

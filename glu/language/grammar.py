@@ -44,52 +44,54 @@ Pos = tuple[int, int]
 
 # ---------------------------------------------------------------------------------------------- the tree
 @dataclass(frozen=True)
-class Word:
+class Node:
+    """A node of the tree: ``pos`` is where it starts in the grammar's text, (line, column), for error
+    messages (keyword-only; not compared or shown)."""
+
+    pos: Pos = field(default=(0, 0), compare=False, repr=False, kw_only=True)
+
+
+@dataclass(frozen=True)
+class Word(Node):
     """A word of the sentence."""
 
     text: str
-    pos: Pos = field(default=(0, 0), compare=False, repr=False)
 
 
 @dataclass(frozen=True)
-class Ref:
+class Ref(Node):
     """A reference to a variable, ``$name`` (``name`` without the dollar)."""
 
     name: str
-    pos: Pos = field(default=(0, 0), compare=False, repr=False)
 
 
 @dataclass(frozen=True)
-class Seq:
+class Seq(Node):
     """Factors one after the other."""
 
     items: tuple[Expr, ...]
-    pos: Pos = field(default=(0, 0), compare=False, repr=False)
 
 
 @dataclass(frozen=True)
-class Alt:
+class Alt(Node):
     """Alternatives, ``a | b | c``: exactly one of them."""
 
     options: tuple[Expr, ...]
-    pos: Pos = field(default=(0, 0), compare=False, repr=False)
 
 
 @dataclass(frozen=True)
-class Opt:
+class Opt(Node):
     """An optional part, ``[ … ]``."""
 
     expr: Expr
-    pos: Pos = field(default=(0, 0), compare=False, repr=False)
 
 
 @dataclass(frozen=True)
-class Rep:
+class Rep(Node):
     """A repetition: ``{ … }`` (``at_least_one=False``, zero or more) or ``< … >`` (one or more)."""
 
     expr: Expr
     at_least_one: bool = False
-    pos: Pos = field(default=(0, 0), compare=False, repr=False)
 
 
 Expr = Word | Ref | Seq | Alt | Opt | Rep
@@ -355,7 +357,7 @@ class _Parser:
         while self.tok.kind == "|":
             self.k += 1
             options.append(self.sequence())
-        return options[0] if len(options) == 1 else Alt(tuple(options), (first.line, first.col))
+        return options[0] if len(options) == 1 else Alt(tuple(options), pos=(first.line, first.col))
 
     def sequence(self) -> Expr:
         first = self.tok
@@ -364,16 +366,16 @@ class _Parser:
         items = []
         while self.tok.kind in _FACTOR_START:
             items.append(self.factor())
-        return items[0] if len(items) == 1 else Seq(tuple(items), (first.line, first.col))
+        return items[0] if len(items) == 1 else Seq(tuple(items), pos=(first.line, first.col))
 
     def factor(self) -> Expr:
         tok = self.tok
         pos = (tok.line, tok.col)
         self.k += 1
         if tok.kind == "word":
-            return Word(tok.text, pos)
+            return Word(tok.text, pos=pos)
         if tok.kind == "var":
-            return Ref(tok.text, pos)
+            return Ref(tok.text, pos=pos)
         self.depth += 1
         if self.depth > MAX_NESTING:
             raise self.error(f"brackets are nested more than {MAX_NESTING} deep", tok)
@@ -389,8 +391,8 @@ class _Parser:
         if tok.kind == "(":
             return inner
         if tok.kind == "[":
-            return Opt(inner, pos)
-        return Rep(inner, tok.kind == "<", pos)
+            return Opt(inner, pos=pos)
+        return Rep(inner, tok.kind == "<", pos=pos)
 
 
 def _check_references(defs: Mapping[str, Expr], sentence: Expr, source: str) -> None:

@@ -13,6 +13,7 @@ import textwrap
 from collections.abc import Sequence
 from contextlib import nullcontext
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 import matplotlib.pyplot as plt
@@ -101,6 +102,12 @@ def strategy_style(strategy: str) -> dict[str, str]:
         "ls": STRATEGY_LINESTYLES.get(strategy, "-"),
         "marker": STRATEGY_MARKERS.get(strategy, "o"),
     }
+
+
+def legend_right(ax: Axes, fontsize: float | str = 8, **kwargs: Any) -> Any:
+    """A frameless legend right of ``ax``, its top level with the axes' top (where the figures keep their
+    legends); ``kwargs`` go to :meth:`~matplotlib.axes.Axes.legend` (handles, title, …)."""
+    return ax.legend(fontsize=fontsize, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0), **kwargs)
 
 
 def balanced_fill(text: str, width: int) -> str:

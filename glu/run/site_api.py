@@ -68,12 +68,6 @@ def _reading_order(module: str) -> tuple[Any, ...]:
     return (*_component(module), module.split("."))
 
 
-def _summary(module: str) -> str:
-    """The first line of a module's docstring."""
-    doc = inspect.getdoc(importlib.import_module(module)) or ""
-    return doc.strip().splitlines()[0] if doc.strip() else ""
-
-
 def _title(text: str) -> str:
     return f"{text}\n{'=' * len(text)}\n"
 

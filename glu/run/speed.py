@@ -30,11 +30,6 @@ RESULTS: Path | None = _ROOT / "benchmarks" / "results" if _ROOT is not None els
 
 :meta hide-value:
 """
-PAGE: Path | None = _ROOT / "docs" / "speed.md" if _ROOT is not None else None
-"""The checkout's speed page (None when glu is installed).
-
-:meta hide-value:
-"""
 BEGIN = (
     "<!-- BEGIN benchmarks: written by `glu readme` from benchmarks/results/*.json; edit glu/run/speed.py -->"
 )

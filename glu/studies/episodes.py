@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -142,6 +142,13 @@ class Condition:
             raise DataError(f"unknown effects {self.effects!r}; allowed: {', '.join(GESTURE_WORLDS)}")
 
 
+def check_probability(value: Any, name: str, where: str = "") -> None:
+    """DataError unless ``value`` is a number in [0, 1]: ``[where: ]name=value: must be a probability in
+    [0, 1]``."""
+    if not (isinstance(value, int | float) and 0 <= value <= 1):
+        raise DataError(f"{where + ': ' if where else ''}{name}={value!r}: must be a probability in [0, 1]")
+
+
 @dataclass(frozen=True)
 class GestureSettings:
     """The gesture generator's tracking problems (the person's speed, amplitude and size it draws itself).
@@ -157,9 +164,7 @@ class GestureSettings:
 
     def __post_init__(self) -> None:
         for name in ("spike_rate", "dropout_rate"):
-            v = getattr(self, name)
-            if not (isinstance(v, int | float) and 0 <= v <= 1):
-                raise DataError(f"{name}={v!r}: must be a probability in [0, 1]")
+            check_probability(getattr(self, name), name)
 
 
 DURATION_S: tuple[float, float] = (2.5, 5.0)

@@ -379,18 +379,18 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
             spec.get("yaw_deg"), spec.get("mirror", False), posture, spec.get("size"), tracker=tracker
         )
     scenario = Scenario.from_mapping(_table(doc, "scenario"))
-    gestures = GestureSettings(**_section(doc, "gestures"))
-    rec = _section(doc, "recognizer")
+    gestures = GestureSettings(**_table(doc, "gestures"))
+    rec = _table(doc, "recognizer")
     if rec.get("file") is not None:
         if not isinstance(rec["file"], str):
             raise DataError("recognizer.file must be a path (a string)")
         rec["file"] = str(_resolve(rec["file"], base))
-    net = _section(doc, "network")
+    net = _table(doc, "network")
     if net.get("data") is not None:
         if not isinstance(net["data"], str):
             raise DataError("network.data must be a folder (a string) or 'synthetic'")
         net["data"] = net["data"] if net["data"] == "synthetic" else str(_resolve(net["data"], base))
-    ev = _section(doc, "evaluation")
+    ev = _table(doc, "evaluation")
     for k in ("fractions", "strategies"):
         if k in grid:
             ev[k] = grid[k]
@@ -472,10 +472,6 @@ def _table(doc: Mapping[str, Any], name: str) -> dict[str, Any]:
     if name in SECTIONS:
         _keys(name, t)
     return dict(t)
-
-
-def _section(doc: Mapping[str, Any], name: str) -> dict[str, Any]:
-    return _table(doc, name)
 
 
 def _keys(section: str, table: Mapping[str, Any], where: str | None = None) -> None:

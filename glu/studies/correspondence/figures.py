@@ -16,7 +16,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 
 from glu.gestures.invariants import ALL, INVARIANCES
-from glu.plots.style import ACTION_COLORS
+from glu.plots.style import ACTION_COLORS, legend_right
 
 FEATURE_COLORS = {
     "raw": "0.2",
@@ -254,17 +254,10 @@ def plot_two_views(axes: Sequence[Axes], curves: pd.DataFrame, action: str) -> S
         ax.set_xlabel("time (s)")
         ax.set_ylim(-0.02, 1.02)
     axes[0].set_ylabel(rf"$p_{{HMM}}({action} \mid G_1^t)$")
-    axes[-1].legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    legend_right(axes[-1])
     return axes
 
 
 def _features_legend(ax: Axes) -> None:
     """The legend of the feature sets, right of the axes."""
-    ax.legend(
-        fontsize=8,
-        frameon=False,
-        title="features",
-        title_fontsize=8,
-        loc="upper left",
-        bbox_to_anchor=(1.01, 1.0),
-    )
+    legend_right(ax, title="features", title_fontsize=8)

@@ -46,6 +46,7 @@ from glu.hmm import (
     first_model,
     kmeans_labels,
 )
+from glu.studies.episodes import check_probability
 from glu.studies.learning.self_supervised import (
     ONLINE_LEARNERS,
     POSTERIOR_READINGS,
@@ -89,8 +90,7 @@ class OnlineSettings:
             raise DataError(f"init_iter={self.init_iter!r}: a whole number ≥ 1")
         if not (isinstance(self.step, int | float) and 0.5 < self.step <= 1):
             raise DataError(f"step={self.step!r}: the stepwise-EM exponent must be in (0.5, 1]")
-        if not (isinstance(self.threshold, int | float) and 0 <= self.threshold <= 1):
-            raise DataError(f"threshold={self.threshold!r}: a probability in [0, 1]")
+        check_probability(self.threshold, "threshold")
         if self.posterior not in POSTERIOR_READINGS:
             raise DataError(f"posterior={self.posterior!r}; allowed: {', '.join(POSTERIOR_READINGS)}")
         if not (isinstance(self.cluster_episodes, int) and self.cluster_episodes >= 3):

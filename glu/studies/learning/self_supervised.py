@@ -65,6 +65,7 @@ from glu.studies.episodes import (
     GestureEffects,
     GestureSettings,
     Scenario,
+    check_probability,
     effects_given_gesture,
     gesture_speed,
 )
@@ -131,9 +132,7 @@ class Ambiguity:
 
     def __post_init__(self) -> None:
         for k in ("failed_taps", "perception_noise"):
-            v = getattr(self, k)
-            if not (isinstance(v, int | float) and 0 <= v <= 1):
-                raise DataError(f"ambiguity {self.name!r}: {k}={v!r} must be a probability in [0, 1]")
+            check_probability(getattr(self, k), k, f"ambiguity {self.name!r}")
 
 
 AMBIGUITIES: dict[str, Ambiguity] = {
@@ -457,8 +456,7 @@ def matched_random_labels(true: np.ndarray, accuracy: float, k: int, rng: np.ran
     The errors depend on nothing (neither the gesture nor the action), so HMMs that learn as well from
     these as from the network's labels owe nothing to what the network knows beyond its accuracy.
     """
-    if not (isinstance(accuracy, int | float) and 0 <= accuracy <= 1):
-        raise DataError(f"matched_random_labels: accuracy={accuracy!r} must be a probability")
+    check_probability(accuracy, "accuracy", "matched_random_labels")
     true = np.asarray(true, dtype=np.intp)
     right = rng.random(len(true)) < accuracy
     other = (true + rng.integers(1, k, size=len(true))) % k

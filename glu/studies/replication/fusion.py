@@ -10,18 +10,20 @@ effect-anticipation experiment, which needs the gesture HMMs, is in
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from glu.bn.inference import make_engine
+from glu.bn.inference import Engine, make_engine
 from glu.bn.model import BayesNet
+from glu.evidence import format_evidence
 from glu.fusion import SOFT_STRATEGIES, Strategy, check_strategy, fuse, hmm_rows
 from glu.gestures.corpus import LabelledSequence
 from glu.gestures.recognizer import Recognizer
 from glu.hmm import p_hmm_from_loglik
-from glu.tidy import evidence_text, model_source, tidy
+from glu.tidy import model_source, tidy
 
 EFFECT_CASES: dict[str, dict[str, str]] = {
     "small sphere": {"Action": "tap", "Shape": "sphere", "Size": "small"},
@@ -68,13 +70,24 @@ ORIGINAL_REFERENCE = "original model (BN_lab.mat)"
 label)."""
 
 
-def _reference(reference: BayesNet | None) -> str | None:
-    return ORIGINAL_REFERENCE if reference is not None else None
+def _stamped(
+    df: pd.DataFrame, name: str, bn: BayesNet, reference: BayesNet | None, **params: Any
+) -> pd.DataFrame:
+    """``df`` stamped by :func:`~glu.tidy.tidy` as the table ``name`` of ``bn``, with its parameters and the
+    reference model's label (None without one)."""
+    return tidy(
+        df, name, model_source(bn), **params, reference=ORIGINAL_REFERENCE if reference is not None else None
+    )
 
 
-def _with_reference(df: pd.DataFrame, ref_values: list[float] | None) -> pd.DataFrame:
-    if ref_values is not None:
-        df["p_original"] = ref_values
+def _against_reference(
+    rows_of: Callable[[Engine], list[dict[str, Any]]], bn: BayesNet, reference: BayesNet | None
+) -> pd.DataFrame:
+    """The rows ``rows_of`` gives on ``bn``'s engine; with a ``reference`` model, the same rows' ``p`` on
+    its engine beside them (``p_original``) and the ``difference``."""
+    df = pd.DataFrame(rows_of(make_engine(bn)))
+    if reference is not None:
+        df["p_original"] = [r["p"] for r in rows_of(make_engine(reference))]
         df["difference"] = df["p"] - df["p_original"]
     return df
 
@@ -84,18 +97,17 @@ def effect_prediction(bn: BayesNet, reference: BayesNet | None = None) -> pd.Dat
 
     Returns columns ``case, ObjVel, p`` (+ ``p_original, difference`` with a reference model).
     """
-    rows, ref = [], []
-    engines = [make_engine(bn)] + ([make_engine(reference)] if reference else [])
-    for case, ev in EFFECT_CASES.items():
-        posts = [e.query(["ObjVel"], ev)["ObjVel"] for e in engines]
-        for i, v in enumerate(bn.schema.values_of("ObjVel")):
-            rows.append({"case": case, "evidence": evidence_text(ev), "ObjVel": v, "p": posts[0][i]})
-            if reference:
-                ref.append(posts[1][i])
-    df = _with_reference(pd.DataFrame(rows), ref if reference else None)
-    return tidy(
-        df, "glu2017_effect_prediction", model_source(bn), cases=EFFECT_CASES, reference=_reference(reference)
-    )
+    values = bn.schema.values_of("ObjVel")
+
+    def rows_of(eng: Engine) -> list[dict[str, Any]]:
+        return [
+            {"case": case, "evidence": format_evidence(ev), "ObjVel": v, "p": p}
+            for case, ev in EFFECT_CASES.items()
+            for v, p in zip(values, eng.query(["ObjVel"], ev)["ObjVel"], strict=True)
+        ]
+
+    df = _against_reference(rows_of, bn, reference)
+    return _stamped(df, "glu2017_effect_prediction", bn, reference, cases=EFFECT_CASES)
 
 
 def word_probability_change(
@@ -117,21 +129,14 @@ def word_probability_change(
     df = pd.DataFrame({"word": list(eng.binary_leaves), "p_without": without, "p_with": with_tap})
     df["delta"] = df["p_with"] - df["p_without"]
     df["shown"] = df["delta"].abs() > threshold
-    df.insert(0, "evidence", evidence_text(ev))
+    df.insert(0, "evidence", format_evidence(ev))
     if reference:
         r = make_engine(reference)
         df["delta_original"] = r.word_probability_array({**ev, "Action": "tap"}) - r.word_probability_array(
             ev
         )
         df["difference"] = df["delta"] - df["delta_original"]
-    return tidy(
-        df,
-        "glu2017_word_change",
-        model_source(bn),
-        evidence=ev,
-        threshold=threshold,
-        reference=_reference(reference),
-    )
+    return _stamped(df, "glu2017_word_change", bn, reference, evidence=ev, threshold=threshold)
 
 
 def action_vs_soft_evidence(
@@ -146,28 +151,18 @@ def action_vs_soft_evidence(
     Returns columns ``case, p_hmm_tap, Action, p`` (+ ``p_original, difference``).
     """
     actions = bn.schema.values_of("Action")
-    eng = make_engine(bn)
-    ref_eng = make_engine(reference) if reference else None
-    out, ref = [], []
-    for q in rows:
-        post = fuse(eng, ["Action"], evidence, q, strategy)["Action"]
-        rpost = fuse(ref_eng, ["Action"], evidence, q, strategy)["Action"] if ref_eng else None
-        for i, a in enumerate(actions):
-            out.append({"case": _label(q), "p_hmm_tap": q[actions.index("tap")], "Action": a, "p": post[i]})
-            if rpost is not None:
-                ref.append(rpost[i])
-    df = pd.DataFrame(out)
-    df.insert(0, "evidence", evidence_text(evidence))
+
+    def rows_of(eng: Engine) -> list[dict[str, Any]]:
+        return [
+            {"case": _label(q), "p_hmm_tap": q[actions.index("tap")], "Action": a, "p": p}
+            for q in rows
+            for a, p in zip(actions, fuse(eng, ["Action"], evidence, q, strategy)["Action"], strict=True)
+        ]
+
+    df = _against_reference(rows_of, bn, reference)
+    df.insert(0, "evidence", format_evidence(evidence))
     df.insert(1, "strategy", strategy)
-    df = _with_reference(df, ref if reference else None)
-    return tidy(
-        df,
-        "tcds_action_vs_soft_evidence",
-        model_source(bn),
-        evidence=evidence,
-        strategy=strategy,
-        reference=_reference(reference),
-    )
+    return _stamped(df, "tcds_action_vs_soft_evidence", bn, reference, evidence=evidence, strategy=strategy)
 
 
 def tap_threshold(
@@ -216,27 +211,19 @@ def effect_vs_soft_evidence(
     ``rules``: soft-fusion strategies to compare (``virtual`` is the originals'). Returns columns
     ``Shape, rule, case, ObjVel, p`` (+ ``p_original, difference``).
     """
-    eng = make_engine(bn)
-    ref_eng = make_engine(reference) if reference else None
-    out, ref = [], []
-    for shape in shapes:
-        for rule in rules:
-            for q in rows:
-                post = fuse(eng, ["ObjVel"], {"Shape": shape}, q, rule)["ObjVel"]
-                rpost = fuse(ref_eng, ["ObjVel"], {"Shape": shape}, q, rule)["ObjVel"] if ref_eng else None
-                for i, v in enumerate(bn.schema.values_of("ObjVel")):
-                    out.append({"Shape": shape, "rule": rule, "case": _label(q), "ObjVel": v, "p": post[i]})
-                    if rpost is not None:
-                        ref.append(rpost[i])
-    df = _with_reference(pd.DataFrame(out), ref if reference else None)
-    return tidy(
-        df,
-        "tcds_effect_vs_soft_evidence",
-        model_source(bn),
-        shapes=shapes,
-        rules=rules,
-        reference=_reference(reference),
-    )
+    values = bn.schema.values_of("ObjVel")
+
+    def rows_of(eng: Engine) -> list[dict[str, Any]]:
+        return [
+            {"Shape": shape, "rule": rule, "case": _label(q), "ObjVel": v, "p": p}
+            for shape in shapes
+            for rule in rules
+            for q in rows
+            for v, p in zip(values, fuse(eng, ["ObjVel"], {"Shape": shape}, q, rule)["ObjVel"], strict=True)
+        ]
+
+    df = _against_reference(rows_of, bn, reference)
+    return _stamped(df, "tcds_effect_vs_soft_evidence", bn, reference, shapes=shapes, rules=rules)
 
 
 def soft_evidence_sweep(
@@ -262,7 +249,7 @@ def soft_evidence_sweep(
         for i, v in enumerate(values):
             frames.append(pd.DataFrame({"rule": rule, "p_hmm_tap": t, target: v, "p": post[:, i]}))
     df = pd.concat(frames, ignore_index=True)
-    df.insert(0, "evidence", evidence_text(evidence))
+    df.insert(0, "evidence", format_evidence(evidence))
     return tidy(
         df,
         f"soft_evidence_sweep_{target}",
@@ -434,7 +421,7 @@ def fusion_on_gestures(
             for v, p in zip(bn.schema.values_of(target), post, strict=True):
                 rows.append({**base, "strategy": strategy, target: v, "p": float(p)})
     df = pd.DataFrame(rows)
-    df.insert(0, "evidence", evidence_text(evidence))
+    df.insert(0, "evidence", format_evidence(evidence))
     return tidy(
         df, "fusion_on_gestures", model_source(bn), evidence=evidence, strategies=strategies, target=target
     )

@@ -13,7 +13,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 
-from glu.plots.style import ACTION_COLORS, RULE_LINESTYLES, VALUE_COLORS, rule_label
+from glu.plots.style import ACTION_COLORS, RULE_LINESTYLES, VALUE_COLORS, legend_right, rule_label
 
 NEAR_ZERO = 0.02
 """A sweep line that never rises above this lies on the axis; the title says which."""
@@ -54,7 +54,7 @@ def plot_soft_sweep(ax: Axes, df: pd.DataFrame, legend: bool = True) -> Axes:
         handles += [
             Line2D([], [], color="0.3", ls=RULE_LINESTYLES.get(r, "-"), label=rule_label(r)) for r in rules
         ]
-        ax.legend(handles=handles, fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        legend_right(ax, handles=handles)
     return ax
 
 
@@ -139,5 +139,5 @@ def plot_fusion_on_gestures(ax: Axes, df: pd.DataFrame, value: str = "fast", tar
         title += "\n" + textwrap.fill(note, 90)
     ax.set_title(title, fontsize=9)
     if len(groups) > 1:
-        ax.legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        legend_right(ax)
     return ax

@@ -14,7 +14,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from glu.gestures.segmentation import RecordingSegmentation, Segment, Segmentation
-from glu.plots.style import ACTION_COLORS
+from glu.plots.style import ACTION_COLORS, legend_right
 
 
 def plot_segmentation(
@@ -182,7 +182,7 @@ def plot_segment_scores(ax: Axes, df: pd.DataFrame) -> Axes:
         for c in cols
     ]
     handles.append(Patch(facecolor="white", edgecolor="black", linewidth=1.5, label="recognised"))
-    ax.legend(handles=handles, fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    legend_right(ax, handles=handles)
     return ax
 
 

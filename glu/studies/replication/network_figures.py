@@ -22,6 +22,7 @@ from glu.plots.style import (
     ORIGINAL_MARK,
     VALUE_COLORS,
     bars_with_original,
+    legend_right,
     rule_label,
 )
 
@@ -58,7 +59,7 @@ def plot_effect_prediction(axes: Sequence[Axes], df: pd.DataFrame) -> Sequence[A
         ax.set_ylabel("probability")
         ax.set_title(f"tap on a {case}", fontsize=10)
     if "p_original" in df:
-        axes[-1].legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        legend_right(axes[-1])
     return axes
 
 
@@ -111,7 +112,7 @@ def plot_word_change(ax: Axes, df: pd.DataFrame, other: pd.DataFrame | None = No
         )
     ax.set_title(title, fontsize=9)
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        legend_right(ax)
     return ax
 
 
@@ -145,7 +146,7 @@ def plot_action_vs_soft_evidence(ax: Axes, df: pd.DataFrame, threshold: float | 
     if threshold is not None and np.isfinite(threshold):
         title += f": tap wins for $p_{{HMM}}(tap) > {threshold:.4f}$"
     ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=8, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    legend_right(ax)
     return ax
 
 
@@ -221,7 +222,7 @@ def plot_unseen_rows(ax: Axes, df: pd.DataFrame, tolerance: float = 1e-3) -> Axe
         f"the most: {worst['value']} ({where}), {worst['p_zero']:+.3f} → {worst['p_uniform']:+.3f}",
         fontsize=8,
     )
-    ax.legend(fontsize=7, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    legend_right(ax, fontsize=7)
     return ax
 
 

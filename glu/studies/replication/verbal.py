@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from glu.data.published import num2str, published
+from glu.evidence import format_evidence
 from glu.language.candidates import SentenceSet
 from glu.language.descriptions import (
     DEFAULT_SCORE,
@@ -38,7 +39,7 @@ from glu.language.descriptions import (
 from glu.language.grammar import Grammar, load_grammar
 from glu.language.sampling import sample_probability, sample_sentences
 from glu.language.sentences import WordNetwork, compile_network
-from glu.tidy import evidence_text, model_source, tidy
+from glu.tidy import model_source, tidy
 
 EVIDENCE_YELLOW_SPHERE: dict[str, str] = {
     "Color": "yellow",
@@ -114,7 +115,7 @@ def and_but_probabilities(engine: Any, compare: bool = False) -> pd.DataFrame:
     for objvel, ev in EVIDENCE_AND_BUT.items():
         probs = word_probabilities(engine, ev)
         for w in CONJUNCTIONS:
-            rows.append({"ObjVel": objvel, "evidence": evidence_text(ev), "word": w, "p": float(probs[w])})
+            rows.append({"ObjVel": objvel, "evidence": format_evidence(ev), "word": w, "p": float(probs[w])})
     df = pd.DataFrame(rows, columns=["ObjVel", "evidence", "word", "p"])
     if compare:
         bars = published()["conjunctions"]
@@ -146,7 +147,7 @@ def and_but_nbest(
     frames = []
     for objvel, ev in EVIDENCE_AND_BUT.items():
         df = describe(engine, ev, n=n, grammar=net, score=score, candidates=cands)
-        df.insert(0, "evidence", evidence_text(ev))
+        df.insert(0, "evidence", format_evidence(ev))
         df.insert(0, "ObjVel", objvel)
         df["conjunction"] = [_conjunction(s) for s in df["sentence"]]
         frames.append(df)
@@ -182,7 +183,7 @@ def fig8_descriptions(engine: Any, grammar: Grammar | WordNetwork | None = None)
         rows.append(
             {
                 "situation": k,
-                "evidence": evidence_text(ev),
+                "evidence": format_evidence(ev),
                 "sentence": best["sentence"],
                 "score": float(best["score"]),
                 "colour_sentence": colour["sentence"],
@@ -224,7 +225,7 @@ def published_descriptions(
                 {
                     "figure": key,
                     "rank": k,
-                    "evidence": evidence_text(ev),
+                    "evidence": format_evidence(ev),
                     "paper_sentence": p["sentence"],
                     "paper_score": p.get("score"),
                     "sentence": o.sentence,
@@ -284,7 +285,7 @@ def exact_vs_samples(
             rows.append(
                 {
                     "figure": key,
-                    "evidence": evidence_text(ev),
+                    "evidence": format_evidence(ev),
                     "score_name": name,
                     "exact_best": exact["sentence"],
                     "exact_score": float(exact["score"]),

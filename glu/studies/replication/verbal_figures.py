@@ -14,7 +14,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from glu.plots.style import ORIGINAL_MARK, WORD_COLORS
+from glu.plots.style import ORIGINAL_MARK, WORD_COLORS, legend_right
 
 SCORE_LABELS: dict[str, str] = {
     "paper": "score: (1/L) Σ log p(word | evidence)",
@@ -187,7 +187,7 @@ def plot_sampling(
         ax.axvline(sb, color="tab:red", lw=1, ls="--", label=f"best of the sample: {sb:.4f}")
     ax.set_xlabel(SCORE_LABELS[score])
     ax.set_ylabel("density")
-    ax.legend(fontsize=7.5, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    legend_right(ax, fontsize=7.5)
     lines = [title] if title else []
     n_inf, m_inf = len(scores) - len(finite), len(sample_scores) - len(fs)
     if n_inf or m_inf:
