@@ -192,6 +192,11 @@ def _network_parts(bn: BayesNet, net: NetworkArrays) -> tuple[Values, Labels, tu
     return parts
 
 
+def _row_key(hard: Mapping[int, int | Array]) -> tuple[int, ...]:
+    """One row of hard evidence as a key of the engine's memo of possible evidence: nodes, then codes."""
+    return (*hard, *map(code_of, hard.values()))
+
+
 @dataclass(frozen=True)
 class Relevance:
     """What one evidence pattern needs (:meth:`Engine._relevance`): targets answered from their
@@ -229,7 +234,6 @@ class Engine:
         self.backend = backend
         self.method = backend.method
         self.values, self.labels, self.binary_leaves = _network_parts(bn, net)
-        """``binary_leaves``: the word nodes: leaves (not affordance nodes, no children) with two values."""
         self.deduplicate = True
         self._relevant: dict[tuple, Relevance] = {}
         self._priors: dict[int, Array] = {}
@@ -302,8 +306,7 @@ class Engine:
         """Whether each row's hard evidence has probability > 0, shape (rows,) (single queries remembered)."""
         if rows > 1:
             return self.backend.log_mass(hard, rows) > -np.inf
-        first = next(iter(hard.values()))
-        key = (*hard, *(hard.values() if type(first) is int else (int(c[0]) for c in hard.values())))
+        key = _row_key(hard)
         ok = self._possible_memo.get(key)
         if ok is None:
             if len(self._possible_memo) >= POSSIBLE_MEMO:
@@ -316,7 +319,7 @@ class Engine:
         :func:`surely_possible` (then remembered); False: not known (it may still be possible)."""
         if self.net.inexact:  # all-zero rows: a configuration of positive terms is not a positive mass
             return False
-        key = (*hard, *map(code_of, hard.values()))
+        key = _row_key(hard)
         ok = self._possible_memo.get(key)
         if ok is not None:
             return bool(ok[0])

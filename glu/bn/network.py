@@ -95,13 +95,28 @@ class NetworkArrays:
         return t
 
     @property
+    def topological_order(self) -> tuple[int, ...]:
+        """The variables, each after all its parents (Kahn's order, ties by index), made on first use."""
+        made = self.__dict__.get("_topological")
+        if made is None:
+            pending = [len(ps) for ps in self.parents]
+            order = [v for v, k in enumerate(pending) if k == 0]
+            for v in order:
+                for c in self.children[v]:
+                    pending[c] -= 1
+                    if pending[c] == 0:
+                        order.append(c)
+            made = self.__dict__["_topological"] = tuple(order)
+        return made
+
+    @property
     def zero_above(self) -> tuple[bool, ...]:
         """Whether each node's table, or a table of one of its ancestors, holds a zero (evidence on the node
         may then have probability 0), made on first use."""
         made = self.__dict__.get("_zero_above")
         if made is None:
             zero = [not bool(t.all()) for t in self.cpts]
-            for v in self.support_arrays()[0].tolist():  # parents first
+            for v in self.topological_order:  # parents first
                 zero[v] = zero[v] or any(zero[p] for p in self.parents[v])
             made = self.__dict__["_zero_above"] = tuple(zero)
         return made
@@ -112,16 +127,9 @@ class NetworkArrays:
         for each variable: the observed values of no evidence, to copy)."""
         made = self.__dict__.get("_support")
         if made is None:
-            pending = [len(ps) for ps in self.parents]
-            order = [v for v, k in enumerate(pending) if k == 0]
-            for v in order:  # Kahn's order: a node after all its parents
-                for c in self.children[v]:
-                    pending[c] -= 1
-                    if pending[c] == 0:
-                        order.append(c)
             sizes = [t.size for t in self.cpts]
             made = self.__dict__["_support"] = (
-                np.array(order, dtype=np.int64),
+                np.array(self.topological_order, dtype=np.int64),
                 np.array(self.cards, dtype=np.int64),
                 np.cumsum([0, *map(len, self.parents)], dtype=np.int64),
                 np.array([p for ps in self.parents for p in ps], dtype=np.int64),
