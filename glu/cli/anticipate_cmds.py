@@ -36,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add ``anticipate``."""
     from glu.studies.anticipation.experiment import CASES, ORIGINAL_STEP
 
-    p = add_command(sub, "anticipate", DESCRIPTION)
+    p = add_command(sub, "anticipate", DESCRIPTION, _anticipate)
     p.add_argument(
         "--case",
         choices=tuple(CASES),
@@ -68,7 +68,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_description_args(p)
     add_json_option(p, "one object (case, frames, loglik_per_frame, updates, description)")
-    p.set_defaults(func=_anticipate)
 
 
 def _load_recognizer(spec: str, source: Any) -> tuple[Any, str]:

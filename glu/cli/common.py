@@ -9,10 +9,12 @@ the package.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import json
 import math
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -170,6 +172,11 @@ def json_text(obj: Any) -> str:
     return json.dumps(_json_ready(obj), allow_nan=False)
 
 
+def chosen(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The options ``names`` as keyword arguments (each option's destination is the parameter's name)."""
+    return {name: getattr(args, name) for name in names}
+
+
 # ------------------------------------------------------------------ shared options
 
 
@@ -269,7 +276,6 @@ def make_engine(bn: Any, args: argparse.Namespace) -> Any:
     """The :class:`~glu.bn.inference.Engine` of ``bn`` with the command's ``--max-table``, which is first
     checked against the memory this process may use (a table of N entries takes 8 N bytes)."""
     from glu.bn import inference
-    from glu.machine import check_memory
 
     max_table = getattr(args, "max_table", None)
     if max_table is not None:
@@ -348,6 +354,8 @@ def read_model_file(path: Path, fmt: str | None = None, renormalise: float | Non
     from glu.bn.model import BayesNet
     from glu.errors import ModelError
 
+    if renormalise is not None and path.suffix.lower() in (".mat", ".json"):
+        raise EvidenceError("--renormalise applies to BIF, XMLBIF and UAI files")
     try:
         size = path.stat().st_size
     except FileNotFoundError:
@@ -374,10 +382,7 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
             raise EvidenceError("give either --model or --data, not both")
         if getattr(args, "schema", None) or getattr(args, "experiments", None):
             raise EvidenceError("give either --model or --schema/--experiments, not both")
-        renormalise = getattr(args, "renormalise", None)
-        if renormalise is not None and model.suffix.lower() in (".mat", ".json"):
-            raise EvidenceError("--renormalise applies to BIF, XMLBIF and UAI files")
-        bn = read_model_file(model, renormalise=renormalise)
+        bn = read_model_file(model, renormalise=getattr(args, "renormalise", None))
         r = bn.meta.get("renormalised")
         rescaled = f"; {r['rows']} CPT row(s) rescaled to sum to 1 on import" if r else ""
         return bn, one_line(f"model {model} ({bn.meta.get('data_source', 'unknown data')}{rescaled})")
@@ -395,11 +400,9 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
             raise EvidenceError("give either --data or --schema/--experiments, not both")
         schema = read_schema_file(schema_file)
         df = read_experiment_table(table, schema)
-        bn = learn_bn(df, schema, unseen_words=args.unseen_words)
-        return bn, one_line(f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}")
-    source = resolve_data(args.data)
-    df = load_experiments(source, args.words)
-    bn = learn_bn(df, unseen_words=args.unseen_words)
+    else:
+        schema, df = None, load_experiments(resolve_data(args.data), args.words)
+    bn = learn_bn(df, schema, unseen_words=args.unseen_words)
     return bn, one_line(f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}")
 
 
@@ -418,6 +421,17 @@ def progress_bar(total: int | None, desc: str, unit: str, quiet: bool = False) -
     from tqdm import tqdm
 
     return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, leave=False, dynamic_ncols=True)
+
+
+@contextlib.contextmanager
+def progress(total: int | None, desc: str, unit: str, quiet: bool = False) -> Iterator[Any]:
+    """The :func:`progress_bar` of a block (None when there is none), closed when the block ends."""
+    bar = progress_bar(total, desc, unit, quiet)
+    try:
+        yield bar
+    finally:
+        if bar is not None:
+            bar.close()
 
 
 def require_extra(extra: str, *modules: str) -> None:
@@ -538,7 +552,7 @@ def add_cluster_args(p: argparse.ArgumentParser, unit: str) -> None:
 
 def add_hmm_size_args(p: argparse.ArgumentParser) -> None:
     """``--states``, ``--mix`` and ``--iter`` of the gesture HMMs, defaults from
-    :class:`~glu.hmm.TrainingConfig`."""
+    :class:`~glu.hmm.TrainingConfig` (read by :func:`hmm_config`)."""
     from glu.hmm import TrainingConfig
 
     d = TrainingConfig()
@@ -551,3 +565,11 @@ def add_hmm_size_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--iter", type=positive_int, default=d.n_iter, help=f"most EM iterations (default {d.n_iter})"
     )
+
+
+def hmm_config(args: argparse.Namespace, *fields: str) -> Any:
+    """The :class:`~glu.hmm.TrainingConfig` of the options of :func:`add_hmm_size_args` and the options
+    ``fields`` (named as its fields)."""
+    from glu.hmm import TrainingConfig
+
+    return TrainingConfig(n_states=args.states, n_mix=args.mix, n_iter=args.iter, **chosen(args, *fields))

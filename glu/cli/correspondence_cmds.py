@@ -23,12 +23,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "training source, feature set and condition; the ideal and the occluding tracker), one task per "
         "seed on a LocalCluster, and write its tables with their key and provenance to -o DIR, where "
         "the notebook finds them (sweeps/10_correspondence/study: make sweeps).",
+        _run,
     )
     add_out_option(p, "DIR", "folder for the tables", folder=True)
     p.add_argument(
         "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: in this process)"
     )
-    p.set_defaults(func=_run)
 
 
 def notebook_settings():

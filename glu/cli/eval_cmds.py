@@ -25,18 +25,6 @@ from glu.cli.common import (
 )
 
 
-def _shared(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--config",
-        type=Path,
-        metavar="FILE.toml",
-        help="sweep settings (see glu.studies.corpus_evaluation.config)",
-    )
-    p.add_argument("--episodes", type=positive_int, metavar="N", help="episodes in all (default 120000)")
-    p.add_argument("--seed", type=seed, metavar="S", help="the corpus's seed (default 0)")
-    add_data_option(p, "the network is learned from its experiments")
-
-
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``evaluate`` and ``corpus`` commands."""
     e = add_command(
@@ -48,8 +36,26 @@ def register(sub: argparse._SubParsersAction) -> None:
         "observed fraction of the gesture (docs/corpus-evaluation.md). Runs on a LocalCluster sized to the "
         "machine or on an existing Dask cluster (--scheduler), and writes the merged tables to -o DIR; run "
         "it again on the same folder to finish an interrupted sweep.",
+        _evaluate,
     )
-    _shared(e)
+    c = add_command(
+        sub,
+        "corpus",
+        "Write the simulated episodes of a sweep's design (the same settings as glu evaluate: "
+        "--config, --episodes, --seed, --data) to one Parquet file, one row per episode, without scoring "
+        "them.",
+        _corpus,
+    )
+    for p in (e, c):  # the sweep's settings
+        p.add_argument(
+            "--config",
+            type=Path,
+            metavar="FILE.toml",
+            help="sweep settings (see glu.studies.corpus_evaluation.config)",
+        )
+        p.add_argument("--episodes", type=positive_int, metavar="N", help="episodes in all (default 120000)")
+        p.add_argument("--seed", type=seed, metavar="S", help="the corpus's seed (default 0)")
+        add_data_option(p, "the network is learned from its experiments")
     add_cluster_args(e, "chunk")
     e.add_argument(
         "--max-chunks",
@@ -65,18 +71,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="once finished, also write the tables notebook 11 reads (a small subset) to DIR, with their key "
         "and provenance (glu.saved): how sweeps/11_corpus_evaluation/ is made",
     )
-    e.set_defaults(func=_evaluate)
-
-    c = add_command(
-        sub,
-        "corpus",
-        "Write the simulated episodes of a sweep's design (the same settings as glu evaluate: "
-        "--config, --episodes, --seed, --data) to one Parquet file, one row per episode, without scoring "
-        "them.",
-    )
-    _shared(c)
     add_out_option(c, "FILE.parquet", "file to write")
-    c.set_defaults(func=_corpus)
 
 
 def _config(args: argparse.Namespace):

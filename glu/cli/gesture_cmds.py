@@ -19,12 +19,13 @@ from glu.cli.common import (
     add_hmm_size_args,
     add_json_option,
     add_out_option,
+    hmm_config,
     json_text,
     nonneg_float,
     output_image,
     positive_float,
     positive_int,
-    progress_bar,
+    progress,
     seed,
 )
 from glu.cli.terminal import one_line
@@ -62,12 +63,14 @@ def _register_gestures(sub: argparse._SubParsersAction) -> None:
         "Inspect hand-trajectory logs: repair their tracking problems and find the gesture "
         "repetitions in them. " + LOG_TEXT,
     )
-    s = gsub.add_parser(
+    s = add_command(
+        gsub,
         "segment",
-        help="find the gesture repetitions in a hand log and print them",
-        description="Repair a hand log (interpolate short gaps, split at long ones, replace spikes), "
+        "Repair a hand log (interpolate short gaps, split at long ones, replace spikes), "
         "then find the repetitions of the gesture from the distance of the hand to its rest pose. --json "
         'prints {"log", "recording", "tracking", "events", "segments", "left_out"}; the rest goes to stderr.',
+        _segment,
+        help="find the gesture repetitions in a hand log and print them",
     )
     s.add_argument("log", help="hand log: a data.log, a recording folder, or a recording name")
     add_data_option(s, "used to find a recording by name")
@@ -76,7 +79,6 @@ def _register_gestures(sub: argparse._SubParsersAction) -> None:
     )
     s.add_argument("--label", help="action performed (default: from the recording's name, if known)")
     add_json_option(s, "the segments and tracking events")
-    s.set_defaults(func=_segment)
 
 
 def _register_hmm(sub: argparse._SubParsersAction) -> None:
@@ -88,20 +90,21 @@ def _register_hmm(sub: argparse._SubParsersAction) -> None:
         "or your own labelled recordings, and save them as a recogniser file that glu recognize and glu "
         "anticipate take (--models FILE).",
     )
-    t = hsub.add_parser(
+    t = add_command(
+        hsub,
         "train",
-        help="train one left-to-right GMM-HMM per action and save the recogniser (JSON)",
-        description="Train on the automatically segmented standing recordings (--data), on synthetic "
+        "Train on the automatically segmented standing recordings (--data), on synthetic "
         "gestures (--synthetic N, N per action), or on your own labelled recordings (--recordings: a folder "
         "with one subfolder per action, or a CSV manifest file,label[,frames]). --features chooses "
         "invariant features; the recogniser file records them and glu recognize applies them.",
+        _train,
+        help="train one left-to-right GMM-HMM per action and save the recogniser (JSON)",
         epilog="invariances: "
         + "; ".join(f"{k} = {v}" for k, v in INVARIANCE_MEANING.items())
         + " (formulas: glu.gestures.invariants)",
     )
     _add_training_data(t)
     _add_training_settings(t)
-    t.set_defaults(func=_train)
 
 
 def _add_training_data(t: argparse.ArgumentParser) -> None:
@@ -194,6 +197,7 @@ def _register_recognize(sub: argparse._SubParsersAction) -> None:
         + LOG_TEXT
         + " "
         + FRAMES_TEXT,
+        _recognize,
     )
     r.add_argument(
         "log",
@@ -215,7 +219,6 @@ def _register_recognize(sub: argparse._SubParsersAction) -> None:
     add_json_option(r, '{"loglik": {…}, "posterior": {…}, "typicality": {…}} (with --stream: one a frame)')
     r.add_argument("--repair", action="store_true", help="repair the log first (default: frames as logged)")
     _add_body_size(r, "for a t,x,y,z table: the body size")
-    r.set_defaults(func=_recognize)
 
 
 # ------------------------------------------------------------------ argument types
@@ -391,16 +394,8 @@ def _train(args: argparse.Namespace) -> int:
         raise DataError(f"no training segments for {', '.join(empty)}")
     for a, v in by_action.items():
         print(f"  {a}: {len(v)} sequences, {sum(len(x) for x in v)} frames")
-    bar = progress_bar(len(by_action), "train", "model")  # ticks while EM runs, as each model converges
-    try:
-        config = TrainingConfig(
-            n_states=args.states,
-            n_mix=args.mix,
-            n_iter=args.iter,
-            tol=args.tol,
-            covar_reg=args.covar_reg,
-            recipe=args.recipe,
-        )
+    config = hmm_config(args, "tol", "covar_reg", "recipe")
+    with progress(len(by_action), "train", "model") as bar:  # ticks while EM runs, as each model converges
         rec = train_recognizer(
             by_action,
             config,
@@ -410,9 +405,6 @@ def _train(args: argparse.Namespace) -> int:
             features=args.features,
             progress=bar.update if bar is not None else None,
         )
-    finally:
-        if bar is not None:
-            bar.close()
     print(f"  features: {rec.features.name} ({rec.features.describe()})")
     for r in rec.reports.values():
         print(("  " if r.converged else "  warning: ") + r.describe())

@@ -44,7 +44,7 @@ printed for comparison. --json prints [{"sentence": …, "score": …}, …] onl
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``describe``."""
-    p = add_command(sub, "describe", DESCRIPTION)
+    p = add_command(sub, "describe", DESCRIPTION, _describe)
     add_model_args(p)
     add_evidence_args(p)
     add_engine_args(p)
@@ -78,7 +78,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="only sentences of at most L words (needed when the grammar repeats with { } or < >)",
     )
     add_json_option(p, '[{"sentence": …, "score": …}, …] (best first; score null for −∞)')
-    p.set_defaults(func=_describe)
 
 
 def _sample_count(text: str) -> int:
