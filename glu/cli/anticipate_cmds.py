@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import functools
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +16,7 @@ from glu.cli.common import (
     json_text,
     positive_int,
     read_candidates,
+    say_to,
 )
 from glu.errors import DataError
 
@@ -118,7 +117,7 @@ def _anticipate(args: argparse.Namespace) -> int:
         score=args.score,
         candidates=candidates,
     )
-    say = functools.partial(print, file=sys.stderr if args.json else sys.stdout)
+    say = say_to(args.json)
     say(f"# data: {source.describe()}")
     say(f"# network: learned, words={args.words}, unseen words {args.unseen_words}; HMMs: {models}")
     say(

@@ -67,11 +67,6 @@ COMMANDS: dict[str, Command] = {
 """Every top-level command, in the order ``glu --help`` lists them."""
 
 
-def help_of(command: str) -> str:
-    """The one line ``glu --help`` gives ``command``."""
-    return COMMANDS[command].help
-
-
 def add_command(
     sub: argparse._SubParsersAction,
     name: str,
@@ -82,7 +77,7 @@ def add_command(
 ) -> argparse.ArgumentParser:
     """The parser of the command ``name``, which runs ``func``: ``description`` (and ``epilog``) for its
     ``--help``, ``help`` for its one line (default: the top-level command's, from :data:`COMMANDS`)."""
-    parser = sub.add_parser(name, help=help or help_of(name), description=description, epilog=epilog)
+    parser = sub.add_parser(name, help=help or COMMANDS[name].help, description=description, epilog=epilog)
     if func is not None:
         parser.set_defaults(func=func)
     return parser

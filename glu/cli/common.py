@@ -32,48 +32,47 @@ DATA_HELP = (
 )
 
 
-def _number(text: str, kind: type, what: str) -> float:
-    try:
-        return kind(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}") from None
+def _number_type(name: str, kind: type, what: str, allowed: Any = None, refusal: str = "") -> Any:
+    """The argparse type ``name``: the text as ``kind`` ("expected WHAT" if it is not one), refused with
+    ``refusal`` (formatted with the value ``v`` and the ``text``) unless ``allowed(v)``."""
+
+    def parse(text: str) -> Any:
+        try:
+            v = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}") from None
+        if allowed is not None and not allowed(v):
+            raise argparse.ArgumentTypeError(refusal.format(v=v, text=text))
+        return v
+
+    parse.__name__ = parse.__qualname__ = name
+    return parse
 
 
-def integer(text: str) -> int:
-    """Any whole number."""
-    return int(_number(text, int, "a whole number"))
-
-
-def positive_int(text: str) -> int:
-    """A whole number ≥ 1."""
-    v = int(_number(text, int, "a whole number"))
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number ≥ 1, not {v}")
-    return v
-
-
-def seed(text: str) -> int:
-    """A random seed: a whole number in [0, 2**32 - 1]."""
-    v = int(_number(text, int, "a whole number"))
-    if not 0 <= v < 2**32:
-        raise argparse.ArgumentTypeError(f"a seed is a whole number in [0, 2**32 - 1], not {v}")
-    return v
-
-
-def positive_float(text: str) -> float:
-    """A finite number > 0."""
-    v = _number(text, float, "a number")
-    if not 0 < v < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive number, not {text}")
-    return v
-
-
-def nonneg_float(text: str) -> float:
-    """A finite number ≥ 0."""
-    v = _number(text, float, "a number")
-    if not 0 <= v < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, not {text}")
-    return v
+integer = _number_type("integer", int, "a whole number")
+positive_int = _number_type(
+    "positive_int", int, "a whole number", lambda v: v >= 1, "expected a whole number ≥ 1, not {v}"
+)
+seed = _number_type(
+    "seed",
+    int,
+    "a whole number",
+    lambda v: 0 <= v < 2**32,
+    "a seed is a whole number in [0, 2**32 - 1], not {v}",
+)
+positive_float = _number_type(
+    "positive_float", float, "a number", lambda v: 0 < v < math.inf, "expected a positive number, not {text}"
+)
+nonneg_float = _number_type(
+    "nonneg_float", float, "a number", lambda v: 0 <= v < math.inf, "expected a number ≥ 0, not {text}"
+)
+tolerance = _number_type(  # --renormalise TOL
+    "tolerance",
+    float,
+    "a tolerance such as 1e-4",
+    lambda v: 0 <= v < 1,
+    "a tolerance is a number in [0, 1), not {text}",
+)
 
 
 def _writable_folder(folder: Path) -> str | None:
@@ -172,6 +171,33 @@ def json_text(obj: Any) -> str:
     return json.dumps(_json_ready(obj), allow_nan=False)
 
 
+def public_argv(argv: list[str]) -> list[str]:
+    """The arguments with the data folder named ``DATA`` (a path of this machine is no one else's), unless
+    it is ``synthetic``."""
+    out = list(argv)
+    for i, a in enumerate(out[:-1]):
+        if a == "--data" and out[i + 1] != "synthetic":
+            out[i + 1] = "DATA"
+    return [a for a in out if a]
+
+
+def command_line() -> str:
+    """The command being run, as a shell would take it again (:func:`public_argv`): for provenance."""
+    import shlex
+    import sys
+
+    return "glu " + shlex.join(public_argv(sys.argv[1:]))
+
+
+def say_to(as_json: bool) -> Any:
+    """``print`` for what a command says besides its answer: to stdout, or to stderr when stdout holds the
+    answer alone (``--json``)."""
+    import functools
+    import sys
+
+    return functools.partial(print, file=sys.stderr if as_json else sys.stdout)
+
+
 def chosen(args: argparse.Namespace, *names: str) -> dict[str, Any]:
     """The options ``names`` as keyword arguments (each option's destination is the parameter's name)."""
     return {name: getattr(args, name) for name in names}
@@ -228,17 +254,6 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
     )
     add_renormalise_option(p)
     add_data_args(p)
-
-
-def tolerance(text: str) -> float:
-    """--renormalise TOL: a number in [0, 1)."""
-    try:
-        tol = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
-    if not 0 <= tol < 1:
-        raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
-    return tol
 
 
 def add_renormalise_option(p: argparse.ArgumentParser) -> None:
@@ -424,9 +439,9 @@ def progress_bar(total: int | None, desc: str, unit: str, quiet: bool = False) -
 
 
 @contextlib.contextmanager
-def progress(total: int | None, desc: str, unit: str, quiet: bool = False) -> Iterator[Any]:
+def progress(total: int | None, desc: str, unit: str) -> Iterator[Any]:
     """The :func:`progress_bar` of a block (None when there is none), closed when the block ends."""
-    bar = progress_bar(total, desc, unit, quiet)
+    bar = progress_bar(total, desc, unit)
     try:
         yield bar
     finally:

@@ -1,13 +1,5 @@
-"""``glu evaluate`` and ``glu corpus``: measure every fusion strategy on a simulated corpus, on Dask.
-
-``glu evaluate`` runs the sweep of :mod:`glu.studies.corpus_evaluation.sweep` (the factorial design effects ×
-action prior × inference network × p_HMM reading × feature set × noise × viewpoint, over recogniser seeds,
-every strategy at every observed fraction; see docs/corpus-evaluation.md) on a LocalCluster sized to the
-machine, or on an existing Dask cluster (``--scheduler tcp://host:8786``), and writes the merged tables to
-``-o DIR``; run it again on the same folder to finish an interrupted sweep (``--save DIR`` also writes the
-small subset notebook 11 reads, as ``sweeps/`` keeps it). ``glu corpus`` writes the simulated episodes
-themselves to Parquet.
-"""
+"""``glu evaluate`` and ``glu corpus``: measure every fusion strategy on a simulated corpus, on Dask (the
+sweep of :mod:`glu.studies.corpus_evaluation.sweep`; what each command does: its description below)."""
 
 from __future__ import annotations
 
@@ -19,6 +11,7 @@ from glu.cli.common import (
     add_cluster_args,
     add_data_option,
     add_out_option,
+    command_line,
     output_folder,
     positive_int,
     seed,
@@ -98,24 +91,10 @@ def _evaluate(args: argparse.Namespace) -> int:
     if result.summary:
         print(overall_text(result.summary))
         if args.save:
-            import shlex
-            import sys
-
             from glu.studies.corpus_evaluation.sweep import export_saved
 
-            command = "glu " + " ".join(shlex.quote(a) for a in public_argv(sys.argv[1:]))
-            print(f"saved tables → {export_saved(args.out, args.save, command)}")
+            print(f"saved tables → {export_saved(args.out, args.save, command_line())}")
     return 0
-
-
-def public_argv(argv: list[str]) -> list[str]:
-    """The arguments with the data folder named ``DATA`` (a path of this machine is no one else's), unless
-    it is ``synthetic``."""
-    out = list(argv)
-    for i, a in enumerate(out[:-1]):
-        if a == "--data" and out[i + 1] != "synthetic":
-            out[i + 1] = "DATA"
-    return [a for a in out if a]
 
 
 def overall_text(summary: dict) -> str:

@@ -1,9 +1,5 @@
-"""``glu gestures segment``, ``glu hmm train`` and ``glu recognize``: gestures from hand logs to p_HMM(A | G).
-
-A LOG argument is a YARP hand log (``data.log``), a recording folder holding one, or the name of a
-recording of the data folder (``tap1_hand`` → ``<data>/gestures/tap1_hand/data.log``). Frame ranges
-(``--frames A:B``) are 1-based and inclusive, in the numbering of the log, as in the papers.
-"""
+"""``glu gestures segment``, ``glu hmm train`` and ``glu recognize``: gestures from hand logs to p_HMM(A | G)
+(what a LOG argument and a frame range are: :data:`LOG_TEXT`, :data:`FRAMES_TEXT`)."""
 
 from __future__ import annotations
 
@@ -26,6 +22,7 @@ from glu.cli.common import (
     positive_float,
     positive_int,
     progress,
+    say_to,
     seed,
 )
 from glu.cli.terminal import one_line
@@ -41,7 +38,7 @@ LOG_TEXT = (
     "A LOG is a YARP hand log (data.log), a recording folder holding one, or the name of a recording of the "
     "data folder (tap1_hand: DATA/gestures/tap1_hand/data.log)."
 )
-"""What the help of the commands taking a hand log says about it (the module's docstring, without markup)."""
+"""What the help of the commands taking a hand log says about it."""
 FRAMES_TEXT = "Frames A:B are 1-based and inclusive, in the numbering of the log, as in the papers."
 
 SYNTHETIC_NOISE = 0.01
@@ -278,10 +275,6 @@ def _resolve_log(log: str, data: str | None) -> tuple[Path, Any]:
     )
 
 
-def _say(msg: str, quiet: bool) -> None:
-    print(msg, file=sys.stderr if quiet else sys.stdout)
-
-
 # ------------------------------------------------------------------ handlers
 
 
@@ -293,9 +286,10 @@ def _segment(args: argparse.Namespace) -> int:
         raise DataError(
             f"--label {args.label!r}: not an action of the recordings; allowed: {', '.join(ACTIONS)}"
         )
+    say = say_to(args.json)
     path, source = _resolve_log(args.log, args.data)
     if source is not None:
-        _say(f"data: {source.describe()}", args.json)
+        say(f"data: {source.describe()}")
     name = path.parent.name if path.name == HAND_LOG else path.stem
     seg = segment_recording(path, label=args.label if args.label is not None else RECORDING_ACTION.get(name))
     if args.json:
@@ -321,7 +315,7 @@ def _segment(args: argparse.Namespace) -> int:
         fmt = Path(args.plot).suffix.lstrip(".").lower() or "png"
         (written,) = save_figure(fig, args.plot, formats=(fmt,))
         plt.close(fig)
-        _say(f"plot: {written}", args.json)
+        say(f"plot: {written}")
     return 0
 
 
@@ -413,7 +407,7 @@ def _train(args: argparse.Namespace) -> int:
     return 0
 
 
-def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
+def _load_models(spec: str, data: str | None, say: Any) -> Any:
     from glu.gestures.recognizer import Recognizer
 
     if spec == "original":
@@ -421,12 +415,12 @@ def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
         from glu.gestures.corpus import original_recognizer
 
         source = resolve_data(data)
-        _say(f"data: {source.describe()}", quiet)
+        say(f"data: {source.describe()}")
         mat = source.file(ORIGINAL_HMMS[3])
-        _say(f"models: {mat} (original 2013 HMMs; touch = their push model)", quiet)
+        say(f"models: {mat} (original 2013 HMMs; touch = their push model)")
         return original_recognizer(source)
     rec = Recognizer.load(spec)
-    _say(f"models: {spec} ({', '.join(rec.actions)}; features {rec.features.name})", quiet)
+    say(f"models: {spec} ({', '.join(rec.actions)}; features {rec.features.name})")
     return rec
 
 
@@ -435,10 +429,11 @@ def _recognize(args: argparse.Namespace) -> int:
 
     from glu.gestures.recordings import load_features
 
+    say = say_to(args.json)
     path, source = _resolve_log(args.log, args.data)  # a missing file is said before the models are read
-    rec = _load_models(args.models, args.data, args.json)
+    rec = _load_models(args.models, args.data, say)
     if source is not None and args.models != "original":
-        _say(f"data: {source.describe()}", args.json)
+        say(f"data: {source.describe()}")
     pieces = load_features(path, policy=None, body=tuple(args.body_size) if args.body_size else None).pieces
     traj = pieces[0]
     if args.repair:
@@ -452,7 +447,7 @@ def _recognize(args: argparse.Namespace) -> int:
     if args.frames:
         traj = traj.frames(*args.frames)
     a0, a1 = int(traj.frame[0]), int(traj.frame[-1])
-    _say(f"log: {path}, frames {a0}:{a1} ({len(traj)} frames)", args.json)
+    say(f"log: {path}, frames {a0}:{a1} ({len(traj)} frames)")
     X = traj.xyz
     acts = rec.actions
     if args.stream:

@@ -4,9 +4,7 @@ probabilities."""
 from __future__ import annotations
 
 import argparse
-import functools
 import math
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -24,6 +22,7 @@ from glu.cli.common import (
     positive_int,
     read_candidates,
     read_evidence,
+    say_to,
     seed,
 )
 from glu.cli.terminal import one_line
@@ -138,7 +137,7 @@ def _describe(args: argparse.Namespace) -> int:
         result = rank_sentences(candidates, probs, args.nbest, args.score, args.must_contain)
 
     gram_name = "glu default grammar" if args.grammar is None else str(args.grammar)
-    say = functools.partial(print, file=sys.stderr if args.json else sys.stdout)
+    say = say_to(args.json)
     say(f"# model: {desc}")
     say(f"# grammar: {gram_name}: {n_sentences:,} sentences of {net.min_length}–{limit} words")
     say(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")

@@ -1,18 +1,11 @@
 """``glu learn-gestures`` and ``glu learning-curves``: the robot learns people's gestures from what their
-actions did.
-
-``glu learn-gestures`` simulates episodes — a person's gesture on an object, the effect, the words — labels
-each with the Affordance–Words network learned from the robot's own experiments, trains gesture HMMs from
-those labels and writes a recogniser that ``glu recognize`` and ``glu anticipate`` take (``--models FILE``).
-``glu learning-curves`` runs the long runs notebook 12 reads — every labelling scheme and control in every
-world and ambiguity, with and without words, one Dask task per training seed; and the real person, one task
-per draw — and saves them with their provenance (:mod:`glu.studies.learning.saved`).
-"""
+actions did (what each command does: its description below; provenance: :mod:`glu.studies.learning.saved`)."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 from glu.cli.commands import add_command
 from glu.cli.common import (
@@ -221,7 +214,7 @@ def _learn(args: argparse.Namespace) -> int:
 
 def _curves(args: argparse.Namespace) -> int:
     from glu.errors import DataError
-    from glu.machine import SYNCHRONOUS, check_reachable
+    from glu.machine import SYNCHRONOUS, available_cores, check_reachable
     from glu.studies.learning import study as lc
 
     for flag, given, allowed in (
@@ -249,7 +242,7 @@ def _curves(args: argparse.Namespace) -> int:
     here = args.scheduler == SYNCHRONOUS
     where = dict(
         scheduler=None if here else args.scheduler,
-        workers=0 if here or args.scheduler else (args.workers or _cores()),
+        workers=0 if here or args.scheduler else (args.workers or available_cores()),
     )
     out = Path(args.out)
     if args.part in ("curves", "all"):
@@ -278,6 +271,12 @@ def _command(args: argparse.Namespace, part: str) -> str:
     )
 
 
+def _done(what: str, n: int) -> Any:
+    """The progress of one task in ``n`` (a seed, a draw): a line each, with how many are done."""
+    done = []
+    return lambda task: done.append(task) or print(f"  {what} {task} done ({len(done)} of {n})", flush=True)
+
+
 def _run_curves(engine, label: str, settings, where: dict, out: Path, command: str) -> None:
     from glu.files import atomic_write_text
     from glu.studies.learning import saved, tables
@@ -289,13 +288,7 @@ def _run_curves(engine, label: str, settings, where: dict, out: Path, command: s
         f"({', '.join(settings.worlds)} worlds)",
         flush=True,
     )
-    done = []
-    results = lc.learning_study(
-        engine,
-        settings,
-        **where,
-        progress=lambda s: done.append(s) or print(f"  seed {s} done ({len(done)} of {n})", flush=True),
-    )
+    results = lc.learning_study(engine, settings, **where, progress=_done("seed", n))
     rep = tables.replicates(results, settings)
     budgets = tables.budgets_table(rep, settings, label)
     frames = {
@@ -330,24 +323,10 @@ def _run_real_person(engine, source, label: str, draws, where: dict, out: Path, 
     settings = rp.RealPersonSettings(draws=draws)
     standing = gesture_sequences(source, include_test=False)
     print(f"the real person: {len(standing)} standing segments × {len(draws)} draws", flush=True)
-    done = []
     rows = rp.real_person_study(
-        engine,
-        standing,
-        settings,
-        **where,
-        progress=lambda d: (
-            done.append(d) or print(f"  draw {d} done ({len(done)} of {len(draws)})", flush=True)
-        ),
-        data_source=label,
+        engine, standing, settings, **where, progress=_done("draw", len(draws)), data_source=label
     )
     saved.save_real_person(out, rows, settings, label, command)
     summary = rp.real_person_summary(rows, settings.bootstrap)
     atomic_write_text(out / "learning_real_person_summary.csv", summary.to_csv(index=False))
     print(f"wrote {out}/{saved.PERSON_FILE}, {saved.PERSON_STUDY_FILE}, learning_real_person_summary.csv")
-
-
-def _cores() -> int:
-    from glu.machine import available_cores
-
-    return available_cores()
