@@ -120,7 +120,6 @@ def _register_exchange(bsub: argparse._SubParsersAction) -> None:
 
 
 def _register_query(sub: argparse._SubParsersAction) -> None:
-    """Add ``query``."""
     q = add_command(
         sub, "query", "Posterior marginal of each target node given evidence, by exact inference.", _query
     )

@@ -185,7 +185,6 @@ def _add_body_size(p: argparse.ArgumentParser, which: str) -> None:
 
 
 def _register_recognize(sub: argparse._SubParsersAction) -> None:
-    """Add ``recognize``."""
     r = add_command(
         sub,
         "recognize",
