@@ -216,10 +216,11 @@ def _curves(args: argparse.Namespace) -> int:
     from glu.errors import DataError
     from glu.machine import SYNCHRONOUS, available_cores, check_reachable
     from glu.studies.learning import study as lc
+    from glu.studies.learning.self_supervised import AMBIGUITIES, WORLDS
 
     for flag, given, allowed in (
-        ("--worlds", args.worlds, _choices("WORLDS")),
-        ("--ambiguities", args.ambiguities, _choices("AMBIGUITIES")),
+        ("--worlds", args.worlds, tuple(WORLDS)),
+        ("--ambiguities", args.ambiguities, tuple(AMBIGUITIES)),
     ):
         bad = [a for a in given if a not in allowed]
         if bad or not given:
@@ -250,12 +251,6 @@ def _curves(args: argparse.Namespace) -> int:
     if args.part in ("real-person", "all"):
         _run_real_person(engine, source, label, args.draws, where, out, _command(args, "real-person"))
     return 0
-
-
-def _choices(name: str) -> tuple[str, ...]:
-    from glu.studies.learning import self_supervised
-
-    return tuple(getattr(self_supervised, name))
 
 
 def _command(args: argparse.Namespace, part: str) -> str:
