@@ -32,9 +32,9 @@ DATA_HELP = (
 )
 
 
-def _number_type(name: str, kind: type, what: str, allowed: Any = None, refusal: str = "") -> Any:
-    """The argparse type ``name``: the text as ``kind`` ("expected WHAT" if it is not one), refused with
-    ``refusal`` (formatted with the value ``v`` and the ``text``) unless ``allowed(v)``."""
+def _number_type(name: str, doc: str, kind: type, what: str, allowed: Any = None, refusal: str = "") -> Any:
+    """The argparse type ``name`` (documented by ``doc``): the text as ``kind`` ("expected WHAT" if it is not
+    one), refused with ``refusal`` (formatted with the value ``v`` and the ``text``) unless ``allowed(v)``."""
 
     def parse(text: str) -> Any:
         try:
@@ -46,28 +46,46 @@ def _number_type(name: str, kind: type, what: str, allowed: Any = None, refusal:
         return v
 
     parse.__name__ = parse.__qualname__ = name
+    parse.__doc__ = doc
     return parse
 
 
-integer = _number_type("integer", int, "a whole number")
+integer = _number_type("integer", "Any whole number.", int, "a whole number")
 positive_int = _number_type(
-    "positive_int", int, "a whole number", lambda v: v >= 1, "expected a whole number ≥ 1, not {v}"
+    "positive_int",
+    "A whole number ≥ 1.",
+    int,
+    "a whole number",
+    lambda v: v >= 1,
+    "expected a whole number ≥ 1, not {v}",
 )
 seed = _number_type(
     "seed",
+    "A random seed: a whole number in [0, 2**32 - 1].",
     int,
     "a whole number",
     lambda v: 0 <= v < 2**32,
     "a seed is a whole number in [0, 2**32 - 1], not {v}",
 )
 positive_float = _number_type(
-    "positive_float", float, "a number", lambda v: 0 < v < math.inf, "expected a positive number, not {text}"
+    "positive_float",
+    "A finite number > 0.",
+    float,
+    "a number",
+    lambda v: 0 < v < math.inf,
+    "expected a positive number, not {text}",
 )
 nonneg_float = _number_type(
-    "nonneg_float", float, "a number", lambda v: 0 <= v < math.inf, "expected a number ≥ 0, not {text}"
+    "nonneg_float",
+    "A finite number ≥ 0.",
+    float,
+    "a number",
+    lambda v: 0 <= v < math.inf,
+    "expected a number ≥ 0, not {text}",
 )
-tolerance = _number_type(  # --renormalise TOL
+tolerance = _number_type(
     "tolerance",
+    "--renormalise TOL: a number in [0, 1).",
     float,
     "a tolerance such as 1e-4",
     lambda v: 0 <= v < 1,

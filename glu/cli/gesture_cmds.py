@@ -1,5 +1,5 @@
 """``glu gestures segment``, ``glu hmm train`` and ``glu recognize``: gestures from hand logs to p_HMM(A | G)
-(what a LOG argument and a frame range are: :data:`LOG_TEXT`, :data:`FRAMES_TEXT`)."""
+(what a LOG argument and a frame range are: ``LOG_TEXT``, ``FRAMES_TEXT``)."""
 
 from __future__ import annotations
 
