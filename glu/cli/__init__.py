@@ -81,7 +81,20 @@ def _interrupt_inside(e: BaseException) -> KeyboardInterrupt | None:
     return None
 
 
-def _os_error_text(e: OSError) -> str:
+def _error_text(e: OSError | MemoryError | RecursionError) -> str:
+    """The line of an error of the system rather than of glu: a file the system refuses; a size no check
+    foresaw; JSON or YAML nested deeper than Python reads (a model, a schema, a query line)."""
+    if isinstance(e, MemoryError):
+        from glu.machine import available_memory, human_bytes
+
+        free = available_memory()
+        return (
+            "out of memory: the input needs more than this process may use"
+            + (f" ({human_bytes(free)} free now)" if free is not None else "")
+            + "; give a smaller input, or run where more memory is available"
+        )
+    if isinstance(e, RecursionError):
+        return "an input file is nested too deeply to read; is it the right file?"
     where = f"{e.filename!r}: " if getattr(e, "filename", None) else ""
     return f"{where}{e.strerror or e}"
 
@@ -182,7 +195,7 @@ def _main(argv: Sequence[str] | None) -> int:
     try:
         args = parser.parse_args(argv)
     except OSError as e:  # a path the system refuses to look at (too long, a symlink loop)
-        print(f"glu: error: {_os_error_text(e)}", file=sys.stderr)
+        print(f"glu: error: {_error_text(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     sub = getattr(args, f"{args.command}_command", None)
     name = f"glu {args.command}" + (f" {sub}" if sub else "")
@@ -200,25 +213,8 @@ def _main(argv: Sequence[str] | None) -> int:
         return _stopped(name, e)
     except BrokenPipeError:
         return 0
-    except OSError as e:
-        print(f"{name}: error: {_os_error_text(e)}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except MemoryError:  # a size no check foresaw: one line, not a traceback
-        from glu.machine import available_memory, human_bytes
-
-        free = available_memory()
-        print(
-            f"{name}: error: out of memory: the input needs more than this process may use"
-            + (f" ({human_bytes(free)} free now)" if free is not None else "")
-            + "; give a smaller input, or run where more memory is available",
-            file=sys.stderr,
-        )
-        return EXIT_BAD_INPUT
-    except RecursionError:  # JSON or YAML nested deeper than Python reads (a model, a schema, a query line)
-        print(
-            f"{name}: error: an input file is nested too deeply to read; is it the right file?",
-            file=sys.stderr,
-        )
+    except (OSError, MemoryError, RecursionError) as e:
+        print(f"{name}: error: {_error_text(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as e:  # a bug: one line, the traceback on request
         stop = _interrupt_inside(e)

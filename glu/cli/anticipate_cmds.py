@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import functools
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +16,7 @@ from glu.cli.common import (
     json_text,
     positive_int,
     read_candidates,
+    say_to,
 )
 from glu.errors import DataError
 
@@ -36,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     """Add ``anticipate``."""
     from glu.studies.anticipation.experiment import CASES, ORIGINAL_STEP
 
-    p = add_command(sub, "anticipate", DESCRIPTION)
+    p = add_command(sub, "anticipate", DESCRIPTION, _anticipate)
     p.add_argument(
         "--case",
         choices=tuple(CASES),
@@ -68,7 +67,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_description_args(p)
     add_json_option(p, "one object (case, frames, loglik_per_frame, updates, description)")
-    p.set_defaults(func=_anticipate)
 
 
 def _load_recognizer(spec: str, source: Any) -> tuple[Any, str]:
@@ -119,7 +117,7 @@ def _anticipate(args: argparse.Namespace) -> int:
         score=args.score,
         candidates=candidates,
     )
-    say = functools.partial(print, file=sys.stderr if args.json else sys.stdout)
+    say = say_to(args.json)
     say(f"# data: {source.describe()}")
     say(f"# network: learned, words={args.words}, unseen words {args.unseen_words}; HMMs: {models}")
     say(

@@ -23,6 +23,7 @@ from glu.cli.common import (
     load_model,
     make_engine,
     read_evidence,
+    read_model_file,
 )
 from glu.cli.terminal import one_line
 from glu.errors import EvidenceError, GluError
@@ -45,62 +46,64 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _register_learn_and_inspect(bsub: argparse._SubParsersAction) -> None:
     """Add ``bn learn``, ``bn edges`` and ``bn nodes``."""
-    lp = bsub.add_parser(
+    lp = add_command(
+        bsub,
         "learn",
+        "Learn the network's structure (K2 with the BIC score) and its conditional probability tables from "
+        "the experiments of --data, or from your own --schema and --experiments, and write it as a glu JSON "
+        "model.",
+        _learn,
         help="learn structure (K2 + BIC) and parameters from the experiments",
-        description="Learn the network's structure (K2 with the BIC score) and its "
-        "conditional probability tables from the experiments of --data, or from your own --schema and "
-        "--experiments, and write it as a glu JSON model.",
     )
     add_data_args(lp)
     add_out_option(lp, "MODEL", "model file to write (JSON)")
-    lp.set_defaults(func=_learn)
-
-    ep = bsub.add_parser(
+    ep = add_command(
+        bsub,
         "edges",
+        "Print the edges of a model, one 'Parent -> Child' per line, sorted by parent then child. --json "
+        'prints [["Parent", "Child"], …].',
+        _edges,
         help="print the edges of a model, one 'Parent -> Child' per line, sorted",
-        description="Print the edges of a model, one 'Parent -> Child' per line, sorted by parent then "
-        'child. --json prints [["Parent", "Child"], …].',
     )
     ep.add_argument("model", type=Path, help="model file (.json from glu bn learn, or the original .mat)")
     add_json_option(ep, "[[parent, child], …]")
-    ep.set_defaults(func=_edges)
-
-    np_ = bsub.add_parser(
+    np_ = add_command(
+        bsub,
         "nodes",
+        "One line per node: its name, its kind (the schema's role — action, object, effect — for affordance "
+        "nodes, 'word' for word nodes, 'node' when the file says nothing), its values and its parents. "
+        "--json prints [{name, kind, values, parents}, …].",
+        _nodes,
         help="list the nodes of a model: kind (role or word), values, parents",
-        description="One line per node: its name, its kind (the schema's role — action, object, effect — "
-        "for affordance nodes, 'word' for word nodes, 'node' when the file says nothing), its values and its "
-        "parents. --json prints [{name, kind, values, parents}, …].",
     )
     np_.add_argument("model", type=Path, help="model file (.json, the original .mat, or .bif/.xmlbif/.uai)")
     add_json_option(np_, "[{name, kind, values, parents}, …]")
-    np_.set_defaults(func=_nodes)
 
 
 def _register_exchange(bsub: argparse._SubParsersAction) -> None:
     """Add ``bn import`` and ``bn export``."""
-    ip = bsub.add_parser(
+    ip = add_command(
+        bsub,
         "import",
+        "Read a BIF, XMLBIF or UAI file (the format from the suffix, or --format), or the originals' "
+        "BN_lab.mat, validate it completely and write a glu JSON model. Indicator nodes seen__NODE written "
+        "by glu bn export --zero-rows seen become NODE's all-zero rows again.",
+        _import,
         help="convert a model from another tool (BIF, XMLBIF, UAI) or the original BNT .mat to a glu "
         "JSON model",
-        description="Read a BIF, XMLBIF or UAI file (the format from the suffix, or --format), or the "
-        "originals' BN_lab.mat, validate it completely and write a glu JSON model. Indicator nodes "
-        "seen__NODE written by glu bn export --zero-rows seen become NODE's all-zero rows again.",
     )
     ip.add_argument("model", type=Path, metavar="FILE", help="e.g. net.bif, net.xmlbif, net.uai, BN_lab.mat")
     add_out_option(ip, "MODEL", "model file to write (JSON)")
     ip.add_argument("--format", choices=tuple(FORMATS), help="the input format (default: from the suffix)")
     add_renormalise_option(ip)
-    ip.set_defaults(func=_import)
-
-    xp = bsub.add_parser(
+    xp = add_command(
+        bsub,
         "export",
+        "Write a glu model (JSON or the original .mat) in an exchange format. A model with the original's "
+        "all-zero CPT rows is refused unless --zero-rows seen, which writes them as observed indicator nodes "
+        "seen__NODE: give seen__NODE=yes as evidence in the other tool to get glu's posteriors exactly.",
+        _export,
         help="write a model as BIF, XMLBIF or UAI, for pgmpy, pyAgrum, GeNIe, bnlearn, UAI solvers",
-        description="Write a glu model (JSON or the original .mat) in an exchange format. A model with the "
-        "original's all-zero CPT rows is refused unless --zero-rows seen, which writes them as observed "
-        "indicator nodes seen__NODE: give seen__NODE=yes as evidence in the other tool to get glu's "
-        "posteriors exactly.",
     )
     xp.add_argument(
         "model", type=Path, metavar="MODEL", help="model file (.json, the original .mat, or an exchange file)"
@@ -114,13 +117,11 @@ def _register_exchange(bsub: argparse._SubParsersAction) -> None:
         help="all-zero CPT rows: refuse (default) or write them as observed indicator nodes (seen)",
     )
     add_renormalise_option(xp)
-    xp.set_defaults(func=_export)
 
 
 def _register_query(sub: argparse._SubParsersAction) -> None:
-    """Add ``query``."""
     q = add_command(
-        sub, "query", "Posterior marginal of each target node given evidence, by exact inference."
+        sub, "query", "Posterior marginal of each target node given evidence, by exact inference.", _query
     )
     add_model_args(q)
     q.add_argument(
@@ -139,7 +140,6 @@ def _register_query(sub: argparse._SubParsersAction) -> None:
         metavar="QUERIES.jsonl",
         help="one JSON query a line ({'target': [...], 'evidence': {...}, 'soft': {...}}); '-' = stdin",
     )
-    q.set_defaults(func=_query)
 
 
 def _learn(args: argparse.Namespace) -> int:
@@ -183,24 +183,20 @@ def _nodes(args: argparse.Namespace) -> int:
     if args.json:
         print(json_text(rows))
         return 0
-    rows = [  # names read from a file, each shown on one line
-        {
-            **r,
-            "name": one_line(r["name"]),
-            "values": list(map(one_line, r["values"])),
-            "parents": list(map(one_line, r["parents"])),
-        }
+    print(f"# {desc}: {len(rows)} nodes, {len(bn.schema.word_nodes)} of them word nodes")
+    table = [("node", "kind", "values", "parents")] + [  # names read from a file, each shown on one line
+        (
+            one_line(r["name"]),
+            r["kind"],
+            ", ".join(map(one_line, r["values"])),
+            ", ".join(map(one_line, r["parents"])) or "—",
+        )
         for r in rows
     ]
-    n_words = len(bn.schema.word_nodes)
-    print(f"# {desc}: {len(rows)} nodes, {n_words} of them word nodes")
-    w_name = max(len("node"), *(len(r["name"]) for r in rows))
-    w_kind = max(len("kind"), *(len(r["kind"]) for r in rows))
-    values = [", ".join(r["values"]) for r in rows]
-    w_val = min(40, max(len("values"), *(len(v) for v in values)))
-    print(f"{'node':<{w_name}}  {'kind':<{w_kind}}  {'values':<{w_val}}  parents")
-    for r, v in zip(rows, values, strict=True):
-        print(f"{r['name']:<{w_name}}  {r['kind']:<{w_kind}}  {v:<{w_val}}  {', '.join(r['parents']) or '—'}")
+    widths = [max(len(row[i]) for row in table) for i in range(3)]
+    widths[2] = min(40, widths[2])
+    for row in table:
+        print("  ".join(f"{cell:<{w}}" for cell, w in zip(row[:3], widths, strict=True)) + f"  {row[3]}")
     return 0
 
 
@@ -216,10 +212,6 @@ def renormalised_text(meta: dict) -> str:
 
 
 def _import(args: argparse.Namespace) -> int:
-    from glu.cli.common import read_model_file
-
-    if args.renormalise is not None and args.model.suffix.lower() in (".mat", ".json"):
-        raise GluError("--renormalise applies to BIF, XMLBIF and UAI files")
     bn = read_model_file(args.model, args.format, renormalise=args.renormalise)
     bn.save(args.out)
     zr = bn.zero_rows()
@@ -236,11 +228,8 @@ def _import(args: argparse.Namespace) -> int:
 
 def _export(args: argparse.Namespace) -> int:
     from glu.bn.exchange import export_bn, format_of, seen_evidence
-    from glu.cli.common import read_model_file
 
     fmt = format_of(args.out, args.format)
-    if args.renormalise is not None and args.model.suffix.lower() in (".mat", ".json"):
-        raise GluError("--renormalise applies to BIF, XMLBIF and UAI files")
     bn = read_model_file(args.model, renormalise=args.renormalise)
     export_bn(bn, args.out, fmt, zero_rows=args.zero_rows)
     print(f"wrote {args.out} ({fmt}): {len(bn.nodes)} nodes, {len(bn.edges())} edges")

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 if TYPE_CHECKING:
     import argparse
+    from collections.abc import Callable
 
 
 class Command(NamedTuple):
@@ -66,15 +67,20 @@ COMMANDS: dict[str, Command] = {
 """Every top-level command, in the order ``glu --help`` lists them."""
 
 
-def help_of(command: str) -> str:
-    """The one line ``glu --help`` gives ``command``."""
-    return COMMANDS[command].help
-
-
-def add_command(sub: argparse._SubParsersAction, name: str, description: str) -> argparse.ArgumentParser:
-    """The parser of the top-level command ``name``: its one line from :data:`COMMANDS`, ``description``
-    for its ``--help``."""
-    return sub.add_parser(name, help=help_of(name), description=description)
+def add_command(
+    sub: argparse._SubParsersAction,
+    name: str,
+    description: str,
+    func: Callable[[argparse.Namespace], int] | None = None,
+    help: str | None = None,
+    epilog: str | None = None,
+) -> argparse.ArgumentParser:
+    """The parser of the command ``name``, which runs ``func``: ``description`` (and ``epilog``) for its
+    ``--help``, ``help`` for its one line (default: the top-level command's, from :data:`COMMANDS`)."""
+    parser = sub.add_parser(name, help=help or COMMANDS[name].help, description=description, epilog=epilog)
+    if func is not None:
+        parser.set_defaults(func=func)
+    return parser
 
 
 def add_group(sub: argparse._SubParsersAction, name: str, description: str) -> argparse._SubParsersAction:

@@ -9,10 +9,12 @@ the package.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import json
 import math
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -30,48 +32,65 @@ DATA_HELP = (
 )
 
 
-def _number(text: str, kind: type, what: str) -> float:
-    try:
-        return kind(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}") from None
+def _number_type(name: str, doc: str, kind: type, what: str, allowed: Any = None, refusal: str = "") -> Any:
+    """The argparse type ``name`` (documented by ``doc``): the text as ``kind`` ("expected WHAT" if it is not
+    one), refused with ``refusal`` (formatted with the value ``v`` and the ``text``) unless ``allowed(v)``."""
+
+    def parse(text: str) -> Any:
+        try:
+            v = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}") from None
+        if allowed is not None and not allowed(v):
+            raise argparse.ArgumentTypeError(refusal.format(v=v, text=text))
+        return v
+
+    parse.__name__ = parse.__qualname__ = name
+    parse.__doc__ = doc
+    return parse
 
 
-def integer(text: str) -> int:
-    """Any whole number."""
-    return int(_number(text, int, "a whole number"))
-
-
-def positive_int(text: str) -> int:
-    """A whole number ≥ 1."""
-    v = int(_number(text, int, "a whole number"))
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number ≥ 1, not {v}")
-    return v
-
-
-def seed(text: str) -> int:
-    """A random seed: a whole number in [0, 2**32 - 1]."""
-    v = int(_number(text, int, "a whole number"))
-    if not 0 <= v < 2**32:
-        raise argparse.ArgumentTypeError(f"a seed is a whole number in [0, 2**32 - 1], not {v}")
-    return v
-
-
-def positive_float(text: str) -> float:
-    """A finite number > 0."""
-    v = _number(text, float, "a number")
-    if not 0 < v < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a positive number, not {text}")
-    return v
-
-
-def nonneg_float(text: str) -> float:
-    """A finite number ≥ 0."""
-    v = _number(text, float, "a number")
-    if not 0 <= v < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, not {text}")
-    return v
+integer = _number_type("integer", "Any whole number.", int, "a whole number")
+positive_int = _number_type(
+    "positive_int",
+    "A whole number ≥ 1.",
+    int,
+    "a whole number",
+    lambda v: v >= 1,
+    "expected a whole number ≥ 1, not {v}",
+)
+seed = _number_type(
+    "seed",
+    "A random seed: a whole number in [0, 2**32 - 1].",
+    int,
+    "a whole number",
+    lambda v: 0 <= v < 2**32,
+    "a seed is a whole number in [0, 2**32 - 1], not {v}",
+)
+positive_float = _number_type(
+    "positive_float",
+    "A finite number > 0.",
+    float,
+    "a number",
+    lambda v: 0 < v < math.inf,
+    "expected a positive number, not {text}",
+)
+nonneg_float = _number_type(
+    "nonneg_float",
+    "A finite number ≥ 0.",
+    float,
+    "a number",
+    lambda v: 0 <= v < math.inf,
+    "expected a number ≥ 0, not {text}",
+)
+tolerance = _number_type(
+    "tolerance",
+    "--renormalise TOL: a number in [0, 1).",
+    float,
+    "a tolerance such as 1e-4",
+    lambda v: 0 <= v < 1,
+    "a tolerance is a number in [0, 1), not {text}",
+)
 
 
 def _writable_folder(folder: Path) -> str | None:
@@ -170,6 +189,38 @@ def json_text(obj: Any) -> str:
     return json.dumps(_json_ready(obj), allow_nan=False)
 
 
+def public_argv(argv: list[str]) -> list[str]:
+    """The arguments with the data folder named ``DATA`` (a path of this machine is no one else's), unless
+    it is ``synthetic``."""
+    out = list(argv)
+    for i, a in enumerate(out[:-1]):
+        if a == "--data" and out[i + 1] != "synthetic":
+            out[i + 1] = "DATA"
+    return [a for a in out if a]
+
+
+def command_line() -> str:
+    """The command being run, as a shell would take it again (:func:`public_argv`): for provenance."""
+    import shlex
+    import sys
+
+    return "glu " + shlex.join(public_argv(sys.argv[1:]))
+
+
+def say_to(as_json: bool) -> Any:
+    """``print`` for what a command says besides its answer: to stdout, or to stderr when stdout holds the
+    answer alone (``--json``)."""
+    import functools
+    import sys
+
+    return functools.partial(print, file=sys.stderr if as_json else sys.stdout)
+
+
+def chosen(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The options ``names`` as keyword arguments (each option's destination is the parameter's name)."""
+    return {name: getattr(args, name) for name in names}
+
+
 # ------------------------------------------------------------------ shared options
 
 
@@ -223,17 +274,6 @@ def add_model_args(p: argparse.ArgumentParser) -> None:
     add_data_args(p)
 
 
-def tolerance(text: str) -> float:
-    """--renormalise TOL: a number in [0, 1)."""
-    try:
-        tol = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
-    if not 0 <= tol < 1:
-        raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
-    return tol
-
-
 def add_renormalise_option(p: argparse.ArgumentParser) -> None:
     """``--renormalise [TOL]``: how far from 1 a CPT row of a BIF, XMLBIF or UAI file may sum."""
     from glu.bn.exchange import IMPORT_TOL
@@ -269,7 +309,6 @@ def make_engine(bn: Any, args: argparse.Namespace) -> Any:
     """The :class:`~glu.bn.inference.Engine` of ``bn`` with the command's ``--max-table``, which is first
     checked against the memory this process may use (a table of N entries takes 8 N bytes)."""
     from glu.bn import inference
-    from glu.machine import check_memory
 
     max_table = getattr(args, "max_table", None)
     if max_table is not None:
@@ -348,6 +387,8 @@ def read_model_file(path: Path, fmt: str | None = None, renormalise: float | Non
     from glu.bn.model import BayesNet
     from glu.errors import ModelError
 
+    if renormalise is not None and path.suffix.lower() in (".mat", ".json"):
+        raise EvidenceError("--renormalise applies to BIF, XMLBIF and UAI files")
     try:
         size = path.stat().st_size
     except FileNotFoundError:
@@ -374,10 +415,7 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
             raise EvidenceError("give either --model or --data, not both")
         if getattr(args, "schema", None) or getattr(args, "experiments", None):
             raise EvidenceError("give either --model or --schema/--experiments, not both")
-        renormalise = getattr(args, "renormalise", None)
-        if renormalise is not None and model.suffix.lower() in (".mat", ".json"):
-            raise EvidenceError("--renormalise applies to BIF, XMLBIF and UAI files")
-        bn = read_model_file(model, renormalise=renormalise)
+        bn = read_model_file(model, renormalise=getattr(args, "renormalise", None))
         r = bn.meta.get("renormalised")
         rescaled = f"; {r['rows']} CPT row(s) rescaled to sum to 1 on import" if r else ""
         return bn, one_line(f"model {model} ({bn.meta.get('data_source', 'unknown data')}{rescaled})")
@@ -395,11 +433,9 @@ def load_model(args: argparse.Namespace) -> tuple[Any, str]:
             raise EvidenceError("give either --data or --schema/--experiments, not both")
         schema = read_schema_file(schema_file)
         df = read_experiment_table(table, schema)
-        bn = learn_bn(df, schema, unseen_words=args.unseen_words)
-        return bn, one_line(f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}")
-    source = resolve_data(args.data)
-    df = load_experiments(source, args.words)
-    bn = learn_bn(df, unseen_words=args.unseen_words)
+    else:
+        schema, df = None, load_experiments(resolve_data(args.data), args.words)
+    bn = learn_bn(df, schema, unseen_words=args.unseen_words)
     return bn, one_line(f"learned from {df.attrs['data_source']}, unseen words {args.unseen_words}")
 
 
@@ -418,6 +454,17 @@ def progress_bar(total: int | None, desc: str, unit: str, quiet: bool = False) -
     from tqdm import tqdm
 
     return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, leave=False, dynamic_ncols=True)
+
+
+@contextlib.contextmanager
+def progress(total: int | None, desc: str, unit: str) -> Iterator[Any]:
+    """The :func:`progress_bar` of a block (None when there is none), closed when the block ends."""
+    bar = progress_bar(total, desc, unit)
+    try:
+        yield bar
+    finally:
+        if bar is not None:
+            bar.close()
 
 
 def require_extra(extra: str, *modules: str) -> None:
@@ -538,7 +585,7 @@ def add_cluster_args(p: argparse.ArgumentParser, unit: str) -> None:
 
 def add_hmm_size_args(p: argparse.ArgumentParser) -> None:
     """``--states``, ``--mix`` and ``--iter`` of the gesture HMMs, defaults from
-    :class:`~glu.hmm.TrainingConfig`."""
+    :class:`~glu.hmm.TrainingConfig` (read by :func:`hmm_config`)."""
     from glu.hmm import TrainingConfig
 
     d = TrainingConfig()
@@ -551,3 +598,11 @@ def add_hmm_size_args(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--iter", type=positive_int, default=d.n_iter, help=f"most EM iterations (default {d.n_iter})"
     )
+
+
+def hmm_config(args: argparse.Namespace, *fields: str) -> Any:
+    """The :class:`~glu.hmm.TrainingConfig` of the options of :func:`add_hmm_size_args` and the options
+    ``fields`` (named as its fields)."""
+    from glu.hmm import TrainingConfig
+
+    return TrainingConfig(n_states=args.states, n_mix=args.mix, n_iter=args.iter, **chosen(args, *fields))

@@ -1,17 +1,12 @@
-"""``glu correspondence``: the synthetic study of notebook 10 (the correspondence problem), as a grid on Dask.
-
-It runs the study with notebook 10's default parameters — every seed, training source, feature set and test
-condition, the ideal and the occluding tracker — one task per seed, and writes its three tables with their
-key and provenance (:mod:`glu.saved`) to ``-o DIR``: how ``sweeps/10_correspondence/study/`` is made
-(``make sweeps``), which notebook 10 reads instead of computing the study.
-"""
+"""``glu correspondence``: the synthetic study of notebook 10 (the correspondence problem), as a grid on Dask
+(what it runs and writes: its description below; the tables' key and provenance: :mod:`glu.saved`)."""
 
 from __future__ import annotations
 
 import argparse
 
 from glu.cli.commands import add_command
-from glu.cli.common import add_out_option, positive_int
+from glu.cli.common import add_out_option, command_line, positive_int
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -23,12 +18,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "training source, feature set and condition; the ideal and the occluding tracker), one task per "
         "seed on a LocalCluster, and write its tables with their key and provenance to -o DIR, where "
         "the notebook finds them (sweeps/10_correspondence/study: make sweeps).",
+        _run,
     )
     add_out_option(p, "DIR", "folder for the tables", folder=True)
     p.add_argument(
         "--workers", type=positive_int, metavar="N", help="LocalCluster workers (default: in this process)"
     )
-    p.set_defaults(func=_run)
 
 
 def notebook_settings():
@@ -55,14 +50,10 @@ def notebook_settings():
 
 
 def _run(args: argparse.Namespace) -> int:
-    import shlex
-    import sys
-
     from glu.studies.correspondence.grid import run_study, write_tables
 
     settings = notebook_settings()
     tables = run_study(settings, workers=args.workers or 0)
-    command = "glu " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-    folder = write_tables(args.out, tables, settings.key(), command)
+    folder = write_tables(args.out, tables, settings.key(), command_line())
     print(f"{len(tables[0])} rows over {len(settings.seeds)} seeds → {folder}")
     return 0

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from glu import paths
-from glu.cli.commands import add_group
+from glu.cli.commands import add_command, add_group
 from glu.cli.common import (
     add_data_option,
     add_deprecated_alias,
@@ -15,7 +15,7 @@ from glu.cli.common import (
     add_out_option,
     integer,
     json_text,
-    progress_bar,
+    progress,
     seed,
 )
 from glu.data.source import DEFAULT_SYNTHETIC_N, WORD_FILES
@@ -32,12 +32,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "or see which data source a command would use and what it holds (glu data info).",
     )
 
-    f = dsub.add_parser(
+    f = add_command(
+        dsub,
         "fetch",
-        help="download the real data at pinned commits, verifying checksums",
-        description="Download the authors' published data (GPL-3.0) at pinned commits and check every "
+        "Download the authors' published data (GPL-3.0) at pinned commits and check every "
         "file's sha256. The data folder appears, by one rename, only when every file is verified; a failed "
         "or interrupted fetch leaves it as it was, and the next run downloads only what is missing.",
+        _fetch,
+        help="download the real data at pinned commits, verifying checksums",
     )
     f.add_argument(
         "-o",
@@ -57,13 +59,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="JSON",
         help="the files to fetch, with their origin and sha256 (default: glu's, the real data)",
     )
-    f.set_defaults(func=_fetch)
 
-    s = dsub.add_parser(
+    s = add_command(
+        dsub,
         "synth",
-        help="write a synthetic data folder with the real data's layout (tables and hand logs)",
-        description="Write synthetic experiments (simple physics, the same 49 words) and synthetic "
+        "Write synthetic experiments (simple physics, the same 49 words) and synthetic "
         "gesture recordings in the layout of the real data, so that every command and notebook runs on them.",
+        _synth,
+        help="write a synthetic data folder with the real data's layout (tables and hand logs)",
     )
     s.add_argument(
         "--n",
@@ -78,29 +81,27 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="replace a folder that is not glu synthetic data (never the published real data)",
     )
-    s.set_defaults(func=_synth)
 
-    i = dsub.add_parser(
+    i = add_command(
+        dsub,
         "info",
-        help="say which data source is used and what it holds",
-        description="Say which data source the commands use (--data, $GLU_DATA_DIR, the fetched data, "
+        "Say which data source the commands use (--data, $GLU_DATA_DIR, the fetched data, "
         "else synthetic) and summarise its experiment table: the counts of each node's values and the most "
         'frequent words. --json prints {"data", "words", "experiments", "values", "most_frequent_words"}.',
+        _info,
+        help="say which data source is used and what it holds",
     )
     add_data_option(i)
     i.add_argument(
         "--words", choices=tuple(WORD_FILES), default="lab", help="which experiment table (default lab)"
     )
     add_json_option(i, "the summary")
-    i.set_defaults(func=_info)
 
 
 def _fetch(args: argparse.Namespace) -> int:
     from glu.data.fetch import MANIFEST, fetch_all, partial_folder
 
-    bar = progress_bar(None, "fetch", "file")
-
-    def progress(i: int, n: int, r) -> None:
+    def report(i: int, n: int, r) -> None:
         extra = f": {r.detail}" if r.detail else ""
         line = f"[{i}/{n}] {r.status:10s} {r.local}{extra}"
         if bar is None:
@@ -112,17 +113,14 @@ def _fetch(args: argparse.Namespace) -> int:
         bar.set_postfix_str(r.local, refresh=False)
         bar.update(1)
 
-    try:
+    with progress(None, "fetch", "file") as bar:
         results = fetch_all(
             args.out,
             mirror=args.mirror,
-            progress=progress,
+            progress=report,
             timeout=args.timeout,
             manifest_path=args.manifest or MANIFEST,
         )
-    finally:
-        if bar is not None:
-            bar.close()
     failed = [r for r in results if r.status == "failed"]
     ok = len(results) - len(failed)
     if failed:
@@ -143,8 +141,7 @@ def _synth(args: argparse.Namespace) -> int:
     if not MIN_ROWS <= args.n <= MAX_ROWS:
         raise DataError(f"--n {args.n} is out of range; allowed: {MIN_ROWS} to {MAX_ROWS:,}")
     recordings = {name: hand_log_arrays(g) for name, g in synthetic_recordings(args.seed).items()}
-    bar = progress_bar(len(TABLES) + 1 + len(recordings), "synth", "file")
-    try:
+    with progress(len(TABLES) + 1 + len(recordings), "synth", "file") as bar:
         out = write_synthetic_folder(
             args.out,
             args.n,
@@ -153,9 +150,6 @@ def _synth(args: argparse.Namespace) -> int:
             progress=(lambda name: bar.update(1)) if bar is not None else None,
             force=args.force,
         )
-    finally:
-        if bar is not None:
-            bar.close()
     print(
         f"wrote synthetic data (seed {args.seed}, {args.n} experiments per table, "
         f"{len(recordings)} gesture recordings) to {out}"

@@ -1,13 +1,5 @@
-"""``glu evaluate`` and ``glu corpus``: measure every fusion strategy on a simulated corpus, on Dask.
-
-``glu evaluate`` runs the sweep of :mod:`glu.studies.corpus_evaluation.sweep` (the factorial design effects ×
-action prior × inference network × p_HMM reading × feature set × noise × viewpoint, over recogniser seeds,
-every strategy at every observed fraction; see docs/corpus-evaluation.md) on a LocalCluster sized to the
-machine, or on an existing Dask cluster (``--scheduler tcp://host:8786``), and writes the merged tables to
-``-o DIR``; run it again on the same folder to finish an interrupted sweep (``--save DIR`` also writes the
-small subset notebook 11 reads, as ``sweeps/`` keeps it). ``glu corpus`` writes the simulated episodes
-themselves to Parquet.
-"""
+"""``glu evaluate`` and ``glu corpus``: measure every fusion strategy on a simulated corpus, on Dask (the
+sweep of :mod:`glu.studies.corpus_evaluation.sweep`; what each command does: its description below)."""
 
 from __future__ import annotations
 
@@ -19,22 +11,11 @@ from glu.cli.common import (
     add_cluster_args,
     add_data_option,
     add_out_option,
+    command_line,
     output_folder,
     positive_int,
     seed,
 )
-
-
-def _shared(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--config",
-        type=Path,
-        metavar="FILE.toml",
-        help="sweep settings (see glu.studies.corpus_evaluation.config)",
-    )
-    p.add_argument("--episodes", type=positive_int, metavar="N", help="episodes in all (default 120000)")
-    p.add_argument("--seed", type=seed, metavar="S", help="the corpus's seed (default 0)")
-    add_data_option(p, "the network is learned from its experiments")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -48,8 +29,26 @@ def register(sub: argparse._SubParsersAction) -> None:
         "observed fraction of the gesture (docs/corpus-evaluation.md). Runs on a LocalCluster sized to the "
         "machine or on an existing Dask cluster (--scheduler), and writes the merged tables to -o DIR; run "
         "it again on the same folder to finish an interrupted sweep.",
+        _evaluate,
     )
-    _shared(e)
+    c = add_command(
+        sub,
+        "corpus",
+        "Write the simulated episodes of a sweep's design (the same settings as glu evaluate: "
+        "--config, --episodes, --seed, --data) to one Parquet file, one row per episode, without scoring "
+        "them.",
+        _corpus,
+    )
+    for p in (e, c):  # the sweep's settings
+        p.add_argument(
+            "--config",
+            type=Path,
+            metavar="FILE.toml",
+            help="sweep settings (see glu.studies.corpus_evaluation.config)",
+        )
+        p.add_argument("--episodes", type=positive_int, metavar="N", help="episodes in all (default 120000)")
+        p.add_argument("--seed", type=seed, metavar="S", help="the corpus's seed (default 0)")
+        add_data_option(p, "the network is learned from its experiments")
     add_cluster_args(e, "chunk")
     e.add_argument(
         "--max-chunks",
@@ -65,18 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="once finished, also write the tables notebook 11 reads (a small subset) to DIR, with their key "
         "and provenance (glu.saved): how sweeps/11_corpus_evaluation/ is made",
     )
-    e.set_defaults(func=_evaluate)
-
-    c = add_command(
-        sub,
-        "corpus",
-        "Write the simulated episodes of a sweep's design (the same settings as glu evaluate: "
-        "--config, --episodes, --seed, --data) to one Parquet file, one row per episode, without scoring "
-        "them.",
-    )
-    _shared(c)
     add_out_option(c, "FILE.parquet", "file to write")
-    c.set_defaults(func=_corpus)
 
 
 def _config(args: argparse.Namespace):
@@ -103,24 +91,10 @@ def _evaluate(args: argparse.Namespace) -> int:
     if result.summary:
         print(overall_text(result.summary))
         if args.save:
-            import shlex
-            import sys
-
             from glu.studies.corpus_evaluation.sweep import export_saved
 
-            command = "glu " + " ".join(shlex.quote(a) for a in public_argv(sys.argv[1:]))
-            print(f"saved tables → {export_saved(args.out, args.save, command)}")
+            print(f"saved tables → {export_saved(args.out, args.save, command_line())}")
     return 0
-
-
-def public_argv(argv: list[str]) -> list[str]:
-    """The arguments with the data folder named ``DATA`` (a path of this machine is no one else's), unless
-    it is ``synthetic``."""
-    out = list(argv)
-    for i, a in enumerate(out[:-1]):
-        if a == "--data" and out[i + 1] != "synthetic":
-            out[i + 1] = "DATA"
-    return [a for a in out if a]
 
 
 def overall_text(summary: dict) -> str:

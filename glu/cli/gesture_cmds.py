@@ -1,9 +1,5 @@
-"""``glu gestures segment``, ``glu hmm train`` and ``glu recognize``: gestures from hand logs to p_HMM(A | G).
-
-A LOG argument is a YARP hand log (``data.log``), a recording folder holding one, or the name of a
-recording of the data folder (``tap1_hand`` → ``<data>/gestures/tap1_hand/data.log``). Frame ranges
-(``--frames A:B``) are 1-based and inclusive, in the numbering of the log, as in the papers.
-"""
+"""``glu gestures segment``, ``glu hmm train`` and ``glu recognize``: gestures from hand logs to p_HMM(A | G)
+(what a LOG argument and a frame range are: ``LOG_TEXT``, ``FRAMES_TEXT``)."""
 
 from __future__ import annotations
 
@@ -19,12 +15,14 @@ from glu.cli.common import (
     add_hmm_size_args,
     add_json_option,
     add_out_option,
+    hmm_config,
     json_text,
     nonneg_float,
     output_image,
     positive_float,
     positive_int,
-    progress_bar,
+    progress,
+    say_to,
     seed,
 )
 from glu.cli.terminal import one_line
@@ -40,7 +38,7 @@ LOG_TEXT = (
     "A LOG is a YARP hand log (data.log), a recording folder holding one, or the name of a recording of the "
     "data folder (tap1_hand: DATA/gestures/tap1_hand/data.log)."
 )
-"""What the help of the commands taking a hand log says about it (the module's docstring, without markup)."""
+"""What the help of the commands taking a hand log says about it."""
 FRAMES_TEXT = "Frames A:B are 1-based and inclusive, in the numbering of the log, as in the papers."
 
 SYNTHETIC_NOISE = 0.01
@@ -62,12 +60,14 @@ def _register_gestures(sub: argparse._SubParsersAction) -> None:
         "Inspect hand-trajectory logs: repair their tracking problems and find the gesture "
         "repetitions in them. " + LOG_TEXT,
     )
-    s = gsub.add_parser(
+    s = add_command(
+        gsub,
         "segment",
-        help="find the gesture repetitions in a hand log and print them",
-        description="Repair a hand log (interpolate short gaps, split at long ones, replace spikes), "
+        "Repair a hand log (interpolate short gaps, split at long ones, replace spikes), "
         "then find the repetitions of the gesture from the distance of the hand to its rest pose. --json "
         'prints {"log", "recording", "tracking", "events", "segments", "left_out"}; the rest goes to stderr.',
+        _segment,
+        help="find the gesture repetitions in a hand log and print them",
     )
     s.add_argument("log", help="hand log: a data.log, a recording folder, or a recording name")
     add_data_option(s, "used to find a recording by name")
@@ -76,7 +76,6 @@ def _register_gestures(sub: argparse._SubParsersAction) -> None:
     )
     s.add_argument("--label", help="action performed (default: from the recording's name, if known)")
     add_json_option(s, "the segments and tracking events")
-    s.set_defaults(func=_segment)
 
 
 def _register_hmm(sub: argparse._SubParsersAction) -> None:
@@ -88,20 +87,21 @@ def _register_hmm(sub: argparse._SubParsersAction) -> None:
         "or your own labelled recordings, and save them as a recogniser file that glu recognize and glu "
         "anticipate take (--models FILE).",
     )
-    t = hsub.add_parser(
+    t = add_command(
+        hsub,
         "train",
-        help="train one left-to-right GMM-HMM per action and save the recogniser (JSON)",
-        description="Train on the automatically segmented standing recordings (--data), on synthetic "
+        "Train on the automatically segmented standing recordings (--data), on synthetic "
         "gestures (--synthetic N, N per action), or on your own labelled recordings (--recordings: a folder "
         "with one subfolder per action, or a CSV manifest file,label[,frames]). --features chooses "
         "invariant features; the recogniser file records them and glu recognize applies them.",
+        _train,
+        help="train one left-to-right GMM-HMM per action and save the recogniser (JSON)",
         epilog="invariances: "
         + "; ".join(f"{k} = {v}" for k, v in INVARIANCE_MEANING.items())
         + " (formulas: glu.gestures.invariants)",
     )
     _add_training_data(t)
     _add_training_settings(t)
-    t.set_defaults(func=_train)
 
 
 def _add_training_data(t: argparse.ArgumentParser) -> None:
@@ -185,7 +185,6 @@ def _add_body_size(p: argparse.ArgumentParser, which: str) -> None:
 
 
 def _register_recognize(sub: argparse._SubParsersAction) -> None:
-    """Add ``recognize``."""
     r = add_command(
         sub,
         "recognize",
@@ -194,6 +193,7 @@ def _register_recognize(sub: argparse._SubParsersAction) -> None:
         + LOG_TEXT
         + " "
         + FRAMES_TEXT,
+        _recognize,
     )
     r.add_argument(
         "log",
@@ -215,7 +215,6 @@ def _register_recognize(sub: argparse._SubParsersAction) -> None:
     add_json_option(r, '{"loglik": {…}, "posterior": {…}, "typicality": {…}} (with --stream: one a frame)')
     r.add_argument("--repair", action="store_true", help="repair the log first (default: frames as logged)")
     _add_body_size(r, "for a t,x,y,z table: the body size")
-    r.set_defaults(func=_recognize)
 
 
 # ------------------------------------------------------------------ argument types
@@ -275,10 +274,6 @@ def _resolve_log(log: str, data: str | None) -> tuple[Path, Any]:
     )
 
 
-def _say(msg: str, quiet: bool) -> None:
-    print(msg, file=sys.stderr if quiet else sys.stdout)
-
-
 # ------------------------------------------------------------------ handlers
 
 
@@ -290,9 +285,10 @@ def _segment(args: argparse.Namespace) -> int:
         raise DataError(
             f"--label {args.label!r}: not an action of the recordings; allowed: {', '.join(ACTIONS)}"
         )
+    say = say_to(args.json)
     path, source = _resolve_log(args.log, args.data)
     if source is not None:
-        _say(f"data: {source.describe()}", args.json)
+        say(f"data: {source.describe()}")
     name = path.parent.name if path.name == HAND_LOG else path.stem
     seg = segment_recording(path, label=args.label if args.label is not None else RECORDING_ACTION.get(name))
     if args.json:
@@ -318,7 +314,7 @@ def _segment(args: argparse.Namespace) -> int:
         fmt = Path(args.plot).suffix.lstrip(".").lower() or "png"
         (written,) = save_figure(fig, args.plot, formats=(fmt,))
         plt.close(fig)
-        _say(f"plot: {written}", args.json)
+        say(f"plot: {written}")
     return 0
 
 
@@ -391,16 +387,8 @@ def _train(args: argparse.Namespace) -> int:
         raise DataError(f"no training segments for {', '.join(empty)}")
     for a, v in by_action.items():
         print(f"  {a}: {len(v)} sequences, {sum(len(x) for x in v)} frames")
-    bar = progress_bar(len(by_action), "train", "model")  # ticks while EM runs, as each model converges
-    try:
-        config = TrainingConfig(
-            n_states=args.states,
-            n_mix=args.mix,
-            n_iter=args.iter,
-            tol=args.tol,
-            covar_reg=args.covar_reg,
-            recipe=args.recipe,
-        )
+    config = hmm_config(args, "tol", "covar_reg", "recipe")
+    with progress(len(by_action), "train", "model") as bar:  # ticks while EM runs, as each model converges
         rec = train_recognizer(
             by_action,
             config,
@@ -410,9 +398,6 @@ def _train(args: argparse.Namespace) -> int:
             features=args.features,
             progress=bar.update if bar is not None else None,
         )
-    finally:
-        if bar is not None:
-            bar.close()
     print(f"  features: {rec.features.name} ({rec.features.describe()})")
     for r in rec.reports.values():
         print(("  " if r.converged else "  warning: ") + r.describe())
@@ -421,7 +406,7 @@ def _train(args: argparse.Namespace) -> int:
     return 0
 
 
-def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
+def _load_models(spec: str, data: str | None, say: Any) -> Any:
     from glu.gestures.recognizer import Recognizer
 
     if spec == "original":
@@ -429,12 +414,12 @@ def _load_models(spec: str, data: str | None, quiet: bool) -> Any:
         from glu.gestures.corpus import original_recognizer
 
         source = resolve_data(data)
-        _say(f"data: {source.describe()}", quiet)
+        say(f"data: {source.describe()}")
         mat = source.file(ORIGINAL_HMMS[3])
-        _say(f"models: {mat} (original 2013 HMMs; touch = their push model)", quiet)
+        say(f"models: {mat} (original 2013 HMMs; touch = their push model)")
         return original_recognizer(source)
     rec = Recognizer.load(spec)
-    _say(f"models: {spec} ({', '.join(rec.actions)}; features {rec.features.name})", quiet)
+    say(f"models: {spec} ({', '.join(rec.actions)}; features {rec.features.name})")
     return rec
 
 
@@ -443,10 +428,11 @@ def _recognize(args: argparse.Namespace) -> int:
 
     from glu.gestures.recordings import load_features
 
+    say = say_to(args.json)
     path, source = _resolve_log(args.log, args.data)  # a missing file is said before the models are read
-    rec = _load_models(args.models, args.data, args.json)
+    rec = _load_models(args.models, args.data, say)
     if source is not None and args.models != "original":
-        _say(f"data: {source.describe()}", args.json)
+        say(f"data: {source.describe()}")
     pieces = load_features(path, policy=None, body=tuple(args.body_size) if args.body_size else None).pieces
     traj = pieces[0]
     if args.repair:
@@ -460,7 +446,7 @@ def _recognize(args: argparse.Namespace) -> int:
     if args.frames:
         traj = traj.frames(*args.frames)
     a0, a1 = int(traj.frame[0]), int(traj.frame[-1])
-    _say(f"log: {path}, frames {a0}:{a1} ({len(traj)} frames)", args.json)
+    say(f"log: {path}, frames {a0}:{a1} ({len(traj)} frames)")
     X = traj.xyz
     acts = rec.actions
     if args.stream:

@@ -23,7 +23,7 @@ from glu.files import is_special, is_stdout, set_stdout
 OUTPUT_ARGS = ("out", "plot")
 """The namespace attributes that name outputs."""
 
-NOT_PATHS = frozenset({"func", "command", "debug", "words", "format", "candidates_mode"})
+NOT_PATHS = frozenset({"func", "command", "debug", "words", "format"})
 
 
 class InputOverwriteError(GluError):

@@ -4,9 +4,7 @@ probabilities."""
 from __future__ import annotations
 
 import argparse
-import functools
 import math
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -24,6 +22,7 @@ from glu.cli.common import (
     positive_int,
     read_candidates,
     read_evidence,
+    say_to,
     seed,
 )
 from glu.cli.terminal import one_line
@@ -44,7 +43,7 @@ printed for comparison. --json prints [{"sentence": …, "score": …}, …] onl
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``describe``."""
-    p = add_command(sub, "describe", DESCRIPTION)
+    p = add_command(sub, "describe", DESCRIPTION, _describe)
     add_model_args(p)
     add_evidence_args(p)
     add_engine_args(p)
@@ -78,7 +77,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="only sentences of at most L words (needed when the grammar repeats with { } or < >)",
     )
     add_json_option(p, '[{"sentence": …, "score": …}, …] (best first; score null for −∞)')
-    p.set_defaults(func=_describe)
 
 
 def _sample_count(text: str) -> int:
@@ -139,7 +137,7 @@ def _describe(args: argparse.Namespace) -> int:
         result = rank_sentences(candidates, probs, args.nbest, args.score, args.must_contain)
 
     gram_name = "glu default grammar" if args.grammar is None else str(args.grammar)
-    say = functools.partial(print, file=sys.stderr if args.json else sys.stdout)
+    say = say_to(args.json)
     say(f"# model: {desc}")
     say(f"# grammar: {gram_name}: {n_sentences:,} sentences of {net.min_length}–{limit} words")
     say(f"# evidence: {format_evidence(evidence, soft, args.soft_rule) or 'none'}")

@@ -1,31 +1,25 @@
 """``glu learn-gestures`` and ``glu learning-curves``: the robot learns people's gestures from what their
-actions did.
-
-``glu learn-gestures`` simulates episodes — a person's gesture on an object, the effect, the words — labels
-each with the Affordance–Words network learned from the robot's own experiments, trains gesture HMMs from
-those labels and writes a recogniser that ``glu recognize`` and ``glu anticipate`` take (``--models FILE``).
-``glu learning-curves`` runs the long runs notebook 12 reads — every labelling scheme and control in every
-world and ambiguity, with and without words, one Dask task per training seed; and the real person, one task
-per draw — and saves them with their provenance (:mod:`glu.studies.learning.saved`).
-"""
+actions did (what each command does: its description below; provenance: :mod:`glu.studies.learning.saved`)."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
-from glu.cli.commands import help_of
+from glu.cli.commands import add_command
 from glu.cli.common import (
     add_cluster_args,
     add_data_option,
     add_deprecated_alias,
     add_hmm_size_args,
+    add_out_option,
+    chosen,
+    hmm_config,
     nonneg_float,
-    output_file,
-    output_folder,
     positive_float,
     positive_int,
-    progress_bar,
+    progress,
     seed,
 )
 
@@ -55,12 +49,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     ambiguity_help = "; ".join(f"{k}: {a.description}" for k, a in AMBIGUITIES.items()).replace("%", "%%")
     world_help = "; ".join(f"{k}: {w.description}" for k, w in WORLDS.items()).replace("%", "%%")
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "learn-gestures",
-        help=help_of("learn-gestures"),
-        description="Simulate episodes (a person's gesture on an object, the effect, the words), label each "
+        "Simulate episodes (a person's gesture on an object, the effect, the words), label each "
         "with the Affordance–Words network learned from the robot's own experiments, train gesture HMMs from "
         "those labels and write a recogniser that glu recognize and glu anticipate take (--models FILE).",
+        _learn,
     )
     p.add_argument("--episodes", type=positive_int, required=True, metavar="N", help="episodes watched")
     p.add_argument(
@@ -96,10 +91,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="sensor noise of the simulated gestures, m (default 0.02)",
     )
     add_data_option(p, "the network is learned from its experiments")
-    p.add_argument(
-        "-o", "--out", type=output_file, required=True, metavar="RECOGNISER", help="file to write (JSON)"
-    )
-    p.set_defaults(func=_learn)
+    add_out_option(p, "RECOGNISER", "file to write (JSON)")
 
     _register_curves(sub, ambiguity_help, world_help)
 
@@ -107,15 +99,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _register_curves(sub: argparse._SubParsersAction, ambiguity_help: str, world_help: str) -> None:
     from glu.studies.learning.self_supervised import AMBIGUITIES, WORLDS
 
-    c = sub.add_parser(
+    c = add_command(
+        sub,
         "learning-curves",
-        help=help_of("learning-curves"),
-        description="Run the study of notebook 12 at the budgets the notebook does not run itself: every "
+        "Run the study of notebook 12 at the budgets the notebook does not run itself: every "
         "labelling scheme and control, every world and ambiguity, with and without words, one Dask task per "
         "training seed (--part curves); and the real person, learned from a generator fitted to their "
         "repetitions and recognised leave-one-segment-out, one task per draw (--part real-person, real data "
         "only). Writes the measurements and their provenance (learning_study.json, learning_results.npz, "
         "learning_real_person.csv.gz) and the tables to -o DIR; give the notebook saved=DIR.",
+        _curves,
     )
     c.add_argument(
         "--part",
@@ -151,10 +144,7 @@ def _register_curves(sub: argparse._SubParsersAction, ambiguity_help: str, world
     add_cluster_args(c, "seed or draw")
     add_deprecated_alias(c, "--synchronous", "--scheduler", const="synchronous")
     add_data_option(c, "the network is learned from its experiments")
-    c.add_argument(
-        "-o", "--out", type=output_folder, required=True, metavar="DIR", help="folder for the tables"
-    )
-    c.set_defaults(func=_curves)
+    add_out_option(c, "DIR", "folder for the tables", folder=True)
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -172,7 +162,6 @@ def _engine(data: str | None):
 
 def _learn(args: argparse.Namespace) -> int:
     from glu.errors import DataError
-    from glu.hmm import TrainingConfig
     from glu.machine import check_memory
     from glu.studies.learning.learned_recognizers import learn_gestures
 
@@ -199,30 +188,20 @@ def _learn(args: argparse.Namespace) -> int:
         f"HMMs trained ({how})",
         flush=True,
     )
-    config = TrainingConfig(n_states=args.states, n_mix=args.mix, n_iter=args.iter)
-    bar = (
-        progress_bar(args.episodes, "learn", "episode")
-        if args.online
-        else progress_bar(None, "learn", "model")
-    )
-    try:
+    config = hmm_config(args)
+    with progress(
+        args.episodes if args.online else None, "learn", "episode" if args.online else "model"
+    ) as bar:
         rec, info = learn_gestures(
             engine,
             args.episodes,
             args.labels,
-            seed=args.seed,
             words=args.with_words,
-            ambiguity=args.ambiguity,
-            online=args.online,
             config=config,
-            noise=args.noise,
-            threshold=args.threshold,
             data_source=label,
             progress=(lambda _: bar.update(1)) if bar is not None else None,
+            **chosen(args, "seed", "ambiguity", "online", "noise", "threshold"),
         )
-    finally:
-        if bar is not None:
-            bar.close()
     print(f"episodes: {info['data']}")
     print(
         f"labels: arg-max of p_BN right for {info['label_accuracy']:.3f} of the episodes; "
@@ -235,12 +214,13 @@ def _learn(args: argparse.Namespace) -> int:
 
 def _curves(args: argparse.Namespace) -> int:
     from glu.errors import DataError
-    from glu.machine import SYNCHRONOUS, check_reachable
+    from glu.machine import SYNCHRONOUS, available_cores, check_reachable
     from glu.studies.learning import study as lc
+    from glu.studies.learning.self_supervised import AMBIGUITIES, WORLDS
 
     for flag, given, allowed in (
-        ("--worlds", args.worlds, _choices("WORLDS")),
-        ("--ambiguities", args.ambiguities, _choices("AMBIGUITIES")),
+        ("--worlds", args.worlds, tuple(WORLDS)),
+        ("--ambiguities", args.ambiguities, tuple(AMBIGUITIES)),
     ):
         bad = [a for a in given if a not in allowed]
         if bad or not given:
@@ -250,12 +230,7 @@ def _curves(args: argparse.Namespace) -> int:
     if args.scheduler not in (None, SYNCHRONOUS):  # before any work: a scheduler that does not answer
         check_reachable(args.scheduler)
     settings = lc.StudySettings(
-        episodes=args.episodes,
-        seeds=args.seeds,
-        worlds=args.worlds,
-        ambiguities=args.ambiguities,
-        test_per_action=args.test_per_action,
-        margin=args.margin,
+        **chosen(args, "episodes", "seeds", "worlds", "ambiguities", "test_per_action", "margin")
     )
     from glu.data.source import resolve_data
 
@@ -268,7 +243,7 @@ def _curves(args: argparse.Namespace) -> int:
     here = args.scheduler == SYNCHRONOUS
     where = dict(
         scheduler=None if here else args.scheduler,
-        workers=0 if here or args.scheduler else (args.workers or _cores()),
+        workers=0 if here or args.scheduler else (args.workers or available_cores()),
     )
     out = Path(args.out)
     if args.part in ("curves", "all"):
@@ -276,12 +251,6 @@ def _curves(args: argparse.Namespace) -> int:
     if args.part in ("real-person", "all"):
         _run_real_person(engine, source, label, args.draws, where, out, _command(args, "real-person"))
     return 0
-
-
-def _choices(name: str) -> tuple[str, ...]:
-    from glu.studies.learning import self_supervised
-
-    return tuple(getattr(self_supervised, name))
 
 
 def _command(args: argparse.Namespace, part: str) -> str:
@@ -297,6 +266,12 @@ def _command(args: argparse.Namespace, part: str) -> str:
     )
 
 
+def _done(what: str, n: int) -> Any:
+    """The progress of one task in ``n`` (a seed, a draw): a line each, with how many are done."""
+    done = []
+    return lambda task: done.append(task) or print(f"  {what} {task} done ({len(done)} of {n})", flush=True)
+
+
 def _run_curves(engine, label: str, settings, where: dict, out: Path, command: str) -> None:
     from glu.files import atomic_write_text
     from glu.studies.learning import saved, tables
@@ -308,13 +283,7 @@ def _run_curves(engine, label: str, settings, where: dict, out: Path, command: s
         f"({', '.join(settings.worlds)} worlds)",
         flush=True,
     )
-    done = []
-    results = lc.learning_study(
-        engine,
-        settings,
-        **where,
-        progress=lambda s: done.append(s) or print(f"  seed {s} done ({len(done)} of {n})", flush=True),
-    )
+    results = lc.learning_study(engine, settings, **where, progress=_done("seed", n))
     rep = tables.replicates(results, settings)
     budgets = tables.budgets_table(rep, settings, label)
     frames = {
@@ -349,24 +318,10 @@ def _run_real_person(engine, source, label: str, draws, where: dict, out: Path, 
     settings = rp.RealPersonSettings(draws=draws)
     standing = gesture_sequences(source, include_test=False)
     print(f"the real person: {len(standing)} standing segments × {len(draws)} draws", flush=True)
-    done = []
     rows = rp.real_person_study(
-        engine,
-        standing,
-        settings,
-        **where,
-        progress=lambda d: (
-            done.append(d) or print(f"  draw {d} done ({len(done)} of {len(draws)})", flush=True)
-        ),
-        data_source=label,
+        engine, standing, settings, **where, progress=_done("draw", len(draws)), data_source=label
     )
     saved.save_real_person(out, rows, settings, label, command)
     summary = rp.real_person_summary(rows, settings.bootstrap)
     atomic_write_text(out / "learning_real_person_summary.csv", summary.to_csv(index=False))
     print(f"wrote {out}/{saved.PERSON_FILE}, {saved.PERSON_STUDY_FILE}, learning_real_person_summary.csv")
-
-
-def _cores() -> int:
-    from glu.machine import available_cores
-
-    return available_cores()

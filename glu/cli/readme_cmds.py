@@ -28,6 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "summary), and the command table of docs/cli.md and the tables of docs/speed.md (from the "
         "benchmarks' results), each between its markers; --check only says whether they are up to date "
         "(exit status 1 if not).",
+        _readme,
     )
     p.add_argument(
         "--summary", type=Path, default=SUMMARY, help="summary.json (default: results/summary.json)"
@@ -39,7 +40,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="do nothing (exit 0) unless the summary is a full run on the real data (for make reproduce)",
     )
-    p.set_defaults(func=_readme)
 
 
 def _readme(args: argparse.Namespace) -> int:

@@ -7,7 +7,15 @@ import argparse
 from pathlib import Path
 
 from glu.cli.commands import add_command
-from glu.cli.common import add_data_option, add_json_option, json_text, positive_int, require_extra, seed
+from glu.cli.common import (
+    add_data_option,
+    add_json_option,
+    chosen,
+    json_text,
+    positive_int,
+    require_extra,
+    seed,
+)
 
 NOTEBOOK_MODULES = ("papermill", "jupytext", "ipykernel", "nbconvert", "rerun")
 """What running the notebooks needs: the extra ``glu[notebooks]``."""
@@ -24,6 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "the documentation site; publish the whole run (figures, recordings, results, models, executed "
         "notebooks, summary, site) at once, only when every notebook succeeded: a failed or interrupted run "
         "leaves the last published run as it was. Nothing glu did not write is replaced.",
+        _reproduce,
     )
     add_data_option(p)
     p.add_argument("--quick", action="store_true", help="small, fast runs (as the tests do)")
@@ -47,8 +56,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="where -o DIR holds a folder or file glu did not write (figures/, site/, …), leave it untouched "
         "and publish that part in DIR/.glu-runs/current/ only (default: refuse, naming it)",
     )
-    _add_notebooks_option(p)
-    p.set_defaults(func=_reproduce)
 
     r = add_command(
         sub,
@@ -61,6 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             'figures/, results/, recordings/, models/. --json prints {"notebook", "executed", "outputs"} '
             "(with --list: the parameters)."
         ),
+        _run,
     )
     r.add_argument("notebook", help="the notebook's name or number (e.g. 08_tcds_figures or 8)")
     r.add_argument(
@@ -86,17 +94,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--list", action="store_true", help="list the notebook's parameters and exit")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr (only errors)")
     add_json_option(r, "the executed notebook and the outputs folder (with --list: the parameters)")
-    _add_notebooks_option(r)
-    r.set_defaults(func=_run)
-
-
-def _add_notebooks_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--notebooks",
-        type=Path,
-        metavar="DIR",
-        help="the jupytext notebooks NN_name.py of DIR instead of glu's own",
-    )
+    for parser in (p, r):
+        parser.add_argument(
+            "--notebooks",
+            type=Path,
+            metavar="DIR",
+            help="the jupytext notebooks NN_name.py of DIR instead of glu's own",
+        )
 
 
 def _notebooks_folder(args: argparse.Namespace) -> Path:
@@ -118,15 +122,9 @@ def _reproduce(args: argparse.Namespace) -> int:
 
     folder = _notebooks_folder(args)
     summary = reproduce(
-        data=args.data,
-        quick=args.quick,
-        out=args.out,
-        jobs=args.jobs,
-        only=args.only,
-        seed=args.seed,
+        **chosen(args, "data", "quick", "out", "jobs", "only", "seed", "force"),
         site=not args.no_site,
         notebooks_dir=folder,
-        force=args.force,
     )
     print(
         f"ran {len(summary['ran'])} notebooks in {summary['wall_time_s']:.1f} s ({summary['data_source']}); "

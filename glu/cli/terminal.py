@@ -19,8 +19,7 @@ from collections.abc import Iterator
 from typing import Any, TextIO
 
 _BIDI = "\u061c\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069\u2028\u2029"
-_UNSAFE = re.compile(f"[\x00-\x08\x0b-\x1f\x7f-\x9f{_BIDI}]")
-_UNSAFE_OUT = re.compile(f"[\x00-\x08\x0b-\x1f\x7f-\x9f{_BIDI}]")  # \r (0x0d) included: no line overwritten
+_UNSAFE = re.compile(f"[\x00-\x08\x0b-\x1f\x7f-\x9f{_BIDI}]")  # \r (0x0d) included: no line overwritten
 _UNSAFE_ERR = re.compile(f"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f{_BIDI}]")  # \r kept: progress bars redraw
 
 
@@ -73,7 +72,7 @@ class SafeStream:
 def safe_streams() -> Iterator[None]:
     """Within the block, ``sys.stdout`` and ``sys.stderr`` escape what no terminal should receive."""
     out, err = sys.stdout, sys.stderr
-    sys.stdout, sys.stderr = SafeStream(out, _UNSAFE_OUT), SafeStream(err, _UNSAFE_ERR)
+    sys.stdout, sys.stderr = SafeStream(out, _UNSAFE), SafeStream(err, _UNSAFE_ERR)
     try:
         yield
     finally:
