@@ -58,6 +58,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
@@ -68,6 +70,7 @@ from glu.gestures.trajectories import RepairPolicy, Trajectory, repair
 from glu.gestures.views import DEFAULT_VIEW, View, track
 from glu.schema import ACTIONS
 
+_IH = OPENNI_JOINTS.index("right_hand")
 GESTURES: tuple[str, ...] = (*ACTIONS, "push")
 """The actions the generator knows (the BN's Action values, plus push)."""
 
@@ -174,12 +177,15 @@ class SyntheticGesture:
         return np.concatenate([p.xyz for p in pieces])
 
 
-def _min_jerk_path(keys: list[tuple[float, np.ndarray]], n: int) -> np.ndarray:
-    times = np.array([k[0] for k in keys])
-    pts = np.stack([k[1] for k in keys])
+@lru_cache(maxsize=512)
+def timing(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The time course of a movement of ``n`` frames through its key poses (mostly minimum-jerk: slow start
+    and end), and the frames' times ``arange(n) / FRAME_RATE`` (both read-only, cached)."""
     s = np.linspace(0.0, 1.0, n)
-    u = 0.15 * s + 0.85 * s**3 * (10 - 15 * s + 6 * s**2)  # mostly minimum-jerk timing: slow start and end
-    return pchip(times, pts, u)  # SciPy's PchipInterpolator, bit for bit, without its set-up cost
+    u = 0.15 * s + 0.85 * s**3 * (10 - 15 * s + 6 * s**2)
+    t = np.arange(n) / FRAME_RATE
+    u.flags.writeable = t.flags.writeable = False
+    return u, t
 
 
 @dataclass(frozen=True)
@@ -215,24 +221,39 @@ def rest_pose(view: View) -> np.ndarray:
 
 def _hand_path(action: str, rng: np.random.Generator, size: float, view: View = DEFAULT_VIEW) -> np.ndarray:
     """Right-hand positions relative to the torso, shape (n_frames, 3), for one repetition."""
-    duration = rng.uniform(2.5, 5.0)
+    duration, amp = rng.uniform(2.5, 5.0), rng.uniform(0.85, 1.15)
+    n, times, points = key_poses(action, rng, size, view, duration, amp, rng.uniform(-0.05, 0.05, size=3))
+    return pchip(times, points, timing(n)[0])  # SciPy's PchipInterpolator, bit for bit, without its set-up
+
+
+def key_poses(
+    action: str,
+    rng: np.random.Generator,
+    size: float,
+    view: View,
+    duration: float,
+    amp: float,
+    offset: np.ndarray,
+) -> tuple[int, np.ndarray, np.ndarray]:
+    """A repetition's number of frames and its key poses, times (K,) and points (K, 3) relative to the torso,
+    from its drawn ``duration`` (s), amplitude and object ``offset``; the rest of its draws from ``rng``."""
     n = max(int(round(duration * FRAME_RATE)), 12)
-    amp = rng.uniform(0.85, 1.15)
-    obj = OBJECT + rng.uniform(-0.05, 0.05, size=3) * np.array([1.0, 0.4, 1.0])
+    obj = OBJECT + offset * np.array([1.0, 0.4, 1.0])
     rest = rest_pose(view) + rng.normal(0, 0.015, size=3)
     if view.posture == "seated":
         obj = obj + SEATED_OBJECT_SHIFT
-    keys = []
     spec = KEYS[action]
+    jitter = rng.uniform(-0.02, 0.02, size=len(spec) - 2)
+    keys = []
     for j, (tf, off) in enumerate(spec):
         if 0 < j < len(spec) - 1:
-            tf = tf + rng.uniform(-0.02, 0.02)
+            tf = tf + jitter[j - 1]
         p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
         keys.append((tf, p * size))
     if view.variety > 0:
         keys = person_style(keys, spec, rng, size, view.variety)
     keys.sort(key=lambda k: k[0])
-    return _min_jerk_path(keys, n)
+    return n, np.array([k[0] for k in keys]), np.stack([k[1] for k in keys])
 
 
 def person_style(
@@ -278,30 +299,47 @@ def _skeletons(
     return world
 
 
-def _sensor(
-    skel: np.ndarray,
-    t: np.ndarray,
-    rng: np.random.Generator,
-    noise: float,
-    spike_rate: float,
-    dropout_rate: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    n = len(skel)
-    skel = skel + rng.normal(0.0, noise, size=skel.shape) if noise > 0 else skel.copy()
-    ih = OPENNI_JOINTS.index("right_hand")
+class SensorDraws(NamedTuple):
+    """The sensor's random draws for one sequence of frames (:func:`sensor_draws`)."""
+
+    noise: np.ndarray | None  # (n, 15, 3), or None without noise
+    spikes: np.ndarray  # bool (n,): frames whose hand joint is displaced …
+    spike: np.ndarray | None  # … by these (n_spikes, 3), or None without a spike
+    jitter: np.ndarray  # (n,) added to the timestamps
+    keep: np.ndarray | None  # bool (n,): the frames left after a dropout, or None without one
+
+
+def sensor_draws(
+    rng: np.random.Generator, n: int, noise: float, spike_rate: float, dropout_rate: float
+) -> SensorDraws:
+    """What the sensor does to ``n`` frames (see the module docstring), drawn from ``rng``."""
+    eps = rng.normal(0.0, noise, size=(n, len(OPENNI_JOINTS), 3)) if noise > 0 else None
     spikes = rng.random(n) < spike_rate
     k = int(spikes.sum())
+    d = None
     if k:
         d = rng.normal(size=(k, 3))
         d *= (rng.uniform(0.15, 0.4, size=k) / np.linalg.norm(d, axis=1))[:, None]
-        skel[spikes, ih] += d
-    t = t + rng.normal(0.0, 0.002, size=n)
-    keep = np.ones(n, dtype=bool)
+    jitter = rng.normal(0.0, 0.002, size=n)
+    keep = None
     if n > 30 and rng.random() < dropout_rate:
         length = int(rng.integers(3, 21))
         start = int(rng.integers(5, n - length - 5))
+        keep = np.ones(n, dtype=bool)
         keep[start : start + length] = False
-    return skel[keep], t[keep]
+    return SensorDraws(eps, spikes, d, jitter, keep)
+
+
+def sensed(
+    skel: np.ndarray, t: np.ndarray, draws: SensorDraws, joints: np.ndarray | slice = slice(None)
+) -> tuple[np.ndarray, np.ndarray]:
+    """The skeletons and timestamps the sensor reports: ``draws`` applied to ``skel`` (n, J, 3), whose
+    joints are ``OPENNI_JOINTS[joints]`` (the right hand among them)."""
+    skel = skel + draws.noise[:, joints] if draws.noise is not None else skel.copy()
+    if draws.spike is not None:
+        skel[draws.spikes, np.arange(len(OPENNI_JOINTS))[joints].tolist().index(_IH)] += draws.spike
+    t = t + draws.jitter
+    return (skel, t) if draws.keep is None else (skel[draws.keep], t[draws.keep])
 
 
 def _check(n: int, noise: float, spike_rate: float, dropout_rate: float) -> None:
@@ -332,10 +370,10 @@ def synthesize_gesture(
         move = _hand_path(action, rng, person.size, view)
     pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
     hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
-    t = np.arange(len(hand)) / FRAME_RATE
+    t = timing(len(hand))[1]
     skel = track(_skeletons(hand, person, t, rng, view), person.yaw, view)  # what the tracker reports
     true = ((pre + 1, pre + len(move)),)
-    skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, dropout_rate)
+    skel, t_obs = sensed(skel, t, sensor_draws(rng, len(skel), noise, spike_rate, dropout_rate))
     return SyntheticGesture(action, skel, t_obs, person.size, true, view)
 
 
@@ -456,9 +494,9 @@ def synthesize_recording(
     from scipy.ndimage import uniform_filter1d
 
     hand = uniform_filter1d(hand, 5, axis=0, mode="nearest")
-    t = np.arange(len(hand)) / FRAME_RATE
+    t = timing(len(hand))[1]
     skel = _skeletons(hand, person, t, rng)
-    skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, 0.0)
+    skel, t_obs = sensed(skel, t, sensor_draws(rng, len(skel), noise, spike_rate, 0.0))
     return SyntheticGesture(action, skel, t_obs, person.size, tuple(segments))
 
 

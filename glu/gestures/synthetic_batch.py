@@ -26,7 +26,6 @@ True
 from __future__ import annotations
 
 from collections.abc import Sequence
-from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
@@ -35,18 +34,16 @@ from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle
 from glu.gestures.synthetic import (
     BODY,
     DEFAULT_VIEW,
-    FRAME_RATE,
-    KEYS,
-    OBJECT,
     OPENNI_JOINTS,
-    SEATED_OBJECT_SHIFT,
     SYNTHETIC_POLICY,
     View,
     check_action,
+    key_poses,
     pchip_many,
-    person_style,
-    rest_pose,
+    sensed,
+    sensor_draws,
     synthesize_gesture,
+    timing,
 )
 from glu.gestures.trajectories import RepairPolicy, repaired_many
 from glu.gestures.views import track
@@ -73,18 +70,6 @@ class GestureBatch(NamedTuple):
     features: list[np.ndarray]
     duration: np.ndarray
     size: np.ndarray
-
-
-@lru_cache(maxsize=512)
-def _timing(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The minimum-jerk time course of ``n`` frames (as ``_min_jerk_path``) and ``arange(n) / FRAME_RATE``."""
-    s = np.linspace(0.0, 1.0, n)
-    u = 0.15 * s + 0.85 * s**3 * (10 - 15 * s + 6 * s**2)
-    for a in (s, u):
-        a.flags.writeable = False
-    t = np.arange(n) / FRAME_RATE
-    t.flags.writeable = False
-    return u, t
 
 
 def gesture_features(
@@ -123,31 +108,23 @@ def gesture_features(
         )
     for a in set(actions):
         check_action(a, view)
-    rest0 = rest_pose(view)
-    episodes = [_draws(a, rng, rest0, view, **sensor) for a, rng in zip(actions, rngs, strict=True)]
+    episodes = [_draws(a, rng, view, **sensor) for a, rng in zip(actions, rngs, strict=True)]
     draws = [e[0] for e in episodes]
     moves = _hand_paths([e[1] for e in episodes], [e[2] for e in episodes], [w[5] for w in draws])
     # the sway of every frame of every episode, in one call
     phase = np.concatenate([np.full(w[5] + w[6] + w[7], w[3]) for w in draws])
     amps = np.concatenate([np.full(w[5] + w[6] + w[7], w[4]) for w in draws])
-    tt = np.concatenate([_timing(w[5] + w[6] + w[7])[1] for w in draws])
+    tt = np.concatenate([timing(w[5] + w[6] + w[7])[1] for w in draws])
     sway_all = amps * np.sin(2 * np.pi * 0.25 * tt + phase)
     xyzs, ts, duration, sizes = [], [], np.empty(len(draws)), np.empty(len(draws))
     at = 0
     for i, (w, move) in enumerate(zip(draws, moves, strict=True)):
-        size, origin, yaw, _, _, m, pre, post, eps, spikes, d, jit, keep = w
+        size, origin, yaw, _, _, m, pre, post, sensor = w
         nf = pre + m + post
         hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
-        t = _timing(nf)[1]
         skel = _skeleton(hand, size, yaw, origin, sway_all[at : at + nf], view)
         at += nf
-        if eps is not None:
-            skel = skel + eps[:, _JOINTS]
-        if d is not None:
-            skel[spikes, 0] += d
-        t = t + jit
-        if keep is not None:
-            skel, t = skel[keep], t[keep]
+        skel, t = sensed(skel, timing(nf)[1], sensor, _JOINTS)
         xyzs.append(_features(skel, view.normalise_body, view.body_frame))
         ts.append(t)
         duration[i], sizes[i] = t[-1] - t[0], size
@@ -157,7 +134,6 @@ def gesture_features(
 def _draws(
     action: str,
     rng: np.random.Generator,
-    rest0: np.ndarray,
     view: View,
     *,
     noise: float,
@@ -166,45 +142,15 @@ def _draws(
     rest_frames: tuple[int, int],
 ) -> tuple[tuple, np.ndarray, np.ndarray]:
     """One episode's random draws, the same in the same order as ``synthesize_gesture``'s (its ``_person``,
-    ``_hand_path`` and ``_sensor``): the drawn values, and the key times and points of its hand path."""
+    ``_hand_path`` and :func:`~glu.gestures.synthetic.sensor_draws`): the drawn values, and the key times
+    and points of its hand path."""
     v = rng.uniform(_LOW, _HIGH)
     size = float(v[0]) if view.size is None else float(view.size)
     yaw = float(np.deg2rad(v[4])) if view.yaw_deg is None else float(np.deg2rad(view.yaw_deg))
-    m = max(int(round(v[7] * FRAME_RATE)), 12)
-    amp = v[8]
-    obj = OBJECT + v[9:12] * np.array([1.0, 0.4, 1.0])
-    rest = rest0 + rng.normal(0, 0.015, size=3)
-    if view.posture == "seated":
-        obj = obj + SEATED_OBJECT_SHIFT
-    spec = KEYS[action]
-    jitter = rng.uniform(-0.02, 0.02, size=len(spec) - 2)
-    keys = []
-    for j, (tf, off) in enumerate(spec):
-        if 0 < j < len(spec) - 1:
-            tf = tf + jitter[j - 1]
-        p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
-        keys.append((tf, p * size))
-    if view.variety > 0:
-        keys = person_style(keys, spec, rng, size, view.variety)
-    keys.sort(key=lambda k: k[0])
+    m, times, points = key_poses(action, rng, size, view, v[7], v[8], v[9:12])
     pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
-    nf = pre + m + post
-    eps = rng.normal(0.0, noise, size=(nf, len(OPENNI_JOINTS), 3)) if noise > 0 else None
-    spikes = rng.random(nf) < spike_rate
-    k = int(spikes.sum())
-    d = None
-    if k:
-        d = rng.normal(size=(k, 3))
-        d *= (rng.uniform(0.15, 0.4, size=k) / np.linalg.norm(d, axis=1))[:, None]
-    jit = rng.normal(0.0, 0.002, size=nf)
-    keep = None
-    if nf > 30 and rng.random() < dropout_rate:
-        length = int(rng.integers(3, 21))
-        start = int(rng.integers(5, nf - length - 5))
-        keep = np.ones(nf, dtype=bool)
-        keep[start : start + length] = False
-    drawn = (size, v[1:4].copy(), yaw, v[5], v[6], m, pre, post, eps, spikes, d, jit, keep)
-    return drawn, np.array([k[0] for k in keys]), np.stack([k[1] for k in keys])
+    sensor = sensor_draws(rng, pre + m + post, noise, spike_rate, dropout_rate)
+    return (size, v[1:4].copy(), yaw, v[5], v[6], m, pre, post, sensor), times, points
 
 
 _JOINTS = np.array([_IH, _IT, _ILS, _IRS, _IN])
@@ -220,7 +166,7 @@ def _hand_paths(times: list[np.ndarray], points: list[np.ndarray], n: list[int])
     for idx in by_k.values():
         x = np.stack([times[i] for i in idx])
         y = np.stack([points[i] for i in idx])
-        u = [_timing(n[i])[0] for i in idx]
+        u = [timing(n[i])[0] for i in idx]
         for i, path in zip(idx, pchip_many(x, y, u), strict=True):
             out[i] = path
     return out
