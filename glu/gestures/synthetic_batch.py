@@ -30,7 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle_frames, to_body_frame
+from glu.gestures.features import skeleton_features
 from glu.gestures.synthetic import (
     BODY,
     DEFAULT_VIEW,
@@ -48,8 +48,9 @@ from glu.gestures.synthetic import (
 from glu.gestures.trajectories import RepairPolicy, repaired_many
 from glu.gestures.views import track
 
-_IH, _IT = OPENNI_JOINTS.index("right_hand"), OPENNI_JOINTS.index("torso")
-_ILS, _IRS, _IN = (OPENNI_JOINTS.index(j) for j in ("left_shoulder", "right_shoulder", "neck"))
+_JOINT_NAMES = ("right_hand", "torso", "left_shoulder", "right_shoulder", "neck")
+"""The joints the features use, in the order of :func:`_skeleton`'s columns."""
+_JOINTS = np.array([OPENNI_JOINTS.index(j) for j in _JOINT_NAMES])
 _BODY_ARRAY = np.array([BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS])
 # _person's draws (size, origin x y z, yaw in degrees, sway phase, sway amplitude) then _hand_path's first
 # ones (duration, amplitude, object offset x y z): all uniform, drawn in this order by one call.
@@ -125,7 +126,8 @@ def gesture_features(
         skel = _skeleton(hand, size, yaw, origin, sway_all[at : at + nf], view)
         at += nf
         skel, t = sensed(skel, timing(nf)[1], sensor, _JOINTS)
-        xyzs.append(_features(skel, view.normalise_body, view.body_frame))
+        frame = "body" if view.body_frame else "torso"
+        xyzs.append(skeleton_features(skel, _JOINT_NAMES, measure=view.normalise_body, frame=frame)[0])
         ts.append(t)
         duration[i], sizes[i] = t[-1] - t[0], size
     return GestureBatch(repaired_many(xyzs, ts, policy), duration, sizes)
@@ -151,10 +153,6 @@ def _draws(
     pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
     sensor = sensor_draws(rng, pre + m + post, noise, spike_rate, dropout_rate)
     return (size, v[1:4].copy(), yaw, v[5], v[6], m, pre, post, sensor), times, points
-
-
-_JOINTS = np.array([_IH, _IT, _ILS, _IRS, _IN])
-"""The joints the features use (hand, torso, shoulders, neck), in the order of :func:`_skeleton`'s columns."""
 
 
 def _hand_paths(times: list[np.ndarray], points: list[np.ndarray], n: list[int]) -> list[np.ndarray]:
@@ -186,7 +184,7 @@ def _skeleton(
     body = _BODY_ARRAY * size
     rel = np.empty((nf, len(OPENNI_JOINTS), 3))
     rel[:] = body
-    rel[:, _IH] = hand
+    rel[:, _JOINTS[0]] = hand
     c, si = np.cos(yaw), np.sin(yaw)
     rot = np.array([[c, 0.0, si], [0.0, 1.0, 0.0], [-si, 0.0, c]])
     if view.tracker != "ideal":  # the tracker needs every joint (glu.gestures.views.track)
@@ -196,23 +194,3 @@ def _skeleton(
     world = (rel @ rot.T)[:, _JOINTS] + origin
     world[:, :, 0] += sway[:, None]
     return world
-
-
-def _features(skel: np.ndarray, measure: bool, body_frame: bool = False) -> np.ndarray:
-    """:func:`~glu.gestures.features.skeleton_features` of the joints of :func:`_skeleton`, shape (n, 3)."""
-    if measure:
-        mid = middle_frames(len(skel))
-        h = _mean_distance(skel[mid, 2], skel[mid, 3], HORIZONTAL_FALLBACK)
-        v = _mean_distance(skel[mid, 4], skel[mid, 1], VERTICAL_FALLBACK)
-    else:
-        h, v = HORIZONTAL_FALLBACK, VERTICAL_FALLBACK
-    rel = skel[:, 0] - skel[:, 1]
-    if body_frame:
-        rel = to_body_frame(rel, skel[:, 2], skel[:, 3])
-    return rel / np.array([h, v, h])
-
-
-def _mean_distance(a: np.ndarray, b: np.ndarray, fallback: float) -> float:
-    d = np.linalg.norm(a - b, axis=1)
-    d = d[np.isfinite(d) & (d > 0)]
-    return float(d.mean()) if len(d) else fallback
