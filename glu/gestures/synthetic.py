@@ -215,10 +215,6 @@ def _person(rng: np.random.Generator, view: View = DEFAULT_VIEW) -> _Person:
     return person
 
 
-def rest_pose(view: View) -> np.ndarray:
-    return _SEATED_REST if view.posture == "seated" else _REST
-
-
 def _hand_path(action: str, rng: np.random.Generator, size: float, view: View = DEFAULT_VIEW) -> np.ndarray:
     """Right-hand positions relative to the torso, shape (n_frames, 3), for one repetition."""
     duration, amp = rng.uniform(2.5, 5.0), rng.uniform(0.85, 1.15)
@@ -238,10 +234,10 @@ def key_poses(
     """A repetition's number of frames and its key poses, times (K,) and points (K, 3) relative to the torso,
     from its drawn ``duration`` (s), amplitude and object ``offset``; the rest of its draws from ``rng``."""
     n = max(int(round(duration * FRAME_RATE)), 12)
-    obj = OBJECT + offset * np.array([1.0, 0.4, 1.0])
-    rest = rest_pose(view) + rng.normal(0, 0.015, size=3)
+    obj, rest = OBJECT + offset * np.array([1.0, 0.4, 1.0]), _REST
     if view.posture == "seated":
-        obj = obj + SEATED_OBJECT_SHIFT
+        obj, rest = obj + SEATED_OBJECT_SHIFT, _SEATED_REST
+    rest = rest + rng.normal(0, 0.015, size=3)
     spec = KEYS[action]
     jitter = rng.uniform(-0.02, 0.02, size=len(spec) - 2)
     keys = []

@@ -115,21 +115,6 @@ class Trajectory:
             value.flags.writeable = False
             object.__setattr__(self, name, value)
 
-    @classmethod
-    def from_array(
-        cls, xyz: np.ndarray, *, frame_rate: float = 30.0, t0: float = 0.0, source: str = "<memory>"
-    ) -> Trajectory:
-        """A trajectory from coordinates alone, shape (n_frames, 3), at a constant ``frame_rate`` (Hz)."""
-        xyz = np.asarray(xyz, dtype=float)
-        n = len(xyz)
-        return cls(
-            xyz=xyz,
-            t=t0 + np.arange(n) / frame_rate,
-            frame=np.arange(1, n + 1),
-            observed=np.ones(n, dtype=bool),
-            source=source,
-        )
-
     def __len__(self) -> int:
         return len(self.t)
 
@@ -205,16 +190,6 @@ class Repaired(NamedTuple):
     events: tuple[TrackingEvent, ...]
 
 
-def running_median(xyz: np.ndarray, window: int) -> np.ndarray:
-    """Per-axis running median over ``window`` frames (odd), edges padded by reflection; shape as ``xyz``."""
-    from scipy.ndimage import median_filter
-
-    xyz = np.asarray(xyz, dtype=float)
-    if len(xyz) == 0:
-        return xyz.copy()
-    return median_filter(xyz, size=(window, 1), mode="nearest")
-
-
 def spike_deviation(xyz: np.ndarray, window: int = 7) -> np.ndarray:
     """Distance of each frame to the running median of ``window`` frames; ``> threshold`` marks a spike.
 
@@ -226,10 +201,13 @@ def spike_deviation(xyz: np.ndarray, window: int = 7) -> np.ndarray:
     -------
     array, shape (n_frames,) (zeros when there are fewer frames than ``window``)
     """
+    from scipy.ndimage import median_filter
+
     xyz = np.asarray(xyz, dtype=float)
     if len(xyz) < window:
         return np.zeros(len(xyz))
-    return np.linalg.norm(xyz - running_median(xyz, window), axis=1)
+    # the per-axis running median, edges padded by repeating the end frames
+    return np.linalg.norm(xyz - median_filter(xyz, size=(window, 1), mode="nearest"), axis=1)
 
 
 def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:
