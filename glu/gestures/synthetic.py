@@ -57,7 +57,7 @@ with rests in between, with the true segments, to test automatic segmentation.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import NamedTuple
 
@@ -189,7 +189,9 @@ def timing(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @dataclass(frozen=True)
-class _Person:
+class Person:
+    """Who performs a synthetic gesture, and where (drawn by :func:`draw_person`)."""
+
     size: float
     origin: np.ndarray  # torso position in the sensor frame
     yaw: float  # radians
@@ -197,44 +199,42 @@ class _Person:
     sway_amp: float
 
 
-def _person(rng: np.random.Generator, view: View = DEFAULT_VIEW) -> _Person:
-    if view.performer == "robot":  # its own body frame: no camera, no sway, no random turn
-        yaw = np.deg2rad(view.yaw_deg or 0.0)
-        return _Person(float(view.size or 1.0), np.zeros(3), float(yaw), 0.0, 0.0)
-    person = _Person(
-        size=float(rng.uniform(0.85, 1.15)),
-        origin=np.array([rng.uniform(-0.4, 0.4), rng.uniform(-0.15, 0.15), rng.uniform(-2.6, -1.6)]),
-        yaw=float(np.deg2rad(rng.uniform(-10, 10))),
-        sway_phase=float(rng.uniform(0, 2 * np.pi)),
-        sway_amp=float(rng.uniform(0.0, 0.02)),
-    )  # drawn in full whatever the view, so a view changes nothing else of the sequence
-    if view.size is not None:
-        person = replace(person, size=float(view.size))
-    if view.yaw_deg is not None:
-        person = replace(person, yaw=float(np.deg2rad(view.yaw_deg)))
-    return person
+_PERSON_LOW = np.array([0.85, -0.4, -0.15, -2.6, -10.0, 0.0, 0.0])
+_PERSON_HIGH = np.array([1.15, 0.4, 0.15, -1.6, 10.0, 2 * np.pi, 0.02])
+"""The ranges of a person's uniform draws: size, origin x y z (m), yaw (degrees), sway phase and amplitude."""
+
+
+def draw_person(rng: np.random.Generator, view: View = DEFAULT_VIEW) -> Person:
+    """A person drawn from ``rng`` (in full whatever the view, so a view changes nothing else of the
+    sequence), with the view's size and turn if it fixes them; the robot: its own body frame (no camera, no
+    sway, no random turn, no draw)."""
+    if view.performer == "robot":
+        return Person(float(view.size or 1.0), np.zeros(3), float(np.deg2rad(view.yaw_deg or 0.0)), 0.0, 0.0)
+    v = rng.uniform(_PERSON_LOW, _PERSON_HIGH)
+    size = float(v[0]) if view.size is None else float(view.size)
+    yaw = float(np.deg2rad(v[4])) if view.yaw_deg is None else float(np.deg2rad(view.yaw_deg))
+    return Person(size, v[1:4].copy(), yaw, float(v[5]), float(v[6]))
 
 
 def _hand_path(action: str, rng: np.random.Generator, size: float, view: View = DEFAULT_VIEW) -> np.ndarray:
     """Right-hand positions relative to the torso, shape (n_frames, 3), for one repetition."""
-    duration, amp = rng.uniform(2.5, 5.0), rng.uniform(0.85, 1.15)
-    n, times, points = key_poses(action, rng, size, view, duration, amp, rng.uniform(-0.05, 0.05, size=3))
+    n, times, points = key_poses(action, rng, size, view)
     return pchip(times, points, timing(n)[0])  # SciPy's PchipInterpolator, bit for bit, without its set-up
 
 
+_HAND_LOW = np.array([2.5, 0.85, -0.05, -0.05, -0.05])
+_HAND_HIGH = np.array([5.0, 1.15, 0.05, 0.05, 0.05])
+"""The ranges of a repetition's first uniform draws: duration (s), amplitude, object offset x y z (m)."""
+
+
 def key_poses(
-    action: str,
-    rng: np.random.Generator,
-    size: float,
-    view: View,
-    duration: float,
-    amp: float,
-    offset: np.ndarray,
+    action: str, rng: np.random.Generator, size: float, view: View
 ) -> tuple[int, np.ndarray, np.ndarray]:
-    """A repetition's number of frames and its key poses, times (K,) and points (K, 3) relative to the torso,
-    from its drawn ``duration`` (s), amplitude and object ``offset``; the rest of its draws from ``rng``."""
+    """A repetition drawn from ``rng``: its number of frames and its key poses, times (K,) and points (K, 3)
+    relative to the torso."""
+    duration, amp, *offset = rng.uniform(_HAND_LOW, _HAND_HIGH)
     n = max(int(round(duration * FRAME_RATE)), 12)
-    obj, rest = OBJECT + offset * np.array([1.0, 0.4, 1.0]), _REST
+    obj, rest = OBJECT + np.array(offset) * np.array([1.0, 0.4, 1.0]), _REST
     if view.posture == "seated":
         obj, rest = obj + SEATED_OBJECT_SHIFT, _SEATED_REST
     rest = rest + rng.normal(0, 0.015, size=3)
@@ -271,7 +271,7 @@ def person_style(
 
 
 def _skeletons(
-    hand: np.ndarray, person: _Person, t: np.ndarray, rng: np.random.Generator, view: View = DEFAULT_VIEW
+    hand: np.ndarray, person: Person, t: np.ndarray, rng: np.random.Generator, view: View = DEFAULT_VIEW
 ) -> np.ndarray:
     """Full skeletons in the sensor frame, shape (n_frames, 15, 3), for hand positions relative to the
     torso."""
@@ -359,7 +359,7 @@ def synthesize_gesture(
     docstring)."""
     view = view or DEFAULT_VIEW
     check_action(action, view)
-    person = _person(rng, view)
+    person = draw_person(rng, view)
     if view.performer == "robot":
         move = robot_hand_path(action, rng, person.size)
     else:
@@ -465,7 +465,7 @@ def synthesize_recording(
         raise DataError("a recording needs at least one repetition")
     _check(n_repetitions, noise, spike_rate, 0.0)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 7, GESTURES.index(action)]))
-    person = _person(rng)
+    person = draw_person(rng)
     parts, segments, n = [], [], 0
     for k in range(n_repetitions + 1):
         if placements is None:

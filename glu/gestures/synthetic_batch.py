@@ -38,6 +38,7 @@ from glu.gestures.synthetic import (
     SYNTHETIC_POLICY,
     View,
     check_action,
+    draw_person,
     key_poses,
     pchip_many,
     sensed,
@@ -52,10 +53,6 @@ _JOINT_NAMES = ("right_hand", "torso", "left_shoulder", "right_shoulder", "neck"
 """The joints the features use, in the order of :func:`_skeleton`'s columns."""
 _JOINTS = np.array([OPENNI_JOINTS.index(j) for j in _JOINT_NAMES])
 _BODY_ARRAY = np.array([BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS])
-# _person's draws (size, origin x y z, yaw in degrees, sway phase, sway amplitude) then _hand_path's first
-# ones (duration, amplitude, object offset x y z): all uniform, drawn in this order by one call.
-_LOW = np.array([0.85, -0.4, -0.15, -2.6, -10, 0, 0.0, 2.5, 0.85, -0.05, -0.05, -0.05])
-_HIGH = np.array([1.15, 0.4, 0.15, -1.6, 10, 2 * np.pi, 0.02, 5.0, 1.15, 0.05, 0.05, 0.05])
 
 
 class GestureBatch(NamedTuple):
@@ -111,25 +108,25 @@ def gesture_features(
         check_action(a, view)
     episodes = [_draws(a, rng, view, **sensor) for a, rng in zip(actions, rngs, strict=True)]
     draws = [e[0] for e in episodes]
-    moves = _hand_paths([e[1] for e in episodes], [e[2] for e in episodes], [w[5] for w in draws])
+    moves = _hand_paths([e[1] for e in episodes], [e[2] for e in episodes], [w[1] for w in draws])
     # the sway of every frame of every episode, in one call
-    phase = np.concatenate([np.full(w[5] + w[6] + w[7], w[3]) for w in draws])
-    amps = np.concatenate([np.full(w[5] + w[6] + w[7], w[4]) for w in draws])
-    tt = np.concatenate([timing(w[5] + w[6] + w[7])[1] for w in draws])
+    phase = np.concatenate([np.full(w[1] + w[2] + w[3], w[0].sway_phase) for w in draws])
+    amps = np.concatenate([np.full(w[1] + w[2] + w[3], w[0].sway_amp) for w in draws])
+    tt = np.concatenate([timing(w[1] + w[2] + w[3])[1] for w in draws])
     sway_all = amps * np.sin(2 * np.pi * 0.25 * tt + phase)
     xyzs, ts, duration, sizes = [], [], np.empty(len(draws)), np.empty(len(draws))
     at = 0
     for i, (w, move) in enumerate(zip(draws, moves, strict=True)):
-        size, origin, yaw, _, _, m, pre, post, sensor = w
+        person, m, pre, post, sensor = w
         nf = pre + m + post
         hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
-        skel = _skeleton(hand, size, yaw, origin, sway_all[at : at + nf], view)
+        skel = _skeleton(hand, person.size, person.yaw, person.origin, sway_all[at : at + nf], view)
         at += nf
         skel, t = sensed(skel, timing(nf)[1], sensor, _JOINTS)
         frame = "body" if view.body_frame else "torso"
         xyzs.append(skeleton_features(skel, _JOINT_NAMES, measure=view.normalise_body, frame=frame)[0])
         ts.append(t)
-        duration[i], sizes[i] = t[-1] - t[0], size
+        duration[i], sizes[i] = t[-1] - t[0], person.size
     return GestureBatch(repaired_many(xyzs, ts, policy), duration, sizes)
 
 
@@ -143,16 +140,14 @@ def _draws(
     dropout_rate: float,
     rest_frames: tuple[int, int],
 ) -> tuple[tuple, np.ndarray, np.ndarray]:
-    """One episode's random draws, the same in the same order as ``synthesize_gesture``'s (its ``_person``,
+    """One episode's random draws, the same in the same order as ``synthesize_gesture``'s (its person,
     ``_hand_path`` and :func:`~glu.gestures.synthetic.sensor_draws`): the drawn values, and the key times
     and points of its hand path."""
-    v = rng.uniform(_LOW, _HIGH)
-    size = float(v[0]) if view.size is None else float(view.size)
-    yaw = float(np.deg2rad(v[4])) if view.yaw_deg is None else float(np.deg2rad(view.yaw_deg))
-    m, times, points = key_poses(action, rng, size, view, v[7], v[8], v[9:12])
+    person = draw_person(rng, view)
+    m, times, points = key_poses(action, rng, person.size, view)
     pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
     sensor = sensor_draws(rng, pre + m + post, noise, spike_rate, dropout_rate)
-    return (size, v[1:4].copy(), yaw, v[5], v[6], m, pre, post, sensor), times, points
+    return (person, m, pre, post, sensor), times, points
 
 
 def _hand_paths(times: list[np.ndarray], points: list[np.ndarray], n: list[int]) -> list[np.ndarray]:
