@@ -147,16 +147,15 @@ def synthetic_corpus(
     seed: int = 0,
     *,
     actions: tuple[str, ...] = ACTIONS,
-    noise: float = 0.01,
-    spike_rate: float = 0.005,
-    dropout_rate: float = 0.2,
     view: View | None = None,
+    **sensor: float,
 ) -> Corpus:
     """``n_per_action`` synthetic gestures per action, as repaired feature sequences
     (:mod:`glu.gestures.synthetic`).
 
     ``view``: how they are seen (:class:`~glu.gestures.synthetic.View`; default the generator's: a person
-    facing the camera), or the robot's own movements (``View(performer="robot")``).
+    facing the camera), or the robot's own movements (``View(performer="robot")``); ``sensor``: ``noise``,
+    ``spike_rate``, ``dropout_rate``, as :func:`~glu.gestures.synthetic.synthesize_gestures` (its defaults).
     ``n_per_action`` is at most :data:`MAX_SYNTHETIC_PER_ACTION` (DataError beyond).
     """
     if n_per_action > MAX_SYNTHETIC_PER_ACTION:
@@ -165,15 +164,7 @@ def synthetic_corpus(
         raise DataError(
             f"{n_per_action:,} synthetic gestures per action: at most {MAX_SYNTHETIC_PER_ACTION:,} are made"
         )
-    gestures = synthesize_gestures(
-        n_per_action * len(actions),
-        seed,
-        actions=actions,
-        noise=noise,
-        spike_rate=spike_rate,
-        dropout_rate=dropout_rate,
-        view=view,
-    )
+    gestures = synthesize_gestures(n_per_action * len(actions), seed, actions=actions, view=view, **sensor)
     seqs = [
         LabelledSequence(g.action, g.features(), f"synthetic-{i}", 1, len(g.t))
         for i, g in enumerate(gestures)

@@ -103,9 +103,9 @@ def normalisation_factors(
     skeleton: np.ndarray,
     joints: tuple[str, ...] = OPENNI_JOINTS,
     fallback: tuple[float, float] = (HORIZONTAL_FALLBACK, VERTICAL_FALLBACK),
-    middle: tuple[float, float] = MIDDLE,
 ) -> Normalisation:
-    """Mean shoulder distance and mean neck–torso distance over the middle frames of a skeleton.
+    """Mean shoulder distance and mean neck–torso distance over the middle frames of a skeleton
+    (:data:`MIDDLE`).
 
     Parameters
     ----------
@@ -115,7 +115,7 @@ def normalisation_factors(
         factor whose joints are missing in every middle frame
     """
     skeleton = _check_skeleton(skeleton, joints)
-    mid = middle_frames(len(skeleton), middle)
+    mid = middle_frames(len(skeleton))
 
     def mean_distance(a: str, b: str) -> float:
         d = np.linalg.norm(_joint(skeleton, joints, a)[mid] - _joint(skeleton, joints, b)[mid], axis=1)
@@ -163,9 +163,6 @@ def to_body_frame(rel: np.ndarray, left_shoulder: np.ndarray, right_shoulder: np
 def skeleton_features(
     skeleton: np.ndarray,
     joints: tuple[str, ...] = OPENNI_JOINTS,
-    fallback: tuple[float, float] = (HORIZONTAL_FALLBACK, VERTICAL_FALLBACK),
-    middle: tuple[float, float] = MIDDLE,
-    hand: str = "right_hand",
     measure: bool = True,
     frame: str = "torso",
 ) -> tuple[np.ndarray, Normalisation]:
@@ -175,10 +172,10 @@ def skeleton_features(
     ----------
     skeleton : array, shape (n_frames, n_joints, 3), in the person's frame (x right, y up, z back);
         frames where the hand or the torso is missing (NaN) give NaN features
-    joints, fallback, middle : see :func:`normalisation_factors`
-    hand : the joint that gestures
-    measure : divide by the body's measured factors (the 2013 system); False: by the ``fallback``
-        constants whatever the body, as the 2017 logs were computed (body size then stays in the features)
+    joints : the joint names along axis 1
+    measure : divide by the body's measured factors (:func:`normalisation_factors`, the 2013 system);
+        False: by the fallback constants whatever the body, as the 2017 logs were computed (body size then
+        stays in the features)
     frame : ``"torso"`` (the skeleton's frame, the originals') or ``"body"`` (turned into the shoulder
         line's frame, :func:`to_body_frame`)
 
@@ -190,12 +187,12 @@ def skeleton_features(
     """
     skeleton = _check_skeleton(skeleton, joints)
     if measure:
-        norm = normalisation_factors(skeleton, joints, fallback, middle)
+        norm = normalisation_factors(skeleton, joints)
     else:
-        norm = Normalisation(fallback[0], fallback[1], True, True)
+        norm = Normalisation(HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, True, True)
     if frame not in FRAMES:
         raise DataError(f"unknown feature frame {frame!r}; allowed: {', '.join(FRAMES)}")
-    rel = _joint(skeleton, joints, hand) - _joint(skeleton, joints, "torso")
+    rel = _joint(skeleton, joints, "right_hand") - _joint(skeleton, joints, "torso")
     if frame == "body":
         rel = to_body_frame(
             rel, _joint(skeleton, joints, "left_shoulder"), _joint(skeleton, joints, "right_shoulder")

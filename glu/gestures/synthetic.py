@@ -57,7 +57,9 @@ with rests in between, with the true segments, to test automatic segmentation.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
@@ -68,6 +70,7 @@ from glu.gestures.trajectories import RepairPolicy, Trajectory, repair
 from glu.gestures.views import DEFAULT_VIEW, View, track
 from glu.schema import ACTIONS
 
+_IH = OPENNI_JOINTS.index("right_hand")
 GESTURES: tuple[str, ...] = (*ACTIONS, "push")
 """The actions the generator knows (the BN's Action values, plus push)."""
 
@@ -174,16 +177,21 @@ class SyntheticGesture:
         return np.concatenate([p.xyz for p in pieces])
 
 
-def _min_jerk_path(keys: list[tuple[float, np.ndarray]], n: int) -> np.ndarray:
-    times = np.array([k[0] for k in keys])
-    pts = np.stack([k[1] for k in keys])
+@lru_cache(maxsize=512)
+def timing(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The time course of a movement of ``n`` frames through its key poses (mostly minimum-jerk: slow start
+    and end), and the frames' times ``arange(n) / FRAME_RATE`` (both read-only, cached)."""
     s = np.linspace(0.0, 1.0, n)
-    u = 0.15 * s + 0.85 * s**3 * (10 - 15 * s + 6 * s**2)  # mostly minimum-jerk timing: slow start and end
-    return pchip(times, pts, u)  # SciPy's PchipInterpolator, bit for bit, without its set-up cost
+    u = 0.15 * s + 0.85 * s**3 * (10 - 15 * s + 6 * s**2)
+    t = np.arange(n) / FRAME_RATE
+    u.flags.writeable = t.flags.writeable = False
+    return u, t
 
 
 @dataclass(frozen=True)
-class _Person:
+class Person:
+    """Who performs a synthetic gesture, and where (drawn by :func:`draw_person`)."""
+
     size: float
     origin: np.ndarray  # torso position in the sensor frame
     yaw: float  # radians
@@ -191,48 +199,57 @@ class _Person:
     sway_amp: float
 
 
-def _person(rng: np.random.Generator, view: View = DEFAULT_VIEW) -> _Person:
-    if view.performer == "robot":  # its own body frame: no camera, no sway, no random turn
-        yaw = np.deg2rad(view.yaw_deg or 0.0)
-        return _Person(float(view.size or 1.0), np.zeros(3), float(yaw), 0.0, 0.0)
-    person = _Person(
-        size=float(rng.uniform(0.85, 1.15)),
-        origin=np.array([rng.uniform(-0.4, 0.4), rng.uniform(-0.15, 0.15), rng.uniform(-2.6, -1.6)]),
-        yaw=float(np.deg2rad(rng.uniform(-10, 10))),
-        sway_phase=float(rng.uniform(0, 2 * np.pi)),
-        sway_amp=float(rng.uniform(0.0, 0.02)),
-    )  # drawn in full whatever the view, so a view changes nothing else of the sequence
-    if view.size is not None:
-        person = replace(person, size=float(view.size))
-    if view.yaw_deg is not None:
-        person = replace(person, yaw=float(np.deg2rad(view.yaw_deg)))
-    return person
+_PERSON_LOW = np.array([0.85, -0.4, -0.15, -2.6, -10.0, 0.0, 0.0])
+_PERSON_HIGH = np.array([1.15, 0.4, 0.15, -1.6, 10.0, 2 * np.pi, 0.02])
+"""The ranges of a person's uniform draws: size, origin x y z (m), yaw (degrees), sway phase and amplitude."""
 
 
-def rest_pose(view: View) -> np.ndarray:
-    return _SEATED_REST if view.posture == "seated" else _REST
+def draw_person(rng: np.random.Generator, view: View = DEFAULT_VIEW) -> Person:
+    """A person drawn from ``rng`` (in full whatever the view, so a view changes nothing else of the
+    sequence), with the view's size and turn if it fixes them; the robot: its own body frame (no camera, no
+    sway, no random turn, no draw)."""
+    if view.performer == "robot":
+        return Person(float(view.size or 1.0), np.zeros(3), float(np.deg2rad(view.yaw_deg or 0.0)), 0.0, 0.0)
+    v = rng.uniform(_PERSON_LOW, _PERSON_HIGH)
+    size = float(v[0]) if view.size is None else float(view.size)
+    yaw = float(np.deg2rad(v[4])) if view.yaw_deg is None else float(np.deg2rad(view.yaw_deg))
+    return Person(size, v[1:4].copy(), yaw, float(v[5]), float(v[6]))
 
 
 def _hand_path(action: str, rng: np.random.Generator, size: float, view: View = DEFAULT_VIEW) -> np.ndarray:
     """Right-hand positions relative to the torso, shape (n_frames, 3), for one repetition."""
-    duration = rng.uniform(2.5, 5.0)
+    n, times, points = key_poses(action, rng, size, view)
+    return pchip(times, points, timing(n)[0])  # SciPy's PchipInterpolator, bit for bit, without its set-up
+
+
+_HAND_LOW = np.array([2.5, 0.85, -0.05, -0.05, -0.05])
+_HAND_HIGH = np.array([5.0, 1.15, 0.05, 0.05, 0.05])
+"""The ranges of a repetition's first uniform draws: duration (s), amplitude, object offset x y z (m)."""
+
+
+def key_poses(
+    action: str, rng: np.random.Generator, size: float, view: View
+) -> tuple[int, np.ndarray, np.ndarray]:
+    """A repetition drawn from ``rng``: its number of frames and its key poses, times (K,) and points (K, 3)
+    relative to the torso."""
+    duration, amp, *offset = rng.uniform(_HAND_LOW, _HAND_HIGH)
     n = max(int(round(duration * FRAME_RATE)), 12)
-    amp = rng.uniform(0.85, 1.15)
-    obj = OBJECT + rng.uniform(-0.05, 0.05, size=3) * np.array([1.0, 0.4, 1.0])
-    rest = rest_pose(view) + rng.normal(0, 0.015, size=3)
+    obj, rest = OBJECT + np.array(offset) * np.array([1.0, 0.4, 1.0]), _REST
     if view.posture == "seated":
-        obj = obj + SEATED_OBJECT_SHIFT
-    keys = []
+        obj, rest = obj + SEATED_OBJECT_SHIFT, _SEATED_REST
+    rest = rest + rng.normal(0, 0.015, size=3)
     spec = KEYS[action]
+    jitter = rng.uniform(-0.02, 0.02, size=len(spec) - 2)
+    keys = []
     for j, (tf, off) in enumerate(spec):
         if 0 < j < len(spec) - 1:
-            tf = tf + rng.uniform(-0.02, 0.02)
+            tf = tf + jitter[j - 1]
         p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
         keys.append((tf, p * size))
     if view.variety > 0:
         keys = person_style(keys, spec, rng, size, view.variety)
     keys.sort(key=lambda k: k[0])
-    return _min_jerk_path(keys, n)
+    return n, np.array([k[0] for k in keys]), np.stack([k[1] for k in keys])
 
 
 def person_style(
@@ -254,7 +271,7 @@ def person_style(
 
 
 def _skeletons(
-    hand: np.ndarray, person: _Person, t: np.ndarray, rng: np.random.Generator, view: View = DEFAULT_VIEW
+    hand: np.ndarray, person: Person, t: np.ndarray, rng: np.random.Generator, view: View = DEFAULT_VIEW
 ) -> np.ndarray:
     """Full skeletons in the sensor frame, shape (n_frames, 15, 3), for hand positions relative to the
     torso."""
@@ -278,30 +295,47 @@ def _skeletons(
     return world
 
 
-def _sensor(
-    skel: np.ndarray,
-    t: np.ndarray,
-    rng: np.random.Generator,
-    noise: float,
-    spike_rate: float,
-    dropout_rate: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    n = len(skel)
-    skel = skel + rng.normal(0.0, noise, size=skel.shape) if noise > 0 else skel.copy()
-    ih = OPENNI_JOINTS.index("right_hand")
+class SensorDraws(NamedTuple):
+    """The sensor's random draws for one sequence of frames (:func:`sensor_draws`)."""
+
+    noise: np.ndarray | None  # (n, 15, 3), or None without noise
+    spikes: np.ndarray  # bool (n,): frames whose hand joint is displaced …
+    spike: np.ndarray | None  # … by these (n_spikes, 3), or None without a spike
+    jitter: np.ndarray  # (n,) added to the timestamps
+    keep: np.ndarray | None  # bool (n,): the frames left after a dropout, or None without one
+
+
+def sensor_draws(
+    rng: np.random.Generator, n: int, noise: float, spike_rate: float, dropout_rate: float
+) -> SensorDraws:
+    """What the sensor does to ``n`` frames (see the module docstring), drawn from ``rng``."""
+    eps = rng.normal(0.0, noise, size=(n, len(OPENNI_JOINTS), 3)) if noise > 0 else None
     spikes = rng.random(n) < spike_rate
     k = int(spikes.sum())
+    d = None
     if k:
         d = rng.normal(size=(k, 3))
         d *= (rng.uniform(0.15, 0.4, size=k) / np.linalg.norm(d, axis=1))[:, None]
-        skel[spikes, ih] += d
-    t = t + rng.normal(0.0, 0.002, size=n)
-    keep = np.ones(n, dtype=bool)
+    jitter = rng.normal(0.0, 0.002, size=n)
+    keep = None
     if n > 30 and rng.random() < dropout_rate:
         length = int(rng.integers(3, 21))
         start = int(rng.integers(5, n - length - 5))
+        keep = np.ones(n, dtype=bool)
         keep[start : start + length] = False
-    return skel[keep], t[keep]
+    return SensorDraws(eps, spikes, d, jitter, keep)
+
+
+def sensed(
+    skel: np.ndarray, t: np.ndarray, draws: SensorDraws, joints: np.ndarray | slice = slice(None)
+) -> tuple[np.ndarray, np.ndarray]:
+    """The skeletons and timestamps the sensor reports: ``draws`` applied to ``skel`` (n, J, 3), whose
+    joints are ``OPENNI_JOINTS[joints]`` (the right hand among them)."""
+    skel = skel + draws.noise[:, joints] if draws.noise is not None else skel.copy()
+    if draws.spike is not None:
+        skel[draws.spikes, np.arange(len(OPENNI_JOINTS))[joints].tolist().index(_IH)] += draws.spike
+    t = t + draws.jitter
+    return (skel, t) if draws.keep is None else (skel[draws.keep], t[draws.keep])
 
 
 def _check(n: int, noise: float, spike_rate: float, dropout_rate: float) -> None:
@@ -325,17 +359,17 @@ def synthesize_gesture(
     docstring)."""
     view = view or DEFAULT_VIEW
     check_action(action, view)
-    person = _person(rng, view)
+    person = draw_person(rng, view)
     if view.performer == "robot":
         move = robot_hand_path(action, rng, person.size)
     else:
         move = _hand_path(action, rng, person.size, view)
     pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
     hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
-    t = np.arange(len(hand)) / FRAME_RATE
+    t = timing(len(hand))[1]
     skel = track(_skeletons(hand, person, t, rng, view), person.yaw, view)  # what the tracker reports
     true = ((pre + 1, pre + len(move)),)
-    skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, dropout_rate)
+    skel, t_obs = sensed(skel, t, sensor_draws(rng, len(skel), noise, spike_rate, dropout_rate))
     return SyntheticGesture(action, skel, t_obs, person.size, true, view)
 
 
@@ -431,7 +465,7 @@ def synthesize_recording(
         raise DataError("a recording needs at least one repetition")
     _check(n_repetitions, noise, spike_rate, 0.0)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 7, GESTURES.index(action)]))
-    person = _person(rng)
+    person = draw_person(rng)
     parts, segments, n = [], [], 0
     for k in range(n_repetitions + 1):
         if placements is None:
@@ -456,9 +490,9 @@ def synthesize_recording(
     from scipy.ndimage import uniform_filter1d
 
     hand = uniform_filter1d(hand, 5, axis=0, mode="nearest")
-    t = np.arange(len(hand)) / FRAME_RATE
+    t = timing(len(hand))[1]
     skel = _skeletons(hand, person, t, rng)
-    skel, t_obs = _sensor(skel, t, rng, noise, spike_rate, 0.0)
+    skel, t_obs = sensed(skel, t, sensor_draws(rng, len(skel), noise, spike_rate, 0.0))
     return SyntheticGesture(action, skel, t_obs, person.size, tuple(segments))
 
 
@@ -481,21 +515,8 @@ def _resample(path: np.ndarray, n: int) -> np.ndarray:
 # (tested).
 
 
-def _sign(v: float) -> int:
-    return (v > 0) - (v < 0)
-
-
-def _edge(h0: float, h1: float, m0: float, m1: float) -> float:
-    d = ((2 * h0 + h1) * m0 - h0 * m1) / (h0 + h1)
-    if _sign(d) != _sign(m0):
-        return 0.0
-    if _sign(m0) != _sign(m1) and abs(d) > 3.0 * abs(m0):
-        return 3.0 * m0
-    return d
-
-
 def pchip(x: np.ndarray, y: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """The PCHIP interpolant through ``(x_k, y_k)`` at ``u``.
+    """The PCHIP interpolant through ``(x_k, y_k)`` at ``u``: :func:`pchip_many` of one curve.
 
     Parameters
     ----------
@@ -507,54 +528,19 @@ def pchip(x: np.ndarray, y: np.ndarray, u: np.ndarray) -> np.ndarray:
     -------
     array, shape (N, D)
     """
-    # The derivatives and coefficients of a few key points are computed with Python floats (the same IEEE
-    # operations SciPy applies elementwise, so the same values), the N evaluations with NumPy.
-    xs = [float(v) for v in np.asarray(x, dtype=float)]
-    Y = np.asarray(y, dtype=float)
-    u = np.asarray(u, dtype=float)
-    K, D = Y.shape
-    h = [xs[k + 1] - xs[k] for k in range(K - 1)]
-    c = np.empty((4, K - 1, D))
-    for j in range(D):
-        yj = [float(v) for v in Y[:, j]]
-        m = [(yj[k + 1] - yj[k]) / h[k] for k in range(K - 1)]
-        if K == 2:
-            d = [m[0], m[0]]
-        else:
-            d = [0.0] * K
-            for k in range(1, K - 1):
-                a, b = m[k - 1], m[k]
-                if _sign(b) != _sign(a) or b == 0 or a == 0:
-                    continue
-                w1, w2 = 2 * h[k] + h[k - 1], h[k] + 2 * h[k - 1]
-                d[k] = 1.0 / ((w1 / a + w2 / b) / (w1 + w2))
-            d[0] = _edge(h[0], h[1], m[0], m[1])
-            d[-1] = _edge(h[-1], h[-2], m[-1], m[-2])
-        for k in range(K - 1):  # cubic Hermite coefficients in the power basis, as SciPy's CubicHermiteSpline
-            t = (d[k] + d[k + 1] - 2 * m[k]) / h[k]
-            c[0, k, j] = t / h[k]
-            c[1, k, j] = (m[k] - d[k]) / h[k] - t
-            c[2, k, j] = d[k]
-            c[3, k, j] = yj[k]
-    k = np.clip(np.searchsorted(xs, u, side="right") - 1, 0, K - 2)
-    s = (u - np.asarray(xs)[k])[:, None]
-    z = s
-    out = c[3][k] + c[2][k] * z
-    z = z * s
-    out = out + c[1][k] * z
-    z = z * s
-    return out + c[0][k] * z
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    return pchip_many(x[None], y[None], [np.asarray(u, dtype=float)])[0]
 
 
 def pchip_many(x: np.ndarray, y: np.ndarray, u: list[np.ndarray]) -> list[np.ndarray]:
     """:func:`pchip` of many curves with the same number of key points, in a few array operations.
 
-    Every value is computed by the same IEEE operations, in the same order, as :func:`pchip` computes
-    it (elementwise, so batching changes nothing), hence bit for bit :func:`pchip`'s values.
+    Every value is computed by elementwise IEEE operations, so batching changes nothing: each curve's
+    values are SciPy's bit for bit, whatever else is in the batch.
 
     Parameters
     ----------
-    x : array, shape (B, K) — each row strictly increasing, K ≥ 3
+    x : array, shape (B, K) — each row strictly increasing, K ≥ 2
     y : array, shape (B, K, D)
     u : B arrays of shapes (N_b,) — where to evaluate each curve
 
@@ -565,21 +551,22 @@ def pchip_many(x: np.ndarray, y: np.ndarray, u: list[np.ndarray]) -> list[np.nda
     x = np.asarray(x, dtype=float)
     Y = np.asarray(y, dtype=float)
     B, K, D = Y.shape
-    if K < 3:
-        return [pchip(x[b], Y[b], u[b]) for b in range(B)]
     h = (x[:, 1:] - x[:, :-1])[:, :, None]  # (B, K-1, 1)
     m = (Y[:, 1:] - Y[:, :-1]) / h  # (B, K-1, D)
     d = np.zeros((B, K, D))
-    a, b = m[:, :-1], m[:, 1:]
-    hk, hk1 = h[:, 1:], h[:, :-1]
-    w1, w2 = 2 * hk + hk1, hk + 2 * hk1
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inner = 1.0 / ((w1 / a + w2 / b) / (w1 + w2))
-    zero = (np.sign(b) != np.sign(a)) | (b == 0) | (a == 0)
-    d[:, 1:-1] = np.where(zero, 0.0, inner)
-    d[:, 0] = _edges(h[:, 0], h[:, 1], m[:, 0], m[:, 1])
-    d[:, -1] = _edges(h[:, -1], h[:, -2], m[:, -1], m[:, -2])
-    t = (d[:, :-1] + d[:, 1:] - 2 * m) / h
+    if K == 2:  # one segment: its slope at both ends
+        d[:] = m
+    else:
+        a, b = m[:, :-1], m[:, 1:]
+        hk, hk1 = h[:, 1:], h[:, :-1]
+        w1, w2 = 2 * hk + hk1, hk + 2 * hk1
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inner = 1.0 / ((w1 / a + w2 / b) / (w1 + w2))
+        zero = (np.sign(b) != np.sign(a)) | (b == 0) | (a == 0)
+        d[:, 1:-1] = np.where(zero, 0.0, inner)
+        d[:, 0] = _edges(h[:, 0], h[:, 1], m[:, 0], m[:, 1])
+        d[:, -1] = _edges(h[:, -1], h[:, -2], m[:, -1], m[:, -2])
+    t = (d[:, :-1] + d[:, 1:] - 2 * m) / h  # cubic Hermite coefficients, as SciPy's CubicHermiteSpline
     c0, c1, c2, c3 = t / h, (m - d[:, :-1]) / h - t, d[:, :-1], Y[:, :-1]
     n = [len(v) for v in u]
     uu = np.concatenate(u)
@@ -597,7 +584,8 @@ def pchip_many(x: np.ndarray, y: np.ndarray, u: list[np.ndarray]) -> list[np.nda
 
 
 def _edges(h0: np.ndarray, h1: np.ndarray, m0: np.ndarray, m1: np.ndarray) -> np.ndarray:
-    """:func:`_edge` elementwise: h0, h1 of shape (B, 1), m0, m1 of shape (B, D)."""
+    """The one-sided three-point end derivatives (SciPy's, from Moler's ``pchiptx``): h0, h1 of shape
+    (B, 1), m0, m1 of shape (B, D)."""
     d = ((2 * h0 + h1) * m0 - h0 * m1) / (h0 + h1)
     overshoot = (np.sign(m0) != np.sign(m1)) & (np.abs(d) > 3.0 * np.abs(m0))
     return np.where(np.sign(d) != np.sign(m0), 0.0, np.where(overshoot, 3.0 * m0, d))

@@ -26,38 +26,33 @@ True
 from __future__ import annotations
 
 from collections.abc import Sequence
-from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
 
-from glu.gestures.features import HORIZONTAL_FALLBACK, VERTICAL_FALLBACK, middle_frames, to_body_frame
+from glu.gestures.features import skeleton_features
 from glu.gestures.synthetic import (
     BODY,
     DEFAULT_VIEW,
-    FRAME_RATE,
-    KEYS,
-    OBJECT,
     OPENNI_JOINTS,
-    SEATED_OBJECT_SHIFT,
     SYNTHETIC_POLICY,
     View,
     check_action,
+    draw_person,
+    key_poses,
     pchip_many,
-    person_style,
-    rest_pose,
+    sensed,
+    sensor_draws,
     synthesize_gesture,
+    timing,
 )
 from glu.gestures.trajectories import RepairPolicy, repaired_many
 from glu.gestures.views import track
 
-_IH, _IT = OPENNI_JOINTS.index("right_hand"), OPENNI_JOINTS.index("torso")
-_ILS, _IRS, _IN = (OPENNI_JOINTS.index(j) for j in ("left_shoulder", "right_shoulder", "neck"))
+_JOINT_NAMES = ("right_hand", "torso", "left_shoulder", "right_shoulder", "neck")
+"""The joints the features use, in the order of :func:`_skeleton`'s columns."""
+_JOINTS = np.array([OPENNI_JOINTS.index(j) for j in _JOINT_NAMES])
 _BODY_ARRAY = np.array([BODY.get(j, (0.0, 0.0, 0.0)) for j in OPENNI_JOINTS])
-# _person's draws (size, origin x y z, yaw in degrees, sway phase, sway amplitude) then _hand_path's first
-# ones (duration, amplitude, object offset x y z): all uniform, drawn in this order by one call.
-_LOW = np.array([0.85, -0.4, -0.15, -2.6, -10, 0, 0.0, 2.5, 0.85, -0.05, -0.05, -0.05])
-_HIGH = np.array([1.15, 0.4, 0.15, -1.6, 10, 2 * np.pi, 0.02, 5.0, 1.15, 0.05, 0.05, 0.05])
 
 
 class GestureBatch(NamedTuple):
@@ -73,18 +68,6 @@ class GestureBatch(NamedTuple):
     features: list[np.ndarray]
     duration: np.ndarray
     size: np.ndarray
-
-
-@lru_cache(maxsize=512)
-def _timing(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The minimum-jerk time course of ``n`` frames (as ``_min_jerk_path``) and ``arange(n) / FRAME_RATE``."""
-    s = np.linspace(0.0, 1.0, n)
-    u = 0.15 * s + 0.85 * s**3 * (10 - 15 * s + 6 * s**2)
-    for a in (s, u):
-        a.flags.writeable = False
-    t = np.arange(n) / FRAME_RATE
-    t.flags.writeable = False
-    return u, t
 
 
 def gesture_features(
@@ -123,41 +106,33 @@ def gesture_features(
         )
     for a in set(actions):
         check_action(a, view)
-    rest0 = rest_pose(view)
-    episodes = [_draws(a, rng, rest0, view, **sensor) for a, rng in zip(actions, rngs, strict=True)]
+    episodes = [_draws(a, rng, view, **sensor) for a, rng in zip(actions, rngs, strict=True)]
     draws = [e[0] for e in episodes]
-    moves = _hand_paths([e[1] for e in episodes], [e[2] for e in episodes], [w[5] for w in draws])
+    moves = _hand_paths([e[1] for e in episodes], [e[2] for e in episodes], [w[1] for w in draws])
     # the sway of every frame of every episode, in one call
-    phase = np.concatenate([np.full(w[5] + w[6] + w[7], w[3]) for w in draws])
-    amps = np.concatenate([np.full(w[5] + w[6] + w[7], w[4]) for w in draws])
-    tt = np.concatenate([_timing(w[5] + w[6] + w[7])[1] for w in draws])
+    phase = np.concatenate([np.full(w[1] + w[2] + w[3], w[0].sway_phase) for w in draws])
+    amps = np.concatenate([np.full(w[1] + w[2] + w[3], w[0].sway_amp) for w in draws])
+    tt = np.concatenate([timing(w[1] + w[2] + w[3])[1] for w in draws])
     sway_all = amps * np.sin(2 * np.pi * 0.25 * tt + phase)
     xyzs, ts, duration, sizes = [], [], np.empty(len(draws)), np.empty(len(draws))
     at = 0
     for i, (w, move) in enumerate(zip(draws, moves, strict=True)):
-        size, origin, yaw, _, _, m, pre, post, eps, spikes, d, jit, keep = w
+        person, m, pre, post, sensor = w
         nf = pre + m + post
         hand = np.concatenate([np.repeat(move[:1], pre, 0), move, np.repeat(move[-1:], post, 0)])
-        t = _timing(nf)[1]
-        skel = _skeleton(hand, size, yaw, origin, sway_all[at : at + nf], view)
+        skel = _skeleton(hand, person.size, person.yaw, person.origin, sway_all[at : at + nf], view)
         at += nf
-        if eps is not None:
-            skel = skel + eps[:, _JOINTS]
-        if d is not None:
-            skel[spikes, 0] += d
-        t = t + jit
-        if keep is not None:
-            skel, t = skel[keep], t[keep]
-        xyzs.append(_features(skel, view.normalise_body, view.body_frame))
+        skel, t = sensed(skel, timing(nf)[1], sensor, _JOINTS)
+        frame = "body" if view.body_frame else "torso"
+        xyzs.append(skeleton_features(skel, _JOINT_NAMES, measure=view.normalise_body, frame=frame)[0])
         ts.append(t)
-        duration[i], sizes[i] = t[-1] - t[0], size
+        duration[i], sizes[i] = t[-1] - t[0], person.size
     return GestureBatch(repaired_many(xyzs, ts, policy), duration, sizes)
 
 
 def _draws(
     action: str,
     rng: np.random.Generator,
-    rest0: np.ndarray,
     view: View,
     *,
     noise: float,
@@ -165,50 +140,14 @@ def _draws(
     dropout_rate: float,
     rest_frames: tuple[int, int],
 ) -> tuple[tuple, np.ndarray, np.ndarray]:
-    """One episode's random draws, the same in the same order as ``synthesize_gesture``'s (its ``_person``,
-    ``_hand_path`` and ``_sensor``): the drawn values, and the key times and points of its hand path."""
-    v = rng.uniform(_LOW, _HIGH)
-    size = float(v[0]) if view.size is None else float(view.size)
-    yaw = float(np.deg2rad(v[4])) if view.yaw_deg is None else float(np.deg2rad(view.yaw_deg))
-    m = max(int(round(v[7] * FRAME_RATE)), 12)
-    amp = v[8]
-    obj = OBJECT + v[9:12] * np.array([1.0, 0.4, 1.0])
-    rest = rest0 + rng.normal(0, 0.015, size=3)
-    if view.posture == "seated":
-        obj = obj + SEATED_OBJECT_SHIFT
-    spec = KEYS[action]
-    jitter = rng.uniform(-0.02, 0.02, size=len(spec) - 2)
-    keys = []
-    for j, (tf, off) in enumerate(spec):
-        if 0 < j < len(spec) - 1:
-            tf = tf + jitter[j - 1]
-        p = rest if off is None else rest + amp * (obj + np.asarray(off) - rest)
-        keys.append((tf, p * size))
-    if view.variety > 0:
-        keys = person_style(keys, spec, rng, size, view.variety)
-    keys.sort(key=lambda k: k[0])
+    """One episode's random draws, the same in the same order as ``synthesize_gesture``'s (its person,
+    ``_hand_path`` and :func:`~glu.gestures.synthetic.sensor_draws`): the drawn values, and the key times
+    and points of its hand path."""
+    person = draw_person(rng, view)
+    m, times, points = key_poses(action, rng, person.size, view)
     pre, post = (int(rng.integers(rest_frames[0], rest_frames[1] + 1)) for _ in range(2))
-    nf = pre + m + post
-    eps = rng.normal(0.0, noise, size=(nf, len(OPENNI_JOINTS), 3)) if noise > 0 else None
-    spikes = rng.random(nf) < spike_rate
-    k = int(spikes.sum())
-    d = None
-    if k:
-        d = rng.normal(size=(k, 3))
-        d *= (rng.uniform(0.15, 0.4, size=k) / np.linalg.norm(d, axis=1))[:, None]
-    jit = rng.normal(0.0, 0.002, size=nf)
-    keep = None
-    if nf > 30 and rng.random() < dropout_rate:
-        length = int(rng.integers(3, 21))
-        start = int(rng.integers(5, nf - length - 5))
-        keep = np.ones(nf, dtype=bool)
-        keep[start : start + length] = False
-    drawn = (size, v[1:4].copy(), yaw, v[5], v[6], m, pre, post, eps, spikes, d, jit, keep)
-    return drawn, np.array([k[0] for k in keys]), np.stack([k[1] for k in keys])
-
-
-_JOINTS = np.array([_IH, _IT, _ILS, _IRS, _IN])
-"""The joints the features use (hand, torso, shoulders, neck), in the order of :func:`_skeleton`'s columns."""
+    sensor = sensor_draws(rng, pre + m + post, noise, spike_rate, dropout_rate)
+    return (person, m, pre, post, sensor), times, points
 
 
 def _hand_paths(times: list[np.ndarray], points: list[np.ndarray], n: list[int]) -> list[np.ndarray]:
@@ -220,7 +159,7 @@ def _hand_paths(times: list[np.ndarray], points: list[np.ndarray], n: list[int])
     for idx in by_k.values():
         x = np.stack([times[i] for i in idx])
         y = np.stack([points[i] for i in idx])
-        u = [_timing(n[i])[0] for i in idx]
+        u = [timing(n[i])[0] for i in idx]
         for i, path in zip(idx, pchip_many(x, y, u), strict=True):
             out[i] = path
     return out
@@ -240,7 +179,7 @@ def _skeleton(
     body = _BODY_ARRAY * size
     rel = np.empty((nf, len(OPENNI_JOINTS), 3))
     rel[:] = body
-    rel[:, _IH] = hand
+    rel[:, _JOINTS[0]] = hand
     c, si = np.cos(yaw), np.sin(yaw)
     rot = np.array([[c, 0.0, si], [0.0, 1.0, 0.0], [-si, 0.0, c]])
     if view.tracker != "ideal":  # the tracker needs every joint (glu.gestures.views.track)
@@ -250,23 +189,3 @@ def _skeleton(
     world = (rel @ rot.T)[:, _JOINTS] + origin
     world[:, :, 0] += sway[:, None]
     return world
-
-
-def _features(skel: np.ndarray, measure: bool, body_frame: bool = False) -> np.ndarray:
-    """:func:`~glu.gestures.features.skeleton_features` of the joints of :func:`_skeleton`, shape (n, 3)."""
-    if measure:
-        mid = middle_frames(len(skel))
-        h = _mean_distance(skel[mid, 2], skel[mid, 3], HORIZONTAL_FALLBACK)
-        v = _mean_distance(skel[mid, 4], skel[mid, 1], VERTICAL_FALLBACK)
-    else:
-        h, v = HORIZONTAL_FALLBACK, VERTICAL_FALLBACK
-    rel = skel[:, 0] - skel[:, 1]
-    if body_frame:
-        rel = to_body_frame(rel, skel[:, 2], skel[:, 3])
-    return rel / np.array([h, v, h])
-
-
-def _mean_distance(a: np.ndarray, b: np.ndarray, fallback: float) -> float:
-    d = np.linalg.norm(a - b, axis=1)
-    d = d[np.isfinite(d) & (d > 0)]
-    return float(d.mean()) if len(d) else fallback

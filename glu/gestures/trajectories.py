@@ -70,6 +70,18 @@ class TrackingEvent:
         return f"{what} (t={self.time:.2f} s): {self.action}"
 
 
+def checked_arrays(xyz: np.ndarray, t: np.ndarray, source: str) -> tuple[np.ndarray, np.ndarray]:
+    """``xyz`` and ``t`` as float arrays; DataError naming ``source`` unless ``xyz`` has shape (n, 3) for
+    ``n = len(t)`` and the timestamps are finite and strictly increasing."""
+    xyz, t = np.asarray(xyz, dtype=float), np.asarray(t, dtype=float)
+    n = len(t)
+    if xyz.shape != (n, 3):
+        raise DataError(f"{source}: xyz must have shape (n_frames, 3) = ({n}, 3), got {xyz.shape}")
+    if n and (not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0)):
+        raise DataError(f"{source}: timestamps must be finite and strictly increasing")
+    return xyz, t
+
+
 @dataclass(frozen=True, eq=False)
 class Trajectory:
     """A 3-D hand trajectory with its timing.
@@ -93,35 +105,15 @@ class Trajectory:
     events: tuple[TrackingEvent, ...] = field(default=())
 
     def __post_init__(self) -> None:
-        xyz = np.asarray(self.xyz, dtype=float)
-        t = np.asarray(self.t, dtype=float)
+        xyz, t = checked_arrays(self.xyz, self.t, self.source)
         n = len(t)
-        if xyz.ndim != 2 or xyz.shape != (n, 3):
-            raise DataError(f"{self.source}: xyz must have shape (n_frames, 3) = ({n}, 3), got {xyz.shape}")
         frame = np.asarray(self.frame, dtype=np.int64)
         observed = np.asarray(self.observed, dtype=bool)
         if frame.shape != (n,) or observed.shape != (n,):
             raise DataError(f"{self.source}: frame and observed must have shape ({n},)")
-        if n and (not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0)):
-            raise DataError(f"{self.source}: timestamps must be finite and strictly increasing")
         for name, value in (("xyz", xyz), ("t", t), ("frame", frame), ("observed", observed)):
             value.flags.writeable = False
             object.__setattr__(self, name, value)
-
-    @classmethod
-    def from_array(
-        cls, xyz: np.ndarray, *, frame_rate: float = 30.0, t0: float = 0.0, source: str = "<memory>"
-    ) -> Trajectory:
-        """A trajectory from coordinates alone, shape (n_frames, 3), at a constant ``frame_rate`` (Hz)."""
-        xyz = np.asarray(xyz, dtype=float)
-        n = len(xyz)
-        return cls(
-            xyz=xyz,
-            t=t0 + np.arange(n) / frame_rate,
-            frame=np.arange(1, n + 1),
-            observed=np.ones(n, dtype=bool),
-            source=source,
-        )
 
     def __len__(self) -> int:
         return len(self.t)
@@ -198,16 +190,6 @@ class Repaired(NamedTuple):
     events: tuple[TrackingEvent, ...]
 
 
-def running_median(xyz: np.ndarray, window: int) -> np.ndarray:
-    """Per-axis running median over ``window`` frames (odd), edges padded by reflection; shape as ``xyz``."""
-    from scipy.ndimage import median_filter
-
-    xyz = np.asarray(xyz, dtype=float)
-    if len(xyz) == 0:
-        return xyz.copy()
-    return median_filter(xyz, size=(window, 1), mode="nearest")
-
-
 def spike_deviation(xyz: np.ndarray, window: int = 7) -> np.ndarray:
     """Distance of each frame to the running median of ``window`` frames; ``> threshold`` marks a spike.
 
@@ -219,10 +201,13 @@ def spike_deviation(xyz: np.ndarray, window: int = 7) -> np.ndarray:
     -------
     array, shape (n_frames,) (zeros when there are fewer frames than ``window``)
     """
+    from scipy.ndimage import median_filter
+
     xyz = np.asarray(xyz, dtype=float)
     if len(xyz) < window:
         return np.zeros(len(xyz))
-    return np.linalg.norm(xyz - running_median(xyz, window), axis=1)
+    # the per-axis running median, edges padded by repeating the end frames
+    return np.linalg.norm(xyz - median_filter(xyz, size=(window, 1), mode="nearest"), axis=1)
 
 
 def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:
@@ -281,12 +266,8 @@ def repaired_xyz(
     -------
     array, shape (n_repaired, 3): ``np.concatenate([p.xyz for p in repair(traj, policy).pieces])``
     """
-    xyz, t = np.asarray(xyz, dtype=float), np.asarray(t, dtype=float)
+    xyz, t = checked_arrays(xyz, t, source)
     n = len(t)
-    if xyz.shape != (n, 3):
-        raise DataError(f"{source}: xyz must have shape (n_frames, 3) = ({n}, 3), got {xyz.shape}")
-    if n and (not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0)):
-        raise DataError(f"{source}: timestamps must be finite and strictly increasing")
     frame, observed = np.arange(1, n + 1), np.ones(n, dtype=bool)
     spans = _repair_spans(xyz, t, frame, observed, policy, source, None, 0.0, deviation)
     kept = [a[0] for a in spans if len(a[1]) >= policy.min_piece]

@@ -71,6 +71,14 @@ def _pad(sequences: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.nd
 
 COVARIANCES: tuple[str, ...] = ("map", "ml")
 """The covariance updates :func:`fit` knows (see the module docstring)."""
+
+
+def check_covariance(covariance: str) -> None:
+    """ValueError unless ``covariance`` is one of :data:`COVARIANCES`."""
+    if covariance not in COVARIANCES:
+        raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
+
+
 EMPTY = 1e-10
 """A component with less soft count than this has lost its frames (``ml`` keeps its covariance)."""
 
@@ -227,8 +235,7 @@ def maximise(
     frames. A state without any frame keeps its mixture weights, means and covariances (only possible with
     weighted or empty statistics).
     """
-    if covariance not in COVARIANCES:
-        raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
+    check_covariance(covariance)
     D = params.means.shape[-1]
     startprob = np.where(params.startprob == 0, 0.0, np.maximum(stats.start, 0.0))
     total = startprob.sum(axis=-1, keepdims=True)
@@ -289,8 +296,7 @@ def fit(
     covariance prior's log-density never decreases (``tests/test_weighted_em.py``). Raises
     ``numpy.linalg.LinAlgError`` when a covariance stops being positive definite.
     """
-    if covariance not in COVARIANCES:
-        raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
+    check_covariance(covariance)
     w = sequence_weights(sequences, weights)
     if not np.any(w > 0):
         raise ValueError("weighted EM needs at least one sequence of positive weight")

@@ -54,7 +54,14 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from glu.hmm._engine.kernels import forward_backward_scaled, mixture_posteriors
-from glu.hmm.em import COVARIANCES, FitResult, GMMHMMParams, SufficientStats, maximise, sequence_weights
+from glu.hmm.em import (
+    FitResult,
+    GMMHMMParams,
+    SufficientStats,
+    check_covariance,
+    maximise,
+    sequence_weights,
+)
 from glu.hmm.inference import forward_backward_log, gaussian_factors
 
 MAX_BATCH_FLOATS = 4_000_000
@@ -269,8 +276,7 @@ def fit_many(
     for it (to rounding). Raises ``numpy.linalg.LinAlgError`` when a covariance stops being positive
     definite, ValueError for bad weights.
     """
-    if covariance not in COVARIANCES:
-        raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
+    check_covariance(covariance)
     tols = np.broadcast_to(np.asarray(tol, dtype=float), (len(problems),))
     ws = [None] * len(problems) if weights is None else list(weights)
     items = [

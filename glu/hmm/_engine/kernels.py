@@ -167,18 +167,19 @@ def _advance(x, a, first, alpha, means, chol_inv, log_norm, startprob, transmat,
     return top + np.log(csum)
 
 
+def _scratch(means):
+    """The scratch arrays of :func:`_advance` for a bank's ``means`` (A, Q, M, D): diff, lc, log_b, pred,
+    new."""
+    Q, M, D = means.shape[1], means.shape[2], means.shape[3]
+    return np.empty(D), np.empty(M), np.empty(Q), np.empty(Q), np.empty(Q)
+
+
 def _loglik_banked(X, starts, lengths, means, chol_inv, log_norm, startprob, transmat):
-    A, Q, M, D = means.shape
-    S = lengths.shape[0]
-    out = np.zeros((S, A))
-    diff = np.empty(D)
-    lc = np.empty(M)
-    log_b = np.empty(Q)
-    alpha = np.empty(Q)
-    pred = np.empty(Q)
-    new = np.empty(Q)
-    for s in range(S):
-        for a in range(A):
+    out = np.zeros((lengths.shape[0], means.shape[0]))
+    alpha = np.empty(means.shape[1])
+    diff, lc, log_b, pred, new = _scratch(means)
+    for s in range(out.shape[0]):
+        for a in range(out.shape[1]):
             total = 0.0
             for t in range(lengths[s]):
                 x = X[starts[s] + t]
@@ -204,13 +205,8 @@ def _loglik_banked(X, starts, lengths, means, chol_inv, log_norm, startprob, tra
 
 def _stream_step(x, first, alpha, total, means, chol_inv, log_norm, startprob, transmat):
     """Every model of a bank advanced by one frame ``x``: ``alpha`` (A, Q) and ``total`` (A,) in place."""
-    A, Q, M, D = means.shape
-    diff = np.empty(D)
-    lc = np.empty(M)
-    log_b = np.empty(Q)
-    pred = np.empty(Q)
-    new = np.empty(Q)
-    for a in range(A):
+    diff, lc, log_b, pred, new = _scratch(means)
+    for a in range(means.shape[0]):
         total[a] += _advance(
             x, a, first, alpha[a], means, chol_inv, log_norm, startprob, transmat, diff, lc, log_b, pred, new
         )
