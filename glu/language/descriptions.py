@@ -67,7 +67,14 @@ from glu.errors import EvidenceError, GrammarError, VocabularyError
 from glu.language.candidates import SentenceSet
 from glu.language.grammar import Grammar, load_grammar
 from glu.language.sampling import sample_sentences
-from glu.language.sentences import Sentence, WordNetwork, as_network, count_sentences, restrict
+from glu.language.sentences import (
+    Sentence,
+    WordNetwork,
+    as_network,
+    as_sentence,
+    count_sentences,
+    restrict,
+)
 from glu.language.words import word_probabilities
 
 WordProbs = Mapping[str, float] | pd.Series
@@ -188,10 +195,6 @@ def _rank_key(
     return (n_zero, Fraction(-(total + offset * scale), length), words)
 
 
-def _split(sentence: str | Iterable[str]) -> Sentence:
-    return tuple(sentence.split()) if isinstance(sentence, str) else tuple(sentence)
-
-
 def score_sentence(sentence: str | Iterable[str], word_probs: WordProbs, score: str = DEFAULT_SCORE) -> float:
     """The score of one sentence (a string or a sequence of words); -inf if a word has p = 0.
 
@@ -211,7 +214,7 @@ def score_sentences(
 ) -> np.ndarray:
     """The score of each sentence (see :func:`score_sentence`), shape (n_sentences,)."""
     offset = score_offset(score)
-    sents = [_split(s) for s in sentences]
+    sents = [as_sentence(s) for s in sentences]
     if any(len(s) == 0 for s in sents):
         raise VocabularyError("an empty sentence has no score (the score is a mean over its words)")
     vocab = sorted({w for s in sents for w in s})
@@ -473,7 +476,7 @@ def describe(
     if isinstance(candidates, SentenceSet):
         vocabulary: Any = candidates.vocabulary
     elif candidates is not None:
-        candidates = [tuple(c.split()) if isinstance(c, str) else tuple(c) for c in candidates]
+        candidates = [as_sentence(c) for c in candidates]
         vocabulary = [w for c in candidates for w in c]
     else:
         vocabulary = word_network(grammar)
