@@ -53,6 +53,17 @@ class SyntheticWorld:
     word_parents: dict[str, tuple[str, ...]]
 
 
+_VERBS = {0: ("grasp", "pick"), 1: ("tap", "push"), 2: ("touch", "poke")}
+_FORMS = {  # base → (3rd person, -ing, past participle)
+    "grasp": ("grasps", "grasping", "grasped"),
+    "pick": ("picks", "picking", "picked"),
+    "tap": ("taps", "tapping", "tapped"),
+    "push": ("pushes", "pushing", "pushed"),
+    "touch": ("touches", "touching", "touched"),
+    "poke": ("pokes", "poking", "poked"),
+}
+
+
 def _world() -> SyntheticWorld:
     A = {"grasp": 0, "tap": 1, "touch": 2}
     cpts: dict[str, np.ndarray] = {
@@ -95,26 +106,7 @@ def _world() -> SyntheticWorld:
         "Contact": ("Action", "Shape"),
     }
     word_parents: dict[str, tuple[str, ...]] = {w: () for w in ("robot", "he", "baltazar", "has", "just")}
-    for verb in (
-        "grasps",
-        "grasping",
-        "grasped",
-        "picks",
-        "picking",
-        "picked",
-        "taps",
-        "tapping",
-        "tapped",
-        "pushes",
-        "pushing",
-        "pushed",
-        "touches",
-        "touching",
-        "touched",
-        "pokes",
-        "poking",
-        "poked",
-    ):
+    for verb in (form for pair in _VERBS.values() for base in pair for form in _FORMS[base]):
         word_parents[verb] = ("Action",)
     for w in ("big", "small"):
         word_parents[w] = ("Size",)
@@ -129,16 +121,6 @@ def _world() -> SyntheticWorld:
 
 WORLD: SyntheticWorld = _world()
 """The generator's ground truth."""
-
-_VERBS = {0: ("grasp", "pick"), 1: ("tap", "push"), 2: ("touch", "poke")}
-_FORMS = {  # base → (3rd person, -ing, past participle)
-    "grasp": ("grasps", "grasping", "grasped"),
-    "pick": ("picks", "picking", "picked"),
-    "tap": ("taps", "tapping", "tapped"),
-    "push": ("pushes", "pushing", "pushed"),
-    "touch": ("touches", "touching", "touched"),
-    "poke": ("pokes", "poking", "poked"),
-}
 
 
 def _sample(rng: np.random.Generator, probs: np.ndarray) -> np.ndarray:
