@@ -52,11 +52,7 @@ GLU_SCHEMA_FILE: Path = RESOURCES_DIR / "schemas" / "glu.json"
 """
 
 
-def _glu_spec() -> dict[str, Any]:
-    return json.loads(GLU_SCHEMA_FILE.read_text(encoding="utf-8"))
-
-
-_GLU = _glu_spec()
+_GLU: dict[str, Any] = json.loads(GLU_SCHEMA_FILE.read_text(encoding="utf-8"))
 AFFORDANCE_VALUES: dict[str, tuple[str, ...]] = {n["name"]: tuple(n["values"]) for n in _GLU["nodes"]}
 """Affordance nodes in the fixed K2 order, with their values in file order (glu names)."""
 AFFORDANCE_NODES: tuple[str, ...] = tuple(AFFORDANCE_VALUES)
