@@ -64,6 +64,13 @@ ROOT_NODES: tuple[str, ...] = tuple(n["name"] for n in _GLU["nodes"] if n.get("s
 """Set by the experimenter: they never get parents."""
 WORDS: tuple[str, ...] = tuple(_GLU["words"])
 """The 49 words of the vocabulary, in file order."""
+ACTION_VERBS: dict[str, tuple[str, ...]] = {
+    "grasp": ("grasps", "grasping", "grasped", "picks", "picking", "picked"),
+    "tap": ("taps", "tapping", "tapped", "pushes", "pushing", "pushed"),
+    "touch": ("touches", "touching", "touched", "pokes", "poking", "poked"),
+}
+"""GLU's actions → the words of :data:`WORDS` that name them: two verbs each (tap and push, touch and poke,
+as in the data), each as third person, ``-ing`` form and past participle."""
 FILE_ALIASES: dict[str, dict[str, str]] = {k: dict(v) for k, v in _GLU.get("aliases", {}).items()}
 """Values as written in the original files → glu values."""
 
