@@ -17,13 +17,13 @@ sentence's sum at 1 instead of 0, so every score printed in TCDS Table II, Fig. 
 (:func:`rank_sentences` ranks any such list, :mod:`glu.language.candidates` reads it); :func:`nbest`
 searches the whole grammar.
 
-**Exact N-best.** The originals scored 10,000 random sentences. Here :func:`nbest` finds the N best of the
-*whole* grammar with a k-best dynamic programme over the deterministic word network
-(:mod:`glu.language.sentences`): for every state and every number ``l`` of remaining words it keeps the
-``n`` best suffixes of exactly ``l`` words (the mean divides by the length, so lengths are kept apart
-until the end), which costs ``O(max length × arcs × n)`` instead of one score per sentence. The network is
-deterministic, so the N best are N *different* sentences. Both scores work: within one length the
-``+1/L`` of the original score is a constant, so only the final comparison across lengths changes.
+**Exact N-best.** :func:`nbest` finds the N best of the *whole* grammar with a k-best dynamic programme
+over the deterministic word network (:mod:`glu.language.sentences`): for every state and every number ``l``
+of remaining words it keeps the ``n`` best suffixes of exactly ``l`` words (the mean divides by the length,
+so lengths are kept apart until the end), which costs ``O(max length × arcs × n)`` instead of one score per
+sentence. The network is deterministic, so the N best are N *different* sentences. Both scores work: within
+one length the ``+1/L`` of the original score is a constant, so only the final comparison across lengths
+changes.
 
 **Exact ties.** Sums of log probabilities are computed exactly: every ``log p`` is a binary fraction, so
 ``log p × 2^K`` is an integer for a common ``K``, and sums of those integers have no rounding error.
@@ -338,7 +338,7 @@ def nbest(
     max_length : only sentences of at most this many words (required when the grammar is infinite)
     must_contain : only sentences with at least one of these words (e.g. the colour words)
     exclude : only sentences with none of these words
-    score : ``"paper"`` (the mean log probability) or ``"original"`` (the originals' ``(1 + Σ log p)/L``)
+    score : a name of :data:`SCORES`
 
     Returns
     -------
