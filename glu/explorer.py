@@ -10,6 +10,7 @@ ipywidgets, the same tables for the starting evidence, as a static result.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -35,12 +36,16 @@ class Exploration:
     descriptions: pd.DataFrame
     evidence_text: str
 
+    @property
+    def table(self) -> pd.DataFrame:
+        """The posteriors as a wide table: a row per node, a column per value."""
+        return self.posteriors.pivot_table(index="node", columns="value", values="p", sort=False)
+
     def to_html(self) -> str:
         """Both tables as HTML, with the evidence above them."""
-        wide = self.posteriors.pivot_table(index="node", columns="value", values="p", sort=False)
         return (
             f"<p><b>evidence:</b> {self.evidence_text}</p>"
-            + wide.to_html(float_format=lambda x: f"{x:.3f}", na_rep="")
+            + self.table.to_html(float_format=lambda x: f"{x:.3f}", na_rep="")
             + self.descriptions[["sentence", "score"]].to_html(index=False, float_format=lambda x: f"{x:.4f}")
         )
 
@@ -87,27 +92,24 @@ def explore(
     return Exploration(pd.DataFrame(rows, columns=["node", "value", "p"]), words, text)
 
 
-def evidence_explorer(
-    engine: Engine,
-    targets: Sequence[str] = ("ObjVel", ACTION),
-    evidence: Mapping[str, str] | None = None,
-    p_hmm: Sequence[float] | None = None,
-    rule: str = "virtual",
-    nbest: int = 3,
-    live: bool | None = None,
-) -> Any:
-    """An interactive explorer in a live kernel; the static :class:`Exploration` of the start otherwise.
+def evidence_explorer(engine: Engine, *, live: bool | None = None, **start: Any) -> Any:
+    """An interactive explorer in a live kernel; otherwise the posteriors of the start as a static table.
 
-    ``live`` forces either form (default: :func:`glu.machine.is_live`). The arguments are the starting
-    point, as :func:`explore`.
+    ``live`` forces either form (default: :func:`glu.machine.is_live`). ``start``, the starting point, takes
+    the keyword arguments of :func:`explore` (``targets``, ``evidence``, ``p_hmm``, ``rule``, ``nbest``).
     """
-    start = explore(engine, targets, evidence, p_hmm, rule, nbest)
+    first = explore(engine, **start)
     if not is_live(live):
-        return start.posteriors.pivot_table(index="node", columns="value", values="p", sort=False)
+        return first.table
     try:
         import ipywidgets as w
     except ImportError:
-        return start.posteriors.pivot_table(index="node", columns="value", values="p", sort=False)
+        return first.table
+    args = inspect.signature(explore).bind(engine, **start)
+    args.apply_defaults()
+    targets, evidence, p_hmm, rule, nbest = (
+        args.arguments[k] for k in ("targets", "evidence", "p_hmm", "rule", "nbest")
+    )
     schema = engine.bn.schema
     evidence = dict(evidence or {})
     drops = {
@@ -127,7 +129,7 @@ def evidence_explorer(
         for a, p in zip(actions, start_p, strict=True)
     ]
     rule_pick = w.ToggleButtons(options=list(SOFT_RULES), value=rule, description="rule")
-    view = w.HTML(start.to_html())
+    view = w.HTML(first.to_html())
 
     def update(_change: Any = None) -> None:
         ev = {n: d.value for n, d in drops.items() if d.value != NOT_OBSERVED}

@@ -30,6 +30,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, BinaryIO
 
+from glu.errors import DataError
+
 STDOUT = "-"
 """The output path that means standard output (``-o -``)."""
 
@@ -185,13 +187,10 @@ def plain_name(name: object) -> bool:
 
 
 def read_text(
-    path: str | os.PathLike, what: str = "file", encoding: str = "utf-8", error: type | None = None
+    path: str | os.PathLike, what: str = "file", encoding: str = "utf-8", error: type = DataError
 ) -> str:
     """The text of an input file; ``error`` (default :class:`~glu.errors.DataError`) names the file and
     ``what`` it should be when it is missing, a folder, unreadable or not text."""
-    from glu.errors import DataError
-
-    error = error or DataError
     try:
         return Path(path).read_text(encoding=encoding)
     except OSError as e:
@@ -200,23 +199,18 @@ def read_text(
         raise error(f"{path}: cannot read the {what} as text ({e})") from None
 
 
-def read_bytes(path: str | os.PathLike, what: str = "file", error: type | None = None) -> bytes:
+def read_bytes(path: str | os.PathLike, what: str = "file", error: type = DataError) -> bytes:
     """The bytes of an input file; ``error`` (default :class:`~glu.errors.DataError`) names the file and
     ``what`` it should be when it is missing, a folder or unreadable."""
-    from glu.errors import DataError
-
     try:
         return Path(path).read_bytes()
     except OSError as e:
-        raise (error or DataError)(_unreadable(path, what, e)) from None
+        raise error(_unreadable(path, what, e)) from None
 
 
-def read_json(path: str | os.PathLike, what: str = "JSON file", error: type | None = None) -> Any:
+def read_json(path: str | os.PathLike, what: str = "JSON file", error: type = DataError) -> Any:
     """The JSON document of an input file; ``error`` (default :class:`~glu.errors.DataError`) names the
     file and ``what`` it should be when it is missing, a folder, unreadable or not JSON."""
-    from glu.errors import DataError
-
-    error = error or DataError
     raw = read_bytes(path, what, error)
     try:
         return json.loads(raw)

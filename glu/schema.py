@@ -52,11 +52,7 @@ GLU_SCHEMA_FILE: Path = RESOURCES_DIR / "schemas" / "glu.json"
 """
 
 
-def _glu_spec() -> dict[str, Any]:
-    return json.loads(GLU_SCHEMA_FILE.read_text(encoding="utf-8"))
-
-
-_GLU = _glu_spec()
+_GLU: dict[str, Any] = json.loads(GLU_SCHEMA_FILE.read_text(encoding="utf-8"))
 AFFORDANCE_VALUES: dict[str, tuple[str, ...]] = {n["name"]: tuple(n["values"]) for n in _GLU["nodes"]}
 """Affordance nodes in the fixed K2 order, with their values in file order (glu names)."""
 AFFORDANCE_NODES: tuple[str, ...] = tuple(AFFORDANCE_VALUES)
@@ -68,6 +64,13 @@ ROOT_NODES: tuple[str, ...] = tuple(n["name"] for n in _GLU["nodes"] if n.get("s
 """Set by the experimenter: they never get parents."""
 WORDS: tuple[str, ...] = tuple(_GLU["words"])
 """The 49 words of the vocabulary, in file order."""
+ACTION_VERBS: dict[str, tuple[str, ...]] = {
+    "grasp": ("grasps", "grasping", "grasped", "picks", "picking", "picked"),
+    "tap": ("taps", "tapping", "tapped", "pushes", "pushing", "pushed"),
+    "touch": ("touches", "touching", "touched", "pokes", "poking", "poked"),
+}
+"""GLU's actions → the words of :data:`WORDS` that name them: two verbs each (tap and push, touch and poke,
+as in the data), each as third person, ``-ing`` form and past participle."""
 FILE_ALIASES: dict[str, dict[str, str]] = {k: dict(v) for k, v in _GLU.get("aliases", {}).items()}
 """Values as written in the original files → glu values."""
 

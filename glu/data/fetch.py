@@ -101,14 +101,11 @@ def published_origin(root: str | os.PathLike, manifest_path: str | os.PathLike =
     manifest does not list are ignored). Otherwise None: the folder is someone's own or modified data.
     The commits are abbreviated to 7 characters, as git does.
     """
-    root = Path(root)
+    same, differ = published_check(root, manifest_path)
+    if differ or not any(f.endswith("_lab_aff_bag.txt") for f in same):
+        return None
     spec = json.loads(Path(manifest_path).read_text(encoding="utf-8"))
-    present = [f for f in spec["files"] if (root / f["local"]).is_file()]
-    if not any(f["local"].endswith("_lab_aff_bag.txt") for f in present):
-        return None
-    if any(_cached_sha256(root / f["local"]) != f["sha256"] for f in present):
-        return None
-    used = sorted({f["source"] for f in present})
+    used = sorted({f["source"] for f in spec["files"] if f["local"] in same})
     repos = spec["repositories"]
     return ", ".join(f"{repos[k]['repo']}@{repos[k]['commit'][:7]}" for k in used)
 

@@ -92,15 +92,15 @@ class DataSource:
 
     def reason(self) -> str:
         """How this source was chosen (and, for the synthetic fallback, why no real data was used)."""
-        if self.origin == "--data":
-            return "chosen explicitly (--data or the data parameter)"
-        if self.origin == "GLU_DATA_DIR":
-            return f"given by ${paths.DATA_ENV_VAR}"
-        if self.origin == "data/real":
-            return f"fetched into {paths.HERE.real_data_label}"
-        return (
-            f"no real data found: no --data, no ${paths.DATA_ENV_VAR}, nothing in "
-            f"{paths.HERE.real_data_label} (`glu data fetch` downloads it)"
+        fetched = paths.HERE.real_data_label
+        return {
+            "--data": "chosen explicitly (--data or the data parameter)",
+            "GLU_DATA_DIR": f"given by ${paths.DATA_ENV_VAR}",
+            "data/real": f"fetched into {fetched}",
+        }.get(
+            self.origin,
+            f"no real data found: no --data, no ${paths.DATA_ENV_VAR}, nothing in {fetched} "
+            "(`glu data fetch` downloads it)",
         )
 
     def location(self) -> str:
@@ -224,9 +224,7 @@ def resolve_data(data: str | os.PathLike | None = None) -> DataSource:
 
 
 def _folder_source(root: Path, origin: str) -> DataSource:
-    where = (
-        "--data" if origin == "--data" else f"${paths.DATA_ENV_VAR}" if origin == "GLU_DATA_DIR" else origin
-    )
+    where = f"${paths.DATA_ENV_VAR}" if origin == "GLU_DATA_DIR" else origin
     if not root.is_dir():
         raise DataError(
             f"{root}: no such data folder (given by {where}); expected a folder with affordance-words/, "
@@ -238,7 +236,10 @@ def _folder_source(root: Path, origin: str) -> DataSource:
             "gestures/"
         )
     marker = root / SYNTHETIC_MARKER
-    if marker.is_file() and not _is_published(root):  # the checksums decide: a stray marker cannot relabel
+    from glu.data.fetch import published_check, published_origin
+
+    # the checksums decide: a stray marker cannot relabel the published data
+    if marker.is_file() and published_origin(root) is None:
         try:
             info = json.loads(marker.read_text())
             return DataSource(
@@ -251,20 +252,11 @@ def _folder_source(root: Path, origin: str) -> DataSource:
         except (ValueError, KeyError, TypeError):
             raise DataError(f"{marker}: malformed marker file; expected JSON with 'seed' and 'n'") from None
     source = DataSource(kind="real", root=root.resolve(), origin=origin)
-    from glu.data.fetch import published_check
-
     if published_check(root)[1]:  # said where the results go (describe) and once to the person (a warning)
         import warnings
 
         warnings.warn(DataWarning(f"{root}: {modified_text(root)}"), stacklevel=3)
     return source
-
-
-def _is_published(root: Path) -> bool:
-    """Whether ``root`` holds the published real data (its files carry the published checksums)."""
-    from glu.data.fetch import published_origin
-
-    return published_origin(root) is not None
 
 
 def load_schema(source: DataSource) -> Schema:

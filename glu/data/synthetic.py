@@ -29,7 +29,7 @@ import pandas as pd
 
 from glu.errors import DataError
 from glu.files import atomic_write_json, staged_folder
-from glu.schema import AFFORDANCE_VALUES, WORD_VALUES, WORDS, default_schema
+from glu.schema import ACTION_VERBS, AFFORDANCE_VALUES, WORD_VALUES, WORDS, default_schema
 
 MIN_ROWS, MAX_ROWS = 100, 1_000_000
 ASR_NOISE = 0.1
@@ -95,26 +95,7 @@ def _world() -> SyntheticWorld:
         "Contact": ("Action", "Shape"),
     }
     word_parents: dict[str, tuple[str, ...]] = {w: () for w in ("robot", "he", "baltazar", "has", "just")}
-    for verb in (
-        "grasps",
-        "grasping",
-        "grasped",
-        "picks",
-        "picking",
-        "picked",
-        "taps",
-        "tapping",
-        "tapped",
-        "pushes",
-        "pushing",
-        "pushed",
-        "touches",
-        "touching",
-        "touched",
-        "pokes",
-        "poking",
-        "poked",
-    ):
+    for verb in (w for verbs in ACTION_VERBS.values() for w in verbs):
         word_parents[verb] = ("Action",)
     for w in ("big", "small"):
         word_parents[w] = ("Size",)
@@ -129,16 +110,6 @@ def _world() -> SyntheticWorld:
 
 WORLD: SyntheticWorld = _world()
 """The generator's ground truth."""
-
-_VERBS = {0: ("grasp", "pick"), 1: ("tap", "push"), 2: ("touch", "poke")}
-_FORMS = {  # base → (3rd person, -ing, past participle)
-    "grasp": ("grasps", "grasping", "grasped"),
-    "pick": ("picks", "picking", "picked"),
-    "tap": ("taps", "tapping", "tapped"),
-    "push": ("pushes", "pushing", "pushed"),
-    "touch": ("touches", "touching", "touched"),
-    "poke": ("pokes", "poking", "poked"),
-}
 
 
 def _sample(rng: np.random.Generator, probs: np.ndarray) -> np.ndarray:
@@ -224,9 +195,9 @@ def _say_agent_and_verb(rng: np.random.Generator, n: int, action: np.ndarray, wo
     words["baltazar"] |= agent == 2
     synonym = _choice(rng, n, [0.6, 0.4])
     form = _choice(rng, n, [0.3, 0.3, 0.2, 0.2])  # taps | is tapping | has just tapped | tapped
-    for a, pair in _VERBS.items():
-        for s, base in enumerate(pair):
-            third, ing, past = _FORMS[base]
+    for a, verbs in enumerate(ACTION_VERBS.values()):  # two synonyms: (3rd person, -ing, past participle)
+        for s in range(2):
+            third, ing, past = verbs[3 * s : 3 * s + 3]
             sel = (action == a) & (synonym == s)
             words[third] |= sel & (form == 0)
             words[ing] |= sel & (form == 1)

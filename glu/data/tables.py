@@ -46,12 +46,15 @@ def _read_text(path: Path) -> str:
     return text
 
 
-def _file_value(node: str, value: str, schema: Schema) -> str:
-    """The value as the original files write it (``circle`` for glu's ``sphere``)."""
-    for alias, v in schema.aliases.get(node, {}).items():
-        if v == value:
-            return alias
-    return value
+def _file_values(node: str, schema: Schema) -> list[str]:
+    """The values of ``node`` as the original files write them: ``-`` and the word itself for a word node,
+    an affordance node's first alias (``circle`` for glu's ``sphere``) where it has one."""
+    if node in schema.word_nodes:
+        return [ABSENT_MARK, node]
+    alias_of: dict[str, str] = {}
+    for alias, value in schema.aliases.get(node, {}).items():
+        alias_of.setdefault(value, alias)
+    return [alias_of.get(v, v) for v in schema.values_of(node)]
 
 
 def read_experiments(path: str | os.PathLike, schema: Schema | None = None) -> pd.DataFrame:
@@ -105,7 +108,7 @@ def read_experiments(path: str | os.PathLike, schema: Schema | None = None) -> p
         raise DataError(f"{path}: cannot parse the table ({e})") from None
     columns: dict[str, pd.Categorical] = {}
     for j, name in enumerate(header):
-        columns[name] = _parse_column(path, j, name, raw[j], schema)
+        columns[name] = _parse_column(path, f"column {j + 1} ({name})", name, raw[j], schema)
     df = pd.DataFrame({node: columns[node] for node in schema.nodes})
     df.attrs["path"] = str(path)
     return df
@@ -129,10 +132,15 @@ def _check_header(path: Path, header: list[str], schema: Schema) -> None:
         raise DataError(f"{path}:1: header lacks {len(missing)} node(s): {shown}")
 
 
-def _parse_column(path: Path, j: int, name: str, col: pd.Series, schema: Schema) -> pd.Categorical:
+def _parse_column(
+    path: Path, where: str, name: str, col: pd.Series, schema: Schema, count_bad: bool = True
+) -> pd.Categorical:
+    """The categorical column of node ``name`` from the file's cells (affordance values stripped, aliases
+    accepted); DataError naming the line and ``where`` (the column) at the first cell that is not allowed,
+    with how many there are when ``count_bad``."""
     values = schema.values_of(name)
     if name in schema.word_nodes:
-        file_cats = [ABSENT_MARK, name]
+        file_cats = _file_values(name, schema)
         allowed = f"'-' or the word {name!r} itself"
     else:
         aliases = schema.aliases.get(name, {})
@@ -147,8 +155,8 @@ def _parse_column(path: Path, j: int, name: str, col: pd.Series, schema: Schema)
         i = int(bad[0])
         shown = col.iloc[i]
         raise DataError(
-            f"{path}:{i + 2}: column {j + 1} ({name}): value {shown!r} is not allowed; allowed: {allowed}"
-            + (f" ({bad.size} bad cells in this column)" if bad.size > 1 else "")
+            f"{path}:{i + 2}: {where}: value {shown!r} is not allowed; allowed: {allowed}"
+            + (f" ({bad.size} bad cells in this column)" if count_bad and bad.size > 1 else "")
         )
     return pd.Categorical.from_codes(codes, categories=list(values))
 
@@ -162,11 +170,7 @@ def write_experiments(df: pd.DataFrame, path: str | os.PathLike, schema: Schema 
         codes = pd.Index(schema.values_of(node)).get_indexer(df[node].astype(object))
         if (codes < 0).any():
             raise DataError(f"column {node}: values outside {schema.values_of(node)}")
-        if node in schema.word_nodes:
-            file_vals = np.array([ABSENT_MARK, node], dtype=object)
-        else:
-            file_vals = np.array([_file_value(node, v, schema) for v in schema.values_of(node)], dtype=object)
-        out[node] = file_vals[codes]
+        out[node] = np.array(_file_values(node, schema), dtype=object)[codes]
     text = pd.DataFrame(out).to_csv(sep="\t", index=False, lineterminator="\n")
     atomic_write_text(path, text)
     return path
@@ -209,12 +213,7 @@ def read_network_definition(path: str | os.PathLike) -> Schema:
 
 def write_network_definition(schema: Schema, path: str | os.PathLike) -> Path:
     """Write a schema as ``networkDefinition.txt`` (file values: ``circle``, ``-``/word), atomically."""
-    lines = []
-    for node in schema.nodes:
-        if node in schema.word_nodes:
-            lines.append(f"{node}\t{ABSENT_MARK}\t{node}")
-        else:
-            lines.append("\t".join([node, *(_file_value(node, v, schema) for v in schema.values_of(node))]))
+    lines = ["\t".join([node, *_file_values(node, schema)]) for node in schema.nodes]
     return atomic_write_text(path, "\n".join(lines) + "\n")
 
 
@@ -262,15 +261,7 @@ def read_experiment_table(path: str | os.PathLike, schema: Schema) -> pd.DataFra
         )
     columns: dict[str, pd.Categorical] = {}
     for n in schema.affordance_nodes:
-        col = raw[n].str.strip().replace(dict(schema.aliases.get(n, {})))
-        codes = pd.Index(schema.values_of(n)).get_indexer(col)
-        bad = np.flatnonzero(codes < 0)
-        if bad.size:
-            raise DataError(
-                f"{path}:{bad[0] + 2}: column {n}: value {col.iloc[bad[0]]!r} is not allowed; "
-                f"allowed: {', '.join(schema.values_of(n))}"
-            )
-        columns[n] = pd.Categorical.from_codes(codes, categories=list(schema.values_of(n)))
+        columns[n] = _parse_column(path, f"column {n}", n, raw[n], schema, count_bad=False)
     words = schema.word_nodes
     if all(w in raw.columns for w in words):
         for w in words:

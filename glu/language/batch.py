@@ -37,14 +37,13 @@ from glu.errors import VocabularyError
 from glu.language.descriptions import PROB_TOL, word_network
 from glu.language.grammar import Grammar
 from glu.language.sentences import WordNetwork
+from glu.schema import ACTION_VERBS
 
 LOG_ZERO = -1e6
 """``log p`` used for a word of probability 0."""
 
 WORD_MEANING: dict[str, tuple[str, tuple[str, ...]]] = {
-    **{w: ("Action", ("grasp",)) for w in ("grasps", "grasping", "grasped", "picks", "picking", "picked")},
-    **{w: ("Action", ("tap",)) for w in ("taps", "tapping", "tapped", "pushes", "pushing", "pushed")},
-    **{w: ("Action", ("touch",)) for w in ("touches", "touching", "touched", "pokes", "poking", "poked")},
+    **{w: ("Action", (action,)) for action, verbs in ACTION_VERBS.items() for w in verbs},
     **{w: ("Shape", ("sphere",)) for w in ("sphere", "ball")},
     **{w: ("Shape", ("box",)) for w in ("box", "square", "cube")},
     "big": ("Size", ("big",)),

@@ -26,7 +26,7 @@ import numpy as np
 from glu.data.source import DataSource
 from glu.errors import DataError
 from glu.files import read_text
-from glu.language.sentences import Sentence
+from glu.language.sentences import Sentence, as_sentence
 
 CANDIDATES: tuple[str, ...] = ("grammar", "samples")
 """The named candidate sets: ``grammar`` (every sentence, exact N-best) and ``samples`` (the originals' 9,941
@@ -87,9 +87,7 @@ class SentenceSet(Sequence):
     __slots__ = ("sentences", "vocabulary", "counts", "lengths")
 
     def __init__(self, sentences: Iterable[str | Iterable[str]]) -> None:
-        self.sentences: tuple[Sentence, ...] = tuple(
-            sorted({tuple(s.split()) if isinstance(s, str) else tuple(s) for s in sentences})
-        )
+        self.sentences: tuple[Sentence, ...] = tuple(sorted({as_sentence(s) for s in sentences}))
         self.vocabulary: tuple[str, ...] = tuple(sorted({w for s in self.sentences for w in s}))
         pos = {w: i for i, w in enumerate(self.vocabulary)}
         rows = np.repeat(np.arange(len(self.sentences)), [len(s) for s in self.sentences])

@@ -17,13 +17,13 @@ sentence's sum at 1 instead of 0, so every score printed in TCDS Table II, Fig. 
 (:func:`rank_sentences` ranks any such list, :mod:`glu.language.candidates` reads it); :func:`nbest`
 searches the whole grammar.
 
-**Exact N-best.** The originals scored 10,000 random sentences. Here :func:`nbest` finds the N best of the
-*whole* grammar with a k-best dynamic programme over the deterministic word network
-(:mod:`glu.language.sentences`): for every state and every number ``l`` of remaining words it keeps the
-``n`` best suffixes of exactly ``l`` words (the mean divides by the length, so lengths are kept apart
-until the end), which costs ``O(max length × arcs × n)`` instead of one score per sentence. The network is
-deterministic, so the N best are N *different* sentences. Both scores work: within one length the
-``+1/L`` of the original score is a constant, so only the final comparison across lengths changes.
+**Exact N-best.** :func:`nbest` finds the N best of the *whole* grammar with a k-best dynamic programme
+over the deterministic word network (:mod:`glu.language.sentences`): for every state and every number ``l``
+of remaining words it keeps the ``n`` best suffixes of exactly ``l`` words (the mean divides by the length,
+so lengths are kept apart until the end), which costs ``O(max length × arcs × n)`` instead of one score per
+sentence. The network is deterministic, so the N best are N *different* sentences. Both scores work: within
+one length the ``+1/L`` of the original score is a constant, so only the final comparison across lengths
+changes.
 
 **Exact ties.** Sums of log probabilities are computed exactly: every ``log p`` is a binary fraction, so
 ``log p × 2^K`` is an integer for a common ``K``, and sums of those integers have no rounding error.
@@ -67,7 +67,14 @@ from glu.errors import EvidenceError, GrammarError, VocabularyError
 from glu.language.candidates import SentenceSet
 from glu.language.grammar import Grammar, load_grammar
 from glu.language.sampling import sample_sentences
-from glu.language.sentences import Sentence, WordNetwork, as_network, count_sentences, restrict
+from glu.language.sentences import (
+    Sentence,
+    WordNetwork,
+    as_network,
+    as_sentence,
+    count_sentences,
+    restrict,
+)
 from glu.language.words import word_probabilities
 
 WordProbs = Mapping[str, float] | pd.Series
@@ -188,10 +195,6 @@ def _rank_key(
     return (n_zero, Fraction(-(total + offset * scale), length), words)
 
 
-def _split(sentence: str | Iterable[str]) -> Sentence:
-    return tuple(sentence.split()) if isinstance(sentence, str) else tuple(sentence)
-
-
 def score_sentence(sentence: str | Iterable[str], word_probs: WordProbs, score: str = DEFAULT_SCORE) -> float:
     """The score of one sentence (a string or a sequence of words); -inf if a word has p = 0.
 
@@ -211,7 +214,7 @@ def score_sentences(
 ) -> np.ndarray:
     """The score of each sentence (see :func:`score_sentence`), shape (n_sentences,)."""
     offset = score_offset(score)
-    sents = [_split(s) for s in sentences]
+    sents = [as_sentence(s) for s in sentences]
     if any(len(s) == 0 for s in sents):
         raise VocabularyError("an empty sentence has no score (the score is a mean over its words)")
     vocab = sorted({w for s in sents for w in s})
@@ -335,7 +338,7 @@ def nbest(
     max_length : only sentences of at most this many words (required when the grammar is infinite)
     must_contain : only sentences with at least one of these words (e.g. the colour words)
     exclude : only sentences with none of these words
-    score : ``"paper"`` (the mean log probability) or ``"original"`` (the originals' ``(1 + Σ log p)/L``)
+    score : a name of :data:`SCORES`
 
     Returns
     -------
@@ -473,7 +476,7 @@ def describe(
     if isinstance(candidates, SentenceSet):
         vocabulary: Any = candidates.vocabulary
     elif candidates is not None:
-        candidates = [tuple(c.split()) if isinstance(c, str) else tuple(c) for c in candidates]
+        candidates = [as_sentence(c) for c in candidates]
         vocabulary = [w for c in candidates for w in c]
     else:
         vocabulary = word_network(grammar)

@@ -114,18 +114,24 @@ def format_expr(expr: Expr) -> str:
     raise TypeError(f"not a grammar expression: {expr!r}")
 
 
+def children(expr: Expr) -> tuple[Expr, ...]:
+    """The direct sub-expressions of ``expr`` (none for a word or a variable; variables are not followed)."""
+    if isinstance(expr, Seq):
+        return expr.items
+    if isinstance(expr, Alt):
+        return expr.options
+    if isinstance(expr, Opt | Rep):
+        return (expr.expr,)
+    return ()
+
+
 def walk(expr: Expr) -> Iterator[Expr]:
     """Every sub-expression of ``expr`` (itself first), without following variables."""
     stack = [expr]
     while stack:
         e = stack.pop()
         yield e
-        if isinstance(e, Seq):
-            stack.extend(reversed(e.items))
-        elif isinstance(e, Alt):
-            stack.extend(reversed(e.options))
-        elif isinstance(e, Opt | Rep):
-            stack.append(e.expr)
+        stack.extend(reversed(children(e)))
 
 
 @dataclass(frozen=True)
@@ -147,34 +153,26 @@ class Grammar:
         """The expression of variable ``name`` (with or without the ``$``)."""
         return self.definitions[name.removeprefix("$")]
 
-    @property
-    def vocabulary(self) -> tuple[str, ...]:
-        """The words a sentence can contain, sorted (variables unused by the sentence do not count)."""
-        words: set[str] = set()
+    def expressions(self) -> Iterator[Expr]:
+        """Every sub-expression the sentence uses, following each variable it refers to once."""
         seen: set[str] = set()
         todo = [self.sentence]
         while todo:
             for e in walk(todo.pop()):
-                if isinstance(e, Word):
-                    words.add(e.text)
-                elif isinstance(e, Ref) and e.name not in seen:
+                yield e
+                if isinstance(e, Ref) and e.name not in seen:
                     seen.add(e.name)
                     todo.append(self.definitions[e.name])
-        return tuple(sorted(words))
+
+    @property
+    def vocabulary(self) -> tuple[str, ...]:
+        """The words a sentence can contain, sorted (variables unused by the sentence do not count)."""
+        return tuple(sorted({e.text for e in self.expressions() if isinstance(e, Word)}))
 
     @property
     def has_repetition(self) -> bool:
         """True when the sentence uses ``{ }`` or ``< >`` (its language may then be infinite)."""
-        seen: set[str] = set()
-        todo = [self.sentence]
-        while todo:
-            for e in walk(todo.pop()):
-                if isinstance(e, Rep):
-                    return True
-                if isinstance(e, Ref) and e.name not in seen:
-                    seen.add(e.name)
-                    todo.append(self.definitions[e.name])
-        return False
+        return any(isinstance(e, Rep) for e in self.expressions())
 
     def format(self) -> str:
         """The grammar as HParse text (comments and layout are not kept)."""
@@ -192,13 +190,8 @@ class _Token:
     col: int
 
     def describe(self) -> str:
-        if self.kind == "eof":
-            return "the end of the grammar"
-        if self.kind == "word":
-            return f"the word {self.text!r}"
-        if self.kind == "var":
-            return f"${self.text}"
-        return f"'{self.text}'"
+        shown = {"eof": "the end of the grammar", "word": f"the word {self.text!r}", "var": f"${self.text}"}
+        return shown.get(self.kind, f"'{self.text}'")
 
 
 _PUNCT = frozenset("()[]{}<>|=;")

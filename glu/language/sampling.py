@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterable
 
 from glu.errors import GrammarError
 from glu.language.grammar import Alt, Expr, Grammar, Opt, Ref, Rep, Seq, Word
-from glu.language.sentences import Sentence
+from glu.language.sentences import Sentence, as_sentence
 
 MAX_SAMPLE_WORDS = 10_000
 """A random sentence longer than this (possible only with repetitions) raises GrammarError."""
@@ -140,7 +140,7 @@ def sample_probability(grammar: Grammar, sentence: str | Iterable[str]) -> float
     before each further round, as in the sampler. So ``1 - (1 - p)**K`` is the chance that K random
     sentences contain ``sentence``.
     """
-    words = sentence.split() if isinstance(sentence, str) else list(sentence)
+    words = as_sentence(sentence)
     n = len(words)
     defs = grammar.definitions
     memo: dict[tuple[int, int], dict[int, float]] = {}

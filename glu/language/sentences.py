@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 from glu.errors import GrammarError
-from glu.language.grammar import Alt, Expr, Grammar, Opt, Ref, Rep, Seq, Word
+from glu.language.grammar import Alt, Expr, Grammar, Opt, Ref, Rep, Seq, Word, children
 
 MAX_NFA_ARCS = 1_000_000
 """Largest grammar accepted, in words after substituting every variable (guards against blow-ups)."""
@@ -32,6 +32,11 @@ MAX_DFA_STATES = 200_000
 """Largest deterministic network built."""
 
 Sentence = tuple[str, ...]
+
+
+def as_sentence(sentence: str | Iterable[str]) -> Sentence:
+    """A sentence as a tuple of words, from a string of words separated by spaces or a sequence of words."""
+    return tuple(sentence.split()) if isinstance(sentence, str) else tuple(sentence)
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,7 +145,7 @@ class WordNetwork:
     def accepts(self, sentence: str | Iterable[str]) -> bool:
         """Whether ``sentence`` (a string of words separated by spaces, or a sequence of words) is in the
         language."""
-        words = sentence.split() if isinstance(sentence, str) else list(sentence)
+        words = as_sentence(sentence)
         index = {w: i for i, w in enumerate(self.words)}
         s = self.start
         for w in words:
@@ -164,11 +169,7 @@ def _expanded_size(grammar: Grammar) -> int:
             if e.name not in memo:
                 memo[e.name] = size(grammar.definitions[e.name])
             return memo[e.name]
-        if isinstance(e, Seq):
-            return sum(size(x) for x in e.items)
-        if isinstance(e, Alt):
-            return sum(size(x) for x in e.options)
-        return size(e.expr)  # Opt, Rep
+        return sum(size(x) for x in children(e))
 
     return size(grammar.sentence)
 

@@ -36,13 +36,6 @@ NOT_IN_NETWORK_PROBABILITY = 1.0
 """The probability a word that is not a network node scores with (see the module docstring)."""
 
 
-def vocabulary_words(vocabulary: Grammar | WordNetwork | Iterable[str]) -> list[str]:
-    """The distinct words of a grammar, its word network, or an iterable of words, in first-seen order."""
-    if isinstance(vocabulary, Grammar | WordNetwork):
-        return list(as_network(vocabulary).words)
-    return list(dict.fromkeys(vocabulary))
-
-
 def word_probabilities(
     engine: Any,
     evidence: Mapping[str, str | int] | None = None,
@@ -76,7 +69,12 @@ def word_probabilities(
     )
     if vocabulary is None:
         return out
-    words = vocabulary_words(vocabulary)
+    # the distinct words of the grammar, its network, or the iterable of words, in first-seen order
+    words = list(
+        as_network(vocabulary).words
+        if isinstance(vocabulary, Grammar | WordNetwork)
+        else dict.fromkeys(vocabulary)
+    )
     known = set(out.index)
     extra = [w for w in words if w not in known]
     if words and len(extra) == len(words):
