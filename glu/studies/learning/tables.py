@@ -74,7 +74,6 @@ class Replicates(NamedTuple):
     hmm : array, shape (B + 1, C, L)
     groups : (world, ambiguity, words) of each column of ``network``
     network : array, shape (B + 1, G) — the network alone (no episodes)
-    true : int array, shape (L,) — the column of the true-label learner of each learner's world
     seeds, tests : how many seeds and held-out gestures per seed
     """
 
@@ -83,13 +82,12 @@ class Replicates(NamedTuple):
     hmm: np.ndarray
     groups: list[tuple[str, str, bool]]
     network: np.ndarray
-    true: np.ndarray
     seeds: int
     tests: int
 
     def gaps(self) -> np.ndarray:
         """Replicates of each learner's accuracy minus its world's true-label HMMs', shape (B + 1, C, L)."""
-        return self.hmm - self.hmm[:, :, self.true]
+        return self.hmm - self.hmm[:, :, [self.true_of(lr[0]) for lr in self.learners]]
 
     def network_gaps(self) -> np.ndarray:
         """The network alone minus the true-label HMMs of its world, shape (B + 1, C, G)."""
@@ -97,6 +95,7 @@ class Replicates(NamedTuple):
         return self.network[:, None, :] - self.hmm[:, :, idx]
 
     def true_of(self, world: str) -> int:
+        """The column of ``world``'s true-label learner."""
         return next(k for k, lr in enumerate(self.learners) if lr[0] == world and lr[1] == "true")
 
 
@@ -109,17 +108,12 @@ def replicates(results: Sequence[SeedResult], settings: StudySettings) -> Replic
     S, J = correct.shape[:2]
     rng = np.random.default_rng(np.random.SeedSequence(list(settings.seeds), spawn_key=(BOOT_KEY,)))
     W = two_level_weights(S, J, settings.bootstrap, rng)
-    learners = [tuple(lr) for lr in first.learners]
-    true = np.array(
-        [next(k for k, x in enumerate(learners) if x[0] == lr[0] and x[1] == "true") for lr in learners]
-    )
     return Replicates(
-        learners,
+        [tuple(lr) for lr in first.learners],
         np.asarray(first.checkpoints),
         replicate_means(correct, W),
         [tuple(g) for g in first.groups],
         replicate_means(network, W),
-        true,
         S,
         J,
     )
