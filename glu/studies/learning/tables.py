@@ -69,10 +69,8 @@ class Replicates(NamedTuple):
 
     Attributes
     ----------
-    learners : (world, learner, ambiguity, words) of each column of ``hmm``
-    checkpoints : shape (C,)
+    learners, checkpoints, groups : as :class:`~glu.studies.learning.study.SeedResult` has them
     hmm : array, shape (B + 1, C, L)
-    groups : (world, ambiguity, words) of each column of ``network``
     network : array, shape (B + 1, G) — the network alone (no episodes)
     seeds, tests : how many seeds and held-out gestures per seed
     """
