@@ -168,6 +168,7 @@ class GestureSettings:
 
 
 DURATION_S: tuple[float, float] = (2.5, 5.0)
+"""The range the gesture generator draws a person's movement duration from (seconds), uniformly."""
 AMPLITUDE: tuple[float, float] = (0.85, 1.15)
 """The ranges the gesture generator draws a person's movement duration (seconds) and amplitude (the
 excursion from rest, scaled) from, uniformly (:mod:`glu.gestures.synthetic`)."""
