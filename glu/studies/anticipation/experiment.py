@@ -183,25 +183,15 @@ class AnticipationRun:
 
     def predictions(self) -> pd.DataFrame:
         """Tidy fused posteriors: columns ``case, models, frame, t, extra, node, value, p``."""
-        rows = []
         extra = self.update_extra if len(self.update_extra) else np.zeros(len(self.update_frames), bool)
-        for node, probs in self.fused.items():
-            for k, (f, t) in enumerate(zip(self.update_frames, self.update_t, strict=True)):
-                for v, p in zip(self.values[node], probs[k], strict=True):
-                    rows.append(
-                        {
-                            "case": self.case,
-                            "models": self.models,
-                            "frame": int(f),
-                            "t": int(t),
-                            "extra": bool(extra[k]),
-                            "node": node,
-                            "value": v,
-                            "p": p,
-                        }
-                    )
+        rows = [
+            (self.case, self.models, int(f), int(t), bool(extra[k]), node, v, p)
+            for node, probs in self.fused.items()
+            for k, (f, t) in enumerate(zip(self.update_frames, self.update_t, strict=True))
+            for v, p in zip(self.values[node], probs[k], strict=True)
+        ]
         return tidy(
-            pd.DataFrame(rows),
+            pd.DataFrame(rows, columns=["case", "models", "frame", "t", "extra", "node", "value", "p"]),
             f"tcds_anticipation_{self.case}_{self.models}_predictions",
             self.data_source,
             **self.parameters,

@@ -52,13 +52,8 @@ def plot_anticipation(
     curves : :meth:`AnticipationRun.curves` (columns frame, t, seconds, action, loglik_per_frame, p_hmm)
     predictions : :meth:`AnticipationRun.predictions` (columns frame, t, node, value, p)
     published : :func:`glu.studies.anticipation.experiment.published_comparison` of the same run: its curves
-    are
-        drawn under glu's, its bars beside glu's last update in ``axes[2]``
+        are drawn under glu's, its bars beside glu's last update in ``axes[2]``
     ylim : y range of the curves (a wide one is drawn linear within ±:data:`SYMLOG_THRESHOLD`, log beyond)
-
-    Returns
-    -------
-    the axes
     """
     top, bottom = axes[0], axes[1]
     frame_of_t = dict(zip(curves["t"], curves["frame"], strict=False))

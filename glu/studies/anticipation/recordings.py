@@ -118,19 +118,9 @@ def write_anticipation_recording(path: str | os.PathLike, recording_id: str, **r
 
 
 def _run_fields(run: AnticipationRun, note: str) -> dict[str, Any]:
-    return dict(
-        xyz=run.xyz,
-        seconds=run.seconds,
-        frames=run.frames,
-        actions=run.actions,
-        loglik_per_frame=run.loglik_per_frame,
-        p_hmm=run.p_hmm,
-        update_frames=run.update_frames,
-        fused=run.fused,
-        scene=run.scene(),
-        descriptions=run.descriptions or None,
-        values=run.values,
-        note=note or run.data_source,
+    names = "xyz seconds frames actions loglik_per_frame p_hmm update_frames fused values".split()
+    return {k: getattr(run, k) for k in names} | dict(
+        scene=run.scene(), descriptions=run.descriptions or None, note=note or run.data_source
     )
 
 

@@ -112,8 +112,7 @@ def learn_recognizer(
     true : the true action of each gesture, int array of shape (n,) (``true``; ``unsupervised`` uses it only
         to name its clusters after training, by the best matching)
     actions, config, seed : the models' names (the columns of ``p_bn``), training settings and seed
-    threshold : the ``confident`` scheme's
-    posterior : how ``iterative`` and ``unsupervised`` read ``p_HMM`` (:data:`POSTERIOR_READINGS`)
+    threshold, posterior : as :class:`~glu.studies.learning.online.OnlineSettings` has them
     max_rounds : most relabelling rounds (``iterative``, ``unsupervised``: until the labels stop changing)
     invariants : the features the models are trained on (computed by the recogniser, as for any);
     progress : called with the action's name after each model is trained (every relabelling round)

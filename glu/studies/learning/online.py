@@ -165,16 +165,6 @@ class _State:
     models: OnlineModels
     buffers: list[list[list[tuple[int, float]]]] = field(default_factory=list)
 
-    @property
-    def exists(self) -> np.ndarray:
-        """Which (learner, action) has a model, shape (L, A)."""
-        return self.models.exists
-
-    @property
-    def params(self) -> GMMHMMParams:
-        """The models' parameters, stacked over (learner, action)."""
-        return self.models.params
-
 
 def _empty_state(L: int, A: int, settings: OnlineSettings, D: int) -> _State:
     models = OnlineModels.empty((L, A), settings.config, D, settings.step)
@@ -322,7 +312,7 @@ def run_online(
         t0 = time.thread_time()
         W = labels.static_weights(i, R, A)
         pairs, unit, loglik = _estep(state, X, W, labels.dynamic)
-        labels.dynamic_weights(W, i, loglik, len(X), state.exists)
+        labels.dynamic_weights(W, i, loglik, len(X), state.models.exists)
         all_weights[i] = W[row]
         if unit is not None:
             _update(state, pairs, unit, W, settings)
@@ -339,10 +329,10 @@ def run_online(
                 matching[c, k] = best_matching(cluster_counts[k])
             correct[c], means[c] = _measure(state, row, matching[c], test_features, test_actions)
             c += 1
-    params = GMMHMMParams(*(p[row] for p in state.params))
+    params = GMMHMMParams(*(p[row] for p in state.models.params))
     return OnlineRun(
         list(learners), tuple(actions), checkpoints, correct, all_weights, np.asarray(episode_actions),
-        np.asarray(test_actions), means, params, state.exists[row].copy(), matching, seconds,
+        np.asarray(test_actions), means, params, state.models.exists[row].copy(), matching, seconds,
     )  # fmt: skip
 
 
@@ -358,7 +348,7 @@ def _estep(state, X: np.ndarray, W: np.ndarray, dynamic: np.ndarray):
     """The E-step of every model that learns from episode ``X`` (weight ``W`` > 0) or whose likelihood labels
     it (``dynamic`` rows): the (row, action) pairs, their sufficient statistics (None without pairs) and the
     log-likelihoods, -inf elsewhere, shape (R, A)."""
-    pairs = np.nonzero(state.exists & ((W > 0) | dynamic[:, None]))
+    pairs = np.nonzero(state.models.exists & ((W > 0) | dynamic[:, None]))
     loglik = np.full(W.shape, -np.inf)
     unit = None
     if len(pairs[0]):
@@ -444,7 +434,7 @@ def _initialise(
     cache: dict,
 ) -> None:
     """Buffer the episode for every action without a model; train those whose buffer weighs enough."""
-    need = (~state.exists) & (W > 0)
+    need = (~state.models.exists) & (W > 0)
     for k, a in zip(*np.nonzero(need), strict=True):
         if k in skip:
             continue
@@ -469,7 +459,7 @@ def _cluster(
 ) -> None:
     """The clustering learners' first models (``rows``): k-means of the episodes seen so far, one model per
     cluster; each clustering learner's counts of its clusters against what names them (``naming``)."""
-    A = state.exists.shape[1]
+    A = state.models.exists.shape[1]
     labels = kmeans_labels(resampled(seen), A, seed)
     for k in rows:
         for a in range(A):
@@ -488,13 +478,13 @@ def _measure(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Which held-out gestures every learner recognises right (L, J), and its models' state means (L, A, Q,
     D): the models of row ``row[k]`` (R rows), their clusters named by ``matching[k]`` (L, A)."""
-    R, A = state.exists.shape
-    Q, D = state.params.means.shape[2], state.params.means.shape[-1]
-    pairs = np.nonzero(state.exists)
+    R, A = state.models.exists.shape
+    Q, D = state.models.params.means.shape[2], state.models.params.means.shape[-1]
+    pairs = np.nonzero(state.models.exists)
     means = np.full((R, A, Q, D), np.nan)
     ll = np.full((len(test_features), R, A), -np.inf)
     if len(pairs[0]):
-        means[pairs] = state.params.means[pairs][:, :, 0]
+        means[pairs] = state.models.params.means[pairs][:, :, 0]
     if len(pairs[0]) and len(test_features):
         ll[:, pairs[0], pairs[1]] = state.models.loglik(test_features, pairs)
     cluster = ll.argmax(axis=2)[:, row]  # (J, L)

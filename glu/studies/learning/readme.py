@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
@@ -78,17 +79,22 @@ def _random(claims: pd.DataFrame) -> str:
     return "Random labels as accurate as the network's: " + "; ".join(parts)
 
 
+def _one(df: pd.DataFrame, error: str, **match: Any) -> pd.Series:
+    """The one row of ``df`` whose columns equal ``match``; :class:`DataError` ``error`` otherwise."""
+    rows = df[np.logical_and.reduce([df[k].astype(object) == v for k, v in match.items()])]
+    if len(rows) != 1:
+        raise DataError(error)
+    return rows.iloc[0]
+
+
 def _person(summary: pd.DataFrame, study: str, features: str) -> dict[str, str]:
     s = summary[(summary["study"] == study) & (summary["features"] == features)]
-
-    def one(learner: str, words: bool = False) -> str:
-        r = s[(s["learner"] == learner) & (s["words"].astype(object) == words)]
-        if len(r) != 1:
-            raise DataError(f"learning_real_person_summary: no single row for {study}, {features}, {learner}")
-        r = r.iloc[0]
-        return f"{r['accuracy']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}]"
-
-    return {lr: one(lr) for lr in dict.fromkeys(s["learner"])}
+    out = {}
+    for lr in dict.fromkeys(s["learner"]):
+        error = f"learning_real_person_summary: no single row for {study}, {features}, {lr}"
+        r = _one(s, error, learner=lr, words=False)
+        out[lr] = f"{r['accuracy']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}]"
+    return out
 
 
 def _number_word(n: int) -> str:
@@ -107,24 +113,14 @@ def values(tables: Tables) -> dict[str, Any]:
     real = tables["learning_real_person_summary"][0]
 
     def label(amb: str, words: bool) -> float:
-        rows = labels[
-            (labels["world"] == "easy")
-            & (labels["ambiguity"] == amb)
-            & (labels["words"].astype(bool) == words)
-        ]
-        if len(rows) != 1:
-            raise DataError(f"learning_labels: no single row for the easy world, {amb}, words={words}")
-        return float(rows["label_accuracy"].iloc[0])
+        error = f"learning_labels: no single row for the easy world, {amb}, words={words}"
+        return float(_one(labels, error, world="easy", ambiguity=amb, words=words)["label_accuracy"])
 
     last = int(budgets["budget"].max())
 
     def true_acc(world: str) -> float:
-        r = budgets[
-            (budgets["world"] == world) & (budgets["learner"] == "true") & (budgets["budget"] == last)
-        ]
-        if len(r) != 1:
-            raise DataError(f"learning_budgets: no true-label row for the {world} world at {last} episodes")
-        return float(r["accuracy"].iloc[0])
+        error = f"learning_budgets: no true-label row for the {world} world at {last} episodes"
+        return float(_one(budgets, error, world=world, learner="true", budget=last)["accuracy"])
 
     fitted = _person(real, "fitted", "centred")
     names = {"true": "true labels", "hard": "hard labels", "soft": "soft labels", "random": "random labels"}

@@ -36,7 +36,7 @@ from glu.bn.inference import Engine
 from glu.errors import DataError
 from glu.gestures.corpus import LabelledSequence
 from glu.gestures.invariants import Invariants
-from glu.stats import LEVEL, adjust, adjusted_verdict, bootstrap_p_value
+from glu.stats import adjust, adjusted_verdict, bootstrap_p_value, interval
 from glu.studies.learning.online import Learner, OnlineSettings, run_online
 from glu.studies.learning.self_supervised import (
     AMBIGUITIES,
@@ -342,13 +342,16 @@ def real_person_summary(rows: pd.DataFrame, replicates: int = 2000) -> pd.DataFr
     segs = list(dict.fromkeys(rows["segment"]))
     cube = np.full((len(draws), len(segs), len(groups)), np.nan)
     index = {g: k for k, g in enumerate(groups)}
+    label_accuracy = {}
     for key, g in rows.groupby(keys, sort=False, dropna=False):
         piv = g.pivot_table(index="draw", columns="segment", values="correct", aggfunc="mean")
         cube[:, :, index[key]] = piv.reindex(index=draws, columns=segs).to_numpy(dtype=float)
+        label_accuracy[key] = g["label_accuracy"].mean()
     seed = rows.attrs.get("parameters", {}).get("draws", [0])
     rng = np.random.default_rng(np.random.SeedSequence(list(seed), spawn_key=(REAL_BOOT_KEY,)))
     reps = _crossed(np.nan_to_num(cube), replicates, rng)
-    q = [50 * (1 - LEVEL), 50 * (1 + LEVEL)]
+    lo, hi = interval(reps)
+    nan = np.full(len(reps), np.nan)
 
     def ref(study, features, learner):
         return index.get((study, features, learner, False))
@@ -356,23 +359,16 @@ def real_person_summary(rows: pd.DataFrame, replicates: int = 2000) -> pd.DataFr
     out = []
     for (study, features, learner, words), k in index.items():
         t, tap = ref(study, features, "true"), ref(study, features, "always_tap")
-        gap = reps[:, k] - reps[:, t] if t is not None else np.full(len(reps), np.nan)
-        vs = reps[:, k] - reps[:, tap] if tap is not None and tap != k else np.full(len(reps), np.nan)
-        g = rows[
-            (rows["study"] == study)
-            & (rows["features"] == features)
-            & (rows["learner"] == learner)
-            & (rows["words"] == words)
-        ]
+        gap = reps[:, k] - reps[:, t] if t is not None else nan
+        vs = reps[:, k] - reps[:, tap] if tap is not None and tap != k else nan
         out.append(
             dict(study=study, features=features, learner=learner, words=words, accuracy=reps[0, k])
-            | dict(zip(("ci_low", "ci_high"), np.percentile(reps[1:, k], q), strict=True))
-            | dict(gap=gap[0], gap_low=np.percentile(gap[1:], q[0]), gap_high=np.percentile(gap[1:], q[1]))
-            | dict(
-                vs_tap=vs[0], vs_tap_low=np.percentile(vs[1:], q[0]), vs_tap_high=np.percentile(vs[1:], q[1])
-            )
+            | dict(ci_low=lo[k], ci_high=hi[k])
+            | dict(zip(("gap", "gap_low", "gap_high"), (gap[0], *interval(gap)), strict=True))
+            | dict(zip(("vs_tap", "vs_tap_low", "vs_tap_high"), (vs[0], *interval(vs)), strict=True))
             | dict(p_vs_tap=float(bootstrap_p_value(vs)) if np.isfinite(vs[0]) else np.nan)
-            | dict(label_accuracy=g["label_accuracy"].mean(), draws=len(draws), segments=len(segs))
+            | dict(label_accuracy=label_accuracy[study, features, learner, words], draws=len(draws))
+            | dict(segments=len(segs))
             | dict(recordings=rows["recording"].nunique())
         )
     df = pd.DataFrame(out)

@@ -44,7 +44,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -108,6 +108,10 @@ EFFECTS: tuple[str, ...] = ("ObjVel",)
 """The effect the robot perceives by default: the object's velocity (TCDS's example)."""
 
 
+def _by_name(*items: Any) -> dict[str, Any]:
+    return {x.name: x for x in items}
+
+
 @dataclass(frozen=True)
 class Ambiguity:
     """How well the effects of the actions tell them apart.
@@ -135,22 +139,17 @@ class Ambiguity:
             check_probability(getattr(self, k), k, f"ambiguity {self.name!r}")
 
 
-AMBIGUITIES: dict[str, Ambiguity] = {
-    a.name: a
-    for a in (
-        Ambiguity(
-            "spheres",
-            "small and medium spheres: a tap rolls them, a touch does not",
-            Scenario.from_mapping({"Shape": {"sphere": 1}, "Size": {"small": 1, "medium": 1}}),
-        ),
-        Ambiguity("mixed", "every object, as in the robot's experiments"),
-        Ambiguity("still", "objects that never move", still=True),
-        Ambiguity(
-            "failed_taps", "half of the taps fail: the object stays, as after a touch", failed_taps=0.5
-        ),
-        Ambiguity("noisy", "the effect misperceived 30 % of the time", perception_noise=0.3),
-    )
-}
+AMBIGUITIES: dict[str, Ambiguity] = _by_name(
+    Ambiguity(
+        "spheres",
+        "small and medium spheres: a tap rolls them, a touch does not",
+        Scenario.from_mapping({"Shape": {"sphere": 1}, "Size": {"small": 1, "medium": 1}}),
+    ),
+    Ambiguity("mixed", "every object, as in the robot's experiments"),
+    Ambiguity("still", "objects that never move", still=True),
+    Ambiguity("failed_taps", "half of the taps fail: the object stays, as after a touch", failed_taps=0.5),
+    Ambiguity("noisy", "the effect misperceived 30 % of the time", perception_noise=0.3),
+)
 """The study's ambiguities, from effects that tell actions apart well to effects that mislead."""
 
 
@@ -160,8 +159,7 @@ class World:
 
     Attributes
     ----------
-    name : a short name
-    description : one line, for tables and figures
+    name, description : as an :class:`Ambiguity`'s
     noise : standard deviation of the sensor noise on every joint, metres
     variety : how far each person's arm length and movement style differ from the generator's standard
         ones (:class:`~glu.gestures.synthetic.View`; 0: the standard people)
@@ -198,26 +196,23 @@ class World:
         return [View(yaw_deg=float(y), variety=self.variety, body_frame=self.body_frame) for y in yaws]
 
 
-WORLDS: dict[str, World] = {
-    w.name: w
-    for w in (
-        World(
-            "easy",
-            "the generator's people facing the camera, 2 cm of sensor noise; effects of the action alone",
-        ),
-        World(
-            "hard",
-            "people varied (their own arm length and movement style), 5 cm of sensor noise, each turned by "
-            "up to 60° (body-frame features); the faster the gesture, the faster the object moves, whatever "
-            "the action, and the slowest quarter of the taps fail",
-            noise=0.05,
-            variety=1.0,
-            max_yaw=60.0,
-            body_frame=True,
-            effects=replace(GESTURE_WORLDS["gesture"], actions=AFFORDANCE_VALUES["Action"]),
-        ),
-    )
-}
+WORLDS: dict[str, World] = _by_name(
+    World(
+        "easy",
+        "the generator's people facing the camera, 2 cm of sensor noise; effects of the action alone",
+    ),
+    World(
+        "hard",
+        "people varied (their own arm length and movement style), 5 cm of sensor noise, each turned by "
+        "up to 60° (body-frame features); the faster the gesture, the faster the object moves, whatever "
+        "the action, and the slowest quarter of the taps fail",
+        noise=0.05,
+        variety=1.0,
+        max_yaw=60.0,
+        body_frame=True,
+        effects=replace(GESTURE_WORLDS["gesture"], actions=AFFORDANCE_VALUES["Action"]),
+    ),
+)
 """The study's worlds: the generator's world, where the label noise cannot depend on the gesture, and a
 harder one."""
 

@@ -292,9 +292,8 @@ def learning_study(
     scheduler: str | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> list[SeedResult]:
-    """Run every seed of the study: in this process (``workers=0``, no scheduler), on a Dask LocalCluster of
-    ``workers`` single-threaded processes, or on an existing Dask scheduler (``tcp://host:port``); one task
-    per seed. ``progress`` is called with each finished seed. Results are in the order of the seeds."""
+    """Run every seed of the study, one task each (here or on Dask, as :func:`run_units` runs them); results
+    in the order of the seeds."""
     return run_units(run_seed, engine, settings, settings.seeds, workers, scheduler, progress)
 
 
@@ -302,8 +301,8 @@ def run_units(
     task: Callable, engine: Engine, settings: Any, units: Sequence[Any], workers, scheduler, progress
 ) -> list[Any]:
     """``[task(engine, unit, settings) for unit in units]``: here (``workers=0``, no scheduler), or as Dask
-    tasks on a LocalCluster of ``workers`` processes or an existing ``scheduler``; ``progress(unit)`` after
-    each (if given); Ctrl-C kills the local workers."""
+    tasks on a LocalCluster of ``workers`` single-threaded processes or an existing ``scheduler``
+    (``tcp://host:port``); ``progress(unit)`` after each (if given); Ctrl-C kills the local workers."""
     if scheduler is None and not workers:
         out = []
         for u in units:

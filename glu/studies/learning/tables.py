@@ -69,12 +69,9 @@ class Replicates(NamedTuple):
 
     Attributes
     ----------
-    learners : (world, learner, ambiguity, words) of each column of ``hmm``
-    checkpoints : shape (C,)
+    learners, checkpoints, groups : as :class:`~glu.studies.learning.study.SeedResult` has them
     hmm : array, shape (B + 1, C, L)
-    groups : (world, ambiguity, words) of each column of ``network``
     network : array, shape (B + 1, G) — the network alone (no episodes)
-    true : int array, shape (L,) — the column of the true-label learner of each learner's world
     seeds, tests : how many seeds and held-out gestures per seed
     """
 
@@ -83,13 +80,12 @@ class Replicates(NamedTuple):
     hmm: np.ndarray
     groups: list[tuple[str, str, bool]]
     network: np.ndarray
-    true: np.ndarray
     seeds: int
     tests: int
 
     def gaps(self) -> np.ndarray:
         """Replicates of each learner's accuracy minus its world's true-label HMMs', shape (B + 1, C, L)."""
-        return self.hmm - self.hmm[:, :, self.true]
+        return self.hmm - self.hmm[:, :, [self.true_of(lr[0]) for lr in self.learners]]
 
     def network_gaps(self) -> np.ndarray:
         """The network alone minus the true-label HMMs of its world, shape (B + 1, C, G)."""
@@ -97,6 +93,7 @@ class Replicates(NamedTuple):
         return self.network[:, None, :] - self.hmm[:, :, idx]
 
     def true_of(self, world: str) -> int:
+        """The column of ``world``'s true-label learner."""
         return next(k for k, lr in enumerate(self.learners) if lr[0] == world and lr[1] == "true")
 
 
@@ -109,17 +106,12 @@ def replicates(results: Sequence[SeedResult], settings: StudySettings) -> Replic
     S, J = correct.shape[:2]
     rng = np.random.default_rng(np.random.SeedSequence(list(settings.seeds), spawn_key=(BOOT_KEY,)))
     W = two_level_weights(S, J, settings.bootstrap, rng)
-    learners = [tuple(lr) for lr in first.learners]
-    true = np.array(
-        [next(k for k, x in enumerate(learners) if x[0] == lr[0] and x[1] == "true") for lr in learners]
-    )
     return Replicates(
-        learners,
+        [tuple(lr) for lr in first.learners],
         np.asarray(first.checkpoints),
         replicate_means(correct, W),
         [tuple(g) for g in first.groups],
         replicate_means(network, W),
-        true,
         S,
         J,
     )
@@ -140,51 +132,41 @@ def curves_table(rep: Replicates, settings: StudySettings, data_source: str = ""
     the same world, seeds and held-out gestures), gap_low, gap_high, seeds, test_gestures. The network's rows
     repeat its (episode-free) accuracy at every checkpoint.
     """
-    lo, hi = interval(rep.hmm)
-    gaps = rep.gaps()
-    glo, ghi = interval(gaps)
-    nlo, nhi = interval(rep.network)
-    ngaps = rep.network_gaps()
-    nglo, nghi = interval(ngaps)
-    rows = []
-    for c, n in enumerate(rep.checkpoints):
-        for k, (world, lr, amb, words) in enumerate(rep.learners):
-            rows.append(
-                dict(world=world, learner=lr, ambiguity=amb, words=words, episodes=int(n))
-                | dict(accuracy=rep.hmm[0, c, k], ci_low=lo[c, k], ci_high=hi[c, k])
-                | dict(gap=gaps[0, c, k], gap_low=glo[c, k], gap_high=ghi[c, k])
-            )
-        for g, (world, amb, words) in enumerate(rep.groups):
-            rows.append(
-                dict(world=world, learner="network", ambiguity=amb, words=words, episodes=int(n))
-                | dict(accuracy=rep.network[0, g], ci_low=nlo[g], ci_high=nhi[g])
-                | dict(gap=ngaps[0, c, g], gap_low=nglo[c, g], gap_high=nghi[c, g])
-            )
+    names, acc, gap = _everyone(rep)
+    lo, hi = interval(acc)
+    glo, ghi = interval(gap)
+    rows = [
+        dict(world=world, learner=lr, ambiguity=amb, words=words, episodes=int(n))
+        | dict(accuracy=acc[0, c, k], ci_low=lo[c, k], ci_high=hi[c, k])
+        | dict(gap=gap[0, c, k], gap_low=glo[c, k], gap_high=ghi[c, k])
+        for c, n in enumerate(rep.checkpoints)
+        for k, (world, lr, amb, words) in enumerate(names)
+    ]
     return _stamp(pd.DataFrame(rows), "learning_curves", settings, data_source, rep)
+
+
+def _everyone(rep: Replicates) -> tuple[list[tuple[str, str, str, bool | None]], np.ndarray, np.ndarray]:
+    """Every learner, then the network alone of every group (learner ``network``), as (world, learner,
+    ambiguity, words), with their accuracy and gap replicates, shape (B + 1, C, L + G)."""
+    names = list(rep.learners) + [(world, "network", amb, words) for world, amb, words in rep.groups]
+    network = np.repeat(rep.network[:, None, :], len(rep.checkpoints), axis=1)
+    gaps = np.concatenate([rep.gaps(), rep.network_gaps()], axis=2)
+    return names, np.concatenate([rep.hmm, network], axis=2), gaps
 
 
 def _columns(rep: Replicates, budgets: Sequence[int]) -> tuple[list[dict], np.ndarray, np.ndarray]:
     """The main table's rows (without verdicts), their accuracy replicates and their gap replicates, (B + 1,
-    rows)."""
+    rows): at each budget, world by world, its learners and then its network rows."""
+    names, acc, gap = _everyone(rep)
     idx = {int(n): c for c, n in enumerate(rep.checkpoints)}
-    gaps, ngaps = rep.gaps(), rep.network_gaps()
-    rows, acc, gap = [], [], []
-    for n in budgets:
-        c = idx[int(n)]
-        for world in dict.fromkeys(lr[0] for lr in rep.learners):
-            for k, (wd, lr, amb, words) in enumerate(rep.learners):
-                if wd == world:
-                    rows.append(
-                        dict(world=wd, budget=int(n), learner=lr, ambiguity=amb, words=words, column=k)
-                    )
-                    acc.append(rep.hmm[:, c, k])
-                    gap.append(gaps[:, c, k])
-            for g, (wd, amb, words) in enumerate(rep.groups):
-                if wd == world:
-                    rows.append(dict(world=wd, budget=int(n), learner="network", ambiguity=amb, words=words))
-                    acc.append(rep.network[:, g])
-                    gap.append(ngaps[:, c, g])
-    return rows, np.stack(acc, axis=1), np.stack(gap, axis=1)
+    worlds = dict.fromkeys(lr[0] for lr in rep.learners)
+    cells = [(int(n), k) for n in budgets for w in worlds for k, name in enumerate(names) if name[0] == w]
+    rows = [
+        dict(world=names[k][0], budget=n, learner=names[k][1], ambiguity=names[k][2], words=names[k][3])
+        for n, k in cells
+    ]
+    acc = np.stack([acc[:, idx[n], k] for n, k in cells], axis=1)
+    return rows, acc, np.stack([gap[:, idx[n], k] for n, k in cells], axis=1)
 
 
 def budgets_table(rep: Replicates, settings: StudySettings, data_source: str = "") -> pd.DataFrame:
@@ -217,7 +199,6 @@ def budgets_table(rep: Replicates, settings: StudySettings, data_source: str = "
         for o, e, d, q in zip(own, df["equivalent"], df["gap"], df["q_difference"], strict=True)
     ]
     _against_random(df, acc)
-    df = df.drop(columns="column")
     df["margin"] = settings.margin
     return _stamp(df, "learning_budgets", settings, data_source, rep)
 

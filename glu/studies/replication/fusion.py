@@ -317,20 +317,13 @@ def network_summary(bn: BayesNet, table: pd.DataFrame, original: BayesNet | None
     from glu.bn.model import encode
 
     codes = encode(table, bn.schema)
-    rows = [
-        ("edges", len(bn.edges()), len(original.edges()) if original else np.nan),
-        ("log_likelihood", bn.log_likelihood(codes), original.log_likelihood(codes) if original else np.nan),
-        (
-            "zero_rows",
-            sum(bn.zero_rows().values()),
-            sum(original.zero_rows().values()) if original else np.nan,
-        ),
-        (
-            "lost_prior_mass",
-            1 - make_engine(bn).probability_of_evidence(),
-            1 - make_engine(original).probability_of_evidence() if original else np.nan,
-        ),
-    ]
+    quantities: dict[str, Callable[[BayesNet], float]] = {
+        "edges": lambda m: len(m.edges()),
+        "log_likelihood": lambda m: m.log_likelihood(codes),
+        "zero_rows": lambda m: sum(m.zero_rows().values()),
+        "lost_prior_mass": lambda m: 1 - make_engine(m).probability_of_evidence(),
+    }
+    rows = [(q, f(bn), f(original) if original else np.nan) for q, f in quantities.items()]
     if original is not None:
         rows += [
             ("differing_edges", len(set(bn.edges()) ^ set(original.edges())), 0),
@@ -349,40 +342,21 @@ def unseen_rows_comparison(zero: BayesNet, uniform: BayesNet) -> pd.DataFrame:
     Returns columns ``experiment, case, value, p_zero, p_uniform, uniform_minus_zero``.
     """
     rows = []
-    for (name, key, val_col), (a, b) in zip(
-        [
-            ("effect prediction", "case", "ObjVel"),
-            ("effect vs soft evidence", "case", "ObjVel"),
-            ("action vs soft evidence", "case", "Action"),
-        ],
-        [
-            (effect_prediction(zero), effect_prediction(uniform)),
-            (
-                effect_vs_soft_evidence(zero, rules=("virtual",)),
-                effect_vs_soft_evidence(uniform, rules=("virtual",)),
-            ),
-            (action_vs_soft_evidence(zero), action_vs_soft_evidence(uniform)),
-        ],
-        strict=True,
+    for name, val_col, table in (
+        ("effect prediction", "ObjVel", effect_prediction),
+        ("effect vs soft evidence", "ObjVel", lambda bn: effect_vs_soft_evidence(bn, rules=("virtual",))),
+        ("action vs soft evidence", "Action", action_vs_soft_evidence),
     ):
-        case = a[key] if "Shape" not in a else a["Shape"] + ", " + a[key]
+        a, b = table(zero), table(uniform)
+        case = a["case"] if "Shape" not in a else a["Shape"] + ", " + a["case"]
         rows.append(
             pd.DataFrame(
                 {"experiment": name, "case": case, "value": a[val_col], "p_zero": a["p"], "p_uniform": b["p"]}
             )
         )
     wz, wu = word_probability_change(zero), word_probability_change(uniform)
-    rows.append(
-        pd.DataFrame(
-            {
-                "experiment": "word change Δp(w)",
-                "case": wz["evidence"],
-                "value": wz["word"],
-                "p_zero": wz["delta"],
-                "p_uniform": wu["delta"],
-            }
-        )
-    )
+    words = {"experiment": "word change Δp(w)", "case": wz["evidence"], "value": wz["word"]}
+    rows.append(pd.DataFrame({**words, "p_zero": wz["delta"], "p_uniform": wu["delta"]}))
     df = pd.concat(rows, ignore_index=True)
     df["uniform_minus_zero"] = df["p_uniform"] - df["p_zero"]
     return tidy(df, "unseen_rows_comparison", model_source(zero))

@@ -257,21 +257,12 @@ def leave_one_out(
         testable = [s for s in te if s.action in trained_actions]
         if testable:
             rows += _predict_rows(recs[key], testable, held_out=key, testable=True)
-        for s in te:
-            if s.action not in trained_actions:
-                rows.append(
-                    {
-                        "held_out": key,
-                        "testable": False,
-                        "recording": s.recording,
-                        "start": s.start,
-                        "end": s.end,
-                        "n_frames": len(s.xyz),
-                        "action": s.action,
-                        "predicted": None,
-                        "correct": False,
-                    }
-                )
+        rows += [
+            {"held_out": key, "testable": False, "recording": s.recording, "start": s.start, "end": s.end}
+            | {"n_frames": len(s.xyz), "action": s.action, "predicted": None, "correct": False}
+            for s in te
+            if s.action not in trained_actions
+        ]
     return tidy(
         pd.DataFrame(rows),
         f"hmm_leave_one_{by}_out",

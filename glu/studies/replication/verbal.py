@@ -41,6 +41,11 @@ from glu.language.sampling import sample_probability, sample_sentences
 from glu.language.sentences import WordNetwork, compile_network
 from glu.tidy import model_source, tidy
 
+Grammars = Grammar | WordNetwork | None
+"""A grammar, one already compiled, or None: glu's (:func:`glu.language.descriptions.word_network`)."""
+Sentences = Iterable[Iterable[str]] | None
+"""Candidate sentences to rank (each a string or its words), or None: the exact search over the grammar."""
+
 EVIDENCE_YELLOW_SPHERE: dict[str, str] = {
     "Color": "yellow",
     "Size": "big",
@@ -75,30 +80,14 @@ PUBLISHED_LISTS: dict[str, dict[str, str]] = {
 
 
 def yellow_sphere_nbest(
-    engine: Any,
-    n: int = 10,
-    grammar: Grammar | WordNetwork | None = None,
-    score: str = DEFAULT_SCORE,
-    candidates: Iterable[Iterable[str]] | None = None,
+    engine, n: int = 10, grammar: Grammars = None, score: str = DEFAULT_SCORE, candidates: Sentences = None
 ) -> pd.DataFrame:
     """The ``n`` best descriptions of {Color=yellow, Size=big, Shape=sphere, ObjVel=fast} (TCDS Table II).
 
-    Exact over the grammar, or ranked among ``candidates`` (see :func:`glu.language.describe`).
-
-    Returns
-    -------
-    DataFrame with columns rank, sentence, score, length (``n`` rows, best first).
+    Exact over the grammar, or ranked among ``candidates`` (see :func:`glu.language.describe`): a DataFrame
+    with columns rank, sentence, score, length (``n`` rows, best first).
     """
-    df = describe(engine, EVIDENCE_YELLOW_SPHERE, n=n, grammar=grammar, score=score, candidates=candidates)
-    return tidy(
-        df,
-        "verbal_yellow_sphere_nbest",
-        model_source(engine.bn),
-        evidence=EVIDENCE_YELLOW_SPHERE,
-        n=n,
-        score=score,
-        candidates="grammar" if candidates is None else "list",
-    )
+    return _nbest_lists(engine, "verbal_yellow_sphere_nbest", None, n, grammar, score, candidates)
 
 
 def and_but_probabilities(engine: Any, compare: bool = False) -> pd.DataFrame:
@@ -123,43 +112,48 @@ def and_but_probabilities(engine: Any, compare: bool = False) -> pd.DataFrame:
         df["paper_p"] = [paper[o, w] for o, w in zip(df["ObjVel"], df["word"], strict=True)]
         df["difference"] = df["p"] - df["paper_p"]
         df["resolution"] = bars["resolution"]
-    return tidy(df, "verbal_and_but", model_source(engine.bn), evidence=EVIDENCE_AND_BUT)
+    return _table(df, "verbal_and_but", engine, evidence=EVIDENCE_AND_BUT)
 
 
 def and_but_nbest(
-    engine: Any,
-    n: int = 10,
-    grammar: Grammar | WordNetwork | None = None,
-    score: str = DEFAULT_SCORE,
-    candidates: Iterable[Iterable[str]] | None = None,
+    engine, n: int = 10, grammar: Grammars = None, score: str = DEFAULT_SCORE, candidates: Sentences = None
 ) -> pd.DataFrame:
     """The ``n`` best descriptions under each of the two and/but evidence sets (TCDS Fig. 7).
 
-    Exact over the grammar, or ranked among ``candidates`` (see :func:`glu.language.describe`).
-
-    Returns
-    -------
-    DataFrame with columns ObjVel, evidence, rank, sentence, score, length, conjunction (the sentence's
-    "and"/"but"); ``2 n`` rows, ObjVel medium first.
+    As :func:`yellow_sphere_nbest`, with the columns ObjVel, evidence, rank, sentence, score, length,
+    conjunction (the sentence's "and"/"but"); ``2 n`` rows, ObjVel medium first.
     """
+    return _nbest_lists(engine, "verbal_and_but_nbest", EVIDENCE_AND_BUT, n, grammar, score, candidates)
+
+
+def _nbest_lists(
+    engine: Any, name: str, sets: dict | None, n: int, grammar: Grammars, score: str, candidates: Sentences
+) -> pd.DataFrame:
+    """The lists of :func:`and_but_nbest` (``sets``) or :func:`yellow_sphere_nbest` (``sets`` None)."""
     net = word_network(grammar)
     cands = None if candidates is None else SentenceSet.of(candidates)
     frames = []
-    for objvel, ev in EVIDENCE_AND_BUT.items():
+    for objvel, ev in (sets or {None: EVIDENCE_YELLOW_SPHERE}).items():
         df = describe(engine, ev, n=n, grammar=net, score=score, candidates=cands)
-        df.insert(0, "evidence", format_evidence(ev))
-        df.insert(0, "ObjVel", objvel)
-        df["conjunction"] = [_conjunction(s) for s in df["sentence"]]
+        if sets:
+            df.insert(0, "evidence", format_evidence(ev))
+            df.insert(0, "ObjVel", objvel)
+            df["conjunction"] = [_conjunction(s) for s in df["sentence"]]
         frames.append(df)
-    return tidy(
+    return _table(
         pd.concat(frames, ignore_index=True),
-        "verbal_and_but_nbest",
-        model_source(engine.bn),
-        evidence=EVIDENCE_AND_BUT,
+        name,
+        engine,
+        evidence=sets or EVIDENCE_YELLOW_SPHERE,
         n=n,
         score=score,
         candidates="grammar" if cands is None else "list",
     )
+
+
+def _table(df: pd.DataFrame, name: str, engine: Any, **parameters: Any) -> pd.DataFrame:
+    """``df`` stamped (:func:`~glu.tidy.tidy`) with the network's source and ``parameters``."""
+    return tidy(df, name, model_source(engine.bn), **parameters)
 
 
 def _conjunction(sentence: str) -> str:
@@ -167,7 +161,7 @@ def _conjunction(sentence: str) -> str:
     return found[0] if found else ""
 
 
-def fig8_descriptions(engine: Any, grammar: Grammar | WordNetwork | None = None) -> pd.DataFrame:
+def fig8_descriptions(engine: Any, grammar: Grammars = None) -> pd.DataFrame:
     """The single best description of each TCDS Fig. 8 situation, and the best one that names a colour.
 
     Returns
@@ -190,12 +184,10 @@ def fig8_descriptions(engine: Any, grammar: Grammar | WordNetwork | None = None)
                 "colour_score": float(colour["score"]),
             }
         )
-    return tidy(pd.DataFrame(rows), "verbal_fig8", model_source(engine.bn), evidence=EVIDENCE_FIG8)
+    return _table(pd.DataFrame(rows), "verbal_fig8", engine, evidence=EVIDENCE_FIG8)
 
 
-def published_descriptions(
-    engine: Any, candidates: Iterable[Iterable[str]] | None, score: str = "original"
-) -> pd.DataFrame:
+def published_descriptions(engine: Any, candidates: Sentences, score: str = "original") -> pd.DataFrame:
     """TCDS Table II, Fig. 7(a), 7(b) and the four Fig. 8 sentences: the paper's beside glu's.
 
     Parameters
@@ -236,10 +228,10 @@ def published_descriptions(
                 }
             )
     what = "grammar" if cands is None else f"{len(set(map(tuple, cands)))} candidate sentences"
-    return tidy(
+    return _table(
         pd.DataFrame(rows),
         "verbal_published_descriptions",
-        model_source(engine.bn),
+        engine,
         score=score,
         candidates=what,
         reference=published()["read_from"],
@@ -296,10 +288,10 @@ def exact_vs_samples(
                     "rank_under_other": _rank_in(every[other], exact_under_other),
                 }
             )
-    return tidy(
+    return _table(
         pd.DataFrame(rows),
         "verbal_exact_vs_samples",
-        model_source(engine.bn),
+        engine,
         n_samples=len(sample_set),
         evidence=dict(evidence_sets),
     )
@@ -359,10 +351,10 @@ def sampling_vs_exact(
                 "p_draw_best": float(p_draw),
             }
         )
-    return tidy(
+    return _table(
         pd.DataFrame(rows),
         "verbal_sampling_vs_exact",
-        model_source(engine.bn),
+        engine,
         evidence=evidence,
         seeds=seeds,
         n_samples=n_samples,
@@ -395,10 +387,10 @@ def sampling_trials(
         sampling_vs_exact(engine, ev, seeds, n_samples, n, g, score, drawn).assign(figure=key)
         for key, ev in evidence_sets.items()
     ]
-    return tidy(
+    return _table(
         pd.concat(frames, ignore_index=True),
         "verbal_sampling_trials",
-        model_source(engine.bn),
+        engine,
         seeds=seeds,
         evidence=dict(evidence_sets),
         n_samples=n_samples,

@@ -44,17 +44,13 @@ def plot_nbest(
 ) -> Axes:
     """A dot plot of the scores of an N-best list: rank 1 at the top, the ranked sentences as labels.
 
+    Each score is also written in a column right of the axes.
+
     Parameters
     ----------
-    ax : the axes to draw on
     nbest : DataFrame with columns sentence and score (as returned by :func:`glu.language.nbest`)
-    title : axes title
     highlight : a word; sentences containing it are drawn in its colour (:data:`WORD_COLORS`)
     score : the name of the score (:data:`SCORE_LABELS`), for the axis label
-
-    Returns
-    -------
-    the Axes; each score is also written in a column right of the axes
     """
     df = nbest.reset_index(drop=True)
     y = np.arange(len(df))
@@ -86,16 +82,8 @@ def plot_nbest(
 def plot_and_but(ax: Axes, probs: pd.DataFrame) -> Axes:
     """Grouped bars of P(and | e) and P(but | e) per evidence set, each labelled with its word and value.
 
-    Parameters
-    ----------
-    ax : the axes to draw on
-    probs : DataFrame with columns ObjVel, word, p (as
-        :func:`glu.studies.replication.verbal.and_but_probabilities`), and ``paper_p`` when compared with
-        TCDS 2020 Fig. 7 (drawn as black marks)
-
-    Returns
-    -------
-    the Axes
+    ``probs``: columns ObjVel, word, p (as :func:`glu.studies.replication.verbal.and_but_probabilities`),
+    and ``paper_p`` when compared with TCDS 2020 Fig. 7 (drawn as black marks).
     """
     groups = list(dict.fromkeys(probs["ObjVel"]))
     words = list(dict.fromkeys(probs["word"]))
@@ -149,7 +137,6 @@ def plot_sampling(
 
     Parameters
     ----------
-    ax : the axes to draw on
     scores : the score of every sentence, shape (n_sentences,) (:func:`glu.language.all_scores`)
     sample_scores : the scores of the sampled sentences, shape (n_samples,)
     exact_best : the best score of the grammar
@@ -157,10 +144,6 @@ def plot_sampling(
     score : the name of the score (:data:`SCORE_LABELS`), for the axis label
     title : the first line of the title; the sentences scoring −∞ (not drawn) and why the sample's
         histogram differs from the grammar's are written below it
-
-    Returns
-    -------
-    the Axes
     """
     finite = scores[np.isfinite(scores)]
     fs = sample_scores[np.isfinite(sample_scores)]
