@@ -329,27 +329,22 @@ def cell_label(row: Mapping[str, Any], features: bool = True) -> str:
     return out
 
 
-def factor_levels(verdicts: pd.DataFrame) -> dict[str, list[str]]:
-    """Each factor of the cells' levels as the sentences name them (learned networks by their table size)."""
-    net = [
-        "generating" if n == "generating" else f"learned ({int(k)})"
-        for n, k in dict.fromkeys(zip(verdicts.inference_network, verdicts.learn_experiments, strict=True))
+def network_names(frame: pd.DataFrame) -> list[str]:
+    """:func:`network_name` of every row of ``frame``."""
+    return [
+        network_name({"inference_network": n, "learn_experiments": k})
+        for n, k in zip(frame.inference_network, frame.learn_experiments, strict=True)
     ]
+
+
+def factor_levels(verdicts: pd.DataFrame) -> dict[str, np.ndarray]:
+    """Each row's level of each factor of the cells, as the sentences name them (learned networks by their
+    table size)."""
     return {
-        "actions": [ACTION_WORDS.get(a, a) for a in dict.fromkeys(verdicts.action_prior)],
-        "network": net,
-        "p_HMM": list(dict.fromkeys(verdicts.p_hmm)),
+        "actions": verdicts.action_prior.map(lambda a: ACTION_WORDS.get(a, a)).to_numpy(),
+        "network": np.array(network_names(verdicts), dtype=object),
+        "p_HMM": verdicts.p_hmm.to_numpy(),
     }
-
-
-def _level(row: Any, factor: str) -> str:
-    if factor == "actions":
-        return ACTION_WORDS.get(row.action_prior, row.action_prior)
-    if factor == "p_HMM":
-        return row.p_hmm
-    return network_name(
-        {"inference_network": row.inference_network, "learn_experiments": row.learn_experiments}
-    )
 
 
 SAID = {"better": "holds", "worse": "is reversed", "no difference": "is not supported"}
@@ -360,37 +355,32 @@ def _counts(g: pd.DataFrame) -> tuple[int, int, int, int]:
     return len(g), int(c.get("better", 0)), int(c.get("no difference", 0)), int(c.get("worse", 0))
 
 
+def _held(name: str, h: pd.DataFrame) -> str:
+    """``"raw 3/12 (reversed in 1)"``: in how many of ``h``'s cells a finding holds (and is reversed)."""
+    n, better, _, worse = _counts(h)
+    return f"{name} {better}/{n}" + (f" (reversed in {worse})" if worse else "")
+
+
 def _elsewhere(g: pd.DataFrame) -> str:
     """Where a finding's count of cells changes from the front view's: per turned viewpoint and feature set,
     with effects that depend on the gesture, and per noise level (viewpoints pooled), raw features."""
     parts = []
     views = [v for v in viewpoints(g) if v != FRONT["viewpoint"]]
     features = list(dict.fromkeys(g.features))
+
+    def per_features(h: pd.DataFrame) -> str:
+        return ", ".join(_held(f, h[h.features == f]) for f in features if (h.features == f).any())
+
     base = g[(g.effects == FRONT["effects"]) & g.noise.isna()]
     for view in views:
-        per = []
-        for f in features:
-            h = base[(base.viewpoint == view) & (base.features == f)]
-            if len(h):
-                n, better, _, worse = _counts(h)
-                per.append(f"{f} {better}/{n}" + (f" (reversed in {worse})" if worse else ""))
-        if per:
-            parts.append(f"{view}: " + ", ".join(per))
+        if per := per_features(base[base.viewpoint == view]):
+            parts.append(f"{view}: {per}")
     other = g[(g.effects != FRONT["effects"]) & g.noise.isna() & (g.viewpoint == FRONT["viewpoint"])]
     for effects, h in other.groupby("effects", sort=False):
-        per = []
-        for f in features:
-            k = h[h.features == f]
-            if len(k):
-                n, better, _, worse = _counts(k)
-                per.append(f"{f} {better}/{n}" + (f" (reversed in {worse})" if worse else ""))
-        parts.append(f"front view with {EFFECT_WORDS.get(effects, effects)}: " + ", ".join(per))
+        parts.append(f"front view with {EFFECT_WORDS.get(effects, effects)}: {per_features(h)}")
     noisy = g[(g.effects == FRONT["effects"]) & g.noise.notna() & (g.viewpoint == "all")]
     noisy = noisy[noisy.features == FRONT["features"]]
-    per = []
-    for noise, h in noisy.groupby("noise", sort=True):
-        n, better, _, worse = _counts(h)
-        per.append(f"{noise * 100:g} cm {better}/{n}" + (f" (reversed in {worse})" if worse else ""))
+    per = [_held(f"{noise * 100:g} cm", h) for noise, h in noisy.groupby("noise", sort=True)]
     if len(per) > 1:
         parts.append("raw features, all viewpoints, by sensor noise: " + ", ".join(per))
     return "; ".join(parts)
@@ -429,12 +419,13 @@ def finding_sentences(
             f"reverse in {worse}"
         )
         levels = []
-        for factor, values in factor_levels(front).items():
+        for factor, level in factor_levels(front).items():
+            values = list(dict.fromkeys(level))
             if brief or len(values) < 2:
                 continue
             per = []
             for value in values:
-                h = front[[_level(row, factor) == value for row in front.itertuples()]]
+                h = front[level == value]
                 per.append(f"{value} {int((h.verdict_adjusted == 'better').sum())}/{len(h)}")
             levels.append(", ".join(per) if factor == "actions" else f"{factor}: {', '.join(per)}")
         text = f"{head}; {body}" + (f" (where it holds: {'; '.join(levels)})" if levels else "")
@@ -483,10 +474,7 @@ def winners_table(win: pd.DataFrame, shown: Sequence[tuple[str, str]]) -> pd.Dat
     """:func:`winners` as a table: one row per (target, metric, action prior, network), one column per p_HMM
     reading, cells ``"jeffrey 0.912 [0.90, 0.93] = virtual"``."""
     rows = win[[(t, m) in set(shown) for t, m in zip(win.target, win.metric, strict=True)]].copy()
-    rows["network"] = [
-        n if n == "generating" else f"learned ({int(k)})"
-        for n, k in zip(rows.inference_network, rows.learn_experiments, strict=True)
-    ]
+    rows["network"] = network_names(rows)
     rows["cell"] = [
         f"{r.best} {r.estimate:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]"
         + "".join(f" = {t}" for t in r.tied.split(", ") if t and t != r.best)
