@@ -286,7 +286,7 @@ def plot_by_viewpoint(
     sel = sel[sel.noise.isna() & (sel.viewpoint != "all")]
     views = viewpoints(sel)
     x = np.arange(len(views))
-    strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
+    strats = list(dict.fromkeys(sel.strategy))
     if strategies is not None:  # in the order asked for
         strats = [s for s in strategies if s in strats]
     for k, strategy in enumerate(strats):
