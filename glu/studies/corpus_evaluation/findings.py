@@ -54,8 +54,10 @@ FRONT: dict[str, Any] = {"effects": "action", "features": "raw", "viewpoint": "f
 """Where the findings are read first: the front view, where the recogniser works, with the originals' raw
 features, in the world the fusion rules assume (pooled over the noise levels)."""
 ADJUSTMENT = "bh"
-"""The findings' multiplicity adjustment (:func:`glu.stats.adjust`): the verdicts of the findings table are
-one family."""
+"""How each family of verdicts is adjusted for its size (:func:`glu.stats.adjust`): Benjamini–Hochberg,
+since the smallest bootstrap p-value, 2 / (B + 1), puts Holm's first threshold out of reach of a family of
+more than α (B + 1) / 2 differences (:mod:`glu.stats`). The verdicts of the findings table are one family;
+the sweep's differences one per pooling (:func:`glu.studies.corpus_evaluation.tables.adjust_families`)."""
 
 
 @dataclass(frozen=True)
@@ -184,7 +186,7 @@ def winners(
     sel = pooled(table, viewpoint)
     sel = sel[np.isclose(sel.fraction, full) & ~sel.strategy.isin(REFERENCES)].copy()
     keys = [*DESIGN, "target", "metric"]
-    up = sel.metric.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    up = higher_is_better(sel.metric)
     sel["_rank"] = np.where(up, -sel.estimate.to_numpy(dtype=float), sel.estimate.to_numpy(dtype=float))
     best = sel.sort_values([*keys, "_rank"], kind="stable").drop_duplicates(keys, keep="first")
     best = best[[*keys, "strategy", "estimate", "ci_low", "ci_high"]].rename(columns={"strategy": "best"})
@@ -259,11 +261,18 @@ def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS
         return pd.DataFrame(columns=cols)
     out = pd.concat(parts, ignore_index=True)
     out["p_adjusted"] = adjust(out["p_value"].to_numpy(dtype=float), ADJUSTMENT)
-    up = out["metric"].map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
-    out["verdict_adjusted"] = adjusted_verdicts(
-        out["difference"].to_numpy(), out["p_adjusted"].to_numpy(), up
-    )
+    out["verdict_adjusted"] = verdicts_adjusted(out)
     return out[cols]
+
+
+def higher_is_better(metrics: pd.Series) -> np.ndarray:
+    """Per row, whether a higher value of its metric is better (:data:`glu.stats.HIGHER_IS_BETTER`)."""
+    return metrics.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+
+
+def verdicts_adjusted(frame: pd.DataFrame) -> np.ndarray:
+    """The adjusted verdict of every row of a differences table (its difference, p_adjusted and metric)."""
+    return adjusted_verdicts(frame["difference"], frame["p_adjusted"], higher_is_better(frame["metric"]))
 
 
 def adjusted_verdicts(difference: np.ndarray, p_adjusted: np.ndarray, up: np.ndarray) -> np.ndarray:

@@ -17,7 +17,7 @@ from glu.errors import DataError
 from glu.files import atomic_path, atomic_write_json, atomic_write_text
 from glu.studies.corpus_evaluation.config import SweepConfig
 from glu.studies.corpus_evaluation.evaluation import Evaluator
-from glu.studies.corpus_evaluation.findings import DESIGN, adjusted_verdicts, winners
+from glu.studies.corpus_evaluation.findings import ADJUSTMENT, DESIGN, verdicts_adjusted, winners
 from glu.studies.corpus_evaluation.intervals import (
     block_frame,
     difference_block,
@@ -44,10 +44,6 @@ FILES = (*(f"{file}.parquet" for file, _ in TABLES), "summary.json", "summary.cs
 CONDITION_FACTORS: tuple[str, ...] = ("effects", "action_prior")
 """The simulated conditions' factors that every table keeps apart (the noise and the viewpoint are also
 pooled)."""
-ADJUSTMENT = "bh"
-"""How each family of verdicts is adjusted for its size (:func:`glu.stats.adjust`): Benjamini–Hochberg,
-since the smallest bootstrap p-value, 2 / (B + 1), puts Holm's first threshold out of reach of a family of
-more than α (B + 1) / 2 differences (:mod:`glu.stats`)."""
 
 
 def chunk_path(out: Path, index: int, chunk: int) -> Path:
@@ -171,17 +167,14 @@ def adjust_families(diffs: pd.DataFrame, families: Sequence[str]) -> pd.DataFram
     """``diffs`` with ``p_adjusted`` (:data:`ADJUSTMENT` within each family: the rows that share the values
     of ``families``) and ``verdict_adjusted`` (a verdict only where the adjusted p-value is at most α, in the
     direction of the difference)."""
-    from glu.stats import HIGHER_IS_BETTER, adjust
+    from glu.stats import adjust
 
     out = diffs.copy()
     out["p_adjusted"] = np.nan
     keys = [out[f].fillna(-1.0) if out[f].dtype.kind == "f" else out[f] for f in families]
     for _, idx in out.groupby(keys, sort=False, dropna=False).groups.items():
         out.loc[idx, "p_adjusted"] = adjust(out.loc[idx, "p_value"].to_numpy(), ADJUSTMENT)
-    up = out["metric"].map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
-    out["verdict_adjusted"] = adjusted_verdicts(
-        out["difference"].to_numpy(), out["p_adjusted"].to_numpy(), up
-    )
+    out["verdict_adjusted"] = verdicts_adjusted(out)
     return out
 
 
