@@ -453,9 +453,7 @@ def p_text(p: float) -> str:
 def seed_spread(seeds: pd.DataFrame, cell: Mapping[str, Any] = REFERENCE_CELL) -> pd.DataFrame:
     """Per strategy of the action target, the accuracy of each recogniser seed at the full gesture in one
     cell: the spread the seed level of the intervals carries. Columns: strategy, min, max, seeds."""
-    sel = seeds[(seeds.target == "action") & (seeds.metric == "accuracy")]
-    for k, v in cell.items():
-        sel = sel[sel[k] == v]
+    sel = select(seeds[(seeds.target == "action") & (seeds.metric == "accuracy")], cell)
     sel = sel[np.isclose(sel.fraction, sel.fraction.max())]
     out = sel.groupby("strategy", sort=False).estimate.agg(["min", "max", "count"]).reset_index()
     return out.rename(columns={"count": "seeds"})
@@ -551,12 +549,6 @@ def metric_rows(table: pd.DataFrame, target: str, metric: str, fraction: float) 
     return table[(table.target == target) & (table.metric == metric) & np.isclose(table.fraction, fraction)]
 
 
-def _cell_rows(
-    table: pd.DataFrame, cell: Mapping[str, Any], target: str, metric: str, fraction: float, viewpoint: str
-) -> pd.DataFrame:
-    return metric_rows(select(pooled(table, viewpoint), cell), target, metric, fraction)
-
-
 def network_alone_sentences(table: pd.DataFrame) -> list[str]:
     """For the contrasted cells on the front view (noise pooled), early and at the full gesture: the effect's
     log-loss and ECE of the network alone beside every fusion rule and the true action (an oracle)."""
@@ -568,7 +560,7 @@ def network_alone_sentences(table: pd.DataFrame) -> list[str]:
         for f in (fractions[0], fractions[-1]):
             parts = []
             for metric in ("log_loss", "ece"):
-                g = _cell_rows(table, cell, "effect", metric, f, view).set_index("strategy")
+                g = metric_rows(select(pooled(table, view), cell), "effect", metric, f).set_index("strategy")
                 if "network" not in g.index:
                     continue
                 net = g.loc["network"]
