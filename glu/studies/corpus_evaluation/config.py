@@ -267,14 +267,7 @@ class SweepConfig:
             "chunk_size": self.chunk_size,
             "recognizer_seeds": self.recognizer_seeds,
             "grid": {
-                "effects": list(self.effects),
-                "action_prior": list(self.action_prior),
-                "inference_network": list(self.inference_network),
-                "learn_experiments": list(self.learn_experiments),
-                "p_hmm": list(self.p_hmm),
-                "features": list(self.features),
-                "noise": list(self.noise),
-                "viewpoints": list(self.viewpoints),
+                **{k: list(getattr(self, k)) for k in (*DESIGN, "noise", "viewpoints")},
                 "fractions": list(self.evaluation.fractions),
                 "strategies": list(self.evaluation.strategies),
             },
@@ -401,14 +394,7 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
         ev["log_floor"] = float(ev["log_floor"])
     if isinstance(ev.get("fractions"), tuple):
         ev["fractions"] = tuple(float(f) if _number(f) else f for f in ev["fractions"])
-    extra = {}
-    if "noise" in grid:
-        extra["noise"] = _list("grid.noise", grid["noise"])
-    if "viewpoints" in grid:
-        extra["viewpoints"] = _list("grid.viewpoints", grid["viewpoints"])
-    for name in ("effects", "action_prior", "inference_network", "learn_experiments", "p_hmm", "features"):
-        if name in grid:
-            extra[name] = _list(f"grid.{name}", grid[name])
+    extra = {k: _list(f"grid.{k}", grid[k]) for k in ("noise", "viewpoints", *DESIGN) if k in grid}
     return SweepConfig(
         **top,
         **extra,

@@ -35,7 +35,14 @@ from glu.plots.style import (
     strategy_label,
     strategy_style,
 )
-from glu.studies.corpus_evaluation.findings import REFERENCE_CELL, cell_label, metric_rows, viewpoints
+from glu.studies.corpus_evaluation.findings import (
+    REFERENCE_CELL,
+    cell_label,
+    metric_rows,
+    pair,
+    select,
+    viewpoints,
+)
 
 METRIC_LABEL = {
     "accuracy": "accuracy",
@@ -61,9 +68,7 @@ def where_label(where: Mapping[str, Any] | None) -> str:
 
 def _cell(frame: pd.DataFrame, where: Mapping[str, Any] | None) -> pd.DataFrame:
     """The rows of one cell of the design (``where``: column → value; None: the reference cell)."""
-    for k, v in (REFERENCE_CELL if where is None else where).items():
-        frame = frame[frame[k] == v]
-    return frame
+    return select(frame, REFERENCE_CELL if where is None else where)
 
 
 def _pooled(
@@ -231,30 +236,16 @@ def plot_differences(
     sel = sel[np.isclose(sel.fraction, fraction)]
     labels = []
     for i, (target, metric, strategy, baseline) in enumerate(pairs):
-        row = sel[
-            (sel.target == target)
-            & (sel.metric == metric)
-            & (sel.strategy == strategy)
-            & (sel.baseline == baseline)
-        ]
-        sign = 1.0
-        if row.empty:  # stored the other way round
-            row = sel[
-                (sel.target == target)
-                & (sel.metric == metric)
-                & (sel.strategy == baseline)
-                & (sel.baseline == strategy)
-            ]
-            sign = -1.0
+        row = pair(sel, target, metric, strategy, baseline)  # flipped if stored the other way round
         if row.empty:
             continue
         r = row.iloc[0]
-        lo, hi = sorted((sign * r.ci_low, sign * r.ci_high))
+        lo, hi = r.ci_low, r.ci_high
         c, marker = STRATEGY_COLORS.get(strategy, "black"), STRATEGY_MARKERS.get(strategy, "o")
         ax.plot([lo, hi], [i, i], color=c, lw=2)
         filled = c if _better(metric, lo, hi) else "white"
-        ax.plot([sign * r.difference], [i], marker=marker, ms=7, color=c, mfc=filled, ls="none")
-        value = f"{sign * r.difference:+.3f} [{lo:+.3f}, {hi:+.3f}]".replace("-", "−")
+        ax.plot([r.difference], [i], marker=marker, ms=7, color=c, mfc=filled, ls="none")
+        value = f"{r.difference:+.3f} [{lo:+.3f}, {hi:+.3f}]".replace("-", "−")
         ax.text(1.02, i, value, va="center", fontsize=7, color="0.2", transform=ax.get_yaxis_transform())
         better = "higher" if _higher(metric) else "lower"
         what = f"{target} {METRIC_LABEL.get(metric, metric)} ({better} is better)"
@@ -295,7 +286,7 @@ def plot_by_viewpoint(
     sel = sel[sel.noise.isna() & (sel.viewpoint != "all")]
     views = viewpoints(sel)
     x = np.arange(len(views))
-    strats = [s for s in dict.fromkeys(sel.strategy) if strategies is None or s in strategies]
+    strats = list(dict.fromkeys(sel.strategy))
     if strategies is not None:  # in the order asked for
         strats = [s for s in strategies if s in strats]
     for k, strategy in enumerate(strats):
@@ -336,7 +327,7 @@ def plot_winners(ax: Axes, winners: pd.DataFrame, target: str, metric: str) -> A
     for r in sel.itertuples():
         i, j = rows.index((r.action_prior, r.network)), cols.index(r.p_hmm)
         c = STRATEGY_COLORS.get(r.best, "0.5")
-        ax.add_patch(plt_rectangle(j, i, c))
+        ax.add_patch(plt_rectangle(j, i, c, alpha=0.35))
         tied = [INITIALS.get(t, t) for t in r.tied.split(", ") if t and t != r.best]
         ax.text(j, i + (0.12 if tied else 0.0), r.best, ha="center", va="center", fontsize=7, weight="bold")
         if tied:
@@ -349,11 +340,12 @@ def plot_winners(ax: Axes, winners: pd.DataFrame, target: str, metric: str) -> A
     return ax
 
 
-def plt_rectangle(x: float, y: float, color: str) -> Any:
-    """A cell of :func:`plot_winners`: a unit square centred on (x, y), lightly filled."""
+def plt_rectangle(x: float, y: float, color: Any, **look: Any) -> Any:
+    """A cell of :func:`plot_winners` and :func:`findings_figure`: a unit square centred on (x, y) with a
+    white edge (``look``: e.g. ``alpha``)."""
     from matplotlib.patches import Rectangle
 
-    return Rectangle((x - 0.5, y - 0.5), 1, 1, facecolor=color, alpha=0.35, edgecolor="white", lw=1.5)
+    return Rectangle((x - 0.5, y - 0.5), 1, 1, facecolor=color, **look, edgecolor="white", lw=1.5)
 
 
 def plot_segment_readings(ax: Axes, readings: pd.DataFrame) -> Axes:
@@ -412,8 +404,7 @@ def plot_p_hmm_reliability(
         & np.isclose(reliability.fraction, fraction)
         & (reliability.n > 0)
     ]
-    for k, v in (where or {}).items():
-        sel = sel[sel[k] == v]
+    sel = select(sel, where or {})
     ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":")
     for reading, g in sel.groupby("p_hmm", sort=False):
         color, ls = READING_STYLE.get(reading, ("black", "-"))
@@ -547,7 +538,7 @@ def findings_figure(counts: pd.DataFrame, columns: Sequence[tuple[str, str, str]
             r = r.iloc[0]
             share = (r.better - r.worse) / max(r.cells, 1)
             face = cmap(0.5 + 0.5 * share)
-            ax.add_patch(plt_rectangle_colour(j, i, face))
+            ax.add_patch(plt_rectangle(j, i, face))
             text = f"{int(r.better)}/{int(r.cells)}" + (f" ↓{int(r.worse)}" if r.worse else "")
             dark = 0.299 * face[0] + 0.587 * face[1] + 0.114 * face[2] < 0.5  # white text on dark cells
             ax.text(j, i, text, ha="center", va="center", fontsize=7, color="white" if dark else "black")
@@ -565,13 +556,6 @@ def findings_figure(counts: pd.DataFrame, columns: Sequence[tuple[str, str, str]
         fontsize=9,
     )
     return fig
-
-
-def plt_rectangle_colour(x: float, y: float, color: Any) -> Any:
-    """A cell of :func:`findings_figure`: a unit square centred on (x, y)."""
-    from matplotlib.patches import Rectangle
-
-    return Rectangle((x - 0.5, y - 0.5), 1, 1, facecolor=color, edgecolor="white", lw=1.5)
 
 
 def early_recognition_figure(results: pd.DataFrame, cells: Cells, viewpoint: str = "front") -> Figure:

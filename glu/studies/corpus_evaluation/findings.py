@@ -54,8 +54,10 @@ FRONT: dict[str, Any] = {"effects": "action", "features": "raw", "viewpoint": "f
 """Where the findings are read first: the front view, where the recogniser works, with the originals' raw
 features, in the world the fusion rules assume (pooled over the noise levels)."""
 ADJUSTMENT = "bh"
-"""The findings' multiplicity adjustment (:func:`glu.stats.adjust`): the verdicts of the findings table are
-one family."""
+"""How each family of verdicts is adjusted for its size (:func:`glu.stats.adjust`): Benjamini–Hochberg,
+since the smallest bootstrap p-value, 2 / (B + 1), puts Holm's first threshold out of reach of a family of
+more than α (B + 1) / 2 differences (:mod:`glu.stats`). The verdicts of the findings table are one family;
+the sweep's differences one per pooling (:func:`glu.studies.corpus_evaluation.tables.adjust_families`)."""
 
 
 @dataclass(frozen=True)
@@ -184,7 +186,7 @@ def winners(
     sel = pooled(table, viewpoint)
     sel = sel[np.isclose(sel.fraction, full) & ~sel.strategy.isin(REFERENCES)].copy()
     keys = [*DESIGN, "target", "metric"]
-    up = sel.metric.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    up = higher_is_better(sel.metric)
     sel["_rank"] = np.where(up, -sel.estimate.to_numpy(dtype=float), sel.estimate.to_numpy(dtype=float))
     best = sel.sort_values([*keys, "_rank"], kind="stable").drop_duplicates(keys, keep="first")
     best = best[[*keys, "strategy", "estimate", "ci_low", "ci_high"]].rename(columns={"strategy": "best"})
@@ -259,11 +261,18 @@ def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS
         return pd.DataFrame(columns=cols)
     out = pd.concat(parts, ignore_index=True)
     out["p_adjusted"] = adjust(out["p_value"].to_numpy(dtype=float), ADJUSTMENT)
-    up = out["metric"].map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
-    out["verdict_adjusted"] = adjusted_verdicts(
-        out["difference"].to_numpy(), out["p_adjusted"].to_numpy(), up
-    )
+    out["verdict_adjusted"] = verdicts_adjusted(out)
     return out[cols]
+
+
+def higher_is_better(metrics: pd.Series) -> np.ndarray:
+    """Per row, whether a higher value of its metric is better (:data:`glu.stats.HIGHER_IS_BETTER`)."""
+    return metrics.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+
+
+def verdicts_adjusted(frame: pd.DataFrame) -> np.ndarray:
+    """The adjusted verdict of every row of a differences table (its difference, p_adjusted and metric)."""
+    return adjusted_verdicts(frame["difference"], frame["p_adjusted"], higher_is_better(frame["metric"]))
 
 
 def adjusted_verdicts(difference: np.ndarray, p_adjusted: np.ndarray, up: np.ndarray) -> np.ndarray:
@@ -329,27 +338,22 @@ def cell_label(row: Mapping[str, Any], features: bool = True) -> str:
     return out
 
 
-def factor_levels(verdicts: pd.DataFrame) -> dict[str, list[str]]:
-    """Each factor of the cells' levels as the sentences name them (learned networks by their table size)."""
-    net = [
-        "generating" if n == "generating" else f"learned ({int(k)})"
-        for n, k in dict.fromkeys(zip(verdicts.inference_network, verdicts.learn_experiments, strict=True))
+def network_names(frame: pd.DataFrame) -> list[str]:
+    """:func:`network_name` of every row of ``frame``."""
+    return [
+        network_name({"inference_network": n, "learn_experiments": k})
+        for n, k in zip(frame.inference_network, frame.learn_experiments, strict=True)
     ]
+
+
+def factor_levels(verdicts: pd.DataFrame) -> dict[str, np.ndarray]:
+    """Each row's level of each factor of the cells, as the sentences name them (learned networks by their
+    table size)."""
     return {
-        "actions": [ACTION_WORDS.get(a, a) for a in dict.fromkeys(verdicts.action_prior)],
-        "network": net,
-        "p_HMM": list(dict.fromkeys(verdicts.p_hmm)),
+        "actions": verdicts.action_prior.map(lambda a: ACTION_WORDS.get(a, a)).to_numpy(),
+        "network": np.array(network_names(verdicts), dtype=object),
+        "p_HMM": verdicts.p_hmm.to_numpy(),
     }
-
-
-def _level(row: Any, factor: str) -> str:
-    if factor == "actions":
-        return ACTION_WORDS.get(row.action_prior, row.action_prior)
-    if factor == "p_HMM":
-        return row.p_hmm
-    return network_name(
-        {"inference_network": row.inference_network, "learn_experiments": row.learn_experiments}
-    )
 
 
 SAID = {"better": "holds", "worse": "is reversed", "no difference": "is not supported"}
@@ -360,37 +364,32 @@ def _counts(g: pd.DataFrame) -> tuple[int, int, int, int]:
     return len(g), int(c.get("better", 0)), int(c.get("no difference", 0)), int(c.get("worse", 0))
 
 
+def _held(name: str, h: pd.DataFrame) -> str:
+    """``"raw 3/12 (reversed in 1)"``: in how many of ``h``'s cells a finding holds (and is reversed)."""
+    n, better, _, worse = _counts(h)
+    return f"{name} {better}/{n}" + (f" (reversed in {worse})" if worse else "")
+
+
 def _elsewhere(g: pd.DataFrame) -> str:
     """Where a finding's count of cells changes from the front view's: per turned viewpoint and feature set,
     with effects that depend on the gesture, and per noise level (viewpoints pooled), raw features."""
     parts = []
     views = [v for v in viewpoints(g) if v != FRONT["viewpoint"]]
     features = list(dict.fromkeys(g.features))
+
+    def per_features(h: pd.DataFrame) -> str:
+        return ", ".join(_held(f, h[h.features == f]) for f in features if (h.features == f).any())
+
     base = g[(g.effects == FRONT["effects"]) & g.noise.isna()]
     for view in views:
-        per = []
-        for f in features:
-            h = base[(base.viewpoint == view) & (base.features == f)]
-            if len(h):
-                n, better, _, worse = _counts(h)
-                per.append(f"{f} {better}/{n}" + (f" (reversed in {worse})" if worse else ""))
-        if per:
-            parts.append(f"{view}: " + ", ".join(per))
+        if per := per_features(base[base.viewpoint == view]):
+            parts.append(f"{view}: {per}")
     other = g[(g.effects != FRONT["effects"]) & g.noise.isna() & (g.viewpoint == FRONT["viewpoint"])]
     for effects, h in other.groupby("effects", sort=False):
-        per = []
-        for f in features:
-            k = h[h.features == f]
-            if len(k):
-                n, better, _, worse = _counts(k)
-                per.append(f"{f} {better}/{n}" + (f" (reversed in {worse})" if worse else ""))
-        parts.append(f"front view with {EFFECT_WORDS.get(effects, effects)}: " + ", ".join(per))
+        parts.append(f"front view with {EFFECT_WORDS.get(effects, effects)}: {per_features(h)}")
     noisy = g[(g.effects == FRONT["effects"]) & g.noise.notna() & (g.viewpoint == "all")]
     noisy = noisy[noisy.features == FRONT["features"]]
-    per = []
-    for noise, h in noisy.groupby("noise", sort=True):
-        n, better, _, worse = _counts(h)
-        per.append(f"{noise * 100:g} cm {better}/{n}" + (f" (reversed in {worse})" if worse else ""))
+    per = [_held(f"{noise * 100:g} cm", h) for noise, h in noisy.groupby("noise", sort=True)]
     if len(per) > 1:
         parts.append("raw features, all viewpoints, by sensor noise: " + ", ".join(per))
     return "; ".join(parts)
@@ -429,12 +428,13 @@ def finding_sentences(
             f"reverse in {worse}"
         )
         levels = []
-        for factor, values in factor_levels(front).items():
+        for factor, level in factor_levels(front).items():
+            values = list(dict.fromkeys(level))
             if brief or len(values) < 2:
                 continue
             per = []
             for value in values:
-                h = front[[_level(row, factor) == value for row in front.itertuples()]]
+                h = front[level == value]
                 per.append(f"{value} {int((h.verdict_adjusted == 'better').sum())}/{len(h)}")
             levels.append(", ".join(per) if factor == "actions" else f"{factor}: {', '.join(per)}")
         text = f"{head}; {body}" + (f" (where it holds: {'; '.join(levels)})" if levels else "")
@@ -453,9 +453,7 @@ def p_text(p: float) -> str:
 def seed_spread(seeds: pd.DataFrame, cell: Mapping[str, Any] = REFERENCE_CELL) -> pd.DataFrame:
     """Per strategy of the action target, the accuracy of each recogniser seed at the full gesture in one
     cell: the spread the seed level of the intervals carries. Columns: strategy, min, max, seeds."""
-    sel = seeds[(seeds.target == "action") & (seeds.metric == "accuracy")]
-    for k, v in cell.items():
-        sel = sel[sel[k] == v]
+    sel = select(seeds[(seeds.target == "action") & (seeds.metric == "accuracy")], cell)
     sel = sel[np.isclose(sel.fraction, sel.fraction.max())]
     out = sel.groupby("strategy", sort=False).estimate.agg(["min", "max", "count"]).reset_index()
     return out.rename(columns={"count": "seeds"})
@@ -483,10 +481,7 @@ def winners_table(win: pd.DataFrame, shown: Sequence[tuple[str, str]]) -> pd.Dat
     """:func:`winners` as a table: one row per (target, metric, action prior, network), one column per p_HMM
     reading, cells ``"jeffrey 0.912 [0.90, 0.93] = virtual"``."""
     rows = win[[(t, m) in set(shown) for t, m in zip(win.target, win.metric, strict=True)]].copy()
-    rows["network"] = [
-        n if n == "generating" else f"learned ({int(k)})"
-        for n, k in zip(rows.inference_network, rows.learn_experiments, strict=True)
-    ]
+    rows["network"] = network_names(rows)
     rows["cell"] = [
         f"{r.best} {r.estimate:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]"
         + "".join(f" = {t}" for t in r.tied.split(", ") if t and t != r.best)
@@ -554,12 +549,6 @@ def metric_rows(table: pd.DataFrame, target: str, metric: str, fraction: float) 
     return table[(table.target == target) & (table.metric == metric) & np.isclose(table.fraction, fraction)]
 
 
-def _cell_rows(
-    table: pd.DataFrame, cell: Mapping[str, Any], target: str, metric: str, fraction: float, viewpoint: str
-) -> pd.DataFrame:
-    return metric_rows(select(pooled(table, viewpoint), cell), target, metric, fraction)
-
-
 def network_alone_sentences(table: pd.DataFrame) -> list[str]:
     """For the contrasted cells on the front view (noise pooled), early and at the full gesture: the effect's
     log-loss and ECE of the network alone beside every fusion rule and the true action (an oracle)."""
@@ -571,7 +560,7 @@ def network_alone_sentences(table: pd.DataFrame) -> list[str]:
         for f in (fractions[0], fractions[-1]):
             parts = []
             for metric in ("log_loss", "ece"):
-                g = _cell_rows(table, cell, "effect", metric, f, view).set_index("strategy")
+                g = metric_rows(select(pooled(table, view), cell), "effect", metric, f).set_index("strategy")
                 if "network" not in g.index:
                     continue
                 net = g.loc["network"]

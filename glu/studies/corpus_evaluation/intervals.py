@@ -41,7 +41,8 @@ import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
-from glu.stats import HIGHER_IS_BETTER, bootstrap_p_value, percentile_interval, verdict
+from glu.stats import bootstrap_p_value, percentile_interval, verdict
+from glu.studies.corpus_evaluation.findings import higher_is_better
 
 BOOT_KEY = 2
 """Spawn key of a chunk's bootstrap weights."""
@@ -161,7 +162,7 @@ def difference_pairs(cells: Cells) -> Pairs:
             "baseline": k.strategy.to_numpy()[a],
         }
     )
-    up = keys.metric.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
+    up = higher_is_better(keys.metric)
     return Pairs(keys, a, b, up, (keys.metric == "ece").to_numpy())
 
 

@@ -66,7 +66,7 @@ from glu.saved import made_with
 from glu.studies.corpus_evaluation import robots
 from glu.studies.corpus_evaluation.config import SweepConfig
 from glu.studies.corpus_evaluation.evaluation import Evaluator
-from glu.studies.corpus_evaluation.tables import chunk_path, merge, write_chunk
+from glu.studies.corpus_evaluation.tables import TABLES, chunk_path, merge, write_chunk
 from glu.studies.episodes import Condition
 
 FORMAT = "glu-sweep"
@@ -136,8 +136,7 @@ def export_saved(folder: str | os.PathLike, dest: str | os.PathLike, command: st
     provenance = json.loads((folder / "sweep.json").read_text(encoding="utf-8"))
     tables = saved_subset(read_tables(folder))
     dest.mkdir(parents=True, exist_ok=True)
-    names = ("results", "differences", "reliability", "seeds", "calibration")
-    for name, df in zip(names, tables[:5], strict=True):
+    for (name, _), df in zip(TABLES, tables[:5], strict=True):
         df = df.copy()
         df.attrs = {}
         df.to_parquet(dest / f"{name}.parquet", index=False, compression="zstd")
@@ -207,11 +206,9 @@ def prepare(config: SweepConfig, out: Path, log: Callable[[str], None]) -> tuple
     )
     # what the numbers depend on: the settings (where the data and the recogniser file are does not
     # matter, what they hold does), the data, the networks, the models, glu's version
-    settings = config.as_dict()
-    settings["network"]["data"] = settings["recognizer"]["file"] = None
     digest = hashlib.sha256()
     for part in (
-        json.dumps(settings, sort_keys=True),
+        json.dumps(_key(config.as_dict(), label)["settings"], sort_keys=True),
         label,
         json.dumps(bn.to_dict()),
         *(json.dumps(rec.to_dict()["models"]) for recs in recognizers for rec in recs.values()),

@@ -17,7 +17,7 @@ from glu.errors import DataError
 from glu.files import atomic_path, atomic_write_json, atomic_write_text
 from glu.studies.corpus_evaluation.config import SweepConfig
 from glu.studies.corpus_evaluation.evaluation import Evaluator
-from glu.studies.corpus_evaluation.findings import DESIGN, adjusted_verdicts, winners
+from glu.studies.corpus_evaluation.findings import ADJUSTMENT, DESIGN, verdicts_adjusted, winners
 from glu.studies.corpus_evaluation.intervals import (
     block_frame,
     difference_block,
@@ -32,22 +32,18 @@ from glu.studies.corpus_evaluation.intervals import (
 from glu.tidy import tidy
 
 EXPERIMENT = "corpus_evaluation"
-FILES = (
-    "results.parquet",
-    "differences.parquet",
-    "reliability.parquet",
-    "seeds.parquet",
-    "calibration.parquet",
-    "summary.json",
-    "summary.csv",
+TABLES: tuple[tuple[str, str], ...] = (
+    ("results", EXPERIMENT),
+    ("differences", "corpus_differences"),
+    ("reliability", "corpus_reliability"),
+    ("seeds", "corpus_seeds"),
+    ("calibration", "corpus_calibration"),
 )
+"""Each table of a sweep's folder: its file's stem (``.parquet``) and its experiment stamp."""
+FILES = (*(f"{file}.parquet" for file, _ in TABLES), "summary.json", "summary.csv")
 CONDITION_FACTORS: tuple[str, ...] = ("effects", "action_prior")
 """The simulated conditions' factors that every table keeps apart (the noise and the viewpoint are also
 pooled)."""
-ADJUSTMENT = "bh"
-"""How each family of verdicts is adjusted for its size (:func:`glu.stats.adjust`): Benjamini–Hochberg,
-since the smallest bootstrap p-value, 2 / (B + 1), puts Holm's first threshold out of reach of a family of
-more than α (B + 1) / 2 differences (:mod:`glu.stats`)."""
 
 
 def chunk_path(out: Path, index: int, chunk: int) -> Path:
@@ -171,17 +167,14 @@ def adjust_families(diffs: pd.DataFrame, families: Sequence[str]) -> pd.DataFram
     """``diffs`` with ``p_adjusted`` (:data:`ADJUSTMENT` within each family: the rows that share the values
     of ``families``) and ``verdict_adjusted`` (a verdict only where the adjusted p-value is at most α, in the
     direction of the difference)."""
-    from glu.stats import HIGHER_IS_BETTER, adjust
+    from glu.stats import adjust
 
     out = diffs.copy()
     out["p_adjusted"] = np.nan
     keys = [out[f].fillna(-1.0) if out[f].dtype.kind == "f" else out[f] for f in families]
     for _, idx in out.groupby(keys, sort=False, dropna=False).groups.items():
         out.loc[idx, "p_adjusted"] = adjust(out.loc[idx, "p_value"].to_numpy(), ADJUSTMENT)
-    up = out["metric"].map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
-    out["verdict_adjusted"] = adjusted_verdicts(
-        out["difference"].to_numpy(), out["p_adjusted"].to_numpy(), up
-    )
+    out["verdict_adjusted"] = verdicts_adjusted(out)
     return out
 
 
@@ -236,19 +229,10 @@ def merge(
     # summarised before the tables are stamped: pandas deep-copies a frame's attrs (here every setting of the
     # sweep) on every row or column it hands out, which made summarize several times slower
     summary = summarize(table, diffs, provenance)
-    for df, name in (
-        (table, EXPERIMENT),
-        (diffs, "corpus_differences"),
-        (rel, "corpus_reliability"),
-        (seeds, "corpus_seeds"),
-        (calibration, "corpus_calibration"),
-    ):
+    for df, (file, name) in zip((table, diffs, rel, seeds, calibration), TABLES, strict=True):
         tidy(df, name, source, **params)
-    _write_parquet(out / "results.parquet", table)
-    _write_parquet(out / "differences.parquet", diffs)
-    _write_parquet(out / "reliability.parquet", rel)
-    _write_parquet(out / "seeds.parquet", seeds)
-    _write_parquet(out / "calibration.parquet", calibration)
+        with atomic_path(out / f"{file}.parquet", suffix=".parquet") as tmp:
+            df.to_parquet(tmp, index=False)
     atomic_write_json(out / "summary.json", summary)
     head = pd.DataFrame(summary["overall"])
     atomic_write_text(out / "summary.csv", head.to_csv(index=False, float_format="%.6g", lineterminator="\n"))
@@ -296,29 +280,16 @@ class SweepTables(NamedTuple):
 def read_tables(folder: str | Path) -> SweepTables:
     """The tables a finished sweep wrote to ``folder``, stamped as :func:`merge` stamps them."""
     folder = Path(folder)
-    names = ("results", "differences", "reliability", "seeds", "calibration")
     try:
         summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
-        frames = [pd.read_parquet(folder / f"{n}.parquet") for n in names]
+        frames = [pd.read_parquet(folder / f"{file}.parquet") for file, _ in TABLES]
     except (OSError, ValueError) as e:
         raise DataError(f"{folder}: not the output folder of a finished `glu evaluate` ({e})") from None
     if not isinstance(summary, dict) or summary.get("experiment") != EXPERIMENT:
         raise DataError(f"{folder}: summary.json is not a corpus evaluation's")
-    experiments = (
-        EXPERIMENT,
-        "corpus_differences",
-        "corpus_reliability",
-        "corpus_seeds",
-        "corpus_calibration",
-    )
-    for df, name in zip(frames, experiments, strict=True):
+    for df, (_, name) in zip(frames, TABLES, strict=True):
         tidy(df, name, summary["data_source"], **summary["parameters"])
     return SweepTables(*frames, summary)
-
-
-def _write_parquet(path: Path, df: pd.DataFrame) -> None:
-    with atomic_path(path, suffix=".parquet") as tmp:
-        df.to_parquet(tmp, index=False)
 
 
 def summarize(table: pd.DataFrame, diffs: pd.DataFrame, provenance: dict[str, Any]) -> dict[str, Any]:

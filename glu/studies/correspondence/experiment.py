@@ -203,9 +203,13 @@ def train_for(
     """A recogniser trained on :func:`training_corpus` with ``config`` (default glu's); ``features`` an
     :class:`Invariants` name (torso frame)."""
     corpus = training_corpus(source, n_per_action, seed, normalise_body)
-    by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
     meta = {"data": corpus.description}
-    return train_recognizer(by_action, config, seed=seed, warn=False, features=features, meta=meta)
+    return train_recognizer(_by_action(corpus), config, seed=seed, warn=False, features=features, meta=meta)
+
+
+def _by_action(corpus: Corpus) -> dict[str, list[np.ndarray]]:
+    """A training set: each action's sequences of ``corpus``."""
+    return {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
 
 
 def _test_seed(seed: int) -> int:
@@ -326,8 +330,7 @@ def _training_runs(
     for seed in seeds:
         for source in train_sources:
             for body in sorted({b for b, _ in specs}):
-                corpus = training_corpus(source, n_train, seed, normalise_body, body)
-                by_action = {a: [s.xyz for s in corpus if s.action == a] for a in ACTIONS}
+                by_action = _by_action(training_corpus(source, n_train, seed, normalise_body, body))
                 for b, inv in specs:
                     if b == body:
                         runs.append((seed, source, body, inv))

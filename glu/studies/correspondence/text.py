@@ -9,7 +9,8 @@ that would name it.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import pandas as pd
 
@@ -38,30 +39,38 @@ def _cell(h: pd.DataFrame, features: str, factor: str, level: str | None = None)
     return rows.iloc[0] if len(rows) else None
 
 
+def _name(features: str) -> str:
+    """A feature set as the sentences name it: raw, ``all four``, else in backticks."""
+    return "all four" if features == ALL_FOUR else (features if features == "raw" else f"`{features}`")
+
+
+def _interval(r: Any) -> str:
+    return f"{r.accuracy:.2f} [{r.ci_low:.2f}, {r.ci_high:.2f}]"
+
+
 def _named(h: pd.DataFrame, factor: str, features: Sequence[str], level: str | None = None) -> str:
     """``"raw 0.33 [0.28, 0.39], `body` 0.34 [...]"`` for the feature sets the study ran."""
-    parts = []
-    for f in features:
-        r = _cell(h, f, factor, level)
-        if r is not None:
-            name = "all four" if f == ALL_FOUR else (f if f == "raw" else f"`{f}`")
-            parts.append(f"{name} {r.accuracy:.2f} [{r.ci_low:.2f}, {r.ci_high:.2f}]")
-    return ", ".join(parts)
+    rows = [(f, _cell(h, f, factor, level)) for f in features]
+    return ", ".join(f"{_name(f)} {_interval(r)}" for f, r in rows if r is not None)
+
+
+TURN_FEATURES = ("raw", "centred+rotated", "body", "body+centred")
+"""The feature sets the sentences on turned people name."""
+
+
+def _per_turn_features(turned: pd.DataFrame, text: Callable[[pd.DataFrame], str], sep: str) -> str:
+    """``text`` of the rows of each of :data:`TURN_FEATURES` in ``turned``, named, joined by ``sep``."""
+    groups = [(f, turned[turned["features"] == f]) for f in TURN_FEATURES]
+    return sep.join(f"{_name(f)} {text(t)}" for f, t in groups if len(t))
 
 
 def _occluded(h: pd.DataFrame) -> str:
     """The occluding tracker's turned views, per feature set of the turn sentence: accuracy at each yaw."""
-    occ = h[h["factor"] == OCCLUDED]
-    parts = []
-    for f in ("raw", "centred+rotated", "body", "body+centred"):
-        t = occ[occ["features"] == f]
-        if len(t):
-            name = f if f == "raw" else f"`{f}`"
-            per = ", ".join(
-                f"{r.level} {r.accuracy:.2f} [{r.ci_low:.2f}, {r.ci_high:.2f}]" for r in t.itertuples()
-            )
-            parts.append(f"{name} {per}")
-    return "; ".join(parts)
+    return _per_turn_features(
+        h[h["factor"] == OCCLUDED],
+        lambda t: ", ".join(f"{r.level} {_interval(r)}" for r in t.itertuples()),
+        "; ",
+    )
 
 
 def _changes(effects: pd.DataFrame, verdict: str) -> str:
@@ -126,18 +135,13 @@ def study_sentences(summary: pd.DataFrame, effects: pd.DataFrame, brief: bool = 
     front = _cell(h, "raw", "viewpoint", "0°")
     turned = h[(h["factor"] == "viewpoint") & (h["yaw_deg"] > 0)]
     if front is not None and len(turned):
-        per = []
-        for f in ("raw", "centred+rotated", "body", "body+centred"):
-            t = turned[turned["features"] == f]
-            if len(t):
-                name = f if f == "raw" else f"`{f}`"
-                per.append(f"{name} {_span(t['accuracy'])}")
+        per = _per_turn_features(turned, lambda t: _span(t["accuracy"]), ", ")
         out.append(
             "Trained on one human view and tested on other people (their own arm lengths and movement "
             "styles), facing the camera: "
             f"{_named(h, 'viewpoint', ('raw', 'centred+rotated', 'body'), '0°')}. Turned by "
             f"{turned['yaw_deg'].min():.0f}–{turned['yaw_deg'].max():.0f}° and seen by an ideal tracker "
-            "(both shoulders wherever the person faces): " + ", ".join(per) + "."
+            f"(both shoulders wherever the person faces): {per}."
         )
     occluded = _occluded(h)
     if occluded:
