@@ -10,7 +10,6 @@ ipywidgets, the same tables for the starting evidence, as a static result.
 
 from __future__ import annotations
 
-import inspect
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -92,24 +91,28 @@ def explore(
     return Exploration(pd.DataFrame(rows, columns=["node", "value", "p"]), words, text)
 
 
-def evidence_explorer(engine: Engine, *, live: bool | None = None, **start: Any) -> Any:
+def evidence_explorer(
+    engine: Engine,
+    targets: Sequence[str] = ("ObjVel", ACTION),
+    evidence: Mapping[str, str] | None = None,
+    p_hmm: Sequence[float] | None = None,
+    rule: str = "virtual",
+    nbest: int = 3,
+    live: bool | None = None,
+) -> Any:
     """An interactive explorer in a live kernel; otherwise the posteriors of the start as a static table.
 
-    ``live`` forces either form (default: :func:`glu.machine.is_live`). ``start``, the starting point, takes
-    the keyword arguments of :func:`explore` (``targets``, ``evidence``, ``p_hmm``, ``rule``, ``nbest``).
+    ``live`` forces either form (default: :func:`glu.machine.is_live`). The other arguments are the starting
+    point, as :func:`explore`'s (declared again here, not read from its signature: Sphinx's autodoc replaces
+    the defaults of a signature it documents in the process that builds the site).
     """
-    first = explore(engine, **start)
+    first = explore(engine, targets, evidence, p_hmm, rule, nbest)
     if not is_live(live):
         return first.table
     try:
         import ipywidgets as w
     except ImportError:
         return first.table
-    args = inspect.signature(explore).bind(engine, **start)
-    args.apply_defaults()
-    targets, evidence, p_hmm, rule, nbest = (
-        args.arguments[k] for k in ("targets", "evidence", "p_hmm", "rule", "nbest")
-    )
     schema = engine.bn.schema
     evidence = dict(evidence or {})
     drops = {
