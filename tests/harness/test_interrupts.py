@@ -36,6 +36,14 @@ time.sleep(120)
 """
 
 
+def _as_from_a_terminal() -> None:
+    """In the child before it starts glu: SIGINT handled as a terminal's command gets it. A suite started in
+    the background (``make test &``) runs with SIGINT and SIGQUIT ignored, which its children inherit; glu
+    would then rightly ignore the test's Ctrl-C."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
@@ -81,6 +89,7 @@ def test_a_signal_stops_the_run_at_once_and_publishes_nothing(tmp_path, sig, sta
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=_as_from_a_terminal,
     )
     deadline = time.monotonic() + 120
     while not all(m.exists() for m in marks):
@@ -275,6 +284,7 @@ def test_a_signal_between_two_steps_of_a_real_run_leaves_one_whole_run(tmp_path,
         capture_output=True,
         text=True,
         timeout=300,
+        preexec_fn=_as_from_a_terminal,
     )
     assert first.returncode == 0, first.stderr
     old = _published(out)
@@ -283,6 +293,7 @@ def test_a_signal_between_two_steps_of_a_real_run_leaves_one_whole_run(tmp_path,
         capture_output=True,
         text=True,
         timeout=300,
+        preexec_fn=_as_from_a_terminal,
     )
     assert second.returncode == (130 if sig == "SIGINT" else -9), second.stderr
     now = _published(out)
@@ -325,6 +336,7 @@ def test_a_signal_at_any_moment_stops_the_run_and_its_kernels(tmp_path, sig, sta
         stderr=subprocess.PIPE,
         text=True,
         env={**os.environ, "GLU_TEST_TOKEN": token},
+        preexec_fn=_as_from_a_terminal,
     )
     time.sleep(moment)
     err = _stop(proc, sig, status)
