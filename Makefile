@@ -2,7 +2,7 @@
 #   make reproduce   set up .venv, then run every notebook (results/, recordings/, models/, build/figures/,
 #                    build/site/; the tracked figures/ only from a full run on the real data)
 #   make docs        the documentation site (build/site/index.html) again, from the last `make reproduce`
-#   make test        set up .venv, then lint (ruff) and run the test suite
+#   make test        set up .venv, then lint (ruff) and run the test suite (on every core, at most 4)
 #   make lab         JupyterLab on the repository, the notebooks open as notebooks
 #   make bench       speed benchmarks (glu vs pgmpy, pyAgrum, hmmlearn); make bench-reproduce: the whole run
 #   make sweeps      the saved tables of the heavy grids of notebooks 10, 11 and 12 (sweeps/), again
@@ -35,8 +35,10 @@ lint: $(STAMP)
 	$(BIN)/ruff check glu tests benchmarks $(wildcard notebooks/*.py)
 	$(BIN)/ruff format --check glu tests benchmarks
 
+# the suite on every core (pytest-xdist, at most 4 workers), a test file to a worker: a file's session fixtures
+# (the quick run of every notebook) are made once; ARGS="-n 0" runs it in this process (pdb, -s)
 test: lint
-	$(BIN)/python -m pytest $(ARGS)
+	$(BIN)/python -m pytest -n auto --maxprocesses 4 --dist loadfile $(ARGS)
 
 # JupyterLab comes with the test extra (glu[test] includes glu[lab]): one install serves both
 lab: $(STAMP)
