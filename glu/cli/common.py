@@ -32,65 +32,59 @@ DATA_HELP = (
 )
 
 
-def _number_type(name: str, doc: str, kind: type, what: str, allowed: Any = None, refusal: str = "") -> Any:
-    """The argparse type ``name`` (documented by ``doc``): the text as ``kind`` ("expected WHAT" if it is not
-    one), refused with ``refusal`` (formatted with the value ``v`` and the ``text``) unless ``allowed(v)``."""
-
-    def parse(text: str) -> Any:
-        try:
-            v = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}") from None
-        if allowed is not None and not allowed(v):
-            raise argparse.ArgumentTypeError(refusal.format(v=v, text=text))
-        return v
-
-    parse.__name__ = parse.__qualname__ = name
-    parse.__doc__ = doc
-    return parse
+def _number(text: str, kind: type, what: str) -> float:
+    try:
+        return kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}, not {text!r}") from None
 
 
-integer = _number_type("integer", "Any whole number.", int, "a whole number")
-positive_int = _number_type(
-    "positive_int",
-    "A whole number ≥ 1.",
-    int,
-    "a whole number",
-    lambda v: v >= 1,
-    "expected a whole number ≥ 1, not {v}",
-)
-seed = _number_type(
-    "seed",
-    "A random seed: a whole number in [0, 2**32 - 1].",
-    int,
-    "a whole number",
-    lambda v: 0 <= v < 2**32,
-    "a seed is a whole number in [0, 2**32 - 1], not {v}",
-)
-positive_float = _number_type(
-    "positive_float",
-    "A finite number > 0.",
-    float,
-    "a number",
-    lambda v: 0 < v < math.inf,
-    "expected a positive number, not {text}",
-)
-nonneg_float = _number_type(
-    "nonneg_float",
-    "A finite number ≥ 0.",
-    float,
-    "a number",
-    lambda v: 0 <= v < math.inf,
-    "expected a number ≥ 0, not {text}",
-)
-tolerance = _number_type(
-    "tolerance",
-    "--renormalise TOL: a number in [0, 1).",
-    float,
-    "a tolerance such as 1e-4",
-    lambda v: 0 <= v < 1,
-    "a tolerance is a number in [0, 1), not {text}",
-)
+def integer(text: str) -> int:
+    """Any whole number."""
+    return int(_number(text, int, "a whole number"))
+
+
+def positive_int(text: str) -> int:
+    """A whole number ≥ 1."""
+    v = int(_number(text, int, "a whole number"))
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number ≥ 1, not {v}")
+    return v
+
+
+def seed(text: str) -> int:
+    """A random seed: a whole number in [0, 2**32 - 1]."""
+    v = int(_number(text, int, "a whole number"))
+    if not 0 <= v < 2**32:
+        raise argparse.ArgumentTypeError(f"a seed is a whole number in [0, 2**32 - 1], not {v}")
+    return v
+
+
+def positive_float(text: str) -> float:
+    """A finite number > 0."""
+    v = _number(text, float, "a number")
+    if not 0 < v < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, not {text}")
+    return v
+
+
+def nonneg_float(text: str) -> float:
+    """A finite number ≥ 0."""
+    v = _number(text, float, "a number")
+    if not 0 <= v < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, not {text}")
+    return v
+
+
+def tolerance(text: str) -> float:
+    """--renormalise TOL: a number in [0, 1)."""
+    try:
+        tol = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
+    if not 0 <= tol < 1:
+        raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
+    return tol
 
 
 def _writable_folder(folder: Path) -> str | None:
