@@ -21,6 +21,8 @@ import numpy as np
 from timing import calls_lasting, fmt, report
 from timing import row as result_row
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the reference: tests/bn_reference.py
+
 
 def timeit(fn, repeat: int = 5, number: int | None = None) -> float:
     """Best-of-``repeat`` seconds per call (``number`` calls per repeat, auto-chosen to last ≥ 0.2 s)."""
@@ -64,10 +66,9 @@ def main() -> None:
         warnings.simplefilter("ignore")
         t0 = time.perf_counter()
         import pgmpy.structure_score as pgmpy_scores
+        from bn_reference import to_pgmpy
         from pgmpy.factors.discrete import TabularCPD
         from pgmpy.inference import VariableElimination
-
-        from glu.bn.pgmpy_bridge import to_pgmpy
 
         t_pgmpy_import = time.perf_counter() - t0
         ve = VariableElimination(to_pgmpy(bn))

@@ -293,7 +293,7 @@ def fit(
     ``tol`` (on the total, hmmlearn's ``tol``). ``covariance`` is one of :data:`COVARIANCES`, with the prior
     ``covar_reg`` (``map``) or the floor ``covar_floor`` (``ml``). The weighted log-likelihood never
     decreases with ``covariance="ml"`` and ``covar_floor=0`` (exact EM); with ``"map"`` its sum with the
-    covariance prior's log-density never decreases (``tests/test_weighted_em.py``). Raises
+    covariance prior's log-density never decreases (``tests/library/test_weighted_em.py``). Raises
     ``numpy.linalg.LinAlgError`` when a covariance stops being positive definite.
     """
     check_covariance(covariance)

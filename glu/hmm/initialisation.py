@@ -10,16 +10,17 @@ hundred frames. :func:`fit_gaussian_mixture` runs the same algorithm:
 * the initial responsibilities from ``KMeans(n_mix, n_init=1)`` seeded with ``RandomState(seed)``, as
   ``GaussianMixture`` seeds it (one component: every frame in it, no k-means): :func:`kmeans_labels`,
   scikit-learn's k-means++ and Lloyd rounds (the labels are scikit-learn's on every problem of
-  ``tests/test_gmm_init.py``; importing scikit-learn alone took 0.6–1 s in every kernel that trained an HMM);
+  ``tests/library/test_gmm_init.py``; importing scikit-learn alone took 0.6–1 s in every kernel that trained
+  an HMM);
 * then EM compiled (:func:`gmm_em`): the M-step's ``nk = Σ resp + 10·eps``, means,
   covariances about the new means ``+ reg_covar·I``, the precisions' Cholesky factors; the E-step's
   log-densities and log-sum-exp; the same stopping rule (the mean log-likelihood changes by less than
   ``tol`` = 1e-3; at most 100 rounds).
 
 The sums run in another order than scikit-learn's BLAS calls, so the result is scikit-learn's to rounding,
-not bit for bit: ``tests/test_gmm_init.py`` compares every array with ``GaussianMixture``'s, and the number
-of EM rounds with its ``n_iter_``, on random and degenerate problems (within 1e-14 of each array's scale
-when written; the test allows 1e-10).
+not bit for bit: ``tests/library/test_gmm_init.py`` compares every array with ``GaussianMixture``'s, and the
+number of EM rounds with its ``n_iter_``, on random and degenerate problems (within 1e-14 of each array's
+scale when written; the test allows 1e-10).
 
 >>> import numpy as np
 >>> X = np.random.default_rng(0).normal(size=(40, 3))

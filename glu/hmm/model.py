@@ -188,7 +188,7 @@ class GestureHMM:
         The draws are hmmlearn's ``GMMHMM.sample(n_frames, random_state=seed)``'s, in its order (a
         ``RandomState(seed)``: the first state by the start distribution's cumulative sum, then per frame a
         component by its weight and a multivariate normal, then the next state), so the same seed gives the
-        same sequence (``tests/test_hmm.py``).
+        same sequence (``tests/library/test_hmm.py``).
         """
         rs = np.random.RandomState(seed)
         start_cdf, trans_cdf = np.cumsum(self.startprob), np.cumsum(self.transmat, axis=1)

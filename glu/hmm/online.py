@@ -17,7 +17,7 @@ label weight ``w`` the statistics move by
   :meth:`~OnlineModels.start` sets a first model (:func:`first_model`: weighted EM on a few episodes);
 * :func:`episode_stats` — the E-step of one sequence under many models, and :func:`batch_stats` — many
   sequences under one model: both the compiled E-step of :mod:`glu.hmm._engine.em_batch`, equal to
-  :func:`glu.hmm.em.expected_stats` to rounding (``tests/test_weighted_em.py``).
+  :func:`glu.hmm.em.expected_stats` to rounding (``tests/library/test_weighted_em.py``).
 
 Which episodes a model learns from, and with what weight, is the study's business
 (:mod:`glu.studies.learning.online`: labelling schemes, buffers, clustering, checkpoints).

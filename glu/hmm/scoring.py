@@ -303,7 +303,8 @@ def loglik_many(bank: Bank, sequences: Sequence[np.ndarray]) -> np.ndarray:
     The emissions and the forward recursion run compiled, frame by frame
     (:func:`glu.hmm._engine.kernels.loglik_banked`), each step :func:`~glu.hmm.inference.forward_step`'s
     (including its log-domain fallback where the scaled mass underflows): the last entry of
-    ``forward_curve`` for each sequence, to rounding (1e-12 relative, tests/test_batched_experiments.py).
+    ``forward_curve`` for each sequence, to rounding (1e-12 relative,
+    ``tests/studies/test_batched_experiments.py``).
 
     Parameters
     ----------

@@ -131,7 +131,7 @@ def test_corpus_and_evaluate_need_only_the_base_and_dask_installs():
     files += [pkg / m for m in ("fusion.py", "schema.py", "evidence.py", "files.py", "paths.py")]
     files += [pkg / "cli" / "eval_cmds.py", pkg / "cli" / "common.py"]
     used = _third_party_imports(files)
-    used.pop("pgmpy", None)  # glu.bn.pgmpy_bridge: the tests' reference, imported by no command
+    used.pop("pgmpy", None)  # tests/bn_reference.py: the tests' reference (pgmpy is a test dependency)
     missing = {d: sorted(fs) for d, fs in used.items() if d not in allowed}
     assert not missing, f"imported but not declared in the base or [dask] install: {missing}"
 

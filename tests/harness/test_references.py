@@ -3,7 +3,8 @@
 Every mention of a ``*.md`` file — in the package, the tests, the notebooks, the benchmarks, the pages,
 ``pyproject.toml`` and the ``Makefile`` — names a file of the repository; every link with an anchor
 (a page's name, ``#`` and a heading's anchor) and every section cited as ``docs/method.md §N.M`` names a
-heading of that page; and every module the package map (docs/api.md) names exists.
+heading of that page; every module the package map (docs/api.md) names exists; and every source file cited by
+path (``tests/library/test_hmm.py``) is there.
 """
 
 from __future__ import annotations
@@ -208,3 +209,22 @@ def test_no_page_shows_a_machine_path():
             if re.search(r"\.\./shared|/work/|/home/|/tmp/|/Users/", line):
                 shown.append(f"{page.relative_to(ROOT)}:{n}: {line.strip()}")
     assert not shown, "pages showing paths of one machine:\n" + "\n".join(shown)
+
+
+SOURCE = re.compile(r"(?<![\w./-])((?:tests|benchmarks|glu|notebooks)/[\w./-]*[\w-]\.py)\b")
+"""A path of a source file of the repository: ``tests/library/test_hmm.py``, ``glu/bn/soft.py``."""
+
+
+def test_every_cited_source_file_is_in_the_repository():
+    """A test or module cited as the evidence of a claim (``tests/library/test_gmm_init.py compares …``) is
+    there: one moved to another folder leaves no stale path. Placeholders (``notebooks/NN_topic.py``) and
+    the tests' own fixtures are not citations."""
+    missing = [
+        f"{path.relative_to(ROOT)}:{n}: {m.group(1)}"
+        for path in files()
+        if path.relative_to(ROOT).parts[0] != "tests"
+        for n, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1)
+        for m in SOURCE.finditer(line)
+        if not re.search(r"[A-Z]{2}", m.group(1)) and not (ROOT / m.group(1)).is_file()
+    ]
+    assert not missing, "paths of files not in the repository:\n" + "\n".join(missing)

@@ -14,9 +14,8 @@ from glu.fusion import fuse, hmm_rows
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
+    from bn_reference import to_pgmpy_with_zero_rows
     from pgmpy.inference import VariableElimination
-
-    from glu.bn.pgmpy_bridge import to_pgmpy_with_zero_rows
 
 ACTIONS = ("grasp", "tap", "touch")
 

@@ -15,10 +15,9 @@ from glu.schema import AFFORDANCE_NODES, WORDS, Schema
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
+    from bn_reference import to_pgmpy, to_pgmpy_with_zero_rows
     from pgmpy.factors.discrete import TabularCPD
     from pgmpy.inference import VariableElimination
-
-    from glu.bn.pgmpy_bridge import to_pgmpy, to_pgmpy_with_zero_rows
 
 TOL = 1e-9
 

@@ -26,10 +26,9 @@ from glu.paths import shared_data_dir
 gum = pytest.importorskip("pyagrum")
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
+    from bn_reference import to_pgmpy
     from pgmpy.factors.discrete import TabularCPD
     from pgmpy.inference import VariableElimination
-
-    from glu.bn.pgmpy_bridge import to_pgmpy
 
 TOL = 1e-9
 SHARED = shared_data_dir()

@@ -41,9 +41,8 @@ from glu.studies.replication.fusion import network_summary
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
+    from bn_reference import to_pgmpy_with_zero_rows
     from pgmpy.inference import VariableElimination
-
-    from glu.bn.pgmpy_bridge import to_pgmpy_with_zero_rows
 
 LOG_LINES = {  # lines in each real log (wc -l), an independent count
     "grasp1_hand": 958,

@@ -24,8 +24,8 @@ every weight 1.
 
 Results equal :func:`glu.hmm.em.fit` and :func:`glu.hmm.em.expected_stats` for each model to rounding
 (summation order): the same number of iterations, log-likelihood histories to 1e-10 and parameters to
-1e-8 relative (``tests/test_baum_welch_batch.py``, ``tests/test_weighted_em.py``). Models of different
-shapes (Q, M, D) are grouped and each group runs as one batch.
+1e-8 relative (``tests/library/test_baum_welch_batch.py``, ``tests/library/test_weighted_em.py``). Models
+of different shapes (Q, M, D) are grouped and each group runs as one batch.
 
 Example
 -------

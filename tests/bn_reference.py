@@ -1,7 +1,5 @@
-"""Conversion to pgmpy (1.x), the independent reference for tests and benchmarks.
-
-Importing pgmpy takes seconds, so nothing on glu's query path imports this module.
-"""
+"""pgmpy (1.x) as the independent reference of glu's networks (tests and benchmarks only: pgmpy is a test
+dependency, and importing it takes seconds)."""
 
 from __future__ import annotations
 
