@@ -128,8 +128,10 @@ def _export_cases() -> list:
         for tool in ("pgmpy", "pyagrum"):
             for fmt in ("bif", "xmlbif", "uai"):
                 marks = [_known_disagreement(tool)] if fmt == "uai" else []
-                if (tool, fmt, rows) in (("pgmpy", "bif", "uniform"), ("pgmpy", "uai", "uniform")):
-                    marks.append(pytest.mark.slow)  # pgmpy's BIF and UAI readers take seconds per file
+                if (tool, fmt) == ("pgmpy", "uai") or (tool, fmt, rows) == ("pgmpy", "bif", "uniform"):
+                    # pgmpy's BIF and UAI readers take seconds per file; its UAI layout is shown by default
+                    # on a small table (test_pgmpy_reads_a_uai_table_as_the_format_lays_it_out)
+                    marks.append(pytest.mark.slow)
                 cases.append(pytest.param(fmt, tool, rows, marks=marks, id=f"{rows}-{tool}-{fmt}"))
     return cases
 
@@ -185,16 +187,22 @@ def test_glu_reads_what_pgmpy_and_pyagrum_write(uniform_bn, tmp_path, fmt, tool)
     _check(theirs, out, names, states, tool, AGRUM_BIF_TOL if tool == "pyagrum" else TOL)
 
 
+UAI_ROWS = [
+    [0.1, 0.2, 0.7],
+    [0.3, 0.3, 0.4],
+    [0.5, 0.25, 0.25],
+    [0.6, 0.3, 0.1],
+]
+"""P(var_2 | var_0, var_1) of :data:`UAI_TWO_PARENTS`, rows (a0,b0) (a0,b1) (a1,b0) (a1,b1)."""
+UAI_TWO_PARENTS = "BAYES\n3\n2 2 3\n3\n1 0\n1 1\n3 0 1 2\n\n2\n0.4 0.6\n\n2\n0.7 0.3\n\n12\n" + (
+    " ".join(str(x) for r in UAI_ROWS for x in r) + "\n"
+)
+"""Two binary parents and a child of three values, the table written by hand as the format lays it out."""
+
+
 def test_uai_follows_the_format(tmp_path):
     """The UAI format's own rule, by hand: a table lists the last variable of the scope fastest."""
-    text = "BAYES\n3\n2 2 3\n3\n1 0\n1 1\n3 0 1 2\n\n2\n0.4 0.6\n\n2\n0.7 0.3\n\n12\n"
-    rows = [
-        [0.1, 0.2, 0.7],
-        [0.3, 0.3, 0.4],
-        [0.5, 0.25, 0.25],
-        [0.6, 0.3, 0.1],
-    ]  # (a0,b0) (a0,b1) (a1,b0) (a1,b1)
-    text += " ".join(str(x) for r in rows for x in r) + "\n"
+    text = UAI_TWO_PARENTS
     bn = from_uai(text)
     np.testing.assert_array_equal(bn.cpts["var_2"][0, 1], [0.3, 0.3, 0.4])  # a0, b1
     np.testing.assert_array_equal(bn.cpts["var_2"][1, 0], [0.5, 0.25, 0.25])  # a1, b0
@@ -210,6 +218,15 @@ def test_uai_follows_the_format(tmp_path):
     np.testing.assert_allclose(
         ie.posterior("1").tolist(), make_engine(chain).query(["var_1"])["var_1"], atol=TOL
     )
+
+
+@_known_disagreement("pgmpy")
+def test_pgmpy_reads_a_uai_table_as_the_format_lays_it_out(tmp_path):
+    """pgmpy's reading of the hand-written table: P(var_2 | a1, b0) is the third row the file lists."""
+    path = tmp_path / "two_parents.uai"
+    path.write_text(UAI_TWO_PARENTS)
+    cpd = _pgmpy(path).get_cpds("var_2").reduce([("var_0", 1), ("var_1", 0)], inplace=False)
+    np.testing.assert_allclose(cpd.values, UAI_ROWS[2], atol=TOL)
 
 
 def test_a_model_with_zero_rows_is_refused_with_the_reason(zero_bn, tmp_path):

@@ -250,10 +250,9 @@ def dask_cluster(tmp_path):
         )
         procs.append(worker)
         yield f"tcp://127.0.0.1:{port}"
-    finally:
+    finally:  # the worker first: a nanny whose scheduler is already gone waits out its timeouts (8 s)
         for p in reversed(procs):
             p.terminate()
-        for p in reversed(procs):
             try:
                 p.wait(timeout=10)
             except subprocess.TimeoutExpired:
