@@ -124,13 +124,18 @@ def balanced_fill(text: str, width: int) -> str:
 def save_figure(fig: Figure, path: str | os.PathLike, formats: Sequence[str] = ("png", "svg")) -> list[Path]:
     """Save ``fig`` as ``path.<fmt>`` for each format, deterministically; returns the files written.
 
-    With the environment variable ``GLU_FIGURE_CHECK`` naming a folder, the readability problems of the
-    PNG as it is drawn (:func:`glu.plots.overlap.watching`, one per line) are written there, to
-    ``<name>.txt``; the files are the same with and without the check.
+    With the environment variable ``GLU_FIGURE_CHECK`` naming a folder by an absolute path (each notebook's
+    kernel runs in a folder of its own), the readability problems of the PNG as it is drawn
+    (:func:`glu.plots.overlap.watching`, one per line) are written there, to ``<name>.txt``; the files are
+    the same with and without the check.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     check = os.environ.get(CHECK_ENV)
+    if check and not Path(check).is_absolute():  # taken in each kernel's own folder, it would scatter
+        raise ValueError(
+            f"{CHECK_ENV} names the folder for the readability checks by an absolute path, not {check!r}"
+        )
+    path.parent.mkdir(parents=True, exist_ok=True)
     out = []
     for fmt in formats:
         target = path.with_suffix(f".{fmt}")

@@ -79,6 +79,18 @@ def test_every_notebook_is_known_and_parameterised():
             assert p["help"], f"{path.stem}: {name} has no comment"
 
 
+def test_the_notebooks_folder_tracks_only_the_notebooks():
+    """Nothing a run writes is committed beside the notebooks (three empty figure-check reports once were,
+    in notebooks/1/)."""
+    root = list_notebooks()[0].parent
+    if not (root.parent / ".git").exists():
+        pytest.skip("not a git checkout")
+    tracked = subprocess.run(
+        ["git", "ls-files", "."], cwd=root, capture_output=True, text=True, check=True
+    ).stdout.split()
+    assert sorted(tracked) == sorted([*(p.name for p in list_notebooks()), "__init__.py"])
+
+
 @pytest.mark.parametrize("name", NOTEBOOKS)
 def test_notebook_quick_run_writes_its_figures(quick_runs, name):
     out, summary = quick_runs[0]

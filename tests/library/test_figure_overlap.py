@@ -148,6 +148,19 @@ def test_the_check_is_written_beside_the_figures_when_asked(tmp_path, monkeypatc
     assert "text on text: 'one label' and 'two labels'" in report
 
 
+def test_a_relative_check_folder_is_refused_and_nothing_is_written(tmp_path, monkeypatch, fig):
+    """A relative folder would be taken in each kernel's working folder (GLU_FIGURE_CHECK=1 once left
+    reports in notebooks/1/)."""
+    from glu.plots.style import save_figure
+
+    f, _ = fig
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv(CHECK_ENV, "1")
+    with pytest.raises(ValueError, match=r"GLU_FIGURE_CHECK .* absolute path, not '1'"):
+        save_figure(f, tmp_path / "figures" / "plain")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_value_label_inside_its_bar_passes_and_one_across_its_edge_is_caught(fig):
     f, ax = fig
     ax.bar([0, 1], [0.8, 0.05], width=0.6)
