@@ -31,6 +31,13 @@ def _bit(u):
     return np.uint64(1) << np.uint64(u & 63)
 
 
+def _put(rows, k, row):
+    """``rows[k] = row`` as a loop: numba's assignment of a row compiles its shape-mismatch message, which
+    took seconds of the first compilation."""
+    for w in range(row.shape[0]):
+        rows[k, w] = row[w]
+
+
 def _members(row, out):
     """The variables of the set ``row`` written to ``out`` in ascending order; returns how many."""
     k = 0
@@ -102,7 +109,7 @@ def _eliminate_simplicial(adj, alive, order, cliques):
         if deg[v] <= 1:
             stack[top] = v
             top += 1
-    step = 0
+    step = np.int64(0)  # not a literal 0, which numba would compile _put for once more
     while top > 0:
         top -= 1
         v = stack[top]
@@ -110,7 +117,7 @@ def _eliminate_simplicial(adj, alive, order, cliques):
             continue
         alive[v] = False
         order[step] = v
-        cliques[step] = adj[v]
+        _put(cliques, step, adj[v])
         cliques[step, v >> 6] |= _bit(v)
         step += 1
         d = _members(adj[v], buf)
@@ -151,13 +158,13 @@ def _eliminate_greedy(adj, alive, order, cliques, step, logc, heuristic):
             k1[v], k2[v] = _key(v, adj, logc, heuristic, buf)
     touched = np.zeros(n, dtype=np.bool_)
     while step < n:
-        v = -1
+        v = np.int64(-1)  # not a literal -1: numba would compile the helpers v reaches once more for it
         for u in range(n):
             if alive[u] and (v < 0 or k1[u] < k1[v] or (k1[u] == k1[v] and k2[u] < k2[v])):
                 v = u
         alive[v] = False  # as in _eliminate_simplicial: a helper called per step slowed small graphs ~9 %
         order[step] = v
-        cliques[step] = adj[v]
+        _put(cliques, step, adj[v])
         cliques[step, v >> 6] |= _bit(v)
         step += 1
         d = _members(adj[v], buf)
@@ -246,20 +253,27 @@ def _tree(order, cliques):
     kept = np.empty((m, W), dtype=np.uint64)
     for k in range(n):
         if rep[k] == k:
-            kept[new[k]] = cliques[k]
-    codes = np.empty(n, dtype=np.int64)
-    e = 0
+            _put(kept, new[k], cliques[k])
+    # each edge once, sorted, as bit sets: joined[a] holds every b > a that a is joined to (np.unique would
+    # compile a sort: seconds of the first compilation)
+    joined = np.zeros((m, max(1, (m + 63) // 64)), dtype=np.uint64)
     for k in range(n):
         p = parent[k]
         if p >= 0 and rep[k] != rep[p]:
             a, b = new[rep[k]], new[rep[p]]
-            codes[e] = min(a, b) * m + max(a, b)
+            joined[min(a, b), max(a, b) >> 6] |= _bit(max(a, b))
+    n_edges = 0
+    for a in range(m):
+        for w in range(joined.shape[1]):
+            n_edges += _popcount(joined[a, w])
+    edges = np.empty((n_edges, 2), dtype=np.int64)
+    e = 0
+    for a in range(m):
+        d = _members(joined[a], buf)
+        for i in range(d):
+            edges[e, 0] = a
+            edges[e, 1] = buf[i]
             e += 1
-    codes = np.unique(codes[:e])
-    edges = np.empty((codes.shape[0], 2), dtype=np.int64)
-    for i in range(codes.shape[0]):
-        edges[i, 0] = codes[i] // m
-        edges[i, 1] = codes[i] % m
     return kept, edges
 
 
@@ -355,15 +369,20 @@ def schedule(cliques, sizes, edges, ptr, idx, first_home):
         at[a] += 1
         nidx[at[b]] = a
         at[b] += 1
-    homes = np.unique(where[first_home:])
+    homed = np.zeros(max(1, (m + 63) // 64), dtype=np.uint64)  # the homes as a bit set: ascending, once each
+    for s in range(first_home, where.shape[0]):
+        if where[s] >= 0:
+            homed[where[s] >> 6] |= _bit(where[s])
+    homes = np.empty(max(m, 1), dtype=np.int64)
+    n_homes = _members(homed, homes)
     parent = np.full(m, -1, dtype=np.int64)
     placed = np.zeros(m, dtype=np.bool_)
     bfs = np.empty(m, dtype=np.int64)
     starts = np.empty(m, dtype=np.int64)
     n_trees = 0
     filled = 0
-    for i in range(homes.shape[0] + m):
-        r = homes[i] if i < homes.shape[0] else i - homes.shape[0]
+    for i in range(n_homes + m):
+        r = homes[i] if i < n_homes else i - n_homes
         if r < 0 or placed[r]:
             continue
         starts[n_trees] = filled
@@ -383,7 +402,7 @@ def schedule(cliques, sizes, edges, ptr, idx, first_home):
                     bfs[filled] = x
                     filled += 1
     on_path = np.zeros(m, dtype=np.bool_)
-    for i in range(homes.shape[0]):
+    for i in range(n_homes):
         c = homes[i]
         while c >= 0 and not on_path[c]:
             on_path[c] = True
@@ -398,8 +417,8 @@ def plan_pattern(n, ptr, idx, cards, first_home, try_all_above):
 
     Returns (heuristic code, order, cliques as bit sets, edges, sizes, counts, the cliques' variables as
     (ptr, idx), then :func:`schedule`'s where, parent, bfs, starts, on_path)."""
-    best = 0
-    order, sets, edges, sizes, counts = triangulate(n, ptr, idx, cards, 0)
+    best = np.int64(0)  # not a literal 0: numba would compile triangulate's whole tree once more for it
+    order, sets, edges, sizes, counts = triangulate(n, ptr, idx, cards, best)
     if sizes.sum() > try_all_above:
         for h in range(1, 4):
             o, s, e, z, c = triangulate(n, ptr, idx, cards, h)

@@ -8,8 +8,12 @@ References: pyAgrum (hard and likelihood evidence), pgmpy, brute-force enumerati
 from __future__ import annotations
 
 import itertools
+import os
 import re
+import subprocess
+import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -242,6 +246,44 @@ def test_glus_network_on_the_junction_tree_equals_the_core_engine(zero_bn):
     assert jt.probability_of_evidence({"Action": "tap"}) == pytest.approx(
         core.probability_of_evidence({"Action": "tap"}), rel=1e-12
     )
+
+
+_COMPILE_ONCE = """
+import sys, types
+from glu.bn import kernels, make_engine, plan
+from glu.jit import compiled
+sys.path.insert(0, sys.argv[1])
+from test_junction import chain_net
+
+plan.TRY_ALL_ABOVE = 0  # every heuristic tried: triangulate with a code that varies
+make_engine(chain_net(12, 3, seed=4, extra_parents=2), method="junction").posterior("X0", {"X11": "v1"})
+for name, obj in vars(kernels).items():
+    if isinstance(obj, types.FunctionType) and obj.__module__ == kernels.__name__:
+        obj = compiled(obj)  # an entry point (helpers are bound to their compiled selves once compiled)
+    if getattr(obj, "signatures", None):
+        print(name, len(obj.signatures))
+"""
+
+
+@pytest.mark.slow
+def test_each_planning_loop_is_compiled_once(tmp_path):
+    """Compiled from an empty cache, after planning by every heuristic, each loop of glu.bn.kernels has one
+    machine-code version: a literal argument (``triangulate(…, 0)``) had numba compile a loop and all it calls
+    once more, which made a fresh machine's first junction-tree query take 21 s instead of 12
+    (benchmarks/bench_kernels.py). Slow: it compiles every loop (about 12 s)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    out = subprocess.run(
+        [sys.executable, "-c", _COMPILE_ONCE, str(Path(__file__).parent)],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    versions = dict(line.split() for line in out.splitlines())
+    assert {"plan_pattern", "triangulate", "eliminate", "_key", "_gains", "_bit", "_tree", "schedule"} <= set(
+        versions
+    )
+    assert {name: n for name, n in versions.items() if n != "1"} == {}
 
 
 def test_engines_pickle_for_dask_workers(zero_bn):
