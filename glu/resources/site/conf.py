@@ -38,6 +38,7 @@ autodoc_default_options = {"members": True, "undoc-members": True, "member-order
 autodoc_typehints = "description"
 autodoc_typehints_description_target = "documented_params"
 autodoc_preserve_defaults = True
+autodoc_use_type_comments = False  # glu annotates; looking for type comments took ~10 % of a build
 napoleon_google_docstring = False
 napoleon_numpy_docstring = True
 napoleon_use_ivar = True
