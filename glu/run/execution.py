@@ -14,7 +14,9 @@ by the cells, Rerun recordings are disconnected, a Dask cluster is closed by the
 a graceful exit cost 0.4–0.5 s a notebook of interpreter teardown and polling.
 
 Kernels run with ``GLU_HEADLESS=1`` in their environment (:data:`glu.machine.HEADLESS_ENV`): interactive
-extras (widgets, the Rerun viewer) then show their static form only. ``run_notebook(..., threads=N)`` also
+extras (widgets, the Rerun viewer) then show their static form only. A relative ``GLU_FIGURE_CHECK``
+(:data:`glu.plots.overlap.CHECK_ENV`) is made absolute from this process's folder, since each kernel runs
+in a folder of its own. ``run_notebook(..., threads=N)`` also
 caps the kernel's BLAS and OpenMP threads (:data:`THREAD_ENV`) at N, unless the caller's environment sets
 them: ``glu reproduce`` gives each of its parallel kernels its share of the cores, since two kernels whose
 BLAS each spin up a thread per core slow each other down (the whole collection took 65.9 s on 2 cores with
@@ -35,6 +37,7 @@ from typing import Any
 from glu.errors import GluError
 from glu.files import atomic_write_text
 from glu.machine import HEADLESS_ENV, thread_env
+from glu.plots.overlap import CHECK_ENV
 
 
 class NotebookStopped(GluError):
@@ -98,6 +101,15 @@ def _kernel_pid(km: Any) -> int | None:
     return getattr(process, "pid", None)
 
 
+def _kernel_env(threads: int | None, extra: dict[str, str]) -> dict[str, str]:
+    """A kernel's environment: this process's, its thread caps, ``extra``, headless, and the figure check's
+    folder made absolute from this process's folder (a kernel works in a folder of its own)."""
+    env = {**os.environ, **thread_env(threads), **extra, HEADLESS_ENV: "1"}
+    if env.get(CHECK_ENV):
+        env[CHECK_ENV] = os.path.abspath(env[CHECK_ENV])
+    return env
+
+
 def _engine_class() -> type:
     """papermill's nbclient engine, reporting cell starts and registering its client with the handle."""
     from jupyter_core.utils import run_sync
@@ -129,12 +141,7 @@ def _engine_class() -> type:
                 if self.handle.stopped:
                     raise NotebookStopped("stopped before its kernel started")
                 self.handle._client = self
-            env = {
-                **os.environ,
-                **thread_env(self.handle.threads),
-                **kwargs.pop("env", {}),
-                HEADLESS_ENV: "1",
-            }
+            env = _kernel_env(self.handle.threads, kwargs.pop("env", {}))
             if self.handle.cwd is not None:
                 kwargs.setdefault("cwd", self.handle.cwd)
             started = await super().async_start_new_kernel(env=env, **kwargs)

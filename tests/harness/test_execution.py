@@ -78,6 +78,23 @@ def test_notebooks_run_side_by_side_each_in_its_own_folder_and_leave_this_proces
     assert __import__("os").getcwd() == here
 
 
+def test_a_relative_figure_check_folder_is_the_callers_not_the_kernels(tmp_path, monkeypatch):
+    """GLU_FIGURE_CHECK=1 once left its reports in notebooks/1/: the kernel took the folder in its own
+    working folder. The runner hands kernels the folder as the caller named it, made absolute."""
+    from glu.plots.overlap import CHECK_ENV
+
+    pytest.importorskip("papermill")
+    (tmp_path / "caller").mkdir()
+    (tmp_path / "nb").mkdir()
+    monkeypatch.chdir(tmp_path / "caller")
+    monkeypatch.setenv(CHECK_ENV, "check")
+    src = tmp_path / "nb" / "probe.py"
+    src.write_text(CWD_NOTEBOOK.replace("print(os.getcwd())", f"print(os.environ[{CHECK_ENV!r}])"))
+    run_notebook(src, tmp_path / "probe.ipynb", {"x": 1})  # the kernel runs in nb/
+    seen = "".join(json.loads((tmp_path / "probe.ipynb").read_text())["cells"][-1]["outputs"][0]["text"])
+    assert seen.strip() == str(tmp_path / "caller" / "check")
+
+
 @pytest.mark.slow  # a fresh interpreter importing papermill twice (5 s)
 def test_papermill_loads_without_jsonschemas_slow_optional_iri_checker_and_notebooks_still_validate():
     """rfc3987_syntax (installed with JupyterLab) builds a grammar at import (1.6 s); jsonschema only uses
