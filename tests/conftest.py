@@ -23,6 +23,10 @@ os.environ.setdefault("RERUN_ANALYTICS", "0")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 from glu.paths import shared_data_dir  # noqa: E402
+from glu.run.execution import load_papermill  # noqa: E402
+
+load_papermill()  # jsonschema as glu reproduce loads it, without the optional IRI checker nbformat never asks
+# for, which builds 38 grammars at import: 1.5-2 s of every worker's collection
 
 SHARED = shared_data_dir()
 NO_SHARED_REASON = (
