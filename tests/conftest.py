@@ -39,6 +39,20 @@ SYNTHETIC_SEED = 0
 SYNTHETIC_N = 1270
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _temporary_files_under_pytests_folder(tmp_path_factory):
+    """Every temporary file of the session (the docstring examples' ``tempfile.mkdtemp()``, Dask's scratch
+    space, kernels, browsers, subprocesses) goes under pytest's own folder, which pytest prunes, instead of
+    piling up in the system's temporary folder run after run."""
+    import tempfile
+
+    folder = tmp_path_factory.mktemp("tmp")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("TMPDIR", str(folder))
+        patch.setattr(tempfile, "tempdir", str(folder))
+        yield folder
+
+
 # ---------------------------------------------------------------- any data (oracle tests)
 @pytest.fixture(scope="session")
 def synthetic_folder(tmp_path_factory) -> Path:
