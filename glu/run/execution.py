@@ -16,11 +16,11 @@ a graceful exit cost 0.4–0.5 s a notebook of interpreter teardown and polling.
 Kernels run with ``GLU_HEADLESS=1`` in their environment (:data:`glu.machine.HEADLESS_ENV`): interactive
 extras (widgets, the Rerun viewer) then show their static form only. A relative ``GLU_FIGURE_CHECK``
 (:data:`glu.plots.overlap.CHECK_ENV`) is made absolute from this process's folder, since each kernel runs
-in a folder of its own. ``run_notebook(..., threads=N)`` also
-caps the kernel's BLAS and OpenMP threads (:data:`THREAD_ENV`) at N, unless the caller's environment sets
-them: ``glu reproduce`` gives each of its parallel kernels its share of the cores, since two kernels whose
-BLAS each spin up a thread per core slow each other down (the whole collection took 65.9 s on 2 cores with
-two-thread BLAS in each of 2 kernels, 59.2 s with one; the same outputs).
+in a folder of its own. ``run_notebook(..., threads=N)`` also caps the kernel's BLAS and OpenMP threads
+(:data:`THREAD_ENV`) at N, unless the caller's environment sets them: ``glu reproduce`` gives each of its
+parallel kernels its share of the cores, since two kernels whose BLAS each spin up a thread per core slow
+each other down (the whole collection took 65.9 s on 2 cores with two-thread BLAS in each of 2 kernels,
+59.2 s with one; the same outputs).
 """
 
 from __future__ import annotations
