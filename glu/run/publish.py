@@ -41,6 +41,7 @@ from typing import Any
 from glu.errors import GluError
 from glu.files import atomic_write_text
 from glu.paths import OUTPUT_KINDS, PROJECT_ROOT, OutputLayout
+from glu.run.summary import previous_summary
 
 MARKER = "STORE"
 """The file that makes a folder glu's store."""
@@ -72,40 +73,53 @@ def reached(name: str) -> None:
         STEP_HOOK(name)
 
 
-def _first_file(folder: Path) -> Path | None:
-    """The first file (in name order) under ``folder``, or None when it holds only empty folders."""
+def _first_file(folder: Path, known: Iterable[str] = ()) -> Path | None:
+    """The first file (in name order) under ``folder`` but those directly in it named in ``known``, or None
+    when there is none (only empty folders)."""
+    known = set(known)
     for f in sorted(folder.rglob("*")):
-        if f.is_file() or f.is_symlink():
+        if (f.is_file() or f.is_symlink()) and (f.parent != folder or f.name not in known):
             return f
     return None
 
 
-def _pid_alive(pid: int) -> bool:
+def _owned(run: Path) -> bool:
+    """Whether the process whose id the run folder's :data:`OWNER` file holds is alive."""
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
+        os.kill(int((run / OWNER).read_text().strip()), 0)
+    except PermissionError:  # alive, another user's
         return True
+    except (OSError, ValueError):  # no owner, or gone
+        return False
     return True
 
 
-def _owner(run: Path) -> int | None:
+def _run_folder(store: Path) -> Path:
+    """A new run folder in the store (named by the time and a random part, :data:`_RUN_NAME`)."""
+    while True:
+        run = store / f"r{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
+        try:
+            run.mkdir()
+            return run
+        except FileExistsError:
+            continue
+
+
+def _link_or_copy(src: Path, dest: Path) -> None:
+    """Hard-link the file ``src`` at ``dest`` (its folder made), or copy it where links are refused."""
+    dest.parent.mkdir(parents=True, exist_ok=True)
     try:
-        return int((run / OWNER).read_text().strip())
-    except (OSError, ValueError):
-        return None
+        os.link(src, dest)
+    except OSError:
+        shutil.copy2(src, dest)
 
 
 def legacy_files(layout: OutputLayout, manifests: Mapping[str, Any] = {}) -> dict[str, set[str]]:  # noqa: B006
     """The files an earlier glu (before the store) wrote at the project's places, by kind: read from its
     ``results/summary.json`` (tables, figures, recordings, notebooks) and the notebooks' ``manifests``
     (models). Empty when there is no such summary."""
-    try:
-        old = json.loads((layout.results / "summary.json").read_text())
-        if not isinstance(old, dict):
-            return {}
-    except (OSError, ValueError):
+    old = previous_summary(layout.results)
+    if not old:
         return {}
     names = [n.get("name") for n in old.get("notebooks") or [] if isinstance(n, dict)]
     tables = [t for t in old.get("tables") or {} if isinstance(t, str)]
@@ -205,11 +219,7 @@ class Store:
         build = PROJECT_ROOT / "build"
         if build in place.parents:  # the checkout's build/ is glu's own (`make clean` removes it)
             return None
-        known = legacy.get(kind, set())
-        for f in sorted(place.rglob("*")):
-            if (f.is_file() or f.is_symlink()) and (f.parent != place or f.name not in known):
-                return f
-        return None
+        return _first_file(place, legacy.get(kind, ()))
 
     def _foreign(self, kind: str, place: Path, what: str) -> str:
         if self.force:
@@ -232,13 +242,7 @@ class Store:
                 "everything in this folder.\n",
             )
         self.clean()
-        while True:
-            run = self.root / f"r{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
-            try:
-                run.mkdir()
-                break
-            except FileExistsError:
-                continue
+        run = _run_folder(self.root)
         (run / OWNER).write_text(f"{os.getpid()}\n")
         return run
 
@@ -254,8 +258,7 @@ class Store:
                 continue
             if not (_RUN_NAME.fullmatch(entry.name) and entry.is_dir()) or entry == current:
                 continue
-            pid = _owner(entry)
-            if pid is not None and _pid_alive(pid):
+            if _owned(entry):
                 continue
             shutil.rmtree(entry, ignore_errors=True)
             removed.append(entry)
@@ -275,12 +278,7 @@ class Store:
         wanted = set(notebooks)
         kept = {p: nb for p, nb in read_record(current).items() if nb in wanted}
         for rel in kept:
-            src, dest = current / rel, run / rel
-            dest.parent.mkdir(parents=True, exist_ok=True)
-            try:
-                os.link(src, dest)
-            except OSError:
-                shutil.copy2(src, dest)
+            _link_or_copy(current / rel, run / rel)
         return kept
 
     def record(self, run: Path, files: Mapping[str, str]) -> None:
@@ -314,8 +312,7 @@ class Store:
                 continue
             if state == "legacy" and place.is_dir() and not place.is_symlink():
                 if aside is None:  # an earlier glu's folders: moved aside, removed as an earlier run
-                    aside = self.root / f"r{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
-                    aside.mkdir()
+                    aside = _run_folder(self.root)
                 os.replace(place, aside / kind)
             if not place.is_symlink():
                 place.parent.mkdir(parents=True, exist_ok=True)
@@ -329,14 +326,8 @@ def _link_tree(src: Path, dest: Path, skip: Iterable[str]) -> None:
     skip = set(skip)
     for f in sorted(src.rglob("*")):
         rel = f.relative_to(src)
-        if rel.parts[0] in skip or f.is_dir():
-            continue
-        target = dest / rel
-        target.parent.mkdir(parents=True, exist_ok=True)
-        try:
-            os.link(f, target)
-        except OSError:
-            shutil.copy2(f, target)
+        if rel.parts[0] not in skip and not f.is_dir():
+            _link_or_copy(f, dest / rel)
 
 
 def republish(

@@ -26,7 +26,6 @@ default.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import shutil
@@ -66,6 +65,7 @@ from glu.run.summary import (
     NotebookResult,
     collect_summary,
     expected_seconds,
+    previous_summary,
     save_summary,
     summary_csv,
     write_rendering_record,
@@ -350,13 +350,9 @@ def _run_all(
     }
     live = sys.stderr.isatty() if progress is None else progress
     bar = _Progress(plan.notebooks, log, live)
-
-    def one(nb: Path, handle: RunHandle) -> NotebookResult:
-        return _run_notebook(plan, nb, run / WORK / nb.stem, handle, bar, shown)
-
     results: list[NotebookResult] = []
     pool = ThreadPoolExecutor(max_workers=plan.jobs)
-    futures: dict[Future, str] = {}
+    futures: set[Future] = set()
     failed: NotebookResult | None = None
     try:
         threads = max(1, available_cores() // plan.jobs)  # each kernel's share of the cores for BLAS/OpenMP
@@ -364,7 +360,7 @@ def _run_all(
         for _, nb in run_order(plan.notebooks, plan.jobs, expected):
             handle = bar.handle(nb.stem)
             handle.threads = threads
-            futures[pool.submit(one, nb, handle)] = nb.stem
+            futures.add(pool.submit(_run_notebook, plan, nb, run / WORK / nb.stem, handle, bar, shown))
         pending = set(futures)
         while pending:
             done, pending = wait(pending, timeout=0.25, return_when=FIRST_COMPLETED)
@@ -379,9 +375,9 @@ def _run_all(
                 results.append(r)
                 if r.status == "failed" and failed is None:
                     failed = r
-                    _stop_all(pending, futures, bar)
+                    _stop_all(pending, bar)
     except BaseException:
-        _stop_all(set(futures), futures, bar)
+        _stop_all(futures, bar)
         raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
@@ -438,7 +434,7 @@ def _stage(plan: _Plan, run: Path, results: list[NotebookResult]) -> dict[str, A
     the run's summary (its ``wall_time_s`` not yet set)."""
     staged = OutputLayout.under(run)
     current = plan.store.current()
-    previous = _summary_of(current)
+    previous = previous_summary(current / "results") if current is not None else {}
     same = previous.get("data_source") == plan.source.describe() and previous.get("quick") == plan.quick
     ran = {r.name for r in results}
     kept_notebooks = [
@@ -468,17 +464,6 @@ def _stage(plan: _Plan, run: Path, results: list[NotebookResult]) -> dict[str, A
     write_rendering_record(staged.figures, plan.source.describe(), plan.quick, label)
     reached("staged")
     return summary
-
-
-def _summary_of(run: Path | None) -> dict[str, Any]:
-    """The summary of a published run ({} for none, or one that cannot be read as a summary)."""
-    if run is None:
-        return {}
-    try:
-        doc = json.loads((run / "results" / "summary.json").read_text())
-    except (OSError, ValueError):
-        return {}
-    return doc if isinstance(doc, dict) else {}
 
 
 def _record(plan: _Plan, run: Path, results: list[NotebookResult]) -> dict[str, str]:
@@ -537,7 +522,7 @@ def _shown_data(source: Any) -> tuple[str, str]:
     return ("synthetic" if source.root is None else shown_path(source.root), source.describe())
 
 
-def _stop_all(pending: set[Future], futures: Mapping[Future, str], bar: _Progress) -> None:
+def _stop_all(pending: set[Future], bar: _Progress) -> None:
     """Cancel what has not started, and kill the kernels of what is running."""
     for f in pending:
         f.cancel()

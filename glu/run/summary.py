@@ -24,6 +24,7 @@ from typing import Any
 from glu.errors import GluError, OutputError
 from glu.files import atomic_write_text, plain_name
 from glu.paths import OutputLayout
+from glu.run.manifest import read_manifest
 
 
 class SummaryError(GluError):
@@ -99,8 +100,8 @@ class NotebookResult:
 
 
 def declared_seconds(notebook: str | os.PathLike) -> float | None:
-    """The seconds a notebook declares a full run takes, or None: ``expected_seconds`` under ``glu`` in the
-    metadata of its jupytext header (the ``jupyter:`` block between the first two ``# ---`` lines)::
+    """The seconds a notebook declares a full run takes, or None: ``expected_seconds`` in its manifest
+    (:func:`glu.run.manifest.read_manifest`; None too when it has no readable manifest)::
 
         # jupyter:
         #   glu:
@@ -108,18 +109,19 @@ def declared_seconds(notebook: str | os.PathLike) -> float | None:
 
     A rough hint, for the order of a first run (:func:`expected_seconds`); a run's own times replace it.
     """
-    import yaml
-
     try:
-        lines = Path(notebook).read_text(encoding="utf-8").splitlines()
-        end = lines.index("# ---", 1) if lines and lines[0] == "# ---" else 0
-        header = yaml.safe_load("\n".join(line[2:] for line in lines[1:end])) if end else None
-        value = header["jupyter"]["glu"]["expected_seconds"]
-    except (OSError, ValueError, yaml.YAMLError, KeyError, TypeError):
+        return read_manifest(notebook).expected_seconds
+    except (OSError, ValueError, AttributeError):  # ValueError: not UTF-8, or a ManifestError
         return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value < math.inf:
-        return None
-    return float(value)
+
+
+def previous_summary(results_dir: Path) -> dict[str, Any]:
+    """The ``summary.json`` in ``results_dir``; {} when there is none, or one that is not a JSON object."""
+    try:
+        doc = json.loads((results_dir / "summary.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return doc if isinstance(doc, dict) else {}
 
 
 def _last_run_seconds(layout: OutputLayout, quick: bool) -> dict[str, float]:
@@ -131,12 +133,12 @@ def _last_run_seconds(layout: OutputLayout, quick: bool) -> dict[str, float]:
     except OutputError:  # an installed package has no project folders
         pass
     for folder in dict.fromkeys(folders):
+        doc = previous_summary(folder)
         try:
-            doc = json.loads((folder / "summary.json").read_text())
             if bool(doc["quick"]) != quick:  # a quick run's times say little about a full run's
                 continue
             return {nb["name"]: float(nb["seconds"]) for nb in doc["notebooks"]}
-        except (OSError, ValueError, KeyError, TypeError):
+        except (ValueError, KeyError, TypeError):
             continue
     return {}
 
@@ -215,7 +217,7 @@ def collect_summary(
         for r in runs
     }
     entries: dict[str, dict[str, Any]] = {"tables": {}, "figures": {}, "recordings": {}}
-    old = _read_previous(results_dir) if previous is None else previous
+    old = previous_summary(results_dir) if previous is None else previous
     if old.get("data_source") == data and old.get("quick") == quick:
         _keep_previous(old, notebooks, entries)
     for run in runs:
@@ -243,14 +245,6 @@ def collect_summary(
         "comparison_with_reference": _comparisons(tables),
         "tables": {k: tables[k] for k in sorted(tables)},
     }
-
-
-def _read_previous(results_dir: Path) -> dict[str, Any]:
-    try:
-        old = json.loads((results_dir / "summary.json").read_text())
-    except (OSError, ValueError):
-        return {}
-    return old if isinstance(old, dict) else {}
 
 
 def _keep_previous(
