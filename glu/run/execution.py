@@ -86,19 +86,13 @@ class RunHandle:
             log = getattr(self._client, "log", None)
             if log is not None:  # its "Kernel died while waiting for execute reply" is the stop itself
                 log.disabled = True
-            km = getattr(self._client, "km", None)
-            pid = _kernel_pid(km)
+            provisioner = getattr(getattr(self._client, "km", None), "provisioner", None)
+            pid = getattr(getattr(provisioner, "process", None), "pid", None)
         if pid is not None:
             try:
                 os.kill(pid, signal.SIGKILL)
             except (ProcessLookupError, PermissionError):
                 pass
-
-
-def _kernel_pid(km: Any) -> int | None:
-    provisioner = getattr(km, "provisioner", None)
-    process = getattr(provisioner, "process", None)
-    return getattr(process, "pid", None)
 
 
 def _kernel_env(threads: int | None, extra: dict[str, str]) -> dict[str, str]:
@@ -257,9 +251,8 @@ def run_notebook(
             progress_bar=False,
             engine_name=_register_engine(),
             glu_handle=handle,
-            extra_arguments=[
-                "--log-level=CRITICAL"
-            ],  # kernel chatter stays out of the run's log; errors reach the notebook
+            # kernel chatter stays out of the run's log; errors reach the notebook
+            extra_arguments=["--log-level=CRITICAL"],
             log_output=False,
             shutdown_kernel="immediate",
         )

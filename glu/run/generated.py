@@ -60,8 +60,9 @@ def manifests(folder: str | os.PathLike = paths.NOTEBOOKS_DIR) -> list[Manifest]
     return [read_manifest(p) for p in found]
 
 
-def _cell(text: str) -> str:
-    return " ".join(text.split()).replace("|", "\\|")
+def md_cell(text: object) -> str:
+    """Text for a cell of a Markdown table: on one line, its whitespace squeezed, its pipes escaped."""
+    return " ".join(str(text).split()).replace("|", "\\|")
 
 
 def story_table(notebooks: Sequence[Manifest]) -> str:
@@ -69,5 +70,5 @@ def story_table(notebooks: Sequence[Manifest]) -> str:
     rows = ["| notebook | what it shows | figures (`figures/`) |", "|---|---|---|"]
     for m in notebooks:
         figures = ", ".join(f"`{f}`" for f in m.figures) or "—"
-        rows.append(f"| `{m.notebook}` | {_cell(m.about)} | {figures} |")
+        rows.append(f"| `{m.notebook}` | {md_cell(m.about)} | {figures} |")
     return "\n".join(rows)

@@ -131,19 +131,17 @@ def read_manifest(path: str | os.PathLike) -> Manifest:
 
 def written_outputs(root: Path) -> dict[str, set[str]]:
     """The names of what a notebook wrote under an output root, by kind (figures by stem, PNG or SVG)."""
-    folders = {"figures": "figures", "tables": "results", "recordings": "recordings", "models": "models"}
+    where = {  # kind → its folder, and the suffixes of its files (named by stem); models: any file, by name
+        "figures": ("figures", (".png", ".svg")),
+        "tables": ("results", (".csv",)),
+        "recordings": ("recordings", (".rrd",)),
+        "models": ("models", None),
+    }
     out: dict[str, set[str]] = {}
-    for kind, folder in folders.items():
+    for kind, (folder, suffixes) in where.items():
         d = root / folder
         files = [f for f in d.iterdir() if f.is_file()] if d.is_dir() else []
-        if kind == "tables":
-            out[kind] = {f.stem for f in files if f.suffix == ".csv"}
-        elif kind == "figures":
-            out[kind] = {f.stem for f in files if f.suffix in (".png", ".svg")}
-        elif kind == "recordings":
-            out[kind] = {f.stem for f in files if f.suffix == ".rrd"}
-        else:
-            out[kind] = {f.name for f in files}
+        out[kind] = {f.stem for f in files if f.suffix in suffixes} if suffixes else {f.name for f in files}
     return out
 
 

@@ -98,7 +98,7 @@ def start(notebook: str, namespace: Mapping[str, Any]) -> Outputs:
             f" · outputs go to a scratch folder of this run's own, {where} "
             "(only `glu reproduce` publishes to results/, recordings/, models/)"
         )
-    _say(line)
+    out.say(line if in_kernel() else line.replace("**", ""))
     _show_tables()
     return out
 
@@ -116,12 +116,3 @@ def _show_tables() -> None:
     shell = get_ipython()
     if shell is not None:
         shell.display_formatter.formatters["text/html"].for_type(pd.DataFrame, html_table)
-
-
-def _say(markdown: str) -> None:
-    if in_kernel():
-        from IPython.display import Markdown, display
-
-        display(Markdown(markdown))
-    else:
-        print(markdown.replace("**", ""))

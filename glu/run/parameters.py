@@ -25,6 +25,7 @@ import ast
 import difflib
 import functools
 import io
+import itertools
 import math
 import re
 import tokenize
@@ -148,11 +149,7 @@ def read_spec(path: str | Path) -> dict[str, Parameter]:
     starts = [i for i, line in enumerate(lines) if _CELL.match(line)]
     if len(starts) != 1:
         raise ParameterError(f"{path.name}: expected one cell tagged parameters, found {len(starts)}")
-    body = []
-    for line in lines[starts[0] + 1 :]:
-        if line.startswith("# %%"):
-            break
-        body.append(line)
+    body = itertools.takewhile(lambda line: not line.startswith("# %%"), lines[starts[0] + 1 :])
     text = "\n".join(body) + "\n"
     comments = {
         tok.start[0]: tok.string.lstrip("#").strip()
@@ -178,10 +175,6 @@ def read_spec(path: str | Path) -> dict[str, Parameter]:
 
 def _num(x: float) -> str:
     return str(int(x)) if float(x).is_integer() else f"{x:g}"
-
-
-def _is_number(v: Any) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool)
 
 
 def _check_one(p: Parameter, value: Any, who: str) -> Any:
@@ -218,7 +211,7 @@ def _check_one(p: Parameter, value: Any, who: str) -> Any:
             continue
         if element == "int" and not (isinstance(v, int) and not isinstance(v, bool)):
             raise ParameterError(f"{who}: {p.name} must be {'an integer' if scalar else 'integers'}, {got}")
-        if not _is_number(v) or not math.isfinite(v):
+        if not isinstance(v, int | float) or isinstance(v, bool) or not math.isfinite(v):
             raise ParameterError(
                 f"{who}: {p.name} must be {'a finite number' if scalar else 'finite numbers'}, {got}"
             )

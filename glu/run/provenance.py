@@ -74,9 +74,7 @@ def read_provenance(root: Path | None = paths.PROJECT_ROOT) -> Provenance:
     return Provenance(glu.__version__, head.strip(), modified=status is None or bool(status.strip()))
 
 
-@cache
-def _this_checkout() -> Provenance:
-    return read_provenance()
+_this_checkout = cache(read_provenance)  # this checkout's provenance, read once per process
 
 
 def made_by() -> str:

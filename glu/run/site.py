@@ -42,6 +42,7 @@ from typing import Any
 
 from glu import paths
 from glu.errors import GluError
+from glu.files import atomic_write_bytes
 from glu.paths import OutputLayout
 from glu.run.captions import caption_figures
 from glu.run.site_api import api_modules, api_pages
@@ -69,12 +70,8 @@ class SiteError(GluError):
 def _write_if_changed(path: Path, text: str | bytes) -> None:
     """Write only what changed, so that Sphinx reads again only the pages whose sources changed."""
     data = text.encode() if isinstance(text, str) else text
-    if path.is_file() and path.read_bytes() == data:
-        return
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
+    if not path.is_file() or path.read_bytes() != data:
+        atomic_write_bytes(path, data)
 
 
 def _checked(summary: Mapping[str, Any]) -> Mapping[str, Any]:
@@ -166,17 +163,17 @@ def assemble(
         target = source / "notebooks" / f"{name}.ipynb"
         _write_if_changed(target, nbformat.writes(nb) + "\n")
         keep.add(target)
-    for page in _docs_pages():
+    docs = _docs_pages()
+    for page in docs:
         target = source / "docs" / page.name
         _write_if_changed(target, docs_page(page.read_text(encoding="utf-8")))
         keep.add(target)
-    for fname, _ in summary.get("figures_by_notebook", {}).items():
+    for fname in summary.get("figures_by_notebook", {}):
         src = layout.figures / fname
         if fname.endswith(".png") and src.is_file():
             target = source / "_figures" / fname
             _write_if_changed(target, src.read_bytes())
             keep.add(target)
-    docs = _docs_pages()
     pages = {
         "index.md": index_page(
             layout, summary, captions, notebooks_dir, has_docs=bool(docs), published=published
@@ -189,8 +186,9 @@ def assemble(
     for page, text in pages.items():
         _write_if_changed(source / page, text)
         keep.add(source / page)
-    for stale in ("api.md",):
-        (source / stale).unlink(missing_ok=True)
+    (source / "api.md").unlink(
+        missing_ok=True
+    )  # an api.md would clash with api.rst (one document, two files)
     for folder in ("notebooks", "docs", "_figures", "api"):  # pages and figures of an earlier run, gone
         for f in (source / folder).glob("*") if (source / folder).is_dir() else []:
             if f not in keep:

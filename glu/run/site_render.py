@@ -9,6 +9,8 @@ in a figure with the caption, its Markdown rendered inline, and the file's name 
 
 from __future__ import annotations
 
+import dataclasses
+
 from docutils import nodes
 from myst_nb.core.render import MimeData, NbElementRenderer
 
@@ -20,15 +22,7 @@ class FigureRenderer(NbElementRenderer):
 
     def _inline(self, data: MimeData, markdown: str) -> list[nodes.Node]:
         return self.render_markdown_inline(
-            MimeData(
-                "text/markdown",
-                markdown,
-                data.cell_metadata,
-                {},
-                data.cell_index,
-                data.output_index,
-                data.line,
-            )
+            dataclasses.replace(data, mime_type="text/markdown", content=markdown, output_metadata={})
         )
 
     def render_image(self, data: MimeData) -> list[nodes.Element]:

@@ -23,6 +23,7 @@ from typing import Any
 
 from glu import paths
 from glu.errors import DataError
+from glu.run.generated import md_cell
 
 _ROOT = paths.PROJECT_ROOT
 RESULTS: Path | None = _ROOT / "benchmarks" / "results" if _ROOT is not None else None
@@ -87,15 +88,11 @@ def load_results(folder: str | os.PathLike | None = RESULTS) -> list[dict[str, A
     return sorted(docs, key=lambda d: (rank.get(d["benchmark"], len(ORDER)), d["benchmark"]))
 
 
-def _cell(text: str) -> str:
-    return " ".join(str(text).split()).replace("|", "\\|")
-
-
 def _row(r: Mapping[str, Any]) -> str:
-    name = _cell(r["name"]) + (f" — *{_cell(r['what'])}*" if r["what"] else "")
-    reference = f"{_cell(r['reference'])}: {fmt(r['reference_s'])}" if r["reference_s"] else "—"
+    name = md_cell(r["name"]) + (f" — *{md_cell(r['what'])}*" if r["what"] else "")
+    reference = f"{md_cell(r['reference'])}: {fmt(r['reference_s'])}" if r["reference_s"] else "—"
     ratio = f"{r['ratio']:.1f}×" if r["ratio"] else "—"
-    target = "—" if not r["target"] else _cell(r["target"])
+    target = "—" if not r["target"] else md_cell(r["target"])
     if r["met"] is not None:
         target += ": met" if r["met"] else ": **missed**"
     return f"| {name} | {fmt(r['glu_s'])} | {reference} | {ratio} | {target} |"
@@ -106,15 +103,15 @@ def section(doc: Mapping[str, Any]) -> str:
     lines = [
         f"## {doc['benchmark']}",
         "",
-        f"{_cell(doc['what'])[:1].upper()}{_cell(doc['what'])[1:]}: `{doc['command']}`, {doc['date']}; "
-        f"{_cell(doc['machine'])}.",
+        f"{md_cell(doc['what'])[:1].upper()}{md_cell(doc['what'])[1:]}: `{doc['command']}`, {doc['date']}; "
+        f"{md_cell(doc['machine'])}.",
         "",
         "| measurement | glu | reference | reference / glu | target |",
         "|---|---|---|---|---|",
         *(_row(r) for r in doc["rows"]),
     ]
     if doc["notes"]:
-        lines += ["", *(f"* {_cell(n)}" for n in doc["notes"])]
+        lines += ["", *(f"* {md_cell(n)}" for n in doc["notes"])]
     return "\n".join(lines)
 
 
