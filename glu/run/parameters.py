@@ -178,47 +178,45 @@ def _num(x: float) -> str:
 
 
 def _check_one(p: Parameter, value: Any, who: str) -> Any:
-    got = f"got {value!r}"
+    def wrong(must: str, every: bool = False, sep: str = ",") -> ParameterError:
+        return ParameterError(
+            f"{who}: {'every element of ' if every else ''}{p.name} must be {must}{sep} got {value!r}"
+        )
+
     if value is None:
         if p.default is None:
             return None
-        raise ParameterError(f"{who}: {p.name} must be a {p.type}, {got}")
+        raise wrong(f"a {p.type}")
     if p.type == "bool":
         if not isinstance(value, bool):
-            raise ParameterError(f"{who}: {p.name} must be True or False, {got}")
+            raise wrong("True or False")
         return value
     if p.type == "str":
         if not isinstance(value, str):
-            raise ParameterError(f"{who}: {p.name} must be a string, {got}")
+            raise wrong("a string")
         if p.choices and value not in p.choices:
-            raise ParameterError(f"{who}: {p.name} must be one of {', '.join(p.choices)}; {got}")
+            raise wrong(f"one of {', '.join(p.choices)}", sep=";")
         return value
     if p.type in ("int", "float"):
         items, scalar = [value], True
     elif isinstance(value, list | tuple):
         items, scalar = list(value), False
     else:
-        raise ParameterError(f"{who}: {p.name} must be a list ({p.type}), {got}")
+        raise wrong(f"a list ({p.type})")
     element = p.type.removeprefix("list[").removesuffix("]")
     for v in items:
         if element == "str":
             if not isinstance(v, str):
-                raise ParameterError(f"{who}: every element of {p.name} must be a string, {got}")
+                raise wrong("a string", every=True)
             if p.choices and v not in p.choices:
-                raise ParameterError(
-                    f"{who}: every element of {p.name} must be one of {', '.join(p.choices)}; {got}"
-                )
+                raise wrong(f"one of {', '.join(p.choices)}", every=True, sep=";")
             continue
         if element == "int" and not (isinstance(v, int) and not isinstance(v, bool)):
-            raise ParameterError(f"{who}: {p.name} must be {'an integer' if scalar else 'integers'}, {got}")
+            raise wrong("an integer" if scalar else "integers")
         if not isinstance(v, int | float) or isinstance(v, bool) or not math.isfinite(v):
-            raise ParameterError(
-                f"{who}: {p.name} must be {'a finite number' if scalar else 'finite numbers'}, {got}"
-            )
+            raise wrong("a finite number" if scalar else "finite numbers")
         if p.range and not p.range[0] <= v <= p.range[1]:
-            raise ParameterError(
-                f"{who}: {p.name} must be in [{_num(p.range[0])}, {_num(p.range[1])}], {got}"
-            )
+            raise wrong(f"in [{_num(p.range[0])}, {_num(p.range[1])}]")
     return value
 
 

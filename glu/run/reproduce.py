@@ -213,34 +213,6 @@ def reproduce(
     data: str | os.PathLike | None = None,
     quick: bool = False,
     out: str | os.PathLike | None = None,
-    **kwargs: Any,
-) -> dict[str, Any]:
-    """:func:`_reproduce` holding the lock of the output folder (:func:`glu.run.lock.run_lock`): a second
-    run on the same project or ``--out`` folder is refused in one line naming the first's process id. The
-    glu that runs (its version and commit, :mod:`glu.run.provenance`) is read once, before any notebook,
-    and every output of the run names it."""
-    with run_lock(OutputLayout.at(out).root), _made_by(read_provenance()) as made:
-        return _reproduce(data, quick, out, made=made, **kwargs)
-
-
-@contextmanager
-def _made_by(made: Provenance) -> Iterator[Provenance]:
-    """Hand the run's provenance to the notebooks' kernels (:data:`glu.run.provenance.ENV`) while it runs."""
-    before = os.environ.get(PROVENANCE_ENV)
-    os.environ[PROVENANCE_ENV] = before or made.label()  # a caller's pinned line wins (a re-render)
-    try:
-        yield made
-    finally:
-        if before is None:
-            os.environ.pop(PROVENANCE_ENV, None)
-        else:
-            os.environ[PROVENANCE_ENV] = before
-
-
-def _reproduce(
-    data: str | os.PathLike | None = None,
-    quick: bool = False,
-    out: str | os.PathLike | None = None,
     jobs: int = 1,
     only: Sequence[str] | None = None,
     seed: int = 0,
@@ -249,9 +221,13 @@ def _reproduce(
     progress: bool | None = None,
     site: bool = True,
     force: bool = False,
-    made: Provenance | None = None,
 ) -> dict[str, Any]:
     """Run the notebooks and publish the whole run if all succeed; returns the summary (also in results/).
+
+    The run holds the lock of the output folder (:func:`glu.run.lock.run_lock`): a second run on the same
+    project or ``--out`` folder is refused in one line naming the first's process id. The glu that runs (its
+    version and commit, :mod:`glu.run.provenance`) is read once, before any notebook, and every output of
+    the run names it.
 
     Parameters
     ----------
@@ -269,7 +245,6 @@ def _reproduce(
     site : also build the documentation site of the run (:func:`glu.run.site.build_site`)
     force : leave a place of the output layout that holds what glu did not write untouched (the run is
         then published in the store only) instead of refusing
-    made : the glu that runs (:func:`glu.run.provenance.read_provenance`, read by :func:`reproduce`)
 
     Raises
     ------
@@ -277,31 +252,46 @@ def _reproduce(
     holds what glu did not write (nothing ran); KeyboardInterrupt : interrupted (nothing published, kernels
     killed, staging removed); :class:`glu.run.site.SiteError` : the run was published without its site
     """
-    t_start = time.perf_counter()
-    plan = _plan(data, quick, out, jobs, only, seed, notebooks_dir, force)
-    plan.made = made or read_provenance()
-    run = plan.store.begin()
+    with run_lock(OutputLayout.at(out).root), _made_by(read_provenance()) as made:
+        t_start = time.perf_counter()
+        plan = _plan(data, quick, out, jobs, only, seed, notebooks_dir, force)
+        plan.made = made
+        run = plan.store.begin()
+        try:
+            where = f"{plan.source.location()}, quick={quick}, jobs={jobs}"
+            log(f"glu reproduce: {len(plan.notebooks)} notebooks, {where}")
+            results = _run_all(plan, run, log, progress, notebooks_dir)
+            summary = _stage(plan, run, results)
+            summary["wall_time_s"] = round(time.perf_counter() - t_start, 3)
+            save_summary(run / "results", summary, summary_csv(summary))
+            site_error = _build_site(plan, run, summary, log, notebooks_dir) if site else None
+            reached("site")
+            plan.store.record(run, _record(plan, run, results))
+            plan.store.publish(run, log)
+        finally:
+            plan.store.discard(run)
+        _promote_figures(plan, run, log)
+        log(
+            f"glu reproduce: done in {summary['wall_time_s']:.1f} s; summary in "
+            f"{plan.layout.results / 'summary.json'}"
+        )
+        if site_error is not None:
+            raise site_error
+        return summary
+
+
+@contextmanager
+def _made_by(made: Provenance) -> Iterator[Provenance]:
+    """Hand the run's provenance to the notebooks' kernels (:data:`glu.run.provenance.ENV`) while it runs."""
+    before = os.environ.get(PROVENANCE_ENV)
+    os.environ[PROVENANCE_ENV] = before or made.label()  # a caller's pinned line wins (a re-render)
     try:
-        where = f"{plan.source.location()}, quick={quick}, jobs={jobs}"
-        log(f"glu reproduce: {len(plan.notebooks)} notebooks, {where}")
-        results = _run_all(plan, run, log, progress, notebooks_dir)
-        summary = _stage(plan, run, results)
-        summary["wall_time_s"] = round(time.perf_counter() - t_start, 3)
-        save_summary(run / "results", summary, summary_csv(summary))
-        site_error = _build_site(plan, run, summary, log, notebooks_dir) if site else None
-        reached("site")
-        plan.store.record(run, _record(plan, run, results))
-        plan.store.publish(run, log)
+        yield made
     finally:
-        plan.store.discard(run)
-    _promote_figures(plan, run, log)
-    log(
-        f"glu reproduce: done in {summary['wall_time_s']:.1f} s; summary in "
-        f"{plan.layout.results / 'summary.json'}"
-    )
-    if site_error is not None:
-        raise site_error
-    return summary
+        if before is None:
+            os.environ.pop(PROVENANCE_ENV, None)
+        else:
+            os.environ[PROVENANCE_ENV] = before
 
 
 def _plan(

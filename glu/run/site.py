@@ -67,11 +67,13 @@ class SiteError(GluError):
 
 
 # ------------------------------------------------------------------------------------------ sources
-def _write_if_changed(path: Path, text: str | bytes) -> None:
-    """Write only what changed, so that Sphinx reads again only the pages whose sources changed."""
+def _write_if_changed(path: Path, text: str | bytes) -> Path:
+    """Write only what changed, so that Sphinx reads again only the pages whose sources changed; returns
+    ``path``."""
     data = text.encode() if isinstance(text, str) else text
     if not path.is_file() or path.read_bytes() != data:
         atomic_write_bytes(path, data)
+    return path
 
 
 def _checked(summary: Mapping[str, Any]) -> Mapping[str, Any]:
@@ -160,20 +162,13 @@ def assemble(
         captions.update(figure_captions)
         if not any(c.cell_type == "markdown" and c.source.lstrip().startswith("# ") for c in nb.cells):
             nb.cells.insert(0, nbformat.v4.new_markdown_cell(f"# {name}"))  # a page needs a title
-        target = source / "notebooks" / f"{name}.ipynb"
-        _write_if_changed(target, nbformat.writes(nb) + "\n")
-        keep.add(target)
+        keep.add(_write_if_changed(source / "notebooks" / f"{name}.ipynb", nbformat.writes(nb) + "\n"))
     docs = _docs_pages()
     for page in docs:
-        target = source / "docs" / page.name
-        _write_if_changed(target, docs_page(page.read_text(encoding="utf-8")))
-        keep.add(target)
+        keep.add(_write_if_changed(source / "docs" / page.name, docs_page(page.read_text(encoding="utf-8"))))
     for fname in summary.get("figures_by_notebook", {}):
-        src = layout.figures / fname
-        if fname.endswith(".png") and src.is_file():
-            target = source / "_figures" / fname
-            _write_if_changed(target, src.read_bytes())
-            keep.add(target)
+        if fname.endswith(".png") and (layout.figures / fname).is_file():
+            keep.add(_write_if_changed(source / "_figures" / fname, (layout.figures / fname).read_bytes()))
     pages = {
         "index.md": index_page(
             layout, summary, captions, notebooks_dir, has_docs=bool(docs), published=published
@@ -184,11 +179,8 @@ def assemble(
     if docs:
         pages["docs.md"] = docs_index_page([p.stem for p in docs])
     for page, text in pages.items():
-        _write_if_changed(source / page, text)
-        keep.add(source / page)
-    (source / "api.md").unlink(
-        missing_ok=True
-    )  # an api.md would clash with api.rst (one document, two files)
+        keep.add(_write_if_changed(source / page, text))
+    (source / "api.md").unlink(missing_ok=True)  # it would clash with api.rst (one document, two files)
     for folder in ("notebooks", "docs", "_figures", "api"):  # pages and figures of an earlier run, gone
         for f in (source / folder).glob("*") if (source / folder).is_dir() else []:
             if f not in keep:

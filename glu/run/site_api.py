@@ -76,10 +76,6 @@ def _autosummary(names: list[str]) -> list[str]:
     return [".. autosummary::", "", *(f"   {n}" for n in names), ""] if names else []
 
 
-def _is_package(module: str) -> bool:
-    return Path(importlib.import_module(module).__file__ or "").name == "__init__.py"
-
-
 def _gathered(package: str) -> tuple[list[str], list[tuple[str, str]]]:
     """A package's public names defined in its modules: (those documented on their module's page, those
     from a private module, as (name, autodoc directive), which the package's page documents itself)."""
@@ -101,7 +97,7 @@ def _gathered(package: str) -> tuple[list[str], list[tuple[str, str]]]:
 def module_page(module: str, modules: tuple[str, ...]) -> str:
     """The reStructuredText page of one module (or package) of the API reference."""
     lines = [_title(module)]
-    if _is_package(module):
+    if hasattr(importlib.import_module(module), "__path__"):  # a package
         lines += [f".. automodule:: {module}", "   :members:", "   :ignore-module-all:", ""]
         linked, own = _gathered(module)
         if linked or own:

@@ -40,10 +40,6 @@ def _about(name: str, notebooks_dir: Path) -> str:
         return ""
 
 
-def _relative(target: Path, start: Path) -> str:
-    return Path(os.path.relpath(target, start)).as_posix()
-
-
 _NOTEBOOK_LINK = re.compile(r"\]\((\.\./)?notebooks/(\d\d_[A-Za-z0-9_]+)\.(py|ipynb)\)")
 
 
@@ -161,7 +157,8 @@ def _recordings(layout: OutputLayout, summary: Mapping[str, Any]) -> list[str]:
     ]
     by_nb = summary.get("recordings_by_notebook", {})
     for rec in recordings:
-        target, name = html.escape(_relative(layout.recordings / rec, layout.site)), html.escape(rec)
+        target = html.escape(Path(os.path.relpath(layout.recordings / rec, layout.site)).as_posix())
+        name = html.escape(rec)
         lines.append(
             f'<tr><td><a href="{target}">{name}</a></td><td>{html.escape(by_nb.get(rec, ""))}</td>'
             f"<td><code>rerun recordings/{name}</code></td></tr>"

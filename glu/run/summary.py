@@ -208,12 +208,7 @@ def collect_summary(
     from glu.run.outputs import package_versions
 
     notebooks = {
-        r.name: {
-            "name": r.name,
-            "status": r.status,
-            "seconds": round(r.seconds, 3),
-            "parameters": r.parameters,
-        }
+        r.name: dict(name=r.name, status=r.status, seconds=round(r.seconds, 3), parameters=r.parameters)
         for r in runs
     }
     entries: dict[str, dict[str, Any]] = {"tables": {}, "figures": {}, "recordings": {}}
@@ -309,18 +304,10 @@ def summary_csv(summary: dict[str, Any]) -> str:
         columns.append(np.tile(np.asarray(df.columns, dtype=object), n))
         values.extend(cells.ravel().tolist())
     # one frame, so that pandas infers the value column's type over every table at once, as it did
-    frame = (
-        pd.DataFrame(
-            {
-                "table": np.concatenate(tables),
-                "row": np.concatenate(rows),
-                "column": np.concatenate(columns),
-                "value": values,
-            }
-        )
-        if tables
-        else pd.DataFrame([])
-    )
+    frame = pd.DataFrame([])
+    if tables:
+        parts = {"table": tables, "row": rows, "column": columns}
+        frame = pd.DataFrame({**{k: np.concatenate(v) for k, v in parts.items()}, "value": values})
     return frame.to_csv(index=False, lineterminator="\n")
 
 
