@@ -51,13 +51,8 @@ def injected_names(namespace: Mapping[str, Any]) -> list[str]:
                 tree = ast.parse(source)
             except SyntaxError:
                 return []
-            return [
-                t.id
-                for node in tree.body
-                if isinstance(node, ast.Assign)
-                for t in node.targets
-                if isinstance(t, ast.Name)
-            ]
+            targets = (t for node in tree.body if isinstance(node, ast.Assign) for t in node.targets)
+            return [t.id for t in targets if isinstance(t, ast.Name)]
     return []
 
 

@@ -27,6 +27,7 @@ recognised by the earlier summary and the notebooks' manifests, and moved aside 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -98,11 +99,9 @@ def _run_folder(store: Path) -> Path:
     """A new run folder in the store (named by the time and a random part, :data:`_RUN_NAME`)."""
     while True:
         run = store / f"r{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
-        try:
+        with contextlib.suppress(FileExistsError):
             run.mkdir()
             return run
-        except FileExistsError:
-            continue
 
 
 def _link_or_copy(src: Path, dest: Path) -> None:

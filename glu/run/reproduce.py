@@ -87,7 +87,7 @@ class NotebookFailed(NotebookError):
 
 def list_notebooks(only: Sequence[str] | None = None, folder: Path = paths.NOTEBOOKS_DIR) -> list[Path]:
     """The notebooks (jupytext ``NN_name.py`` files) in story order; ``only`` selects by name or number."""
-    found = sorted(p for p in folder.glob("[0-9][0-9]_*.py"))
+    found = sorted(folder.glob("[0-9][0-9]_*.py"))
     if only is None:
         return found
     chosen = []
@@ -106,8 +106,6 @@ def list_notebooks(only: Sequence[str] | None = None, folder: Path = paths.NOTEB
 
 def _move_tree(staged: Path, final: Path) -> list[str]:
     moved = []
-    if not staged.exists():
-        return moved
     for f in sorted(staged.rglob("*")):
         if f.is_file():
             target = final / f.relative_to(staged)
@@ -204,10 +202,6 @@ class _Plan:
     kept: dict[str, str] = field(default_factory=dict)
     made: Provenance | None = None
 
-    @property
-    def data_param(self) -> str:
-        return "synthetic" if self.source.root is None else str(self.source.root)
-
 
 def reproduce(
     data: str | os.PathLike | None = None,
@@ -260,7 +254,7 @@ def reproduce(
         try:
             where = f"{plan.source.location()}, quick={quick}, jobs={jobs}"
             log(f"glu reproduce: {len(plan.notebooks)} notebooks, {where}")
-            results = _run_all(plan, run, log, progress, notebooks_dir)
+            results = _run_all(plan, run, log, progress)
             summary = _stage(plan, run, results)
             summary["wall_time_s"] = round(time.perf_counter() - t_start, 3)
             save_summary(run / "results", summary, summary_csv(summary))
@@ -330,7 +324,7 @@ def _plan(
 
 
 def _run_all(
-    plan: _Plan, run: Path, log: Callable[[str], None], progress: bool | None, notebooks_dir: Path
+    plan: _Plan, run: Path, log: Callable[[str], None], progress: bool | None
 ) -> list[NotebookResult]:
     """Run every notebook of the plan, each staging into ``run/_work/NAME/``; the results when all
     succeeded, else :class:`NotebookFailed` (the others stopped)."""
@@ -388,7 +382,7 @@ def _run_notebook(
     name = nb.stem
     t0 = time.perf_counter()
     out_ipynb = work / f"{name}.ipynb"
-    params = {**plan.params[name], "data": plan.data_param, "out_dir": str(work / "out")}
+    params = {**plan.params[name], "data": _data_param(plan.source), "out_dir": str(work / "out")}
 
     def failed(msg: str, why: str) -> NotebookResult:
         kept = plan.store.failed / f"{name}.failed.ipynb"
@@ -427,25 +421,18 @@ def _stage(plan: _Plan, run: Path, results: list[NotebookResult]) -> dict[str, A
     previous = previous_summary(current / "results") if current is not None else {}
     same = previous.get("data_source") == plan.source.describe() and previous.get("quick") == plan.quick
     ran = {r.name for r in results}
-    kept_notebooks = [
-        nb["name"] for nb in previous.get("notebooks", []) if same and nb.get("name") not in ran
-    ]
-    plan.kept = plan.store.carry_over(run, kept_notebooks)
+    others = [nb["name"] for nb in previous.get("notebooks", []) if same and nb.get("name") not in ran]
+    plan.kept = plan.store.carry_over(run, others)
+    for kind in (*staged.published(), "notebooks"):  # every place of the run resolves, even empty
+        staged.folder(kind).mkdir(parents=True, exist_ok=True)
     for r in results:
-        work = run / WORK / r.name
-        out = OutputLayout.under(work / "out")
+        out = OutputLayout.under(run / WORK / r.name / "out")
         for kind, target in staged.published().items():
             r.files += _move_tree(out.folder(kind), target)
-        staged.notebooks.mkdir(parents=True, exist_ok=True)
         os.replace(r.executed, staged.notebooks / f"{r.name}.ipynb")
         r.executed = plan.layout.notebooks / f"{r.name}.ipynb"
         (plan.store.failed / f"{r.name}.failed.ipynb").unlink(missing_ok=True)
     shutil.rmtree(run / WORK, ignore_errors=True)
-    for kind in (
-        *staged.published(),
-        "notebooks",
-    ):  # every place of the run resolves, even with nothing in it
-        staged.folder(kind).mkdir(parents=True, exist_ok=True)
     summary = collect_summary(
         staged.results, results, plan.source.describe(), plan.quick, previous=previous if same else {}
     )
@@ -506,6 +493,11 @@ def _promote_figures(plan: _Plan, run: Path, log: Callable[[str], None]) -> None
     log(f"glu reproduce: {changed} of the tracked figures in figures/ rewritten from the real data")
 
 
+def _data_param(source: Any) -> str:
+    """The data as a kernel is given it: ``synthetic``, or its folder."""
+    return "synthetic" if source.root is None else str(source.root)
+
+
 def _shown_data(source: Any) -> tuple[str, str]:
     """The data as an executed notebook shows it: ``synthetic``, or its folder relative to the project
     (:func:`shown_path`), with what it is (:meth:`glu.data.DataSource.describe`: its public origin)."""
@@ -563,11 +555,7 @@ def run_one(
         refuse_published(layout, "glu run")
     else:
         layout = OutputLayout.scratch(src.stem)
-    params = {
-        **parsed,
-        "data": "synthetic" if source.root is None else str(source.root),
-        "out_dir": str(layout.root),
-    }
+    params = {**parsed, "data": _data_param(source), "out_dir": str(layout.root)}
     executed = layout.notebooks / f"{src.stem}.ipynb"
     label = parameters_text(parsed) or "default parameters"
     log(f"glu run: {src.stem} with {label}, {source.location()} …")

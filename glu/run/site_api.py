@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import pkgutil
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -166,19 +167,10 @@ def api_pages(modules: tuple[str, ...]) -> dict[str, str]:
 # ------------------------------------------------------------------------------------------ references
 def _resolve_path(dotted: str) -> tuple[Any, bool]:
     """The object a dotted glu path names (importing the longest module prefix), and whether it exists."""
-    parts = dotted.split(".")
-    for k in range(len(parts), 0, -1):
-        try:
-            obj = importlib.import_module(".".join(parts[:k]))
-        except ImportError:
-            continue
-        try:
-            for attr in parts[k:]:
-                obj = getattr(obj, attr)
-        except AttributeError:
-            return None, False
-        return obj, True
-    return None, False
+    try:
+        return pkgutil.resolve_name(dotted), True
+    except (ImportError, AttributeError, ValueError):
+        return None, False
 
 
 def _candidates(target: str, module: str, cls: str | None) -> list[str]:
