@@ -67,7 +67,6 @@ from glu.run.summary import (
     expected_seconds,
     previous_summary,
     save_summary,
-    summary_csv,
     write_rendering_record,
 )
 
@@ -257,7 +256,7 @@ def reproduce(
             results = _run_all(plan, run, log, progress)
             summary = _stage(plan, run, results)
             summary["wall_time_s"] = round(time.perf_counter() - t_start, 3)
-            save_summary(run / "results", summary, summary_csv(summary))
+            save_summary(run / "results", summary)
             site_error = _build_site(plan, run, summary, log, notebooks_dir) if site else None
             reached("site")
             plan.store.record(run, _record(plan, run, results))
