@@ -204,7 +204,7 @@ def check_size(tri: Triangulation, limit: int, variables: Sequence[int], cards: 
         )
     if max(tri.sizes.tolist(), default=1) > limit:
         worst = int(np.argmax(tri.sizes))
-        members = _bits(_mask(tri.sets[worst]))
+        members = tri.idx[tri.ptr[worst] : tri.ptr[worst + 1]].tolist()
         largest = math.prod(cards[variables[i]] for i in members)
         if largest > limit:
             raise ModelError(
@@ -213,15 +213,6 @@ def check_size(tri: Triangulation, limit: int, variables: Sequence[int], cards: 
                 f"--max-table, ${MAX_TABLE_ENV} or max_table= (memory: {_bytes(largest * 8)} for that "
                 "table alone)"
             )
-
-
-def _bits(mask: int) -> list[int]:
-    out = []
-    while mask:
-        low = mask & -mask
-        out.append(low.bit_length() - 1)
-        mask ^= low
-    return out
 
 
 def plan_junction_tree(
