@@ -152,12 +152,8 @@ class BayesNet:
 
     def zero_rows(self) -> dict[str, int]:
         """Nodes whose CPT has all-zero rows (parent configurations never seen), with how many."""
-        out = {}
-        for node in self.nodes:
-            z = int((self.cpts[node].sum(axis=-1) == 0).sum())
-            if z:
-                out[node] = z
-        return out
+        zeros = {node: int((self.cpts[node].sum(axis=-1) == 0).sum()) for node in self.nodes}
+        return {node: z for node, z in zeros.items() if z}
 
     def log_likelihood(self, data: Any, nodes: Sequence[str] | None = None) -> float:
         """Natural-log likelihood of a table of experiments (``nodes``: only these nodes' terms).
@@ -165,11 +161,7 @@ class BayesNet:
         ``data`` is a DataFrame with a column per node (value names, or categoricals) or a mapping node →
         value codes, shape (n_rows,). Rows that a zero CPT row excludes give ``-inf``.
         """
-
-        if isinstance(data, pd.DataFrame):
-            codes = encode(data, self.schema)
-        else:
-            codes = data
+        codes = encode(data, self.schema) if isinstance(data, pd.DataFrame) else data
         total = 0.0
         for node in nodes or self.nodes:
             cpt = self.cpts[node]
