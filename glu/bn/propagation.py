@@ -26,6 +26,7 @@ very small probability is answered and only evidence of probability exactly 0 is
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
@@ -210,11 +211,8 @@ def _clique_tables(
         axes = tuple(fam.index(u) for u in (*rest, *seen))
         table = net.cpts[v] if axes == tuple(range(len(fam))) else net.cpts[v].transpose(axes)
         flat = np.ascontiguousarray(table.reshape(*(cards[u] for u in rest), -1))
-        stride, strides = 1, []
-        for u in reversed(seen):  # the last observed variable varies fastest
-            strides.append(stride)
-            stride *= cards[u]
-        strides = tuple(reversed(strides))
+        # the last observed variable varies fastest
+        strides = tuple(math.prod(cards[u] for u in seen[i + 1 :]) for i in range(len(seen)))
         entry = (flat, tuple(slot[u] for u in seen), strides, ())
         if c < 0:
             constants.append(entry)
