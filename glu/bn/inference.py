@@ -109,14 +109,10 @@ def choose_method(bn: BayesNet, method: str = "auto") -> str:
         return method
     chosen = _AUTO.get(bn)
     if chosen is None:
-        chosen = _AUTO[bn] = _auto_method(bn)
+        states, entries = core_size(bn)
+        small = len(core_split(bn)[0]) <= 60 and states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES
+        chosen = _AUTO[bn] = "core" if small else "junction"
     return chosen
-
-
-def _auto_method(bn: BayesNet) -> str:
-    states, entries = core_size(bn)
-    small = len(core_split(bn)[0]) <= 60 and states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES
-    return "core" if small else "junction"
 
 
 class Backend(Protocol):
@@ -279,11 +275,8 @@ class Engine:
         elif computed:  # Bayes-ball: barren and d-separated nodes left out, and the evidence they carry
             if need is None:
                 need = requisite(net.parents, net.children, hard_set, virtual, computed)
-            tables, hard_used, soft_used = (
-                need.tables,
-                tuple(sorted(need.hard)),
-                tuple(sorted(need.virtual & soft_set)),
-            )
+            tables, hard_used = need.tables, tuple(sorted(need.hard))
+            soft_used = tuple(sorted(need.virtual & soft_set))
         else:
             tables, hard_used, soft_used = set(), (), ()
         rel = Relevance(

@@ -97,9 +97,8 @@ class JunctionBackend:
         rows: int,
         tables: Collection[int],
     ) -> tuple[dict[int, np.ndarray], np.ndarray]:
-        """Marginals of ``targets`` given hard evidence (variable → codes, shape (rows,), all ≥ 0) and
-        likelihoods (variable → shape (rows, k)): (target → shape (rows, k), NaN where impossible;
-        possible, shape (rows,)). Keys of ``hard`` and ``likelihood`` come sorted."""
+        """:meth:`glu.bn.core.CoreBackend.solve`'s answer, propagated in the pattern's plan (``tables``: the
+        nodes whose tables it needs; keys of ``hard`` and ``likelihood`` come sorted)."""
         plan = self.plan(tables, tuple(hard), tuple(likelihood), targets)
         codes = list(hard.values())
         liks = list(likelihood.values())

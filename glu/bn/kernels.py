@@ -443,10 +443,7 @@ def support_witness(observed, order, cards, par_ptr, par_idx, cpt_off, flat, max
     maxk = 1
     for v in range(n):
         maxk = max(maxk, cards[v])
-    need = np.zeros(n, dtype=np.bool_)
-    for v in range(n):
-        if observed[v] >= 0:
-            need[v] = True
+    need = observed >= 0
     for k in range(n - 1, -1, -1):
         v = order[k]
         if need[v]:

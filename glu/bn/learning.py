@@ -76,11 +76,10 @@ def k2_parents(
             break
         scores = [bic_family_score(family_counts(codes, cards, child, chosen + [c]), n) for c in pool]
         k = int(np.argmax(scores))
-        if scores[k] > best:
-            best = scores[k]
-            chosen.append(pool[k])
-        else:
+        if not scores[k] > best:
             break
+        best = scores[k]
+        chosen.append(pool[k])
     return tuple(chosen)
 
 
@@ -90,8 +89,7 @@ def learn_structure(
     """K2 + BIC in two steps (affordance nodes in order, then words among affordance nodes): node →
     parents."""
     schema = schema or default_schema()
-    codes = encode(df, schema)
-    return _structure(codes, schema, max_parents)
+    return _structure(encode(df, schema), schema, max_parents)
 
 
 def _structure(

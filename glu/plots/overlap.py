@@ -92,14 +92,13 @@ def watching(fig: Figure) -> Iterator[list[str]]:
     """Check ``fig`` each time it is drawn in the block (by a ``savefig``); the yielded list then holds the
     problems found in the last drawing. Nothing drawn is changed."""
     problems: list[str] = []
-    found: list[list[str]] = []
     drawn: list[Text] = []
     draw = fig.draw
 
     def checked_draw(renderer) -> None:
         drawn.clear()
         draw(renderer)
-        found.append(_problems(fig, renderer, drawn))
+        problems[:] = _problems(fig, renderer, drawn)
 
     fig.draw = checked_draw
     try:
@@ -107,7 +106,6 @@ def watching(fig: Figure) -> Iterator[list[str]]:
             yield problems
     finally:
         del fig.draw
-    problems.extend(found[-1] if found else [])
 
 
 def _problems(fig: Figure, renderer, drawn_texts: list[Text]) -> list[str]:
