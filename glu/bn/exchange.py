@@ -385,11 +385,8 @@ def assemble(
             raise ModelError(
                 f"{where}: node {n!r} must have a name and distinct, non-empty value names; got {list(vals)}"
             )
-    values, parents, cpts = (
-        dict(values),
-        dict(parents),
-        {n: np.asarray(c, dtype=float) for n, c in cpts.items()},
-    )
+    values, parents = dict(values), dict(parents)
+    cpts = {n: np.asarray(c, dtype=float) for n, c in cpts.items()}
     for n, c in cpts.items():
         shape = tuple(len(values[p]) for p in parents[n]) + (len(values[n]),)
         if c.shape != shape:

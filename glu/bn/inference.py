@@ -564,11 +564,8 @@ class Engine:
             bits = patterns.tolist()
         inverse = inverse.ravel()
         always = [v for v in hard if v not in partial]
-        out = []
-        for k, on in enumerate(bits):
-            group = tuple(sorted(always + [v for v, b in zip(partial, on, strict=True) if b]))
-            out.append((np.flatnonzero(inverse == k), group))
-        return out
+        groups = [tuple(sorted(always + [v for v, b in zip(partial, on, strict=True) if b])) for on in bits]
+        return [(np.flatnonzero(inverse == k), group) for k, group in enumerate(groups)]
 
     def _unique_rows(
         self, targets: tuple[int, ...], hard: dict[int, Array], soft: dict[int, Array], rule: str, rows: int

@@ -272,17 +272,12 @@ def _tree(order, cliques):
         if p >= 0 and rep[k] != rep[p]:
             a, b = new[rep[k]], new[rep[p]]
             joined[min(a, b), max(a, b) >> 6] |= _bit(max(a, b))
-    n_edges = 0
+    jptr, jidx = members_csr(joined)
+    edges = np.empty((jidx.shape[0], 2), dtype=np.int64)
     for a in range(m):
-        n_edges += _count(joined[a])
-    edges = np.empty((n_edges, 2), dtype=np.int64)
-    e = 0
-    for a in range(m):
-        d = _members(joined[a], buf)
-        for i in range(d):
+        for e in range(jptr[a], jptr[a + 1]):
             edges[e, 0] = a
-            edges[e, 1] = buf[i]
-            e += 1
+            edges[e, 1] = jidx[e]
     return kept, edges
 
 

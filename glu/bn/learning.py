@@ -98,12 +98,10 @@ def _structure(
     cards = {n: schema.cardinality(n) for n in schema.nodes}
     order = {n: i for i, n in enumerate(schema.nodes)}
     aff = schema.affordance_nodes
-    parents: dict[str, tuple[str, ...]] = {}
-    for i, node in enumerate(aff):
-        if node in schema.root_nodes:
-            parents[node] = ()
-        else:
-            parents[node] = k2_parents(codes, cards, node, aff[:i], max_parents)
+    parents = {  # the root nodes get no parents
+        node: () if node in schema.root_nodes else k2_parents(codes, cards, node, aff[:i], max_parents)
+        for i, node in enumerate(aff)
+    }
     for word in schema.word_nodes:
         parents[word] = k2_parents(codes, cards, word, aff, max_parents)
     return {n: tuple(sorted(ps, key=order.__getitem__)) for n, ps in parents.items()}
