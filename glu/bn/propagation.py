@@ -200,10 +200,8 @@ def _clique_tables(
                 local_slots[c] |= 1 << slot[u]
     for c, b in enumerate(base):
         full = (*(cards[u] for u in at[c]), 1)
-        if b is None:
-            base[c] = np.broadcast_to(_ONE_ENTRY, full)
-        elif b.shape != full:
-            base[c] = np.broadcast_to(b, full)
+        if b is None or b.shape != full:
+            base[c] = np.broadcast_to(_ONE_ENTRY if b is None else b, full)
     return base, factors, constants, local_slots  # type: ignore[return-value]
 
 
