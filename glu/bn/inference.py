@@ -98,7 +98,8 @@ _AUTO: weakref.WeakKeyDictionary[BayesNet, str] = weakref.WeakKeyDictionary()
 """The engine that suits each live network (a frozen network: chosen once, :func:`choose_method`)."""
 _PARTS: weakref.WeakKeyDictionary[BayesNet, tuple[Values, Labels, tuple[str, ...]]]
 _PARTS = weakref.WeakKeyDictionary()
-"""What every engine of a live network shares (:func:`_network_parts`)."""
+"""What every engine of a live network shares, made once (:class:`Engine`): the value look-up, the labels, and
+the word nodes (leaves that are not affordance nodes, with two values)."""
 
 
 def choose_method(bn: BayesNet, method: str = "auto") -> str:
@@ -169,21 +170,6 @@ def make_engine(bn: BayesNet, method: Method = "auto", max_table: int | None = N
     return Engine(bn, net, backend)
 
 
-def _network_parts(bn: BayesNet, net: NetworkArrays) -> tuple[Values, Labels, tuple[str, ...]]:
-    """What every engine of ``bn`` shares, made once per live network: the value look-up, the labels, and
-    the word nodes (leaves that are not affordance nodes, with two values)."""
-    parts = _PARTS.get(bn)
-    if parts is None:
-        aff = set(bn.schema.affordance_nodes)
-        leaves = tuple(
-            n
-            for n, kids, k in zip(bn.nodes, net.children, net.cards, strict=True)
-            if not kids and k == 2 and n not in aff
-        )
-        parts = _PARTS[bn] = (Values(bn), Labels(bn.schema.values_of), leaves)
-    return parts
-
-
 def _with_nan(out: dict[int, Array], possible: Array) -> dict[int, Array]:
     """Copies of the marginals ``out`` with NaN in the rows that are not ``possible``."""
     out = {t: np.array(m, dtype=float) for t, m in out.items()}
@@ -233,7 +219,13 @@ class Engine:
         self.net = net
         self.backend = backend
         self.method = backend.method
-        self.values, self.labels, self.binary_leaves = _network_parts(bn, net)
+        parts = _PARTS.get(bn)
+        if parts is None:  # the word nodes: leaves that are not affordance nodes, with two values
+            aff = set(bn.schema.affordance_nodes)
+            nodes = zip(bn.nodes, net.children, net.cards, strict=True)
+            leaves = tuple(n for n, kids, k in nodes if not kids and k == 2 and n not in aff)
+            parts = _PARTS[bn] = (Values(bn), Labels(bn.schema.values_of), leaves)
+        self.values, self.labels, self.binary_leaves = parts
         self.deduplicate = True
         self._relevant: dict[tuple, Relevance] = {}
         self._priors: dict[int, Array] = {}

@@ -313,9 +313,7 @@ def _legends(fig: Figure) -> list[Legend]:
 
 def _legend_box(lg: Legend, renderer) -> Bbox:
     """The legend's frame when it draws one, else the box of its entries and title."""
-    if lg.get_frame_on():
-        return lg.get_window_extent(renderer)
-    return lg._legend_box.get_window_extent(renderer)
+    return (lg if lg.get_frame_on() else lg._legend_box).get_window_extent(renderer)
 
 
 def _placed_in_axes(t: Text) -> bool:
