@@ -91,7 +91,8 @@ class _BifReader:
             depth += {"{": 1, "}": -1}.get(tok, 0)
 
 
-def _numbers(tokens: list[str], context: str, where: str) -> list[float]:
+def numbers(tokens: list[str], context: str, where: str) -> list[float]:
+    """The numbers of ``tokens``, or :class:`ModelError` naming ``context`` for a malformed one."""
     try:
         return [float(t) for t in tokens]
     except ValueError as e:
@@ -145,14 +146,14 @@ def _bif_probability(
     while (tok := r.next("'}'")) != "}":
         if tok == "table":
             cpt = table_from_flat(
-                np.array(_numbers(r.until(";", "a table"), context, where)),
+                np.array(numbers(r.until(";", "a table"), context, where)),
                 shape,
                 child,
                 where,
                 "parents-slowest",
             )
         elif tok == "default":
-            row = _numbers(r.until(";", "a default row"), context, where)
+            row = numbers(r.until(";", "a default row"), context, where)
             if len(row) != shape[-1]:
                 raise ModelError(f"{where}: {context}: a row has {len(row)} numbers, expected {shape[-1]}")
             cpt[np.isnan(cpt).all(axis=-1)] = row
@@ -166,7 +167,7 @@ def _bif_probability(
             idx = tuple(
                 _value_index(index[p], values[p], v, p, where) for p, v in zip(ps, config, strict=True)
             )
-            row = _numbers(r.until(";", "a row"), context, where)
+            row = numbers(r.until(";", "a row"), context, where)
             if len(row) != shape[-1]:
                 raise ModelError(f"{where}: {context}: a row has {len(row)} numbers, expected {shape[-1]}")
             cpt[idx] = row

@@ -19,6 +19,7 @@ pgmpy's VariableElimination and pyAgrum are the independent references in the te
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -139,9 +140,6 @@ class CoreBackend:
         self.leaf_ratio: dict[str, np.ndarray] = {}
         self._leaf: dict[int, tuple[tuple[int, ...], np.ndarray]] = {}
         for leaf in self.leaves:
-            bad = [p for p in bn.parents[leaf] if p not in self.axis]
-            if bad:  # pragma: no cover - impossible by construction of the core
-                raise ModelError(f"leaf {leaf!r} has non-core parents {bad}")
             cpt = bn.cpts[leaf]
             axes = tuple(self.axis[p] for p in bn.parents[leaf])
             m = cpt.sum(axis=-1)
@@ -196,15 +194,10 @@ class CoreBackend:
             t = np.transpose(t[pick], [0, *(1 + left.index(a) for a in order)]).reshape(k, n_obs, n_kept)
             return np.ascontiguousarray(np.moveaxis(t, 0, 1))
 
-        stacked = None
-        spans = []
-        if leaf_targets:
-            parts = [over(v) for v in leaf_targets]
-            stacked = np.ascontiguousarray(np.concatenate(parts, axis=1))
-            col = 0
-            for v, t in zip(leaf_targets, parts, strict=True):
-                spans.append((v, col, t.shape[1]))
-                col += t.shape[1]
+        parts = [over(v) for v in leaf_targets]
+        stacked = np.ascontiguousarray(np.concatenate(parts, axis=1)) if parts else None
+        starts = itertools.accumulate((t.shape[1] for t in parts), initial=0)
+        spans = [(v, col, t.shape[1]) for v, col, t in zip(leaf_targets, starts, parts, strict=False)]
         kcards = tuple(self.shape[a] for a in kept)
         core_targets = tuple(
             (v, tuple(1 + i for i, a in enumerate(kept) if a != ax[v])) for v in targets if v in ax

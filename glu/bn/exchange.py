@@ -57,7 +57,7 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
-from glu.bn.bif import check_declared, read_bif, table_from_flat
+from glu.bn.bif import check_declared, numbers, read_bif, table_from_flat
 from glu.bn.model import BayesNet
 from glu.bn.rows import normalise_rows
 from glu.errors import ModelError
@@ -273,10 +273,7 @@ def from_xmlbif(text: str, where: str = "<string>", renormalise: float | None = 
             if n not in values:
                 raise ModelError(f"{where}: the definition of {child!r} names an undeclared variable {n!r}")
         shape = tuple(len(values[p]) for p in ps) + (len(values[child]),)
-        try:
-            flat = np.array([float(x) for x in (d.findtext("TABLE") or "").split()])
-        except ValueError as e:
-            raise ModelError(f"{where}: the table of {child!r} has a malformed number ({e})") from None
+        flat = np.array(numbers((d.findtext("TABLE") or "").split(), f"the table of {child!r}", where))
         if child in cpts:
             raise ModelError(f"{where}: two definitions of {child!r}")
         parents[child], cpts[child] = ps, table_from_flat(flat, shape, child, where, order="c")
@@ -334,18 +331,12 @@ def from_uai(text: str, where: str = "<string>", renormalise: float | None = Non
             )
         if pos + size > len(tokens):
             raise ModelError(f"{where}: the table of {child!r} is cut short")
-        try:
-            flat = np.array([float(x) for x in tokens[pos : pos + size]])
-        except ValueError as e:
-            raise ModelError(f"{where}: the table of {child!r} has a malformed number ({e})") from None
+        flat = np.array(numbers(tokens[pos : pos + size], f"the table of {child!r}", where))
         pos += size
         if child in cpts:
             raise ModelError(f"{where}: two CPTs for {child!r} (the last variable of a scope is the child)")
-        shape = tuple(cards[i] for i in scope)
-        parents[child], cpts[child] = (
-            tuple(names[i] for i in scope[:-1]),
-            table_from_flat(flat, shape, child, where, "c"),
-        )
+        parents[child] = tuple(names[i] for i in scope[:-1])
+        cpts[child] = table_from_flat(flat, tuple(cards[i] for i in scope), child, where, "c")
     return assemble(
         values, parents, cpts, where, {"data_source": f"imported from {Path(where).name} (UAI)"}, renormalise
     )
@@ -394,13 +385,8 @@ def assemble(
             raise ModelError(
                 f"{where}: node {n!r} must have a name and distinct, non-empty value names; got {list(vals)}"
             )
-        if len(vals) < 1:
-            raise ModelError(f"{where}: node {n!r} has no values")
-    values, parents, cpts = (
-        dict(values),
-        dict(parents),
-        {n: np.asarray(c, dtype=float) for n, c in cpts.items()},
-    )
+    values, parents = dict(values), dict(parents)
+    cpts = {n: np.asarray(c, dtype=float) for n, c in cpts.items()}
     for n, c in cpts.items():
         shape = tuple(len(values[p]) for p in parents[n]) + (len(values[n]),)
         if c.shape != shape:

@@ -62,7 +62,7 @@ from typing import TYPE_CHECKING, Literal, Protocol
 
 import numpy as np
 
-from glu.bn.core import CoreBackend, core_split
+from glu.bn.core import CoreBackend, core_size, core_split
 from glu.bn.junction import JunctionBackend
 from glu.bn.labels import Labels, series
 from glu.bn.model import BayesNet
@@ -98,7 +98,8 @@ _AUTO: weakref.WeakKeyDictionary[BayesNet, str] = weakref.WeakKeyDictionary()
 """The engine that suits each live network (a frozen network: chosen once, :func:`choose_method`)."""
 _PARTS: weakref.WeakKeyDictionary[BayesNet, tuple[Values, Labels, tuple[str, ...]]]
 _PARTS = weakref.WeakKeyDictionary()
-"""What every engine of a live network shares (:func:`_network_parts`)."""
+"""What every engine of a live network shares, made once (:class:`Engine`): the value look-up, the labels, and
+the word nodes (leaves that are not affordance nodes, with two values)."""
 
 
 def choose_method(bn: BayesNet, method: str = "auto") -> str:
@@ -109,18 +110,10 @@ def choose_method(bn: BayesNet, method: str = "auto") -> str:
         return method
     chosen = _AUTO.get(bn)
     if chosen is None:
-        chosen = _AUTO[bn] = _auto_method(bn)
+        states, entries = core_size(bn)
+        small = len(core_split(bn)[0]) <= 60 and states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES
+        chosen = _AUTO[bn] = "core" if small else "junction"
     return chosen
-
-
-def _auto_method(bn: BayesNet) -> str:
-    core, leaves = core_split(bn)
-    if len(core) > 60:
-        return "junction"
-    states = math.prod(bn.cpts[n].shape[-1] for n in core)
-    entries = states * (2 + sum(bn.cpts[n].shape[-1] for n in leaves))
-    small = states <= CORE_MAX_STATES and entries <= CORE_MAX_ENTRIES
-    return "core" if small else "junction"
 
 
 class Backend(Protocol):
@@ -177,19 +170,12 @@ def make_engine(bn: BayesNet, method: Method = "auto", max_table: int | None = N
     return Engine(bn, net, backend)
 
 
-def _network_parts(bn: BayesNet, net: NetworkArrays) -> tuple[Values, Labels, tuple[str, ...]]:
-    """What every engine of ``bn`` shares, made once per live network: the value look-up, the labels, and
-    the word nodes (leaves that are not affordance nodes, with two values)."""
-    parts = _PARTS.get(bn)
-    if parts is None:
-        aff = set(bn.schema.affordance_nodes)
-        leaves = tuple(
-            n
-            for n, kids, k in zip(bn.nodes, net.children, net.cards, strict=True)
-            if not kids and k == 2 and n not in aff
-        )
-        parts = _PARTS[bn] = (Values(bn), Labels(bn.schema.values_of), leaves)
-    return parts
+def _with_nan(out: dict[int, Array], possible: Array) -> dict[int, Array]:
+    """Copies of the marginals ``out`` with NaN in the rows that are not ``possible``."""
+    out = {t: np.array(m, dtype=float) for t, m in out.items()}
+    for m in out.values():
+        m[~possible] = np.nan
+    return out
 
 
 def _row_key(hard: Mapping[int, int | Array]) -> tuple[int, ...]:
@@ -233,7 +219,13 @@ class Engine:
         self.net = net
         self.backend = backend
         self.method = backend.method
-        self.values, self.labels, self.binary_leaves = _network_parts(bn, net)
+        parts = _PARTS.get(bn)
+        if parts is None:  # the word nodes: leaves that are not affordance nodes, with two values
+            aff = set(bn.schema.affordance_nodes)
+            nodes = zip(bn.nodes, net.children, net.cards, strict=True)
+            leaves = tuple(n for n, kids, k in nodes if not kids and k == 2 and n not in aff)
+            parts = _PARTS[bn] = (Values(bn), Labels(bn.schema.values_of), leaves)
+        self.values, self.labels, self.binary_leaves = parts
         self.deduplicate = True
         self._relevant: dict[tuple, Relevance] = {}
         self._priors: dict[int, Array] = {}
@@ -275,11 +267,8 @@ class Engine:
         elif computed:  # Bayes-ball: barren and d-separated nodes left out, and the evidence they carry
             if need is None:
                 need = requisite(net.parents, net.children, hard_set, virtual, computed)
-            tables, hard_used, soft_used = (
-                need.tables,
-                tuple(sorted(need.hard)),
-                tuple(sorted(need.virtual & soft_set)),
-            )
+            tables, hard_used = need.tables, tuple(sorted(need.hard))
+            soft_used = tuple(sorted(need.virtual & soft_set))
         else:
             tables, hard_used, soft_used = set(), (), ()
         rel = Relevance(
@@ -308,10 +297,13 @@ class Engine:
             return self.backend.log_mass(hard, rows) > -np.inf
         key = _row_key(hard)
         ok = self._possible_memo.get(key)
-        if ok is None:
-            if len(self._possible_memo) >= POSSIBLE_MEMO:
-                self._possible_memo.clear()
-            ok = self._possible_memo[key] = self.backend.log_mass(hard, 1) > -np.inf
+        return self._remember(key, self.backend.log_mass(hard, 1) > -np.inf) if ok is None else ok
+
+    def _remember(self, key: tuple, ok: Array) -> Array:
+        """Keep ``ok`` as the possibility of the evidence ``key`` (:data:`POSSIBLE_MEMO` at most)."""
+        if len(self._possible_memo) >= POSSIBLE_MEMO:
+            self._possible_memo.clear()
+        self._possible_memo[key] = ok
         return ok
 
     def _shown_possible(self, hard: dict[int, Array]) -> bool:
@@ -323,12 +315,7 @@ class Engine:
         ok = self._possible_memo.get(key)
         if ok is not None:
             return bool(ok[0])
-        if not surely_possible(self.net, hard):
-            return False
-        if len(self._possible_memo) >= POSSIBLE_MEMO:
-            self._possible_memo.clear()
-        self._possible_memo[key] = _ONE
-        return True
+        return surely_possible(self.net, hard) and bool(self._remember(key, _ONE)[0])
 
     def _prior(self, targets: Sequence[int]) -> list[Array]:
         """Prior marginals (given only the all-zero rows, if any), computed once per node."""
@@ -384,9 +371,7 @@ class Engine:
         if rel.check:  # no target computed, and hard evidence that may have probability 0: its probability
             possible = possible & self._possible(hard, rows)
         if not (possible[0] if rows == 1 else possible.all()):
-            for t in targets:
-                out[t] = np.array(out[t], dtype=float)
-                out[t][~possible] = np.nan
+            out = _with_nan(out, possible)
         return out, possible
 
     def _answer(
@@ -405,9 +390,7 @@ class Engine:
             out, possible = self._solve(targets, hard, lik, rows)
             if not fit_ok.all():
                 possible = possible & fit_ok
-                out = {t: np.array(m, dtype=float) for t, m in out.items()}
-                for m in out.values():
-                    m[~possible] = np.nan
+                out = _with_nan(out, possible)
             return out, possible, hard_possible
         lik = {v: virtual_likelihood(q) for v, q in soft.items()}
         if any(((lam > 0) & (lam < SUBNORMAL_RISK)).any() for lam in lik.values()):
@@ -429,14 +412,14 @@ class Engine:
         return out, possible, hard_possible
 
     # ------------------------------------------------------------------ single queries
-    def _variables(self, targets: Sequence[str] | str) -> tuple[int, ...]:
-        if isinstance(targets, str):
-            targets = [targets]
+    def _variables(self, targets: Sequence[str] | str) -> tuple[list[str], tuple[int, ...]]:
+        """(the target names as a list, their variables)."""
+        names = [targets] if isinstance(targets, str) else list(targets)
         index = self.net.index
         try:
-            return tuple(index[t] for t in targets)
+            return names, tuple(index[t] for t in names)
         except (KeyError, TypeError):
-            for t in targets:
+            for t in names:
                 self.values.check_node(t)
             raise  # pragma: no cover - check_node raised
 
@@ -474,8 +457,7 @@ class Engine:
         the originals' choice) or ``"jeffrey"``. Raises UnknownNodeError, UnknownValueError, EvidenceError,
         ImpossibleEvidenceError (all ValueError).
         """
-        names = [targets] if isinstance(targets, str) else list(targets)
-        tv = self._variables(names)
+        names, tv = self._variables(targets)
         hard, qs = self._parse(evidence, soft, soft_rule)
         out, possible, hard_possible = self._answer(tv, hard, qs, soft_rule, 1)
         if not possible[0]:
@@ -518,8 +500,7 @@ class Engine:
         Rows are grouped by which nodes they observe (a row without a value for a node does not observe
         it); within a group, rows with the same hard evidence and no soft evidence are answered once.
         """
-        names = [targets] if isinstance(targets, str) else list(targets)
-        tv = self._variables(names)
+        names, tv = self._variables(targets)
         evidence = dict(evidence or {})
         soft = dict(soft or {})
         n = batch_length(evidence, soft)
@@ -540,14 +521,14 @@ class Engine:
             out = {v: np.full((n, self.net.cards[v]), np.nan) for v in tv}
             possible = np.ones(n, dtype=bool)
             hard_possible = np.zeros(n, dtype=bool)
-        for rows, group in groups:
-            sub = {v: hard[v] if rows is None else hard[v][rows] for v in group}
-            sq = {v: q if rows is None else q[rows] for v, q in qs.items()}
-            res, ok, hp = self._unique_rows(tv, sub, sq, soft_rule, n if rows is None else len(rows))
-            sel = slice(None) if rows is None else rows
+        for rows, group in groups:  # each pattern of observed nodes in its rows (never None here)
+            sub = {v: hard[v][rows] for v in group}
+            res, ok, hp = self._unique_rows(
+                tv, sub, {v: q[rows] for v, q in qs.items()}, soft_rule, len(rows)
+            )
             for v in set(tv):
-                out[v][sel] = res[v]
-            possible[sel], hard_possible[sel] = ok, hp
+                out[v][rows] = res[v]
+            possible[rows], hard_possible[rows] = ok, hp
         if errors == "raise" and not possible.all():
             k = int(np.flatnonzero(~possible)[0])
             raise self.values.impossible_row(
@@ -575,11 +556,8 @@ class Engine:
             bits = patterns.tolist()
         inverse = inverse.ravel()
         always = [v for v in hard if v not in partial]
-        out = []
-        for k, on in enumerate(bits):
-            group = tuple(sorted(always + [v for v, b in zip(partial, on, strict=True) if b]))
-            out.append((np.flatnonzero(inverse == k), group))
-        return out
+        groups = [tuple(sorted(always + [v for v, b in zip(partial, on, strict=True) if b])) for on in bits]
+        return [(np.flatnonzero(inverse == k), group) for k, group in enumerate(groups)]
 
     def _unique_rows(
         self, targets: tuple[int, ...], hard: dict[int, Array], soft: dict[int, Array], rule: str, rows: int

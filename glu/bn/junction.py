@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from glu.bn.network import NetworkArrays, code_of
-from glu.bn.plan import JunctionTreePlan, plan_junction_tree
+from glu.bn.plan import JunctionTreePlan, plan_from_scopes
 from glu.bn.propagation import PatternPlan, make_plan, propagate
 
 PLAN_CACHE = 64
@@ -97,9 +97,8 @@ class JunctionBackend:
         rows: int,
         tables: Collection[int],
     ) -> tuple[dict[int, np.ndarray], np.ndarray]:
-        """Marginals of ``targets`` given hard evidence (variable → codes, shape (rows,), all ≥ 0) and
-        likelihoods (variable → shape (rows, k)): (target → shape (rows, k), NaN where impossible;
-        possible, shape (rows,)). Keys of ``hard`` and ``likelihood`` come sorted."""
+        """:meth:`glu.bn.core.CoreBackend.solve`'s answer, propagated in the pattern's plan (``tables``: the
+        nodes whose tables it needs; keys of ``hard`` and ``likelihood`` come sorted)."""
         plan = self.plan(tables, tuple(hard), tuple(likelihood), targets)
         codes = list(hard.values())
         liks = list(likelihood.values())
@@ -125,11 +124,7 @@ class JunctionBackend:
     def junction_tree(self) -> JunctionTreePlan:
         """The junction tree of the whole network (no evidence), planned on first use."""
         if self._tree is None:
-            net = self.net
-            self._tree = plan_junction_tree(
-                net.names,
-                {n: tuple(net.names[p] for p in ps) for n, ps in zip(net.names, net.parents, strict=True)},
-                net.cards,
-                self.max_table,
-            )
+            every = range(len(self.net.cards))
+            families = [self.net.family(v) for v in every]
+            self._tree = plan_from_scopes(self.net.cards, families, every, self.max_table)
         return self._tree

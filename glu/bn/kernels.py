@@ -31,6 +31,22 @@ def _bit(u):
     return np.uint64(1) << np.uint64(u & 63)
 
 
+def _count(row):
+    """The number of variables in the set ``row``."""
+    k = 0
+    for w in range(row.shape[0]):
+        k += _popcount(row[w])
+    return k
+
+
+def _subset(a, b):
+    """Whether the set ``a`` lies inside the set ``b``."""
+    for w in range(a.shape[0]):
+        if a[w] & ~b[w] != 0:
+            return False
+    return True
+
+
 def _put(rows, k, row):
     """``rows[k] = row`` as a loop: numba's assignment of a row compiles its shape-mismatch message, which
     took seconds of the first compilation."""
@@ -97,11 +113,10 @@ def _key(v, adj, logc, heuristic, buf):
 def _eliminate_simplicial(adj, alive, order, cliques):
     """The first steps: nodes with at most one neighbour are simplicial whatever comes next, so they go
     first, the smallest first, then those left with at most one neighbour by them. Returns the steps taken."""
-    n, W = adj.shape
+    n = adj.shape[0]
     deg = np.zeros(n, dtype=np.int64)
     for v in range(n):
-        for w in range(W):
-            deg[v] += _popcount(adj[v, w])
+        deg[v] = _count(adj[v])
     buf = np.empty(n, dtype=np.int64)
     stack = np.empty(2 * n + 1, dtype=np.int64)
     top = 0
@@ -236,12 +251,7 @@ def _tree(order, cliques):
     for k in range(n):
         for j in range(kptr[k], kptr[k + 1]):
             r = rep[kids[j]]
-            inside = True
-            for w in range(W):
-                if cliques[k, w] & ~cliques[r, w] != 0:
-                    inside = False
-                    break
-            if inside:
+            if _subset(cliques[k], cliques[r]):
                 rep[k] = r
                 break
     new = np.full(n, -1, dtype=np.int64)
@@ -262,18 +272,12 @@ def _tree(order, cliques):
         if p >= 0 and rep[k] != rep[p]:
             a, b = new[rep[k]], new[rep[p]]
             joined[min(a, b), max(a, b) >> 6] |= _bit(max(a, b))
-    n_edges = 0
+    jptr, jidx = members_csr(joined)
+    edges = np.empty((jidx.shape[0], 2), dtype=np.int64)
     for a in range(m):
-        for w in range(joined.shape[1]):
-            n_edges += _popcount(joined[a, w])
-    edges = np.empty((n_edges, 2), dtype=np.int64)
-    e = 0
-    for a in range(m):
-        d = _members(joined[a], buf)
-        for i in range(d):
+        for e in range(jptr[a], jptr[a + 1]):
             edges[e, 0] = a
-            edges[e, 1] = buf[i]
-            e += 1
+            edges[e, 1] = jidx[e]
     return kept, edges
 
 
@@ -303,11 +307,10 @@ def triangulate(n, ptr, idx, cards, heuristic):
 
 def members_csr(sets):
     """The variables of each bit set of ``sets`` (shape (m, W)), ascending, as (ptr, idx)."""
-    m, W = sets.shape
+    m = sets.shape[0]
     ptr = np.zeros(m + 1, dtype=np.int64)
     for c in range(m):
-        for w in range(W):
-            ptr[c + 1] += _popcount(sets[c, w])
+        ptr[c + 1] = _count(sets[c])
     for c in range(m):
         ptr[c + 1] += ptr[c]
     idx = np.empty(ptr[m], dtype=np.int64)
@@ -331,14 +334,7 @@ def _homes(cliques, sizes, ptr, idx):
             want[idx[i] >> 6] |= _bit(idx[i])
         best = -1
         for k in range(m):
-            if best >= 0 and not sizes[k] < sizes[best]:
-                continue
-            inside = True
-            for w in range(W):
-                if want[w] & ~cliques[k, w] != 0:
-                    inside = False
-                    break
-            if inside:
+            if (best < 0 or sizes[k] < sizes[best]) and _subset(want, cliques[k]):
                 best = k
         where[s] = best
     return where
@@ -442,10 +438,7 @@ def support_witness(observed, order, cards, par_ptr, par_idx, cpt_off, flat, max
     maxk = 1
     for v in range(n):
         maxk = max(maxk, cards[v])
-    need = np.zeros(n, dtype=np.bool_)
-    for v in range(n):
-        if observed[v] >= 0:
-            need[v] = True
+    need = observed >= 0
     for k in range(n - 1, -1, -1):
         v = order[k]
         if need[v]:

@@ -62,9 +62,7 @@ class Labels:
     def index(self, node: str) -> pd.Index:
         """``node``'s values as an Index named ``node``."""
         idx = self._index.get(node)
-        if idx is None:
-            idx = self._index[node] = pd.Index(list(self._values(node)), name=node)
-        return idx
+        return idx if idx is not None else self.named(node, self._values(node), node)
 
     def named(self, key: str, names: Sequence[str], name: str) -> pd.Index:
         """Any other fixed index (e.g. the word names), made once under ``key``."""

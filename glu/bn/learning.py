@@ -76,11 +76,10 @@ def k2_parents(
             break
         scores = [bic_family_score(family_counts(codes, cards, child, chosen + [c]), n) for c in pool]
         k = int(np.argmax(scores))
-        if scores[k] > best:
-            best = scores[k]
-            chosen.append(pool[k])
-        else:
+        if not scores[k] > best:
             break
+        best = scores[k]
+        chosen.append(pool[k])
     return tuple(chosen)
 
 
@@ -90,8 +89,7 @@ def learn_structure(
     """K2 + BIC in two steps (affordance nodes in order, then words among affordance nodes): node →
     parents."""
     schema = schema or default_schema()
-    codes = encode(df, schema)
-    return _structure(codes, schema, max_parents)
+    return _structure(encode(df, schema), schema, max_parents)
 
 
 def _structure(
@@ -100,12 +98,10 @@ def _structure(
     cards = {n: schema.cardinality(n) for n in schema.nodes}
     order = {n: i for i, n in enumerate(schema.nodes)}
     aff = schema.affordance_nodes
-    parents: dict[str, tuple[str, ...]] = {}
-    for i, node in enumerate(aff):
-        if node in schema.root_nodes:
-            parents[node] = ()
-        else:
-            parents[node] = k2_parents(codes, cards, node, aff[:i], max_parents)
+    parents = {  # the root nodes get no parents
+        node: () if node in schema.root_nodes else k2_parents(codes, cards, node, aff[:i], max_parents)
+        for i, node in enumerate(aff)
+    }
     for word in schema.word_nodes:
         parents[word] = k2_parents(codes, cards, word, aff, max_parents)
     return {n: tuple(sorted(ps, key=order.__getitem__)) for n, ps in parents.items()}

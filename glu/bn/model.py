@@ -27,6 +27,7 @@ out (GLU's roles are implied, and its model files stay as they were).
 
 from __future__ import annotations
 
+import graphlib
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -148,16 +149,15 @@ class BayesNet:
                     "1 (or be all zeros)" if node in words else "1 (all-zero rows are for word nodes only)"
                 )
                 raise ModelError(f"node {node!r}: CPT rows must sum to {allowed}, found {sums[~ok].flat[0]}")
-        _check_acyclic(self.nodes, self.parents)
+        try:
+            graphlib.TopologicalSorter(self.parents).prepare()
+        except graphlib.CycleError as e:  # e.args[1]: the cycle, each node a parent of the next
+            raise ModelError(f"the graph has a cycle: {' -> '.join(e.args[1])}") from None
 
     def zero_rows(self) -> dict[str, int]:
         """Nodes whose CPT has all-zero rows (parent configurations never seen), with how many."""
-        out = {}
-        for node in self.nodes:
-            z = int((self.cpts[node].sum(axis=-1) == 0).sum())
-            if z:
-                out[node] = z
-        return out
+        zeros = {node: int((self.cpts[node].sum(axis=-1) == 0).sum()) for node in self.nodes}
+        return {node: z for node, z in zeros.items() if z}
 
     def log_likelihood(self, data: Any, nodes: Sequence[str] | None = None) -> float:
         """Natural-log likelihood of a table of experiments (``nodes``: only these nodes' terms).
@@ -165,11 +165,7 @@ class BayesNet:
         ``data`` is a DataFrame with a column per node (value names, or categoricals) or a mapping node →
         value codes, shape (n_rows,). Rows that a zero CPT row excludes give ``-inf``.
         """
-
-        if isinstance(data, pd.DataFrame):
-            codes = encode(data, self.schema)
-        else:
-            codes = data
+        codes = encode(data, self.schema) if isinstance(data, pd.DataFrame) else data
         total = 0.0
         for node in nodes or self.nodes:
             cpt = self.cpts[node]
@@ -328,23 +324,3 @@ class BayesNet:
         schema = Schema(values=values, n_affordance=n_aff, aliases=FILE_ALIASES, roles=roles)
         meta = {"data_source": f"original model imported from {path.name}", "origin": str(path)}
         return cls(schema=schema, parents=parents, cpts=cpts, meta=meta)
-
-
-def _check_acyclic(nodes: tuple[str, ...], parents: Mapping[str, tuple[str, ...]]) -> None:
-    state: dict[str, int] = {}
-
-    def visit(n: str, stack: list[str]) -> None:
-        if state.get(n) == 2:
-            return
-        if state.get(n) == 1:
-            cycle = stack[stack.index(n) :] + [n]
-            raise ModelError(f"the graph has a cycle: {' -> '.join(reversed(cycle))}")
-        state[n] = 1
-        stack.append(n)
-        for p in parents[n]:
-            visit(p, stack)
-        stack.pop()
-        state[n] = 2
-
-    for n in nodes:
-        visit(n, [])

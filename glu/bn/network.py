@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -76,14 +77,13 @@ class NetworkArrays:
         """The axes of ``v``'s table as variables: its parents, then itself."""
         return (*self.parents[v], v)
 
+    @cached_property
+    def _sorted_families(self) -> list[tuple[int, ...]]:
+        return [tuple(sorted((*ps, u))) for u, ps in enumerate(self.parents)]
+
     def sorted_family(self, v: int) -> tuple[int, ...]:
         """``v`` and its parents in ascending order (the axes of :meth:`sorted_cpt`)."""
-        fams = self.__dict__.get("_sorted_families")
-        if fams is None:
-            fams = self.__dict__["_sorted_families"] = [
-                tuple(sorted((*ps, u))) for u, ps in enumerate(self.parents)
-            ]
-        return fams[v]
+        return self._sorted_families[v]
 
     def sorted_cpt(self, v: int) -> np.ndarray:
         """``v``'s table with its axes in the order of :meth:`sorted_family` (a view, made on first use)."""
@@ -94,50 +94,45 @@ class NetworkArrays:
             t = tables[v] = np.transpose(self.cpts[v], [fam.index(u) for u in self.sorted_family(v)])
         return t
 
-    @property
+    @cached_property
     def topological_order(self) -> tuple[int, ...]:
         """The variables, each after all its parents (Kahn's order, ties by index), made on first use."""
-        made = self.__dict__.get("_topological")
-        if made is None:
-            pending = [len(ps) for ps in self.parents]
-            order = [v for v, k in enumerate(pending) if k == 0]
-            for v in order:
-                for c in self.children[v]:
-                    pending[c] -= 1
-                    if pending[c] == 0:
-                        order.append(c)
-            made = self.__dict__["_topological"] = tuple(order)
-        return made
+        pending = [len(ps) for ps in self.parents]
+        order = [v for v, k in enumerate(pending) if k == 0]
+        for v in order:
+            for c in self.children[v]:
+                pending[c] -= 1
+                if pending[c] == 0:
+                    order.append(c)
+        return tuple(order)
 
-    @property
+    @cached_property
     def zero_above(self) -> tuple[bool, ...]:
         """Whether each node's table, or a table of one of its ancestors, holds a zero (evidence on the node
         may then have probability 0), made on first use."""
-        made = self.__dict__.get("_zero_above")
-        if made is None:
-            zero = [not bool(t.all()) for t in self.cpts]
-            for v in self.topological_order:  # parents first
-                zero[v] = zero[v] or any(zero[p] for p in self.parents[v])
-            made = self.__dict__["_zero_above"] = tuple(zero)
-        return made
+        zero = [not bool(t.all()) for t in self.cpts]
+        for v in self.topological_order:  # parents first
+            zero[v] = zero[v] or any(zero[p] for p in self.parents[v])
+        return tuple(zero)
 
     def support_arrays(self) -> tuple[np.ndarray, ...]:
         """The network as :func:`glu.bn.kernels.support_witness` reads it, made on first use: (a topological
         order, cards, parents as (ptr, idx), each table's offset in ``flat``, every table flattened, and -1
         for each variable: the observed values of no evidence, to copy)."""
-        made = self.__dict__.get("_support")
-        if made is None:
-            sizes = [t.size for t in self.cpts]
-            made = self.__dict__["_support"] = (
-                np.array(self.topological_order, dtype=np.int64),
-                np.array(self.cards, dtype=np.int64),
-                np.cumsum([0, *map(len, self.parents)], dtype=np.int64),
-                np.array([p for ps in self.parents for p in ps], dtype=np.int64),
-                np.cumsum([0, *sizes[:-1]], dtype=np.int64),
-                np.concatenate([t.ravel() for t in self.cpts]),
-                np.full(len(self.cards), -1, dtype=np.int64),  # no variable observed: a template
-            )
-        return made
+        return self._support
+
+    @cached_property
+    def _support(self) -> tuple[np.ndarray, ...]:
+        sizes = [t.size for t in self.cpts]
+        return (
+            np.array(self.topological_order, dtype=np.int64),
+            np.array(self.cards, dtype=np.int64),
+            np.cumsum([0, *map(len, self.parents)], dtype=np.int64),
+            np.array([p for ps in self.parents for p in ps], dtype=np.int64),
+            np.cumsum([0, *sizes[:-1]], dtype=np.int64),
+            np.concatenate([t.ravel() for t in self.cpts]),
+            np.full(len(self.cards), -1, dtype=np.int64),  # no variable observed: a template
+        )
 
     def ancestors(self, nodes: set[int] | frozenset[int]) -> set[int]:
         """``nodes`` and all their ancestors."""

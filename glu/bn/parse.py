@@ -76,9 +76,9 @@ class Values:
         """A batch column as value indices, shape (n,): -1 where not observed (None, NaN, a negative
         index)."""
         self.check_node(node)
+        if len(values) != n:
+            raise EvidenceError(f"batch evidence on {node} has {len(values)} rows, expected {n}")
         if isinstance(values, np.ndarray) and values.dtype.kind in "iu" and values.ndim == 1:
-            if len(values) != n:
-                raise EvidenceError(f"batch evidence on {node} has {len(values)} rows, expected {n}")
             out = values.astype(np.intp, copy=False)
             if out.min(initial=0) < 0:
                 out = np.where(out < 0, -1, out)
@@ -86,11 +86,8 @@ class Values:
             if bad.any():
                 self.value(node, int(out[bad][0]))  # raises UnknownValueError, naming the value
             return out
-        vals = list(values)
-        if len(vals) != n:
-            raise EvidenceError(f"batch evidence on {node} has {len(vals)} rows, expected {n}")
         out = np.empty(n, dtype=np.intp)
-        for i, v in enumerate(vals):
+        for i, v in enumerate(values):
             if (
                 v is None
                 or (isinstance(v, float) and np.isnan(v))

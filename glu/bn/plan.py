@@ -31,7 +31,7 @@ from __future__ import annotations
 import itertools
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -204,7 +204,7 @@ def check_size(tri: Triangulation, limit: int, variables: Sequence[int], cards: 
         )
     if max(tri.sizes.tolist(), default=1) > limit:
         worst = int(np.argmax(tri.sizes))
-        members = _bits(_mask(tri.sets[worst]))
+        members = tri.idx[tri.ptr[worst] : tri.ptr[worst + 1]].tolist()
         largest = math.prod(cards[variables[i]] for i in members)
         if largest > limit:
             raise ModelError(
@@ -215,13 +215,25 @@ def check_size(tri: Triangulation, limit: int, variables: Sequence[int], cards: 
             )
 
 
-def _bits(mask: int) -> list[int]:
-    out = []
-    while mask:
-        low = mask & -mask
-        out.append(low.bit_length() - 1)
-        mask ^= low
-    return out
+def triangulate_sets(
+    variables: Iterable[int],
+    sets: Sequence[Sequence[int]],
+    cards: Sequence[int],
+    max_table: int | None = None,
+    first_home: int | None = None,
+) -> tuple[Triangulation, tuple[tuple[int, ...], ...]]:
+    """:func:`triangulate` of the graph joining the variables of each of ``sets`` (indices among
+    ``variables``; ``cards``: the cardinality of every index), checked by :func:`check_size` against
+    ``max_table`` (:func:`max_table_setting`); and each clique's variables, as those indices, sorted."""
+    limit = max_table_setting(max_table)
+    keep = sorted(set(variables))
+    local = {v: i for i, v in enumerate(keep)}
+    ptr = np.cumsum([0, *map(len, sets)], dtype=np.int64)
+    idx = np.array([local[u] for s in sets for u in s], dtype=np.int64)
+    tri = triangulate(len(keep), ptr, idx, np.array([cards[v] for v in keep], dtype=np.int64), first_home)
+    check_size(tri, limit, keep, cards)
+    members = np.array(keep, dtype=np.int64)[tri.idx].tolist()
+    return tri, tuple(tuple(members[a:b]) for a, b in itertools.pairwise(tri.ptr.tolist()))
 
 
 def plan_junction_tree(
@@ -261,18 +273,9 @@ def plan_from_scopes(
     per family (a node and its parents: the moral graph). Variables outside ``variables`` must not appear in
     a scope; ``cards`` gives the cardinality of every variable index.
     """
-    limit = max_table_setting(max_table)
     cards = tuple(int(c) for c in cards)
+    tri, cliques = triangulate_sets(variables, scopes, cards, max_table)
     keep = sorted(set(variables))
-    local = {v: i for i, v in enumerate(keep)}
-    flat = [local[v] for scope in scopes for v in scope]
-    ptr = np.cumsum([0, *map(len, scopes)], dtype=np.int64)
-    tri = triangulate(
-        len(keep), ptr, np.array(flat, dtype=np.int64), np.array([cards[v] for v in keep], dtype=np.int64)
-    )
-    check_size(tri, limit, keep, cards)
-    members = np.array(keep, dtype=np.int64)[tri.idx].tolist()
-    cliques = tuple(tuple(members[a:b]) for a, b in itertools.pairwise(tri.ptr.tolist()))
     sizes = [math.prod(cards[v] for v in c) for c in cliques]
     return JunctionTreePlan(
         cards=cards,

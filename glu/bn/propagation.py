@@ -26,13 +26,14 @@ very small probability is answered and only evidence of probability exactly 0 is
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from glu.bn.network import NetworkArrays, code_of
-from glu.bn.plan import Triangulation, check_size, max_table_setting, triangulate
+from glu.bn.plan import triangulate_sets
 
 _ONE_ENTRY = np.ones((1,))
 _ONE_ENTRY.flags.writeable = False  # the table of a clique no table without evidence falls in: broadcast
@@ -116,8 +117,9 @@ def make_plan(
     ``tables`` are the nodes whose tables the answer needs (:func:`glu.bn.relevance.requisite`). Raises
     :class:`~glu.errors.ModelError` (one line) when a table would pass ``max_table``. The graph, its
     triangulation, the home of each table, likelihood and target (its smallest clique) and the order of the
-    messages come from one compiled call (:func:`glu.bn.plan.triangulate`, in :func:`_triangulate`); here
-    the tables are built (:func:`_clique_tables`) and the messages laid out (:func:`_schedule`).
+    messages come from one compiled call (:func:`glu.bn.plan.triangulate_sets`: the sets whose homes it finds
+    are the tables' free scopes, the ``soft`` variables and the ``targets``, in this order); here the tables
+    are built (:func:`_clique_tables`) and the messages laid out (:func:`_schedule`).
     """
     cards = net.cards
     obs = tuple(sorted(observed))
@@ -129,7 +131,9 @@ def make_plan(
         scopes = [
             sc if slot.keys().isdisjoint(sc) else tuple(u for u in sc if u not in slot) for sc in scopes
         ]
-    tri, cliques = _triangulate(net, scopes, soft, targets, max_table)
+    free = {u for sc in scopes for u in sc}.union(soft, targets)
+    sets = [*scopes, *((v,) for v in soft), *((v,) for v in targets)]
+    tri, cliques = triangulate_sets(free, sets, cards, max_table, len(scopes) + len(soft))
     at = [{v: i for i, v in enumerate(c)} for c in cliques]  # each clique's axis of each of its variables
     where = tri.where.tolist()
     base, factors, constants, local_slots = _clique_tables(net, tables, scopes, where, slot, at)
@@ -144,31 +148,6 @@ def make_plan(
     return _schedule(
         tri, cliques, at, cards, obs, soft, base, factors, constants, likelihoods, local_slots, homes
     )
-
-
-def _triangulate(
-    net: NetworkArrays,
-    scopes: Sequence[tuple[int, ...]],
-    soft: Sequence[int],
-    targets: Sequence[int],
-    max_table: int | None,
-) -> tuple[Triangulation, tuple[tuple[int, ...], ...]]:
-    """The junction tree of the tables' free ``scopes``, the ``soft`` variables and the ``targets`` (those
-    are the sets whose homes it finds, in this order) and each clique's variables, sorted; checked against
-    ``max_table``."""
-    cards = net.cards
-    free = sorted({u for sc in scopes for u in sc}.union(soft, targets))
-    local = {v: i for i, v in enumerate(free)}
-    sets = [*scopes, *((v,) for v in soft), *((v,) for v in targets)]
-    ptr = np.array([0, *itertools.accumulate(map(len, sets))], dtype=np.int64)
-    idx = np.array([local[u] for sc in sets for u in sc], dtype=np.int64)
-    tri = triangulate(
-        len(free), ptr, idx, np.array([cards[v] for v in free], dtype=np.int64), len(scopes) + len(soft)
-    )
-    check_size(tri, max_table_setting(max_table), free, cards)
-    members = np.array(free, dtype=np.int64)[tri.idx].tolist()
-    bounds = tri.ptr.tolist()
-    return tri, tuple(tuple(members[bounds[c] : bounds[c + 1]]) for c in range(len(bounds) - 1))
 
 
 def _shape_in(variables: Iterable[int], axis: dict[int, int], cards: Sequence[int]) -> tuple[int, ...]:
@@ -210,11 +189,8 @@ def _clique_tables(
         axes = tuple(fam.index(u) for u in (*rest, *seen))
         table = net.cpts[v] if axes == tuple(range(len(fam))) else net.cpts[v].transpose(axes)
         flat = np.ascontiguousarray(table.reshape(*(cards[u] for u in rest), -1))
-        stride, strides = 1, []
-        for u in reversed(seen):  # the last observed variable varies fastest
-            strides.append(stride)
-            stride *= cards[u]
-        strides = tuple(reversed(strides))
+        # the last observed variable varies fastest
+        strides = tuple(math.prod(cards[u] for u in seen[i + 1 :]) for i in range(len(seen)))
         entry = (flat, tuple(slot[u] for u in seen), strides, ())
         if c < 0:
             constants.append(entry)
@@ -224,10 +200,8 @@ def _clique_tables(
                 local_slots[c] |= 1 << slot[u]
     for c, b in enumerate(base):
         full = (*(cards[u] for u in at[c]), 1)
-        if b is None:
-            base[c] = np.broadcast_to(_ONE_ENTRY, full)
-        elif b.shape != full:
-            base[c] = np.broadcast_to(b, full)
+        if b is None or b.shape != full:
+            base[c] = np.broadcast_to(_ONE_ENTRY if b is None else b, full)
     return base, factors, constants, local_slots  # type: ignore[return-value]
 
 
@@ -428,7 +402,6 @@ def _run(plan, state, codes, likelihoods, rows, changed, normalise, mass):  # ty
             else:
                 with np.errstate(invalid="ignore", divide="ignore"):
                     m = m / reduce(m, axis=1, keepdims=True)
-            if not ok:
                 if len(m) != rows:
                     m = np.repeat(m, rows, axis=0)
                 m[~possible] = np.nan

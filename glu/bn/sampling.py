@@ -94,7 +94,8 @@ def sample(
     n = lengths.pop()
     fixed_axes = {core.axis[k]: v for k, v in codes.items()}
     free = [a for a in range(len(core.shape)) if a not in fixed_axes]
-    table = _gather(core.base, fixed_axes, n).reshape(n, -1)
+    moved = np.moveaxis(core.base, list(fixed_axes), list(range(len(fixed_axes))))
+    table = moved[tuple(fixed_axes.values())].reshape(n, -1)  # row by row at the fixed values
     mass = table.sum(axis=1)
     if not (mass > 0).all():
         i = int(np.flatnonzero(~(mass > 0))[0])
@@ -110,11 +111,3 @@ def sample(
         probs = ratio[(slice(None), *parents)].T if parents else np.broadcast_to(ratio, (n, len(ratio)))
         codes[leaf] = categorical(np.asarray(probs).reshape(n, -1), rng)
     return {node: codes[node] for node in engine.nodes}
-
-
-def _gather(table: np.ndarray, fixed_axes: Mapping[int, np.ndarray], n: int) -> np.ndarray:
-    """``table`` indexed row by row at the fixed axes: shape (n, *free axes)."""
-    nd = table.ndim
-    free = [a for a in range(nd) if a not in fixed_axes]
-    moved = np.moveaxis(table, list(fixed_axes), list(range(len(fixed_axes))))
-    return moved[tuple(fixed_axes.values())].reshape((n, *(table.shape[a] for a in free)))

@@ -54,6 +54,8 @@ BACKGROUND_ALPHA = 0.35
 MAX_BY_COLOUR = 4
 """Up to this many series in one axes may be told apart by colour alone; beyond it each needs its own marker,
 line style or hatch (colour-blind readers, greyscale prints)."""
+_NO_STYLE = ("None", "none", "", " ")
+"""The line styles (and markers, with None) that draw nothing."""
 
 
 @dataclass(frozen=True)
@@ -90,14 +92,13 @@ def watching(fig: Figure) -> Iterator[list[str]]:
     """Check ``fig`` each time it is drawn in the block (by a ``savefig``); the yielded list then holds the
     problems found in the last drawing. Nothing drawn is changed."""
     problems: list[str] = []
-    found: list[list[str]] = []
     drawn: list[Text] = []
     draw = fig.draw
 
     def checked_draw(renderer) -> None:
         drawn.clear()
         draw(renderer)
-        found.append(_problems(fig, renderer, drawn))
+        problems[:] = _problems(fig, renderer, drawn)
 
     fig.draw = checked_draw
     try:
@@ -105,7 +106,6 @@ def watching(fig: Figure) -> Iterator[list[str]]:
             yield problems
     finally:
         del fig.draw
-    problems.extend(found[-1] if found else [])
 
 
 def _problems(fig: Figure, renderer, drawn_texts: list[Text]) -> list[str]:
@@ -163,11 +163,19 @@ def _problems(fig: Figure, renderer, drawn_texts: list[Text]) -> list[str]:
 
 # ---------------------------------------------------------------- series told apart by colour only
 def _line_signature(line: Line2D) -> tuple[str, str]:
-    marker = line.get_marker()
-    drawn_marker = marker not in (None, "None", "none", "", " ") and line.get_markersize() > 0
-    style = line.get_linestyle()
-    drawn_line = style not in ("None", "none", "", " ") and line.get_linewidth() > 0
-    return (str(marker) if drawn_marker else "", str(style) if drawn_line else "")
+    drawn_marker = _has_marker(line) and line.get_markersize() > 0
+    return (
+        str(line.get_marker()) if drawn_marker else "",
+        str(line.get_linestyle()) if _has_line(line) else "",
+    )
+
+
+def _has_marker(line: Line2D) -> bool:
+    return line.get_marker() not in (None, *_NO_STYLE)
+
+
+def _has_line(line: Line2D) -> bool:
+    return line.get_linestyle() not in _NO_STYLE and line.get_linewidth() > 0
 
 
 def _series(ax: Axes) -> list[tuple[str, str, tuple]]:
@@ -263,9 +271,8 @@ def _drawn(t: Text, renderer) -> _Drawn | None:
         turn = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
         local = np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
         corners = local @ turn.T + [(box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2]
-    return _Drawn(
-        corners, box, _text_name(t), t.axes, t, upright=abs(angle) < 1e-6 or abs(angle - 180) < 1e-6
-    )
+    level = abs(angle) < 1e-6 or abs(angle - 180) < 1e-6
+    return _Drawn(corners, box, repr(_short(t.get_text())), t.axes, t, upright=level)
 
 
 def _corners(box: Bbox) -> np.ndarray:
@@ -301,19 +308,12 @@ def _side_by_side(a: _Drawn, b: _Drawn) -> bool:
 
 
 def _legends(fig: Figure) -> list[Legend]:
-    out = list(fig.legends)
-    for ax in fig.axes:
-        lg = ax.get_legend()
-        if lg is not None:
-            out.append(lg)
-    return out
+    return [*fig.legends, *(lg for ax in fig.axes if (lg := ax.get_legend()) is not None)]
 
 
 def _legend_box(lg: Legend, renderer) -> Bbox:
     """The legend's frame when it draws one, else the box of its entries and title."""
-    if lg.get_frame_on():
-        return lg.get_window_extent(renderer)
-    return lg._legend_box.get_window_extent(renderer)
+    return (lg if lg.get_frame_on() else lg._legend_box).get_window_extent(renderer)
 
 
 def _placed_in_axes(t: Text) -> bool:
@@ -355,16 +355,14 @@ def _is_drawn_patch(p: Patch) -> bool:
 
 
 def _opaque(artist: Artist) -> bool:
-    alpha = artist.get_alpha()
     if isinstance(artist, Patch):
-        face = artist.get_facecolor()[3] if artist.get_fill() else 0.0
-        return (alpha if alpha is not None else 1.0) * max(face, artist.get_edgecolor()[3]) > BACKGROUND_ALPHA
-    if isinstance(artist, Collection):
-        faces = artist.get_facecolors()
-        edges = artist.get_edgecolors()
-        a = max([c[3] for c in faces] + [c[3] for c in edges] + [0.0])
-        return (alpha if alpha is not None else 1.0) * a > BACKGROUND_ALPHA
-    return True
+        a = max(artist.get_facecolor()[3] if artist.get_fill() else 0.0, artist.get_edgecolor()[3])
+    elif isinstance(artist, Collection):
+        a = max([c[3] for c in artist.get_facecolors()] + [c[3] for c in artist.get_edgecolors()] + [0.0])
+    else:
+        return True
+    alpha = artist.get_alpha()
+    return (alpha if alpha is not None else 1.0) * a > BACKGROUND_ALPHA
 
 
 def _covers(artist: Artist, box: Bbox, ax: Axes, renderer, inside_ok: bool = False) -> bool:
@@ -379,12 +377,9 @@ def _covers(artist: Artist, box: Bbox, ax: Axes, renderer, inside_ok: bool = Fal
     area = area.padded(-TOLERANCE_PX / 2)
     if isinstance(artist, Line2D):
         path = artist.get_transform().transform_path(artist.get_path())
-        if artist.get_linestyle() not in ("None", "none", "", " ") and artist.get_linewidth() > 0:
-            if len(path.vertices) > 1 and path.intersects_bbox(area, filled=False):
-                return True
-        if artist.get_marker() not in (None, "None", "none", "", " "):
-            return _points_in(path.vertices, _marker_reach(artist, area, renderer))
-        return False
+        if _has_line(artist) and len(path.vertices) > 1 and path.intersects_bbox(area, filled=False):
+            return True
+        return _has_marker(artist) and _points_in(path.vertices, _marker_reach(artist, area, renderer))
     if isinstance(artist, Patch):
         path = artist.get_transform().transform_path(artist.get_path())
         ext = path.get_extents()
@@ -453,10 +448,6 @@ def _legend_name(lg: Legend) -> str:
 def _label(artist: Artist) -> str:
     label = str(artist.get_label() or "")
     return "" if label.startswith("_") else repr(_short(label, 30))
-
-
-def _text_name(t: Text) -> str:
-    return repr(_short(t.get_text(), 40))
 
 
 def _short(s: str, n: int = 40) -> str:
