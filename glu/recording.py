@@ -3,8 +3,9 @@
 One function per concept, explicit ``frame`` and ``time`` timelines (or an ``episode`` timeline), whole
 series sent with ``send_columns``. Each file is written headless through its own
 :class:`rerun.RecordingStream` with an explicit recording id and no log time (:func:`new_recording`), and
-closed with ``disconnect()`` so the footer is written: the same data give the same file. Open one with
-``rerun FILE.rrd``.
+closed with ``disconnect()`` so the footer is written: the same data give the same recording, equal under
+``rerun rrd compare`` (the bytes are not: Rerun stamps each chunk and row with an id of its own). Open one
+with ``rerun FILE.rrd``.
 
 The studies compose these into their recordings, each with its blueprint (the viewer's layout):
 :mod:`glu.studies.anticipation.recordings` (effect anticipation), :mod:`glu.studies.correspondence.recordings`
