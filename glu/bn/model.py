@@ -152,7 +152,10 @@ class BayesNet:
         try:
             graphlib.TopologicalSorter(self.parents).prepare()
         except graphlib.CycleError as e:  # e.args[1]: the cycle, each node a parent of the next
-            raise ModelError(f"the graph has a cycle: {' -> '.join(e.args[1])}") from None
+            loop = list(e.args[1])
+            if len(loop) > 12:  # a long loop: its ends, so that the message stays one readable line
+                loop = [*loop[:5], f"… ({len(loop) - 9:,} more) …", *loop[-4:]]
+            raise ModelError(f"the graph has a cycle: {' -> '.join(loop)}") from None
 
     def zero_rows(self) -> dict[str, int]:
         """Nodes whose CPT has all-zero rows (parent configurations never seen), with how many."""

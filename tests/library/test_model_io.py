@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -101,6 +102,35 @@ def _doc(cpt_b, parents_b=("A",), parents_a=()):
             {"name": "B", "values": ["b0", "b1"], "parents": list(parents_b), "cpt": cpt_b},
         ],
     }
+
+
+def _chain(n: int, closed: bool) -> dict:
+    """A chain X0 -> X1 -> … of ``n`` binary nodes; ``closed``: X0 also has the last node as its parent."""
+    nodes = []
+    for i in range(n):
+        parents = [f"X{i - 1}"] if i else ([f"X{n - 1}"] if closed else [])
+        cpt = [[0.5, 0.5]] * 2 if parents else [0.5, 0.5]
+        nodes.append({"name": f"X{i}", "values": ["a", "b"], "parents": parents, "cpt": cpt})
+    return {"format": "glu-bayesnet", "version": 1, "n_affordance": n, "nodes": nodes}
+
+
+def test_a_chain_deeper_than_pythons_recursion_limit_is_checked_for_cycles():
+    """The acyclicity check walks no recursion: a chain of 3,000 nodes is valid, and closed into a loop it
+    is refused with the loop named in one line (the recursive search before it said "malformed model
+    (RecursionError: maximum recursion depth exceeded …)" for this loop)."""
+    assert len(BayesNet.from_dict(_chain(3000, closed=False)).nodes) == 3000
+    with pytest.raises(ModelError) as e:
+        BayesNet.from_dict(_chain(3000, closed=True))
+    message = str(e.value)
+    assert "\n" not in message and len(message) < 200, message  # one readable line, not 3,000 names
+    names = re.fullmatch(r"model: the graph has a cycle: (.*)", message).group(1).split(" -> ")
+    first, last = int(names[0][1:]), int(names[-1][1:])
+    assert names[0] == names[-1] and names[5] == "… (2,992 more) …", names
+    for a, b in zip(names[:4], names[1:5], strict=True):  # each name a parent of the next, along the chain
+        assert int(b[1:]) == (int(a[1:]) + 1) % 3000
+    for a, b in zip(names[6:-1], names[7:], strict=True):
+        assert int(b[1:]) == (int(a[1:]) + 1) % 3000
+    assert (int(names[6][1:]) - int(names[4][1:])) % 3000 == 2993 and first == last
 
 
 def test_model_validation_errors(tmp_path):
