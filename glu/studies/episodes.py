@@ -301,7 +301,6 @@ def effects_given_gesture(
         return out
     schema = engine.bn.schema
     quantile = np.asarray(quantile, dtype=float)
-    n = len(quantile)
     acts = [schema.values_of("Action").index(a) for a in effects.actions]
     moved = np.isin(out["Action"], acts)
     roots = list(schema.root_nodes)
@@ -319,13 +318,10 @@ def effects_given_gesture(
     if effects.failed_taps > 0 and "tap" in schema.values_of("Action"):
         fails = (out["Action"] == schema.values_of("Action").index("tap")) & (quantile < effects.failed_taps)
         out["ObjVel"][fails] = schema.values_of("ObjVel").index("slow")
-    changed = np.zeros(n, dtype=bool)
-    for node in set(effects.nodes) | {"ObjVel"}:
-        changed |= out[node] != np.asarray(codes[node])
-    rows = np.flatnonzero(changed)
+    redrawn = set(effects.nodes) | {"ObjVel"}
+    rows = np.flatnonzero(np.any([out[node] != np.asarray(codes[node]) for node in redrawn], axis=0))
     if len(rows):
-        fixed = {r: out[r][rows] for r in roots}
-        fixed.update({node: out[node][rows] for node in set(effects.nodes) | {"ObjVel"}})
+        fixed = {node: out[node][rows] for node in [*roots, *redrawn]}
         for node, v in sample(engine, fixed, rng).items():
             out[node][rows] = v
     return out

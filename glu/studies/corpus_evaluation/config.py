@@ -90,6 +90,10 @@ from glu.studies.episodes import (
 
 MAX_EPISODES = 100_000_000
 MAX_SEEDS = 1000
+TOP_LEVEL: tuple[str, ...] = ("episodes", "seed", "chunk_size", "recognizer_seeds")
+"""The settings of a sweep file's top level (the others are its tables)."""
+IN_GRID: tuple[str, ...] = ("fractions", "strategies")
+"""The fields of :class:`EvaluationSettings` a sweep file gives in its ``[grid]`` table."""
 
 
 @dataclass(frozen=True)
@@ -173,16 +177,7 @@ class SweepConfig:
                     f"grid.{name}: unknown value {bad[0] if bad else '(none)'!r}; "
                     f"allowed: {', '.join(allowed)}"
                 )
-        for name in (
-            "noise",
-            "viewpoints",
-            "effects",
-            "action_prior",
-            "inference_network",
-            "p_hmm",
-            "features",
-            "learn_experiments",
-        ):
+        for name in ("noise", "viewpoints", *factors, "learn_experiments"):
             v = getattr(self, name)
             if len(set(v)) != len(v):
                 raise DataError(f"grid.{name}: each value may appear once")
@@ -262,10 +257,7 @@ class SweepConfig:
     def as_dict(self) -> dict[str, Any]:
         """The settings as plain data (JSON-ready), for result files and fingerprints."""
         d = {
-            "episodes": self.episodes,
-            "seed": self.seed,
-            "chunk_size": self.chunk_size,
-            "recognizer_seeds": self.recognizer_seeds,
+            **{k: getattr(self, k) for k in TOP_LEVEL},
             "grid": {
                 **{k: list(getattr(self, k)) for k in (*DESIGN, "noise", "viewpoints")},
                 "fractions": list(self.evaluation.fractions),
@@ -276,9 +268,7 @@ class SweepConfig:
             "gestures": asdict(self.gestures),
             "recognizer": self.recognizer.as_dict(),
             "network": asdict(self.network),
-            "evaluation": {
-                k: v for k, v in asdict(self.evaluation).items() if k not in ("fractions", "strategies")
-            },
+            "evaluation": {k: v for k, v in asdict(self.evaluation).items() if k not in IN_GRID},
         }
         return _plain(d)
 
@@ -302,32 +292,13 @@ def _whole(name: str, v: Any, lo: int, hi: int) -> None:
 
 # ---------------------------------------------------------------------------------------------- files
 SECTIONS: dict[str, tuple[str, ...]] = {
-    "": (
-        "episodes",
-        "seed",
-        "chunk_size",
-        "recognizer_seeds",
-        "grid",
-        "views",
-        "scenario",
-        "gestures",
-        "recognizer",
-        "network",
-        "evaluation",
-    ),
-    "grid": (*DESIGN, "noise", "viewpoints", "fractions", "strategies"),
+    "": (*TOP_LEVEL, "grid", "views", "scenario", "gestures", "recognizer", "network", "evaluation"),
+    "grid": (*DESIGN, "noise", "viewpoints", *IN_GRID),
     "gestures": tuple(f.name for f in fields(GestureSettings)),
     "recognizer": tuple(f.name for f in fields(RecognizerSettings) if f.name != "training")
     + tuple(f.name for f in fields(TrainingConfig)),
     "network": tuple(f.name for f in fields(NetworkSettings)),
-    "evaluation": (
-        "action_evidence",
-        "effect_evidence",
-        "words_evidence",
-        "bins",
-        "bootstrap",
-        "log_floor",
-    ),
+    "evaluation": tuple(f.name for f in fields(EvaluationSettings) if f.name not in IN_GRID),
     "views.*": ("yaw_deg", "mirror", "posture", "size", "tracker"),
 }
 """The keys each table of a sweep file may have."""
@@ -350,7 +321,7 @@ def load_config(path: str | os.PathLike) -> SweepConfig:
 def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepConfig:
     """A :class:`SweepConfig` from the tables of a sweep file (relative paths resolved against ``base``)."""
     _keys("", doc)
-    top = {k: doc[k] for k in ("episodes", "seed", "chunk_size", "recognizer_seeds") if k in doc}
+    top = {k: doc[k] for k in TOP_LEVEL if k in doc}
     grid = _table(doc, "grid")
     views = dict(VIEWPOINTS)
     for name, spec in _table(doc, "views").items():
@@ -384,7 +355,7 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
             raise DataError("network.data must be a folder (a string) or 'synthetic'")
         net["data"] = net["data"] if net["data"] == "synthetic" else str(_resolve(net["data"], base))
     ev = _table(doc, "evaluation")
-    for k in ("fractions", "strategies"):
+    for k in IN_GRID:
         if k in grid:
             ev[k] = grid[k]
     for k, v in list(ev.items()):
@@ -415,8 +386,7 @@ def config_from_parameters(params: Mapping[str, Any], data: str | os.PathLike | 
     """The sweep of notebook 11's parameters (its cell's names; others in ``params`` are ignored), with
     the network learned from ``data`` (None: synthetic): one call instead of a sweep file."""
     grid_keys = set(SECTIONS["grid"])
-    top = ("episodes", "seed", "chunk_size", "recognizer_seeds")
-    doc: dict[str, Any] = {k: params[k] for k in top if k in params}
+    doc: dict[str, Any] = {k: params[k] for k in TOP_LEVEL if k in params}
     doc["grid"] = {
         NOTEBOOK_NAMES.get(k, k): v for k, v in params.items() if NOTEBOOK_NAMES.get(k, k) in grid_keys
     }

@@ -395,9 +395,7 @@ class Evaluator:
         (each shape (n, k)), one list of blocks per reading of ``self.readings``. Each feature set's
         forward pass is shared by the readings that use it."""
         rep = self.replications[replication]
-        scored = {}
-        for f in self.feature_sets:
-            scored[f] = self.loglik(self.seen(episodes, f), replication, f)
+        scored = {f: self.loglik(self.seen(episodes, f), replication, f) for f in self.feature_sets}
         cache: dict[tuple, np.ndarray] = {}  # blocks the readings of one network share
         out = []
         for i, r in enumerate(self.readings):
@@ -441,23 +439,21 @@ class Evaluator:
                     p = fuse_action_tables(p_a[:, None, :], q, strat)
                 cache[key("action", strat)] = _prediction_stats(p, action, s, s.bins)
             blocks.append(cache[key("action", strat)])
-        t = tables["effect"]
-        c = t.combo(codes, [shape[x] for x in t.nodes])
-        p_a, p_x = t.p_action[c], t.p_given_action[c]  # (n, K), (n, K, V)
-        for strat in s.strategies_for("effect"):
-            if key("effect", strat) not in cache:
-                p = self._fused(strat, p_a, p_x, q, action)
-                cache[key("effect", strat)] = _prediction_stats(p, codes[EFFECT], s, s.bins)
-            blocks.append(cache[key("effect", strat)])
-        t = tables["words"]
-        c = t.combo(codes, [shape[x] for x in t.nodes])
-        p_a, p_w = t.p_action[c], t.p_given_action[c]  # (n, K), (n, K, W): p(word present | a)
         said = np.stack([codes[w] == 1 for w in self.world.binary_leaves], axis=1)  # (n, W)
-        for strat in s.strategies_for("words"):
-            if key("words", strat) not in cache:
-                p = self._fused(strat, p_a, p_w, q, action)
-                cache[key("words", strat)] = _word_stats(p, said, s.log_floor)
-            blocks.append(cache[key("words", strat)])
+        for target in ("effect", "words"):
+            t = tables[target]
+            c = t.combo(codes, [shape[x] for x in t.nodes])
+            # (n, K), and (n, K, V) for the effect, (n, K, W) for the words: p(word present | a)
+            p_a, p_x = t.p_action[c], t.p_given_action[c]
+            for strat in s.strategies_for(target):
+                if key(target, strat) not in cache:
+                    p = self._fused(strat, p_a, p_x, q, action)
+                    cache[key(target, strat)] = (
+                        _prediction_stats(p, codes[EFFECT], s, s.bins)
+                        if target == "effect"
+                        else _word_stats(p, said, s.log_floor)
+                    )
+                blocks.append(cache[key(target, strat)])
         return blocks
 
     def _fused(

@@ -289,21 +289,11 @@ def verdict_counts(verdicts: pd.DataFrame) -> pd.DataFrame:
     One row per (finding, effects, features, viewpoint, noise): cells, better, no_difference, worse (from
     ``verdict_adjusted``), and better_unadjusted (from the unadjusted ``verdict``).
     """
-    v = bare(verdicts)
     keys = ["finding", "effects", "features", "viewpoint", "noise"]
-    rows = []
-    for key, g in v.groupby(keys, sort=False, dropna=False):
-        c = g.verdict_adjusted.value_counts()
-        rows.append(
-            {
-                **dict(zip(keys, key, strict=True)),
-                "cells": len(g),
-                "better": int(c.get("better", 0)),
-                "no_difference": int(c.get("no difference", 0)),
-                "worse": int(c.get("worse", 0)),
-                "better_unadjusted": int((g.verdict == "better").sum()),
-            }
-        )
+    rows = [
+        (*key, *_counts(g), int((g.verdict == "better").sum()))  # cells, better, no_difference, worse
+        for key, g in bare(verdicts).groupby(keys, sort=False, dropna=False)
+    ]
     return pd.DataFrame(
         rows, columns=[*keys, "cells", "better", "no_difference", "worse", "better_unadjusted"]
     )

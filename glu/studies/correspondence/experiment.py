@@ -221,11 +221,8 @@ def _outcomes(rec: Recognizer, corpora: Sequence[Corpus]) -> list[np.ndarray]:
     """Whether ``rec`` recognises each gesture of each corpus (every sequence scored in one batch)."""
     ll = rec.loglik_many([s.xyz for corpus in corpora for s in corpus])
     predicted = np.array(rec.actions)[np.argmax(ll, axis=1)]  # as Recognizer.classify
-    out, lo = [], 0
-    for corpus in corpora:
-        out.append(predicted[lo : lo + len(corpus)] == np.array([s.action for s in corpus]))
-        lo += len(corpus)
-    return out
+    hits = predicted == np.array([s.action for corpus in corpora for s in corpus])
+    return np.split(hits, np.cumsum([len(corpus) for corpus in corpora])[:-1])
 
 
 def correspondence_study(
