@@ -221,10 +221,7 @@ def forward_curve(log_b: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
 def log_softmax(loglik: np.ndarray) -> np.ndarray:
     """``log p(a) = loglik[..., a] − logsumexp(loglik[..., :])`` (equal priors), shape as ``loglik``."""
     loglik = np.asarray(loglik, dtype=float)
-    m = loglik.max(axis=-1, keepdims=True)
-    m = np.where(np.isfinite(m), m, 0.0)
-    with np.errstate(divide="ignore"):
-        return loglik - (np.log(np.exp(loglik - m).sum(axis=-1, keepdims=True)) + m)
+    return loglik - logsumexp(loglik, axis=-1)[..., None]
 
 
 def p_hmm_from_loglik(loglik: np.ndarray) -> np.ndarray:
@@ -234,11 +231,8 @@ def p_hmm_from_loglik(loglik: np.ndarray) -> np.ndarray:
 
 def left_to_right_transmat(n_states: int, stay: float) -> np.ndarray:
     """A left-to-right transition matrix, shape (Q, Q): stay with ``stay``, else move one state right."""
-    A = np.zeros((n_states, n_states))
-    for q in range(n_states - 1):
-        A[q, q], A[q, q + 1] = stay, 1.0 - stay
-    A[-1, -1] = 1.0
-    return A
+    stays = np.diag(np.r_[np.full(n_states - 1, stay, dtype=float), 1.0])
+    return stays + np.diag(np.full(n_states - 1, 1.0 - stay), 1)
 
 
 def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
