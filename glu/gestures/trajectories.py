@@ -116,6 +116,11 @@ class Trajectory:
             value.flags.writeable = False
             object.__setattr__(self, name, value)
 
+    @classmethod
+    def recorded(cls, xyz: np.ndarray, t: np.ndarray, source: str = "<memory>") -> Trajectory:
+        """Frames 1 … n of a source log as it was read: every one observed, no event yet."""
+        return cls(xyz, t, np.arange(1, len(t) + 1), np.ones(len(t), dtype=bool), source)
+
     def __len__(self) -> int:
         return len(self.t)
 
