@@ -231,8 +231,11 @@ def p_hmm_from_loglik(loglik: np.ndarray) -> np.ndarray:
 
 def left_to_right_transmat(n_states: int, stay: float) -> np.ndarray:
     """A left-to-right transition matrix, shape (Q, Q): stay with ``stay``, else move one state right."""
-    stays = np.diag(np.r_[np.full(n_states - 1, stay, dtype=float), 1.0])
-    return stays + np.diag(np.full(n_states - 1, 1.0 - stay), 1)
+    A = np.zeros((n_states, n_states))
+    for q in range(n_states - 1):
+        A[q, q], A[q, q + 1] = stay, 1.0 - stay
+    A[-1, -1] = 1.0
+    return A
 
 
 def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
