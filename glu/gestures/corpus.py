@@ -237,12 +237,10 @@ def synthetic_recordings(seed: int = 0, noise: float = 0.01) -> dict[str, Synthe
     """
     out = {}
     for i, (name, action) in enumerate(RECORDING_ACTION.items()):
-        if name in ORIGINAL_SEGMENTS:
-            out[name] = synthesize_recording(
-                action, 0, seed + i, noise=noise, placements=ORIGINAL_SEGMENTS[name]
-            )
-        else:
-            out[name] = synthesize_recording(action, 4, seed + i, noise=noise)
+        cut = ORIGINAL_SEGMENTS.get(name)  # the originals' segments, where the gestures are placed
+        out[name] = synthesize_recording(
+            action, 4 if cut is None else 0, seed + i, noise=noise, placements=cut
+        )
     return out
 
 

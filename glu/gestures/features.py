@@ -238,7 +238,4 @@ def table_features(table: TrajectoryTable, body: tuple[float, float] | None = No
         names = SKELETON_JOINTS
         skeleton = np.stack([table.joints.get(j, np.full((len(table.t), 3), np.nan)) for j in names], axis=1)
         xyz, _ = skeleton_features(skeleton, joints=names)
-    n = len(table.t)
-    return Trajectory(
-        xyz=xyz, t=table.t, frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool), source=table.source
-    )
+    return Trajectory.recorded(xyz, table.t, table.source)

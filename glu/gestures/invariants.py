@@ -63,7 +63,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from itertools import combinations
 from typing import Any
 
@@ -176,12 +176,7 @@ class Invariants:
     def to_dict(self) -> dict[str, Any]:
         """What a recogniser file records:
         ``{"names": [...], "lock_radius": ρ, "min_scale": …, "anchor_frames": k}``."""
-        return {
-            "names": list(self.names),
-            "lock_radius": self.lock_radius,
-            "min_scale": self.min_scale,
-            "anchor_frames": self.anchor_frames,
-        }
+        return {**asdict(self), "names": list(self.names)}
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any] | None, source: str = "<dict>") -> Invariants:

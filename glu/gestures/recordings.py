@@ -30,8 +30,6 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import numpy as np
-
 from glu.data import hand_logs
 from glu.data.trajectory_files import is_trajectory_file, read_trajectory_table
 from glu.gestures.features import log_features, table_features
@@ -49,19 +47,14 @@ def read_hand_log(path: str | os.PathLike) -> Trajectory:
 
     The format and its errors are :mod:`glu.data.hand_logs`'; frames are numbered 1, 2, … in file order.
     """
-    return _as_trajectory(hand_logs.read_hand_log(path))
+    log = hand_logs.read_hand_log(path)
+    return Trajectory.recorded(log.xyz, log.t, log.source)
 
 
 def parse_hand_log(data: bytes | str, source: str = "<string>") -> Trajectory:
     """Parse the text of a YARP hand log (see :func:`read_hand_log`); ``source`` names it in errors."""
-    return _as_trajectory(hand_logs.parse_hand_log(data, source))
-
-
-def _as_trajectory(log: hand_logs.HandLog) -> Trajectory:
-    n = len(log.t)
-    return Trajectory(
-        xyz=log.xyz, t=log.t, frame=np.arange(1, n + 1), observed=np.ones(n, dtype=bool), source=log.source
-    )
+    log = hand_logs.parse_hand_log(data, source)
+    return Trajectory.recorded(log.xyz, log.t, log.source)
 
 
 def read_recording(path: str | os.PathLike, body: tuple[float, float] | None = None) -> Trajectory:

@@ -116,6 +116,5 @@ def robot_hand_path(action: str, rng: np.random.Generator, size: float = 1.0) ->
         n = max(int(round(duration * ROBOT_FRAME_RATE)), 4)
         parts.append(_min_jerk(points[k - 1][0], points[k][0], n + 1)[1:])
         hold = int(round(points[k][1] * ROBOT_FRAME_RATE))
-        if hold:
-            parts.append(np.repeat(points[k][0][None], hold, 0))
+        parts.append(np.repeat(points[k][0][None], hold, 0))  # (0, 3) without a hold
     return np.concatenate(parts) * size

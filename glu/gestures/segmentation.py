@@ -26,7 +26,7 @@ log, as in the papers.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -268,13 +268,7 @@ class RecordingSegmentation:
             "recording": self.recording,
             "tracking": summarize_events(self.events),
             "events": [
-                {
-                    "kind": e.kind,
-                    "frame": int(e.frame),
-                    "time": float(e.time),
-                    "size": float(e.size),
-                    "action": e.action,
-                }
+                {**asdict(e), "frame": int(e.frame), "time": float(e.time), "size": float(e.size)}
                 for e in self.events
             ],
             "segments": [s.as_dict() for s in self.segments],

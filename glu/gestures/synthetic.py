@@ -166,10 +166,7 @@ class SyntheticGesture:
         unrepaired."""
         frame = "body" if self.view.body_frame else "torso"
         xyz, _ = skeleton_features(self.skeleton, measure=self.view.normalise_body, frame=frame)
-        n = len(xyz)
-        return Trajectory(
-            xyz, self.t, np.arange(1, n + 1), np.ones(n, dtype=bool), f"synthetic {self.action}"
-        )
+        return Trajectory.recorded(xyz, self.t, f"synthetic {self.action}")
 
     def features(self, policy: RepairPolicy = SYNTHETIC_POLICY) -> np.ndarray:
         """The features after repair (dropouts interpolated, spikes replaced), shape (n_frames, 3)."""

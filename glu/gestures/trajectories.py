@@ -25,6 +25,7 @@ segments are always reported in the numbering of the original log.
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import NamedTuple
@@ -114,6 +115,11 @@ class Trajectory:
         for name, value in (("xyz", xyz), ("t", t), ("frame", frame), ("observed", observed)):
             value.flags.writeable = False
             object.__setattr__(self, name, value)
+
+    @classmethod
+    def recorded(cls, xyz: np.ndarray, t: np.ndarray, source: str = "<memory>") -> Trajectory:
+        """Frames 1 … n of a source log as it was read: every one observed, no event yet."""
+        return cls(xyz, t, np.arange(1, len(t) + 1), np.ones(len(t), dtype=bool), source)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -221,7 +227,6 @@ def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:
     events: list[TrackingEvent] = []
     t0 = float(traj.t[0]) if len(traj) else 0.0
     spans = _repair_spans(traj.xyz, traj.t, traj.frame, traj.observed, policy, traj.source, events, t0)
-    events.sort(key=lambda e: (e.frame, e.time))
     kept = []
     for arrays in spans:
         if len(arrays[1]) >= policy.min_piece:
@@ -232,8 +237,7 @@ def repair(traj: Trajectory, policy: RepairPolicy = DEFAULT_POLICY) -> Repaired:
                     "short-piece", int(arrays[2][0]), float(arrays[1][0] - t0), len(arrays[1]), "dropped"
                 )
             )
-    if len(kept) < len(spans):
-        events.sort(key=lambda e: (e.frame, e.time))
+    events.sort(key=lambda e: (e.frame, e.time))  # stable: a short piece after the events of its frame
     all_events = tuple(events)
     out = []
     for a_xyz, a_t, a_frame, a_obs in kept:
@@ -373,25 +377,24 @@ def _gap_spans(
 
     for g in gaps:
         dt = float(t[g + 1] - t[g])
-        if dt <= policy.max_interpolate:
-            ev("gap", int(g) + 1, dt, "interpolated")
-            k = max(int(round(dt / period)) - 1, 0)
-            add(start, g + 1)
-            if k:
-                w = np.arange(1, k + 1) / (k + 1)
-                parts[0].append(xyz[g] + w[:, None] * (xyz[g + 1] - xyz[g]))
-                parts[1].append(t[g] + w * dt)
-                parts[2].append(np.full(k, frame[g]))
-                parts[3].append(np.zeros(k, dtype=bool))
-            start = g + 1
-        elif policy.long_gaps == "split":
+        if dt > policy.max_interpolate and policy.long_gaps == "keep":
+            ev("gap", int(g) + 1, dt, "kept")
+            continue
+        add(start, g + 1)
+        start = g + 1
+        if dt > policy.max_interpolate:
             ev("gap", int(g) + 1, dt, "split")
-            add(start, g + 1)
             spans.append(parts)
             parts = ([], [], [], [])
-            start = g + 1
-        else:
-            ev("gap", int(g) + 1, dt, "kept")
+            continue
+        ev("gap", int(g) + 1, dt, "interpolated")
+        k = max(int(round(dt / period)) - 1, 0)
+        if k:
+            w = np.arange(1, k + 1) / (k + 1)
+            parts[0].append(xyz[g] + w[:, None] * (xyz[g + 1] - xyz[g]))
+            parts[1].append(t[g] + w * dt)
+            parts[2].append(np.full(k, frame[g]))
+            parts[3].append(np.zeros(k, dtype=bool))
     add(start, len(t))
     spans.append(parts)
     return [[a[0] if len(a) == 1 else np.concatenate(a) for a in p] for p in spans]
@@ -407,10 +410,7 @@ def summarize_events(events: tuple[TrackingEvent, ...] | list[TrackingEvent]) ->
         sel = [e for e in events if e.kind == kind]
         if not sel:
             continue
-        actions: dict[str, int] = {}
-        for e in sel:
-            actions[e.action] = actions.get(e.action, 0) + 1
-        detail = ", ".join(f"{n} {a}" for a, n in actions.items())
+        detail = ", ".join(f"{n} {a}" for a, n in Counter(e.action for e in sel).items())
         parts.append(f"{len(sel)} {kind}{'s' if len(sel) != 1 else ''} ({detail})")
     return ", ".join(parts)
 

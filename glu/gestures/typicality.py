@@ -31,7 +31,7 @@ meta under :data:`FRAMES_KEY`):
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -140,12 +140,7 @@ class FeatureRanges:
 
     def to_meta(self) -> dict[str, Any]:
         """The ranges as a recogniser's meta entry (JSON)."""
-        return {
-            "start_low": list(self.start_low),
-            "start_high": list(self.start_high),
-            "extent_low": self.extent_low,
-            "reference": self.reference,
-        }
+        return {**asdict(self), "start_low": list(self.start_low), "start_high": list(self.start_high)}
 
     @classmethod
     def from_meta(cls, meta: Mapping[str, Any]) -> FeatureRanges | None:

@@ -142,16 +142,8 @@ class SufficientStats:
     ) -> SufficientStats:
         """Statistics of no sequence, shapes as the attributes with ``... = batch``."""
         Q, M, D = n_states, n_mix, n_features
-        return cls(
-            np.zeros(batch + (Q,)),
-            np.zeros(batch + (Q, Q)),
-            np.zeros(batch + (Q, M)),
-            np.zeros(batch + (Q, M, D)),
-            np.zeros(batch + (Q, M, D, D)),
-            np.zeros(batch),
-            np.zeros(batch),
-            np.zeros(batch),
-        )
+        shapes = ((Q,), (Q, Q), (Q, M), (Q, M, D), (Q, M, D, D), (), (), ())  # the fields' order
+        return cls(*(np.zeros(batch + shape) for shape in shapes))
 
 
 def sequence_weights(

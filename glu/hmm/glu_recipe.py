@@ -111,34 +111,25 @@ def train_batch(
     jobs = list(zip(sequences, seeds, names, ws, firsts, strict=True))
     with threadpool_limits(1):
         problems = [Problem(seqs, config, sd, nm, w, first) for seqs, sd, nm, w, first in jobs]
-        try:
-            results = _fit(problems, config, progress)
-        except ModelError:
+        try:  # Baum–Welch of every problem in one batch
+            with warnings.catch_warnings(), np.errstate(all="ignore"):
+                warnings.simplefilter("ignore", RuntimeWarning)
+                results = fit_many(
+                    [(p.seqs, p.init) for p in problems],
+                    config.n_iter,
+                    [p.tol for p in problems],
+                    config.covar_reg,
+                    "map",
+                    weights=[p.weights for p in problems],
+                    progress=progress,
+                )
+        except (ValueError, np.linalg.LinAlgError) as e:
             if n == 1:
-                raise
+                raise ModelError(f"EM failed for {problems[0].name or 'the model'}: {e}") from None
             results = None
     if results is None:  # say which model failed
         return [train_batch([j[0]], config, *([x] for x in j[1:]), warn=warn)[0] for j in jobs]
     return [_finish(p, r, config, warn) for p, r in zip(problems, results, strict=True)]
-
-
-def _fit(problems: list[Problem], config: TrainingConfig, progress: Callable[[int], None] | None) -> list:
-    """Baum–Welch of every problem in one batch (:func:`~glu.hmm._engine.em_batch.fit_many`)."""
-    try:
-        with warnings.catch_warnings(), np.errstate(all="ignore"):
-            warnings.simplefilter("ignore", RuntimeWarning)
-            return fit_many(
-                [(p.seqs, p.init) for p in problems],
-                config.n_iter,
-                [p.tol for p in problems],
-                config.covar_reg,
-                "map",
-                weights=[p.weights for p in problems],
-                progress=progress,
-            )
-    except (ValueError, np.linalg.LinAlgError) as e:
-        who = problems[0].name if len(problems) == 1 else "one of the models"
-        raise ModelError(f"EM failed for {who or 'the model'}: {e}") from None
 
 
 def _finish(

@@ -221,10 +221,7 @@ def forward_curve(log_b: np.ndarray, startprob: np.ndarray, transmat: np.ndarray
 def log_softmax(loglik: np.ndarray) -> np.ndarray:
     """``log p(a) = loglik[..., a] − logsumexp(loglik[..., :])`` (equal priors), shape as ``loglik``."""
     loglik = np.asarray(loglik, dtype=float)
-    m = loglik.max(axis=-1, keepdims=True)
-    m = np.where(np.isfinite(m), m, 0.0)
-    with np.errstate(divide="ignore"):
-        return loglik - (np.log(np.exp(loglik - m).sum(axis=-1, keepdims=True)) + m)
+    return loglik - logsumexp(loglik, axis=-1)[..., None]
 
 
 def p_hmm_from_loglik(loglik: np.ndarray) -> np.ndarray:

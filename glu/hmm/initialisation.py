@@ -188,6 +188,5 @@ def init_left_to_right(
     covars = 0.5 * (covars + np.swapaxes(covars, -1, -2))
     mean_len = float(np.mean([len(X) for X in sequences]))
     stay = float(np.clip(1.0 - n_states / mean_len, 0.5, 0.98))
-    startprob = np.zeros(n_states)
-    startprob[0] = 1.0
+    startprob = np.eye(n_states)[0]  # every sequence starts in the first state
     return GestureHMM(startprob, left_to_right_transmat(n_states, stay), weights, means, covars, name=name)

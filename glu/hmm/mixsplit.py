@@ -68,8 +68,7 @@ def flat_start(sequences: Sequence[np.ndarray], n_states: int, name: str = "") -
     D = X.shape[1]
     mean = X.mean(axis=0)
     cov = np.cov(X.T, bias=True).reshape(D, D)
-    startprob = np.zeros(n_states)
-    startprob[0] = 1.0
+    startprob = np.eye(n_states)[0]  # every sequence starts in the first state
     return GestureHMM(
         startprob,
         left_to_right_transmat(n_states, FLAT_STAY),

@@ -339,10 +339,7 @@ class BankStream:
     """
 
     def __init__(self, bank: Bank) -> None:
-        def f(a: np.ndarray) -> np.ndarray:
-            return np.ascontiguousarray(a, dtype=np.float64)
-
-        self._bank = (f(bank.means), f(bank.chol_inv), f(bank.log_norm), f(bank.startprob), f(bank.transmat))
+        self._bank = tuple(np.ascontiguousarray(a, dtype=np.float64) for a in bank)  # in Bank's field order
         self._alpha = np.zeros(bank.startprob.shape)
         self.loglik = np.zeros(len(bank.startprob))
         self.t = 0

@@ -50,6 +50,7 @@ True
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -228,9 +229,7 @@ def about_origin(stats: SufficientStats, centre: np.ndarray) -> SufficientStats:
         + np.swapaxes(cross, -1, -2)
         + stats.counts[..., None, None] * (c[..., :, None] * c[..., None, :])
     )
-    return SufficientStats(
-        stats.start, stats.trans, stats.counts, first, second, stats.loglik, stats.weight, stats.frames
-    )
+    return replace(stats, first=first, second=second)
 
 
 def expected_stats_many(

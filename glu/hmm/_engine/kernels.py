@@ -281,17 +281,10 @@ def loglik_banked(
     lengths = np.array([len(x) for x in sequences], dtype=np.int64)
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
     X = np.ascontiguousarray(np.concatenate(sequences), dtype=np.float64)
-    f = np.ascontiguousarray
-    return compiled(_loglik_banked)(
-        X,
-        starts,
-        lengths,
-        f(means, dtype=np.float64),
-        f(chol_inv, dtype=np.float64),
-        f(log_norm, dtype=np.float64),
-        f(startprob, dtype=np.float64),
-        f(transmat, dtype=np.float64),
+    bank = (
+        np.ascontiguousarray(a, dtype=np.float64) for a in (means, chol_inv, log_norm, startprob, transmat)
     )
+    return compiled(_loglik_banked)(X, starts, lengths, *bank)
 
 
 def stream_step(
