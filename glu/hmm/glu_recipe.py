@@ -68,7 +68,13 @@ class Problem:
             if sum(len(X) for X in core) < config.n_states * config.n_mix:
                 core = self.used
             checked_sequences(core, config, name)
-            start = init_left_to_right(core, config.n_states, config.n_mix, config.covar_reg, seed, name)
+            try:
+                start = init_left_to_right(core, config.n_states, config.n_mix, config.covar_reg, seed, name)
+            except ValueError:  # a state's frames have a singular covariance (a feature that never varies)
+                raise ModelError(
+                    f"the initial model of {who} failed: a state's frames have a singular covariance (does a "
+                    f"feature never vary?); try a larger covar_reg (now {config.covar_reg})"
+                ) from None
         self.init = GMMHMMParams(start.startprob, start.transmat, start.weights, start.means, start.covars)
         self.tol = config.tol * self.weighted_frames
 
@@ -128,7 +134,7 @@ def train_batch(
                 raise ModelError(f"EM failed for {problems[0].name or 'the model'}: {e}") from None
             results = None
     if results is None:  # say which model failed
-        return [train_batch([j[0]], config, *([x] for x in j[1:]), warn=warn)[0] for j in jobs]
+        return [train_batch([s], config, [sd], [nm], warn, [w], [f])[0] for s, sd, nm, w, f in jobs]
     return [_finish(p, r, config, warn) for p, r in zip(problems, results, strict=True)]
 
 

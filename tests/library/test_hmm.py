@@ -423,6 +423,36 @@ def test_training_input_errors():
         TrainingConfig(recipe="htk")
 
 
+def test_a_model_that_cannot_be_trained_is_named_alone_or_in_a_batch():
+    """With covar_reg 0, a feature that never varies makes a covariance singular. Alone or trained in one
+    batch with a model that trains, the error is one ModelError naming that model (a batch's retry used to
+    raise TypeError, and the initial mixtures a bare ValueError)."""
+    rng = np.random.default_rng(0)
+    good = [rng.normal(size=(30, 3)) for _ in range(4)]
+    flat = [np.c_[rng.normal(size=(30, 2)), np.zeros(30)] for _ in range(3)]  # the third feature is 0
+    config = TrainingConfig(n_states=2, n_mix=1, n_iter=5, covar_reg=0.0)
+    start = GestureHMM(
+        [1.0, 0.0],
+        left_to_right_transmat(2, 0.9),
+        [[1.0], [1.0]],
+        [[[0.0] * 3], [[1.0] * 3]],
+        np.tile(np.eye(3), (2, 1, 1, 1)),
+    )
+    weights = {"a": [1.0] * 4, "b": [1.0] * 3}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert list(train({"a": good}, config, weights={"a": weights["a"]})) == ["a"]  # a trains
+        for jobs in ({"a": good, "b": flat}, {"b": flat, "a": good}, {"b": flat}):
+            with pytest.raises(ModelError, match=r"^EM failed for b: "):
+                train(jobs, config, weights={k: weights[k] for k in jobs}, start={"b": start})
+            with pytest.raises(ModelError, match=r"the initial model of b failed: .*covar_reg \(now 0\.0\)"):
+                train(jobs, config)
+        assert list(train({"a": good, "b": flat}, TrainingConfig(n_states=2, n_mix=1, n_iter=5))) == [
+            "a",
+            "b",
+        ]
+
+
 def test_model_validation():
     rng = np.random.default_rng(9)
     m = random_model(rng)
