@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -151,7 +152,7 @@ def learn_recognizer(
             )
         perm = best_matching(W.T @ one_hot(np.asarray(true), k))
         models = {
-            actions[perm[c]]: _renamed(models[actions[c]], actions[perm[c]])
+            actions[perm[c]]: replace(models[actions[c]], name=actions[perm[c]])
             for c in range(k)
             if actions[c] in models
         }
@@ -182,10 +183,6 @@ def with_ranges(
     if set(ranges) == set(recognizer.actions):
         recognizer.meta[META_KEY] = ranges_to_meta(ranges)
     return recognizer
-
-
-def _renamed(m: GestureHMM, name: str) -> GestureHMM:
-    return GestureHMM(m.startprob, m.transmat, m.weights, m.means, m.covars, name=name)
 
 
 def _loglik(

@@ -166,11 +166,6 @@ class _State:
     buffers: list[list[list[tuple[int, float]]]] = field(default_factory=list)
 
 
-def _empty_state(L: int, A: int, settings: OnlineSettings, D: int) -> _State:
-    models = OnlineModels.empty((L, A), settings.config, D, settings.step)
-    return _State(models, [[[] for _ in range(A)] for _ in range(L)])
-
-
 class _Labels:
     """How each learner labels each episode: the static labels, computed once, and the rules of those that
     read their own HMMs (:func:`run_online`); every learner's labels of one episode in a few array
@@ -193,7 +188,7 @@ class _Labels:
         self.static_rows = np.array(list(static), dtype=int)
         self.static = np.stack(list(static.values()), axis=1) if static else np.zeros((len(true), 0, A))
         self.dynamic = np.array([lr.scheme in DYNAMIC for lr in learners], dtype=bool).reshape(L)
-        self.clusters = [k for k, lr in enumerate(learners) if lr.scheme in ("unsupervised", "clustering")]
+        self.clusters = [k for k, lr in enumerate(learners) if lr.scheme in CLUSTERS]
         # the learners that read their HMMs, by reading; those of them that multiply by the network
         self.readings = {
             r: np.array(
@@ -295,7 +290,9 @@ def run_online(
     config, D = settings.config, features[0].shape[1]
     row, owners = _model_rows(learners)  # learner k learns the models of row row[k]
     R = len(owners)
-    state = _empty_state(R, A, settings, D)
+    state = _State(
+        OnlineModels.empty((R, A), config, D, settings.step), [[[] for _ in range(A)] for _ in range(R)]
+    )
     labels = _Labels([learners[k] for k in owners], episode_actions, p_bn, A, settings)
     clusters = [k for k, lr in enumerate(learners) if lr.scheme in CLUSTERS]  # learners
     naming = _naming(learners, clusters, episode_actions, p_bn, A)

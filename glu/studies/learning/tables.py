@@ -292,10 +292,6 @@ def labels_table(
     return tidy(pd.DataFrame(rows), "learning_labels", data_source, **settings.as_dict())
 
 
-def _budget(n: int) -> str:
-    return f"{n:,} episodes"
-
-
 def claim_lines(claims: pd.DataFrame, margin: float) -> list[str]:
     """One sentence per claim and world, from :func:`claims_table`: at each budget, in how many ambiguities a
     labelling scheme matches the true labels (equivalent within ± ``margin``, adjusted), in how many random
@@ -308,7 +304,7 @@ def claim_lines(claims: pd.DataFrame, margin: float) -> list[str]:
         for r in g.itertuples():
             where = f" ({r.matched_where})" if r.matched else ""
             parts.append(
-                f"after {_budget(r.budget)}, a scheme matches them in {r.matched} of {n}{where}, "
+                f"after {r.budget:,} episodes, a scheme matches them in {r.matched} of {n}{where}, "
                 f"random labels as accurate in {r.random_matched}, and a scheme beats those random labels "
                 f"in {r.beats_random}"
             )
