@@ -193,8 +193,7 @@ def _loglik(
     have = [a for a in actions if a in models]
     ll = Recognizer({a: models[a] for a in have}).loglik_many(seqs)
     out = np.full((len(seqs), len(actions)), -np.inf)
-    for j, a in enumerate(have):
-        out[:, list(actions).index(a)] = ll[:, j]
+    out[:, [list(actions).index(a) for a in have]] = ll
     return out
 
 
