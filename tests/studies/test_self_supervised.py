@@ -384,11 +384,15 @@ def test_supervision_by_one_label_per_action_is_one_training(engine):
         settings,
         seed=4,
     )
+    one = ol.learn_online(ep.features, ep.actions, "supervised", None, actions, settings, 4, per_action=1)
     for a in range(3):
         first = ep.features[int(np.flatnonzero(ep.actions == a)[0])]
         m = train([first], SMALL.replace(n_iter=5), weights=np.ones(1), seed=4, warn=False).model
         np.testing.assert_allclose(run.params.means[0, a], m.means, rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(one.params.means[0, a], m.means, rtol=1e-8, atol=1e-10)  # one learner
     assert np.count_nonzero(run.weights[:, 0]) == 3
+    with pytest.raises(DataError, match="labels per action None"):  # learn_online needs per_action
+        ol.learn_online(ep.features, ep.actions, "supervised", None, actions, settings)
     with pytest.raises(DataError, match="labels per action"):
         ol.run_online(
             ep.features,

@@ -503,11 +503,13 @@ def learn_online(
     test_actions: np.ndarray | None = None,
     checkpoints: Sequence[int] | None = None,
     progress: Callable[[str], None] | None = None,
+    per_action: int | None = None,
 ) -> OnlineRun:
     """One learner over the episodes (:func:`run_online` with one :class:`Learner`); measured on the held-out
-    gestures, if given, at the checkpoints (default: after the last episode only)."""
-    source = None if scheme in ("true", "unsupervised") else "network"
-    sources = {} if source is None else {"network": np.asarray(p_bn)}
+    gestures, if given, at the checkpoints (default: after the last episode only). ``per_action``: for
+    ``supervised``, how many labelled episodes per action (its labels come from no network)."""
+    source = {"true": None, "unsupervised": None, "supervised": per_action}.get(scheme, "network")
+    sources = {"network": np.asarray(p_bn)} if source == "network" else {}
     return run_online(
         features,
         episode_actions,
