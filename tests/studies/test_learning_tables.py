@@ -204,6 +204,7 @@ def test_a_saved_run_reads_back_and_is_checked(engine, small_run, tmp_path):
         np.testing.assert_allclose(a.labels, b.labels)
         assert a.learners == b.learners and a.groups == b.groups
     fewer = lc.StudySettings(**{**settings.__dict__, "seeds": (1,), "ambiguities": ("still",)})
+    source_meta = ("synthetic data (seed 0, 1270 experiments)", meta)
     chosen = saved.select(back, stored, fewer, "synthetic data (seed 0, 1270 experiments)", meta)
     k = results[1].learners.index(("hard", "iterative", "still", True))
     j = chosen[0].learners.index(("hard", "iterative", "still", True))
@@ -213,6 +214,12 @@ def test_a_saved_run_reads_back_and_is_checked(engine, small_run, tmp_path):
     more = lc.StudySettings(**{**settings.__dict__, "seeds": (0, 5)})
     with pytest.raises(DataError, match="lacks seed 5.*glu learning-curves"):
         saved.select(back, stored, more, "synthetic data (seed 0, 1270 experiments)", meta)
+    only_still = lc.StudySettings(**{**fewer.__dict__, "seeds": (0, 1)})  # a saved run of 'still' alone
+    baselines = lc.StudySettings(**{**settings.__dict__, "schemes": (), "controls": ()})
+    with pytest.raises(DataError, match=r"lacks group \('easy', 'mixed', False\).*glu learning-curves"):
+        saved.select(
+            saved.select(back, stored, only_still, *source_meta), only_still, baselines, *source_meta
+        )
     with pytest.raises(DataError, match="no saved run"):
         saved.load_study(tmp_path / "nowhere")
 

@@ -218,15 +218,17 @@ def select(
     have_l = {tuple(lr): k for k, lr in enumerate(results[0].learners)}
     have_g = {tuple(g): k for k, g in enumerate(results[0].groups)}
     have_c = {int(c): k for k, c in enumerate(results[0].checkpoints)}
+    groups = [(w, a, words) for w in wanted.worlds for a in wanted.ambiguities for words in wanted.words]
     lack = (
         [f"seed {s}" for s in missing_seeds]
         + [f"learner {lr}" for lr in wanted.learners() if tuple(lr) not in have_l]
+        + [f"group {g}" for g in groups if g not in have_g]  # (a study of the baselines alone)
         + [f"{c} episodes" for c in wanted.checkpoints if c not in have_c]
     )
     if lack:
         raise DataError(f"the saved run lacks {', '.join(lack[:3])}{' …' if len(lack) > 3 else ''}: {fix}")
     li = [have_l[tuple(lr)] for lr in wanted.learners()]
-    gi = [have_g[(w, a, words)] for w in wanted.worlds for a in wanted.ambiguities for words in wanted.words]
+    gi = [have_g[g] for g in groups]
     ci = [have_c[c] for c in wanted.checkpoints]
     out = []
     for s in wanted.seeds:
