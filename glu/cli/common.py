@@ -78,10 +78,7 @@ def nonneg_float(text: str) -> float:
 
 def tolerance(text: str) -> float:
     """--renormalise TOL: a number in [0, 1)."""
-    try:
-        tol = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
+    tol = _number(text, float, "a tolerance such as 1e-4")
     if not 0 <= tol < 1:
         raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
     return tol
