@@ -580,15 +580,12 @@ def add_hmm_size_args(p: argparse.ArgumentParser) -> None:
     from glu.hmm import TrainingConfig
 
     d = TrainingConfig()
-    p.add_argument(
-        "--states", type=positive_int, default=d.n_states, help=f"Q, states per HMM (default {d.n_states})"
-    )
-    p.add_argument(
-        "--mix", type=positive_int, default=d.n_mix, help=f"M, Gaussians per state (default {d.n_mix})"
-    )
-    p.add_argument(
-        "--iter", type=positive_int, default=d.n_iter, help=f"most EM iterations (default {d.n_iter})"
-    )
+    for flag, default, text in (
+        ("--states", d.n_states, "Q, states per HMM"),
+        ("--mix", d.n_mix, "M, Gaussians per state"),
+        ("--iter", d.n_iter, "most EM iterations"),
+    ):
+        p.add_argument(flag, type=positive_int, default=default, help=f"{text} (default {default})")
 
 
 def hmm_config(args: argparse.Namespace, *fields: str) -> Any:
