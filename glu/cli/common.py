@@ -11,9 +11,11 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
+import functools
 import json
 import math
 import os
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -193,7 +195,6 @@ def public_argv(argv: list[str]) -> list[str]:
 def command_line() -> str:
     """The command being run, as a shell would take it again (:func:`public_argv`): for provenance."""
     import shlex
-    import sys
 
     return "glu " + shlex.join(public_argv(sys.argv[1:]))
 
@@ -201,9 +202,6 @@ def command_line() -> str:
 def say_to(as_json: bool) -> Any:
     """``print`` for what a command says besides its answer: to stdout, or to stderr when stdout holds the
     answer alone (``--json``)."""
-    import functools
-    import sys
-
     return functools.partial(print, file=sys.stderr if as_json else sys.stdout)
 
 
@@ -438,8 +436,6 @@ def progress_bar(total: int | None, desc: str, unit: str, quiet: bool = False) -
 
     Callers print plain lines instead when this is None, so logs and pipes never see bar characters.
     """
-    import sys
-
     if quiet or not sys.stderr.isatty():
         return None
     from tqdm import tqdm
@@ -485,8 +481,6 @@ class DeprecatedAlias(argparse.Action):
         super().__init__(option_strings, dest, **kwargs)
 
     def __call__(self, parser, namespace, values, option_string=None):  # type: ignore[no-untyped-def]
-        import sys
-
         print(f"{parser.prog}: {option_string} is deprecated; use {self.replacement}", file=sys.stderr)
         setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
 
