@@ -11,9 +11,11 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
+import functools
 import json
 import math
 import os
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -78,10 +80,7 @@ def nonneg_float(text: str) -> float:
 
 def tolerance(text: str) -> float:
     """--renormalise TOL: a number in [0, 1)."""
-    try:
-        tol = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a tolerance such as 1e-4, not {text!r}") from None
+    tol = _number(text, float, "a tolerance such as 1e-4")
     if not 0 <= tol < 1:
         raise argparse.ArgumentTypeError(f"a tolerance is a number in [0, 1), not {text}")
     return tol
@@ -196,7 +195,6 @@ def public_argv(argv: list[str]) -> list[str]:
 def command_line() -> str:
     """The command being run, as a shell would take it again (:func:`public_argv`): for provenance."""
     import shlex
-    import sys
 
     return "glu " + shlex.join(public_argv(sys.argv[1:]))
 
@@ -204,9 +202,6 @@ def command_line() -> str:
 def say_to(as_json: bool) -> Any:
     """``print`` for what a command says besides its answer: to stdout, or to stderr when stdout holds the
     answer alone (``--json``)."""
-    import functools
-    import sys
-
     return functools.partial(print, file=sys.stderr if as_json else sys.stdout)
 
 
@@ -441,8 +436,6 @@ def progress_bar(total: int | None, desc: str, unit: str, quiet: bool = False) -
 
     Callers print plain lines instead when this is None, so logs and pipes never see bar characters.
     """
-    import sys
-
     if quiet or not sys.stderr.isatty():
         return None
     from tqdm import tqdm
@@ -488,8 +481,6 @@ class DeprecatedAlias(argparse.Action):
         super().__init__(option_strings, dest, **kwargs)
 
     def __call__(self, parser, namespace, values, option_string=None):  # type: ignore[no-untyped-def]
-        import sys
-
         print(f"{parser.prog}: {option_string} is deprecated; use {self.replacement}", file=sys.stderr)
         setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
 
@@ -583,15 +574,12 @@ def add_hmm_size_args(p: argparse.ArgumentParser) -> None:
     from glu.hmm import TrainingConfig
 
     d = TrainingConfig()
-    p.add_argument(
-        "--states", type=positive_int, default=d.n_states, help=f"Q, states per HMM (default {d.n_states})"
-    )
-    p.add_argument(
-        "--mix", type=positive_int, default=d.n_mix, help=f"M, Gaussians per state (default {d.n_mix})"
-    )
-    p.add_argument(
-        "--iter", type=positive_int, default=d.n_iter, help=f"most EM iterations (default {d.n_iter})"
-    )
+    for flag, default, text in (
+        ("--states", d.n_states, "Q, states per HMM"),
+        ("--mix", d.n_mix, "M, Gaussians per state"),
+        ("--iter", d.n_iter, "most EM iterations"),
+    ):
+        p.add_argument(flag, type=positive_int, default=default, help=f"{text} (default {default})")
 
 
 def hmm_config(args: argparse.Namespace, *fields: str) -> Any:

@@ -134,14 +134,13 @@ def _fetch(args: argparse.Namespace) -> int:
 
 
 def _synth(args: argparse.Namespace) -> int:
-    from glu.data.source import WORD_FILES as TABLES
     from glu.data.synthetic import write_synthetic_folder
     from glu.gestures.corpus import hand_log_arrays, synthetic_recordings
 
     if not MIN_ROWS <= args.n <= MAX_ROWS:
         raise DataError(f"--n {args.n} is out of range; allowed: {MIN_ROWS} to {MAX_ROWS:,}")
     recordings = {name: hand_log_arrays(g) for name, g in synthetic_recordings(args.seed).items()}
-    with progress(len(TABLES) + 1 + len(recordings), "synth", "file") as bar:
+    with progress(len(WORD_FILES) + 1 + len(recordings), "synth", "file") as bar:
         out = write_synthetic_folder(
             args.out,
             args.n,

@@ -60,15 +60,14 @@ def _readme(args: argparse.Namespace) -> int:
         print(f"README results section left as it is: {e}")
         return 1 if stale else 0
     if args.check:
-        current = readme_section(args.readme.read_text(encoding="utf-8"))
-        if current == render(summary) and not stale:
-            print(f"{args.readme}: the results section matches {args.summary}")
-            return 0
-        if current != render(summary):
+        if readme_section(args.readme.read_text(encoding="utf-8")) != render(summary):
             print(
                 f"{args.readme}: the results section differs from {args.summary}; run `glu readme`",
                 file=sys.stderr,
             )
+        elif not stale:
+            print(f"{args.readme}: the results section matches {args.summary}")
+            return 0
         return 1
     changed = update_readme(summary, args.readme)
     print(

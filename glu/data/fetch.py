@@ -188,8 +188,7 @@ def _download(item: RemoteFile, folder: Path, timeout: float) -> FetchResult:
         )
     except (requests.RequestException, OSError) as e:
         return FetchResult(item.local, "failed", f"{item.url}: {type(e).__name__}: {e}")
-    target_ok = _verified(target, item.sha256)
-    if not target_ok:  # pragma: no cover - pooch verified it
+    if not _verified(target, item.sha256):  # pragma: no cover - pooch verified it
         target.unlink(missing_ok=True)
         return FetchResult(item.local, "failed", f"{item.url}: sha256 mismatch after download")
     return FetchResult(item.local, "downloaded")

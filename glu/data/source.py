@@ -209,15 +209,13 @@ def resolve_data(data: str | os.PathLike | None = None) -> DataSource:
 
     ``data`` may be a folder or the word ``synthetic`` (force the built-in synthetic data).
     """
-    if data is not None and str(data) == SYNTHETIC_KEYWORD:
-        return DataSource(kind="synthetic", root=None, origin="--data")
-    if data is not None:
-        return _folder_source(Path(data), "--data")
-    env = os.environ.get(paths.DATA_ENV_VAR)
-    if env:
-        if env == SYNTHETIC_KEYWORD:
-            return DataSource(kind="synthetic", root=None, origin="GLU_DATA_DIR")
-        return _folder_source(Path(env), "GLU_DATA_DIR")
+    given, origin = data, "--data"
+    if data is None:  # an empty $GLU_DATA_DIR is no folder
+        given, origin = os.environ.get(paths.DATA_ENV_VAR) or None, "GLU_DATA_DIR"
+    if given is not None:
+        if str(given) == SYNTHETIC_KEYWORD:
+            return DataSource(kind="synthetic", root=None, origin=origin)
+        return _folder_source(Path(given), origin)
     if (paths.REAL_DATA_DIR / WORD_FILES["lab"]).is_file():
         return _folder_source(paths.REAL_DATA_DIR, "data/real")
     return DataSource(kind="synthetic", root=None, origin="default")

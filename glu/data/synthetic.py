@@ -95,16 +95,11 @@ def _world() -> SyntheticWorld:
         "Contact": ("Action", "Shape"),
     }
     word_parents: dict[str, tuple[str, ...]] = {w: () for w in ("robot", "he", "baltazar", "has", "just")}
-    for verb in (w for verbs in ACTION_VERBS.values() for w in verbs):
-        word_parents[verb] = ("Action",)
-    for w in ("big", "small"):
-        word_parents[w] = ("Size",)
-    for w in ("green", "yellow", "blue"):
-        word_parents[w] = ("Color",)
-    for w in ("ball", "sphere", "box", "square", "cube"):
-        word_parents[w] = ("Shape",)
-    for w in ("still", "inert"):
-        word_parents[w] = ("ObjVel",)
+    word_parents.update(dict.fromkeys((w for verbs in ACTION_VERBS.values() for w in verbs), ("Action",)))
+    word_parents.update(dict.fromkeys(("big", "small"), ("Size",)))
+    word_parents.update(dict.fromkeys(("green", "yellow", "blue"), ("Color",)))
+    word_parents.update(dict.fromkeys(("ball", "sphere", "box", "square", "cube"), ("Shape",)))
+    word_parents.update(dict.fromkeys(("still", "inert"), ("ObjVel",)))
     return SyntheticWorld(parents=parents, cpts=cpts, word_parents=word_parents)
 
 

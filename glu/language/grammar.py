@@ -256,8 +256,6 @@ def _tokenize(text: str, source: str) -> list[_Token]:
             raise err("unexpected '*' outside a comment (escape a literal star as '\\*')", ln, cl)
         if c == "$":
             advance(1)
-            if i >= n or text[i].isspace() or (text[i] in META and text[i] != "\\"):
-                raise err("'$' must be followed by a variable name, e.g. $object", ln, cl)
             name = read_name(ln, cl, "a variable name")
             if not name:
                 raise err("'$' must be followed by a variable name, e.g. $object", ln, cl)

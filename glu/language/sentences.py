@@ -294,22 +294,18 @@ def _trim(
     alive = _reachable((s for s, f in enumerate(final) if f), preds)
     if start not in alive:  # the language is empty: keep one non-final state
         return WordNetwork(words, ((),), (False,), 0, source)
-    new_id = {start: 0}
-    order = [start]
+    new_id = {start: 0}  # breadth-first order
+    kept: dict[int, list[tuple[int, int]]] = {}  # per state, its arcs into live states, in word order
     queue = deque([start])
     while queue:
         s = queue.popleft()
-        for w in sorted(arcs[s], key=lambda i: words[i]):
-            t = arcs[s][w]
-            if t in alive and t not in new_id:
-                new_id[t] = len(order)
-                order.append(t)
+        kept[s] = [(w, arcs[s][w]) for w in sorted(arcs[s], key=lambda i: words[i]) if arcs[s][w] in alive]
+        for _, t in kept[s]:
+            if t not in new_id:
+                new_id[t] = len(new_id)
                 queue.append(t)
-    new_arcs = tuple(
-        tuple((w, new_id[arcs[s][w]]) for w in sorted(arcs[s], key=lambda i: words[i]) if arcs[s][w] in alive)
-        for s in order
-    )
-    return WordNetwork(words, new_arcs, tuple(final[s] for s in order), 0, source)
+    new_arcs = tuple(tuple((w, new_id[t]) for w, t in kept[s]) for s in new_id)
+    return WordNetwork(words, new_arcs, tuple(final[s] for s in new_id), 0, source)
 
 
 def restrict(
