@@ -182,21 +182,28 @@ def json_text(obj: Any) -> str:
     return json.dumps(_json_ready(obj), allow_nan=False)
 
 
-def public_argv(argv: list[str]) -> list[str]:
-    """The arguments with the data folder named ``DATA`` (a path of this machine is no one else's), unless
-    it is ``synthetic``."""
-    out = list(argv)
-    for i, a in enumerate(out[:-1]):
-        if a == "--data" and out[i + 1] != "synthetic":
-            out[i + 1] = "DATA"
-    return [a for a in out if a]
+def public_argv(argv: list[str], data: str | None = None) -> list[str]:
+    """The arguments without a path of this machine (no one else's): the data folder named ``DATA``, unless
+    it is ``synthetic``, however it was written (``--data DIR``, ``--data=DIR``, or an abbreviation argparse
+    accepts such as ``--dat DIR``, given as ``data``, the folder the command parsed); any other absolute
+    path shown as ``…/NAME``."""
+    out = []
+    for i, a in enumerate(argv):
+        flag, eq, value = a.partition("=") if a.startswith("--") and "=" in a else ("", "", a)
+        if value and value == data or flag == "--data" or (i and argv[i - 1] == "--data"):
+            value = value if value == "synthetic" else "DATA"
+        elif os.path.isabs(value):
+            value = f"…/{os.path.basename(os.path.normpath(value))}"
+        out.append(f"{flag}={value}" if eq else value)
+    return out
 
 
-def command_line() -> str:
-    """The command being run, as a shell would take it again (:func:`public_argv`): for provenance."""
+def command_line(data: str | None = None) -> str:
+    """The command being run, as a shell would take it again (:func:`public_argv`; ``data``: the data folder
+    it parsed): for provenance."""
     import shlex
 
-    return "glu " + shlex.join(public_argv(sys.argv[1:]))
+    return "glu " + shlex.join(public_argv(sys.argv[1:], data))
 
 
 def say_to(as_json: bool) -> Any:

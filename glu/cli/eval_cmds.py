@@ -93,7 +93,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         if args.save:
             from glu.studies.corpus_evaluation.sweep import export_saved
 
-            print(f"saved tables → {export_saved(args.out, args.save, command_line())}")
+            print(f"saved tables → {export_saved(args.out, args.save, command_line(args.data))}")
     return 0
 
 

@@ -343,3 +343,33 @@ def test_every_documented_command_parses_with_no_deprecated_spelling(capsys):
             assert not err, f"{doc.relative_to(ROOT)}:{number}: {command}\n{err}"
             checked += 1
     assert checked >= 40
+
+
+@pytest.mark.parametrize(
+    ("argv", "data", "shown"),
+    [
+        (["evaluate", "--data", "/home/me/real", "-o", "out"], "/home/me/real", "--data DATA -o out"),
+        (["evaluate", "--data=/home/me/real", "-o", "out"], "/home/me/real", "--data=DATA -o out"),
+        (["evaluate", "--dat", "rel/real"], "rel/real", "--dat DATA"),  # argparse's abbreviation
+        (["evaluate", "--da=rel/real"], "rel/real", "--da=DATA"),
+        (
+            ["evaluate", "--data", "synthetic", "--save", "/home/me/sweeps/x"],
+            "synthetic",
+            "--data synthetic --save '…/x'",
+        ),
+        (["evaluate", "--out=/tmp/run/", "--label", ""], None, "'--out=…/run' --label ''"),
+        (["correspondence", "-o", "sweeps/10"], None, "-o sweeps/10"),
+    ],
+)
+def test_the_recorded_command_names_no_path_of_this_machine(argv, data, shown, monkeypatch):
+    """The command saved tables record (``glu evaluate --save``, ``glu correspondence``): the data folder is
+    DATA however it was typed, other absolute paths by their name, and it parses again as the same words."""
+    import shlex
+
+    from glu.cli.common import command_line
+
+    monkeypatch.setattr("sys.argv", ["glu", *argv])
+    line = command_line(data)
+    assert line == f"glu {argv[0]} {shown}"
+    assert "/home/me" not in line and "/tmp/" not in line
+    assert len(shlex.split(line)) == len(argv) + 1  # no argument dropped, an empty one quoted
