@@ -16,6 +16,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +27,13 @@ from glu.files import atomic_write_text, read_bytes
 from glu.schema import FILE_ALIASES, WORD_VALUES, Schema, default_schema
 
 ABSENT_MARK = "-"
+
+
+def _lines(text: str) -> list[str]:
+    """The lines of a table, split where pandas splits them (``\\n``, ``\\r\\n`` or ``\\r``): not also at the
+    characters :meth:`str.splitlines` takes for line breaks (form feed, U+2028, …), which in a cell would put
+    the error on the wrong line."""
+    return re.split(r"\r\n|\r|\n", text)
 
 
 def _read_text(path: Path) -> str:
@@ -73,7 +81,7 @@ def read_experiments(path: str | os.PathLike, schema: Schema | None = None) -> p
     path = Path(path)
     schema = schema or default_schema()
     text = _read_text(path)
-    lines = text.splitlines()
+    lines = _lines(text)
     while lines and not lines[-1].strip():
         lines.pop()
     if not lines:
@@ -187,7 +195,7 @@ def read_network_definition(path: str | os.PathLike) -> Schema:
     text = _read_text(path)
     values: dict[str, tuple[str, ...]] = {}
     n_aff = 0
-    for i, line in enumerate(text.splitlines(), start=1):
+    for i, line in enumerate(_lines(text), start=1):
         if not line.strip():
             continue
         parts = [p.strip() for p in line.split("\t")]

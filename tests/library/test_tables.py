@@ -124,6 +124,20 @@ def test_empty_file_header_only_and_blank_line(tmp_path):
         read_experiments(_write(tmp_path, "\n".join([HEADER, _row(), "", _row()]) + "\n"))
 
 
+@pytest.mark.parametrize("char", ["\x0b", "\x0c", "\x1c", "\x1e", "\x85", "\u2028", "\u2029"])
+def test_a_character_other_than_a_newline_is_a_bad_cell_on_its_own_line(tmp_path, char):
+    """Characters str.splitlines takes for line breaks are cells' characters here: one in a word cell of
+    line 10 is that cell's error, on line 10 (it was "2 columns, expected 57 …; 2 such lines in all")."""
+    rows = [_row() for _ in range(12)]
+    rows[8] = rows[8].replace("\t-", "\t-" + char, 1)  # line 10: the header, then rows 1 … 9
+    p = _write(tmp_path, "\r\n".join([HEADER, *rows]) + "\r\n")
+    with pytest.raises(DataError, match=r":10: column \d+ \(\w+\): value '-.+' is not allowed") as e:
+        read_experiments(p)
+    assert "columns" not in str(e.value)
+    good = _write(tmp_path, "\r".join([HEADER, *[_row() for _ in range(3)]]) + "\r", "mac.txt")
+    assert len(read_experiments(good)) == 3  # lines ended by \r alone are still lines
+
+
 def test_binary_and_wrong_encoding(tmp_path):
     with pytest.raises(DataError, match=r":2: not UTF-8 text \(byte 0xe9\)"):
         read_experiments(_write(tmp_path, (HEADER + "\n").encode() + "caf\xe9".encode("latin-1")))
