@@ -190,7 +190,7 @@ def public_argv(argv: list[str], data: str | None = None) -> list[str]:
     out = []
     for i, a in enumerate(argv):
         flag, eq, value = a.partition("=") if a.startswith("--") and "=" in a else ("", "", a)
-        if value and value == data or flag == "--data" or (i and argv[i - 1] == "--data"):
+        if (value and value == data) or flag == "--data" or (i and argv[i - 1] == "--data"):
             value = value if value == "synthetic" else "DATA"
         elif os.path.isabs(value):
             value = f"…/{os.path.basename(os.path.normpath(value))}"

@@ -68,13 +68,7 @@ class Problem:
             if sum(len(X) for X in core) < config.n_states * config.n_mix:
                 core = self.used
             checked_sequences(core, config, name)
-            try:
-                start = init_left_to_right(core, config.n_states, config.n_mix, config.covar_reg, seed, name)
-            except ValueError:  # a state's frames have a singular covariance (a feature that never varies)
-                raise ModelError(
-                    f"the initial model of {who} failed: a state's frames have a singular covariance (does a "
-                    f"feature never vary?); try a larger covar_reg (now {config.covar_reg})"
-                ) from None
+            start = init_left_to_right(core, config.n_states, config.n_mix, config.covar_reg, seed, name)
         self.init = GMMHMMParams(start.startprob, start.transmat, start.weights, start.means, start.covars)
         self.tol = config.tol * self.weighted_frames
 

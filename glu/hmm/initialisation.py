@@ -36,6 +36,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from glu.errors import ModelError
 from glu.hmm._engine.gmm import gmm_em, kmeans_lloyd
 from glu.hmm.inference import left_to_right_transmat
 from glu.hmm.model import GestureHMM
@@ -161,7 +162,8 @@ def init_left_to_right(
     fit, seeded, as :func:`~glu.hmm.initialisation.fit_gaussian_mixture` computes it without scikit-learn;
     with too few frames, one Gaussian copied ``n_mix`` times with means spread along its main axis).
     Self-transition probabilities are ``1 - 1 / (mean frames per state)``, clipped to [0.5, 0.98].
-    ``sequences`` are arrays of shape (T_i, D).
+    ``sequences`` are arrays of shape (T_i, D). Raises :class:`~glu.errors.ModelError`, naming the model
+    (``name``) and ``covar_reg``, when a state's mixture has a singular covariance.
     """
     D = sequences[0].shape[1]
     slices: list[list[np.ndarray]] = [[] for _ in range(n_states)]
@@ -176,7 +178,14 @@ def init_left_to_right(
     for q in range(n_states):
         Xq = np.concatenate(slices[q]) if any(len(s) for s in slices[q]) else pooled_all
         if len(Xq) >= max(4 * n_mix * D, n_mix + 1) and len(np.unique(Xq, axis=0)) > n_mix:
-            weights[q], means[q], covars[q] = fit_gaussian_mixture(Xq, n_mix, covar_reg, seed)
+            try:
+                weights[q], means[q], covars[q] = fit_gaussian_mixture(Xq, n_mix, covar_reg, seed)
+            except ValueError:  # a singular covariance (a feature that never varies in the slice's frames)
+                raise ModelError(
+                    f"the initial model of {name or 'the model'} failed: state {q + 1}'s frames have a "
+                    "singular covariance (does a feature never vary?); try a larger covar_reg "
+                    f"(now {covar_reg})"
+                ) from None
         else:
             mu = Xq.mean(axis=0)
             cov = (np.cov(Xq.T) if len(Xq) > 1 else np.zeros((D, D))).reshape(D, D) + covar_reg * np.eye(D)
