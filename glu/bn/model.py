@@ -292,12 +292,13 @@ class BayesNet:
         try:  # the BNT structure: nodeNames, AFFORDNODES, nodeValueNames, dag, bnet.CPD{j}.CPT
             names = [str(n) for n in np.atleast_1d(net.nodeNames)]
             n_aff = len(np.atleast_1d(net.AFFORDNODES))
+            value_names = [net.nodeValueNames] if n_aff == 1 else net.nodeValueNames  # squeezed: 1 × 1 cell
             values: dict[str, tuple[str, ...]] = {}
             for i, name in enumerate(names):
                 if i >= n_aff:
                     values[name] = WORD_VALUES
                 else:
-                    vals = [str(v) for v in np.atleast_1d(net.nodeValueNames[i])]
+                    vals = [str(v) for v in np.atleast_1d(value_names[i])]
                     aliases = FILE_ALIASES.get(name, {})
                     values[name] = tuple(aliases.get(v, v) for v in vals)
             dag = np.asarray(net.dag)
