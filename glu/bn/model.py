@@ -281,8 +281,6 @@ class BayesNet:
             raise ModelError(f"{path}: no such file")
         try:
             net = read_mat(path, squeeze_me=True, struct_as_record=False)[variable]
-        except FileNotFoundError:
-            raise ModelError(f"{path}: no such file") from None
         except KeyError:
             raise ModelError(f"{path}: no variable {variable!r} in the .mat file") from None
         except MatFileError as e:
