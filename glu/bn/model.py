@@ -97,10 +97,6 @@ class BayesNet:
         """All edges ``(parent, child)``, sorted by name."""
         return sorted((p, c) for c in self.nodes for p in self.parents[c])
 
-    def children(self, node: str) -> tuple[str, ...]:
-        """The children of ``node``, in node order."""
-        return tuple(c for c in self.nodes if node in self.parents[c])
-
     def validate(self) -> None:
         """Check the model completely; :class:`ModelError` (one line) for the first problem.
 
@@ -263,8 +259,6 @@ class BayesNet:
             return cls(schema=schema, parents=parents, cpts=cpts, meta=dict(meta))
         except ModelError as e:
             raise ModelError(f"{where}: {e}") from None
-        except _MALFORMED as e:  # shapes the validation meets late
-            raise ModelError(f"{where}: malformed model ({type(e).__name__}: {e})") from None
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> BayesNet:
