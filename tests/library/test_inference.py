@@ -463,3 +463,23 @@ def test_answers_stay_exact_when_the_caches_start_again_and_batches_are_cut(monk
     for i, b in enumerate(column):
         for t in ("C", "w1"):
             np.testing.assert_allclose(out[t][i], _brute_force(bn, t, {"B": b}), atol=1e-12)
+
+
+def test_labelled_answers_without_pandas_block_constructor(monkeypatch):
+    """A pandas without ``SingleBlockManager`` (the fast constructor): Series made by ``pd.Series``."""
+    import importlib
+
+    import pandas as pd
+    import pandas.core.internals
+
+    from glu.bn import labels
+
+    monkeypatch.delattr(pandas.core.internals, "SingleBlockManager")
+    try:
+        s = importlib.reload(labels).series(
+            np.array([0.25, 0.75]), pd.Index(["no", "yes"], name="Rain"), "Rain"
+        )
+        assert s.to_dict() == {"no": 0.25, "yes": 0.75} and s.name == "Rain" and s.index.name == "Rain"
+    finally:
+        monkeypatch.undo()
+        importlib.reload(labels)
