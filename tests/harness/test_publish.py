@@ -207,6 +207,6 @@ def test_an_installed_glu_asks_for_an_output_folder(tmp_path, monkeypatch):
     from glu.errors import OutputError
 
     monkeypatch.setattr(paths, "PROJECT_ROOT", None)
-    with pytest.raises(OutputError, match=r"^glu is installed, not a source checkout: give an output folder \(-o"):
+    with pytest.raises(OutputError, match=r"^glu is installed, not a source checkout: give an output"):
         OutputLayout.at(None)
     assert OutputLayout.at(tmp_path).results == tmp_path.resolve() / "results"
