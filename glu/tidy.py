@@ -117,8 +117,6 @@ def _breakable(text: str) -> str:
 
 
 def _text_cell(x: Any) -> str:
-    if _missing(x):
-        return MISSING
     text = str(x)
     m = _INTERVAL.match(text)
     if m:  # the estimate, and its interval under it
@@ -168,6 +166,10 @@ def html_table(df: pd.DataFrame, max_rows: int = 60) -> str:
             formatters[col] = lambda x: MISSING if _missing(x) else str(x)
         else:
             formatters[col] = _text_cell
+        if values.hasnans and (
+            values.dtype == object or isinstance(values.dtype, pd.api.extensions.ExtensionDtype)
+        ):
+            shown[col] = values.astype(object).where(values.notna(), np.nan)  # to_html writes pd.NA as "<NA>"
     default_index = (
         isinstance(shown.index, pd.RangeIndex) and shown.index.start == 0 and shown.index.step == 1
     )

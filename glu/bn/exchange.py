@@ -387,10 +387,6 @@ def assemble(
             )
     values, parents = dict(values), dict(parents)
     cpts = {n: np.asarray(c, dtype=float) for n, c in cpts.items()}
-    for n, c in cpts.items():
-        shape = tuple(len(values[p]) for p in parents[n]) + (len(values[n]),)
-        if c.shape != shape:
-            raise ModelError(f"{where}: the table of {n!r} has shape {c.shape}, expected {shape}")
     tol = IMPORT_TOL if renormalise is None else renormalise
     cpts, report = normalise_rows(values, parents, cpts, tol, where)
     if report:

@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from glu.bn.model import BayesNet, encode
-from glu.errors import DataError
+from glu.errors import DataError, ModelError
 from glu.schema import Schema, default_schema
 
 UnseenRows = Literal["zero", "uniform"]
@@ -120,7 +120,7 @@ def learn_parameters(
     """
     schema = schema or default_schema()
     if unseen_words not in UNSEEN_MODES:
-        raise ValueError(f"unseen_words={unseen_words!r}; allowed: {', '.join(UNSEEN_MODES)}")
+        raise ModelError(f"unseen_words={unseen_words!r}; allowed: {', '.join(UNSEEN_MODES)}")
     codes = encode(df_or_codes, schema) if isinstance(df_or_codes, pd.DataFrame) else df_or_codes
     cards = {n: schema.cardinality(n) for n in schema.nodes}
     cpts = {}

@@ -97,10 +97,6 @@ class BayesNet:
         """All edges ``(parent, child)``, sorted by name."""
         return sorted((p, c) for c in self.nodes for p in self.parents[c])
 
-    def children(self, node: str) -> tuple[str, ...]:
-        """The children of ``node``, in node order."""
-        return tuple(c for c in self.nodes if node in self.parents[c])
-
     def validate(self) -> None:
         """Check the model completely; :class:`ModelError` (one line) for the first problem.
 
@@ -263,8 +259,6 @@ class BayesNet:
             return cls(schema=schema, parents=parents, cpts=cpts, meta=dict(meta))
         except ModelError as e:
             raise ModelError(f"{where}: {e}") from None
-        except _MALFORMED as e:  # shapes the validation meets late
-            raise ModelError(f"{where}: malformed model ({type(e).__name__}: {e})") from None
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> BayesNet:
@@ -281,8 +275,6 @@ class BayesNet:
             raise ModelError(f"{path}: no such file")
         try:
             net = read_mat(path, squeeze_me=True, struct_as_record=False)[variable]
-        except FileNotFoundError:
-            raise ModelError(f"{path}: no such file") from None
         except KeyError:
             raise ModelError(f"{path}: no variable {variable!r} in the .mat file") from None
         except MatFileError as e:
@@ -292,12 +284,13 @@ class BayesNet:
         try:  # the BNT structure: nodeNames, AFFORDNODES, nodeValueNames, dag, bnet.CPD{j}.CPT
             names = [str(n) for n in np.atleast_1d(net.nodeNames)]
             n_aff = len(np.atleast_1d(net.AFFORDNODES))
+            value_names = [net.nodeValueNames] if n_aff == 1 else net.nodeValueNames  # squeezed: 1 × 1 cell
             values: dict[str, tuple[str, ...]] = {}
             for i, name in enumerate(names):
                 if i >= n_aff:
                     values[name] = WORD_VALUES
                 else:
-                    vals = [str(v) for v in np.atleast_1d(net.nodeValueNames[i])]
+                    vals = [str(v) for v in np.atleast_1d(value_names[i])]
                     aliases = FILE_ALIASES.get(name, {})
                     values[name] = tuple(aliases.get(v, v) for v in vals)
             dag = np.asarray(net.dag)

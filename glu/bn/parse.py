@@ -76,8 +76,6 @@ class Values:
         """A batch column as value indices, shape (n,): -1 where not observed (None, NaN, a negative
         index)."""
         self.check_node(node)
-        if len(values) != n:
-            raise EvidenceError(f"batch evidence on {node} has {len(values)} rows, expected {n}")
         if isinstance(values, np.ndarray) and values.dtype.kind in "iu" and values.ndim == 1:
             out = values.astype(np.intp, copy=False)
             if out.min(initial=0) < 0:

@@ -104,10 +104,6 @@ class JunctionTreePlan:
     total: int
     heuristic: str = "min-fill"
 
-    def size(self, clique: Sequence[int]) -> int:
-        """Entries of the table over ``clique`` (variable indices)."""
-        return math.prod(self.cards[v] for v in clique)
-
 
 HEURISTICS: tuple[str, ...] = ("fill-weight", "min-fill", "min-weight", "min-size")
 """The greedy elimination heuristics, tried in this order: simplicial nodes first, then the fewest fill-in

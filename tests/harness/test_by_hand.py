@@ -166,3 +166,20 @@ def test_glu_run_runs_one_notebook_into_its_out_folder(tmp_path):
 
 def test_the_notebook_list_is_not_empty():
     assert len(list_notebooks()) >= 9
+
+
+def test_runs_in_the_same_second_get_folders_of_their_own_until_none_is_left(tmp_path, monkeypatch):
+    monkeypatch.setattr(paths, "SCRATCH_DIR", tmp_path)
+    monkeypatch.setattr(time, "strftime", lambda fmt: "20260101-120000")
+    first, second = paths.new_scratch_dir("nb"), paths.new_scratch_dir("nb")
+    assert (first.name, second.name) == ("20260101-120000", "20260101-120000-2")
+    real = Path.mkdir
+
+    def taken(path: Path, *args, **kwargs) -> None:  # every run folder's name already made
+        if not kwargs.get("exist_ok"):
+            raise FileExistsError(path)
+        real(path, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "mkdir", taken)
+    with pytest.raises(paths.OutputError, match=r"nb: no new scratch folder could be made \(10,000 runs"):
+        paths.new_scratch_dir("nb")

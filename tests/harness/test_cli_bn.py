@@ -185,6 +185,11 @@ def test_a_malformed_soft_line_answers_in_place_and_later_lines_still_run(
         ),
         (["query", "--target", "ObjVel", "--soft", "Action=tap:0.7,grasp:0.7"], "not a distribution"),
         (["query", "--target", "ObjVel", "--soft", "Action=tap"], "expected VALUE:PROBABILITY"),
+        (
+            ["query", "--target", "ObjVel", "--soft", "Action=tap:1", "--soft", "Action=grasp:1"],
+            "Action is given twice as soft evidence",
+        ),
+        (["query", "--target", "ObjVel", "--soft", "Action=tap:0.5,tap:0.5"], "on Action gives 'tap' twice"),
         (["query", "--data", "/nonexistent/folder", "--target", "ObjVel"], "no such data folder"),
         (["query", "--model", "/nonexistent/m.json", "--target", "ObjVel"], "no such model file"),
         (["query"], "no target"),

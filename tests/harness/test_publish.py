@@ -201,3 +201,12 @@ def test_a_synthetic_make_reproduce_leaves_gits_tree_clean(tmp_path):
     status = subprocess.run(["git", "status", "--porcelain"], cwd=clone, capture_output=True, text=True)
     assert status.stdout == "", status.stdout
     assert {f.name: f.read_bytes() for f in (clone / "figures").iterdir()} == tracked
+
+
+def test_an_installed_glu_asks_for_an_output_folder(tmp_path, monkeypatch):
+    from glu.errors import OutputError
+
+    monkeypatch.setattr(paths, "PROJECT_ROOT", None)
+    with pytest.raises(OutputError, match=r"^glu is installed, not a source checkout: give an output"):
+        OutputLayout.at(None)
+    assert OutputLayout.at(tmp_path).results == tmp_path.resolve() / "results"

@@ -87,3 +87,21 @@ def test_categorical_is_an_inverse_cdf():
     draws = np.stack([categorical(p, np.random.default_rng(i)) for i in range(2000)])
     assert (draws[:, 1] == 1).all() and not (draws[:, 0] == 1).any()
     assert abs((draws[:, 0] == 0).mean() - 0.2) < 0.04
+
+
+def test_impossible_fixed_values_and_the_junction_tree_are_refused():
+    """B is b0 whatever A is: a row fixing B=b1 has probability 0; a junction-tree engine has no joint."""
+    from glu.bn import BayesNet
+    from glu.errors import ImpossibleEvidenceError, ModelError
+    from glu.schema import Schema
+
+    schema = Schema(values={"A": ("a0", "a1"), "B": ("b0", "b1")}, n_affordance=2)
+    cpts = {"A": np.array([0.5, 0.5]), "B": np.array([[1.0, 0.0], [1.0, 0.0]])}
+    bn = BayesNet(schema=schema, parents={"A": (), "B": ("A",)}, cpts=cpts)
+    rng = np.random.default_rng(0)
+    with pytest.raises(
+        ImpossibleEvidenceError, match="^row 2: A=a1, B=b1 has probability 0 under the model$"
+    ):
+        sample(make_engine(bn), {"A": np.array([0, 1, 1]), "B": np.array([0, 0, 1])}, rng)
+    with pytest.raises(ModelError, match="answered by the junction tree"):
+        sample(make_engine(bn, method="junction"), {"A": np.array([0])}, rng)

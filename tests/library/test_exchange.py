@@ -323,3 +323,158 @@ def test_a_name_xmlbif_carries_and_bif_cannot_is_named_with_the_way_out():
     with pytest.raises(ModelError, match="BIF cannot carry 'Äction', 'tap me' \\(a value of 'Äction'\\)"):
         to_bif(bn)
     assert from_xmlbif(to_xmlbif(bn), "again.xmlbif").schema.values == {"Äction": ("grasp", "tap me")}
+
+
+VAR_A = "variable A { type discrete [ 2 ] { a0, a1 }; }\n"
+P_A = "probability ( A ) { table 0.5, 0.5; }\n"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("variable A", r"the file ends early \(expected '\{'\)"),
+        ("variable A ( }", r"variable 'A': expected '\{', found '\('"),
+        ("variable A { type continuous; }", r"variable 'A' is not 'type discrete \[ n \] \{ values \}'"),
+        ("variable A { type discrete [ two ] { a0, a1 }; }", "variable 'A' is not 'type discrete"),
+        ("variable A { type discrete [ 3 ] { a0, a1 }; }", "variable 'A' declares 3 values but lists 2"),
+        ("variable A { kind x; }", "expected 'type' or 'property', found 'kind'"),
+        ("variable A { property x; }", "variable 'A' is not 'type discrete"),
+        (VAR_A + VAR_A, "variable 'A' is declared twice"),
+        (VAR_A + "probability ( A B ) { table 0.5, 0.5; }", r"malformed 'probability \( A B \)'"),
+        (VAR_A + P_A + P_A, "two probability blocks for 'A'"),
+        (VAR_A + "probability ( A ) { tabel 0.5, 0.5; }", "expected 'table', 'default', '\\(' or 'property'"),
+        (VAR_A + "probability ( A ) { default 1; }", "a row has 1 numbers, expected 2"),
+        (VAR_A + P_A + "node B { }", "expected 'network', 'variable' or 'probability', found 'node'"),
+        (VAR_A + P_A + "variable B { type discrete [ 2 ] { b0, b1 }; }", "no probability table for B"),
+        ("variable A { type discrete [ 2 ] { a0, a1 }; } /* a comment never closed", "never closed"),
+    ],
+)
+def test_malformed_bif_variables_and_blocks_are_one_line(text, message):
+    with pytest.raises(ModelError, match=message) as e:
+        from_bif(text, "bad.bif")
+    assert "\n" not in str(e.value) and str(e.value).startswith("bad.bif: ")
+
+
+@pytest.mark.parametrize(
+    ("rows", "message"),
+    [
+        ("(a0, a1) 0.5, 0.5;", r"the configuration \(a0, a1\) names 2 value\(s\) for 1 parent\(s\)"),
+        ("(a0) 0.5;", "probability of 'B': a row has 1 numbers, expected 2"),
+        ("(a2) 0.5, 0.5;", "'A' has no value 'a2'; values: a0, a1"),
+    ],
+)
+def test_malformed_bif_rows_name_the_node_and_the_value(rows, message):
+    text = VAR_A + P_A + "variable B { type discrete [ 2 ] { b0, b1 }; }\n"
+    with pytest.raises(ModelError, match=message):
+        from_bif(text + f"probability ( B | A ) {{ {rows} }}", "bad.bif")
+
+
+def test_bif_comments_properties_and_default_rows():
+    """/* */ and // comments are skipped, properties ignored, ``default`` fills the rows not listed."""
+    text = """/* a network
+    written by hand */ network n { property author x; }
+    variable A { type discrete [ 3 ] { a0, a1, a2 }; property position = (1, 2); }
+    variable B { property note; type discrete [ 2 ] { b0, b1 }; }  // B's values
+    probability ( A ) { table 0.2, 0.3, 0.5; }
+    probability ( B | A ) { (a1) 0.6, 0.4; default 0.1, 0.9; property source = expert; }
+    """
+    bn = from_bif(text)
+    np.testing.assert_array_equal(bn.cpts["A"], [0.2, 0.3, 0.5])
+    np.testing.assert_array_equal(bn.cpts["B"], [[0.1, 0.9], [0.6, 0.4], [0.1, 0.9]])
+
+
+XML_A = "<VARIABLE><NAME>A</NAME><OUTCOME>a0</OUTCOME><OUTCOME>a1</OUTCOME></VARIABLE>"
+DEF_A = "<DEFINITION><FOR>A</FOR><TABLE>0.5 0.5</TABLE></DEFINITION>"
+
+
+@pytest.mark.parametrize(
+    ("body", "message"),
+    [
+        (None, r"no <NETWORK> element \(expected XMLBIF 0.3\)"),
+        (XML_A + XML_A + DEF_A, "variable 'A' is declared twice"),
+        (
+            XML_A + "<DEFINITION><FOR>A</FOR><GIVEN>C</GIVEN><TABLE>1 0 0 1</TABLE></DEFINITION>",
+            "undeclared variable 'C'",
+        ),
+        (XML_A + DEF_A + DEF_A, "two definitions of 'A'"),
+        (XML_A + XML_A.replace(">A<", ">B<") + DEF_A, "no probability table for B"),
+    ],
+)
+def test_malformed_xmlbif_is_one_line(body, message):
+    text = "<BIF><X/></BIF>" if body is None else f"<BIF><NETWORK>{body}</NETWORK></BIF>"
+    with pytest.raises(ModelError, match=message) as e:
+        from_xmlbif(text, "x.xmlbif")
+    assert "\n" not in str(e.value) and str(e.value).startswith("x.xmlbif: ")
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("BAYES", r"the file ends early \(expected the number of variables\)"),
+        ("BAYES two 2 2", r"expected the number of variables \(an integer\), found 'two'"),
+        (
+            "BAYES 1 2 2 1 0 1 0 2 0.5 0.5 2 0.5 0.5",
+            "1 variables with cardinalities ≥ 1 need 1 functions, one CPT each; got 2",
+        ),
+        ("BAYES 1 2 1 9 0", "a scope of 9 variables is longer than the rest of the file"),
+        ("BAYES 1 2 1 1 3 2 0.5 0.5", r"a scope names variables outside 0 … 0: \[3\]"),
+        ("BAYES 2 2 2 2 1 0 1 0 2 0.5 0.5 2 0.5 0.5", "two CPTs for 'var_0'"),
+    ],
+)
+def test_malformed_uai_is_one_line(text, message):
+    with pytest.raises(ModelError, match=message) as e:
+        from_uai(text, "x.uai")
+    assert "\n" not in str(e.value) and str(e.value).startswith("x.uai: ")
+
+
+def _indicator_file(seen_rows: str, extra: str = "") -> str:
+    """XMLBIF: a word ``w`` under ``A`` and its indicator ``seen__w``, P(seen__w = yes | A) ``seen_rows``."""
+    var = "<VARIABLE><NAME>{}</NAME><OUTCOME>{}</OUTCOME><OUTCOME>{}</OUTCOME></VARIABLE>"
+    return (
+        "<BIF><NETWORK>" + XML_A + var.format("w", "absent", "present") + var.format("seen__w", "no", "yes")
+        + DEF_A + "<DEFINITION><FOR>w</FOR><GIVEN>A</GIVEN><TABLE>0.5 0.5 0.5 0.5</TABLE></DEFINITION>"
+        + f"<DEFINITION><FOR>seen__w</FOR><GIVEN>A</GIVEN><TABLE>{seen_rows}</TABLE></DEFINITION>"
+        + extra + "</NETWORK></BIF>"
+    )  # fmt: skip
+
+
+def test_indicators_fold_back_and_malformed_ones_are_refused():
+    bn = from_xmlbif(_indicator_file("0 1 1 0"))
+    assert bn.nodes == ("A", "w")
+    np.testing.assert_array_equal(bn.cpts["w"], [[0.5, 0.5], [0.0, 0.0]])  # A=a1: the row w never saw
+    with pytest.raises(ModelError, match="x.xmlbif: the indicator 'seen__w' must have P\\(yes\\) of 0 or 1"):
+        from_xmlbif(_indicator_file("0.5 0.5 0 1"), "x.xmlbif")
+    child = (
+        "<VARIABLE><NAME>C</NAME><OUTCOME>c0</OUTCOME><OUTCOME>c1</OUTCOME></VARIABLE>"
+        "<DEFINITION><FOR>C</FOR><GIVEN>seen__w</GIVEN><TABLE>1 0 0 1</TABLE></DEFINITION>"
+    )
+    with pytest.raises(ModelError, match="x.xmlbif: the indicator 'seen__w' has children; an indicator must"):
+        from_xmlbif(_indicator_file("0 1 1 0", child), "x.xmlbif")
+    plain = from_xmlbif(_indicator_file("0 1 1 0").replace("<NAME>w<", "<NAME>v<").replace(">w<", ">v<"))
+    assert set(plain.nodes) == {"A", "v", "seen__w"}  # seen__w without a node w: an ordinary node
+
+
+def test_unknown_format_or_zero_row_mode_and_a_clashing_indicator_are_refused(uniform_bn, tmp_path):
+    from glu.bn.model import BayesNet
+    from glu.schema import Schema
+
+    with pytest.raises(ModelError, match="unknown format 'csv'; formats: bif, xmlbif, uai"):
+        export_bn(uniform_bn, tmp_path / "m.bif", fmt="csv")
+    with pytest.raises(ModelError, match="zero_rows='drop'; allowed: refuse, seen"):
+        to_bif(uniform_bn, zero_rows="drop")
+    values = {"A": ("a0", "a1"), "seen__w": ("no", "yes"), "w": ("absent", "present")}
+    cpts = {"A": np.array([0.5, 0.5]), "seen__w": np.array([0.5, 0.5]), "w": np.array([[0.5, 0.5], [0, 0]])}
+    bn = BayesNet(
+        schema=Schema(values=values, n_affordance=2), parents={"A": (), "seen__w": (), "w": ("A",)}, cpts=cpts
+    )
+    with pytest.raises(ModelError, match="cannot add the indicator 'seen__w': the model already has a node"):
+        to_bif(bn, zero_rows="seen")
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("tol", [1.5, -0.1, "lots", [1e-4], float("nan")])
+def test_a_renormalise_tolerance_outside_0_1_is_refused(tol):
+    bif = VAR_A + "probability ( A ) { table 0.5, 0.50001; }"
+    np.testing.assert_allclose(from_bif(bif, renormalise=1e-4).cpts["A"], [0.5 / 1.00001, 0.50001 / 1.00001])
+    with pytest.raises(ModelError, match=r"renormalise=.*: a tolerance is a number in \[0, 1\), e.g. 1e-4"):
+        from_bif(bif, renormalise=tol)

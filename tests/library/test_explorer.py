@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -110,3 +112,14 @@ def test_the_rerun_viewer_shows_only_when_live(tmp_path, monkeypatch):
     from rerun.notebook import Viewer
 
     assert isinstance(viewer, Viewer)
+
+
+def test_live_without_ipywidgets_it_is_the_static_table(engine, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ipywidgets", None)  # `import ipywidgets` fails
+    table = evidence_explorer(engine, evidence={"Shape": "box"}, live=True)
+    assert isinstance(table, pd.DataFrame)
+    np.testing.assert_allclose(
+        table.loc["ObjVel", ["slow", "medium", "fast"]].to_numpy(dtype=float),
+        engine.query(["ObjVel"], {"Shape": "box"})["ObjVel"],
+        atol=1e-12,
+    )

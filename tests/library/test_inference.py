@@ -402,3 +402,84 @@ def _a_possible_row(bn: BayesNet, parents: tuple[str, ...]) -> tuple[str, ...]:
         if eng.probability_of_evidence(dict(zip(parents, combo, strict=True))) > 0:
             return combo
     raise AssertionError("no possible configuration")
+
+
+def test_unknown_soft_rule_and_malformed_batches_are_one_clear_error():
+    eng = make_engine(_tiny_bn(1, zero_rows=False))
+    with pytest.raises(EvidenceError, match="^unknown soft rule 'bayes'; allowed: virtual, jeffrey$"):
+        eng.query(["C"], soft={"A": [0.2, 0.3, 0.5]}, soft_rule="bayes")
+    with pytest.raises(EvidenceError, match=r"batch evidence columns have different lengths: \[2, 3\]"):
+        eng.query_batch(["C"], {"A": ["a0", "a1"], "B": ["b0", "b1", "b0"]})
+    with pytest.raises(
+        EvidenceError, match="a batch query needs at least one evidence or soft-evidence column"
+    ):
+        eng.query_batch(["C"], {})
+    with pytest.raises(UnknownValueError, match="B has no value '2'; allowed: b0, b1"):
+        eng.query_batch(["C"], {"B": np.array([0, 2, 1])})
+
+
+def test_numpy_scalars_are_value_indices_and_names():
+    from glu.bn.parse import Values
+
+    vals = Values(_tiny_bn(1, zero_rows=False))
+    assert vals.value("A", np.int64(2)) == 2 and type(vals.value("A", np.int64(2))) is int
+    assert vals.value("A", np.str_("a1")) == 1
+    with pytest.raises(UnknownValueError, match="A has no value '3'"):
+        vals.value("A", np.uint8(3))
+
+
+def test_a_network_without_words_has_no_word_probabilities():
+    bn = _tiny_bn(1, zero_rows=False)
+    schema = Schema(values={n: bn.schema.values_of(n) for n in ("A", "B", "C")}, n_affordance=3)
+    bare = BayesNet(
+        schema=schema, parents={n: bn.parents[n] for n in "ABC"}, cpts={n: bn.cpts[n] for n in "ABC"}
+    )
+    assert make_engine(bare).word_probability_array({"A": "a1"}).shape == (0,)
+
+
+@pytest.mark.parametrize("method", ["core", "junction"])
+def test_answers_stay_exact_when_the_caches_start_again_and_batches_are_cut(monkeypatch, method):
+    """Caches of one entry (every pattern and every evidence set evicts the last) and batches cut into
+    rows of one: every answer still equals brute force."""
+    from glu.bn import inference
+
+    monkeypatch.setattr(inference, "PATTERN_CACHE", 1)
+    monkeypatch.setattr(inference, "POSSIBLE_MEMO", 1)
+    monkeypatch.setattr(inference, "BATCH_ENTRIES", 1)
+    zero_in_b = _tiny_bn(2, zero_rows=False)
+    zero_in_b.cpts["B"][0] = [1.0, 0.0]  # B = b0 whenever A = a0
+    cases = [({"B": "b1"}, "A"), ({"C": "c2"}, "w1"), ({"B": "b1"}, "B"), ({"w3": "y", "A": "a0"}, "B")]
+    for bn in (zero_in_b, _tiny_bn(2, zero_rows=True)):
+        eng = make_engine(bn, method=method)
+        for evidence, target in cases * 2:
+            ref = _brute_force(bn, target, evidence)
+            if ref is None:
+                with pytest.raises(ImpossibleEvidenceError):
+                    eng.query([target], evidence)
+            else:
+                np.testing.assert_allclose(eng.query([target], evidence)[target], ref, atol=1e-12)
+    column = ["b0", "b1", "b1", "b0", "b1"]
+    out = eng.query_batch(["C", "w1"], {"B": column}, errors="nan")
+    for i, b in enumerate(column):
+        for t in ("C", "w1"):
+            np.testing.assert_allclose(out[t][i], _brute_force(bn, t, {"B": b}), atol=1e-12)
+
+
+def test_labelled_answers_without_pandas_block_constructor(monkeypatch):
+    """A pandas without ``SingleBlockManager`` (the fast constructor): Series made by ``pd.Series``."""
+    import importlib
+
+    import pandas as pd
+    import pandas.core.internals
+
+    from glu.bn import labels
+
+    monkeypatch.delattr(pandas.core.internals, "SingleBlockManager")
+    try:
+        s = importlib.reload(labels).series(
+            np.array([0.25, 0.75]), pd.Index(["no", "yes"], name="Rain"), "Rain"
+        )
+        assert s.to_dict() == {"no": 0.25, "yes": 0.75} and s.name == "Rain" and s.index.name == "Rain"
+    finally:
+        monkeypatch.undo()
+        importlib.reload(labels)

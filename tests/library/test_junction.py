@@ -360,3 +360,44 @@ def test_unknown_node_and_bad_soft_evidence_are_clear(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         eng.query_batch(["X0"], {"X3": [0, 1, None, float("nan")]})
+
+
+def test_limits_that_are_not_whole_numbers_and_cores_too_large_are_refused(monkeypatch):
+    for bad in (0, -5, 2.5, True, "1000"):
+        with pytest.raises(
+            ModelError, match=rf"^max_table={bad!r}: expected a whole number of table entries ≥ 1$"
+        ):
+            max_table_setting(bad)
+    monkeypatch.setenv(MAX_TABLE_ENV, "0")
+    with pytest.raises(ModelError, match=r"^\$GLU_MAX_TABLE=0: expected a whole number"):
+        max_table_setting()
+    big = chain_net(23, 2, 0)  # 2**23 core states: past the core engine's 2**22
+    with pytest.raises(ModelError, match="has 8,388,608 states; the core engine handles up to 4,194,304"):
+        make_engine(big, method="core").query(["X0"])
+    assert make_engine(big).method == "junction"
+
+
+def test_a_clique_wider_than_numpys_axes_is_refused_before_any_table():
+    """62 nodes, each a child of all before it: one clique of all 62 (more axes than NumPy's 64 allow once
+    the rows are added), refused whatever the table limit."""
+    names = [f"Y{i}" for i in range(62)]
+    parents = {x: tuple(names[:i]) for i, x in enumerate(names)}
+    with pytest.raises(ModelError, match=r"a table over 62 variables \(elimination width 61\); NumPy arrays"):
+        plan_junction_tree(names, parents, [2] * 62, max_table=1 << 62)
+
+
+def test_rows_impossible_elsewhere_give_nan_on_a_target_their_evidence_does_not_reach():
+    """X1 is always a0; Y1's row for Y0 = b is all zeros (a word never seen there), so P(Y0 = a) = 1 in
+    every possible row, and the row observing X1 = a1 is impossible: NaN on both engines."""
+    vals = {n: ("a", "b") for n in ("X0", "X1", "Y0")} | {"Y1": ("absent", "present")}
+    parents = {"X0": (), "X1": ("X0",), "Y0": (), "Y1": ("Y0",)}
+    cpts = {
+        "X0": np.array([0.5, 0.5]),
+        "X1": np.array([[1.0, 0.0], [1.0, 0.0]]),
+        "Y0": np.array([0.4, 0.6]),
+        "Y1": np.array([[0.9, 0.1], [0.0, 0.0]]),
+    }
+    bn = BayesNet(schema=Schema(values=vals, n_affordance=3), parents=parents, cpts=cpts)
+    for method in ("junction", "core"):
+        out = make_engine(bn, method=method).query_batch(["Y0"], {"X1": np.array([0, 1, 0])}, errors="nan")
+        np.testing.assert_array_equal(out["Y0"], [[1.0, 0.0], [np.nan, np.nan], [1.0, 0.0]])

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from glu.bn import BayesNet, learn_bn
+from glu.bn import BayesNet, learn_bn, learn_structure
 from glu.bn.learning import bic_family_score, family_counts, k2_parents, learn_parameters
 from glu.bn.model import encode
 from glu.schema import AFFORDANCE_NODES, ROOT_NODES, WORDS, default_schema
@@ -175,3 +175,30 @@ def test_learning_is_deterministic_and_saves_round_trip(table, tmp_path):
     for n in a.nodes:
         np.testing.assert_array_equal(a.cpts[n], c.cpts[n])
     assert c.meta["unseen_words"] == "zero"
+
+
+def test_learn_structure_finds_the_generating_parents():
+    """B copies A (5 % errors), C is noise, the word w copies B: K2 gives B ← A and w ← B, A (a root) and C
+    nothing; A is not added to w's parents, which B already explains."""
+    from glu.schema import Schema
+
+    rng = np.random.default_rng(3)
+    n = 3000
+    a = rng.integers(0, 3, n)
+    b = (a + (rng.random(n) < 0.05)) % 3
+    c = rng.integers(0, 2, n)
+    df = pd.DataFrame({"A": a, "B": b, "C": c, "w": (b == 0).astype(int)})
+    df = df.astype(str).replace({"w": {"0": "absent", "1": "present"}})
+    values = {"A": ("0", "1", "2"), "B": ("0", "1", "2"), "C": ("0", "1"), "w": ("absent", "present")}
+    schema = Schema(values=values, n_affordance=3, roots=("A",))
+    assert learn_structure(df, schema) == {"A": (), "B": ("A",), "C": (), "w": ("B",)}
+    assert learn_structure(df, schema, max_parents=0) == {n: () for n in values}
+
+
+def test_bad_learning_input_is_one_clear_error(table):
+    from glu.errors import DataError, ModelError
+
+    with pytest.raises(DataError, match="cannot learn from an empty table"):
+        learn_bn(table.iloc[:0])
+    with pytest.raises(ModelError, match="unseen_words='drop'; allowed: zero, uniform"):
+        learn_parameters(table, {n: () for n in default_schema().nodes}, unseen_words="drop")

@@ -170,3 +170,64 @@ def test_a_well_formed_file_is_parsed_from_the_checked_bytes(tmp_path, monkeypat
     monkeypatch.setattr(scipy.io, "loadmat", lambda f, **kw: seen.append(f) or real(f, **kw))
     read_mat(path)
     assert len(seen) == 1 and isinstance(seen[0], io.BytesIO)
+
+
+def _el(mdtype: int, payload: bytes) -> bytes:
+    """A data element: its tag, then its bytes padded to 8."""
+    return struct.pack("<II", mdtype, len(payload)) + payload + bytes(-len(payload) % 8)
+
+
+def _matrix(mclass: int, dims: list[int], *parts: bytes, name: bytes = b"x") -> bytes:
+    """A matrix element (type 14): array flags of class ``mclass``, dimensions, name, then ``parts``."""
+    head = _el(6, struct.pack("<II", mclass, 0)) + _el(5, struct.pack(f"<{len(dims)}i", *dims)) + _el(1, name)
+    return _el(14, head + b"".join(parts))
+
+
+def _doubles(*values: float) -> bytes:
+    return _el(9, struct.pack(f"<{len(values)}d", *values))
+
+
+def _nested_cells(depth: int) -> bytes:
+    inner = _matrix(6, [1, 1], _doubles(1.0), name=b"")
+    for _ in range(depth):
+        inner = _matrix(1, [1, 1], inner, name=b"")
+    return inner
+
+
+@pytest.mark.parametrize(
+    ("variable", "message"),
+    [
+        (_el(15, zlib.compress(_el(9, bytes(8)))), r"must hold one matrix that fills it \(type 9"),
+        (_el(15, zlib.compress(_matrix(6, [1, 1], _doubles(1.0)))[:-6]), "a compressed variable cut short"),
+        (_matrix(6, [-1, 2], _doubles(1.0)), r"the dimensions: negative values \[-1, 2\]"),
+        (_matrix(6, [1, 2], _doubles(1.0)), "real part: 8 bytes for 2 values of 8 bytes"),
+        (_matrix(1, [1, 1], _el(9, bytes(8))), "data type 9 where a matrix \\(14\\) belongs"),
+        (_matrix(1, [1, 1], struct.pack("<II", 14, 800)), "a matrix of 800 bytes that runs past its parent"),
+        (_nested_cells(70), "matrices nested more than 64 deep"),
+        (_el(14, _el(6, struct.pack("<II", 6, 0))[:8]), "a matrix too short for its array flags"),
+        (_matrix(5, [2, 2, 2], _el(5, b""), _el(5, b""), _doubles()), "a sparse matrix of 3 dimensions"),
+        (_matrix(5, [2, 2], _el(5, b""), _el(5, b""), _doubles()), "a sparse matrix without column pointers"),
+        (_matrix(2, [1, 1], _el(5, struct.pack("<2i", 4, 4)), _el(1, b"abcd")), r"name lengths \[4, 4\]"),
+        (_matrix(2, [1, 1], _el(5, struct.pack("<i", 0)), _el(1, b"")), r"field-name lengths \[0\]"),
+        (_matrix(6, [1, 1], _doubles(1.0), _doubles(2.0)), "16 bytes left over at the end of a matrix"),
+    ],
+    ids=[
+        "compressed-non-matrix", "compressed-cut-short", "negative-dimension", "wrong-byte-count",
+        "cell-of-non-matrix", "sub-matrix-past-parent", "nested-70-deep", "no-array-flags", "sparse-3d",
+        "sparse-no-pointers", "two-field-name-lengths", "zero-field-name-length", "left-over-bytes",
+    ],
+)  # fmt: skip
+def test_malformed_matrices_are_refused_at_their_offset(variable, message):
+    with pytest.raises(MatFileError, match=r"^offset \d+( \(inflated\))?: .*" + message):
+        check_mat(_header() + variable)
+
+
+def test_a_function_handle_reads_as_scipy_reads_it(tmp_path):
+    """A function handle (class 16) holds one matrix, walked like any other; SciPy then reads the bytes."""
+    path = tmp_path / "f.mat"
+    path.write_bytes(
+        _header() + _matrix(16, [1, 1], _matrix(6, [1, 2], _doubles(1.0, 2.0), name=b""), name=b"f")
+    )
+    _same(read_mat(path)["f"], scipy.io.loadmat(path)["f"])
+    with pytest.raises(MatFileError, match="left over"):  # the walk does not stop at the handle's matrix
+        check_mat(_header() + _matrix(16, [1, 1], _matrix(6, [1, 1], _doubles(1.0), name=b""), _doubles(2.0)))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+import struct
 
 import numpy as np
 import pytest
@@ -154,3 +155,112 @@ def test_model_validation_errors(tmp_path):
         BayesNet.load(tmp_path / "missing.json")
     with pytest.raises(ModelError, match="no such file"):
         BayesNet.from_bnt_mat(tmp_path / "missing.mat")
+
+
+def _edited(edit) -> dict:
+    doc = _doc([[0.5, 0.5], [0.25, 0.75]])
+    edit(doc)
+    return doc
+
+
+TWO_PARENTS = [[[0.5, 0.5]] * 2] * 2
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d.update(nodes=[], n_affordance=0), "a model needs at least one node"),
+        (lambda d: d["nodes"][1].update(name="A"), "a node name appears twice"),
+        (lambda d: d.update(schema=["roles"]), '"schema" must be an object, not list'),
+        (lambda d: d.update(schema={"roles": {"A": "verb"}}), r"unknown role\(s\) \['verb'\]; roles are"),
+        (lambda d: d["nodes"][1].update(parents=["Z"]), "node 'B': unknown parent 'Z'"),
+        (lambda d: d["nodes"][1].update(parents=["A", "A"], cpt=TWO_PARENTS), "node 'B': parents must be"),
+        (
+            lambda d: d["nodes"].append(
+                {**d["nodes"][1], "name": "C", "parents": ["B", "A"], "cpt": TWO_PARENTS}
+            ),
+            r"node 'C': parents must be distinct and in node order, got \['B', 'A'\]",
+        ),
+    ],
+    ids=["no-nodes", "name-twice", "schema-not-object", "unknown-role", "unknown-parent", "twice", "order"],
+)
+def test_malformed_model_documents_are_one_line(edit, message):
+    with pytest.raises(ModelError, match="^m.json: " + message) as e:
+        BayesNet.from_dict(_edited(edit), "m.json")
+    assert "\n" not in str(e.value)
+
+
+def test_a_model_needs_parents_and_cpts_for_exactly_its_nodes():
+    bn = BayesNet.from_dict(_doc([[0.5, 0.5], [0.25, 0.75]]))
+    with pytest.raises(ModelError, match="parents and CPTs must be given for exactly the schema's nodes"):
+        BayesNet(schema=bn.schema, parents={"A": ()}, cpts=bn.cpts)
+
+
+def test_a_table_of_value_names_is_encoded_and_scored():
+    """Plain strings (not categoricals): log P = log P(a1) + log P(b1 | a1) + log P(a0) + log P(b0 | a0)."""
+    import pandas as pd
+
+    from glu.errors import DataError
+
+    bn = BayesNet.from_dict({**_doc([[0.5, 0.5], [0.25, 0.75]]), "n_affordance": 2})
+    bn.cpts["A"][:] = [0.4, 0.6]
+    df = pd.DataFrame({"A": ["a1", "a0"], "B": ["b1", "b0"]})
+    assert bn.log_likelihood(df) == pytest.approx(np.log(0.6 * 0.75 * 0.4 * 0.5), rel=1e-12)
+    with pytest.raises(DataError, match="the table has no column 'B'"):
+        bn.log_likelihood(df[["A"]])
+    with pytest.raises(DataError, match=r"column 'B': missing or unknown values; allowed: \('b0', 'b1'\)"):
+        bn.log_likelihood(df.assign(B=["b1", "b2"]))
+
+
+def _bnt_file(path, **changes) -> None:
+    """A BNT network A → w (a word) as the originals saved it, with ``changes`` to its fields."""
+    cpds = np.empty(2, dtype=object)
+    cpds[0], cpds[1] = {"CPT": np.array([0.5, 0.5])}, {"CPT": np.array([[0.2, 0.8], [0.6, 0.4]])}
+    value_names = np.empty(1, dtype=object)
+    value_names[0] = np.array(["a0", "a1"], dtype=object)
+    net = {
+        "nodeNames": np.array(["A", "w"], dtype=object),
+        "nodeValueNames": value_names,
+        "AFFORDNODES": np.array([1.0]),
+        "dag": np.array([[0.0, 1.0], [0.0, 0.0]]),
+        "bnet": {"CPD": cpds},
+    }
+    sio.savemat(path, {"netobj_lab": {**net, **changes}})
+
+
+def test_a_bnt_network_with_one_affordance_node_reads(tmp_path):
+    """Its value names are a 1 × 1 cell, which SciPy squeezes to the names themselves (glu read A's
+    first value name as a node's only value, then refused the file: "cannot reshape array of size 2")."""
+    path = tmp_path / "BN.mat"
+    _bnt_file(path)
+    bn = BayesNet.from_bnt_mat(path)
+    assert bn.schema.values == {"A": ("a0", "a1"), "w": ("absent", "present")} and bn.parents["w"] == ("A",)
+    np.testing.assert_array_equal(bn.cpts["w"], [[0.2, 0.8], [0.6, 0.4]])
+
+
+def test_inconsistent_bnt_networks_are_one_line(tmp_path):
+    path = tmp_path / "BN.mat"
+    _bnt_file(path, dag=np.zeros((3, 3)))
+    with pytest.raises(
+        ModelError, match=r"BN.mat: an inconsistent BNT network in 'netobj_lab': 2 node names "
+    ):
+        BayesNet.from_bnt_mat(path)
+    _bnt_file(path, AFFORDNODES=np.zeros(0))
+    with pytest.raises(ModelError, match="BN.mat: 0 affordance nodes among 2 nodes in 'netobj_lab'"):
+        BayesNet.from_bnt_mat(path)
+
+
+def test_a_mat_file_scipy_cannot_parse_is_one_line(tmp_path):
+    """A character array of 5 declared characters holding 2: the structure is sound, SciPy's reading fails."""
+    name = b"netobj_lab"
+    head = b"MATLAB 5.0 MAT-file".ljust(116, b" ") + bytes(8) + b"\x00\x01IM"
+
+    def el(t: int, payload: bytes) -> bytes:
+        return struct.pack("<II", t, len(payload)) + payload + bytes(-len(payload) % 8)
+
+    body = el(6, struct.pack("<II", 4, 0)) + el(5, struct.pack("<2i", 1, 5)) + el(1, name) + el(1, b"ab")
+    path = tmp_path / "BN.mat"
+    path.write_bytes(head + el(14, body))
+    with pytest.raises(ModelError, match=r"BN.mat: not a readable MATLAB file \(TypeError: ") as e:
+        BayesNet.from_bnt_mat(path)
+    assert "\n" not in str(e.value)

@@ -209,3 +209,64 @@ def test_malformed_experiment_tables_name_the_line(tool_use, tmp_path):
     bad.write_text("Tool,ObjShape,Direction\nstick,ball,away\n")
     with pytest.raises(DataError, match="no column for the node"):
         read_experiment_table(bad, schema)
+
+
+def _schema_doc(edit) -> dict:
+    import yaml
+
+    d = yaml.safe_load(SCHEMA_YAML)
+    edit(d)
+    return d
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d.update(version=2), "version 2; this glu reads version 1"),
+        (lambda d: d.update(nodes=[]), "'nodes' must be a non-empty list of {name, values, role}"),
+        (lambda d: d.update(words=["the", " robot"]), r"'words' must be a list of words \(non-empty"),
+        (lambda d: d["nodes"][0].pop("name"), "node 1 needs a 'name'"),
+        (lambda d: d["nodes"][0].update(values=["stick"]), "node 'Tool' needs a list of at least two"),
+        (lambda d: d["nodes"].append(d["nodes"][0]), "node 'Tool' is defined twice"),
+        (lambda d: d["nodes"][0].update(colour="red"), r"node 'Tool': unknown key\(s\) \['colour'\]"),
+        (lambda d: d.update(aliases=["stik"]), "'aliases' maps node names to {alias: value}"),
+        (lambda d: d.update(aliases={"Tool": {"stik": "spoon"}}), "alias 'stik' of 'Tool' names an unknown"),
+    ],
+    ids=[
+        "version",
+        "no-nodes",
+        "spaced-word",
+        "no-name",
+        "one-value",
+        "twice",
+        "unknown-key",
+        "aliases",
+        "alias",
+    ],
+)
+def test_malformed_schema_documents_name_the_file_and_the_node(edit, message):
+    with pytest.raises(DataError, match="^s.yaml: " + message) as e:
+        schema_from_dict(_schema_doc(edit), "s.yaml")
+    assert "\n" not in str(e.value)
+
+
+def test_a_json_schema_file_that_is_not_json_is_one_line(tmp_path):
+    p = tmp_path / "s.json"
+    p.write_text('{"format": "glu-schema",')
+    with pytest.raises(DataError, match=r"s.json: not JSON \(Expecting property name"):
+        read_schema_file(p)
+
+
+def test_schemas_without_roots_or_roles_take_glus_and_name_unknown_nodes():
+    """No roots given: GLU's nodes set by the experimenter (Action, Color, Shape, Size) where present; no
+    role given: the node called Action is the action; several action roles: the user must choose."""
+    from glu.errors import UnknownNodeError
+    from glu.schema import Schema, action_node
+
+    s = Schema(values={"Shape": ("a", "b"), "Effect": ("c", "d"), "Action": ("e", "f")}, n_affordance=3)
+    assert s.root_nodes == ("Action", "Shape") and action_node(s) == "Action"
+    with pytest.raises(UnknownNodeError, match=r"unknown node 'Shap' \(did you mean Shape\?\); nodes are: "):
+        s.values_of("Shap")
+    two = Schema(values=s.values, n_affordance=3, roles={"Shape": "action", "Action": "action"})
+    with pytest.raises(DataError, match=r"several nodes the role action \(Shape, Action\).*action=NODE"):
+        action_node(two)

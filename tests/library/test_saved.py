@@ -63,6 +63,13 @@ def test_made_with_names_this_checkout():
     assert info["glu"] and (info["commit"] is None or len(info["commit"]) == 40)
 
 
+def test_made_with_without_git_names_no_commit(tmp_path, monkeypatch):
+    """A checkout on a machine without git (or where it hangs): the version only, nothing raised."""
+    monkeypatch.setattr(saved, "PROJECT_ROOT", tmp_path)
+    monkeypatch.setenv("PATH", str(tmp_path))  # no git to run
+    assert saved.made_with() == {"glu": saved.__version__, "commit": None, "dirty": None}
+
+
 def _square(x: int, add: int) -> int:
     return x * x + add
 

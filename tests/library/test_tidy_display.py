@@ -81,3 +81,51 @@ def test_a_pivot_with_two_header_rows_is_shown_whole():
     for frame in (pivot, multi):
         html = html_table(frame)
         assert html.count("<table") == 1 and "-0.390" in html
+
+
+def test_missing_values_of_every_column_type_are_a_dash():
+    """Text, categoricals and pandas' nullable types (whose missing value pd.NA was written "<NA>", an
+    unknown HTML tag that the page showed as an empty cell)."""
+    df = pd.DataFrame(
+        {
+            "text": ["a", None],
+            "category": pd.Categorical(["b", None]),
+            "string": pd.array(["c", None], dtype="string"),
+            "count": pd.array([3, None], dtype="Int64"),
+            "flag": pd.array([True, None], dtype="boolean"),
+            "share": pd.array([0.25, None], dtype="Float64"),
+        }
+    )
+    html = html_table(df)
+    assert "NA" not in html
+    assert _rows(html)[1:] == [["a", "b", "c", "3", "True", "0.250"], [MISSING] * 6]
+
+
+def test_a_missing_estimate_keeps_its_interval_and_columns_not_all_floats_stay_apart():
+    df = pd.DataFrame({"accuracy": [np.nan, 0.5], "ci_low": [0.1, 0.2], "ci_high": [0.9, 0.8]})
+    assert _rows(html_table(df))[1:] == [[f"{MISSING}[0.100, 0.900]"], ["0.500[0.200, 0.800]"]]
+    counts = pd.DataFrame({"n": [3, 4], "ci_low": [1.5, 2.5], "ci_high": [4.5, 5.5]})  # n: integers
+    rows = _rows(html_table(counts))  # below 100: two decimals
+    assert rows == [["n", "ci_low", "ci_high"], ["3", "1.50", "4.50"], ["4", "2.50", "5.50"]]
+
+
+def test_parameters_are_stamped_as_json_ready_data():
+    from glu.gestures.invariants import Invariants
+    from glu.tidy import tidy
+
+    df = tidy(
+        pd.DataFrame({"x": [1]}),
+        "exp",
+        "synthetic",
+        features=Invariants(("rotated", "centred")),
+        seeds=(np.int64(1), 2),
+        rule={"p": np.float64(0.5)},
+    )
+    assert df.attrs == {
+        "experiment": "exp",
+        "data_source": "synthetic",
+        "parameters": {"features": "centred+rotated", "seeds": [1, 2], "rule": {"p": 0.5}},
+    }
+    assert (
+        type(df.attrs["parameters"]["seeds"][0]) is int and type(df.attrs["parameters"]["rule"]["p"]) is float
+    )
