@@ -250,6 +250,9 @@ def test_columns_and_settings():
         ({"effect_evidence": ("ObjVel",)}, "leave it out"),
         ({"action_evidence": ("Action",)}, "cannot be observed"),
         ({"bootstrap": -1}, "replicates"),
+        ({"fractions": (0.5, 0.5)}, "each may appear once"),
+        ({"bins": 0}, "bins=0: a whole number from 1 to 100"),
+        ({"log_floor": 1}, "log_floor=1: a number in \\(0, 1\\)"),
     ]:
         with pytest.raises(DataError, match=msg):
             EvaluationSettings(**bad)
@@ -272,6 +275,22 @@ def test_the_recogniser_must_know_the_networks_actions(setup):
         Reading("learned", 0)
     with pytest.raises(DataError, match="unknown feature set 'bodily'"):
         Reading(features="bodily")
+    with pytest.raises(DataError, match="unknown inference network 'oracle'; allowed: generating, learned"):
+        Reading("oracle")
+    with pytest.raises(DataError, match="unknown reading of p_HMM 'raw'; allowed: likelihood, per-frame"):
+        Reading(p_hmm="raw")
+    with pytest.raises(DataError, match="at least one recogniser"):
+        Evaluator(engine, ())
+    for readings in [(), (Reading(), Reading())]:
+        with pytest.raises(DataError, match="distinct readings"):
+            Evaluator(engine, ev.replications, readings)
+
+
+def test_a_body_feature_set_needs_the_body_frame(setup):
+    """Episodes simulated without the shoulder line's frame cannot be seen by a body recogniser."""
+    _, _, ev, chunk, *_ = setup
+    with pytest.raises(DataError, match="feature set 'body' needs the episodes in the shoulder line's frame"):
+        ev.seen(chunk._replace(body_features=None), "body")
 
 
 def test_each_feature_set_sees_its_own_features(setup):
