@@ -307,3 +307,14 @@ def test_the_shipped_runs_match_the_notebook_defaults():
         stored, results, meta = saved.load_study(folder)
         saved.select(results, stored, wanted, source or meta["data_source"], meta)
         assert pd.notna(meta["made_by"]["date"])
+
+
+@pytest.mark.slow
+def test_units_run_on_a_local_dask_cluster_as_here():
+    """``workers=1``: the tasks run on a LocalCluster's worker; results in the units' order, progress once
+    per unit (``max`` stands for a task: it pickles by name and takes (engine, unit, settings))."""
+    units = [3, -1, 5, 0]
+    calls = []
+    out = lc.run_units(max, 0, 1, units, 1, None, calls.append)
+    assert out == [max(0, u, 1) for u in units] == [3, 1, 5, 1]
+    assert sorted(calls) == sorted(units)
