@@ -312,3 +312,32 @@ def test_each_feature_set_sees_its_own_features(setup):
             assert cell(frame, "action", "gesture", 1.0, "log_loss")[i] == pytest.approx(
                 -np.log(max(q[a], 1e-6)), rel=1e-9
             )
+
+
+def test_network_tables_without_evidence_and_with_impossible_evidence():
+    """No observed node: one combination, the prior and p(ObjVel | A) by summing the object out of the CPTs
+    (words of uniform unseen rows: every word's rows sum to 1, the words sum out); evidence of probability 0
+    (no object ever stays still): NaN rows."""
+    from dataclasses import replace
+
+    from glu.studies.corpus_evaluation.network_tables import network_tables
+
+    bn = learn_bn(load_experiments("synthetic"), unseen_words="uniform")
+    none = network_tables(make_engine(bn), (), "ObjVel")
+    shape, size, vel = bn.cpts["Shape"], bn.cpts["Size"], bn.cpts["ObjVel"]
+    assert (
+        bn.parents["ObjVel"] == ("Action", "Shape", "Size") and not bn.parents["Shape"] + bn.parents["Size"]
+    )
+    np.testing.assert_allclose(none.p_action, [bn.cpts["Action"]], rtol=1e-12)
+    np.testing.assert_allclose(
+        none.p_given_action[0], np.einsum("j,k,ajkv->av", shape, size, vel), rtol=1e-12
+    )
+    assert none.combo({"Color": np.array([0, 2, 1])}, ()).tolist() == [0, 0, 0]
+    cpt = vel.copy()
+    cpt[..., 0] = 0.0  # slow
+    cpt /= cpt.sum(axis=-1, keepdims=True)
+    never_still = network_tables(
+        make_engine(replace(bn, cpts={**bn.cpts, "ObjVel": cpt})), ("ObjVel",), "Shape"
+    )
+    assert np.isnan(never_still.p_action[0]).all() and np.isnan(never_still.p_given_action[0]).all()
+    assert np.isfinite(never_still.p_action[1:]).all()

@@ -9,13 +9,15 @@ import socket
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from cli_run import run
 
-from glu.errors import DataError
+from glu.errors import DataError, ModelError
 from glu.studies.corpus_evaluation.config import config_from_dict, config_from_parameters, load_config
 from glu.studies.corpus_evaluation.sweep import run_sweep
 
@@ -578,3 +580,60 @@ def test_a_failed_task_on_the_cluster_is_said_in_one_line(monkeypatch, tmp_path,
         sweep._run_on_dask(None, [(0, None, 0, 4), (0, None, 1, 4)], tmp_path, "f" * 16, None, 1, None)
     cancelled = [f.cancelled for f in futures[1:]]  # the first is the shared evaluator
     assert cancelled == [not isinstance(error, DataError)] * 2
+
+
+ONE_SEED = SMALL.replace("recognizer_seeds = 2", "recognizer_seeds = 1").replace(
+    'inference_network = ["generating", "learned"]', 'inference_network = ["generating"]'
+)
+
+
+def test_a_recogniser_file_and_a_damaged_saved_recogniser(tmp_path):
+    """A sweep given its own saved recogniser as ``[recognizer] file`` computes the tables it computed; a
+    saved recogniser that cannot be read is trained again (the same file); one lacking an action is
+    refused."""
+    from glu.gestures.recognizer import Recognizer
+
+    config = load_config_text(ONE_SEED)
+    first = run_sweep(config, tmp_path / "a", scheduler="synchronous", log=quiet)
+    saved = tmp_path / "a" / "recognizers" / "seed-000-raw.json"
+    original = saved.read_bytes()
+    rec = replace(config.recognizer, file=str(saved))
+    from_file = run_sweep(
+        config.with_overrides(recognizer=rec), tmp_path / "b", scheduler="synchronous", log=quiet
+    )
+    pd.testing.assert_frame_equal(from_file.metrics, first.metrics)
+    assert not (tmp_path / "b" / "recognizers").exists()
+    saved.write_text("{", encoding="utf-8")  # cut short
+    again = run_sweep(config, tmp_path / "a", scheduler="synchronous", log=quiet)
+    assert again.computed == 0 and saved.read_bytes() == original
+    full = Recognizer.load(saved)
+    Recognizer({a: full.models[a] for a in ("grasp", "tap")}).save(tmp_path / "two.json")
+    rec = replace(config.recognizer, file=str(tmp_path / "two.json"))
+    with pytest.raises(ModelError, match="the recogniser has no model for touch; it needs grasp, tap, touch"):
+        run_sweep(config.with_overrides(recognizer=rec), tmp_path / "c", scheduler="synchronous", log=quiet)
+    assert not (tmp_path / "c").exists()
+
+
+def test_matched_gestures_with_fewer_gestures_than_views_and_no_learned_network():
+    """3 held-out gestures over 4 (viewpoint, noise) pairs: gesture i is seen from pair i, the fourth pair
+    sees none; a sweep of the generating network learns none."""
+    from glu.gestures.synthetic_batch import gesture_features
+    from glu.studies.corpus_evaluation import robots
+    from glu.studies.corpus_evaluation.sweep import prepare_world
+
+    config = load_config_text(ONE_SEED.replace("calibration_per_action = 4", "calibration_per_action = 1"))
+    xs, actions = robots.matched_gestures(config, 0, False)
+    assert actions.tolist() == [0, 1, 2]
+    pairs = [(v, x) for v in config.viewpoints for x in config.noise]
+    for i, (view, noise) in enumerate(pairs[:3]):
+        one = gesture_features(
+            [robots.ACTIONS[i]],
+            [np.random.default_rng([config.seed, robots.MATCHED_KEY, 0, i])],
+            noise=noise,
+            spike_rate=config.gestures.spike_rate,
+            dropout_rate=config.gestures.dropout_rate,
+            view=config.views[view],
+        )
+        np.testing.assert_array_equal(xs[i], one.features[0])
+    engine, _ = prepare_world(config)
+    assert robots.learned_networks(config, engine) == [{}]
