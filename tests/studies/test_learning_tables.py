@@ -318,3 +318,25 @@ def test_units_run_on_a_local_dask_cluster_as_here():
     out = lc.run_units(max, 0, 1, units, 1, None, calls.append)
     assert out == [max(0, u, 1) for u in units] == [3, 1, 5, 1]
     assert sorted(calls) == sorted(units)
+
+
+def test_a_learner_missing_at_an_ambiguity_draws_no_curve():
+    """``hard`` exists in the world, but only for another ambiguity: its curve is left out; ``true`` (the
+    same for every ambiguity) is drawn."""
+    import matplotlib.pyplot as plt
+
+    from glu.studies.learning.figures import plot_learning_curves
+
+    rows = [
+        {"world": "easy", "learner": lr, "ambiguity": amb, "words": False, "episodes": e, "accuracy": a}
+        for lr, amb in (("true", "mixed"), ("hard", "still"))
+        for e, a in ((10, 0.4), (100, 0.8))
+    ]
+    curves = pd.DataFrame(rows).assign(ci_low=lambda d: d.accuracy - 0.1, ci_high=lambda d: d.accuracy + 0.1)
+    fig, ax = plt.subplots()
+    try:
+        plot_learning_curves(ax, curves, "easy", "mixed", False, learners=("true", "hard"))
+        drawn = [line for line in ax.lines if len(line.get_xdata()) == 2 and line.get_ydata()[0] != 1 / 3]
+        assert [list(line.get_ydata()) for line in drawn] == [[0.4, 0.8]]
+    finally:
+        plt.close(fig)

@@ -165,3 +165,24 @@ def test_the_saved_study_reads_back_and_is_checked(engine, small_study, tmp_path
     here, where = saved.real_person_rows(engine, "SOURCE", settings, saved.HERE, "synthetic")
     pd.testing.assert_frame_equal(here, rows)
     assert where == {"folder": None, "made_by": None, "check": None}
+
+
+def test_a_learner_never_right_is_marked_on_the_axis():
+    """A bar of height 0 cannot be seen: a mark on the axis in the learner's colour says it is 0."""
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from glu.studies.learning.figures import plot_real_person
+
+    summary = pd.DataFrame(
+        {"study": "fitted", "features": "centred", "learner": ["true", "always_tap"], "words": False,
+         "accuracy": [0.8, 0.0], "ci_low": [0.7, 0.0], "ci_high": [0.9, 0.0]}
+    )  # fmt: skip
+    fig, ax = plt.subplots()
+    try:
+        plot_real_person(ax, summary, "fitted", "centred")
+        marks = [line for line in ax.lines if line.get_marker() == "_"]
+        assert [(list(m.get_xdata()), list(m.get_ydata())) for m in marks] == [([1], [0.005])]
+        assert [b.get_height() for b in ax.patches] == [0.8, 0.0]
+    finally:
+        plt.close(fig)
