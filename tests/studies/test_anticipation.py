@@ -114,6 +114,34 @@ def test_the_extra_update_at_t_equal_T_only_on_request(setup):
     assert (anticipation.update_indices(146, 5, True) + 1).tolist() == [*range(5, 146, 5), 146]
     with pytest.raises(DataError, match="fewer than the update step"):
         anticipation.update_indices(3, 5)
+    for step in (0, 2.5):
+        with pytest.raises(
+            DataError, match=f"step={step}: the update step must be a whole number of frames ≥ 1"
+        ):
+            anticipation.update_indices(94, step)
+
+
+def test_a_case_split_by_a_repaired_gap_keeps_its_frames(synthetic_folder, tmp_path):
+    """A log whose timestamps jump by 10 s after frame 60: the repair policy splits it in two pieces there
+    (nothing interpolated), which are put back together; the case's frames 121–214 are the logged rows."""
+    import shutil
+
+    from glu.gestures.trajectories import RepairPolicy
+
+    folder = tmp_path / "data"
+    shutil.copytree(synthetic_folder, folder)
+    log = folder / "gestures" / "tap_notable_seated_1" / "data.log"
+    raw = np.loadtxt(log)
+    lines = log.read_text().splitlines()
+    jumped = [
+        " ".join([f[0], f"{float(f[1]) + 10:.6f}", *f[2:]]) if i >= 60 else line
+        for i, (line, f) in enumerate((line, line.split()) for line in lines)
+    ]
+    log.write_text("\n".join(jumped) + "\n")
+    policy = RepairPolicy(max_interpolate=0.0, spike_threshold=np.inf)
+    traj = anticipation.case_trajectory(resolve_data(folder), "sphere", policy=policy)
+    assert traj.frame.tolist() == list(range(121, 215))
+    np.testing.assert_allclose(traj.xyz, raw[120:214, 2:5] / 1000)
 
 
 def test_run_as_dict_has_the_documented_shape(setup):
@@ -179,3 +207,63 @@ def test_cli_anticipate_bad_input_is_one_line(setup, tmp_path, capsys, extra, me
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def test_no_viewer_without_rerun_notebook_or_its_widgets(monkeypatch):
+    """Live, but without rerun-notebook (no Viewer class) or with a Viewer that cannot start (ipywidgets
+    missing): nothing is shown, None is returned."""
+    from types import SimpleNamespace
+
+    run = SimpleNamespace(actions=["grasp", "tap", "touch"])
+    monkeypatch.setattr(recordings, "viewer_class", lambda: None)
+    assert recordings.show_anticipation(run, "rid", live=True) is None
+
+    def broken(**kwargs):
+        raise ImportError("ipywidgets")
+
+    monkeypatch.setattr(recordings, "viewer_class", lambda: broken)
+    assert recordings.show_anticipation(run, "rid", live=True) is None
+
+
+@pytest.mark.parametrize("n_frames", [1, 2])
+def test_the_seconds_axis_needs_two_frames(n_frames):
+    """The top axis maps frames to seconds by their rate: drawn for two frames (at 30 frames a second, frame
+    131 is 1/3 s after frame 121), left out for one (no rate)."""
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from glu.studies.anticipation.figures import plot_anticipation
+
+    frames = [121, 131][:n_frames]
+    actions = ["grasp", "tap", "touch"]
+    curves = pd.DataFrame(
+        {
+            "case": "sphere",
+            "models": "bank",
+            "frame": np.repeat(frames, 3),
+            "t": np.repeat(np.arange(1, n_frames + 1), 3),
+            "seconds": np.repeat([0.0, 1 / 3][:n_frames], 3),
+            "action": actions * n_frames,
+            "loglik_per_frame": -1.0,
+            "p_hmm": 1 / 3,
+        }
+    )
+    preds = pd.DataFrame(
+        {
+            "frame": frames[-1],
+            "t": n_frames,
+            "node": "ObjVel",
+            "value": ["slow", "medium", "fast"],
+            "p": 1 / 3,
+        }
+    )
+    fig, axes = plt.subplots(2)
+    try:
+        plot_anticipation(axes, curves, preds)
+        secondary = axes[0].child_axes
+        assert len(secondary) == n_frames - 1
+        if secondary:
+            forward = secondary[0]._functions[0]
+            assert forward(131.0) == pytest.approx(1 / 3) and forward(121.0) == 0.0
+    finally:
+        plt.close(fig)

@@ -54,6 +54,22 @@ def test_leave_one_segment_out_equals_training_every_fold_alone(recipe, features
         _assert_same_model(everything.models[a], full[a])
 
 
+def test_a_segment_alone_of_its_action_is_not_testable():
+    """One grasp only: held out, grasp has nothing to train on; its row says so (no prediction, not testable,
+    not correct), and the others are tested."""
+    from glu.studies.replication.recipes import leave_one_segment_out
+
+    corpus = synthetic_corpus(3, seed=4)
+    grasps = [i for i, s in enumerate(corpus) if s.action == "grasp"]
+    corpus = [s for i, s in enumerate(corpus) if i not in grasps[1:]]
+    loso, _ = leave_one_segment_out(corpus, seed=1, config=SMALL)
+    alone = loso[loso.action == "grasp"]
+    assert alone.predicted.isna().tolist() == [True]
+    assert alone.testable.tolist() == [False] and alone.correct.tolist() == [False]
+    others = loso[loso.action != "grasp"]
+    assert others.testable.all() and others.predicted.notna().all()
+
+
 def test_cross_validation_equals_training_every_fold_alone():
     from glu.studies.replication.gestures import cross_validate, stratified_folds
 

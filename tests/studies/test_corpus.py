@@ -107,7 +107,13 @@ def test_bad_chunks_and_conditions(engine):
         simulate_chunk(engine, Condition(0.0, "front"), 0, 0, 3, 2)
     with pytest.raises(DataError, match="noise"):
         Condition(-1.0, "front")
+    with pytest.raises(DataError, match="unknown effects 'magic'; allowed: action, gesture"):
+        Condition(0.0, "front", effects="magic")
+    with pytest.raises(DataError, match="scenario: 'ObjVel' is not a root node; allowed: Action, "):
+        Scenario({"ObjVel": (1.0, 1.0, 1.0)})
     assert chunk_ranges(7, 3) == [(0, 3), (1, 3), (2, 1)]
+    with pytest.raises(DataError, match="chunk_size=0: must be at least 1"):
+        chunk_ranges(7, 0)
 
 
 def test_write_corpus_streams_chunks_to_parquet(engine, tmp_path):

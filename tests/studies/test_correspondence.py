@@ -15,6 +15,7 @@ import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
+from glu.errors import DataError
 from glu.gestures.corpus import synthetic_corpus
 from glu.gestures.synthetic import View
 from glu.hmm import TrainingConfig
@@ -82,6 +83,10 @@ def test_summary_pools_the_seeds_with_two_level_intervals(study):
     table = corr.main_table(s, "human")
     assert list(table.columns) == list(FEATURES)
     assert table.index[0] == "viewpoint: 0°"
+    with pytest.raises(DataError, match="no results for training source 'robot'"):
+        corr.main_table(s[s["train"] == "human"], "robot")
+    with pytest.raises(DataError, match="unknown training source 'alien'; allowed: robot, human"):
+        corr.training_corpus("alien", 2, 0)
 
 
 def test_feature_set_names():
@@ -310,3 +315,5 @@ def test_the_study_grid_is_saved_found_and_read_back(tmp_path, monkeypatch):
     }
     defaults = notebook_settings()
     assert defaults.bootstrap == 1000 and defaults.levels is None and len(defaults.seeds) == 10
+    with pytest.raises(DataError, match="nowhere: not a folder of saved correspondence tables"):
+        grid.read_tables(tmp_path / "nowhere")

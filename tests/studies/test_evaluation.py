@@ -250,6 +250,9 @@ def test_columns_and_settings():
         ({"effect_evidence": ("ObjVel",)}, "leave it out"),
         ({"action_evidence": ("Action",)}, "cannot be observed"),
         ({"bootstrap": -1}, "replicates"),
+        ({"fractions": (0.5, 0.5)}, "each may appear once"),
+        ({"bins": 0}, "bins=0: a whole number from 1 to 100"),
+        ({"log_floor": 1}, "log_floor=1: a number in \\(0, 1\\)"),
     ]:
         with pytest.raises(DataError, match=msg):
             EvaluationSettings(**bad)
@@ -272,6 +275,22 @@ def test_the_recogniser_must_know_the_networks_actions(setup):
         Reading("learned", 0)
     with pytest.raises(DataError, match="unknown feature set 'bodily'"):
         Reading(features="bodily")
+    with pytest.raises(DataError, match="unknown inference network 'oracle'; allowed: generating, learned"):
+        Reading("oracle")
+    with pytest.raises(DataError, match="unknown reading of p_HMM 'raw'; allowed: likelihood, per-frame"):
+        Reading(p_hmm="raw")
+    with pytest.raises(DataError, match="at least one recogniser"):
+        Evaluator(engine, ())
+    for readings in [(), (Reading(), Reading())]:
+        with pytest.raises(DataError, match="distinct readings"):
+            Evaluator(engine, ev.replications, readings)
+
+
+def test_a_body_feature_set_needs_the_body_frame(setup):
+    """Episodes simulated without the shoulder line's frame cannot be seen by a body recogniser."""
+    _, _, ev, chunk, *_ = setup
+    with pytest.raises(DataError, match="feature set 'body' needs the episodes in the shoulder line's frame"):
+        ev.seen(chunk._replace(body_features=None), "body")
 
 
 def test_each_feature_set_sees_its_own_features(setup):
@@ -293,3 +312,32 @@ def test_each_feature_set_sees_its_own_features(setup):
             assert cell(frame, "action", "gesture", 1.0, "log_loss")[i] == pytest.approx(
                 -np.log(max(q[a], 1e-6)), rel=1e-9
             )
+
+
+def test_network_tables_without_evidence_and_with_impossible_evidence():
+    """No observed node: one combination, the prior and p(ObjVel | A) by summing the object out of the CPTs
+    (words of uniform unseen rows: every word's rows sum to 1, the words sum out); evidence of probability 0
+    (no object ever stays still): NaN rows."""
+    from dataclasses import replace
+
+    from glu.studies.corpus_evaluation.network_tables import network_tables
+
+    bn = learn_bn(load_experiments("synthetic"), unseen_words="uniform")
+    none = network_tables(make_engine(bn), (), "ObjVel")
+    shape, size, vel = bn.cpts["Shape"], bn.cpts["Size"], bn.cpts["ObjVel"]
+    assert (
+        bn.parents["ObjVel"] == ("Action", "Shape", "Size") and not bn.parents["Shape"] + bn.parents["Size"]
+    )
+    np.testing.assert_allclose(none.p_action, [bn.cpts["Action"]], rtol=1e-12)
+    np.testing.assert_allclose(
+        none.p_given_action[0], np.einsum("j,k,ajkv->av", shape, size, vel), rtol=1e-12
+    )
+    assert none.combo({"Color": np.array([0, 2, 1])}, ()).tolist() == [0, 0, 0]
+    cpt = vel.copy()
+    cpt[..., 0] = 0.0  # slow
+    cpt /= cpt.sum(axis=-1, keepdims=True)
+    never_still = network_tables(
+        make_engine(replace(bn, cpts={**bn.cpts, "ObjVel": cpt})), ("ObjVel",), "Shape"
+    )
+    assert np.isnan(never_still.p_action[0]).all() and np.isnan(never_still.p_given_action[0]).all()
+    assert np.isfinite(never_still.p_action[1:]).all()

@@ -42,3 +42,27 @@ def test_tables_are_stamped_with_their_provenance(zero_bn, uniform_bn):
         assert isinstance(df.attrs["parameters"], dict)
     sweep = experiments.soft_evidence_sweep(zero_bn, {"Shape": "sphere"}, n_points=5, rules=("jeffrey",))
     assert sweep.attrs["parameters"] == {"evidence": {"Shape": "sphere"}, "n_points": 5, "rules": ["jeffrey"]}
+
+
+def _without(bn, value, actions):
+    """``bn`` with P(ObjVel=value | Action=a, …) = 0 for the ``actions`` (their rows renormalised)."""
+    from dataclasses import replace
+
+    cpt = bn.cpts["ObjVel"].copy()
+    v = bn.schema.values_of("ObjVel").index(value)
+    for a in actions:
+        i = bn.schema.values_of("Action").index(a)
+        cpt[i, ..., v] = 0.0
+        cpt[i] /= cpt[i].sum(axis=-1, keepdims=True)
+    return replace(bn, cpts={**bn.cpts, "ObjVel": cpt})
+
+
+def test_evidence_tap_cannot_have_or_nothing_can(zero_bn):
+    """Objects that taps never leave still: tap never wins on a still object, whatever the HMMs say (nan);
+    objects that no action leaves still: no row of the thresholds' table for them."""
+    no_slow_tap = _without(zero_bn, "slow", ["tap"])
+    eng = make_engine(no_slow_tap)
+    assert eng.query(["Action"], {"ObjVel": "slow"})["Action"][1] == 0
+    assert np.isnan(experiments.tap_threshold(no_slow_tap, {"ObjVel": "slow"}))
+    table = experiments.tap_thresholds(_without(zero_bn, "slow", ["grasp", "tap", "touch"]))
+    assert "slow" not in set(table.ObjVel) and len(table) == 2 * 3 * 2  # Shape × Size × {medium, fast}

@@ -183,6 +183,66 @@ def test_winners_name_the_best_and_the_adjusted_ties():
     assert row.estimate == pytest.approx(0.88) and row.viewpoint == "front"  # the oracle never wins
     side = fd.winners(table, diffs, viewpoint="side-on")
     assert set(side.viewpoint) == {"side-on"}
+    elsewhere = fd.winners(table, diffs, viewpoint="turned")  # not in the sweep: its first viewpoint
+    pd.testing.assert_frame_equal(elsewhere, fd.winners(table, diffs))
+
+
+def calibration_rows():
+    return pd.DataFrame(
+        {
+            "recognizer_seed": [0, 1, 0, 1, 0, 1, 0, 1],
+            "features": ["raw"] * 4 + ["centred+rotated"] * 4,
+            "reading": ["calibrated", "calibrated", "calibrated-matched", "calibrated-matched"] * 2,
+            "fraction": [1.0] * 8,
+            "beta": [0.05, 1.0, 0.002, 0.003, 0.1, 0.2, 0.01, 0.02],
+            "at_bound": [False, True, False, False, False, False, False, False],
+            "n_gestures": [9] * 8,
+            "accuracy": [0.9, 0.9, 0.5, 0.6, 0.8, 0.8, 0.7, 0.8],
+        }
+    )
+
+
+def test_sentences_of_a_sweep_that_lacks_a_part():
+    """A sweep without calibration, without the matched reading, of one world, without the reference cell,
+    without a viewpoint's rows for the gesture or the network, without seeds: each sentence says so or
+    leaves that part out."""
+    table = metric_rows()
+    cal = calibration_rows()
+    unmatched = cal[cal.reading == "calibrated"]
+    assert cd.best_invariant(None) is None and cd.best_invariant(cal.iloc[:0]) is None
+    assert cd.best_invariant(unmatched) is None
+    assert cd.validation_sentence(unmatched) == (
+        "No held-out gestures drawn like the test conditions: no feature set is chosen."
+    )
+    one_world = table[table.effects == "action"]
+    assert cd.gesture_world_sentence(one_world) == "The sweep has one world only: nothing to compare."
+    no_side_net = table[~((table.viewpoint == "side-on") & (table.strategy == "network"))]
+    views = cd.viewpoint_sentences(no_side_net, ["raw", "centred+rotated"])
+    assert len(views) == 1 and views[0].startswith("Seen front:")
+    no_side_gesture = table[~((table.viewpoint == "side-on") & (table.target == "action"))]
+    text = fd.p_hmm_sentences(no_side_gesture, cal)
+    assert text[0].startswith("On the corpus's held-out synthetic gestures seen front")
+    assert not any("seen side-on" in t for t in text)
+    network_only = table[table.action_prior == "network"]
+    first = network_only.iloc[0]
+    assert fd.contrast_cells(network_only)[0] == {k: first[k] for k in fd.DESIGN}
+    assert fd.seed_sentence(pd.DataFrame()) == "No seed-level estimates in this cell."
+
+
+def test_selection_verdicts_and_labels_in_edge_cases():
+    frame = pd.DataFrame({"noise": [0.05, 0.05 + 1e-12, 0.1, np.nan], "k": range(4)})
+    assert fd.select(frame, {"noise": 0.05}).k.tolist() == [0, 1]  # a float matches within rounding
+    assert fd.select(frame, {"noise": np.nan}).k.tolist() == [3]
+    none = fd.finding_verdicts(diff_rows(), (fd.Finding("words", "words", "log_loss", "jeffrey", "network"),))
+    assert none.empty and {"finding", "viewpoint", "fraction", "p_adjusted"} <= set(none.columns)
+    assert (
+        fd.p_text(float("nan")) == "n/a" and fd.p_text(0.0004) == "< 0.001" and fd.p_text(0.0123) == "0.012"
+    )
+    row = {**fd.REFERENCE_CELL, "effects": "gesture"}
+    assert fd.cell_label(row) == (
+        "uniform actions, generating network, p_HMM per-frame, raw features, "
+        "effects that depend on the gesture"
+    )
 
 
 def test_network_alone_p_hmm_and_condition_sentences():
@@ -199,18 +259,7 @@ def test_network_alone_p_hmm_and_condition_sentences():
         in (lines[0])
     )
     assert "the true action 0.500" in lines[0] and "ECE (bias-corrected) 0.090" in lines[0]
-    cal = pd.DataFrame(
-        {
-            "recognizer_seed": [0, 1, 0, 1, 0, 1, 0, 1],
-            "features": ["raw"] * 4 + ["centred+rotated"] * 4,
-            "reading": ["calibrated", "calibrated", "calibrated-matched", "calibrated-matched"] * 2,
-            "fraction": [1.0] * 8,
-            "beta": [0.05, 1.0, 0.002, 0.003, 0.1, 0.2, 0.01, 0.02],
-            "at_bound": [False, True, False, False, False, False, False, False],
-            "n_gestures": [9] * 8,
-            "accuracy": [0.9, 0.9, 0.5, 0.6, 0.8, 0.8, 0.7, 0.8],
-        }
-    )
+    cal = calibration_rows()
     seg = pd.DataFrame(
         {"reading": ["likelihood", "per-frame"], "segments": [11, 11], "accuracy": [0.73, 0.73],
          "confidence": [1.0, 0.9], "ece": [0.27, 0.14], "log_loss": [3.7, 0.9], "certain": [11, 3]}
@@ -268,3 +317,36 @@ def test_viewpoints_keep_the_worlds_order_and_results_keep_the_contrasted_cells(
     assert set(kept.p_hmm) == set(table.p_hmm) and set(kept.features) == set(table.features)
     v = fd.adjusted_verdicts(np.array([0.1, -0.1, 0.1, 0.0]), np.array([0.01, 0.01, 0.2, 0.01]), [True] * 4)
     assert list(v) == ["better", "worse", "no difference", "no difference"]
+
+
+def test_figures_leave_out_what_the_sweep_lacks():
+    """A pair of strategies the sweep has no difference for draws no row; a condition a finding was not
+    measured in leaves its cell blank."""
+    import matplotlib.pyplot as plt
+
+    from glu.studies.corpus_evaluation.figures import findings_figure, plot_differences
+
+    diffs = diff_rows().assign(p_adjusted=0.01, verdict_adjusted="better")
+    pairs = [("words", "log_loss", "jeffrey", "network"), ("effect", "log_loss", "jeffrey", "network")]
+    fig, ax = plt.subplots()
+    try:
+        plot_differences(ax, diffs, pairs, viewpoint="front", where={**fd.REFERENCE_CELL, **CELLS[1]})
+        assert list(ax.get_yticks()) == [1]  # the words' row (0) is left out
+        assert [t.get_text() for t in ax.get_yticklabels()] == [
+            "effect log-loss (nats) (lower is better): Jeffrey's rule − network alone"
+        ]
+        assert [tuple(line.get_xdata()) for line in ax.lines[:1]] == [(-0.07, -0.03)]
+    finally:
+        plt.close(fig)
+    counts = fd.verdict_counts(fd.finding_verdicts(diff_rows(), FINDINGS))
+    counts = counts[~((counts.finding == FINDINGS[1].label) & (counts.viewpoint == "side-on"))]
+    columns = [("action", "front", "raw"), ("action", "side-on", "raw")]
+    fig = findings_figure(counts, columns)
+    try:
+        cells = {
+            (round(p.get_x() + p.get_width() / 2), round(p.get_y() + p.get_height() / 2))
+            for p in fig.axes[0].patches
+        }
+        assert cells == {(0, 0), (0, 1), (1, 0)}  # (column, finding): the second finding has no side-on cell
+    finally:
+        plt.close(fig)

@@ -30,6 +30,31 @@ def test_stratified_folds_balance_each_action():
     np.testing.assert_array_equal(folds, stratified_folds(labels, 3, seed=1))
     with pytest.raises(DataError, match="cannot fill"):
         stratified_folds(["a", "a", "b"], 3)
+    with pytest.raises(DataError, match="k=1: cross-validation needs at least 2 folds"):
+        stratified_folds(labels, 1)
+
+
+def test_bad_arguments_and_sources_are_refused(synthetic_folder):
+    from glu.data import resolve_data
+    from glu.studies.replication.gestures import original_scores
+
+    with pytest.raises(DataError, match="by='fold'; allowed: 'recording', 'segment'"):
+        leave_one_out(synthetic_corpus(2, seed=2), by="fold", **SMALL)
+    with pytest.raises(DataError, match="the data source has no original HMMs with M = 3 \\("):
+        original_scores(resolve_data(synthetic_folder))
+
+
+def test_a_recording_without_segments_has_one_row():
+    """A recording where segmentation found nothing is one row (segment 0, no action), not left out."""
+    from types import SimpleNamespace
+
+    from glu.studies.replication.gestures import segmentation_table
+
+    seg = SimpleNamespace(recording="r", segments=[], events=[])
+    table = segmentation_table([(seg, [(1, 10), (20, 30)])], "test")
+    assert len(table) == 1
+    row = table.iloc[0]
+    assert (row.recording, row.segment, row.n_reference) == ("r", 0, 2) and pd.isna(row.action)
 
 
 def test_confusion_matrix_counts():

@@ -159,6 +159,21 @@ def test_reliability_bins(data):
         assert (row.lower, row.upper) == (0.5, 0.75)
 
 
+def test_no_group_no_bins_and_too_few_sums(data):
+    """Sums with no row for a kept factor give an empty table with the columns; statistics without
+    calibration bins give no reliability rows; sums of fewer statistics than the settings have are refused."""
+    from glu.errors import DataError
+    from glu.studies.corpus_evaluation.intervals import metric_values
+
+    cols, X, truth, frame, n = data
+    empty = metrics(frame.assign(noise=0.0).iloc[:0], cols, ["noise"])
+    assert empty.empty and list(empty.columns[:4]) == ["noise", "target", "strategy", "fraction"]
+    unbinned = reliability(frame, cols.assign(bin=-1), [])
+    assert unbinned.empty and list(unbinned.columns[-3:]) == ["n", "confidence", "accuracy"]
+    with pytest.raises(DataError, match=f"5 sums for {len(cols)} statistics: the chunks do not match"):
+        metric_values(np.zeros((1, 5)), cols)
+
+
 # ------------------------------------------------------------------ two levels: seeds, then episodes
 
 

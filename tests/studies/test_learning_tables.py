@@ -137,17 +137,33 @@ def test_curves_table_gaps_are_paired():
     assert set(curves.learner) == {"true", "hard", "soft", "random", "network"}
 
 
-def test_study_settings_are_checked():
-    with pytest.raises(DataError, match="ambiguity"):
-        lc.StudySettings(ambiguities=("foggy",))
-    with pytest.raises(DataError, match="world"):
-        lc.StudySettings(worlds=("moon",))
-    with pytest.raises(DataError, match="learner"):
-        lc.StudySettings(schemes=("guess",))
-    with pytest.raises(DataError, match="true"):
-        lc.StudySettings(baselines=("unsupervised",))
-    with pytest.raises(DataError, match="margin"):
-        lc.StudySettings(margin=0)
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        ({"ambiguities": ("foggy",)}, "ambiguity"),
+        ({"worlds": ("moon",)}, "world"),
+        ({"schemes": ("guess",)}, "learner"),
+        ({"baselines": ("unsupervised",)}, "true"),
+        ({"margin": 0}, "margin"),
+        ({"episodes": 5}, "episodes=5: a whole number from 10 to 1,000,000"),
+        ({"seeds": ()}, "seeds \\[\\]: give at least one, each once"),
+        ({"seeds": (1, 1)}, "seeds \\[1, 1\\]: give at least one, each once"),
+        ({"supervised": (0,)}, "supervised=\\[0\\]: labels per action, whole numbers ≥ 1"),
+        ({"supervised": (True,)}, "supervised=\\[True\\]"),
+        ({"words": ()}, "words=\\[\\]: True, False or both"),
+        ({"words": (1,)}, "words=\\[1\\]: True, False or both"),
+        ({"test_per_action": 0}, "test_per_action=0: a whole number ≥ 1"),
+        ({"bootstrap": -1}, "bootstrap=-1: a whole number of replicates"),
+        ({"budgets": ()}, "budgets=\\[\\]: episodes, whole numbers ≥ 1"),
+        ({"budgets": (100, 0)}, "budgets=\\[100, 0\\]"),
+    ],
+)
+def test_study_settings_are_checked(bad, message):
+    with pytest.raises(DataError, match=message):
+        lc.StudySettings(**bad)
+
+
+def test_study_settings_defaults():
     s = lc.StudySettings(episodes=300, budgets=(100, 1000))
     assert s.checkpoints == (10, 20, 50, 100, 200, 300) and s.main_budgets == (100,)
     assert lc.StudySettings(episodes=30, budgets=(100,)).main_budgets == (30,)
@@ -222,6 +238,19 @@ def test_a_saved_run_reads_back_and_is_checked(engine, small_run, tmp_path):
         )
     with pytest.raises(DataError, match="no saved run"):
         saved.load_study(tmp_path / "nowhere")
+    other = lc.StudySettings(**{**settings.__dict__, "test_per_action": 4})
+    with pytest.raises(DataError, match="the saved run has other test_per_action than asked: run `glu"):
+        saved.select(back, stored, other, *source_meta)
+    study_file = tmp_path / saved.STUDY_FILE
+    study_file.write_text(study_file.read_text().replace('"format": 1', '"format": 0'))
+    with pytest.raises(DataError, match="saved in format 0, glu reads 1; run it again"):
+        saved.load_study(tmp_path)
+
+
+def test_an_installed_glu_has_no_shipped_runs(monkeypatch):
+    monkeypatch.setattr("glu.saved.roots", lambda notebook: [])
+    with pytest.raises(DataError, match="in a source checkout of glu \\(sweeps/\\); make one with `glu"):
+        saved.default_folder(True)
 
 
 def test_a_saved_run_carries_a_check_run_that_this_code_recomputes(engine, small_run, tmp_path):
@@ -248,6 +277,12 @@ def test_a_saved_run_carries_a_check_run_that_this_code_recomputes(engine, small
     saved.save_study(tmp_path / saved.CHECK_FOLDER, flipped, small, "synthetic", "glu learning-curves (test)")
     with pytest.raises(DataError, match="not what this code computes.*glu learning-curves \\(test\\)"):
         saved.check_against(engine, tmp_path, [0])
+    reordered = [r._replace(learners=r.learners[::-1]) for r in check]
+    saved.save_study(
+        tmp_path / saved.CHECK_FOLDER, reordered, small, "synthetic", "glu learning-curves (test)"
+    )
+    with pytest.raises(DataError, match="other learners or checkpoints than this code makes; run `glu"):
+        saved.check_against(engine, tmp_path, [0])
 
 
 def test_the_shipped_runs_match_the_notebook_defaults():
@@ -272,3 +307,36 @@ def test_the_shipped_runs_match_the_notebook_defaults():
         stored, results, meta = saved.load_study(folder)
         saved.select(results, stored, wanted, source or meta["data_source"], meta)
         assert pd.notna(meta["made_by"]["date"])
+
+
+@pytest.mark.slow
+def test_units_run_on_a_local_dask_cluster_as_here():
+    """``workers=1``: the tasks run on a LocalCluster's worker; results in the units' order, progress once
+    per unit (``max`` stands for a task: it pickles by name and takes (engine, unit, settings))."""
+    units = [3, -1, 5, 0]
+    calls = []
+    out = lc.run_units(max, 0, 1, units, 1, None, calls.append)
+    assert out == [max(0, u, 1) for u in units] == [3, 1, 5, 1]
+    assert sorted(calls) == sorted(units)
+
+
+def test_a_learner_missing_at_an_ambiguity_draws_no_curve():
+    """``hard`` exists in the world, but only for another ambiguity: its curve is left out; ``true`` (the
+    same for every ambiguity) is drawn."""
+    import matplotlib.pyplot as plt
+
+    from glu.studies.learning.figures import plot_learning_curves
+
+    rows = [
+        {"world": "easy", "learner": lr, "ambiguity": amb, "words": False, "episodes": e, "accuracy": a}
+        for lr, amb in (("true", "mixed"), ("hard", "still"))
+        for e, a in ((10, 0.4), (100, 0.8))
+    ]
+    curves = pd.DataFrame(rows).assign(ci_low=lambda d: d.accuracy - 0.1, ci_high=lambda d: d.accuracy + 0.1)
+    fig, ax = plt.subplots()
+    try:
+        plot_learning_curves(ax, curves, "easy", "mixed", False, learners=("true", "hard"))
+        drawn = [line for line in ax.lines if len(line.get_xdata()) == 2 and line.get_ydata()[0] != 1 / 3]
+        assert [list(line.get_ydata()) for line in drawn] == [[0.4, 0.8]]
+    finally:
+        plt.close(fig)

@@ -105,3 +105,13 @@ def test_onset_frame():
     x[4:, 0] = np.linspace(0.05, 1.0, 6)  # still for four frames, then a movement of one unit
     assert nested.onset_frame(x) == 6  # the first frame more than a tenth of the way out
     assert nested.onset_frame(np.zeros((3, 3))) == 1
+
+
+def test_a_segment_alone_of_its_action_is_left_out(segments):
+    """One tap only: held out, tap has nothing to train on, so it is no outer fold, and the inner
+    leave-one-segment-out skips it too; the grasps are tested."""
+    grasps = [s for s in segments if s.action == "grasp"]
+    one_tap = [*grasps, next(s for s in segments if s.action == "tap")]
+    cv = nested.nested_cv(one_tap, ("raw",), ("reg0.01",), seeds=(0,), config=CONFIG)
+    assert cv.folds.action.tolist() == ["grasp"] * len(grasps)
+    assert cv.summary.testable.tolist() == [len(grasps)] and cv.summary.always_tap.tolist() == [0.0]

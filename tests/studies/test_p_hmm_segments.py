@@ -57,3 +57,11 @@ def test_readings_equal_models_trained_fold_by_fold():
     b = np.minimum((conf * 5).astype(int), 4)
     ece = sum(abs(ok[b == k].sum() - conf[b == k].sum()) for k in range(5)) / len(lik)
     assert summary.loc["likelihood", "ece"] == pytest.approx(ece)
+
+
+def test_an_action_with_one_segment_is_not_scored():
+    """One tap: held out, tap has no model, so no row; the grasps are scored, their inner folds without it."""
+    segs = list(synthetic_corpus(3, seed=11, noise=0.06, actions=ACTIONS))
+    one_tap = [s for s in segs if s.action == "grasp"] + [next(s for s in segs if s.action == "tap")]
+    table = segment_readings(one_tap, CONFIG, seed=0)
+    assert set(table.action) == {"grasp"} and len(table) == 3 * table.reading.nunique()

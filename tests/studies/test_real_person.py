@@ -76,13 +76,18 @@ def engine():
     return make_engine(learn_bn(load_experiments("synthetic")))
 
 
-def test_the_study_on_a_small_corpus(engine):
+@pytest.fixture(scope="module")
+def small_study(engine):
     corpus = synthetic_corpus(3, seed=4)  # 3 repetitions of each action
     small = ol.OnlineSettings(config=TrainingConfig(n_states=3, n_mix=1, n_iter=10), cluster_episodes=9)
     settings = rp.RealPersonSettings(
         draws=(0,), episodes=15, generator_episodes=15, online=small, bootstrap=50
     )
-    rows = rp.real_person_study(engine, corpus, settings, data_source="synthetic")
+    return corpus, settings, rp.real_person_study(engine, corpus, settings, data_source="synthetic")
+
+
+def test_the_study_on_a_small_corpus(engine, small_study):
+    corpus, settings, rows = small_study
     actions = engine.bn.schema.values_of("Action")
     n = sum(s.action in actions for s in corpus)
     fitted = rows[rows.study == "fitted"]
@@ -100,3 +105,84 @@ def test_the_study_on_a_small_corpus(engine):
     assert len(lines) == 3 and "always answering tap" in lines[0]
     with pytest.raises(DataError, match="two repetitions"):
         rp.real_person_study(engine, [c for c in corpus if c.action != "grasp"], settings)
+
+
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        ({"draws": ()}, "draws \\[\\]: give at least one, each once"),
+        ({"draws": (0, 0)}, "draws \\[0, 0\\]: give at least one, each once"),
+        ({"episodes": 9}, "episodes=9: a whole number from 10 to 1,000,000"),
+        ({"generator_episodes": 2_000_000}, "generator_episodes=2000000: a whole number from 10"),
+        ({"ambiguity": "foggy"}, "unknown ambiguity 'foggy'; allowed: "),
+        ({"points": 3}, "points=3: a whole number from 4 to 200"),
+    ],
+)
+def test_real_person_settings_are_checked(bad, message):
+    with pytest.raises(DataError, match=message):
+        rp.RealPersonSettings(**bad)
+
+
+def test_a_learner_without_any_model_answers_none():
+    from types import SimpleNamespace
+
+    run = SimpleNamespace(exists=np.array([[True, True, True], [False, False, False]]))
+    assert rp._predict(run, 1, [np.zeros((5, 3))] * 2) == [None, None]
+
+
+def test_the_saved_study_reads_back_and_is_checked(engine, small_study, tmp_path, monkeypatch):
+    """Saved rows read back equal (the same bytes when saved again); a folder of other data or other
+    settings, or an unreadable one, is one error; ``saved="none"`` runs the study on the standing segments."""
+    import gzip
+
+    import pandas as pd
+
+    from glu.studies.learning import saved
+
+    corpus, settings, rows = small_study
+    saved.save_real_person(tmp_path, rows, settings, "synthetic", "glu test")
+    first = (tmp_path / saved.PERSON_FILE).read_bytes()
+    saved.save_real_person(tmp_path, rows, settings, "synthetic", "glu test")
+    assert (tmp_path / saved.PERSON_FILE).read_bytes() == first
+    assert gzip.decompress(first).decode() == rows.to_csv(index=False)
+    back, where = saved.real_person_rows(engine, None, settings, tmp_path, "synthetic")
+    pd.testing.assert_frame_equal(back, rows, check_dtype=False)
+    assert where == {"folder": str(tmp_path), "made_by": where["made_by"], "check": None}
+    assert where["made_by"]["command"] == "glu test"
+    with pytest.raises(DataError, match="made from 'synthetic', not 'real'"):
+        saved.real_person_rows(engine, None, settings, tmp_path, "real")
+    with pytest.raises(DataError, match="other settings than asked"):
+        saved.real_person_rows(engine, None, rp.RealPersonSettings(draws=(1,)), tmp_path, "synthetic")
+    (tmp_path / saved.PERSON_STUDY_FILE).write_text("{", encoding="utf-8")
+    with pytest.raises(DataError, match="not a readable saved real-person study"):
+        saved.load_real_person(tmp_path, "synthetic")
+
+    def standing(source, include_test=True):
+        assert source == "SOURCE" and include_test is False  # the test recordings stay out
+        return corpus
+
+    monkeypatch.setattr("glu.gestures.corpus.gesture_sequences", standing)
+    here, where = saved.real_person_rows(engine, "SOURCE", settings, saved.HERE, "synthetic")
+    pd.testing.assert_frame_equal(here, rows)
+    assert where == {"folder": None, "made_by": None, "check": None}
+
+
+def test_a_learner_never_right_is_marked_on_the_axis():
+    """A bar of height 0 cannot be seen: a mark on the axis in the learner's colour says it is 0."""
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from glu.studies.learning.figures import plot_real_person
+
+    summary = pd.DataFrame(
+        {"study": "fitted", "features": "centred", "learner": ["true", "always_tap"], "words": False,
+         "accuracy": [0.8, 0.0], "ci_low": [0.7, 0.0], "ci_high": [0.9, 0.0]}
+    )  # fmt: skip
+    fig, ax = plt.subplots()
+    try:
+        plot_real_person(ax, summary, "fitted", "centred")
+        marks = [line for line in ax.lines if line.get_marker() == "_"]
+        assert [(list(m.get_xdata()), list(m.get_ydata())) for m in marks] == [([1], [0.005])]
+        assert [b.get_height() for b in ax.patches] == [0.8, 0.0]
+    finally:
+        plt.close(fig)

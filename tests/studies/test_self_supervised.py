@@ -164,6 +164,35 @@ def test_network_posteriors_equal_single_queries(engine):
             np.testing.assert_allclose(p[i], engine.query(["Action"], ev)["Action"], rtol=1e-12)
 
 
+def test_impossible_evidence_falls_back_on_the_object(engine):
+    """An episode whose words contradict its object (the word "box" heard of a sphere) is labelled by the
+    object alone; the others as before; words=True without the world's words is refused."""
+    ep = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], 8, seed=2)
+    schema = engine.bn.schema
+    world = {k: v.copy() for k, v in ep.world.items()}
+    spheres = np.flatnonzero(ep.perceived["Shape"] == schema.values_of("Shape").index("sphere"))
+    i = int(spheres[0])
+    world["box"][i] = schema.values_of("box").index("present")
+    p = ss.network_posteriors(engine, ep.perceived, world, words=True)
+    obj = {n: schema.values_of(n)[ep.perceived[n][i]] for n in ("Color", "Shape", "Size")}
+    np.testing.assert_allclose(p[i], engine.query(["Action"], obj)["Action"], rtol=1e-12)
+    others = np.delete(np.arange(8), i)
+    np.testing.assert_allclose(p[others], ss.network_posteriors(engine, ep.perceived, ep.world, True)[others])
+    with pytest.raises(DataError, match="words=True needs the episodes' world"):
+        ss.network_posteriors(engine, ep.perceived, words=True)
+
+
+def test_bad_worlds_and_readings_are_refused():
+    with pytest.raises(DataError, match="world 'w': noise=1.5 must be metres in \\[0, 1\\)"):
+        ss.World("w", noise=1.5)
+    with pytest.raises(DataError, match="world 'w': max_yaw=200 must be degrees in \\[0, 180\\]"):
+        ss.World("w", max_yaw=200)
+    with pytest.raises(DataError, match="unknown posterior reading 'vote'; allowed: "):
+        ss.p_hmm_reading(np.zeros((1, 3)), np.ones(1), "vote")
+    with pytest.raises(DataError, match="the 'true' baseline needs the true actions"):
+        ss.label_weights("true", np.full((1, 3), 1 / 3))
+
+
 # ------------------------------------------------------------------ labels
 
 
@@ -236,6 +265,30 @@ def test_iterative_and_unsupervised_relabel_until_the_labels_settle(engine):
     assert set(un.recognizer.actions) <= set(actions)
     with pytest.raises(DataError, match="needs p_bn"):
         lr_.learn_recognizer(ep.features, "soft", actions=actions, config=SMALL)
+
+
+def test_batch_learning_reports_each_model_and_refuses_bad_schemes(engine):
+    ep, actions = _corpus(engine, 12)
+    calls = []
+    lr_.learn_recognizer(
+        ep.features, "true", true=ep.actions, actions=actions, config=SMALL, progress=calls.append
+    )
+    assert calls == list(actions)  # true labels: one round, one model per action
+    with pytest.raises(DataError, match="unknown labelling scheme 'guess'; allowed: "):
+        lr_.learn_recognizer(ep.features, "guess")
+    with pytest.raises(DataError, match="the unsupervised baseline needs the true actions"):
+        lr_.learn_recognizer(ep.features, "unsupervised", actions=actions, config=SMALL)
+    with pytest.raises(DataError, match="unknown ambiguity 'foggy'; allowed: "):
+        lr_.learn_gestures(engine, 12, "hard", ambiguity="foggy")
+
+
+def test_an_action_no_episode_is_labelled_with_is_one_error(engine):
+    """Hard labels of 10 episodes (seed 1) that never name tap: no tap model, which the error says."""
+    ep = ss.simulate_episodes(engine, ss.AMBIGUITIES["mixed"], 10, 1)
+    tap = engine.bn.schema.values_of("Action").index("tap")
+    assert (ss.network_posteriors(engine, ep.perceived, ep.world).argmax(axis=1) != tap).all()
+    with pytest.raises(DataError, match="no episode was labelled tap \\(hard labels, mixed\\); watch more"):
+        lr_.learn_gestures(engine, 10, "hard", seed=1, config=SMALL)
 
 
 # ------------------------------------------------------------------ online learning
@@ -372,6 +425,7 @@ def test_supervision_by_one_label_per_action_is_one_training(engine):
     ep, held, _ = _stream(engine, 30)
     actions = engine.bn.schema.values_of("Action")
     settings = ol.OnlineSettings(config=SMALL, init_iter=5)
+    calls = []
     run = ol.run_online(
         ep.features,
         ep.actions,
@@ -383,7 +437,9 @@ def test_supervision_by_one_label_per_action_is_one_training(engine):
         actions,
         settings,
         seed=4,
+        progress=calls.append,
     )
+    assert calls == ["episode"] * 30  # one call per episode
     one = ol.learn_online(ep.features, ep.actions, "supervised", None, actions, settings, 4, per_action=1)
     for a in range(3):
         first = ep.features[int(np.flatnonzero(ep.actions == a)[0])]
@@ -406,11 +462,35 @@ def test_supervision_by_one_label_per_action_is_one_training(engine):
         )
 
 
-def test_online_settings_are_checked():
-    with pytest.raises(DataError, match="step"):
-        ol.OnlineSettings(step=0.3)
-    with pytest.raises(DataError, match="posterior"):
-        ol.OnlineSettings(posterior="vote")
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        ({"step": 0.3}, "step"),
+        ({"posterior": "vote"}, "posterior"),
+        ({"init_weight": 0}, "init_weight=0: a number > 0"),
+        ({"init_iter": 0}, "init_iter=0: a whole number ≥ 1"),
+        ({"cluster_episodes": 2}, "cluster_episodes=2: a whole number ≥ 3"),
+    ],
+)
+def test_online_settings_are_checked(bad, message):
+    with pytest.raises(DataError, match=message):
+        ol.OnlineSettings(**bad)
+
+
+@pytest.mark.parametrize(
+    ("learner", "checkpoints", "message"),
+    [
+        (ol.Learner("guess", "n"), [2], "unknown learner 'guess'; allowed: "),
+        (ol.Learner("soft", "x"), [2], "learner 'soft': no network posteriors for 'x'"),
+        (ol.Learner("true"), [3], "checkpoints must lie in 1 … 2 \\(the episodes\\), got \\[3\\]"),
+        (ol.Learner("true"), [], "checkpoints must lie in 1 … 2"),
+    ],
+)
+def test_bad_learners_and_checkpoints_are_refused(learner, checkpoints, message):
+    xs = [np.zeros((5, 3))] * 2
+    p = {"n": np.full((2, 3), 1 / 3)}
+    with pytest.raises(DataError, match=message):
+        ol.run_online(xs, np.zeros(2, int), [learner], p, xs, np.zeros(2, int), checkpoints, ("a", "b", "c"))
 
 
 def test_the_recording_of_an_online_learner_reads_back(engine, tmp_path):

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 
+from glu.errors import DataError
 from glu.studies.correspondence.experiment import OCCLUDED
 from glu.studies.correspondence.text import nested_sentences, study_sentences
 from glu.studies.replication.text import (
@@ -231,3 +233,26 @@ def test_leader_text():
         leader_text(("grasp", "tap", "touch"), p, [5, 10, 15])
         == "grasp from t = 5, touch from t = 10, tap from t = 15"
     )
+
+
+def test_readme_values_from_a_summary_that_lacks_them_are_one_error():
+    """A summary whose notebook 10 ran without raw features, or whose intervals do not say their
+    replicates, or whose real-person summary has two rows for one learner: the README cannot be filled."""
+    from glu.studies.correspondence import readme as creadme
+    from glu.studies.learning import readme as lreadme
+
+    cands = pd.DataFrame({"features": ["centred"], "loso_accuracy": [0.9]})
+    with pytest.raises(DataError, match="correspondence_candidates has no raw-feature rows"):
+        creadme._loso({"correspondence_candidates": (cands, {}), "correspondence_nested_cv": (None, {})})
+    with pytest.raises(DataError, match="does not say how many replicates it drew"):
+        creadme._replicates({"parameters": {"interval": "95 % percentile bootstrap"}})
+    assert (
+        creadme._replicates({"parameters": {"interval": "95 % two-level bootstrap (2000 replicates)"}})
+        == 2000
+    )
+    rows = {"study": "fitted", "features": "centred", "learner": "true", "words": False, "accuracy": 0.5}
+    twice = pd.DataFrame([rows, rows]).assign(ci_low=0.4, ci_high=0.6)
+    with pytest.raises(
+        DataError, match="learning_real_person_summary: no single row for fitted, centred, true"
+    ):
+        lreadme._person(twice, "fitted", "centred")

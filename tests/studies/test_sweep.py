@@ -9,13 +9,15 @@ import socket
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from cli_run import run
 
-from glu.errors import DataError
+from glu.errors import DataError, ModelError
 from glu.studies.corpus_evaluation.config import config_from_dict, config_from_parameters, load_config
 from glu.studies.corpus_evaluation.sweep import run_sweep
 
@@ -319,6 +321,27 @@ def test_an_unreachable_scheduler_is_one_line(config_file, tmp_path, capsys):
         ("[evaluation]\neffect_evidence = ['ObjVel']\n", "leave it out"),
         ("[recognizer]\nn_states = 0\n", "recognizer.n_states=0"),
         ("episodes = [\n", "small.toml"),
+        ("[grid]\nnoise = [0.0, 0.0]\n", "grid.noise: each value may appear once"),
+        ("[grid]\nlearn_experiments = []\n", "grid.learn_experiments: give the rows of at least one"),
+        ("[grid]\naction_prior = ['scenario']\n", "'scenario' needs [scenario.Action] weights"),
+        ("[grid]\nviewpoints = []\n", "grid.viewpoints: give at least one viewpoint"),
+        ("[grid]\nnoise = 0.1\n", "grid.noise must be a list, e.g. noise = [ … ]"),
+        ("[grid]\nfractions = [0.5, 0.5]\n", "fractions [0.5, 0.5]: each may appear once"),
+        ("grid = 3\n", "grid must be a table ([grid])"),
+        ("[views]\nleft = 3\n", "views.left must be a table, e.g. [views.left] yaw_deg = 30.0"),
+        ("[views.left]\nposture = 'lying'\n", "views.left.posture='lying'; allowed: standing, seated"),
+        ("[views.left]\nyaw_deg = 'north'\n", "views.left.yaw_deg='north': must be a number"),
+        ("[views.left]\nmirror = 1\n", "views.left.mirror=1: must be true or false"),
+        ("[recognizer]\nnoise = -0.1\n", "recognizer.noise=-0.1: the training noise must be a number ≥ 0"),
+        ("[recognizer]\nfile = 3\n", "recognizer.file must be a path (a string)"),
+        (
+            "recognizer_seeds = 1\n[grid]\nfeatures = ['raw', 'body']\n[recognizer]\nfile = 'r.json'\n",
+            "one recogniser from a file has one feature set (grid.features)",
+        ),
+        ("[network]\ndata = 3\n", "network.data must be a folder (a string) or 'synthetic'"),
+        ("[network]\nunseen_words = 'guess'\n", "network.unseen_words='guess'; allowed: zero"),
+        ("[evaluation]\nbins = 0\n", "bins=0: a whole number from 1 to 100"),
+        ("[evaluation]\nlog_floor = 2\n", "log_floor=2: a number in (0, 1)"),
     ],
 )
 def test_bad_settings_are_one_line(tmp_path, capsys, toml, message):
@@ -343,6 +366,18 @@ def test_bad_arguments_are_one_line(tmp_path, capsys, argv, message):
     status, out, err = run(capsys, "evaluate", *argv, "-o", str(tmp_path / "out"))
     assert status == 2 and "Traceback" not in err and message in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_view_defined_in_the_file():
+    """A ``[views.NAME]`` table defines a viewpoint the grid can name, with the defaults of what it omits."""
+    from glu.gestures.views import View
+
+    c = config_from_dict(
+        {"grid": {"viewpoints": ["left", "front"]}, "views": {"left": {"yaw_deg": 30, "posture": "seated"}}}
+    )
+    assert c.viewpoints == ("left", "front")
+    assert c.views["left"] == View(yaw_deg=30, posture="seated")
+    assert c.views["front"] == config_from_dict({}).views["front"]
 
 
 def test_the_defaults_are_valid_and_overridable():
@@ -451,3 +486,154 @@ def test_the_notebook_reads_a_finished_sweep(synchronous):
     assert summary["fingerprint"] == result.summary["fingerprint"]
     with pytest.raises(DataError, match="not the output folder of a finished"):
         read_tables(out / "chunks")
+
+
+def test_a_finished_sweep_run_again_computes_nothing(config_file, synchronous, tmp_path):
+    """Run again, a finished sweep reuses every chunk and writes the same tables."""
+    ref, first = synchronous
+    dest = tmp_path / "again"
+    shutil.copytree(ref, dest)
+    result = run_sweep(load_config(config_file), dest, scheduler="synchronous", log=quiet)
+    assert result.computed == 0 and result.reused == first.computed + first.reused
+    pd.testing.assert_frame_equal(result.metrics, first.metrics)
+
+
+def test_unreadable_or_foreign_files_in_a_sweep_folder_are_one_error(config_file, synchronous, tmp_path):
+    """An unreadable sweep.json, a chunk of another sweep, a summary of another experiment: each is refused
+    with the file named, nothing computed."""
+    from glu.studies.corpus_evaluation.tables import chunk_path, read_chunk, read_tables
+
+    ref, _ = synchronous
+    dest = tmp_path / "copy"
+    shutil.copytree(ref, dest)
+    (dest / "sweep.json").write_text("{", encoding="utf-8")
+    with pytest.raises(DataError, match="holds a sweep with other settings or data \\(sweep.json\\)"):
+        run_sweep(load_config(config_file), dest, scheduler="synchronous", log=quiet)
+    chunk = chunk_path(ref, 0, 0)
+    with pytest.raises(DataError, match=f"{chunk.name}: this chunk belongs to another sweep"):
+        read_chunk(chunk, "another fingerprint")
+    summary = dest / "summary.json"
+    summary.write_text(summary.read_text().replace('"corpus_evaluation"', '"learning_curves"'))
+    with pytest.raises(DataError, match="summary.json is not a corpus evaluation's"):
+        read_tables(dest)
+
+
+def test_the_saved_settings_name_no_folder_of_this_machine():
+    from glu.studies.corpus_evaluation.sweep import _public
+
+    settings = {
+        "network": {"data": "/home/me/data/real"},
+        "recognizer": {"file": "/tmp/x/rec.json"},
+        "seed": 1,
+    }
+    assert _public(settings) == {"network": {"data": "real"}, "recognizer": {"file": "rec.json"}, "seed": 1}
+    same = {"network": {"data": "synthetic"}, "recognizer": {"file": None}}
+    assert _public(same) == same
+
+
+class _Future:
+    def __init__(self, error):
+        self.error, self.cancelled = error, False
+
+    def result(self):
+        raise self.error
+
+    def cancel(self):
+        self.cancelled = True
+
+
+@pytest.mark.parametrize(
+    ("error", "raised", "message"),
+    [
+        (DataError("bad gesture"), DataError, "bad gesture"),
+        (
+            "KilledWorker",
+            "WorkerLostError",
+            "a Dask worker was lost .*\\(KilledWorker\\); the chunks finished",
+        ),
+        (ImportError("no module glu"), RuntimeError, "a sweep task failed on the cluster \\(ImportError: no"),
+    ],
+)
+def test_a_failed_task_on_the_cluster_is_said_in_one_line(monkeypatch, tmp_path, error, raised, message):
+    """A task's bad input is raised as it is; a worker that died, as a lost worker (the finished chunks kept);
+    anything else names the exception; the other tasks are cancelled."""
+    import contextlib
+
+    import distributed
+    from distributed.scheduler import KilledWorker
+
+    from glu.studies.corpus_evaluation import sweep
+
+    if error == "KilledWorker":
+        error = KilledWorker("glu-chunk-0", None, 3)
+    raised = sweep.WorkerLostError if raised == "WorkerLostError" else raised
+    futures = []
+
+    class Client:
+        def submit(self, *args, **kwargs):
+            futures.append(_Future(error))
+            return futures[-1]
+
+    monkeypatch.setattr(sweep, "dask_client", lambda *a, **k: contextlib.nullcontext(Client()))
+    monkeypatch.setattr(distributed, "as_completed", iter)
+    with pytest.raises(raised, match=message):
+        sweep._run_on_dask(None, [(0, None, 0, 4), (0, None, 1, 4)], tmp_path, "f" * 16, None, 1, None)
+    cancelled = [f.cancelled for f in futures[1:]]  # the first is the shared evaluator
+    assert cancelled == [not isinstance(error, DataError)] * 2
+
+
+ONE_SEED = SMALL.replace("recognizer_seeds = 2", "recognizer_seeds = 1").replace(
+    'inference_network = ["generating", "learned"]', 'inference_network = ["generating"]'
+)
+
+
+def test_a_recogniser_file_and_a_damaged_saved_recogniser(tmp_path):
+    """A sweep given its own saved recogniser as ``[recognizer] file`` computes the tables it computed; a
+    saved recogniser that cannot be read is trained again (the same file); one lacking an action is
+    refused."""
+    from glu.gestures.recognizer import Recognizer
+
+    config = load_config_text(ONE_SEED)
+    first = run_sweep(config, tmp_path / "a", scheduler="synchronous", log=quiet)
+    saved = tmp_path / "a" / "recognizers" / "seed-000-raw.json"
+    original = saved.read_bytes()
+    rec = replace(config.recognizer, file=str(saved))
+    from_file = run_sweep(
+        config.with_overrides(recognizer=rec), tmp_path / "b", scheduler="synchronous", log=quiet
+    )
+    pd.testing.assert_frame_equal(from_file.metrics, first.metrics)
+    assert not (tmp_path / "b" / "recognizers").exists()
+    saved.write_text("{", encoding="utf-8")  # cut short
+    again = run_sweep(config, tmp_path / "a", scheduler="synchronous", log=quiet)
+    assert again.computed == 0 and saved.read_bytes() == original
+    full = Recognizer.load(saved)
+    Recognizer({a: full.models[a] for a in ("grasp", "tap")}).save(tmp_path / "two.json")
+    rec = replace(config.recognizer, file=str(tmp_path / "two.json"))
+    with pytest.raises(ModelError, match="the recogniser has no model for touch; it needs grasp, tap, touch"):
+        run_sweep(config.with_overrides(recognizer=rec), tmp_path / "c", scheduler="synchronous", log=quiet)
+    assert not (tmp_path / "c").exists()
+
+
+def test_matched_gestures_with_fewer_gestures_than_views_and_no_learned_network():
+    """3 held-out gestures over 4 (viewpoint, noise) pairs: gesture i is seen from pair i, the fourth pair
+    sees none; a sweep of the generating network learns none."""
+    from glu.gestures.synthetic_batch import gesture_features
+    from glu.studies.corpus_evaluation import robots
+    from glu.studies.corpus_evaluation.sweep import prepare_world
+
+    config = load_config_text(ONE_SEED.replace("calibration_per_action = 4", "calibration_per_action = 1"))
+    xs, actions = robots.matched_gestures(config, 0, False)
+    assert actions.tolist() == [0, 1, 2]
+    pairs = [(v, x) for v in config.viewpoints for x in config.noise]
+    for i, (view, noise) in enumerate(pairs[:3]):
+        one = gesture_features(
+            [robots.ACTIONS[i]],
+            [np.random.default_rng([config.seed, robots.MATCHED_KEY, 0, i])],
+            noise=noise,
+            spike_rate=config.gestures.spike_rate,
+            dropout_rate=config.gestures.dropout_rate,
+            view=config.views[view],
+        )
+        np.testing.assert_array_equal(xs[i], one.features[0])
+    engine, _ = prepare_world(config)
+    assert robots.learned_networks(config, engine) == [{}]

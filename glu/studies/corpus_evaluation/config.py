@@ -361,8 +361,6 @@ def config_from_dict(doc: Mapping[str, Any], base: Path | None = None) -> SweepC
     for k, v in list(ev.items()):
         if isinstance(v, list):
             ev[k] = tuple(v)
-    if "log_floor" in ev and _number(ev["log_floor"]):
-        ev["log_floor"] = float(ev["log_floor"])
     if isinstance(ev.get("fractions"), tuple):
         ev["fractions"] = tuple(float(f) if _number(f) else f for f in ev["fractions"])
     extra = {k: _list(f"grid.{k}", grid[k]) for k in ("noise", "viewpoints", *DESIGN) if k in grid}

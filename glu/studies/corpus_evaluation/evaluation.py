@@ -491,7 +491,7 @@ def _uniform_if_undefined(p: np.ndarray) -> np.ndarray:
     return p
 
 
-def _prediction_stats(p: np.ndarray, truth: np.ndarray, s: EvaluationSettings, bins: int = 0) -> np.ndarray:
+def _prediction_stats(p: np.ndarray, truth: np.ndarray, s: EvaluationSettings, bins: int) -> np.ndarray:
     """correct, log-loss, Brier per episode and fraction (and calibration bins at the full fraction),
     shape (n, F · 3 + 3 · bins), in the order of :func:`statistic_columns`."""
     n, F, V = p.shape
@@ -503,8 +503,6 @@ def _prediction_stats(p: np.ndarray, truth: np.ndarray, s: EvaluationSettings, b
     log_loss = -np.log(np.maximum(p_true, s.log_floor))
     brier = (p**2).sum(axis=-1) - 2 * p_true + 1.0
     stats = np.stack([correct, log_loss, brier], axis=-1)  # (n, F, 3)
-    if not bins:
-        return stats.reshape(n, -1)
     j = s.full_index
     conf = np.take_along_axis(p[:, j], top[:, j, None], axis=-1)[:, 0]
     b = np.minimum((conf * bins).astype(int), bins - 1)

@@ -134,9 +134,6 @@ def read_tables(folder: str | Path) -> StudyTables:
     for name, df in zip(TABLES, frames, strict=True):
         stamp = doc.get("stamps", {}).get(name, {})
         tidy(df, stamp.get("experiment", name), stamp.get("data_source", ""), **stamp.get("parameters", {}))
-        for k, v in stamp.items():
-            if k not in ("experiment", "data_source", "parameters"):
-                df.attrs[k] = v
     return StudyTables(*frames, folder)
 
 

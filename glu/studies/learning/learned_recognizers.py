@@ -120,6 +120,8 @@ def learn_recognizer(
     """
     if scheme not in LEARNERS:
         raise DataError(f"unknown labelling scheme {scheme!r}; allowed: {', '.join(LEARNERS)}")
+    if scheme == "unsupervised" and true is None:
+        raise DataError("the unsupervised baseline needs the true actions to name its clusters afterwards")
     spec = Invariants.parse(invariants)
     seen = [x if spec.is_raw else spec.transform(x) for x in features]
     n, k = len(seen), len(actions)
@@ -146,10 +148,6 @@ def learn_recognizer(
                 break
             labels = new
     if scheme == "unsupervised":
-        if true is None:
-            raise DataError(
-                "the unsupervised baseline needs the true actions to name its clusters afterwards"
-            )
         perm = best_matching(W.T @ one_hot(np.asarray(true), k))
         models = {
             actions[perm[c]]: replace(models[actions[c]], name=actions[perm[c]])
@@ -195,13 +193,6 @@ def _loglik(
     out = np.full((len(seqs), len(actions)), -np.inf)
     out[:, [list(actions).index(a) for a in have]] = ll
     return out
-
-
-def classify(recognizer: Recognizer, actions: Sequence[str], seqs: Sequence[np.ndarray]) -> np.ndarray:
-    """The predicted action index (into ``actions``) of each sequence, shape (n,)."""
-    ll = recognizer.loglik_many(seqs)
-    names = np.array([list(actions).index(a) for a in recognizer.actions])
-    return names[ll.argmax(axis=1)]
 
 
 def learn_gestures(

@@ -315,7 +315,7 @@ def run_online(
             _update(state, pairs, unit, W, settings)
         for k in clusters:
             cluster_counts[k] += np.outer(W[row[k]], naming[k][i])
-        _initialise(state, W, features, i, labels, seed, labels.clusters, first_models)
+        _initialise(state, W, features, i, labels, seed, first_models)
         if clusters and i + 1 == settings.cluster_episodes:
             _cluster(state, labels.clusters, features[: i + 1], settings, seed, cluster_counts, naming)
         seconds[i] = time.thread_time() - t0
@@ -427,14 +427,12 @@ def _initialise(
     i: int,
     labels: _Labels,
     seed: int,
-    skip: Sequence[int],
     cache: dict,
 ) -> None:
-    """Buffer the episode for every action without a model; train those whose buffer weighs enough."""
+    """Buffer the episode for every action without a model; train those whose buffer weighs enough (the
+    clustering learners' weights are 0 until :func:`_cluster` gave them every model)."""
     need = (~state.models.exists) & (W > 0)
     for k, a in zip(*np.nonzero(need), strict=True):
-        if k in skip:
-            continue
         buf = state.buffers[k][a]
         buf.append((i, float(W[k, a])))
         if sum(x for _, x in buf) >= labels.init_weight[k] and len(buf) >= labels.init_count[k]:

@@ -228,7 +228,7 @@ def leave_one_out(
     """Hold out one recording (``by="recording"``) or one segment (``by="segment"``) at a time.
 
     Models are trained on everything else. A held-out sequence whose action has no training sequence
-    left cannot be recognised; it is reported with ``testable = False`` and ``predicted`` None rather
+    left cannot be recognised; it is reported with ``testable = False`` and ``predicted`` missing rather
     than counted as an error. Columns as :func:`cross_validate`, plus held_out and testable.
     """
     if by not in ("recording", "segment"):

@@ -60,9 +60,9 @@ def leave_one_segment_out(
 
     Returns
     -------
-    (DataFrame with one row per segment: recording, start, end, action, predicted (None when its action
-    has no other segment), testable, correct; the :class:`~glu.gestures.recognizer.Recognizer` trained on
-    all segments)
+    (DataFrame with one row per segment: recording, start, end, action, predicted (missing when its
+    action has no other segment), testable, correct; the :class:`~glu.gestures.recognizer.Recognizer`
+    trained on all segments)
     """
     run = {**(config or TrainingConfig()).as_dict(), "seed": seed, "features": features}
     return leave_one_segment_out_many(sequences, [run])[0]

@@ -1,0 +1,87 @@
+"""The replication's figures on small made-up tables: what is drawn (the artists' data), checked by hand."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import pytest
+
+from glu.plots.style import rule_label
+
+
+@pytest.fixture
+def ax():
+    fig, ax = plt.subplots()
+    yield ax
+    plt.close(fig)
+
+
+def test_strategies_that_differ_get_their_own_bars_and_a_legend(ax):
+    from glu.studies.replication.fusion_figures import plot_fusion_on_gestures
+
+    segs = [("r1", 1, 50), ("r2", 3, 60)]
+    rows = [
+        {"recording": r, "start": a, "end": b, "strategy": st, "p": p, "ObjVel": "fast"}
+        | {"hmm_top": "tap", "evidence": "Shape=sphere"}
+        for (r, a, b), ps in zip(segs, [(0.2, 0.7), (0.4, 0.9)], strict=True)
+        for st, p in zip(("virtual", "jeffrey"), ps, strict=True)
+    ]
+    plot_fusion_on_gestures(ax, pd.DataFrame(rows))
+    heights = [[b.get_height() for b in c] for c in ax.containers]
+    assert heights == [[0.2, 0.4], [0.7, 0.9]]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        rule_label("virtual"),
+        rule_label("jeffrey"),
+    ]
+    assert ax.get_title() == "Shape=sphere"  # no note of strategies giving the same p
+
+
+def test_a_grammar_whose_sentences_all_score_minus_infinity_draws_nothing(ax):
+    from glu.studies.replication.verbal_figures import plot_sampling
+
+    scores = np.full(5, -np.inf)
+    assert plot_sampling(ax, scores, scores[:2], -np.inf) is ax
+    assert not ax.patches and not ax.lines and ax.get_legend() is None
+
+
+def test_a_word_change_under_other_evidence_is_drawn_beside(ax):
+    """Δp(w) of another evidence that differs: half-width bars beside, hatched, labelled by its evidence."""
+    from glu.studies.replication.network_figures import plot_word_change
+
+    df = pd.DataFrame(
+        {"word": ["ball", "rolls", "the"], "delta": [0.3, -0.2, 0.0], "shown": [True, True, False]}
+    )
+    df.attrs["parameters"] = {"evidence": {"Shape": "sphere"}}
+    other = pd.DataFrame({"word": ["the", "ball", "rolls"], "delta": [0.0, 0.1, -0.25]})
+    other.attrs["parameters"] = {"evidence": {"Shape": "sphere", "Color": "yellow"}}
+    plot_word_change(ax, df, other)
+    ours, theirs = ax.containers
+    assert [b.get_height() for b in ours] == [0.3, -0.2] and [b.get_height() for b in theirs] == [0.1, -0.25]
+    assert [b.get_x() + b.get_width() / 2 for b in theirs] == pytest.approx([0.2, 1.2])
+    assert [b.get_width() for b in [*ours, *theirs]] == pytest.approx([0.4] * 4)
+    assert theirs.get_label() == "Shape=sphere, Color=yellow" and theirs[0].get_hatch() == "//"
+
+
+def test_edges_only_in_ours_or_only_in_the_reference_are_marked():
+    """The network learned from 200 rows against the one learned from all of them: a filled red square for
+    each edge only in ours, a hollow one for each only in the reference, counted by set difference."""
+    from glu.bn import learn_bn
+    from glu.data import load_experiments
+    from glu.studies.replication.network_figures import plot_structure
+
+    table = load_experiments("synthetic")
+    ours, ref = learn_bn(table.iloc[:200]), learn_bn(table)
+    aff = set(ours.schema.affordance_nodes)
+    mine = {e for e in ours.edges() if e[0] in aff} - set(ref.edges())
+    theirs = {e for e in ref.edges() if e[0] in aff} - set(ours.edges())
+    assert mine and theirs
+    fig, ax = plt.subplots()
+    try:
+        plot_structure(ax, ours, ref)
+        filled = [c for c in ax.collections if len(c.get_facecolor())]
+        hollow = [c for c in ax.collections if not len(c.get_facecolor())]
+        assert (len(filled), len(hollow)) == (len(mine), len(theirs))
+        assert f", {len(mine)} only in ours, {len(theirs)} only in theirs" in ax.get_title()
+    finally:
+        plt.close(fig)
