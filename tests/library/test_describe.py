@@ -454,6 +454,22 @@ def test_the_published_evidence_is_the_codes():
     assert [r["evidence"] for r in pub["fig8"]["rows"]] == list(ex.EVIDENCE_FIG8)
 
 
+def test_num2str_prints_whole_numbers_without_a_point_as_matlab():
+    """MATLAB's num2str of an integer-valued double prints its digits alone: num2str(3) is '3', num2str(-2)
+    '-2', num2str(1e6) '1000000'."""
+    from glu.data.published import num2str
+
+    assert [num2str(x) for x in (3.0, -2.0, 0.0, 1e6)] == ["3", "-2", "0", "1000000"]
+
+
+def test_an_unknown_paper_names_the_published_ones():
+    from glu.data.published import published
+    from glu.errors import DataError
+
+    with pytest.raises(DataError, match="no published numbers named 'tcds2099'; there are: tcds2020"):
+        published("tcds2099")
+
+
 # ---------------------------------------------------------------- the command line
 def test_cli_done_when(source, capsys):
     for objvel, word in [("slow", "but"), ("medium", "and")]:

@@ -102,6 +102,9 @@ def test_empty_missing_and_folder(tmp_path):
         read_hand_log(tmp_path / "nope.log")
     with pytest.raises(DataError, match="no such file"):
         read_hand_log(tmp_path)  # a folder without data.log
+    (tmp_path / "rec" / "data.log").mkdir(parents=True)
+    with pytest.raises(DataError, match=r"data.log: cannot read: Is a directory"):
+        read_hand_log(tmp_path / "rec")  # a recording folder whose data.log is a folder
     (tmp_path / "data.log").write_text(GOOD)
     assert len(read_hand_log(tmp_path)) == 3  # a recording folder is accepted
 
@@ -184,6 +187,9 @@ def test_written_logs_read_back_exactly(tmp_path):
     np.testing.assert_array_equal(tr.xyz, xyz)
     with pytest.raises(DataError, match="strictly increasing"):
         format_hand_log(t[::-1], xyz)
+    for bad_t, bad_xyz in ((t, xyz[:, :2]), (t[:0], xyz[:0])):
+        with pytest.raises(DataError, match=r"n ≥ 1 timestamps and \(n, 3\) coordinates"):
+            format_hand_log(bad_t, bad_xyz)
 
 
 # --- repair on constructed trajectories ------------------------------------------------------------
