@@ -185,6 +185,27 @@ def test_recognizer_outputs(bank):
         bank.stream().push(np.array([1.0, np.inf, 0.0]))
 
 
+def test_a_recognizer_checks_its_models_and_shows_them(bank):
+    rng = np.random.default_rng(7)
+    with pytest.raises(ModelError, match="a recogniser needs at least one model"):
+        Recognizer({})
+    with pytest.raises(ModelError, match=r"all models must have the same number of features, got \[2, 3\]"):
+        Recognizer({"tap": random_model(rng, D=3), "push": random_model(rng, D=2)})
+    with pytest.raises(ModelError, match="invariant features need 3-D models, these have 2 features"):
+        Recognizer({"tap": random_model(rng, D=2)}, features="centred")
+    assert (
+        repr(bank) == "Recognizer(grasp: Q=6 M=3, tap: Q=4 M=1, touch: Q=5 M=2, push: Q=6 M=3; features raw)"
+    )
+
+
+def test_many_training_sets_need_as_many_seeds():
+    sets = [{"tap": [np.zeros((10, 3))]}, {"tap": [np.ones((10, 3))]}]
+    with pytest.raises(ModelError, match="2 training sets need as many seeds and feature sets, got 1 and 2"):
+        train_recognizer(sets, seed=[0])
+    with pytest.raises(ModelError, match="got 2 and 3"):
+        train_recognizer(sets, features=["raw", "centred", "scaled"])
+
+
 def test_save_load_round_trip_scores_identically(bank, tmp_path):
     path = bank.save(tmp_path / "rec.json")
     d = json.loads(path.read_text())

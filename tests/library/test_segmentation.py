@@ -82,6 +82,19 @@ def test_extract_and_bad_input():
         segment_repetitions(tr.take(slice(0, 1)))
 
 
+def test_a_segment_with_a_tracking_jump_is_left_out():
+    """Every step between frames is longer than max_jump = 0: each repetition is left out for its longest
+    step, which is measured here on the segment's own frames."""
+    from glu.gestures.segmentation import SegmentationParams
+
+    tr = _features(synthesize_recording("push", 2, seed=0))
+    seg = segment_repetitions(tr, params=SegmentationParams(max_jump=0.0))
+    assert seg.segments == [] and len(seg.rejected) == 2
+    for s, why in seg.rejected:
+        longest = np.linalg.norm(np.diff(tr.xyz[s.start - 1 : s.end], axis=0), axis=1).max()
+        assert why == f"tracking jump of {longest:.2f} (more than 0.0)"
+
+
 def _png(seg, ref=()) -> tuple[bytes, int]:
     fig, ax = plt.subplots(figsize=(8, 3))
     plot_segmentation(ax, seg, "title", reference=ref)
