@@ -95,16 +95,13 @@ def _meminfo(field: str, path: str = "/proc/meminfo") -> int | None:
 def available_memory() -> int | None:
     """Bytes this process may still allocate: the system's available memory, and below the address-space
     limit (``ulimit -v``) what this process does not use yet; None where neither can be read."""
-    import resource
-
-    limits = []
     system = _meminfo("MemAvailable")
-    if system is not None:
-        limits.append(system)
+    limits = [] if system is None else [system]
     try:
-        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
-    except (ValueError, OSError):
-        soft = resource.RLIM_INFINITY
+        import resource
+    except ImportError:  # Windows: no address-space limit to read
+        return system
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
     if soft != resource.RLIM_INFINITY:
         used = _meminfo("VmSize", "/proc/self/status") or 0
         limits.append(max(soft - used, 0))

@@ -80,16 +80,16 @@ def manifest(mirror: str | None = None, path: str | os.PathLike = MANIFEST) -> l
 
 
 def _check_mirror(mirror: str) -> None:
-    """FetchError unless ``mirror`` is an http(s) or ftp URL with a host (checked before any request)."""
+    """FetchError unless ``mirror`` is an http(s) URL with a host (checked before any request)."""
     from urllib.parse import urlsplit
 
-    expected = "expected an http://, https:// or ftp:// URL with a host, e.g. http://127.0.0.1:8000/data"
+    expected = "expected an http:// or https:// URL with a host, e.g. http://127.0.0.1:8000/data"
     try:
         parts = urlsplit(mirror)
         parts.port  # noqa: B018 - raises ValueError for a port that is not a number
     except ValueError as e:
         raise FetchError(f"--mirror {mirror!r}: not a URL ({e}); {expected}") from None
-    if parts.scheme not in ("http", "https", "ftp") or not parts.hostname or any(c.isspace() for c in mirror):
+    if parts.scheme not in ("http", "https") or not parts.hostname or any(c.isspace() for c in mirror):
         raise FetchError(f"--mirror {mirror!r}: {expected}")
 
 

@@ -65,7 +65,8 @@ def is_trajectory_file(path: str | os.PathLike) -> bool:
 
 
 def read_trajectory_table(path: str | os.PathLike) -> TrajectoryTable:
-    """Read a CSV, TSV or NPY recording (see the module docstring); :class:`DataError` naming the file."""
+    """Read a CSV, TSV or NPY recording (a path :func:`is_trajectory_file` accepts; see the module docstring);
+    :class:`DataError` naming the file."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix in ARRAY_SUFFIXES:
@@ -81,8 +82,6 @@ def read_trajectory_table(path: str | os.PathLike) -> TrajectoryTable:
                 f"{path}: an array of {arr.dtype} values; a trajectory is real numbers (t, x, y, z)"
             )
         return _from_array(arr, str(path))
-    if suffix not in TABLE_SUFFIXES:
-        raise DataError(f"{path}: unknown suffix; trajectories are .csv, .tsv, .npy (or a YARP .log)")
     text = read_text(path, "trajectory table", encoding="utf-8-sig")
     return parse_trajectory_table(text, TABLE_SUFFIXES[suffix], str(path))
 

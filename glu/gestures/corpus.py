@@ -346,11 +346,6 @@ def labelled_recordings(path: str | os.PathLike, body: tuple[float, float] | Non
         if frames is not None:
             traj = traj.frames(*frames)
         xyz = np.asarray(traj.xyz, dtype=float)
-        if len(xyz) == 0:
-            raise DataError(f"{where}: the recording has no frames")
-        bad = ~np.all(np.isfinite(xyz), axis=1)
-        if bad.any():
-            raise DataError(f"{where}: frame {int(np.flatnonzero(bad)[0]) + 1} is not finite")
         start, end = frames or (int(traj.frame[0]), int(traj.frame[-1]))
         base = path.parent if path.is_file() else path
         name = os.path.relpath(file, base) if file.is_relative_to(base) else file.name
@@ -363,10 +358,7 @@ def original_recognizer(source: DataSource, n_mix: int = 3) -> Recognizer:
     whose typicality check knows where gestures start and how far they move from the published standing
     recordings (:func:`real_segments`) — the originals' own training data is not published, and sequences
     sampled from their models start elsewhere (their person's rest pose) than the published logs."""
-    path = source.original_hmms(n_mix)
-    if path is None:
-        raise DataError(f"the data source has no original HMMs with M = {n_mix} ({source.describe()})")
-    rec = load_original_models(path)
+    rec = load_original_models(source.original_hmms(n_mix))  # the caller checked the source has them
     reference = [s.xyz for s in real_segments(source, include_original=False)]
     if reference:
         rec.meta[FRAMES_KEY] = FeatureRanges.of(reference, "published standing").to_meta()

@@ -72,8 +72,6 @@ def middle_frames(n_frames: int, middle: tuple[float, float] = MIDDLE) -> slice:
 
     For 100 frames this is frames 45 … 54 (0-based), i.e. the 46th to the 55th frame.
     """
-    if n_frames < 1:
-        raise DataError("a sequence needs at least one frame")
     lo = math.ceil(round(middle[0] * n_frames, 9))  # round: 0.55 * 100 is 55.000000000000007
     hi = math.ceil(round(middle[1] * n_frames, 9))
     if hi <= lo:
@@ -230,10 +228,6 @@ def table_features(table: TrajectoryTable, body: tuple[float, float] | None = No
                 f"{BODY_SIZE_RANGE[1]:g} m (a person's shoulder width and neck-torso length)"
             )
         xyz = table.hand / np.array([h, v, h])
-        if not np.isfinite(xyz[np.isfinite(table.hand)]).all():
-            raise DataError(
-                f"{table.source}: coordinates too large for the body size ({h:g}, {v:g}) m: not finite"
-            )
     else:
         names = SKELETON_JOINTS
         skeleton = np.stack([table.joints.get(j, np.full((len(table.t), 3), np.nan)) for j in names], axis=1)

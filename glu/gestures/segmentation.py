@@ -137,8 +137,6 @@ def smooth(xyz: np.ndarray, params: SegmentationParams = DEFAULT_PARAMS) -> np.n
     from scipy.ndimage import median_filter, uniform_filter1d
 
     xyz = np.asarray(xyz, dtype=float)
-    if len(xyz) == 0:
-        return xyz.copy()
     out = median_filter(xyz, size=(params.median_window, 1), mode="nearest")
     return uniform_filter1d(out, params.smooth_window, axis=0, mode="nearest")
 
@@ -158,8 +156,6 @@ def activity_signal(
     rest : array, shape (3,)
     """
     s = smooth(xyz, params)
-    if len(s) == 0:
-        raise DataError("cannot segment an empty trajectory")
     zq = np.quantile(s[:, 2], params.rest_quantile)
     rest = np.median(s[s[:, 2] >= zq], axis=0)
     d = np.linalg.norm(s - rest, axis=1)

@@ -285,6 +285,8 @@ def forward_backward(
     c = np.ones((S, T))
     a = startprob * b[:, 0]
     c[:, 0] = a.sum(axis=1)
+    if not np.all(c[:, 0] > TINY):  # checked before dividing by it
+        return forward_backward_log(log_b, lengths, startprob, transmat, weights)
     alpha[:, 0] = a / c[:, 0, None]
     for t in range(1, T):
         live = alive[:, t, None]
@@ -293,8 +295,6 @@ def forward_backward(
         if not np.all(c[:, t] > TINY):  # the scaled mass underflows for some sequence
             return forward_backward_log(log_b, lengths, startprob, transmat, weights)
         alpha[:, t] = a / c[:, t, None]
-    if not np.all(c[:, 0] > TINY):
-        return forward_backward_log(log_b, lengths, startprob, transmat, weights)
     loglik = np.where(alive, np.log(c) + mx, 0.0).sum(axis=1)
     beta = np.ones((S, T, Q))
     for t in range(T - 2, -1, -1):

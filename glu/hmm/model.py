@@ -119,10 +119,6 @@ class GestureHMM:
             chol_inv, log_norm = gaussian_factors(arrs["weights"], cov)
         except np.linalg.LinAlgError:
             raise ModelError(f"{who}: a covariance matrix is not positive definite") from None
-        if not np.all(np.isfinite(log_norm)):
-            raise ModelError(
-                f"{who}: a covariance matrix is too close to singular (its density is not finite)"
-            )
         for k, a in arrs.items():
             a.flags.writeable = False
             object.__setattr__(self, k, a)

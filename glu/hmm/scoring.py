@@ -272,8 +272,6 @@ def forward_curves_batch(
     alpha = np.zeros((A, Q, S))
     for t in range(T):
         n = int(active[t])
-        if n == 0:
-            break
         comp = (coef_t @ phi[t, :, :n]).reshape(A, Q * n_mix, n)
         scale = comp.max(axis=1)  # per model and sequence
         np.subtract(comp, scale[:, None, :], out=comp)

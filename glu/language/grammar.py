@@ -109,9 +109,7 @@ def format_expr(expr: Expr) -> str:
         return " | ".join(format_expr(e) for e in expr.options)
     if isinstance(expr, Opt):
         return f"[{format_expr(expr.expr)}]"
-    if isinstance(expr, Rep):
-        return f"< {format_expr(expr.expr)} >" if expr.at_least_one else f"{{{format_expr(expr.expr)}}}"
-    raise TypeError(f"not a grammar expression: {expr!r}")
+    return f"< {format_expr(expr.expr)} >" if expr.at_least_one else f"{{{format_expr(expr.expr)}}}"  # Rep
 
 
 def children(expr: Expr) -> tuple[Expr, ...]:
@@ -148,10 +146,6 @@ class Grammar:
     definitions: Mapping[str, Expr]
     sentence: Expr
     source: str = "<string>"
-
-    def resolve(self, name: str) -> Expr:
-        """The expression of variable ``name`` (with or without the ``$``)."""
-        return self.definitions[name.removeprefix("$")]
 
     def expressions(self) -> Iterator[Expr]:
         """Every sub-expression the sentence uses, following each variable it refers to once."""

@@ -114,22 +114,18 @@ def _compile(
                 inner(out)
 
         return opt
-    if isinstance(e, Rep):
-        inner = _compile(e.expr, grammar, rand, randrange, refs)
-        at_least_one = e.at_least_one
+    inner = _compile(e.expr, grammar, rand, randrange, refs)  # Rep, the last kind of expression
+    at_least_one = e.at_least_one
 
-        def rep(out: list[str]) -> None:
-            if at_least_one:
-                inner(out)
-            while rand() < 0.5:
-                inner(out)
-                if len(out) > MAX_SAMPLE_WORDS:
-                    raise GrammarError(
-                        f"a random sentence grew beyond {MAX_SAMPLE_WORDS} words", grammar.source
-                    )
+    def rep(out: list[str]) -> None:
+        if at_least_one:
+            inner(out)
+        while rand() < 0.5:
+            inner(out)
+            if len(out) > MAX_SAMPLE_WORDS:
+                raise GrammarError(f"a random sentence grew beyond {MAX_SAMPLE_WORDS} words", grammar.source)
 
-        return rep
-    raise TypeError(f"not a grammar expression: {e!r}")
+    return rep
 
 
 def sample_probability(grammar: Grammar, sentence: str | Iterable[str]) -> float:

@@ -63,11 +63,6 @@ class WordNetwork:
         """Number of states."""
         return len(self.arcs)
 
-    @property
-    def n_arcs(self) -> int:
-        """Number of word arcs."""
-        return sum(len(a) for a in self.arcs)
-
     @cached_property
     def topological_order(self) -> tuple[int, ...] | None:
         """States in an order where every arc goes forward, or None when the network has a cycle."""

@@ -35,7 +35,6 @@ from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.collections import Collection, PathCollection
 from matplotlib.figure import Figure
-from matplotlib.image import AxesImage
 from matplotlib.legend import Legend
 from matplotlib.lines import Line2D
 from matplotlib.markers import MarkerStyle
@@ -253,10 +252,8 @@ def _recording_texts(drawn: list[Text]) -> Iterator[list[Text]]:
 
 
 def _drawn(t: Text, renderer) -> _Drawn | None:
-    if not t.get_visible() or not t.get_text().strip():
-        return None
-    box = t.get_window_extent(renderer)
-    if box.width <= 0 or box.height <= 0:
+    box = t.get_window_extent(renderer)  # a visible, non-blank text (as recorded)
+    if box.width <= 0 or box.height <= 0:  # e.g. a zero-width space
         return None
     angle = t.get_rotation() % 180
     if min(angle, 180 - angle, abs(angle - 90)) < 1e-6:
@@ -357,10 +354,8 @@ def _is_drawn_patch(p: Patch) -> bool:
 def _opaque(artist: Artist) -> bool:
     if isinstance(artist, Patch):
         a = max(artist.get_facecolor()[3] if artist.get_fill() else 0.0, artist.get_edgecolor()[3])
-    elif isinstance(artist, Collection):
+    else:  # a Collection: _data asks about nothing else
         a = max([c[3] for c in artist.get_facecolors()] + [c[3] for c in artist.get_edgecolors()] + [0.0])
-    else:
-        return True
     alpha = artist.get_alpha()
     return (alpha if alpha is not None else 1.0) * a > BACKGROUND_ALPHA
 
@@ -395,9 +390,7 @@ def _covers(artist: Artist, box: Bbox, ax: Axes, renderer, inside_ok: bool = Fal
         t = artist.get_transform()
         filled = len(artist.get_facecolors()) > 0 and artist.get_facecolors()[:, 3].max() > 0
         return any(t.transform_path(p).intersects_bbox(area, filled=filled) for p in artist.get_paths())
-    if isinstance(artist, AxesImage):
-        return _overlap(artist.get_window_extent(renderer), area)
-    return False
+    return _overlap(artist.get_window_extent(renderer), area)  # an AxesImage: _data yields nothing else
 
 
 def _marker_reach(line: Line2D, box: Bbox, renderer) -> Bbox:

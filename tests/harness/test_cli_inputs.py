@@ -104,7 +104,7 @@ def test_impossible_sentences_print_as_impossible_never_as_inf(capsys):
 )
 def test_a_malformed_mirror_url_is_refused_before_any_request(capsys, tmp_path, mirror):
     status, out, err = _glu(capsys, "data", "fetch", "-o", tmp_path / "d", "--mirror", mirror)
-    assert status == 2 and err.count("\n") == 1 and "expected an http://, https:// or ftp:// URL" in err
+    assert status == 2 and err.count("\n") == 1 and "expected an http:// or https:// URL" in err
     assert not (tmp_path / "d").exists()
 
 

@@ -129,6 +129,19 @@ def test_loglik_at_picks_prefixes_and_checks_them(bank):
         scorer.loglik_at(X, ends + 1)
     with pytest.raises(DataError, match="sequence 1"):
         scorer.loglik_curves([X[0], np.full((3, 3), np.nan)])
+    for bad in (ends[:, 0], ends[:3]):
+        with pytest.raises(DataError, match=r"ends must have shape \(n_sequences=4, n_prefixes\)"):
+            scorer.loglik_at(X, bad)
+
+
+def test_a_bank_needs_models_of_one_width():
+    from glu.errors import ModelError
+
+    rng = np.random.default_rng(6)
+    with pytest.raises(ModelError, match="a bank needs at least one model"):
+        stack_models([])
+    with pytest.raises(ModelError, match=r"all models must have the same number of features, got \[2, 3\]"):
+        stack_models([random_model(rng, 2, 1, D=3), random_model(rng, 2, 1, D=2)])
 
 
 def test_pchip_equals_scipy_bit_for_bit():

@@ -65,3 +65,20 @@ def test_calibration_per_fraction():
     assert cal.at(1.0) == 1.0 and cal.at(0.5) < 0.1 and cal.n_gestures == 400
     with pytest.raises(DataError, match="no calibration at fraction"):
         cal.at(0.3)
+
+
+def test_fits_refuse_what_they_cannot_fit():
+    ll = np.zeros((4, 3))
+    for labels in (np.array([0, 1, 2]), np.array([0, 1, 2, 3]), np.array([0, -1, 2, 1])):
+        with pytest.raises(
+            DataError, match=r"fit_temperature: log-likelihoods \(n, K\) and labels \(n,\) in 0…K−1"
+        ):
+            fit_temperature(ll, labels)
+    with pytest.raises(DataError, match="fit_temperature: log-likelihoods"):
+        fit_temperature(np.zeros(4), np.zeros(4, dtype=int))
+    with pytest.raises(DataError, match="no held-out gesture with finite log-likelihoods"):
+        fit_temperature(np.full((2, 3), -np.inf), np.array([0, 1]))
+    with pytest.raises(
+        DataError, match=r"fit_calibration: log-likelihoods of shape \(n, 2, K\), not \(4, 3\)"
+    ):
+        fit_calibration(ll, np.zeros(4, dtype=int), [0.5, 1.0])

@@ -100,6 +100,41 @@ def test_grammar_words_missing_from_the_model_are_an_error():
         nbest(None, _random_probs(1), n=0)
 
 
+def test_word_probabilities_of_another_type_and_empty_candidates():
+    with pytest.raises(TypeError, match="a mapping word → p or a pandas Series, not list"):
+        score_sentence("the", [0.5])
+    for empty in ("", "  ", ()):
+        with pytest.raises(VocabularyError, match="an empty sentence has no score"):
+            rank_sentences([empty, "the"], {"the": 0.5})
+
+
+def test_sentence_files_and_sets(tmp_path):
+    from glu.errors import DataError
+    from glu.language import SentenceSet, read_sentences
+
+    blank = tmp_path / "blank.txt"
+    blank.write_text("\n  \n\t\n")
+    with pytest.raises(DataError, match=f"{blank}: no sentence in the file"):
+        read_sentences(blank)
+    assert (
+        repr(SentenceSet(["the robot taps", "the ball", "the ball"])) == "SentenceSet(2 sentences, 4 words)"
+    )
+
+
+def test_sampling_walks_a_grammar_and_all_scores_has_a_limit():
+    from glu.errors import GrammarError
+
+    probs = _random_probs(2)
+    with pytest.raises(TypeError, match="pass a Grammar, not a WordNetwork"):
+        sample_nbest(default_network(), probs, n_samples=5)
+    ten = "(" + " | ".join(WORDS[:10]) + ")"
+    huge = compile_network(parse_grammar("( " + " ".join([ten] * 8) + " )"))  # 10⁸ sentences
+    with pytest.raises(
+        GrammarError, match="the grammar has 100000000 sentences; all_scores handles up to 50000000"
+    ):
+        all_scores(huge, probs)
+
+
 # ---------------------------------------------------------------- exact N-best == brute force
 def test_ties_are_broken_by_the_words():
     g = parse_grammar("( (a | b) (a | b) )")
@@ -369,6 +404,18 @@ def test_and_but_follow_the_objects_velocity(engine):
     assert all("and" in s.split() for s in medium["sentence"])
 
 
+def test_describe_ranks_a_list_of_candidate_sentences(engine):
+    from glu.language import describe, word_probabilities
+
+    ev = {"Action": "grasp", "ObjVel": "slow"}
+    sents = ["the robot grasps the ball but the ball is inert", "the robot taps the box", "the ball rolls"]
+    got = describe(engine, ev, candidates=sents, n=3)
+    probs = word_probabilities(engine, ev).to_dict()
+    expected = brute_force_nbest([tuple(s.split()) for s in sents], probs, 3, 0)
+    assert [tuple(s.split()) for s in got["sentence"]] == [s for s, _ in expected]
+    np.testing.assert_allclose(got["score"], [sc for _, sc in expected], rtol=1e-12)
+
+
 def test_word_probabilities_match_the_word_marginals(engine):
     from glu.language import word_probabilities
 
@@ -452,6 +499,22 @@ def test_the_published_evidence_is_the_codes():
     for key, ev in ex.PUBLISHED_LISTS.items():
         assert pub[key]["evidence"] == ev
     assert [r["evidence"] for r in pub["fig8"]["rows"]] == list(ex.EVIDENCE_FIG8)
+
+
+def test_num2str_prints_whole_numbers_without_a_point_as_matlab():
+    """MATLAB's num2str of an integer-valued double prints its digits alone: num2str(3) is '3', num2str(-2)
+    '-2', num2str(1e6) '1000000'."""
+    from glu.data.published import num2str
+
+    assert [num2str(x) for x in (3.0, -2.0, 0.0, 1e6)] == ["3", "-2", "0", "1000000"]
+
+
+def test_an_unknown_paper_names_the_published_ones():
+    from glu.data.published import published
+    from glu.errors import DataError
+
+    with pytest.raises(DataError, match="no published numbers named 'tcds2099'; there are: tcds2020"):
+        published("tcds2099")
 
 
 # ---------------------------------------------------------------- the command line

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import shutil
 import threading
 from functools import partial
@@ -147,3 +148,83 @@ def test_the_manifest_names_the_pinned_commits():
         "fd608ac0f732bc1016df55af0489e5f25c43036c",
     }
     assert all(len(i.sha256) == 64 for i in items)
+
+
+def test_an_ftp_mirror_is_refused_before_any_request(tmp_path):
+    """The downloads speak HTTP only: an ftp:// mirror made every file fail with requests' "No connection
+    adapters were found"; it is refused up front now, and nothing is written."""
+    with pytest.raises(FetchError, match=r"--mirror 'ftp://127.0.0.1/data': expected an http:// or https://"):
+        fetch_all(tmp_path / "d", mirror="ftp://127.0.0.1/data")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ({"files": [{"local": "a.txt"}]}, "malformed manifest (KeyError: 'sha256')"),
+        ({"files": [1]}, "malformed manifest (TypeError"),
+        ([], "malformed manifest (TypeError"),
+    ],
+)
+def test_a_malformed_manifest_is_one_fetch_error(tmp_path, spec, message):
+    path = tmp_path / "manifest.json"
+    path.write_text(json.dumps(spec))
+    with pytest.raises(FetchError, match=re.escape(f"{path}: {message}")):
+        fetch_all(tmp_path / "d", mirror="http://127.0.0.1:9", manifest_path=path)
+
+
+def test_a_url_the_downloader_cannot_fetch_fails_that_file_only(mirror_manifest, tmp_path):
+    """A manifest may give any URL template: a file:// URL fails its file with the reason, nothing is
+    published."""
+    path, n = mirror_manifest
+    spec = json.loads(path.read_text())
+    path.write_text(json.dumps({**spec, "url_template": "file:///nowhere/{path}"}))
+    results = fetch_all(tmp_path / "d", manifest_path=path, timeout=5)
+    assert len(results) == n and {r.status for r in results} == {"failed"}
+    assert (
+        results[0].detail.startswith("file:///nowhere/data/")
+        and "No connection adapters" in results[0].detail
+    )
+    assert not (tmp_path / "d").exists()
+
+
+def test_a_destination_that_is_a_file_is_refused(mirror_manifest, tmp_path):
+    path, _ = mirror_manifest
+    (tmp_path / "d").write_text("x")
+    with pytest.raises(FetchError, match="d: exists and is not a folder; give a data folder"):
+        fetch_all(tmp_path / "d", mirror="http://127.0.0.1:9", manifest_path=path)
+    assert (tmp_path / "d").read_text() == "x"
+
+
+def test_files_are_copied_where_they_cannot_be_linked(server, mirror_manifest, tmp_path, monkeypatch):
+    """A data folder on a file system without hard links (or another device than its partial folder): the
+    verified files present are copied into the new folder instead."""
+    import os
+
+    _, url, _ = server
+    path, _ = mirror_manifest
+    dest = tmp_path / "real"
+    assert all(r.status == "downloaded" for r in fetch_all(dest, mirror=url, manifest_path=path))
+    before = {p: p.read_bytes() for p in dest.rglob("*") if p.is_file()}
+
+    def no_link(src, dst):
+        raise OSError(18, "Invalid cross-device link")
+
+    monkeypatch.setattr(os, "link", no_link)
+    assert all(r.status == "present" for r in fetch_all(dest, mirror=url, manifest_path=path))
+    assert {p: p.read_bytes() for p in dest.rglob("*") if p.is_file()} == before
+
+
+def test_a_failed_fetch_keeps_the_folders_it_made_if_others_wrote_there(mirror_manifest, tmp_path):
+    """Nothing verified: the folders the fetch made above its destination are removed again, up to one that
+    something else wrote into meanwhile (kept with its file)."""
+    path, _ = mirror_manifest
+    top = tmp_path / "a"
+    dest = top / "b" / "real"
+
+    def meanwhile(i, n, result):
+        (top / "notes.txt").write_text("mine")
+
+    results = fetch_all(dest, mirror="http://127.0.0.1:9", manifest_path=path, timeout=5, progress=meanwhile)
+    assert {r.status for r in results} == {"failed"}
+    assert not (top / "b").exists() and [p.name for p in top.iterdir()] == ["notes.txt"]

@@ -391,3 +391,66 @@ def test_a_balanced_title_keeps_every_word_within_the_width_in_as_few_lines_as_t
     if len(plain) > 1:  # as even as the words allow: the longest line no longer than textwrap's
         assert max(map(len, lines)) <= max(map(len, plain))
         assert min(map(len, lines)) >= min(map(len, plain))
+
+
+def test_a_legend_reaching_into_the_next_panel_is_caught():
+    f, (a, b) = plt.subplots(1, 2, figsize=(6, 3))
+    a.plot([0, 1], [0, 1], label="a line")
+    a.legend(loc="upper left", bbox_to_anchor=(0.9, 1))
+    problems = figure_problems(f)
+    plt.close(f)
+    assert "text on another panel: the legend [a line] inside panel 2" in problems, problems
+
+
+def test_an_annotation_at_a_data_point_outside_the_axes_is_caught(fig):
+    f, ax = fig
+    ax.set_xlim(0, 1)
+    ax.annotate("note", xy=(1.3, 0.5), annotation_clip=False)
+    assert figure_problems(f) == [
+        "label across the frame: 'note', placed at a data point, is outside panel 1"
+    ]
+
+
+def test_a_legend_on_an_image_is_caught(fig):
+    from matplotlib.patches import Patch
+
+    f, ax = fig
+    ax.imshow(np.arange(16).reshape(4, 4))
+    ax.legend(handles=[Patch(color="k", label="scale")], loc="upper left")
+    assert figure_problems(f) == ["legend on data: the legend [scale] covers the image of panel 1"]
+
+
+def test_a_label_or_a_legend_on_scatter_markers_is_caught_and_one_on_faint_ones_passes(fig):
+    f, ax = fig
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    dots = ax.scatter([0.05, 0.5], [0.95, 0.5], s=200, label="dots")
+    ax.text(0.5, 0.5, "here")
+    ax.legend(loc="upper left")
+    assert figure_problems(f) == [
+        "legend on data: the legend [dots] covers the PathCollection 'dots' of panel 1",
+        "label on data: 'here' covers the PathCollection 'dots' of panel 1",
+    ]
+    ax.get_legend().remove()
+    dots.set_alpha(0.1)  # shading a label may sit on
+    assert figure_problems(f) == []
+
+
+def test_what_draws_nothing_is_not_in_the_way(fig):
+    """A zero-width space is no text; a bar a billionth wide and high is no patch; an axes of no width is
+    crossed by no text (and its edges of length 0 give no warning)."""
+    import warnings
+
+    f, ax = fig
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.text(0.5, 0.5, "\u200b")
+    ax.text(0.5, 0.5, "x", ha="center", va="center")
+    ax.bar([0.5], [1e-9], width=1e-9, bottom=0.5)
+    ax.set_xticks([0.5], ["a rotated tick label"], rotation=45, ha="right")
+    flat = f.add_axes([0.45, 0.0, 0.0, 0.3])  # across the rotated label
+    flat.set_xticks([])
+    flat.set_yticks([])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert figure_problems(f) == []

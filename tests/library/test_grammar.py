@@ -150,6 +150,10 @@ def test_grammar_files(tmp_path):
     bad.write_bytes("(caf\xe9)".encode("latin-1"))
     with pytest.raises(GrammarError, match="UTF-8"):
         load_grammar(bad)
+    with pytest.raises(GrammarError, match=r"cannot read the grammar file \(File name too long\)"):
+        load_grammar(tmp_path / ("g" * 300 + ".grm"))
+    with pytest.raises(GrammarError, match="<string>: a grammar is text, not bytes"):
+        parse_grammar(b"( a )")
     good = tmp_path / "ok.grm"
     good.write_text(grammar_text(("seq", [("w", "a"), ("opt", ("w", "b"))])))
     assert count_sentences(load_grammar(good)) == 2

@@ -185,6 +185,27 @@ def test_recognizer_outputs(bank):
         bank.stream().push(np.array([1.0, np.inf, 0.0]))
 
 
+def test_a_recognizer_checks_its_models_and_shows_them(bank):
+    rng = np.random.default_rng(7)
+    with pytest.raises(ModelError, match="a recogniser needs at least one model"):
+        Recognizer({})
+    with pytest.raises(ModelError, match=r"all models must have the same number of features, got \[2, 3\]"):
+        Recognizer({"tap": random_model(rng, D=3), "push": random_model(rng, D=2)})
+    with pytest.raises(ModelError, match="invariant features need 3-D models, these have 2 features"):
+        Recognizer({"tap": random_model(rng, D=2)}, features="centred")
+    assert (
+        repr(bank) == "Recognizer(grasp: Q=6 M=3, tap: Q=4 M=1, touch: Q=5 M=2, push: Q=6 M=3; features raw)"
+    )
+
+
+def test_many_training_sets_need_as_many_seeds():
+    sets = [{"tap": [np.zeros((10, 3))]}, {"tap": [np.ones((10, 3))]}]
+    with pytest.raises(ModelError, match="2 training sets need as many seeds and feature sets, got 1 and 2"):
+        train_recognizer(sets, seed=[0])
+    with pytest.raises(ModelError, match="got 2 and 3"):
+        train_recognizer(sets, features=["raw", "centred", "scaled"])
+
+
 def test_save_load_round_trip_scores_identically(bank, tmp_path):
     path = bank.save(tmp_path / "rec.json")
     d = json.loads(path.read_text())
@@ -611,3 +632,173 @@ def test_sampling_draws_what_hmmlearn_draws(bank):
     for m in bank.models.values():
         for seed in (0, 7):
             np.testing.assert_array_equal(m.sample(25, seed), to_hmmlearn(m).sample(25, random_state=seed)[0])
+
+
+# --- bad models, bad training requests, and the rare paths of training ----------------------------------
+
+
+def test_a_mixture_component_of_weight_zero_is_allowed_and_ignored():
+    """A weight of 0 leaves its component out of the density (the model documents it: its log_norm is −∞);
+    such a model was refused as "too close to singular" before. Scores equal the scipy reference, which
+    skips the component."""
+    rng = np.random.default_rng(11)
+    m = random_model(rng, Q=3, M=3, D=2)
+    w = np.array([[0.5, 0.5, 0.0], [0.3, 0.0, 0.7], [1.0, 0.0, 0.0]])
+    zero = GestureHMM(m.startprob, m.transmat, w, m.means, m.covars)
+    assert np.isneginf(zero.log_norm[w == 0]).all()
+    X = rng.normal(size=(25, 2))
+    np.testing.assert_allclose(zero.loglik_curve(X), ref_forward(X, *params(zero)), rtol=1e-10)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"means": np.zeros((3, 2))}, r"means must have shape \(Q, M, D\), got \(3, 2\)"),
+        (
+            {"covars": np.array([[[[1.0, 0.5], [0.0, 1.0]]]] * 3).reshape(3, 1, 2, 2)},
+            "covariances must be symmetric",
+        ),
+    ],
+)
+def test_malformed_model_parameters(change, message):
+    rng = np.random.default_rng(12)
+    m = random_model(rng, Q=3, M=1, D=2)
+    p = {
+        "startprob": m.startprob,
+        "transmat": m.transmat,
+        "weights": m.weights,
+        "means": m.means,
+        "covars": m.covars,
+    }
+    with pytest.raises(ModelError, match=message):
+        GestureHMM(**{**p, **change}, name="mine")
+
+
+def test_a_sequence_must_be_numbers():
+    from glu.hmm.model import as_sequence
+
+    with pytest.raises(DataError, match="gesture: not an array of numbers"):
+        as_sequence([["a", "b", "c"]], 3, "gesture")
+    with pytest.raises(DataError, match="gesture: not an array of numbers"):
+        as_sequence([[1.0, 2.0], [3.0]], 2, "gesture")
+
+
+def test_training_settings_and_requests_that_are_refused():
+    seqs = [np.random.default_rng(k).normal(size=(20, 2)) for k in range(3)]
+    for bad in ({"n_iter": 0}, {"tol": 0.0}, {"n_iter": 2.5}):
+        with pytest.raises(ModelError, match="must be ≥ 1 and tol=.* > 0"):
+            TrainingConfig(**bad)
+    with pytest.raises(ModelError, match="one model takes one list of weights, one seed and one start"):
+        train(seqs, weights={"a": [1.0] * 3})
+    with pytest.raises(ModelError, match="one model takes one list of weights"):
+        train(seqs, seed={"a": 1})
+    with pytest.raises(ModelError, match="give a mapping of weights with the same keys"):
+        train({"a": seqs, "b": seqs}, weights={"a": [1.0] * 3})
+    with pytest.raises(ModelError, match="give a mapping of weights with the same keys"):
+        train({"a": seqs}, weights=[1.0] * 3)
+    with pytest.raises(ModelError, match="no seed for b"):
+        train({"a": seqs, "b": seqs}, seed={"a": 1})
+
+
+def test_models_under_other_keys_are_named_by_str():
+    from glu.hmm.training import model_name
+
+    assert [model_name(k) for k in ("tap", (0, "tap"), 7, (), None)] == ["tap", "tap", "7", "()", "None"]
+    seqs = [np.random.default_rng(k).normal(size=(20, 2)) for k in range(3)]
+    cfg = TrainingConfig(n_states=2, n_mix=1, n_iter=3)
+    assert train({7: seqs}, cfg, warn=False)[7].model.name == "7"
+
+
+def test_weighted_training_starts_from_every_weighted_sequence_when_the_heavy_ones_are_too_short():
+    """The sequences of at least half the largest weight give the initial model, unless they hold fewer than
+    Q·M frames (here 4 < 6): then every sequence of positive weight does."""
+    rng = np.random.default_rng(13)
+    seqs = [rng.normal(size=(4, 2)), rng.normal(size=(30, 2)), rng.normal(size=(30, 2))]
+    w = [1.0, 0.2, 0.0]
+    cfg = TrainingConfig(n_states=3, n_mix=2, n_iter=5)
+    got = train(seqs, cfg, weights=w, seed=3, warn=False).model
+    start = init_left_to_right(seqs[:2], 3, 2, cfg.covar_reg, 3)
+    ref = train(seqs, cfg, weights=w, start=start, warn=False).model
+    for a, b in zip(params(got), params(ref), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def _collapsing(n_random=11, seed=0):
+    """Sequences whose last frames are one point: EM can give a state a covariance of 0 without a floor."""
+    rng = np.random.default_rng(seed)
+    return [np.vstack([rng.normal(size=(n_random, 1)), np.ones((20 - n_random, 1))]) for _ in range(3)]
+
+
+def test_em_that_collapses_a_state_names_the_model_and_the_remedy():
+    """Without covar_reg, a state that takes only the repeated point gets a zero covariance: at the last
+    M-step (n_iter = 4 here) the fitted model is invalid, earlier the next E-step fails. Either way one
+    ModelError naming the model."""
+    said = set()
+    for n_iter in range(1, 8):
+        try:
+            train(
+                {"bad": _collapsing()},
+                TrainingConfig(n_states=2, n_mix=1, covar_reg=0.0, n_iter=n_iter),
+                warn=False,
+            )
+        except ModelError as e:
+            said.add(str(e).split(" for bad")[0])
+            assert "for bad" in str(e) and "\n" not in str(e)
+    assert said == {"EM diverged", "EM failed"}
+    with pytest.raises(
+        ModelError,
+        match=r"EM diverged for bad \(HMM 'bad': a covariance matrix is not positive definite\); "
+        "try a larger covar_reg",
+    ):
+        train(
+            {"bad": _collapsing()}, TrainingConfig(n_states=2, n_mix=1, covar_reg=0.0, n_iter=4), warn=False
+        )
+
+
+def test_original_model_files_with_bad_contents(tmp_path, monkeypatch):
+    from glu.hmm.original import load_original_hmms, original_hmm
+
+    rng = np.random.default_rng(14)
+    m = random_model(rng, Q=2, M=2, D=3)
+    mat = {
+        "hmm1_prior": m.startprob[:, None],
+        "hmm1_trans": m.transmat,
+        "hmm1_mixmat": m.weights,
+        "hmm1_mu": np.zeros((3, 2, 3)),  # M = 3 means for M = 2 weights
+        "hmm1_Sigma": np.zeros((3, 3, 2, 2)),
+    }
+    with pytest.raises(
+        ModelError, match=r"model hmm1: mu \(3, 2, 3\) / Sigma \(3, 3, 2, 2\) do not fit Q=2, M=2"
+    ):
+        original_hmm(mat, 1)
+    path = tmp_path / "HMM_M3_Q6_mixsplit.mat"
+    write_original_mat({k: random_model(rng, Q=6, M=3, D=3) for k in (0, 1, 3, 4)}, path)
+    with pytest.raises(ModelError, match="no original model for 'push'; allowed: grasp, tap, touch, garbage"):
+        load_original_hmms(path, actions=("tap", "push"))
+
+    def unreadable(path, **options):
+        raise OSError(5, "Input/output error")
+
+    monkeypatch.setattr("glu.matfile.read_mat", unreadable)
+    with pytest.raises(
+        ModelError, match=r"HMM_M3_Q6_mixsplit.mat: not a readable MATLAB file \(\[Errno 5\] Input/output"
+    ):
+        load_original_hmms(path)
+
+
+def test_forward_of_no_frames_is_empty_and_kmeans_needs_enough_points():
+    from glu.hmm.initialisation import kmeans_labels
+
+    assert forward_curve(np.zeros((0, 3)), np.ones(3) / 3, np.eye(3)).shape == (0,)
+    for k in (0, 5):
+        with pytest.raises(ValueError, match=f"k-means needs between 1 and n_samples=4 clusters, got {k}"):
+            kmeans_labels(np.zeros((4, 2)), k, 0)
+
+
+def test_an_unknown_covariance_update_is_refused():
+    from glu.hmm.em import GMMHMMParams, fit
+
+    m = random_model(np.random.default_rng(15), Q=2, M=1, D=2)
+    init = GMMHMMParams(*params(m))
+    with pytest.raises(ValueError, match="unknown covariance update 'diag'; allowed: "):
+        fit([np.zeros((5, 2))], init, 3, 1e-4, covariance="diag")

@@ -215,3 +215,9 @@ def test_the_batch_scorer_of_a_recogniser_uses_its_features(trained):
         np.testing.assert_allclose(curves[s, : len(X)], rec.loglik_curve(X), rtol=1e-8)
     raw = BatchScorer([rec.models[a] for a in rec.actions]).loglik_curves(seqs)  # bare models: as given
     assert not np.allclose(raw[0, : len(seqs[0])], curves[0, : len(seqs[0])])
+
+
+def test_invariant_features_need_three_coordinates_a_frame():
+    for spec in ("raw", "centred"):
+        with pytest.raises(DataError, match=r"invariant features need shape \(n_frames, 3\), got \(5, 2\)"):
+            Invariants.parse(spec).transform(np.zeros((5, 2)))

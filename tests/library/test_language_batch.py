@@ -109,3 +109,10 @@ def test_every_meaningful_word_is_a_vocabulary_word():
     assert set(WORD_MEANING) <= set(WORDS)
     for node, values in WORD_MEANING.values():
         assert set(values) <= set(AFFORDANCE_VALUES[node])
+
+
+def test_word_probabilities_of_the_wrong_shape():
+    with pytest.raises(
+        VocabularyError, match=r"word probabilities must have shape \(n_rows, 3\), got \(4,\)"
+    ):
+        best_sentences(np.full(4, 0.5), ["a", "b", "c"], parse_grammar("( a b )"))

@@ -167,6 +167,39 @@ def test_bad_settings(taps):
         TrainingConfig(recipe="htk")
 
 
+def _collapsing():
+    """Sequences whose last frames are one point: Baum–Welch without a floor can give a state a covariance
+    of 0."""
+    rng = np.random.default_rng(0)
+    rng.normal(size=60)
+    return [np.vstack([rng.normal(size=(8, 1)), np.ones((12, 1))]) for _ in range(3)]
+
+
+def test_a_collapsing_stage_is_one_error_naming_the_model():
+    """Without covar_floor, the repeated point's state collapses: at the last M-step (n_iter = 7 here) the
+    fitted model is invalid, after it the next E-step fails; trained with a sound model, the error still
+    names the one that failed (each is trained again alone)."""
+    from glu.hmm import train
+
+    def error(data, n_iter):
+        config = TrainingConfig(recipe="mixsplit", n_states=2, n_mix=1, n_iter=n_iter, covar_floor=0.0)
+        with pytest.raises(ModelError) as e:
+            train(data, config, warn=False)
+        assert "\n" not in str(e.value)
+        return str(e.value)
+
+    assert error({"bad": _collapsing()}, 7).startswith(
+        "Baum–Welch diverged for bad at M = 1 (HMM 'bad': a covariance matrix is not positive definite); "
+        "try covar_floor > 0"
+    )
+    assert (
+        error({"bad": _collapsing()}, 8)
+        == "Baum–Welch failed for bad at M = 1: Matrix is not positive definite"
+    )
+    good = [np.random.default_rng(k).normal(size=(20, 1)) for k in range(3)]
+    assert error({"good": good, "bad": _collapsing()}, 20).startswith("Baum–Welch failed for bad at M = 1")
+
+
 def test_recognizer_and_command_line(tmp_path, capsys, taps):
     rec = train_recognizer(
         {"tap": taps, "grasp": taps[:3]},

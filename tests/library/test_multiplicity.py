@@ -8,6 +8,7 @@ import itertools
 import numpy as np
 import pytest
 
+from glu import stats
 from glu.errors import DataError
 from glu.stats import adjust, adjusted_verdict, benjamini_hochberg, bootstrap_p_value, holm
 
@@ -104,3 +105,28 @@ def test_holm_never_below_bh_and_both_above_raw():
         assert (benjamini_hochberg(p) >= p - 1e-15).all()
     for perm in itertools.permutations([0.01, 0.02, 0.03]):
         assert np.allclose(np.sort(holm(np.array(perm))), [0.03, 0.04, 0.04])
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda rng: stats.seed_counts(0, 5, rng), "at least one seed, not 0"),
+        (
+            lambda rng: stats.poisson_weights(4, 5, rng, counts=np.ones(5)),
+            r"counts of shape \(5,\); expected \(6,\)",
+        ),
+        (lambda rng: stats.two_level_sums([np.ones((3, 2)), np.ones((3, 1))], 5, rng), "same statistics"),
+        (lambda rng: stats.two_level_weights(2, 0, 5, rng), "needs seeds and units, got 2 and 0"),
+        (lambda rng: stats.clopper_pearson(4, 3), r"k=4, n=3"),
+        (lambda rng: stats.clopper_pearson(0, 0), r"k=0, n=0"),
+    ],
+)
+def test_bootstrap_helpers_refuse_what_they_cannot_resample(call, message):
+    with pytest.raises(DataError, match=message):
+        call(np.random.default_rng(0))
+
+
+def test_intervals_without_replicates_are_nan_of_the_statistics_shape():
+    """Zero replicates (row 0, the estimate, alone): no interval, one NaN per statistic."""
+    for lo, hi in (stats.percentile_interval(np.empty((0, 2, 3))), stats.interval(np.ones((1, 2, 3)))):
+        assert lo.shape == hi.shape == (2, 3) and np.isnan(lo).all() and np.isnan(hi).all()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import re
 
 import matplotlib
 
@@ -82,6 +83,19 @@ def test_extract_and_bad_input():
         segment_repetitions(tr.take(slice(0, 1)))
 
 
+def test_a_segment_with_a_tracking_jump_is_left_out():
+    """Every step between frames is longer than max_jump = 0: each repetition is left out for its longest
+    step, which is measured here on the segment's own frames."""
+    from glu.gestures.segmentation import SegmentationParams
+
+    tr = _features(synthesize_recording("push", 2, seed=0))
+    seg = segment_repetitions(tr, params=SegmentationParams(max_jump=0.0))
+    assert seg.segments == [] and len(seg.rejected) == 2
+    for s, why in seg.rejected:
+        longest = np.linalg.norm(np.diff(tr.xyz[s.start - 1 : s.end], axis=0), axis=1).max()
+        assert why == f"tracking jump of {longest:.2f} (more than 0.0)"
+
+
 def _png(seg, ref=()) -> tuple[bytes, int]:
     fig, ax = plt.subplots(figsize=(8, 3))
     plot_segmentation(ax, seg, "title", reference=ref)
@@ -144,3 +158,80 @@ def test_plot_a_recording(source):
     png1, _ = _png(seg, original_segments("push1_hand"))
     png2, _ = _png(seg, original_segments("push1_hand"))
     assert png1 == png2 and png1[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_hand_cut_segments_outside_a_shortened_recording_are_left_out(synthetic_folder, tmp_path):
+    import shutil
+
+    from glu.data import resolve_data
+
+    root = tmp_path / "data"
+    shutil.copytree(synthetic_folder, root)
+    log = root / "gestures" / "tap1_hand" / "data.log"
+    log.write_text("".join(log.read_text().splitlines(keepends=True)[:400]))  # frames 1 … 400
+    source = resolve_data(root)
+    seqs = [s for s in real_segments(source, recordings=()) if s.recording == "tap1_hand"]
+    assert [(s.start, s.end) for s in seqs] == [ORIGINAL_SEGMENTS["tap1_hand"][0]]  # (216, 351) only
+
+
+# ---------------------------------------------------------------- your own labelled recordings
+def _table(path, n=30, x=0.1):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    t = np.arange(n) / 30.0
+    rows = np.column_stack([t, np.full(n, x), np.linspace(-0.2, 0.1, n), np.full(n, -0.3)])
+    np.savetxt(path, rows, delimiter=",", header="t,x,y,z", comments="")
+    return path
+
+
+def test_labelled_folders_take_recording_folders_and_skip_hidden_files(tmp_path):
+    from glu.gestures.corpus import labelled_recordings
+
+    root = tmp_path / "mine"
+    _table(root / "wave" / "a.csv")
+    (root / "wave" / "b").mkdir()
+    (root / "wave" / "b" / "data.log").write_text(
+        "".join(f"{i} {i / 30:.6f} 100 -200 -300\n" for i in range(20))
+    )
+    (root / "wave" / ".notes.csv").write_text("not a recording")
+    corpus = labelled_recordings(root)
+    assert [(s.action, s.recording, len(s.xyz)) for s in corpus] == [
+        ("wave", "wave/a.csv", 30),
+        ("wave", "wave/b/data.log", 20),
+    ]
+    np.testing.assert_allclose(corpus[1].xyz[0], [0.1, -0.2, -0.3])  # logged units / 1000
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("file,label,frames,who\n", "columns must be file, label, frames; got file, label, frames, who"),
+        ("file,label,when\n", "columns must be file, label, frames; got file, label, when"),
+        ("file,label\n,wave\n", "m.csv, line 2: empty file or label"),
+        ("file,label\nwave/a.csv, \n", "m.csv, line 2: empty file or label"),
+        (b"file,label\n\xff\n", "m.csv: cannot read the manifest"),
+    ],
+)
+def test_more_bad_manifests(tmp_path, content, message):
+    from glu.gestures.corpus import labelled_recordings
+
+    _table(tmp_path / "wave" / "a.csv")
+    manifest = tmp_path / "m.csv"
+    manifest.write_bytes(content if isinstance(content, bytes) else content.encode())
+    with pytest.raises(DataError, match=re.escape(message)):
+        labelled_recordings(manifest)
+
+
+def test_a_manifest_may_skip_blank_rows_and_name_a_recording_folder(tmp_path):
+    from glu.gestures.corpus import labelled_recordings
+
+    _table(tmp_path / "recs" / "a.csv")
+    (tmp_path / "recs" / "b").mkdir()
+    (tmp_path / "recs" / "b" / "data.log").write_text("".join(f"{i} {i / 30:.6f} 1 2 3\n" for i in range(12)))
+    (tmp_path / "m.csv").write_text("file,label\nrecs/a.csv,wave\n,\n\nrecs/b,point\n")
+    corpus = labelled_recordings(tmp_path / "m.csv")
+    assert [(s.action, s.recording, len(s.xyz)) for s in corpus] == [
+        ("wave", "recs/a.csv", 30),
+        ("point", "recs/b/data.log", 12),
+    ]
+    with pytest.raises(DataError, match="nowhere: no such folder or manifest"):
+        labelled_recordings(tmp_path / "nowhere")

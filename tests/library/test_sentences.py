@@ -232,3 +232,63 @@ def test_sampling_a_grammar_nested_deeper_than_python_recurses_is_a_grammar_erro
     text = "".join(f"$v{i} = $v{i + 1};\n" for i in range(3000)) + "$v3000 = a | b;\n( $v0 )\n"
     with pytest.raises(GrammarError, match="nests too deeply"):
         sample_sentences(parse_grammar(text), 3, seed=0)
+
+
+def test_sample_probability_of_rounds_that_end_at_the_same_word():
+    """``{a | a a}``: a round is one 'a' or two (1/2 each), another round with 1/2. "a a" is two short rounds
+    (1/4 · 1/4 · 1/2) or one long one (1/4 · 1/2): 5/32; "a a a" is three short rounds or a short and a long
+    one in either order: 1/128 + 2/32 = 9/128. A variable used twice is read once."""
+    g = parse_grammar("( { a | a a } )")
+    assert sample_probability(g, "a a") == 5 / 32 and sample_probability(g, "a a a") == 9 / 128
+    twice = parse_grammar("$x = a; ( $x | $x b )")
+    assert [sample_probability(twice, s) for s in ("a", "a b", "b")] == [0.5, 0.5, 0.0]
+
+
+def test_a_sentence_longer_than_python_recurses_is_a_grammar_error():
+    with pytest.raises(GrammarError, match="the sentence is too long or the grammar nests too deeply"):
+        sample_probability(parse_grammar("( { a } )"), " ".join(["a"] * 20_000))
+
+
+def test_a_random_sentence_that_grows_without_bound_is_a_grammar_error():
+    """One round of the repetition is 11,000 words: a sample that takes it (probability 1/2 each) goes past
+    the limit of 10,000 words."""
+    text = "$a0 = x x x x x x x x x x;\n" + "".join(
+        f"$a{k} = {' '.join([f'$a{k - 1}'] * 10)};\n" for k in (1, 2)
+    )
+    g = parse_grammar(text + "$a3 = " + " ".join(["$a2"] * 11) + ";\n( { $a3 } )")
+    with pytest.raises(GrammarError, match="a random sentence grew beyond 10000 words"):
+        sample_sentences(g, 20, seed=0)
+
+
+@pytest.mark.parametrize("max_length", [-1, 2.5])
+def test_a_maximum_length_is_a_whole_number(max_length):
+    with pytest.raises(
+        GrammarError, match=f"the maximum length must be a whole number ≥ 0, not {max_length}"
+    ):
+        count_sentences(parse_grammar("( a {b} )"), max_length=max_length)
+
+
+def test_grammars_too_large_or_too_deep_to_compile(monkeypatch):
+    chain = "".join(f"$v{i} = $v{i - 1};\n" if i else "$v0 = a;\n" for i in range(1500)) + "( $v1499 )"
+    with pytest.raises(GrammarError, match="the grammar nests variables too deeply to expand"):
+        compile_network(parse_grammar(chain))
+    # each chain alone is within reach, but the second runs through the first: compiled, they nest 1,200 deep
+    x = "".join(f"$x{i} = $x{i - 1};\n" if i else "$x0 = a;\n" for i in range(600))
+    y = "".join(f"$y{i} = $y{i - 1};\n" if i else "$y0 = $x599;\n" for i in range(600))
+    with pytest.raises(GrammarError, match="the grammar nests too deeply to compile"):
+        compile_network(parse_grammar(x + y + "( $x599 | $y599 )"))
+    doubling = "$a0 = x x;\n" + "".join(f"$a{k} = $a{k - 1} $a{k - 1};\n" for k in range(1, 20)) + "( $a19 )"
+    with pytest.raises(
+        GrammarError, match="expands to 1048576 words once variables are substituted; glu handles"
+    ):
+        compile_network(parse_grammar(doubling))
+    # the k-th word from the end is an 'a': a deterministic network needs 2^k states (here k = 11, limit 1000)
+    monkeypatch.setattr("glu.language.sentences.MAX_DFA_STATES", 1000)
+    explodes = "( { a | b } a " + " ".join(["(a | b)"] * 10) + " )"
+    with pytest.raises(GrammarError, match="the grammar's word network needs more than 1000 states"):
+        compile_network(parse_grammar(explodes))
+
+
+def test_counting_needs_a_grammar_or_its_network():
+    with pytest.raises(TypeError, match="expected a Grammar or a WordNetwork, not str"):
+        count_sentences("( a b )")

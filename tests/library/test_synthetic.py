@@ -31,6 +31,20 @@ def test_size_out_of_range(n):
         synthesize_experiments(n)
 
 
+@pytest.mark.parametrize("noise", [-0.1, 0.6, float("nan")])
+def test_asr_noise_out_of_range(noise):
+    with pytest.raises(DataError, match=r"asr_noise=.* is out of range; allowed: 0 to 0.5"):
+        synthesize_experiments(200, asr_noise=noise)
+
+
+def test_a_file_is_not_a_synthetic_folder(tmp_path):
+    out = tmp_path / "data"
+    out.write_text("notes")
+    with pytest.raises(DataError, match="exists and is not a folder"):
+        write_synthetic_folder(out, 200, 1)
+    assert out.read_text() == "notes"
+
+
 def test_physics_of_the_generator():
     df = synthesize_experiments(20_000, seed=1)
 

@@ -86,6 +86,15 @@ def test_bad_arguments():
         synthesize_gestures(3, noise=-1)
     with pytest.raises(DataError):
         synthesize_recording("grasp", 0)
+    with pytest.raises(DataError, match="number of sequences -1 is negative"):
+        synthesize_gestures(-1)
+    with pytest.raises(DataError, match="unknown action 'wave'; allowed: grasp, tap, touch, push"):
+        synthesize_recording("wave", 2)
+    for placements in ([(1, 20)], [(5, 10)], [(5, 30), (30, 60)], [(40, 60), (5, 30)]):
+        with pytest.raises(DataError, match="must be in order, apart, after frame 1, ≥ 10 frames each"):
+            synthesize_recording("tap", 2, placements=placements)
+    with pytest.raises(DataError, match=r"n_frames=50 is shorter than the last placement \(60\)"):
+        synthesize_recording("tap", 2, placements=[(5, 30), (40, 60)], n_frames=50)
 
 
 # ---------------------------------------------------------------- views

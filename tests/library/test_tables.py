@@ -203,3 +203,87 @@ def test_corrupted_files_give_data_error_or_a_complete_valid_table(tmp_path, blo
     assert not df.isna().any().any()
     for node in df.columns:
         assert np.all(np.asarray(df[node].cat.codes) >= 0)
+
+
+def test_a_byte_order_mark_before_the_header_is_ignored(tmp_path):
+    p = _write(tmp_path, "\ufeff" + "\n".join([HEADER, _row(Action="grasp")]) + "\n")
+    assert list(read_experiments(p)["Action"]) == ["grasp"]
+
+
+def test_writing_a_value_outside_the_schema_is_refused(tmp_path):
+    df = synthesize_experiments(200, seed=1)
+    df["Size"] = df["Size"].astype(str).replace({"big": "huge"})
+    with pytest.raises(DataError, match=r"column Size: values outside \('small', 'medium', 'big'\)"):
+        write_experiments(df, tmp_path / "t.txt")
+    assert not (tmp_path / "t.txt").exists()
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("Action\tgrasp\n", ":1: expected a node name and at least two values"),
+        ("Action\tgrasp\ttap\nAction\tgrasp\ttap\n", ":2: node 'Action' defined twice"),
+        ("Action\tgrasp\tgrasp\n", ":1: node 'Action' lists a value twice"),
+        (
+            "Action\tgrasp\ttap\nball\t-\tball\nSize\tsmall\tbig\n",
+            ":3: affordance node 'Size' after word nodes",
+        ),
+        ("\n\n", ": empty network definition"),
+    ],
+)
+def test_malformed_network_definitions_name_the_line(tmp_path, text, message):
+    p = _write(tmp_path, text, "networkDefinition.txt")
+    with pytest.raises(DataError, match=re.escape(f"{p}{message}")):
+        read_network_definition(p)
+
+
+# ---------------------------------------------------------------- your own experiments
+def _own(tmp_path: Path, name: str, rows: list[list[str]]) -> Path:
+    sep = "\t" if name.endswith(".tsv") else ","
+    return _write(tmp_path, "".join(sep.join(r) + "\n" for r in rows), name)
+
+
+AFFORDANCES = ["tap", "blue", "sphere", "big", "fast", "fast", "fast", "short"]
+
+
+def test_own_table_with_a_column_per_word(tmp_path):
+    """Each word column may say present/absent, 1/0, yes/no, true/false, or the word itself/-."""
+    from glu.data.tables import read_experiment_table
+
+    spellings = [("present", "absent"), ("1", "0"), (" Yes", "no"), ("TRUE", "false"), ("{w}", "-")]
+    rows = [[*AFFORDANCE_VALUES, *WORDS]]
+    for k, (yes, no) in enumerate(spellings):
+        rows.append([*AFFORDANCES, *((yes if j % 5 == k else no).format(w=w) for j, w in enumerate(WORDS))])
+    df = read_experiment_table(_own(tmp_path, "own.tsv", rows), default_schema())
+    assert (
+        list(df.columns) == [*AFFORDANCE_VALUES, *WORDS]
+        and "own.tsv (5 experiments" in df.attrs["data_source"]
+    )
+    for k in range(len(spellings)):
+        said = [w for j, w in enumerate(WORDS) if j % 5 == k]
+        assert [w for w in WORDS if df[w].iloc[k] == "present"] == said
+    rows[3][8 + 2] = "maybe"
+    with pytest.raises(
+        DataError, match=f"own.tsv:4: column {WORDS[2]}: 'maybe'; allowed: present/absent, 1/0"
+    ):
+        read_experiment_table(_own(tmp_path, "own.tsv", rows), default_schema())
+
+
+@pytest.mark.parametrize(
+    ("name", "rows", "message"),
+    [
+        ("own.txt", [["Action"]], "own.txt: an experiments table is .csv or .tsv"),
+        ("own.csv", [], "own.csv: not a table with a header line (No columns to parse from file)"),
+        ("own.csv", [list(AFFORDANCE_VALUES)], "own.csv: no experiments after the header line"),
+        (
+            "own.csv",
+            [[*AFFORDANCE_VALUES, WORDS[0]], [*AFFORDANCES, "1"]],
+            "own.csv:1: give a column per word (lacking: ",
+        ),
+    ],
+)
+def test_own_tables_that_cannot_be_read(tmp_path, name, rows, message):
+    from glu.data.tables import read_experiment_table
+
+    with pytest.raises(DataError, match=re.escape(message)):
+        read_experiment_table(_own(tmp_path, name, rows), default_schema())

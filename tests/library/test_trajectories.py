@@ -102,6 +102,9 @@ def test_empty_missing_and_folder(tmp_path):
         read_hand_log(tmp_path / "nope.log")
     with pytest.raises(DataError, match="no such file"):
         read_hand_log(tmp_path)  # a folder without data.log
+    (tmp_path / "rec" / "data.log").mkdir(parents=True)
+    with pytest.raises(DataError, match=r"data.log: cannot read: Is a directory"):
+        read_hand_log(tmp_path / "rec")  # a recording folder whose data.log is a folder
     (tmp_path / "data.log").write_text(GOOD)
     assert len(read_hand_log(tmp_path)) == 3  # a recording folder is accepted
 
@@ -184,6 +187,9 @@ def test_written_logs_read_back_exactly(tmp_path):
     np.testing.assert_array_equal(tr.xyz, xyz)
     with pytest.raises(DataError, match="strictly increasing"):
         format_hand_log(t[::-1], xyz)
+    for bad_t, bad_xyz in ((t, xyz[:, :2]), (t[:0], xyz[:0])):
+        with pytest.raises(DataError, match=r"n ≥ 1 timestamps and \(n, 3\) coordinates"):
+            format_hand_log(bad_t, bad_xyz)
 
 
 # --- repair on constructed trajectories ------------------------------------------------------------
@@ -286,3 +292,67 @@ def test_policy_validation():
         RepairPolicy(spikes="smooth")
     with pytest.raises(DataError, match="odd"):
         RepairPolicy(spike_window=4)
+
+
+def test_each_tracking_event_describes_itself_in_one_line():
+    from glu.gestures.trajectories import TrackingEvent
+
+    said = [
+        TrackingEvent("gap", 339, 10.3149, 1.538, "split").describe(),
+        TrackingEvent("spike", 12, 0.4, 0.25, "replaced").describe(),
+        TrackingEvent("jump", 40, 1.3, 0.612, "kept").describe(),
+        TrackingEvent("short-piece", 400, 13.0, 7.0, "dropped").describe(),
+        TrackingEvent("missing", 5, 0.13, 0.0, "dropped").describe(),
+    ]
+    assert said == [
+        "gap of 1.54 s before frame 339 (t=10.31 s): split",
+        "spike at frame 12 (0.25 from the running median) (t=0.40 s): replaced",
+        "jump of 0.61 before frame 40 (t=1.30 s): kept",
+        "piece of 7 frames from frame 400 (t=13.00 s): dropped",
+        "missing at frame 5 (t=0.13 s): dropped",
+    ]
+
+
+def test_a_trajectory_checks_its_arrays():
+    t = np.arange(4) / 30
+    with pytest.raises(
+        DataError, match=r"mine: xyz must have shape \(n_frames, 3\) = \(4, 3\), got \(4, 2\)"
+    ):
+        Trajectory(np.zeros((4, 2)), t, np.arange(1, 5), np.ones(4, bool), "mine")
+    with pytest.raises(DataError, match="mine: timestamps must be finite and strictly increasing"):
+        Trajectory(np.zeros((4, 3)), t[::-1], np.arange(1, 5), np.ones(4, bool), "mine")
+    with pytest.raises(DataError, match=r"mine: frame and observed must have shape \(4,\)"):
+        Trajectory(np.zeros((4, 3)), t, np.arange(1, 4), np.ones(4, bool), "mine")
+    empty = Trajectory(np.zeros((0, 3)), t[:0], np.arange(0), np.ones(0, bool), "mine")
+    with pytest.raises(DataError, match="mine: the trajectory has no frames"):
+        empty.frames(1, 1)
+
+
+def test_a_trajectory_without_a_finite_frame_cannot_be_repaired():
+    tr = _line_traj(10)
+    with pytest.raises(DataError, match="line: no frame has finite coordinates"):
+        repair(tr.with_xyz(np.full((10, 3), np.nan)))
+
+
+def test_more_policy_validation():
+    with pytest.raises(DataError, match="long_gaps='drop'; allowed: 'split', 'keep'"):
+        RepairPolicy(long_gaps="drop")
+    for bad in ({"gap_factor": 1.0}, {"max_interpolate": -1.0}, {"min_piece": 0}):
+        with pytest.raises(DataError, match="gap_factor must be > 1, max_interpolate ≥ 0 and min_piece ≥ 1"):
+            RepairPolicy(**bad)
+
+
+def test_repaired_many_takes_changes_to_the_policy_and_checks_its_arguments():
+    from glu.gestures.trajectories import repaired_many, repaired_xyz
+
+    tr = _line_traj(40)
+    keep = np.ones(40, dtype=bool)
+    keep[10:25] = False  # a long gap: two pieces of 10 and 15 frames
+    src = tr.take(keep)
+    assert len(repaired_many([src.xyz], [src.t])[0]) == 25
+    strict = repaired_many([src.xyz], [src.t], min_piece=12)[0]
+    np.testing.assert_array_equal(strict, src.xyz[10:])  # the first piece is too short now
+    np.testing.assert_array_equal(strict, repaired_xyz(src.xyz, src.t, RepairPolicy(min_piece=12)))
+    assert repaired_many([], []) == []
+    with pytest.raises(DataError, match="2 coordinate arrays but 1 timestamp arrays"):
+        repaired_many([src.xyz, src.xyz], [src.t])

@@ -144,3 +144,37 @@ def test_a_trained_recogniser_keeps_its_training_range(recogniser, tmp_path):
     assert set(ranges) == set(back.actions)
     assert back.meta[META_KEY]["reference"] in ("training", "sampled")
     assert all(r.low <= r.high for r in ranges.values())
+
+
+def test_an_npy_of_x_y_z_is_read_at_30_frames_a_second(tmp_path):
+    from glu.data.trajectory_files import read_trajectory_table
+
+    xyz = np.array([[0.1, -0.2, -0.3], [0.11, -0.2, -0.31], [0.12, -0.21, -0.32]])
+    np.save(tmp_path / "hand.npy", xyz)
+    table = read_trajectory_table(tmp_path / "hand.npy")
+    assert table.kind == "hand"
+    np.testing.assert_array_equal(table.t, [0.0, 1 / 30, 2 / 30])
+    np.testing.assert_array_equal(table.hand, xyz)
+
+
+@pytest.mark.parametrize(
+    ("name", "write", "message"),
+    [
+        ("missing.npy", None, "missing.npy: no such file"),
+        ("text.npy", lambda p: p.write_text("t,x,y,z\n"), "text.npy: not a NumPy array file"),
+        (
+            "flat.npy",
+            lambda p: np.save(p, np.zeros(5)),
+            r"flat.npy: an array of shape \(5,\); expected \(T, 4\)",
+        ),
+        ("wide.npy", lambda p: np.save(p, np.zeros((4, 5))), r"an array of shape \(4, 5\)"),
+        ("empty.npy", lambda p: np.save(p, np.zeros((0, 4))), "empty.npy: no frames"),
+        ("header.csv", lambda p: p.write_text("t,x,y,z\n"), "header.csv: no frames"),
+    ],
+)
+def test_unreadable_or_empty_recordings_are_one_line(tmp_path, name, write, message):
+    if write is not None:
+        write(tmp_path / name)
+    with pytest.raises(DataError, match=message) as e:
+        load_features(tmp_path / name, policy=None)
+    assert "\n" not in str(e.value)

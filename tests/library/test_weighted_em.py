@@ -357,3 +357,20 @@ def test_online_stepwise_em_equals_the_formula_on_the_reference_e_step():
         [GestureHMM(*p).loglik(X) for X in episodes],
         rtol=1e-10,
     )
+
+
+def test_forward_backward_of_one_frame_whose_reachable_emission_underflows():
+    """One frame, the start state's emission e⁻¹⁰⁰⁰ against the other's 1: the scaled mass of frame 1
+    underflows and the log domain gives log L = −1000 exactly (without a warning: the scaled recursion
+    stops before dividing by it); a single frame has no transition."""
+    import warnings
+
+    log_b = np.array([[[-1000.0, 0.0]]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gamma, xi_sum, loglik = forward_backward(
+            log_b, np.array([1]), np.array([1.0, 0.0]), np.array([[0.5, 0.5], [0.0, 1.0]])
+        )
+    assert loglik[0] == -1000.0
+    np.testing.assert_array_equal(gamma, [[[1.0, 0.0]]])
+    np.testing.assert_array_equal(xi_sum, np.zeros((2, 2)))
