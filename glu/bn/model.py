@@ -97,6 +97,10 @@ class BayesNet:
         """All edges ``(parent, child)``, sorted by name."""
         return sorted((p, c) for c in self.nodes for p in self.parents[c])
 
+    def children(self, node: str) -> tuple[str, ...]:
+        """The children of ``node``, in node order."""
+        return tuple(c for c in self.nodes if node in self.parents[c])
+
     def validate(self) -> None:
         """Check the model completely; :class:`ModelError` (one line) for the first problem.
 

@@ -115,6 +115,14 @@ def _chain(n: int, closed: bool) -> dict:
     return {"format": "glu-bayesnet", "version": 1, "n_affordance": n, "nodes": nodes}
 
 
+def test_children_are_the_nodes_naming_the_node_as_parent():
+    """A chain X0 -> X1 -> X2, and B with parent A: each node's children, by hand."""
+    chain = BayesNet.from_dict(_chain(3, closed=False))
+    assert [chain.children(x) for x in ("X0", "X1", "X2")] == [("X1",), ("X2",), ()]
+    two = BayesNet.from_dict(_doc([[0.9, 0.1], [0.2, 0.8]]))
+    assert (two.children("A"), two.children("B")) == (("B",), ())
+
+
 def test_a_chain_deeper_than_pythons_recursion_limit_is_checked_for_cycles():
     """The acyclicity check walks no recursion: a chain of 3,000 nodes is valid, and closed into a loop it
     is refused with the loop named in one line (the recursive search before it said "malformed model
