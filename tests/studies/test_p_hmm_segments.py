@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from glu.errors import DataError
 from glu.gestures.calibration import fit_temperature
 from glu.gestures.corpus import synthetic_corpus
 from glu.hmm import TrainingConfig, loglik_many, stack_models, train
@@ -65,3 +66,16 @@ def test_an_action_with_one_segment_is_not_scored():
     one_tap = [s for s in segs if s.action == "grasp"] + [next(s for s in segs if s.action == "tap")]
     table = segment_readings(one_tap, CONFIG, seed=0)
     assert set(table.action) == {"grasp"} and len(table) == 3 * table.reading.nunique()
+
+
+def test_a_segment_whose_temperature_has_nothing_to_fit_on_is_not_scored():
+    """Two grasps and a tap: a held-out grasp has a model (the other grasp), but no other segment can be
+    scored without both it and that one, so it has no temperature and no row; the tap has no model without it.
+    Nothing can be scored, which is said in one line (fit_temperature's shape error before)."""
+    segs = list(synthetic_corpus(3, seed=11, noise=0.06, actions=ACTIONS))
+    two_grasps = [s for s in segs if s.action == "grasp"][:2] + [next(s for s in segs if s.action == "tap")]
+    with pytest.raises(DataError, match=r"^no segment can be scored \(segments per action: grasp 2, tap 1\)"):
+        segment_readings(two_grasps, CONFIG, seed=0)
+    three_taps = two_grasps + [s for s in segs if s.action == "tap"][1:3]  # grasps scored with the taps' help
+    table = segment_readings(three_taps, CONFIG, seed=0)
+    assert sorted(table.action.unique()) == ["grasp", "tap"] and (table.action == "grasp").sum() == 2 * 3

@@ -20,6 +20,7 @@ from itertools import combinations
 import numpy as np
 import pandas as pd
 
+from glu.errors import DataError
 from glu.gestures.calibration import READINGS, fit_temperature, p_hmm_reading
 from glu.gestures.corpus import LabelledSequence
 from glu.gestures.invariants import Invariants
@@ -74,10 +75,10 @@ def segment_readings(
     rows = []
     for i, s in enumerate(sequences):
         ll = loglik(i, {i})
-        if not np.isfinite(ll).all():
-            continue  # its action has no other segment to train on
-        inner = [(j, loglik(j, {i, j})) for j in range(len(sequences)) if j != i]
+        inner = [(j, loglik(j, {i, j})) for j in range(len(sequences)) if j != i and np.isfinite(ll).all()]
         inner = [(j, v) for j, v in inner if np.isfinite(v).all()]
+        if not inner:
+            continue  # no model of its action without it, or no other segment scored without both
         beta = fit_temperature(np.array([v for _, v in inner]), labels[[j for j, _ in inner]])
         t = np.array(len(xs[i]))
         for reading in READINGS:
@@ -98,6 +99,12 @@ def segment_readings(
                     "n_frames": len(xs[i]),
                 }
             )
+    if not rows:
+        raise DataError(
+            "no segment can be scored (segments per action: "
+            + ", ".join(f"{a} {len(i)}" for a, i in by_action.items())
+            + "): a held-out segment needs models of every action trained without it and one more segment"
+        )
     return tidy(
         pd.DataFrame(rows),
         "p_hmm_real_segments",
