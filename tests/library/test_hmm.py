@@ -731,10 +731,10 @@ def _collapsing(n_random=11, seed=0):
 
 def test_em_that_collapses_a_state_names_the_model_and_the_remedy():
     """Without covar_reg, a state that takes only the repeated point gets a zero covariance: at the last
-    M-step (n_iter = 4 here) the fitted model is invalid, earlier the next E-step fails. Either way one
-    ModelError naming the model."""
-    said = set()
-    for n_iter in range(1, 8):
+    M-step the fitted model is invalid, earlier the next E-step fails (at which iteration it collapses is left
+    to the floating point). Either way one ModelError naming the model."""
+    said = {}
+    for n_iter in range(1, 10):
         try:
             train(
                 {"bad": _collapsing()},
@@ -742,17 +742,13 @@ def test_em_that_collapses_a_state_names_the_model_and_the_remedy():
                 warn=False,
             )
         except ModelError as e:
-            said.add(str(e).split(" for bad")[0])
+            said[str(e).split(" for bad")[0]] = str(e)
             assert "for bad" in str(e) and "\n" not in str(e)
-    assert said == {"EM diverged", "EM failed"}
-    with pytest.raises(
-        ModelError,
-        match=r"EM diverged for bad \(HMM 'bad': a covariance matrix is not positive definite\); "
-        "try a larger covar_reg",
-    ):
-        train(
-            {"bad": _collapsing()}, TrainingConfig(n_states=2, n_mix=1, covar_reg=0.0, n_iter=4), warn=False
-        )
+    assert set(said) == {"EM diverged", "EM failed"}
+    assert said["EM diverged"].startswith(
+        "EM diverged for bad (HMM 'bad': a covariance matrix is not positive definite); "
+        "try a larger covar_reg"
+    )
 
 
 def test_original_model_files_with_bad_contents(tmp_path, monkeypatch):
