@@ -191,9 +191,7 @@ def test_a_collapsing_stage_is_one_error_naming_the_model():
         return None
 
     said = {error({"bad": _collapsing()}, n_iter) for n_iter in range(1, 13)} - {None}
-    diverged = (
-        "Baum–Welch diverged for bad at M = 1 (HMM 'bad': a covariance matrix is not positive definite)"
-    )
+    diverged = "Baum–Welch diverged for bad at M = 1 (HMM 'bad': a covariance matrix is not positive definite"
     assert "Baum–Welch failed for bad at M = 1: Matrix is not positive definite" in said, said
     assert any(m.startswith(diverged + "); try covar_floor > 0") for m in said), said
     good = [np.random.default_rng(k).normal(size=(20, 1)) for k in range(3)]
