@@ -147,3 +147,30 @@ def test_the_manifest_names_the_pinned_commits():
         "fd608ac0f732bc1016df55af0489e5f25c43036c",
     }
     assert all(len(i.sha256) == 64 for i in items)
+
+
+def test_fetch_command_on_a_terminal_writes_failures_above_its_bar(
+    server, mirror_manifest, tmp_path, capsys, monkeypatch
+):
+    """On a terminal the files go by in a progress bar; a failed file still gets its own line, and a fetch
+    that verifies every file says so on stdout."""
+    import re
+    import sys
+
+    root, url, _ = server
+    path, n = mirror_manifest
+    gone = root / "affordance-words" / "networkDefinition.txt"
+    content = gone.read_bytes()
+    gone.unlink()
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
+    dest = tmp_path / "d"
+    argv = ["data", "fetch", "-o", str(dest), "--mirror", url, "--manifest", str(path)]
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and re.search(rf"\[\d+/{n}\] failed     affordance-words/networkDefinition.txt: ", err)
+    assert "downloaded " not in err  # the other files are counted by the bar, not listed
+    gone.write_bytes(content)
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    assert out == f"{n}/{n} files verified in {dest}\n" and "failed" not in err
+    assert (dest / "affordance-words" / "networkDefinition.txt").read_bytes() == content
