@@ -449,3 +449,9 @@ def test_an_input_path_the_system_cannot_resolve_is_no_input(tmp_path, monkeypat
     monkeypatch.chdir(gone)
     gone.rmdir()  # the working folder is removed: "." is still there, its absolute path no longer
     assert _real(".") is None and _real(str(tmp_path)) == tmp_path.resolve()
+
+
+def test_a_path_too_long_for_the_system_is_one_line(capsys, tmp_path):
+    long = tmp_path / ("a" * 300) / "d"
+    status, out, err = _glu(capsys, "data", "synth", "-o", long)
+    assert status == 2 and out == "" and err == f"glu: error: {str(long)!r}: File name too long\n"

@@ -467,3 +467,75 @@ def test_a_full_disk_during_the_site_build_publishes_nothing_and_leaves_no_stagi
         _reproduce_in_process(out, nbs, seed=2)
     assert _published(out) == old and len(_runs(out)) == 1
     assert sorted(p.name for p in out.iterdir()) == sorted([".glu-runs", *OUTPUT_KINDS])
+
+
+def test_an_unexpected_error_is_one_line_asking_for_a_report_and_its_traceback_on_request(
+    monkeypatch, capsys
+):
+    from glu.cli import bn_cmds, main
+
+    def handler(args):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(bn_cmds, "_edges", handler)
+    line = (
+        "glu bn edges: internal error: RuntimeError: boom — this is a bug in glu; please report it with the "
+        "command you ran (set GLU_DEBUG=1 or pass --debug for the traceback)\n"
+    )
+    assert main(["bn", "edges", "model.json"]) == 1
+    assert capsys.readouterr().err == line
+    for argv, env in ((["--debug", "bn", "edges", "model.json"], "0"), (["bn", "edges", "model.json"], "1")):
+        monkeypatch.setenv("GLU_DEBUG", env)
+        assert main(argv) == 1
+        err = capsys.readouterr().err
+        assert err.startswith("Traceback (most recent call last):\n") and err.endswith(
+            "RuntimeError: boom\n" + line
+        )
+
+
+def test_a_closed_pipe_ends_quietly_and_warnings_are_said_once(monkeypatch, capsys):
+    """`glu … | head`: the reader went away, status 0 and nothing said; a warning about the data folder is
+    one line however often it is raised, any other warning as Python shows it."""
+    import warnings
+
+    from glu.cli import bn_cmds, main
+    from glu.data.source import DataWarning
+
+    def closed(args):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def warns(args):
+        for _ in range(3):
+            warnings.warn(DataWarning("data/real is modified"), stacklevel=1)
+        warnings.warn("a user warning", UserWarning, stacklevel=1)
+        return 0
+
+    monkeypatch.setattr(bn_cmds, "_edges", closed)
+    assert main(["bn", "edges", "model.json"]) == 0
+    assert capsys.readouterr() == ("", "")
+    monkeypatch.setattr(bn_cmds, "_edges", warns)
+    with pytest.warns(UserWarning, match="a user warning"):  # passed on to Python's (here pytest's) handler
+        assert main(["bn", "edges", "model.json"]) == 0
+    assert capsys.readouterr().err == "glu bn edges: warning: data/real is modified; results say so\n"
+
+
+def test_an_interrupt_while_the_parser_is_built_and_main_outside_the_main_thread(monkeypatch, capsys):
+    import signal
+    import threading
+
+    import glu.cli as cli
+    from glu.cli import bn_cmds, main
+
+    def interrupted(argv):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(cli, "build_parser", interrupted)
+        assert main(["bn", "edges", "model.json"]) == 130
+    assert capsys.readouterr().err == "glu: interrupted\n"
+    monkeypatch.setattr(bn_cmds, "_edges", lambda args: 0)
+    before, status = signal.getsignal(signal.SIGTERM), []
+    thread = threading.Thread(target=lambda: status.append(main(["bn", "edges", "model.json"])))
+    thread.start()
+    thread.join(60)
+    assert status == [0] and signal.getsignal(signal.SIGTERM) is before
