@@ -61,8 +61,12 @@ def test_on_a_terminal_one_bar_counts_the_cells_done():
     with CellProgress("nb", live=True, stream=stream) as progress:
         _feed(progress)
         assert progress.bar.total == 3 and progress.bar.n == 2  # the third is running
+        drawn = len(stream.getvalue())
+        progress.beat(progress.last_line + 1e6)  # the bar's clock is redrawn; no line says it still runs
+        assert len(stream.getvalue()) > drawn
     text = stream.getvalue()
-    assert "2/3 cells done" in text and "cell 3: z = 'aaa" in text and "starting its kernel" in text
+    assert "still running" not in text and "2/3 cells done" in text
+    assert "cell 3: z = 'aaa" in text and "starting its kernel" in text
     assert text.rstrip().splitlines()[-1].strip().startswith("nb: 3 cells in")
 
 
