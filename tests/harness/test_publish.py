@@ -92,6 +92,48 @@ def test_runs_replace_only_what_glu_published_and_a_stale_staging_goes(capsys, t
     assert len(runs) == 1 and (out / ".glu-runs" / CURRENT).resolve() == runs[0].resolve()
 
 
+def test_a_partial_run_keeps_the_other_notebooks_outputs_unless_the_published_summary_is_malformed(
+    capsys, tmp_path
+):
+    """--only 02 after a full run: 01's figures and summary entries are kept from the published run (a
+    malformed published summary keeps nothing: the run publishes what it ran, as with no summary)."""
+    nbs, out = tmp_path / "nbs", tmp_path / "out"
+    nbs.mkdir()
+    (nbs / "01_a.py").write_text(TINY_NOTEBOOK)
+    (nbs / "02_b.py").write_text(
+        TINY_NOTEBOOK.replace("    - a\n", "    - b\n").replace('"a.{ext}"', '"b.{ext}"')
+    )
+    assert _reproduce(capsys, nbs, out)[0] == 0
+    assert _reproduce(capsys, nbs, out, "--only", "02", "--seed", "5")[0] == 0
+    assert (out / "figures" / "a.png").read_text() == "run 0" and (
+        out / "figures" / "b.png"
+    ).read_text() == "run 5"
+    summary = json.loads((out / "results" / "summary.json").read_text())
+    assert [(nb["name"], nb["parameters"]) for nb in summary["notebooks"]] == [
+        ("01_a", {}),
+        ("02_b", {"seed": 5}),
+    ]
+    assert summary["figures_by_notebook"] == {
+        "a.png": "01_a",
+        "a.svg": "01_a",
+        "b.png": "02_b",
+        "b.svg": "02_b",
+    }
+    for notebooks in (["01_a", {"name": "02_b"}], [{"title": "01_a"}]):
+        published = out / "results" / "summary.json"
+        text = json.dumps({**summary, "notebooks": notebooks})
+        published.unlink()  # a file of its own, not the one the runs share
+        published.write_text(text)
+        status, _, err = _reproduce(capsys, nbs, out, "--only", "02")
+        assert status == 0, err
+        summary = json.loads(published.read_text())
+        assert [nb["name"] for nb in summary["notebooks"]] == ["02_b"] and summary["figures"] == [
+            "b.png",
+            "b.svg",
+        ]
+        assert not (out / "figures" / "a.png").exists()
+
+
 def test_glu_run_refuses_to_write_into_a_published_run(capsys, tmp_path, notebooks):
     out = tmp_path / "out"
     assert _reproduce(capsys, notebooks, out)[0] == 0
