@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
 import signal
 import subprocess
@@ -403,6 +404,29 @@ def test_a_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
     (tmp_path / LOCK_FILE).write_text(f"{dead.pid}\n")
     with run_lock(tmp_path) as lock:
         assert lock.read_text().strip() == str(os.getpid())
+
+
+@pytest.mark.parametrize("ending", ["removed", "replaced"])
+def test_a_lock_file_the_ending_run_removes_meanwhile_is_not_the_one_held(tmp_path, monkeypatch, ending):
+    """Between opening the lock file and locking it, the run that held it ends and removes it (and another
+    run may already have made a new one): the lock is taken on the file at the path, not on the old one."""
+    from glu.run import lock as lock_module
+
+    path, real_flock, opened = tmp_path / lock_module.LOCK_FILE, fcntl.flock, []
+
+    def flock(fd, op):
+        opened.append(os.fstat(fd).st_ino)
+        if len(opened) == 1:  # the first open file: removed before it is locked
+            path.unlink()
+            if ending == "replaced":
+                path.write_text("")
+        real_flock(fd, op)
+
+    monkeypatch.setattr(lock_module.fcntl, "flock", flock)
+    with lock_module.run_lock(tmp_path) as lock:
+        assert len(opened) == 2 and os.stat(lock).st_ino == opened[1]
+        assert lock.read_text() == f"{os.getpid()}\n"
+    assert not path.exists()
 
 
 def test_two_runs_at_once_one_of_them_refused(tmp_path):
