@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -563,3 +564,56 @@ def test_an_interrupt_while_the_parser_is_built_and_main_outside_the_main_thread
     thread.start()
     thread.join(60)
     assert status == [0] and signal.getsignal(signal.SIGTERM) is before
+
+
+def test_a_site_that_cannot_be_built_is_said_after_the_run_is_published_without_it(tmp_path, monkeypatch):
+    import glu.run.reproduce as reproduce_module
+    import glu.run.site as site_module
+    from glu.run.reproduce import reproduce
+    from glu.run.site import SiteError
+
+    def broken(layout, *args, **kwargs):
+        raise SiteError("the documentation site was not built: 1 Sphinx warning(s)")
+
+    monkeypatch.setattr(reproduce_module, "run_notebook", _fake_kernel)
+    monkeypatch.setattr(site_module, "build_site", broken)
+    nbs, out, said = _notebooks(tmp_path / "nbs"), tmp_path / "out", []
+    with pytest.raises(SiteError) as e:
+        reproduce(data="synthetic", out=out, notebooks_dir=nbs, seed=3, log=said.append)
+    assert str(e.value) == (
+        "the documentation site was not built: 1 Sphinx warning(s)\n"
+        "the run was published without its site (`make docs` builds it again)"
+    )
+    files = _published(out)
+    assert (
+        _seeds(files) == {3}
+        and "results/summary.json" in files
+        and not any(f.startswith("site/") for f in files)
+    )
+    assert said[-1].startswith("glu reproduce: done in ")
+
+
+def test_on_a_terminal_a_bar_counts_the_notebooks_and_shows_the_running_ones(tmp_path, monkeypatch):
+    import io
+
+    import glu.run.reproduce as reproduce_module
+    import glu.run.site as site_module
+    from glu.run.reproduce import reproduce
+
+    def slow_kernel(src, out_ipynb, parameters, cwd=None, handle=None):
+        handle._cell_started(1, 3, {"cell_type": "code", "source": "x = 1"})
+        time.sleep(0.6)  # long enough for the bar's ticks (every 0.25 s)
+        _fake_kernel(src, out_ipynb, parameters)
+
+    monkeypatch.setattr(reproduce_module, "run_notebook", slow_kernel)
+    monkeypatch.setattr(site_module, "build_site", _fake_site)
+    terminal = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    nbs, said = _notebooks(tmp_path / "nbs"), []
+    reproduce(
+        data="synthetic", out=tmp_path / "out", notebooks_dir=nbs, jobs=2, log=said.append, progress=True
+    )
+    text = terminal.getvalue()
+    assert "[1/2] " in text and "[2/2] " in text and ": ok in " in text  # written above the bar
+    assert re.search(r"0/2 \[.*(01_a|02_b) cell 2/3 \d+s", text)  # the running notebooks, their cell
+    assert not any(line.startswith("[") for line in said)  # not also in the plain log

@@ -16,7 +16,7 @@ from tiny_notebook import TINY_NOTEBOOK
 
 from glu import paths
 from glu.paths import OUTPUT_KINDS, OutputLayout
-from glu.run.publish import CURRENT, MARKER, PublishError, Store, legacy_files
+from glu.run.publish import CURRENT, MARKER, OWNER, PublishError, Store, legacy_files
 
 
 @pytest.fixture(scope="module")
@@ -243,3 +243,57 @@ def test_a_synthetic_make_reproduce_leaves_gits_tree_clean(tmp_path):
     status = subprocess.run(["git", "status", "--porcelain"], cwd=clone, capture_output=True, text=True)
     assert status.stdout == "", status.stdout
     assert {f.name: f.read_bytes() for f in (clone / "figures").iterdir()} == tracked
+
+
+def test_a_store_or_a_link_glu_did_not_make_is_refused(tmp_path):
+    layout = OutputLayout.under(tmp_path / "out")
+    layout.root.mkdir()
+    layout.store.write_text("a file where the store goes")
+    with pytest.raises(PublishError, match=r"\.glu-runs is not a folder glu made; move it away"):
+        Store(layout).survey()
+    layout.store.unlink()
+    (tmp_path / "elsewhere").mkdir()
+    layout.store.symlink_to(tmp_path / "elsewhere")
+    with pytest.raises(PublishError, match="is not a folder glu made"):
+        Store(layout).survey()
+    layout.store.unlink()
+    layout.figures.symlink_to(tmp_path / "elsewhere")
+    with pytest.raises(PublishError, match=r"figures is a link glu did not make; glu never replaces"):
+        Store(layout).survey()
+    assert Store(layout, force=True).survey()["figures"] == "kept"
+
+
+def test_clean_removes_a_pointer_never_swapped_in_and_keeps_a_run_of_a_live_process(tmp_path, monkeypatch):
+    from glu.run import publish
+
+    store = Store(OutputLayout.under(tmp_path / "out"))
+    run = store.begin()
+    (run / OWNER).write_text("1\n")  # a process of another user's: signals to it are refused
+    pointer = store.root / f".{CURRENT}-1234"
+    pointer.symlink_to(run.name)
+    monkeypatch.setattr(publish.os, "kill", lambda pid, sig: (_ for _ in ()).throw(PermissionError(1, "no")))
+    assert store.clean() == [] and run.is_dir() and not pointer.is_symlink()
+    monkeypatch.undo()
+    (run / OWNER).write_text("not a process id\n")
+    assert store.clean() == [run] and not run.exists()
+
+
+def test_files_are_copied_where_hard_links_are_refused_and_a_bad_record_is_none(tmp_path, monkeypatch):
+    from glu.run import publish
+
+    (tmp_path / "a.txt").write_text("kept")
+
+    def refused(src, dst):
+        raise OSError(18, "Invalid cross-device link")
+
+    monkeypatch.setattr(publish.os, "link", refused)
+    publish._link_or_copy(tmp_path / "a.txt", tmp_path / "run" / "x" / "a.txt")
+    assert (tmp_path / "run" / "x" / "a.txt").read_text() == "kept"
+    assert (tmp_path / "run" / "x" / "a.txt").stat().st_ino != (tmp_path / "a.txt").stat().st_ino
+    run = tmp_path / "run"
+    assert publish.read_record(run) == {}  # none
+    for text in ("{not json", '{"other": 1}', '["files"]', '{"files": ["a"]}'):
+        (run / publish.RUN_RECORD).write_text(text)
+        assert publish.read_record(run) == {}, text
+    (run / publish.RUN_RECORD).write_text('{"files": {"x/a.txt": "01_a", "../b": "01_a", "c": 3}}')
+    assert publish.read_record(run) == {"x/a.txt": "01_a"}
