@@ -262,12 +262,20 @@ def test_the_site_needs_a_run(tmp_path):
         build_site(OutputLayout.under(tmp_path), log=lambda _: None)
 
 
+def _build(src: Path, out: Path, warnings=None) -> None:
+    """Sphinx on the project ``src`` into ``out/html``, its registrations undone afterwards (as glu's own
+    build does: a later build in this process must not find them)."""
+    from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace, patch_docutils
+
+    with patch_docutils(src), docutils_namespace():
+        Sphinx(src, src, out / "html", out / "doctrees", "html", status=None, warning=warnings).build()
+
+
 def test_formulas_are_mathml_a_numbered_one_with_its_number_an_unreadable_one_a_warning(tmp_path):
     """glu.run.site_math alone in a one-page Sphinx project: x^2 as MathML, the number of a labelled
     formula beside it, and a formula latex2mathml cannot read shown as its LaTeX, with a warning."""
     import io
-
-    from sphinx.application import Sphinx
 
     src = tmp_path / "src"
     src.mkdir()
@@ -277,8 +285,7 @@ def test_formulas_are_mathml_a_numbered_one_with_its_number_an_unreadable_one_a_
         ".. math:: y^2\n   :label: square\n\n.. math:: z^\n"
     )
     warnings = io.StringIO()
-    app = Sphinx(src, src, tmp_path / "html", tmp_path / "doctrees", "html", status=None, warning=warnings)
-    app.build()
+    _build(src, tmp_path, warnings)
     page = (tmp_path / "html" / "index.html").read_text()
     mathml = '<math xmlns="http://www.w3.org/1998/Math/MathML" display='
     assert f'<span class="math notranslate">{mathml}"inline"><mrow><msup><mi>x</mi><mn>2</mn></msup>' in page
@@ -293,8 +300,6 @@ def test_formulas_are_mathml_a_numbered_one_with_its_number_an_unreadable_one_a_
 def test_only_a_figure_with_a_caption_becomes_a_captioned_figure(tmp_path):
     """glu's MyST-NB renderer alone in a one-notebook Sphinx project: an image whose output metadata has
     a title is a captioned figure; one with only its file name, or no glu metadata, stays a plain image."""
-    from sphinx.application import Sphinx
-
     png = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNkYPhfDwAChwGA60e6kgAAAABJRU5ErkJggg=="
     src = tmp_path / "src"
     src.mkdir()
@@ -308,7 +313,7 @@ def test_only_a_figure_with_a_caption_becomes_a_captioned_figure(tmp_path):
     ]
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("# Title"), cell])
     nbformat.write(nb, src / "index.ipynb")
-    Sphinx(src, src, tmp_path / "html", tmp_path / "doctrees", "html", status=None, warning=None).build()
+    _build(src, tmp_path)
     page = (tmp_path / "html" / "index.html").read_text()
     assert page.count("<img ") == 3 and page.count("<figure") == 1
     figure = page[page.index("<figure") : page.index("</figure>")]
