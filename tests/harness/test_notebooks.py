@@ -455,19 +455,21 @@ def _header(expected: float, body: str) -> str:
 
 
 def test_a_failure_stops_the_notebook_running_beside_it_and_those_not_started_never_start(tmp_path):
-    """-j 2: 02 (longest, first) and 01 start; 01 fails: 02 is stopped at once, 03 never starts."""
+    """-j 2: 02 (longest, first) and 01 start; 01 fails: 02 is stopped at once, and so is 03, which took
+    01's place; 04, still waiting, never starts."""
     nbs = tmp_path / "nbs"
     nbs.mkdir()
     (nbs / "01_fails.py").write_text(_header(5, '\n# %%\nraise RuntimeError("deliberate failure")\n'))
     (nbs / "02_slow.py").write_text(_header(100, "\n# %%\nimport time\ntime.sleep(120)\n"))
     (nbs / "03_later.py").write_text(_header(1, ""))
+    (nbs / "04_last.py").write_text(_header(0.5, ""))
     said = []
     with pytest.raises(NotebookError, match="notebook 01_fails failed in cell .* deliberate failure"):
         reproduce(
             data="synthetic", out=tmp_path / "out", jobs=2, log=said.append, notebooks_dir=nbs, site=False
         )
     finished = [line for line in said if line.startswith("[")]
-    assert len(finished) == 1 and finished[0].startswith("[1/3] 01_fails: FAILED after ")
+    assert len(finished) == 1 and finished[0].startswith("[1/4] 01_fails: FAILED after ")
     assert not (tmp_path / "out" / "figures").exists()
 
 
