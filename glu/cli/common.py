@@ -89,9 +89,7 @@ def tolerance(text: str) -> float:
 def _writable_folder(folder: Path) -> str | None:
     """Why files cannot be created in ``folder`` (made if missing), or None when they can."""
     probe = folder
-    while not probe.exists():
-        if probe.parent == probe:
-            break
+    while not probe.exists() and probe.parent != probe:  # ends at "/" or ".", which exist
         probe = probe.parent
     if not probe.is_dir():
         return f"{probe} is a file, not a folder"

@@ -26,10 +26,7 @@ class RunLockedError(GluError):
 
 
 def _holder(fd: int) -> str:
-    try:
-        text = os.pread(fd, 64, 0).decode("ascii", "replace").strip()
-    except OSError:
-        text = ""
+    text = os.pread(fd, 64, 0).decode("ascii", "replace").strip()
     return f"process {text}" if text.isdigit() else "a process that is starting"
 
 

@@ -65,16 +65,6 @@ class Outputs:
     written: list[Path] = field(default_factory=list)
 
     @property
-    def figures(self) -> Path:
-        """The folder of figures."""
-        return self.layout.figures
-
-    @property
-    def results(self) -> Path:
-        """The folder of result tables."""
-        return self.layout.results
-
-    @property
     def data_label(self) -> str:
         """One line naming the data, for figure footers and tables."""
         return self.source.describe()

@@ -63,6 +63,8 @@ from glu.run.publish import Store, legacy_files, reached, refuse_published
 from glu.run.summary import (
     RENDERING_RECORD,
     NotebookResult,
+    SummaryError,
+    check_summary,
     collect_summary,
     expected_seconds,
     previous_summary,
@@ -418,7 +420,11 @@ def _stage(plan: _Plan, run: Path, results: list[NotebookResult]) -> dict[str, A
     staged = OutputLayout.under(run)
     current = plan.store.current()
     previous = previous_summary(current / "results") if current is not None else {}
-    same = previous.get("data_source") == plan.source.describe() and previous.get("quick") == plan.quick
+    try:  # a malformed summary (edited, or damaged) is kept no more than a missing one
+        check_summary(previous)
+        same = previous.get("data_source") == plan.source.describe() and previous.get("quick") == plan.quick
+    except SummaryError:
+        same = False
     ran = {r.name for r in results}
     others = [nb["name"] for nb in previous.get("notebooks", []) if same and nb.get("name") not in ran]
     plan.kept = plan.store.carry_over(run, others)

@@ -75,6 +75,9 @@ def check_summary(doc: Any) -> None:
     for key, kind in (("data_source", str), ("quick", bool), ("versions", dict), ("tables", dict)):
         if key in doc and not isinstance(doc[key], kind):
             raise SummaryError(f"{key}: expected {kind.__name__}, got {type(doc[key]).__name__}")
+    for name, table in (doc.get("tables") or {}).items():
+        if not isinstance(table, dict) or not isinstance(table.get("meta"), dict):
+            raise SummaryError(f"tables[{name!r}]: not a table (its meta and rows)")
     if doc.get("wall_time_s") is not None and not _number(doc["wall_time_s"]):
         raise SummaryError("wall_time_s is not a number")
     for i, c in enumerate(doc.get("comparison_with_reference") or []):

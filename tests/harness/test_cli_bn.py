@@ -222,3 +222,30 @@ def test_console_script_error_has_no_traceback(tmp_path):
     )
     assert res.returncode == 2
     assert res.stderr.count("\n") == 1 and "not a glu data folder" in res.stderr
+
+
+def test_a_batch_file_that_cannot_be_read_is_one_line_and_status_2(tmp_path, capsys, zero_bn):
+    model = str(zero_bn.save(tmp_path / "m.json"))
+    (tmp_path / "latin1.jsonl").write_bytes(b'{"target": ["Action"], "evidence": {"Shape": "b\xf6x"}}\n')
+    for batch, message in (
+        (tmp_path / "none.jsonl", f"{tmp_path / 'none.jsonl'}: no such batch file"),
+        (tmp_path, f"{tmp_path}: cannot read the batch file ([Errno 21] Is a directory"),
+        (
+            tmp_path / "latin1.jsonl",
+            f"{tmp_path / 'latin1.jsonl'}: cannot read the batch file ('utf-8' codec can't decode",
+        ),
+    ):
+        status, out, err = run(capsys, "query", "--model", model, "--batch", str(batch))
+        assert status == 2 and out == "" and err.count("\n") == 1
+        assert err.startswith(f"glu query: error: {message}")
+
+
+def test_the_words_target_of_a_model_without_word_nodes_is_refused(tmp_path, capsys):
+    bif = tmp_path / "net.bif"
+    bif.write_text(
+        "network n {}\nvariable A { type discrete [ 2 ] { a0, a1 }; }\n"
+        "probability ( A ) { table 0.5, 0.5; }\n"
+    )
+    status, out, err = run(capsys, "query", "--model", str(bif), "--target", "words")
+    assert status == 2 and out == ""
+    assert err == "glu query: error: --target words: this model has no word nodes\n"

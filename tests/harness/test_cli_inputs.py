@@ -382,3 +382,76 @@ def test_query_offers_the_renormalise_its_advice_names(capsys, tmp_path):
     status, out, err = run(capsys, "query", "--model", str(bif), "--target", "A", "--renormalise")
     assert status == 0, err
     assert "1 CPT row(s) rescaled" in out and "A  a0" in out
+
+
+def test_the_safe_streams_escape_what_writelines_writes_too(capsys):
+    from glu.cli.terminal import safe_streams
+
+    with safe_streams():
+        sys.stdout.writelines(["tap\x1bc\n", "\u202eevil\r\n"])
+        sys.stderr.writelines(["50 %\r", "\x07done\n"])
+    out, err = capsys.readouterr()
+    assert out == "tap\\x1bc\n\\u202eevil\\x0d\n" and err == "50 %\r\\x07done\n"
+
+
+RENORMALISE = "--renormalise applies to BIF, XMLBIF and UAI files"
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["gestures", "segment", "x.log", "--plot", "-"], "an image is not written to standard output"),
+        (["query", "--model", "m.json", "--renormalise", "--target", "A"], RENORMALISE),
+        (["query", "--model", "m.mat", "--renormalise", "--target", "A"], RENORMALISE),
+        (["describe", "--sample", "3", "--max-length", "9"], "--max-length applies to the exact N-best"),
+    ],
+)
+def test_options_that_do_not_go_together_are_refused_before_any_work(capsys, argv, message):
+    status, out, err = _glu(capsys, *argv)
+    assert status == 2 and out == "" and err.count("\n") == 1 and message in err
+
+
+def test_describe_says_when_no_sentence_is_left(capsys):
+    # "falling" comes after "is" (the ball is falling): in no sentence of the shortest length, 8 words
+    argv = ["describe", "--evidence", "Action=grasp", "--must-contain", "falling", "--max-length", "8"]
+    status, out, err = _glu(capsys, *argv)
+    assert status == 0 and out.splitlines()[-1] == "# no sentence" and "rank" not in out
+    status, out, err = _glu(capsys, *argv, "--json")
+    assert status == 0 and json.loads(out) == []
+
+
+def test_the_default_data_folder_is_an_input_too(capsys, tmp_path, monkeypatch, synthetic_folder):
+    """With --data left out, $GLU_DATA_DIR is what the command reads: no output may land in it; a
+    $GLU_DATA_DIR that is no data folder is the command's own error, not the guard's."""
+    table = synthetic_folder / "gestures" / "tap1_hand" / "data.log"
+    monkeypatch.setenv("GLU_DATA_DIR", str(synthetic_folder))
+    status, out, err = _glu(capsys, "bn", "learn", "-o", table)
+    assert (
+        status == 2
+        and out == ""
+        and err
+        == (
+            f"glu bn learn: error: -o {table} is a file inside an input folder (the data folder "
+            f"{synthetic_folder}); write to another path\n"
+        )
+    )
+    monkeypatch.setenv("GLU_DATA_DIR", str(tmp_path / "none"))
+    status, out, err = _glu(capsys, "bn", "learn", "-o", tmp_path / "m.json")
+    assert status == 2 and out == "" and err.count("\n") == 1 and str(tmp_path / "none") in err
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_an_input_path_the_system_cannot_resolve_is_no_input(tmp_path, monkeypatch):
+    from glu.cli.guard import _real
+
+    gone = tmp_path / "gone"
+    gone.mkdir()
+    monkeypatch.chdir(gone)
+    gone.rmdir()  # the working folder is removed: "." is still there, its absolute path no longer
+    assert _real(".") is None and _real(str(tmp_path)) == tmp_path.resolve()
+
+
+def test_a_path_too_long_for_the_system_is_one_line(capsys, tmp_path):
+    long = tmp_path / ("a" * 300) / "d"
+    status, out, err = _glu(capsys, "data", "synth", "-o", long)
+    assert status == 2 and out == "" and err == f"glu: error: {str(long)!r}: File name too long\n"

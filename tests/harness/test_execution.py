@@ -124,3 +124,73 @@ def test_papermill_loads_without_jsonschemas_slow_optional_iri_checker_and_noteb
 
     assert iri_checker("") is False
     assert iri_checker("import jsonschema") is True
+
+
+THREE_CELLS = """# %% tags=["parameters"]
+x: int = 0
+
+# %%
+a = 1
+
+# %%
+b = 2
+"""
+
+
+@pytest.mark.parametrize(
+    "moment", ["before its kernel", "while its kernel starts", "between cells", "last cell"]
+)
+def test_a_stop_at_any_moment_ends_the_run_as_stopped(tmp_path, monkeypatch, moment):
+    """A stop that comes before the kernel starts, while it starts, between two cells (no further cell
+    runs), or during the last cell (papermill then ends quietly): NotebookStopped, never a finished run."""
+    pytest.importorskip("papermill")
+    from glu.run import execution
+    from glu.run.execution import NotebookStopped
+
+    src = tmp_path / "three.py"
+    src.write_text(THREE_CELLS)
+    started = []
+
+    def on_cell(index, n_cells):
+        started.append(index)
+        if (moment == "between cells" and len(started) == 2) or (
+            moment == "last cell" and index == n_cells - 1
+        ):
+            handle.stopped = True  # as stop() sets it, its kill of the kernel not yet come
+
+    handle = RunHandle(on_cell=on_cell)
+    if moment == "before its kernel":
+        handle.stopped = True
+    elif moment == "while its kernel starts":
+        kernel_env = execution._kernel_env
+
+        def stopped_meanwhile(*args):
+            handle.stopped = True
+            return kernel_env(*args)
+
+        monkeypatch.setattr(execution, "_kernel_env", stopped_meanwhile)
+    with pytest.raises(NotebookStopped, match="^three: stopped$"):
+        run_notebook(src, tmp_path / "three.ipynb", {"x": 1}, handle=handle)
+    assert len(started) == {"before its kernel": 0, "while its kernel starts": 0, "between cells": 2}.get(
+        moment, 4
+    )
+
+
+def test_stop_after_the_kernel_is_gone_and_the_engine_registered_when_no_entry_point_did(monkeypatch):
+    import subprocess
+    import sys
+    from types import SimpleNamespace
+
+    from papermill.engines import papermill_engines
+
+    from glu.run.execution import _register_engine
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    log = SimpleNamespace(disabled=False)
+    handle = RunHandle()
+    handle._client = SimpleNamespace(log=log, km=SimpleNamespace(provisioner=SimpleNamespace(process=gone)))
+    handle.stop()  # the kernel already ended: nothing to kill, no error
+    assert handle.stopped and log.disabled
+    monkeypatch.delitem(papermill_engines._engines, "glu")  # glu run from a checkout that is not installed
+    assert _register_engine() == "glu" and papermill_engines._engines["glu"].__name__ == "GluEngine"

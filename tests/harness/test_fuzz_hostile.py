@@ -137,6 +137,7 @@ def _tree(folder):
         (lambda s: {**s, "notebooks": [{"name": "01_a", "seconds": "a lot"}]}, "seconds is not a number"),
         (lambda s: {**s, "versions": ["numpy"]}, "versions: expected dict"),
         (lambda s: {**s, "comparison_with_reference": [{"table": 1}]}, "is not a comparison"),
+        (lambda s: {**s, "tables": {"t": ["x"]}}, "tables['t']: not a table (its meta and rows)"),
     ],
 )
 def test_make_docs_refuses_a_malformed_summary_in_one_line_and_writes_nowhere(

@@ -333,3 +333,65 @@ def test_an_empty_folder_of_recordings_is_one_line(capsys, tmp_path):
     out = str(tmp_path / "o.json")
     status, _, err = run(capsys, "hmm", "train", "--recordings", str(tmp_path / "empty"), "-o", out)
     assert_one_line_error(status, err, "no recordings found; expected one subfolder per action")
+
+
+def test_segment_reports_a_gap_and_the_candidates_it_left_out(capsys, tmp_path):
+    """A log cut in the middle of its last tap, with half a second missing after frame 100 (inside the first
+    tap): the gap splits the trajectory, the pieces of the cut taps are left out as partial."""
+    rec = synthesize_recording("tap", 3, seed=1, noise=0.005)
+    tr = rec.trajectory()
+    (a, b), (c, d), (e, f) = rec.segments
+    assert a < 100 < b
+    cut = (e + f) // 2
+    t = 1000.0 + tr.t[:cut]
+    t[100:] += 0.5
+    log = _write_log(tmp_path / "data.log", tr.xyz[:cut], t)
+    status, out, err = run(capsys, "gestures", "segment", str(log), "--label", "tap")
+    assert status == 0, err
+    lines = out.splitlines()
+    gap = next(line for line in lines if line.startswith("  gap of "))
+    assert gap.startswith(f"  gap of {0.5 + tr.t[100] - tr.t[99]:.2f} s before frame 101 ") and gap.endswith(
+        "split"
+    )
+    left = lines[lines.index("left out: 3") + 1 :]
+    assert len(left) == 3 and all(
+        line.endswith("partial: cut by the start or end of the trajectory") for line in left
+    )
+    assert left[1].startswith("  frames 101:") and left[2].endswith(
+        f":{cut}: partial: cut by the start or end of the trajectory"
+    )
+    kept = [line for line in lines if line.startswith("  1. frames ")]
+    start, end = map(int, kept[0].split("frames ")[1].split(" ")[0].split(":"))
+    assert "segments: 1" in lines and c - 5 <= start < end <= d + 5
+
+
+def test_segment_a_recording_by_name_says_its_data(capsys, source):
+    status, out, err = run(capsys, "gestures", "segment", "tap1_hand", "--data", str(source.root))
+    assert status == 0, err
+    assert out.startswith(f"data: {source.kind} data") and "\nlog: " in out
+
+
+def test_train_refuses_options_its_data_cannot_honour(capsys, tmp_path, synthetic_folder):
+    import shutil
+
+    out = str(tmp_path / "m.json")
+    status, _, err = run(capsys, "hmm", "train", "--synthetic", "3", "--body-size", "1.8", "1.2", "-o", out)
+    assert_one_line_error(
+        status, err, "--body-size goes with --recordings (the body size of your t,x,y,z tables)"
+    )
+    _recordings(tmp_path / "mine", n=1)
+    status, _, err = run(
+        capsys, "hmm", "train", "--recordings", str(tmp_path / "mine"), "--actions", "wave,jump", "-o", out
+    )
+    assert_one_line_error(status, err, "--actions jump: no such label; the labels are ")
+    tables = tmp_path / "tables"
+    shutil.copytree(synthetic_folder, tables, ignore=shutil.ignore_patterns("gestures"))
+    status, _, err = run(capsys, "hmm", "train", "--data", str(tables), "-o", out)
+    assert_one_line_error(
+        status, err, "the data source has no gesture recordings (", "give --data DIR with gestures/"
+    )
+    status, _, err = run(
+        capsys, "hmm", "train", "--data", str(synthetic_folder), "--actions", "tap,wave", "-o", out
+    )
+    assert_one_line_error(status, err, "no training segments for wave")
+    assert not (tmp_path / "m.json").exists()

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -405,6 +407,29 @@ def test_a_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
         assert lock.read_text().strip() == str(os.getpid())
 
 
+@pytest.mark.parametrize("ending", ["removed", "replaced"])
+def test_a_lock_file_the_ending_run_removes_meanwhile_is_not_the_one_held(tmp_path, monkeypatch, ending):
+    """Between opening the lock file and locking it, the run that held it ends and removes it (and another
+    run may already have made a new one): the lock is taken on the file at the path, not on the old one."""
+    from glu.run import lock as lock_module
+
+    path, real_flock, opened = tmp_path / lock_module.LOCK_FILE, fcntl.flock, []
+
+    def flock(fd, op):
+        opened.append(os.fstat(fd).st_ino)
+        if len(opened) == 1:  # the first open file: removed before it is locked
+            path.unlink()
+            if ending == "replaced":
+                path.write_text("")
+        real_flock(fd, op)
+
+    monkeypatch.setattr(lock_module.fcntl, "flock", flock)
+    with lock_module.run_lock(tmp_path) as lock:
+        assert len(opened) == 2 and os.stat(lock).st_ino == opened[1]
+        assert lock.read_text() == f"{os.getpid()}\n"
+    assert not path.exists()
+
+
 def test_two_runs_at_once_one_of_them_refused(tmp_path):
     """Two processes take the lock at the same moment: exactly one holds it."""
     script = (
@@ -467,3 +492,128 @@ def test_a_full_disk_during_the_site_build_publishes_nothing_and_leaves_no_stagi
         _reproduce_in_process(out, nbs, seed=2)
     assert _published(out) == old and len(_runs(out)) == 1
     assert sorted(p.name for p in out.iterdir()) == sorted([".glu-runs", *OUTPUT_KINDS])
+
+
+def test_an_unexpected_error_is_one_line_asking_for_a_report_and_its_traceback_on_request(
+    monkeypatch, capsys
+):
+    from glu.cli import bn_cmds, main
+
+    def handler(args):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(bn_cmds, "_edges", handler)
+    line = (
+        "glu bn edges: internal error: RuntimeError: boom — this is a bug in glu; please report it with the "
+        "command you ran (set GLU_DEBUG=1 or pass --debug for the traceback)\n"
+    )
+    assert main(["bn", "edges", "model.json"]) == 1
+    assert capsys.readouterr().err == line
+    for argv, env in ((["--debug", "bn", "edges", "model.json"], "0"), (["bn", "edges", "model.json"], "1")):
+        monkeypatch.setenv("GLU_DEBUG", env)
+        assert main(argv) == 1
+        err = capsys.readouterr().err
+        assert err.startswith("Traceback (most recent call last):\n") and err.endswith(
+            "RuntimeError: boom\n" + line
+        )
+
+
+def test_a_closed_pipe_ends_quietly_and_warnings_are_said_once(monkeypatch, capsys):
+    """`glu … | head`: the reader went away, status 0 and nothing said; a warning about the data folder is
+    one line however often it is raised, any other warning as Python shows it."""
+    import warnings
+
+    from glu.cli import bn_cmds, main
+    from glu.data.source import DataWarning
+
+    def closed(args):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def warns(args):
+        for _ in range(3):
+            warnings.warn(DataWarning("data/real is modified"), stacklevel=1)
+        warnings.warn("a user warning", UserWarning, stacklevel=1)
+        return 0
+
+    monkeypatch.setattr(bn_cmds, "_edges", closed)
+    assert main(["bn", "edges", "model.json"]) == 0
+    assert capsys.readouterr() == ("", "")
+    monkeypatch.setattr(bn_cmds, "_edges", warns)
+    with pytest.warns(UserWarning, match="a user warning"):  # passed on to Python's (here pytest's) handler
+        assert main(["bn", "edges", "model.json"]) == 0
+    assert capsys.readouterr().err == "glu bn edges: warning: data/real is modified; results say so\n"
+
+
+def test_an_interrupt_while_the_parser_is_built_and_main_outside_the_main_thread(monkeypatch, capsys):
+    import signal
+    import threading
+
+    import glu.cli as cli
+    from glu.cli import bn_cmds, main
+
+    def interrupted(argv):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(cli, "build_parser", interrupted)
+        assert main(["bn", "edges", "model.json"]) == 130
+    assert capsys.readouterr().err == "glu: interrupted\n"
+    monkeypatch.setattr(bn_cmds, "_edges", lambda args: 0)
+    before, status = signal.getsignal(signal.SIGTERM), []
+    thread = threading.Thread(target=lambda: status.append(main(["bn", "edges", "model.json"])))
+    thread.start()
+    thread.join(60)
+    assert status == [0] and signal.getsignal(signal.SIGTERM) is before
+
+
+def test_a_site_that_cannot_be_built_is_said_after_the_run_is_published_without_it(tmp_path, monkeypatch):
+    import glu.run.reproduce as reproduce_module
+    import glu.run.site as site_module
+    from glu.run.reproduce import reproduce
+    from glu.run.site import SiteError
+
+    def broken(layout, *args, **kwargs):
+        raise SiteError("the documentation site was not built: 1 Sphinx warning(s)")
+
+    monkeypatch.setattr(reproduce_module, "run_notebook", _fake_kernel)
+    monkeypatch.setattr(site_module, "build_site", broken)
+    nbs, out, said = _notebooks(tmp_path / "nbs"), tmp_path / "out", []
+    with pytest.raises(SiteError) as e:
+        reproduce(data="synthetic", out=out, notebooks_dir=nbs, seed=3, log=said.append)
+    assert str(e.value) == (
+        "the documentation site was not built: 1 Sphinx warning(s)\n"
+        "the run was published without its site (`make docs` builds it again)"
+    )
+    files = _published(out)
+    assert (
+        _seeds(files) == {3}
+        and "results/summary.json" in files
+        and not any(f.startswith("site/") for f in files)
+    )
+    assert said[-1].startswith("glu reproduce: done in ")
+
+
+def test_on_a_terminal_a_bar_counts_the_notebooks_and_shows_the_running_ones(tmp_path, monkeypatch):
+    import io
+
+    import glu.run.reproduce as reproduce_module
+    import glu.run.site as site_module
+    from glu.run.reproduce import reproduce
+
+    def slow_kernel(src, out_ipynb, parameters, cwd=None, handle=None):
+        handle._cell_started(1, 3, {"cell_type": "code", "source": "x = 1"})
+        time.sleep(0.6)  # long enough for the bar's ticks (every 0.25 s)
+        _fake_kernel(src, out_ipynb, parameters)
+
+    monkeypatch.setattr(reproduce_module, "run_notebook", slow_kernel)
+    monkeypatch.setattr(site_module, "build_site", _fake_site)
+    terminal = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    nbs, said = _notebooks(tmp_path / "nbs"), []
+    reproduce(
+        data="synthetic", out=tmp_path / "out", notebooks_dir=nbs, jobs=2, log=said.append, progress=True
+    )
+    text = terminal.getvalue()
+    assert "[1/2] " in text and "[2/2] " in text and ": ok in " in text  # written above the bar
+    assert re.search(r"0/2 \[.*(01_a|02_b) cell 2/3 \d+s", text)  # the running notebooks, their cell
+    assert not any(line.startswith("[") for line in said)  # not also in the plain log

@@ -209,3 +209,39 @@ def test_learning_curves_on_a_local_dask_cluster_equal_the_run_here(capsys, tmp_
         "learning_results.npz",
     ):
         assert (here / name).read_bytes() == (there / name).read_bytes(), name
+
+
+def test_seeds_are_a_list_or_a_range_and_the_margin_an_accuracy(capsys, tmp_path):
+    import argparse
+
+    from glu.cli.learn_cmds import _seeds
+
+    assert _seeds("0..3") == (0, 1, 2, 3) and _seeds("7..7") == (7,) and _seeds("2, 5") == (2, 5)
+    for bad in ("3..1", "0..x", "1..2..3", "-1..2"):
+        with pytest.raises(argparse.ArgumentTypeError, match="seeds"):
+            _seeds(bad)
+    status, _, err = run(
+        capsys, "learning-curves", "--margin", "1", "--data", "synthetic", "-o", str(tmp_path)
+    )
+    assert_one_line_error(status, err, "--margin 1.0: an accuracy in (0, 1)")
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.slow  # the real person's 11 standing segments, one draw: about 30 s
+def test_learning_curves_real_person_writes_its_tables(capsys, tmp_path, shared_data):
+    argv = ["learning-curves", "--part", "real-person", "--draws", "0", "--scheduler", "synchronous"]
+    status, out, err = run(capsys, *argv, "--data", str(shared_data), "-o", str(tmp_path))
+    assert status == 0, err
+    assert out.startswith("the real person: 11 standing segments × 1 draws\n")
+    study = json.loads((tmp_path / "learning_real_person.json").read_text())
+    assert study["settings"]["draws"] == [0]
+    assert (
+        study["made_by"]["command"] == "glu learning-curves --part real-person --draws 0 --data DATA -o DIR"
+    )
+    rows = pd.read_csv(tmp_path / "learning_real_person.csv.gz")
+    summary = pd.read_csv(tmp_path / "learning_real_person_summary.csv")
+    keys = ["study", "features", "learner", "words"]
+    accuracy = rows.groupby(keys)["correct"].mean().rename("expected").reset_index()
+    both = summary.merge(accuracy, on=keys, validate="one_to_one")
+    assert len(both) == len(summary) > 0 and set(summary["segments"]) == {11} and set(summary["draws"]) == {1}
+    np.testing.assert_allclose(both["accuracy"], both["expected"], rtol=0, atol=1e-12)

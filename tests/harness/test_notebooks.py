@@ -398,3 +398,158 @@ def test_the_run_counts_the_notebooks_finished_and_the_count_only_goes_up(tmp_pa
     )  # fmt: skip
     counted = [line.split(" ")[0] for line in lines if line.startswith("[")]
     assert counted == ["[1/2]", "[2/2]"], lines
+
+
+@pytest.mark.parametrize(
+    ("block", "message"),
+    [
+        ("  figures: a", "figures: must be a list of names (letters, digits, _ . -), got 'a'"),
+        ("  figures:\n  - ../a", "figures: must be a list of names (letters, digits, _ . -), got ['../a']"),
+        ("  figures:\n  - a\n  - a", "figures: a name is listed twice"),
+        ("  figure:\n  - a", "has unknown keys ['figure']; allowed: ['about', 'expected_seconds', 'figures', "
+         "'models', 'quick', 'real_only', 'recordings', 'tables']"),
+        ("  figures:\n  - a\n  real_only:\n  - b", "real_only: ['b'] are not among its outputs"),
+        ("  quick: fast", "quick: must map parameter names to values, got 'fast'"),
+        ("  about:\n  - two\n  - lines", "about: must be one line of text"),
+    ],
+)  # fmt: skip
+def test_a_malformed_manifest_is_refused_naming_its_notebook_and_key(tmp_path, block, message):
+    from glu.run.manifest import ManifestError
+
+    path = tmp_path / "07_x.py"
+    path.write_text(
+        "# ---\n# jupyter:\n#   glu:\n" + "".join(f"#   {line}\n" for line in block.splitlines()) + "# ---\n"
+    )
+    with pytest.raises(ManifestError) as e:
+        read_manifest(path)
+    assert (
+        str(e.value)
+        == f"07_x: the glu block of its header{' ' if message.startswith('has') else ', '}{message}"
+    )
+
+
+def test_a_notebook_must_write_what_its_manifest_declares_for_its_data(tmp_path):
+    from glu.run.manifest import Manifest, ManifestError, check_outputs
+
+    m = Manifest("07_x", "", None, figures=("a", "b"), tables=("t",), real_only=frozenset({"b"}))
+    check_outputs(m, {"figures": {"a", "b"}, "tables": {"t"}}, real=True)
+    check_outputs(m, {"figures": {"a"}, "tables": {"t"}}, real=False)
+    with pytest.raises(ManifestError) as e:
+        check_outputs(m, {"figures": {"a", "c"}, "tables": set()}, real=True)
+    assert str(e.value) == (
+        "07_x (real data): figures not in its manifest: c; figures declared but not written: b; "
+        "tables declared but not written: t (its manifest is the glu block of its header)"
+    )
+    with pytest.raises(ManifestError, match=r"^07_x \(synthetic data\): figures not in its manifest: b "):
+        check_outputs(m, {"figures": {"a", "b"}, "tables": {"t"}}, real=False)
+
+
+def _header(expected: float, body: str) -> str:
+    return (
+        _OK.replace(
+            "#     about: a test notebook\n",
+            f"#     about: a test notebook\n#     expected_seconds: {expected}\n",
+        )
+        + body
+    )
+
+
+def test_a_failure_stops_the_notebook_running_beside_it_and_those_not_started_never_start(tmp_path):
+    """-j 2: 02 (longest, first) and 01 start; 01 fails: 02 is stopped at once, and so is 03, which took
+    01's place; 04, still waiting, never starts."""
+    nbs = tmp_path / "nbs"
+    nbs.mkdir()
+    (nbs / "01_fails.py").write_text(_header(5, '\n# %%\nraise RuntimeError("deliberate failure")\n'))
+    (nbs / "02_slow.py").write_text(_header(100, "\n# %%\nimport time\ntime.sleep(120)\n"))
+    (nbs / "03_later.py").write_text(_header(1, ""))
+    (nbs / "04_last.py").write_text(_header(0.5, ""))
+    said = []
+    with pytest.raises(NotebookError, match="notebook 01_fails failed in cell .* deliberate failure"):
+        reproduce(
+            data="synthetic", out=tmp_path / "out", jobs=2, log=said.append, notebooks_dir=nbs, site=False
+        )
+    finished = [line for line in said if line.startswith("[")]
+    assert len(finished) == 1 and finished[0].startswith("[1/4] 01_fails: FAILED after ")
+    assert not (tmp_path / "out" / "figures").exists()
+
+
+def test_a_notebook_that_writes_other_outputs_than_its_manifest_declares_fails(tmp_path):
+    nbs = tmp_path / "nbs"
+    nbs.mkdir()
+    (nbs / "01_x.py").write_text(
+        _OK.replace("#     about: a test notebook\n", "#     about: a test\n#     figures: [z]\n").replace(
+            '"new.txt"', '"a.png"'
+        )
+    )
+    with pytest.raises(NotebookError) as e:
+        reproduce(data="synthetic", out=tmp_path / "out", log=_silent, notebooks_dir=nbs, site=False)
+    assert str(e.value).startswith(
+        "notebook 01_x ran, but 01_x (synthetic data): figures not in its manifest: a; figures declared but "
+        "not written: z (its manifest is the glu block of its header); executed copy kept at "
+    )
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"jobs": 0}, "-j 0: the number of notebooks run at once must be between 1 and 64"),
+        ({"jobs": 65}, "-j 65: the number of notebooks run at once must be between 1 and 64"),
+        ({"seed": -1}, "--seed -1: a seed must be between 0 and 2**32 - 1"),
+        ({"seed": 2**32}, "--seed 4294967296: a seed must be between 0 and 2**32 - 1"),
+        ({"notebooks_dir": "empty"}, "no notebooks found in "),
+        ({"notebooks_dir": "seedless"}, "01_x: its parameters cell lacks seed"),
+    ],
+)
+def test_reproduce_refuses_what_it_cannot_run_before_running_anything(tmp_path, kwargs, message):
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "seedless").mkdir()
+    (tmp_path / "seedless" / "01_x.py").write_text(_OK.replace("seed: int = 0  # seed\n", ""))
+    if "notebooks_dir" in kwargs:
+        kwargs = {"notebooks_dir": tmp_path / kwargs["notebooks_dir"]}
+    with pytest.raises(NotebookError) as e:
+        reproduce(
+            data="synthetic",
+            out=tmp_path / "out",
+            log=_silent,
+            **{"notebooks_dir": tmp_path / "seedless", **kwargs},
+        )
+    assert str(e.value).startswith(message) and not (tmp_path / "out").exists()
+
+
+def test_only_a_full_real_run_with_seed_0_in_the_checkout_rewrites_the_tracked_figures(tmp_path):
+    from types import SimpleNamespace
+
+    from glu.run.reproduce import _promote_figures
+    from glu.run.summary import RENDERING_RECORD
+
+    run, tracked = tmp_path / "run", tmp_path / "tracked"
+    (run / "figures").mkdir(parents=True)
+    tracked.mkdir()
+    for name, data in (
+        ("a.png", b"new a"),
+        ("b.png", b"same b"),
+        ("c.svg", b"svg"),
+        (RENDERING_RECORD, b"{}"),
+    ):
+        (run / "figures" / name).write_bytes(data)
+    (tracked / "b.png").write_bytes(b"same b")
+    (tracked / "a.png").write_bytes(b"old a")
+    said = []
+
+    def plan(**change):
+        base = {"tracked_figures": tracked, "is_real": True, "quick": False, "seed": 0, **change}
+        layout = SimpleNamespace(tracked_figures=base["tracked_figures"])
+        return SimpleNamespace(
+            layout=layout,
+            source=SimpleNamespace(is_real=base["is_real"]),
+            quick=base["quick"],
+            seed=base["seed"],
+        )
+
+    for other in ({"tracked_figures": None}, {"is_real": False}, {"quick": True}, {"seed": 1}):
+        _promote_figures(plan(**other), run, said.append)
+    assert said == [] and (tracked / "a.png").read_bytes() == b"old a"
+    _promote_figures(plan(), run, said.append)
+    assert said == ["glu reproduce: 2 of the tracked figures in figures/ rewritten from the real data"]
+    assert sorted(p.name for p in tracked.iterdir()) == ["a.png", "b.png", RENDERING_RECORD]
+    assert (tracked / "a.png").read_bytes() == b"new a" and (tracked / RENDERING_RECORD).read_bytes() == b"{}"

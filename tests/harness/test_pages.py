@@ -154,3 +154,46 @@ def test_the_readme_stays_a_front_page():
         "run the test suite",
         "```",
     ]
+
+
+def test_a_folder_without_notebooks_or_readable_results_is_refused(tmp_path):
+    with pytest.raises(DataError, match="no notebooks NN_name.py in"):
+        generated.manifests(tmp_path)
+    with pytest.raises(DataError, match="installed, not a source checkout"):
+        speed.load_results(None)
+    (tmp_path / "demo.json").write_text("{not json")
+    with pytest.raises(DataError, match="demo.json: not readable benchmark results"):
+        speed.load_results(tmp_path)
+
+
+def test_the_other_pages_are_checked_then_rewritten(tmp_path, monkeypatch, capsys):
+    from glu.cli import readme_cmds
+    from glu.run import readme
+
+    page = tmp_path / "docs" / "page.md"
+    page.parent.mkdir()
+    page.write_text("<!-- B -->\nold\n<!-- E -->\n")
+    monkeypatch.setattr(readme, "README", tmp_path / "README.md")
+    monkeypatch.setattr(readme_cmds, "_pages", lambda: [(page, "<!-- B -->", "<!-- E -->", lambda: "new")])
+    args = argparse.Namespace(readme=tmp_path / "README.md", check=True)
+    assert readme_cmds._other_pages(args) is True
+    assert "docs/page.md: a generated section is out of date" in capsys.readouterr().err
+    assert page.read_text() == "<!-- B -->\nold\n<!-- E -->\n"
+    args.check = False
+    assert readme_cmds._other_pages(args) is False
+    assert capsys.readouterr().out == "docs/page.md: generated section updated\n"
+    assert page.read_text() == "<!-- B -->\nnew\n<!-- E -->\n"
+    args.check = True
+    assert readme_cmds._other_pages(args) is False
+
+
+def test_readme_without_a_checkout_asks_for_its_files(tmp_path, monkeypatch, capsys):
+    from glu.cli import main
+    from glu.run import readme
+
+    monkeypatch.setattr(readme, "SUMMARY", None)
+    assert main(["readme", "--readme", str(tmp_path / "README.md")]) == 2
+    assert capsys.readouterr().err == (
+        "glu readme: error: glu is installed, not a source checkout: "
+        "give --readme README.md and --summary FILE\n"
+    )

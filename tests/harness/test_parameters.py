@@ -65,6 +65,12 @@ def test_each_element_of_a_list_of_choices_is_checked():
     assert check(spec, {"feature_sets": ["centred+rotated", "all"]}, "10_x")["feature_sets"][1] == "all"
     with pytest.raises(ParameterError, match="every element of feature_sets must be one of raw, centred"):
         check(spec, {"feature_sets": ["raw", "rotated+centred"]}, "10_x")  # names are canonical
+    with pytest.raises(
+        ParameterError, match=r"every element of feature_sets must be a string, got \['raw', 3\]"
+    ):
+        check(spec, {"feature_sets": ["raw", 3]}, "10_x")
+    assert parse_value(spec["feature_sets"], "raw, 'centred'") == ["raw", "centred"]
+    assert parse_value(spec["feature_sets"], "[]") == []
 
 
 SPEC = {
@@ -91,6 +97,7 @@ SPEC = {
         ({"step": 0}, "step must be in [1, 100000]"),
         ({"rule": "jefrey"}, "rule must be one of virtual, jeffrey; got 'jefrey'"),
         ({"rule": None}, "rule must be a str"),
+        ({"rule": 5}, "rule must be a string, got 5"),
         ({"noise_levels": 0.1}, "noise_levels must be a list"),
         ({"noise_levels": [0.1, "x"]}, "noise_levels must be finite numbers"),
         ({"noise_levels": [0.1, 5.0]}, "noise_levels must be in [0, 1]"),
@@ -155,6 +162,64 @@ def test_a_malformed_parameters_cell_is_refused(tmp_path):
     nb.write_text('# %% tags=["parameters"]\nx: dict = {}  # a dict\n')
     with pytest.raises(ParameterError, match="type 'dict' is not one of"):
         read_spec(nb)
+    nb.write_text('# %% tags=["parameters"]\nx: int = len("ab")  # computed\n')
+    with pytest.raises(
+        ParameterError, match="01_bad.py, parameters cell line 1: the default of x is not a literal"
+    ):
+        read_spec(nb)
     nb.write_text("# %%\nx: int = 1\n")
     with pytest.raises(ParameterError, match="expected one cell tagged parameters, found 0"):
         read_spec(nb)
+
+
+def test_a_notebook_run_as_a_plain_script_checks_its_parameters_and_says_its_line(tmp_path, capsys):
+    """``start`` outside a kernel (a notebook's .py run by python): no injected names, the line printed."""
+    from glu.data import resolve_data
+    from glu.run.notebook import start
+
+    out = start("03_bn_learning", {"data": "synthetic", "out_dir": str(tmp_path / "out")})
+    source = resolve_data("synthetic")
+    assert capsys.readouterr().out == (
+        f"03_bn_learning · {source.describe()} ({source.reason()}) · default parameters\n"
+    )
+    assert out.layout.root == tmp_path / "out"
+    with pytest.raises(ParameterError, match="03_bn_learning: unknown parameter 'sede'"):
+        start("03_bn_learning", {"In": ["", "# Parameters\nsede = 1\n"], "data": "synthetic"})
+
+
+def test_the_names_papermill_injected_are_read_from_the_kernels_history():
+    from glu.run.notebook import injected_names
+
+    assert injected_names({}) == [] and injected_names({"In": "not a list"}) == []
+    assert injected_names({"In": ["", "x = 1", "# Parameters here"]}) == []  # by hand: no injected cell
+    history = ["", "# Parameters\nseed = 3\nrule = 'jeffrey'\n", "x = 1", "# Parameters\nseed = 4\n"]
+    assert injected_names({"In": history}) == ["seed"]  # the last one
+    assert injected_names({"In": ["", "# Parameters\nseed = (\n"]}) == []  # a cell that did not run
+
+
+def test_outside_a_kernel_a_figure_is_saved_not_shown_and_a_table_needs_a_name(tmp_path, capsys, monkeypatch):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    from glu.run import outputs
+    from glu.run.notebook import start
+
+    out = start("03_bn_learning", {"data": "synthetic", "out_dir": str(tmp_path / "out")})
+    capsys.readouterr()
+    fig, ax = plt.subplots()
+    ax.plot([0, 1])
+    out.figure(fig, "line")
+    assert capsys.readouterr() == ("", "")
+    assert (tmp_path / "out" / "figures" / "line.png").read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(ValueError, match="a table needs a name"):
+        out.table(pd.DataFrame({"x": [1]}))
+    assert not (tmp_path / "out" / "results").exists() or not any((tmp_path / "out" / "results").iterdir())
+    monkeypatch.setattr(outputs, "PACKAGES", ("numpy", "glu-no-such-package"))
+    versions = outputs.package_versions()
+    assert (
+        versions["glu-no-such-package"] == "not installed"
+        and versions["numpy"] == __import__("numpy").__version__
+    )

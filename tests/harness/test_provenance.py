@@ -62,6 +62,22 @@ def test_outside_a_checkout_the_version_alone(tmp_path):
     assert read_provenance(None).label() == f"glu {glu.__version__}"
 
 
+def test_without_git_the_version_alone_and_an_unknown_status_is_modified(checkout, monkeypatch, tmp_path):
+    monkeypatch.setenv("PATH", str(tmp_path))  # no git on the PATH
+    assert read_provenance(checkout) == Provenance(glu.__version__)
+    monkeypatch.undo()
+    head = _git(checkout, "rev-parse", "HEAD").strip()
+    real_run = subprocess.run
+
+    def status_hangs(argv, **kwargs):
+        if "status" in argv:
+            raise subprocess.TimeoutExpired(argv, kwargs.get("timeout"))
+        return real_run(argv, **kwargs)
+
+    monkeypatch.setattr(provenance.subprocess, "run", status_hangs)
+    assert read_provenance(checkout) == Provenance(glu.__version__, head, modified=True)
+
+
 def test_the_run_passes_its_line_to_the_kernels(monkeypatch):
     monkeypatch.setenv(ENV, "glu 9.9.9, commit 0123456789ab")
     assert made_by() == "glu 9.9.9, commit 0123456789ab"

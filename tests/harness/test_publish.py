@@ -16,7 +16,7 @@ from tiny_notebook import TINY_NOTEBOOK
 
 from glu import paths
 from glu.paths import OUTPUT_KINDS, OutputLayout
-from glu.run.publish import CURRENT, MARKER, PublishError, Store, legacy_files
+from glu.run.publish import CURRENT, MARKER, OWNER, PublishError, Store, legacy_files
 
 
 @pytest.fixture(scope="module")
@@ -90,6 +90,48 @@ def test_runs_replace_only_what_glu_published_and_a_stale_staging_goes(capsys, t
     assert all((out / kind).is_symlink() for kind in OUTPUT_KINDS)
     runs = [d for d in (out / ".glu-runs").iterdir() if d.name.startswith("r")]
     assert len(runs) == 1 and (out / ".glu-runs" / CURRENT).resolve() == runs[0].resolve()
+
+
+def test_a_partial_run_keeps_the_other_notebooks_outputs_unless_the_published_summary_is_malformed(
+    capsys, tmp_path
+):
+    """--only 02 after a full run: 01's figures and summary entries are kept from the published run (a
+    malformed published summary keeps nothing: the run publishes what it ran, as with no summary)."""
+    nbs, out = tmp_path / "nbs", tmp_path / "out"
+    nbs.mkdir()
+    (nbs / "01_a.py").write_text(TINY_NOTEBOOK)
+    (nbs / "02_b.py").write_text(
+        TINY_NOTEBOOK.replace("    - a\n", "    - b\n").replace('"a.{ext}"', '"b.{ext}"')
+    )
+    assert _reproduce(capsys, nbs, out)[0] == 0
+    assert _reproduce(capsys, nbs, out, "--only", "02", "--seed", "5")[0] == 0
+    assert (out / "figures" / "a.png").read_text() == "run 0" and (
+        out / "figures" / "b.png"
+    ).read_text() == "run 5"
+    summary = json.loads((out / "results" / "summary.json").read_text())
+    assert [(nb["name"], nb["parameters"]) for nb in summary["notebooks"]] == [
+        ("01_a", {}),
+        ("02_b", {"seed": 5}),
+    ]
+    assert summary["figures_by_notebook"] == {
+        "a.png": "01_a",
+        "a.svg": "01_a",
+        "b.png": "02_b",
+        "b.svg": "02_b",
+    }
+    for notebooks in (["01_a", {"name": "02_b"}], [{"title": "01_a"}]):
+        published = out / "results" / "summary.json"
+        text = json.dumps({**summary, "notebooks": notebooks})
+        published.unlink()  # a file of its own, not the one the runs share
+        published.write_text(text)
+        status, _, err = _reproduce(capsys, nbs, out, "--only", "02")
+        assert status == 0, err
+        summary = json.loads(published.read_text())
+        assert [nb["name"] for nb in summary["notebooks"]] == ["02_b"] and summary["figures"] == [
+            "b.png",
+            "b.svg",
+        ]
+        assert not (out / "figures" / "a.png").exists()
 
 
 def test_glu_run_refuses_to_write_into_a_published_run(capsys, tmp_path, notebooks):
@@ -210,3 +252,57 @@ def test_an_installed_glu_asks_for_an_output_folder(tmp_path, monkeypatch):
     with pytest.raises(OutputError, match=r"^glu is installed, not a source checkout: give an output"):
         OutputLayout.at(None)
     assert OutputLayout.at(tmp_path).results == tmp_path.resolve() / "results"
+
+
+def test_a_store_or_a_link_glu_did_not_make_is_refused(tmp_path):
+    layout = OutputLayout.under(tmp_path / "out")
+    layout.root.mkdir()
+    layout.store.write_text("a file where the store goes")
+    with pytest.raises(PublishError, match=r"\.glu-runs is not a folder glu made; move it away"):
+        Store(layout).survey()
+    layout.store.unlink()
+    (tmp_path / "elsewhere").mkdir()
+    layout.store.symlink_to(tmp_path / "elsewhere")
+    with pytest.raises(PublishError, match="is not a folder glu made"):
+        Store(layout).survey()
+    layout.store.unlink()
+    layout.figures.symlink_to(tmp_path / "elsewhere")
+    with pytest.raises(PublishError, match=r"figures is a link glu did not make; glu never replaces"):
+        Store(layout).survey()
+    assert Store(layout, force=True).survey()["figures"] == "kept"
+
+
+def test_clean_removes_a_pointer_never_swapped_in_and_keeps_a_run_of_a_live_process(tmp_path, monkeypatch):
+    from glu.run import publish
+
+    store = Store(OutputLayout.under(tmp_path / "out"))
+    run = store.begin()
+    (run / OWNER).write_text("1\n")  # a process of another user's: signals to it are refused
+    pointer = store.root / f".{CURRENT}-1234"
+    pointer.symlink_to(run.name)
+    monkeypatch.setattr(publish.os, "kill", lambda pid, sig: (_ for _ in ()).throw(PermissionError(1, "no")))
+    assert store.clean() == [] and run.is_dir() and not pointer.is_symlink()
+    monkeypatch.undo()
+    (run / OWNER).write_text("not a process id\n")
+    assert store.clean() == [run] and not run.exists()
+
+
+def test_files_are_copied_where_hard_links_are_refused_and_a_bad_record_is_none(tmp_path, monkeypatch):
+    from glu.run import publish
+
+    (tmp_path / "a.txt").write_text("kept")
+
+    def refused(src, dst):
+        raise OSError(18, "Invalid cross-device link")
+
+    monkeypatch.setattr(publish.os, "link", refused)
+    publish._link_or_copy(tmp_path / "a.txt", tmp_path / "run" / "x" / "a.txt")
+    assert (tmp_path / "run" / "x" / "a.txt").read_text() == "kept"
+    assert (tmp_path / "run" / "x" / "a.txt").stat().st_ino != (tmp_path / "a.txt").stat().st_ino
+    run = tmp_path / "run"
+    assert publish.read_record(run) == {}  # none
+    for text in ("{not json", '{"other": 1}', '["files"]', '{"files": ["a"]}'):
+        (run / publish.RUN_RECORD).write_text(text)
+        assert publish.read_record(run) == {}, text
+    (run / publish.RUN_RECORD).write_text('{"files": {"x/a.txt": "01_a", "../b": "01_a", "c": 3}}')
+    assert publish.read_record(run) == {"x/a.txt": "01_a"}

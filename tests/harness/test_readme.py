@@ -490,3 +490,24 @@ def test_only_a_full_run_on_the_real_data_is_quoted(summary, tmp_path, capsys):
         readme.load_summary(path)
     assert main(["readme", "--summary", str(tmp_path / "none.json"), "--readme", str(page)]) == 2
     assert "no summary" in capsys.readouterr().err
+
+
+def test_a_run_of_modified_code_is_noted_when_the_readme_is_updated(summary, tmp_path, capsys):
+    page = tmp_path / "README.md"
+    page.write_text(f"{readme.BEGIN}\nx\n{readme.END}\n")
+    path = tmp_path / "summary.json"
+    path.write_text(json.dumps({**summary, "provenance": {"modified": True}, "made_by": "glu 9.9+dirty"}))
+    assert main(["readme", "--summary", str(path), "--readme", str(page)]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("note: this run was made by glu 9.9+dirty: its figures name no commit")
+
+
+def test_two_studies_filling_one_slot_differently_are_refused(summary, monkeypatch):
+    from types import SimpleNamespace
+
+    parts = [SimpleNamespace(values=lambda t, v=v: {"ci_percent": v}) for v in (95, 90)]
+    monkeypatch.setattr(readme, "PARTS", parts)
+    with pytest.raises(DataError, match="two studies fill the README slot 'ci_percent' differently"):
+        readme.values(summary)
+    monkeypatch.setattr(readme, "PARTS", parts[:1] * 2)
+    assert readme.values(summary)["ci_percent"] == 95

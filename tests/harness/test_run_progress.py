@@ -61,8 +61,12 @@ def test_on_a_terminal_one_bar_counts_the_cells_done():
     with CellProgress("nb", live=True, stream=stream) as progress:
         _feed(progress)
         assert progress.bar.total == 3 and progress.bar.n == 2  # the third is running
+        drawn = len(stream.getvalue())
+        progress.beat(progress.last_line + 1e6)  # the bar's clock is redrawn; no line says it still runs
+        assert len(stream.getvalue()) > drawn
     text = stream.getvalue()
-    assert "2/3 cells done" in text and "cell 3: z = 'aaa" in text and "starting its kernel" in text
+    assert "still running" not in text and "2/3 cells done" in text
+    assert "cell 3: z = 'aaa" in text and "starting its kernel" in text
     assert text.rstrip().splitlines()[-1].strip().startswith("nb: 3 cells in")
 
 
@@ -115,3 +119,29 @@ def test_glu_run_shows_progress_on_stderr_and_nothing_with_quiet(tmp_path, capsy
         "executed": str(tmp_path / "b" / "notebooks" / "01_tiny.ipynb"),
         "outputs": str(tmp_path / "b"),
     }
+
+
+def test_glu_run_without_out_writes_to_a_scratch_folder_and_a_failing_cell_is_status_1(
+    tmp_path, capsys, monkeypatch
+):
+    pytest.importorskip("papermill")
+    from glu import paths
+    from glu.cli import main
+
+    monkeypatch.setattr(paths, "SCRATCH_DIR", tmp_path / "scratch")
+    folder = tmp_path / "nbs"
+    folder.mkdir()
+    (folder / "01_tiny.py").write_text(TINY)
+    (folder / "02_fails.py").write_text(TINY + '\n# %%\nraise RuntimeError("deliberate failure")\n')
+    argv = ["run", "--notebooks", str(folder), "--data", "synthetic", "--quiet"]
+    assert main([*argv, "01"]) == 0
+    (run,) = (tmp_path / "scratch" / "01_tiny").iterdir()
+    assert (run / "notebooks" / "01_tiny.ipynb").is_file() and f"{run}" in capsys.readouterr().out
+    assert main([*argv, "02", "-o", str(tmp_path / "out")]) == 1
+    executed = tmp_path / "out" / "notebooks" / "02_fails.ipynb"
+    assert capsys.readouterr().err == (
+        "glu run: error: notebook 02_fails failed in cell 5: RuntimeError: deliberate failure; "
+        f"executed copy at {executed}\n"
+    )
+    cells = json.loads(executed.read_text())["cells"]
+    assert ["RuntimeError"] == [o["ename"] for c in cells for o in c.get("outputs", []) if "ename" in o]

@@ -260,3 +260,142 @@ def test_make_docs_builds_the_site_again_from_the_last_run_and_a_warning_fails_i
 def test_the_site_needs_a_run(tmp_path):
     with pytest.raises(SiteError, match="run `glu reproduce` first"):
         build_site(OutputLayout.under(tmp_path), log=lambda _: None)
+
+
+def _build(src: Path, out: Path, warnings=None) -> None:
+    """Sphinx on the project ``src`` into ``out/html``, its registrations undone afterwards (as glu's own
+    build does: a later build in this process must not find them)."""
+    from sphinx.application import Sphinx
+    from sphinx.util.docutils import docutils_namespace, patch_docutils
+
+    with patch_docutils(src), docutils_namespace():
+        Sphinx(src, src, out / "html", out / "doctrees", "html", status=None, warning=warnings).build()
+
+
+def test_formulas_are_mathml_a_numbered_one_with_its_number_an_unreadable_one_a_warning(tmp_path):
+    """glu.run.site_math alone in a one-page Sphinx project: x^2 as MathML, the number of a labelled
+    formula beside it, and a formula latex2mathml cannot read shown as its LaTeX, with a warning."""
+    import io
+
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text('extensions = ["glu.run.site_math"]\nhtml_math_renderer = "mathml"\n')
+    (src / "index.rst").write_text(
+        "Page\n====\n\nInline :math:`x^2` and :math:`\\frac{`.\n\n"
+        ".. math:: y^2\n   :label: square\n\n.. math:: z^\n"
+    )
+    warnings = io.StringIO()
+    _build(src, tmp_path, warnings)
+    page = (tmp_path / "html" / "index.html").read_text()
+    mathml = '<math xmlns="http://www.w3.org/1998/Math/MathML" display='
+    assert f'<span class="math notranslate">{mathml}"inline"><mrow><msup><mi>x</mi><mn>2</mn></msup>' in page
+    assert f'<span class="eqno">(1)</span>{mathml}"block"><mrow><msup><mi>y</mi><mn>2</mn></msup>' in page
+    assert page.count('class="eqno"') == 1
+    assert "<code>\\frac{</code>" in page and "<pre>z^" in page
+    said = warnings.getvalue()
+    assert "a formula could not be read (NoAvailableTokensError): \\frac{" in said
+    assert "a formula could not be read (MissingSuperScriptOrSubscriptError): z^" in said
+
+
+def test_only_a_figure_with_a_caption_becomes_a_captioned_figure(tmp_path):
+    """glu's MyST-NB renderer alone in a one-notebook Sphinx project: an image whose output metadata has
+    a title is a captioned figure; one with only its file name, or no glu metadata, stays a plain image."""
+    png = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNkYPhfDwAChwGA60e6kgAAAABJRU5ErkJggg=="
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text(
+        'extensions = ["myst_nb"]\nnb_render_plugin = "glu"\nnb_execution_mode = "off"\n'
+    )
+    cell = nbformat.v4.new_code_cell("x")
+    cell.outputs = [
+        nbformat.v4.new_output("display_data", data={"image/png": png}, metadata=meta)
+        for meta in ({"glu": {"figure": "a.png", "title": "Section A"}}, {"glu": {"figure": "b.png"}}, {})
+    ]
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("# Title"), cell])
+    nbformat.write(nb, src / "index.ipynb")
+    _build(src, tmp_path)
+    page = (tmp_path / "html" / "index.html").read_text()
+    assert page.count("<img ") == 3 and page.count("<figure") == 1
+    figure = page[page.index("<figure") : page.index("</figure>")]
+    assert '<img alt="a.png"' in figure and "Section A" in figure and "<code" in figure
+    assert 'alt="b.png"' not in page
+
+
+def test_a_package_page_documents_the_names_it_takes_from_a_private_module_itself(tmp_path, monkeypatch):
+    from glu.run.site_api import module_page
+
+    pkg = tmp_path / "glu_demo"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text(
+        '"""A package."""\nfrom glu_demo._impl import Hidden, helper\nfrom glu_demo.shown import visible\n'
+    )
+    (pkg / "_impl.py").write_text("class Hidden:\n    pass\n\n\ndef helper():\n    pass\n")
+    (pkg / "shown.py").write_text("def visible():\n    pass\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    page = module_page("glu_demo", ("glu_demo", "glu_demo.shown"))
+    assert page.endswith("\n.. autoclass:: glu_demo.Hidden\n\n.. autofunction:: glu_demo.helper\n")
+    assert "   visible\n   Hidden\n   helper\n" in page and "glu_demo.visible" not in page  # on its own page
+
+
+def test_the_index_of_a_run_without_figures_recordings_or_notebook_sources(tmp_path):
+    """A summary whose notebooks have no readable source here (gone, or a malformed header) and whose
+    figure files are missing: the rows without what they show, the gallery and recordings say so."""
+    from glu.run.site_pages import index_page
+
+    nbs = tmp_path / "nbs"
+    nbs.mkdir()
+    (nbs / "08_bad.py").write_text("---\njupyter:\n  glu: 3\n---\n")
+    summary = {
+        "notebooks": [
+            {"name": "07_gone", "status": "ok", "seconds": 1.5},
+            {"name": "08_bad", "status": "ok"},
+        ],
+        "figures_by_notebook": {"x.png": "07_gone"},
+    }
+    page = index_page(OutputLayout.under(tmp_path / "out"), summary, {}, nbs, has_docs=False)
+    assert "| [07_gone](notebooks/07_gone.ipynb) |  | ok | 1.5 | defaults |" in page
+    assert "| [08_bad](notebooks/08_bad.ipynb) |  | ok |  | defaults |" in page
+    assert (
+        "\nThis run drew no figures.\n" in page and "## Recordings\n\nThis run wrote no recordings.\n" in page
+    )
+
+
+def test_the_site_refuses_unreadable_parts_and_gives_a_notebook_without_one_a_title(tmp_path, monkeypatch):
+    from glu.run.site import assemble
+
+    layout = OutputLayout.under(tmp_path / "out")
+    layout.results.mkdir(parents=True)
+    (layout.results / "summary.json").write_text("{not json")
+    with pytest.raises(
+        SiteError, match=r"summary.json in results/ is not JSON \(.+\); run `glu reproduce` again"
+    ):
+        build_site(layout, log=lambda _: None)
+    summary = {"notebooks": [{"name": "01_x", "status": "ok"}]}
+    source = tmp_path / "src"
+    with pytest.raises(SiteError, match=r"^the executed notebook 01_x.ipynb is missing from notebooks/$"):
+        assemble(layout, summary, source, notebooks_dir=tmp_path, modules=())
+    layout.notebooks.mkdir(parents=True)
+    untitled = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("x = 1")])
+    nbformat.write(untitled, layout.notebooks / "01_x.ipynb")
+    monkeypatch.setattr(site_module, "DOCS_DIR", None)  # glu installed: no docs pages
+    assemble(layout, summary, source, notebooks_dir=tmp_path, modules=())
+    page = nbformat.read(source / "notebooks" / "01_x.ipynb", as_version=4)
+    assert [(c.cell_type, c.source) for c in page.cells] == [("markdown", "# 01_x"), ("code", "x = 1")]
+    assert not (source / "docs.md").exists() and "docs\n" not in (source / "index.md").read_text()
+    layout.site.mkdir()
+    with pytest.raises(SiteError, match="exists; the site is built into a run being staged"):
+        build_site(layout, summary=summary, log=lambda _: None)
+
+
+def test_make_docs_is_python_m_glu_run_site_and_needs_a_run(tmp_path):
+    import subprocess
+    import sys
+
+    r = subprocess.run(
+        [sys.executable, "-m", "glu.run.site", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.startswith("glu site: error: no run is published in ") and r.stderr.count("\n") == 1

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 import pandas as pd
+import pytest
 
 from glu.run.summary import NotebookResult, write_summary
 
@@ -231,3 +232,65 @@ def test_summary_csv_is_the_cell_by_cell_long_format():
         summary = {"tables": tables}
         assert summary_csv(summary) == _long_csv_by_iterrows(summary), tables
     assert summary_csv({"tables": {}}) == _long_csv_by_iterrows({"tables": {}})
+
+
+GOOD = {
+    "notebooks": [{"name": "01_a", "status": "ok", "seconds": 1.0}],
+    "tables": {"t": {"meta": {}, "rows": []}},
+}
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"notebooks": [{"name": "01_a", "status": 3}]}, "notebooks[0] (01_a): status or parameters of"),
+        ({"notebooks": [{"name": "01_a", "parameters": [1]}]}, "notebooks[0] (01_a): status or parameters"),
+        ({"figures": "a.png"}, "figures: expected a list, got str"),
+        ({"figures_by_notebook": ["a.png"]}, "figures_by_notebook: expected a mapping, got list"),
+        ({"recordings_by_notebook": {"r.rrd": "../x"}}, "recordings_by_notebook['r.rrd']: '../x' is not a"),
+        ({"wall_time_s": "1 s"}, "wall_time_s is not a number"),
+        ({"tables": {"t": [1, 2]}}, "tables['t']: not a table (its meta and rows)"),
+        ({"tables": {"t": {"rows": []}}}, "tables['t']: not a table"),
+    ],
+)  # fmt: skip
+def test_a_malformed_summary_is_refused_naming_its_field(change, message):
+    from glu.run.summary import SummaryError, check_summary
+
+    check_summary(GOOD)  # no figures, recordings or wall time: nothing to check there
+    with pytest.raises(SummaryError) as e:
+        check_summary({**GOOD, **change})
+    assert str(e.value).startswith(message)
+
+
+def test_a_partial_run_keeps_the_earlier_notebooks_of_the_same_data_and_mode(tmp_path):
+    """collect_summary with the published summary: the notebooks not run keep their entries (tables,
+    figures, recordings), those run replace theirs; a summary of other data keeps nothing."""
+    from glu.run.summary import collect_summary
+
+    results = tmp_path / "results"
+    results.mkdir()
+    new = _table(results, "t_b", [{"x": 2}], notebook="02_b")
+    old_table = {"meta": {"name": "t_a", "notebook": "01_a"}, "rows": [{"x": 1}]}
+    previous = {
+        "data_source": "synthetic data",
+        "quick": False,
+        "notebooks": [{"name": "01_a", "status": "ok"}, {"name": "02_b", "status": "ok", "seconds": 9.0}],
+        "tables": {
+            "t_a": old_table,
+            "t_b_old": {"meta": {"name": "t_b_old", "notebook": "02_b"}, "rows": []},
+        },
+        "figures_by_notebook": {"a.png": "01_a", "old_b.png": "02_b"},
+        "recordings_by_notebook": {"a.rrd": "01_a"},
+    }
+    runs = [NotebookResult("02_b", "ok", 1.0, files=[new, str(tmp_path / "figures" / "b.png")])]
+    summary = collect_summary(results, runs, "synthetic data", False, previous=previous)
+    assert summary["ran"] == ["02_b"]
+    assert summary["notebooks"] == [
+        {"name": "01_a", "status": "ok"},
+        {"name": "02_b", "status": "ok", "seconds": 1.0, "parameters": {}},
+    ]
+    assert list(summary["tables"]) == ["t_a", "t_b"] and summary["tables"]["t_a"] == old_table
+    assert summary["figures_by_notebook"] == {"a.png": "01_a", "b.png": "02_b"}
+    assert summary["recordings_by_notebook"] == {"a.rrd": "01_a"}
+    other = collect_summary(results, runs, "real data", False, previous=previous)
+    assert [nb["name"] for nb in other["notebooks"]] == ["02_b"] and list(other["tables"]) == ["t_b"]

@@ -228,3 +228,30 @@ def test_a_failed_fetch_keeps_the_folders_it_made_if_others_wrote_there(mirror_m
     results = fetch_all(dest, mirror="http://127.0.0.1:9", manifest_path=path, timeout=5, progress=meanwhile)
     assert {r.status for r in results} == {"failed"}
     assert not (top / "b").exists() and [p.name for p in top.iterdir()] == ["notes.txt"]
+
+
+def test_fetch_command_on_a_terminal_writes_failures_above_its_bar(
+    server, mirror_manifest, tmp_path, capsys, monkeypatch
+):
+    """On a terminal the files go by in a progress bar; a failed file still gets its own line, and a fetch
+    that verifies every file says so on stdout."""
+    import re
+    import sys
+
+    root, url, _ = server
+    path, n = mirror_manifest
+    gone = root / "affordance-words" / "networkDefinition.txt"
+    content = gone.read_bytes()
+    gone.unlink()
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
+    dest = tmp_path / "d"
+    argv = ["data", "fetch", "-o", str(dest), "--mirror", url, "--manifest", str(path)]
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and re.search(rf"\[\d+/{n}\] failed     affordance-words/networkDefinition.txt: ", err)
+    assert "downloaded " not in err  # the other files are counted by the bar, not listed
+    gone.write_bytes(content)
+    assert main(argv) == 0
+    out, err = capsys.readouterr()
+    assert out == f"{n}/{n} files verified in {dest}\n" and "failed" not in err
+    assert (dest / "affordance-words" / "networkDefinition.txt").read_bytes() == content

@@ -4,6 +4,7 @@ turned, mirrored tap scores the same)."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 
@@ -317,3 +318,27 @@ def test_the_study_grid_is_saved_found_and_read_back(tmp_path, monkeypatch):
     assert defaults.bootstrap == 1000 and defaults.levels is None and len(defaults.seeds) == 10
     with pytest.raises(DataError, match="nowhere: not a folder of saved correspondence tables"):
         grid.read_tables(tmp_path / "nowhere")
+
+
+def test_glu_correspondence_writes_the_study_with_its_key_and_command(tmp_path, monkeypatch, capsys):
+    """`glu correspondence -o DIR` runs the study of notebook 10's settings (here a small grid in their
+    place) and writes its tables with their key and the command that makes them again."""
+    from glu import saved
+    from glu.cli import correspondence_cmds, main
+    from glu.studies.correspondence import grid
+
+    settings = grid.StudySettings(
+        seeds=(0, 1), n_train=2, n_test=1, feature_sets=("raw",), yaws=(0,), n_states=2, n_iter=3,
+        bootstrap=20, levels=("0°",),
+    )  # fmt: skip
+    monkeypatch.setattr(correspondence_cmds, "notebook_settings", lambda: settings)
+    out = tmp_path / "study"
+    monkeypatch.setattr(sys, "argv", ["glu", "correspondence", "-o", str(out)])
+    assert main(["correspondence", "-o", str(out)]) == 0
+    results = pd.read_parquet(out / f"{grid.TABLES[0]}.parquet")
+    assert capsys.readouterr().out == f"{len(results)} rows over 2 seeds → {out}\n"
+    assert set(results["seed"]) == {0, 1}
+    doc = saved.read_key(out)
+    assert doc["command"] == "glu correspondence -o '…/study'" and doc["key"] == json.loads(
+        json.dumps(settings.key())
+    )

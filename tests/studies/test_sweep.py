@@ -637,3 +637,24 @@ def test_matched_gestures_with_fewer_gestures_than_views_and_no_learned_network(
         np.testing.assert_array_equal(xs[i], one.features[0])
     engine, _ = prepare_world(config)
     assert robots.learned_networks(config, engine) == [{}]
+
+
+def test_glu_evaluate_save_writes_the_saved_tables_with_the_command(
+    synchronous, config_file, tmp_path, capsys, monkeypatch
+):
+    """A finished sweep run again with --save: every chunk reused, the subset notebook 11 reads written
+    with the command that makes it (no path of this machine: an absolute path is …/NAME)."""
+    from glu import saved
+
+    ref, _ = synchronous
+    out, dest = tmp_path / "ev", tmp_path / "saved"
+    shutil.copytree(ref, out)
+    argv = ["evaluate", "--config", str(config_file), "--scheduler", "synchronous", "-o", str(out)]
+    monkeypatch.setattr(sys, "argv", ["glu", *argv, "--save", str(dest)])
+    status, stdout, err = run(capsys, *argv, "--save", str(dest))
+    assert status == 0, err
+    assert stdout.startswith("0 chunks computed, 8 reused") and stdout.endswith(f"saved tables → {dest}\n")
+    assert saved.read_key(dest)["command"] == (
+        "glu evaluate --config '…/small.toml' --scheduler synchronous -o '…/ev' --save '…/saved'"
+    )
+    assert (dest / "results.parquet").is_file()
