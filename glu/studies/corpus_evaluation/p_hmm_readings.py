@@ -24,7 +24,7 @@ from glu.errors import DataError
 from glu.gestures.calibration import READINGS, fit_temperature, p_hmm_reading
 from glu.gestures.corpus import LabelledSequence
 from glu.gestures.invariants import Invariants
-from glu.hmm import TrainingConfig, loglik_many, stack_models, train
+from glu.hmm import GestureHMM, TrainingConfig, loglik_many, stack_models, train
 from glu.tidy import corpus_source, tidy, training_parameters
 
 
@@ -55,15 +55,7 @@ def segment_readings(
     xs = [s.xyz if inv.is_raw else inv.transform(s.xyz) for s in sequences]
     actions = tuple(dict.fromkeys(s.action for s in sequences))
     by_action = {a: [i for i, s in enumerate(sequences) if s.action == a] for a in actions}
-    jobs = {}
-    for a, idx in by_action.items():
-        for r in range(3):
-            for left_out in combinations(idx, r):
-                rest = [xs[i] for i in idx if i not in left_out]
-                if rest:
-                    jobs[(a, frozenset(left_out))] = rest
-    trained = train(jobs, config, seed=seed, warn=False)
-    models = {k: m for k, (m, _) in trained.items()}
+    models = _models_without(xs, by_action, config, seed)
 
     def loglik(i: int, without: set[int]) -> np.ndarray:
         bank = [models.get((a, frozenset(without & set(by_action[a])))) for a in actions]
@@ -113,6 +105,21 @@ def segment_readings(
         features=inv.name,
         **training_parameters(config),
     )
+
+
+def _models_without(
+    xs: list[np.ndarray], by_action: dict[str, list[int]], config: TrainingConfig, seed: int
+) -> dict[tuple[str, frozenset[int]], GestureHMM]:
+    """Every model the nested leave-one-out needs, in one batch: action a without E, E at most two of a's
+    segments (none when they would leave it nothing to train on)."""
+    jobs = {}
+    for a, idx in by_action.items():
+        for r in range(3):
+            for left_out in combinations(idx, r):
+                rest = [xs[i] for i in idx if i not in left_out]
+                if rest:
+                    jobs[(a, frozenset(left_out))] = rest
+    return {k: m for k, (m, _) in train(jobs, config, seed=seed, warn=False).items()}
 
 
 def segment_calibration(readings: pd.DataFrame, bins: int = 5) -> pd.DataFrame:
