@@ -52,8 +52,10 @@ def test_observed_targets_are_left_out_and_gesture_ignored_when_action_is_observ
     np.testing.assert_allclose(_p(ex, "ObjVel"), engine.query(["ObjVel"], {"Action": "tap"})["ObjVel"])
 
 
-def test_headless_it_is_a_static_table(engine):
-    table = evidence_explorer(engine, evidence={"Shape": "box"}, live=False)
+@pytest.mark.parametrize("live", [False, True], ids=["headless", "live-without-ipywidgets"])
+def test_headless_or_without_ipywidgets_it_is_a_static_table(engine, live, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ipywidgets", None)  # `import ipywidgets` fails
+    table = evidence_explorer(engine, evidence={"Shape": "box"}, live=live)
     assert isinstance(table, pd.DataFrame)
     np.testing.assert_allclose(
         table.loc["ObjVel", ["slow", "medium", "fast"]].to_numpy(dtype=float),
@@ -112,14 +114,3 @@ def test_the_rerun_viewer_shows_only_when_live(tmp_path, monkeypatch):
     from rerun.notebook import Viewer
 
     assert isinstance(viewer, Viewer)
-
-
-def test_live_without_ipywidgets_it_is_the_static_table(engine, monkeypatch):
-    monkeypatch.setitem(sys.modules, "ipywidgets", None)  # `import ipywidgets` fails
-    table = evidence_explorer(engine, evidence={"Shape": "box"}, live=True)
-    assert isinstance(table, pd.DataFrame)
-    np.testing.assert_allclose(
-        table.loc["ObjVel", ["slow", "medium", "fast"]].to_numpy(dtype=float),
-        engine.query(["ObjVel"], {"Shape": "box"})["ObjVel"],
-        atol=1e-12,
-    )
