@@ -170,18 +170,18 @@ def test_the_other_pages_are_checked_then_rewritten(tmp_path, monkeypatch, capsy
     from glu.cli import readme_cmds
     from glu.run import readme
 
-    page = tmp_path / "docs" / "page.md"
+    page = tmp_path / "guide" / "page.txt"
     page.parent.mkdir()
     page.write_text("<!-- B -->\nold\n<!-- E -->\n")
     monkeypatch.setattr(readme, "README", tmp_path / "README.md")
     monkeypatch.setattr(readme_cmds, "_pages", lambda: [(page, "<!-- B -->", "<!-- E -->", lambda: "new")])
     args = argparse.Namespace(readme=tmp_path / "README.md", check=True)
     assert readme_cmds._other_pages(args) is True
-    assert "docs/page.md: a generated section is out of date" in capsys.readouterr().err
+    assert "guide/page.txt: a generated section is out of date" in capsys.readouterr().err
     assert page.read_text() == "<!-- B -->\nold\n<!-- E -->\n"
     args.check = False
     assert readme_cmds._other_pages(args) is False
-    assert capsys.readouterr().out == "docs/page.md: generated section updated\n"
+    assert capsys.readouterr().out == "guide/page.txt: generated section updated\n"
     assert page.read_text() == "<!-- B -->\nnew\n<!-- E -->\n"
     args.check = True
     assert readme_cmds._other_pages(args) is False
