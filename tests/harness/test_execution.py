@@ -140,6 +140,7 @@ b = 2
 @pytest.mark.parametrize(
     "moment", ["before its kernel", "while its kernel starts", "between cells", "last cell"]
 )
+@pytest.mark.slow
 def test_a_stop_at_any_moment_ends_the_run_as_stopped(tmp_path, monkeypatch, moment):
     """A stop that comes before the kernel starts, while it starts, between two cells (no further cell
     runs), or during the last cell (papermill then ends quietly): NotebookStopped, never a finished run."""

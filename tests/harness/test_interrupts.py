@@ -593,6 +593,7 @@ def test_a_site_that_cannot_be_built_is_said_after_the_run_is_published_without_
     assert said[-1].startswith("glu reproduce: done in ")
 
 
+@pytest.mark.slow
 def test_on_a_terminal_a_bar_counts_the_notebooks_and_shows_the_running_ones(tmp_path, monkeypatch):
     import io
 

@@ -454,6 +454,7 @@ def _header(expected: float, body: str) -> str:
     )
 
 
+@pytest.mark.slow
 def test_a_failure_stops_the_notebook_running_beside_it_and_those_not_started_never_start(tmp_path):
     """-j 2: 02 (longest, first) and 01 start; 01 fails: 02 is stopped at once, and so is 03, which took
     01's place; 04, still waiting, never starts."""
@@ -473,6 +474,7 @@ def test_a_failure_stops_the_notebook_running_beside_it_and_those_not_started_ne
     assert not (tmp_path / "out" / "figures").exists()
 
 
+@pytest.mark.slow
 def test_a_notebook_that_writes_other_outputs_than_its_manifest_declares_fails(tmp_path):
     nbs = tmp_path / "nbs"
     nbs.mkdir()

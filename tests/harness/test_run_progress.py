@@ -121,6 +121,7 @@ def test_glu_run_shows_progress_on_stderr_and_nothing_with_quiet(tmp_path, capsy
     }
 
 
+@pytest.mark.slow
 def test_glu_run_without_out_writes_to_a_scratch_folder_and_a_failing_cell_is_status_1(
     tmp_path, capsys, monkeypatch
 ):

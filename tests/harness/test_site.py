@@ -272,6 +272,7 @@ def _build(src: Path, out: Path, warnings=None) -> None:
         Sphinx(src, src, out / "html", out / "doctrees", "html", status=None, warning=warnings).build()
 
 
+@pytest.mark.slow
 def test_formulas_are_mathml_a_numbered_one_with_its_number_an_unreadable_one_a_warning(tmp_path):
     """glu.run.site_math alone in a one-page Sphinx project: x^2 as MathML, the number of a labelled
     formula beside it, and a formula latex2mathml cannot read shown as its LaTeX, with a warning."""
@@ -297,6 +298,7 @@ def test_formulas_are_mathml_a_numbered_one_with_its_number_an_unreadable_one_a_
     assert "a formula could not be read (MissingSuperScriptOrSubscriptError): z^" in said
 
 
+@pytest.mark.slow
 def test_only_a_figure_with_a_caption_becomes_a_captioned_figure(tmp_path):
     """glu's MyST-NB renderer alone in a one-notebook Sphinx project: an image whose output metadata has
     a title is a captioned figure; one with only its file name, or no glu metadata, stays a plain image."""
@@ -387,6 +389,7 @@ def test_the_site_refuses_unreadable_parts_and_gives_a_notebook_without_one_a_ti
         build_site(layout, summary=summary, log=lambda _: None)
 
 
+@pytest.mark.slow
 def test_make_docs_is_python_m_glu_run_site_and_needs_a_run(tmp_path):
     import subprocess
     import sys

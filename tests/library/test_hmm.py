@@ -700,6 +700,7 @@ def test_training_settings_and_requests_that_are_refused():
         train({"a": seqs, "b": seqs}, seed={"a": 1})
 
 
+@pytest.mark.slow
 def test_models_under_other_keys_are_named_by_str():
     from glu.hmm.training import model_name
 

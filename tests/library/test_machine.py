@@ -151,6 +151,7 @@ def test_without_dask_an_open_port_is_all_that_is_checked(monkeypatch, listening
     assert machine.check_reachable(listening, timeout=2) is None
 
 
+@pytest.mark.slow
 def test_a_scheduler_whose_connections_time_out_did_not_answer(listening):
     with pytest.raises(
         DataError, match=f"the Dask scheduler at {listening} accepted the connection but did not"

@@ -68,7 +68,7 @@ def test_scenario_weights(engine):
 def test_action_priors(engine):
     """Actions drawn uniformly, or as often as the network's prior p(Action) says."""
     prior = engine.query(["Action"], {})["Action"]
-    n = 6000
+    n = 2000
     for name, expected in (("uniform", np.full(3, 1 / 3)), ("network", prior)):
         ch = simulate_chunk(engine, Condition(0.0, "front", name), 0, 0, n, n)
         freq = np.bincount(ch.codes["Action"], minlength=3) / n

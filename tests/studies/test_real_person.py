@@ -130,6 +130,7 @@ def test_a_learner_without_any_model_answers_none():
     assert rp._predict(run, 1, [np.zeros((5, 3))] * 2) == [None, None]
 
 
+@pytest.mark.slow
 def test_the_saved_study_reads_back_and_is_checked(engine, small_study, tmp_path, monkeypatch):
     """Saved rows read back equal (the same bytes when saved again); a folder of other data or other
     settings, or an unreadable one, is one error; ``saved="none"`` runs the study on the standing segments."""

@@ -267,6 +267,7 @@ def test_iterative_and_unsupervised_relabel_until_the_labels_settle(engine):
         lr_.learn_recognizer(ep.features, "soft", actions=actions, config=SMALL)
 
 
+@pytest.mark.slow
 def test_batch_learning_reports_each_model_and_refuses_bad_schemes(engine):
     ep, actions = _corpus(engine, 12)
     calls = []

@@ -488,6 +488,7 @@ def test_the_notebook_reads_a_finished_sweep(synchronous):
         read_tables(out / "chunks")
 
 
+@pytest.mark.slow
 def test_a_finished_sweep_run_again_computes_nothing(config_file, synchronous, tmp_path):
     """Run again, a finished sweep reuses every chunk and writes the same tables."""
     ref, first = synchronous
@@ -587,6 +588,7 @@ ONE_SEED = SMALL.replace("recognizer_seeds = 2", "recognizer_seeds = 1").replace
 )
 
 
+@pytest.mark.slow
 def test_a_recogniser_file_and_a_damaged_saved_recogniser(tmp_path):
     """A sweep given its own saved recogniser as ``[recognizer] file`` computes the tables it computed; a
     saved recogniser that cannot be read is trained again (the same file); one lacking an action is
@@ -639,6 +641,7 @@ def test_matched_gestures_with_fewer_gestures_than_views_and_no_learned_network(
     assert robots.learned_networks(config, engine) == [{}]
 
 
+@pytest.mark.slow
 def test_glu_evaluate_save_writes_the_saved_tables_with_the_command(
     synchronous, config_file, tmp_path, capsys, monkeypatch
 ):
