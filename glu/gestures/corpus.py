@@ -358,7 +358,10 @@ def original_recognizer(source: DataSource, n_mix: int = 3) -> Recognizer:
     whose typicality check knows where gestures start and how far they move from the published standing
     recordings (:func:`real_segments`) — the originals' own training data is not published, and sequences
     sampled from their models start elsewhere (their person's rest pose) than the published logs."""
-    rec = load_original_models(source.original_hmms(n_mix))  # the caller checked the source has them
+    path = source.original_hmms(n_mix)
+    if path is None:
+        raise DataError(f"the data source has no original HMMs with M = {n_mix} ({source.describe()})")
+    rec = load_original_models(path)
     reference = [s.xyz for s in real_segments(source, include_original=False)]
     if reference:
         rec.meta[FRAMES_KEY] = FeatureRanges.of(reference, "published standing").to_meta()

@@ -72,6 +72,8 @@ def middle_frames(n_frames: int, middle: tuple[float, float] = MIDDLE) -> slice:
 
     For 100 frames this is frames 45 … 54 (0-based), i.e. the 46th to the 55th frame.
     """
+    if n_frames < 1:
+        raise DataError("a sequence needs at least one frame")
     lo = math.ceil(round(middle[0] * n_frames, 9))  # round: 0.55 * 100 is 55.000000000000007
     hi = math.ceil(round(middle[1] * n_frames, 9))
     if hi <= lo:

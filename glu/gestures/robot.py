@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from glu.errors import DataError
+
 ROBOT_ACTIONS: tuple[str, ...] = ("grasp", "tap", "touch")
 """The robot's own actions (the BN's Action values)."""
 ROBOT_NOISE = 0.002
@@ -103,6 +105,8 @@ def robot_hand_path(action: str, rng: np.random.Generator, size: float = 1.0) ->
     rng : the random generator (object position, segment durations)
     size : the robot's size factor (1 = the body of :data:`ROBOT_BODY`)
     """
+    if action not in _WAYPOINTS:
+        raise DataError(f"the robot has no action {action!r}; allowed: {', '.join(ROBOT_ACTIONS)}")
     obj = ROBOT_OBJECT + rng.uniform(-0.03, 0.03, size=3) * np.array([1.0, 0.3, 1.0])
     home = ROBOT_HOME + rng.normal(0.0, 0.003, size=3)
     points = [(home if off is None else obj + np.asarray(off), hold) for off, hold in _WAYPOINTS[action]]

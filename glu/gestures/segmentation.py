@@ -156,6 +156,8 @@ def activity_signal(
     rest : array, shape (3,)
     """
     s = smooth(xyz, params)
+    if len(s) == 0:
+        raise DataError("cannot segment an empty trajectory")
     zq = np.quantile(s[:, 2], params.rest_quantile)
     rest = np.median(s[s[:, 2] >= zq], axis=0)
     d = np.linalg.norm(s - rest, axis=1)

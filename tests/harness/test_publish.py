@@ -306,3 +306,10 @@ def test_files_are_copied_where_hard_links_are_refused_and_a_bad_record_is_none(
         assert publish.read_record(run) == {}, text
     (run / publish.RUN_RECORD).write_text('{"files": {"x/a.txt": "01_a", "../b": "01_a", "c": 3}}')
     assert publish.read_record(run) == {"x/a.txt": "01_a"}
+
+
+def test_an_unknown_output_kind_is_refused(tmp_path):
+    layout = OutputLayout.under(tmp_path)
+    assert layout.folder("figures") == layout.figures
+    with pytest.raises(ValueError, match=r"^unknown output kind 'nope'; allowed: figures, results, "):
+        layout.folder("nope")

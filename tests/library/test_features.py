@@ -112,3 +112,8 @@ def test_synthetic_skeletons_give_the_original_body_factors():
         assert norm.horizontal == pytest.approx(0.33 * g.size, rel=1e-9)
         assert norm.vertical == pytest.approx(0.23 * g.size, rel=1e-9)
         assert math.isfinite(norm.horizontal)
+
+
+def test_the_middle_of_no_frames_is_refused():
+    with pytest.raises(DataError, match="^a sequence needs at least one frame$"):
+        middle_frames(0)

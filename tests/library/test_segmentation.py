@@ -235,3 +235,10 @@ def test_a_manifest_may_skip_blank_rows_and_name_a_recording_folder(tmp_path):
     ]
     with pytest.raises(DataError, match="nowhere: no such folder or manifest"):
         labelled_recordings(tmp_path / "nowhere")
+
+
+def test_an_empty_trajectory_has_no_activity_to_segment():
+    from glu.gestures.segmentation import activity_signal
+
+    with pytest.raises(DataError, match="^cannot segment an empty trajectory$"):
+        activity_signal(np.zeros((0, 3)))

@@ -99,3 +99,10 @@ def test_fetched_data_is_used_when_nothing_is_given(synthetic_folder, monkeypatc
     source = resolve_data()
     assert source.origin == "data/real" and source.root == synthetic_folder.resolve()
     assert isinstance(source, DataSource) and source.kind == "synthetic"
+
+
+def test_a_source_without_the_original_hmms_has_no_original_recogniser():
+    from glu.gestures.corpus import original_recognizer
+
+    with pytest.raises(DataError, match=r"^the data source has no original HMMs with M = 3 \("):
+        original_recognizer(resolve_data("synthetic"))

@@ -202,3 +202,10 @@ def test_robot_views_are_checked():
         View(performer="dog")
     assert _robot("grasp", mirror=True).skeleton[0, OPENNI_JOINTS.index("right_hand"), 0] < 0  # its left arm
     assert View(performer="robot", yaw_deg=30.0).describe() == "robot, yaw 30°"
+
+
+def test_the_robot_has_only_its_own_actions():
+    from glu.gestures.robot import robot_hand_path
+
+    with pytest.raises(DataError, match=r"^the robot has no action 'kick'; allowed: grasp, tap, touch$"):
+        robot_hand_path("kick", np.random.default_rng(0))
