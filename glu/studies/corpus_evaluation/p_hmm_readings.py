@@ -67,8 +67,8 @@ def segment_readings(
     rows = []
     for i, s in enumerate(sequences):
         ll = loglik(i, {i})
-        inner = [(j, loglik(j, {i, j})) for j in range(len(sequences)) if j != i and np.isfinite(ll).all()]
-        inner = [(j, v) for j, v in inner if np.isfinite(v).all()]
+        others = [j for j in range(len(sequences)) if j != i] if np.isfinite(ll).all() else []
+        inner = [(j, v) for j in others if np.isfinite(v := loglik(j, {i, j})).all()]
         if not inner:
             continue  # no model of its action without it, or no other segment scored without both
         beta = fit_temperature(np.array([v for _, v in inner]), labels[[j for j, _ in inner]])
