@@ -444,6 +444,27 @@ def test_saved_tables_are_found_by_their_key(synchronous, tmp_path, monkeypatch)
     assert saved.digest(saved.cache_key(saved_key(cfg))) != saved.digest(saved_key(cfg))
 
 
+def test_a_sweep_the_notebook_computed_is_found_in_the_cache(tmp_path, monkeypatch):
+    """notebook_tables runs a sweep of unsaved settings into the cache once, with the key and the code's
+    digest; asked again, it finds it there and runs nothing (the sweep itself stands in here)."""
+    import dataclasses
+
+    from glu import saved
+    from glu.studies.corpus_evaluation import sweep
+
+    here = dataclasses.replace(saved.HERE, saved=tmp_path / "sweeps", sweeps=tmp_path / "cache")
+    monkeypatch.setattr(saved, "HERE", here)
+    runs = []
+    monkeypatch.setattr(
+        sweep, "run_sweep", lambda config, out, **kw: runs.append(out) or out.mkdir(parents=True)
+    )
+    config = load_config_text(SMALL)
+    first = sweep.notebook_tables(config)
+    assert runs == [first] and first.parent == tmp_path / "cache" / sweep.NOTEBOOK
+    assert saved.read_key(first)["key"] == saved.cache_key(sweep.saved_key(config))
+    assert sweep.notebook_tables(config) == first and runs == [first]
+
+
 def _shrink(folder: Path) -> None:
     """Make the tables in ``folder`` those of an older computation: one row each, a mark in the summary."""
     import json

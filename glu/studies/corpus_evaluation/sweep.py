@@ -173,7 +173,7 @@ def notebook_tables(
     """The folder of the tables of ``config``: saved ones with the same key (:func:`saved_key`), else a sweep
     run now into the cache (on a LocalCluster of ``workers``, or in this process for None) and kept there.
     :func:`glu.studies.corpus_evaluation.tables.read_tables` reads either."""
-    from glu.saved import KEY_FILE, cache_folder, find, write_key
+    from glu.saved import KEY_FILE, cache_folder, cache_key, find, write_key
 
     key = saved_key(config)
     found = find(NOTEBOOK, key)
@@ -185,7 +185,7 @@ def notebook_tables(
         run_sweep(
             config, out, scheduler=None if workers else SYNCHRONOUS, workers=workers, progress=False, log=log
         )
-        write_key(out, key, f"glu run {NOTEBOOK} (these parameters)")
+        write_key(out, cache_key(key), f"glu run {NOTEBOOK} (these parameters)")
     return out
 
 
