@@ -60,6 +60,7 @@ NOTEBOOK = "12_learning_from_effects"
 STUDY_FILE, RESULTS_FILE = "learning_study.json", "learning_results.npz"
 PERSON_FILE, PERSON_STUDY_FILE = "learning_real_person.csv.gz", "learning_real_person.json"
 PERSON_SUMMARY_FILE = "learning_real_person_summary.csv"
+"""The real-person study's summary, for reading (:func:`save_real_person` writes it with the rows)."""
 FORMAT = 1
 """The version of the saved layout."""
 SAME: tuple[str, ...] = ("test_per_action", "effects", "online")
