@@ -10,6 +10,11 @@ Only a regular file (or a new one) is ever renamed over. An output path that exi
 the content is complete, as any Unix tool does (so ``-o /dev/null`` discards the output and leaves the
 device a device). The path ``-`` (:data:`STDOUT`) writes the content to standard output.
 
+A set of files that readers take as one whole (tables and the key or provenance file that vouches for
+them) is rewritten under :func:`marked_set`: its marker first removed, every file written atomically, the
+marker last; a whole folder glu owns alone can instead be rebuilt beside it and swapped in
+(:func:`staged_folder`).
+
 This module is the one implementation of atomic writes in glu; models, tables, figures and data folders
 all use it. Its readers of input files (:func:`read_text`, :func:`read_bytes`, :func:`read_json`) turn the
 system's errors into one line naming the file and what it should be.
@@ -129,6 +134,41 @@ def atomic_write_json(path: str | os.PathLike, obj: Any, indent: int | None = 1,
     """Write ``obj`` as JSON (strict: no NaN or Infinity) followed by a newline, atomically."""
     kwargs.setdefault("allow_nan", False)
     return atomic_write_text(path, json.dumps(obj, indent=indent, **kwargs) + "\n")
+
+
+@contextmanager
+def marked_set(folder: str | os.PathLike, *markers: str) -> Iterator[Path]:
+    """Rewrite the set of files in ``folder`` that readers take as one whole because its ``markers`` (file
+    names: a key, a provenance file) vouch for it; yields ``folder``. ::
+
+        with marked_set(out, "saved.json"):
+            with atomic_path(out / "table.parquet") as tmp:
+                df.to_parquet(tmp)
+            atomic_write_json(out / "saved.json", key)  # the marker, last
+
+    On entry the markers are removed, before any other file is touched; the block writes every file of the
+    set atomically (:func:`atomic_path`, :func:`atomic_write_bytes`, …) and the markers last, in order. A
+    reader that refuses a folder without its marker therefore sees the old whole set, a set it refuses,
+    or the new whole set — never new files beside old ones under the old marker. On an exception or an
+    interrupt the markers are removed again (the set is refused until a write of it completes); the files
+    already written stay, as does every other file of the folder: the folder may be one the user named, with
+    files of their own, so it is never removed or replaced whole (that is :func:`staged_folder`, for a
+    folder glu owns alone). A block that ends without writing every marker is a mistake of glu's:
+    RuntimeError.
+    """
+    folder = Path(folder)
+    paths = [folder / m for m in markers]
+    for path in paths:
+        path.unlink(missing_ok=True)
+    try:
+        yield folder
+    except BaseException:
+        for path in paths:
+            path.unlink(missing_ok=True)
+        raise
+    missing = [p.name for p in paths if not p.is_file()]
+    if missing:
+        raise RuntimeError(f"{folder}: the set was written without its marker {', '.join(missing)}")
 
 
 @contextmanager

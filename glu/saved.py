@@ -14,8 +14,11 @@ commits of the real data, or the synthetic generator's seed) and the tables' for
 
 Each folder holds :data:`KEY_FILE`: the key, and the provenance of the tables — glu's version, the commit of
 the checkout that computed them (and whether its work tree had changes), the date, and the command that
-regenerates them. What the key cannot hold is the code: after a change of what the numbers depend on, run
-``make sweeps`` again (the notebooks print the commit their tables come from).
+regenerates them. It vouches for the tables beside it: a writer removes it before it writes any table and
+writes it last (:func:`write_key` inside :func:`glu.files.marked_set`), so a folder without it — a write
+cut short — is passed by (:func:`find`) and refused by its reader, never read as a mix of two computations.
+What the key cannot hold is the code: after a change of what the numbers depend on, run ``make sweeps``
+again (the notebooks print the commit their tables come from).
 """
 
 from __future__ import annotations
@@ -124,7 +127,8 @@ def cache_folder(notebook: str, key: Mapping[str, Any]) -> Path:
 
 def write_key(folder: Path, key: Mapping[str, Any], command: str, **extra: Any) -> Path:
     """Write a folder's :data:`KEY_FILE`: the key, the command that regenerates the tables, the date, and
-    :func:`made_with` (``extra`` entries added)."""
+    :func:`made_with` (``extra`` entries added). It is the marker of the folder's set of tables: written
+    last, inside ``glu.files.marked_set(folder, KEY_FILE)``, once every table is."""
     doc = {
         "key": json.loads(json.dumps(key)),
         "command": command,

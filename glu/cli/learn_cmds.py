@@ -273,7 +273,6 @@ def _done(what: str, n: int) -> Any:
 
 
 def _run_curves(engine, label: str, settings, where: dict, out: Path, command: str) -> None:
-    from glu.files import atomic_write_text
     from glu.studies.learning import saved, tables
     from glu.studies.learning import study as lc
 
@@ -292,8 +291,6 @@ def _run_curves(engine, label: str, settings, where: dict, out: Path, command: s
         "learning_claims": tables.claims_table(budgets),
         "learning_labels": tables.labels_table(results, settings, label),
     }
-    for name, df in frames.items():
-        atomic_write_text(out / f"{name}.csv", df.to_csv(index=False))
     small = saved.check_settings(settings)
     print(
         f"the check run (recomputed by notebook 12): seed {small.seeds[0]}, {small.episodes:,} episodes, "
@@ -301,8 +298,9 @@ def _run_curves(engine, label: str, settings, where: dict, out: Path, command: s
         flush=True,
     )
     check = lc.learning_study(engine, small, **where)
-    saved.save_study(out / saved.CHECK_FOLDER, check, small, label, command)
-    saved.save_study(out, results, settings, label, command, lc.update_times(results))
+    # computed first, then written as one set: an interrupt leaves the old run, or one that is refused
+    times = lc.update_times(results)
+    saved.save_study(out, results, settings, label, command, times, check=(check, small), tables=frames)
     print(
         f"wrote {out}/{saved.STUDY_FILE}, {saved.RESULTS_FILE}, {', '.join(f'{k}.csv' for k in frames)}, "
         f"{saved.CHECK_FOLDER}/"
@@ -310,7 +308,6 @@ def _run_curves(engine, label: str, settings, where: dict, out: Path, command: s
 
 
 def _run_real_person(engine, source, label: str, draws, where: dict, out: Path, command: str) -> None:
-    from glu.files import atomic_write_text
     from glu.gestures.corpus import gesture_sequences
     from glu.studies.learning import real_person as rp
     from glu.studies.learning import saved
@@ -321,7 +318,6 @@ def _run_real_person(engine, source, label: str, draws, where: dict, out: Path, 
     rows = rp.real_person_study(
         engine, standing, settings, **where, progress=_done("draw", len(draws)), data_source=label
     )
-    saved.save_real_person(out, rows, settings, label, command)
     summary = rp.real_person_summary(rows, settings.bootstrap)
-    atomic_write_text(out / "learning_real_person_summary.csv", summary.to_csv(index=False))
-    print(f"wrote {out}/{saved.PERSON_FILE}, {saved.PERSON_STUDY_FILE}, learning_real_person_summary.csv")
+    saved.save_real_person(out, rows, settings, label, command, summary)
+    print(f"wrote {out}/{saved.PERSON_FILE}, {saved.PERSON_STUDY_FILE}, {saved.PERSON_SUMMARY_FILE}")

@@ -194,6 +194,64 @@ def test_learning_curves_writes_the_study_tables(capsys, tmp_path):
     assert_one_line_error(status, err, "real person is in the real data only")
 
 
+def _made_up_study(engine, settings, progress=None, **where):
+    """Measurements of the shapes ``settings`` asks for, made up (fast), in the place of the study."""
+    from glu.studies.learning import study as lc
+
+    rng = np.random.default_rng(settings.episodes)
+    learners = settings.learners()
+    groups = [
+        (w, a, words) for w in settings.worlds for a in settings.ambiguities for words in settings.words
+    ]
+    c, j = len(settings.checkpoints), 6
+    out = []
+    for s in settings.seeds:
+        correct = rng.random((c, len(learners), j)) < 0.7
+        network = rng.random((len(groups), j)) < 0.7
+        labels = rng.random((len(groups), 5))
+        out.append(
+            lc.SeedResult(s, learners, np.array(settings.checkpoints), correct, groups, network, labels,
+                          np.full(settings.episodes, 1e-3))
+        )  # fmt: skip
+        if progress is not None:
+            progress(s)
+    return out
+
+
+def test_learning_curves_cut_short_leave_no_run_vouched_for_by_another_check_run(
+    capsys, tmp_path, monkeypatch
+):
+    """glu learning-curves over a saved run, interrupted after writing its check run and before its own
+    measurements (the study made up, for speed): the run is refused in one line, never read as the old run
+    beside the new check run that vouches for it; a file of the user's in the folder survives."""
+    from cut_short import cut_short, old_or_refused
+
+    from glu.cli import learn_cmds
+    from glu.studies.learning import saved
+    from glu.studies.learning import study as lc
+
+    monkeypatch.setattr(learn_cmds, "_engine", lambda data: (None, "synthetic (made up)"))
+    monkeypatch.setattr(lc, "learning_study", _made_up_study)
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine\n")
+    argv = ["learning-curves", "--seeds", "0,1", "--ambiguities", "mixed", "--test-per-action", "2"]
+    argv += ["--scheduler", "synchronous", "--data", "synthetic", "-o", str(out)]
+    assert run(capsys, *argv, "--episodes", "12")[0] == 0
+    with cut_short(saved, "atomic_write_bytes", at=2, caught=True):  # the check run's, then the run's
+        status, _, err = run(capsys, *argv, "--episodes", "14")
+    assert status == 130 and err == "glu learning-curves: interrupted\n"
+
+    def commands() -> list[str]:
+        return [saved.load_study(f)[2]["made_by"]["command"] for f in (out, out / saved.CHECK_FOLDER)]
+
+    refusal = old_or_refused(commands, lambda c: all("--episodes 12 " in x for x in c))
+    assert refusal is not None and "learning_study.json missing" in refusal
+    assert (out / "notes.txt").read_text() == "mine\n"
+    assert run(capsys, *argv, "--episodes", "14")[0] == 0
+    assert all("--episodes 14 " in x for x in commands()) and (out / "notes.txt").read_text() == "mine\n"
+
+
 @pytest.mark.slow  # a LocalCluster (3 s); tests/studies/test_sweep.py runs a real scheduler and worker
 def test_learning_curves_on_a_local_dask_cluster_equal_the_run_here(capsys, tmp_path):
     common = ["learning-curves", "--episodes", "12", "--seeds", "0,1", "--ambiguities", "still"]

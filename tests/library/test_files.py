@@ -43,6 +43,34 @@ def test_a_failed_write_leaves_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_marked_set_is_vouched_for_only_once_written_whole(tmp_path):
+    """marked_set: the markers are gone from the first write of the set to the last, and again after a
+    failure (even one after a marker was written); the folder's other files are never touched; a block
+    that forgets a marker is glu's mistake."""
+    from glu.files import atomic_write_json, marked_set
+
+    (tmp_path / "notes.txt").write_text("mine\n")
+    for name in ("table.csv", "summary.json", "key.json"):
+        (tmp_path / name).write_text("old\n")
+    with marked_set(tmp_path, "summary.json", "key.json") as folder:
+        assert folder == tmp_path
+        assert not (tmp_path / "summary.json").exists() and not (tmp_path / "key.json").exists()
+        atomic_write_text(tmp_path / "table.csv", "new\n")
+        atomic_write_json(tmp_path / "summary.json", {"n": 1})
+        atomic_write_json(tmp_path / "key.json", {"k": 1})
+    assert (tmp_path / "key.json").read_text() == '{\n "k": 1\n}\n'
+    with pytest.raises(KeyboardInterrupt), marked_set(tmp_path, "summary.json", "key.json"):
+        atomic_write_text(tmp_path / "summary.json", "written too early\n")
+        raise KeyboardInterrupt
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt", "table.csv"]
+    assert (tmp_path / "notes.txt").read_text() == "mine\n"
+    with pytest.raises(RuntimeError, match="without its marker key.json"), marked_set(tmp_path, "key.json"):
+        atomic_write_text(tmp_path / "table.csv", "newer\n")
+    with marked_set(tmp_path / "new" / "folder", "key.json") as folder:  # a folder not there yet
+        atomic_write_text(folder / "key.json", "{}")
+    assert (tmp_path / "new" / "folder" / "key.json").is_file()
+
+
 def test_read_text_names_the_file_and_what_it_should_be(tmp_path):
     from glu.errors import DataError
     from glu.files import read_text

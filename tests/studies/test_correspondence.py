@@ -320,6 +320,44 @@ def test_the_study_grid_is_saved_found_and_read_back(tmp_path, monkeypatch):
         grid.read_tables(tmp_path / "nowhere")
 
 
+def _stamped_tables(value: int) -> tuple[pd.DataFrame, ...]:
+    """Three small tables stamped as the study's (every cell ``value``), in the place of a computed study."""
+    from glu.studies.correspondence import grid
+    from glu.tidy import tidy
+
+    return tuple(tidy(pd.DataFrame({"value": [value] * 3}), n, "synthetic", seeds=[0]) for n in grid.TABLES)
+
+
+def test_a_rewrite_of_saved_tables_cut_short_is_refused_never_mixed(tmp_path):
+    """Saved tables rewritten with other numbers, interrupted after the first table: the folder is refused in
+    one line and passed by when looking for its key, never read as the new table beside the old ones under
+    the old key; a file of the user's in the folder survives, and a complete write is read whole."""
+    from cut_short import cut_short, old_or_refused
+
+    from glu import saved
+    from glu.studies.correspondence import grid
+
+    root = tmp_path / "sweeps"
+    folder = root / "study"
+    folder.mkdir(parents=True)
+    (folder / "notes.txt").write_text("mine\n")
+    key = {"format": list(grid.FORMAT), "settings": {"seeds": [0]}}
+    grid.write_tables(folder, _stamped_tables(1), key, "test")
+    assert saved.find(grid.NOTEBOOK, key, [root]) == folder
+    with cut_short(pd.DataFrame, "to_parquet", at=2):
+        grid.write_tables(folder, _stamped_tables(2), key, "test")
+    refusal = old_or_refused(
+        lambda: grid.read_tables(folder), lambda t: all((df["value"] == 1).all() for df in t[:3])
+    )
+    assert refusal is not None and "not a folder of saved correspondence tables" in refusal
+    assert saved.find(grid.NOTEBOOK, key, [root]) is None and saved.read_key(folder) is None
+    assert (folder / "notes.txt").read_text() == "mine\n"
+    assert not [p.name for p in folder.iterdir() if p.name.startswith(".")]  # no temporary file left
+    grid.write_tables(folder, _stamped_tables(3), key, "test")
+    assert all((df["value"] == 3).all() for df in grid.read_tables(folder)[:3])
+    assert saved.find(grid.NOTEBOOK, key, [root]) == folder and (folder / "notes.txt").read_text() == "mine\n"
+
+
 def test_glu_correspondence_writes_the_study_with_its_key_and_command(tmp_path, monkeypatch, capsys):
     """`glu correspondence -o DIR` runs the study of notebook 10's settings (here a small grid in their
     place) and writes its tables with their key and the command that makes them again."""

@@ -247,6 +247,58 @@ def test_a_saved_run_reads_back_and_is_checked(engine, small_run, tmp_path):
         saved.load_study(tmp_path)
 
 
+def test_a_rewrite_of_a_saved_run_cut_short_is_refused_never_mixed(tmp_path):
+    """A saved run rewritten with other measurements, the disk full when its study file is written: the
+    folder is refused in one line, never read as the new measurements under the old study file; a file of
+    the user's in the folder survives, and a complete write is read whole."""
+    from cut_short import cut_short, old_or_refused
+
+    old, new = _results(), [r._replace(correct=~r.correct) for r in _results()]
+    (tmp_path / "notes.txt").write_text("mine\n")
+    saved.save_study(tmp_path, old, SETTINGS, "synthetic", "glu test")
+    with cut_short(saved, "atomic_write_json", at=1, error=OSError):
+        saved.save_study(tmp_path, new, SETTINGS, "synthetic", "glu test")
+
+    def is_old(loaded) -> bool:
+        return all((a.correct == b.correct).all() for a, b in zip(loaded[1], old, strict=True))
+
+    refusal = old_or_refused(lambda: saved.load_study(tmp_path), is_old)
+    assert (
+        refusal is not None
+        and "no saved run of learning from effects (learning_study.json missing)" in refusal
+    )
+    assert (tmp_path / "notes.txt").read_text() == "mine\n"
+    saved.save_study(tmp_path, new, SETTINGS, "synthetic", "glu test")
+    assert not is_old(saved.load_study(tmp_path)) and (tmp_path / "notes.txt").read_text() == "mine\n"
+
+
+def test_a_run_its_check_run_and_its_tables_are_one_set(tmp_path):
+    """save_study with the check run and the tables: all written, the study file last; cut short at the
+    run's own measurements (after the check run was written), the run is refused, never vouched for by a
+    check run of another computation; the other files of the folder stay."""
+    from cut_short import cut_short, old_or_refused
+
+    small = saved.check_settings(SETTINGS)
+    check = [r for r in _results() if r.seed in small.seeds]
+    frames = {"learning_curves": pd.DataFrame({"episodes": [10, 20]})}
+    (tmp_path / "notes.txt").write_text("mine\n")
+    saved.save_study(tmp_path, _results(), SETTINGS, "synthetic", "old", check=(check, small), tables=frames)
+    assert saved.load_study(tmp_path / saved.CHECK_FOLDER)[0] == small
+    assert (tmp_path / "learning_curves.csv").read_text() == "episodes\n10\n20\n"
+    with cut_short(saved, "atomic_write_bytes", at=2, error=KeyboardInterrupt):  # the check's, then the run's
+        saved.save_study(
+            tmp_path, _results(), SETTINGS, "synthetic", "new", check=(check, small), tables=frames
+        )
+
+    def commands() -> tuple[str, str]:
+        return tuple(saved.load_study(f)[2]["made_by"]["command"] for f in (tmp_path, tmp_path / "check"))
+
+    refusal = old_or_refused(commands, lambda c: c == ("old", "old"))
+    assert refusal is not None and "learning_study.json missing" in refusal
+    assert saved.load_study(tmp_path / saved.CHECK_FOLDER)[2]["made_by"]["command"] == "new"
+    assert (tmp_path / "notes.txt").read_text() == "mine\n"
+
+
 def test_an_installed_glu_has_no_shipped_runs(monkeypatch):
     monkeypatch.setattr("glu.saved.roots", lambda notebook: [])
     with pytest.raises(DataError, match="in a source checkout of glu \\(sweeps/\\); make one with `glu"):

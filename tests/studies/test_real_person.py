@@ -130,6 +130,42 @@ def test_a_learner_without_any_model_answers_none():
     assert rp._predict(run, 1, [np.zeros((5, 3))] * 2) == [None, None]
 
 
+def test_a_rewrite_of_the_saved_study_cut_short_is_refused_never_mixed(tmp_path):
+    """The real-person study's rows rewritten, the disk full when their provenance is written (or the run
+    interrupted while their summary is): the folder is refused in one line, never read as the new rows under
+    the old provenance; a file of the user's in the folder survives, and a complete write is read whole."""
+    import pandas as pd
+    from cut_short import cut_short, old_or_refused
+
+    from glu.studies.learning import saved
+
+    settings = rp.RealPersonSettings(draws=(0,))
+    old = pd.DataFrame({"draw": [0, 0], "predicted": ["tap", None], "correct": [True, False]})
+    new = old.assign(correct=~old["correct"])
+    (tmp_path / "notes.txt").write_text("mine\n")
+    saved.save_real_person(tmp_path, old, settings, "synthetic", "old")
+    with cut_short(saved, "atomic_write_json", at=1, error=OSError):
+        saved.save_real_person(tmp_path, new, settings, "synthetic", "new")
+
+    def is_old(loaded) -> bool:
+        rows, meta = loaded
+        return rows["correct"].tolist() == [True, False] and meta["made_by"]["command"] == "old"
+
+    refusal = old_or_refused(lambda: saved.load_real_person(tmp_path, "synthetic"), is_old)
+    assert refusal is not None and "no saved real-person study (learning_real_person.json missing)" in refusal
+    assert (tmp_path / "notes.txt").read_text() == "mine\n"
+    summary = pd.DataFrame({"learner": ["hard"], "accuracy": [0.5]})
+    saved.save_real_person(tmp_path, new, settings, "synthetic", "new", summary)
+    assert (tmp_path / saved.PERSON_SUMMARY_FILE).read_text() == "learner,accuracy\nhard,0.5\n"
+    with cut_short(saved, "atomic_write_text", at=1):  # the summary, after the rows
+        saved.save_real_person(tmp_path, old, settings, "synthetic", "old", summary)
+    assert old_or_refused(lambda: saved.load_real_person(tmp_path, "synthetic"), lambda _: False)
+    saved.save_real_person(tmp_path, new, settings, "synthetic", "new", summary)
+    rows, meta = saved.load_real_person(tmp_path, "synthetic")
+    assert rows["correct"].tolist() == [False, True] and meta["made_by"]["command"] == "new"
+    assert (tmp_path / "notes.txt").read_text() == "mine\n"
+
+
 @pytest.mark.slow
 def test_the_saved_study_reads_back_and_is_checked(engine, small_study, tmp_path, monkeypatch):
     """Saved rows read back equal (the same bytes when saved again); a folder of other data or other

@@ -444,6 +444,96 @@ def test_saved_tables_are_found_by_their_key(synchronous, tmp_path, monkeypatch)
     assert saved.digest(saved.cache_key(saved_key(cfg))) != saved.digest(saved_key(cfg))
 
 
+def test_a_sweep_the_notebook_computed_is_found_in_the_cache(tmp_path, monkeypatch):
+    """notebook_tables runs a sweep of unsaved settings into the cache once, with the key and the code's
+    digest; asked again, it finds it there and runs nothing (the sweep itself stands in here)."""
+    import dataclasses
+
+    from glu import saved
+    from glu.studies.corpus_evaluation import sweep
+
+    here = dataclasses.replace(saved.HERE, saved=tmp_path / "sweeps", sweeps=tmp_path / "cache")
+    monkeypatch.setattr(saved, "HERE", here)
+    runs = []
+    monkeypatch.setattr(
+        sweep, "run_sweep", lambda config, out, **kw: runs.append(out) or out.mkdir(parents=True)
+    )
+    config = load_config_text(SMALL)
+    first = sweep.notebook_tables(config)
+    assert runs == [first] and first.parent == tmp_path / "cache" / sweep.NOTEBOOK
+    assert saved.read_key(first)["key"] == saved.cache_key(sweep.saved_key(config))
+    assert sweep.notebook_tables(config) == first and runs == [first]
+
+
+def _shrink(folder: Path) -> None:
+    """Make the tables in ``folder`` those of an older computation: one row each, a mark in the summary."""
+    import json
+
+    for name in TABLES[:-1]:
+        pd.read_parquet(folder / name).head(1).to_parquet(folder / name, index=False)
+    summary = json.loads((folder / "summary.json").read_text())
+    (folder / "summary.json").write_text(json.dumps({**summary, "older": True}))
+
+
+def _shrunk(tables) -> bool:
+    """Whether ``tables`` (read back) are all of the older computation :func:`_shrink` made."""
+    return all(len(df) == 1 for df in tables[:5]) and tables.summary.get("older") is True
+
+
+def test_a_rewrite_of_saved_tables_cut_short_is_refused_never_mixed(synchronous, tmp_path):
+    """glu evaluate --save over saved tables of an older computation, interrupted after the first table:
+    the folder is refused in one line and passed by when looking for its key, never read as the new table
+    beside the old ones; a file of the user's in it survives, and a complete write is read whole."""
+    from cut_short import cut_short, old_or_refused
+
+    from glu import saved
+    from glu.studies.corpus_evaluation.sweep import NOTEBOOK, export_saved
+    from glu.studies.corpus_evaluation.tables import read_tables
+
+    ref, _ = synchronous
+    root = tmp_path / "sweeps" / NOTEBOOK
+    dest = root / "synthetic"
+    dest.mkdir(parents=True)
+    (dest / "notes.txt").write_text("mine\n")
+    export_saved(ref, dest, "glu evaluate --save …")
+    key = saved.read_key(dest)["key"]
+    _shrink(dest)
+    assert saved.find(NOTEBOOK, key, [root]) == dest and _shrunk(read_tables(dest))
+    with cut_short(pd.DataFrame, "to_parquet", at=2):
+        export_saved(ref, dest, "glu evaluate --save …")
+    refusal = old_or_refused(lambda: read_tables(dest), _shrunk)
+    assert refusal is not None and "not the output folder of a finished `glu evaluate`" in refusal
+    assert saved.find(NOTEBOOK, key, [root]) is None
+    assert (dest / "notes.txt").read_text() == "mine\n"
+    export_saved(ref, dest, "glu evaluate --save …")
+    assert saved.find(NOTEBOOK, key, [root]) == dest and not _shrunk(read_tables(dest))
+    assert (dest / "notes.txt").read_text() == "mine\n"
+
+
+def test_a_rewrite_of_a_sweeps_tables_cut_short_is_refused_never_mixed(config_file, synchronous, tmp_path):
+    """A finished sweep whose tables are an older computation's, run again and interrupted after its first
+    table: the folder is refused in one line (no summary.json), never read as the new table beside the old
+    ones; a file of the user's in it survives, and the run completed writes the same tables as the first."""
+    from cut_short import cut_short, old_or_refused
+
+    from glu.studies.corpus_evaluation.tables import read_tables
+
+    ref, _ = synchronous
+    out = tmp_path / "again"
+    shutil.copytree(ref, out)
+    (out / "notes.txt").write_text("mine\n")
+    _shrink(out)
+    with cut_short(pd.DataFrame, "to_parquet", at=2):
+        run_sweep(load_config(config_file), out, scheduler="synchronous", log=quiet)
+    refusal = old_or_refused(lambda: read_tables(out), _shrunk)
+    assert refusal is not None and "not the output folder of a finished `glu evaluate`" in refusal
+    assert (out / "notes.txt").read_text() == "mine\n"
+    run_sweep(load_config(config_file), out, scheduler="synchronous", log=quiet)
+    same_tables(ref, out)
+    assert (out / "summary.csv").read_bytes() == (ref / "summary.csv").read_bytes()
+    assert (out / "notes.txt").read_text() == "mine\n"
+
+
 def load_config_text(text: str):
     import tomllib
 

@@ -39,6 +39,11 @@ The output folder::
                             it sits at a bound, and the recogniser's accuracy on the gestures it was fitted on
     OUT/summary.json, OUT/summary.csv   the tidy summary: the overall metrics at the full gesture, and
                             which strategy wins each cell of the design
+
+The tables and the summary are one set: ``summary.json`` is removed before the tables are (re)written and
+written last (:func:`glu.files.marked_set`), and a folder without it is not a finished sweep
+(:func:`~glu.studies.corpus_evaluation.tables.read_tables` refuses it), so a merge cut short never leaves new
+tables beside old ones.
 """
 
 from __future__ import annotations
@@ -60,7 +65,7 @@ import pandas as pd
 
 from glu import __version__
 from glu.errors import DataError, GluError
-from glu.files import atomic_write_json
+from glu.files import atomic_path, atomic_write_json, marked_set
 from glu.machine import SYNCHRONOUS, available_cores, check_reachable, check_scheduler, dask_client
 from glu.saved import made_with
 from glu.studies.corpus_evaluation import robots
@@ -128,25 +133,33 @@ def export_saved(folder: str | os.PathLike, dest: str | os.PathLike, command: st
     """Write what notebook 11 reads of the finished sweep in ``folder``
     (:func:`~glu.studies.corpus_evaluation.tables.saved_subset`, Parquet with zstd) to ``dest``, with the
     sweep's ``sweep.json`` and ``summary.json`` and a :mod:`glu.saved` key file (``command``: how to
-    regenerate it). Returns ``dest``."""
-    from glu.saved import write_key
-    from glu.studies.corpus_evaluation.tables import read_tables, saved_subset
+    regenerate it). Returns ``dest``.
+
+    They are one set with two markers (:func:`glu.files.marked_set`): ``summary.json``, which
+    :func:`~glu.studies.corpus_evaluation.tables.read_tables` needs, and the key file, which
+    :func:`glu.saved.find` needs. Both are removed first and written last, every file through a temporary
+    one, so an error or an interrupt while an existing ``dest`` is rewritten leaves one that both refuse,
+    never new tables beside old ones under the old key. Other files in ``dest`` are left as they are."""
+    from glu.saved import KEY_FILE, write_key
+    from glu.studies.corpus_evaluation.tables import SUMMARY_FILE, read_tables, saved_subset
 
     folder, dest = Path(folder), Path(dest)
     provenance = json.loads((folder / "sweep.json").read_text(encoding="utf-8"))
     tables = saved_subset(read_tables(folder))
     dest.mkdir(parents=True, exist_ok=True)
-    for (name, _), df in zip(TABLES, tables[:5], strict=True):
-        df = df.copy()
-        df.attrs = {}
-        df.to_parquet(dest / f"{name}.parquet", index=False, compression="zstd")
-    # the per-cell summary ("overall", "best") is the sweep's own report: the notebook computes its own
-    atomic_write_json(
-        dest / "summary.json", {k: v for k, v in tables.summary.items() if k not in ("overall", "best")}
-    )
-    atomic_write_json(dest / "sweep.json", provenance)
-    key = _key(provenance["settings"], provenance["data_source"])
-    write_key(dest, key, command, computed_by=provenance.get("made_with"))
+    with marked_set(dest, SUMMARY_FILE, KEY_FILE):
+        for (name, _), df in zip(TABLES, tables[:5], strict=True):
+            df = df.copy()
+            df.attrs = {}
+            with atomic_path(dest / f"{name}.parquet", suffix=".parquet") as tmp:
+                df.to_parquet(tmp, index=False, compression="zstd")
+        atomic_write_json(dest / "sweep.json", provenance)
+        # the per-cell summary ("overall", "best") is the sweep's own report: the notebook computes its own
+        atomic_write_json(
+            dest / SUMMARY_FILE, {k: v for k, v in tables.summary.items() if k not in ("overall", "best")}
+        )
+        key = _key(provenance["settings"], provenance["data_source"])
+        write_key(dest, key, command, computed_by=provenance.get("made_with"))
     return dest
 
 
@@ -160,7 +173,7 @@ def notebook_tables(
     """The folder of the tables of ``config``: saved ones with the same key (:func:`saved_key`), else a sweep
     run now into the cache (on a LocalCluster of ``workers``, or in this process for None) and kept there.
     :func:`glu.studies.corpus_evaluation.tables.read_tables` reads either."""
-    from glu.saved import cache_folder, find, write_key
+    from glu.saved import KEY_FILE, cache_folder, cache_key, find, write_key
 
     key = saved_key(config)
     found = find(NOTEBOOK, key)
@@ -168,10 +181,11 @@ def notebook_tables(
         return found
     out = cache_folder(NOTEBOOK, key)
     log(f"no saved tables for these settings and data: running the sweep into {out}")
-    run_sweep(
-        config, out, scheduler=None if workers else SYNCHRONOUS, workers=workers, progress=False, log=log
-    )
-    write_key(out, key, f"glu run {NOTEBOOK} (these parameters)")
+    with marked_set(out, KEY_FILE):  # the key vouches for the sweep's tables: written once they are
+        run_sweep(
+            config, out, scheduler=None if workers else SYNCHRONOUS, workers=workers, progress=False, log=log
+        )
+        write_key(out, cache_key(key), f"glu run {NOTEBOOK} (these parameters)")
     return out
 
 

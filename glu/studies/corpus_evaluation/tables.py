@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
-from glu.files import atomic_path, atomic_write_json, atomic_write_text
+from glu.files import atomic_path, atomic_write_json, atomic_write_text, marked_set
 from glu.studies.corpus_evaluation.config import SweepConfig
 from glu.studies.corpus_evaluation.evaluation import Evaluator
 from glu.studies.corpus_evaluation.findings import ADJUSTMENT, DESIGN, verdicts_adjusted, winners
@@ -40,7 +40,10 @@ TABLES: tuple[tuple[str, str], ...] = (
     ("calibration", "corpus_calibration"),
 )
 """Each table of a sweep's folder: its file's stem (``.parquet``) and its experiment stamp."""
-FILES = (*(f"{file}.parquet" for file, _ in TABLES), "summary.json", "summary.csv")
+SUMMARY_FILE = "summary.json"
+"""The summary of a sweep's folder, written after every table: :func:`read_tables` takes a folder without
+it for a sweep not finished (or a rewrite of its tables cut short)."""
+FILES = (*(f"{file}.parquet" for file, _ in TABLES), SUMMARY_FILE, "summary.csv")
 CONDITION_FACTORS: tuple[str, ...] = ("effects", "action_prior")
 """The simulated conditions' factors that every table keeps apart (the noise and the viewpoint are also
 pooled)."""
@@ -183,7 +186,10 @@ def merge(
 ) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, pd.DataFrame, dict[str, Any]]:
     """Merge the chunks (in index order) and write every table of the output folder.
 
-    One reading at a time, so that memory holds the sums of one reading, never of the whole grid.
+    One reading at a time, so that memory holds the sums of one reading, never of the whole grid. The tables
+    and ``summary.csv`` are one set with :data:`SUMMARY_FILE` (:func:`glu.files.marked_set`): it is removed
+    before the first table is written and written last, so a rewrite of a finished sweep's tables cut short
+    leaves a folder :func:`read_tables` refuses, never new tables beside old ones.
     """
     from glu.studies.corpus_evaluation.corpus import chunk_ranges
 
@@ -229,13 +235,16 @@ def merge(
     # summarised before the tables are stamped: pandas deep-copies a frame's attrs (here every setting of the
     # sweep) on every row or column it hands out, which made summarize several times slower
     summary = summarize(table, diffs, provenance)
-    for df, (file, name) in zip((table, diffs, rel, seeds, calibration), TABLES, strict=True):
+    for df, (_, name) in zip((table, diffs, rel, seeds, calibration), TABLES, strict=True):
         tidy(df, name, source, **params)
-        with atomic_path(out / f"{file}.parquet", suffix=".parquet") as tmp:
-            df.to_parquet(tmp, index=False)
-    atomic_write_json(out / "summary.json", summary)
     head = pd.DataFrame(summary["overall"])
-    atomic_write_text(out / "summary.csv", head.to_csv(index=False, float_format="%.6g", lineterminator="\n"))
+    with marked_set(out, SUMMARY_FILE):
+        for df, (file, _) in zip((table, diffs, rel, seeds, calibration), TABLES, strict=True):
+            with atomic_path(out / f"{file}.parquet", suffix=".parquet") as tmp:
+                df.to_parquet(tmp, index=False)
+        text = head.to_csv(index=False, float_format="%.6g", lineterminator="\n")
+        atomic_write_text(out / "summary.csv", text)
+        atomic_write_json(out / SUMMARY_FILE, summary)
     return table, diffs, rel, seeds, summary
 
 
@@ -278,10 +287,12 @@ class SweepTables(NamedTuple):
 
 
 def read_tables(folder: str | Path) -> SweepTables:
-    """The tables a finished sweep wrote to ``folder``, stamped as :func:`merge` stamps them."""
+    """The tables a finished sweep wrote to ``folder``, stamped as :func:`merge` stamps them; a folder
+    without :data:`SUMMARY_FILE` (a sweep not finished, or a rewrite of its tables cut short) is refused in
+    one line (:class:`DataError`)."""
     folder = Path(folder)
     try:
-        summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        summary = json.loads((folder / SUMMARY_FILE).read_text(encoding="utf-8"))
         frames = [pd.read_parquet(folder / f"{file}.parquet") for file, _ in TABLES]
     except (OSError, ValueError) as e:
         raise DataError(f"{folder}: not the output folder of a finished `glu evaluate` ({e})") from None

@@ -22,8 +22,9 @@ from typing import Any, NamedTuple
 import pandas as pd
 
 from glu.errors import DataError
+from glu.files import atomic_path, marked_set
 from glu.machine import map_tasks
-from glu.saved import cache_folder, cache_key, find, write_key
+from glu.saved import KEY_FILE, cache_folder, cache_key, find, write_key
 from glu.studies.correspondence.experiment import (
     FEATURE_SETS,
     STUDY_TRAINING,
@@ -110,16 +111,23 @@ def run_study(settings: StudySettings, workers: int = 0) -> tuple[pd.DataFrame, 
 
 
 def write_tables(folder: Path, tables: tuple[pd.DataFrame, ...], key: dict[str, Any], command: str) -> Path:
-    """The tables as Parquet (zstd) in ``folder``, their stamps and the key in its key file."""
+    """The tables as Parquet (zstd) in ``folder``, their stamps and the key in its key file.
+
+    The tables and the key file are one set (:func:`glu.files.marked_set`): the key file is removed first
+    and written last, each table through a temporary file, so an error or an interrupt while an existing
+    folder is rewritten leaves one that :func:`read_tables` refuses and :func:`glu.saved.find` passes by,
+    never new tables under the old key. Other files in ``folder`` are left as they are."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     stamps = {}
-    for name, df in zip(TABLES, tables, strict=True):
-        stamps[name] = json.loads(json.dumps(df.attrs, default=str))
-        plain = df.copy()
-        plain.attrs = {}
-        plain.to_parquet(folder / f"{name}.parquet", index=False, compression="zstd")
-    write_key(folder, key, command, stamps=stamps)
+    with marked_set(folder, KEY_FILE):
+        for name, df in zip(TABLES, tables, strict=True):
+            stamps[name] = json.loads(json.dumps(df.attrs, default=str))
+            plain = df.copy()
+            plain.attrs = {}
+            with atomic_path(folder / f"{name}.parquet", suffix=".parquet") as tmp:
+                plain.to_parquet(tmp, index=False, compression="zstd")
+        write_key(folder, key, command, stamps=stamps)
     return folder
 
 
@@ -127,7 +135,7 @@ def read_tables(folder: str | Path) -> StudyTables:
     """The tables :func:`write_tables` saved in ``folder``, stamped again."""
     folder = Path(folder)
     try:
-        doc = json.loads((folder / "saved.json").read_text(encoding="utf-8"))
+        doc = json.loads((folder / KEY_FILE).read_text(encoding="utf-8"))
         frames = [pd.read_parquet(folder / f"{name}.parquet") for name in TABLES]
     except (OSError, ValueError) as e:
         raise DataError(f"{folder}: not a folder of saved correspondence tables ({e})") from None

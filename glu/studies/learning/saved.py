@@ -26,6 +26,10 @@ each learner recognised —, not the data. Another data folder or other settings
 * for the real data, ``learning_real_person.csv.gz`` and ``learning_real_person.json`` — every draw's
   predictions of the real-person study (:mod:`glu.studies.learning.real_person`) and their provenance
   (:func:`save_real_person`, :func:`load_real_person`), and ``learning_real_person_summary.csv``.
+
+Each of the two is one set of files vouched for by its JSON file (:func:`glu.files.marked_set`): removed
+before the others are rewritten and written last, so a run cut short leaves the old set whole or a folder
+the reader refuses in one line, never new measurements (or a new check run) under the old provenance.
 """
 
 from __future__ import annotations
@@ -35,7 +39,7 @@ import gzip
 import io
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -44,7 +48,7 @@ import numpy as np
 import pandas as pd
 
 from glu.errors import DataError
-from glu.files import atomic_write_bytes, atomic_write_json
+from glu.files import atomic_write_bytes, atomic_write_json, atomic_write_text, marked_set
 from glu.hmm import TrainingConfig
 from glu.studies.learning.online import OnlineSettings
 from glu.studies.learning.real_person import RealPersonSettings
@@ -55,6 +59,8 @@ NOTEBOOK = "12_learning_from_effects"
 """The notebook whose saved runs these are (``sweeps/<notebook>/`` of a checkout, :mod:`glu.saved`)."""
 STUDY_FILE, RESULTS_FILE = "learning_study.json", "learning_results.npz"
 PERSON_FILE, PERSON_STUDY_FILE = "learning_real_person.csv.gz", "learning_real_person.json"
+PERSON_SUMMARY_FILE = "learning_real_person_summary.csv"
+"""The real-person study's summary, for reading (:func:`save_real_person` writes it with the rows)."""
 FORMAT = 1
 """The version of the saved layout."""
 SAME: tuple[str, ...] = ("test_per_action", "effects", "online")
@@ -104,9 +110,19 @@ def save_study(
     data_source: str,
     command: str,
     update_seconds: dict[str, float] | None = None,
+    *,
+    check: tuple[Sequence[SeedResult], StudySettings] | None = None,
+    tables: Mapping[str, pd.DataFrame] | None = None,
 ) -> Path:
-    """Write a run's measurements and provenance into ``folder`` (see the module docstring); returns the
-    study file."""
+    """Write a run's measurements and provenance into ``folder`` (see the module docstring), with its check
+    run (``check``: its results and :func:`check_settings`) in ``check/`` and ``tables`` (name → frame) as
+    ``NAME.csv`` for reading; returns the study file.
+
+    They are one set, vouched for by the study file (:func:`glu.files.marked_set`): it is removed before
+    anything is written and written last, every file through a temporary one, so an error or an interrupt
+    while an existing run is rewritten leaves a folder :func:`load_study` refuses in one line — never new
+    measurements, or a new check run, under the old study file. Other files in ``folder`` (the real-person
+    study's, the user's own) are left as they are."""
     folder = Path(folder)
     first = results[0]
     correct = np.stack([r.correct for r in results])  # (S, C, L, J)
@@ -119,21 +135,24 @@ def save_study(
         labels=np.stack([r.labels for r in results]),
         tests=np.array(correct.shape[-1]),
     )
-    atomic_write_bytes(folder / RESULTS_FILE, buf.getvalue())
-    return atomic_write_json(
-        folder / STUDY_FILE,
-        {
-            "format": FORMAT,
-            "settings": json.loads(json.dumps(settings.as_dict(), default=str)),
-            "data_source": data_source,
-            "seeds": [int(r.seed) for r in results],
-            "learners": [list(lr) for lr in first.learners],
-            "groups": [list(g) for g in first.groups],
-            "checkpoints": [int(c) for c in first.checkpoints],
-            "update_seconds": update_seconds or {},
-            "made_by": _made_by(command),
-        },
-    )
+    study = {
+        "format": FORMAT,
+        "settings": json.loads(json.dumps(settings.as_dict(), default=str)),
+        "data_source": data_source,
+        "seeds": [int(r.seed) for r in results],
+        "learners": [list(lr) for lr in first.learners],
+        "groups": [list(g) for g in first.groups],
+        "checkpoints": [int(c) for c in first.checkpoints],
+        "update_seconds": update_seconds or {},
+        "made_by": _made_by(command),
+    }
+    with marked_set(folder, STUDY_FILE):
+        for name, df in (tables or {}).items():
+            atomic_write_text(folder / f"{name}.csv", df.to_csv(index=False))
+        if check is not None:
+            save_study(folder / CHECK_FOLDER, *check, data_source, command)
+        atomic_write_bytes(folder / RESULTS_FILE, buf.getvalue())
+        return atomic_write_json(folder / STUDY_FILE, study)
 
 
 def _read(folder: Path, what: str, part: str, read) -> Any:
@@ -323,21 +342,30 @@ def save_real_person(
     settings: RealPersonSettings,
     data_source: str,
     command: str,
+    summary: pd.DataFrame | None = None,
 ) -> Path:
-    """Write the real-person study's rows (gzip, byte for byte the same for the same rows) and their
-    provenance into ``folder``; returns the provenance file."""
+    """Write the real-person study's rows (gzip, byte for byte the same for the same rows), their
+    ``summary`` (:func:`~glu.studies.learning.real_person.real_person_summary`, if given, as
+    :data:`PERSON_SUMMARY_FILE` for reading) and their provenance into ``folder``; returns the provenance
+    file.
+
+    They are one set, vouched for by the provenance file (:func:`glu.files.marked_set`): it is removed
+    first and written last, so an error or an interrupt while an existing study is rewritten leaves a folder
+    :func:`load_real_person` refuses in one line, never new rows under the old provenance. Other files in
+    ``folder`` (the run of learning curves, the user's own) are left as they are."""
     folder = Path(folder)
     text = rows.to_csv(index=False).encode("utf-8")
-    atomic_write_bytes(folder / PERSON_FILE, gzip.compress(text, mtime=0))
-    return atomic_write_json(
-        folder / PERSON_STUDY_FILE,
-        {
-            "format": FORMAT,
-            "settings": json.loads(json.dumps(settings.as_dict(), default=str)),
-            "data_source": data_source,
-            "made_by": _made_by(command),
-        },
-    )
+    provenance = {
+        "format": FORMAT,
+        "settings": json.loads(json.dumps(settings.as_dict(), default=str)),
+        "data_source": data_source,
+        "made_by": _made_by(command),
+    }
+    with marked_set(folder, PERSON_STUDY_FILE):
+        atomic_write_bytes(folder / PERSON_FILE, gzip.compress(text, mtime=0))
+        if summary is not None:
+            atomic_write_text(folder / PERSON_SUMMARY_FILE, summary.to_csv(index=False))
+        return atomic_write_json(folder / PERSON_STUDY_FILE, provenance)
 
 
 def load_real_person(folder: str | os.PathLike, data_source: str) -> tuple[pd.DataFrame, dict[str, Any]]:
