@@ -260,6 +260,18 @@ def soft_evidence_sweep(
     )
 
 
+SWEEP_SHAPES: tuple[str, ...] = ("sphere", "box")
+"""The shapes notebook 05 sweeps p_HMM(tap) for (TCDS's effect-prediction objects)."""
+
+
+def soft_evidence_sweeps(
+    bn: BayesNet, shapes: Sequence[str] = SWEEP_SHAPES, n_points: int = 101
+) -> dict[str, pd.DataFrame]:
+    """:func:`soft_evidence_sweep` of p_comb(ObjVel | Shape) under virtual evidence and Jeffrey's rule for
+    each of ``shapes``: shape → its sweep, in the order given."""
+    return {shape: soft_evidence_sweep(bn, {"Shape": shape}, n_points=n_points) for shape in shapes}
+
+
 def tap_thresholds(bn: BayesNet, nodes: Sequence[str] = ("Shape", "Size", "ObjVel")) -> pd.DataFrame:
     """The tap threshold of :func:`tap_threshold` for every combination of values of ``nodes``.
 
