@@ -149,3 +149,38 @@ def test_the_sweeps_are_panels_side_by_side_with_one_legend():
         assert [ax.get_legend() is not None for ax in fig.axes] == [False, True]
     finally:
         plt.close(fig)
+
+
+def test_an_nbest_figure_is_titled_by_its_evidence_score_and_candidates():
+    from glu.studies.replication.verbal_figures import nbest_figure
+
+    nbest = pd.DataFrame({"sentence": ["the robot taps the ball", "the ball rolls"], "score": [-1.5, -2.25]})
+    fig = nbest_figure(nbest, {"Color": "yellow", "Shape": "sphere"}, "original", "the samples")
+    try:
+        (ax,) = fig.axes
+        assert ax.get_title(loc="right") == "Color=yellow, Shape=sphere (original score, the samples)"
+        assert [t.get_text() for t in ax.get_yticklabels()] == [
+            f"{k}. {s}" for k, s in enumerate(nbest.sentence, 1)
+        ]
+        assert list(ax.collections[0].get_offsets()[:, 0]) == [-1.5, -2.25]
+    finally:
+        plt.close(fig)
+
+
+def test_a_sampling_figure_draws_the_example_it_is_given():
+    """The grammar's scores and the sample's as histograms, the grammar's best and the sample's as lines,
+    titled by the evidence and the sample's size."""
+    from glu.studies.replication.verbal import SamplingExample
+    from glu.studies.replication.verbal_figures import sampling_figure
+
+    grammar = np.linspace(-4.0, -1.0, 50)
+    sample = np.array([-3.0, -2.5, -2.0, -np.inf])
+    example = SamplingExample({"ObjVel": "slow"}, grammar, sample, -1.0, 4, "original")
+    fig = sampling_figure(example)
+    try:
+        (ax,) = fig.axes
+        assert ax.get_title().split("\n")[0] == "ObjVel=slow: one sample of 4"
+        assert [line.get_xdata()[0] for line in ax.lines] == [-1.0, -2.0]  # the grammar's best, the sample's
+        assert "1 of the sample's (25 %)" in ax.get_title()  # the −∞ sentence, not drawn
+    finally:
+        plt.close(fig)

@@ -14,6 +14,7 @@ from glu.studies.replication.text import (
     effect_sentence,
     leader_text,
     published_sentence,
+    sampling_line,
     verbal_sentences,
     word_change_sentences,
 )
@@ -260,6 +261,16 @@ def test_an_anticipation_run_and_its_published_comparison_in_a_sentence():
     )
     versus.attrs["parameters"] = {"same_caption": True}
     assert published_sentence("box", versus).endswith("the caption is the paper's")
+
+
+def test_how_often_random_samples_drew_the_best_in_a_line():
+    trials = pd.DataFrame(
+        {"n_samples": [10_000] * 4, "found_best": [True, False, False, False], "sample_rank": [1, 3, 8, 20]}
+    )
+    assert sampling_line(trials) == (
+        "over 4 trials of 10,000 random sentences, the best of the grammar was drawn 1 times (25.0 %); "
+        "the median rank of a sample's best in the grammar is 6"
+    )
 
 
 def test_readme_values_from_a_summary_that_lacks_them_are_one_error():

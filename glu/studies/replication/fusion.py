@@ -139,6 +139,14 @@ def word_probability_change(
     return _stamped(df, "glu2017_word_change", bn, reference, evidence=ev, threshold=threshold)
 
 
+def word_probability_changes(
+    bn: BayesNet, reference: BayesNet | None = None, threshold: float = 0.02
+) -> dict[str, pd.DataFrame]:
+    """:func:`word_probability_change` under each evidence of :data:`WORD_EVIDENCE` (the paper's text's,
+    the original code's): its name → the frame."""
+    return {name: word_probability_change(bn, name, reference, threshold) for name in WORD_EVIDENCE}
+
+
 def action_vs_soft_evidence(
     bn: BayesNet,
     rows: Sequence[Sequence[float]] = TCDS_ACTION_ROWS,

@@ -128,3 +128,14 @@ def published_sentence(case: str, versus: pd.DataFrame) -> str:
         f"{case}: {int(versus.within.sum())} of {len(versus)} published values within the figure's "
         f"resolution; the caption {same} the paper's"
     )
+
+
+def sampling_line(trials: pd.DataFrame) -> str:
+    """How often random samples drew the grammar's best, over every trial of
+    :func:`~glu.studies.replication.verbal.sampling_trials`, and the median rank of a sample's best."""
+    found, n = trials["found_best"], int(trials["n_samples"].iloc[0])
+    return (
+        f"over {len(trials)} trials of {n:,} random sentences, the best of the "
+        f"grammar was drawn {int(found.sum())} times ({100 * found.mean():.1f} %); "
+        f"the median rank of a sample's best in the grammar is {np.median(trials['sample_rank']):.0f}"
+    )
