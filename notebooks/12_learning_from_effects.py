@@ -115,7 +115,6 @@ from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.language import candidate_sentences
 from glu.run import start
-from glu.stats import ALPHA, LEVEL
 from glu.studies.learning import figures, learned_recognizers, real_person, recordings, study, tables
 from glu.studies.learning import saved as saved_runs
 
@@ -150,10 +149,7 @@ main = tables.budgets_table(rep, settings, source)
 claims = tables.claims_table(main)
 out.table(main, "learning_budgets")
 out.table(claims, "learning_claims")
-print(
-    f"Intervals: {LEVEL:.0%} two-level bootstrap ({bootstrap:,} replicates over {len(seeds)} seeds and "
-    f"{3 * test_per_action} held-out gestures each); equivalence reads the {1 - 2 * ALPHA:.0%} interval.\n"
-)
+print(tables.intervals_line(settings) + "\n")
 print("\n\n".join(tables.claim_lines(claims, margin)))
 with pd.option_context("display.max_rows", 400, "display.max_colwidth", 80):
     display(tables.main_table(main, words=False))  # noqa: F821 - IPython's display

@@ -450,3 +450,11 @@ def test_the_learned_anticipation_figure_draws_one_learners_cases():
         assert fig.axes[0].get_shared_x_axes().joined(fig.axes[0], fig.axes[2])
     finally:
         plt.close(fig)
+
+
+def test_the_intervals_line_names_the_bootstrap_of_the_settings():
+    s = lc.StudySettings(seeds=(0, 1, 2), test_per_action=4, bootstrap=1500)
+    assert tables.intervals_line(s) == (
+        "Intervals: 95% two-level bootstrap (1,500 replicates over 3 seeds and 12 held-out gestures each); "
+        "equivalence reads the 90% interval."
+    )
