@@ -450,6 +450,30 @@ def test_the_study_grid_is_saved_found_and_read_back(tmp_path, monkeypatch):
         grid.read_tables(tmp_path / "nowhere")
 
 
+def test_glu_correspondence_writes_the_study_with_its_key_and_command(tmp_path, monkeypatch, capsys):
+    """`glu correspondence -o DIR` runs the study of notebook 10's settings (here a small grid in their
+    place) and writes its tables with their key and the command that makes them again."""
+    from glu import saved
+    from glu.cli import correspondence_cmds, main
+    from glu.studies.correspondence import grid
+
+    settings = grid.StudySettings(
+        seeds=(0, 1), n_train=2, n_test=1, feature_sets=("raw",), yaws=(0,), n_states=2, n_iter=3,
+        bootstrap=20, levels=("0°",),
+    )  # fmt: skip
+    monkeypatch.setattr(correspondence_cmds, "notebook_settings", lambda: settings)
+    out = tmp_path / "study"
+    monkeypatch.setattr(sys, "argv", ["glu", "correspondence", "-o", str(out)])
+    assert main(["correspondence", "-o", str(out)]) == 0
+    results = pd.read_parquet(out / f"{grid.TABLES[0]}.parquet")
+    assert capsys.readouterr().out == f"{len(results)} rows over 2 seeds → {out}\n"
+    assert set(results["seed"]) == {0, 1}
+    doc = saved.read_key(out)
+    assert doc["command"] == "glu correspondence -o '…/study'" and doc["key"] == json.loads(
+        json.dumps(settings.key())
+    )
+
+
 def _by_field(p):
     """The settings as notebook 10 built them field by field from its parameters, before it made them in one
     call (grid.settings_from_parameters)."""
@@ -519,27 +543,3 @@ def test_an_unknown_or_ill_typed_parameter_is_refused_in_one_line(bad, message):
     with pytest.raises(DataError, match=f"^{message}") as err:
         grid.settings_from_parameters(bad)
     assert "\n" not in str(err.value)
-
-
-def test_glu_correspondence_writes_the_study_with_its_key_and_command(tmp_path, monkeypatch, capsys):
-    """`glu correspondence -o DIR` runs the study of notebook 10's settings (here a small grid in their
-    place) and writes its tables with their key and the command that makes them again."""
-    from glu import saved
-    from glu.cli import correspondence_cmds, main
-    from glu.studies.correspondence import grid
-
-    settings = grid.StudySettings(
-        seeds=(0, 1), n_train=2, n_test=1, feature_sets=("raw",), yaws=(0,), n_states=2, n_iter=3,
-        bootstrap=20, levels=("0°",),
-    )  # fmt: skip
-    monkeypatch.setattr(correspondence_cmds, "notebook_settings", lambda: settings)
-    out = tmp_path / "study"
-    monkeypatch.setattr(sys, "argv", ["glu", "correspondence", "-o", str(out)])
-    assert main(["correspondence", "-o", str(out)]) == 0
-    results = pd.read_parquet(out / f"{grid.TABLES[0]}.parquet")
-    assert capsys.readouterr().out == f"{len(results)} rows over 2 seeds → {out}\n"
-    assert set(results["seed"]) == {0, 1}
-    doc = saved.read_key(out)
-    assert doc["command"] == "glu correspondence -o '…/study'" and doc["key"] == json.loads(
-        json.dumps(settings.key())
-    )
