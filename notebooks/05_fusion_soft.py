@@ -43,7 +43,6 @@ seed: int = 0  # seed (unused: everything here is exact)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
 from glu.run import start
@@ -61,22 +60,17 @@ mat = out.source.original_bn()
 original = BayesNet.from_bnt_mat(mat) if mat else None
 table = fusion.effect_vs_soft_evidence(bn, rules=("virtual", "jeffrey"), reference=original)
 out.table(table, "fusion_soft_rules")
-fig, axes = plots.new_figure(2, width=3.8, height=3.4, nrows=2, sharex=True)
-network_figures.plot_effect_vs_soft_evidence(axes[:2], table, rule="virtual", legend=False)
-network_figures.plot_effect_vs_soft_evidence(axes[2:], table, rule="jeffrey")
-out.figure(fig, "fusion_soft_rules")
+out.figure(network_figures.effect_vs_rules_figure(table), "fusion_soft_rules")
 
 # %% [markdown]
 # ## A continuous sweep of p_HMM(tap)
 
 # %%
-fig, axes = plots.new_figure(2, width=4.6)
-for ax, shape in zip(axes, ("sphere", "box"), strict=True):
-    sweep = fusion.soft_evidence_sweep(bn, {"Shape": shape}, n_points=n_points)
+sweeps = fusion.soft_evidence_sweeps(bn, n_points=n_points)
+for shape, sweep in sweeps.items():
     out.table(sweep, f"fusion_soft_sweep_{shape}")
-    fusion_figures.plot_soft_sweep(ax, sweep, legend=shape == "box")
-out.figure(fig, "fusion_soft_sweep")
-pivot = sweep.pivot_table(index="p_hmm_tap", columns=["rule", "ObjVel"], values="p")
+out.figure(fusion_figures.soft_sweep_figure(sweeps), "fusion_soft_sweep")
+pivot = sweeps["box"].pivot_table(index="p_hmm_tap", columns=["rule", "ObjVel"], values="p")
 pivot.iloc[:: max(1, len(pivot) // 5)]
 
 # %% [markdown]

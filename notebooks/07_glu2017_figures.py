@@ -70,10 +70,9 @@ effect
 # "rolls".)
 
 # %%
-changes = {}
-for variant in ("text", "code"):
-    changes[variant] = fusion.word_probability_change(bn, variant, original, threshold=threshold)
-    out.table(changes[variant], f"glu2017_word_change_{variant}", evidence=variant)
+changes = fusion.word_probability_changes(bn, original, threshold=threshold)
+for variant, change in changes.items():
+    out.table(change, f"glu2017_word_change_{variant}", evidence=variant)
 fig, (ax,) = plots.new_figure(1, width=7, height=3.6)
 network_figures.plot_word_change(ax, changes["text"], other=changes["code"])
 out.figure(fig, "glu2017_word_change")

@@ -95,14 +95,13 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 from glu import plots
 from glu.bn import BayesNet, learn_bn, make_engine
 from glu.data import load_experiments
-from glu.gestures import gesture_sequences, load_original_models
 from glu.hmm import TrainingConfig
 from glu.language import candidate_sentences
 from glu.run import start
 from glu.studies.anticipation import experiment as anticipation
 from glu.studies.anticipation import figures, recordings
 from glu.studies.replication import fusion, gestures, network_figures
-from glu.studies.replication.text import leader_text
+from glu.studies.replication.text import anticipation_sentence, published_sentence
 
 out = start("08_tcds_figures", globals())
 bn = learn_bn(load_experiments(out.source, words), unseen_words=unseen_words)
@@ -143,78 +142,35 @@ engine = make_engine(bn)
 if candidates is None:
     candidates = "samples" if out.source.sentence_samples() is not None else "grammar"
 sentences = candidate_sentences(candidates, out.source)
-banks = {}
-hmm_mat = out.source.original_hmms()
-if hmm_mat is not None:
-    banks["original"] = load_original_models(hmm_mat)
 train = TrainingConfig(n_states=n_states, n_mix=n_mix, n_iter=n_iter)
-# the two anticipation recordings are test data: train on the other recordings only
-sequences = gesture_sequences(out.source, n_per_action=n_per_action, seed=seed, include_test=False)
-banks["glu"] = gestures.train_on(sequences, train, seed=seed, features=features)
-banks["mixsplit"] = gestures.train_on(
-    sequences, train.replace(recipe="mixsplit"), seed=seed, features=features
+banks = gestures.anticipation_banks(out.source, train, n_per_action, seed=seed, features=features)
+runs = anticipation.anticipation_runs(
+    banks,
+    engine,
+    out.source,
+    seed=seed,
+    step=step,
+    final_update=final_update,
+    rule=rule,
+    describe=True,
+    score=score,
+    candidates=sentences,
 )
-
-runs, published = {}, {}
-for name, recognizer in banks.items():
-    for case in anticipation.CASES:
-        trajectory = anticipation.case_trajectory(out.source, case, seed=seed)
-        run = anticipation.effect_anticipation(
-            recognizer,
-            engine,
-            trajectory,
-            anticipation.CASES[case].evidence,
-            case=case,
-            models=name,
-            step=step,
-            final_update=final_update,
-            rule=rule,
-            describe=True,
-            score=score,
-            candidates=sentences,
-        )
-        runs[case, name] = run
-        out.table(run.curves(), f"tcds_anticipation_{case}_{name}_curves")
-        out.table(
-            run.predictions(),
-            f"tcds_anticipation_{case}_{name}_predictions",
-            final_description=run.description,
-            prediction_changes=run.prediction_changes(),
-        )
-        recordings.write_anticipation(
-            run,
-            out.recording(f"tcds_anticipation_{case}_{name}"),
-            f"glu-anticipation-{case}-{name}-{seed}",
-            note=out.footer(),
-        )
-        if name == "original":  # the published Fig. 5: curves, bars and caption
-            published[case] = versus = anticipation.published_comparison(run)
-            out.table(
-                versus, f"tcds_anticipation_{case}_published", reference="TCDS 2020 Fig. 5 (published EPS)"
-            )
-            print(
-                f"{case}: {int(versus.within.sum())} of {len(versus)} published values within the figure's "
-                f"resolution; the caption {'is' if versus.attrs['parameters']['same_caption'] else 'is not'} "
-                "the paper's"
-            )
-        changes = "; ".join(
-            f"{v} from t = {t} (frame {f}, p {p:.2f})" for t, f, v, p in run.prediction_changes()
-        )
-        leads = leader_text(run.actions, run.p_hmm, run.update_t)
-        out.say(
-            f"* {case}, {name} HMMs: leading model {leads}; predicted ObjVel {changes}; “{run.description}”"
-        )
-# glu's and the originals' recipes share one y axis, to be compared by eye; the original HMMs beside the paper
-ylim = figures.shared_ylim([r.curves() for (_, name), r in runs.items() if name != "original"])
+published = anticipation.published_comparisons(runs, "original")  # the paper's curves, bars and caption
+for frame, name, extra in anticipation.anticipation_tables(runs, published):
+    out.table(frame, name, **extra)
+for (case, name), run in runs.items():
+    recording = out.recording(f"tcds_anticipation_{case}_{name}")
+    recordings.write_anticipation(run, recording, f"glu-anticipation-{case}-{name}-{seed}", note=out.footer())
+    if name == "original":
+        print(published_sentence(case, published[case]))
+    out.say("* " + anticipation_sentence(case, name, run))
 captions = {
     "original": "With the originals' 2013 HMMs, the published Fig. 5 drawn under ours and its bars beside.",
     "glu": "With HMMs trained here by glu's recipe (time slices, MAP EM).",
     "mixsplit": "With HMMs trained here by the originals' recipe (mixsplit), on the same axes as glu's.",
 }
-for name in banks:
-    cases = [(runs[case, name].curves(), runs[case, name].predictions()) for case in anticipation.CASES]
-    paper = [published.get(case) for case in anticipation.CASES] if name == "original" else None
-    fig = figures.anticipation_figure(cases, paper, ylim=None if name == "original" else ylim)
+for name, fig in figures.bank_figures(runs, published, "original").items():
     out.figure(fig, f"tcds_anticipation_{name}", caption=captions[name])
 
 # %% [markdown]

@@ -55,25 +55,20 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 # %%
 import time
 
-import numpy as np
-
-from glu import plots
 from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.language import (
-    all_scores,
     candidate_sentences,
     count_sentences,
     default_network,
     load_grammar,
     sample_sentences,
-    score_sentences,
     word_probabilities,
 )
 from glu.language import nbest as exact_nbest
 from glu.run import start
 from glu.studies.replication import verbal, verbal_figures
-from glu.studies.replication.text import verbal_sentences
+from glu.studies.replication.text import sampling_line, verbal_sentences
 
 out = start("09_verbal_descriptions", globals())
 engine = make_engine(learn_bn(load_experiments(out.source, words), unseen_words=unseen_words))
@@ -135,9 +130,7 @@ and_but
 # %%
 yellow = verbal.yellow_sphere_nbest(engine, nbest, net, score=score, candidates=samples)
 out.table(yellow, "verbal_yellow_sphere_nbest")
-fig, (ax,) = plots.new_figure(1, width=7, height=3.6)
-title = ", ".join(f"{k}={v}" for k, v in verbal.EVIDENCE_YELLOW_SPHERE.items())
-verbal_figures.plot_nbest(ax, yellow, title=f"{title} ({score} score, the samples)", score=score)
+fig = verbal_figures.nbest_figure(yellow, verbal.EVIDENCE_YELLOW_SPHERE, score, "the samples")
 out.figure(fig, "verbal_yellow_sphere_nbest")
 
 # %% [markdown]
@@ -161,33 +154,10 @@ trials = verbal.sampling_trials(
     engine, seeds, verbal.PUBLISHED_LISTS, n_samples, nbest, grammar, score="original"
 )
 out.table(trials, "verbal_sampling_vs_exact", n_trials=len(trials), n_found=int(trials["found_best"].sum()))
-ev = verbal.PUBLISHED_LISTS["fig7a"]
-probs = word_probabilities(engine, ev)
-first = trials[trials["figure"] == "fig7a"].iloc[0]
-drawn = sample_sentences(grammar, n_samples, int(first["seed"]))
-fig, (ax,) = plots.new_figure(1, width=8.5, height=3.6)
-verbal_figures.plot_sampling(
-    ax,
-    all_scores(net, probs, "original"),
-    score_sentences(drawn, probs, "original"),
-    first["exact_score"],
-    score="original",
-    title=f"{', '.join(f'{k}={v}' for k, v in ev.items())}: one sample of {n_samples:,}",
-)
-out.figure(fig, "verbal_sampling_vs_exact")
-per_set = trials.groupby("figure", sort=False).agg(
-    trials=("seed", "size"),
-    found_best=("found_best", "sum"),
-    p_draw_best=("p_draw_best", "first"),
-    median_rank=("sample_rank", "median"),
-    mean_gap=("gap", "mean"),
-)
-print(
-    f"over {len(trials)} trials of {n_samples:,} random sentences, the best of the grammar was drawn "
-    f"{int(trials['found_best'].sum())} times ({100 * trials['found_best'].mean():.1f} %); "
-    f"the median rank of a sample's best in the grammar is {np.median(trials['sample_rank']):.0f}"
-)
-per_set
+example = verbal.sampling_example(engine, trials, net, grammar, "fig7a", score="original")
+out.figure(verbal_figures.sampling_figure(example), "verbal_sampling_vs_exact")
+print(sampling_line(trials))
+verbal.trials_per_set(trials)
 
 # %%
 for sentence in verbal_sentences(reproduced, and_but, versus, trials):

@@ -133,34 +133,15 @@ seed: int = 0  # two-view recording: seed of the recognisers' training set and E
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-import matplotlib.pyplot as plt
-
-from glu import plots
-from glu.gestures.corpus import gesture_sequences, original_test_segments
-from glu.gestures.synthetic import View
-from glu.hmm import TrainingConfig
+from glu.gestures.corpus import gesture_sequences
 from glu.run import start
 from glu.saved import provenance_text
-from glu.studies.anticipation import experiment as anticipation
 from glu.studies.correspondence import experiment as correspondence
 from glu.studies.correspondence import figures, grid, nested, recordings, seated, two_views
 from glu.studies.correspondence.text import nested_sentences, study_sentences
 
 out = start("10_correspondence", globals())
-settings = grid.StudySettings(
-    seeds=tuple(seeds),
-    n_train=n_train,
-    n_test=n_test,
-    feature_sets=tuple(feature_sets),
-    yaws=tuple(yaws),
-    variety=variety,
-    n_states=n_states,
-    n_mix=n_mix,
-    n_iter=n_iter,
-    bootstrap=bootstrap,
-    levels=None if levels is None else tuple(levels),
-    normalise_body=normalise_body,
-)
+settings = grid.settings_from_parameters(globals())
 
 # %% [markdown]
 # ## Recognising other people's gestures seen otherwise
@@ -174,23 +155,15 @@ results, summary, effects = tables.results, tables.summary, tables.effects
 out.say(provenance_text(tables.folder))
 out.table(results, "correspondence_study")
 out.table(summary, "correspondence_summary")
-panels = [("robot", "viewpoint"), ("human", "viewpoint"), ("human", correspondence.OCCLUDED)]
-panels = [(t, f) for t, f in panels if f in set(summary["factor"])]
-fig, axes = plots.new_figure(len(panels), width=4.6, height=3.6)
-for ax, (train, factor) in zip(axes, panels, strict=True):
-    figures.plot_accuracy_vs_viewpoint(ax, summary, train, legend=ax is axes[-1], factor=factor)
 out.figure(
-    fig,
+    figures.viewpoint_figure(summary),
     "correspondence_viewpoint",
     source=results.attrs["data_source"],
     caption="Accuracy against the person's turn, trained on the robot (left) and on one human view, the "
     "turned person seen by an ideal tracker and by an occluding one (right).",
 )
-fig, axes = plots.new_figure(1, width=11, height=3.4)
-figures.plot_accuracy_by_condition(axes[0], summary, "human")
-axes[0].set_title("trained on one human view", fontsize=9)
 out.figure(
-    fig,
+    figures.conditions_figure(summary, "human"),
     "correspondence_conditions",
     source=results.attrs["data_source"],
     caption="Accuracy in every test condition, trained on one human view, one bar per feature set.",
@@ -207,9 +180,7 @@ correspondence.main_table(summary, "robot")
 
 # %%
 out.table(effects, "correspondence_invariance_effects")
-fig, axes = plt.subplots(2, 1, figsize=(13, 7))
-for ax, train in zip(axes, correspondence.TRAIN_SOURCES, strict=True):
-    figures.plot_invariance_effects(ax, effects, train)
+fig = figures.invariance_effects_figure(effects)
 out.figure(fig, "correspondence_invariance_effects", source=results.attrs["data_source"])
 for sentence in study_sentences(summary, effects):
     out.say("* " + sentence)
@@ -223,17 +194,7 @@ for sentence in study_sentences(summary, effects):
 # sees them, the raw and aligned features in 3-D, and both posteriors over time.
 
 # %%
-raw_rec, inv_rec = (
-    correspondence.train_for(
-        "human", f, n_train, seed, normalise_body, TrainingConfig(n_states=n_states, n_mix=n_mix, tol=1e-3)
-    )
-    for f in ("raw", "all")
-)
-views = (
-    View(yaw_deg=0.0, normalise_body=normalise_body),
-    View(yaw_deg=120.0, mirror=True, normalise_body=normalise_body),
-)
-runs = two_views.two_views(raw_rec, inv_rec, "tap", views, seed=view_gesture, noise=0.0)
+runs = two_views.one_tap_two_views(n_train, seed, view_gesture, normalise_body, n_states, n_mix)
 recordings.write_two_views(
     runs,
     out.recording("correspondence_two_views"),
@@ -242,8 +203,7 @@ recordings.write_two_views(
 )
 curves = two_views.two_views_curves(runs)
 out.table(curves, "correspondence_two_views")
-fig, axes = plots.new_figure(len(runs), width=4.2, height=2.8)
-figures.plot_two_views(axes, curves, "tap")
+fig = figures.two_views_figure(curves, "tap")
 out.figure(fig, "correspondence_two_views", source=curves.attrs["data_source"])
 last = curves[curves["t"] == curves.groupby("view")["t"].transform("max")]
 last.pivot_table(index=["view", "recogniser"], columns="action", values="p_hmm").round(3)
@@ -268,16 +228,13 @@ offsets.groupby(["posture", "action"])[["x", "y", "z"]].agg(["min", "max"]).roun
 # %%
 if out.source.is_real:
     standing = gesture_sequences(out.source, include_test=False)
-    cases = {c.recording for c in anticipation.CASES.values()}
-    taps = [s for s in original_test_segments(out.source) if s.recording in cases]
     cv = nested.nested_cv(standing, real_features, real_settings, real_seeds)
-    typicality = nested.seated_report(standing, taps, cv)
+    typicality = nested.seated_report(standing, seated.seated_taps(out.source), cv)
     out.table(cv.folds, "correspondence_nested_folds")
     out.table(cv.summary, "correspondence_nested_cv")
     out.table(cv.candidates, "correspondence_candidates")
     out.table(typicality, "seated_typicality")
-    fig, axes = plots.new_figure(1, width=5, height=3.4)
-    figures.plot_nested_cv(axes[0], cv.summary)
+    fig = figures.nested_cv_figure(cv.summary)
     out.figure(fig, "correspondence_nested_cv", source=cv.summary.attrs["data_source"])
     for sentence in nested_sentences(cv.summary, typicality, cv.candidates):
         out.say("* " + sentence)

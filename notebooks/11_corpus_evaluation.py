@@ -125,8 +125,6 @@ seed: int = 0  # seed of the corpus, the recognisers, their calibration and the 
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-import matplotlib.pyplot as plt
-
 from glu.gestures.corpus import gesture_sequences
 from glu.run import start
 from glu.saved import provenance_text
@@ -150,25 +148,8 @@ verdicts = findings.finding_verdicts(diffs)
 counts = findings.verdict_counts(verdicts)
 best = conditions.best_invariant(calibration)
 full = table.fraction.max()
-# results/: the findings whole; the metrics and differences of the reference cell and the contrasted one
-# (every reading, feature set, world and viewpoint, noise pooled), their reliability diagrams (effects from
-# the action alone), the reference cell's seeds; the rest in `folder`
-for frame, stamp, name in (
-    (findings.in_contrast_cells(table[table.viewpoint != "all"], table), stamped.metrics, "corpus_metrics"),
-    (findings.in_contrast_cells(diffs, table), stamped.differences, "corpus_differences"),
-    (verdicts, stamped.differences, "corpus_findings"),
-    (counts, stamped.differences, "corpus_finding_counts"),
-    (
-        findings.in_contrast_cells(rel[rel.effects == "action"], table),
-        stamped.reliability,
-        "corpus_reliability",
-    ),
-    (findings.select(seeds, findings.REFERENCE_CELL), stamped.seeds, "corpus_seeds"),
-    (calibration, stamped.calibration, "corpus_calibration"),
-):
-    frame.attrs = dict(stamp.attrs)
-    out.table(frame, name, **({"episodes": summary["episodes"]} if name == "corpus_metrics" else {}))
-    frame.attrs = {}
+for frame, name, extra in findings.result_tables(stamped, verdicts, counts):  # the rest stays in `folder`
+    out.table(frame, name, **extra)
 out.say(findings.design_text(summary))
 
 # %% [markdown]
@@ -212,11 +193,7 @@ win = findings.winners(table, diffs)
 out.table(win, "corpus_winners")
 front = win[(win.effects == "action") & (win.features == "raw")]
 shown = [("action", "accuracy"), ("effect", "log_loss"), ("effect", "ece"), ("words", "log_loss")]
-rows = front.groupby(list(findings.CELL[:3])).ngroups
-fig, axes = plt.subplots(2, 2, figsize=(10, 0.9 * rows + 2.5))
-for ax, (target, metric) in zip(axes.ravel(), shown, strict=True):
-    figures.plot_winners(ax, front, target, metric)
-out.figure(fig, "corpus_winners", source=source)
+out.figure(figures.winners_figure(front, shown), "corpus_winners", source=source)
 findings.winners_table(front, shown)
 
 # %% [markdown]

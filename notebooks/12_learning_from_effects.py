@@ -109,41 +109,19 @@ seed: int = 0  # seed of the recorded learner's episodes
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-import matplotlib.pyplot as plt
 import pandas as pd
 
 from glu.bn import learn_bn, make_engine
 from glu.data import load_experiments
 from glu.language import candidate_sentences
 from glu.run import start
-from glu.stats import ALPHA, LEVEL
-from glu.studies.anticipation import experiment as anticipation
-from glu.studies.anticipation.figures import plot_anticipation
-from glu.studies.learning import (
-    figures,
-    learned_recognizers,
-    online,
-    real_person,
-    recordings,
-    self_supervised,
-    study,
-    tables,
-)
+from glu.studies.learning import figures, learned_recognizers, real_person, recordings, study, tables
 from glu.studies.learning import saved as saved_runs
 
 out = start("12_learning_from_effects", globals())
 engine = make_engine(learn_bn(load_experiments(out.source)))
 source = out.source.describe()
-settings = study.StudySettings(
-    episodes=max(budgets),
-    seeds=tuple(seeds),
-    worlds=tuple(worlds),
-    ambiguities=tuple(ambiguities),
-    test_per_action=test_per_action,
-    budgets=tuple(budgets),
-    margin=margin,
-    bootstrap=bootstrap,
-)
+settings = study.settings_from_parameters(globals())
 results, where = saved_runs.study_results(engine, settings, saved, source, out.source.is_real, check_seeds)
 print(saved_runs.provenance_line(where))
 
@@ -171,10 +149,7 @@ main = tables.budgets_table(rep, settings, source)
 claims = tables.claims_table(main)
 out.table(main, "learning_budgets")
 out.table(claims, "learning_claims")
-print(
-    f"Intervals: {LEVEL:.0%} two-level bootstrap ({bootstrap:,} replicates over {len(seeds)} seeds and "
-    f"{3 * test_per_action} held-out gestures each); equivalence reads the {1 - 2 * ALPHA:.0%} interval.\n"
-)
+print(tables.intervals_line(settings) + "\n")
 print("\n\n".join(tables.claim_lines(claims, margin)))
 with pd.option_context("display.max_rows", 400, "display.max_colwidth", 80):
     display(tables.main_table(main, words=False))  # noqa: F821 - IPython's display
@@ -202,38 +177,18 @@ out.figure(figures.gaps_figure(main), "learning_gaps", source=source)
 # and its confidence, the held-out accuracy so far, and the models' mean trajectories taking shape in 3-D.
 
 # %%
-amb = self_supervised.AMBIGUITIES["mixed"]
-seen = self_supervised.simulate_episodes(engine, amb, recorded_episodes, seed)
-test = self_supervised.simulate_episodes(
-    engine, amb, 3 * test_per_action, seed, offset=self_supervised.TEST_OFFSET, balanced=True
-)
-p_bn = self_supervised.network_posteriors(engine, seen.perceived, seen.world)
-every = [n for n in range(10, recorded_episodes + 1, 10)] or [recorded_episodes]
-life = online.run_online(
-    seen.features,
-    seen.actions,
-    [online.Learner(recorded_scheme, "network"), online.Learner("true")],
-    {"network": p_bn},
-    test.features,
-    test.actions,
-    every,
-    engine.bn.schema.values_of("Action"),
-    settings.online,
-    seed,
+life = learned_recognizers.recorded_life(
+    engine, recorded_scheme, recorded_episodes, test_per_action, seed, settings.online
 )
 recordings.write_learning(
-    life,
-    seen.features,
+    life.run,
+    life.features,
     out.recording("learning_online"),
     f"glu-learning-online-{recorded_scheme}-{seed}",
-    scene=f"# Learning gestures from effects\n{recorded_scheme} labels, {amb.description}; "
-    f"{recorded_episodes} episodes.",
+    scene=life.scene(),
     note=out.footer(),
 )
-print(
-    f"after {recorded_episodes} episodes: {recorded_scheme} labels {life.accuracy()[-1, 0]:.3f}, "
-    f"true labels {life.accuracy()[-1, 1]:.3f} on {len(test.features)} held-out gestures"
-)
+print(life.summary())
 
 # %% [markdown]
 # ## What the robot then anticipates and describes (the TCDS Fig. 5 cases)
@@ -244,15 +199,11 @@ print(
 sentences = candidate_sentences(
     "samples" if out.source.sentence_samples() is not None else "grammar", out.source
 )
-learned = {f"{recorded_scheme} labels": life.recognizer(0), "true labels": life.recognizer(1)}
 anticipated, runs = learned_recognizers.anticipation_after_learning(
-    learned, engine, out.source, seed=seed, candidates=sentences
+    life.recognizers(), engine, out.source, seed=seed, candidates=sentences
 )
 out.table(anticipated, "learning_anticipation", episodes=recorded_episodes, scheme=recorded_scheme)
-fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), sharex="col")
-for j, case in enumerate(anticipation.CASES):
-    run = runs[f"{recorded_scheme} labels", case]
-    plot_anticipation(axes[:, j], run.curves(), run.predictions())
+fig = figures.learned_anticipation_figure(runs, f"{recorded_scheme} labels")
 out.figure(fig, "learning_anticipation", source=source)
 anticipated.round(3)
 
@@ -270,14 +221,7 @@ anticipated.round(3)
 
 # %%
 if out.source.is_real:
-    person_settings = real_person.RealPersonSettings(draws=tuple(range(real_draws)), episodes=real_episodes)
-    if saved == "none":
-        person_settings = real_person.RealPersonSettings(
-            draws=tuple(range(real_draws)),
-            episodes=real_episodes,
-            generator_episodes=real_episodes,
-            bootstrap=bootstrap,
-        )
+    person_settings = real_person.settings_from_parameters(globals())
     person, person_where = saved_runs.real_person_rows(engine, out.source, person_settings, saved, source)
     person_summary = real_person.real_person_summary(person, person_settings.bootstrap)
     out.table(person, "learning_real_person")

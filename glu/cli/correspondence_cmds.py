@@ -30,23 +30,10 @@ def notebook_settings():
     """The study's settings from notebook 10's parameters cell (its defaults)."""
     from glu.paths import NOTEBOOKS_DIR
     from glu.run.parameters import read_spec
-    from glu.studies.correspondence.grid import StudySettings
+    from glu.studies.correspondence.grid import settings_from_parameters
 
     spec = {k: p.default for k, p in read_spec(NOTEBOOKS_DIR / "10_correspondence.py").items()}
-    return StudySettings(
-        seeds=tuple(spec["seeds"]),
-        n_train=spec["n_train"],
-        n_test=spec["n_test"],
-        feature_sets=tuple(spec["feature_sets"]),
-        yaws=tuple(spec["yaws"]),
-        variety=spec["variety"],
-        n_states=spec["n_states"],
-        n_mix=spec["n_mix"],
-        n_iter=spec["n_iter"],
-        bootstrap=spec["bootstrap"],
-        levels=None if spec["levels"] is None else tuple(spec["levels"]),
-        normalise_body=spec["normalise_body"],
-    )
+    return settings_from_parameters(spec)
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from glu.bn import make_engine
@@ -267,3 +268,97 @@ def test_the_seconds_axis_needs_two_frames(n_frames):
             assert forward(131.0) == pytest.approx(1 / 3) and forward(121.0) == 0.0
     finally:
         plt.close(fig)
+
+
+def test_every_case_with_every_bank_and_what_notebook_08_writes_of_them(setup):
+    """anticipation_runs: each bank on each case, bank by bank, each run its case's evidence and its bank's
+    name, as effect_anticipation alone gives it; the tables: each run's curves and predictions (with its
+    description and changes), then each published comparison."""
+    src, rec, eng = setup
+    banks = {"a": rec, "b": rec}
+    runs = anticipation.anticipation_runs(banks, eng, src, seed=3, step=10)
+    assert list(runs) == [("sphere", "a"), ("box", "a"), ("sphere", "b"), ("box", "b")]
+    for (case, name), run in runs.items():
+        assert (run.case, run.models, run.update_t[0]) == (case, name, 10)
+    one = anticipation.effect_anticipation(
+        rec, eng, anticipation.case_trajectory(src, "box", seed=3), anticipation.CASES["box"].evidence,
+        case="box", models="b", step=10,
+    )  # fmt: skip
+    np.testing.assert_array_equal(runs["box", "b"].fused["ObjVel"], one.fused["ObjVel"])
+    versus = {"box": runs["box", "a"].curves().head(2)}  # stands for a published comparison
+    tables = anticipation.anticipation_tables(runs, versus)
+    names = [name for _, name, _ in tables]
+    assert names[:2] == ["tcds_anticipation_sphere_a_curves", "tcds_anticipation_sphere_a_predictions"]
+    assert len(names) == 2 * 4 + 1 and names[-1] == "tcds_anticipation_box_published"
+    frame, _, extra = tables[1]
+    assert extra == {
+        "final_description": runs["sphere", "a"].description,
+        "prediction_changes": runs["sphere", "a"].prediction_changes(),
+    }
+    assert frame.equals(runs["sphere", "a"].predictions()) and tables[0][2] == {}
+    assert tables[-1][0] is versus["box"] and tables[-1][2] == {"reference": anticipation.PUBLISHED_REFERENCE}
+    assert anticipation.published_comparisons(runs, "original") == {}  # no such bank: nothing to compare
+
+
+class _Run:
+    """What bank_figures reads of an anticipation run: its curves and predictions."""
+
+    def __init__(self, case, bank, low):
+        self.frames = pd.DataFrame(
+            [
+                {"frame": f, "t": f, "seconds": f / 30, "action": a, "loglik_per_frame": low + f + k,
+                 "p_hmm": (k + 1) / 6, "case": case, "models": bank}
+                for f in range(1, 11)
+                for k, a in enumerate(("grasp", "tap", "touch"))
+            ]
+        )  # fmt: skip
+        self.bars = pd.DataFrame(
+            [
+                {"frame": t, "t": t, "node": "ObjVel", "value": v, "p": p}
+                for t in (5, 10)
+                for v, p in (("slow", 0.2), ("medium", 0.3), ("fast", 0.5))
+            ]
+        )
+
+    def curves(self):
+        return self.frames
+
+    def predictions(self):
+        return self.bars
+
+
+def _published(case):
+    rows = [("loglik_per_frame", a, 5, -1.0, -1.0, 0.0, 0.01, True) for a in ("grasp", "tap", "touch")]
+    rows += [
+        ("ObjVel", v, 10, p, p, 0.0, 0.001, True) for v, p in (("slow", 0.2), ("medium", 0.3), ("fast", 0.5))
+    ]
+    cols = ["quantity", "key", "t", "ours", "paper", "difference", "resolution", "within"]
+    return pd.DataFrame(rows, columns=cols)
+
+
+def test_a_figure_per_bank_the_paper_beside_its_own_and_the_others_on_one_axis():
+    """bank_figures: a figure per bank, in the runs' order; the paper's bank with the published bars in a
+    narrow column beside each case, on its own y axis; the other banks on the one y axis their curves
+    span together (shared_ylim)."""
+    import matplotlib.pyplot as plt
+
+    from glu.studies.anticipation.figures import bank_figures, shared_ylim
+
+    lows = {"original": 0.0, "glu": -40.0, "mixsplit": 5.0}
+    runs = {(c, b): _Run(c, b, low) for b, low in lows.items() for c in ("sphere", "box")}
+    published = {c: _published(c) for c in ("sphere", "box")}
+    figs = bank_figures(runs, published, "original")
+    try:
+        assert list(figs) == ["original", "glu", "mixsplit"]
+        assert len(figs["original"].axes) == 6 and len(figs["glu"].axes) == len(figs["mixsplit"].axes) == 4
+        span = shared_ylim([runs[c, b].curves() for b in ("glu", "mixsplit") for c in ("sphere", "box")])
+        for bank in ("glu", "mixsplit"):
+            tops = [figs[bank].axes[0], figs[bank].axes[2]]
+            assert [ax.get_ylim() for ax in tops] == [pytest.approx(span)] * 2
+            assert [ax.get_title().split(" — ")[0] for ax in tops] == [
+                c.description for c in anticipation.CASES.values()
+            ]
+        assert figs["original"].axes[0].get_ylim() != pytest.approx(span)
+    finally:
+        for fig in figs.values():
+            plt.close(fig)

@@ -170,6 +170,93 @@ def test_plots_draw_the_study(study):
     plt.close(fig)
 
 
+def _summary_rows(s, train, features, factor):
+    """The summary's accuracies one line of plot_accuracy_vs_viewpoint draws, by turn (the occluding
+    tracker's panel starts at the ideal one's front view)."""
+    g = s[(s["train"] == train) & (s["features"] == features)]
+    front = (g["factor"] == "viewpoint") & (g["yaw_deg"] == 0)
+    return g[(g["factor"] == factor) | (front if factor != "viewpoint" else False)].sort_values("yaw_deg")
+
+
+def test_the_viewpoint_figure_has_a_panel_per_training_source_and_tracker(study):
+    """Notebook 10's first figure: the robot, one human view, and one human view through the occluding
+    tracker, in that order; each panel a line per feature set holding the summary's accuracies by turn, and
+    chance; one legend, on the last panel. A summary without the occluding tracker has two panels."""
+    s = corr.summarise(study)
+    fig = cplots.viewpoint_figure(s)
+    try:
+        assert [ax.get_title() for ax in fig.axes] == [
+            "trained on the robot",
+            "trained on one human view",
+            "trained on one human view, occluding tracker",
+        ]
+        for ax, (train, factor) in zip(fig.axes, cplots.VIEWPOINT_PANELS, strict=True):
+            assert [c.get_label() for c in ax.containers] == list(FEATURES)
+            for c, features in zip(ax.containers, FEATURES, strict=True):
+                rows = _summary_rows(s, train, features, factor)
+                np.testing.assert_allclose(np.asarray(c.lines[0].get_ydata(), float), rows["accuracy"])
+            assert ax.lines[-1].get_ydata()[0] == pytest.approx(1 / 3)  # chance
+        assert [ax.get_legend() is not None for ax in fig.axes] == [False, False, True]
+    finally:
+        plt.close(fig)
+    fig = cplots.viewpoint_figure(s[s["factor"] != corr.OCCLUDED])
+    assert [ax.get_title() for ax in fig.axes] == ["trained on the robot", "trained on one human view"]
+    plt.close(fig)
+
+
+def test_the_conditions_figure_draws_every_condition_of_one_source(study):
+    """A bar per feature set and condition (here the reference and the robot itself), at the summary's
+    accuracy, titled by the training source."""
+    s = corr.summarise(study)
+    fig = cplots.conditions_figure(s, "human")
+    try:
+        (ax,) = fig.axes
+        assert ax.get_title() == "trained on one human view"
+        bars = [list(c) for c in ax.containers if hasattr(c, "patches")]
+        h = s[
+            (s["train"] == "human")
+            & s["level"].isin(["0°", "the robot itself"])
+            & (s["factor"] != corr.OCCLUDED)
+        ]
+        for group, features in zip(bars, FEATURES, strict=True):
+            want = h[h["features"] == features].set_index("level").loc[["0°", "the robot itself"], "accuracy"]
+            assert [b.get_height() for b in group] == pytest.approx(list(want))
+        assert [t.get_text() for t in ax.get_legend().get_texts()] == list(FEATURES)
+    finally:
+        plt.close(fig)
+
+
+def test_the_invariance_effects_figure_stacks_a_map_per_training_source(study):
+    """One map per training source (robot, then human), each writing that source's paired differences."""
+    effects = corr.invariance_effects(study)
+    fig = cplots.invariance_effects_figure(effects)
+    try:
+        assert len(fig.axes) == 2
+        for ax, train in zip(fig.axes, corr.TRAIN_SOURCES, strict=True):
+            assert f"trained on {train};" in ax.get_title() and len(ax.images) == 1
+            want = effects.loc[effects["train"] == train, "delta"].dropna()
+            assert sorted(t.get_text() for t in ax.texts) == sorted(f"{v:+.2f}" for v in want)
+    finally:
+        plt.close(fig)
+
+
+def test_the_nested_cv_figure_draws_each_seeds_accuracy():
+    summary = pd.DataFrame(
+        {"seed": [0, 1], "accuracy": [0.7, 0.8], "ci_low": [0.5, 0.6], "ci_high": [0.9, 0.95]}
+        | {"tuned_accuracy": [0.9, 0.9], "always_tap": [0.33, 0.33]}
+    )
+    fig = cplots.nested_cv_figure(summary)
+    try:
+        (ax,) = fig.axes
+        assert ax.get_title() == "real standing segments"
+        (bars,) = ax.containers
+        assert list(bars.lines[0].get_ydata()) == [0.7, 0.8]
+        assert [list(line.get_ydata()) for line in ax.lines[-2:]] == [[0.9, 0.9], [0.33, 0.33]]
+        assert [t.get_text() for t in ax.get_xticklabels()] == ["seed 0", "seed 1"]
+    finally:
+        plt.close(fig)
+
+
 def test_settings_are_labelled_and_parsed_back():
     for label in ("glu defaults", "Q6 M3 reg0.03", "M1", "mixsplit", "mixsplit Q4"):
         assert seated.setting_label(seated.parse_setting(label)) == label
@@ -212,6 +299,40 @@ def test_an_invariant_recogniser_does_not_see_the_turn_or_the_mirror(runs):
         set(curves["recogniser"]) == {"raw", "aligned"}
         and curves.attrs["experiment"] == "correspondence_two_views"
     )
+
+
+def test_the_two_views_figure_has_a_panel_per_view(runs):
+    """A panel per view, titled by it, drawing the raw and the invariant recogniser's p_HMM(tap) over time
+    as the curves hold them; one legend, beside the last."""
+    curves = two_views.two_views_curves(runs)
+    fig = cplots.two_views_figure(curves, "tap")
+    try:
+        assert [ax.get_title() for ax in fig.axes] == ["yaw 0°", "yaw 120°, mirrored"]
+        for ax, run in zip(fig.axes, runs, strict=True):
+            tap = run.actions.index("tap")
+            raw, aligned = ax.lines
+            np.testing.assert_allclose(raw.get_ydata(), run.p_raw[:, tap])
+            np.testing.assert_allclose(aligned.get_ydata(), run.p_aligned[:, tap])
+            np.testing.assert_allclose(raw.get_xdata(), run.seconds)
+        assert [ax.get_legend() is not None for ax in fig.axes] == [False, True]
+    finally:
+        plt.close(fig)
+
+
+def test_notebook_10s_two_views_are_the_recognisers_it_names():
+    """one_tap_two_views: a raw and an `all` recogniser trained on the front human view with the notebook's
+    recipe, the noise-free tap seen from the front and, mirrored, from 120° round."""
+    config = TrainingConfig(n_states=2, n_mix=1, tol=1e-3)
+    raw, inv = (corr.train_for("human", f, 3, 4, False, config) for f in ("raw", "all"))
+    views = (View(yaw_deg=0.0, normalise_body=False), View(yaw_deg=120.0, mirror=True, normalise_body=False))
+    by_hand = two_views.two_views(raw, inv, "tap", views, seed=2, noise=0.0)
+    runs = two_views.one_tap_two_views(3, seed=4, gesture=2, n_states=2)
+    assert [r.label for r in runs] == ["yaw 0°", "yaw 120°, mirrored"]
+    assert cplots.feature_label(runs[0].parameters["features"]) == "all"
+    assert runs[0].parameters["noise_m"] == 0.0
+    for a, b in zip(runs, by_hand, strict=True):
+        np.testing.assert_array_equal(a.p_raw, b.p_raw)
+        np.testing.assert_array_equal(a.p_aligned, b.p_aligned)
 
 
 @pytest.fixture
@@ -261,6 +382,15 @@ def test_posture_offsets_of_synthetic_standing_and_seated_gestures():
     mean = off.groupby("posture")[["y", "z"]].mean()
     assert mean.loc["seated", "y"] > mean.loc["standing", "y"]  # seated: the hand works higher, further out
     assert mean.loc["seated", "z"] < mean.loc["standing", "z"]
+
+
+def test_the_seated_taps_are_the_anticipation_cases_test_segments(synthetic_folder):
+    from glu.data import resolve_data
+    from glu.studies.anticipation.experiment import CASES
+
+    taps = seated.seated_taps(resolve_data(synthetic_folder))
+    assert [s.recording for s in taps] == [c.recording for c in CASES.values()]
+    assert {s.action for s in taps} == {"tap"}
 
 
 def test_the_invariances_effects_are_one_adjusted_family():
@@ -380,3 +510,74 @@ def test_glu_correspondence_writes_the_study_with_its_key_and_command(tmp_path, 
     assert doc["command"] == "glu correspondence -o '…/study'" and doc["key"] == json.loads(
         json.dumps(settings.key())
     )
+
+
+def _by_field(p):
+    """The settings as notebook 10 built them field by field from its parameters, before it made them in one
+    call (grid.settings_from_parameters)."""
+    from glu.studies.correspondence import grid
+
+    return grid.StudySettings(
+        seeds=tuple(p["seeds"]),
+        n_train=p["n_train"],
+        n_test=p["n_test"],
+        feature_sets=tuple(p["feature_sets"]),
+        yaws=tuple(p["yaws"]),
+        variety=p["variety"],
+        n_states=p["n_states"],
+        n_mix=p["n_mix"],
+        n_iter=p["n_iter"],
+        bootstrap=p["bootstrap"],
+        levels=None if p["levels"] is None else tuple(p["levels"]),
+        normalise_body=p["normalise_body"],
+    )
+
+
+def test_notebook_10s_parameters_cell_makes_its_settings_in_one_call():
+    """The notebook's own parameters (its cell's defaults, and its quick run's), with the other names of its
+    namespace beside them, give the settings it built field by field, and the same key of the saved
+    tables; `glu correspondence` makes the same from the same cell."""
+    from glu.cli.correspondence_cmds import notebook_settings
+    from glu.paths import PROJECT_ROOT
+    from glu.run.manifest import read_manifest
+    from glu.run.parameters import read_spec
+    from glu.studies.correspondence import grid
+
+    path = PROJECT_ROOT / "notebooks" / "10_correspondence.py"
+    spec = {k: p.default for k, p in read_spec(path).items()}
+    for params in (spec, {**spec, **read_manifest(path).quick}):
+        made = grid.settings_from_parameters({**params, "out": object(), "np": np})
+        assert made == _by_field(params) and made.key() == _by_field(params).key()
+    assert notebook_settings() == _by_field(spec)
+    assert grid.settings_from_parameters({}) == grid.StudySettings()
+
+
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        (
+            {"feature_sets": ["raw", "nope"]},
+            r"feature_sets=\('raw', 'nope'\): unknown feature set 'nope'; allowed: raw, ",
+        ),
+        ({"feature_sets": "raw"}, r"feature_sets='raw': a list of feature sets, at least one, each once"),
+        ({"seeds": [0, 0]}, r"seeds=\(0, 0\): a list of whole numbers ≥ 0, at least one, each once"),
+        ({"seeds": [0, 1.5]}, r"seeds=\(0, 1.5\): a list of whole numbers ≥ 0"),
+        ({"n_train": "8"}, r"n_train='8': a whole number ≥ 1"),
+        ({"n_states": True}, r"n_states=True: a whole number ≥ 1"),
+        ({"yaws": [0, float("nan")]}, r"yaws=\(0, nan\): a list of turns in degrees \(finite numbers\)"),
+        ({"variety": -1.0}, r"variety=-1.0: a number ≥ 0"),
+        ({"bootstrap": -5}, r"bootstrap=-5: a whole number of replicates ≥ 0"),
+        ({"normalise_body": "no"}, r"normalise_body='no': True or False"),
+        (
+            {"levels": ["0°", "upside down"]},
+            r"levels=\('0°', 'upside down'\): unknown level 'upside down'; allowed: '0°'",
+        ),
+        ({"levels": []}, r"levels=\(\): None \(every condition\) or a list of the conditions' levels"),
+    ],
+)
+def test_an_unknown_or_ill_typed_parameter_is_refused_in_one_line(bad, message):
+    from glu.studies.correspondence import grid
+
+    with pytest.raises(DataError, match=f"^{message}") as err:
+        grid.settings_from_parameters(bad)
+    assert "\n" not in str(err.value)

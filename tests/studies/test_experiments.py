@@ -66,3 +66,53 @@ def test_evidence_tap_cannot_have_or_nothing_can(zero_bn):
     assert np.isnan(experiments.tap_threshold(no_slow_tap, {"ObjVel": "slow"}))
     table = experiments.tap_thresholds(_without(zero_bn, "slow", ["grasp", "tap", "touch"]))
     assert "slow" not in set(table.ObjVel) and len(table) == 2 * 3 * 2  # Shape × Size × {medium, fast}
+
+
+def test_the_word_changes_under_both_evidences_and_the_sweeps_of_both_shapes(zero_bn):
+    """Notebook 07's two Δp(w) tables, by the evidence's name; notebook 05's sweeps, by shape: each what the
+    single call gives."""
+    changes = experiments.word_probability_changes(zero_bn, threshold=0.05)
+    assert list(changes) == ["text", "code"]
+    for name, frame in changes.items():
+        assert frame.equals(experiments.word_probability_change(zero_bn, name, threshold=0.05))
+        assert frame.attrs["parameters"]["threshold"] == 0.05
+    sweeps = experiments.soft_evidence_sweeps(zero_bn, ("box", "sphere"), n_points=5)
+    assert list(sweeps) == ["box", "sphere"]
+    for shape, sweep in sweeps.items():
+        assert sweep.equals(experiments.soft_evidence_sweep(zero_bn, {"Shape": shape}, n_points=5))
+        assert set(sweep["rule"]) == {"virtual", "jeffrey"}
+
+
+def test_one_sampling_trial_drawn_again_and_the_trials_per_set(zero_bn):
+    """sampling_example: the first trial of a set drawn again from its seed, scored as the trial scored it,
+    beside every sentence of the grammar; trials_per_set counts each set's trials."""
+    from glu.language import (
+        all_scores,
+        default_network,
+        load_grammar,
+        sample_sentences,
+        score_sentences,
+        word_probabilities,
+    )
+    from glu.studies.replication import verbal
+
+    engine, grammar, net = make_engine(zero_bn), load_grammar(), default_network()
+    sets = {k: verbal.PUBLISHED_LISTS[k] for k in ("fig7a", "fig7b")}
+    trials = verbal.sampling_trials(engine, [3, 4], sets, n_samples=400, n=3, grammar=grammar)
+    example = verbal.sampling_example(engine, trials, net, grammar, "fig7b")
+    probs = word_probabilities(engine, sets["fig7b"])
+    assert example.evidence == sets["fig7b"] and example.n_samples == 400 and example.score == "original"
+    drawn = sample_sentences(grammar, 400, 3)
+    np.testing.assert_array_equal(example.sample_scores, score_sentences(drawn, probs, "original"))
+    np.testing.assert_array_equal(example.grammar_scores, all_scores(net, probs, "original"))
+    first = trials[trials["figure"] == "fig7b"].iloc[0]
+    assert (
+        example.exact_score == first["exact_score"] == pytest.approx(example.grammar_scores.max(), rel=1e-12)
+    )
+    assert example.sample_scores.max() == pytest.approx(first["sample_score"])
+    per_set = verbal.trials_per_set(trials)
+    assert list(per_set.index) == ["fig7a", "fig7b"] and list(per_set["trials"]) == [2, 2]
+    for key, row in per_set.iterrows():
+        mine = trials[trials["figure"] == key]
+        assert row["found_best"] == mine["found_best"].sum()
+        assert row["median_rank"] == mine["sample_rank"].median()

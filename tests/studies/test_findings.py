@@ -350,3 +350,84 @@ def test_figures_leave_out_what_the_sweep_lacks():
         assert cells == {(0, 0), (0, 1), (1, 0)}  # (column, finding): the second finding has no side-on cell
     finally:
         plt.close(fig)
+
+
+def test_the_result_tables_are_the_contrasted_cells_each_stamped_as_its_source():
+    """What notebook 11 writes to results/: seven tables in order, each with the stamp of the saved table it
+    was computed from (the metrics also the episodes), the metrics and differences in the contrasted cells
+    only, the reliability of effects from the action alone, the reference cell's seeds; neither the
+    caller's frames nor the saved tables change."""
+    from glu.studies.corpus_evaluation.tables import SweepTables
+
+    def stamped(df, name):
+        df.attrs = {"experiment": name, "data_source": "synthetic", "parameters": {"seed": 0}}
+        return df
+
+    table = metric_rows()
+    diffs = diff_rows().assign(p_adjusted=0.01, verdict_adjusted="better")
+    saved = SweepTables(
+        stamped(table, "corpus_evaluation_results"),
+        stamped(diffs, "corpus_evaluation_differences"),
+        stamped(table.assign(n=10), "corpus_evaluation_reliability"),
+        stamped(table.assign(recognizer_seed=0), "corpus_evaluation_seeds"),
+        stamped(calibration_rows(), "corpus_evaluation_calibration"),
+        {"episodes": 64},
+    )
+    before = [dict(t.attrs) for t in saved[:5]]
+    verdicts = fd.finding_verdicts(fd.bare(diffs), FINDINGS)
+    counts = fd.verdict_counts(verdicts)
+    written = fd.result_tables(saved, verdicts, counts)
+    assert [name for _, name, _ in written] == [
+        "corpus_metrics", "corpus_differences", "corpus_findings", "corpus_finding_counts",
+        "corpus_reliability", "corpus_seeds", "corpus_calibration",
+    ]  # fmt: skip
+    sources = [saved.metrics, saved.differences, saved.differences, saved.differences, saved.reliability]
+    sources += [saved.seeds, saved.calibration]
+    for (frame, name, extra), source in zip(written, sources, strict=True):
+        assert frame.attrs == source.attrs, name
+        assert extra == ({"episodes": 64} if name == "corpus_metrics" else {})
+    frames = {name: frame for frame, name, _ in written}
+    metrics = frames["corpus_metrics"]
+    assert "all" not in set(metrics.viewpoint) and metrics.noise.isna().all() and len(metrics)
+    cells = set(zip(metrics.action_prior, metrics.inference_network, metrics.learn_experiments, strict=True))
+    assert cells == {("uniform", "generating", 0), ("network", "learned", 100)}
+    pd.testing.assert_frame_equal(frames["corpus_differences"], fd.in_contrast_cells(diffs, table))
+    pd.testing.assert_frame_equal(frames["corpus_findings"], verdicts)
+    assert set(frames["corpus_reliability"].effects) == {"action"}
+    pd.testing.assert_frame_equal(frames["corpus_seeds"], fd.select(fd.bare(saved.seeds), fd.REFERENCE_CELL))
+    assert verdicts.attrs == {} and counts.attrs == {}
+    assert [dict(t.attrs) for t in saved[:5]] == before
+
+
+def test_the_winners_figure_has_a_panel_per_target_and_metric_shown():
+    """Notebook 11's winners: a panel per (target, metric) shown, two to a row (none left empty), each
+    naming every cell's best strategy and titled by its target and metric; as tall as the cells need."""
+    import matplotlib.pyplot as plt
+
+    from glu.studies.corpus_evaluation.figures import winners_figure
+
+    table = metric_rows()
+    diffs = pd.DataFrame(
+        [
+            {**c, "effects": "action", "features": "raw", "noise": np.nan, "viewpoint": "front",
+             "fraction": 1.0, "target": t, "metric": m, "strategy": s, "baseline": b, "difference": 0.1,
+             "ci_low": 0.05, "ci_high": 0.2, "verdict": "better", "verdict_adjusted": "better"}
+            for c in CELLS
+            for t, m, s, b in (("effect", "log_loss", "jeffrey", "hard"),
+                               ("action", "accuracy", "gesture", "network"))
+        ]
+    )  # fmt: skip
+    win = fd.winners(table, diffs)
+    front = win[(win.effects == "action") & (win.features == "raw")]
+    shown = [("action", "accuracy"), ("effect", "log_loss"), ("effect", "ece")]
+    fig = winners_figure(front, shown)
+    try:
+        assert len(fig.axes) == 3 and tuple(fig.get_size_inches()) == pytest.approx((10, 0.9 * 4 + 2.5))
+        for ax, (target, metric) in zip(fig.axes, shown, strict=True):
+            assert ax.get_title().startswith(f"{target}: ")
+            rows = front[(front.target == target) & (front.metric == metric)]
+            bold = [t.get_text() for t in ax.texts if t.get_fontweight() == "bold"]
+            assert sorted(bold) == sorted(rows.best) and len(ax.patches) == len(rows) == len(CELLS)
+        assert {t.get_text() for t in fig.axes[1].texts if t.get_fontweight() == "bold"} == {"jeffrey"}
+    finally:
+        plt.close(fig)

@@ -111,3 +111,23 @@ def test_leave_one_recording_out_marks_untestable_actions():
     assert len(seg) == 5 and seg.testable.all()
     # the grasp sequences sit 5 units away from the taps: leave-one-segment-out must find that
     assert seg[seg.action == "grasp"].correct.all()
+
+
+def test_notebook_08s_banks_are_the_originals_and_both_recipes_on_the_standing_recordings(source):
+    """anticipation_banks: the originals' HMMs when the data has them, then glu's recipe and mixsplit with
+    the same settings and features, trained on the standing recordings only (as train_on of them)."""
+    from glu.gestures.corpus import gesture_sequences
+    from glu.studies.replication.gestures import anticipation_banks, recognizer_settings, train_on
+
+    config = TrainingConfig(n_states=2, n_mix=1, n_iter=3)
+    banks = anticipation_banks(source, config, 3, seed=1, features="centred")
+    originals = ["original"] if source.original_hmms() is not None else []
+    assert list(banks) == [*originals, "glu", "mixsplit"]
+    for name in ("glu", "mixsplit"):
+        s = recognizer_settings(banks[name])
+        assert (s["recipe"], s["n_states"], s["n_iter"], s["seed"]) == (name, 2, 3, 1)
+        assert banks[name].features.name == "centred"
+    standing = gesture_sequences(source, n_per_action=3, seed=1, include_test=False)
+    by_hand = train_on(standing, config, seed=1, features="centred")
+    x = standing[0].xyz
+    np.testing.assert_array_equal(banks["glu"].loglik(x), by_hand.loglik(x))

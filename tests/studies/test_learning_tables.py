@@ -392,3 +392,121 @@ def test_a_learner_missing_at_an_ambiguity_draws_no_curve():
         assert [list(line.get_ydata()) for line in drawn] == [[0.4, 0.8]]
     finally:
         plt.close(fig)
+
+
+def _by_field(p):
+    """The settings as notebook 12 built them field by field from its parameters, before it made them in one
+    call (study.settings_from_parameters)."""
+    return lc.StudySettings(
+        episodes=max(p["budgets"]),
+        seeds=tuple(p["seeds"]),
+        worlds=tuple(p["worlds"]),
+        ambiguities=tuple(p["ambiguities"]),
+        test_per_action=p["test_per_action"],
+        budgets=tuple(p["budgets"]),
+        margin=p["margin"],
+        bootstrap=p["bootstrap"],
+    )
+
+
+def test_notebook_12s_parameters_cell_makes_its_settings_in_one_call():
+    """The notebook's own parameters (its cell's defaults, and its quick run's), other names of its
+    namespace beside them, give the settings it built field by field."""
+    from glu.paths import PROJECT_ROOT
+    from glu.run.manifest import read_manifest
+    from glu.run.parameters import read_spec
+
+    path = PROJECT_ROOT / "notebooks" / "12_learning_from_effects.py"
+    spec = {k: p.default for k, p in read_spec(path).items()}
+    for params in (spec, {**spec, **read_manifest(path).quick}):
+        made = lc.settings_from_parameters({**params, "out": object(), "episodes": 5})
+        assert made == _by_field(params) and made.episodes == max(params["budgets"])
+    assert lc.settings_from_parameters({}) == lc.StudySettings()
+
+
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        ({"seeds": [0, "1"]}, r"seeds=\(0, '1'\): a list of whole numbers ≥ 0"),
+        ({"seeds": "0,1"}, r"seeds='0,1': a list of whole numbers ≥ 0"),
+        ({"worlds": ["easy", "moon"]}, r"unknown world \['moon'\]; allowed: easy, hard"),
+        ({"test_per_action": "30"}, r"test_per_action='30': a whole number ≥ 1"),
+        ({"margin": 2}, r"margin=2: the equivalence margin, an accuracy in \(0, 1\)"),
+        ({"budgets": []}, r"budgets=\[\]: episodes, whole numbers ≥ 1"),
+        ({"budgets": [100, "1000"]}, r"budgets=\[100, '1000'\]: episodes, whole numbers ≥ 1"),
+    ],
+)
+def test_an_unknown_or_ill_typed_parameter_of_notebook_12_is_refused_in_one_line(bad, message):
+    with pytest.raises(DataError, match=f"^{message}") as err:
+        lc.settings_from_parameters(bad)
+    assert "\n" not in str(err.value)
+
+
+class _Run:
+    """What learned_anticipation_figure reads of an anticipation run: its curves and predictions."""
+
+    def __init__(self, case, hmms, shift):
+        frames = np.arange(1, 11)
+        self._curves = pd.DataFrame(
+            [
+                {"frame": f, "t": f, "seconds": f / 30, "action": a, "loglik_per_frame": -f - k - shift,
+                 "p_hmm": (k + 1) / 6, "case": case, "models": hmms}
+                for f in frames
+                for k, a in enumerate(("grasp", "tap", "touch"))
+            ]
+        )  # fmt: skip
+        ps = (0.2, 0.3 + shift / 100, 0.5 - shift / 100)
+        self._predictions = pd.DataFrame(
+            [
+                {"frame": t, "t": t, "node": "ObjVel", "value": v, "p": p}
+                for t in (5, 10)
+                for v, p in zip(("slow", "medium", "fast"), ps, strict=True)
+            ]
+        )
+
+    def curves(self):
+        return self._curves
+
+    def predictions(self):
+        return self._predictions
+
+
+def test_the_learned_anticipation_figure_draws_one_learners_cases():
+    """A column per case in the order of the TCDS cases, drawing the named learner's runs only: the top
+    panel each action's per-frame log-likelihood, the bottom one p_comb(ObjVel) at each update."""
+    import matplotlib.pyplot as plt
+
+    from glu.studies.anticipation.experiment import CASES
+    from glu.studies.learning.figures import learned_anticipation_figure
+
+    runs = {
+        (h, c): _Run(c, h, shift)
+        for h, shift in (("true labels", 7), ("soft labels", 0))
+        for c in ("box", "sphere")
+    }
+    fig = learned_anticipation_figure(runs, "soft labels")
+    try:
+        top, bottom = fig.axes[:2], fig.axes[2:4]
+        assert [ax.get_title() for ax in top] == [
+            f"{c.description} — HMMs: soft labels" for c in CASES.values()
+        ]
+        for t, b, case in zip(top, bottom, CASES, strict=True):
+            run = runs["soft labels", case]
+            for line, (_, g) in zip(t.lines, run.curves().groupby("action", sort=False), strict=True):
+                np.testing.assert_array_equal(line.get_ydata(), g.loglik_per_frame)
+            p = run.predictions()
+            want = [
+                p[(p.value == v) & (p.t == t_)].p.item() for v in ("slow", "medium", "fast") for t_ in (5, 10)
+            ]
+            assert [r.get_height() for r in b.patches] == pytest.approx(want)
+        assert fig.axes[0].get_shared_x_axes().joined(fig.axes[0], fig.axes[2])
+    finally:
+        plt.close(fig)
+
+
+def test_the_intervals_line_names_the_bootstrap_of_the_settings():
+    s = lc.StudySettings(seeds=(0, 1, 2), test_per_action=4, bootstrap=1500)
+    assert tables.intervals_line(s) == (
+        "Intervals: 95% two-level bootstrap (1,500 replicates over 3 seeds and 12 held-out gestures each); "
+        "equivalence reads the 90% interval."
+    )

@@ -223,3 +223,18 @@ def test_a_learner_never_right_is_marked_on_the_axis():
         assert [b.get_height() for b in ax.patches] == [0.8, 0.0]
     finally:
         plt.close(fig)
+
+
+def test_notebook_12s_parameters_make_the_real_persons_settings():
+    """Its draws and episodes; computed here (saved "none"), as many episodes from glu's generator and the
+    notebook's bootstrap; a saved run keeps its own; a number of draws that is not one is refused."""
+    params = {"real_draws": 3, "real_episodes": 40, "bootstrap": 300, "saved": "shipped", "seed": 5}
+    assert rp.settings_from_parameters(params) == rp.RealPersonSettings(draws=(0, 1, 2), episodes=40)
+    here = rp.settings_from_parameters({**params, "saved": "none"})
+    assert here == rp.RealPersonSettings(draws=(0, 1, 2), episodes=40, generator_episodes=40, bootstrap=300)
+    assert rp.settings_from_parameters({}) == rp.RealPersonSettings()
+    for bad in (0, "5", True):
+        with pytest.raises(DataError, match=f"^real_draws={bad!r}: a whole number of draws ≥ 1$"):
+            rp.settings_from_parameters({"real_draws": bad})
+    with pytest.raises(DataError, match="^real_episodes=9|^episodes=9: a whole number from 10"):
+        rp.settings_from_parameters({"real_episodes": 9})

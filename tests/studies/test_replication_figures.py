@@ -85,3 +85,102 @@ def test_edges_only_in_ours_or_only_in_the_reference_are_marked():
         assert f", {len(mine)} only in ours, {len(theirs)} only in theirs" in ax.get_title()
     finally:
         plt.close(fig)
+
+
+def _effect_rows(shapes, rules, cases, values):
+    """A made-up p_comb(ObjVel | Shape) table as effect_vs_soft_evidence writes it: every p distinct."""
+    rows = [
+        {"Shape": s, "rule": r, "case": c, "ObjVel": v}
+        for s in shapes
+        for r in rules
+        for c in cases
+        for v in values
+    ]
+    df = pd.DataFrame(rows)
+    df["p"] = np.arange(1, len(df) + 1) / 100
+    return df
+
+
+def test_the_effect_under_each_rule_is_a_row_of_panels_one_per_shape():
+    """Notebook 05's figure: a row per rule, a column per shape, each panel's stacked bars the table's p of
+    its shape and rule (every value over every case), one legend, beside the last row's last panel."""
+    from glu.studies.replication.network_figures import effect_vs_rules_figure
+
+    shapes, rules = ("sphere", "box"), ("virtual", "jeffrey")
+    cases, values = ("none", "[0 1 0]"), ("slow", "fast")
+    df = _effect_rows(shapes, rules, cases, values)
+    fig = effect_vs_rules_figure(df, rules)
+    try:
+        axes = fig.axes
+        assert [ax.get_title() for ax in axes] == [f"{s}, {rule_label(r)}" for r in rules for s in shapes]
+        for ax, (r, s) in zip(axes, [(r, s) for r in rules for s in shapes], strict=True):
+            g = df[(df.Shape == s) & (df.rule == r)]
+            expected = [g[(g.ObjVel == v) & (g.case == c)].p.item() for v in values for c in cases]
+            assert [b.get_height() for b in ax.patches] == pytest.approx(expected)
+        assert [ax.get_legend() is not None for ax in axes] == [False, False, False, True]
+        assert axes[0].get_shared_x_axes().joined(axes[0], axes[3])
+    finally:
+        plt.close(fig)
+
+
+def test_the_sweeps_are_panels_side_by_side_with_one_legend():
+    """Notebook 05's sweeps: a panel per sweep in the order given, each drawing its own p per rule and value,
+    the legend beside the last only."""
+    from glu.studies.replication.fusion_figures import soft_sweep_figure
+
+    t = np.linspace(0, 1, 5)
+    sweeps = {}
+    for k, shape in enumerate(("sphere", "box")):
+        frames = [
+            pd.DataFrame({"rule": r, "p_hmm_tap": t, "ObjVel": v, "p": (t + j + 3 * k) / 10})
+            for r in ("virtual", "jeffrey")
+            for j, v in enumerate(("slow", "fast"))
+        ]
+        sweeps[shape] = pd.concat(frames, ignore_index=True).assign(evidence=f"Shape={shape}")
+    fig = soft_sweep_figure(sweeps)
+    try:
+        assert [ax.get_title() for ax in fig.axes] == ["Shape=sphere", "Shape=box"]
+        for ax, sweep in zip(fig.axes, sweeps.values(), strict=True):
+            drawn = [line.get_ydata() for line in ax.lines]
+            wanted = [g.p.to_numpy() for _, g in sweep.groupby(["rule", "ObjVel"], sort=False)]
+            assert len(drawn) == len(wanted) == 4
+            for a, b in zip(drawn, wanted, strict=True):
+                np.testing.assert_array_equal(a, b)
+        assert [ax.get_legend() is not None for ax in fig.axes] == [False, True]
+    finally:
+        plt.close(fig)
+
+
+def test_an_nbest_figure_is_titled_by_its_evidence_score_and_candidates():
+    from glu.studies.replication.verbal_figures import nbest_figure
+
+    nbest = pd.DataFrame({"sentence": ["the robot taps the ball", "the ball rolls"], "score": [-1.5, -2.25]})
+    fig = nbest_figure(nbest, {"Color": "yellow", "Shape": "sphere"}, "original", "the samples")
+    try:
+        (ax,) = fig.axes
+        assert ax.get_title(loc="right") == "Color=yellow, Shape=sphere (original score, the samples)"
+        assert [t.get_text() for t in ax.get_yticklabels()] == [
+            f"{k}. {s}" for k, s in enumerate(nbest.sentence, 1)
+        ]
+        assert list(ax.collections[0].get_offsets()[:, 0]) == [-1.5, -2.25]
+    finally:
+        plt.close(fig)
+
+
+def test_a_sampling_figure_draws_the_example_it_is_given():
+    """The grammar's scores and the sample's as histograms, the grammar's best and the sample's as lines,
+    titled by the evidence and the sample's size."""
+    from glu.studies.replication.verbal import SamplingExample
+    from glu.studies.replication.verbal_figures import sampling_figure
+
+    grammar = np.linspace(-4.0, -1.0, 50)
+    sample = np.array([-3.0, -2.5, -2.0, -np.inf])
+    example = SamplingExample({"ObjVel": "slow"}, grammar, sample, -1.0, 4, "original")
+    fig = sampling_figure(example)
+    try:
+        (ax,) = fig.axes
+        assert ax.get_title().split("\n")[0] == "ObjVel=slow: one sample of 4"
+        assert [line.get_xdata()[0] for line in ax.lines] == [-1.0, -2.0]  # the grammar's best, the sample's
+        assert "1 of the sample's (25 %)" in ax.get_title()  # the −∞ sentence, not drawn
+    finally:
+        plt.close(fig)

@@ -548,3 +548,31 @@ def test_the_recording_of_an_online_learner_reads_back(engine, tmp_path):
     np.testing.assert_allclose(last, run.means[-1, 0, 1], rtol=1e-6)
     texts = column("/decisions", "TextLog:text").column("TextLog:text").to_pylist()
     assert len(texts) == 24 and texts[0][0].startswith("episode 1: ")
+
+
+def test_the_recorded_life_is_the_scheme_and_the_true_labels_on_the_same_episodes(engine):
+    """Notebook 12's recorded learner: the scheme labelling by the network (no words) and the true labels,
+    run together on the same episodes, measured every 10 on balanced held-out gestures, as by hand."""
+    settings = ol.OnlineSettings(config=SMALL)
+    life = lr_.recorded_life(engine, "soft", 25, 2, seed=1, settings=settings)
+    amb = ss.AMBIGUITIES["mixed"]
+    ep = ss.simulate_episodes(engine, amb, 25, 1)
+    held = ss.simulate_episodes(engine, amb, 6, 1, offset=ss.TEST_OFFSET, balanced=True)
+    p = ss.network_posteriors(engine, ep.perceived, ep.world)
+    learners = [ol.Learner("soft", "network"), ol.Learner("true")]
+    actions = engine.bn.schema.values_of("Action")
+    by_hand = ol.run_online(
+        ep.features, ep.actions, learners, {"network": p}, held.features, held.actions, [10, 20], actions,
+        settings, 1,
+    )  # fmt: skip
+    assert list(life.run.checkpoints) == [10, 20] and life.run.learners == learners
+    np.testing.assert_array_equal(life.run.correct, by_hand.correct)
+    np.testing.assert_array_equal(life.run.weights, by_hand.weights)
+    assert len(life.features) == 25 and life.held_out == 6 == len(held.features)
+    acc = by_hand.accuracy()[-1]
+    assert life.summary() == (
+        f"after 25 episodes: soft labels {acc[0]:.3f}, true labels {acc[1]:.3f} on 6 held-out gestures"
+    )
+    assert life.scene() == f"# Learning gestures from effects\nsoft labels, {amb.description}; 25 episodes."
+    assert list(life.recognizers()) == ["soft labels", "true labels"]
+    assert life.recognizers()["true labels"].meta["scheme"] == "true"

@@ -10,8 +10,11 @@ from glu.errors import DataError
 from glu.studies.correspondence.experiment import OCCLUDED
 from glu.studies.correspondence.text import nested_sentences, study_sentences
 from glu.studies.replication.text import (
+    anticipation_sentence,
     effect_sentence,
     leader_text,
+    published_sentence,
+    sampling_line,
     verbal_sentences,
     word_change_sentences,
 )
@@ -232,6 +235,41 @@ def test_leader_text():
     assert (
         leader_text(("grasp", "tap", "touch"), p, [5, 10, 15])
         == "grasp from t = 5, touch from t = 10, tap from t = 15"
+    )
+
+
+def test_an_anticipation_run_and_its_published_comparison_in_a_sentence():
+    from types import SimpleNamespace
+
+    p = np.array([[0.6, 0.3, 0.1]] * 5 + [[0.1, 0.7, 0.2]] * 5)
+    run = SimpleNamespace(
+        actions=("grasp", "tap", "touch"),
+        p_hmm=p,
+        update_t=[5, 10],
+        prediction_changes=lambda: [(5, 125, "slow", 0.61), (10, 130, "fast", 0.55)],
+        description="the robot is tapping the ball and the ball is rolling",
+    )
+    assert anticipation_sentence("sphere", "glu", run) == (
+        "sphere, glu HMMs: leading model grasp from t = 5, tap from t = 10; predicted ObjVel slow from t = 5 "
+        "(frame 125, p 0.61); fast from t = 10 (frame 130, p 0.55); "
+        "“the robot is tapping the ball and the ball is rolling”"
+    )
+    versus = pd.DataFrame({"within": [True, True, False]})
+    versus.attrs["parameters"] = {"same_caption": False}
+    assert published_sentence("box", versus) == (
+        "box: 2 of 3 published values within the figure's resolution; the caption is not the paper's"
+    )
+    versus.attrs["parameters"] = {"same_caption": True}
+    assert published_sentence("box", versus).endswith("the caption is the paper's")
+
+
+def test_how_often_random_samples_drew_the_best_in_a_line():
+    trials = pd.DataFrame(
+        {"n_samples": [10_000] * 4, "found_best": [True, False, False, False], "sample_rank": [1, 3, 8, 20]}
+    )
+    assert sampling_line(trials) == (
+        "over 4 trials of 10,000 random sentences, the best of the grammar was drawn 1 times (25.0 %); "
+        "the median rank of a sample's best in the grammar is 6"
     )
 
 

@@ -4,8 +4,9 @@ On a tap towards a small sphere and one towards a big box, the gesture HMMs scor
 hand trajectory, ``(1/t) log L(G_1^t | A)`` per model, and every few frames their posterior
 ``p_HMM(A | G_1^t)`` enters the Affordance–Words network as soft evidence on Action, giving
 ``p_comb(ObjVel | Shape, Size, G_1^t)`` — the robot anticipates the object's motion before the hand
-touches it. :func:`effect_anticipation` runs it; :func:`case_trajectory` gets the hand trajectory (the
-originals' hand-cut segments of the real recordings, or a synthetic tap);
+touches it. :func:`effect_anticipation` runs it (:func:`anticipation_runs`: every case with every bank of
+HMMs, and :func:`anticipation_tables`, what notebook 08 writes of them); :func:`case_trajectory` gets the
+hand trajectory (the originals' hand-cut segments of the real recordings, or a synthetic tap);
 :func:`glu.studies.anticipation.recordings.write_anticipation` turns a run into a Rerun recording.
 
 **The originals' schedule** (docs/method.md §7.4): updates at t = 5, 10, …, the last multiple of 5 within the
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -404,3 +406,49 @@ def _concat(pieces: Sequence[Trajectory]) -> Trajectory:
         np.concatenate([p.observed for p in pieces]),
         pieces[0].source,
     )
+
+
+def anticipation_runs(
+    banks: Mapping[str, Recognizer], engine: Engine, source: DataSource, seed: int = 0, **options: Any
+) -> dict[tuple[str, str], AnticipationRun]:
+    """:func:`effect_anticipation` of every case of :data:`CASES` with every bank of HMMs of ``banks`` (name →
+    recogniser), bank by bank: the runs by (case, bank). ``options`` go to :func:`effect_anticipation`
+    (``step``, ``final_update``, ``rule``, ``describe``, ``score``, ``candidates``); ``seed`` picks the
+    synthetic taps of data without the real ones."""
+    runs = {}
+    for name, recognizer in banks.items():
+        for case, c in CASES.items():
+            trajectory = case_trajectory(source, case, seed=seed)
+            runs[case, name] = effect_anticipation(
+                recognizer, engine, trajectory, c.evidence, case=case, models=name, **options
+            )
+    return runs
+
+
+def published_comparisons(
+    runs: Mapping[tuple[str, str], AnticipationRun], bank: str = "original"
+) -> dict[str, pd.DataFrame]:
+    """:func:`published_comparison` of each case the HMMs ``bank`` ran (the originals' are those of the
+    paper), by case; none without them."""
+    return {case: published_comparison(runs[case, bank]) for case in CASES if (case, bank) in runs}
+
+
+PUBLISHED_REFERENCE = "TCDS 2020 Fig. 5 (published EPS)"
+"""What :func:`published_comparison` compares with, as a result table names it."""
+
+
+def anticipation_tables(
+    runs: Mapping[tuple[str, str], AnticipationRun], published: Mapping[str, pd.DataFrame]
+) -> list[tuple[pd.DataFrame, str, dict[str, Any]]]:
+    """What notebook 08 writes to ``results/`` of its runs (by (case, bank), :func:`anticipation_runs`), as
+    ``(frame, name, extra)`` for :meth:`glu.run.outputs.Outputs.table`: each run's curves, and its
+    predictions with its final description and where the prediction changes; then each case's comparison
+    with the paper (``published``, by case: :func:`published_comparisons`)."""
+    out: list[tuple[pd.DataFrame, str, dict[str, Any]]] = []
+    for (case, name), run in runs.items():
+        out.append((run.curves(), f"tcds_anticipation_{case}_{name}_curves", {}))
+        extra = {"final_description": run.description, "prediction_changes": run.prediction_changes()}
+        out.append((run.predictions(), f"tcds_anticipation_{case}_{name}_predictions", extra))
+    for case, versus in published.items():
+        out.append((versus, f"tcds_anticipation_{case}_published", {"reference": PUBLISHED_REFERENCE}))
+    return out

@@ -6,12 +6,13 @@ update, and above it, in words, which action the HMMs put ahead and what that pr
 values (:func:`glu.studies.anticipation.experiment.published_comparison`) the figure draws the paper's curves
 under glu's — wide pale lines under thin ones — and the paper's final bars beside glu's last update, so the
 match can be seen. :func:`anticipation_figure` builds the whole figure; :func:`plot_anticipation` draws one
-case on the axes it is given; :func:`shared_ylim` gives several figures the same y axis.
+case on the axes it is given; :func:`shared_ylim` gives several figures the same y axis;
+:func:`bank_figures` builds one figure per bank of HMMs.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -23,7 +24,7 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 
 from glu.plots.style import ACTION_COLORS, VALUE_COLORS, balanced_fill
-from glu.studies.anticipation.experiment import CASES
+from glu.studies.anticipation.experiment import CASES, AnticipationRun
 
 PUBLISHED_LABEL = "TCDS 2020 Fig. 5 (read from the authors' EPS)"
 LOGLIK_LABEL = r"$(1/t)\,\log L(G_1^t \mid A)$"
@@ -211,3 +212,26 @@ def anticipation_figure(
     handles += [Patch(facecolor=_color(v), edgecolor="0.2", lw=0.3, label=f"{node} {v}") for v in values]
     fig.legend(handles=handles, loc="outside upper center", ncols=len(handles), fontsize=8, frameon=False)
     return fig
+
+
+def bank_figures(
+    runs: Mapping[tuple[str, str], AnticipationRun],
+    published: Mapping[str, pd.DataFrame],
+    paper_bank: str = "original",
+) -> dict[str, Figure]:
+    """One :func:`anticipation_figure` per bank of HMMs of ``runs`` (by (case, bank), its cases in the order
+    of :data:`~glu.studies.anticipation.experiment.CASES`), by bank: ``paper_bank``'s with the published
+    Fig. 5 (``published``, by case) on its own y axis; the others on one y axis they share
+    (:func:`shared_ylim`), to be compared by eye."""
+    banks = list(dict.fromkeys(name for _, name in runs))
+    others = [r.curves() for (_, name), r in runs.items() if name != paper_bank]
+    ylim = shared_ylim(others) if others else None
+    out = {}
+    for name in banks:
+        cases = [case for case in CASES if (case, name) in runs]
+        drawn = [(runs[case, name].curves(), runs[case, name].predictions()) for case in cases]
+        if name == paper_bank:
+            out[name] = anticipation_figure(drawn, [published.get(case) for case in cases])
+        else:
+            out[name] = anticipation_figure(drawn, ylim=ylim)
+    return out

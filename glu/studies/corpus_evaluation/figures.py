@@ -36,6 +36,7 @@ from glu.plots.style import (
     strategy_style,
 )
 from glu.studies.corpus_evaluation.findings import (
+    CELL,
     REFERENCE_CELL,
     cell_label,
     metric_rows,
@@ -338,6 +339,19 @@ def plot_winners(ax: Axes, winners: pd.DataFrame, target: str, metric: str) -> A
     ax.set_xlabel("p_HMM reading", fontsize=7)
     ax.tick_params(length=0)
     return ax
+
+
+def winners_figure(winners: pd.DataFrame, shown: Sequence[tuple[str, str]]) -> Figure:
+    """Which strategy wins each cell (:func:`plot_winners`), one panel per ``(target, metric)`` of ``shown``,
+    two to a row, each as tall as its rows of action prior × network need."""
+    rows = winners.groupby(list(CELL[:3])).ngroups
+    nrows = -(-len(shown) // 2)
+    fig, axes = plt.subplots(nrows, 2, figsize=(10, (0.9 * rows + 2.5) * nrows / 2), squeeze=False)
+    for ax, (target, metric) in zip(axes.flat, shown, strict=False):
+        plot_winners(ax, winners, target, metric)
+    for ax in list(axes.flat)[len(shown) :]:
+        fig.delaxes(ax)
+    return fig
 
 
 def plt_rectangle(x: float, y: float, color: Any, **look: Any) -> Any:

@@ -528,6 +528,39 @@ def in_contrast_cells(frame: pd.DataFrame, table: pd.DataFrame) -> pd.DataFrame:
     return frame[keep & frame.noise.isna().to_numpy()]
 
 
+def result_tables(
+    stamped: Any, verdicts: pd.DataFrame, counts: pd.DataFrame
+) -> list[tuple[pd.DataFrame, str, dict[str, Any]]]:
+    """What notebook 11 writes to ``results/``, as ``(frame, name, extra)`` for
+    :meth:`glu.run.outputs.Outputs.table`: the findings whole (``verdicts``, :func:`finding_verdicts`, and
+    ``counts``, :func:`verdict_counts`); the metrics and differences of the contrasted cells (every reading,
+    feature set, world and viewpoint, noise pooled: :func:`in_contrast_cells`), their reliability diagrams
+    (effects from the action alone), the reference cell's seeds and the calibrations. The rest stays in the
+    sweep's folder.
+
+    ``stamped``: the saved tables (:func:`glu.studies.corpus_evaluation.tables.saved_subset`). Each frame
+    returned is a view carrying the stamp of the table it was computed from (the caller's frames stay
+    unstamped); the metrics' extra names the sweep's episodes.
+    """
+    table, diffs, rel, seeds, calibration = (bare(t) for t in stamped[:5])
+    found = (
+        (in_contrast_cells(table[table.viewpoint != "all"], table), stamped.metrics, "corpus_metrics"),
+        (in_contrast_cells(diffs, table), stamped.differences, "corpus_differences"),
+        (verdicts, stamped.differences, "corpus_findings"),
+        (counts, stamped.differences, "corpus_finding_counts"),
+        (in_contrast_cells(rel[rel.effects == "action"], table), stamped.reliability, "corpus_reliability"),
+        (select(seeds, REFERENCE_CELL), stamped.seeds, "corpus_seeds"),
+        (calibration, stamped.calibration, "corpus_calibration"),
+    )
+    out = []
+    for frame, stamp, name in found:
+        frame = bare(frame)
+        frame.attrs = dict(stamp.attrs)
+        extra = {"episodes": stamped.summary["episodes"]} if name == "corpus_metrics" else {}
+        out.append((frame, name, extra))
+    return out
+
+
 def front_view(table: pd.DataFrame) -> str:
     """The viewpoint the findings are read on first (:data:`FRONT`), or the sweep's first."""
     views = viewpoints(table)

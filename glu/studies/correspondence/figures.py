@@ -2,8 +2,9 @@
 buys or costs, the spread of leave-one-out accuracy on the real data, one gesture seen from two sides.
 
 Every function draws the tidy frames of :mod:`glu.studies.correspondence.experiment` on the axes it is given
-and returns them: ``plot_x(ax, frame, …) -> Axes``. Feature sets are named as in the text (``all`` for the
-four invariances together); conditions by their factor and level (``body size 0.8``).
+and returns them: ``plot_x(ax, frame, …) -> Axes``; the ``*_figure`` functions lay out notebook 10's figures
+from them, one call each. Feature sets are named as in the text (``all`` for the four invariances together);
+conditions by their factor and level (``body size 0.8``).
 """
 
 from __future__ import annotations
@@ -14,9 +15,11 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 from glu.gestures.invariants import ALL, INVARIANCES
-from glu.plots.style import ACTION_COLORS, legend_right
+from glu.plots.style import ACTION_COLORS, legend_right, new_figure
+from glu.studies.correspondence.experiment import OCCLUDED, TRAIN_SOURCES
 
 FEATURE_COLORS = {
     "raw": "0.2",
@@ -70,6 +73,11 @@ def _marker(features: str) -> str:
 
 def _line(features: str) -> str:
     return FEATURE_LINES.get(feature_label(features), "-")
+
+
+def trained_on(train: str) -> str:
+    """The recognisers' training source in words: ``"the robot"``, ``"one human view"``."""
+    return "the robot" if train == "robot" else "one human view"
 
 
 def condition_label(factor: str, level: str, width: int = 14) -> str:
@@ -129,7 +137,7 @@ def plot_accuracy_vs_viewpoint(
     ax.set_xticks(yaws)
     ax.set_ylim(0, 1.02)
     tracker = "" if factor == "viewpoint" else ", occluding tracker"
-    ax.set_title(f"trained on {'the robot' if train == 'robot' else 'one human view'}{tracker}", fontsize=9)
+    ax.set_title(f"trained on {trained_on(train)}{tracker}", fontsize=9)
     if legend:
         _features_legend(ax)
     return ax
@@ -256,6 +264,57 @@ def plot_two_views(axes: Sequence[Axes], curves: pd.DataFrame, action: str) -> S
     axes[0].set_ylabel(rf"$p_{{HMM}}({action} \mid G_1^t)$")
     legend_right(axes[-1])
     return axes
+
+
+VIEWPOINT_PANELS: tuple[tuple[str, str], ...] = (
+    ("robot", "viewpoint"),
+    ("human", "viewpoint"),
+    ("human", OCCLUDED),
+)
+"""The panels of :func:`viewpoint_figure`: (training source, factor of the turns)."""
+
+
+def viewpoint_figure(summary: pd.DataFrame) -> Figure:
+    """Accuracy against the person's turn (:func:`plot_accuracy_vs_viewpoint`), one panel per
+    :data:`VIEWPOINT_PANELS` whose turns the summary holds: trained on the robot, on one human view, and on
+    one human view with the turns seen by the occluding tracker; the legend right of the last."""
+    panels = [(t, f) for t, f in VIEWPOINT_PANELS if f in set(summary["factor"])]
+    fig, axes = new_figure(len(panels), width=4.6, height=3.6)
+    for ax, (train, factor) in zip(axes, panels, strict=True):
+        plot_accuracy_vs_viewpoint(ax, summary, train, legend=ax is axes[-1], factor=factor)
+    return fig
+
+
+def conditions_figure(summary: pd.DataFrame, train: str = "human") -> Figure:
+    """Accuracy in every test condition of one training source, a bar per feature set
+    (:func:`plot_accuracy_by_condition`), titled by the source."""
+    fig, (ax,) = new_figure(1, width=11, height=3.4)
+    plot_accuracy_by_condition(ax, summary, train)
+    ax.set_title(f"trained on {trained_on(train)}", fontsize=9)
+    return fig
+
+
+def invariance_effects_figure(effects: pd.DataFrame, trains: Sequence[str] = TRAIN_SOURCES) -> Figure:
+    """What adding each invariance changes (:func:`plot_invariance_effects`), one map per training source,
+    stacked."""
+    fig, axes = new_figure(1, width=13, height=3.5, nrows=len(trains))
+    for ax, train in zip(axes, trains, strict=True):
+        plot_invariance_effects(ax, effects, train)
+    return fig
+
+
+def nested_cv_figure(summary: pd.DataFrame) -> Figure:
+    """The real data's nested cross-validation, per seed (:func:`plot_nested_cv`)."""
+    fig, (ax,) = new_figure(1, width=5, height=3.4)
+    plot_nested_cv(ax, summary)
+    return fig
+
+
+def two_views_figure(curves: pd.DataFrame, action: str = "tap") -> Figure:
+    """``p_HMM(action | G_1^t)`` over time, one panel per view of ``curves`` (:func:`plot_two_views`)."""
+    fig, axes = new_figure(curves["view"].nunique(), width=4.2, height=2.8)
+    plot_two_views(axes, curves, action)
+    return fig
 
 
 def _features_legend(ax: Axes) -> None:

@@ -14,8 +14,9 @@ people only: its tables do not depend on the data folder.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
-from dataclasses import asdict, dataclass
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -27,6 +28,7 @@ from glu.machine import map_tasks
 from glu.saved import KEY_FILE, cache_folder, cache_key, find, write_key
 from glu.studies.correspondence.experiment import (
     FEATURE_SETS,
+    STUDY_FEATURE_NAMES,
     STUDY_TRAINING,
     correspondence_study,
     default_conditions,
@@ -50,7 +52,8 @@ effects."""
 
 @dataclass(frozen=True)
 class StudySettings:
-    """Everything the synthetic study's tables depend on (notebook 10's parameters of the same names)."""
+    """Everything the synthetic study's tables depend on (notebook 10's parameters of the same names), each
+    checked when the settings are made (:class:`~glu.errors.DataError`, one line naming it)."""
 
     seeds: tuple[int, ...] = tuple(range(10))
     n_train: int = 8
@@ -65,6 +68,48 @@ class StudySettings:
     levels: tuple[str, ...] | None = None
     normalise_body: bool = False
 
+    def __post_init__(self) -> None:
+        def refuse(name: str, must: str) -> DataError:
+            return DataError(f"{name}={getattr(self, name)!r}: {must}")
+
+        def whole(v: Any, lo: int) -> bool:
+            return isinstance(v, int) and not isinstance(v, bool) and v >= lo
+
+        def number(v: Any) -> bool:
+            return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+        lists = {
+            "seeds": (lambda k: whole(k, 0), "whole numbers ≥ 0"),
+            "feature_sets": (lambda f: isinstance(f, str), "feature sets"),
+            "yaws": (number, "turns in degrees (finite numbers)"),
+        }
+        for name, (ok, what) in lists.items():
+            v = getattr(self, name)
+            if not isinstance(v, tuple) or not v or not all(map(ok, v)) or len(set(v)) != len(v):
+                raise refuse(name, f"a list of {what}, at least one, each once")
+        unknown = [f for f in self.feature_sets if f not in STUDY_FEATURE_NAMES]
+        if unknown:
+            allowed = ", ".join(STUDY_FEATURE_NAMES)
+            raise refuse("feature_sets", f"unknown feature set {unknown[0]!r}; allowed: {allowed}")
+        for name in ("n_train", "n_test", "n_states", "n_mix", "n_iter"):
+            if not whole(getattr(self, name), 1):
+                raise refuse(name, "a whole number ≥ 1")
+        if not whole(self.bootstrap, 0):
+            raise refuse("bootstrap", "a whole number of replicates ≥ 0")
+        if not number(self.variety) or self.variety < 0:
+            raise refuse("variety", "a number ≥ 0")
+        if not isinstance(self.normalise_body, bool):
+            raise refuse("normalise_body", "True or False")
+        if self.levels is not None:
+            if not isinstance(self.levels, tuple) or not self.levels:
+                raise refuse("levels", "None (every condition) or a list of the conditions' levels")
+            conds = default_conditions(self.normalise_body, yaws=self.yaws, variety=self.variety)
+            known = list(dict.fromkeys(c.level for c in conds))
+            unknown = [lv for lv in self.levels if lv not in known]
+            if unknown:
+                allowed = ", ".join(map(repr, known))
+                raise refuse("levels", f"unknown level {unknown[0]!r}; allowed: {allowed}")
+
     def key(self) -> dict[str, Any]:
         """The key of the saved tables (:mod:`glu.saved`): the format and every setting."""
         return {"format": list(FORMAT), "settings": json.loads(json.dumps(asdict(self)))}
@@ -73,6 +118,14 @@ class StudySettings:
         """The test conditions (:func:`default_conditions`), those of :attr:`levels` if given."""
         conds = default_conditions(self.normalise_body, yaws=self.yaws, variety=self.variety)
         return conds if self.levels is None else [c for c in conds if c.level in self.levels]
+
+
+def settings_from_parameters(params: Mapping[str, Any]) -> StudySettings:
+    """The study's settings from notebook 10's parameters (its cell's names, which are the fields'; a list
+    becomes a tuple; other names in ``params`` are ignored): one call instead of the fields one by one, the
+    values checked as :class:`StudySettings` checks them."""
+    given = {f.name: params[f.name] for f in fields(StudySettings) if f.name in params}
+    return StudySettings(**{k: tuple(v) if isinstance(v, list) else v for k, v in given.items()})
 
 
 class StudyTables(NamedTuple):

@@ -1,11 +1,11 @@
 """The correspondence problem on the real data: the seated taps of effect anticipation.
 
 The published recordings hold one person's standing repetitions (grasp1, tap1, touch1, push1) and two
-taps made seated, towards a small sphere and a big box (docs/method.md §5.3). The seated hand moves in
-another part of the torso frame (:func:`posture_offsets`), so HMMs trained on raw standing features judge
-the seated taps by their tails. Training settings are named by short labels (:func:`parse_setting`,
-:func:`setting_label`); the choice among them, made without the seated taps in view, is
-:mod:`glu.studies.correspondence.nested`.
+taps made seated, towards a small sphere and a big box (docs/method.md §5.3; :func:`seated_taps`). The
+seated hand moves in another part of the torso frame (:func:`posture_offsets`), so HMMs trained on raw
+standing features judge the seated taps by their tails. Training settings are named by short labels
+(:func:`parse_setting`, :func:`setting_label`); the choice among them, made without the seated taps in
+view, is :mod:`glu.studies.correspondence.nested`.
 """
 
 from __future__ import annotations
@@ -17,8 +17,9 @@ import pandas as pd
 
 from glu.data.source import DataSource
 from glu.errors import DataError
-from glu.gestures.corpus import synthetic_corpus
+from glu.gestures.corpus import LabelledSequence, original_test_segments, synthetic_corpus
 from glu.gestures.synthetic import View
+from glu.studies.anticipation.experiment import CASES
 from glu.tidy import tidy
 
 SETTING_KEYS = {"Q": "n_states", "M": "n_mix", "reg": "covar_reg", "iter": "n_iter", "tol": "tol"}
@@ -98,3 +99,11 @@ def posture_offsets(source: DataSource, n_per_action: int = 4) -> pd.DataFrame:
         for s in seqs
     ]
     return tidy(pd.DataFrame(rows), "posture_offsets", where)
+
+
+def seated_taps(source: DataSource) -> list[LabelledSequence]:
+    """The two seated taps of effect anticipation (the recordings of
+    :data:`glu.studies.anticipation.experiment.CASES`) among the data's test segments: what the nested
+    cross-validation never trains on."""
+    cases = {c.recording for c in CASES.values()}
+    return [s for s in original_test_segments(source) if s.recording in cases]

@@ -1,6 +1,6 @@
 """One action, two viewpoints: the same synthetic gesture seen from each view, through a raw and an
 invariant recogniser, frame by frame (for :func:`glu.studies.correspondence.recordings.write_two_views` and
-notebook 10)."""
+notebook 10, whose recording is :func:`one_tap_two_views`)."""
 
 from __future__ import annotations
 
@@ -10,10 +10,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from glu.gestures.invariants import ALL
 from glu.gestures.recognizer import Recognizer
 from glu.gestures.synthetic import SYNTHETIC_POLICY, View, synthesize_gesture
 from glu.gestures.trajectories import repair
-from glu.studies.correspondence.experiment import HUMAN_NOISE
+from glu.hmm import TrainingConfig
+from glu.studies.correspondence.experiment import HUMAN_NOISE, train_for
 from glu.tidy import tidy
 
 
@@ -119,3 +121,25 @@ def two_views(
             )
         )
     return out
+
+
+def one_tap_two_views(
+    n_train: int,
+    seed: int = 0,
+    gesture: int = 1,
+    normalise_body: bool = False,
+    n_states: int = 6,
+    n_mix: int = 1,
+) -> list[ViewRun]:
+    """Notebook 10's two views: one noise-free tap (seed ``gesture``) seen from the front and, as a mirror
+    image, from 120° round (:func:`two_views`), through a raw recogniser and an invariant one (``all``), both
+    trained on the front human view (:func:`~glu.studies.correspondence.experiment.train_for`: ``n_train``
+    gestures per action, seed ``seed``, ``n_states`` states of ``n_mix`` Gaussians, EM to a tolerance of
+    1e-3)."""
+    config = TrainingConfig(n_states=n_states, n_mix=n_mix, tol=1e-3)
+    raw, invariant = (train_for("human", f, n_train, seed, normalise_body, config) for f in ("raw", ALL))
+    views = (
+        View(yaw_deg=0.0, normalise_body=normalise_body),
+        View(yaw_deg=120.0, mirror=True, normalise_body=normalise_body),
+    )
+    return two_views(raw, invariant, "tap", views, seed=gesture, noise=0.0)

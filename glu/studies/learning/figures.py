@@ -1,12 +1,15 @@
-"""Figures of learning gestures from effects: learning curves, gaps to the true labels, the real person.
+"""Figures of learning gestures from effects: learning curves, gaps to the true labels, the real person, what
+the robot anticipates with the gestures it learned.
 
 Each function draws a table of :mod:`glu.studies.learning.tables` or
-:mod:`glu.studies.learning.real_person` and returns the figure (or the axes it was given).
+:mod:`glu.studies.learning.real_person` (or the anticipation runs of
+:func:`glu.studies.learning.learned_recognizers.anticipation_after_learning`) and returns the figure (or the
+axes it was given).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -15,6 +18,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 
+from glu.studies.anticipation.experiment import CASES, AnticipationRun
+from glu.studies.anticipation.figures import plot_anticipation
 from glu.studies.learning.tables import LEARNER_NAMES
 
 LEARNER_STYLE: dict[str, dict] = {
@@ -248,4 +253,17 @@ def real_person_figure(summary: pd.DataFrame) -> Figure:
         [], [], color="0.1", lw=1.2, label=f"95 % interval ({segs} segments × {draws} draws, both resampled)"
     )
     _legend_above(fig, ax, ncols=2)
+    return fig
+
+
+def learned_anticipation_figure(runs: Mapping[tuple[str, str], AnticipationRun], hmms: str) -> Figure:
+    """What the robot anticipates with the HMMs ``hmms`` (TCDS Fig. 5's cases that ``runs`` holds, one column
+    each, in the order of :data:`~glu.studies.anticipation.experiment.CASES`:
+    :func:`~glu.studies.anticipation.figures.plot_anticipation`), from the runs keyed by (hmms, case) of
+    :func:`~glu.studies.learning.learned_recognizers.anticipation_after_learning`."""
+    cases = [case for case in CASES if (hmms, case) in runs]
+    fig, axes = plt.subplots(2, len(cases), figsize=(5 * len(cases), 5.5), sharex="col", squeeze=False)
+    for j, case in enumerate(cases):
+        run = runs[hmms, case]
+        plot_anticipation(axes[:, j], run.curves(), run.predictions())
     return fig

@@ -6,6 +6,8 @@
   gesture stop changing;
 * :func:`learn_gestures` — watch simulated episodes and learn a recogniser from them, batch or online
   (:mod:`glu.studies.learning.online`): what ``glu learn-gestures`` writes;
+* :func:`recorded_life` — one scheme's online learning beside the true labels', measured as it goes: notebook
+  12's recording;
 * :func:`anticipation_after_learning` — what the robot anticipates and says with learned HMMs (the TCDS
   Fig. 5 cases).
 """
@@ -28,18 +30,20 @@ from glu.gestures.typicality import META_KEY, ranges_to_meta, training_range
 from glu.hmm import GestureHMM, TrainingConfig, kmeans_labels, train
 from glu.schema import ACTIONS
 from glu.studies.anticipation.experiment import AnticipationRun
-from glu.studies.learning.online import OnlineSettings
+from glu.studies.learning.online import Learner, OnlineRun, OnlineSettings, run_online
 from glu.studies.learning.self_supervised import (
     AMBIGUITIES,
     EFFECTS,
     LEARNERS,
     STUDY_TRAINING,
+    TEST_OFFSET,
     best_matching,
     label_weights,
     network_posteriors,
     one_hot,
     p_hmm_reading,
     resampled,
+    simulate_episodes,
 )
 from glu.tidy import tidy
 
@@ -315,3 +319,72 @@ def anticipation_after_learning(
                 | {"description": run.description}
             )
     return tidy(pd.DataFrame(rows), "learning_anticipation", source.describe(), seed=seed), runs
+
+
+class RecordedLife(NamedTuple):
+    """One labelling scheme's life beside the true labels' (:func:`recorded_life`).
+
+    Attributes
+    ----------
+    run : the online run of both learners (the scheme first)
+    features : the episodes' gestures, in the order seen
+    scheme : the labelling scheme; ambiguity : the objects' description; held_out : held-out gestures
+    """
+
+    run: OnlineRun
+    features: list[np.ndarray]
+    scheme: str
+    ambiguity: str
+    held_out: int
+
+    def recognizers(self) -> dict[str, Recognizer]:
+        """What each learned at the end: ``"<scheme> labels"`` and ``"true labels"`` → its recogniser."""
+        return {f"{self.scheme} labels": self.run.recognizer(0), "true labels": self.run.recognizer(1)}
+
+    def scene(self) -> str:
+        """The recording's description of the scene (Markdown)."""
+        return (
+            f"# Learning gestures from effects\n{self.scheme} labels, {self.ambiguity}; "
+            f"{len(self.features)} episodes."
+        )
+
+    def summary(self) -> str:
+        """Both learners' held-out accuracy at the end, in one line."""
+        last = self.run.accuracy()[-1]
+        return (
+            f"after {len(self.features)} episodes: {self.scheme} labels {last[0]:.3f}, true labels "
+            f"{last[1]:.3f} on {self.held_out} held-out gestures"
+        )
+
+
+def recorded_life(
+    engine: Engine,
+    scheme: str,
+    episodes: int,
+    test_per_action: int,
+    seed: int = 0,
+    settings: OnlineSettings | None = None,
+    ambiguity: str = "mixed",
+) -> RecordedLife:
+    """Notebook 12's recorded learner: ``scheme`` labelling by the network's posteriors without words, and
+    the true labels, learning online (:func:`~glu.studies.learning.online.run_online`) from the same
+    ``episodes`` episodes of seed ``seed`` (easy world, ``ambiguity``'s objects), measured every 10 episodes
+    on ``3 · test_per_action`` held-out gestures, balanced over the actions."""
+    amb = AMBIGUITIES[ambiguity]
+    seen = simulate_episodes(engine, amb, episodes, seed)
+    test = simulate_episodes(engine, amb, 3 * test_per_action, seed, offset=TEST_OFFSET, balanced=True)
+    p_bn = network_posteriors(engine, seen.perceived, seen.world)
+    every = list(range(10, episodes + 1, 10)) or [episodes]
+    run = run_online(
+        seen.features,
+        seen.actions,
+        [Learner(scheme, "network"), Learner("true")],
+        {"network": p_bn},
+        test.features,
+        test.actions,
+        every,
+        engine.bn.schema.values_of("Action"),
+        settings or OnlineSettings(),
+        seed,
+    )
+    return RecordedLife(run, seen.features, scheme, amb.description, len(test.features))

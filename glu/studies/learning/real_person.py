@@ -25,7 +25,7 @@ support a general claim: the study says what happens for this person.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -113,6 +113,23 @@ class RealPersonSettings:
 
     def as_dict(self) -> dict[str, Any]:
         return settings_dict(self)
+
+
+def settings_from_parameters(params: Mapping[str, Any]) -> RealPersonSettings:
+    """The real person's settings from notebook 12's parameters: draws 0 … ``real_draws`` − 1 of
+    ``real_episodes`` episodes per held-out segment; computed here (``saved`` ``"none"``), also as many
+    episodes from glu's standard generator and ``bootstrap`` replicates (a saved run keeps its own)."""
+    draws = params.get("real_draws", len(RealPersonSettings.draws))
+    if isinstance(draws, bool) or not isinstance(draws, int) or draws < 1:
+        raise DataError(f"real_draws={draws!r}: a whole number of draws ≥ 1")
+    given: dict[str, Any] = {
+        "draws": tuple(range(draws)),
+        "episodes": params.get("real_episodes", RealPersonSettings.episodes),
+    }
+    if params.get("saved") == "none":
+        given["generator_episodes"] = given["episodes"]
+        given["bootstrap"] = params.get("bootstrap", RealPersonSettings.bootstrap)
+    return RealPersonSettings(**given)
 
 
 class PersonGenerator(NamedTuple):

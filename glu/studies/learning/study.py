@@ -19,7 +19,7 @@ scheduler, as ``glu evaluate`` does); :mod:`glu.studies.learning.tables` turns t
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any, NamedTuple
 
@@ -97,6 +97,8 @@ class StudySettings:
     def __post_init__(self) -> None:
         if not (isinstance(self.episodes, int) and 10 <= self.episodes <= 1_000_000):
             raise DataError(f"episodes={self.episodes!r}: a whole number from 10 to 1,000,000")
+        if not isinstance(self.seeds, tuple | list) or not all(_whole(k) for k in self.seeds):
+            raise DataError(f"seeds={self.seeds!r}: a list of whole numbers ≥ 0")
         if not self.seeds or len(set(self.seeds)) != len(self.seeds):
             raise DataError(f"seeds {list(self.seeds)}: give at least one, each once")
         for name, allowed in (("world", WORLDS), ("ambiguity", AMBIGUITIES)):
@@ -158,6 +160,34 @@ class StudySettings:
     def as_dict(self) -> dict[str, Any]:
         """The settings as plain data (the tables' parameters)."""
         return settings_dict(self)
+
+
+NOTEBOOK_FIELDS: tuple[str, ...] = (
+    "seeds",
+    "worlds",
+    "ambiguities",
+    "test_per_action",
+    "budgets",
+    "margin",
+    "bootstrap",
+)
+"""The fields of :class:`StudySettings` that notebook 12's parameters of the same names give."""
+
+
+def _whole(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool) and v >= 0
+
+
+def settings_from_parameters(params: Mapping[str, Any]) -> StudySettings:
+    """The study's settings from notebook 12's parameters (its cell's names, :data:`NOTEBOOK_FIELDS`; a list
+    becomes a tuple; other names in ``params`` are ignored): each learner sees as many episodes as the
+    largest budget. One call instead of the fields one by one, the values checked as
+    :class:`StudySettings` checks them (:class:`~glu.errors.DataError`, one line)."""
+    given = {k: tuple(v) if isinstance(v, list) else v for k, v in params.items() if k in NOTEBOOK_FIELDS}
+    budgets = given.get("budgets")
+    if isinstance(budgets, tuple) and budgets and all(_whole(b) for b in budgets):
+        given["episodes"] = max(budgets)
+    return StudySettings(**given)
 
 
 def settings_dict(settings: Any) -> dict[str, Any]:

@@ -25,6 +25,8 @@ import numpy as np
 import pandas as pd
 
 from glu.stats import (
+    ALPHA,
+    LEVEL,
     adjust,
     adjusted_verdict,
     bootstrap_p_value,
@@ -290,6 +292,17 @@ def labels_table(
         for (world, amb, words), v in zip(first.groups, labels, strict=True)
     ]
     return tidy(pd.DataFrame(rows), "learning_labels", data_source, **settings.as_dict())
+
+
+def intervals_line(settings: StudySettings) -> str:
+    """How the tables' intervals are made, in one sentence: the two-level bootstrap's level and replicates
+    over the seeds and each seed's held-out gestures (``test_per_action`` of each of the three actions),
+    and the interval the equivalence tests read."""
+    return (
+        f"Intervals: {LEVEL:.0%} two-level bootstrap ({settings.bootstrap:,} replicates over "
+        f"{len(settings.seeds)} seeds and {3 * settings.test_per_action} held-out gestures each); "
+        f"equivalence reads the {1 - 2 * ALPHA:.0%} interval."
+    )
 
 
 def claim_lines(claims: pd.DataFrame, margin: float) -> list[str]:

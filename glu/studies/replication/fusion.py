@@ -139,6 +139,14 @@ def word_probability_change(
     return _stamped(df, "glu2017_word_change", bn, reference, evidence=ev, threshold=threshold)
 
 
+def word_probability_changes(
+    bn: BayesNet, reference: BayesNet | None = None, threshold: float = 0.02
+) -> dict[str, pd.DataFrame]:
+    """:func:`word_probability_change` under each evidence of :data:`WORD_EVIDENCE` (the paper's text's,
+    the original code's): its name → the frame."""
+    return {name: word_probability_change(bn, name, reference, threshold) for name in WORD_EVIDENCE}
+
+
 def action_vs_soft_evidence(
     bn: BayesNet,
     rows: Sequence[Sequence[float]] = TCDS_ACTION_ROWS,
@@ -258,6 +266,18 @@ def soft_evidence_sweep(
         n_points=n_points,
         rules=rules,
     )
+
+
+SWEEP_SHAPES: tuple[str, ...] = ("sphere", "box")
+"""The shapes notebook 05 sweeps p_HMM(tap) for (TCDS's effect-prediction objects)."""
+
+
+def soft_evidence_sweeps(
+    bn: BayesNet, shapes: Sequence[str] = SWEEP_SHAPES, n_points: int = 101
+) -> dict[str, pd.DataFrame]:
+    """:func:`soft_evidence_sweep` of p_comb(ObjVel | Shape) under virtual evidence and Jeffrey's rule for
+    each of ``shapes``: shape → its sweep, in the order given."""
+    return {shape: soft_evidence_sweep(bn, {"Shape": shape}, n_points=n_points) for shape in shapes}
 
 
 def tap_thresholds(bn: BayesNet, nodes: Sequence[str] = ("Shape", "Size", "ObjVel")) -> pd.DataFrame:

@@ -1,19 +1,22 @@
 """Figures of fusion: the soft-evidence sweeps, the tap thresholds, the fusion rules on the test gestures.
 
 Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``;
-the frames are the tidy outputs of :mod:`glu.studies.replication.fusion`.
+the frames are the tidy outputs of :mod:`glu.studies.replication.fusion`. :func:`soft_sweep_figure` builds
+the whole figure of several sweeps.
 """
 
 from __future__ import annotations
 
 import textwrap
+from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from glu.plots.style import ACTION_COLORS, RULE_LINESTYLES, VALUE_COLORS, legend_right, rule_label
+from glu.plots.style import ACTION_COLORS, RULE_LINESTYLES, VALUE_COLORS, legend_right, new_figure, rule_label
 
 NEAR_ZERO = 0.02
 """A sweep line that never rises above this lies on the axis; the title says which."""
@@ -56,6 +59,16 @@ def plot_soft_sweep(ax: Axes, df: pd.DataFrame, legend: bool = True) -> Axes:
         ]
         legend_right(ax, handles=handles)
     return ax
+
+
+def soft_sweep_figure(sweeps: Mapping[str, pd.DataFrame]) -> Figure:
+    """The sweeps of p_HMM(tap) side by side (:func:`plot_soft_sweep`, one panel per sweep of ``sweeps``, in
+    its order: e.g. :func:`glu.studies.replication.fusion.soft_evidence_sweeps`), the legend right of the
+    last."""
+    fig, axes = new_figure(len(sweeps), width=4.6)
+    for k, (ax, sweep) in enumerate(zip(axes, sweeps.values(), strict=True)):
+        plot_soft_sweep(ax, sweep, legend=k == len(sweeps) - 1)
+    return fig
 
 
 def plot_tap_thresholds(ax: Axes, df: pd.DataFrame) -> Axes:

@@ -11,7 +11,8 @@ sequences come from :mod:`glu.gestures.corpus`; training settings are a
   :func:`confusion_matrix` and :func:`accuracy` summarise the predictions;
 * :func:`accuracy_vs_noise` — k-fold accuracy as the sensor noise grows;
 * :func:`leave_one_out` — on the real segments, hold out one recording (or one segment) at a time;
-* :func:`original_scores` — the original 2013 models on the five original test segments.
+* :func:`original_scores` — the original 2013 models on the five original test segments;
+* :func:`anticipation_banks` — notebook 08's HMMs: the originals', and trained here by both recipes.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from scipy.stats import binomtest
 
 from glu.data.source import DataSource
 from glu.errors import DataError
-from glu.gestures.corpus import LabelledSequence, original_test_segments, synthetic_corpus
+from glu.gestures.corpus import LabelledSequence, gesture_sequences, original_test_segments, synthetic_corpus
 from glu.gestures.invariants import Invariants
 from glu.gestures.recognizer import Recognizer, load_original_models, train_recognizer
 from glu.hmm import TrainingConfig, p_hmm_from_loglik
@@ -339,6 +340,28 @@ def train_on(
     return train_recognizer(
         _by_action(sequences, actions), config, seed=seed, features=features, meta=meta, warn=False
     )
+
+
+def anticipation_banks(
+    source: DataSource,
+    config: TrainingConfig | None = None,
+    n_per_action: int = 20,
+    seed: int = 0,
+    features: Features = None,
+) -> dict[str, Recognizer]:
+    """The banks of HMMs notebook 08 anticipates with, by name: ``original``, the originals' 2013 HMMs (when
+    the data has them); ``glu`` and ``mixsplit``, trained with ``config`` by glu's recipe and by the
+    originals' (``recipe="mixsplit"``) on ``features`` of the standing recordings only — never on the two
+    seated taps the anticipation shows (synthetic data: ``n_per_action`` gestures per action)."""
+    banks = {}
+    mat = source.original_hmms()
+    if mat is not None:
+        banks["original"] = load_original_models(mat)
+    config = config or TrainingConfig()
+    sequences = gesture_sequences(source, n_per_action=n_per_action, seed=seed, include_test=False)
+    banks["glu"] = train_on(sequences, config, seed=seed, features=features)
+    banks["mixsplit"] = train_on(sequences, config.replace(recipe="mixsplit"), seed=seed, features=features)
+    return banks
 
 
 def training_table(recognizer: Recognizer) -> pd.DataFrame:

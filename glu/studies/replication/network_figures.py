@@ -4,6 +4,7 @@ Every function draws on the axes it is given, first argument (a sequence of axes
 figures), and returns them: ``plot_x(ax, frame, …)``. Frames are the tidy outputs of
 :mod:`glu.studies.replication.fusion`; where they hold the original model's values (``p_original``), those are
 drawn beside ours: black marks on single bars, a narrow outlined bar beside a stacked one.
+:func:`effect_vs_rules_figure` builds the whole figure of the effect under each soft-evidence rule.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
@@ -23,6 +25,7 @@ from glu.plots.style import (
     VALUE_COLORS,
     bars_with_original,
     legend_right,
+    new_figure,
     rule_label,
 )
 
@@ -200,6 +203,18 @@ def plot_effect_vs_soft_evidence(
             bbox_to_anchor=(1.02, 0.5),
         )
     return axes
+
+
+def effect_vs_rules_figure(df: pd.DataFrame, rules: Sequence[str] = ("virtual", "jeffrey")) -> Figure:
+    """TCDS effect prediction under each soft-evidence rule: a row of :func:`plot_effect_vs_soft_evidence`
+    per rule (in the order given), a column per shape, the rows sharing their x axis; one legend, right of
+    the last row."""
+    shapes = list(dict.fromkeys(df["Shape"]))
+    fig, axes = new_figure(len(shapes), width=3.8, height=3.4, nrows=len(rules), sharex=True)
+    for k, rule in enumerate(rules):
+        row = axes[k * len(shapes) : (k + 1) * len(shapes)]
+        plot_effect_vs_soft_evidence(row, df, rule=rule, legend=k == len(rules) - 1)
+    return fig
 
 
 def plot_unseen_rows(ax: Axes, df: pd.DataFrame, tolerance: float = 1e-3) -> Axes:

@@ -7,6 +7,7 @@ result cannot leave a sentence that contradicts it.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -107,3 +108,34 @@ def leader_text(actions: Sequence[str], p_hmm: np.ndarray, update_t: Sequence[in
         if not out or out[-1][1] != a:
             out.append((int(t), a))
     return ", ".join(f"{a} from t = {t}" for t, a in out)
+
+
+def anticipation_sentence(case: str, hmms: str, run: Any) -> str:
+    """One effect-anticipation run (:class:`~glu.studies.anticipation.experiment.AnticipationRun`) in a
+    sentence: the HMMs' leading model where it changes (:func:`leader_text`), the predicted ObjVel where it
+    changes, the final description."""
+    changes = "; ".join(f"{v} from t = {t} (frame {f}, p {p:.2f})" for t, f, v, p in run.prediction_changes())
+    leads = leader_text(run.actions, run.p_hmm, run.update_t)
+    return f"{case}, {hmms} HMMs: leading model {leads}; predicted ObjVel {changes}; “{run.description}”"
+
+
+def published_sentence(case: str, versus: pd.DataFrame) -> str:
+    """How much of the published Fig. 5 a case reproduces
+    (:func:`~glu.studies.anticipation.experiment.published_comparison`): values within the figure's
+    resolution, and whether the caption is the paper's."""
+    same = "is" if versus.attrs["parameters"]["same_caption"] else "is not"
+    return (
+        f"{case}: {int(versus.within.sum())} of {len(versus)} published values within the figure's "
+        f"resolution; the caption {same} the paper's"
+    )
+
+
+def sampling_line(trials: pd.DataFrame) -> str:
+    """How often random samples drew the grammar's best, over every trial of
+    :func:`~glu.studies.replication.verbal.sampling_trials`, and the median rank of a sample's best."""
+    found, n = trials["found_best"], int(trials["n_samples"].iloc[0])
+    return (
+        f"over {len(trials)} trials of {n:,} random sentences, the best of the "
+        f"grammar was drawn {int(found.sum())} times ({100 * found.mean():.1f} %); "
+        f"the median rank of a sample's best in the grammar is {np.median(trials['sample_rank']):.0f}"
+    )

@@ -9,7 +9,8 @@ optionally a grammar (default: glu's, the originals' language). Two ways to choo
   printed sentences and scores (:mod:`glu.data.published`) beside glu's;
 * exactly: the N best of the whole grammar (:mod:`glu.language.descriptions`), under either score.
   :func:`exact_vs_samples` compares the two; :func:`sampling_vs_exact` measures how often a random sample
-  of 10,000 sentences misses the best of the grammar.
+  of 10,000 sentences misses the best of the grammar (:func:`trials_per_set` sums its trials up,
+  :func:`sampling_example` draws one of them again for a figure).
 
 Each returns a frame stamped by :func:`~glu.tidy.tidy`.
 """
@@ -17,7 +18,7 @@ Each returns a frame stamped by :func:`~glu.tidy.tidy`.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -33,6 +34,7 @@ from glu.language.descriptions import (
     nbest,
     rank_sentences,
     score_sentence,
+    score_sentences,
     word_network,
     word_probabilities,
 )
@@ -395,4 +397,55 @@ def sampling_trials(
         evidence=dict(evidence_sets),
         n_samples=n_samples,
         score=score,
+    )
+
+
+def trials_per_set(trials: pd.DataFrame) -> pd.DataFrame:
+    """:func:`sampling_trials` summed up per evidence set (``figure``, in the trials' order): trials, how many
+    drew the grammar's best, the exact chance of that, the median rank of a sample's best in the grammar,
+    the mean gap of its score to the best."""
+    return trials.groupby("figure", sort=False).agg(
+        trials=("seed", "size"),
+        found_best=("found_best", "sum"),
+        p_draw_best=("p_draw_best", "first"),
+        median_rank=("sample_rank", "median"),
+        mean_gap=("gap", "mean"),
+    )
+
+
+class SamplingExample(NamedTuple):
+    """One trial of :func:`sampling_trials` drawn again (:func:`sampling_example`), for
+    :func:`glu.studies.replication.verbal_figures.sampling_figure`."""
+
+    evidence: dict[str, str]
+    grammar_scores: np.ndarray
+    sample_scores: np.ndarray
+    exact_score: float
+    n_samples: int
+    score: str
+
+
+def sampling_example(
+    engine: Any,
+    trials: pd.DataFrame,
+    net: WordNetwork,
+    grammar: Grammar,
+    figure: str = "fig7a",
+    score: str = "original",
+) -> SamplingExample:
+    """The first trial of the evidence set ``figure`` of ``trials`` (:func:`sampling_trials`, with the same
+    ``score``): the score of every sentence of the grammar (``net``, compiled from ``grammar``) and of the
+    trial's ``n_samples`` sentences, drawn again from its seed, and the grammar's best."""
+    evidence = dict(PUBLISHED_LISTS[figure])
+    probs = word_probabilities(engine, evidence)
+    first = trials[trials["figure"] == figure].iloc[0]
+    n_samples = int(first["n_samples"])
+    drawn = sample_sentences(grammar, n_samples, int(first["seed"]))
+    return SamplingExample(
+        evidence,
+        all_scores(net, probs, score),
+        score_sentences(drawn, probs, score),
+        first["exact_score"],
+        n_samples,
+        score,
     )

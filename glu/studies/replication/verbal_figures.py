@@ -1,11 +1,14 @@
 """Figures of the verbal descriptions: N-best lists, "and" against "but", sampling against the exact search.
 
 Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``;
-:func:`and_but_figure` builds the whole "and"/"but" figure. N-best lists are dot plots (a score per
+:func:`and_but_figure` builds the whole "and"/"but" figure, :func:`nbest_figure` one N-best list's and
+:func:`sampling_figure` one random sample's against the grammar. N-best lists are dot plots (a score per
 sentence, rank 1 at the top): their x axis spans the scores only, which a bar's length would exaggerate.
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -14,7 +17,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from glu.plots.style import ORIGINAL_MARK, WORD_COLORS, legend_right
+from glu.evidence import format_evidence
+from glu.plots.style import ORIGINAL_MARK, WORD_COLORS, legend_right, new_figure
+from glu.studies.replication.verbal import SamplingExample
 
 SCORE_LABELS: dict[str, str] = {
     "paper": "score: (1/L) Σ log p(word | evidence)",
@@ -186,3 +191,28 @@ def plot_sampling(
     )
     ax.set_title("\n".join(lines), fontsize=8.5)
     return ax
+
+
+def nbest_figure(
+    nbest: pd.DataFrame, evidence: Mapping[str, str], score: str = "paper", candidates: str = "the samples"
+) -> Figure:
+    """One N-best list (:func:`plot_nbest`), titled by its evidence, its score and where its sentences come
+    from (``candidates``)."""
+    fig, (ax,) = new_figure(1, width=7, height=3.6)
+    plot_nbest(ax, nbest, title=f"{format_evidence(evidence)} ({score} score, {candidates})", score=score)
+    return fig
+
+
+def sampling_figure(example: SamplingExample) -> Figure:
+    """One random sample's scores against the whole grammar's (:func:`plot_sampling`), titled by its evidence
+    and size (:func:`glu.studies.replication.verbal.sampling_example`)."""
+    fig, (ax,) = new_figure(1, width=8.5, height=3.6)
+    plot_sampling(
+        ax,
+        example.grammar_scores,
+        example.sample_scores,
+        example.exact_score,
+        score=example.score,
+        title=f"{format_evidence(example.evidence)}: one sample of {example.n_samples:,}",
+    )
+    return fig
