@@ -227,7 +227,7 @@ if out.source.is_real:
     out.table(person, "learning_real_person")
     out.table(person_summary, "learning_real_person_summary")
     out.figure(figures.real_person_figure(person_summary), "learning_real_person", source=source)
-    print(saved_runs.provenance_line(person_where).replace("The budgets come", "The real-person draws come"))
+    print(saved_runs.provenance_line(person_where, "real-person draws"))
     print("\n\n".join(real_person.real_person_lines(person_summary)))
     shown = person_summary.drop(columns=["p_vs_tap"]).round(3)
 else:

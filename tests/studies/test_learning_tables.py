@@ -510,3 +510,19 @@ def test_the_intervals_line_names_the_bootstrap_of_the_settings():
         "Intervals: 95% two-level bootstrap (1,500 replicates over 3 seeds and 12 held-out gestures each); "
         "equivalence reads the 90% interval."
     )
+
+
+def test_the_provenance_line_names_what_it_is_about():
+    """Budgets and the real person's draws each get their own sentence, computed here or read from disk."""
+    assert saved.provenance_line({"folder": None}) == "Every budget was computed here."
+    assert (
+        saved.provenance_line({"folder": None}, "real-person draws")
+        == "Every real-person draw was computed here."
+    )
+    made = {"command": "glu learning-curves --part person", "date": "2026-11-29 14:00 UTC", "glu": "0.1.0"}
+    where = {"folder": "sweeps/12/real", "made_by": made, "check": None}
+    assert saved.provenance_line(where, "real-person draws") == (
+        "The real-person draws come from sweeps/12/real, made by `glu learning-curves --part person` on "
+        "2026-11-29 14:00 UTC (glu 0.1.0)."
+    )
+    assert saved.provenance_line(where).startswith("The budgets come from sweeps/12/real, made by")

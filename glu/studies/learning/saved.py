@@ -421,13 +421,14 @@ def study_results(
     return chosen, {"folder": where, "made_by": meta.get("made_by"), "check": check}
 
 
-def provenance_line(where: dict[str, Any]) -> str:
-    """One sentence saying where the results come from and how they were checked (:func:`study_results`)."""
+def provenance_line(where: dict[str, Any], what: str = "budgets") -> str:
+    """One sentence saying where the results (``what``, plural: "budgets", "real-person draws") come from and
+    how they were checked (:func:`study_results`, :func:`real_person_rows`)."""
     if where["folder"] is None:
-        return "Every budget was computed here."
+        return f"Every {what.removesuffix('s')} was computed here."
     m = where["made_by"] or {}
     text = (
-        f"The budgets come from {where['folder']}, made by `{m.get('command', '?')}` on {m.get('date', '?')} "
+        f"The {what} come from {where['folder']}, made by `{m.get('command', '?')}` on {m.get('date', '?')} "
         f"(glu {m.get('glu', '?')}{', commit ' + m['commit'][:12] if m.get('commit') else ''}"
         f"{' with changes' if m.get('dirty') else ''})."
     )
