@@ -344,16 +344,7 @@ def test_the_shipped_runs_match_the_notebook_defaults():
 
     nb = next(p for p in list_notebooks() if p.stem == "12_learning_from_effects")
     spec = {k: p.default for k, p in read_spec(nb).items()}
-    wanted = lc.StudySettings(
-        episodes=max(spec["budgets"]),
-        seeds=tuple(spec["seeds"]),
-        worlds=tuple(spec["worlds"]),
-        ambiguities=tuple(spec["ambiguities"]),
-        test_per_action=spec["test_per_action"],
-        budgets=tuple(spec["budgets"]),
-        margin=spec["margin"],
-        bootstrap=spec["bootstrap"],
-    )
+    wanted = lc.settings_from_parameters(spec)  # as the notebook makes them
     for real, source in ((True, None), (False, "synthetic data (seed 0, 1270 experiments)")):
         folder = saved.default_folder(real)
         stored, results, meta = saved.load_study(folder)
