@@ -184,3 +184,36 @@ def test_a_sampling_figure_draws_the_example_it_is_given():
         assert "1 of the sample's (25 %)" in ax.get_title()  # the −∞ sentence, not drawn
     finally:
         plt.close(fig)
+
+
+def test_the_segmentation_figure_is_a_row_per_recording_in_the_order_given():
+    """Notebook 01's figure: one full-width row per recording, in the order given, each titled by its own
+    recording and count, drawing its own hand features and activity and its own reference segments."""
+    from glu.gestures.segmentation import RecordingSegmentation, Segment, segment_repetitions
+    from glu.gestures.synthetic import synthesize_recording
+    from glu.gestures.trajectories import repair
+    from glu.studies.replication.gesture_figures import segmentation_figure
+
+    segmentations = []
+    for action, n in (("touch", 1), ("tap", 3)):
+        g = synthesize_recording(action, n, seed=0)
+        name = f"made-up {action}"
+        (piece,) = repair(g.trajectory()).pieces
+        seg = RecordingSegmentation(name, [segment_repetitions(piece, action, recording=name)])
+        segmentations.append((seg, [Segment(a, b, action, name) for a, b in g.segments]))
+    fig = segmentation_figure(segmentations)
+    try:
+        assert len(fig.axes) == 2 and tuple(fig.get_size_inches()) == pytest.approx((10, 4.6))
+        counts = [len(seg.segments) for seg, _ in segmentations]
+        assert counts == [1, 3]
+        assert [ax.get_title() for ax in fig.axes] == ["made-up touch: 1 segment", "made-up tap: 3 segments"]
+        for ax, (seg, reference) in zip(fig.axes, segmentations, strict=True):
+            (piece,) = seg.pieces
+            x, y, z, activity = ax.lines[:4]
+            for line, values in zip((x, y, z), piece.trajectory.xyz.T, strict=True):
+                np.testing.assert_array_equal(line.get_ydata(), values)
+            np.testing.assert_array_equal(activity.get_ydata(), piece.activity)
+            bars = [list(line.get_xdata()) for line in ax.lines if line.get_linewidth() == 3]
+            assert bars == [[s.start, s.end] for s in reference]
+    finally:
+        plt.close(fig)

@@ -1,6 +1,7 @@
 """Figures of the gesture chain: segmentation of the recordings, and how well the HMMs recognise actions.
 
-Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``.
+Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``;
+the ``*_figure`` functions lay out notebook 01's figure from them, in one call.
 """
 
 from __future__ import annotations
@@ -10,11 +11,12 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from glu.gestures.segmentation import RecordingSegmentation, Segment, Segmentation
-from glu.plots.style import ACTION_COLORS, legend_right
+from glu.plots.style import ACTION_COLORS, legend_right, new_figure
 
 
 def plot_segmentation(
@@ -104,6 +106,14 @@ def plot_segmentations(axes: Sequence[Axes], segmentations: Sequence) -> Sequenc
         )
         ax.title.set_fontsize(9)
     return axes
+
+
+def segmentation_figure(segmentations: Sequence) -> Figure:
+    """Notebook 01's figure: :func:`plot_segmentations` of every recording, one full-width row each, in the
+    order given (``segmentations`` as :func:`glu.gestures.corpus.recording_segmentations` returns them)."""
+    fig, axes = new_figure(1, width=10, height=2.3, nrows=len(segmentations))
+    plot_segmentations(axes, segmentations)
+    return fig
 
 
 def plot_confusion(ax: Axes, confusion: pd.DataFrame) -> Axes:
