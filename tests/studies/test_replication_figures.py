@@ -217,3 +217,63 @@ def test_the_segmentation_figure_is_a_row_per_recording_in_the_order_given():
             assert bars == [[s.start, s.end] for s in reference]
     finally:
         plt.close(fig)
+
+
+def test_the_accuracy_figure_puts_the_confusion_matrix_beside_the_noise_curve():
+    """Notebook 02's accuracy figure: the confusion matrix's counts, titled by the folds and the accuracy,
+    then the accuracy against noise (cm), overall and per action, from the tables given."""
+    from glu.studies.replication.gesture_figures import accuracy_figure
+
+    actions = ["grasp", "tap", "touch"]
+    confusion = pd.DataFrame([[5, 1, 0], [0, 4, 2], [1, 0, 5]], index=actions, columns=actions)
+    noise = pd.DataFrame(
+        {
+            "noise_m": [0.0, 0.02, 0.05],
+            "accuracy": [0.9, 0.8, 0.5],
+            "accuracy_grasp": [1.0, 0.7, 0.4],
+            "accuracy_tap": [0.8, 0.9, 0.6],
+        }
+    )
+    fig = accuracy_figure(confusion, 14 / 18, 4, noise)
+    try:
+        left, right = fig.axes
+        assert left.get_title() == "4-fold CV, accuracy 0.778"
+        np.testing.assert_array_equal(left.images[0].get_array(), confusion.to_numpy())
+        assert [t.get_text() for t in left.texts] == [str(n) for n in confusion.to_numpy().flat]
+        overall, grasp, tap = right.lines
+        np.testing.assert_allclose(overall.get_xdata(), [0, 2, 5])
+        for line, column in ((overall, "accuracy"), (grasp, "accuracy_grasp"), (tap, "accuracy_tap")):
+            np.testing.assert_array_equal(line.get_ydata(), noise[column])
+        assert [t.get_text() for t in right.get_legend().get_texts()][1:] == ["grasp", "tap"]
+    finally:
+        plt.close(fig)
+
+
+def test_the_segment_scores_figure_draws_each_segments_per_frame_scores():
+    """Notebook 02's scores under the original models: per model, one bar per segment, its log-likelihood
+    divided by the segment's frames; the best model of each segment edged in black."""
+    from glu.studies.replication.gesture_figures import segment_scores_figure
+
+    scores = pd.DataFrame(
+        {
+            "recording": ["tap1_hand", "tap_notable_seated_1"],
+            "start": [216, 121],
+            "end": [351, 214],
+            "n_frames": [136, 94],
+            "loglik_grasp": [-680.0, -188.0],
+            "loglik_tap": [-272.0, -470.0],
+        }
+    )
+    fig = segment_scores_figure(scores)
+    try:
+        (ax,) = fig.axes
+        assert ax.get_title().startswith("per-frame log-likelihood of each segment")
+        assert [b.get_height() for b in ax.patches] == pytest.approx([-5.0, -2.0, -2.0, -5.0])
+        black = [tuple(b.get_edgecolor()) == (0, 0, 0, 1) for b in ax.patches]
+        assert black == [False, True, True, False]
+        assert [t.get_text().split("\n")[-1] for t in ax.get_xticklabels()] == [
+            "frames 216–351",
+            "frames 121–214",
+        ]
+    finally:
+        plt.close(fig)
