@@ -277,3 +277,67 @@ def test_the_segment_scores_figure_draws_each_segments_per_frame_scores():
         ]
     finally:
         plt.close(fig)
+
+
+def test_the_structure_figure_is_the_learned_parents_of_every_child():
+    """Notebook 03's structure figure: a cell filled for each edge parent → child of the network given (rows:
+    the nodes with parents, columns: the affordance nodes), titled by its edges and the reference's."""
+    from glu.bn import learn_bn
+    from glu.data import load_experiments
+    from glu.studies.replication.network_figures import structure_figure
+
+    table = load_experiments("synthetic")
+    ours, ref = learn_bn(table.iloc[:200]), learn_bn(table)
+    for reference in (None, ref):
+        fig = structure_figure(ours, reference)
+        try:
+            (ax,) = fig.axes
+            children = [t.get_text() for t in ax.get_yticklabels()]
+            parents = [t.get_text() for t in ax.get_xticklabels()]
+            assert parents == list(ours.schema.affordance_nodes)
+            drawn = {
+                (p, c)
+                for i, c in enumerate(children)
+                for j, p in enumerate(parents)
+                if ax.images[0].get_array()[i, j]
+            }
+            assert drawn == {(p, c) for p, c in ours.edges() if p in parents}
+            title = f"{len(ours.edges())} edges"
+            if reference is not None:
+                assert ax.get_title().startswith(f"{title}; the original: {len(ref.edges())}, ")
+                assert set(children) >= {c for p, c in ref.edges()}
+            else:
+                assert ax.get_title() == title and not ax.collections
+        finally:
+            plt.close(fig)
+
+
+def test_the_unseen_rows_figure_plots_each_experiments_numbers_zero_against_uniform():
+    """Notebook 03's unseen-rows figure: per experiment, in order, its points at (all-zero rows, uniform
+    rows); the diagonal; the title counting the numbers moved and naming the one moved most."""
+    from glu.studies.replication.network_figures import unseen_rows_figure
+
+    df = pd.DataFrame(
+        {
+            "experiment": ["effect prediction"] * 2 + ["word change Δp(w)"] * 3,
+            "case": ["small sphere", "big box", "F, E", "F, E", "F, E"],
+            "value": ["fast", "slow", "rolls", "ball", "the"],
+            "p_zero": [0.8, 0.1, 0.3, -0.2, 0.0],
+            "p_uniform": [0.8, 0.15, 0.1, -0.2, 0.0005],
+        }
+    )
+    df["uniform_minus_zero"] = df.p_uniform - df.p_zero
+    fig = unseen_rows_figure(df)
+    try:
+        (ax,) = fig.axes
+        first, second = ax.collections
+        np.testing.assert_array_equal(first.get_offsets(), df[["p_zero", "p_uniform"]].to_numpy()[:2])
+        np.testing.assert_array_equal(second.get_offsets(), df[["p_zero", "p_uniform"]].to_numpy()[2:])
+        (diagonal,) = ax.lines
+        assert list(diagonal.get_xdata()) == list(diagonal.get_ydata()) == [-0.2, 1]
+        assert ax.get_title() == (
+            "uniform rows move 2 of 5 numbers by more than 0.001;\n"
+            "the most: rolls (word change Δp(w), F, E), +0.300 → +0.100"
+        )
+    finally:
+        plt.close(fig)

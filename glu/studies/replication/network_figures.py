@@ -4,7 +4,8 @@ Every function draws on the axes it is given, first argument (a sequence of axes
 figures), and returns them: ``plot_x(ax, frame, …)``. Frames are the tidy outputs of
 :mod:`glu.studies.replication.fusion`; where they hold the original model's values (``p_original``), those are
 drawn beside ours: black marks on single bars, a narrow outlined bar beside a stacked one.
-:func:`effect_vs_rules_figure` builds the whole figure of the effect under each soft-evidence rule.
+The ``*_figure`` functions lay out the notebooks' figures from them, one call each (e.g.
+:func:`effect_vs_rules_figure`, the effect under each soft-evidence rule).
 """
 
 from __future__ import annotations
@@ -241,6 +242,14 @@ def plot_unseen_rows(ax: Axes, df: pd.DataFrame, tolerance: float = 1e-3) -> Axe
     return ax
 
 
+def unseen_rows_figure(comparison: pd.DataFrame) -> Figure:
+    """Notebook 03's figure of the all-zero rows against uniform rows: :func:`plot_unseen_rows` of
+    ``comparison`` (:func:`glu.studies.replication.fusion.unseen_rows_comparison`)."""
+    fig, (ax,) = new_figure(1, width=5, height=4.5)
+    plot_unseen_rows(ax, comparison)
+    return fig
+
+
 def plot_structure(ax: Axes, bn, reference=None, reference_name: str = "the original") -> Axes:
     """The learned DAG as a matrix: one row per node with parents (children), one column per affordance node.
 
@@ -290,3 +299,11 @@ def plot_structure(ax: Axes, bn, reference=None, reference_name: str = "the orig
         handles=handles, fontsize=7, frameon=False, loc="upper center", bbox_to_anchor=(0.5, -0.01), ncols=1
     )
     return ax
+
+
+def structure_figure(bn, reference=None) -> Figure:
+    """Notebook 03's figure of the learned structure: :func:`plot_structure` of ``bn`` against ``reference``
+    (None: none), tall enough for a row per word."""
+    fig, (ax,) = new_figure(1, width=4.5, height=8)
+    plot_structure(ax, bn, reference)
+    return fig
