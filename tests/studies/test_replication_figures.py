@@ -341,3 +341,38 @@ def test_the_unseen_rows_figure_plots_each_experiments_numbers_zero_against_unif
         )
     finally:
         plt.close(fig)
+
+
+def _gesture_rows(n_segments, strategies=("hard", "virtual")):
+    """A made-up fusion_on_gestures table: each segment's p of fast and slow under each strategy, all
+    distinct, the strategies apart by more than SAME_P."""
+    rows = [
+        {"evidence": "Shape=sphere, Size=small", "recording": f"rec_{i}", "start": 10 * i, "end": 10 * i + 9}
+        | {"hmm_top": "tap" if i % 2 else "touch", "strategy": st, "ObjVel": v, "p": p}
+        for i in range(n_segments)
+        for k, st in enumerate(strategies)
+        for v, p in (("fast", (i + 1) / 10 + k / 100), ("slow", 0.05 + k / 100))
+    ]
+    return pd.DataFrame(rows)
+
+
+def test_the_fusion_on_gestures_figure_widens_with_the_segments_and_draws_the_value_asked():
+    """Notebook 04's figure: 1.3 inches per segment (6 at least); per strategy, a bar per segment whose
+    height is that segment's p of the value asked (not another value's), each segment's HMM answer below."""
+    from glu.studies.replication.fusion_figures import fusion_on_gestures_figure
+
+    for n, width in ((3, 6.0), (5, 6.5)):
+        df = _gesture_rows(n)
+        fig = fusion_on_gestures_figure(df, value="fast")
+        try:
+            (ax,) = fig.axes
+            assert fig.get_size_inches()[0] == pytest.approx(width)
+            for bars, st in zip(ax.containers, ("hard", "virtual"), strict=True):
+                wanted = df[(df.strategy == st) & (df.ObjVel == "fast")].p.to_list()
+                assert [b.get_height() for b in bars] == pytest.approx(wanted)
+            tops = [t.get_text().split("\n")[-1] for t in ax.get_xticklabels()]
+            assert tops == [f"HMM: {'tap' if i % 2 else 'touch'}" for i in range(n)]
+            assert ax.get_ylabel() == "$p_{comb}(ObjVel=fast)$"
+            assert ax.get_title() == "Shape=sphere, Size=small"
+        finally:
+            plt.close(fig)

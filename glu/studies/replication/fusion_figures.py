@@ -1,8 +1,8 @@
 """Figures of fusion: the soft-evidence sweeps, the tap thresholds, the fusion rules on the test gestures.
 
 Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``;
-the frames are the tidy outputs of :mod:`glu.studies.replication.fusion`. :func:`soft_sweep_figure` builds
-the whole figure of several sweeps.
+the frames are the tidy outputs of :mod:`glu.studies.replication.fusion`. The ``*_figure`` functions lay out
+the notebooks' figures from them, one call each (e.g. :func:`soft_sweep_figure`, several sweeps side by side).
 """
 
 from __future__ import annotations
@@ -154,3 +154,13 @@ def plot_fusion_on_gestures(ax: Axes, df: pd.DataFrame, value: str = "fast", tar
     if len(groups) > 1:
         legend_right(ax)
     return ax
+
+
+def fusion_on_gestures_figure(df: pd.DataFrame, value: str = "fast", target: str = "ObjVel") -> Figure:
+    """Notebook 04's figure: :func:`plot_fusion_on_gestures` of ``df``
+    (:func:`glu.studies.replication.fusion.fusion_on_gestures`), 1.3 inches wide per gesture segment, 6 at
+    least."""
+    n = len(df[["recording", "start", "end"]].drop_duplicates())
+    fig, (ax,) = new_figure(1, width=max(6, 1.3 * n))
+    plot_fusion_on_gestures(ax, df, value=value, target=target)
+    return fig
