@@ -376,3 +376,63 @@ def test_the_fusion_on_gestures_figure_widens_with_the_segments_and_draws_the_va
             assert ax.get_title() == "Shape=sphere, Size=small"
         finally:
             plt.close(fig)
+
+
+def test_the_tap_threshold_sweep_marks_the_threshold_it_is_given():
+    """Notebook 06's sweep: p_comb of each action along p_HMM(tap), then a dotted line at the threshold
+    and, at its top, "tap wins above" with the threshold to four decimals."""
+    from glu.studies.replication.fusion_figures import tap_threshold_sweep_figure
+
+    t = np.linspace(0, 1, 6)
+    actions = ("grasp", "tap", "touch")
+    sweep = pd.concat(
+        [
+            pd.DataFrame({"rule": "product", "p_hmm_tap": t, "Action": a, "p": (t + k) / 3})
+            for k, a in enumerate(actions)
+        ],
+        ignore_index=True,
+    ).assign(evidence="Size=small, Shape=sphere, ObjVel=slow")
+    fig = tap_threshold_sweep_figure(sweep, 0.81234)
+    try:
+        (ax,) = fig.axes
+        *curves, marker = ax.lines
+        assert len(curves) == 3
+        for line, a in zip(curves, actions, strict=True):
+            np.testing.assert_array_equal(line.get_xdata(), t)
+            np.testing.assert_array_equal(line.get_ydata(), sweep[sweep.Action == a].p)
+        assert list(marker.get_xdata()) == [0.81234, 0.81234] and marker.get_linestyle() == ":"
+        (note,) = [c for c in ax.texts if c.get_text().startswith("tap wins")]
+        assert note.get_text() == "tap wins above 0.8123" and note.xy == (0.81234, 0.9)
+        assert ax.get_title() == "Size=small, Shape=sphere, ObjVel=slow"
+    finally:
+        plt.close(fig)
+
+
+def test_the_tap_thresholds_figure_draws_a_bar_per_object_and_effect():
+    """Notebook 06's thresholds: a bar per row of the table, in its order, as long as its threshold (none
+    where tap never wins), its value written right of the axes."""
+    from glu.studies.replication.fusion_figures import tap_thresholds_figure
+
+    thresholds = pd.DataFrame(
+        {
+            "Shape": ["sphere", "sphere", "box"],
+            "Size": ["small", "big", "small"],
+            "ObjVel": ["slow", "fast", "slow"],
+            "p_bn_tap": [0.1, 0.8, 0.0],
+            "threshold": [0.8123, 0.001, np.nan],
+        }
+    )
+    fig = tap_thresholds_figure(thresholds)
+    try:
+        (ax,) = fig.axes
+        assert [b.get_width() for b in ax.patches] == pytest.approx([0.8123, 0.001, 0.0])
+        assert [b.get_y() + b.get_height() / 2 for b in ax.patches] == pytest.approx([0, 1, 2])
+        assert [t.get_text() for t in ax.get_yticklabels()] == [
+            "sphere, small, slow",
+            "sphere, big, fast",
+            "box, small, slow",
+        ]
+        assert [t.get_text() for t in ax.texts][:3] == ["0.812", "any > 0", "never"]
+        assert list(ax.lines[0].get_xdata()) == pytest.approx([1 / 3, 1 / 3])
+    finally:
+        plt.close(fig)
