@@ -436,3 +436,58 @@ def test_the_tap_thresholds_figure_draws_a_bar_per_object_and_effect():
         assert list(ax.lines[0].get_xdata()) == pytest.approx([1 / 3, 1 / 3])
     finally:
         plt.close(fig)
+
+
+def test_the_effect_prediction_figure_is_a_panel_per_case_in_order():
+    """Notebook 07's Fig. 4: a panel per case of the table, in its order, each drawing that case's p (and the
+    original model's marks) with the value written on each bar; the legend beside the last panel only."""
+    from glu.studies.replication.network_figures import effect_prediction_figure
+
+    cases, values = ["small sphere", "big box", "small box"], ["slow", "medium", "fast"]
+    df = pd.DataFrame([{"case": c, "ObjVel": v} for c in cases for v in values])
+    df["p"] = np.arange(1, 10) / 10
+    df["p_original"] = df["p"] + 0.01
+    for n in (2, 3):
+        table = df[df.case.isin(cases[:n])]
+        fig = effect_prediction_figure(table)
+        try:
+            assert [ax.get_title() for ax in fig.axes] == [f"tap on a {c}" for c in cases[:n]]
+            for ax, c in zip(fig.axes, cases, strict=False):
+                rows = table[table.case == c]
+                assert [b.get_height() for b in ax.patches] == pytest.approx(rows.p.to_list())
+                np.testing.assert_array_equal(ax.lines[0].get_ydata(), rows.p_original)
+                assert [t.get_text() for t in ax.texts] == [f"{p:.3f}" for p in rows.p]
+            assert [ax.get_legend() is not None for ax in fig.axes] == [False] * (n - 1) + [True]
+        finally:
+            plt.close(fig)
+
+
+def test_the_word_change_figure_draws_the_shown_words_and_says_when_the_other_evidence_agrees():
+    """Notebook 07's Fig. 5: the Δp(w) of the words shown, in order, full width; the other evidence's Δp(w),
+    equal within SAME_DELTA, is not drawn but named in the title."""
+    from glu.studies.replication.network_figures import word_change_figure
+
+    df = pd.DataFrame(
+        {
+            "word": ["ball", "rolls", "the", "cube"],
+            "delta": [0.3, -0.2, 0.001, 0.05],
+            "shown": [True, True, False, True],
+        }
+    )
+    df.attrs["parameters"] = {"evidence": {"Shape": "sphere"}}
+    other = df.assign(delta=df.delta + 1e-12)
+    other.attrs["parameters"] = {"evidence": {"Shape": "sphere", "Color": "yellow"}}
+    fig = word_change_figure(df, other=other)
+    try:
+        (ax,) = fig.axes
+        assert tuple(fig.get_size_inches()) == pytest.approx((7, 3.6))
+        (bars,) = ax.containers
+        assert [b.get_height() for b in bars] == [0.3, -0.2, 0.05]
+        assert [b.get_width() for b in bars] == pytest.approx([0.8] * 3)
+        assert [t.get_text() for t in ax.get_xticklabels()] == ["ball", "rolls", "cube"]
+        assert "F, E = Shape=sphere (as the paper's text)" in ax.get_title()
+        assert (
+            "adding Color=yellow (as the original code) changes no Δp(w) by more than 1e-12" in ax.get_title()
+        )
+    finally:
+        plt.close(fig)

@@ -67,6 +67,14 @@ def plot_effect_prediction(axes: Sequence[Axes], df: pd.DataFrame) -> Sequence[A
     return axes
 
 
+def effect_prediction_figure(df: pd.DataFrame) -> Figure:
+    """GLU 2017 Fig. 4 as notebook 07 draws it: :func:`plot_effect_prediction` of ``df``
+    (:func:`glu.studies.replication.fusion.effect_prediction`), a panel per case side by side."""
+    fig, axes = new_figure(df["case"].nunique())
+    plot_effect_prediction(axes, df)
+    return fig
+
+
 def plot_word_change(ax: Axes, df: pd.DataFrame, other: pd.DataFrame | None = None) -> Axes:
     """GLU 2017 Fig. 5: Δp(w) for the words whose probability changes by more than the threshold.
 
@@ -118,6 +126,14 @@ def plot_word_change(ax: Axes, df: pd.DataFrame, other: pd.DataFrame | None = No
     if ax.get_legend_handles_labels()[0]:
         legend_right(ax)
     return ax
+
+
+def word_change_figure(df: pd.DataFrame, other: pd.DataFrame | None = None) -> Figure:
+    """GLU 2017 Fig. 5 as notebook 07 draws it: :func:`plot_word_change` of ``df`` (and ``other``), 7 × 3.6
+    inches."""
+    fig, (ax,) = new_figure(1, width=7, height=3.6)
+    plot_word_change(ax, df, other=other)
+    return fig
 
 
 def _given(df: pd.DataFrame) -> str:
