@@ -491,3 +491,46 @@ def test_the_word_change_figure_draws_the_shown_words_and_says_when_the_other_ev
         )
     finally:
         plt.close(fig)
+
+
+def test_the_action_vs_soft_evidence_figure_groups_each_actions_bars_by_case():
+    """Notebook 08's action figure: per action, in order, a bar per p_HMM row of that action's p, the original
+    model's marks on them, and the threshold given in the title (none when it is not finite)."""
+    from glu.studies.replication.network_figures import action_vs_soft_evidence_figure
+
+    cases, actions = ["no action evidence", "[0.1 0.8 0.1]"], ["grasp", "tap", "touch"]
+    df = pd.DataFrame([{"case": c, "Action": a} for c in cases for a in actions])
+    df["p"] = np.arange(1, 7) / 21
+    df["p_original"] = df["p"] + 0.01
+    for threshold, suffix in ((0.81234, ": tap wins for $p_{HMM}(tap) > 0.8123$"), (np.nan, "")):
+        fig = action_vs_soft_evidence_figure(df, threshold)
+        try:
+            (ax,) = fig.axes
+            assert ax.get_title() == "action given soft evidence (product rule)" + suffix
+            wanted = [df[(df.Action == a) & (df.case == c)].p.item() for a in actions for c in cases]
+            assert [b.get_height() for b in ax.patches] == pytest.approx(wanted)
+            for line, a in zip(ax.lines, actions, strict=True):
+                np.testing.assert_array_equal(line.get_ydata(), df[df.Action == a].p_original)
+            assert [t.get_text() for t in ax.get_xticklabels()] == ["none", "[0.1 0.8 0.1]"]
+        finally:
+            plt.close(fig)
+
+
+def test_the_effect_vs_soft_evidence_figure_draws_one_rule_a_panel_per_shape():
+    """Notebook 08's effect figure: a panel per shape, in order, each stacking only the rows of the rule asked
+    (not the other rule's), one legend beside the last panel."""
+    from glu.studies.replication.network_figures import effect_vs_soft_evidence_figure
+
+    cases, values = ("none", "[0 1 0]"), ("slow", "fast")
+    for shapes in (("sphere", "box"), ("sphere", "box", "cylinder")):
+        df = _effect_rows(shapes, ("jeffrey", "virtual"), cases, values)
+        fig = effect_vs_soft_evidence_figure(df, "virtual")
+        try:
+            assert [ax.get_title() for ax in fig.axes] == [f"{s}, {rule_label('virtual')}" for s in shapes]
+            for ax, s in zip(fig.axes, shapes, strict=True):
+                g = df[(df.Shape == s) & (df.rule == "virtual")]
+                expected = [g[(g.ObjVel == v) & (g.case == c)].p.item() for v in values for c in cases]
+                assert [b.get_height() for b in ax.patches] == pytest.approx(expected)
+            assert [ax.get_legend() is not None for ax in fig.axes] == [False] * (len(shapes) - 1) + [True]
+        finally:
+            plt.close(fig)

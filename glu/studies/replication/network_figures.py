@@ -170,6 +170,15 @@ def plot_action_vs_soft_evidence(ax: Axes, df: pd.DataFrame, threshold: float | 
     return ax
 
 
+def action_vs_soft_evidence_figure(df: pd.DataFrame, threshold: float | None = None) -> Figure:
+    """TCDS's action under soft evidence as notebook 08 draws it: :func:`plot_action_vs_soft_evidence` of
+    ``df`` (:func:`glu.studies.replication.fusion.action_vs_soft_evidence`), its title giving the tap
+    ``threshold``; 7 inches wide."""
+    fig, (ax,) = new_figure(1, width=7)
+    plot_action_vs_soft_evidence(ax, df, threshold)
+    return fig
+
+
 def plot_effect_vs_soft_evidence(
     axes: Sequence[Axes], df: pd.DataFrame, rule: str = "virtual", legend: bool = True
 ) -> Sequence[Axes]:
@@ -220,6 +229,15 @@ def plot_effect_vs_soft_evidence(
             bbox_to_anchor=(1.02, 0.5),
         )
     return axes
+
+
+def effect_vs_soft_evidence_figure(df: pd.DataFrame, rule: str = "virtual") -> Figure:
+    """TCDS's effect under soft evidence as notebook 08 draws it: :func:`plot_effect_vs_soft_evidence` of
+    ``df``'s rows of ``rule``, a panel per shape side by side, the legend right of the last (notebook 05's
+    figure of several rules is :func:`effect_vs_rules_figure`)."""
+    fig, axes = new_figure(df.loc[df["rule"] == rule, "Shape"].nunique())
+    plot_effect_vs_soft_evidence(axes, df, rule=rule)
+    return fig
 
 
 def effect_vs_rules_figure(df: pd.DataFrame, rules: Sequence[str] = ("virtual", "jeffrey")) -> Figure:
