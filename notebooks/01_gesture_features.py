@@ -37,8 +37,6 @@ seed: int = 0  # seed of the synthetic recordings
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-import matplotlib.pyplot as plt
-
 from glu.gestures.corpus import recording_segmentations
 from glu.run import start
 from glu.studies.replication import gesture_figures, gestures
@@ -49,9 +47,7 @@ table = gestures.segmentation_table(segmentations, out.data_label)
 out.table(table, "gesture_segments")
 
 # %%
-fig, axes = plt.subplots(len(segmentations), 1, figsize=(10, 2.3 * len(segmentations)), squeeze=False)
-gesture_figures.plot_segmentations(axes[:, 0], segmentations)
-out.figure(fig, "gesture_segmentation")
+out.figure(gesture_figures.segmentation_figure(segmentations), "gesture_segmentation")
 table.groupby("recording", sort=False).agg(
     segments=("segment", "max"),
     reference=("n_reference", "first"),

@@ -65,7 +65,6 @@ seed: int = 0  # seed of the synthetic corpora and of EM initialisation
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-from glu import plots
 from glu.gestures.corpus import gesture_sequences, synthetic_corpus
 from glu.hmm import TrainingConfig
 from glu.run import start
@@ -93,9 +92,7 @@ report
 if out.source.original_hmms() is not None:
     scores = gestures.original_scores(out.source)
     out.table(scores, "hmm_original_scores")
-    fig, (ax,) = plots.new_figure(1, width=8)
-    gesture_figures.plot_segment_scores(ax, scores)
-    out.figure(fig, "hmm_original_scores")
+    out.figure(gesture_figures.segment_scores_figure(scores), "hmm_original_scores")
     display_scores = scores[["recording", "start", "end", "winner"]]
 else:
     display_scores = "no original models in synthetic data"
@@ -112,11 +109,11 @@ accuracy = gestures.accuracy(predictions)
 out.table(predictions, "hmm_synthetic_cv", accuracy=accuracy, folds=folds)
 noise = gestures.accuracy_vs_noise(noise_levels, n_per_action=n_per_action, k=3, seed=seed, config=sweep)
 out.table(noise, "hmm_accuracy_vs_noise")
-fig, axes = plots.new_figure(2, width=4.2)
-gesture_figures.plot_confusion(axes[0], confusion)
-axes[0].set_title(f"{folds}-fold CV, accuracy {accuracy:.3f}", fontsize=9)
-gesture_figures.plot_accuracy_vs_noise(axes[1], noise)
-out.figure(fig, "hmm_synthetic_accuracy", source=predictions.attrs["data_source"])
+out.figure(
+    gesture_figures.accuracy_figure(confusion, accuracy, folds, noise),
+    "hmm_synthetic_accuracy",
+    source=predictions.attrs["data_source"],
+)
 noise
 
 # %% [markdown]

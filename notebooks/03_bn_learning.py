@@ -42,7 +42,6 @@ out_dir: str = None  # folder for the outputs; None: the scratch folder build/sc
 # %%
 import time
 
-from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
 from glu.run import start
@@ -69,9 +68,7 @@ print(
     f"{int(edges.difference.sum())}"
 )
 
-fig, (ax,) = plots.new_figure(1, width=4.5, height=8)
-network_figures.plot_structure(ax, bn, original)
-out.figure(fig, "bn_structure")
+out.figure(network_figures.structure_figure(bn, original), "bn_structure")
 
 # %% [markdown]
 # ## The CPTs, and the original's quirk
@@ -88,9 +85,7 @@ comparison = fusion.unseen_rows_comparison(bn, uniform)
 out.table(comparison, "unseen_rows_comparison")
 print(f"uniform rows move these numbers by up to {comparison.uniform_minus_zero.abs().max():.2f}")
 print(numbers.to_string(index=False))
-fig, (ax,) = plots.new_figure(1, width=5, height=4.5)
-network_figures.plot_unseen_rows(ax, comparison)
-out.figure(fig, "unseen_rows_comparison")
+out.figure(network_figures.unseen_rows_figure(comparison), "unseen_rows_comparison")
 comparison.loc[comparison.uniform_minus_zero.abs().sort_values(ascending=False).index[:5]]
 
 # %% [markdown]

@@ -42,7 +42,6 @@ seed: int = 0  # seed of synthetic gestures and EM initialisation
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-from glu import plots
 from glu.bn import learn_bn
 from glu.data import load_experiments
 from glu.gestures import gesture_sequences, load_original_models
@@ -66,9 +65,7 @@ print(f"{len(segments)} test gestures, {models}")
 # %%
 table = fusion.fusion_on_gestures(bn, recognizer, segments, {"Shape": shape, "Size": size})
 out.table(table, "fusion_hard_on_gestures", models=models)
-fig, (ax,) = plots.new_figure(1, width=max(6, 1.3 * len(segments)))
-fusion_figures.plot_fusion_on_gestures(ax, table, value="fast")
-out.figure(fig, "fusion_hard_on_gestures")
+out.figure(fusion_figures.fusion_on_gestures_figure(table, value="fast"), "fusion_hard_on_gestures")
 table.pivot_table(index=["recording", "start", "hmm_top"], columns=["strategy", "ObjVel"], values="p").round(
     3
 )

@@ -43,7 +43,6 @@ seed: int = 0  # seed (unused: everything here is exact)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-from glu import plots
 from glu.bn import learn_bn
 from glu.data import load_experiments
 from glu.run import start
@@ -57,18 +56,7 @@ evidence = fusion.TCDS_ACTION_EVIDENCE
 threshold = fusion.tap_threshold(bn, evidence)
 sweep = fusion.soft_evidence_sweep(bn, evidence, target="Action", n_points=n_points, rules=("product",))
 out.table(sweep, "fusion_product_sweep", tap_threshold=threshold)
-fig, (ax,) = plots.new_figure(1, width=6)
-fusion_figures.plot_soft_sweep(ax, sweep)
-ax.axvline(threshold, color="0.3", linestyle=":", linewidth=1)
-ax.annotate(
-    f"tap wins above {threshold:.4f}",
-    (threshold, 0.9),
-    xytext=(-5, 0),
-    textcoords="offset points",
-    ha="right",
-    fontsize=8,
-)
-out.figure(fig, "fusion_product_action")
+out.figure(fusion_figures.tap_threshold_sweep_figure(sweep, threshold), "fusion_product_action")
 print(f"tap wins p_comb(Action | Size=small, Shape=sphere, ObjVel=slow) when p_HMM(tap) > {threshold:.6f}")
 
 # %% [markdown]
@@ -77,9 +65,7 @@ print(f"tap wins p_comb(Action | Size=small, Shape=sphere, ObjVel=slow) when p_H
 # %%
 thresholds = fusion.tap_thresholds(bn)
 out.table(thresholds, "fusion_product_thresholds")
-fig, (ax,) = plots.new_figure(1, width=5, height=5)
-fusion_figures.plot_tap_thresholds(ax, thresholds)
-out.figure(fig, "fusion_product_thresholds")
+out.figure(fusion_figures.tap_thresholds_figure(thresholds), "fusion_product_thresholds")
 thresholds
 
 # %% [markdown]

@@ -40,7 +40,6 @@ seed: int = 0  # seed (unused: everything here is exact)
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-from glu import plots
 from glu.bn import BayesNet, learn_bn
 from glu.data import load_experiments
 from glu.run import start
@@ -58,9 +57,7 @@ original = BayesNet.from_bnt_mat(mat) if mat else None
 # %%
 effect = fusion.effect_prediction(bn, original)
 out.table(effect, "glu2017_effect_prediction")
-fig, axes = plots.new_figure(2)
-network_figures.plot_effect_prediction(axes, effect)
-out.figure(fig, "glu2017_effect_prediction")
+out.figure(network_figures.effect_prediction_figure(effect), "glu2017_effect_prediction")
 effect
 
 # %% [markdown]
@@ -73,9 +70,7 @@ effect
 changes = fusion.word_probability_changes(bn, original, threshold=threshold)
 for variant, change in changes.items():
     out.table(change, f"glu2017_word_change_{variant}", evidence=variant)
-fig, (ax,) = plots.new_figure(1, width=7, height=3.6)
-network_figures.plot_word_change(ax, changes["text"], other=changes["code"])
-out.figure(fig, "glu2017_word_change")
+out.figure(network_figures.word_change_figure(changes["text"], other=changes["code"]), "glu2017_word_change")
 change = changes["code"]
 for sentence in [effect_sentence(effect), *word_change_sentences(changes)]:
     out.say("* " + sentence)

@@ -92,7 +92,6 @@ seed: int = 0  # seed of synthetic gestures and EM initialisation
 out_dir: str = None  # folder for the outputs; None: the scratch folder build/scratch/<notebook>/
 
 # %%
-from glu import plots
 from glu.bn import BayesNet, learn_bn, make_engine
 from glu.data import load_experiments
 from glu.hmm import TrainingConfig
@@ -115,9 +114,7 @@ original = BayesNet.from_bnt_mat(bn_mat) if bn_mat else None
 threshold = fusion.tap_threshold(bn)
 actions = fusion.action_vs_soft_evidence(bn, reference=original)
 out.table(actions, "tcds_action_vs_soft_evidence", tap_threshold=threshold)
-fig, (ax,) = plots.new_figure(1, width=7)
-network_figures.plot_action_vs_soft_evidence(ax, actions, threshold)
-out.figure(fig, "tcds_action_vs_soft_evidence")
+out.figure(network_figures.action_vs_soft_evidence_figure(actions, threshold), "tcds_action_vs_soft_evidence")
 print(f"tap wins when p_HMM(tap) > {threshold:.6f} (the paper: 0.81)")
 
 # %% [markdown]
@@ -126,9 +123,7 @@ print(f"tap wins when p_HMM(tap) > {threshold:.6f} (the paper: 0.81)")
 # %%
 effects = fusion.effect_vs_soft_evidence(bn, rules=("virtual",), reference=original)
 out.table(effects, "tcds_effect_vs_soft_evidence")
-fig, axes = plots.new_figure(2)
-network_figures.plot_effect_vs_soft_evidence(axes, effects, rule="virtual")
-out.figure(fig, "tcds_effect_vs_soft_evidence")
+out.figure(network_figures.effect_vs_soft_evidence_figure(effects, "virtual"), "tcds_effect_vs_soft_evidence")
 
 # %% [markdown]
 # ## Effect anticipation, frame by frame

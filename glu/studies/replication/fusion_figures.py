@@ -1,8 +1,8 @@
 """Figures of fusion: the soft-evidence sweeps, the tap thresholds, the fusion rules on the test gestures.
 
 Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``;
-the frames are the tidy outputs of :mod:`glu.studies.replication.fusion`. :func:`soft_sweep_figure` builds
-the whole figure of several sweeps.
+the frames are the tidy outputs of :mod:`glu.studies.replication.fusion`. The ``*_figure`` functions lay out
+the notebooks' figures from them, one call each (e.g. :func:`soft_sweep_figure`, several sweeps side by side).
 """
 
 from __future__ import annotations
@@ -71,6 +71,24 @@ def soft_sweep_figure(sweeps: Mapping[str, pd.DataFrame]) -> Figure:
     return fig
 
 
+def tap_threshold_sweep_figure(sweep: pd.DataFrame, threshold: float) -> Figure:
+    """Notebook 06's sweep: :func:`plot_soft_sweep` of ``sweep`` with the tap ``threshold`` (e.g.
+    :func:`glu.studies.replication.fusion.tap_threshold`) as a dotted vertical line, labelled left of it
+    "tap wins above <threshold>"."""
+    fig, (ax,) = new_figure(1, width=6)
+    plot_soft_sweep(ax, sweep)
+    ax.axvline(threshold, color="0.3", linestyle=":", linewidth=1)
+    ax.annotate(
+        f"tap wins above {threshold:.4f}",
+        (threshold, 0.9),
+        xytext=(-5, 0),
+        textcoords="offset points",
+        ha="right",
+        fontsize=8,
+    )
+    return fig
+
+
 def plot_tap_thresholds(ax: Axes, df: pd.DataFrame) -> Axes:
     """The p_hmm(tap) above which tap wins, for each (Shape, Size, ObjVel): bars, values in a column right."""
     keys = [c for c in df.columns if c not in ("p_bn_tap", "threshold")]
@@ -90,6 +108,14 @@ def plot_tap_thresholds(ax: Axes, df: pd.DataFrame) -> Axes:
     ax.set_xlim(0, 1)
     ax.set_xlabel(r"$p_{HMM}(tap)$ needed for tap to win (never: it cannot)")
     return ax
+
+
+def tap_thresholds_figure(thresholds: pd.DataFrame) -> Figure:
+    """Notebook 06's thresholds: :func:`plot_tap_thresholds` of ``thresholds``
+    (:func:`glu.studies.replication.fusion.tap_thresholds`), 5 × 5 inches."""
+    fig, (ax,) = new_figure(1, width=5, height=5)
+    plot_tap_thresholds(ax, thresholds)
+    return fig
 
 
 def plot_fusion_on_gestures(ax: Axes, df: pd.DataFrame, value: str = "fast", target: str = "ObjVel") -> Axes:
@@ -154,3 +180,13 @@ def plot_fusion_on_gestures(ax: Axes, df: pd.DataFrame, value: str = "fast", tar
     if len(groups) > 1:
         legend_right(ax)
     return ax
+
+
+def fusion_on_gestures_figure(df: pd.DataFrame, value: str = "fast", target: str = "ObjVel") -> Figure:
+    """Notebook 04's figure: :func:`plot_fusion_on_gestures` of ``df``
+    (:func:`glu.studies.replication.fusion.fusion_on_gestures`), 1.3 inches wide per gesture segment, 6 at
+    least."""
+    n = len(df[["recording", "start", "end"]].drop_duplicates())
+    fig, (ax,) = new_figure(1, width=max(6, 1.3 * n))
+    plot_fusion_on_gestures(ax, df, value=value, target=target)
+    return fig

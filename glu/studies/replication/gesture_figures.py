@@ -1,6 +1,7 @@
 """Figures of the gesture chain: segmentation of the recordings, and how well the HMMs recognise actions.
 
-Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``.
+Every function draws on the axes it is given, first argument, and returns them: ``plot_x(ax, frame, …)``;
+the ``*_figure`` functions lay out notebooks 01 and 02's figures from them, one call each.
 """
 
 from __future__ import annotations
@@ -10,11 +11,12 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from glu.gestures.segmentation import RecordingSegmentation, Segment, Segmentation
-from glu.plots.style import ACTION_COLORS, legend_right
+from glu.plots.style import ACTION_COLORS, legend_right, new_figure
 
 
 def plot_segmentation(
@@ -106,6 +108,14 @@ def plot_segmentations(axes: Sequence[Axes], segmentations: Sequence) -> Sequenc
     return axes
 
 
+def segmentation_figure(segmentations: Sequence) -> Figure:
+    """Notebook 01's figure: :func:`plot_segmentations` of every recording, one full-width row each, in the
+    order given (``segmentations`` as :func:`glu.gestures.corpus.recording_segmentations` returns them)."""
+    fig, axes = new_figure(1, width=10, height=2.3, nrows=len(segmentations))
+    plot_segmentations(axes, segmentations)
+    return fig
+
+
 def plot_confusion(ax: Axes, confusion: pd.DataFrame) -> Axes:
     """A confusion matrix (rows: true action, columns: predicted), counts in the cells."""
     m = confusion.to_numpy(dtype=float)
@@ -156,6 +166,17 @@ def plot_accuracy_vs_noise(ax: Axes, df: pd.DataFrame) -> Axes:
     return ax
 
 
+def accuracy_figure(confusion: pd.DataFrame, accuracy: float, folds: int, noise: pd.DataFrame) -> Figure:
+    """Notebook 02's accuracy on synthetic gestures: the k-fold confusion matrix (:func:`plot_confusion`),
+    titled by ``folds`` and the ``accuracy`` it gives, beside the accuracy against sensor noise
+    (:func:`plot_accuracy_vs_noise` of ``noise``)."""
+    fig, axes = new_figure(2, width=4.2)
+    plot_confusion(axes[0], confusion)
+    axes[0].set_title(f"{folds}-fold CV, accuracy {accuracy:.3f}", fontsize=9)
+    plot_accuracy_vs_noise(axes[1], noise)
+    return fig
+
+
 def plot_segment_scores(ax: Axes, df: pd.DataFrame) -> Axes:
     """Per-frame log-likelihood of each segment under each model (grouped bars), the winner marked."""
     cols = [c for c in df.columns if c.startswith("loglik_")]
@@ -184,6 +205,14 @@ def plot_segment_scores(ax: Axes, df: pd.DataFrame) -> Axes:
     handles.append(Patch(facecolor="white", edgecolor="black", linewidth=1.5, label="recognised"))
     legend_right(ax, handles=handles)
     return ax
+
+
+def segment_scores_figure(scores: pd.DataFrame) -> Figure:
+    """Notebook 02's scores of the test segments under the original models: :func:`plot_segment_scores`
+    of ``scores`` (:func:`glu.studies.replication.gestures.original_scores`), 8 inches wide."""
+    fig, (ax,) = new_figure(1, width=8)
+    plot_segment_scores(ax, scores)
+    return fig
 
 
 def _wrap(name: str, width: int = 16) -> str:

@@ -4,7 +4,8 @@ Every function draws on the axes it is given, first argument (a sequence of axes
 figures), and returns them: ``plot_x(ax, frame, …)``. Frames are the tidy outputs of
 :mod:`glu.studies.replication.fusion`; where they hold the original model's values (``p_original``), those are
 drawn beside ours: black marks on single bars, a narrow outlined bar beside a stacked one.
-:func:`effect_vs_rules_figure` builds the whole figure of the effect under each soft-evidence rule.
+The ``*_figure`` functions lay out the notebooks' figures from them, one call each (e.g.
+:func:`effect_vs_rules_figure`, the effect under each soft-evidence rule).
 """
 
 from __future__ import annotations
@@ -66,6 +67,14 @@ def plot_effect_prediction(axes: Sequence[Axes], df: pd.DataFrame) -> Sequence[A
     return axes
 
 
+def effect_prediction_figure(df: pd.DataFrame) -> Figure:
+    """GLU 2017 Fig. 4 as notebook 07 draws it: :func:`plot_effect_prediction` of ``df``
+    (:func:`glu.studies.replication.fusion.effect_prediction`), a panel per case side by side."""
+    fig, axes = new_figure(df["case"].nunique())
+    plot_effect_prediction(axes, df)
+    return fig
+
+
 def plot_word_change(ax: Axes, df: pd.DataFrame, other: pd.DataFrame | None = None) -> Axes:
     """GLU 2017 Fig. 5: Δp(w) for the words whose probability changes by more than the threshold.
 
@@ -119,6 +128,14 @@ def plot_word_change(ax: Axes, df: pd.DataFrame, other: pd.DataFrame | None = No
     return ax
 
 
+def word_change_figure(df: pd.DataFrame, other: pd.DataFrame | None = None) -> Figure:
+    """GLU 2017 Fig. 5 as notebook 07 draws it: :func:`plot_word_change` of ``df`` (and ``other``), 7 × 3.6
+    inches."""
+    fig, (ax,) = new_figure(1, width=7, height=3.6)
+    plot_word_change(ax, df, other=other)
+    return fig
+
+
 def _given(df: pd.DataFrame) -> str:
     ev = df.attrs.get("parameters", {}).get("evidence") or {}
     return ", ".join(f"{k}={v}" for k, v in ev.items()) or str(df["evidence"].iloc[0])
@@ -151,6 +168,15 @@ def plot_action_vs_soft_evidence(ax: Axes, df: pd.DataFrame, threshold: float | 
     ax.set_title(title, fontsize=9)
     legend_right(ax)
     return ax
+
+
+def action_vs_soft_evidence_figure(df: pd.DataFrame, threshold: float | None = None) -> Figure:
+    """TCDS's action under soft evidence as notebook 08 draws it: :func:`plot_action_vs_soft_evidence` of
+    ``df`` (:func:`glu.studies.replication.fusion.action_vs_soft_evidence`), its title giving the tap
+    ``threshold``; 7 inches wide."""
+    fig, (ax,) = new_figure(1, width=7)
+    plot_action_vs_soft_evidence(ax, df, threshold)
+    return fig
 
 
 def plot_effect_vs_soft_evidence(
@@ -205,6 +231,15 @@ def plot_effect_vs_soft_evidence(
     return axes
 
 
+def effect_vs_soft_evidence_figure(df: pd.DataFrame, rule: str = "virtual") -> Figure:
+    """TCDS's effect under soft evidence as notebook 08 draws it: :func:`plot_effect_vs_soft_evidence` of
+    ``df``'s rows of ``rule``, a panel per shape side by side, the legend right of the last (notebook 05's
+    figure of several rules is :func:`effect_vs_rules_figure`)."""
+    fig, axes = new_figure(df.loc[df["rule"] == rule, "Shape"].nunique())
+    plot_effect_vs_soft_evidence(axes, df, rule=rule)
+    return fig
+
+
 def effect_vs_rules_figure(df: pd.DataFrame, rules: Sequence[str] = ("virtual", "jeffrey")) -> Figure:
     """TCDS effect prediction under each soft-evidence rule: a row of :func:`plot_effect_vs_soft_evidence`
     per rule (in the order given), a column per shape, the rows sharing their x axis; one legend, right of
@@ -239,6 +274,14 @@ def plot_unseen_rows(ax: Axes, df: pd.DataFrame, tolerance: float = 1e-3) -> Axe
     )
     legend_right(ax, fontsize=7)
     return ax
+
+
+def unseen_rows_figure(comparison: pd.DataFrame) -> Figure:
+    """Notebook 03's figure of the all-zero rows against uniform rows: :func:`plot_unseen_rows` of
+    ``comparison`` (:func:`glu.studies.replication.fusion.unseen_rows_comparison`)."""
+    fig, (ax,) = new_figure(1, width=5, height=4.5)
+    plot_unseen_rows(ax, comparison)
+    return fig
 
 
 def plot_structure(ax: Axes, bn, reference=None, reference_name: str = "the original") -> Axes:
@@ -290,3 +333,11 @@ def plot_structure(ax: Axes, bn, reference=None, reference_name: str = "the orig
         handles=handles, fontsize=7, frameon=False, loc="upper center", bbox_to_anchor=(0.5, -0.01), ncols=1
     )
     return ax
+
+
+def structure_figure(bn, reference=None) -> Figure:
+    """Notebook 03's figure of the learned structure: :func:`plot_structure` of ``bn`` against ``reference``
+    (None: none), tall enough for a row per word."""
+    fig, (ax,) = new_figure(1, width=4.5, height=8)
+    plot_structure(ax, bn, reference)
+    return fig
