@@ -127,11 +127,15 @@ class Backend(Protocol):
     def solve(
         self, targets: Sequence[int], hard: Mapping[int, Array], likelihood: Mapping[int, Array], rows: int,
         tables: frozenset[int],
-    ) -> Answer: ...  # fmt: skip
+    ) -> Answer:  # fmt: skip
+        """The marginals of ``targets`` and the evidence's log-mass per row
+        (:meth:`glu.bn.core.CoreBackend.solve`)."""
 
-    def size(self, tables: frozenset[int], observed: Sequence[int], soft: Sequence[int], targets: Sequence[int]) -> int: ...  # fmt: skip # noqa: E501
+    def size(self, tables: frozenset[int], observed: Sequence[int], soft: Sequence[int], targets: Sequence[int]) -> int:  # fmt: skip # noqa: E501
+        """Table entries one row of this pattern costs (to cut a batch into chunks)."""
 
-    def log_mass(self, hard: Mapping[int, Array], rows: int) -> Array: ...
+    def log_mass(self, hard: Mapping[int, Array], rows: int) -> Array:
+        """log P(hard evidence), shape (rows,) (-inf: probability 0)."""
 
 
 def make_engine(bn: BayesNet, method: Method = "auto", max_table: int | None = None) -> Engine:

@@ -371,6 +371,7 @@ def synthesize_gesture(
 
 
 def check_action(action: str, view: View) -> None:
+    """Refuse, in one line, an action the performer of ``view`` (a person or the robot) cannot perform."""
     allowed = ROBOT_ACTIONS if view.performer == "robot" else GESTURES
     if action not in allowed:
         raise DataError(f"unknown action {action!r} for a {view.performer}; allowed: {', '.join(allowed)}")

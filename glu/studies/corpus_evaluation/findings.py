@@ -165,6 +165,7 @@ def select(frame: pd.DataFrame, where: Mapping[str, Any]) -> pd.DataFrame:
 
 
 def pooled(frame: pd.DataFrame, viewpoint: str = "all") -> pd.DataFrame:
+    """The rows of ``frame`` for ``viewpoint`` with the noise levels pooled (noise missing)."""
     return frame[(frame.viewpoint == viewpoint) & frame.noise.isna()]
 
 

@@ -30,6 +30,7 @@ def replication_seed(seed: int, key: int, replication: int) -> int:
 
 
 def scorer(recognizer: Any) -> Any:
+    """A batch scorer (:class:`glu.hmm.BatchScorer`) of ``recognizer``'s models, one per action."""
     from glu.hmm import BatchScorer
 
     missing = [a for a in ACTIONS if a not in recognizer.models]

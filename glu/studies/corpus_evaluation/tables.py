@@ -50,6 +50,7 @@ pooled)."""
 
 
 def chunk_path(out: Path, index: int, chunk: int) -> Path:
+    """The file of one finished task of a sweep: condition ``index``'s chunk ``chunk``, in ``out/chunks/``."""
     return out / "chunks" / f"c{index:03d}-{chunk:06d}.npz"
 
 

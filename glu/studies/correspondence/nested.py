@@ -62,6 +62,7 @@ class Candidate(NamedTuple):
 
     @property
     def label(self) -> str:
+        """``"features, setting"``, as tables and figures name the candidate."""
         return f"{self.features}, {self.setting}"
 
 

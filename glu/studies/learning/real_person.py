@@ -112,6 +112,7 @@ class RealPersonSettings:
         Invariants.parse(self.features)
 
     def as_dict(self) -> dict[str, Any]:
+        """The settings as plain data (for the saved study's provenance)."""
         return settings_dict(self)
 
 
