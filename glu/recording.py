@@ -129,7 +129,11 @@ def log_scene(rec, markdown: str, note: str = "") -> None:
 
 
 def log_texts(rec, entity: str, texts: Sequence[str], frames: np.ndarray, seconds: np.ndarray) -> None:
-    """Text lines at given frames (e.g. the current best verbal description)."""
+    """Text lines at given frames (e.g. the current best verbal description).
+
+    ``texts``, ``frames`` (frame numbers) and ``seconds`` (their times in s from the start): one entry per
+    line, shape (n_texts,) each.
+    """
     rr = rerun()
     for text, f, t in zip(texts, frames, seconds, strict=True):
         rec.set_time("frame", sequence=int(f))

@@ -158,7 +158,11 @@ def accumulate(blocks: Sequence[np.ndarray], weights: np.ndarray) -> np.ndarray:
 
 
 def percentile_interval(reps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Percentile interval over axis 0 (NaN without replicates)."""
+    """Percentile interval over axis 0 (NaN without replicates).
+
+    ``reps``, shape (B, ...) — the replicates only (the estimate's row already dropped); returns ``(low,
+    high)``, each of shape ``reps.shape[1:]``, in the replicates' units.
+    """
     if len(reps) == 0:
         nan = np.full(reps.shape[1:], np.nan)
         return nan, nan
@@ -199,7 +203,11 @@ def replicate_means(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
 
 
 def interval(replicates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The percentile interval of :data:`LEVEL` over axis 0 of replicate estimates (row 0 excluded)."""
+    """The percentile interval of :data:`LEVEL` over axis 0 of replicate estimates (row 0 excluded).
+
+    ``replicates``, shape (B + 1, ...) — row 0 the estimate, rows 1 … the replicates; returns ``(low, high)``,
+    each of shape ``replicates.shape[1:]`` (NaN when B = 0).
+    """
     reps = np.asarray(replicates, dtype=float)[1:]
     if len(reps) == 0:
         nan = np.full(np.shape(replicates)[1:], np.nan)
@@ -246,7 +254,8 @@ def holm(p: np.ndarray) -> np.ndarray:
     """Holm's step-down adjusted p-values of a family (NaN entries are not in the family and stay NaN).
 
     ``p̃_(i) = max_{j ≤ i} min(1, (m − j + 1) p_(j))`` for the sorted p-values ``p_(1) ≤ … ≤ p_(m)``:
-    rejecting ``p̃ ≤ α`` keeps the family-wise error rate at α under any dependence.
+    rejecting ``p̃ ≤ α`` keeps the family-wise error rate at α under any dependence. ``p``: array of any
+    shape, usually (m,); the adjusted p-values have the same shape.
     """
     p, ok, q = _family(p)
     out = np.full(p.shape, np.nan)
@@ -264,7 +273,8 @@ def benjamini_hochberg(p: np.ndarray) -> np.ndarray:
     """Benjamini–Hochberg step-up adjusted p-values (q-values) of a family (NaN entries stay NaN).
 
     ``p̃_(i) = min_{j ≥ i} min(1, m p_(j) / j)``: rejecting ``p̃ ≤ α`` keeps the expected share of false
-    verdicts among those reported at α (for independent or positively dependent tests).
+    verdicts among those reported at α (for independent or positively dependent tests). ``p``: array of any
+    shape, usually (m,); the adjusted p-values have the same shape.
     """
     p, ok, q = _family(p)
     out = np.full(p.shape, np.nan)
@@ -284,7 +294,7 @@ ADJUSTMENTS = {"holm": holm, "bh": benjamini_hochberg}
 
 
 def adjust(p: np.ndarray, method: str = "bh") -> np.ndarray:
-    """The adjusted p-values of a family by ``method`` (:data:`ADJUSTMENTS`)."""
+    """The adjusted p-values of a family by ``method`` (:data:`ADJUSTMENTS`), of the same shape as ``p``."""
     if method not in ADJUSTMENTS:
         raise DataError(f"unknown adjustment {method!r}; allowed: {', '.join(ADJUSTMENTS)}")
     return ADJUSTMENTS[method](p)

@@ -94,7 +94,7 @@ def _missing(x: Any) -> bool:
 def decimals(values: np.ndarray) -> int | None:
     """How many decimals a column of floats is shown with: none when every value is whole, 3 up to 1 (a
     probability, an accuracy), 2 below 100, 1 above; None (three significant digits, each value on its own)
-    when all are below 0.01."""
+    when all are below 0.01. ``values``: array of floats, shape (n,) (NaN and ±inf ignored)."""
     finite = values[np.isfinite(values)]
     if finite.size == 0 or np.all(finite == np.round(finite)):
         return 0

@@ -109,7 +109,8 @@ def with_seen_indicators(
     """Nodes, parents, CPTs and values with every all-zero row made explicit (see the module docstring).
 
     Returns (nodes, parents, cpts, values): the model's nodes followed by one ``seen__<node>`` per node with
-    zero rows; those rows made uniform.
+    zero rows; those rows made uniform. Each table has shape ``(*parent cardinalities, cardinality)``; an
+    indicator's, ``(*its node's parent cardinalities, 2)``.
     """
     nodes = list(bn.nodes)
     parents = {n: tuple(bn.parents[n]) for n in nodes}

@@ -128,8 +128,12 @@ class Backend(Protocol):
         self, targets: Sequence[int], hard: Mapping[int, Array], likelihood: Mapping[int, Array], rows: int,
         tables: frozenset[int],
     ) -> Answer:  # fmt: skip
-        """The marginals of ``targets`` and the evidence's log-mass per row
-        (:meth:`glu.bn.core.CoreBackend.solve`)."""
+        """The marginals of ``targets`` and whether each row's evidence is possible
+        (:meth:`glu.bn.core.CoreBackend.solve`).
+
+        ``hard``: variable → value codes, shape (rows,); ``likelihood``: variable → shape (rows, k). Returns
+        (target → shape (rows, k), NaN where impossible; possible, bool, shape (rows,)).
+        """
 
     def size(self, tables: frozenset[int], observed: Sequence[int], soft: Sequence[int], targets: Sequence[int]) -> int:  # fmt: skip # noqa: E501
         """Table entries one row of this pattern costs (to cut a batch into chunks)."""
@@ -684,7 +688,8 @@ class Engine:
         """``p(target | row)`` for every row of ``evidence``: a DataFrame, one column per value.
 
         ``evidence`` has one column per observed node (value names; NaN or None = not observed in that
-        row); the result keeps its index.
+        row), n rows; ``soft``: node → array, shape (n, n_values); the result, n rows × n_values of
+        ``target``, keeps its index.
 
         >>> import pandas as pd
         >>> from glu.bn import learn_bn

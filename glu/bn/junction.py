@@ -97,8 +97,9 @@ class JunctionBackend:
         rows: int,
         tables: Collection[int],
     ) -> tuple[dict[int, np.ndarray], np.ndarray]:
-        """:meth:`glu.bn.core.CoreBackend.solve`'s answer, propagated in the pattern's plan (``tables``: the
-        nodes whose tables it needs; keys of ``hard`` and ``likelihood`` come sorted)."""
+        """:meth:`glu.bn.core.CoreBackend.solve`'s answer (the same arguments and shapes), propagated in the
+        pattern's plan (``tables``: the nodes whose tables it needs; keys of ``hard`` and ``likelihood`` come
+        sorted)."""
         plan = self.plan(tables, tuple(hard), tuple(likelihood), targets)
         codes = list(hard.values())
         liks = list(likelihood.values())

@@ -31,6 +31,7 @@ def _from_blocks() -> Callable[[np.ndarray, pd.Index, str], pd.Series] | None:
         from pandas.core.internals import SingleBlockManager
 
         def make(values: np.ndarray, index: pd.Index, name: str) -> pd.Series:
+            """A Series of ``values`` (shape (k,)) over ``index`` (k labels), named ``name``, one block."""
             mgr = SingleBlockManager.from_array(values, index)
             s = pd.Series._from_mgr(mgr, axes=mgr.axes)
             object.__setattr__(s, "_name", name)  # what ``s.name = name`` stores, without its checks

@@ -47,7 +47,11 @@ def family_counts(
 
 
 def bic_family_score(counts: np.ndarray, n_rows: int) -> float:
-    """BIC of one family from its counts: maximum-likelihood log-likelihood − ½ (r−1) q ln N."""
+    """BIC of one family from its counts: maximum-likelihood log-likelihood − ½ (r−1) q ln N.
+
+    ``counts``, shape (q, r): parent configurations × child values (:func:`family_counts`); ``n_rows``: N,
+    the rows counted. The score is in nats.
+    """
     q, r = counts.shape
     totals = counts.sum(axis=1, keepdims=True)
     nz = counts > 0
@@ -66,6 +70,7 @@ def k2_parents(
 
     Starting from no parents, repeatedly add the candidate that most increases the family score (the first
     in ``candidates`` order on ties), stopping when none increases it or ``max_parents`` are reached.
+    ``codes``: node → value codes, int array, shape (n_rows,).
     """
     n = len(codes[child])
     chosen: list[str] = []

@@ -86,7 +86,8 @@ class NetworkArrays:
         return self._sorted_families[v]
 
     def sorted_cpt(self, v: int) -> np.ndarray:
-        """``v``'s table with its axes in the order of :meth:`sorted_family` (a view, made on first use)."""
+        """``v``'s table with its axes in the order of :meth:`sorted_family` (a view, made on first use),
+        shape ``tuple(cards[u] for u in sorted_family(v))``."""
         tables = self.__dict__.setdefault("_sorted_cpts", {})
         t = tables.get(v)
         if t is None:
@@ -118,7 +119,11 @@ class NetworkArrays:
     def support_arrays(self) -> tuple[np.ndarray, ...]:
         """The network as :func:`glu.bn.kernels.support_witness` reads it, made on first use: (a topological
         order, cards, parents as (ptr, idx), each table's offset in ``flat``, every table flattened, and -1
-        for each variable: the observed values of no evidence, to copy)."""
+        for each variable: the observed values of no evidence, to copy).
+
+        For V variables: int64 arrays of shapes (V,), (V,), (V + 1,), (n_arcs,), (V,), the float64 ``flat``
+        of shape (Σ table sizes,), and (V,).
+        """
         return self._support
 
     @cached_property

@@ -176,8 +176,8 @@ class Values:
         n_bad: int,
         hard_possible: bool = False,
     ) -> ImpossibleEvidenceError:
-        """The error for row ``i`` of a batch (node → value codes, -1 = not observed; the soft nodes), the
-        first of ``n_bad`` impossible rows."""
+        """The error for row ``i`` of a batch (``codes``: node → value codes, shape (n,), -1 = not observed;
+        ``soft``: the names of the soft nodes), the first of ``n_bad`` impossible rows."""
         ev = {node: self.bn.schema.values_of(node)[c[i]] for node, c in codes.items() if c[i] >= 0}
         return ImpossibleEvidenceError(
             f"row {i}: {self.impossible(ev, dict.fromkeys(soft), hard_possible)}"
@@ -186,7 +186,10 @@ class Values:
 
 
 def batch_length(evidence: Mapping[str, Sequence], soft: Mapping[str, np.ndarray]) -> int:
-    """The number of rows of a batch: every column's length, the same (else :class:`EvidenceError`)."""
+    """The number of rows of a batch: every column's length, the same (else :class:`EvidenceError`).
+
+    ``evidence``: node → n values; ``soft``: node → array, shape (n, n_values). Returns n.
+    """
     lengths = {len(v) for v in evidence.values()} | {len(v) for v in soft.values()}
     if len(lengths) > 1:
         raise EvidenceError(f"batch evidence columns have different lengths: {sorted(lengths)}")

@@ -181,7 +181,10 @@ def triangulate(
     """The junction tree of the graph joining the variables of each set ``idx[ptr[s]:ptr[s + 1]]`` (local
     variables 0 … n-1 of cardinalities ``cards``, int64 arrays): by the first of :data:`HEURISTICS`, or —
     past :data:`TRY_ALL_ABOVE` entries — by the one of the smallest total; the trees rooted at the homes
-    of the sets from ``first_home`` on (None: no set)."""
+    of the sets from ``first_home`` on (None: no set).
+
+    ``ptr``, shape (n_sets + 1,), ascending from 0; ``idx``, shape (ptr[-1],); ``cards``, shape (n,).
+    """
     home = len(ptr) - 1 if first_home is None else first_home
     res = compiled(kernels.plan_pattern)(n, ptr, idx, cards, home, TRY_ALL_ABOVE)
     return Triangulation(HEURISTICS[res[0]], *res[1:])

@@ -363,7 +363,8 @@ def _run(plan, state, codes, likelihoods, rows, changed, normalise, mass):  # ty
     scales = []
 
     def table(c: int) -> np.ndarray:
-        """Clique ``c``'s table times the messages from below it."""
+        """Clique ``c``'s table times the messages from below it, shape ``(*cardinalities, rows)`` (its
+        variables' cardinalities): a rows axis of 1 when nothing in it differs by row."""
         t = plan.base[c]
         for entry in plan.factors[c]:
             t = t * _pick(entry, codes, ints).reshape(entry[3])

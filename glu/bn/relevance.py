@@ -150,7 +150,8 @@ def surely_possible(net: NetworkArrays, hard: Mapping[int, int | np.ndarray]) ->
     evidence's ancestors is a positive term of P(evidence).
 
     When it holds, a query may leave out the evidence that cannot reach its targets without losing the
-    check that the evidence is possible — the relevance that tables with zeros otherwise forbid."""
+    check that the evidence is possible — the relevance that tables with zeros otherwise forbid. ``hard``:
+    variable → value code, a Python int or a batch row's array of shape (1,)."""
     arrays = net.support_arrays()
     observed = arrays[-1].copy()
     for v, c in hard.items():

@@ -56,7 +56,8 @@ def check_rows(
 ) -> None:
     """:class:`ModelError` naming the first row of ``cpt`` that is not a distribution within ``tol``.
 
-    The message gives the row (:func:`row_name`), its sum, how many other rows are off, and the
+    ``cpt``, shape ``(*parent cardinalities, cardinality)``, its axes in the order of ``parents``. The
+    message gives the row (:func:`row_name`), its sum, how many other rows are off, and the
     ``--renormalise`` tolerance that would accept it when it is close to 1.
     """
     sums = cpt.sum(axis=-1)
@@ -90,8 +91,10 @@ def normalise_rows(
 ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """Check every row (:func:`check_rows`) and rescale those off 1 by more than ``ROW_TOL`` to sum to 1.
 
-    Returns (cpts, report): the tables, and — when a row was rescaled — ``{"rows": how many,
-    "largest_deviation": the largest |1 − sum|, "at": that row's name, "tolerance": tol}``, else ``{}``.
+    ``cpts``: node → table, shape ``(*parent cardinalities, cardinality)``, axes in the order of
+    ``parents[node]``. Returns (cpts, report): the tables, of the same shapes, and — when a row was
+    rescaled — ``{"rows": how many, "largest_deviation": the largest |1 − sum|, "at": that row's name,
+    "tolerance": tol}``, else ``{}``.
     """
     tol = check_tolerance(tol)
     out, rescaled, worst = {}, 0, (0.0, "")

@@ -151,7 +151,11 @@ def format_hand_log(t: np.ndarray, xyz: np.ndarray) -> str:
 
 
 def write_hand_log(path: str | os.PathLike, t: np.ndarray, xyz: np.ndarray) -> Path:
-    """Write a hand log (atomically); ``path`` is the file or the recording's folder."""
+    """Write a hand log (atomically); ``path`` is the file or the recording's folder.
+
+    ``t``, shape (n,), seconds, strictly increasing; ``xyz``, shape (n, 3), the hand features in logged
+    units (1000 × body units: the module docstring). Returns the file written.
+    """
     path = Path(path)
     if path.suffix != ".log":
         path = path / FILE_NAME

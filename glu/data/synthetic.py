@@ -265,9 +265,10 @@ def write_synthetic_folder(
     ----------
     out : the folder; if it exists it must be empty or an earlier synthetic folder (it is then replaced)
     n, seed : experiments per table, and the generator's seed
-    recordings : hand logs to write, recording name → (timestamps, logged coordinates), e.g. from
-        :func:`glu.gestures.corpus.synthetic_recordings`; none by default (the data layer does not make
-        gestures)
+    recordings : hand logs to write; none by default (the data layer does not make gestures)
+        recording name → (timestamps, shape (n,), seconds; logged coordinates, shape (n, 3), 1000 × body
+        units), e.g. :func:`glu.gestures.corpus.hand_log_arrays` of each of
+        :func:`glu.gestures.corpus.synthetic_recordings`
     progress : called with the name of each file written (for a progress bar)
     force : replace a folder that holds something else (never the published real data)
     """

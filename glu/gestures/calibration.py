@@ -49,7 +49,7 @@ BETA_BOUNDS = (0.0, 1.0)
 
 def softmax_rows(scores: np.ndarray) -> np.ndarray:
     """``exp(s) / Σ exp(s)`` along the last axis, computed stably; rows with no finite score become
-    uniform."""
+    uniform. ``scores``, shape (..., K) (e.g. scaled log-likelihoods) → probabilities, shape (..., K)."""
     s = np.asarray(scores, dtype=float)
     top = np.max(np.where(np.isfinite(s), s, -np.inf), axis=-1, keepdims=True)
     ok = np.isfinite(top)

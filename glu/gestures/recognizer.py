@@ -217,7 +217,8 @@ class Recognizer:
         return p_hmm_from_loglik(self.loglik(X))
 
     def posterior(self, X: np.ndarray) -> Any:
-        """:meth:`p_hmm` as a pandas Series indexed by action, named ``p_HMM(A | G)``."""
+        """:meth:`p_hmm` as a pandas Series indexed by action (length n_actions), named ``p_HMM(A | G)``, of a
+        sequence of shape (T, D)."""
         import pandas as pd
 
         return pd.Series(self.p_hmm(X), index=pd.Index(self.actions, name="action"), name="p_HMM(A | G)")
@@ -234,7 +235,7 @@ class Recognizer:
         return p_hmm_from_loglik(self.loglik_curve(X))
 
     def classify(self, X: np.ndarray) -> str:
-        """The action with the highest likelihood."""
+        """The action with the highest likelihood, of a sequence of shape (T, D)."""
         return self.actions[int(np.argmax(self.loglik(X)))]
 
     def stream(self) -> GestureStream:

@@ -177,7 +177,11 @@ class SyntheticGesture:
 @lru_cache(maxsize=512)
 def timing(n: int) -> tuple[np.ndarray, np.ndarray]:
     """The time course of a movement of ``n`` frames through its key poses (mostly minimum-jerk: slow start
-    and end), and the frames' times ``arange(n) / FRAME_RATE`` (both read-only, cached)."""
+    and end), and the frames' times ``arange(n) / FRAME_RATE`` (both read-only, cached).
+
+    Returns ``(u, t)``, each shape (n,): ``u`` the fraction of the movement done, rising from 0 to 1; ``t`` in
+    seconds from the first frame.
+    """
     s = np.linspace(0.0, 1.0, n)
     u = 0.15 * s + 0.85 * s**3 * (10 - 15 * s + 6 * s**2)
     t = np.arange(n) / FRAME_RATE
@@ -252,7 +256,12 @@ def key_poses(
 def person_style(
     keys: list[tuple[float, np.ndarray]], spec: list, rng: np.random.Generator, size: float, variety: float
 ) -> list[tuple[float, np.ndarray]]:
-    """A person's own arm length and movement style (see the module docstring), drawn after the key poses."""
+    """A person's own arm length and movement style (see the module docstring), drawn after the key poses.
+
+    ``keys``: the K key poses of :func:`key_poses`, each (time fraction, point of shape (3,) in metres
+    relative to the torso); ``spec``: the action's K entries of ``KEYS``. Returns the K key poses moved,
+    in the same form.
+    """
     arm = rng.uniform(1 - 0.15 * variety, 1 + 0.15 * variety)
     shift = rng.normal(0.0, 0.03 * variety, size=(len(spec), 3))
     warp = rng.uniform(-0.04 * variety, 0.04 * variety, size=len(spec))
@@ -326,8 +335,9 @@ def sensor_draws(
 def sensed(
     skel: np.ndarray, t: np.ndarray, draws: SensorDraws, joints: np.ndarray | slice = slice(None)
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The skeletons and timestamps the sensor reports: ``draws`` applied to ``skel`` (n, J, 3), whose
-    joints are ``OPENNI_JOINTS[joints]`` (the right hand among them)."""
+    """The skeletons and timestamps the sensor reports: ``draws`` applied to ``skel`` (n, J, 3), metres,
+    whose joints are ``OPENNI_JOINTS[joints]`` (the right hand among them), and to its times ``t`` (n,),
+    seconds. Returns the skeletons (n_kept, J, 3) and times (n_kept,): the frames left after a dropout."""
     skel = skel + draws.noise[:, joints] if draws.noise is not None else skel.copy()
     if draws.spike is not None:
         skel[draws.spikes, np.arange(len(OPENNI_JOINTS))[joints].tolist().index(_IH)] += draws.spike

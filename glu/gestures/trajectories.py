@@ -118,7 +118,11 @@ class Trajectory:
 
     @classmethod
     def recorded(cls, xyz: np.ndarray, t: np.ndarray, source: str = "<memory>") -> Trajectory:
-        """Frames 1 … n of a source log as it was read: every one observed, no event yet."""
+        """Frames 1 … n of a source log as it was read: every one observed, no event yet.
+
+        ``xyz``, shape (n, 3), in the source's units (a hand log's logged units, or feature units); ``t``,
+        shape (n,), seconds, strictly increasing.
+        """
         return cls(xyz, t, np.arange(1, len(t) + 1), np.ones(len(t), dtype=bool), source)
 
     def __len__(self) -> int:
@@ -129,7 +133,8 @@ class Trajectory:
         return replace(self, xyz=np.asarray(xyz, dtype=float))
 
     def take(self, index: np.ndarray | slice) -> Trajectory:
-        """The frames selected by a positional index (a slice, an int array or a bool mask)."""
+        """The frames selected by a positional index (a slice, an int array of shape (k,), or a bool mask of
+        shape (n_frames,))."""
         return replace(
             self, xyz=self.xyz[index], t=self.t[index], frame=self.frame[index], observed=self.observed[index]
         )

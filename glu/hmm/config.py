@@ -165,7 +165,11 @@ def make_report(
 ) -> TrainingReport:
     """The :class:`TrainingReport` of a fitted model (converged: the last change of the total
     log-likelihood below ``tol`` per frame, or per weighted frame with sequence weights,
-    ``weighted_frames``); warns with :class:`HMMConvergenceWarning` when it did not."""
+    ``weighted_frames``); warns with :class:`HMMConvergenceWarning` when it did not.
+
+    ``seqs``: the training sequences, each of shape (T_i, D) (only their lengths are read); ``history`` and
+    ``final_loglik``: total training log-likelihoods (:class:`TrainingReport`).
+    """
     n_frames = sum(len(X) for X in seqs)
     delta = history[-1] - history[-2] if len(history) >= 2 else math.inf
     converged = bool(abs(delta) < tol * (n_frames if weighted_frames is None else weighted_frames))

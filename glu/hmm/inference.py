@@ -239,7 +239,8 @@ def left_to_right_transmat(n_states: int, stay: float) -> np.ndarray:
 
 
 def logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
-    """``log Σ exp(a)`` along ``axis`` (−∞ where every term is −∞), scaled by the largest term."""
+    """``log Σ exp(a)`` along ``axis`` (−∞ where every term is −∞), scaled by the largest term: the shape of
+    ``a`` without ``axis``."""
     m = a.max(axis=axis, keepdims=True)
     m = np.where(np.isfinite(m), m, 0.0)
     with np.errstate(divide="ignore", under="ignore"):

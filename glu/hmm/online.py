@@ -101,14 +101,22 @@ def first_model(
     sequences: Sequence[np.ndarray], weights: np.ndarray, config: TrainingConfig, seed: int = 0
 ) -> tuple[GMMHMMParams, SufficientStats]:
     """A first model from a few weighted sequences (:func:`glu.hmm.train` with ``weights``: glu's recipe,
-    ``config.n_iter`` EM iterations), and the statistics of those sequences under it."""
+    ``config.n_iter`` EM iterations), and the statistics of those sequences under it.
+
+    ``sequences``: S arrays, each of shape (T_i, D); ``weights``, shape (S,). Returns one model's parameters
+    (startprob (Q,), transmat (Q, Q), weights (Q, M), means (Q, M, D), covars (Q, M, D, D)) and the
+    sequences' weighted statistics under it (:func:`batch_stats`, no batch axis).
+    """
     model = train(list(sequences), config, weights=weights, seed=seed, warn=False).model
     params = GMMHMMParams(model.startprob, model.transmat, model.weights, model.means, model.covars)
     return params, batch_stats(sequences, params, weights)
 
 
 def step_size(total: np.ndarray, weight: np.ndarray, step: float) -> np.ndarray:
-    """``η = w / W^α`` of the stepwise-EM step (at most 1), for the label weight ``W`` after the episode."""
+    """``η = w / W^α`` of the stepwise-EM step (at most 1), for the label weight ``W`` after the episode.
+
+    ``total`` (W) and ``weight`` (w): arrays of one shape, one entry per model (e.g. (n,)); η has that shape.
+    """
     return np.minimum(1.0, weight / np.asarray(total, dtype=float) ** step)
 
 
@@ -169,9 +177,10 @@ class OnlineModels:
     def update(self, idx: Index, stats: SufficientStats, weights: np.ndarray, covar_reg: float) -> None:
         """The stepwise-EM step and the M-step of the models at ``idx``.
 
-        ``stats`` are the unweighted statistics of one episode under each of them (:meth:`estep`) and
-        ``weights`` its label weight for each (> 0); each running mean moves by ``η`` towards the episode's
-        statistics and each model becomes ``maximise(W · s)`` (glu's ``map`` covariance with ``covar_reg``).
+        ``stats`` are the unweighted statistics of one episode under each of them (:meth:`estep`; batch
+        shape: that of the selection, say (n,)) and ``weights``, shape (n,), its label weight for each
+        (> 0); each running mean moves by ``η`` towards the episode's statistics and each model becomes
+        ``maximise(W · s)`` (glu's ``map`` covariance with ``covar_reg``).
         """
         w = np.asarray(weights, dtype=float)
         total = self.total[idx] + w

@@ -181,7 +181,10 @@ def new_figure(
 
 
 def bars_with_original(ax: Axes, x: np.ndarray, p: np.ndarray, colors, original: np.ndarray | None) -> None:
-    """Bars of ``p`` at ``x``, and the original model's values as black marks (if given)."""
+    """Bars of ``p`` at ``x``, and the original model's values as black marks (if given).
+
+    ``x`` (bar positions), ``p`` (probabilities) and ``original``: shape (n_bars,); ``colors``: one per bar.
+    """
     ax.bar(x, p, color=colors, edgecolor="0.2", linewidth=0.6)
     if original is not None:
         ax.plot(x, original, **ORIGINAL_MARK, label=ORIGINAL_LABEL)

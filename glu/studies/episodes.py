@@ -197,7 +197,11 @@ class GestureSpeed(NamedTuple):
 
 def speed_quantile(speed: np.ndarray) -> np.ndarray:
     """P(A / D ≤ s) for A uniform on :data:`AMPLITUDE` and D on :data:`DURATION_S`, in closed form:
-    ``(1 / |D|) ∫ clip((s d − a0) / (a1 − a0), 0, 1) dd``."""
+    ``(1 / |D|) ∫ clip((s d − a0) / (a1 − a0), 0, 1) dd``.
+
+    ``speed``: array of any shape, e.g. (n,), amplitude factor per second (:class:`GestureSpeed`); the
+    quantiles, in [0, 1], have the same shape.
+    """
     (d0, d1), (a0, a1) = DURATION_S, AMPLITUDE
     s = np.maximum(np.asarray(speed, dtype=float), 1e-12)
     lo, hi = np.clip(a0 / s, d0, d1), np.clip(a1 / s, d0, d1)

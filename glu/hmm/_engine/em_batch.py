@@ -202,6 +202,7 @@ def estep(layout: Layout, params: GMMHMMParams) -> tuple[SufficientStats, np.nda
         second[..., i, j] = second[..., j, i] = moments[..., f]
 
     def per_model(values: np.ndarray) -> np.ndarray:  # Σ over each model's sequences
+        """``values``, shape (S, ...), one row per sequence of the layout → their sums, shape (K, ...)."""
         return (layout.members @ values.reshape(len(values), -1)).reshape((K,) + values.shape[1:])
 
     stats = SufficientStats(

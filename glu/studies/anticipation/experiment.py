@@ -243,7 +243,7 @@ def _bn_order(recognizer: Recognizer, actions: Sequence[str]) -> np.ndarray:
 
 def update_indices(n_frames: int, step: int = ORIGINAL_STEP, final_update: bool = False) -> np.ndarray:
     """0-based indices of the fusion updates in a segment of ``n_frames``: t = step, 2·step, … ≤ T, and T if
-    asked.
+    asked; int array, shape (n_updates,), ascending frame indices.
 
     >>> (update_indices(94) + 1).tolist()[-3:], (update_indices(94, final_update=True) + 1).tolist()[-2:]
     ([80, 85, 90], [90, 94])

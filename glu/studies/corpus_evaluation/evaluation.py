@@ -351,7 +351,8 @@ class Evaluator:
 
     def seen(self, episodes: Chunk, features: str) -> list[np.ndarray]:
         """What the recogniser of a feature set sees of each episode's gesture: the hand in its frame, with
-        its invariances (computed online, so a prefix of the result is the result of the prefix)."""
+        its invariances (computed online, so a prefix of the result is the result of the prefix): one array
+        per episode, shape (T_i, 3), in feature units."""
         spec = FeatureSet.parse(features)
         xs = episodes.body_features if spec.body else episodes.features
         if xs is None:

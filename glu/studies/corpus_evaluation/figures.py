@@ -87,7 +87,11 @@ def _line(ax: Axes, x: np.ndarray, g: pd.DataFrame, strategy: str) -> Line2D:
 
 
 def coinciding(series: dict[str, tuple[np.ndarray, np.ndarray]], span: float) -> list[list[str]]:
-    """Groups (two or more) of the named ``(x, y)`` series that coincide: same x, ``|Δy| ≤ COINCIDE·span``."""
+    """Groups (two or more) of the named ``(x, y)`` series that coincide: same x, ``|Δy| ≤ COINCIDE·span``.
+
+    ``x`` and ``y`` of a series: shape (n_points,) each (n_points may differ between series); ``span``: the
+    y range drawn, in y's units.
+    """
     groups: list[list[str]] = []
     for name, (x, y) in series.items():
         for grp in groups:

@@ -267,17 +267,20 @@ def finding_verdicts(diffs: pd.DataFrame, findings: Sequence[Finding] = FINDINGS
 
 
 def higher_is_better(metrics: pd.Series) -> np.ndarray:
-    """Per row, whether a higher value of its metric is better (:data:`glu.stats.HIGHER_IS_BETTER`)."""
+    """Per row, whether a higher value of its metric is better (:data:`glu.stats.HIGHER_IS_BETTER`): bool
+    array, shape (n_rows,)."""
     return metrics.map(lambda m: HIGHER_IS_BETTER.get(m, True)).to_numpy(dtype=bool)
 
 
 def verdicts_adjusted(frame: pd.DataFrame) -> np.ndarray:
-    """The adjusted verdict of every row of a differences table (its difference, p_adjusted and metric)."""
+    """The adjusted verdict of every row of a differences table (its difference, p_adjusted and metric):
+    object array of ``"better"``, ``"worse"``, ``"no difference"``, shape (n_rows,)."""
     return adjusted_verdicts(frame["difference"], frame["p_adjusted"], higher_is_better(frame["metric"]))
 
 
 def adjusted_verdicts(difference: np.ndarray, p_adjusted: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """:func:`glu.stats.adjusted_verdict` of many differences at once."""
+    """:func:`glu.stats.adjusted_verdict` of many differences at once: ``difference``, ``p_adjusted`` and
+    ``up`` (whether higher is better), each shape (n,) → verdicts, object array, shape (n,)."""
     d, p = np.asarray(difference, dtype=float), np.asarray(p_adjusted, dtype=float)
     sure = np.isfinite(d) & np.isfinite(p) & (p <= ALPHA) & (d != 0)
     better = (d > 0) == np.asarray(up, dtype=bool)
@@ -339,7 +342,7 @@ def network_names(frame: pd.DataFrame) -> list[str]:
 
 def factor_levels(verdicts: pd.DataFrame) -> dict[str, np.ndarray]:
     """Each row's level of each factor of the cells, as the sentences name them (learned networks by their
-    table size)."""
+    table size): factor → array, shape (n_rows,)."""
     return {
         "actions": verdicts.action_prior.map(lambda a: ACTION_WORDS.get(a, a)).to_numpy(),
         "network": np.array(network_names(verdicts), dtype=object),

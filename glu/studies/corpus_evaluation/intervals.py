@@ -178,8 +178,8 @@ def metric_block(S: np.ndarray, cells: Cells) -> dict[str, np.ndarray]:
 
 
 def difference_block(S: np.ndarray, cells: Cells, pairs: Pairs) -> dict[str, np.ndarray]:
-    """Every pair's paired difference from one group's summed statistics: columns difference, ci_low,
-    ci_high, p_value, better, verdict (one value per pair)."""
+    """Every pair's paired difference from one group's summed statistics ``S`` (shape (B + 1, K)): columns
+    difference, ci_low, ci_high, p_value, better, verdict, each of shape (n_pairs,)."""
     vals = metric_values(S, cells)
     d = vals[:, pairs.second] - vals[:, pairs.first]
     est, lo, hi = estimates_and_intervals(d, pairs.ece, clip=False)
@@ -263,7 +263,9 @@ def reliability_block(s0: np.ndarray, columns: pd.DataFrame | dict[str, np.ndarr
 
 
 def reliability_index(columns: pd.DataFrame) -> dict[str, np.ndarray]:
-    """Where each bin statistic sits among the statistics (for :func:`reliability_block`)."""
+    """Where each bin statistic sits among the statistics (for :func:`reliability_block`): ``bin_n``,
+    ``bin_confidence``, ``bin_correct`` → int array, shape (n_rows,), its position in a row of sums for each
+    (target, strategy, fraction, bin)."""
     binned = columns[columns["bin"] >= 0]
     return {
         st: binned.index[binned.stat == st].to_numpy() for st in ("bin_n", "bin_confidence", "bin_correct")

@@ -58,6 +58,8 @@ def segment_readings(
     models = _models_without(xs, by_action, config, seed)
 
     def loglik(i: int, without: set[int]) -> np.ndarray:
+        """``log L(segment i | a)`` under each action's model trained without the segments ``without``, shape
+        (n_actions,) in ``actions`` order; all NaN when one of those models is missing."""
         bank = [models.get((a, frozenset(without & set(by_action[a])))) for a in actions]
         if any(m is None for m in bank):
             return np.full(len(actions), np.nan)

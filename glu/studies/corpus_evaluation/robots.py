@@ -104,7 +104,8 @@ def matched_gestures(config: SweepConfig, k: int, body: bool) -> tuple[list[np.n
     """The held-out gestures of recogniser seed ``k`` drawn like the test conditions:
     ``calibration_per_action`` per action, each seen from one of the sweep's (viewpoint, noise level) pairs
     in turn, with the episodes' tracking problems, repaired as they are; in the shoulder line's frame with
-    ``body``. Returns the features and the actions' indices."""
+    ``body``. Returns the features, n arrays of shape (T_i, 3), and the actions' indices in
+    :data:`glu.schema.ACTIONS`, shape (n,), for n = ``calibration_per_action`` × the number of actions."""
     from dataclasses import replace
 
     from glu.gestures.synthetic_batch import gesture_features

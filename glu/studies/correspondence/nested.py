@@ -245,7 +245,7 @@ class _Scorer:
 
 def onset_frame(xyz: np.ndarray, share: float = ONSET_SHARE) -> int:
     """The first frame (1-based) at which the hand's distance from the first frame exceeds ``share`` of its
-    largest distance."""
+    largest distance; ``xyz``, shape (n_frames, 3), the hand's path (any unit: only ratios are read)."""
     d = np.linalg.norm(np.asarray(xyz) - xyz[0], axis=1)
     return int(np.argmax(d > share * d.max())) + 1 if d.max() > 0 else 1
 

@@ -209,6 +209,8 @@ class _Labels:
         self.init_count = np.array([min(2, lr.source) if lr.scheme == "supervised" else 2 for lr in learners])
 
     def static_weights(self, i: int, L: int, A: int) -> np.ndarray:
+        """Episode ``i``'s label weights from the learners whose labels need no HMM, shape (L, A) (rows of 0
+        for the others)."""
         W = np.zeros((L, A))
         W[self.static_rows] = self.static[i]
         return W
@@ -505,7 +507,13 @@ def learn_online(
 ) -> OnlineRun:
     """One learner over the episodes (:func:`run_online` with one :class:`Learner`); measured on the held-out
     gestures, if given, at the checkpoints (default: after the last episode only). ``per_action``: for
-    ``supervised``, how many labelled episodes per action (its labels come from no network)."""
+    ``supervised``, how many labelled episodes per action (its labels come from no network).
+
+    ``features``: N arrays of shape (T_i, D); ``episode_actions``: int array, shape (N,); ``p_bn``: the
+    network's labels, shape (N, A) (not read for ``true``, ``unsupervised``, ``supervised``);
+    ``test_features``: J arrays of shape (T_j, D); ``test_actions``: int array, shape (J,). The arrays as
+    :func:`run_online` takes them.
+    """
     source = {"true": None, "unsupervised": None, "supervised": per_action}.get(scheme, "network")
     sources = {"network": np.asarray(p_bn)} if source == "network" else {}
     return run_online(

@@ -90,8 +90,9 @@ def write_learning(
     note: str = "",
 ) -> Path:
     """Write one online learner's life (:class:`glu.studies.learning.online.OnlineRun` of one learner,
-    ``features`` its episodes' gestures) as a recording; ``note`` (plain text: the data, the run's
-    parameters) ends the scene panel. Layout (timeline ``episode``)::
+    ``features`` its N episodes' gestures, each of shape (T_i, 3), in the run's order) as a recording;
+    ``note`` (plain text: the data, the run's parameters) ends the scene panel. Layout (timeline
+    ``episode``)::
 
         /scene                     markdown: what is shown (static)
         /space/episode             this episode's hand path (3-D), coloured by its true action

@@ -241,7 +241,8 @@ def _rng(seed: int, *key: int) -> np.random.Generator:
 
 
 def draw_actions(engine: Engine, n: int, seed: int, offset: int = 0, balanced: bool = False) -> np.ndarray:
-    """The actions of episodes ``offset … offset + n − 1`` (uniform; ``balanced``: cycling through them)."""
+    """The actions of episodes ``offset … offset + n − 1`` (uniform; ``balanced``: cycling through them), as
+    indices of the network's Action values: int array, shape (n,)."""
     k = len(engine.bn.schema.values_of("Action"))
     if balanced:
         return np.arange(n) % k
@@ -393,10 +394,10 @@ def one_hot(labels: np.ndarray, k: int) -> np.ndarray:
 
 
 def p_hmm_reading(loglik: np.ndarray, n_frames: np.ndarray, posterior: str = "per-frame") -> np.ndarray:
-    """``p_HMM(A | G)`` from log-likelihoods (n, A): equal priors, from the likelihoods or per frame
-    (``exp((1/T) log L)``, the tempered reading); ``-inf`` (no model) gives probability 0. The formula's
-    home is :func:`glu.gestures.calibration.p_hmm_reading`; this study allows the readings that need no
-    fitted temperature (:data:`POSTERIOR_READINGS`)."""
+    """``p_HMM(A | G)``, shape (n, A), from log-likelihoods (n, A) and frames seen ``n_frames`` (n,): equal
+    priors, from the likelihoods or per frame (``exp((1/T) log L)``, the tempered reading); ``-inf`` (no
+    model) gives probability 0. The formula's home is :func:`glu.gestures.calibration.p_hmm_reading`; this
+    study allows the readings that need no fitted temperature (:data:`POSTERIOR_READINGS`)."""
     if posterior not in POSTERIOR_READINGS:
         raise DataError(f"unknown posterior reading {posterior!r}; allowed: {', '.join(POSTERIOR_READINGS)}")
     return calibration.p_hmm_reading(loglik, n_frames, posterior)
