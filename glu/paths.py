@@ -243,7 +243,7 @@ class OutputLayout:
     def folder(self, kind: str) -> Path:
         """The folder of one kind of output (one of :data:`OUTPUT_KINDS`)."""
         if kind not in OUTPUT_KINDS:
-            raise ValueError(f"unknown output kind {kind!r}; allowed: {', '.join(OUTPUT_KINDS)}")
+            raise OutputError(f"unknown output kind {kind!r}; allowed: {', '.join(OUTPUT_KINDS)}")
         return getattr(self, kind)
 
     def published(self) -> dict[str, Path]:

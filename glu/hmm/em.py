@@ -40,6 +40,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from glu.errors import ModelError
 from glu.hmm.inference import forward_backward, gaussian_factors, log_component_densities, logsumexp
 
 
@@ -74,9 +75,9 @@ COVARIANCES: tuple[str, ...] = ("map", "ml")
 
 
 def check_covariance(covariance: str) -> None:
-    """ValueError unless ``covariance`` is one of :data:`COVARIANCES`."""
+    """ModelError unless ``covariance`` is one of :data:`COVARIANCES`."""
     if covariance not in COVARIANCES:
-        raise ValueError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
+        raise ModelError(f"unknown covariance update {covariance!r}; allowed: {', '.join(COVARIANCES)}")
 
 
 EMPTY = 1e-10
@@ -149,15 +150,15 @@ class SufficientStats:
 def sequence_weights(
     sequences: Sequence[np.ndarray], weights: Sequence[float] | np.ndarray | None
 ) -> np.ndarray:
-    """``weights`` as a float array of shape (S,) (all ones for None); ValueError unless each is finite
+    """``weights`` as a float array of shape (S,) (all ones for None); ModelError unless each is finite
     ≥ 0."""
     if weights is None:
         return np.ones(len(sequences))
     w = np.asarray(weights, dtype=float)
     if w.shape != (len(sequences),):
-        raise ValueError(f"{len(sequences)} sequences need {len(sequences)} weights, got shape {w.shape}")
+        raise ModelError(f"{len(sequences)} sequences need {len(sequences)} weights, got shape {w.shape}")
     if not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ValueError("sequence weights must be finite and ≥ 0")
+        raise ModelError("sequence weights must be finite and ≥ 0")
     return w
 
 
@@ -291,7 +292,7 @@ def fit(
     check_covariance(covariance)
     w = sequence_weights(sequences, weights)
     if not np.any(w > 0):
-        raise ValueError("weighted EM needs at least one sequence of positive weight")
+        raise ModelError("weighted EM needs at least one sequence of positive weight")
     params = GMMHMMParams(*(np.array(a, dtype=float) for a in init))
     history: list[float] = []
     for _ in range(n_iter):

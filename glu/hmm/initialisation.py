@@ -70,7 +70,7 @@ def kmeans_labels(X: np.ndarray, n_clusters: int, seed: int) -> np.ndarray:
     X = np.array(X, dtype=np.float64, order="C")  # a copy: centred below, as KMeans does
     n = X.shape[0]
     if not 1 <= n_clusters <= n:
-        raise ValueError(f"k-means needs between 1 and n_samples={n} clusters, got {n_clusters}")
+        raise ModelError(f"k-means needs between 1 and n_samples={n} clusters, got {n_clusters}")
     tol = np.mean(np.var(X, axis=0)) * KMEANS_TOL
     X -= X.mean(axis=0)
     x_squared_norms = np.einsum("ij,ij->i", X, X)

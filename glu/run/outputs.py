@@ -23,6 +23,7 @@ from typing import Any
 import pandas as pd
 
 from glu.data.source import DataSource
+from glu.errors import OutputError
 from glu.files import atomic_write_text
 from glu.machine import in_kernel
 from glu.paths import OutputLayout
@@ -113,7 +114,7 @@ class Outputs:
         """
         name = name or df.attrs.get("experiment")
         if not name:
-            raise ValueError("a table needs a name (or an experiment frame that carries one)")
+            raise OutputError("a table needs a name (or an experiment frame that carries one)")
         csv = self.layout.results / f"{name}.csv"
         atomic_write_text(csv, df.to_csv(index=False, float_format="%.12g", lineterminator="\n"))
         meta = {

@@ -8,7 +8,7 @@ import jupytext
 import papermill as pm
 import pytest
 
-from glu.errors import ParameterError
+from glu.errors import OutputError, ParameterError
 from glu.run.parameters import (
     CHOICES,
     RANGES,
@@ -214,7 +214,7 @@ def test_outside_a_kernel_a_figure_is_saved_not_shown_and_a_table_needs_a_name(t
     out.figure(fig, "line")
     assert capsys.readouterr() == ("", "")
     assert (tmp_path / "out" / "figures" / "line.png").read_bytes()[:4] == b"\x89PNG"
-    with pytest.raises(ValueError, match="a table needs a name"):
+    with pytest.raises(OutputError, match="a table needs a name"):
         out.table(pd.DataFrame({"x": [1]}))
     assert not (tmp_path / "out" / "results").exists() or not any((tmp_path / "out" / "results").iterdir())
     monkeypatch.setattr(outputs, "PACKAGES", ("numpy", "glu-no-such-package"))

@@ -15,6 +15,7 @@ from cli_run import run
 from tiny_notebook import TINY_NOTEBOOK
 
 from glu import paths
+from glu.errors import OutputError
 from glu.paths import OUTPUT_KINDS, OutputLayout
 from glu.run.publish import CURRENT, MARKER, OWNER, PublishError, Store, legacy_files
 
@@ -311,5 +312,5 @@ def test_files_are_copied_where_hard_links_are_refused_and_a_bad_record_is_none(
 def test_an_unknown_output_kind_is_refused(tmp_path):
     layout = OutputLayout.under(tmp_path)
     assert layout.folder("figures") == layout.figures
-    with pytest.raises(ValueError, match=r"^unknown output kind 'nope'; allowed: figures, results, "):
+    with pytest.raises(OutputError, match=r"^unknown output kind 'nope'; allowed: figures, results, "):
         layout.folder("nope")

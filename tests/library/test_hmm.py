@@ -788,7 +788,7 @@ def test_forward_of_no_frames_is_empty_and_kmeans_needs_enough_points():
 
     assert forward_curve(np.zeros((0, 3)), np.ones(3) / 3, np.eye(3)).shape == (0,)
     for k in (0, 5):
-        with pytest.raises(ValueError, match=f"k-means needs between 1 and n_samples=4 clusters, got {k}"):
+        with pytest.raises(ModelError, match=f"k-means needs between 1 and n_samples=4 clusters, got {k}"):
             kmeans_labels(np.zeros((4, 2)), k, 0)
 
 
@@ -797,5 +797,5 @@ def test_an_unknown_covariance_update_is_refused():
 
     m = random_model(np.random.default_rng(15), Q=2, M=1, D=2)
     init = GMMHMMParams(*params(m))
-    with pytest.raises(ValueError, match="unknown covariance update 'diag'; allowed: "):
+    with pytest.raises(ModelError, match="unknown covariance update 'diag'; allowed: "):
         fit([np.zeros((5, 2))], init, 3, 1e-4, covariance="diag")

@@ -209,13 +209,13 @@ def test_the_m_step_keeps_left_to_right_zeros_and_normalised_rows(problem):
 
 def test_bad_weights_are_refused_in_one_line(problem):
     seqs, p0 = problem
-    with pytest.raises(ValueError, match="6 weights"):
+    with pytest.raises(ModelError, match="6 weights"):
         expected_stats(seqs, p0, [1.0, 2.0])
-    with pytest.raises(ValueError, match="finite and ≥ 0"):
+    with pytest.raises(ModelError, match="finite and ≥ 0"):
         expected_stats(seqs, p0, [1, 1, 1, -1, 1, 1])
-    with pytest.raises(ValueError, match="positive weight"):
+    with pytest.raises(ModelError, match="positive weight"):
         fit(seqs, p0, 5, 1e-3, weights=np.zeros(6))
-    with pytest.raises(ValueError, match="positive weight"):
+    with pytest.raises(ModelError, match="positive weight"):
         fit_many([(seqs, p0)], 5, 1e-3, weights=[np.zeros(6)])
 
 

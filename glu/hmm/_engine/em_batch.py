@@ -54,6 +54,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from glu.errors import ModelError
 from glu.hmm._engine.kernels import forward_backward_scaled, mixture_posteriors
 from glu.hmm.em import (
     FitResult,
@@ -107,7 +108,7 @@ class Layout:
     ----------
     sequences : per model, its sequences (arrays of shape (T_i, D), the same D for all)
     weights : per model, one weight ≥ 0 per sequence; sequences of weight 0 are left out, and every model
-        needs one of positive weight (ValueError otherwise)
+        needs one of positive weight (ModelError otherwise)
     """
 
     def __init__(self, sequences: Sequence[Sequence[np.ndarray]], weights: Sequence[np.ndarray]) -> None:
@@ -115,7 +116,7 @@ class Layout:
         for seqs, w in zip(sequences, weights, strict=True):
             pairs = [(np.asarray(x, dtype=float), float(v)) for x, v in zip(seqs, w, strict=True) if v > 0]
             if not pairs:
-                raise ValueError("weighted EM needs at least one sequence of positive weight")
+                raise ModelError("weighted EM needs at least one sequence of positive weight")
             kept.append(pairs)
         K = len(kept)
         self.n_frames = np.array([sum(len(x) for x, _ in p) for p in kept])
@@ -274,7 +275,7 @@ def fit_many(
     -------
     one :class:`~glu.hmm.em.FitResult` per problem, in order, equal to what :func:`~glu.hmm.em.fit` returns
     for it (to rounding). Raises ``numpy.linalg.LinAlgError`` when a covariance stops being positive
-    definite, ValueError for bad weights.
+    definite, ModelError for bad weights.
     """
     check_covariance(covariance)
     tols = np.broadcast_to(np.asarray(tol, dtype=float), (len(problems),))
